@@ -1,0 +1,5 @@
+import sys
+
+from executive.cli import main
+
+sys.exit(main())

@@ -1,0 +1,146 @@
+"""Flow control for missions: waiting with a limit, waiting out failed guards, and looping over legs."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+
+import py_trees
+from py_trees.common import Status
+
+from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.guards import Guard
+from executive.clock import Clock
+from executive.io.mavlink.commander import Commander
+from executive.mission.lifecycle import MissionState
+
+
+class WaitUntil(py_trees.decorators.Decorator):
+    """RUNNING until the child succeeds (then SUCCESS); FAILURE if it has not within ``limit_s``.
+
+    A failed child is ticked again ``retry_s`` later (a condition: every tick; an action such as
+    arming: not so often that the autopilot is flooded).
+    """
+
+    def __init__(self, child: py_trees.behaviour.Behaviour, limit_s: float, name: str | None = None, retry_s: float = 0.0) -> None:
+        super().__init__(name=name or f"Wait until {child.name}", child=child)
+        self.limit_s = limit_s
+        self.retry_s = retry_s
+        self.clock: Clock | None = None
+
+    def setup(self, **services: object) -> None:
+        clock = services.get("clock")
+        if clock is None:
+            raise RuntimeError(f"{self.name}: setup() needs clock")
+        self.clock = clock  # type: ignore[assignment]
+
+    def initialise(self) -> None:
+        assert self.clock is not None
+        self.started = self.clock.now()
+        self._failed_at = float("-inf")
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        assert self.clock is not None
+        if self.status != Status.RUNNING:
+            self.initialise()
+        if self.clock.now() - self._failed_at >= self.retry_s:
+            yield from self.decorated.tick()
+            if self.decorated.status == Status.FAILURE:
+                self._failed_at = self.clock.now()
+        new_status = self.update()
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def update(self) -> Status:
+        assert self.clock is not None
+        if self.decorated.status == Status.SUCCESS:
+            self.feedback_message = ""
+            return Status.SUCCESS
+        waited = self.clock.now() - self.started
+        if waited > self.limit_s:
+            self.feedback_message = f"gave up after {self.limit_s:g} s: {self.decorated.feedback_message}"
+            return Status.FAILURE
+        self.feedback_message = f"waiting ({waited:.0f}/{self.limit_s:g} s): {self.decorated.feedback_message}"
+        return Status.RUNNING
+
+
+class WaitForGuards(TimedBehaviour):
+    """RUNNING while one of ``guards`` fails this tick (waiting for it to recover), up to ``limit_s``.
+
+    Put it after the guarded branch in a reactive selector. When every guard holds, the branch
+    itself failed, and so does this: there is nothing to wait for. On entry it asks for
+    ``hold_mode`` unless a failing guard says a person has the vehicle.
+    """
+
+    needs = ("clock", "commander")
+    commander: Commander
+
+    def __init__(self, guards: Sequence[Guard], limit_s: float, hold_mode: str | None = None, name: str = "Wait for guards") -> None:
+        super().__init__(name)
+        self.guards = tuple(guards)
+        self.limit_s = limit_s
+        self.hold_mode = hold_mode
+
+    def initialise(self) -> None:
+        super().initialise()
+        failing = [g for g in self.guards if g.status == Status.FAILURE]
+        if self.hold_mode and failing and not any(g.pilot_in_control for g in failing):
+            self.commander.set_mode(self.hold_mode)
+
+    def update(self) -> Status:
+        failing = [g for g in self.guards if g.status == Status.FAILURE]
+        if not failing:
+            self.feedback_message = "no guard is failing"
+            return Status.FAILURE
+        why = "; ".join(f"{g.name} {g.feedback_message}" for g in failing)
+        if self.elapsed > self.limit_s:
+            self.feedback_message = f"not recovered after {self.limit_s:g} s: {why}"
+            return Status.FAILURE
+        self.feedback_message = f"holding ({self.elapsed:.0f}/{self.limit_s:g} s): {why}"
+        return Status.RUNNING
+
+
+class ForEachLeg(py_trees.decorators.Decorator):
+    """Run the child once per remaining leg of the mission; SUCCESS when no leg is left.
+
+    The leg index lives in the mission state, so interrupting and re-entering this node (a guard
+    failed, the mission was paused) continues with the same leg. One child serves every leg, so
+    the tree and its tick cost do not grow with the mission.
+    """
+
+    def __init__(self, child: py_trees.behaviour.Behaviour, name: str = "For each leg") -> None:
+        super().__init__(name=name, child=child)
+        self.mission_state: MissionState | None = None
+
+    def setup(self, **services: object) -> None:
+        state = services.get("mission_state")
+        if state is None:
+            raise RuntimeError(f"{self.name}: setup() needs mission_state")
+        self.mission_state = state  # type: ignore[assignment]
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        assert self.mission_state is not None
+        if self.status != Status.RUNNING:
+            self.initialise()
+        if self.mission_state.target is not None:
+            yield from self.decorated.tick()
+        new_status = self.update()
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def update(self) -> Status:
+        assert self.mission_state is not None
+        state = self.mission_state
+        if state.target is not None and self.decorated.status == Status.SUCCESS:
+            state.advance_leg()
+        if state.target is None:
+            self.feedback_message = f"{state.leg_index}/{state.leg_count} legs done"
+            return Status.SUCCESS
+        if self.decorated.status == Status.FAILURE:
+            self.feedback_message = f"leg {state.leg_index + 1}/{state.leg_count} failed: {self.decorated.feedback_message}"
+            return Status.FAILURE
+        self.feedback_message = f"leg {state.leg_index + 1}/{state.leg_count}"
+        return Status.RUNNING

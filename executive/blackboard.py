@@ -1,0 +1,128 @@
+"""The blackboard's documented keys, who writes them, and their defaults.
+
+Namespaces:
+
+- ``/link``: the MAVLink link to the autopilot (mavlink reader).
+- ``/vehicle``: the vehicle's state as the autopilot reports it (mavlink reader).
+- ``/rc``: the RC receiver, from MAVLink RC_CHANNELS or the CAN bus (mavlink / CAN reader).
+- ``/heading``: the heading sanity filter's verdict (heading filter).
+- ``/mission``: the mission lifecycle and progress (mission state code only).
+- ``/operator``: requests from the operator (control socket, RC switches, ground station).
+- ``/command``: the latest command of each MAV_CMD kind and its ack (commander).
+
+Behaviours only read. Every key exists from :func:`reset` on, holding its default, so a guard
+never trips over a missing key.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import py_trees
+from py_trees.common import Access
+
+
+@dataclass(frozen=True)
+class Key:
+    """One documented blackboard key."""
+
+    name: str
+    default: Any
+    writer: str
+    doc: str
+
+
+_KEYS: tuple[Key, ...] = (
+    Key("/link/up", False, "mavlink reader", "an autopilot HEARTBEAT arrived within the link timeout"),
+    Key("/link/last_heartbeat", None, "mavlink reader", "clock time of the autopilot's last HEARTBEAT"),
+    Key("/link/system_id", None, "mavlink reader", "the autopilot's MAVLink system id"),
+    Key("/link/component_id", None, "mavlink reader", "the autopilot's MAVLink component id"),
+    Key("/link/messages", 0, "mavlink reader", "messages received from the autopilot"),
+    Key("/link/bad_data", 0, "mavlink reader", "undecodable byte runs received"),
+    Key("/vehicle/mav_type", None, "mavlink reader", "HEARTBEAT type (MAV_TYPE)"),
+    Key("/vehicle/armed", False, "mavlink reader", "the autopilot reports itself armed"),
+    Key("/vehicle/mode", None, "mavlink reader", "flight mode name, e.g. GUIDED"),
+    Key("/vehicle/custom_mode", None, "mavlink reader", "flight mode number"),
+    Key("/vehicle/system_status", None, "mavlink reader", "HEARTBEAT system_status (MAV_STATE)"),
+    Key("/vehicle/position", None, "mavlink reader", "GlobalPosition (GLOBAL_POSITION_INT)"),
+    Key("/vehicle/attitude", None, "mavlink reader", "Attitude (ATTITUDE)"),
+    Key("/vehicle/ekf", None, "mavlink reader", "EkfStatus (EKF_STATUS_REPORT)"),
+    Key("/vehicle/battery", None, "mavlink reader", "Battery (SYS_STATUS)"),
+    Key("/vehicle/statustext", None, "mavlink reader", "(severity, text) of the last STATUSTEXT"),
+    Key("/rc/channels", (), "mavlink reader", "RC input PWM per channel, µs; 0 = no signal"),
+    Key("/rc/rssi", None, "mavlink reader", "receiver RSSI, 0-254; None if unknown"),
+    Key("/rc/last_update", None, "mavlink reader", "clock time of the last RC report"),
+    Key("/rc/connected", False, "mavlink reader", "the receiver reports a transmitter (channels non-zero)"),
+    Key("/heading/deg", None, "heading filter", "filtered heading, degrees [0, 360)"),
+    Key("/heading/ok", None, "heading filter", "the compass agrees with the filter; None = not judged yet"),
+    Key("/heading/bias_deg", None, "heading filter", "estimated compass bias against course over ground"),
+    Key("/mission/state", "IDLE", "mission state", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
+    Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
+    Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),
+    Key("/mission/target", None, "mission state", "the Waypoint of the current leg; None when no leg is active"),
+    Key("/mission/reason", "", "mission state", "why the last request was refused or the mission ended"),
+    Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
+)
+
+#: MAV_CMD kinds the commander tracks; each has a key ``/command/<name lowercase>``.
+COMMAND_NAMES: tuple[str, ...] = (
+    "DO_SET_MODE",
+    "COMPONENT_ARM_DISARM",
+    "SET_MESSAGE_INTERVAL",
+    "DO_SET_HOME",
+    "DO_CHANGE_SPEED",
+    "DO_REPOSITION",
+    "DO_VTOL_TRANSITION",
+    "NAV_TAKEOFF",
+    "NAV_LAND",
+)
+
+
+def command_key(name: str) -> str:
+    """The blackboard key holding the CommandStatus of a MAV_CMD kind (e.g. DO_SET_MODE)."""
+    return f"/command/{name.lower()}"
+
+
+KEYS: dict[str, Key] = {k.name: k for k in _KEYS} | {
+    command_key(n): Key(command_key(n), None, "commander", f"CommandStatus of the latest MAV_CMD_{n}") for n in COMMAND_NAMES
+}
+
+
+def reset(*, activity_stream: bool = False) -> None:
+    """Empty the (process-global) blackboard and set every documented key to its default.
+
+    The activity stream (every read and write, for debugging displays) costs time on each
+    access, so it is off unless asked for.
+    """
+    py_trees.blackboard.Blackboard.clear()
+    if activity_stream:
+        py_trees.blackboard.Blackboard.enable_activity_stream()
+    for key in KEYS.values():
+        py_trees.blackboard.Blackboard.set(key.name, key.default)
+
+
+def keys_under(*prefixes: str) -> list[str]:
+    """Documented keys whose names start with one of ``prefixes`` (e.g. ``"/vehicle/"``)."""
+    return [name for name in KEYS if name.startswith(prefixes)]
+
+
+def writer(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
+    """A client that may write ``keys``: for IO readers and mission state code only."""
+    client = py_trees.blackboard.Client(name=name)
+    for key in keys:
+        if key not in KEYS:
+            raise KeyError(f"undocumented blackboard key {key!r}")
+        client.register_key(key=key, access=Access.WRITE)
+    return client
+
+
+def reader(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
+    """A read-only client (what a behaviour holds)."""
+    client = py_trees.blackboard.Client(name=name)
+    for key in keys:
+        if key not in KEYS:
+            raise KeyError(f"undocumented blackboard key {key!r}")
+        client.register_key(key=key, access=Access.READ)
+    return client

@@ -1,0 +1,90 @@
+"""``executive sim``: the simulated vehicle alone, for a separate executive or a ground station."""
+
+from __future__ import annotations
+
+import argparse
+import re
+import signal
+import sys
+import threading
+from types import FrameType
+
+from executive.cli import EXIT_FAILED, EXIT_OK
+from executive.clock import ScaledClock
+from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, Home
+from executive.sim.server import SimServer
+
+
+def _home(text: str) -> Home:
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected LAT,LON[,HEADING] in degrees, got {text!r}") from None
+    if len(values) not in (2, 3) or abs(values[0]) > 90 or abs(values[1]) > 180:
+        raise argparse.ArgumentTypeError(f"expected LAT,LON[,HEADING] in degrees, got {text!r}")
+    return values[0], values[1], values[2] if len(values) == 3 else 0.0
+
+
+def _seconds(text: str, *, positive: bool) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if value < 0 or (positive and value == 0):
+        raise argparse.ArgumentTypeError(f"must be {'> 0' if positive else '>= 0'}, got {text}")
+    return value
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    parser = subparsers.add_parser(
+        "sim",
+        help="run the simulated vehicle alone",
+        description="Run a simulated ArduPilot vehicle speaking MAVLink 2, until Ctrl-C or SIGTERM.",
+    )
+    # let "--home -35.36,149.16" through: argparse would take a negative latitude for an option
+    parser._negative_number_matcher = re.compile(r"^-\.?\d[\d.,]*$")
+    parser.add_argument("--vehicle", choices=sorted(AUTOPILOTS), default="rover", help="vehicle kind (default: %(default)s)")
+    where = "where to listen: tcpin:HOST:PORT or udpin:HOST:PORT (default: %(default)s, as SITL)"
+    parser.add_argument("--mavlink", metavar="URL", default="tcpin:127.0.0.1:5760", help=where)
+    start = "start position and heading in degrees (default: ArduPilot SITL's CMAC)"
+    parser.add_argument("--home", metavar="LAT,LON[,HEADING]", type=_home, default=DEFAULT_HOME, help=start)
+    positive, non_negative = (lambda s: _seconds(s, positive=True)), (lambda s: _seconds(s, positive=False))
+    parser.add_argument("--speedup", metavar="X", type=positive, default=1.0, help="simulated time runs X times faster")
+    ekf = "simulated seconds before the EKF uses GPS and arming is possible (default: %(default)g)"
+    parser.add_argument("--ekf-ready-after", metavar="S", type=non_negative, default=40.0, help=ekf)
+    parser.add_argument("--duration", metavar="S", type=positive, help="exit after S simulated seconds")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Serve the simulated vehicle in the foreground."""
+    clock = ScaledClock(args.speedup)
+    try:
+        server = SimServer(args.vehicle, args.mavlink, clock=clock, home=args.home, ekf_ready_after_s=args.ekf_ready_after)
+    except (OSError, ValueError) as exc:
+        print(f"executive sim: cannot listen on {args.mavlink}: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    done = threading.Event()
+
+    def on_sigterm(signum: int, frame: FrameType | None) -> None:
+        done.set()
+
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, on_sigterm) if in_main_thread else None
+    ap = server.autopilot
+    print(
+        f"executive sim: {ap.FIRMWARE} {args.vehicle} listening on {args.mavlink} (connect to {server.url_for_client}), speed-up {args.speedup:g}x",
+        flush=True,
+    )
+    end = None if args.duration is None else clock.now() + args.duration
+    try:
+        with server:
+            while not done.wait(0.05):
+                if end is not None and clock.now() >= end:
+                    break
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous)
+    return EXIT_OK

@@ -1,0 +1,1 @@
+"""MAVLink: link, reader, commander and the executive's own heartbeat (pymavlink)."""

@@ -1,0 +1,181 @@
+"""The commander: behaviours ask it for commands; it sends them after the tick.
+
+Requests never block. A COMMAND_LONG / COMMAND_INT is queued, sent at :meth:`Commander.flush`,
+matched to its COMMAND_ACK on ``command`` (MAVLink allows one command of a kind in flight), retried
+with ``confirmation + 1`` when no ack comes, and its fate is written to ``/command/<name>`` as a
+:class:`~executive.state.CommandStatus`. Setpoints (no ack exists) are just queued and sent.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+from executive import blackboard
+from executive.clock import Clock
+from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.io.mavlink.link import Link
+from executive.state import CommandState, CommandStatus
+from executive.vehicles import VehicleProfile
+
+#: SET_POSITION_TARGET_GLOBAL_INT type_mask: use position only (ignore velocity, acceleration, yaw).
+POSITION_ONLY_MASK = 0x0DF8
+#: param2 values that skip ArduPilot's checks: 2989 forces an arm, 21196 a disarm (MAVLink's 21196 for both is PX4's).
+FORCE_ARM_MAGIC = 2989.0
+FORCE_DISARM_MAGIC = 21196.0
+
+
+@dataclass
+class _InFlight:
+    status: CommandStatus
+    params: tuple[float, ...]
+    frame: int | None  # set for COMMAND_INT
+    due: float | None  # when to (re)send; None = waiting for an ack until ``deadline``
+    deadline: float
+
+
+def command_name(command: int) -> str:
+    """``176`` -> ``DO_SET_MODE``."""
+    entry = mavlink.enums["MAV_CMD"].get(command)
+    return entry.name.removeprefix("MAV_CMD_") if entry else f"CMD_{command}"
+
+
+class Commander:
+    """Queues commands for the autopilot and tracks their acks on the blackboard."""
+
+    def __init__(
+        self,
+        link: Link,
+        clock: Clock,
+        profile: VehicleProfile,
+        *,
+        system_id: int = 1,
+        component_id: int = EXECUTIVE_COMPONENT,
+        ack_timeout_s: float = 1.5,
+        retries: int = 3,
+    ) -> None:
+        self._link = link
+        self._clock = clock
+        self.profile = profile
+        self._encoder = encoder(system_id, component_id)
+        self._ack_timeout_s = ack_timeout_s
+        self._retries = retries
+        self._tickets = itertools.count(1)
+        self._in_flight: dict[int, _InFlight] = {}
+        self._outbox: list[MAVLinkMessage] = []
+        self._bb = blackboard.writer("commander", [blackboard.command_key(n) for n in blackboard.COMMAND_NAMES])
+        self.target_system = 1
+        self.target_component = 1
+
+    # -- requests (from behaviours; never block) ---------------------------------------------
+    def command_long(self, command: int, params: Sequence[float] = ()) -> int:
+        """Queue a COMMAND_LONG; returns the ticket to look for in ``/command/<name>``."""
+        return self._request(command, params, frame=None)
+
+    def command_int(self, command: int, frame: int, params: Sequence[float] = ()) -> int:
+        """Queue a COMMAND_INT; ``params`` are param1-4, x, y (degrees: scaled here), z."""
+        return self._request(command, params, frame=frame)
+
+    def set_mode(self, mode: str | int) -> int:
+        """Ask for a flight mode by name or number (a name wins); raises KeyError if unknown."""
+        number = self.profile.mode_number(mode)
+        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number))
+
+    def arm(self, *, force: bool = False) -> int:
+        return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0, FORCE_ARM_MAGIC if force else 0.0))
+
+    def disarm(self, *, force: bool = False) -> int:
+        return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0.0, FORCE_DISARM_MAGIC if force else 0.0))
+
+    def goto(self, lat: float, lon: float, alt_m: float = 0.0) -> None:
+        """Queue a GUIDED position target (ArduPilot ignores it, silently, outside GUIDED)."""
+        self._outbox.append(
+            self._encoder.set_position_target_global_int_encode(
+                0,
+                self.target_system,
+                self.target_component,
+                mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+                POSITION_ONLY_MASK,
+                round(lat * 1e7),
+                round(lon * 1e7),
+                alt_m,
+                0, 0, 0, 0, 0, 0, 0, 0,
+            )
+        )  # fmt: skip
+
+    # -- IO side (called by the runtime and the reader) --------------------------------------
+    def on_ack(self, msg: MAVLinkMessage) -> None:
+        """A COMMAND_ACK arrived (the reader calls this)."""
+        entry = self._in_flight.get(msg.command)
+        if entry is None:
+            return
+        now = self._clock.now()
+        if msg.result == mavlink.MAV_RESULT_IN_PROGRESS:
+            entry.deadline = now + self._ack_timeout_s * 4
+            entry.due = None
+            self._publish(entry, CommandState.IN_PROGRESS, msg.result, now)
+            return
+        state = CommandState.ACCEPTED if msg.result == mavlink.MAV_RESULT_ACCEPTED else CommandState.REJECTED
+        self._publish(entry, state, msg.result, now)
+        del self._in_flight[msg.command]
+
+    def flush(self) -> int:
+        """Send what is queued and due (first sends and retries); time out the hopeless. Returns messages sent."""
+        now = self._clock.now()
+        sent = 0
+        for msg in self._outbox:
+            self._link.send(msg)
+            sent += 1
+        self._outbox.clear()
+        for command, entry in list(self._in_flight.items()):
+            if entry.due is None and entry.deadline <= now:
+                if entry.status.attempts > self._retries:
+                    self._publish(entry, CommandState.TIMED_OUT, None, now)
+                    del self._in_flight[command]
+                    continue
+                entry.due = now
+            if entry.due is not None and entry.due <= now:
+                self._link.send(self._encode(command, entry))
+                sent += 1
+                entry.due = None
+                entry.deadline = now + self._ack_timeout_s
+                self._publish(entry, CommandState.SENT, None, now, attempts=entry.status.attempts + 1)
+        return sent
+
+    @property
+    def idle(self) -> bool:
+        """Nothing queued and no command waiting for an ack."""
+        return not self._outbox and not self._in_flight
+
+    # -- internals ---------------------------------------------------------------------------
+    def _request(self, command: int, params: Sequence[float], frame: int | None) -> int:
+        if len(params) > 7:
+            raise ValueError(f"a command has at most 7 parameters, got {len(params)}")
+        now = self._clock.now()
+        ticket = next(self._tickets)
+        status = CommandStatus(ticket, command, command_name(command), CommandState.QUEUED, None, 0, now)
+        padded = (*(float(p) for p in params), *([0.0] * (7 - len(params))))
+        # A newer request of the same kind supersedes the one in flight: its ack could not be told apart.
+        entry = _InFlight(status, padded, frame, due=now, deadline=now + self._ack_timeout_s)
+        self._in_flight[command] = entry
+        self._publish(entry, CommandState.QUEUED, None, now)
+        return ticket
+
+    def _encode(self, command: int, entry: _InFlight) -> MAVLinkMessage:
+        p = entry.params
+        if entry.frame is None:
+            confirmation = entry.status.attempts  # 0 on the first send, +1 on each retry
+            return self._encoder.command_long_encode(self.target_system, self.target_component, command, confirmation, *p)
+        return self._encoder.command_int_encode(
+            self.target_system, self.target_component, entry.frame, command, 0, 0,
+            p[0], p[1], p[2], p[3], round(p[4] * 1e7), round(p[5] * 1e7), p[6],
+        )  # fmt: skip
+
+    def _publish(self, entry: _InFlight, state: CommandState, result: int | None, now: float, attempts: int | None = None) -> None:
+        if attempts is None:
+            attempts = entry.status.attempts
+        entry.status = replace(entry.status, state=state, result=result, time=now, attempts=attempts)
+        key = blackboard.command_key(entry.status.name)
+        if key in blackboard.KEYS:
+            self._bb.set(key, entry.status)

@@ -1,0 +1,29 @@
+"""The executive's own HEARTBEAT, as an onboard-computer component, at 1 Hz."""
+
+from __future__ import annotations
+
+from executive.clock import Clock
+from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
+from executive.io.mavlink.link import Link
+
+
+class Heartbeat:
+    """Sends a HEARTBEAT when one is due; the autopilot and ground stations see us by it."""
+
+    def __init__(self, link: Link, clock: Clock, *, system_id: int = 1, component_id: int = EXECUTIVE_COMPONENT, period_s: float = 1.0) -> None:
+        self._link = link
+        self._clock = clock
+        self._encoder = encoder(system_id, component_id)
+        self._period_s = period_s
+        self._next = float("-inf")
+        self.system_status = mavlink.MAV_STATE_ACTIVE
+
+    def service(self) -> bool:
+        """Send a heartbeat if one is due; returns whether it did."""
+        now = self._clock.now()
+        if now < self._next:
+            return False
+        self._next = now + self._period_s
+        msg = self._encoder.heartbeat_encode(mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, self.system_status)
+        self._link.send(msg)
+        return True

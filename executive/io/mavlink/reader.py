@@ -1,0 +1,164 @@
+"""The MAVLink reader: drains the link each tick and writes what the autopilot says on the blackboard.
+
+It is the only consumer of incoming messages (``recv_match`` would drop the others). The autopilot
+is the first component whose HEARTBEAT names a real autopilot; vehicle facts from anyone else
+(a ground station, another companion computer) are ignored. Values that cannot be true (no fix,
+coordinates off the globe, NaN) never reach the blackboard.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+
+from executive import blackboard
+from executive.clock import Clock
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.link import Link
+from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition
+from executive.vehicles import profile_for_mav_type
+
+log = logging.getLogger(__name__)
+
+_NOT_AUTOPILOTS = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
+
+
+def _finite(*values: float) -> bool:
+    return all(math.isfinite(v) for v in values)
+
+
+class MavlinkReader:
+    """Drains a :class:`Link`, dispatches each message by type, keeps ``/link``, ``/vehicle`` and ``/rc``."""
+
+    def __init__(self, link: Link, clock: Clock, commander: Commander, *, link_timeout_s: float = 3.0) -> None:
+        self._link = link
+        self._clock = clock
+        self._commander = commander
+        self.link_timeout_s = link_timeout_s
+        self._bb = blackboard.writer("mavlink reader", blackboard.keys_under("/link/", "/vehicle/", "/rc/"))
+        self._autopilot: tuple[int, int] | None = None
+        self._messages = 0
+        self._bad_data = 0
+        self._handlers: dict[str, Callable[[MAVLinkMessage, float], None]] = {
+            "HEARTBEAT": self._on_heartbeat,
+            "GLOBAL_POSITION_INT": self._on_global_position,
+            "ATTITUDE": self._on_attitude,
+            "EKF_STATUS_REPORT": self._on_ekf_status,
+            "SYS_STATUS": self._on_sys_status,
+            "RC_CHANNELS": self._on_rc_channels,
+            "COMMAND_ACK": self._on_command_ack,
+            "STATUSTEXT": self._on_statustext,
+        }
+
+    @property
+    def autopilot(self) -> tuple[int, int] | None:
+        """(system id, component id) of the autopilot, once its HEARTBEAT was seen."""
+        return self._autopilot
+
+    def drain(self, max_messages: int = 10_000) -> int:
+        """Handle every message waiting on the link (at most ``max_messages``); returns how many."""
+        now = self._clock.now()
+        count = 0
+        while count < max_messages:
+            msg = self._link.recv()
+            if msg is None:
+                break
+            count += 1
+            self.dispatch(msg, now)
+        self._update_link_health(now)
+        return count
+
+    def dispatch(self, msg: MAVLinkMessage, now: float) -> None:
+        """Handle one message received at clock time ``now``."""
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            self._bad_data += 1
+            self._bb.set("/link/bad_data", self._bad_data)
+            return
+        if kind == "HEARTBEAT" and self._autopilot is None:
+            self._maybe_adopt_autopilot(msg)
+        if self._autopilot != (msg.get_srcSystem(), msg.get_srcComponent()):
+            return
+        self._messages += 1
+        handler = self._handlers.get(kind)
+        if handler is not None:
+            handler(msg, now)
+
+    # -- handlers ----------------------------------------------------------------------------
+    def _maybe_adopt_autopilot(self, msg: MAVLinkMessage) -> None:
+        if msg.autopilot == mavlink.MAV_AUTOPILOT_INVALID or msg.type in _NOT_AUTOPILOTS:
+            return
+        self._autopilot = (msg.get_srcSystem(), msg.get_srcComponent())
+        self._commander.target_system, self._commander.target_component = self._autopilot
+        self._bb.set("/link/system_id", self._autopilot[0])
+        self._bb.set("/link/component_id", self._autopilot[1])
+        log.info("autopilot found: system %d component %d (MAV_TYPE %d)", *self._autopilot, msg.type)
+
+    def _on_heartbeat(self, msg: MAVLinkMessage, now: float) -> None:
+        profile = profile_for_mav_type(msg.type)
+        self._bb.set("/link/last_heartbeat", now)
+        self._bb.set("/vehicle/mav_type", msg.type)
+        self._bb.set("/vehicle/armed", bool(msg.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED))
+        self._bb.set("/vehicle/custom_mode", msg.custom_mode)
+        self._bb.set("/vehicle/mode", profile.mode_name(msg.custom_mode) if profile else f"MODE({msg.custom_mode})")
+        self._bb.set("/vehicle/system_status", msg.system_status)
+
+    def _on_global_position(self, msg: MAVLinkMessage, now: float) -> None:
+        lat, lon = msg.lat / 1e7, msg.lon / 1e7
+        if (msg.lat == 0 and msg.lon == 0) or not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+            return  # no fix yet, or nonsense
+        heading = None if msg.hdg == 65535 else msg.hdg / 100.0
+        position = GlobalPosition(lat, lon, msg.relative_alt / 1000.0, msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0, heading, now)
+        self._bb.set("/vehicle/position", position)
+
+    def _on_attitude(self, msg: MAVLinkMessage, now: float) -> None:
+        if not _finite(msg.roll, msg.pitch, msg.yaw, msg.yawspeed):
+            return
+        self._bb.set(
+            "/vehicle/attitude",
+            Attitude(math.degrees(msg.roll), math.degrees(msg.pitch), math.degrees(msg.yaw) % 360.0, math.degrees(msg.yawspeed), now),
+        )
+
+    def _on_ekf_status(self, msg: MAVLinkMessage, now: float) -> None:
+        variances = (msg.velocity_variance, msg.pos_horiz_variance, msg.pos_vert_variance, msg.compass_variance, msg.terrain_alt_variance)
+        if not _finite(*variances):
+            return
+        self._bb.set("/vehicle/ekf", EkfStatus(EkfFlags(msg.flags), *variances, now))
+
+    def _on_sys_status(self, msg: MAVLinkMessage, now: float) -> None:
+        self._bb.set(
+            "/vehicle/battery",
+            Battery(
+                None if msg.voltage_battery == 65535 else msg.voltage_battery / 1000.0,
+                None if msg.current_battery == -1 else msg.current_battery / 100.0,
+                None if msg.battery_remaining == -1 else msg.battery_remaining,
+                now,
+            ),
+        )
+
+    def _on_rc_channels(self, msg: MAVLinkMessage, now: float) -> None:
+        count = min(msg.chancount, 18)
+        channels = tuple(getattr(msg, f"chan{i}_raw") for i in range(1, count + 1))
+        self._bb.set("/rc/channels", channels)
+        self._bb.set("/rc/rssi", None if msg.rssi == 255 else msg.rssi)
+        self._bb.set("/rc/last_update", now)
+        self._bb.set("/rc/connected", any(channels))
+
+    def _on_command_ack(self, msg: MAVLinkMessage, now: float) -> None:
+        self._commander.on_ack(msg)
+
+    def _on_statustext(self, msg: MAVLinkMessage, now: float) -> None:
+        text = msg.text.rstrip("\x00") if isinstance(msg.text, str) else msg.text.decode("utf-8", "replace").rstrip("\x00")
+        log.log(logging.WARNING if msg.severity <= mavlink.MAV_SEVERITY_WARNING else logging.INFO, "autopilot: %s", text)
+        self._bb.set("/vehicle/statustext", (msg.severity, text))
+
+    def _update_link_health(self, now: float) -> None:
+        last = self._bb.get("/link/last_heartbeat")
+        up = last is not None and now - last <= self.link_timeout_s
+        if up != self._bb.get("/link/up"):
+            self._bb.set("/link/up", up)
+            if last is not None:
+                log.warning("link %s", "up" if up else f"lost: no heartbeat for {now - last:.1f} s")
+        self._bb.set("/link/messages", self._messages)

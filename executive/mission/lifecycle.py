@@ -1,0 +1,140 @@
+"""The mission lifecycle and progress: the only writer of ``/mission``.
+
+States and requests follow the AUV mission manager: upload (IDLE/READY/COMPLETED -> READY, refused
+while RUNNING or PAUSED), start (READY -> RUNNING; COMPLETED -> RUNNING from the first waypoint),
+pause (RUNNING -> PAUSED), resume (PAUSED -> RUNNING), delete (READY/PAUSED/COMPLETED -> IDLE; a
+running mission is paused first). We add ABORTED, where a failed or interrupted mission ends; it
+behaves like COMPLETED. A refused request raises :class:`Refused` and changes nothing.
+
+Progress (the current leg) lives here, not in the tree: a guard that fails and recovers resumes
+the same leg.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from enum import StrEnum
+
+from executive import blackboard
+from executive.mission.model import Mission, Waypoint
+
+log = logging.getLogger(__name__)
+
+
+class MissionStatus(StrEnum):
+    IDLE = "IDLE"
+    READY = "READY"
+    RUNNING = "RUNNING"
+    PAUSED = "PAUSED"
+    COMPLETED = "COMPLETED"
+    ABORTED = "ABORTED"
+
+
+_S = MissionStatus
+#: request -> (states it is allowed from, state it leads to)
+TRANSITIONS: dict[str, tuple[frozenset[MissionStatus], MissionStatus]] = {
+    "upload": (frozenset({_S.IDLE, _S.READY, _S.COMPLETED, _S.ABORTED}), _S.READY),
+    "start": (frozenset({_S.READY, _S.COMPLETED, _S.ABORTED}), _S.RUNNING),
+    "pause": (frozenset({_S.RUNNING}), _S.PAUSED),
+    "resume": (frozenset({_S.PAUSED}), _S.RUNNING),
+    "delete": (frozenset({_S.READY, _S.RUNNING, _S.PAUSED, _S.COMPLETED, _S.ABORTED}), _S.IDLE),
+    "complete": (frozenset({_S.RUNNING}), _S.COMPLETED),
+    "abort": (frozenset({_S.RUNNING, _S.PAUSED}), _S.ABORTED),
+}
+
+Listener = Callable[[MissionStatus, MissionStatus, str], None]
+
+
+class Refused(Exception):
+    """A lifecycle request that is not allowed in the current state; ``str()`` says why."""
+
+
+class MissionState:
+    """The loaded mission, its lifecycle state and the current leg."""
+
+    def __init__(self) -> None:
+        self._bb = blackboard.writer("mission state", blackboard.keys_under("/mission/"))
+        self.mission: Mission | None = None
+        self.status = MissionStatus.IDLE
+        self.leg_index = 0
+        self.listeners: list[Listener] = []
+
+    # -- requests ----------------------------------------------------------------------------
+    def upload(self, mission: Mission) -> None:
+        self._check("upload")
+        self.mission = mission
+        self.leg_index = 0
+        self._transition("upload", f"mission {mission.name!r} loaded, {len(mission.waypoints)} waypoints")
+
+    def start(self) -> None:
+        self._check("start")
+        self.leg_index = 0
+        self._transition("start", "started from the first waypoint")
+
+    def pause(self, reason: str = "pause requested") -> None:
+        self._check("pause")
+        self._transition("pause", reason)
+
+    def resume(self) -> None:
+        self._check("resume")
+        self._transition("resume", f"resumed at leg {self.leg_index + 1}")
+
+    def delete(self) -> None:
+        self._check("delete")
+        if self.status is MissionStatus.RUNNING:
+            self._transition("pause", "paused before delete")
+        self.mission = None
+        self.leg_index = 0
+        self._transition("delete", "mission deleted")
+
+    def complete(self) -> None:
+        self._check("complete")
+        self._transition("complete", "every waypoint reached")
+
+    def abort(self, reason: str) -> None:
+        self._check("abort")
+        self._transition("abort", reason)
+
+    # -- progress ----------------------------------------------------------------------------
+    @property
+    def leg_count(self) -> int:
+        return len(self.mission.waypoints) if self.mission else 0
+
+    @property
+    def target(self) -> Waypoint | None:
+        """The waypoint of the current leg, if a leg is active."""
+        if self.mission is None or self.status not in (MissionStatus.RUNNING, MissionStatus.PAUSED) or self.leg_index >= self.leg_count:
+            return None
+        return self.mission.waypoints[self.leg_index]
+
+    def advance_leg(self) -> None:
+        """The current leg is done: head for the next waypoint."""
+        if self.status is not MissionStatus.RUNNING:
+            raise Refused(f"cannot advance a leg while {self.status}")
+        self.leg_index = min(self.leg_index + 1, self.leg_count)
+        log.info("leg %d/%d done", self.leg_index, self.leg_count)
+        self._publish()
+
+    # -- internals ---------------------------------------------------------------------------
+    def _check(self, request: str) -> None:
+        allowed, _ = TRANSITIONS[request]
+        if self.status not in allowed:
+            raise Refused(f"cannot {request} while {self.status} (allowed from {', '.join(sorted(allowed))})")
+        if request in ("start", "resume") and self.mission is None:
+            raise Refused(f"cannot {request}: no mission loaded")
+
+    def _transition(self, request: str, reason: str) -> None:
+        before, (_, after) = self.status, TRANSITIONS[request]
+        self.status = after
+        self._bb.set("/mission/reason", reason)
+        self._publish()
+        log.info("mission %s -> %s: %s", before, after, reason)
+        for listener in self.listeners:
+            listener(before, after, reason)
+
+    def _publish(self) -> None:
+        self._bb.set("/mission/state", str(self.status))
+        self._bb.set("/mission/leg_index", self.leg_index)
+        self._bb.set("/mission/leg_count", self.leg_count)
+        self._bb.set("/mission/target", self.target)

@@ -1,0 +1,256 @@
+"""Load a mission file: YAML -> :class:`Mission`, every problem located as ``FILE:LINE:COL: FIELD: message``.
+
+The YAML is composed into a node graph first (with limits against alias bombs and deep nesting),
+each value's path is mapped to its node, and only then is the graph constructed and validated, so
+that every pydantic and cross-field error points at the line and column of the offending value.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterator
+from typing import Any, NoReturn, get_args, get_origin
+
+import yaml
+from pydantic import BaseModel, ValidationError
+
+import trees
+from executive.mission.errors import FieldError, MissionError, Path, format_path
+from executive.mission.model import Mission, cross_field_errors
+
+MAX_BYTES = 1 << 20  # a mission file is small; refuse anything bigger before parsing
+MAX_ALIASES = 100
+MAX_DEPTH = 64  # nested mappings/sequences, the root mapping being level 1
+MAX_VALUES = 1_000_000  # nodes after expanding aliases; 1 MiB of YAML without aliases holds fewer
+
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+_EXPONENT_WITHOUT_DOT_OR_SIGN = re.compile(r"[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+")  # what YAML 1.1 reads as a string
+
+#: pydantic type errors -> what the file should have had there.
+_EXPECTED = {
+    "float_type": "a number",
+    "int_type": "an integer",
+    "string_type": "a string",
+    "bool_type": "true or false",
+    "model_type": "a mapping",
+    "dict_type": "a mapping",
+    "list_type": "a list",
+    "invalid_key": "a string key",
+}
+
+
+class _Loader(yaml.SafeLoader):
+    """A SafeLoader that refuses alias bombs, recursive aliases and deep nesting while composing,
+    and indexes the composed graph by value path (reporting duplicate keys)."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self._aliases = 0
+        self._depth = 0
+        self._expanded = 0  # nodes composed so far, counting an alias as the size of what it names
+        self._sizes: dict[int, int] = {}  # id(anchored node) -> its expanded size
+        self.values: dict[Path, yaml.Node] = {}
+        self.keys: dict[Path, yaml.Node] = {}
+        self.duplicates: dict[int, tuple[Path, yaml.Node]] = {}  # id(key node) -> (path, key node): aliased mappings are walked again
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node:
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent):
+            self._aliases += 1
+            if self._aliases > MAX_ALIASES:
+                _refuse(event, f"more than {MAX_ALIASES} aliases (refusing a possible alias bomb)")
+            node = self.anchors.get(event.anchor)
+            # A collection is closed (end_mark set) once composed: an alias to an open one is inside it.
+            if isinstance(node, yaml.CollectionNode) and node.end_mark is None:
+                _refuse(event, f"recursive alias *{event.anchor} (a value that contains itself)")
+            self._expanded += self._sizes.get(id(node), 1)
+            if self._expanded > MAX_VALUES:
+                _refuse(event, f"aliases expand the document to more than {MAX_VALUES} values (refusing a possible alias bomb)")
+            return super().compose_node(parent, index)
+        collection = isinstance(event, yaml.CollectionStartEvent)
+        self._depth += int(collection)
+        if self._depth > MAX_DEPTH:
+            _refuse(event, f"nesting deeper than {MAX_DEPTH} levels")
+        before = self._expanded
+        self._expanded += 1
+        node = super().compose_node(parent, index)
+        self._depth -= int(collection)
+        if getattr(event, "anchor", None) is not None:
+            self._sizes[id(node)] = self._expanded - before
+        return node
+
+    def index_paths(self, node: yaml.Node, path: Path = ()) -> None:
+        """Map ``path`` and everything below it to nodes, as the constructor will see them."""
+        if isinstance(node, yaml.CollectionNode) and len(path) >= MAX_DEPTH:  # deep only through aliases
+            _refuse(node, f"nesting deeper than {MAX_DEPTH} levels (through aliases)")
+        self.values[path] = node
+        if isinstance(node, yaml.SequenceNode):
+            for i, child in enumerate(node.value):
+                self.index_paths(child, (*path, i))
+        elif isinstance(node, yaml.MappingNode):
+            pairs: dict[Any, tuple[yaml.Node, yaml.Node]] = {}
+            for key, value in _own_pairs(node):
+                name = self.construct_object(key)
+                if name in pairs:
+                    self.duplicates[id(key)] = ((*path, name), key)
+                pairs[name] = (key, value)  # the last one wins, as in the constructor
+            for key, value in _merged_pairs(node):
+                pairs.setdefault(self.construct_object(key), (key, value))
+            for name, (key, value) in pairs.items():
+                self.keys[(*path, name)] = key
+                self.index_paths(value, (*path, name))
+
+
+def _refuse(at: yaml.Event | yaml.Node, problem: str) -> NoReturn:
+    raise yaml.composer.ComposerError(problem=problem, problem_mark=at.start_mark)
+
+
+def _own_pairs(node: yaml.MappingNode) -> Iterator[tuple[yaml.Node, yaml.Node]]:
+    """Key/value nodes written in the mapping itself (hashable keys only; the constructor reports the others)."""
+    return ((k, v) for k, v in node.value if isinstance(k, yaml.ScalarNode) and k.tag != _MERGE_TAG)
+
+
+def _merged_pairs(node: yaml.MappingNode) -> Iterator[tuple[yaml.Node, yaml.Node]]:
+    """Key/value nodes merged in with ``<<``, in the precedence order of the constructor."""
+    for key, value in node.value:
+        if key.tag == _MERGE_TAG:
+            for merged in value.value if isinstance(value, yaml.SequenceNode) else [value]:
+                if isinstance(merged, yaml.MappingNode):
+                    yield from _own_pairs(merged)
+                    yield from _merged_pairs(merged)
+
+
+def load_mission(path: str | os.PathLike[str]) -> Mission:
+    """Read and validate a mission file; raises :class:`MissionError` listing every problem."""
+    name = os.fsdecode(path)
+    try:
+        with open(path, "rb") as stream:
+            _check_size(name, os.fstat(stream.fileno()).st_size)
+            data = stream.read(MAX_BYTES + 1)  # the size may lie (a pipe) or change
+    except OSError as exc:
+        raise MissionError([_located(name, None, "(file)", exc.strerror or str(exc))]) from None
+    _check_size(name, len(data))
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        before = data[: exc.start].decode("utf-8", "replace")
+        raise MissionError([_located_after(name, before, "(file)", f"not UTF-8 text: byte 0x{data[exc.start]:02x} at offset {exc.start}")]) from None
+    return load_mission_text(text, name)
+
+
+def load_mission_text(text: str, filename: str) -> Mission:
+    """Validate mission YAML ``text``; ``filename`` is only used to locate errors."""
+    _check_size(filename, len(text.encode("utf-8", "surrogatepass")))
+    data, loader = _parse(text, filename)
+
+    def error(path: Path, message: str, node: yaml.Node | None = None) -> FieldError:
+        """Located at ``node``, else at the value of ``path`` or of its nearest enclosing value in the file."""
+        node = node or next(loader.values[path[:n]] for n in range(len(path), -1, -1) if path[:n] in loader.values)
+        return _located(filename, node.start_mark, format_path(path), message)
+
+    errors = [error(path, "duplicate key (an earlier one is ignored)", key) for path, key in loader.duplicates.values()]
+    try:
+        mission = Mission.model_validate(data)
+    except ValidationError as exc:
+        for e in exc.errors(include_url=False):
+            path = tuple(e["loc"])
+            key = loader.keys.get(path) if e["type"] in ("extra_forbidden", "invalid_key") else None
+            if key is not None and e["type"] == "invalid_key":
+                path = (*path[:-1], key.value)  # 'on: 1' has the key True: name it as written
+            errors.append(error(path, _message(e, key or loader.values.get(path)), key))
+        raise MissionError(errors) from None
+    errors += [error(path, message) for path, message in cross_field_errors(mission)]
+    if mission.tree not in (available := trees.available()):
+        errors.append(error(("tree",), f"unknown tree {mission.tree!r} (available: {', '.join(available) or 'none'})"))
+    if errors:
+        raise MissionError(errors)
+    return mission
+
+
+def _located(file: str, mark: yaml.Mark | None, field: str, message: str) -> FieldError:
+    """An error at a YAML mark (0-based), or at the start of the file."""
+    return FieldError(file, mark.line + 1, mark.column + 1, field, message) if mark else FieldError(file, 1, 1, field, message)
+
+
+def _located_after(file: str, before: str, field: str, message: str) -> FieldError:
+    """An error right after ``before``, the text from the start of the file up to the problem."""
+    return FieldError(file, before.count("\n") + 1, len(before) - before.rfind("\n"), field, message)
+
+
+def _check_size(name: str, size: int) -> None:
+    if size > MAX_BYTES:
+        raise MissionError([_located(name, None, "(file)", f"file is {size} bytes; a mission file may have at most {MAX_BYTES} (1 MiB)")])
+
+
+def _parse(text: str, filename: str) -> tuple[dict[str, Any], _Loader]:
+    """The mission mapping and the loader holding the node index; refuses anything that is not one YAML mapping."""
+    loader = None
+    try:
+        loader = _Loader(text)
+        root = loader.get_single_node()
+        if root is None:
+            raise MissionError([_located(filename, None, "(mission)", "the file holds no YAML document (it is empty or only comments)")])
+        loader.index_paths(root)
+        data = loader.construct_document(root)
+    except yaml.MarkedYAMLError as exc:
+        message = f"{exc.context}, {exc.problem}" if exc.context else str(exc.problem)
+        raise MissionError([_located(filename, exc.problem_mark or exc.context_mark, "(yaml)", message)]) from None
+    except yaml.reader.ReaderError as exc:  # a character YAML does not allow, e.g. a control character
+        raise MissionError([_located_after(filename, text[: exc.position], "(yaml)", f"character #x{exc.character:04x}: {exc.reason}")]) from None
+    finally:
+        if loader is not None:
+            loader.dispose()
+    if not isinstance(data, dict):
+        raise MissionError([_located(filename, root.start_mark, "(mission)", f"expected a mapping of mission fields, got {_describe(data)}")])
+    return data, loader
+
+
+def _message(error: dict[str, Any], node: yaml.Node | None) -> str:
+    """A pydantic error entry as a person would say it."""
+    kind, value = error["type"], error.get("input")
+    if kind == "missing":
+        return "required field is missing"
+    if kind == "extra_forbidden":
+        model = _model_at(error["loc"][:-1])
+        return f"unknown field (allowed: {', '.join(model.model_fields)})" if model else "unknown field"
+    if kind in _EXPECTED:
+        return f"expected {_EXPECTED[kind]}, got {_describe(value)}{_yaml11_hint(node, value)}"
+    message = error["msg"].removeprefix("Value error, ")
+    return message if isinstance(value, list | dict) else f"{_show(value)}: {message}"
+
+
+def _model_at(path: tuple[Any, ...]) -> type[BaseModel] | None:
+    """The model validating the mapping at ``path`` (list indices and ``X | None`` see through)."""
+    model: type[BaseModel] | None = Mission
+    for part in path:
+        if isinstance(part, str) and model is not None:
+            annotation = model.model_fields[part].annotation if part in model.model_fields else None
+            candidates = (annotation, *get_args(annotation))
+            model = next((t for t in candidates if get_origin(t) is None and isinstance(t, type) and issubclass(t, BaseModel)), None)
+    return model
+
+
+def _show(value: Any) -> str:
+    """A value as YAML spells it, shortened."""
+    text = "null" if value is None else str(value).lower() if isinstance(value, bool) else repr(value) if isinstance(value, str) else str(value)
+    return text if len(text) <= 40 else f"{text[:37]}..."
+
+
+def _describe(value: Any) -> str:
+    """The YAML type and value found, e.g. ``bool true`` or ``a list``."""
+    if isinstance(value, list | dict):
+        return "a list" if isinstance(value, list) else "a mapping"
+    kinds = {bool: "bool", int: "integer", float: "number", str: "string", type(None): ""}
+    return f"{kinds.get(type(value), type(value).__name__)} {_show(value)}".strip()
+
+
+def _yaml11_hint(node: yaml.Node | None, value: Any) -> str:
+    """Explain the YAML 1.1 surprises: ``yes``/``off`` are booleans, ``1e3`` is a string."""
+    if not isinstance(node, yaml.ScalarNode) or node.style is not None:  # quoted: the author meant a string
+        return ""
+    if isinstance(value, bool) and node.value.lower() not in ("true", "false"):
+        return f" (YAML 1.1 reads {node.value} as a boolean)"
+    if isinstance(value, str) and _EXPONENT_WITHOUT_DOT_OR_SIGN.fullmatch(value):
+        return f" (YAML 1.1 reads {node.value} as a string: write a number with a dot and a signed exponent, e.g. 1.0e+3)"
+    return ""

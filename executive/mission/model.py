@@ -1,0 +1,130 @@
+"""The mission file format (version 1), as strict pydantic models.
+
+Strict means: no silent coercion (``"5"`` is not a number, ``yes`` is not a float), no unknown
+fields, every value in range. Rules that relate several fields (a waypoint speed inside the
+mission's speed limits, say) are in :func:`cross_field_errors` so that each gets its own
+location in the file.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from executive.mission.errors import Path
+
+VehicleKind = Literal["rover", "boat", "sub", "vtol"]
+ControlMode = Literal["depth", "altitude"]
+
+_STRICT = ConfigDict(strict=True, extra="forbid", frozen=True, allow_inf_nan=False)
+
+Latitude = Annotated[float, Field(ge=-90.0, le=90.0, description="WGS84 latitude, degrees")]
+Longitude = Annotated[float, Field(ge=-180.0, le=180.0, description="WGS84 longitude, degrees")]
+
+
+class Range(BaseModel):
+    """An inclusive ``[min, max]`` interval."""
+
+    model_config = _STRICT
+    min: float
+    max: float
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Range:
+        if self.min > self.max:
+            raise ValueError(f"min ({self.min}) is greater than max ({self.max})")
+        return self
+
+    def __contains__(self, value: float) -> bool:
+        return self.min <= value <= self.max
+
+
+class Limits(BaseModel):
+    """Numbers the guards and actions enforce."""
+
+    model_config = _STRICT
+    acceptance_radius_m: float = Field(2.0, gt=0.0, le=1000.0, description="a waypoint counts as reached within this distance")
+    leg_timeout_s: float = Field(120.0, gt=0.0, le=86400.0, description="a leg taking longer than this is abandoned")
+    max_goal_distance_m: float = Field(5000.0, gt=0.0, le=100_000.0, description="targets farther than this from the vehicle are refused")
+    speed_m_s: Range = Field(default_factory=lambda: Range(min=0.1, max=5.0), description="allowed waypoint speeds")
+    depth_m: Range = Field(default_factory=lambda: Range(min=0.0, max=100.0), description="allowed depths (sub)")
+    altitude_m: Range = Field(default_factory=lambda: Range(min=2.0, max=100.0), description="allowed altitudes above seabed/ground")
+    link_timeout_s: float = Field(3.0, gt=0.0, le=60.0, description="heartbeat age after which the link counts as lost")
+    recovery_timeout_s: float = Field(120.0, gt=0.0, le=86400.0, description="how long a failed guard may take to recover before the mission aborts")
+    ekf_wait_s: float = Field(120.0, gt=0.0, le=3600.0, description="how long pre-flight waits for the EKF to become ready")
+
+
+class RcConfig(BaseModel):
+    """How the RC transmitter shows that a person is taking over."""
+
+    model_config = _STRICT
+    takeover_channel: int = Field(6, ge=1, le=18, description="RC channel whose high position means manual take-over")
+    takeover_above_us: int = Field(1700, ge=800, le=2200, description="PWM above which the take-over channel is high")
+
+
+class Home(BaseModel):
+    """Where the vehicle is expected to start (the simulated vehicle starts here)."""
+
+    model_config = _STRICT
+    lat: Latitude
+    lon: Longitude
+    heading_deg: float = Field(0.0, ge=0.0, lt=360.0)
+
+
+class Waypoint(BaseModel):
+    """One point of the route."""
+
+    model_config = _STRICT
+    lat: Latitude
+    lon: Longitude
+    alt_m: float = Field(0.0, ge=-1000.0, le=10_000.0, description="altitude above home (air vehicles)")
+    name: str | None = Field(None, max_length=64)
+    speed_m_s: float | None = Field(None, gt=0.0, description="speed on the leg to this point")
+    depth_m: float | None = Field(None, ge=0.0, description="target depth (sub, control_mode depth)")
+    altitude_m: float | None = Field(None, gt=0.0, description="height above the seabed (sub, control_mode altitude)")
+    control_mode: ControlMode | None = Field(None, description="sub: hold a depth or an altitude above the seabed")
+
+
+class Mission(BaseModel):
+    """A mission file."""
+
+    model_config = _STRICT
+    version: Literal[1] = Field(description="mission file format version")
+    name: str = Field(min_length=1, max_length=128)
+    vehicle: VehicleKind
+    tree: str = Field("waypoints", pattern=r"^[a-z][a-z0-9_]*$", description="module of trees/ that builds the tree")
+    description: str | None = Field(None, max_length=4096)
+    auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
+    home: Home | None = None
+    limits: Limits = Field(default_factory=Limits)
+    rc: RcConfig = Field(default_factory=RcConfig)
+    waypoints: list[Waypoint] = Field(min_length=1, max_length=100_000)
+
+
+def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """Rules between fields; each error is the path of the offending value and why."""
+    errors: list[tuple[Path, str]] = []
+    limits = mission.limits
+    for i, wp in enumerate(mission.waypoints):
+        here: Path = ("waypoints", i)
+        if wp.speed_m_s is not None and wp.speed_m_s not in limits.speed_m_s:
+            errors.append(((*here, "speed_m_s"), f"{wp.speed_m_s} m/s is outside limits.speed_m_s "
+                           f"[{limits.speed_m_s.min}, {limits.speed_m_s.max}]"))  # fmt: skip
+        sub_fields = ("depth_m", "altitude_m", "control_mode")
+        if mission.vehicle != "sub":
+            for field in sub_fields:
+                if getattr(wp, field) is not None:
+                    errors.append(((*here, field), f"only a sub has {field} (vehicle is {mission.vehicle})"))
+            continue
+        if wp.depth_m is not None and wp.depth_m not in limits.depth_m:
+            errors.append(((*here, "depth_m"), f"{wp.depth_m} m is outside limits.depth_m "
+                           f"[{limits.depth_m.min}, {limits.depth_m.max}]"))  # fmt: skip
+        if wp.altitude_m is not None and wp.altitude_m not in limits.altitude_m:
+            errors.append(((*here, "altitude_m"), f"{wp.altitude_m} m is outside limits.altitude_m "
+                           f"[{limits.altitude_m.min}, {limits.altitude_m.max}]"))  # fmt: skip
+        if wp.control_mode == "altitude" and wp.altitude_m is None:
+            errors.append(((*here, "altitude_m"), "control_mode altitude needs altitude_m"))
+        if wp.control_mode != "altitude" and wp.altitude_m is not None:
+            errors.append(((*here, "altitude_m"), "altitude_m is only used with control_mode altitude"))
+    return errors

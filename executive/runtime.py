@@ -1,0 +1,198 @@
+"""The onboard runtime: a fixed-rate loop of drain IO -> blackboard -> tick -> send commands.
+
+It owns the process-level safety: a stop request (Ctrl-C, SIGTERM), a failed mission and an
+exception inside a behaviour all end with the vehicle commanded into its safe mode.
+"""
+
+from __future__ import annotations
+
+import logging
+import types
+from dataclasses import dataclass
+
+import py_trees
+from py_trees.common import Status
+
+import trees
+from executive import blackboard
+from executive.clock import Clock
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.heartbeat import Heartbeat
+from executive.io.mavlink.link import Link
+from executive.io.mavlink.reader import MavlinkReader
+from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.model import Mission
+from executive.progress import Progress
+from executive.vehicles import PROFILES
+
+log = logging.getLogger(__name__)
+
+
+class BehaviourCrashed(RuntimeError):
+    """A behaviour raised during a tick; ``path`` names it from the root."""
+
+    def __init__(self, path: str, error: BaseException) -> None:
+        super().__init__(f"{path}: {type(error).__name__}: {error}")
+        self.path = path
+        self.error = error
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How a run ended."""
+
+    status: MissionStatus
+    reason: str
+    ticks: int
+
+
+def behaviour_path(node: py_trees.behaviour.Behaviour) -> str:
+    """``Mission/Route or hold/Guarded route/EKF ok?``"""
+    names = []
+    current: py_trees.behaviour.Behaviour | None = node
+    while current is not None:
+        names.append(current.name)
+        current = current.parent
+    return "/".join(reversed(names))
+
+
+def _crashed_behaviour(tb: types.TracebackType | None) -> py_trees.behaviour.Behaviour | None:
+    """The innermost behaviour whose method is on the traceback."""
+    found = None
+    while tb is not None:
+        candidate = tb.tb_frame.f_locals.get("self")
+        if isinstance(candidate, py_trees.behaviour.Behaviour):
+            found = candidate
+        tb = tb.tb_next
+    return found
+
+
+def explain_failure(root: py_trees.behaviour.Behaviour) -> str:
+    """The reason for a failed tree: the shallowest failed node that says why."""
+    best: tuple[int, str] | None = None
+    for node in root.iterate():
+        if node.status == Status.FAILURE and node.feedback_message:
+            depth = behaviour_path(node).count("/")
+            if best is None or depth <= best[0]:
+                best = (depth, f"{node.name}: {node.feedback_message}")
+    return best[1] if best else "the mission tree failed"
+
+
+class Runtime:
+    """One executive attached to one vehicle, running one mission."""
+
+    def __init__(
+        self,
+        mission: Mission,
+        link: Link,
+        clock: Clock,
+        *,
+        rate_hz: float = 10.0,
+        system_id: int = 1,
+        progress: Progress | None = None,
+        safe_timeout_s: float = 5.0,
+        root: py_trees.behaviour.Behaviour | None = None,
+    ) -> None:
+        """``root`` replaces the tree the mission selects (for tests and tools)."""
+        blackboard.reset()
+        self.mission = mission
+        self.clock = clock
+        self.period_s = 1.0 / rate_hz
+        self.profile = PROFILES[mission.vehicle]
+        self.commander = Commander(link, clock, self.profile, system_id=system_id)
+        self.reader = MavlinkReader(link, clock, self.commander, link_timeout_s=mission.limits.link_timeout_s)
+        self.heartbeat = Heartbeat(link, clock, system_id=system_id)
+        self.mission_state = MissionState()
+        self.mission_state.upload(mission)
+        self.tree = py_trees.trees.BehaviourTree(root or trees.build(mission))
+        self.tree.setup(clock=clock, commander=self.commander, mission_state=self.mission_state)
+        self.progress = progress
+        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up"])
+        self.safe_timeout_s = safe_timeout_s
+        self.ticks = 0
+        self._stop_reason: str | None = None
+
+    # -- phases ------------------------------------------------------------------------------
+    def connect(self, timeout_s: float) -> bool:
+        """Announce ourselves and wait for the autopilot's heartbeat (bounded)."""
+        deadline = self.clock.now() + timeout_s
+        while self.clock.now() < deadline:
+            self.heartbeat.service()
+            self.reader.drain()
+            if self.reader.autopilot is not None:
+                return True
+            self.clock.sleep_until(self.clock.now() + self.period_s)
+        return False
+
+    def tick(self) -> Status:
+        """One tick: drain the link, tick the tree, send what it asked for."""
+        self.reader.drain()
+        self.heartbeat.service()
+        try:
+            self.tree.tick()
+        except Exception as exc:
+            node = _crashed_behaviour(exc.__traceback__)
+            raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
+        self.commander.flush()
+        self.ticks += 1
+        return self.tree.root.status
+
+    def request_stop(self, reason: str) -> None:
+        """Ask the loop to stop at the next tick (safe from a signal handler)."""
+        self._stop_reason = reason
+
+    def run(self) -> Outcome:
+        """Start the mission and tick at the fixed rate until it completes, fails or is stopped."""
+        self.mission_state.start()
+        next_tick = self.clock.now()
+        try:
+            while True:
+                if self._stop_reason is not None:
+                    return self._abort(f"stopped: {self._stop_reason}")
+                try:
+                    status = self.tick()
+                except BehaviourCrashed as crash:
+                    log.error("behaviour crashed: %s", crash, exc_info=crash.error)
+                    return self._abort(f"behaviour crashed: {crash}")
+                if self.progress:
+                    self.progress.update()
+                if status == Status.SUCCESS:
+                    self.mission_state.complete()
+                    return Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks)
+                if status == Status.FAILURE:
+                    return self._abort(explain_failure(self.tree.root))
+                next_tick += self.period_s
+                now = self.clock.now()
+                if next_tick < now - self.period_s:  # fell behind by more than a tick: do not try to catch up
+                    next_tick = now
+                self.clock.sleep_until(next_tick)
+        finally:
+            if self.progress:
+                self.progress.update(force=True)
+                self.progress.close()
+
+    def make_safe(self) -> bool:
+        """Command the vehicle's safe mode and wait (bounded) for the heartbeat to confirm it."""
+        self.tree.interrupt()
+        safe = self.profile.safe_mode
+        deadline = self.clock.now() + self.safe_timeout_s
+        requested = False
+        while self.clock.now() < deadline:
+            self.reader.drain()
+            self.heartbeat.service()
+            if self._bb.get("/link/up") and self._bb.get("/vehicle/mode") == safe:
+                log.info("vehicle in %s", safe)
+                return True
+            if not requested:
+                self.commander.set_mode(safe)
+                requested = True
+            self.commander.flush()
+            self.clock.sleep_until(self.clock.now() + self.period_s / 2)
+        log.error("could not confirm %s within %g s", safe, self.safe_timeout_s)
+        return False
+
+    def _abort(self, reason: str) -> Outcome:
+        log.warning("mission aborted: %s", reason)
+        self.make_safe()
+        self.mission_state.abort(reason)
+        return Outcome(MissionStatus.ABORTED, reason, self.ticks)

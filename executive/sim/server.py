@@ -1,0 +1,107 @@
+"""The simulated vehicle on a real MAVLink link (UDP or TCP), served from a background thread."""
+
+from __future__ import annotations
+
+import logging
+import threading
+from types import TracebackType
+
+from executive.clock import Clock, ScaledClock
+from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, mavutil
+from executive.sim.autopilot import DEFAULT_HOME, ArduPilotSim, Home, make_autopilot
+
+log = logging.getLogger(__name__)
+
+
+class SimServer:
+    """A simulated ArduPilot vehicle listening on ``url`` (``udpin:HOST:PORT`` or ``tcpin:HOST:PORT``).
+
+    Port 0 lets the OS choose: :attr:`port` and :attr:`url_for_client` tell where it landed. As on
+    a real vehicle behind a ``udpin`` endpoint, nothing is sent until a peer has sent something.
+    pymavlink's ``tcpin`` serves one client at a time. The autopilot runs in ``clock`` time; the
+    loop sleeps ``period_s`` of wall time between iterations whatever the speed-up. Hold
+    :attr:`lock` to touch :attr:`autopilot` from another thread.
+    """
+
+    MAX_DRAIN = 200  # messages handled per iteration: a flood cannot starve the telemetry
+
+    def __init__(
+        self,
+        vehicle_kind: str,
+        url: str = "udpin:127.0.0.1:0",
+        clock: Clock | None = None,
+        home: Home = DEFAULT_HOME,
+        system_id: int = 1,
+        ekf_ready_after_s: float = 40.0,
+        period_s: float = 0.005,
+    ) -> None:
+        self.clock = clock if clock is not None else ScaledClock()
+        self.autopilot: ArduPilotSim = make_autopilot(vehicle_kind, self.clock, home, system_id=system_id, ekf_ready_after_s=ekf_ready_after_s)
+        self.url = url
+        self.period_s = period_s
+        self.lock = threading.Lock()
+        self._conn = mavutil.mavlink_connection(url, source_system=system_id, source_component=AUTOPILOT_COMPONENT, dialect="ardupilotmega")
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @property
+    def _socket_name(self) -> tuple[str, int]:
+        sock = self._conn.listen if isinstance(self._conn, mavutil.mavtcpin) else self._conn.port
+        host, port = sock.getsockname()[:2]
+        return host, port
+
+    @property
+    def port(self) -> int:
+        """The local port the link listens on."""
+        return self._socket_name[1]
+
+    @property
+    def url_for_client(self) -> str:
+        """What a client (the executive, a ground station) connects to: ``udpout:`` or ``tcp:``."""
+        host, port = self._socket_name
+        host = "127.0.0.1" if host in ("0.0.0.0", "") else host
+        scheme = "tcp" if isinstance(self._conn, mavutil.mavtcpin) else "udpout"
+        return f"{scheme}:{host}:{port}"
+
+    def start(self) -> SimServer:
+        """Start serving in a daemon thread; returns self."""
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name=f"sim-{self.autopilot.profile.kind}", daemon=True)
+            self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop serving and close the link (idempotent)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+            self._thread = None
+        self._conn.close()
+
+    def __enter__(self) -> SimServer:
+        return self.start()
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+        self.stop()
+
+    def step(self) -> None:
+        """One iteration: drain the link, handle what came in, move the world, send what is due."""
+        out = []
+        with self.lock:
+            for _ in range(self.MAX_DRAIN):
+                msg = self._conn.recv_msg()
+                if msg is None:
+                    break
+                if msg.get_type() != "BAD_DATA":
+                    out += self.autopilot.handle(msg)
+            out += self.autopilot.update()
+        for msg in out:
+            self._conn.mav.send(msg)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                self.step()
+            except Exception:  # garbage on the link or a dead peer must not kill the vehicle
+                log.exception("simulated vehicle: error in the serving loop")
+            self._stop.wait(self.period_s)

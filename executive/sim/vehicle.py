@@ -1,0 +1,223 @@
+"""Kinematics of the simulated vehicles: where they are and how they move. No IO, no MAVLink.
+
+Positions are integrated on a flat patch of earth around the start point (metres north/east),
+which is accurate to centimetres over the few kilometres a mission spans.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+_EARTH_RADIUS_M = 6378137.0
+
+
+def _wrap_pi(angle: float) -> float:
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def _clamp(value: float, limit: float) -> float:
+    return max(-limit, min(limit, value))
+
+
+class VehicleModel(Protocol):
+    """What an autopilot needs from a vehicle model (surface vehicles now; a sub or a VTOL later)."""
+
+    powered: bool  # armed: motors respond; unpowered, the vehicle does not move at all
+
+    @property
+    def lat(self) -> float: ...
+    @property
+    def lon(self) -> float: ...
+    @property
+    def alt_m(self) -> float:
+        """Height above the start point (negative = depth)."""
+        ...
+
+    @property
+    def heading_deg(self) -> float: ...
+    @property
+    def velocity_ned(self) -> tuple[float, float, float]: ...
+    @property
+    def yaw_rate_rad_s(self) -> float: ...
+    @property
+    def speed_m_s(self) -> float:
+        """Forward speed through the medium (positive ahead)."""
+        ...
+
+    @property
+    def target(self) -> tuple[float, float] | None: ...
+    @property
+    def arrived(self) -> bool: ...
+
+    def drive_to(self, lat: float, lon: float, speed_m_s: float | None = None) -> None: ...
+    def hold(self) -> None: ...
+    def stopping_point(self) -> tuple[float, float]: ...
+    def distance_to(self, lat: float, lon: float) -> float: ...
+    def bearing_to(self, lat: float, lon: float) -> float: ...
+    def step(self, dt: float) -> None: ...
+
+
+@dataclass(frozen=True)
+class Limits:
+    """How a surface vehicle can move."""
+
+    cruise_m_s: float = 2.0
+    max_m_s: float = 3.5
+    accel_m_s2: float = 1.0
+    decel_m_s2: float = 1.5
+    turn_rate_deg_s: float = 90.0
+    arrive_m: float = 0.3  # closer than this to its target, the vehicle stops and holds
+    drift_m_s: float = 0.0  # a water current (boats) that pushes a powered vehicle: LOITER corrects it
+    drift_toward_deg: float = 0.0
+
+
+ROVER_LIMITS = Limits()
+BOAT_LIMITS = Limits(accel_m_s2=0.6, decel_m_s2=1.0, turn_rate_deg_s=45.0, drift_m_s=0.03, drift_toward_deg=60.0)
+
+
+class SurfaceVehicle:
+    """A rover or a boat: position, heading and forward speed, with a drive-to-target controller.
+
+    The controller turns toward the target (turn-rate limited), drives at the requested speed
+    (acceleration limited), slows down on a profile it can always brake to, and stops within
+    ``limits.arrive_m`` of the target. Without a target it brakes to a stop and stays there.
+    """
+
+    SUBSTEP_S = 0.05
+    HEADING_GAIN = 2.0  # turn rate (rad/s) asked per radian of heading error
+    APPROACH_GAIN = 1.0  # speed (m/s) allowed per metre left, for the last metres
+
+    def __init__(self, lat: float, lon: float, heading_deg: float = 0.0, limits: Limits = ROVER_LIMITS) -> None:
+        self.limits = limits
+        self.powered = False
+        self._lat0, self._lon0 = lat, lon
+        self._m_per_deg_lat = math.radians(1.0) * _EARTH_RADIUS_M
+        self._m_per_deg_lon = self._m_per_deg_lat * math.cos(math.radians(lat))
+        self._n = self._e = 0.0
+        self._yaw = _wrap_pi(math.radians(heading_deg))
+        self._speed = 0.0
+        self._yaw_rate = 0.0
+        self._target: tuple[float, float] | None = None  # north, east (m)
+        self._target_speed = limits.cruise_m_s
+        self._arrived = False
+        toward = math.radians(limits.drift_toward_deg)
+        self._drift = (limits.drift_m_s * math.cos(toward), limits.drift_m_s * math.sin(toward))
+
+    # -- local flat-earth frame --------------------------------------------------------------
+
+    def _ne(self, lat: float, lon: float) -> tuple[float, float]:
+        return (lat - self._lat0) * self._m_per_deg_lat, (lon - self._lon0) * self._m_per_deg_lon
+
+    def _latlon(self, n: float, e: float) -> tuple[float, float]:
+        return self._lat0 + n / self._m_per_deg_lat, self._lon0 + e / self._m_per_deg_lon
+
+    # -- state ---------------------------------------------------------------------------------
+
+    @property
+    def lat(self) -> float:
+        return self._latlon(self._n, self._e)[0]
+
+    @property
+    def lon(self) -> float:
+        return self._latlon(self._n, self._e)[1]
+
+    @property
+    def alt_m(self) -> float:
+        return 0.0
+
+    @property
+    def heading_deg(self) -> float:
+        """Heading in [0, 360)."""
+        return math.degrees(self._yaw) % 360.0
+
+    @property
+    def speed_m_s(self) -> float:
+        return self._speed
+
+    @property
+    def yaw_rate_rad_s(self) -> float:
+        return self._yaw_rate
+
+    @property
+    def velocity_ned(self) -> tuple[float, float, float]:
+        """Velocity over ground (north, east, down), drift included."""
+        drift_n, drift_e = self._drift if self.powered else (0.0, 0.0)
+        return self._speed * math.cos(self._yaw) + drift_n, self._speed * math.sin(self._yaw) + drift_e, 0.0
+
+    @property
+    def target(self) -> tuple[float, float] | None:
+        """The (lat, lon) being driven to, if any."""
+        return None if self._target is None else self._latlon(*self._target)
+
+    @property
+    def arrived(self) -> bool:
+        """True once within ``limits.arrive_m`` of the target (until the next order)."""
+        return self._arrived
+
+    def distance_to(self, lat: float, lon: float) -> float:
+        n, e = self._ne(lat, lon)
+        return math.hypot(n - self._n, e - self._e)
+
+    def bearing_to(self, lat: float, lon: float) -> float:
+        """Bearing in [0, 360) from the vehicle to a point."""
+        n, e = self._ne(lat, lon)
+        return math.degrees(math.atan2(e - self._e, n - self._n)) % 360.0
+
+    def stopping_point(self) -> tuple[float, float]:
+        """Where the vehicle would stop if it braked now."""
+        ahead = self._speed * abs(self._speed) / (2.0 * self.limits.decel_m_s2)
+        return self._latlon(self._n + ahead * math.cos(self._yaw), self._e + ahead * math.sin(self._yaw))
+
+    # -- orders ------------------------------------------------------------------------------
+
+    def drive_to(self, lat: float, lon: float, speed_m_s: float | None = None) -> None:
+        """Drive to a point at ``speed_m_s`` (default cruise, capped at the maximum) and stop there."""
+        self._target = self._ne(lat, lon)
+        self._target_speed = min(speed_m_s if speed_m_s and speed_m_s > 0 else self.limits.cruise_m_s, self.limits.max_m_s)
+        self._arrived = False
+
+    def hold(self) -> None:
+        """Forget the target and brake to a stop."""
+        self._target = None
+        self._arrived = False
+
+    # -- physics -------------------------------------------------------------------------------
+
+    def step(self, dt: float) -> None:
+        """Advance ``dt`` seconds, in sub-steps of at most ``SUBSTEP_S``."""
+        while dt > 1e-9:
+            h = min(dt, self.SUBSTEP_S)
+            self._substep(h)
+            dt -= h
+
+    def _substep(self, h: float) -> None:
+        if not self.powered:
+            self._speed = self._yaw_rate = 0.0
+            return
+        want_speed, want_rate = self._control()
+        change = want_speed - self._speed
+        self._speed += _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h)
+        self._yaw_rate = want_rate
+        self._yaw = _wrap_pi(self._yaw + want_rate * h)
+        vn, ve, _ = self.velocity_ned
+        self._n += vn * h
+        self._e += ve * h
+
+    def _control(self) -> tuple[float, float]:
+        """Speed and turn rate wanted now."""
+        if self._target is None or self._arrived:
+            return 0.0, 0.0
+        dn, de = self._target[0] - self._n, self._target[1] - self._e
+        distance = math.hypot(dn, de)
+        if distance <= self.limits.arrive_m:
+            self._arrived = True
+            return 0.0, 0.0
+        error = _wrap_pi(math.atan2(de, dn) - self._yaw)
+        rate = _clamp(self.HEADING_GAIN * error, math.radians(self.limits.turn_rate_deg_s))
+        # a braking profile with margin, then a linear approach: never overshoots the target
+        brake = math.sqrt(2.0 * 0.8 * self.limits.decel_m_s2 * distance)
+        speed = min(self._target_speed, brake, self.APPROACH_GAIN * distance)
+        # turn toward a target behind before driving to it: no circling around it
+        return speed * max(0.0, math.cos(error)), rate

@@ -1,0 +1,117 @@
+"""Immutable values the IO readers put on the blackboard.
+
+Each is replaced whole when a new message arrives, so a behaviour never sees half an update,
+and a snapshot of the blackboard shows exactly which facts changed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntFlag, StrEnum
+
+
+@dataclass(frozen=True, slots=True)
+class GlobalPosition:
+    """Where the vehicle is (GLOBAL_POSITION_INT)."""
+
+    lat: float  # degrees
+    lon: float  # degrees
+    alt_rel_m: float  # above home; meaningless on a surface vehicle before EKF origin is set
+    vn_m_s: float
+    ve_m_s: float
+    vd_m_s: float
+    heading_deg: float | None  # None when the autopilot does not know it
+    time: float  # executive clock time of reception
+
+    @property
+    def ground_speed_m_s(self) -> float:
+        return float((self.vn_m_s**2 + self.ve_m_s**2) ** 0.5)
+
+
+@dataclass(frozen=True, slots=True)
+class Attitude:
+    """ATTITUDE, in degrees; yaw in [0, 360)."""
+
+    roll_deg: float
+    pitch_deg: float
+    yaw_deg: float
+    yaw_rate_deg_s: float
+    time: float
+
+
+class EkfFlags(IntFlag):
+    """EKF_STATUS_REPORT.flags."""
+
+    ATTITUDE = 1
+    VELOCITY_HORIZ = 2
+    VELOCITY_VERT = 4
+    POS_HORIZ_REL = 8
+    POS_HORIZ_ABS = 16
+    POS_VERT_ABS = 32
+    POS_VERT_AGL = 64
+    CONST_POS_MODE = 128
+    PRED_POS_HORIZ_REL = 256
+    PRED_POS_HORIZ_ABS = 512
+    UNINITIALIZED = 1024
+    GPS_GLITCHING = 32768
+
+
+@dataclass(frozen=True, slots=True)
+class EkfStatus:
+    """EKF_STATUS_REPORT: flags and normalised variances (1.0 = at the failsafe threshold scale)."""
+
+    flags: EkfFlags
+    velocity_variance: float
+    pos_horiz_variance: float
+    pos_vert_variance: float
+    compass_variance: float
+    terrain_alt_variance: float
+    time: float
+
+    def position_ok(self) -> bool:
+        """ArduRover's own test: a horizontal position estimate, not in constant-position mode."""
+        has_position = bool(self.flags & (EkfFlags.POS_HORIZ_ABS | EkfFlags.POS_HORIZ_REL))
+        return has_position and not self.flags & EkfFlags.CONST_POS_MODE
+
+    def variances_ok(self, threshold: float = 0.8) -> bool:
+        """ArduPilot's EKF failsafe trips when two of compass/velocity/position variances exceed FS_EKF_THRESH."""
+        over = sum(v >= threshold for v in (self.compass_variance, self.velocity_variance, self.pos_horiz_variance))
+        return over < 2
+
+
+@dataclass(frozen=True, slots=True)
+class Battery:
+    """SYS_STATUS battery fields; ``None`` where the autopilot reports 'unknown'."""
+
+    voltage_v: float | None
+    current_a: float | None
+    remaining_pct: int | None
+    time: float
+
+
+class CommandState(StrEnum):
+    """Where a command stands."""
+
+    QUEUED = "QUEUED"
+    SENT = "SENT"
+    IN_PROGRESS = "IN_PROGRESS"  # MAV_RESULT_IN_PROGRESS: the autopilot is working on it
+    ACCEPTED = "ACCEPTED"
+    REJECTED = "REJECTED"  # any other MAV_RESULT
+    TIMED_OUT = "TIMED_OUT"  # no ack after every retry
+
+    @property
+    def done(self) -> bool:
+        return self in (CommandState.ACCEPTED, CommandState.REJECTED, CommandState.TIMED_OUT)
+
+
+@dataclass(frozen=True, slots=True)
+class CommandStatus:
+    """The latest command of one MAV_CMD kind and what became of it."""
+
+    ticket: int  # unique per request; a behaviour keeps the ticket it was given
+    command: int  # MAV_CMD id
+    name: str  # MAV_CMD name without the prefix, e.g. DO_SET_MODE
+    state: CommandState
+    result: int | None  # MAV_RESULT of the last ack
+    attempts: int
+    time: float

@@ -1,0 +1,167 @@
+"""Actions tick by tick: the status on each tick and the exact commands sent."""
+
+from __future__ import annotations
+
+import pytest
+from py_trees.common import Status
+
+from executive.behaviours import Arm, Disarm, GoTo, SetMode
+from executive.geo import destination
+from executive.io.mavlink.dialect import mavlink
+from executive.state import GlobalPosition
+
+DO_SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
+ARM_DISARM = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
+
+
+def at(lat: float, lon: float, t: float = 0.0) -> GlobalPosition:
+    return GlobalPosition(lat, lon, 0.0, 0.0, 0.0, 0.0, 0.0, t)
+
+
+class TestSetMode:
+    def test_already_in_mode_succeeds_without_a_command(self, harness, vehicle):
+        vehicle.set(vehicle__mode="GUIDED")
+        h = harness(SetMode("GUIDED"))
+        assert h.tick() == Status.SUCCESS
+        assert h.link.take() == []
+
+    def test_ack_then_heartbeat_confirms(self, harness, vehicle):
+        vehicle.set(vehicle__mode="HOLD")
+        h = harness(SetMode("guided"))
+        assert h.tick() == Status.RUNNING
+        (sent,) = h.link.take()
+        assert (sent.get_type(), sent.command, sent.confirmation) == ("COMMAND_LONG", DO_SET_MODE, 0)
+        assert (sent.param1, sent.param2) == (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 15)
+        assert (sent.target_system, sent.target_component) == (1, 1)
+        h.ack(DO_SET_MODE)
+        assert h.tick() == Status.RUNNING  # an ack is not the mode: wait for the heartbeat
+        vehicle.set(vehicle__mode="GUIDED")
+        assert h.tick() == Status.SUCCESS
+        assert h.link.take() == []  # no retry after the ack
+
+    def test_refused_mode_fails_with_the_reason(self, harness, vehicle):
+        vehicle.set(vehicle__mode="HOLD", vehicle__statustext=(4, "Flight mode change failed"))
+        node = SetMode("GUIDED")
+        h = harness(node)
+        assert h.tick() == Status.RUNNING
+        h.ack(DO_SET_MODE, mavlink.MAV_RESULT_FAILED)
+        assert h.tick() == Status.FAILURE
+        assert node.feedback_message == "refused: FAILED (Flight mode change failed)"
+
+    def test_no_ack_is_retried_with_confirmation_then_times_out(self, harness, vehicle):
+        vehicle.set(vehicle__mode="HOLD")
+        node = SetMode("GUIDED", confirm_timeout_s=30.0)
+        h = harness(node)
+        confirmations, status, ticks = [], Status.RUNNING, 0
+        while status == Status.RUNNING and ticks < 100:
+            status = h.tick(0.125)  # exact in binary: no rounding in the deadlines
+            ticks += 1
+            confirmations += [m.confirmation for m in h.link.take("COMMAND_LONG")]
+        assert confirmations == [0, 1, 2, 3]
+        assert status == Status.FAILURE
+        # sent on tick 1, retried on 13, 25 and 37 (1.5 s ack timeout = 12 ticks), given up on the
+        # flush of tick 49: the action sees it on tick 50
+        assert ticks == 50
+        assert node.feedback_message == "no ack after 4 attempts"
+
+    def test_accepted_but_never_shown_fails_after_confirm_timeout(self, harness, vehicle):
+        vehicle.set(vehicle__mode="HOLD")
+        node = SetMode("GUIDED", confirm_timeout_s=2.0)
+        h = harness(node)
+        h.tick()
+        h.ack(DO_SET_MODE)
+        statuses = [h.tick(0.5) for _ in range(5)]
+        assert statuses == [Status.RUNNING] * 4 + [Status.FAILURE]  # elapsed 0.5 ... 2.5 s
+        assert node.feedback_message == "not confirmed after 2 s"
+
+    def test_unknown_mode_is_refused_before_anything_is_sent(self, harness, vehicle):
+        vehicle.set(vehicle__mode="HOLD")
+        h = harness(SetMode("WARP"))
+        with pytest.raises(KeyError):
+            h.tick()
+        assert h.link.take() == []
+
+
+class TestArm:
+    def test_arm_confirmed_by_heartbeat(self, harness, vehicle):
+        h = harness(Arm())
+        assert h.tick() == Status.RUNNING
+        (sent,) = h.link.take()
+        assert (sent.command, sent.param1, sent.param2) == (ARM_DISARM, 1.0, 0.0)
+        h.ack(ARM_DISARM)
+        vehicle.set(vehicle__armed=True)
+        assert h.tick() == Status.SUCCESS
+
+    def test_prearm_refusal_fails_with_statustext(self, harness, vehicle):
+        vehicle.set(vehicle__statustext=(3, "PreArm: AHRS: not using configured AHRS type"))
+        node = Arm()
+        h = harness(node)
+        h.tick()
+        h.ack(ARM_DISARM, mavlink.MAV_RESULT_FAILED)
+        assert h.tick() == Status.FAILURE
+        assert "PreArm: AHRS" in node.feedback_message
+
+    def test_disarm(self, harness, vehicle):
+        vehicle.set(vehicle__armed=True)
+        h = harness(Disarm())
+        assert h.tick() == Status.RUNNING
+        (sent,) = h.link.take()
+        assert (sent.command, sent.param1) == (ARM_DISARM, 0.0)
+        vehicle.set(vehicle__armed=False)
+        assert h.tick() == Status.SUCCESS
+
+
+class TestGoTo:
+    @pytest.fixture
+    def running(self, mission_state, vehicle):
+        mission_state.start()
+        return mission_state.target
+
+    def test_sends_guided_target_and_reports_distance(self, harness, vehicle, running):
+        lat, lon = destination(running.lat, running.lon, 180.0, 30.0)  # 30 m south of the waypoint
+        vehicle.set(vehicle__position=at(lat, lon))
+        node = GoTo(acceptance_radius_m=1.5, leg_timeout_s=60.0)
+        h = harness(node)
+        assert h.tick() == Status.RUNNING
+        (sent,) = h.link.take()
+        assert sent.get_type() == "SET_POSITION_TARGET_GLOBAL_INT"
+        assert (sent.lat_int, sent.lon_int) == (round(running.lat * 1e7), round(running.lon * 1e7))
+        assert (sent.type_mask, sent.coordinate_frame) == (0x0DF8, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)
+        assert node.distance_m == pytest.approx(30.0, abs=0.01)
+        assert node.bearing_deg == pytest.approx(0.0, abs=0.1)
+        assert node.feedback_message == "leg 1/4: 30.0 m at 000°"
+
+    def test_resends_the_target_every_second(self, harness, vehicle, running):
+        vehicle.set(vehicle__position=at(*destination(running.lat, running.lon, 90.0, 10.0)))
+        h = harness(GoTo(1.5, 60.0))
+        sends = 0
+        for _ in range(30):  # 3 s
+            h.tick()
+            sends += len(h.link.take("SET_POSITION_TARGET_GLOBAL_INT"))
+        assert sends == 3
+
+    def test_succeeds_inside_the_acceptance_radius(self, harness, vehicle, running):
+        h = harness(GoTo(1.5, 60.0))
+        statuses = []
+        for distance in (10.0, 5.0, 1.6, 1.4):
+            vehicle.set(vehicle__position=at(*destination(running.lat, running.lon, 45.0, distance)))
+            statuses.append(h.tick())
+        assert statuses == [Status.RUNNING, Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+
+    def test_fails_after_the_leg_timeout(self, harness, vehicle, running):
+        vehicle.set(vehicle__position=at(*destination(running.lat, running.lon, 0.0, 100.0)))
+        node = GoTo(1.5, leg_timeout_s=60.0)
+        h = harness(node)
+        statuses = [h.tick(1.0) for _ in range(62)]  # started on the first tick: elapsed 0 ... 61 s
+        assert statuses == [Status.RUNNING] * 61 + [Status.FAILURE]
+        assert node.feedback_message == "leg 1/4: timed out after 60 s, 100.0 m short"
+
+    def test_no_position_keeps_running(self, harness, running):
+        node = GoTo(1.5, 60.0)
+        assert harness(node).tick() == Status.RUNNING
+        assert node.feedback_message == "leg 1/4: no position"
+
+    def test_no_active_leg_fails(self, harness, vehicle):
+        node = GoTo(1.5, 60.0)
+        assert harness(node).tick() == Status.FAILURE
+        assert node.feedback_message == "no active leg"

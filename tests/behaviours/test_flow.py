@@ -1,0 +1,138 @@
+"""Flow control tick by tick: waiting with a limit, holding while guards fail, looping over legs."""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.common import Status
+
+from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, LinkAlive, RcNotTakingOver, WaitForGuards, WaitUntil
+from executive.io.mavlink.dialect import mavlink
+
+
+def test_wait_until_succeeds_when_the_condition_holds(harness, vehicle):
+    h = harness(WaitUntil(LinkAlive(), limit_s=5.0))
+    assert [h.tick() for _ in range(3)] == [Status.RUNNING] * 3
+    vehicle.set(link__up=True)
+    assert h.tick() == Status.SUCCESS
+
+
+def test_wait_until_gives_up_after_its_limit(harness):
+    node = WaitUntil(LinkAlive(), limit_s=1.0)
+    h = harness(node)
+    statuses = [h.tick(0.25) for _ in range(7)]  # waited 0, 0.25, ... 1.5 s
+    assert statuses == [Status.RUNNING] * 5 + [Status.FAILURE, Status.RUNNING]  # restarts when ticked again
+    assert node.status == Status.RUNNING
+
+
+def test_wait_until_retries_a_failed_action_no_faster_than_retry_s(harness, vehicle):
+    h = harness(WaitUntil(Arm(), limit_s=60.0, retry_s=2.0))
+    arm_requests = 0
+    for _ in range(50):  # 5 s; the autopilot refuses every arm
+        h.tick()
+        for msg in h.link.take("COMMAND_LONG"):
+            arm_requests += 1
+            h.ack(msg.command, mavlink.MAV_RESULT_FAILED)
+    assert arm_requests == 3  # at 0 s, ~2 s and ~4 s
+    assert h.root.status == Status.RUNNING
+    vehicle.set(vehicle__armed=True)
+    assert [h.tick() for _ in range(21)][-1] == Status.SUCCESS
+
+
+def guarded(harness, leg: py_trees.behaviour.Behaviour, hold_mode: str | None = "HOLD"):
+    guards = [LinkAlive(), Armed(), RcNotTakingOver(6, 1700)]
+    route = py_trees.composites.Sequence("route", memory=False, children=[*guards, leg])
+    wait = WaitForGuards(guards, limit_s=10.0, hold_mode=hold_mode)
+    return harness(py_trees.composites.Selector("route or hold", memory=False, children=[route, wait])), wait
+
+
+def test_wait_for_guards_holds_then_gives_way_on_recovery(harness, vehicle):
+    vehicle.set(link__up=True, vehicle__armed=True)
+    h, wait = guarded(harness, py_trees.behaviours.Running("leg"))
+    assert h.tick() == Status.RUNNING
+    vehicle.set(link__up=False)
+    assert h.tick() == Status.RUNNING
+    assert wait.status == Status.RUNNING
+    assert "Link alive? no heartbeat from the autopilot" in wait.feedback_message
+    (hold,) = h.link.take("COMMAND_LONG")
+    assert (hold.command, hold.param2) == (mavlink.MAV_CMD_DO_SET_MODE, 4)  # HOLD, asked once
+    assert [h.tick() for _ in range(5)] == [Status.RUNNING] * 5
+    assert h.link.take("COMMAND_LONG") == []
+    vehicle.set(link__up=True)
+    assert h.tick() == Status.RUNNING
+    assert wait.status == Status.INVALID  # the route runs again
+
+
+def test_wait_for_guards_keeps_hands_off_when_a_person_has_the_vehicle(harness, vehicle):
+    vehicle.set(link__up=True, vehicle__armed=True, rc__channels=(1500,) * 5 + (1900,))
+    h, wait = guarded(harness, py_trees.behaviours.Running("leg"))
+    assert h.tick() == Status.RUNNING
+    assert wait.status == Status.RUNNING
+    assert h.link.take("COMMAND_LONG") == []  # no HOLD while the pilot drives
+
+
+def test_wait_for_guards_gives_up_after_its_limit(harness, vehicle):
+    vehicle.set(link__up=True, vehicle__armed=False)
+    h, wait = guarded(harness, py_trees.behaviours.Running("leg"))
+    statuses = [h.tick(1.0) for _ in range(12)]
+    assert statuses[:11] == [Status.RUNNING] * 11
+    assert statuses[11] == Status.FAILURE
+    assert wait.feedback_message == "not recovered after 10 s: Armed? vehicle is disarmed"
+
+
+def test_wait_for_guards_fails_when_the_route_itself_failed(harness, vehicle):
+    vehicle.set(link__up=True, vehicle__armed=True)
+    h, _ = guarded(harness, py_trees.behaviours.Failure("leg"))
+    assert h.tick() == Status.FAILURE
+
+
+def test_for_each_leg_runs_the_child_once_per_leg(harness, mission_state):
+    mission_state.start()
+    visits = []
+
+    class Leg(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            visits.append(mission_state.leg_index)
+            return Status.SUCCESS if len(visits) % 2 == 0 else Status.RUNNING  # two ticks per leg
+
+    h = harness(ForEachLeg(Leg("leg")))
+    statuses = [h.tick() for _ in range(8)]
+    assert visits == [0, 0, 1, 1, 2, 2, 3, 3]
+    assert statuses == [Status.RUNNING] * 7 + [Status.SUCCESS]
+    assert mission_state.leg_index == 4 and mission_state.target is None
+
+
+def test_for_each_leg_resumes_the_same_leg_after_an_interruption(harness, mission_state, vehicle):
+    """A guard failing mid-leg and recovering continues that leg, not the first one."""
+    mission_state.start()
+    mission_state.advance_leg()
+    vehicle.set(link__up=True, vehicle__armed=True)
+    seen = []
+
+    class Leg(py_trees.behaviour.Behaviour):
+        def initialise(self) -> None:
+            seen.append(mission_state.leg_index)
+
+        def update(self) -> Status:
+            return Status.RUNNING
+
+    h, _ = guarded(harness, ForEachLeg(Leg("leg")))
+    h.tick()
+    vehicle.set(vehicle__armed=False)
+    h.tick()
+    vehicle.set(vehicle__armed=True)
+    h.tick()
+    assert seen == [1, 1]
+
+
+def test_for_each_leg_fails_with_the_leg_failure(harness, mission_state):
+    mission_state.start()
+    node = ForEachLeg(py_trees.behaviours.Failure("leg"))
+    assert harness(node).tick() == Status.FAILURE
+    assert node.feedback_message.startswith("leg 1/4 failed")
+    assert mission_state.leg_index == 0
+
+
+def test_guards_only_read_the_blackboard():
+    for guard in (LinkAlive(), EkfOk(), Armed(), RcNotTakingOver(6, 1700)):
+        assert guard.bb.read == set(guard.reads)
+        assert not guard.bb.write and not guard.bb.exclusive

@@ -1,0 +1,101 @@
+"""``executive run`` end to end: real processes, real UDP sockets, the built-in simulated vehicle."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from executive.cli import main
+from executive.clock import ScaledClock
+from executive.sim import SimServer
+
+ROOT = Path(__file__).parents[2]
+MISSIONS = sorted((ROOT / "missions").glob("*.yaml"))
+
+
+def executive(*args: str, **popen) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stderr=subprocess.PIPE, text=True, **popen)
+
+
+@pytest.mark.parametrize("mission", MISSIONS, ids=lambda p: p.name)
+def test_every_example_mission_completes_in_the_simulator(mission):
+    proc = executive("run", str(mission), "--speedup", "50")
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert "COMPLETED: every waypoint reached" in err
+
+
+def test_ctrl_c_leaves_the_vehicle_in_its_safe_mode():
+    proc = executive("run", str(ROOT / "missions/rover_square.yaml"), "--speedup", "20", "-v")
+    lines = []
+    deadline = time.monotonic() + 30
+    assert proc.stderr is not None
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        lines.append(line)
+        if "RUNNING   leg 2/4" in line:
+            break
+    else:
+        pytest.fail("mission never reached leg 2: " + "".join(lines))
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 1
+    assert "vehicle in HOLD" in err
+    assert "ABORTED: stopped: SIGINT" in err
+
+
+def test_a_broken_mission_exits_2_before_anything_starts(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("version: 1\nname: x\nvehicle: rover\nwaypoints:\n  - {lat: 95.0, lon: 8.5}\n")
+    assert main(["run", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}:5:11: waypoints[0].lat:" in err
+    assert "simulated" not in err
+
+
+def test_no_vehicle_exits_3(capsys):
+    assert main(["run", str(ROOT / "missions/rover_square.yaml"), "--mavlink", "udpout:127.0.0.1:9", "--connect-timeout", "0.3"]) == 3
+    assert "no heartbeat from an autopilot" in capsys.readouterr().err
+
+
+def test_runs_against_a_simulator_in_another_process(tmp_path):
+    """The executive and the vehicle in two processes, joined by UDP, both at real time."""
+    mission = tmp_path / "short.yaml"
+    mission.write_text(
+        "version: 1\nname: short\nvehicle: rover\nauto_arm: true\n"
+        "waypoints:\n  - {lat: -35.3632150, lon: 149.1652300}\n"  # 5 m north of the simulator's home
+    )
+    sim = executive("sim", "--vehicle", "rover", "--mavlink", "udpin:127.0.0.1:14591", "--home", "-35.363261,149.165230", "--ekf-ready-after", "0.5")
+    try:
+        run = executive("run", str(mission), "--mavlink", "udpout:127.0.0.1:14591", "--connect-timeout", "10")
+        _, err = run.communicate(timeout=60)
+        assert run.returncode == 0, err
+        assert "COMPLETED" in err
+    finally:
+        sim.send_signal(signal.SIGTERM)
+        sim.communicate(timeout=10)
+
+
+def test_in_process_run_against_a_sim_server(square_mission):
+    """The runtime over a real loopback socket, in one process: what `run` does without --mavlink."""
+    from executive.io.mavlink.link import PymavlinkLink
+    from executive.runtime import Runtime
+
+    clock = ScaledClock(50.0)
+    first = square_mission.waypoints[0]
+    with SimServer("rover", clock=clock, home=(first.lat - 0.0002, first.lon, 0.0)) as sim:
+        link = PymavlinkLink(sim.url_for_client)
+        try:
+            runtime = Runtime(square_mission, link, clock)
+            assert runtime.connect(10.0 * clock.speedup)
+            outcome = runtime.run()
+        finally:
+            link.close()
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    assert os.environ.get("MAVLINK20") == "1"

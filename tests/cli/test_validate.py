@@ -1,0 +1,77 @@
+"""``executive validate``: exit codes, ``FILE:LINE:COL: FIELD: message`` on stderr, ``--json``."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from executive.cli import main
+
+BROKEN = Path(__file__).parents[1] / "data" / "broken_missions"
+
+
+def test_a_good_mission(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["validate", str(minimal_mission)]) == 0
+    out, err = capsys.readouterr()
+    assert (out, err) == (f"{minimal_mission}: ok (1 waypoints, vehicle rover, tree waypoints)\n", "")
+
+
+def test_a_bad_mission(capsys: pytest.CaptureFixture[str]) -> None:
+    path = BROKEN / "duplicate_key.yaml"
+    assert main(["validate", str(path)]) == 2
+    out, err = capsys.readouterr()
+    assert (out, err) == ("", f"{path}:9:5: waypoints[1].lat: duplicate key (an earlier one is ignored)\n")
+
+
+def test_every_error_of_every_file_and_ok_for_the_good_ones(minimal_mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(minimal_mission.read_text().replace("lat: 47.397742", "lat: 95.0").replace("rover", "car"), encoding="utf-8")
+    assert main(["validate", str(bad), str(minimal_mission), str(tmp_path / "missing.yaml")]) == 2
+    out, err = capsys.readouterr()
+    assert out == f"{minimal_mission}: ok (1 waypoints, vehicle rover, tree waypoints)\n"
+    assert err.splitlines() == [
+        f"{bad}:3:10: vehicle: 'car': Input should be 'rover', 'boat', 'sub' or 'vtol'",
+        f"{bad}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90",
+        f"{tmp_path / 'missing.yaml'}:1:1: (file): No such file or directory",
+    ]
+
+
+def test_each_broken_mission_reports_its_expected_first_error(capsys: pytest.CaptureFixture[str]) -> None:
+    paths = sorted(BROKEN.glob("*.yaml"))
+    assert main(["validate", *map(str, paths)]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    for path in paths:
+        line, column, field = re.fullmatch(r"# expect: (\d+):(\d+) (\S+)", path.read_text().splitlines()[0]).groups()
+        first = next(e for e in err.splitlines() if e.startswith(f"{path}:"))
+        assert first.startswith(f"{path}:{line}:{column}: {field}: ")
+
+
+def test_json_lists_a_result_per_file(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = BROKEN / "lat_out_of_range.yaml"
+    assert main(["validate", "--json", str(minimal_mission), str(bad)]) == 2
+    out, err = capsys.readouterr()
+    assert err == ""
+    assert json.loads(out) == [
+        {"file": str(minimal_mission), "ok": True, "waypoints": 1, "vehicle": "rover", "tree": "waypoints"},
+        {
+            "file": str(bad),
+            "ok": False,
+            "errors": [
+                {"file": str(bad), "line": 7, "column": 11, "field": "waypoints[0].lat", "message": "95.0: Input should be less than or equal to 90"}
+            ],
+        },
+    ]
+
+
+def test_json_exit_0_when_all_are_good(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["validate", "--json", str(minimal_mission), str(minimal_mission)]) == 0
+    assert [r["ok"] for r in json.loads(capsys.readouterr().out)] == [True, True]
+
+
+def test_no_mission_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["validate"]) == 2
+    assert "the following arguments are required: MISSION" in capsys.readouterr().err

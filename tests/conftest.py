@@ -1,0 +1,139 @@
+"""Fixtures shared by every test: a clean blackboard, a manual clock, a fake MAVLink link."""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Iterator
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from executive import blackboard
+from executive.clock import ManualClock
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.mission.lifecycle import MissionState
+from executive.mission.model import Mission
+from executive.vehicles import PROFILES
+from tests_support import ack
+
+
+class FakeLink:
+    """A Link that records what is sent and returns what a test queued for reception."""
+
+    def __init__(self) -> None:
+        self.incoming: deque[MAVLinkMessage] = deque()
+        self.sent: list[MAVLinkMessage] = []
+
+    def recv(self) -> MAVLinkMessage | None:
+        return self.incoming.popleft() if self.incoming else None
+
+    def send(self, msg: MAVLinkMessage) -> None:
+        self.sent.append(msg)
+
+    def close(self) -> None:
+        pass
+
+    def take(self, kind: str | None = None) -> list[MAVLinkMessage]:
+        """Messages sent since the last take (of one type, if given), oldest first."""
+        taken = [m for m in self.sent if kind is None or m.get_type() == kind]
+        self.sent = [m for m in self.sent if m not in taken]
+        return taken
+
+
+class Vehicle:
+    """Writes vehicle facts to the blackboard as the reader would (for tick tests)."""
+
+    def __init__(self) -> None:
+        self.bb = blackboard.writer("test vehicle", blackboard.keys_under("/link/", "/vehicle/", "/rc/", "/heading/"))
+
+    def set(self, **facts: object) -> None:
+        """``set(vehicle__mode="GUIDED", link__up=True)`` -> ``/vehicle/mode``, ``/link/up``."""
+        for name, value in facts.items():
+            self.bb.set("/" + name.replace("__", "/"), value)
+
+
+class Harness:
+    """A tree ticked by hand: the clock advances ``dt`` before each tick; commands are flushed after."""
+
+    def __init__(
+        self, root: py_trees.behaviour.Behaviour, clock: ManualClock, link: FakeLink, commander: Commander, mission_state: MissionState
+    ) -> None:
+        self.root = root
+        self.clock = clock
+        self.link = link
+        self.commander = commander
+        self.mission_state = mission_state
+        self.tree = py_trees.trees.BehaviourTree(root)
+        self.tree.setup(clock=clock, commander=commander, mission_state=mission_state)
+
+    def tick(self, dt: float = 0.1) -> Status:
+        self.clock.advance(dt)
+        self.tree.tick()
+        self.commander.flush()
+        return self.root.status
+
+    def ack(self, command: int, result: int = mavlink.MAV_RESULT_ACCEPTED) -> None:
+        """A COMMAND_ACK arrives from the autopilot."""
+        self.commander.on_ack(ack(command, result))
+
+
+@pytest.fixture(autouse=True)
+def clean_blackboard() -> Iterator[None]:
+    blackboard.reset()
+    yield
+    py_trees.blackboard.Blackboard.clear()
+
+
+@pytest.fixture
+def clock() -> ManualClock:
+    return ManualClock(start=100.0)
+
+
+@pytest.fixture
+def link() -> FakeLink:
+    return FakeLink()
+
+
+@pytest.fixture
+def commander(link: FakeLink, clock: ManualClock) -> Commander:
+    return Commander(link, clock, PROFILES["rover"])
+
+
+@pytest.fixture
+def vehicle() -> Vehicle:
+    return Vehicle()
+
+
+@pytest.fixture
+def square_mission() -> Mission:
+    """Four waypoints on a 20 m square (the rover square), radius 1.5 m, leg timeout 60 s."""
+    corners = [(47.397742, 8.545594), (47.397922, 8.545594), (47.397922, 8.545860), (47.397742, 8.545860)]
+    return Mission.model_validate(
+        {
+            "version": 1,
+            "name": "square",
+            "vehicle": "rover",
+            "auto_arm": True,
+            "limits": {"acceptance_radius_m": 1.5, "leg_timeout_s": 60.0, "recovery_timeout_s": 30.0, "ekf_wait_s": 60.0},
+            "waypoints": [{"lat": lat, "lon": lon} for lat, lon in corners],
+        }
+    )
+
+
+@pytest.fixture
+def mission_state(square_mission: Mission) -> MissionState:
+    state = MissionState()
+    state.upload(square_mission)
+    return state
+
+
+@pytest.fixture
+def harness(clock: ManualClock, link: FakeLink, commander: Commander, mission_state: MissionState):
+    """``harness(root)`` -> a :class:`Harness` ticking ``root`` with the shared fakes."""
+
+    def make(root: py_trees.behaviour.Behaviour) -> Harness:
+        return Harness(root, clock, link, commander, mission_state)
+
+    return make

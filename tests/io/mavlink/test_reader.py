@@ -1,0 +1,140 @@
+"""The reader: every message drained, decoded onto the blackboard; nonsense never becomes truth."""
+
+from __future__ import annotations
+
+import math
+
+import py_trees
+import pytest
+
+from executive.io.mavlink.dialect import mavlink
+from executive.io.mavlink.reader import MavlinkReader
+from executive.state import CommandState, EkfFlags
+from tests_support import AUTOPILOT, GCS, Peer, ack
+
+ARMED = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
+
+
+def bb(key: str):
+    return py_trees.blackboard.Blackboard.get(key)
+
+
+def heartbeat(custom_mode: int = 4, base_mode: int = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, source=AUTOPILOT, mav_type=None):
+    mav_type = mavlink.MAV_TYPE_GROUND_ROVER if mav_type is None else mav_type
+    return source.heartbeat(mav_type, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, base_mode, custom_mode, mavlink.MAV_STATE_STANDBY)
+
+
+@pytest.fixture
+def reader(link, clock, commander) -> MavlinkReader:
+    return MavlinkReader(link, clock, commander, link_timeout_s=3.0)
+
+
+def receive(reader, link, *messages) -> int:
+    link.incoming.extend(messages)
+    return reader.drain()
+
+
+def test_adopts_the_autopilot_not_the_ground_station(reader, link, commander):
+    gcs = GCS.heartbeat(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+    assert receive(reader, link, gcs, heartbeat()) == 2
+    assert reader.autopilot == (1, 1)
+    assert (bb("/link/system_id"), bb("/link/component_id")) == (1, 1)
+    assert (commander.target_system, commander.target_component) == (1, 1)
+
+
+def test_heartbeat_gives_mode_by_name_armed_and_link_up(reader, link):
+    receive(reader, link, heartbeat(custom_mode=15, base_mode=ARMED))
+    assert (bb("/vehicle/mode"), bb("/vehicle/custom_mode"), bb("/vehicle/armed")) == ("GUIDED", 15, True)
+    assert bb("/link/up") is True
+    receive(reader, link, heartbeat(custom_mode=4))
+    assert (bb("/vehicle/mode"), bb("/vehicle/armed")) == ("HOLD", False)
+
+
+def test_unknown_vehicle_type_mode_is_shown_by_number(reader, link):
+    receive(reader, link, heartbeat(custom_mode=3, mav_type=mavlink.MAV_TYPE_QUADROTOR))
+    assert bb("/vehicle/mode") == "MODE(3)"
+
+
+def test_link_goes_down_after_the_timeout_and_comes_back(reader, link, clock):
+    receive(reader, link, heartbeat())
+    clock.advance(2.9)
+    reader.drain()
+    assert bb("/link/up") is True
+    clock.advance(0.2)
+    reader.drain()
+    assert bb("/link/up") is False
+    receive(reader, link, heartbeat())
+    assert bb("/link/up") is True
+
+
+def test_vehicle_facts_from_other_systems_are_ignored(reader, link):
+    receive(reader, link, heartbeat(custom_mode=4))
+    receive(reader, link, heartbeat(custom_mode=15, source=Peer(2, 1)))
+    assert bb("/vehicle/mode") == "HOLD"
+
+
+def test_global_position(reader, link, clock):
+    pos = AUTOPILOT.global_position_int(0, 473977420, 85455940, 500, 1234, 100, -200, 5, 9000)
+    receive(reader, link, heartbeat(), pos)
+    p = bb("/vehicle/position")
+    assert (p.lat, p.lon, p.alt_rel_m) == (47.397742, 8.545594, 1.234)
+    assert (p.vn_m_s, p.ve_m_s, p.heading_deg, p.time) == (1.0, -2.0, 90.0, clock.now())
+    assert p.ground_speed_m_s == pytest.approx(math.hypot(1, 2))
+
+
+@pytest.mark.parametrize(("lat", "lon"), [(0, 0), (910000000, 0), (0, -1810000000)], ids=["no fix", "lat off the globe", "lon off the globe"])
+def test_impossible_positions_never_reach_the_blackboard(reader, link, lat, lon):
+    receive(reader, link, heartbeat(), AUTOPILOT.global_position_int(0, lat, lon, 0, 0, 0, 0, 0, 65535))
+    assert bb("/vehicle/position") is None
+
+
+def test_attitude_in_degrees_and_nan_dropped(reader, link):
+    receive(reader, link, heartbeat(), AUTOPILOT.attitude(0, 0.1, -0.2, -math.pi / 2, 0, 0, 0.5))
+    a = bb("/vehicle/attitude")
+    assert (a.roll_deg, a.pitch_deg, a.yaw_deg) == pytest.approx((5.7296, -11.4592, 270.0), abs=1e-3)
+    receive(reader, link, AUTOPILOT.attitude(0, float("nan"), 0, 0, 0, 0, 0))
+    assert bb("/vehicle/attitude") == a
+
+
+def test_ekf_status(reader, link):
+    receive(reader, link, heartbeat(), AUTOPILOT.ekf_status_report(831, 0.1, 0.2, 0.3, 0.4, 0.0))
+    ekf = bb("/vehicle/ekf")
+    assert ekf.flags == EkfFlags(831) and ekf.position_ok()
+    assert (ekf.velocity_variance, ekf.compass_variance) == pytest.approx((0.1, 0.4))
+
+
+def test_battery_unknowns_are_none(reader, link):
+    sys_status = AUTOPILOT.sys_status(0, 0, 0, 0, 12600, 150, 80, 0, 0, 0, 0, 0, 0)
+    receive(reader, link, heartbeat(), sys_status)
+    assert (bb("/vehicle/battery").voltage_v, bb("/vehicle/battery").current_a, bb("/vehicle/battery").remaining_pct) == (12.6, 1.5, 80)
+    receive(reader, link, AUTOPILOT.sys_status(0, 0, 0, 0, 65535, -1, -1, 0, 0, 0, 0, 0, 0))
+    assert (bb("/vehicle/battery").voltage_v, bb("/vehicle/battery").current_a, bb("/vehicle/battery").remaining_pct) == (None, None, None)
+
+
+def test_rc_channels(reader, link, clock):
+    channels = [1500] * 5 + [1900] + [1000] * 12
+    receive(reader, link, heartbeat(), AUTOPILOT.rc_channels(0, 8, *channels, 200))
+    assert bb("/rc/channels") == (1500, 1500, 1500, 1500, 1500, 1900, 1000, 1000)
+    assert (bb("/rc/rssi"), bb("/rc/connected"), bb("/rc/last_update")) == (200, True, clock.now())
+    receive(reader, link, AUTOPILOT.rc_channels(0, 8, *([0] * 18), 255))
+    assert (bb("/rc/rssi"), bb("/rc/connected")) == (None, False)
+
+
+def test_command_ack_reaches_the_commander(reader, link, commander):
+    receive(reader, link, heartbeat())
+    commander.set_mode("GUIDED")
+    commander.flush()
+    receive(reader, link, ack(mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_RESULT_DENIED))
+    assert bb("/command/do_set_mode").state is CommandState.REJECTED
+
+
+def test_statustext(reader, link):
+    receive(reader, link, heartbeat(), AUTOPILOT.statustext(3, b"PreArm: AHRS: not using configured AHRS type"))
+    assert bb("/vehicle/statustext") == (3, "PreArm: AHRS: not using configured AHRS type")
+
+
+def test_garbage_bytes_are_counted_not_believed(reader, link):
+    bad = mavlink.MAVLink_bad_data(b"\x01\x02\x03", "invalid MAVLink prefix")
+    assert receive(reader, link, bad, heartbeat()) == 2
+    assert bb("/link/bad_data") == 1
+    assert bb("/link/messages") == 1

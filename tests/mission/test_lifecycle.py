@@ -1,0 +1,128 @@
+"""The mission lifecycle: the AUV mission manager's transition table, refusals that change nothing."""
+
+from __future__ import annotations
+
+import py_trees
+import pytest
+
+from executive.mission.lifecycle import TRANSITIONS, MissionState, MissionStatus, Refused
+
+S = MissionStatus
+
+
+def bb(key: str):
+    return py_trees.blackboard.Blackboard.get(key)
+
+
+@pytest.fixture
+def state_in(square_mission):
+    """``state_in(S.PAUSED)``: a MissionState driven to a state by legal requests."""
+
+    routes = {
+        S.IDLE: [],
+        S.READY: ["upload"],
+        S.RUNNING: ["upload", "start"],
+        S.PAUSED: ["upload", "start", "pause"],
+        S.COMPLETED: ["upload", "start", "complete"],
+        S.ABORTED: ["upload", "start", "abort"],
+    }
+
+    def make(status: MissionStatus) -> MissionState:
+        state = MissionState()
+        for request in routes[status]:
+            {"upload": lambda: state.upload(square_mission), "abort": lambda: state.abort("test")}.get(request, getattr(state, request))()
+        assert state.status is status
+        return state
+
+    return make
+
+
+# (state, request) -> resulting state, or None when refused; the AUV table plus ABORTED.
+TABLE = {
+    (S.IDLE, "upload"): S.READY,
+    (S.READY, "upload"): S.READY,
+    (S.COMPLETED, "upload"): S.READY,
+    (S.RUNNING, "upload"): None,
+    (S.PAUSED, "upload"): None,
+    (S.READY, "start"): S.RUNNING,
+    (S.COMPLETED, "start"): S.RUNNING,
+    (S.IDLE, "start"): None,
+    (S.RUNNING, "start"): None,
+    (S.PAUSED, "start"): None,
+    (S.RUNNING, "pause"): S.PAUSED,
+    (S.READY, "pause"): None,
+    (S.PAUSED, "pause"): None,
+    (S.PAUSED, "resume"): S.RUNNING,
+    (S.RUNNING, "resume"): None,
+    (S.READY, "resume"): None,
+    (S.READY, "delete"): S.IDLE,
+    (S.PAUSED, "delete"): S.IDLE,
+    (S.COMPLETED, "delete"): S.IDLE,
+    (S.RUNNING, "delete"): S.IDLE,  # paused first
+    (S.IDLE, "delete"): None,
+    (S.ABORTED, "start"): S.RUNNING,
+    (S.ABORTED, "upload"): S.READY,
+}
+
+
+@pytest.mark.parametrize(("start", "request_", "expected"), [(s, r, e) for (s, r), e in TABLE.items()], ids=lambda v: str(v))
+def test_transition_table(state_in, square_mission, start, request_, expected):
+    state = state_in(start)
+    action = (lambda: state.upload(square_mission)) if request_ == "upload" else getattr(state, request_)
+    before = (state.status, state.leg_index, state.mission, bb("/mission/state"))
+    if expected is None:
+        with pytest.raises(Refused, match=f"cannot {request_} while {start}"):
+            action()
+        assert (state.status, state.leg_index, state.mission, bb("/mission/state")) == before  # nothing half-applied
+    else:
+        action()
+        assert state.status is expected
+        assert bb("/mission/state") == str(expected)
+
+
+def test_every_request_in_the_table_is_covered():
+    assert {r for _, r in TABLE} >= set(TRANSITIONS) - {"complete", "abort"}
+
+
+def test_start_after_completion_runs_again_from_the_first_waypoint(state_in, square_mission):
+    state = state_in(S.RUNNING)
+    for _ in range(4):
+        state.advance_leg()
+    state.complete()
+    state.start()
+    assert state.leg_index == 0
+    assert state.target == square_mission.waypoints[0]
+
+
+def test_pause_and_resume_keep_the_leg(state_in, square_mission):
+    state = state_in(S.RUNNING)
+    state.advance_leg()
+    state.pause()
+    assert state.target == square_mission.waypoints[1]
+    state.resume()
+    assert state.leg_index == 1
+    assert bb("/mission/target") == square_mission.waypoints[1]
+
+
+def test_delete_while_running_pauses_first(state_in):
+    state = state_in(S.RUNNING)
+    seen = []
+    state.listeners.append(lambda before, after, reason: seen.append((before, after)))
+    state.delete()
+    assert seen == [(S.RUNNING, S.PAUSED), (S.PAUSED, S.IDLE)]
+    assert state.mission is None and bb("/mission/leg_count") == 0
+
+
+def test_advance_leg_only_while_running(state_in):
+    state = state_in(S.PAUSED)
+    with pytest.raises(Refused):
+        state.advance_leg()
+
+
+def test_progress_is_published(state_in, square_mission):
+    state = state_in(S.RUNNING)
+    state.advance_leg()
+    assert (bb("/mission/leg_index"), bb("/mission/leg_count"), bb("/mission/target")) == (1, 4, square_mission.waypoints[1])
+    for _ in range(3):
+        state.advance_leg()
+    assert bb("/mission/target") is None

@@ -1,0 +1,138 @@
+"""The runtime: tick order, the fixed rate, and safety when things go wrong."""
+
+from __future__ import annotations
+
+import itertools
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+from executive.io.mavlink.dialect import mavlink
+from executive.mission.lifecycle import MissionStatus
+from executive.runtime import BehaviourCrashed, Runtime, explain_failure
+from tests_support import AUTOPILOT
+
+HOLD, GUIDED = 4, 15
+
+
+class Explodes(py_trees.behaviour.Behaviour):
+    def update(self) -> Status:
+        raise ZeroDivisionError("boom")
+
+
+class ObedientAutopilot:
+    """Answers on the fake link: heartbeats every tick and instant mode changes."""
+
+    def __init__(self, link) -> None:
+        self.link, self.mode = link, GUIDED
+        self._send = link.send
+        link.send = self.receive
+
+    def receive(self, msg) -> None:
+        self._send(msg)
+        if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+            self.mode = int(msg.param2)
+            self.link.incoming.append(AUTOPILOT.command_ack(msg.command, 0, 0, 0, 1, 191))
+        if msg.get_type() == "HEARTBEAT":
+            self.beat()
+
+    def beat(self) -> None:
+        base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
+        self.link.incoming.append(AUTOPILOT.heartbeat(mavlink.MAV_TYPE_GROUND_ROVER, 3, base, self.mode, 4))
+
+
+def make_runtime(square_mission, link, clock, root=None) -> Runtime:
+    return Runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
+
+
+def test_connect_waits_for_an_autopilot_heartbeat(square_mission, link, clock):
+    runtime = make_runtime(square_mission, link, clock)
+    assert runtime.connect(timeout_s=1.0) is False
+    assert [m.get_type() for m in link.take()][:1] == ["HEARTBEAT"]  # we announce ourselves meanwhile
+    ObedientAutopilot(link).beat()
+    assert runtime.connect(timeout_s=1.0) is True
+
+
+def test_a_tick_drains_then_ticks_then_sends(square_mission, link, clock):
+    seen = []
+
+    class Probe(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            seen.append(py_trees.blackboard.Blackboard.get("/vehicle/mode"))
+            runtime.commander.set_mode("HOLD")
+            assert link.take("COMMAND_LONG") == []  # not sent during the tick
+            return Status.RUNNING
+
+    runtime = make_runtime(square_mission, link, clock, root=Probe("probe"))
+    ObedientAutopilot(link).beat()
+    runtime.tick()
+    assert seen == ["GUIDED"]
+    assert [m.param2 for m in link.take("COMMAND_LONG")] == [HOLD]
+
+
+def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mission, link, clock):
+    root = py_trees.composites.Sequence("Mission", memory=True, children=[py_trees.behaviours.Success("ok"), Explodes("Divide")])
+    runtime = make_runtime(square_mission, link, clock, root=root)
+    autopilot = ObedientAutopilot(link)
+    autopilot.beat()
+    assert runtime.connect(1.0)
+    with pytest.raises(BehaviourCrashed) as crash:
+        runtime.tick()
+    assert crash.value.path == "Mission/Divide"
+    outcome = runtime.run()
+    assert outcome.status is MissionStatus.ABORTED
+    assert "behaviour crashed: Mission/Divide: ZeroDivisionError: boom" in outcome.reason
+    assert autopilot.mode == HOLD
+    assert runtime.mission_state.status is MissionStatus.ABORTED
+
+
+def test_a_stop_request_makes_the_vehicle_safe(square_mission, link, clock):
+    runtime = make_runtime(square_mission, link, clock, root=py_trees.behaviours.Running("forever"))
+    autopilot = ObedientAutopilot(link)
+    autopilot.beat()
+    runtime.request_stop("SIGTERM")
+    outcome = runtime.run()
+    assert (outcome.status, outcome.reason) == (MissionStatus.ABORTED, "stopped: SIGTERM")
+    assert autopilot.mode == HOLD
+
+
+def test_make_safe_gives_up_when_the_vehicle_does_not_answer(square_mission, link, clock):
+    runtime = make_runtime(square_mission, link, clock)
+    start = clock.now()
+    assert runtime.make_safe() is False
+    assert clock.now() - start == pytest.approx(2.0, abs=0.1)
+    assert any(m.get_type() == "COMMAND_LONG" and m.param2 == HOLD for m in link.sent)
+
+
+def test_success_completes_the_mission(square_mission, link, clock):
+    runtime = make_runtime(square_mission, link, clock, root=py_trees.behaviours.Success("done"))
+    outcome = runtime.run()
+    assert outcome.status is MissionStatus.COMPLETED and outcome.ticks == 1
+
+
+def test_ticks_at_the_fixed_rate(square_mission, link, clock):
+    times = []
+
+    class Stamp(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            times.append(clock.now())
+            return Status.SUCCESS if len(times) == 5 else Status.RUNNING
+
+    make_runtime(square_mission, link, clock, root=Stamp("stamp")).run()
+    assert [round(b - a, 6) for a, b in itertools.pairwise(times)] == [0.1] * 4
+
+
+def test_explain_failure_prefers_the_shallowest_reason():
+    class Fails(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            self.feedback_message = "deep reason"
+            return Status.FAILURE
+
+    leaf = Fails("leaf")
+    mid = py_trees.composites.Sequence("mid", memory=True, children=[leaf])
+    root = py_trees.composites.Sequence("root", memory=True, children=[mid])
+    py_trees.trees.BehaviourTree(root).tick()
+    assert explain_failure(root) == "leaf: deep reason"
+    mid.feedback_message = "shallow reason"
+    assert explain_failure(root) == "mid: shallow reason"

@@ -1,0 +1,142 @@
+"""The guarded waypoint tree, tick by tick, against a scripted autopilot on a fake link."""
+
+from __future__ import annotations
+
+import pytest
+from py_trees.common import Status
+
+import trees
+from executive.geo import destination, distance_bearing
+from executive.io.mavlink.dialect import mavlink
+from executive.state import EkfFlags, EkfStatus, GlobalPosition
+from executive.vehicles import PROFILES
+
+EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+
+
+class ScriptedAutopilot:
+    """Obeys mode and arm commands at once and jumps a step toward each GUIDED target per tick."""
+
+    def __init__(self, harness, vehicle, start: tuple[float, float], step_m: float = 8.0) -> None:
+        self.h, self.vehicle, self.step_m = harness, vehicle, step_m
+        self.lat, self.lon = start
+        self.mode, self.armed, self.target = "MANUAL", False, None
+        self.commands: list[tuple[str, float]] = []
+        self.refuse_arm = False
+        self.publish()
+
+    def publish(self) -> None:
+        self.vehicle.set(
+            vehicle__mode=self.mode,
+            vehicle__armed=self.armed,
+            vehicle__position=GlobalPosition(self.lat, self.lon, 0, 0, 0, 0, 0, 0),
+        )
+
+    def respond(self) -> None:
+        for msg in self.h.link.take():
+            if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+                self.mode = PROFILES["rover"].mode_name(int(msg.param2))
+                self.commands.append(("mode", self.mode))
+                self.h.ack(msg.command)
+            elif msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
+                self.commands.append(("arm", msg.param1))
+                result = mavlink.MAV_RESULT_FAILED if self.refuse_arm else mavlink.MAV_RESULT_ACCEPTED
+                self.armed = self.armed if self.refuse_arm else bool(msg.param1)
+                self.h.ack(msg.command, result)
+            elif msg.get_type() == "SET_POSITION_TARGET_GLOBAL_INT" and self.mode == "GUIDED":
+                self.target = (msg.lat_int / 1e7, msg.lon_int / 1e7)
+        if self.target and self.mode == "GUIDED" and self.armed:
+            d, b = distance_bearing(self.lat, self.lon, *self.target)
+            self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
+        self.publish()
+
+    def run(self, ticks: int) -> list[Status]:
+        statuses = []
+        for _ in range(ticks):
+            statuses.append(self.h.tick())
+            self.respond()
+            if statuses[-1] != Status.RUNNING:
+                break
+        return statuses
+
+
+@pytest.fixture
+def mission_run(harness, vehicle, square_mission, mission_state):
+    """The square mission's tree, started, with the autopilot 30 m south of the first corner."""
+    first = square_mission.waypoints[0]
+    mission_state.start()
+    h = harness(trees.build(square_mission))
+    vehicle.set(link__up=True, vehicle__ekf=EKF_READY)
+    return ScriptedAutopilot(h, vehicle, destination(first.lat, first.lon, 180.0, 30.0))
+
+
+def test_the_square_completes_and_ends_held(mission_run, mission_state):
+    statuses = mission_run.run(200)
+    assert statuses[-1] == Status.SUCCESS
+    assert mission_state.leg_index == 4
+    assert mission_run.commands[0] == ("arm", 1.0)
+    assert mission_run.commands[1] == ("mode", "GUIDED")
+    assert mission_run.commands[-1] == ("mode", "HOLD")
+    assert mission_run.mode == "HOLD"
+
+
+def test_preflight_waits_for_the_ekf_before_arming(mission_run, vehicle):
+    vehicle.set(vehicle__ekf=EKF_LOST)
+    assert mission_run.run(20) == [Status.RUNNING] * 20
+    assert mission_run.commands == []
+    vehicle.set(vehicle__ekf=EKF_READY)
+    mission_run.run(1)
+    assert mission_run.commands == [("arm", 1.0)]
+    mission_run.run(1)
+    assert mission_run.commands == [("arm", 1.0), ("mode", "GUIDED")]
+
+
+def test_preflight_retries_a_refused_arm_then_gives_up(mission_run, square_mission):
+    mission_run.refuse_arm = True
+    statuses = mission_run.run(int(square_mission.limits.ekf_wait_s * 10) + 20)
+    assert statuses[-1] == Status.FAILURE
+    arms = [c for c in mission_run.commands if c[0] == "arm"]
+    assert len(arms) == pytest.approx(square_mission.limits.ekf_wait_s / 2.0, abs=2)  # one try every 2 s
+
+
+def test_rc_takeover_mid_leg_waits_hands_off_then_resumes_the_same_leg(mission_run, mission_state, vehicle):
+    while mission_state.leg_index < 2:
+        assert mission_run.run(1) == [Status.RUNNING]
+    vehicle.set(rc__channels=(1500,) * 5 + (1900,))  # the pilot flips the take-over switch
+    mission_run.mode = "MANUAL"
+    commands_before = len(mission_run.commands)
+    mission_run.run(30)
+    assert mission_run.commands[commands_before:] == []  # no HOLD, no GUIDED while the pilot drives
+    assert mission_state.leg_index == 2
+    vehicle.set(rc__channels=(1500,) * 6)
+    mission_run.run(2)
+    assert mission_run.commands[commands_before:] == [("mode", "GUIDED")]
+    assert mission_state.leg_index == 2
+    assert mission_run.run(200)[-1] == Status.SUCCESS
+
+
+def test_ekf_loss_holds_the_vehicle_and_resumes_after_recovery(mission_run, mission_state, vehicle):
+    while mission_state.leg_index < 1:
+        mission_run.run(1)
+    vehicle.set(vehicle__ekf=EKF_LOST)
+    mission_run.run(5)
+    assert mission_run.commands[-1] == ("mode", "HOLD")
+    leg = mission_state.leg_index
+    vehicle.set(vehicle__ekf=EKF_READY)
+    mission_run.run(2)
+    assert mission_run.commands[-1] == ("mode", "GUIDED")
+    assert mission_state.leg_index == leg
+
+
+def test_a_guard_that_never_recovers_fails_the_mission(mission_run, square_mission, vehicle):
+    mission_run.run(10)
+    vehicle.set(link__up=False)
+    statuses = mission_run.run(int(square_mission.limits.recovery_timeout_s * 10) + 20)
+    assert statuses[-1] == Status.FAILURE
+
+
+def test_a_leg_that_times_out_fails_the_mission(mission_run, square_mission):
+    mission_run.step_m = 0.01  # the vehicle barely moves
+    statuses = mission_run.run(int(square_mission.limits.leg_timeout_s * 10) + 30)
+    assert statuses[-1] == Status.FAILURE
