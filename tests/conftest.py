@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterator
+from pathlib import Path
 
 import py_trees
 import pytest
@@ -137,3 +138,18 @@ def harness(clock: ManualClock, link: FakeLink, commander: Commander, mission_st
         return Harness(root, clock, link, commander, mission_state)
 
     return make
+
+
+DATA = Path(__file__).parent / "data"
+
+
+@pytest.fixture
+def minimal_mission() -> Path:
+    """A valid mission file: one waypoint, rover, tree waypoints."""
+    return DATA / "minimal_mission.yaml"
+
+
+@pytest.fixture
+def minimal_yaml(minimal_mission: Path) -> str:
+    """The text of the smallest valid mission."""
+    return minimal_mission.read_text(encoding="utf-8")

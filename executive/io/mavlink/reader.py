@@ -159,6 +159,8 @@ class MavlinkReader:
         up = last is not None and now - last <= self.link_timeout_s
         if up != self._bb.get("/link/up"):
             self._bb.set("/link/up", up)
-            if last is not None:
-                log.warning("link %s", "up" if up else f"lost: no heartbeat for {now - last:.1f} s")
+            if up:
+                log.info("link up")
+            elif last is not None:
+                log.warning("link lost: no heartbeat for %.1f s", now - last)
         self._bb.set("/link/messages", self._messages)
