@@ -20,6 +20,7 @@ from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.reader import MavlinkReader
+from executive.io.mavlink.streams import StreamRequester
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.progress import Progress
@@ -102,6 +103,8 @@ class Runtime:
         self.commander = Commander(link, clock, self.profile, system_id=system_id)
         self.reader = MavlinkReader(link, clock, self.commander, link_timeout_s=mission.limits.link_timeout_s)
         self.heartbeat = Heartbeat(link, clock, system_id=system_id)
+        self.streams = StreamRequester(self.commander)
+        self.reader.on_reconnect = self.streams.restart
         self.mission_state = MissionState()
         self.mission_state.upload(mission)
         self.tree = py_trees.trees.BehaviourTree(root or trees.build(mission))
@@ -133,6 +136,7 @@ class Runtime:
         except Exception as exc:
             node = _crashed_behaviour(exc.__traceback__)
             raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
+        self.streams.service()
         self.commander.flush()
         self.ticks += 1
         return self.tree.root.status

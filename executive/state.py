@@ -89,6 +89,30 @@ class Battery:
     time: float
 
 
+@dataclass(frozen=True, slots=True)
+class HomePosition:
+    """HOME_POSITION: where RTL goes and relative altitudes start."""
+
+    lat: float
+    lon: float
+    alt_m: float  # above mean sea level
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
+class GpsFix:
+    """GPS_RAW_INT: fix type (GPS_FIX_TYPE: 3 = 3D fix), satellites, horizontal dilution."""
+
+    fix_type: int
+    satellites: int | None
+    hdop: float | None
+    time: float
+
+    @property
+    def has_3d_fix(self) -> bool:
+        return self.fix_type >= 3
+
+
 class CommandState(StrEnum):
     """Where a command stands."""
 

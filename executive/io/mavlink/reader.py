@@ -17,7 +17,8 @@ from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.link import Link
-from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition
+from executive.io.mavlink.link_health import LinkHealth
+from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition
 from executive.vehicles import profile_for_mav_type
 
 log = logging.getLogger(__name__)
@@ -41,6 +42,9 @@ class MavlinkReader:
         self._autopilot: tuple[int, int] | None = None
         self._messages = 0
         self._bad_data = 0
+        self.health = LinkHealth()
+        #: Called when the autopilot is first found, comes back after a link loss, or rebooted.
+        self.on_reconnect: Callable[[], None] | None = None
         self._handlers: dict[str, Callable[[MAVLinkMessage, float], None]] = {
             "HEARTBEAT": self._on_heartbeat,
             "GLOBAL_POSITION_INT": self._on_global_position,
@@ -50,6 +54,11 @@ class MavlinkReader:
             "RC_CHANNELS": self._on_rc_channels,
             "COMMAND_ACK": self._on_command_ack,
             "STATUSTEXT": self._on_statustext,
+            "HOME_POSITION": self._on_home_position,
+            "VFR_HUD": self._on_vfr_hud,
+            "GPS_RAW_INT": self._on_gps_raw,
+            "SERVO_OUTPUT_RAW": self._on_servo_output,
+            "EXTENDED_SYS_STATE": self._on_extended_sys_state,
         }
 
     @property
@@ -82,6 +91,11 @@ class MavlinkReader:
         if self._autopilot != (msg.get_srcSystem(), msg.get_srcComponent()):
             return
         self._messages += 1
+        self.health.on_packet(msg.get_seq())
+        boot_ms = getattr(msg, "time_boot_ms", None)
+        if boot_ms is not None and self.health.on_boot_time(boot_ms):
+            log.warning("autopilot rebooted")
+            self._reconnected()
         handler = self._handlers.get(kind)
         if handler is not None:
             handler(msg, now)
@@ -95,6 +109,11 @@ class MavlinkReader:
         self._bb.set("/link/system_id", self._autopilot[0])
         self._bb.set("/link/component_id", self._autopilot[1])
         log.info("autopilot found: system %d component %d (MAV_TYPE %d)", *self._autopilot, msg.type)
+        self._reconnected()
+
+    def _reconnected(self) -> None:
+        if self.on_reconnect is not None:
+            self.on_reconnect()
 
     def _on_heartbeat(self, msg: MAVLinkMessage, now: float) -> None:
         profile = profile_for_mav_type(msg.type)
@@ -154,13 +173,46 @@ class MavlinkReader:
         log.log(logging.WARNING if msg.severity <= mavlink.MAV_SEVERITY_WARNING else logging.INFO, "autopilot: %s", text)
         self._bb.set("/vehicle/statustext", (msg.severity, text))
 
+    def _on_home_position(self, msg: MAVLinkMessage, now: float) -> None:
+        lat, lon = msg.latitude / 1e7, msg.longitude / 1e7
+        if -90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0:
+            self._bb.set("/vehicle/home", HomePosition(lat, lon, msg.altitude / 1000.0, now))
+
+    def _on_vfr_hud(self, msg: MAVLinkMessage, now: float) -> None:
+        if _finite(msg.groundspeed) and 0.0 <= msg.groundspeed < 1000.0:
+            self._bb.set("/vehicle/ground_speed_m_s", msg.groundspeed)
+        self._bb.set("/vehicle/heading_deg", float(msg.heading % 360))
+
+    def _on_gps_raw(self, msg: MAVLinkMessage, now: float) -> None:
+        satellites = None if msg.satellites_visible == 255 else msg.satellites_visible
+        hdop = None if msg.eph == 65535 else msg.eph / 100.0
+        self._bb.set("/vehicle/gps", GpsFix(msg.fix_type, satellites, hdop, now))
+
+    def _on_servo_output(self, msg: MAVLinkMessage, now: float) -> None:
+        if msg.port == 0:
+            self._bb.set("/vehicle/servo_outputs", tuple(getattr(msg, f"servo{i}_raw") for i in range(1, 17)))
+
+    def _on_extended_sys_state(self, msg: MAVLinkMessage, now: float) -> None:
+        vtol = mavlink.enums["MAV_VTOL_STATE"].get(msg.vtol_state)
+        landed = mavlink.enums["MAV_LANDED_STATE"].get(msg.landed_state)
+        self._bb.set("/vehicle/vtol_state", vtol.name.removeprefix("MAV_VTOL_STATE_") if vtol else None)
+        self._bb.set("/vehicle/landed_state", landed.name.removeprefix("MAV_LANDED_STATE_") if landed else None)
+
     def _update_link_health(self, now: float) -> None:
         last = self._bb.get("/link/last_heartbeat")
         up = last is not None and now - last <= self.link_timeout_s
         if up != self._bb.get("/link/up"):
+            was_lost = last is not None and self._bb.get("/link/heartbeat_age_s") is not None
             self._bb.set("/link/up", up)
             if up:
                 log.info("link up")
+                if was_lost:
+                    self._reconnected()
             elif last is not None:
                 log.warning("link lost: no heartbeat for %.1f s", now - last)
+        self._bb.set("/link/heartbeat_age_s", None if last is None else now - last)
         self._bb.set("/link/messages", self._messages)
+        self._bb.set("/link/packets_lost", self.health.lost)
+        self._bb.set("/link/loss_pct", self.health.loss_pct)
+        self._bb.set("/link/reboots", self.health.reboots)
+        self._bb.set("/link/unsigned_dropped", getattr(self._link, "unsigned_dropped", 0))

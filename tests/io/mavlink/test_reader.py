@@ -138,3 +138,48 @@ def test_garbage_bytes_are_counted_not_believed(reader, link):
     assert receive(reader, link, bad, heartbeat()) == 2
     assert bb("/link/bad_data") == 1
     assert bb("/link/messages") == 1
+
+
+def test_sequence_gaps_are_packet_loss(reader, link):
+    link.incoming.append(heartbeat())
+    reader.drain()
+    for seq in (5, 9):  # three and then three more lost in between
+        msg = heartbeat()
+        msg._header.seq = seq
+        link.incoming.append(msg)
+    reader.drain()
+    assert bb("/link/packets_lost") > 0
+    assert bb("/link/loss_pct") > 0
+
+
+def test_reconnect_is_signalled_on_first_contact_link_return_and_reboot(reader, link, clock):
+    calls = []
+    reader.on_reconnect = lambda: calls.append(clock.now())
+    receive(reader, link, heartbeat())
+    assert len(calls) == 1
+    clock.advance(5.0)
+    reader.drain()  # link lost
+    receive(reader, link, heartbeat())
+    assert len(calls) == 2
+    receive(reader, link, AUTOPILOT.attitude(90_000, 0, 0, 0, 0, 0, 0), AUTOPILOT.attitude(2_000, 0, 0, 0, 0, 0, 0))
+    assert len(calls) == 3 and bb("/link/reboots") == 1
+
+
+def test_home_gps_speed_servos_and_extended_state(reader, link):
+    receive(
+        reader,
+        link,
+        heartbeat(),
+        AUTOPILOT.home_position(-353632610, 1491652300, 584000, 0, 0, 0, [1, 0, 0, 0], 0, 0, 0),
+        AUTOPILOT.gps_raw_int(0, 3, 0, 0, 0, 120, 65535, 0, 0, 11),
+        AUTOPILOT.vfr_hud(0.0, 2.5, 271, 50, 0.0, 0.0),
+        AUTOPILOT.servo_output_raw(0, 0, 1900, 1500, 1100, 1500, 0, 0, 0, 0),
+        AUTOPILOT.extended_sys_state(mavlink.MAV_VTOL_STATE_FW, mavlink.MAV_LANDED_STATE_IN_AIR),
+    )
+    home = bb("/vehicle/home")
+    assert (home.lat, home.lon, home.alt_m) == (-35.363261, 149.16523, 584.0)
+    gps = bb("/vehicle/gps")
+    assert (gps.fix_type, gps.satellites, gps.hdop, gps.has_3d_fix) == (3, 11, 1.2, True)
+    assert (bb("/vehicle/ground_speed_m_s"), bb("/vehicle/heading_deg")) == (2.5, 271.0)
+    assert bb("/vehicle/servo_outputs")[:4] == (1900, 1500, 1100, 1500)
+    assert (bb("/vehicle/vtol_state"), bb("/vehicle/landed_state")) == ("FW", "IN_AIR")

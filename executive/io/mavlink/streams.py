@@ -1,0 +1,70 @@
+"""Stream set-up: ask the autopilot for the messages the executive needs, at the rates it needs.
+
+One MAV_CMD_SET_MESSAGE_INTERVAL is in flight at a time (acks of one command kind cannot be told
+apart). The whole set is requested again after a reconnect or an autopilot reboot.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import deque
+
+from executive import blackboard
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import mavlink
+
+log = logging.getLogger(__name__)
+
+#: message name -> rate in Hz.
+DEFAULT_RATES: dict[str, float] = {
+    "GLOBAL_POSITION_INT": 5.0,
+    "ATTITUDE": 10.0,
+    "EKF_STATUS_REPORT": 2.0,
+    "SYS_STATUS": 1.0,
+    "RC_CHANNELS": 5.0,
+    "SERVO_OUTPUT_RAW": 5.0,
+    "VFR_HUD": 2.0,
+    "GPS_RAW_INT": 2.0,
+    "EXTENDED_SYS_STATE": 1.0,
+    "MISSION_CURRENT": 1.0,
+    "HOME_POSITION": 0.2,
+}
+
+_KEY = blackboard.command_key("SET_MESSAGE_INTERVAL")
+
+
+class StreamRequester:
+    """Requests each stream in turn; call :meth:`restart` after a reconnect or reboot, :meth:`service` every tick."""
+
+    def __init__(self, commander: Commander, rates: dict[str, float] | None = None) -> None:
+        self._commander = commander
+        self.rates = dict(DEFAULT_RATES if rates is None else rates)
+        self._queue: deque[str] = deque()
+        self._ticket: int | None = None
+        self._bb = blackboard.reader("stream requester", [_KEY])
+        self.refused: set[str] = set()
+
+    def restart(self) -> None:
+        """Ask for every stream again, from the first."""
+        self._queue = deque(self.rates)
+        self._ticket = None
+
+    @property
+    def done(self) -> bool:
+        return not self._queue and self._ticket is None
+
+    def service(self) -> None:
+        if self._ticket is not None:
+            status = self._bb.get(_KEY)
+            if status is None or status.ticket != self._ticket or not status.state.done:
+                return
+            if status.state.name != "ACCEPTED":
+                self.refused.add(self._queue[0])
+                log.info("autopilot refused stream %s: %s", self._queue[0], status.state)
+            self._queue.popleft()
+            self._ticket = None
+        if self._queue:
+            name = self._queue[0]
+            interval_us = 1e6 / self.rates[name]
+            msg_id = getattr(mavlink, f"MAVLINK_MSG_ID_{name}")
+            self._ticket = self._commander.command_long(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, interval_us))
