@@ -89,6 +89,12 @@ COMMAND_NAMES: tuple[str, ...] = (
     "DO_VTOL_TRANSITION",
     "NAV_TAKEOFF",
     "NAV_LAND",
+    "NAV_VTOL_TAKEOFF",
+    "NAV_VTOL_LAND",
+    "NAV_RETURN_TO_LAUNCH",
+    "MISSION_START",
+    "DO_SET_MISSION_CURRENT",
+    "REQUEST_MESSAGE",
 )
 
 
@@ -97,9 +103,20 @@ def command_key(name: str) -> str:
     return f"/command/{name.lower()}"
 
 
-KEYS: dict[str, Key] = {k.name: k for k in _KEYS} | {
-    command_key(n): Key(command_key(n), None, "commander", f"CommandStatus of the latest MAV_CMD_{n}") for n in COMMAND_NAMES
-}
+def _command_doc(name: str) -> Key:
+    return Key(command_key(name), None, "commander", f"CommandStatus of the latest MAV_CMD_{name}")
+
+
+KEYS: dict[str, Key] = {k.name: k for k in _KEYS} | {command_key(n): _command_doc(n) for n in COMMAND_NAMES}
+
+
+def document_command(name: str) -> str:
+    """Document ``/command/<name>`` for a MAV_CMD kind not listed in COMMAND_NAMES; returns the key."""
+    key = command_key(name)
+    if key not in KEYS:
+        KEYS[key] = _command_doc(name)
+        py_trees.blackboard.Blackboard.set(key, None)
+    return key
 
 
 def reset(*, activity_stream: bool = False) -> None:

@@ -43,21 +43,6 @@ class VehicleProfile:
     manual_mode: str
     surface: bool  # moves on a surface: vertical position values are meaningless
 
-    def mode_number(self, mode: str | int) -> int:
-        """The custom-mode number for a mode name or number; raises ``KeyError`` if unknown."""
-        if isinstance(mode, str):
-            return self.modes[mode.upper()]
-        if mode not in self.modes.values():
-            raise KeyError(mode)
-        return mode
-
-    def mode_name(self, number: int) -> str:
-        """The name of a custom-mode number, or ``MODE(n)`` for one this firmware lacks."""
-        for name, value in self.modes.items():
-            if value == number:
-                return name
-        return f"MODE({number})"
-
 
 PROFILES: MappingProxyType[str, VehicleProfile] = MappingProxyType({
     "rover": VehicleProfile("rover", mavlink.MAV_TYPE_GROUND_ROVER, ROVER_MODES, "HOLD", "GUIDED", "MANUAL", True),

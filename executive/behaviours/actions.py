@@ -78,7 +78,7 @@ class SetMode(CommandAction):
         return self.commander.set_mode(self.mode)
 
     def confirmed(self) -> bool:
-        return self.get("/vehicle/mode") == self.mode
+        return self.get("/vehicle/mode") == self.commander.modes.canonical(self.mode)
 
 
 class Arm(CommandAction):

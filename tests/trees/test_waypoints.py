@@ -8,8 +8,9 @@ from py_trees.common import Status
 import trees
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.dialect import mavlink
+from executive.io.mavlink.modes import ArduPilotModes
 from executive.state import EkfFlags, EkfStatus, GlobalPosition
-from executive.vehicles import PROFILES
+from executive.vehicles import ROVER_MODES
 
 EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
@@ -36,7 +37,7 @@ class ScriptedAutopilot:
     def respond(self) -> None:
         for msg in self.h.link.take():
             if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-                self.mode = PROFILES["rover"].mode_name(int(msg.param2))
+                self.mode = ArduPilotModes(ROVER_MODES).decode(int(msg.param2))
                 self.commands.append(("mode", self.mode))
                 self.h.ack(msg.command)
             elif msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:

@@ -12,10 +12,13 @@ import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
+from py_trees.common import Access
+
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import Link
+from executive.io.mavlink.modes import ArduPilotModes, ModeTable
 from executive.state import CommandState, CommandStatus
 from executive.vehicles import VehicleProfile
 
@@ -67,6 +70,8 @@ class Commander:
         self._bb = blackboard.writer("commander", [blackboard.command_key(n) for n in blackboard.COMMAND_NAMES])
         self.target_system = 1
         self.target_component = 1
+        #: The autopilot's mode table; the reader replaces it once the HEARTBEAT tells the firmware.
+        self.modes: ModeTable = ArduPilotModes(profile.modes)
 
     # -- requests (from behaviours; never block) ---------------------------------------------
     def command_long(self, command: int, params: Sequence[float] = ()) -> int:
@@ -79,14 +84,45 @@ class Commander:
 
     def set_mode(self, mode: str | int) -> int:
         """Ask for a flight mode by name or number (a name wins); raises KeyError if unknown."""
-        number = self.profile.mode_number(mode)
-        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number))
+        main, sub = self.modes.encode(mode)
+        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub))
 
     def arm(self, *, force: bool = False) -> int:
         return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0, FORCE_ARM_MAGIC if force else 0.0))
 
     def disarm(self, *, force: bool = False) -> int:
         return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0.0, FORCE_DISARM_MAGIC if force else 0.0))
+
+    def set_home(self, lat: float | None = None, lon: float | None = None, alt_m: float = 0.0) -> int:
+        """Home at the vehicle's current position (no arguments) or at a point (altitude above sea level)."""
+        if lat is None or lon is None:
+            return self.command_long(mavlink.MAV_CMD_DO_SET_HOME, (1.0,))
+        return self.command_int(mavlink.MAV_CMD_DO_SET_HOME, mavlink.MAV_FRAME_GLOBAL, (0, 0, 0, 0, lat, lon, alt_m))
+
+    def change_speed(self, speed_m_s: float, *, airspeed: bool = False) -> int:
+        """Cruise speed for GUIDED/AUTO legs (ground speed unless ``airspeed``)."""
+        return self.command_long(mavlink.MAV_CMD_DO_CHANGE_SPEED, (0.0 if airspeed else 1.0, speed_m_s, -1.0))
+
+    def reposition(self, lat: float, lon: float, alt_m: float = 0.0) -> int:
+        """Go to a point (switching to GUIDED where the firmware does); acked, unlike a setpoint."""
+        flags = float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)
+        return self.command_int(
+            mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, (-1, flags, 0, float("nan"), lat, lon, alt_m)
+        )
+
+    def vtol_transition(self, to: str) -> int:
+        """Transition a VTOL to multicopter (``"MC"``) or fixed-wing (``"FW"``) flight."""
+        state = {"MC": mavlink.MAV_VTOL_STATE_MC, "FW": mavlink.MAV_VTOL_STATE_FW}[to.upper()]
+        return self.command_long(mavlink.MAV_CMD_DO_VTOL_TRANSITION, (state,))
+
+    def takeoff(self, alt_m: float, *, vtol: bool = False) -> int:
+        """Climb to ``alt_m`` above home (a VTOL climbs as a multicopter)."""
+        command = mavlink.MAV_CMD_NAV_VTOL_TAKEOFF if vtol else mavlink.MAV_CMD_NAV_TAKEOFF
+        return self.command_long(command, (0, 0, 0, 0, 0, 0, alt_m))
+
+    def land(self, *, vtol: bool = False) -> int:
+        """Land where the vehicle is."""
+        return self.command_long(mavlink.MAV_CMD_NAV_VTOL_LAND if vtol else mavlink.MAV_CMD_NAV_LAND, ())
 
     def goto(self, lat: float, lon: float, alt_m: float = 0.0) -> None:
         """Queue a GUIDED position target (ArduPilot ignores it, silently, outside GUIDED)."""
@@ -177,5 +213,6 @@ class Commander:
             attempts = entry.status.attempts
         entry.status = replace(entry.status, state=state, result=result, time=now, attempts=attempts)
         key = blackboard.command_key(entry.status.name)
-        if key in blackboard.KEYS:
-            self._bb.set(key, entry.status)
+        if key not in self._bb.write:
+            self._bb.register_key(key=blackboard.document_command(entry.status.name), access=Access.WRITE)
+        self._bb.set(key, entry.status)

@@ -18,8 +18,8 @@ from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.link_health import LinkHealth
+from executive.io.mavlink.modes import mode_table
 from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition
-from executive.vehicles import profile_for_mav_type
 
 log = logging.getLogger(__name__)
 
@@ -106,6 +106,7 @@ class MavlinkReader:
             return
         self._autopilot = (msg.get_srcSystem(), msg.get_srcComponent())
         self._commander.target_system, self._commander.target_component = self._autopilot
+        self._commander.modes = mode_table(msg.autopilot, msg.type)
         self._bb.set("/link/system_id", self._autopilot[0])
         self._bb.set("/link/component_id", self._autopilot[1])
         log.info("autopilot found: system %d component %d (MAV_TYPE %d)", *self._autopilot, msg.type)
@@ -116,12 +117,11 @@ class MavlinkReader:
             self.on_reconnect()
 
     def _on_heartbeat(self, msg: MAVLinkMessage, now: float) -> None:
-        profile = profile_for_mav_type(msg.type)
         self._bb.set("/link/last_heartbeat", now)
         self._bb.set("/vehicle/mav_type", msg.type)
         self._bb.set("/vehicle/armed", bool(msg.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED))
         self._bb.set("/vehicle/custom_mode", msg.custom_mode)
-        self._bb.set("/vehicle/mode", profile.mode_name(msg.custom_mode) if profile else f"MODE({msg.custom_mode})")
+        self._bb.set("/vehicle/mode", self._commander.modes.decode(msg.custom_mode))
         self._bb.set("/vehicle/system_status", msg.system_status)
 
     def _on_global_position(self, msg: MAVLinkMessage, now: float) -> None:

@@ -108,3 +108,52 @@ def test_commands_go_to_the_autopilot_that_was_found(commander, link):
     commander.flush()
     (msg,) = link.take()
     assert (msg.target_system, msg.target_component, msg.param1, msg.param2) == (7, 1, 0.0, 21196.0)
+
+
+@pytest.mark.parametrize(
+    ("request_", "command", "params"),
+    [
+        (lambda c: c.set_home(), mavlink.MAV_CMD_DO_SET_HOME, (1.0, 0.0)),
+        (lambda c: c.change_speed(1.5), mavlink.MAV_CMD_DO_CHANGE_SPEED, (1.0, 1.5)),
+        (lambda c: c.change_speed(18.0, airspeed=True), mavlink.MAV_CMD_DO_CHANGE_SPEED, (0.0, 18.0)),
+        (lambda c: c.vtol_transition("fw"), mavlink.MAV_CMD_DO_VTOL_TRANSITION, (mavlink.MAV_VTOL_STATE_FW, 0.0)),
+        (lambda c: c.vtol_transition("MC"), mavlink.MAV_CMD_DO_VTOL_TRANSITION, (mavlink.MAV_VTOL_STATE_MC, 0.0)),
+        (lambda c: c.land(vtol=True), mavlink.MAV_CMD_NAV_VTOL_LAND, (0.0, 0.0)),
+    ],
+    ids=["set home here", "ground speed", "airspeed", "to FW", "to MC", "vtol land"],
+)
+def test_command_helpers(commander, link, request_, command, params):
+    request_(commander)
+    commander.flush()
+    (msg,) = link.take()
+    assert (msg.command, msg.param1, msg.param2) == (command, *params)
+
+
+def test_takeoff_altitude_is_param7(commander, link):
+    commander.takeoff(30.0, vtol=True)
+    commander.flush()
+    (msg,) = link.take()
+    assert (msg.command, msg.param7) == (mavlink.MAV_CMD_NAV_VTOL_TAKEOFF, 30.0)
+
+
+def test_set_home_at_a_point_and_reposition_use_command_int(commander, link):
+    commander.set_home(-35.1, 149.2, 584.0)
+    commander.reposition(-35.2, 149.3, 10.0)
+    commander.flush()
+    home, reposition = link.take()
+    assert (home.command, home.frame, home.x, home.y, home.z) == (
+        mavlink.MAV_CMD_DO_SET_HOME,
+        mavlink.MAV_FRAME_GLOBAL,
+        -351000000,
+        1492000000,
+        584.0,
+    )
+    assert (reposition.command, reposition.x, reposition.param2) == (mavlink.MAV_CMD_DO_REPOSITION, -352000000, 1.0)
+
+
+def test_every_command_result_is_on_the_blackboard_even_undocumented_ones(commander, link):
+    commander.command_long(mavlink.MAV_CMD_DO_DIGICAM_CONTROL, ())
+    commander.flush()
+    commander.on_ack(ack(mavlink.MAV_CMD_DO_DIGICAM_CONTROL, mavlink.MAV_RESULT_UNSUPPORTED))
+    assert status("DO_DIGICAM_CONTROL").state is CommandState.REJECTED
+    assert blackboard.command_key("DO_DIGICAM_CONTROL") in blackboard.KEYS
