@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Protocol
+import hashlib
+import os
+import struct
+import time
+from pathlib import Path
+from typing import BinaryIO, Protocol
 
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
 
@@ -21,14 +26,52 @@ class Link(Protocol):
     def close(self) -> None: ...
 
 
+def load_signing_key(path: str | os.PathLike[str]) -> bytes:
+    """A MAVLink 2 signing key from a file: 32 raw bytes, 64 hex digits, or a passphrase (SHA-256, as MAVProxy)."""
+    data = Path(path).read_bytes()
+    if len(data) == 32:
+        return data
+    text = data.decode("utf-8", "replace").strip()
+    if len(text) == 64:
+        try:
+            return bytes.fromhex(text)
+        except ValueError:
+            pass
+    if not text:
+        raise ValueError(f"{path}: empty signing key file")
+    return hashlib.sha256(text.encode()).digest()
+
+
+class TlogWriter:
+    """Records messages in the .tlog format: an 8-byte big-endian µs wall-clock timestamp, then the raw packet."""
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self._file: BinaryIO = open(path, "ab")  # noqa: SIM115 - lives as long as the link
+
+    def write(self, msg: MAVLinkMessage) -> None:
+        self._file.write(struct.pack(">Q", int(time.time() * 1e6)) + bytes(msg.get_msgbuf()))
+
+    def close(self) -> None:
+        self._file.close()
+
+
 class PymavlinkLink:
     """A link over serial, UDP or TCP, from a pymavlink connection string.
 
     ``udpout:127.0.0.1:14550``, ``udpin:0.0.0.0:14550``, ``tcp:127.0.0.1:5760``, ``/dev/ttyACM0``...
-    A serial device may carry its baud rate after a comma: ``/dev/ttyAMA0,921600``.
+    A serial device may carry its baud rate after a comma: ``/dev/ttyAMA0,921600``. With a signing
+    key everything sent is signed and unsigned (or badly signed) packets are dropped and counted.
     """
 
-    def __init__(self, url: str, system_id: int = 1, component_id: int = EXECUTIVE_COMPONENT) -> None:
+    def __init__(
+        self,
+        url: str,
+        system_id: int = 1,
+        component_id: int = EXECUTIVE_COMPONENT,
+        *,
+        signing_key: bytes | None = None,
+        tlog: str | os.PathLike[str] | None = None,
+    ) -> None:
         device, _, baud = url.partition(",")
         self.url = url
         self._conn = mavutil.mavlink_connection(
@@ -39,12 +82,30 @@ class PymavlinkLink:
             dialect="ardupilotmega",
             autoreconnect=True,
         )
+        if signing_key is not None:
+            if len(signing_key) != 32:
+                raise ValueError("a MAVLink signing key is 32 bytes")
+            self._conn.setup_signing(signing_key, sign_outgoing=True, allow_unsigned_callback=lambda _mav, _msg_id: False)
+        self._tlog = TlogWriter(tlog) if tlog else None
+
+    @property
+    def unsigned_dropped(self) -> int:
+        """Packets dropped for lacking a valid signature."""
+        signing = self._conn.mav.signing
+        return signing.reject_count if signing.secret_key is not None else 0
 
     def recv(self) -> MAVLinkMessage | None:
-        return self._conn.recv_msg()
+        msg = self._conn.recv_msg()
+        if msg is not None and self._tlog is not None and msg.get_type() != "BAD_DATA":
+            self._tlog.write(msg)
+        return msg
 
     def send(self, msg: MAVLinkMessage) -> None:
         self._conn.mav.send(msg)
+        if self._tlog is not None:
+            self._tlog.write(msg)
 
     def close(self) -> None:
         self._conn.close()
+        if self._tlog is not None:
+            self._tlog.close()

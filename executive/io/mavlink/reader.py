@@ -26,6 +26,10 @@ log = logging.getLogger(__name__)
 _NOT_AUTOPILOTS = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
 
 
+#: HEARTBEAT system_status values of an autopilot that is (re)starting.
+_STARTING = {mavlink.MAV_STATE_UNINIT, mavlink.MAV_STATE_BOOT, mavlink.MAV_STATE_CALIBRATING}
+
+
 def _finite(*values: float) -> bool:
     return all(math.isfinite(v) for v in values)
 
@@ -83,6 +87,8 @@ class MavlinkReader:
         """Handle one message received at clock time ``now``."""
         kind = msg.get_type()
         if kind == "BAD_DATA":
+            if str(getattr(msg, "reason", "")).startswith("Invalid signature"):
+                return  # counted by the link as unsigned_dropped
             self._bad_data += 1
             self._bb.set("/link/bad_data", self._bad_data)
             return
@@ -117,6 +123,11 @@ class MavlinkReader:
             self.on_reconnect()
 
     def _on_heartbeat(self, msg: MAVLinkMessage, now: float) -> None:
+        previous = self._bb.get("/vehicle/system_status")
+        if previous is not None and previous not in _STARTING and msg.system_status in _STARTING:
+            self.health.reboots += 1
+            log.warning("autopilot rebooted (heartbeat says it is starting up)")
+            self._reconnected()
         self._bb.set("/link/last_heartbeat", now)
         self._bb.set("/vehicle/mav_type", msg.type)
         self._bb.set("/vehicle/armed", bool(msg.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED))

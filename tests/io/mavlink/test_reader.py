@@ -183,3 +183,13 @@ def test_home_gps_speed_servos_and_extended_state(reader, link):
     assert (bb("/vehicle/ground_speed_m_s"), bb("/vehicle/heading_deg")) == (2.5, 271.0)
     assert bb("/vehicle/servo_outputs")[:4] == (1900, 1500, 1100, 1500)
     assert (bb("/vehicle/vtol_state"), bb("/vehicle/landed_state")) == ("FW", "IN_AIR")
+
+
+def test_a_heartbeat_saying_it_is_starting_again_is_a_reboot(reader, link):
+    calls = []
+    reader.on_reconnect = lambda: calls.append(1)
+    boot = AUTOPILOT.heartbeat(mavlink.MAV_TYPE_GROUND_ROVER, 3, 0, 16, mavlink.MAV_STATE_CALIBRATING)
+    receive(reader, link, boot, boot, heartbeat())  # first contact while booting: one reconnect, no reboot
+    assert (len(calls), bb("/link/reboots")) == (1, 0)
+    receive(reader, link, boot)
+    assert (len(calls), bb("/link/reboots")) == (2, 1)
