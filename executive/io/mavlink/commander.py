@@ -82,9 +82,12 @@ class Commander:
         """Queue a COMMAND_INT; ``params`` are param1-4, x, y (degrees: scaled here), z."""
         return self._request(command, params, frame=frame)
 
-    def set_mode(self, mode: str | int) -> int:
-        """Ask for a flight mode by name or number (a name wins); raises KeyError if unknown."""
-        main, sub = self.modes.encode(mode)
+    def set_mode(self, mode: str | int | None = None, *, number: int | None = None) -> int:
+        """Ask for a flight mode by name or number; given both, the name wins. KeyError if unknown."""
+        chosen = mode if mode is not None else number
+        if chosen is None:
+            raise KeyError("no mode given")
+        main, sub = self.modes.encode(chosen)
         return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub))
 
     def arm(self, *, force: bool = False) -> int:

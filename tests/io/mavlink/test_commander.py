@@ -157,3 +157,15 @@ def test_every_command_result_is_on_the_blackboard_even_undocumented_ones(comman
     commander.on_ack(ack(mavlink.MAV_CMD_DO_DIGICAM_CONTROL, mavlink.MAV_RESULT_UNSUPPORTED))
     assert status("DO_DIGICAM_CONTROL").state is CommandState.REJECTED
     assert blackboard.command_key("DO_DIGICAM_CONTROL") in blackboard.KEYS
+
+
+def test_mode_name_wins_over_number(commander, link):
+    commander.set_mode("GUIDED", number=4)
+    commander.set_mode(number=4)
+    commander.flush()
+    assert [m.param2 for m in link.take()] == [4]  # the second request superseded the first before sending
+    commander.set_mode("GUIDED", number=4)
+    commander.flush()
+    assert [m.param2 for m in link.take()] == [15]
+    with pytest.raises(KeyError):
+        commander.set_mode()
