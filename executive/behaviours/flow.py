@@ -91,7 +91,7 @@ class WaitForGuards(TimedBehaviour):
     def update(self) -> Status:
         failing = [g for g in self.guards if g.status == Status.FAILURE]
         if not failing:
-            self.feedback_message = "no guard is failing"
+            self.feedback_message = ""  # the branch it stands behind failed: that is the reason to report
             return Status.FAILURE
         why = "; ".join(f"{g.name} {g.feedback_message}" for g in failing)
         if self.elapsed > self.limit_s:

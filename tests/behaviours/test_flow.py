@@ -81,8 +81,9 @@ def test_wait_for_guards_gives_up_after_its_limit(harness, vehicle):
 
 def test_wait_for_guards_fails_when_the_route_itself_failed(harness, vehicle):
     vehicle.set(link__up=True, vehicle__armed=True)
-    h, _ = guarded(harness, py_trees.behaviours.Failure("leg"))
+    h, wait = guarded(harness, py_trees.behaviours.Failure("leg"))
     assert h.tick() == Status.FAILURE
+    assert wait.feedback_message == ""  # nothing to add: the reason is the route's
 
 
 def test_for_each_leg_runs_the_child_once_per_leg(harness, mission_state):
