@@ -2,8 +2,8 @@
 
 Namespaces:
 
-- ``/link``: the MAVLink link to the autopilot (mavlink reader).
-- ``/vehicle``: the vehicle's state as the autopilot reports it (mavlink reader).
+- ``/link``: the MAVLink link to the autopilot (mavlink reader) and its mission transfers (mission transfer).
+- ``/vehicle``: the vehicle's state as the autopilot reports it (mavlink reader; its mission: mission transfer).
 - ``/rc``: the RC receiver, from MAVLink RC_CHANNELS or the CAN bus (mavlink / CAN reader).
 - ``/heading``: the heading sanity filter's verdict (heading filter).
 - ``/mission``: the mission lifecycle and progress (mission state code only).
@@ -46,6 +46,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/link/reboots", 0, "mavlink reader", "autopilot reboots seen (its boot clock ran backwards)"),
     Key("/link/bad_data", 0, "mavlink reader", "undecodable byte runs received"),
     Key("/link/unsigned_dropped", 0, "mavlink reader", "unsigned packets dropped while signing is on"),
+    Key("/link/mission_transfer", None, "mission transfer", "MissionTransferStatus of the latest mission upload, download, clear or set-current"),
     Key("/vehicle/mav_type", None, "mavlink reader", "HEARTBEAT type (MAV_TYPE)"),
     Key("/vehicle/armed", False, "mavlink reader", "the autopilot reports itself armed"),
     Key("/vehicle/mode", None, "mavlink reader", "flight mode name, e.g. GUIDED"),
@@ -56,6 +57,10 @@ _KEYS: tuple[Key, ...] = (
     Key("/vehicle/ekf", None, "mavlink reader", "EkfStatus (EKF_STATUS_REPORT)"),
     Key("/vehicle/battery", None, "mavlink reader", "Battery (SYS_STATUS)"),
     Key("/vehicle/statustext", None, "mavlink reader", "(severity, text) of the last STATUSTEXT"),
+    Key("/vehicle/mission_home", None, "mission transfer", "home as item 0 of the last mission read back (MissionItem); None = not read"),
+    Key("/vehicle/mission_items", None, "mission transfer", "the mission items 1..n the vehicle holds (tuple of MissionItem); None = unknown"),
+    Key("/vehicle/mission_current", None, "mission transfer", "MissionCurrent (MISSION_CURRENT): the item the vehicle is on"),
+    Key("/vehicle/mission_reached", None, "mission transfer", "MissionItemReached: the last item the vehicle reported reached"),
     Key("/vehicle/home", None, "mavlink reader", "HomePosition (HOME_POSITION)"),
     Key("/vehicle/ground_speed_m_s", None, "mavlink reader", "ground speed (VFR_HUD)"),
     Key("/vehicle/heading_deg", None, "mavlink reader", "heading the autopilot believes, degrees (VFR_HUD)"),

@@ -7,6 +7,7 @@ import contextlib
 import signal
 import sys
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK
 from executive.cli.common import load_or_report, setup_logging
@@ -17,6 +18,9 @@ from executive.mission.model import Mission
 from executive.progress import Progress
 from executive.runtime import Runtime
 
+if TYPE_CHECKING:
+    from executive.sim.faults import FaultInjector
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a mission (on the built-in simulated vehicle unless --mavlink is given)")
@@ -26,12 +30,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--speedup", type=float, default=1.0, metavar="X", help="simulator only: run X times faster than real time")
     p.add_argument("--sysid", type=int, default=1, help="our MAVLink system id (default 1, the vehicle's)")
     p.add_argument("--connect-timeout", type=float, default=30.0, metavar="S", help="seconds to wait for the autopilot (default 30)")
+    p.add_argument("--faults", metavar="FILE", help="simulator only: YAML list of faults to inject into the simulated vehicle")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-v info, -vv debug)")
     p.set_defaults(func=main)
 
 
 @contextlib.contextmanager
-def _vehicle_link(args: argparse.Namespace, mission: Mission, clock: ScaledClock) -> Iterator[PymavlinkLink]:
+def _vehicle_link(args: argparse.Namespace, mission: Mission, clock: ScaledClock, faults: FaultInjector | None = None) -> Iterator[PymavlinkLink]:
     """A link to the vehicle named by --mavlink, or to a simulated one started here."""
     if args.mavlink:
         link = PymavlinkLink(args.mavlink, system_id=args.sysid)
@@ -44,7 +49,7 @@ def _vehicle_link(args: argparse.Namespace, mission: Mission, clock: ScaledClock
 
     start = mission.home or mission.waypoints[0]
     home = (start.lat, start.lon, getattr(start, "heading_deg", 0.0))
-    with SimServer(mission.vehicle, clock=clock, home=home) as sim:
+    with SimServer(mission.vehicle, clock=clock, home=home, faults=faults) as sim:
         print(f"executive: simulated {mission.vehicle} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
         link = PymavlinkLink(sim.url_for_client, system_id=args.sysid)
         try:
@@ -64,7 +69,20 @@ def main(args: argparse.Namespace) -> int:
     if args.mavlink and args.speedup != 1.0:
         print("executive: run: --speedup applies to the simulator only; ignored with --mavlink", file=sys.stderr)
     clock = ScaledClock(1.0 if args.mavlink else args.speedup)
-    with _vehicle_link(args, mission, clock) as link:
+    faults = None
+    if args.faults is not None:
+        if args.mavlink:
+            print("executive: run: --faults applies to the built-in simulator only; it cannot be used with --mavlink", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        from executive.sim.faults import FaultFileError, FaultInjector, load_faults
+
+        try:
+            faults = FaultInjector(load_faults(args.faults, vehicle=mission.vehicle), clock)
+        except FaultFileError as exc:
+            for error in exc.errors:
+                print(error, file=sys.stderr)
+            return EXIT_BAD_INPUT
+    with _vehicle_link(args, mission, clock, faults) as link:
         runtime = Runtime(mission, link, clock, rate_hz=args.rate, system_id=args.sysid, progress=Progress(sys.stderr, clock))
         if not runtime.connect(args.connect_timeout * clock.speedup):
             print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)

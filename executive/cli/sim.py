@@ -9,9 +9,10 @@ import sys
 import threading
 from types import FrameType
 
-from executive.cli import EXIT_FAILED, EXIT_OK
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
 from executive.clock import ScaledClock
 from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, Home
+from executive.sim.faults import FaultFileError, FaultInjector, load_faults
 from executive.sim.server import SimServer
 
 
@@ -53,14 +54,23 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     ekf = "simulated seconds before the EKF uses GPS and arming is possible (default: %(default)g)"
     parser.add_argument("--ekf-ready-after", metavar="S", type=non_negative, default=40.0, help=ekf)
     parser.add_argument("--duration", metavar="S", type=positive, help="exit after S simulated seconds")
+    parser.add_argument("--faults", metavar="FILE", help="YAML list of faults to inject (link loss, EKF, GPS, compass, RC, battery)")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Serve the simulated vehicle in the foreground."""
     clock = ScaledClock(args.speedup)
+    faults = None
+    if args.faults is not None:
+        try:
+            faults = FaultInjector(load_faults(args.faults, vehicle=args.vehicle), clock)
+        except FaultFileError as exc:
+            for error in exc.errors:
+                print(error, file=sys.stderr)
+            return EXIT_BAD_INPUT
     try:
-        server = SimServer(args.vehicle, args.mavlink, clock=clock, home=args.home, ekf_ready_after_s=args.ekf_ready_after)
+        server = SimServer(args.vehicle, args.mavlink, clock=clock, home=args.home, ekf_ready_after_s=args.ekf_ready_after, faults=faults)
     except (OSError, ValueError) as exc:
         print(f"executive sim: cannot listen on {args.mavlink}: {exc}", file=sys.stderr)
         return EXIT_FAILED
@@ -76,6 +86,8 @@ def run(args: argparse.Namespace) -> int:
         f"executive sim: {ap.FIRMWARE} {args.vehicle} listening on {args.mavlink} (connect to {server.url_for_client}), speed-up {args.speedup:g}x",
         flush=True,
     )
+    if faults is not None:
+        print(f"executive sim: injecting {len(faults.faults)} fault(s) from {args.faults}", flush=True)
     end = None if args.duration is None else clock.now() + args.duration
     try:
         with server:

@@ -3,14 +3,15 @@
 The YAML is composed into a node graph first (with limits against alias bombs and deep nesting),
 each value's path is mapped to its node, and only then is the graph constructed and validated, so
 that every pydantic and cross-field error points at the line and column of the offending value.
+:func:`load_model` does the same for any strict pydantic model (the simulator's fault files).
 """
 
 from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterator
-from typing import Any, NoReturn, get_args, get_origin
+from collections.abc import Callable, Iterator
+from typing import Any, Literal, NoReturn, TypeVar, get_args, get_origin
 
 import yaml
 from pydantic import BaseModel, ValidationError
@@ -24,6 +25,10 @@ MAX_ALIASES = 100
 MAX_DEPTH = 64  # nested mappings/sequences, the root mapping being level 1
 MAX_VALUES = 1_000_000  # nodes after expanding aliases; 1 MiB of YAML without aliases holds fewer
 
+M = TypeVar("M", bound=BaseModel)
+#: Rules between fields of a validated model: (path of the offending value, why) for each problem.
+Checks = Callable[[M], list[tuple[Path, str]]]
+
 _MERGE_TAG = "tag:yaml.org,2002:merge"
 _EXPONENT_WITHOUT_DOT_OR_SIGN = re.compile(r"[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+")  # what YAML 1.1 reads as a string
 
@@ -34,6 +39,7 @@ _EXPECTED = {
     "string_type": "a string",
     "bool_type": "true or false",
     "model_type": "a mapping",
+    "model_attributes_type": "a mapping",
     "dict_type": "a mapping",
     "list_type": "a list",
     "invalid_key": "a string key",
@@ -123,49 +129,91 @@ def _merged_pairs(node: yaml.MappingNode) -> Iterator[tuple[yaml.Node, yaml.Node
 
 def load_mission(path: str | os.PathLike[str]) -> Mission:
     """Read and validate a mission file; raises :class:`MissionError` listing every problem."""
+    return load_model(path, Mission, _mission_checks)
+
+
+def load_mission_text(text: str, filename: str) -> Mission:
+    """Validate mission YAML ``text``; ``filename`` is only used to locate errors."""
+    return load_model_text(text, filename, Mission, _mission_checks)
+
+
+def _mission_checks(mission: Mission) -> list[tuple[Path, str]]:
+    errors = cross_field_errors(mission)
+    if mission.tree not in (available := trees.available()):
+        errors.append((("tree",), f"unknown tree {mission.tree!r} (available: {', '.join(available) or 'none'})"))
+    return errors
+
+
+def load_model(path: str | os.PathLike[str], model: type[M], checks: Checks[M] | None = None, what: str = "mission") -> M:
+    """Read a YAML file and validate it as ``model`` (then ``checks``); raises :class:`MissionError` listing every problem.
+
+    ``what`` names the kind of file in messages (``a {what} file``, ``({what})`` for the whole document).
+    """
     name = os.fsdecode(path)
     try:
         with open(path, "rb") as stream:
-            _check_size(name, os.fstat(stream.fileno()).st_size)
+            _check_size(name, os.fstat(stream.fileno()).st_size, what)
             data = stream.read(MAX_BYTES + 1)  # the size may lie (a pipe) or change
     except OSError as exc:
         raise MissionError([_located(name, None, "(file)", exc.strerror or str(exc))]) from None
-    _check_size(name, len(data))
+    _check_size(name, len(data), what)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         before = data[: exc.start].decode("utf-8", "replace")
         raise MissionError([_located_after(name, before, "(file)", f"not UTF-8 text: byte 0x{data[exc.start]:02x} at offset {exc.start}")]) from None
-    return load_mission_text(text, name)
+    return load_model_text(text, name, model, checks, what)
 
 
-def load_mission_text(text: str, filename: str) -> Mission:
-    """Validate mission YAML ``text``; ``filename`` is only used to locate errors."""
-    _check_size(filename, len(text.encode("utf-8", "surrogatepass")))
-    data, loader = _parse(text, filename)
+def load_model_text(text: str, filename: str, model: type[M], checks: Checks[M] | None = None, what: str = "mission") -> M:
+    """Validate YAML ``text`` as ``model`` (then ``checks``); ``filename`` is only used to locate errors."""
+    _check_size(filename, len(text.encode("utf-8", "surrogatepass")), what)
+    data, loader = _parse(text, filename, what)
 
     def error(path: Path, message: str, node: yaml.Node | None = None) -> FieldError:
         """Located at ``node``, else at the value of ``path`` or of its nearest enclosing value in the file."""
         node = node or next(loader.values[path[:n]] for n in range(len(path), -1, -1) if path[:n] in loader.values)
-        return _located(filename, node.start_mark, format_path(path), message)
+        return _located(filename, node.start_mark, format_path(path) if path else f"({what})", message)
 
     errors = [error(path, "duplicate key (an earlier one is ignored)", key) for path, key in loader.duplicates.values()]
     try:
-        mission = Mission.model_validate(data)
+        result = model.model_validate(data)
     except ValidationError as exc:
         for e in exc.errors(include_url=False):
-            path = tuple(e["loc"])
+            path = _file_path(e["loc"], data, missing=e["type"] == "missing")
+            if e["type"] in ("union_tag_invalid", "union_tag_not_found"):  # name the tag field, not the whole mapping
+                path = (*path, e["ctx"]["discriminator"].strip("'"))
             key = loader.keys.get(path) if e["type"] in ("extra_forbidden", "invalid_key") else None
             if key is not None and e["type"] == "invalid_key":
                 path = (*path[:-1], key.value)  # 'on: 1' has the key True: name it as written
-            errors.append(error(path, _message(e, key or loader.values.get(path)), key))
+            errors.append(error(path, _message(e, key or loader.values.get(path), model), key))
         raise MissionError(errors) from None
-    errors += [error(path, message) for path, message in cross_field_errors(mission)]
-    if mission.tree not in (available := trees.available()):
-        errors.append(error(("tree",), f"unknown tree {mission.tree!r} (available: {', '.join(available) or 'none'})"))
+    errors += [error(path, message) for path, message in (checks(result) if checks else [])]
     if errors:
         raise MissionError(errors)
-    return mission
+    return result
+
+
+def _file_path(loc: tuple[int | str, ...], data: Any, missing: bool = False) -> Path:
+    """A pydantic error location as a path in the file: the tags pydantic inserts for a discriminated union are dropped.
+
+    ``missing``: the location ends with a field missing from the file (never a tag).
+    """
+    path: list[int | str] = []
+    here = data
+    for i, part in enumerate(loc):
+        # ('faults', 0, 'link_loss', 'direction'): 'link_loss' is no key of the fault but the value of its tag field
+        last_missing = missing and i == len(loc) - 1
+        if not last_missing and isinstance(here, dict) and part not in here and any(v == part for v in here.values() if isinstance(v, str)):
+            continue
+        path.append(part)
+        if isinstance(here, dict):
+            here = here.get(part)
+        elif isinstance(here, list) and isinstance(part, int) and 0 <= part < len(here):
+            here = here[part]
+        else:
+            here = None
+    return tuple(path)
 
 
 def _located(file: str, mark: yaml.Mark | None, field: str, message: str) -> FieldError:
@@ -178,19 +226,19 @@ def _located_after(file: str, before: str, field: str, message: str) -> FieldErr
     return FieldError(file, before.count("\n") + 1, len(before) - before.rfind("\n"), field, message)
 
 
-def _check_size(name: str, size: int) -> None:
+def _check_size(name: str, size: int, what: str) -> None:
     if size > MAX_BYTES:
-        raise MissionError([_located(name, None, "(file)", f"file is {size} bytes; a mission file may have at most {MAX_BYTES} (1 MiB)")])
+        raise MissionError([_located(name, None, "(file)", f"file is {size} bytes; a {what} file may have at most {MAX_BYTES} (1 MiB)")])
 
 
-def _parse(text: str, filename: str) -> tuple[dict[str, Any], _Loader]:
-    """The mission mapping and the loader holding the node index; refuses anything that is not one YAML mapping."""
+def _parse(text: str, filename: str, what: str) -> tuple[dict[str, Any], _Loader]:
+    """The document's mapping and the loader holding the node index; refuses anything that is not one YAML mapping."""
     loader = None
     try:
         loader = _Loader(text)
         root = loader.get_single_node()
         if root is None:
-            raise MissionError([_located(filename, None, "(mission)", "the file holds no YAML document (it is empty or only comments)")])
+            raise MissionError([_located(filename, None, f"({what})", "the file holds no YAML document (it is empty or only comments)")])
         loader.index_paths(root)
         data = loader.construct_document(root)
     except yaml.MarkedYAMLError as exc:
@@ -202,17 +250,20 @@ def _parse(text: str, filename: str) -> tuple[dict[str, Any], _Loader]:
         if loader is not None:
             loader.dispose()
     if not isinstance(data, dict):
-        raise MissionError([_located(filename, root.start_mark, "(mission)", f"expected a mapping of mission fields, got {_describe(data)}")])
+        raise MissionError([_located(filename, root.start_mark, f"({what})", f"expected a mapping of {what} fields, got {_describe(data)}")])
     return data, loader
 
 
-def _message(error: dict[str, Any], node: yaml.Node | None) -> str:
+def _message(error: dict[str, Any], node: yaml.Node | None, root: type[BaseModel] = Mission) -> str:
     """A pydantic error entry as a person would say it."""
     kind, value = error["type"], error.get("input")
-    if kind == "missing":
+    if kind in ("missing", "union_tag_not_found"):
         return "required field is missing"
+    if kind == "union_tag_invalid":
+        tag = value.get(error["ctx"]["discriminator"].strip("'")) if isinstance(value, dict) else error["ctx"]["tag"]
+        return f"{_show(tag)}: expected one of {error['ctx']['expected_tags']}"
     if kind == "extra_forbidden":
-        model = _model_at(error["loc"][:-1])
+        model = _model_at(root, error["loc"][:-1])
         return f"unknown field (allowed: {', '.join(model.model_fields)})" if model else "unknown field"
     if kind in _EXPECTED:
         return f"expected {_EXPECTED[kind]}, got {_describe(value)}{_yaml11_hint(node, value)}"
@@ -220,15 +271,29 @@ def _message(error: dict[str, Any], node: yaml.Node | None) -> str:
     return message if isinstance(value, list | dict) else f"{_show(value)}: {message}"
 
 
-def _model_at(path: tuple[Any, ...]) -> type[BaseModel] | None:
-    """The model validating the mapping at ``path`` (list indices and ``X | None`` see through)."""
-    model: type[BaseModel] | None = Mission
-    for part in path:
-        if isinstance(part, str) and model is not None:
-            annotation = model.model_fields[part].annotation if part in model.model_fields else None
-            candidates = (annotation, *get_args(annotation))
-            model = next((t for t in candidates if get_origin(t) is None and isinstance(t, type) and issubclass(t, BaseModel)), None)
-    return model
+def _model_at(root: type[BaseModel], loc: tuple[Any, ...]) -> type[BaseModel] | None:
+    """The model validating the mapping at pydantic location ``loc`` (lists, ``X | None`` and tagged unions see through)."""
+    models = [root]
+    for part in loc:
+        if not isinstance(part, str):
+            continue
+        owners = [m for m in models if part in m.model_fields]
+        if owners:
+            models = [found for m in owners for found in _models_in(m.model_fields[part].annotation)]
+        else:  # the tag pydantic puts in the location of a discriminated union's member
+            models = [m for m in models if _has_tag(m, part)]
+    return models[0] if len(models) == 1 else None
+
+
+def _has_tag(model: type[BaseModel], tag: str) -> bool:
+    return any(get_origin(f.annotation) is Literal and tag in get_args(f.annotation) for f in model.model_fields.values())
+
+
+def _models_in(annotation: Any) -> list[type[BaseModel]]:
+    """The models an annotation can hold: ``X``, ``list[X]``, ``X | Y | None``, ``Annotated[...]``."""
+    if get_origin(annotation) is None and isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return [annotation]
+    return [model for arg in get_args(annotation) for model in _models_in(arg)]
 
 
 def _show(value: Any) -> str:

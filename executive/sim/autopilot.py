@@ -13,15 +13,17 @@ real ArduRover did, quirks included: the firmware is the reference, not the MAVL
 
 from __future__ import annotations
 
+import importlib
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import ClassVar
 
 from executive.clock import Clock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.sim.mission_store import MissionStore, StoredCommand
 from executive.sim.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.vehicles import PROFILES, VehicleProfile
 
@@ -72,6 +74,7 @@ DEFAULT_INTERVALS: Mapping[int, float] = MappingProxyType({
         _M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, _M.MAVLINK_MSG_ID_VFR_HUD, _M.MAVLINK_MSG_ID_RC_CHANNELS,
         _M.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW, _M.MAVLINK_MSG_ID_EKF_STATUS_REPORT,
         _M.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT, _M.MAVLINK_MSG_ID_POSITION_TARGET_GLOBAL_INT,
+        _M.MAVLINK_MSG_ID_MISSION_CURRENT,
     ), _STREAM_S),
 })  # fmt: skip
 
@@ -91,6 +94,8 @@ class Command:
     command: int
     params: tuple[float, float, float, float, float, float, float]
     is_int: bool
+    # ArduPilot handles a COMMAND_LONG as a COMMAND_INT in the relative-altitude frame
+    frame: int = mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT
 
     @property
     def lat_lon(self) -> tuple[float, float]:
@@ -112,6 +117,8 @@ class ArduPilotSim(ABC):
     INITIAL_MODE: ClassVar[str] = "MANUAL"
     MANUAL_INPUT_MODES: ClassVar[frozenset[str]] = frozenset()  # HEARTBEAT MANUAL_INPUT_ENABLED
     AUTOPILOT_MODES: ClassVar[frozenset[str]] = frozenset()  # HEARTBEAT GUIDED_ENABLED, NAV_CONTROLLER_OUTPUT
+    STABILIZE_MODES: ClassVar[frozenset[str]] = frozenset()  # HEARTBEAT STABILIZE_ENABLED
+    STREAMS: ClassVar[Mapping[int, float]] = DEFAULT_INTERVALS  # messages sent unasked, with their default interval (s)
     POSITION_MODES: ClassVar[frozenset[str]] = frozenset()  # refused while armed without a position estimate
     UNARMABLE_MODES: ClassVar[frozenset[str]] = frozenset()
     NAV_PERIOD_S: ClassVar[float] = 0.1  # how often mode logic runs, in clock time
@@ -140,16 +147,18 @@ class ArduPilotSim(ABC):
         self.home: tuple[float, float] | None = None  # set when the EKF gets its origin
         self.rc_channels = [1500] * 16
         self.rc_channels[4] = self.rc_channels[5] = 1000  # ch5/ch6 switches low
+        self.ekf_position_lost = False  # set by fault injection: the EKF has no horizontal position
         self.consumed_mah = 0.0
         self._mav = encoder(system_id, component_id)
         self._t0 = self._t = clock.now()
         self._mode_names = {number: name for name, number in profile.modes.items()}
-        self._intervals = dict(DEFAULT_INTERVALS)
+        self._intervals = dict(self.STREAMS)
         self._due: dict[int, float] = {}
         self._out: list[MAVLinkMessage] = []
         self._booted = self._origin_set = False
         self._prearm_reported_at = -math.inf
         self._text_id = 0
+        self.mission = MissionStore(self, self._emit, self._text)
         self._builders = self._message_builders()
         self._handlers = self._message_handlers()
         self._commands = self._command_handlers()
@@ -193,6 +202,7 @@ class ArduPilotSim(ABC):
             self.vehicle.step(h)
             self._drain_battery(h)
             self._t = now if now - self._t - h < _EPSILON_S else self._t + h
+        self.mission.update()
         self._events()
         self._telemetry()
         return self._flush()
@@ -235,12 +245,22 @@ class ArduPilotSim(ABC):
         return failures
 
     @property
+    def servo_outputs(self) -> tuple[int, ...]:
+        """The 16 PWM outputs now (SERVO_OUTPUT_RAW; 0 = unused): what a drive bridge forwards to motors."""
+        return tuple(self._servo_outputs())
+
+    @property
     def position_ok(self) -> bool:
-        """The firmware's own "EKF position ok" (fault injection may override it later)."""
-        return self.ekf_ready
+        """The firmware's own "EKF position ok" (false while an injected fault takes the position away)."""
+        return self.ekf_ready and not self.ekf_position_lost
 
     def _message_handlers(self) -> dict[str, Callable[[MAVLinkMessage], None]]:
-        return {"COMMAND_LONG": self._on_command, "COMMAND_INT": self._on_command, "SET_MODE": self._on_set_mode}
+        return {
+            "COMMAND_LONG": self._on_command,
+            "COMMAND_INT": self._on_command,
+            "SET_MODE": self._on_set_mode,
+            **dict.fromkeys(MissionStore.MESSAGES, self.mission.handle),
+        }
 
     def _command_handlers(self) -> dict[int, Callable[[Command], int]]:
         return {
@@ -251,6 +271,7 @@ class ArduPilotSim(ABC):
             _M.MAV_CMD_REQUEST_MESSAGE: self._cmd_request_message,
             _M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: self._cmd_request_capabilities,
             _M.MAV_CMD_DO_SET_HOME: self._cmd_set_home,
+            _M.MAV_CMD_DO_SET_MISSION_CURRENT: lambda cmd: self.mission.command_set_current(cmd.params[0], cmd.params[1]),
         }
 
     def _message_builders(self) -> dict[int, Callable[[], MAVLinkMessage | None]]:
@@ -269,6 +290,7 @@ class ArduPilotSim(ABC):
             _M.MAVLINK_MSG_ID_HOME_POSITION: self._msg_home_position,
             _M.MAVLINK_MSG_ID_GPS_GLOBAL_ORIGIN: self._msg_gps_global_origin,
             _M.MAVLINK_MSG_ID_AUTOPILOT_VERSION: self._msg_autopilot_version,
+            _M.MAVLINK_MSG_ID_MISSION_CURRENT: self.mission.current_message,
         }
 
     # -- output ----------------------------------------------------------------------------------
@@ -347,7 +369,8 @@ class ArduPilotSim(ABC):
             params = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
         else:
             params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
-        cmd = Command(msg.command, params, msg.get_type() == "COMMAND_INT")
+        is_int = msg.get_type() == "COMMAND_INT"
+        cmd = Command(msg.command, params, is_int, msg.frame if is_int else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT)
         handler = self._commands.get(cmd.command)
         self._ack_first(msg, cmd.command, lambda: handler(cmd) if handler else _M.MAV_RESULT_UNSUPPORTED)
 
@@ -380,11 +403,19 @@ class ArduPilotSim(ABC):
         if (self.armed and name in self.POSITION_MODES and not self.position_ok) or not self._enter_mode(name):
             self._text(_M.MAV_SEVERITY_WARNING, "Flight mode change failed")
             return False
+        if self.mode == "AUTO":
+            self.mission.stop()  # leaving AUTO stops the mission where it is, to resume there
         self.mode = name
         self._emit(self._msg_heartbeat())  # ArduPilot announces a new mode at once
         return True
 
     # -- commands --------------------------------------------------------------------------------
+
+    def disarm(self) -> None:
+        """Disarm, whoever asks (a GCS command, a pilot's switch in fault injection)."""
+        if self.armed:
+            self.armed = self.vehicle.powered = False
+            self._text(_M.MAV_SEVERITY_INFO, "Throttle disarmed")
 
     def _report_prearm(self, failures: list[str]) -> None:
         for failure in failures:
@@ -401,9 +432,7 @@ class ArduPilotSim(ABC):
                 self._text(_M.MAV_SEVERITY_INFO, "Throttle armed")
             return _M.MAV_RESULT_ACCEPTED
         if cmd.params[0] == 0.0:
-            if self.armed:
-                self.armed = self.vehicle.powered = False
-                self._text(_M.MAV_SEVERITY_INFO, "Throttle disarmed")
+            self.disarm()
             return _M.MAV_RESULT_ACCEPTED
         return _M.MAV_RESULT_UNSUPPORTED
 
@@ -413,9 +442,9 @@ class ArduPilotSim(ABC):
             self._text(_M.MAV_SEVERITY_INFO, f"No ap_message for mavlink id ({msg_id})")
             return _M.MAV_RESULT_FAILED
         if interval_us == 0:  # back to the default rate, if it has one
-            if msg_id not in DEFAULT_INTERVALS:
+            if msg_id not in self.STREAMS:
                 return _M.MAV_RESULT_FAILED
-            interval = DEFAULT_INTERVALS[msg_id]
+            interval = self.STREAMS[msg_id]
         elif interval_us == -1:
             interval = 0.0  # stop sending
         else:
@@ -464,7 +493,9 @@ class ArduPilotSim(ABC):
             base_mode |= _M.MAV_MODE_FLAG_MANUAL_INPUT_ENABLED
         if self.mode in self.AUTOPILOT_MODES:
             base_mode |= _M.MAV_MODE_FLAG_GUIDED_ENABLED
-        if self.armed and self.mode != self.BOOT_MODE:
+        if self.mode in self.STABILIZE_MODES:
+            base_mode |= _M.MAV_MODE_FLAG_STABILIZE_ENABLED
+        if self.armed and self.booted:
             base_mode |= _M.MAV_MODE_FLAG_SAFETY_ARMED
         return self._mav.heartbeat_encode(self.profile.mav_type, _M.MAV_AUTOPILOT_ARDUPILOTMEGA, base_mode, self.mode_number, self._system_status())
 
@@ -559,8 +590,9 @@ class ArduRoverSim(ArduPilotSim):
 
     HOLD and the manual modes stop (no pilot in the sim). LOITER holds a point within
     ``LOITER_RADIUS_M``. GUIDED drives to position targets, then stops (rover) or loiters (boat).
-    RTL drives home, then stops or loiters, staying in RTL as the firmware does. AUTO is refused
-    until the mission protocol exists ("No Mission. Can't set AUTO.").
+    RTL drives home, then stops or loiters, staying in RTL as the firmware does. AUTO drives to each
+    NAV_WAYPOINT of the mission in turn, then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
+    refused without a mission ("No Mission. Can't set AUTO.").
     """
 
     FIRMWARE = "ArduRover"
@@ -577,6 +609,8 @@ class ArduRoverSim(ArduPilotSim):
     _driving = False  # on the way to _destination
     _loitering = False  # holding _destination within the loiter radius
     _guided_speed: float | None = None
+    _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
+    _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
 
     @property
     def is_boat(self) -> bool:
@@ -623,8 +657,13 @@ class ArduRoverSim(ArduPilotSim):
 
     def _enter_mode(self, mode: str) -> bool:
         if mode == "AUTO":
-            self._text(_M.MAV_SEVERITY_NOTICE, "No Mission. Can't set AUTO.")
-            return False
+            if not self.mission.present:
+                self._text(_M.MAV_SEVERITY_NOTICE, "No Mission. Can't set AUTO.")
+                return False
+            self._auto_waiting, self._auto_item = True, None
+            if not (self.is_boat and self._loiter()):
+                self._stop()
+            return True
         if mode in self.NOT_SIMULATED:
             return False
         if mode == "LOITER":
@@ -644,6 +683,9 @@ class ArduRoverSim(ArduPilotSim):
         return True
 
     def _update_mode(self) -> None:
+        if self.mode == "AUTO":
+            self._update_auto()
+            return
         if self._driving and self.vehicle.arrived:
             self._driving = False
             if self.mode == "GUIDED":
@@ -657,6 +699,30 @@ class ArduRoverSim(ArduPilotSim):
                 self.vehicle.drive_to(*self._destination)
             elif self.vehicle.arrived:
                 self.vehicle.hold()
+
+    def _update_auto(self) -> None:
+        """Start the mission once the EKF has an origin, drive to each NAV_WAYPOINT, pass over other items, stop at the end."""
+        if self._auto_waiting:
+            if not self.position_ok:
+                return
+            self._auto_waiting = False
+            self.mission.start_or_resume()
+        item = self.mission.current
+        if item is None:  # complete (ArduRover stays in AUTO, stopped), or the mission was cleared
+            if self._driving or self._loitering:
+                self._stop()
+            return
+        if (self.mission.current_seq, item) != self._auto_item:  # the next item, a set-current, or an upload replaced it
+            self._auto_item = (self.mission.current_seq, item)
+            if item.command == _M.MAV_CMD_NAV_WAYPOINT:
+                self._drive(item.lat, item.lon)
+            else:
+                self.mission.advance()
+        elif self._driving and self.vehicle.arrived:
+            self._driving = False
+            self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{self.mission.current_seq}")
+            if self.mission.advance() is None:
+                self._stop()
 
     def _desired_location(self) -> tuple[float, float] | None:
         return self._destination
@@ -707,12 +773,34 @@ class ArduRoverSim(ArduPilotSim):
         return _M.MAV_RESULT_ACCEPTED
 
 
+class _Firmwares(Mapping[str, type[ArduPilotSim]]):
+    """Vehicle kind -> simulated firmware class, imported on first use: the other modules' classes subclass this one's."""
+
+    _WHERE: ClassVar[Mapping[str, str]] = MappingProxyType({
+        "rover": "executive.sim.autopilot:ArduRoverSim", "boat": "executive.sim.autopilot:ArduRoverSim",
+        "bunker": "executive.sim.bunker:BunkerSim", "sub": "executive.sim.ardusub:ArduSubSim", "vtol": "executive.sim.arduplane:QuadPlaneSim",
+    })  # fmt: skip
+
+    def __getitem__(self, kind: str) -> type[ArduPilotSim]:
+        module, name = self._WHERE[kind].split(":")
+        cls: type[ArduPilotSim] = getattr(importlib.import_module(module), name)
+        return cls
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._WHERE)
+
+    def __len__(self) -> int:
+        return len(self._WHERE)
+
+
 #: The simulated firmware for each vehicle kind (``executive sim --vehicle``).
-AUTOPILOTS: Mapping[str, type[ArduPilotSim]] = MappingProxyType({"rover": ArduRoverSim, "boat": ArduRoverSim})
+AUTOPILOTS: Mapping[str, type[ArduPilotSim]] = _Firmwares()
+#: Kinds that are another kind's profile on a different vehicle model (a Bunker is an ArduRover rover).
+PROFILE_OF: Mapping[str, str] = MappingProxyType({"bunker": "rover"})
 
 
 def make_autopilot(kind: str, clock: Clock, home: Home = DEFAULT_HOME, **options: float) -> ArduPilotSim:
-    """The simulated autopilot for a vehicle kind; ``options`` go to :class:`ArduPilotSim`."""
+    """The simulated autopilot for a vehicle kind; ``options`` go to its class (:class:`ArduPilotSim` and the firmware's own)."""
     if kind not in AUTOPILOTS:
         raise ValueError(f"no simulated vehicle of kind {kind!r} (known: {', '.join(AUTOPILOTS)})")
-    return AUTOPILOTS[kind](PROFILES[kind], clock, home, **options)
+    return AUTOPILOTS[kind](PROFILES[PROFILE_OF.get(kind, kind)], clock, home, **options)

@@ -5,10 +5,14 @@ from __future__ import annotations
 import logging
 import threading
 from types import TracebackType
+from typing import TYPE_CHECKING
 
 from executive.clock import Clock, ScaledClock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, mavutil
 from executive.sim.autopilot import DEFAULT_HOME, ArduPilotSim, Home, make_autopilot
+
+if TYPE_CHECKING:
+    from executive.sim.faults import FaultInjector
 
 log = logging.getLogger(__name__)
 
@@ -20,7 +24,8 @@ class SimServer:
     a real vehicle behind a ``udpin`` endpoint, nothing is sent until a peer has sent something.
     pymavlink's ``tcpin`` serves one client at a time. The autopilot runs in ``clock`` time; the
     loop sleeps ``period_s`` of wall time between iterations whatever the speed-up. Hold
-    :attr:`lock` to touch :attr:`autopilot` from another thread.
+    :attr:`lock` to touch :attr:`autopilot` from another thread. ``faults`` (on the same clock)
+    are injected from the moment the server is created, the simulated vehicle's boot.
     """
 
     MAX_DRAIN = 200  # messages handled per iteration: a flood cannot starve the telemetry
@@ -34,9 +39,13 @@ class SimServer:
         system_id: int = 1,
         ekf_ready_after_s: float = 40.0,
         period_s: float = 0.005,
+        faults: FaultInjector | None = None,
     ) -> None:
-        self.clock = clock if clock is not None else ScaledClock()
+        self.clock = clock if clock is not None else faults.clock if faults is not None else ScaledClock()
         self.autopilot: ArduPilotSim = make_autopilot(vehicle_kind, self.clock, home, system_id=system_id, ekf_ready_after_s=ekf_ready_after_s)
+        self.faults = faults
+        if faults is not None:
+            faults.attach(self.autopilot)
         self.url = url
         self.period_s = period_s
         self.lock = threading.Lock()
@@ -88,13 +97,18 @@ class SimServer:
         """One iteration: drain the link, handle what came in, move the world, send what is due."""
         out = []
         with self.lock:
+            if self.faults is not None:
+                self.faults.update(self.autopilot)
+            receiving = self.faults is None or self.faults.receiving
             for _ in range(self.MAX_DRAIN):
                 msg = self._conn.recv_msg()
                 if msg is None:
                     break
-                if msg.get_type() != "BAD_DATA":
+                if msg.get_type() != "BAD_DATA" and receiving:  # during an uplink loss what arrives is lost
                     out += self.autopilot.handle(msg)
             out += self.autopilot.update()
+            if self.faults is not None:
+                out = self.faults.transform(out)
         for msg in out:
             self._conn.mav.send(msg)
 

@@ -92,6 +92,7 @@ class SurfaceVehicle:
     def __init__(self, lat: float, lon: float, heading_deg: float = 0.0, limits: Limits = ROVER_LIMITS) -> None:
         self.limits = limits
         self.powered = False
+        self.heading_bias_deg = 0.0  # compass error the controller steers by (fault injection): it heads this far off
         self._lat0, self._lon0 = lat, lon
         self._m_per_deg_lat = math.radians(1.0) * _EARTH_RADIUS_M
         self._m_per_deg_lon = self._m_per_deg_lat * math.cos(math.radians(lat))
@@ -126,6 +127,11 @@ class SurfaceVehicle:
     @property
     def alt_m(self) -> float:
         return 0.0
+
+    @property
+    def north_east_m(self) -> tuple[float, float]:
+        """Position in metres north and east of the start point."""
+        return self._n, self._e
 
     @property
     def heading_deg(self) -> float:
@@ -196,14 +202,16 @@ class SurfaceVehicle:
         if not self.powered:
             self._speed = self._yaw_rate = 0.0
             return
-        want_speed, want_rate = self._control()
-        change = want_speed - self._speed
-        self._speed += _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h)
-        self._yaw_rate = want_rate
-        self._yaw = _wrap_pi(self._yaw + want_rate * h)
+        self._speed, self._yaw_rate = self._actuate(*self._control(), h)
+        self._yaw = _wrap_pi(self._yaw + self._yaw_rate * h)
         vn, ve, _ = self.velocity_ned
         self._n += vn * h
         self._e += ve * h
+
+    def _actuate(self, want_speed: float, want_rate: float, h: float) -> tuple[float, float]:
+        """The speed and turn rate reached after ``h`` seconds of asking for these (acceleration limited)."""
+        change = want_speed - self._speed
+        return self._speed + _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h), want_rate
 
     def _control(self) -> tuple[float, float]:
         """Speed and turn rate wanted now."""
@@ -214,10 +222,74 @@ class SurfaceVehicle:
         if distance <= self.limits.arrive_m:
             self._arrived = True
             return 0.0, 0.0
-        error = _wrap_pi(math.atan2(de, dn) - self._yaw)
+        error = _wrap_pi(math.atan2(de, dn) - self._yaw - math.radians(self.heading_bias_deg))
         rate = _clamp(self.HEADING_GAIN * error, math.radians(self.limits.turn_rate_deg_s))
         # a braking profile with margin, then a linear approach: never overshoots the target
         brake = math.sqrt(2.0 * 0.8 * self.limits.decel_m_s2 * distance)
         speed = min(self._target_speed, brake, self.APPROACH_GAIN * distance)
         # turn toward a target behind before driving to it: no circling around it
         return speed * max(0.0, math.cos(error)), rate
+
+
+@dataclass(frozen=True)
+class Tracks:
+    """The running gear of a skid-steered (tracked) vehicle."""
+
+    width_m: float = 0.55  # between the track centre lines (AgileX Bunker)
+    max_m_s: float = 1.5  # a track at full throttle
+    # Tracks skid sideways in a turn: the vehicle turns as if its tracks were this much farther apart
+    # (the "expanded instantaneous centres of rotation" of tracked-vehicle kinematics).
+    slip_factor: float = 1.3
+
+
+BUNKER_LIMITS = Limits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0)
+BUNKER_TRACKS = Tracks()
+
+
+class SkidSteerVehicle(SurfaceVehicle):
+    """A tracked vehicle steered by the speed difference of its tracks (ArduRover's skid-steer frame).
+
+    The drive-to-target controller is the one of :class:`SurfaceVehicle`; its speed and turn-rate
+    demand goes through ArduRover's skid-steer mixer (throttle +/- steering, scaled back together
+    when they saturate) to a left and a right track throttle in [-1, 1] (:attr:`track_throttles`),
+    and the vehicle moves as its tracks do, slipping in turns. Unpowered, both throttles are 0.
+    """
+
+    def __init__(self, lat: float, lon: float, heading_deg: float = 0.0, limits: Limits = BUNKER_LIMITS, tracks: Tracks = BUNKER_TRACKS) -> None:
+        super().__init__(lat, lon, heading_deg, limits)
+        self.tracks = tracks
+        self._left = self._right = 0.0
+
+    @property
+    def track_throttles(self) -> tuple[float, float]:
+        """Left and right track throttle in [-1, 1] (positive = forward), as last commanded."""
+        return self._left, self._right
+
+    def _substep(self, h: float) -> None:
+        if not self.powered:
+            self._left = self._right = 0.0
+        super()._substep(h)
+
+    def _actuate(self, want_speed: float, want_rate: float, h: float) -> tuple[float, float]:
+        speed, rate = super()._actuate(want_speed, want_rate, h)
+        t = self.tracks
+        # a turn-rate controller learns the steering the slip needs: ask the tracks for it
+        throttle = speed / t.max_m_s
+        steering = rate * t.width_m * t.slip_factor / 2.0 / t.max_m_s  # positive = right turn
+        self._left, self._right = skid_steer_mix(throttle, steering)
+        left, right = self._left * t.max_m_s, self._right * t.max_m_s
+        return (left + right) / 2.0, (left - right) / (t.width_m * t.slip_factor)
+
+
+def skid_steer_mix(throttle: float, steering: float) -> tuple[float, float]:
+    """ArduRover's skid-steer mixer (symmetric thrust, MOT_STR_THR_MIX 0.5): (left, right) in [-1, 1].
+
+    Throttle and steering are in [-1, 1] (steering positive = turn right). When they do not fit
+    together, steering is scaled back by the saturation and throttle gets what is left.
+    """
+    throttle, steering = _clamp(throttle, 1.0), _clamp(steering, 1.0)
+    saturation = abs(throttle) + abs(steering)
+    if saturation > 1.0:
+        steering /= saturation
+        throttle = math.copysign(1.0 - abs(steering), throttle)
+    return _clamp(throttle + steering, 1.0), _clamp(throttle - steering, 1.0)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterator
 
@@ -55,8 +56,27 @@ class Gcs:
     def arm(self, force: bool = False) -> int:
         return self.ack(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1, 2989 if force else 0).result
 
-    def goto(self, lat: float, lon: float, type_mask: int = 0x0DF8, frame: int = mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT) -> list[MAVLinkMessage]:
-        return self.send(self.mav.set_position_target_global_int_encode(0, 1, 1, frame, type_mask, round(lat * 1e7), round(lon * 1e7), 0, *[0.0] * 8))
+    def goto(
+        self, lat: float, lon: float, type_mask: int = 0x0DF8, frame: int = mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, alt: float = 0.0
+    ) -> list[MAVLinkMessage]:
+        x, y = round(lat * 1e7), round(lon * 1e7)
+        return self.send(self.mav.set_position_target_global_int_encode(0, 1, 1, frame, type_mask, x, y, alt, *[0.0] * 8))
+
+    def reposition(self, lat: float, lon: float, alt: float, flags: int = 0, radius: float = 0.0) -> MAVLinkMessage:
+        """COMMAND_INT MAV_CMD_DO_REPOSITION (relative-altitude frame); returns its COMMAND_ACK."""
+        x, y = round(lat * 1e7), round(lon * 1e7)
+        frame = mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+        replies = self.send(self.mav.command_int_encode(1, 1, frame, mavlink.MAV_CMD_DO_REPOSITION, 0, 0, -1, flags, radius, 0, x, y, alt))
+        assert replies and replies[0].get_type() == "COMMAND_ACK" and replies[0].command == mavlink.MAV_CMD_DO_REPOSITION, replies
+        return replies[0]
+
+    def east(self, metres: float) -> tuple[float, float]:
+        """A point ``metres`` east of where the vehicle started."""
+        return self.ap.start[0], self.ap.start[1] + metres / (M_PER_DEG_LAT * math.cos(math.radians(self.ap.start[0])))
+
+    def last(self, kind: str) -> MAVLinkMessage:
+        """The latest message of a type the autopilot sent."""
+        return self.of_type(self.log, kind)[-1]
 
     def north(self, metres: float) -> tuple[float, float]:
         """A point ``metres`` north of where the vehicle started."""

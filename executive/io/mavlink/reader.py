@@ -18,6 +18,7 @@ from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.link_health import LinkHealth
+from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition
 
@@ -37,10 +38,13 @@ def _finite(*values: float) -> bool:
 class MavlinkReader:
     """Drains a :class:`Link`, dispatches each message by type, keeps ``/link``, ``/vehicle`` and ``/rc``."""
 
-    def __init__(self, link: Link, clock: Clock, commander: Commander, *, link_timeout_s: float = 3.0) -> None:
+    def __init__(
+        self, link: Link, clock: Clock, commander: Commander, *, link_timeout_s: float = 3.0, mission: MissionTransfer | None = None
+    ) -> None:
         self._link = link
         self._clock = clock
         self._commander = commander
+        self._mission = mission
         self.link_timeout_s = link_timeout_s
         self._bb = blackboard.writer("mavlink reader", blackboard.keys_under("/link/", "/vehicle/", "/rc/"))
         self._autopilot: tuple[int, int] | None = None
@@ -64,6 +68,16 @@ class MavlinkReader:
             "SERVO_OUTPUT_RAW": self._on_servo_output,
             "EXTENDED_SYS_STATE": self._on_extended_sys_state,
         }
+        if mission is not None:  # the mission protocol's replies go to the transfer, as COMMAND_ACK goes to the commander
+            self._handlers |= {
+                "MISSION_REQUEST_INT": mission.on_request,
+                "MISSION_REQUEST": mission.on_request,
+                "MISSION_ACK": mission.on_ack,
+                "MISSION_COUNT": mission.on_count,
+                "MISSION_ITEM_INT": mission.on_item,
+                "MISSION_CURRENT": mission.on_current,
+                "MISSION_ITEM_REACHED": mission.on_reached,
+            }
 
     @property
     def autopilot(self) -> tuple[int, int] | None:
@@ -112,6 +126,8 @@ class MavlinkReader:
             return
         self._autopilot = (msg.get_srcSystem(), msg.get_srcComponent())
         self._commander.target_system, self._commander.target_component = self._autopilot
+        if self._mission is not None:
+            self._mission.target_system, self._mission.target_component = self._autopilot
         self._commander.modes = mode_table(msg.autopilot, msg.type)
         self._bb.set("/link/system_id", self._autopilot[0])
         self._bb.set("/link/component_id", self._autopilot[1])

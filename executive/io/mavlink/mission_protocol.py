@@ -1,0 +1,490 @@
+"""The MAVLink mission protocol, executive side: upload, download, clear and set-current, never blocking.
+
+A request (:meth:`MissionTransfer.upload`, :meth:`~MissionTransfer.download`, ...) returns a ticket
+at once and starts a transfer. The transfer sends its messages at :meth:`MissionTransfer.flush`
+(after the tick, like the commander), advances when the reader hands it the vehicle's replies,
+resends its last message when a reply is late and gives up after ``retries`` resends in a row.
+One transfer runs at a time: a new request supersedes the one in progress. Its fate is
+``/link/mission_transfer`` (a :class:`MissionTransferStatus`); what the vehicle holds and does is
+``/vehicle/mission_home``, ``/vehicle/mission_items``, ``/vehicle/mission_current`` and
+``/vehicle/mission_reached``.
+
+ArduPilot's conventions, which the firmware follows rather than the spec:
+
+- item 0 is home: an upload carries a home item 0 (ArduPilot stores it, yet reports its own home
+  there), a download returns it apart from the mission items 1..n;
+- the vehicle asks for items with MISSION_REQUEST (ArduPilot) or MISSION_REQUEST_INT: both are
+  answered with MISSION_ITEM_INT;
+- items come back as the vehicle stores them (latitude and longitude to 1e-7 degree, altitude to
+  the centimetre, non-INT frames), so an upload's read-back compares within those tolerances.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import math
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass, replace
+from enum import Enum, StrEnum
+from typing import Any
+
+from executive import blackboard
+from executive.clock import Clock
+from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.io.mavlink.link import Link
+
+log = logging.getLogger(__name__)
+
+_M = mavlink
+_MISSION = _M.MAV_MISSION_TYPE_MISSION
+
+#: Read-back tolerances: what ArduPilot's storage keeps (1e-7 degree, 1 cm) and float32 parameters.
+LATLON_TOLERANCE_DEG = 1e-7
+ALT_TOLERANCE_M = 0.01
+PARAM_RELATIVE_TOLERANCE = 1e-6
+
+# ArduPilot reports a frame in its non-INT form, and frame 0 for items without a location
+_SAME_FRAME = {
+    _M.MAV_FRAME_GLOBAL_INT: _M.MAV_FRAME_GLOBAL,
+    _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: _M.MAV_FRAME_GLOBAL_RELATIVE_ALT,
+    _M.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT: _M.MAV_FRAME_GLOBAL_TERRAIN_ALT,
+    _M.MAV_FRAME_MISSION: _M.MAV_FRAME_GLOBAL,
+}
+
+#: The blackboard keys a :class:`MissionTransfer` writes.
+MISSION_KEYS = ("/link/mission_transfer", "/vehicle/mission_home", "/vehicle/mission_items", "/vehicle/mission_current", "/vehicle/mission_reached")
+
+
+def mission_result_name(result: int) -> str:
+    """``4`` -> ``MAV_MISSION_NO_SPACE``."""
+    entry = _M.enums["MAV_MISSION_RESULT"].get(result)
+    return entry.name if entry else f"MAV_MISSION_RESULT({result})"
+
+
+@dataclass(frozen=True, slots=True)
+class MissionItem:
+    """One mission item as MISSION_ITEM_INT carries it, but with ``x``/``y`` in degrees (1e-7 degree on the wire)."""
+
+    seq: int
+    frame: int  # MAV_FRAME
+    command: int  # MAV_CMD
+    current: int  # 1 on the item the vehicle is executing (downloads only)
+    autocontinue: int
+    param1: float
+    param2: float
+    param3: float
+    param4: float
+    x: float  # latitude, degrees
+    y: float  # longitude, degrees
+    z: float  # altitude, metres, in ``frame``
+
+    @classmethod
+    def waypoint(
+        cls, seq: int, lat: float, lon: float, alt_m: float = 0.0, *, hold_s: float = 0.0, frame: int = _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+    ) -> MissionItem:
+        """A NAV_WAYPOINT to ``lat``/``lon`` at ``alt_m`` (above home by default), holding there ``hold_s``."""
+        return cls(seq, frame, _M.MAV_CMD_NAV_WAYPOINT, 0, 1, hold_s, 0.0, 0.0, 0.0, lat, lon, alt_m)
+
+    @classmethod
+    def from_message(cls, msg: MAVLinkMessage) -> MissionItem:
+        """From a MISSION_ITEM_INT."""
+        return cls(
+            msg.seq, msg.frame, msg.command, msg.current, msg.autocontinue,
+            msg.param1, msg.param2, msg.param3, msg.param4, msg.x / 1e7, msg.y / 1e7, msg.z,
+        )  # fmt: skip
+
+    def encode(self, mav: mavlink.MAVLink, target_system: int, target_component: int) -> MAVLinkMessage:
+        """As a MISSION_ITEM_INT from ``mav`` (an :func:`~executive.io.mavlink.dialect.encoder`)."""
+        return mav.mission_item_int_encode(
+            target_system, target_component, self.seq, self.frame, self.command, self.current, self.autocontinue,
+            self.param1, self.param2, self.param3, self.param4, round(self.x * 1e7), round(self.y * 1e7), self.z, _MISSION,
+        )  # fmt: skip
+
+
+def waypoint_items(points: Iterable[Sequence[float]]) -> tuple[MissionItem, ...]:
+    """NAV_WAYPOINT items numbered from 1 (0 is home), from ``(lat, lon)`` or ``(lat, lon, alt_m)`` points."""
+    return tuple(MissionItem.waypoint(seq, *point) for seq, point in enumerate(points, start=1))
+
+
+def _compared(sent: MissionItem, held: MissionItem) -> Iterator[tuple[str, float, float, float, str]]:
+    """(field, sent, held, tolerance, format) for each field a vehicle must keep."""
+    yield "command", sent.command, held.command, 0.0, "g"
+    yield "frame", _SAME_FRAME.get(sent.frame, sent.frame), _SAME_FRAME.get(held.frame, held.frame), 0.0, "g"
+    yield "autocontinue", sent.autocontinue, held.autocontinue, 0.0, "g"
+    for name in ("param1", "param2", "param3", "param4"):
+        value = getattr(sent, name)
+        yield name, value, getattr(held, name), PARAM_RELATIVE_TOLERANCE * max(1.0, abs(value)), ".7g"
+    yield "x (latitude)", sent.x, held.x, LATLON_TOLERANCE_DEG, ".7f"
+    yield "y (longitude)", sent.y, held.y, LATLON_TOLERANCE_DEG, ".7f"
+    yield "z (altitude)", sent.z, held.z, ALT_TOLERANCE_M, ".3f"
+
+
+def first_mismatch(sent: Sequence[MissionItem], held: Sequence[MissionItem]) -> str | None:
+    """How the items read back (``held``) first differ from those sent, beyond storage precision; None if they agree."""
+    if len(sent) != len(held):
+        return f"the vehicle holds {len(held)} items, {len(sent)} were sent"
+    for a, b in zip(sent, held, strict=True):
+        for name, want, got, tolerance, fmt in _compared(a, b):
+            same = (math.isnan(want) and math.isnan(got)) or abs(want - got) <= tolerance * (1 + 1e-6)
+            if not same:
+                return f"item {a.seq} {name}: sent {want:{fmt}}, the vehicle holds {got:{fmt}}"
+    return None
+
+
+class TransferOperation(StrEnum):
+    """What a mission transfer does."""
+
+    UPLOAD = "UPLOAD"
+    DOWNLOAD = "DOWNLOAD"
+    CLEAR = "CLEAR"
+    SET_CURRENT = "SET_CURRENT"
+
+
+class TransferState(StrEnum):
+    """Where a mission transfer stands."""
+
+    IN_PROGRESS = "IN_PROGRESS"
+    DONE = "DONE"
+    FAILED = "FAILED"
+
+
+@dataclass(frozen=True, slots=True)
+class MissionTransferStatus:
+    """The latest mission transfer and what became of it (``/link/mission_transfer``)."""
+
+    ticket: int  # unique per request; a behaviour keeps the ticket it was given
+    operation: TransferOperation
+    state: TransferState
+    progress: int  # items through so far, home included
+    total: int  # items to go through, home included; 0 until known
+    reason: str  # why it failed; "" otherwise
+    result: int | None  # MAV_MISSION_RESULT of the MISSION_ACK that decided it, if one did
+    retries: int  # messages resent after a timeout, over the whole transfer
+    verifying: bool  # an upload is reading the mission back
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
+class MissionCurrent:
+    """MISSION_CURRENT: the item the vehicle is on and the mission's state."""
+
+    seq: int
+    total: int  # items after home; 0 if the firmware does not say
+    state: int  # MISSION_STATE; 0 (unknown) if the firmware does not say
+    in_mission_mode: bool  # the vehicle is in its mission mode (AUTO)
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
+class MissionItemReached:
+    """MISSION_ITEM_REACHED: the last item the vehicle reported reached."""
+
+    seq: int
+    time: float
+
+
+class _Step(Enum):
+    IDLE = "idle"
+    SEND_COUNT = "count sent, waiting for the first request"
+    SEND_ITEMS = "answering item requests"
+    REQUEST_LIST = "list requested, waiting for the count"
+    REQUEST_ITEMS = "requesting items"
+    CLEAR = "clear sent"
+    SET_CURRENT = "set-current sent"
+
+
+_UPLOADING = (_Step.SEND_COUNT, _Step.SEND_ITEMS)
+_DOWNLOADING = (_Step.REQUEST_LIST, _Step.REQUEST_ITEMS)
+
+
+class MissionTransfer:
+    """Moves the mission to and from the autopilot over the MAVLink mission protocol, one transfer at a time.
+
+    Drive it like the :class:`~executive.io.mavlink.commander.Commander`: the reader hands it the
+    MISSION_* messages (``on_*``), the runtime calls :meth:`flush` after each drain or tick.
+    """
+
+    def __init__(
+        self,
+        link: Link,
+        clock: Clock,
+        *,
+        system_id: int = 1,
+        component_id: int = EXECUTIVE_COMPONENT,
+        item_timeout_s: float = 1.5,  # longer than ArduPilot's own 1 s re-request: its re-request usually comes first
+        retries: int = 5,
+        verify: bool = True,
+    ) -> None:
+        self._link = link
+        self._clock = clock
+        self._system_id = system_id
+        self._component_id = component_id
+        self._mav = encoder(system_id, component_id)
+        self._timeout_s = item_timeout_s
+        self._retries = retries
+        self.verify = verify
+        self._bb = blackboard.writer("mission transfer", MISSION_KEYS)
+        self.target_system = 1
+        self.target_component = 1
+        self._tickets = itertools.count(1)
+        self._status: MissionTransferStatus | None = None
+        self._step = _Step.IDLE
+        self._outbox: list[MAVLinkMessage] = []
+        self._last: MAVLinkMessage | None = None  # what a timeout resends
+        self._awaiting = ""  # the reply we wait for, to say what never came
+        self._deadline = math.inf
+        self._timeouts = 0  # in a row, without a word from the vehicle
+        self._upload: tuple[MissionItem, ...] = ()  # home first
+        self._verify_upload = verify
+        self._final_item_sent = False
+        self._last_item_seq = 0
+        self._count = 0
+        self._received: list[MissionItem] = []
+        self._wanted_current = 0
+        self.home: MissionItem | None = None
+        self.items: tuple[MissionItem, ...] | None = None
+
+    # -- requests (from behaviours; never block) ---------------------------------------------
+    def upload(self, items: Iterable[MissionItem], home: Sequence[float] | None = None, *, verify: bool | None = None) -> int:
+        """Replace the vehicle's mission with ``items`` (renumbered from 1) after a home item 0 at ``home`` (lat, lon[, alt]).
+
+        ArduPilot reports its own home as item 0 whatever is uploaded there, so ``home`` may stay
+        None (a placeholder). With ``verify`` (default: the instance's), the mission is read back
+        and compared item by item before the upload counts as DONE. Returns the ticket.
+        """
+        lat, lon, alt = (*home, 0.0)[:3] if home else (0.0, 0.0, 0.0)
+        home_item = MissionItem(0, _M.MAV_FRAME_GLOBAL, _M.MAV_CMD_NAV_WAYPOINT, 0, 1, 0.0, 0.0, 0.0, 0.0, lat, lon, alt)
+        self._upload = (home_item, *(replace(item, seq=seq) for seq, item in enumerate(items, start=1)))
+        self._verify_upload = self.verify if verify is None else verify
+        self._final_item_sent = False
+        ticket = self._start(TransferOperation.UPLOAD, len(self._upload))
+        self._step = _Step.SEND_COUNT
+        count = self._mav.mission_count_encode(self.target_system, self.target_component, len(self._upload), _MISSION)
+        self._send(count, "MISSION_REQUEST for item 0")
+        return ticket
+
+    def download(self) -> int:
+        """Read the vehicle's mission into ``/vehicle/mission_home`` and ``/vehicle/mission_items``; returns the ticket."""
+        ticket = self._start(TransferOperation.DOWNLOAD, 0)
+        self._request_list()
+        return ticket
+
+    def clear(self) -> int:
+        """Delete the vehicle's mission (ArduPilot refuses while it runs one armed); returns the ticket."""
+        ticket = self._start(TransferOperation.CLEAR, 0)
+        self._step = _Step.CLEAR
+        self._send(self._mav.mission_clear_all_encode(self.target_system, self.target_component, _MISSION), "MISSION_ACK to MISSION_CLEAR_ALL")
+        return ticket
+
+    def set_current(self, seq: int) -> int:
+        """Make item ``seq`` the one the mission goes to next; returns the ticket.
+
+        MISSION_SET_CURRENT has no ack: a MISSION_CURRENT carrying ``seq`` confirms it, and
+        ArduPilot ignores a seq it does not hold (the transfer then fails after its retries).
+        """
+        ticket = self._start(TransferOperation.SET_CURRENT, 1)
+        self._step = _Step.SET_CURRENT
+        self._wanted_current = seq
+        self._send(self._mav.mission_set_current_encode(self.target_system, self.target_component, seq), f"MISSION_CURRENT with seq {seq}")
+        return ticket
+
+    @property
+    def status(self) -> MissionTransferStatus | None:
+        """The latest transfer's status (also on ``/link/mission_transfer``)."""
+        return self._status
+
+    @property
+    def idle(self) -> bool:
+        """No transfer in progress."""
+        return self._step is _Step.IDLE
+
+    # -- IO side (the reader and the runtime) -------------------------------------------------
+    def flush(self) -> int:
+        """Send what is due: new messages, and the last one again when its reply is late. Returns messages sent."""
+        now = self._clock.now()
+        if self._step is not _Step.IDLE and not self._outbox and now >= self._deadline and self._status is not None:
+            if self._timeouts >= self._retries:
+                self._fail(f"no {self._awaiting} after {self._retries} retries", now)
+            elif self._last is not None:
+                self._timeouts += 1
+                self._outbox.append(self._last)
+                self._publish(now, retries=self._status.retries + 1)
+        sent = len(self._outbox)
+        for msg in self._outbox:
+            self._link.send(msg)
+        self._outbox.clear()
+        if sent and self._step is not _Step.IDLE:
+            self._deadline = now + self._timeout_s
+        return sent
+
+    def on_request(self, msg: MAVLinkMessage, now: float) -> None:
+        """MISSION_REQUEST_INT or MISSION_REQUEST: the vehicle asks for an item of the upload."""
+        if self._step not in _UPLOADING or not self._for_us(msg) or self._status is None:
+            return
+        seq = msg.seq
+        if seq >= len(self._upload):
+            log.warning("the vehicle asked for item %d of a %d-item upload", seq, len(self._upload))
+            return
+        self._step = _Step.SEND_ITEMS
+        self._timeouts = 0
+        if not any(m.get_type() == "MISSION_ITEM_INT" and m.seq == seq for m in self._outbox):
+            last = seq == len(self._upload) - 1
+            self._final_item_sent = self._final_item_sent or last
+            self._last_item_seq = seq
+            item = self._upload[seq].encode(self._mav, self.target_system, self.target_component)
+            self._send(item, "MISSION_ACK" if last else f"MISSION_REQUEST for item {seq + 1}")
+        if seq > self._status.progress:
+            self._publish(now, progress=seq)
+
+    def on_ack(self, msg: MAVLinkMessage, now: float) -> None:
+        """MISSION_ACK: the end of an upload or a clear, or the vehicle's refusal."""
+        if self._step is _Step.IDLE or not self._for_us(msg):
+            return
+        result, name = msg.type, mission_result_name(msg.type)
+        if self._step in _UPLOADING:
+            if result == _M.MAV_MISSION_ACCEPTED:
+                if self._final_item_sent:  # else a stale ack (of an earlier clear, say)
+                    self._uploaded(now)
+            elif result == _M.MAV_MISSION_INVALID_SEQUENCE:
+                pass  # a resent or reordered item arrived after the vehicle moved on; it re-requests what it lacks
+            elif result == _M.MAV_MISSION_ERROR and self._final_item_sent and self._verify_upload:
+                # ArduPilot answers an item with ERROR once it stopped receiving: its ACCEPTED may have been lost
+                self._uploaded(now)
+            elif result == _M.MAV_MISSION_ERROR and self._final_item_sent:
+                self._fail(f"the vehicle answered the last item with {name}: its MISSION_ACK may have been lost; download to check", now, result)
+            else:
+                where = f" at item {self._last_item_seq}" if self._step is _Step.SEND_ITEMS else ""
+                self._fail(f"the vehicle refused the upload{where}: {name}", now, result)
+        elif self._step in _DOWNLOADING:
+            # ERROR and INVALID_SEQUENCE may answer an upload's duplicate items late; a request out of
+            # range gets ERROR too, but with a MISSION_COUNT, which on_count checks
+            if result not in (_M.MAV_MISSION_ACCEPTED, _M.MAV_MISSION_ERROR, _M.MAV_MISSION_INVALID_SEQUENCE):
+                what = "the read-back" if self._status is not None and self._status.verifying else "the download"
+                self._fail(f"the vehicle refused {what}: {name}", now, result)
+        elif self._step is _Step.CLEAR:
+            if result == _M.MAV_MISSION_ACCEPTED:
+                self._hold(self.home, ())
+                self._finish(now, result)
+            else:
+                self._fail(f"the vehicle refused to clear its mission: {name}", now, result)
+
+    def on_count(self, msg: MAVLinkMessage, now: float) -> None:
+        """MISSION_COUNT: how many items (home included) a download will bring."""
+        if self._step not in _DOWNLOADING or not self._for_us(msg):
+            return
+        if self._step is _Step.REQUEST_ITEMS:
+            if msg.count != self._count:  # ArduPilot's answer to a request beyond its mission
+                self._fail(f"the mission changed during the download: {msg.count} items, not {self._count}", now)
+            return  # else the answer to a resent MISSION_REQUEST_LIST
+        self._timeouts = 0
+        self._count = msg.count
+        self._received = []
+        self._publish(now, total=msg.count, progress=0)
+        if msg.count == 0:
+            self._downloaded(now)
+        else:
+            self._step = _Step.REQUEST_ITEMS
+            self._request_item(0)
+
+    def on_item(self, msg: MAVLinkMessage, now: float) -> None:
+        """MISSION_ITEM_INT: the item a download asked for (others are duplicates, dropped)."""
+        if self._step is not _Step.REQUEST_ITEMS or not self._for_us(msg) or msg.seq != len(self._received):
+            return
+        self._timeouts = 0
+        self._received.append(MissionItem.from_message(msg))
+        self._publish(now, progress=len(self._received))
+        if len(self._received) < self._count:
+            self._request_item(len(self._received))
+            return
+        # the spec's closing ack: the vehicle sends nothing back, so it is sent once, without retries
+        self._outbox.append(self._mav.mission_ack_encode(self.target_system, self.target_component, _M.MAV_MISSION_ACCEPTED, _MISSION))
+        self._downloaded(now)
+
+    def on_current(self, msg: MAVLinkMessage, now: float) -> None:
+        """MISSION_CURRENT (streamed, and the reply to MISSION_SET_CURRENT)."""
+        # total, mission_state and mission_mode are MAVLink 2 extensions: 0 from firmware that predates them
+        current = MissionCurrent(msg.seq, getattr(msg, "total", 0), getattr(msg, "mission_state", 0), bool(getattr(msg, "mission_mode", 0)), now)
+        self._bb.set("/vehicle/mission_current", current)
+        if self._step is _Step.SET_CURRENT and msg.seq == self._wanted_current:
+            self._finish(now, None)
+
+    def on_reached(self, msg: MAVLinkMessage, now: float) -> None:
+        """MISSION_ITEM_REACHED."""
+        self._bb.set("/vehicle/mission_reached", MissionItemReached(msg.seq, now))
+
+    # -- internals ---------------------------------------------------------------------------
+    def _for_us(self, msg: MAVLinkMessage) -> bool:
+        """Addressed to us (or to everyone) and about the mission, not the fence or rally points."""
+        return (
+            getattr(msg, "target_system", 0) in (0, self._system_id)
+            and getattr(msg, "target_component", 0) in (0, self._component_id)
+            and getattr(msg, "mission_type", _MISSION) == _MISSION
+        )
+
+    def _start(self, operation: TransferOperation, total: int) -> int:
+        now = self._clock.now()
+        if self._step is not _Step.IDLE:
+            self._fail(f"superseded by a {operation.lower().replace('_', '-')} request", now)
+        self._outbox.clear()
+        self._timeouts = 0
+        self._deadline = math.inf
+        ticket = next(self._tickets)
+        self._status = MissionTransferStatus(ticket, operation, TransferState.IN_PROGRESS, 0, total, "", None, 0, False, now)
+        self._bb.set("/link/mission_transfer", self._status)
+        return ticket
+
+    def _send(self, msg: MAVLinkMessage, awaiting: str) -> None:
+        self._outbox.append(msg)
+        self._last = msg
+        self._awaiting = awaiting
+
+    def _request_list(self) -> None:
+        self._step = _Step.REQUEST_LIST
+        self._send(self._mav.mission_request_list_encode(self.target_system, self.target_component, _MISSION), "MISSION_COUNT")
+
+    def _request_item(self, seq: int) -> None:
+        self._send(self._mav.mission_request_int_encode(self.target_system, self.target_component, seq, _MISSION), f"MISSION_ITEM_INT {seq}")
+
+    def _uploaded(self, now: float) -> None:
+        if not self._verify_upload:
+            self._hold(self.home, self._upload[1:])
+            self._finish(now, _M.MAV_MISSION_ACCEPTED)
+            return
+        self._publish(now, verifying=True, progress=0)
+        self._request_list()
+
+    def _downloaded(self, now: float) -> None:
+        home, items = (self._received[0] if self._received else None), tuple(self._received[1:])
+        self._hold(home, items)
+        if self._status is not None and self._status.verifying:
+            mismatch = first_mismatch(self._upload[1:], items)
+            if mismatch is not None:
+                self._fail(f"read-back mismatch: {mismatch}", now)
+                return
+        self._finish(now, None)
+
+    def _hold(self, home: MissionItem | None, items: tuple[MissionItem, ...]) -> None:
+        """What the vehicle holds, as far as we know."""
+        self.home, self.items = home, items
+        self._bb.set("/vehicle/mission_home", home)
+        self._bb.set("/vehicle/mission_items", items)
+
+    def _finish(self, now: float, result: int | None) -> None:
+        self._step = _Step.IDLE
+        self._deadline = math.inf
+        if self._status is not None:
+            self._publish(now, state=TransferState.DONE, progress=self._status.total, result=result, verifying=False)
+
+    def _fail(self, reason: str, now: float, result: int | None = None) -> None:
+        self._step = _Step.IDLE
+        self._deadline = math.inf
+        if self._status is not None:
+            log.warning("mission %s failed: %s", self._status.operation.lower(), reason)
+            self._publish(now, state=TransferState.FAILED, reason=reason, result=result, verifying=False)
+
+    def _publish(self, now: float, **changes: Any) -> None:
+        if self._status is None:
+            return
+        self._status = replace(self._status, time=now, **changes)
+        self._bb.set("/link/mission_transfer", self._status)

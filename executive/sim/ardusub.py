@@ -1,0 +1,293 @@
+"""ArduSub as the simulated AUV's autopilot: its modes drive an :class:`~executive.sim.underwater.UnderwaterVehicle`.
+
+What follows ArduSub's source (4.x): every mode may be armed; GUIDED, POSHOLD, AUTO and CIRCLE
+need a position estimate even disarmed ("Mode change failed: X requires position"); SURFACE climbs
+at the waypoint climb speed and switches itself to ALT_HOLD at the surface; GUIDED takes
+SET_POSITION_TARGET_GLOBAL_INT with a position in the relative-altitude frames (altitude above
+home, negative below the surface), or in the terrain frames with a velocity, where ``alt`` is the
+height above the seabed to keep; the absolute frames are ignored; in ALT_HOLD the same message
+sets only the depth (``alt`` taken as metres above the EKF origin, whatever the frame).
+DO_REPOSITION goes to a point in GUIDED (or switches to it when asked); NAV_LAND means SURFACE and
+NAV_LOITER_UNLIM means POSHOLD. The height above the seabed comes from a downward rangefinder,
+reported in DISTANCE_SENSOR (orientation PITCH_270) with the EXTRA3 stream; ArduPilot 4.7 no
+longer streams the older RANGEFINDER message, which is sent only on request.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from types import MappingProxyType
+from typing import ClassVar
+
+from executive.clock import Clock
+from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.sim.autopilot import (
+    ACC_BITS,
+    DEFAULT_HOME,
+    DEFAULT_INTERVALS,
+    GLOBAL_FRAMES,
+    POS_BITS,
+    TARGET_REPORT_MASK,
+    ArduPilotSim,
+    Command,
+    Home,
+    _e7,
+    _valid_latlon,
+)
+from executive.sim.underwater import SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
+from executive.sim.vehicle import VehicleModel
+from executive.vehicles import SUB_MODES, VehicleProfile
+
+_M = mavlink
+RELATIVE_FRAMES = frozenset({_M.MAV_FRAME_GLOBAL_RELATIVE_ALT, _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT})
+TERRAIN_FRAMES = frozenset({_M.MAV_FRAME_GLOBAL_TERRAIN_ALT, _M.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT})
+VEL_BITS = _M.POSITION_TARGET_TYPEMASK_VX_IGNORE | _M.POSITION_TARGET_TYPEMASK_VY_IGNORE | _M.POSITION_TARGET_TYPEMASK_VZ_IGNORE
+SURFACE_DEPTH_M = 0.10  # SURFACE_DEPTH (-10 cm): shallower than this (with 5 cm of margin) the vehicle is at the surface
+RANGEFINDER_MIN_M, RANGEFINDER_MAX_M = 0.5, 50.0  # a Ping-class echo sounder looking down
+
+
+class ArduSubSim(ArduPilotSim):
+    """ArduSub on a vectored ROV/AUV frame, over a seabed; the seabed and the limits are options.
+
+    MANUAL, STABILIZE and ACRO have no pilot here: the vehicle stops and its buoyancy takes it up.
+    ALT_HOLD holds the depth it had when entered (or when armed), POSHOLD the position too. GUIDED
+    holds where it can stop until given a target; a target reached is held. SURFTRAK holds the
+    height above the seabed it had when entered. AUTO waits for the mission protocol; CIRCLE and
+    MOTOR_DETECT are not simulated.
+    """
+
+    FIRMWARE = "ArduSub"
+    READY_TEXT = "Frame: VECTORED_6DOF"
+    BOOT_MODE = "MANUAL"  # ArduSub has no INITIALISING mode: it reports its initial mode while booting
+    INITIAL_MODE = "MANUAL"
+    MANUAL_INPUT_MODES = frozenset(SUB_MODES)  # ArduSub sets MANUAL_INPUT and STABILIZE in every mode
+    STABILIZE_MODES = MANUAL_INPUT_MODES
+    AUTOPILOT_MODES = frozenset({"AUTO", "GUIDED", "CIRCLE", "POSHOLD"})
+    POSITION_MODES = frozenset({"GUIDED", "AUTO", "POSHOLD", "CIRCLE"})  # Mode::requires_GPS()
+    DEPTH_HOLD_MODES = frozenset({"ALT_HOLD", "POSHOLD", "GUIDED", "SURFTRAK"})
+    NOT_SIMULATED = frozenset({"AUTO", "CIRCLE", "MOTOR_DETECT"})
+    STREAMS: ClassVar[Mapping[int, float]] = MappingProxyType({**DEFAULT_INTERVALS, _M.MAVLINK_MSG_ID_DISTANCE_SENSOR: 0.25})
+
+    vehicle: UnderwaterVehicle
+
+    def __init__(
+        self,
+        profile: VehicleProfile,
+        clock: Clock,
+        home: Home = DEFAULT_HOME,
+        *,
+        seabed: Seabed | None = None,
+        limits: SubLimits = SUB_LIMITS,
+        **options: float,
+    ) -> None:
+        self._seabed = seabed if seabed is not None else Seabed()
+        self._limits = limits
+        self._destination: tuple[float, float] | None = None  # GUIDED's horizontal target
+        self._guided_speed: float | None = None
+        super().__init__(profile, clock, home, **options)
+
+    def _make_vehicle(self, home: Home) -> VehicleModel:
+        return UnderwaterVehicle(home[0], home[1], home[2], self._limits, self._seabed)
+
+    # -- what the firmware reports -----------------------------------------------------------
+
+    @property
+    def rangefinder_m(self) -> float | None:
+        """The downward rangefinder's reading (height above the seabed), None out of its range."""
+        altitude = self.vehicle.altitude_m
+        return altitude if RANGEFINDER_MIN_M <= altitude <= RANGEFINDER_MAX_M else None
+
+    @property
+    def at_surface(self) -> bool:
+        return self.vehicle.depth_m < SURFACE_DEPTH_M + 0.05
+
+    def _system_status(self) -> int:
+        if not self.booted:
+            return _M.MAV_STATE_BOOT
+        return _M.MAV_STATE_ACTIVE if self.armed else _M.MAV_STATE_STANDBY
+
+    def _throttle(self) -> float:
+        if not self.armed:
+            return 0.0
+        vn, ve, vd = self.vehicle.velocity_ned
+        return min(1.0, math.hypot(vn, ve) / self._limits.horizontal.max_m_s + abs(vd) / self._limits.descend_m_s)
+
+    def _servo_outputs(self) -> Sequence[int]:
+        """Eight bidirectional thrusters: 1-4 horizontal (vectored), 5-8 vertical; 1500 = stopped."""
+        outputs = [0] * 16
+        vn, ve, vd = self.vehicle.velocity_ned if self.armed else (0.0, 0.0, 0.0)
+        forward = math.hypot(vn, ve) / self._limits.horizontal.max_m_s
+        down = vd / max(self._limits.descend_m_s, self._limits.climb_m_s)
+        outputs[0:4] = [round(1500 + 400 * max(-1.0, min(1.0, forward)))] * 4
+        outputs[4:8] = [round(1500 + 400 * max(-1.0, min(1.0, down)))] * 4
+        return outputs
+
+    # -- modes -------------------------------------------------------------------------------
+
+    def set_mode(self, number: int) -> bool:
+        name = self._mode_names.get(number)
+        if name in self.POSITION_MODES and name != self.mode and not self.position_ok:  # checked armed or not, unlike Rover
+            self._text(_M.MAV_SEVERITY_WARNING, f"Mode change failed: {name} requires position")
+            return False
+        return super().set_mode(number)
+
+    def _enter_mode(self, mode: str) -> bool:
+        v = self.vehicle
+        if mode in self.NOT_SIMULATED:
+            return False
+        if mode == "SURFTRAK" and self.rangefinder_m is None:
+            self._text(_M.MAV_SEVERITY_WARNING, "Rangefinder not healthy")
+            return False
+        self._destination = None
+        v.hold()
+        if mode == "SURFTRAK":
+            v.hold_altitude_at(v.altitude_m)
+        elif mode == "SURFACE":
+            v.hold_depth_at(0.0)
+        elif mode in self.DEPTH_HOLD_MODES:
+            v.hold_depth()
+        else:
+            v.release_depth()
+        if mode == "GUIDED":
+            self._guided_speed = None
+        return True
+
+    def _update_mode(self) -> None:
+        v = self.vehicle
+        if not self.armed and self.mode in self.DEPTH_HOLD_MODES | {"SURFACE"}:
+            # disarmed, the controllers relax: once armed the vehicle holds where it then is
+            if v.holding_altitude:
+                v.hold_altitude_at(v.altitude_m)
+            elif self.mode != "SURFACE":
+                v.hold_depth_at(v.depth_m)
+        if self.mode == "SURFACE" and self.armed and self.at_surface:
+            self.set_mode(self.profile.modes["ALT_HOLD"])  # ModeReason::SURFACE_COMPLETE
+        elif self.mode == "ALT_HOLD" and self.at_surface and (v.depth_target_m or 0.0) < SURFACE_DEPTH_M + 0.05:
+            v.hold_depth_at(SURFACE_DEPTH_M + 0.05)  # ArduSub keeps its depth target 5 cm under SURFACE_DEPTH
+
+    def _desired_location(self) -> tuple[float, float] | None:
+        if self.mode in ("GUIDED", "POSHOLD") and self.vehicle.target is not None:
+            return self.vehicle.target
+        return None
+
+    # -- messages ----------------------------------------------------------------------------
+
+    def _message_handlers(self) -> dict[str, Callable[[MAVLinkMessage], None]]:
+        return {**super()._message_handlers(), "SET_POSITION_TARGET_GLOBAL_INT": self._on_position_target}
+
+    def _message_builders(self) -> dict[int, Callable[[], MAVLinkMessage | None]]:
+        return {
+            **super()._message_builders(),
+            _M.MAVLINK_MSG_ID_DISTANCE_SENSOR: self._msg_distance_sensor,
+            _M.MAVLINK_MSG_ID_RANGEFINDER: self._msg_rangefinder,
+        }
+
+    def _command_handlers(self) -> dict[int, Callable[[Command], int]]:
+        modes = self.profile.modes
+        return {
+            **super()._command_handlers(),
+            _M.MAV_CMD_DO_REPOSITION: self._cmd_reposition,
+            _M.MAV_CMD_DO_CHANGE_SPEED: self._cmd_change_speed,
+            _M.MAV_CMD_NAV_LAND: lambda cmd: self._mode_result(modes["SURFACE"]),
+            _M.MAV_CMD_NAV_LOITER_UNLIM: lambda cmd: self._mode_result(modes["POSHOLD"]),
+            _M.MAV_CMD_MISSION_START: self._cmd_mission_start,
+        }
+
+    def _mode_result(self, number: int) -> int:
+        return _M.MAV_RESULT_ACCEPTED if self.set_mode(number) else _M.MAV_RESULT_FAILED
+
+    def _on_position_target(self, msg: MAVLinkMessage) -> None:
+        """SET_POSITION_TARGET_GLOBAL_INT: GUIDED goes there, ALT_HOLD takes the depth; never acknowledged."""
+        v = self.vehicle
+        z_ignored = msg.type_mask & _M.POSITION_TARGET_TYPEMASK_Z_IGNORE
+        if self.mode == "ALT_HOLD":
+            if not z_ignored:
+                v.hold_depth_at(-msg.alt)
+            return
+        if self.mode != "GUIDED" or not msg.type_mask & ACC_BITS or msg.type_mask & POS_BITS:
+            return  # velocity-only targets (pos ignored) are not simulated
+        lat, lon = msg.lat_int * 1e-7, msg.lon_int * 1e-7
+        if not _valid_latlon(lat, lon) or msg.coordinate_frame not in GLOBAL_FRAMES:
+            return
+        if msg.coordinate_frame in RELATIVE_FRAMES:
+            self._go(lat, lon)
+            v.hold_depth_at(-msg.alt)
+        elif msg.coordinate_frame in TERRAIN_FRAMES and not msg.type_mask & VEL_BITS:
+            self._go(lat, lon)  # alt is the height above the seabed; the velocity (feed-forward) is not simulated
+            v.hold_altitude_at(msg.alt)
+        # the absolute frames (GLOBAL, GLOBAL_INT) are not supported by ArduSub's GUIDED
+
+    def _go(self, lat: float, lon: float) -> None:
+        self._destination = (lat, lon)
+        self.vehicle.drive_to(lat, lon, self._guided_speed)
+
+    def _cmd_reposition(self, cmd: Command) -> int:
+        change_mode = int(cmd.params[1]) & _M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE
+        if self.mode != "GUIDED" and not change_mode:
+            return _M.MAV_RESULT_DENIED
+        lat, lon = cmd.lat_lon
+        alt = cmd.params[6]
+        # Location::sanitize() fills in a zero lat/lon or a zero relative altitude: ArduSub refuses such a target
+        relative_zero = alt == 0.0 and cmd.frame not in (_M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT)
+        if not _valid_latlon(lat, lon) or (lat == 0.0 and lon == 0.0) or relative_zero:
+            return _M.MAV_RESULT_DENIED
+        if cmd.frame in TERRAIN_FRAMES or cmd.frame not in GLOBAL_FRAMES:
+            return _M.MAV_RESULT_FAILED  # no terrain database under water
+        if self.mode != "GUIDED" and not self.set_mode(self.profile.modes["GUIDED"]):
+            return _M.MAV_RESULT_FAILED
+        self._go(lat, lon)
+        self.vehicle.hold_depth_at(-alt)
+        return _M.MAV_RESULT_ACCEPTED
+
+    def _cmd_change_speed(self, cmd: Command) -> int:
+        if cmd.params[1] <= 0:
+            return _M.MAV_RESULT_DENIED
+        if int(cmd.params[0]) not in (_M.SPEED_TYPE_AIRSPEED, _M.SPEED_TYPE_GROUNDSPEED):
+            return _M.MAV_RESULT_DENIED
+        self._guided_speed = cmd.params[1]
+        if self._destination is not None:
+            self.vehicle.drive_to(*self._destination, self._guided_speed)
+        return _M.MAV_RESULT_ACCEPTED
+
+    def _cmd_mission_start(self, cmd: Command) -> int:
+        if any(cmd.params[:2]):
+            return _M.MAV_RESULT_DENIED
+        return _M.MAV_RESULT_ACCEPTED if self.armed and self.set_mode(self.profile.modes["AUTO"]) else _M.MAV_RESULT_FAILED
+
+    def _msg_distance_sensor(self) -> MAVLinkMessage | None:
+        reading = self.rangefinder_m
+        distance_cm = round((reading if reading is not None else RANGEFINDER_MAX_M) * 100)
+        return self._mav.distance_sensor_encode(
+            self._ms(),
+            round(RANGEFINDER_MIN_M * 100),
+            round(RANGEFINDER_MAX_M * 100),
+            distance_cm,
+            _M.MAV_DISTANCE_SENSOR_ULTRASOUND,
+            0,
+            _M.MAV_SENSOR_ROTATION_PITCH_270,
+            0,
+            signal_quality=100 if reading is not None else 1,
+        )
+
+    def _msg_rangefinder(self) -> MAVLinkMessage | None:
+        reading = self.rangefinder_m
+        return None if reading is None else self._mav.rangefinder_encode(reading, 0.0)
+
+    def _msg_nav_controller_output(self) -> MAVLinkMessage | None:
+        """ArduSub sends it in every mode: the waypoint controller's target, and the depth error."""
+        v = self.vehicle
+        target = self._desired_location()
+        distance, bearing = (v.distance_to(*target), round(v.bearing_to(*target))) if target else (0.0, 0)
+        depth_target = v.depth_target_m
+        alt_error = 0.0 if depth_target is None else v.depth_m - depth_target
+        return self._mav.nav_controller_output_encode(0.0, 0.0, bearing, bearing, min(round(distance), 65535), alt_error, 0.0, 0.0)
+
+    def _msg_position_target_global_int(self) -> MAVLinkMessage | None:
+        target = self._desired_location()
+        depth_target = self.vehicle.depth_target_m
+        if target is None or depth_target is None:
+            return None
+        return self._mav.position_target_global_int_encode(
+            self._ms(), _M.MAV_FRAME_GLOBAL, TARGET_REPORT_MASK, _e7(target[0]), _e7(target[1]), -depth_target, 0, 0, 0, 0, 0, 0, 0, 0
+        )

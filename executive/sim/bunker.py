@@ -1,0 +1,46 @@
+"""The AgileX Bunker tracked UGV on ArduRover: ArduRover's modes on a skid-steered vehicle model.
+
+ArduRover's skid-steer frame drives the left track from SERVO1 (SERVO1_FUNCTION=73, ThrottleLeft)
+and the right one from SERVO3 (SERVO3_FUNCTION=74, ThrottleRight); here those outputs span
+1000..2000 us around a 1500 us trim, and a disarmed vehicle outputs the trim (MOT_SAFE_DISARM=0).
+A CAN drive bridge reads them from :attr:`BunkerSim.track_pwm` (holding the server's lock), as the
+real one reads SERVO_OUTPUT_RAW.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from executive.sim.autopilot import ArduRoverSim, Home
+from executive.sim.vehicle import BUNKER_LIMITS, Limits, SkidSteerVehicle, VehicleModel
+
+PWM_TRIM, PWM_SPAN = 1500, 500  # SERVOn_TRIM, and SERVOn_MAX - SERVOn_TRIM (MIN 1000, MAX 2000)
+
+
+def throttle_pwm(throttle: float) -> int:
+    """A track throttle in [-1, 1] as the PWM ArduPilot outputs for it."""
+    return round(PWM_TRIM + PWM_SPAN * max(-1.0, min(1.0, throttle)))
+
+
+class BunkerSim(ArduRoverSim):
+    """ArduRover (MAV_TYPE_GROUND_ROVER) on a tracked, skid-steered base."""
+
+    vehicle: SkidSteerVehicle
+
+    @property
+    def limits(self) -> Limits:
+        return BUNKER_LIMITS
+
+    def _make_vehicle(self, home: Home) -> VehicleModel:
+        return SkidSteerVehicle(home[0], home[1], home[2], self.limits)
+
+    @property
+    def track_pwm(self) -> tuple[int, int]:
+        """SERVO1 (left track) and SERVO3 (right track) in microseconds."""
+        left, right = self.vehicle.track_throttles
+        return throttle_pwm(left), throttle_pwm(right)
+
+    def _servo_outputs(self) -> Sequence[int]:
+        outputs = [0] * 16
+        outputs[0], outputs[2] = self.track_pwm
+        return outputs

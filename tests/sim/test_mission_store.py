@@ -1,0 +1,216 @@
+"""The simulated ArduPilot's side of the mission protocol, and AUTO, at the message level: no sockets, a manual clock."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import pytest
+
+from executive.io.mavlink.dialect import MAVLinkMessage
+from executive.io.mavlink.dialect import mavlink as m
+
+if TYPE_CHECKING:
+    from conftest import Gcs
+
+MakeGcs = Callable[..., "Gcs"]
+M_PER_DEG_LAT = 111_319.49
+
+
+def item(gcs: Gcs, seq: int, lat: float = 0.0, lon: float = 0.0, alt: float = 0.0, **fields: float) -> MAVLinkMessage:
+    """A MISSION_ITEM_INT from the ground station: a NAV_WAYPOINT in the relative-altitude frame unless ``fields`` say otherwise."""
+    f = {"frame": m.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, "command": m.MAV_CMD_NAV_WAYPOINT, "param1": 0.0, "param2": 0.0, "mission_type": 0} | fields
+    x, y = fields.get("x", round(lat * 1e7)), fields.get("y", round(lon * 1e7))
+    return gcs.mav.mission_item_int_encode(
+        1, 1, seq, f["frame"], f["command"], 0, 1, f["param1"], f["param2"], 0.0, 0.0, x, y, alt, f["mission_type"]
+    )
+
+
+def kinds(messages: list[MAVLinkMessage]) -> list[str]:
+    return [msg.get_type() for msg in messages]
+
+
+def upload(gcs: Gcs, items: list[MAVLinkMessage]) -> list[MAVLinkMessage]:
+    """The ground station's side of an upload, answering each request; returns the vehicle's last replies."""
+    replies = gcs.send(gcs.mav.mission_count_encode(1, 1, len(items), 0))
+    while replies and replies[-1].get_type() == "MISSION_REQUEST":
+        replies = gcs.send(items[replies[-1].seq])
+    return replies
+
+
+def square(gcs: Gcs, side_m: float = 10.0) -> list[MAVLinkMessage]:
+    """Home and three corners of a square north-east of the start."""
+    lat0, lon0 = gcs.ap.start
+    dlat, dlon = side_m / M_PER_DEG_LAT, side_m / (M_PER_DEG_LAT * math.cos(math.radians(lat0)))
+    corners = [(lat0 + dlat, lon0), (lat0 + dlat, lon0 + dlon), (lat0, lon0 + dlon)]
+    return [item(gcs, 0, lat0, lon0), *(item(gcs, seq, lat, lon) for seq, (lat, lon) in enumerate(corners, start=1))]
+
+
+def test_upload_is_driven_by_the_vehicle_with_mission_request(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    items = square(gcs)
+    replies = gcs.send(gcs.mav.mission_count_encode(1, 1, len(items), 0))
+    for seq in range(len(items)):
+        # ArduPilot asks with the float-era MISSION_REQUEST and takes MISSION_ITEM_INT for an answer
+        assert kinds(replies) == ["MISSION_REQUEST"]
+        assert (replies[0].seq, replies[0].target_system, replies[0].target_component) == (seq, 255, 190)
+        replies = gcs.send(items[seq])
+    assert kinds(replies) == ["STATUSTEXT", "MISSION_ACK"]
+    assert gcs.texts(replies) == ["Flight plan received"]
+    assert (replies[1].type, replies[1].target_system, replies[1].target_component) == (m.MAV_MISSION_ACCEPTED, 255, 190)
+    assert gcs.ap.mission.count == 4 and not gcs.ap.mission.receiving
+
+
+def test_an_item_out_of_sequence_is_refused_and_the_upload_goes_on(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    items = square(gcs)
+    gcs.send(gcs.mav.mission_count_encode(1, 1, len(items), 0))
+    replies = gcs.send(items[1])
+    assert (kinds(replies), replies[0].type) == (["MISSION_ACK"], m.MAV_MISSION_INVALID_SEQUENCE)
+    assert [r.seq for r in gcs.send(items[0])] == [1]  # still wanted item 0; now item 1
+    assert gcs.send(items[0])[0].type == m.MAV_MISSION_INVALID_SEQUENCE  # a duplicate changes nothing either
+    assert upload(gcs, items)[-1].type == m.MAV_MISSION_ACCEPTED
+    late = gcs.send(items[3])  # after the upload: the vehicle is no longer receiving
+    assert (kinds(late), late[0].type) == (["MISSION_ACK"], m.MAV_MISSION_ERROR)
+
+
+def test_the_vehicle_asks_again_then_cancels_a_stalled_upload(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    items = square(gcs)
+    gcs.send(gcs.mav.mission_count_encode(1, 1, len(items), 0))
+    gcs.send(items[0])
+    out = gcs.run(2.5)
+    assert [r.seq for r in gcs.of_type(out, "MISSION_REQUEST")] == [1, 1]  # once a second
+    out = gcs.run(6.0)
+    acks = gcs.of_type(out, "MISSION_ACK")
+    assert [a.type for a in acks] == [m.MAV_MISSION_OPERATION_CANCELLED]
+    assert "Mission upload timeout" in gcs.texts(out)
+    assert gcs.send(items[1])[0].type == m.MAV_MISSION_ERROR
+    assert gcs.ap.mission.count == 1  # cut to the new count, then only item 0 arrived
+
+
+def test_download_gives_home_as_item_0_and_items_as_stored(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    lat, lon = gcs.north(10.0)
+    upload(gcs, [item(gcs, 0, 1.0, 2.0, 3.0), item(gcs, 1, lat, lon, 12.345, param1=2.7, param2=5.0)])
+    count = gcs.send(gcs.mav.mission_request_list_encode(1, 1, 0))
+    assert (kinds(count), count[0].count, count[0].target_system) == (["MISSION_COUNT"], 2, 255)
+    home = gcs.send(gcs.mav.mission_request_int_encode(1, 1, 0, 0))[0]
+    # item 0 is the vehicle's own home, whatever was uploaded there
+    assert (home.x, home.y, home.z, home.frame, home.command) == (round(gcs.ap.home[0] * 1e7), round(gcs.ap.home[1] * 1e7), 0.0, 0, 16)
+    wp = gcs.send(gcs.mav.mission_request_int_encode(1, 1, 1, 0))[0]
+    assert (wp.get_type(), wp.seq, wp.x, wp.y, wp.frame, wp.autocontinue) == ("MISSION_ITEM_INT", 1, round(lat * 1e7), round(lon * 1e7), 3, 1)
+    assert (wp.z, wp.param1, wp.param2) == (pytest.approx(12.34), 2.0, 0.0)  # cm, whole seconds, no acceptance radius kept
+    beyond = gcs.send(gcs.mav.mission_request_int_encode(1, 1, 5, 0))
+    assert kinds(beyond) == ["MISSION_COUNT", "MISSION_ACK"] and beyond[1].type == m.MAV_MISSION_ERROR
+
+
+@pytest.mark.parametrize(
+    ("fields", "result"),
+    [
+        ({"command": m.MAV_CMD_NAV_TAKEOFF}, m.MAV_MISSION_UNSUPPORTED),
+        ({"x": 91 * 10**7}, m.MAV_MISSION_INVALID_PARAM5_X),
+        ({"y": -181 * 10**7}, m.MAV_MISSION_INVALID_PARAM6_Y),
+        ({"param1": math.nan}, m.MAV_MISSION_INVALID_PARAM1),
+        ({"frame": m.MAV_FRAME_LOCAL_NED}, m.MAV_MISSION_UNSUPPORTED_FRAME),
+    ],
+)
+def test_a_bad_item_ends_the_upload_with_its_reason(make_gcs: MakeGcs, fields: dict[str, float], result: int) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    gcs.send(gcs.mav.mission_count_encode(1, 1, 3, 0))
+    gcs.send(item(gcs, 0))
+    replies = gcs.send(item(gcs, 1, *gcs.north(5.0), **fields))
+    assert (kinds(replies), replies[0].type) == (["MISSION_ACK"], result)
+    assert not gcs.ap.mission.receiving
+
+
+def test_uploads_refused_whole(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    replies = gcs.send(gcs.mav.mission_count_encode(1, 1, 701, 0))
+    assert (replies[0].type, gcs.texts(replies)) == (m.MAV_MISSION_NO_SPACE, ["Only 700 items are supported"])
+    assert gcs.send(gcs.mav.mission_count_encode(1, 1, 2, m.MAV_MISSION_TYPE_FENCE))[0].type == m.MAV_MISSION_UNSUPPORTED
+    gcs.send(gcs.mav.mission_count_encode(1, 1, 2, 0))
+    other = gcs.mav.mission_count_encode(1, 1, 2, 0)
+    other.pack(m.MAVLink(None, srcSystem=254, srcComponent=190))  # another ground station, while we upload
+    replies = gcs.ap.handle(other)
+    assert (replies[0].type, replies[0].target_system) == (m.MAV_MISSION_DENIED, 254)
+    assert gcs.send(gcs.mav.mission_request_list_encode(1, 1, 0))[0].type == m.MAV_MISSION_DENIED  # no reading mid-upload
+
+
+def test_clear_all(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    upload(gcs, square(gcs))
+    replies = gcs.send(gcs.mav.mission_clear_all_encode(1, 1, 0))
+    assert (kinds(replies), replies[0].type) == (["MISSION_ACK"], m.MAV_MISSION_ACCEPTED)
+    assert gcs.send(gcs.mav.mission_request_list_encode(1, 1, 0))[0].count == 0
+    assert gcs.set_mode("AUTO") == m.MAV_RESULT_FAILED
+
+
+def test_clear_is_refused_while_the_mission_runs_armed(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    upload(gcs, square(gcs))
+    gcs.arm()
+    gcs.set_mode("AUTO")
+    gcs.run(1.0)
+    assert gcs.send(gcs.mav.mission_clear_all_encode(1, 1, 0))[0].type == m.MAV_MISSION_ERROR
+    assert gcs.ap.mission.count == 4
+
+
+def test_set_current(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    upload(gcs, square(gcs))
+    replies = gcs.send(gcs.mav.mission_set_current_encode(1, 1, 2))
+    assert (kinds(replies), replies[0].seq, replies[0].total) == (["MISSION_CURRENT"], 2, 3)
+    assert gcs.send(gcs.mav.mission_set_current_encode(1, 1, 9)) == []  # not held: ignored, no ack exists
+    assert gcs.ap.mission.current_seq == 2
+    replies = gcs.command(m.MAV_CMD_DO_SET_MISSION_CURRENT, 3)
+    assert (kinds(replies), replies[0].result, replies[1].seq) == (["COMMAND_ACK", "MISSION_CURRENT"], m.MAV_RESULT_ACCEPTED, 3)
+    assert gcs.ack(m.MAV_CMD_DO_SET_MISSION_CURRENT, 9).result == m.MAV_RESULT_FAILED
+
+
+def test_mission_current_is_streamed(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    current = gcs.of_type(gcs.run(1.0), "MISSION_CURRENT")
+    assert len(current) == 4 and (current[-1].seq, current[-1].total, current[-1].mission_state) == (0, 0, m.MISSION_STATE_NO_MISSION)
+    upload(gcs, square(gcs))
+    latest = gcs.of_type(gcs.run(0.5), "MISSION_CURRENT")[-1]
+    assert (latest.total, latest.mission_state, latest.mission_mode) == (3, m.MISSION_STATE_NOT_STARTED, 0)
+
+
+def test_auto_drives_the_mission_then_stops_and_stays_in_auto(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    items = square(gcs)
+    upload(gcs, items)
+    assert gcs.arm() == m.MAV_RESULT_ACCEPTED
+    assert gcs.ack(m.MAV_CMD_MISSION_START).result == m.MAV_RESULT_ACCEPTED
+    assert gcs.ap.mode == "AUTO"
+    out = gcs.run(15.0)
+    active = gcs.of_type(out, "MISSION_CURRENT")[-1]
+    assert (active.mission_state, active.mission_mode) == (m.MISSION_STATE_ACTIVE, 1)
+    out += gcs.run(45.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [1, 2, 3]
+    texts = gcs.texts(out)
+    assert [t for t in texts if t.startswith("Reached waypoint")] == ["Reached waypoint #1", "Reached waypoint #2", "Reached waypoint #3"]
+    assert texts[-1] == "Mission Complete"
+    last_corner = (items[3].x / 1e7, items[3].y / 1e7)
+    assert gcs.ap.vehicle.distance_to(*last_corner) <= 0.5
+    gcs.run(10.0)
+    assert gcs.ap.mode == "AUTO" and gcs.ap.vehicle.distance_to(*last_corner) <= 0.5  # ArduRover holds in AUTO (MIS_DONE_BEHAVE=0)
+    done = gcs.of_type(gcs.log, "MISSION_CURRENT")[-1]
+    assert (done.seq, done.mission_state) == (3, m.MISSION_STATE_COMPLETE)
+
+
+def test_leaving_auto_stops_the_mission_and_auto_resumes_it(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    upload(gcs, square(gcs))
+    gcs.arm()
+    gcs.set_mode("AUTO")
+    out = gcs.run(9.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [1]
+    gcs.set_mode("HOLD")
+    paused = gcs.of_type(gcs.run(1.0), "MISSION_CURRENT")[-1]
+    assert (paused.seq, paused.mission_state, paused.mission_mode) == (2, m.MISSION_STATE_NOT_STARTED, 0)
+    gcs.set_mode("AUTO")
+    out = gcs.run(40.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [2, 3]
