@@ -19,6 +19,7 @@ from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
+from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester
 from executive.mission.lifecycle import MissionState, MissionStatus
@@ -101,14 +102,15 @@ class Runtime:
         self.period_s = 1.0 / rate_hz
         self.profile = PROFILES[mission.vehicle]
         self.commander = Commander(link, clock, self.profile, system_id=system_id)
-        self.reader = MavlinkReader(link, clock, self.commander, link_timeout_s=mission.limits.link_timeout_s)
+        self.mission_transfer = MissionTransfer(link, clock, system_id=system_id)
+        self.reader = MavlinkReader(link, clock, self.commander, link_timeout_s=mission.limits.link_timeout_s, mission=self.mission_transfer)
         self.heartbeat = Heartbeat(link, clock, system_id=system_id)
         self.streams = StreamRequester(self.commander)
         self.reader.on_reconnect = self.streams.restart
         self.mission_state = MissionState()
         self.mission_state.upload(mission)
         self.tree = py_trees.trees.BehaviourTree(root or trees.build(mission))
-        self.tree.setup(clock=clock, commander=self.commander, mission_state=self.mission_state)
+        self.tree.setup(clock=clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer)
         self.progress = progress
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up"])
         self.safe_timeout_s = safe_timeout_s
@@ -138,6 +140,7 @@ class Runtime:
             raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
         self.streams.service()
         self.commander.flush()
+        self.mission_transfer.flush()
         self.ticks += 1
         return self.tree.root.status
 

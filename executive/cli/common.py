@@ -4,10 +4,22 @@ from __future__ import annotations
 
 import logging
 import sys
+from typing import TYPE_CHECKING
 
+from executive.clock import Clock
+from executive.io.mavlink.link import load_signing_key
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
+
+if TYPE_CHECKING:
+    from executive.sim.faults import FaultInjector
+
+
+def print_errors(exc: MissionError) -> None:
+    """Every located error of a refused file, one per line, on stderr."""
+    for error in exc.errors:
+        print(error, file=sys.stderr)
 
 
 def load_or_report(path: str) -> Mission | None:
@@ -15,9 +27,33 @@ def load_or_report(path: str) -> Mission | None:
     try:
         return load_mission(path)
     except MissionError as exc:
-        for error in exc.errors:
-            print(error, file=sys.stderr)
+        print_errors(exc)
         return None
+
+
+def faults_or_report(path: str, vehicle: str, clock: Clock) -> FaultInjector | None:
+    """A fault injector for the fault file in ``path``, or ``None`` after printing every error."""
+    from executive.sim.faults import FaultInjector, load_faults
+
+    try:
+        return FaultInjector(load_faults(path, vehicle=vehicle), clock)
+    except MissionError as exc:
+        print_errors(exc)
+        return None
+
+
+class BadInput(Exception):
+    """Input the command cannot use; ``main`` prints it and exits 2."""
+
+
+def signing_key_arg(path: str | None) -> bytes | None:
+    """The signing key of ``--signing-key`` (None without one); BadInput if it cannot be read."""
+    if path is None:
+        return None
+    try:
+        return load_signing_key(path)
+    except (OSError, ValueError) as exc:
+        raise BadInput(f"--signing-key: {exc}") from exc
 
 
 def setup_logging(verbose: int = 0) -> None:

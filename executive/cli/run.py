@@ -10,7 +10,7 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK
-from executive.cli.common import load_or_report, setup_logging
+from executive.cli.common import faults_or_report, load_or_report, setup_logging, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
@@ -31,15 +31,20 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sysid", type=int, default=1, help="our MAVLink system id (default 1, the vehicle's)")
     p.add_argument("--connect-timeout", type=float, default=30.0, metavar="S", help="seconds to wait for the autopilot (default 30)")
     p.add_argument("--faults", metavar="FILE", help="simulator only: YAML list of faults to inject into the simulated vehicle")
+    p.add_argument("--tlog", metavar="FILE", help="record the whole MAVLink link in FILE (.tlog, for Mission Planner and pymavlink)")
+    p.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key (32 bytes, 64 hex digits or a passphrase)")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-v info, -vv debug)")
     p.set_defaults(func=main)
 
 
 @contextlib.contextmanager
-def _vehicle_link(args: argparse.Namespace, mission: Mission, clock: ScaledClock, faults: FaultInjector | None = None) -> Iterator[PymavlinkLink]:
+def _vehicle_link(
+    args: argparse.Namespace, mission: Mission, clock: ScaledClock, faults: FaultInjector | None, signing_key: bytes | None
+) -> Iterator[PymavlinkLink]:
     """A link to the vehicle named by --mavlink, or to a simulated one started here."""
+    options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog}
     if args.mavlink:
-        link = PymavlinkLink(args.mavlink, system_id=args.sysid)
+        link = PymavlinkLink(args.mavlink, **options)
         try:
             yield link
         finally:
@@ -49,9 +54,9 @@ def _vehicle_link(args: argparse.Namespace, mission: Mission, clock: ScaledClock
 
     start = mission.home or mission.waypoints[0]
     home = (start.lat, start.lon, getattr(start, "heading_deg", 0.0))
-    with SimServer(mission.vehicle, clock=clock, home=home, faults=faults) as sim:
+    with SimServer(mission.vehicle, clock=clock, home=home, faults=faults, signing_key=signing_key) as sim:
         print(f"executive: simulated {mission.vehicle} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
-        link = PymavlinkLink(sim.url_for_client, system_id=args.sysid)
+        link = PymavlinkLink(sim.url_for_client, **options)
         try:
             yield link
         finally:
@@ -74,15 +79,11 @@ def main(args: argparse.Namespace) -> int:
         if args.mavlink:
             print("executive: run: --faults applies to the built-in simulator only; it cannot be used with --mavlink", file=sys.stderr)
             return EXIT_BAD_INPUT
-        from executive.sim.faults import FaultFileError, FaultInjector, load_faults
-
-        try:
-            faults = FaultInjector(load_faults(args.faults, vehicle=mission.vehicle), clock)
-        except FaultFileError as exc:
-            for error in exc.errors:
-                print(error, file=sys.stderr)
+        faults = faults_or_report(args.faults, mission.vehicle, clock)
+        if faults is None:
             return EXIT_BAD_INPUT
-    with _vehicle_link(args, mission, clock, faults) as link:
+    signing_key = signing_key_arg(args.signing_key)
+    with _vehicle_link(args, mission, clock, faults, signing_key) as link:
         runtime = Runtime(mission, link, clock, rate_hz=args.rate, system_id=args.sysid, progress=Progress(sys.stderr, clock))
         if not runtime.connect(args.connect_timeout * clock.speedup):
             print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)

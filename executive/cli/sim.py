@@ -10,9 +10,9 @@ import threading
 from types import FrameType
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
+from executive.cli.common import faults_or_report, signing_key_arg
 from executive.clock import ScaledClock
 from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, Home
-from executive.sim.faults import FaultFileError, FaultInjector, load_faults
 from executive.sim.server import SimServer
 
 
@@ -55,6 +55,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--ekf-ready-after", metavar="S", type=non_negative, default=40.0, help=ekf)
     parser.add_argument("--duration", metavar="S", type=positive, help="exit after S simulated seconds")
     parser.add_argument("--faults", metavar="FILE", help="YAML list of faults to inject (link loss, EKF, GPS, compass, RC, battery)")
+    parser.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key: sign everything, drop unsigned packets")
     parser.set_defaults(func=run)
 
 
@@ -63,14 +64,20 @@ def run(args: argparse.Namespace) -> int:
     clock = ScaledClock(args.speedup)
     faults = None
     if args.faults is not None:
-        try:
-            faults = FaultInjector(load_faults(args.faults, vehicle=args.vehicle), clock)
-        except FaultFileError as exc:
-            for error in exc.errors:
-                print(error, file=sys.stderr)
+        faults = faults_or_report(args.faults, args.vehicle, clock)
+        if faults is None:
             return EXIT_BAD_INPUT
+    signing_key = signing_key_arg(args.signing_key)
     try:
-        server = SimServer(args.vehicle, args.mavlink, clock=clock, home=args.home, ekf_ready_after_s=args.ekf_ready_after, faults=faults)
+        server = SimServer(
+            args.vehicle,
+            args.mavlink,
+            clock=clock,
+            home=args.home,
+            ekf_ready_after_s=args.ekf_ready_after,
+            faults=faults,
+            signing_key=signing_key,
+        )
     except (OSError, ValueError) as exc:
         print(f"executive sim: cannot listen on {args.mavlink}: {exc}", file=sys.stderr)
         return EXIT_FAILED

@@ -40,6 +40,7 @@ class SimServer:
         ekf_ready_after_s: float = 40.0,
         period_s: float = 0.005,
         faults: FaultInjector | None = None,
+        signing_key: bytes | None = None,
     ) -> None:
         self.clock = clock if clock is not None else faults.clock if faults is not None else ScaledClock()
         self.autopilot: ArduPilotSim = make_autopilot(vehicle_kind, self.clock, home, system_id=system_id, ekf_ready_after_s=ekf_ready_after_s)
@@ -50,6 +51,8 @@ class SimServer:
         self.period_s = period_s
         self.lock = threading.Lock()
         self._conn = mavutil.mavlink_connection(url, source_system=system_id, source_component=AUTOPILOT_COMPONENT, dialect="ardupilotmega")
+        if signing_key is not None:  # like ArduPilot with a key set: sign everything, refuse unsigned packets
+            self._conn.setup_signing(signing_key, sign_outgoing=True, allow_unsigned_callback=lambda _mav, _msg_id: False)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 

@@ -11,7 +11,6 @@ from collections.abc import Callable, Iterator
 
 import py_trees
 import pytest
-from lossy_udp import LossyUdpProxy
 
 from executive.clock import Clock, ScaledClock
 from executive.io.mavlink.commander import Commander
@@ -23,6 +22,7 @@ from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, 
 from executive.io.mavlink.reader import MavlinkReader
 from executive.sim import SimServer
 from executive.vehicles import PROFILES
+from lossy_udp import LossyUdpProxy
 
 HOME = (47.397742, 8.545594, 0.0)
 M_PER_DEG_LAT = 111_319.49
