@@ -21,7 +21,7 @@ from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
-from executive.io.mavlink.streams import StreamRequester
+from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.progress import Progress
@@ -105,7 +105,7 @@ class Runtime:
         self.mission_transfer = MissionTransfer(link, clock, system_id=system_id)
         self.reader = MavlinkReader(link, clock, self.commander, link_timeout_s=mission.limits.link_timeout_s, mission=self.mission_transfer)
         self.heartbeat = Heartbeat(link, clock, system_id=system_id)
-        self.streams = StreamRequester(self.commander)
+        self.streams = StreamRequester(self.commander, rates_for(mission.vehicle))
         self.reader.on_reconnect = self.streams.restart
         self.mission_state = MissionState()
         self.mission_state.upload(mission)

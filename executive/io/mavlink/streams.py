@@ -33,6 +33,11 @@ DEFAULT_RATES: dict[str, float] = {
 _KEY = blackboard.command_key("SET_MESSAGE_INTERVAL")
 
 
+def rates_for(kind: str) -> dict[str, float]:
+    """The streams a kind of vehicle has: only aircraft report VTOL and landed state."""
+    return {name: hz for name, hz in DEFAULT_RATES.items() if kind == "vtol" or name != "EXTENDED_SYS_STATE"}
+
+
 class StreamRequester:
     """Requests each stream in turn; call :meth:`restart` after a reconnect or reboot, :meth:`service` every tick."""
 

@@ -58,3 +58,11 @@ def test_interval_is_the_inverse_rate(commander, link, rate):
     streams = StreamRequester(commander, {"VFR_HUD": rate})
     streams.restart()
     assert run(streams, commander, link) == [(mavlink.MAVLINK_MSG_ID_VFR_HUD, 1e6 / rate)]
+
+
+def test_only_aircraft_are_asked_for_vtol_and_landed_state():
+    from executive.io.mavlink.streams import rates_for
+
+    assert "EXTENDED_SYS_STATE" in rates_for("vtol")
+    assert "EXTENDED_SYS_STATE" not in rates_for("rover")
+    assert set(rates_for("boat")) | {"EXTENDED_SYS_STATE"} == set(rates_for("vtol"))
