@@ -8,6 +8,7 @@ Namespaces:
 - ``/heading``: the heading sanity filter's verdict (heading filter).
 - ``/mission``: the mission lifecycle and progress (mission state code only).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
+- ``/sampler``: the sample-taking instrument (sampler).
 - ``/command``: the latest command of each MAV_CMD kind and its ack (commander).
 
 Behaviours only read. Every key exists from :func:`reset` on, holding its default, so a guard
@@ -72,6 +73,8 @@ _KEYS: tuple[Key, ...] = (
     Key("/rc/rssi", None, "mavlink reader", "receiver RSSI, 0-254; None if unknown"),
     Key("/rc/last_update", None, "mavlink reader", "clock time of the last RC report"),
     Key("/rc/connected", False, "mavlink reader", "the receiver reports a transmitter (channels non-zero)"),
+    Key("/rc/fresh", False, "rc reader", "RC reports arrive (within rc.fresh_timeout_s) and are not frozen"),
+    Key("/rc/switches", None, "rc reader", "RcSwitches: SWA..SWD and knob VRA, from RC channels or CAN"),
     Key("/heading/deg", None, "heading filter", "filtered heading, degrees [0, 360)"),
     Key("/heading/ok", None, "heading filter", "the compass agrees with the filter; None = not judged yet"),
     Key("/heading/bias_deg", None, "heading filter", "estimated compass bias against course over ground"),
@@ -80,6 +83,8 @@ _KEYS: tuple[Key, ...] = (
     Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),
     Key("/mission/target", None, "mission state", "the Waypoint of the current leg; None when no leg is active"),
     Key("/mission/reason", "", "mission state", "why the last request was refused or the mission ended"),
+    Key("/mission/samples", (), "mission state", "Samples recorded in this run, oldest first"),
+    Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
 )
 

@@ -113,6 +113,66 @@ class GpsFix:
         return self.fix_type >= 3
 
 
+class SwitchPosition(StrEnum):
+    """Where an RC switch is."""
+
+    UP = "UP"
+    MIDDLE = "MIDDLE"
+    DOWN = "DOWN"
+
+
+@dataclass(frozen=True, slots=True)
+class RcSwitches:
+    """The operator's switches (AgileX/FlySky layout: SWA..SWD, knob VRA), from RC channels or CAN 0x241."""
+
+    swa: SwitchPosition | None
+    swb: SwitchPosition | None
+    swc: SwitchPosition | None
+    swd: SwitchPosition | None
+    knob: int | None  # VRA, [-100, 100]
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
+class SampleRead:
+    """One sensor reading taken by the sampler."""
+
+    sensor: str
+    value: float
+    unit: str
+    time: float
+
+
+class SamplerState(StrEnum):
+    IDLE = "IDLE"
+    SAMPLING = "SAMPLING"
+    DONE = "DONE"
+    FAILED = "FAILED"  # includes cancelled
+
+
+@dataclass(frozen=True, slots=True)
+class SamplerStatus:
+    """What the sampler is doing for which request, and what it has read so far."""
+
+    ticket: int
+    state: SamplerState
+    reads: tuple[SampleRead, ...]
+    reason: str
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
+class Sample:
+    """A finished sample, as recorded: where, when, and every read."""
+
+    leg_index: int
+    lat: float
+    lon: float
+    reads: tuple[SampleRead, ...]
+    started: float
+    finished: float
+
+
 class CommandState(StrEnum):
     """Where a command stands."""
 

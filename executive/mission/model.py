@@ -55,12 +55,53 @@ class Limits(BaseModel):
     ekf_wait_s: float = Field(120.0, gt=0.0, le=3600.0, description="how long pre-flight waits for the EKF to become ready")
 
 
-class RcConfig(BaseModel):
-    """How the RC transmitter shows that a person is taking over."""
+class SwitchChannels(BaseModel):
+    """Which RC channel carries each switch of an AgileX-style transmitter (SWA..SWD, knob VRA), for ``source: mavlink``."""
 
     model_config = _STRICT
-    takeover_channel: int = Field(6, ge=1, le=18, description="RC channel whose high position means manual take-over")
+    swa: int = Field(5, ge=1, le=18, description="two-position switch A (route edit trigger when down)")
+    swb: int = Field(6, ge=1, le=18, description="three-position switch B")
+    swc: int = Field(7, ge=1, le=18, description="three-position switch C (up MANUAL, middle AUTO, down aux mode)")
+    swd: int = Field(8, ge=1, le=18, description="two-position switch D (down arm, up disarm)")
+    knob: int = Field(9, ge=1, le=18, description="knob VRA, mapped to [-100, 100]")
+
+
+class RcConfig(BaseModel):
+    """Where the RC receiver is read and what its switches mean."""
+
+    model_config = _STRICT
+    source: Literal["mavlink", "can"] = Field("mavlink", description="RC from the autopilot's RC_CHANNELS or from the CAN bus (AgileX 0x241)")
+    takeover_channel: int = Field(6, ge=1, le=18, description="RC channel whose high position means manual take-over (mavlink)")
     takeover_above_us: int = Field(1700, ge=800, le=2200, description="PWM above which the take-over channel is high")
+    fresh_timeout_s: float = Field(1.0, gt=0.0, le=60.0, description="an RC report older than this (or a frozen CAN counter) is stale")
+    switch_channels: SwitchChannels = Field(default_factory=SwitchChannels)
+
+
+class SamplingOptions(BaseModel):
+    """goto_sample: what happens at a sample point."""
+
+    model_config = _STRICT
+    duration_s: float = Field(10.0, gt=0.0, le=3600.0, description="how long the sampler reads at a sample point")
+    rate_hz: float = Field(1.0, gt=0.0, le=100.0, description="sensor reads per second")
+    sensors: list[str] = Field(default_factory=lambda: ["temperature", "conductivity", "ph", "dissolved_oxygen"], min_length=1, max_length=32)
+    hold_mode: str = Field("LOITER", description="the mode the vehicle holds the sample point in")
+
+
+class VtolOptions(BaseModel):
+    """vtol_transit: take-off, transitions and landing."""
+
+    model_config = _STRICT
+    takeoff_alt_m: float = Field(30.0, ge=5.0, le=500.0, description="climb as a multicopter to this height above home")
+    land: Literal["home", "last"] = Field("home", description="land back at home or at the last waypoint")
+    transition_timeout_s: float = Field(30.0, gt=0.0, le=300.0, description="a transition not confirmed by EXTENDED_SYS_STATE by then fails")
+
+
+class RcRouteOptions(BaseModel):
+    """ugv_rc_route: how long the operator has, and what switch C down selects."""
+
+    model_config = _STRICT
+    aux_mode: str | None = Field(None, description="mode for switch C down (None: ignored)")
+    operator_timeout_s: float = Field(3600.0, gt=0.0, le=86400.0, description="give up if the operator has not started the route by then")
 
 
 class Home(BaseModel):
@@ -84,12 +125,25 @@ class Waypoint(BaseModel):
     depth_m: float | None = Field(None, ge=0.0, description="target depth (sub, control_mode depth)")
     altitude_m: float | None = Field(None, gt=0.0, description="height above the seabed (sub, control_mode altitude)")
     control_mode: ControlMode | None = Field(None, description="sub: hold a depth or an altitude above the seabed")
+    sample: bool = Field(False, description="goto_sample: hold here and run the sampler")
 
 
 class Mission(BaseModel):
     """A mission file."""
 
-    model_config = _STRICT
+    model_config = ConfigDict(
+        strict=True,
+        extra="forbid",
+        frozen=True,
+        allow_inf_nan=False,
+        # for editors: an empty route only for ugv_rc_route, whose operator records it (cross_field_errors says so too)
+        json_schema_extra={
+            "anyOf": [
+                {"type": "object", "required": ["tree"], "properties": {"tree": {"const": "ugv_rc_route"}}},
+                {"type": "object", "properties": {"waypoints": {"minItems": 1}}},
+            ]
+        },
+    )
     version: Literal[1] = Field(description="mission file format version")
     name: str = Field(min_length=1, max_length=128)
     vehicle: VehicleKind
@@ -99,13 +153,38 @@ class Mission(BaseModel):
     home: Home | None = None
     limits: Limits = Field(default_factory=Limits)
     rc: RcConfig = Field(default_factory=RcConfig)
-    waypoints: list[Waypoint] = Field(min_length=1, max_length=100_000)
+    sampling: SamplingOptions | None = Field(None, description="goto_sample options")
+    vtol: VtolOptions | None = Field(None, description="vtol_transit options")
+    rc_route: RcRouteOptions | None = Field(None, description="ugv_rc_route options")
+    waypoints: list[Waypoint] = Field(max_length=100_000, description="the route; only ugv_rc_route may start empty (the operator records it)")
+
+
+#: Tree -> the vehicle kinds it can drive and the options section it reads.
+TREE_RULES: dict[str, tuple[frozenset[str], str | None]] = {
+    "waypoints": (frozenset({"rover", "boat", "sub", "vtol"}), None),
+    "goto_sample": (frozenset({"rover", "boat"}), "sampling"),
+    "auv_survey": (frozenset({"sub"}), None),
+    "vtol_transit": (frozenset({"vtol"}), "vtol"),
+    "ugv_rc_route": (frozenset({"rover"}), "rc_route"),
+}
 
 
 def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
     """Rules between fields; each error is the path of the offending value and why."""
     errors: list[tuple[Path, str]] = []
     limits = mission.limits
+    kinds, section = TREE_RULES.get(mission.tree, (frozenset({mission.vehicle}), None))
+    if mission.vehicle not in kinds:
+        errors.append((("tree",), f"tree {mission.tree} drives {', '.join(sorted(kinds))}, not a {mission.vehicle}"))
+    for other in ("sampling", "vtol", "rc_route"):
+        if other != section and getattr(mission, other) is not None:
+            errors.append(((other,), f"only used by tree {next(t for t, (_, s) in TREE_RULES.items() if s == other)} (tree is {mission.tree})"))
+    if not mission.waypoints and mission.tree != "ugv_rc_route":
+        errors.append((("waypoints",), "at least one waypoint is needed"))
+    if mission.tree == "goto_sample" and not any(wp.sample for wp in mission.waypoints):
+        errors.append((("waypoints",), "goto_sample needs at least one waypoint with sample: true"))
+    if mission.tree != "goto_sample":
+        errors += [(("waypoints", i, "sample"), "only goto_sample takes samples") for i, wp in enumerate(mission.waypoints) if wp.sample]
     for i, wp in enumerate(mission.waypoints):
         here: Path = ("waypoints", i)
         if wp.speed_m_s is not None and wp.speed_m_s not in limits.speed_m_s:

@@ -56,7 +56,7 @@ def test_every_error_is_reported_in_file_order(minimal_yaml: str) -> None:
     assert errors_of(text) == [
         "m.yaml:7:10: waypoints[1].lat: 95.0: Input should be less than or equal to 90",
         "m.yaml:8:10: waypoints[1].lon: expected a number, got bool true (YAML 1.1 reads yes as a boolean)",
-        "m.yaml:9:5: waypoints[1].latt: unknown field (allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode)",
+        "m.yaml:9:5: waypoints[1].latt: unknown field (allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode, sample)",
         "m.yaml:10:24: rc.takeover_channel: expected an integer, got number 6.0",
     ]
 
