@@ -598,6 +598,8 @@ class ArduRoverSim(ArduPilotSim):
     FIRMWARE = "ArduRover"
     READY_TEXT = "Ready to drive"
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
+    PILOT_DRIVEN_MODES: ClassVar[frozenset[str]] = frozenset({"MANUAL", "ACRO", "STEERING"})
+    STICK_DEADZONE_US: ClassVar[int] = 30  # RC_DZ
     AUTOPILOT_MODES = frozenset({"AUTO", "GUIDED", "LOITER", "RTL", "SMART_RTL", "FOLLOW", "CIRCLE", "DOCK"})
     POSITION_MODES = frozenset({"LOITER", "FOLLOW", "SIMPLE", "CIRCLE", "DOCK", "AUTO", "RTL", "SMART_RTL", "GUIDED"})
     UNARMABLE_MODES = frozenset({"RTL", "SMART_RTL"})
@@ -686,6 +688,9 @@ class ArduRoverSim(ArduPilotSim):
         if self.mode == "AUTO":
             self._update_auto()
             return
+        if self.mode in self.PILOT_DRIVEN_MODES:
+            self._drive_by_sticks()
+            return
         if self._driving and self.vehicle.arrived:
             self._driving = False
             if self.mode == "GUIDED":
@@ -699,6 +704,16 @@ class ArduRoverSim(ArduPilotSim):
                 self.vehicle.drive_to(*self._destination)
             elif self.vehicle.arrived:
                 self.vehicle.hold()
+
+    def _drive_by_sticks(self) -> None:
+        """MANUAL and friends: the pilot's sticks drive (RCMAP defaults: steering channel 1, throttle channel 3)."""
+
+        def stick(pwm: int) -> float:
+            offset = pwm - 1500
+            return 0.0 if pwm == 0 or abs(offset) <= self.STICK_DEADZONE_US else offset / 500.0
+
+        self._destination, self._driving, self._loitering = None, False, False
+        self.vehicle.drive_manual(stick(self.rc_channels[2]), stick(self.rc_channels[0]))
 
     def _update_auto(self) -> None:
         """Start the mission once the EKF has an origin, drive to each NAV_WAYPOINT, pass over other items, stop at the end."""

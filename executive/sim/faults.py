@@ -108,6 +108,13 @@ class RcTakeover(_Fault):
     disarm: bool = False
 
 
+class RcInput(_Fault):
+    """The operator moves sticks and switches: RC channels take these PWM values (restored after ``for_s``, if given)."""
+
+    kind: Literal["rc_input"]
+    channels: dict[Annotated[int, Field(ge=1, le=16)], Annotated[int, Field(ge=800, le=2200)]] = Field(min_length=1)
+
+
 class RcLoss(_Fault):
     """The RC receiver loses the transmitter: RC_CHANNELS all zero, RSSI 0. With ``failsafe_mode``, ArduRover's RC failsafe acts."""
 
@@ -130,7 +137,7 @@ class BatterySag(_Fault):
 
 
 Fault = Annotated[
-    LinkLoss | EkfDegradation | GpsGlitch | CompassBias | CompassGlitch | RcTakeover | RcLoss | BatterySag,
+    LinkLoss | EkfDegradation | GpsGlitch | CompassBias | CompassGlitch | RcTakeover | RcInput | RcLoss | BatterySag,
     Field(discriminator="kind"),
 ]
 
@@ -198,6 +205,7 @@ class FaultInjector:
         self._ended: set[int] = set()
         self._failsafe_done: set[int] = set()
         self._saved_rc: dict[int, int] = {}  # fault index -> the channel value it replaced
+        self._saved_inputs: dict[int, dict[int, int]] = {}  # rc_input fault index -> the channel values it replaced
         # state the injector owns only if some fault needs it: otherwise left alone
         self._loses_position = any(isinstance(f, EkfDegradation) and f.lose_position for f in self.faults)
         self._steers = any(isinstance(f, CompassBias | CompassGlitch) for f in self.faults)
@@ -267,6 +275,10 @@ class FaultInjector:
                 log.warning("fault injection: the %s model cannot steer by a wrong compass; only the telemetry is biased", autopilot.profile.kind)
 
     def _start(self, i: int, fault: Fault, autopilot: ArduPilotSim) -> None:
+        if isinstance(fault, RcInput):
+            self._saved_inputs[i] = {ch: autopilot.rc_channels[ch - 1] for ch in fault.channels}
+            for ch, pwm in fault.channels.items():
+                autopilot.rc_channels[ch - 1] = pwm
         if isinstance(fault, RcTakeover):
             self._saved_rc[i] = autopilot.rc_channels[fault.channel - 1]
             autopilot.rc_channels[fault.channel - 1] = fault.pwm
@@ -276,6 +288,9 @@ class FaultInjector:
                 autopilot.disarm()
 
     def _end(self, i: int, fault: Fault, autopilot: ArduPilotSim) -> None:
+        if isinstance(fault, RcInput):
+            for ch, pwm in self._saved_inputs.pop(i).items():
+                autopilot.rc_channels[ch - 1] = pwm
         if isinstance(fault, RcTakeover):  # the switch goes back; the mode stays where the pilot left it
             autopilot.rc_channels[fault.channel - 1] = self._saved_rc.pop(i)
 

@@ -103,6 +103,7 @@ class SurfaceVehicle:
         self._target: tuple[float, float] | None = None  # north, east (m)
         self._target_speed = limits.cruise_m_s
         self._arrived = False
+        self._manual: tuple[float, float] | None = None  # (throttle, steering) from a pilot
         toward = math.radians(limits.drift_toward_deg)
         self._drift = (limits.drift_m_s * math.cos(toward), limits.drift_m_s * math.sin(toward))
 
@@ -181,6 +182,7 @@ class SurfaceVehicle:
     def drive_to(self, lat: float, lon: float, speed_m_s: float | None = None) -> None:
         """Drive to a point at ``speed_m_s`` (default cruise, capped at the maximum) and stop there."""
         self._target = self._ne(lat, lon)
+        self._manual = None
         self._target_speed = min(speed_m_s if speed_m_s and speed_m_s > 0 else self.limits.cruise_m_s, self.limits.max_m_s)
         self._arrived = False
 
@@ -188,6 +190,12 @@ class SurfaceVehicle:
         """Forget the target and brake to a stop."""
         self._target = None
         self._arrived = False
+        self._manual = None
+
+    def drive_manual(self, throttle: float, steering: float) -> None:
+        """A pilot's sticks, each in [-1, 1]: forward speed and turn rate as fractions of the maximum."""
+        self._target = None
+        self._manual = (_clamp(throttle, 1.0), _clamp(steering, 1.0))
 
     # -- physics -------------------------------------------------------------------------------
 
@@ -215,6 +223,9 @@ class SurfaceVehicle:
 
     def _control(self) -> tuple[float, float]:
         """Speed and turn rate wanted now."""
+        if self._manual is not None:
+            throttle, steering = self._manual
+            return throttle * self.limits.max_m_s, steering * math.radians(self.limits.turn_rate_deg_s)
         if self._target is None or self._arrived:
             return 0.0, 0.0
         dn, de = self._target[0] - self._n, self._target[1] - self._e

@@ -92,7 +92,10 @@ def test_the_shipped_examples_cover_every_kind() -> None:
     assert {f.kind for path in EXAMPLES for f in load_faults(path).faults} == KINDS
 
 
-KIND_TAGS = "expected one of 'link_loss', 'ekf_degradation', 'gps_glitch', 'compass_bias', 'compass_glitch', 'rc_takeover', 'rc_loss', 'battery_sag'"
+KIND_TAGS = (
+    "expected one of 'link_loss', 'ekf_degradation', 'gps_glitch', 'compass_bias', 'compass_glitch', "
+    "'rc_takeover', 'rc_input', 'rc_loss', 'battery_sag'"
+)
 ROVER_MODES = "(known: MANUAL, ACRO, STEERING, HOLD, LOITER, FOLLOW, SIMPLE, DOCK, CIRCLE, AUTO, RTL, SMART_RTL, GUIDED)"
 
 
@@ -483,3 +486,37 @@ def test_sim_injects_a_good_fault_file(capsys: pytest.CaptureFixture[str]) -> No
     assert args.func(args) == 0
     assert f"injecting 1 fault(s) from {path}" in capsys.readouterr().out
     assert isinstance(load_faults(path).faults[0], GpsGlitch)
+
+
+def test_rc_input_moves_sticks_and_switches_then_puts_them_back(tmp_path):
+    from executive.clock import ManualClock
+    from executive.sim.autopilot import make_autopilot
+    from executive.sim.faults import FaultInjector, load_faults
+
+    path = tmp_path / "operator.yaml"
+    events = ["{kind: rc_input, at_s: 5, for_s: 3, channels: {3: 1900, 7: 1000}}", "{kind: rc_input, at_s: 6, channels: {8: 2000}}"]
+    path.write_text("version: 1\nfaults:\n" + "".join(f"  - {e}\n" for e in events))
+    clock = ManualClock()
+    autopilot = make_autopilot("rover", clock)
+    injector = FaultInjector(load_faults(path), clock)
+    injector.attach(autopilot)
+    seen = []
+    for _ in range(10):
+        clock.advance(1.0)
+        injector.update(autopilot)
+        seen.append((autopilot.rc_channels[2], autopilot.rc_channels[6], autopilot.rc_channels[7]))
+    assert seen[3] == (1500, 1500, 1500)  # 4 s
+    assert seen[4] == (1900, 1000, 1500)  # 5 s: sticks and switch C moved
+    assert seen[6] == (1900, 1000, 2000)  # 7 s: switch D too, for good
+    assert seen[8] == (1500, 1500, 2000)  # 9 s: the first input is over, switch D stays
+
+
+def test_rc_input_is_validated(tmp_path):
+    from executive.mission.errors import MissionError
+    from executive.sim.faults import load_faults
+
+    path = tmp_path / "bad.yaml"
+    path.write_text("version: 1\nfaults:\n  - {kind: rc_input, at_s: 5, channels: {17: 1900}}\n")
+    with pytest.raises(MissionError) as refused:
+        load_faults(path)
+    assert any("channels" in str(e) and ":3:" in str(e) for e in refused.value.errors)
