@@ -163,6 +163,9 @@ class Runtime:
                     return self._abort(f"behaviour crashed: {crash}")
                 if self.progress:
                     self.progress.update()
+                if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
+                    self.make_safe()
+                    return Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
                 if status == Status.SUCCESS:
                     self.mission_state.complete()
                     return Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks)

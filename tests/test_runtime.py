@@ -136,3 +136,19 @@ def test_explain_failure_prefers_the_shallowest_reason():
     assert explain_failure(root) == "leaf: deep reason"
     mid.feedback_message = "shallow reason"
     assert explain_failure(root) == "mid: shallow reason"
+
+
+def test_an_operator_abort_ends_the_run_with_the_vehicle_safe(square_mission, link, clock):
+    class AbortOnThirdTick(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            self.ticks = getattr(self, "ticks", 0) + 1
+            if self.ticks == 3:
+                runtime.mission_state.abort("operator: abort")
+            return Status.RUNNING
+
+    runtime = make_runtime(square_mission, link, clock, root=AbortOnThirdTick("busy"))
+    autopilot = ObedientAutopilot(link)
+    autopilot.beat()
+    outcome = runtime.run()
+    assert (outcome.status, outcome.reason, outcome.ticks) == (MissionStatus.ABORTED, "operator: abort", 3)
+    assert autopilot.mode == HOLD

@@ -2,7 +2,7 @@
 
 ::
 
-    Mission (sequence)
+    Mission: while PAUSED, hold the vehicle (the leg is kept); otherwise run:
     ├── Pre-flight: wait for the EKF, arm (or wait for the operator to)
     ├── Route or hold (reactive selector)
     │   ├── Guarded route: link alive? EKF ok? armed? RC not taking over? -> for each leg: set GUIDED, go to
@@ -23,6 +23,7 @@ from executive.behaviours import (
     LinkAlive,
     RcNotTakingOver,
     SetMode,
+    UnlessPaused,
     WaitForGuards,
     WaitUntil,
 )
@@ -57,5 +58,7 @@ def guarded_route(mission: Mission) -> py_trees.behaviour.Behaviour:
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     """The tree for a ``tree: waypoints`` mission."""
-    hold = SetMode(PROFILES[mission.vehicle].safe_mode, name="Hold at the end")
-    return py_trees.composites.Sequence("Mission", memory=True, children=[preflight(mission), guarded_route(mission), hold])
+    safe_mode = PROFILES[mission.vehicle].safe_mode
+    hold = SetMode(safe_mode, name="Hold at the end")
+    body = py_trees.composites.Sequence("Run", memory=True, children=[preflight(mission), guarded_route(mission), hold])
+    return UnlessPaused(body, hold_mode=safe_mode, name="Mission")

@@ -11,7 +11,7 @@ from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
 from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
-from executive.mission.lifecycle import MissionState
+from executive.mission.lifecycle import MissionState, MissionStatus
 
 
 class WaitUntil(py_trees.decorators.Decorator):
@@ -144,3 +144,51 @@ class ForEachLeg(py_trees.decorators.Decorator):
             return Status.FAILURE
         self.feedback_message = f"leg {state.leg_index + 1}/{state.leg_count}"
         return Status.RUNNING
+
+
+class UnlessPaused(py_trees.decorators.Decorator):
+    """Runs the mission body, except while the mission is PAUSED: then the body is stopped and the vehicle held.
+
+    The body keeps no progress of its own (the leg is in the mission state), so on resume it
+    starts again from its first child and carries on with the same leg: back to GUIDED, same target.
+    """
+
+    def __init__(self, child: py_trees.behaviour.Behaviour, hold_mode: str, name: str = "Unless paused") -> None:
+        super().__init__(name=name, child=child)
+        self.hold_mode = hold_mode
+        self.mission_state: MissionState | None = None
+        self.commander: Commander | None = None
+        self._holding = False
+
+    def setup(self, **services: object) -> None:
+        missing = [n for n in ("mission_state", "commander") if services.get(n) is None]
+        if missing:
+            raise RuntimeError(f"{self.name}: setup() needs {', '.join(missing)}")
+        self.mission_state = services["mission_state"]  # type: ignore[assignment]
+        self.commander = services["commander"]  # type: ignore[assignment]
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        assert self.mission_state is not None and self.commander is not None
+        if self.status != Status.RUNNING:
+            self.initialise()
+        state = self.mission_state
+        if state.status is MissionStatus.PAUSED:
+            if self.decorated.status == Status.RUNNING:
+                self.decorated.stop(Status.INVALID)
+            if not self._holding:
+                self.commander.set_mode(self.hold_mode)
+                self._holding = True
+            self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: holding in {self.hold_mode}"
+            new_status = Status.RUNNING
+        else:
+            self._holding = False
+            yield from self.decorated.tick()
+            self.feedback_message = ""
+            new_status = self.decorated.status
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def update(self) -> Status:
+        return self.status  # decided in tick(): the body's status, or RUNNING while paused

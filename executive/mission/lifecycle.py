@@ -58,6 +58,7 @@ class MissionState:
         self.mission: Mission | None = None
         self.status = MissionStatus.IDLE
         self.leg_index = 0
+        self.reason = ""
         self.listeners: list[Listener] = []
 
     # -- requests ----------------------------------------------------------------------------
@@ -127,6 +128,7 @@ class MissionState:
     def _transition(self, request: str, reason: str) -> None:
         before, (_, after) = self.status, TRANSITIONS[request]
         self.status = after
+        self.reason = reason
         self._bb.set("/mission/reason", reason)
         self._publish()
         log.info("mission %s -> %s: %s", before, after, reason)

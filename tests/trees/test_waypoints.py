@@ -141,3 +141,24 @@ def test_a_leg_that_times_out_fails_the_mission(mission_run, square_mission):
     mission_run.step_m = 0.01  # the vehicle barely moves
     statuses = mission_run.run(int(square_mission.limits.leg_timeout_s * 10) + 30)
     assert statuses[-1] == Status.FAILURE
+
+
+def test_pause_holds_the_vehicle_and_resume_continues_the_same_leg(mission_run, mission_state):
+    while mission_state.leg_index < 2:
+        mission_run.run(1)
+    mission_run.run(1)  # under way on leg 3
+    mission_state.pause("operator: pause")
+    statuses = mission_run.run(20)
+    assert statuses == [Status.RUNNING] * 20
+    assert mission_run.commands[-1] == ("mode", "HOLD")  # asked once, then held
+    assert [c for c in mission_run.commands if c == ("mode", "HOLD")] == [("mode", "HOLD")]
+    held_at = (mission_run.lat, mission_run.lon)
+    mission_run.run(10)
+    assert (mission_run.lat, mission_run.lon) == held_at
+    assert mission_state.leg_index == 2
+    mission_state.resume()
+    mission_run.run(2)
+    assert mission_run.commands[-1] == ("mode", "GUIDED")  # back to GUIDED, same leg
+    assert mission_state.leg_index == 2
+    assert mission_run.run(300)[-1] == Status.SUCCESS
+    assert mission_state.leg_index == 4
