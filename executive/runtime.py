@@ -22,6 +22,8 @@ from executive.io.mavlink.link import Link
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
+from executive.io.rc import RcReader
+from executive.io.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.progress import Progress
@@ -104,13 +106,17 @@ class Runtime:
         self.commander = Commander(link, clock, self.profile, system_id=system_id)
         self.mission_transfer = MissionTransfer(link, clock, system_id=system_id)
         self.reader = MavlinkReader(link, clock, self.commander, link_timeout_s=mission.limits.link_timeout_s, mission=self.mission_transfer)
+        self.rc = RcReader(mission.rc, clock)
         self.heartbeat = Heartbeat(link, clock, system_id=system_id)
         self.streams = StreamRequester(self.commander, rates_for(mission.vehicle))
         self.reader.on_reconnect = self.streams.restart
         self.mission_state = MissionState()
         self.mission_state.upload(mission)
+        self.sampler = SimulatedSampler(clock, mission.sampling) if mission.sampling is not None else None
         self.tree = py_trees.trees.BehaviourTree(root or trees.build(mission))
-        self.tree.setup(clock=clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer)
+        self.tree.setup(
+            clock=clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler
+        )
         self.progress = progress
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up"])
         self.safe_timeout_s = safe_timeout_s
@@ -132,12 +138,15 @@ class Runtime:
     def tick(self) -> Status:
         """One tick: drain the link, tick the tree, send what it asked for."""
         self.reader.drain()
+        self.rc.service()
         self.heartbeat.service()
         try:
             self.tree.tick()
         except Exception as exc:
             node = _crashed_behaviour(exc.__traceback__)
             raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
+        if self.sampler is not None:
+            self.sampler.service()
         self.streams.service()
         self.commander.flush()
         self.mission_transfer.flush()

@@ -3,22 +3,46 @@
 An action never waits inside a tick. It sends in ``initialise`` (the commander transmits after
 the tick) and each ``update`` looks at what came back: the ack in ``/command/...`` and, for the
 effect itself, the vehicle state (ArduPilot can ack a mode change that the heartbeat never shows).
+Setpoints have no ack: a setpoint action re-sends its target and watches the vehicle get there.
+
+Every action needs the ``clock`` and the ``commander`` from ``tree.setup``; the current leg's
+waypoint comes from ``/mission/target``.
 """
 
 from __future__ import annotations
 
+import math
+from typing import Literal
+
 from py_trees.common import Status
 
-from executive import blackboard, geo
+from executive import blackboard, frames, geo
 from executive.behaviours.base import TimedBehaviour
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
-from executive.state import CommandState, CommandStatus, GlobalPosition
+from executive.io.mavlink.modes import ArduPilotModes
+from executive.mission.model import Waypoint
+from executive.state import CommandState, CommandStatus, GlobalPosition, HomePosition
 
 
 def _result_name(result: int | None) -> str:
     entry = mavlink.enums["MAV_RESULT"].get(result) if result is not None else None
     return entry.name.removeprefix("MAV_RESULT_") if entry else "no ack"
+
+
+def _refusal(status: CommandStatus | None, ticket: int | None, statustext: tuple[int, str] | None) -> str | None:
+    """Why the command with ``ticket`` failed (refused, or no ack after every retry); None if it has not."""
+    if status is None or ticket is None or status.ticket != ticket:
+        return None
+    if status.state is CommandState.TIMED_OUT:
+        return f"no ack after {status.attempts} attempts"
+    if status.state is CommandState.REJECTED:
+        return f"refused: {_result_name(status.result)}" + (f" ({statustext[1]})" if statustext else "")
+    return None
+
+
+def _accepted(status: CommandStatus | None, ticket: int | None) -> bool:
+    return status is not None and ticket is not None and status.ticket == ticket and status.state is CommandState.ACCEPTED
 
 
 class CommandAction(TimedBehaviour):
@@ -42,6 +66,10 @@ class CommandAction(TimedBehaviour):
         """The vehicle state shows the command took effect."""
         raise NotImplementedError
 
+    def progress(self) -> str | None:
+        """What the vehicle shows so far (for the feedback while waiting, and in a timeout's reason)."""
+        return None
+
     def initialise(self) -> None:
         super().initialise()
         self._ticket = None if self.confirmed() else self.request()
@@ -50,17 +78,15 @@ class CommandAction(TimedBehaviour):
         if self.confirmed():
             self.feedback_message = "confirmed"
             return Status.SUCCESS
-        status: CommandStatus | None = self.get(blackboard.command_key(self.command_name))
-        if status is not None and status.ticket == self._ticket and status.state in (CommandState.REJECTED, CommandState.TIMED_OUT):
-            text = self.get("/vehicle/statustext")
-            self.feedback_message = f"refused: {_result_name(status.result)}" + (f" ({text[1]})" if text else "")
-            if status.state is CommandState.TIMED_OUT:
-                self.feedback_message = f"no ack after {status.attempts} attempts"
+        refusal = _refusal(self.get(blackboard.command_key(self.command_name)), self._ticket, self.get("/vehicle/statustext"))
+        if refusal is not None:
+            self.feedback_message = refusal
             return Status.FAILURE
+        seen = self.progress()
         if self.elapsed > self.confirm_timeout_s:
-            self.feedback_message = f"not confirmed after {self.confirm_timeout_s:g} s"
+            self.feedback_message = f"not confirmed after {self.confirm_timeout_s:g} s" + (f": {seen}" if seen else "")
             return Status.FAILURE
-        self.feedback_message = "waiting for the autopilot"
+        self.feedback_message = seen or "waiting for the autopilot"
         return Status.RUNNING
 
 
@@ -110,42 +136,73 @@ class Disarm(Arm):
         return not self.get("/vehicle/armed")
 
 
+def _send_setpoint(commander: Commander, target: Waypoint) -> None:
+    """The GUIDED target for a waypoint: a sub's waypoint carries its depth (or height above the seabed), others their altitude."""
+    if target.control_mode == "altitude" and target.altitude_m is not None:
+        commander.depth_target(target.lat, target.lon, altitude_m=target.altitude_m)
+    elif target.depth_m is not None:
+        commander.depth_target(target.lat, target.lon, depth_m=target.depth_m)
+    else:
+        commander.goto(target.lat, target.lon, target.alt_m)
+
+
 class GoTo(TimedBehaviour):
-    """Drive to the current leg's waypoint in GUIDED.
+    """Go to the current leg's waypoint in GUIDED.
 
     RUNNING with feedback (distance, bearing) on the way; SUCCESS inside the acceptance radius;
-    FAILURE after the leg timeout. The setpoint is re-sent every ``resend_s``: ArduPilot gives no
-    ack for it and drops it silently outside GUIDED.
+    FAILURE after the leg timeout. ``method``:
+
+    - ``"setpoint"``: SET_POSITION_TARGET_GLOBAL_INT, re-sent every ``resend_s``: ArduPilot gives no
+      ack for it and drops it silently outside GUIDED. A sub's waypoint goes with its depth (or its
+      height above the seabed, control_mode altitude), so a leg never brings the sub up.
+    - ``"reposition"``: MAV_CMD_DO_REPOSITION (acked; switches to GUIDED), sent once and again only
+      when refused or unanswered, at most every ``resend_s``. ArduPlane needs it: it takes only the
+      altitude from a setpoint. A waypoint without an altitude (``alt_m`` 0, which ArduPlane refuses)
+      is flown at the vehicle's current height. A plane circles the point at WP_LOITER_RAD
+      (60 m by default): give it an acceptance radius larger than that.
     """
 
-    reads = ("/mission/target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position")
+    reads = (
+        "/mission/target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position", "/vehicle/statustext",
+        blackboard.command_key("DO_REPOSITION"),
+    )  # fmt: skip
     needs = ("clock", "commander")
     commander: Commander
 
-    def __init__(self, acceptance_radius_m: float, leg_timeout_s: float, name: str = "Go to waypoint", resend_s: float = 1.0) -> None:
+    def __init__(
+        self,
+        acceptance_radius_m: float,
+        leg_timeout_s: float,
+        name: str = "Go to waypoint",
+        resend_s: float = 1.0,
+        method: Literal["setpoint", "reposition"] = "setpoint",
+    ) -> None:
+        if method not in ("setpoint", "reposition"):
+            raise ValueError(f"method must be setpoint or reposition, not {method!r}")
         super().__init__(name)
         self.acceptance_radius_m = acceptance_radius_m
         self.leg_timeout_s = leg_timeout_s
         self.resend_s = resend_s
+        self.method = method
         self.distance_m: float | None = None
         self.bearing_deg: float | None = None
+        self._ticket: int | None = None
 
     def initialise(self) -> None:
         super().initialise()
         self.target = self.get("/mission/target")
         self.distance_m = self.bearing_deg = None
         self._last_sent = float("-inf")
+        self._ticket = None
+        self._refusal: str | None = None
 
     def update(self) -> Status:
         if self.target is None:
             self.feedback_message = "no active leg"
             return Status.FAILURE
-        now = self.clock.now()
-        if now - self._last_sent >= self.resend_s:
-            self.commander.goto(self.target.lat, self.target.lon, self.target.alt_m)
-            self._last_sent = now
-        leg = f"leg {self.get('/mission/leg_index') + 1}/{self.get('/mission/leg_count')}"
         position: GlobalPosition | None = self.get("/vehicle/position")
+        self._send(position)
+        leg = f"leg {self.get('/mission/leg_index') + 1}/{self.get('/mission/leg_count')}"
         if position is not None:
             self.distance_m, self.bearing_deg = geo.distance_bearing(position.lat, position.lon, self.target.lat, self.target.lon)
             if self.distance_m <= self.acceptance_radius_m:
@@ -153,10 +210,416 @@ class GoTo(TimedBehaviour):
                 return Status.SUCCESS
         if self.elapsed > self.leg_timeout_s:
             short = f", {self.distance_m:.1f} m short" if self.distance_m is not None else ""
-            self.feedback_message = f"{leg}: timed out after {self.leg_timeout_s:g} s{short}"
+            why = f" (DO_REPOSITION {self._refusal})" if self._refusal else ""
+            self.feedback_message = f"{leg}: timed out after {self.leg_timeout_s:g} s{short}{why}"
             return Status.FAILURE
         if self.distance_m is None:
             self.feedback_message = f"{leg}: no position"
         else:
             self.feedback_message = f"{leg}: {self.distance_m:.1f} m at {self.bearing_deg:03.0f}°"
+        return Status.RUNNING
+
+    def _send(self, position: GlobalPosition | None) -> None:
+        assert self.target is not None
+        now = self.clock.now()
+        if now - self._last_sent < self.resend_s:
+            return
+        if self.method == "setpoint":
+            _send_setpoint(self.commander, self.target)
+            self._last_sent = now
+            return
+        if self._ticket is not None:
+            self._refusal = _refusal(self.get(blackboard.command_key("DO_REPOSITION")), self._ticket, self.get("/vehicle/statustext"))
+            if self._refusal is None:
+                return  # accepted or still waiting for the ack: the autopilot has the target
+        alt = self.target.alt_m
+        if self.target.depth_m is not None:
+            alt = -self.target.depth_m
+        elif alt == 0.0 and position is not None:
+            alt = position.alt_rel_m
+        self._ticket = self.commander.reposition(self.target.lat, self.target.lon, alt)
+        self._last_sent = now
+
+
+class HoldFor(SetMode):
+    """Hold the vehicle in ``mode`` for ``seconds``: set the mode (confirmed by the heartbeat), then RUNNING until the time is up.
+
+    The time counts from the heartbeat showing the mode. A refused or unconfirmed mode is a
+    FAILURE (as SetMode); so is the vehicle leaving the mode during the hold (someone else has it).
+    """
+
+    def __init__(self, seconds: float, mode: str = "LOITER", name: str | None = None, confirm_timeout_s: float = 5.0) -> None:
+        super().__init__(mode, name or f"Hold {mode.upper()} {seconds:g} s", confirm_timeout_s)
+        self.seconds = seconds
+        self._holding_since: float | None = None
+
+    def initialise(self) -> None:
+        super().initialise()
+        self._holding_since = None
+
+    def update(self) -> Status:
+        if self._holding_since is None:
+            status = super().update()
+            if status != Status.SUCCESS:
+                return status
+            self._holding_since = self.clock.now()
+        elif not self.confirmed():
+            self.feedback_message = f"left {self.mode} (now {self.get('/vehicle/mode')}) after {self.clock.now() - self._holding_since:.1f} s"
+            return Status.FAILURE
+        held = self.clock.now() - self._holding_since
+        if held >= self.seconds:
+            self.feedback_message = f"held {self.mode} for {self.seconds:g} s"
+            return Status.SUCCESS
+        self.feedback_message = f"holding {self.mode}: {held:.0f}/{self.seconds:g} s"
+        return Status.RUNNING
+
+
+class ChangeSpeed(CommandAction):
+    """Set the speed of the current leg (its waypoint's ``speed_m_s``) with MAV_CMD_DO_CHANGE_SPEED.
+
+    SUCCESS at once when the waypoint has no speed. Confirmed by the ack ACCEPTED: ArduPilot
+    reports the new speed nowhere else. Refused or unanswered: FAILURE. ``airspeed`` for a plane
+    in wing-borne flight, else ground speed.
+    """
+
+    reads = ("/mission/target",)
+    command_name = "DO_CHANGE_SPEED"
+
+    def __init__(self, name: str = "Change speed", airspeed: bool = False, confirm_timeout_s: float = 5.0) -> None:
+        super().__init__(name, confirm_timeout_s)
+        self.airspeed = airspeed
+        self.speed_m_s: float | None = None
+
+    def initialise(self) -> None:
+        target: Waypoint | None = self.get("/mission/target")
+        self.speed_m_s = target.speed_m_s if target is not None else None
+        super().initialise()
+
+    def request(self) -> int:
+        assert self.speed_m_s is not None
+        return self.commander.change_speed(self.speed_m_s, airspeed=self.airspeed)
+
+    def confirmed(self) -> bool:
+        return self.speed_m_s is None or _accepted(self.get(blackboard.command_key(self.command_name)), self._ticket)
+
+    def update(self) -> Status:
+        status = super().update()
+        if status == Status.SUCCESS:
+            self.feedback_message = "no speed for this leg" if self.speed_m_s is None else f"{self.speed_m_s:g} m/s"
+        return status
+
+
+class _VerticalSetpoint(TimedBehaviour):
+    """A sub's vertical target for the current leg, held where the vehicle is when the action starts.
+
+    The setpoint (no ack exists) is re-sent every ``resend_s`` at that same point; SUCCESS once the
+    vehicle shows the target within ``tolerance_m``; FAILURE after ``timeout_s``. SUCCESS at once
+    when the leg has no target of this kind.
+    """
+
+    reads = ("/mission/target", "/vehicle/position", "/vehicle/mode")
+    needs = ("clock", "commander")
+    commander: Commander
+    what = ""
+
+    def __init__(self, name: str, tolerance_m: float, timeout_s: float, resend_s: float) -> None:
+        super().__init__(name)
+        self.tolerance_m = tolerance_m
+        self.timeout_s = timeout_s
+        self.resend_s = resend_s
+        self.target_m: float | None = None
+
+    def wanted(self, waypoint: Waypoint) -> float | None:
+        """The leg's target of this kind, if it has one."""
+        raise NotImplementedError
+
+    def measured(self, position: GlobalPosition) -> float | None:
+        """The vehicle's current value of that kind, if known."""
+        raise NotImplementedError
+
+    def send(self, lat: float, lon: float, target_m: float) -> None:
+        raise NotImplementedError
+
+    def refuse(self) -> str | None:
+        """Why the setpoint cannot be sent now (None: it can)."""
+        return None
+
+    def initialise(self) -> None:
+        super().initialise()
+        waypoint: Waypoint | None = self.get("/mission/target")
+        self.target_m = self.wanted(waypoint) if waypoint is not None else None
+        self._here: tuple[float, float] | None = None
+        self._last_sent = float("-inf")
+
+    def update(self) -> Status:
+        if self.target_m is None:
+            self.feedback_message = f"no {self.what} for this leg"
+            return Status.SUCCESS
+        refusal = self.refuse()
+        if refusal is not None:
+            self.feedback_message = refusal
+            return Status.FAILURE
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        if self._here is None and position is not None:
+            self._here = (position.lat, position.lon)
+        now = self.clock.now()
+        if self._here is not None and now - self._last_sent >= self.resend_s:
+            self.send(*self._here, self.target_m)
+            self._last_sent = now
+        value = self.measured(position) if position is not None else None
+        if value is not None and abs(value - self.target_m) <= self.tolerance_m and self._last_sent > float("-inf"):
+            self.feedback_message = f"{self.what} {value:.1f} m (target {self.target_m:g} m)"
+            return Status.SUCCESS
+        now_at = f"{value:.1f} m" if value is not None else "unknown"
+        if self.elapsed > self.timeout_s:
+            self.feedback_message = f"{self.what} {now_at}, target {self.target_m:g} m, not reached after {self.timeout_s:g} s"
+            return Status.FAILURE
+        self.feedback_message = f"{self.what} {now_at} -> {self.target_m:g} m"
+        return Status.RUNNING
+
+
+class ChangeDepth(_VerticalSetpoint):
+    """Sub: dive (or rise) to the current leg's ``depth_m`` where the vehicle is; SUCCESS when ``/vehicle/position`` shows it.
+
+    The depth goes as ``alt = -depth`` in the relative-altitude frame, which ArduSub takes in
+    GUIDED (with the position: the vehicle holds where it was when the action started) and in
+    ALT_HOLD (the depth alone). A leg with control_mode ``altitude`` or no depth: SUCCESS at once
+    (ChangeAltitude's job, or nothing to do), so one tree can put both in every leg.
+    """
+
+    what = "depth"
+
+    def __init__(self, name: str = "Change depth", tolerance_m: float = 0.5, timeout_s: float = 120.0, resend_s: float = 1.0) -> None:
+        super().__init__(name, tolerance_m, timeout_s, resend_s)
+
+    def wanted(self, waypoint: Waypoint) -> float | None:
+        return None if waypoint.control_mode == "altitude" else waypoint.depth_m
+
+    def measured(self, position: GlobalPosition) -> float | None:
+        return -position.alt_rel_m
+
+    def send(self, lat: float, lon: float, target_m: float) -> None:
+        self.commander.depth_target(lat, lon, depth_m=target_m)
+
+
+class ChangeAltitude(_VerticalSetpoint):
+    """Sub: keep the current leg's ``altitude_m`` above the seabed (control_mode ``altitude``), where the vehicle is.
+
+    Sent in the terrain frame, which only GUIDED understands (ALT_HOLD would take the height for a
+    depth below the origin): outside GUIDED it is a FAILURE without sending anything. Confirmed by
+    the downward rangefinder (``/vehicle/altitude_above_bottom_m``). Other legs: SUCCESS at once.
+    """
+
+    reads = (*_VerticalSetpoint.reads, "/vehicle/altitude_above_bottom_m")
+    what = "altitude"
+
+    def __init__(self, name: str = "Change altitude", tolerance_m: float = 0.5, timeout_s: float = 120.0, resend_s: float = 1.0) -> None:
+        super().__init__(name, tolerance_m, timeout_s, resend_s)
+
+    def wanted(self, waypoint: Waypoint) -> float | None:
+        return waypoint.altitude_m if waypoint.control_mode == "altitude" else None
+
+    def measured(self, position: GlobalPosition) -> float | None:
+        value: float | None = self.get("/vehicle/altitude_above_bottom_m")
+        return value
+
+    def refuse(self) -> str | None:
+        mode = self.get("/vehicle/mode")
+        guided = self.commander.modes.canonical("GUIDED")
+        return None if mode == guided else f"needs {guided} to keep a height above the seabed (mode is {mode})"
+
+    def send(self, lat: float, lon: float, target_m: float) -> None:
+        self.commander.depth_target(lat, lon, altitude_m=target_m)
+
+
+class TakeOff(CommandAction):
+    """Climb to ``alt_m`` above home (a VTOL climbs as a multicopter) with MAV_CMD_NAV_TAKEOFF.
+
+    The vehicle must be in GUIDED and armed, on the ground (ArduPlane refuses otherwise: put SetMode
+    and Arm before it). SUCCESS when ``/vehicle/landed_state`` is IN_AIR and the relative altitude
+    is at least ``reached_fraction`` of ``alt_m``; FAILURE when refused or not there in time. On
+    PX4 param7 is an altitude above sea level: home's plus ``alt_m`` (NaN, PX4's default take-off
+    altitude, before home is known).
+    """
+
+    reads = ("/vehicle/landed_state", "/vehicle/position", "/vehicle/home")
+    command_name = "NAV_TAKEOFF"
+
+    def __init__(self, alt_m: float, name: str | None = None, confirm_timeout_s: float = 60.0, reached_fraction: float = 0.95) -> None:
+        super().__init__(name or f"Take off to {alt_m:g} m", confirm_timeout_s)
+        self.alt_m = alt_m
+        self.reached_fraction = reached_fraction
+
+    def request(self) -> int:
+        if isinstance(self.commander.modes, ArduPilotModes):
+            return self.commander.takeoff(self.alt_m)
+        home: HomePosition | None = self.get("/vehicle/home")
+        return self.commander.takeoff(home.alt_m + self.alt_m if home is not None else math.nan)
+
+    def confirmed(self) -> bool:
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        high = position is not None and position.alt_rel_m >= self.reached_fraction * self.alt_m
+        return self.get("/vehicle/landed_state") == "IN_AIR" and high
+
+    def progress(self) -> str | None:
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        alt = f"{position.alt_rel_m:.1f}" if position is not None else "?"
+        return f"{self.get('/vehicle/landed_state') or 'landed state unknown'} at {alt}/{self.alt_m:g} m"
+
+
+class Land(CommandAction):
+    """Land with a landing mode (QLAND for a QuadPlane; on PX4 its equivalent, AUTO.LAND).
+
+    SUCCESS when ``/vehicle/landed_state`` is ON_GROUND and the vehicle has disarmed (ArduPlane
+    disarms once its land detector is sure); FAILURE when the mode is refused or the landing
+    takes longer than ``confirm_timeout_s``.
+    """
+
+    reads = ("/vehicle/landed_state", "/vehicle/armed", "/vehicle/position")
+    command_name = "DO_SET_MODE"
+
+    def __init__(self, mode: str = "QLAND", name: str = "Land", confirm_timeout_s: float = 120.0) -> None:
+        super().__init__(name, confirm_timeout_s)
+        self.mode = mode.upper()
+
+    def request(self) -> int:
+        return self.commander.set_mode(self.mode)
+
+    def confirmed(self) -> bool:
+        return self.get("/vehicle/landed_state") == "ON_GROUND" and not self.get("/vehicle/armed")
+
+    def progress(self) -> str | None:
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        alt = f" at {position.alt_rel_m:.1f} m" if position is not None else ""
+        armed = "armed" if self.get("/vehicle/armed") else "disarmed"
+        return f"{self.get('/vehicle/landed_state') or 'landed state unknown'}{alt}, {armed}"
+
+
+VtolState = Literal["FW", "MC"]
+
+
+class VtolTransition(TimedBehaviour):
+    """Transition a VTOL to fixed-wing (``"FW"``) or multicopter (``"MC"``) flight.
+
+    SUCCESS only when ``/vehicle/vtol_state`` (EXTENDED_SYS_STATE) reports the state asked for:
+    an ack says nothing about the transition. How it is asked depends on the firmware:
+
+    - ArduPilot (``commander.modes`` is ArduPilotModes) accepts MAV_CMD_DO_VTOL_TRANSITION in AUTO
+      only, so there it is used in AUTO; elsewhere the mode decides: to FW, a DO_REPOSITION to a
+      point ``ahead_m`` ahead on the current heading at the current height (GUIDED, wing-borne: a
+      GoTo with ``method="reposition"`` takes over from there); to MC, the mode ``mc_mode`` (QLOITER).
+    - PX4 (any other table) takes MAV_CMD_DO_VTOL_TRANSITION in flight.
+
+    FAILURE when the request is refused or unanswered, or after ``timeout_s`` with the last state seen.
+    """
+
+    reads = (
+        "/vehicle/vtol_state", "/vehicle/mode", "/vehicle/position", "/vehicle/heading_deg", "/vehicle/statustext",
+        blackboard.command_key("DO_VTOL_TRANSITION"), blackboard.command_key("DO_REPOSITION"), blackboard.command_key("DO_SET_MODE"),
+    )  # fmt: skip
+    needs = ("clock", "commander")
+    commander: Commander
+
+    def __init__(self, to: VtolState, timeout_s: float = 30.0, name: str | None = None, mc_mode: str = "QLOITER", ahead_m: float = 300.0) -> None:
+        if to not in ("FW", "MC"):
+            raise ValueError(f"a VTOL transitions to FW or MC, not {to!r}")
+        super().__init__(name or f"Transition to {to}")
+        self.to = to
+        self.timeout_s = timeout_s
+        self.mc_mode = mc_mode.upper()
+        self.ahead_m = ahead_m
+        self.last_state: str | None = None
+        self.how = ""
+        self._ticket: int | None = None
+        self._command = ""
+
+    def initialise(self) -> None:
+        super().initialise()
+        self.last_state = self.get("/vehicle/vtol_state")
+        self._ticket, self._command, self.how = None, "", ""
+        if self.last_state != self.to:
+            self._request()
+
+    def _request(self) -> None:
+        if not isinstance(self.commander.modes, ArduPilotModes) or self.get("/vehicle/mode") == "AUTO":
+            self._command, self.how = "DO_VTOL_TRANSITION", "DO_VTOL_TRANSITION"
+            self._ticket = self.commander.vtol_transition(self.to)
+        elif self.to == "MC":
+            self._command, self.how = "DO_SET_MODE", self.mc_mode
+            self._ticket = self.commander.set_mode(self.mc_mode)
+        else:
+            position: GlobalPosition | None = self.get("/vehicle/position")
+            if position is None:
+                return  # update() fails: there is no "ahead" without a position
+            heading = position.heading_deg if position.heading_deg is not None else self.get("/vehicle/heading_deg") or 0.0
+            lat, lon = geo.destination(position.lat, position.lon, heading, self.ahead_m)
+            self._command, self.how = "DO_REPOSITION", f"reposition {self.ahead_m:g} m ahead"
+            self._ticket = self.commander.reposition(lat, lon, position.alt_rel_m)
+
+    def update(self) -> Status:
+        state = self.get("/vehicle/vtol_state")
+        if state is not None:
+            self.last_state = state
+        if state == self.to:
+            self.feedback_message = f"{self.to}" + (f" (by {self.how})" if self.how else "")
+            return Status.SUCCESS
+        if self._ticket is None:
+            self.feedback_message = "no position to transition from"
+            return Status.FAILURE
+        refusal = _refusal(self.get(blackboard.command_key(self._command)), self._ticket, self.get("/vehicle/statustext"))
+        if refusal is not None:
+            self.feedback_message = f"{self.how} {refusal}; still {self.last_state}"
+            return Status.FAILURE
+        if self.elapsed > self.timeout_s:
+            self.feedback_message = f"still {self.last_state} after {self.timeout_s:g} s (by {self.how})"
+            return Status.FAILURE
+        self.feedback_message = f"{self.last_state} -> {self.to} (by {self.how})"
+        return Status.RUNNING
+
+
+class GoToLocal(TimedBehaviour):
+    """Go to a point of the local frame given in ENU (ROS), sent as SET_POSITION_TARGET_LOCAL_NED (MAVLink).
+
+    The setpoint (no ack) is re-sent every ``resend_s``. Arrival is judged from the global position
+    taken to the local frame with home as its origin (ArduPilot and PX4 put the local origin where
+    home was set at the first fix; a home moved later would shift this judgement): SUCCESS within
+    ``acceptance_radius_m`` (3-D), FAILURE after ``timeout_s``.
+    """
+
+    reads = ("/vehicle/position", "/vehicle/home")
+    needs = ("clock", "commander")
+    commander: Commander
+
+    def __init__(self, target: frames.Enu, acceptance_radius_m: float, timeout_s: float, name: str | None = None, resend_s: float = 1.0) -> None:
+        super().__init__(name or f"Go to local E{target.east:g} N{target.north:g} U{target.up:g}")
+        self.target = frames.Enu(*target)
+        self.ned = frames.enu_to_ned(self.target)
+        self.acceptance_radius_m = acceptance_radius_m
+        self.timeout_s = timeout_s
+        self.resend_s = resend_s
+        self.distance_m: float | None = None
+
+    def initialise(self) -> None:
+        super().initialise()
+        self._last_sent = float("-inf")
+        self.distance_m = None
+
+    def update(self) -> Status:
+        now = self.clock.now()
+        if now - self._last_sent >= self.resend_s:
+            self.commander.local_setpoint(*self.ned)
+            self._last_sent = now
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        home: HomePosition | None = self.get("/vehicle/home")
+        if position is not None and home is not None:
+            north, east = frames.global_to_local(home.lat, home.lon, position.lat, position.lon)
+            self.distance_m = math.dist((north, east, -position.alt_rel_m), self.ned)
+            if self.distance_m <= self.acceptance_radius_m:
+                self.feedback_message = f"reached ({self.distance_m:.1f} m)"
+                return Status.SUCCESS
+        left = f"{self.distance_m:.1f} m" if self.distance_m is not None else "no position or home"
+        if self.elapsed > self.timeout_s:
+            self.feedback_message = f"timed out after {self.timeout_s:g} s: {left}"
+            return Status.FAILURE
+        self.feedback_message = left
         return Status.RUNNING

@@ -1,14 +1,22 @@
 """Guard conditions: SUCCESS when the condition holds, FAILURE (with the reason) when not.
 
-Guards read the blackboard and nothing else; they never return RUNNING.
+Guards read the blackboard and nothing else; they never return RUNNING. A guard that passes
+without being able to judge (no battery report yet, heading not judged yet) says so in its
+feedback.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Literal, Protocol
+
 from py_trees.common import Status
 
 from executive.behaviours.base import ExecutiveBehaviour
-from executive.state import EkfStatus
+from executive.geo import distance
+from executive.geofence import Geofence
+from executive.mission.model import Mission, Range, RcConfig
+from executive.state import Battery, EkfStatus, GlobalPosition, HomePosition, RcSwitches, SwitchPosition
 
 
 class Guard(ExecutiveBehaviour):
@@ -17,13 +25,17 @@ class Guard(ExecutiveBehaviour):
     #: When this guard fails a person has the vehicle: the executive keeps its hands off.
     pilot_in_control = False
 
+    #: Set by :meth:`check` to qualify a pass (e.g. "battery not reported yet"); shown instead of "ok".
+    note: str = ""
+
     def check(self) -> str | None:
         """``None`` when the condition holds, else why it does not."""
         raise NotImplementedError
 
     def update(self) -> Status:
+        self.note = ""
         reason = self.check()
-        self.feedback_message = reason or "ok"
+        self.feedback_message = reason or self.note or "ok"
         return Status.FAILURE if reason else Status.SUCCESS
 
 
@@ -98,8 +110,281 @@ class RcNotTakingOver(Guard):
         self.above_us = above_us
 
     def check(self) -> str | None:
-        channels: tuple[int, ...] = self.get("/rc/channels")
-        value = channels[self.channel - 1] if len(channels) >= self.channel else 0
-        if value > self.above_us:
-            return f"RC channel {self.channel} high ({value} µs): manual take-over"
+        return _takeover(self.get("/rc/channels"), self.channel, self.above_us)
+
+
+def _takeover(channels: tuple[int, ...], channel: int, above_us: int) -> str | None:
+    value = channels[channel - 1] if len(channels) >= channel else 0
+    return f"RC channel {channel} high ({value} µs): manual take-over" if value > above_us else None
+
+
+_SWC_MEANS = {SwitchPosition.UP: "MANUAL", SwitchPosition.DOWN: "aux mode"}
+
+
+class RcAutoMode(Guard):
+    """The operator's mode switch is in AUTO.
+
+    ``source="mavlink"``: the take-over channel is not high (as :class:`RcNotTakingOver`; a missing
+    transmitter is not a take-over). ``source="can"``: switch C is in the middle (AgileX: up
+    MANUAL, middle AUTO, down aux mode); no switch report yet fails.
+    """
+
+    reads = ("/rc/channels", "/rc/switches")
+    pilot_in_control = True
+
+    def __init__(
+        self, source: Literal["mavlink", "can"] = "mavlink", takeover_channel: int = 6, takeover_above_us: int = 1700, name: str = "RC in auto?"
+    ) -> None:
+        super().__init__(name)
+        self.source = source
+        self.takeover_channel = takeover_channel
+        self.takeover_above_us = takeover_above_us
+
+    def check(self) -> str | None:
+        if self.source == "mavlink":
+            return _takeover(self.get("/rc/channels"), self.takeover_channel, self.takeover_above_us)
+        switches: RcSwitches | None = self.get("/rc/switches")
+        if switches is None or switches.swc is None:
+            return "no RC switch C position yet"
+        if switches.swc is not SwitchPosition.MIDDLE:
+            return f"RC switch C {switches.swc} ({_SWC_MEANS[switches.swc]}), not MIDDLE (AUTO)"
         return None
+
+
+def rc_auto_mode(rc: RcConfig, name: str = "RC in auto?") -> RcAutoMode:
+    """The :class:`RcAutoMode` guard for a mission's ``rc:`` section."""
+    return RcAutoMode(rc.source, rc.takeover_channel, rc.takeover_above_us, name)
+
+
+class RcFresh(Guard):
+    """RC reports arrive and are not frozen, and the transmitter is there (the RC reader judges: /rc/fresh)."""
+
+    reads = ("/rc/fresh", "/rc/stale_reason")
+
+    def __init__(self, name: str = "RC fresh?") -> None:
+        super().__init__(name)
+
+    def check(self) -> str | None:
+        return None if self.get("/rc/fresh") else self.get("/rc/stale_reason") or "RC is stale"
+
+
+class _HasLatLon(Protocol):
+    lat: float
+    lon: float
+
+
+class TargetWithin(Guard):
+    """The current leg's target (/mission/target) is within ``max_distance_m`` of the vehicle (go-to refusal, 5 km)."""
+
+    reads = ("/mission/target", "/vehicle/position")
+
+    def __init__(self, max_distance_m: float, name: str | None = None) -> None:
+        super().__init__(name or f"Target within {max_distance_m:g} m?")
+        self.max_distance_m = max_distance_m
+
+    def check(self) -> str | None:
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        target: _HasLatLon | None = self.get("/mission/target")
+        if position is None:
+            return "no position"
+        if target is None:
+            return "no target: no leg is active"
+        d = distance(position.lat, position.lon, target.lat, target.lon)
+        return f"target is {d:.0f} m away, over {self.max_distance_m:g} m" if d > self.max_distance_m else None
+
+
+class AllWaypointsWithin(Guard):
+    """Every waypoint is within ``max_distance_m`` of the vehicle's live position (the AUV's 1 km rule).
+
+    Each verdict is remembered with the position it was computed at: while every waypoint was
+    within ``max_distance_m - moved`` there, the triangle inequality says they still are, and
+    the waypoints are not measured again (a long route costs one distance per tick).
+    """
+
+    reads = ("/vehicle/position",)
+
+    def __init__(self, waypoints: Sequence[_HasLatLon], max_distance_m: float, name: str | None = None) -> None:
+        super().__init__(name or f"All waypoints within {max_distance_m:g} m?")
+        self.waypoints = tuple(waypoints)
+        self.max_distance_m = max_distance_m
+        self._measured: tuple[float, float, float] | None = None  # lat, lon, farthest waypoint there
+
+    def check(self) -> str | None:
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        if position is None:
+            return "no position"
+        if self._measured is not None:
+            lat, lon, farthest = self._measured
+            if farthest + distance(lat, lon, position.lat, position.lon) <= self.max_distance_m:
+                return None
+        self._measured = None
+        farthest = 0.0
+        for i, wp in enumerate(self.waypoints):
+            d = distance(position.lat, position.lon, wp.lat, wp.lon)
+            if d > self.max_distance_m:
+                named = f" ({wp.name})" if getattr(wp, "name", None) else ""
+                return f"waypoint {i}{named} is {d:.0f} m away, over {self.max_distance_m:g} m"
+            farthest = max(farthest, d)
+        self._measured = (position.lat, position.lon, farthest)
+        return None
+
+
+def _speed(position: GlobalPosition | None, ground_speed: float | None) -> float | None:
+    return position.ground_speed_m_s if position is not None else ground_speed
+
+
+class SpeedWithin(Guard):
+    """The vehicle is not faster than the mission allows.
+
+    Rule: FAILURE when the ground speed exceeds ``limit.max`` by more than
+    ``max(tolerance_m_s, tolerance_fraction * limit.max)`` (an autopilot overshoots a little while
+    settling on a speed). ``limit.min`` is never enforced: a vehicle is slower while accelerating,
+    turning, holding or at a waypoint. The speed is the EKF's (/vehicle/position, horizontal),
+    else VFR_HUD's (/vehicle/ground_speed_m_s); neither reported passes with a note.
+    """
+
+    reads = ("/vehicle/position", "/vehicle/ground_speed_m_s")
+
+    def __init__(self, limit: Range, tolerance_m_s: float = 0.3, tolerance_fraction: float = 0.1, name: str | None = None) -> None:
+        super().__init__(name or f"Speed within {limit.max:g} m/s?")
+        self.limit = limit
+        self.allowed_m_s = limit.max + max(tolerance_m_s, tolerance_fraction * limit.max)
+
+    def check(self) -> str | None:
+        speed = _speed(self.get("/vehicle/position"), self.get("/vehicle/ground_speed_m_s"))
+        if speed is None:
+            self.note = "speed not reported yet"
+            return None
+        if speed > self.allowed_m_s:
+            return f"speed {speed:.1f} m/s over the limit {self.limit.max:g} m/s"
+        return None
+
+
+def _outside(value: float, limit: Range, tolerance: float) -> bool:
+    return not limit.min - tolerance <= value <= limit.max + tolerance
+
+
+class DepthWithin(Guard):
+    """A sub's depth (-/vehicle/position.alt_rel_m) is in ``limit``, give or take ``tolerance_m`` (waves, sensor noise)."""
+
+    reads = ("/vehicle/position",)
+
+    def __init__(self, limit: Range, tolerance_m: float = 0.5, name: str | None = None) -> None:
+        super().__init__(name or f"Depth within [{limit.min:g}, {limit.max:g}] m?")
+        self.limit = limit
+        self.tolerance_m = tolerance_m
+
+    def check(self) -> str | None:
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        if position is None:
+            return "no position"
+        depth = -position.alt_rel_m
+        if _outside(depth, self.limit, self.tolerance_m):
+            return f"depth {depth:.1f} m outside [{self.limit.min:g}, {self.limit.max:g}] m"
+        return None
+
+
+class AltitudeWithin(Guard):
+    """A sub's height above the seabed (/vehicle/altitude_above_bottom_m) is in ``limit``, give or take ``tolerance_m``.
+
+    No valid rangefinder reading (none yet, out of its range, invalid) fails: the guard cannot
+    tell the seabed is far enough.
+    """
+
+    reads = ("/vehicle/altitude_above_bottom_m",)
+
+    def __init__(self, limit: Range, tolerance_m: float = 0.5, name: str | None = None) -> None:
+        super().__init__(name or f"Altitude within [{limit.min:g}, {limit.max:g}] m?")
+        self.limit = limit
+        self.tolerance_m = tolerance_m
+
+    def check(self) -> str | None:
+        altitude: float | None = self.get("/vehicle/altitude_above_bottom_m")
+        if altitude is None:
+            return "no altitude above the seabed (no valid rangefinder reading)"
+        if _outside(altitude, self.limit, self.tolerance_m):
+            return f"altitude {altitude:.1f} m above the seabed outside [{self.limit.min:g}, {self.limit.max:g}] m"
+        return None
+
+
+class HeadingSane(Guard):
+    """The heading filter trusts the compass (/heading/ok); not judged yet passes with a note."""
+
+    reads = ("/heading/ok", "/heading/bias_deg")
+
+    def __init__(self, name: str = "Heading sane?") -> None:
+        super().__init__(name)
+
+    def check(self) -> str | None:
+        ok: bool | None = self.get("/heading/ok")
+        if ok is None:
+            self.note = "not judged yet"
+            return None
+        if ok:
+            return None
+        bias: float | None = self.get("/heading/bias_deg")
+        return "compass disagrees with the course over ground" + (f" (bias {bias:+.0f}°)" if bias is not None else "")
+
+
+class BatteryAbove(Guard):
+    """The battery is above ``floor_pct`` remaining and ``floor_v`` volts (either None: not checked).
+
+    A value the autopilot does not report (no SYS_STATUS yet, 'unknown' fields) passes with a note.
+    """
+
+    reads = ("/vehicle/battery",)
+
+    def __init__(self, floor_pct: float | None, floor_v: float | None = None, name: str = "Battery above floor?") -> None:
+        super().__init__(name)
+        self.floor_pct = floor_pct
+        self.floor_v = floor_v
+
+    def check(self) -> str | None:
+        battery: Battery | None = self.get("/vehicle/battery")
+        if battery is None:
+            self.note = "battery not reported yet"
+            return None
+        pct, volts = battery.remaining_pct, battery.voltage_v
+        if self.floor_pct is not None and pct is not None and pct < self.floor_pct:
+            return f"battery {pct}% below {self.floor_pct:g}%"
+        if self.floor_v is not None and volts is not None and volts < self.floor_v:
+            return f"battery {volts:.2f} V below {self.floor_v:g} V"
+        unknown = [
+            what
+            for what, floor, value in (("remaining", self.floor_pct, pct), ("voltage", self.floor_v, volts))
+            if floor is not None and value is None
+        ]
+        if unknown:
+            self.note = f"battery {' and '.join(unknown)} unknown"
+        return None
+
+
+class InsideGeofence(Guard):
+    """The vehicle is inside ``fence``: its polygon, and its maximum distance from home.
+
+    Home is the autopilot's (/vehicle/home: where RTL goes and what its own fence measures from),
+    else ``mission_home`` until the autopilot reports one; with neither, a fence with a maximum
+    distance fails ("no home to measure the distance from").
+    """
+
+    reads = ("/vehicle/position", "/vehicle/home")
+
+    def __init__(self, fence: Geofence, mission_home: tuple[float, float] | None = None, name: str = "Inside geofence?") -> None:
+        super().__init__(name)
+        self.fence = fence
+        self.mission_home = mission_home
+
+    def check(self) -> str | None:
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        if position is None:
+            return "no position"
+        home: HomePosition | None = self.get("/vehicle/home")
+        return self.fence.why_outside(position.lat, position.lon, (home.lat, home.lon) if home else self.mission_home)
+
+
+def inside_geofence(mission: Mission, name: str = "Inside geofence?") -> InsideGeofence | None:
+    """The :class:`InsideGeofence` guard for a mission's ``geofence:`` section; None without one."""
+    if mission.geofence is None:
+        return None
+    home = (mission.home.lat, mission.home.lon) if mission.home else None
+    return InsideGeofence(mission.geofence.fence(), home, name)

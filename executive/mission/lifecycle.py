@@ -8,16 +8,24 @@ behaves like COMPLETED. A refused request raises :class:`Refused` and changes no
 
 Progress (the current leg) lives here, not in the tree: a guard that fails and recovers resumes
 the same leg.
+
+So do the samples taken: :meth:`MissionState.record_sample` is the one way a sample is kept, and
+:meth:`MissionState.sampled` tells whether a leg's sample is already taken, so that a Sample action
+re-entered (a guard recovered, the mission resumed) never takes it twice. Samples belong to a run:
+``upload`` and ``start`` begin with none. A restarted executive (after a crash) must not take a
+sample twice either: whoever restores its progress (the journal) hands the samples it recorded to
+:meth:`MissionState.restore_samples` after ``start`` and before the first tick.
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from enum import StrEnum
 
 from executive import blackboard
 from executive.mission.model import Mission, Waypoint
+from executive.state import Sample
 
 log = logging.getLogger(__name__)
 
@@ -44,6 +52,8 @@ TRANSITIONS: dict[str, tuple[frozenset[MissionStatus], MissionStatus]] = {
 }
 
 Listener = Callable[[MissionStatus, MissionStatus, str], None]
+#: Told of every sample recorded (a journal keeps them).
+SampleListener = Callable[[Sample], None]
 
 
 class Refused(Exception):
@@ -59,18 +69,22 @@ class MissionState:
         self.status = MissionStatus.IDLE
         self.leg_index = 0
         self.reason = ""
+        self.samples: tuple[Sample, ...] = ()
         self.listeners: list[Listener] = []
+        self.sample_listeners: list[SampleListener] = []
 
     # -- requests ----------------------------------------------------------------------------
     def upload(self, mission: Mission) -> None:
         self._check("upload")
         self.mission = mission
         self.leg_index = 0
+        self.samples = ()
         self._transition("upload", f"mission {mission.name!r} loaded, {len(mission.waypoints)} waypoints")
 
     def start(self) -> None:
         self._check("start")
         self.leg_index = 0
+        self.samples = ()
         self._transition("start", "started from the first waypoint")
 
     def pause(self, reason: str = "pause requested") -> None:
@@ -87,6 +101,7 @@ class MissionState:
             self._transition("pause", "paused before delete")
         self.mission = None
         self.leg_index = 0
+        self.samples = ()
         self._transition("delete", "mission deleted")
 
     def complete(self) -> None:
@@ -117,6 +132,36 @@ class MissionState:
         log.info("leg %d/%d done", self.leg_index, self.leg_count)
         self._publish()
 
+    # -- samples -----------------------------------------------------------------------------
+    def sampled(self, leg_index: int) -> bool:
+        """A sample of this leg is already recorded in this run: do not take it again."""
+        return any(s.leg_index == leg_index for s in self.samples)
+
+    def record_sample(self, sample: Sample) -> None:
+        """Keep a finished sample: publish ``/mission/samples`` and tell the sample listeners.
+
+        Refused (nothing changes) without a mission, for a leg the mission does not have, or for a
+        leg already sampled.
+        """
+        if self.mission is None:
+            raise Refused("cannot record a sample: no mission loaded")
+        if not 0 <= sample.leg_index < self.leg_count:
+            raise Refused(f"cannot record a sample of leg {sample.leg_index + 1}: the mission has {self.leg_count}")
+        if self.sampled(sample.leg_index):
+            raise Refused(f"leg {sample.leg_index + 1} is already sampled")
+        self.samples = (*self.samples, sample)
+        self._publish()
+        log.info("sample of leg %d recorded: %d reads", sample.leg_index + 1, len(sample.reads))
+        for listener in self.sample_listeners:
+            listener(sample)
+
+    def restore_samples(self, samples: Iterable[Sample]) -> None:
+        """Put back the samples a previous process recorded (listeners are not told: they already know)."""
+        for sample in samples:
+            if not self.sampled(sample.leg_index):
+                self.samples = (*self.samples, sample)
+        self._publish()
+
     # -- internals ---------------------------------------------------------------------------
     def _check(self, request: str) -> None:
         allowed, _ = TRANSITIONS[request]
@@ -140,3 +185,4 @@ class MissionState:
         self._bb.set("/mission/leg_index", self.leg_index)
         self._bb.set("/mission/leg_count", self.leg_count)
         self._bb.set("/mission/target", self.target)
+        self._bb.set("/mission/samples", self.samples)

@@ -12,6 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from executive.geofence import Geofence, open_ring, polygon_problems
 from executive.mission.errors import Path
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
@@ -53,6 +54,10 @@ class Limits(BaseModel):
     link_timeout_s: float = Field(3.0, gt=0.0, le=60.0, description="heartbeat age after which the link counts as lost")
     recovery_timeout_s: float = Field(120.0, gt=0.0, le=86400.0, description="how long a failed guard may take to recover before the mission aborts")
     ekf_wait_s: float = Field(120.0, gt=0.0, le=3600.0, description="how long pre-flight waits for the EKF to become ready")
+    battery_min_pct: float | None = Field(
+        20.0, ge=0.0, le=100.0, description="remaining battery below this, percent, fails the battery guard (null: not checked)"
+    )
+    battery_min_v: float | None = Field(None, gt=0.0, le=1000.0, description="battery voltage below this fails the battery guard (null: not checked)")
 
 
 class SwitchChannels(BaseModel):
@@ -113,6 +118,30 @@ class Home(BaseModel):
     heading_deg: float = Field(0.0, ge=0.0, lt=360.0)
 
 
+class Vertex(BaseModel):
+    """A corner of the geofence polygon."""
+
+    model_config = _STRICT
+    lat: Latitude
+    lon: Longitude
+
+
+class GeofenceConfig(BaseModel):
+    """Where the vehicle may be: inside a polygon, within a distance of home, or both."""
+
+    model_config = _STRICT
+    polygon: Annotated[list[Vertex], Field(min_length=3, max_length=500)] | None = Field(
+        None, description="the fence's corners in order (either direction; a last corner repeating the first is allowed); must not cross itself"
+    )
+    max_distance_from_home_m: float | None = Field(
+        None, gt=0.0, le=1_000_000.0, description="how far from home the vehicle may be (the autopilot's home, else the mission's home)"
+    )
+
+    def fence(self) -> Geofence:
+        """The :class:`Geofence` value the guard checks (the polygon must be valid: see cross_field_errors)."""
+        return Geofence(tuple((v.lat, v.lon) for v in self.polygon or ()), self.max_distance_from_home_m)
+
+
 class Waypoint(BaseModel):
     """One point of the route."""
 
@@ -151,6 +180,7 @@ class Mission(BaseModel):
     description: str | None = Field(None, max_length=4096)
     auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
     home: Home | None = None
+    geofence: GeofenceConfig | None = Field(None, description="where the vehicle may be")
     limits: Limits = Field(default_factory=Limits)
     rc: RcConfig = Field(default_factory=RcConfig)
     sampling: SamplingOptions | None = Field(None, description="goto_sample options")
@@ -206,4 +236,30 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
             errors.append(((*here, "altitude_m"), "control_mode altitude needs altitude_m"))
         if wp.control_mode != "altitude" and wp.altitude_m is not None:
             errors.append(((*here, "altitude_m"), "altitude_m is only used with control_mode altitude"))
+    if mission.geofence is not None:
+        errors += _geofence_errors(mission)
+    return errors
+
+
+def _geofence_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """The fence is usable, and the home and every waypoint of the mission are inside it."""
+    config = mission.geofence
+    assert config is not None
+    if config.polygon is None and config.max_distance_from_home_m is None:
+        return [(("geofence",), "a geofence needs a polygon, max_distance_from_home_m or both")]
+    if config.polygon is not None:
+        problems = polygon_problems(open_ring([(v.lat, v.lon) for v in config.polygon]))
+        if problems:
+            return [(("geofence", "polygon", i), why) for i, why in problems]
+    fence = config.fence()
+    home = (mission.home.lat, mission.home.lon) if mission.home else None
+    if home is None:  # the distance rule waits for the autopilot's home, at run time
+        fence = Geofence(fence.polygon)
+    points: list[tuple[Path, float, float]] = [(("home",), *home)] if home else []
+    points += [(("waypoints", i), wp.lat, wp.lon) for i, wp in enumerate(mission.waypoints)]
+    errors: list[tuple[Path, str]] = []
+    for path, lat, lon in points:
+        why = fence.why_outside(lat, lon, home)
+        if why:
+            errors.append((path, f"outside the geofence: {why}"))
     return errors

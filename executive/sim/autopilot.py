@@ -632,6 +632,7 @@ class ArduRoverSim(ArduPilotSim):
         return {
             **super()._command_handlers(),
             _M.MAV_CMD_DO_REPOSITION: self._cmd_reposition,
+            _M.MAV_CMD_DO_CHANGE_SPEED: self._cmd_change_speed,
             _M.MAV_CMD_NAV_RETURN_TO_LAUNCH: lambda cmd: self._set_mode_result("RTL"),
             _M.MAV_CMD_MISSION_START: lambda cmd: _M.MAV_RESULT_DENIED if any(cmd.params[:2]) else self._set_mode_result("AUTO"),
         }
@@ -662,7 +663,7 @@ class ArduRoverSim(ArduPilotSim):
             if not self.mission.present:
                 self._text(_M.MAV_SEVERITY_NOTICE, "No Mission. Can't set AUTO.")
                 return False
-            self._auto_waiting, self._auto_item = True, None
+            self._auto_waiting, self._auto_item, self._guided_speed = True, None, None
             if not (self.is_boat and self._loiter()):
                 self._stop()
             return True
@@ -730,7 +731,7 @@ class ArduRoverSim(ArduPilotSim):
         if (self.mission.current_seq, item) != self._auto_item:  # the next item, a set-current, or an upload replaced it
             self._auto_item = (self.mission.current_seq, item)
             if item.command == _M.MAV_CMD_NAV_WAYPOINT:
-                self._drive(item.lat, item.lon)
+                self._drive(item.lat, item.lon, self._guided_speed)
             else:
                 self.mission.advance()
         elif self._driving and self.vehicle.arrived:
@@ -772,6 +773,16 @@ class ArduRoverSim(ArduPilotSim):
             return
         if not msg.type_mask & POS_BITS:  # velocity, heading and turn-rate targets are not simulated
             self._drive(lat, lon, self._guided_speed)
+
+    def _cmd_change_speed(self, cmd: Command) -> int:
+        """ArduRover: only the autonomous modes take a desired speed (Mode::set_desired_speed), else FAILED."""
+        speed = cmd.params[1]
+        if self.mode not in ("GUIDED", "AUTO", "RTL", "SMART_RTL") or not 0.0 < speed <= self.vehicle.limits.max_m_s:
+            return _M.MAV_RESULT_FAILED
+        self._guided_speed = speed
+        if self._driving and self._destination is not None:
+            self.vehicle.drive_to(*self._destination, speed)
+        return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_reposition(self, cmd: Command) -> int:
         change_mode = int(cmd.params[1]) & _M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE

@@ -58,3 +58,17 @@ def test_guided_ignores_the_sticks(rover):
     start = position(rover)
     rover.run(3.0)
     assert position(rover) == pytest.approx(start, abs=1e-7)
+
+
+def test_change_speed_applies_in_autonomous_modes_only(rover):
+    assert rover.ack(mavlink.MAV_CMD_DO_CHANGE_SPEED, 1, 1.0).result == mavlink.MAV_RESULT_FAILED  # MANUAL
+    rover.arm()
+    rover.set_mode("GUIDED")
+    assert rover.ack(mavlink.MAV_CMD_DO_CHANGE_SPEED, 1, 1.0).result == mavlink.MAV_RESULT_ACCEPTED
+    rover.goto(*rover.north(100.0))
+    rover.run(10.0)
+    assert rover.ap.vehicle.speed_m_s == pytest.approx(1.0, abs=0.01)
+    assert rover.ack(mavlink.MAV_CMD_DO_CHANGE_SPEED, 1, 3.0).result == mavlink.MAV_RESULT_ACCEPTED
+    rover.run(5.0)
+    assert rover.ap.vehicle.speed_m_s == pytest.approx(3.0, abs=0.01)
+    assert rover.ack(mavlink.MAV_CMD_DO_CHANGE_SPEED, 1, 50.0).result == mavlink.MAV_RESULT_FAILED  # beyond what it can do

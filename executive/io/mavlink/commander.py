@@ -24,6 +24,8 @@ from executive.vehicles import VehicleProfile
 
 #: SET_POSITION_TARGET_GLOBAL_INT type_mask: use position only (ignore velocity, acceleration, yaw).
 POSITION_ONLY_MASK = 0x0DF8
+#: ... use position and velocity (ignore acceleration, yaw): ArduSub keeps a height above the seabed only with a velocity.
+POSITION_VELOCITY_MASK = 0x0DC0
 #: param2 values that skip ArduPilot's checks: 2989 forces an arm, 21196 a disarm (MAVLink's 21196 for both is PX4's).
 FORCE_ARM_MAGIC = 2989.0
 FORCE_DISARM_MAGIC = 21196.0
@@ -140,6 +142,35 @@ class Commander:
                 round(lon * 1e7),
                 alt_m,
                 0, 0, 0, 0, 0, 0, 0, 0,
+            )
+        )  # fmt: skip
+
+    def depth_target(self, lat: float, lon: float, *, depth_m: float | None = None, altitude_m: float | None = None) -> None:
+        """Queue an ArduSub depth target (``depth_m`` below the surface) or height above the seabed (``altitude_m``).
+
+        A depth goes as ``alt = -depth`` in the relative-altitude frame: GUIDED goes to (lat, lon) at
+        that depth, ALT_HOLD takes the depth alone. A height above the seabed goes in the terrain
+        frame with a (zero) velocity, which only GUIDED understands. Never acknowledged.
+        """
+        if depth_m is not None and altitude_m is None:
+            frame, mask, alt = mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, POSITION_ONLY_MASK, -depth_m
+        elif altitude_m is not None and depth_m is None:
+            frame, mask, alt = mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT, POSITION_VELOCITY_MASK, altitude_m
+        else:
+            raise ValueError("give exactly one of depth_m and altitude_m")
+        self._outbox.append(
+            self._encoder.set_position_target_global_int_encode(
+                0, self.target_system, self.target_component, frame, mask, round(lat * 1e7), round(lon * 1e7), alt,
+                0, 0, 0, 0, 0, 0, 0, 0,
+            )
+        )  # fmt: skip
+
+    def local_setpoint(self, north_m: float, east_m: float, down_m: float) -> None:
+        """Queue a position target in the local NED frame (MAV_FRAME_LOCAL_NED: from the EKF origin, z down). Never acknowledged."""
+        self._outbox.append(
+            self._encoder.set_position_target_local_ned_encode(
+                0, self.target_system, self.target_component, mavlink.MAV_FRAME_LOCAL_NED, POSITION_ONLY_MASK,
+                north_m, east_m, down_m, 0, 0, 0, 0, 0, 0, 0, 0,
             )
         )  # fmt: skip
 

@@ -67,6 +67,8 @@ class MavlinkReader:
             "GPS_RAW_INT": self._on_gps_raw,
             "SERVO_OUTPUT_RAW": self._on_servo_output,
             "EXTENDED_SYS_STATE": self._on_extended_sys_state,
+            "DISTANCE_SENSOR": self._on_distance_sensor,
+            "RANGEFINDER": self._on_rangefinder,
         }
         if mission is not None:  # the mission protocol's replies go to the transfer, as COMMAND_ACK goes to the commander
             self._handlers |= {
@@ -224,6 +226,17 @@ class MavlinkReader:
         landed = mavlink.enums["MAV_LANDED_STATE"].get(msg.landed_state)
         self._bb.set("/vehicle/vtol_state", vtol.name.removeprefix("MAV_VTOL_STATE_") if vtol else None)
         self._bb.set("/vehicle/landed_state", landed.name.removeprefix("MAV_LANDED_STATE_") if landed else None)
+
+    def _on_distance_sensor(self, msg: MAVLinkMessage, now: float) -> None:
+        if msg.orientation != mavlink.MAV_SENSOR_ROTATION_PITCH_270:
+            return  # not looking down: an obstacle sensor
+        # signal_quality 1 = invalid (0 = unknown); out of its range the reading says nothing
+        valid = msg.min_distance <= msg.current_distance <= msg.max_distance and getattr(msg, "signal_quality", 0) != 1
+        self._bb.set("/vehicle/altitude_above_bottom_m", msg.current_distance / 100.0 if valid else None)
+
+    def _on_rangefinder(self, msg: MAVLinkMessage, now: float) -> None:
+        valid = _finite(msg.distance) and msg.distance >= 0.0  # ArduPilot sends RANGEFINDER for its downward (PITCH_270) rangefinder
+        self._bb.set("/vehicle/altitude_above_bottom_m", float(msg.distance) if valid else None)
 
     def _update_link_health(self, now: float) -> None:
         last = self._bb.get("/link/last_heartbeat")

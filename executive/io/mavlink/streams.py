@@ -34,8 +34,11 @@ _KEY = blackboard.command_key("SET_MESSAGE_INTERVAL")
 
 
 def rates_for(kind: str) -> dict[str, float]:
-    """The streams a kind of vehicle has: only aircraft report VTOL and landed state."""
-    return {name: hz for name, hz in DEFAULT_RATES.items() if kind == "vtol" or name != "EXTENDED_SYS_STATE"}
+    """The streams a kind of vehicle has: only aircraft report VTOL and landed state, only subs a downward sonar."""
+    rates = {name: hz for name, hz in DEFAULT_RATES.items() if kind == "vtol" or name != "EXTENDED_SYS_STATE"}
+    if kind == "sub":
+        rates["DISTANCE_SENSOR"] = 5.0
+    return rates
 
 
 class StreamRequester:

@@ -66,3 +66,10 @@ def test_only_aircraft_are_asked_for_vtol_and_landed_state():
     assert "EXTENDED_SYS_STATE" in rates_for("vtol")
     assert "EXTENDED_SYS_STATE" not in rates_for("rover")
     assert set(rates_for("boat")) | {"EXTENDED_SYS_STATE"} == set(rates_for("vtol"))
+
+
+def test_subs_are_asked_for_their_sonar():
+    from executive.io.mavlink.streams import rates_for
+
+    assert rates_for("sub")["DISTANCE_SENSOR"] == 5.0
+    assert "DISTANCE_SENSOR" not in rates_for("boat")

@@ -1,0 +1,87 @@
+"""Taking a sample at a sample point: the sampler does the work, the action watches it and records the result."""
+
+from __future__ import annotations
+
+import math
+
+from py_trees.common import Status
+
+from executive.behaviours.base import TimedBehaviour
+from executive.io.sampler import Sampler
+from executive.mission.lifecycle import MissionState
+from executive.state import GlobalPosition, SamplerState, SamplerStatus
+from executive.state import Sample as SampleRecord
+
+
+class Sample(TimedBehaviour):
+    """Take the current leg's sample: start the sampler, SUCCESS when it is DONE (the sample recorded).
+
+    Needs ``clock``, ``mission_state`` and ``sampler`` from ``tree.setup``. The sample is recorded
+    through ``mission_state.record_sample`` with the reads, the start and end times and the last
+    position seen while sampling (NaN if none was). A leg already sampled in this run (the action
+    re-entered after a guard recovered, a resume, a restart that restored the samples) is SUCCESS
+    at once, without sampling again. FAILURE when the sampler fails, after ``timeout_s`` (None: the
+    sampler's own duration bounds it), or with no active leg. Interrupted (an RC take-over, a
+    cancel, a pause: the guards above stop it), it cancels the sampler; nothing is recorded.
+    """
+
+    reads = ("/sampler/status", "/vehicle/position", "/mission/leg_count")
+    needs = ("clock", "mission_state", "sampler")
+    mission_state: MissionState
+    sampler: Sampler
+
+    def __init__(self, name: str = "Sample", timeout_s: float | None = None) -> None:
+        super().__init__(name)
+        self.timeout_s = timeout_s
+        self.leg_index: int | None = None
+        self._ticket: int | None = None
+        self._finished = True
+        self._skip: Status | None = None
+        self._position: GlobalPosition | None = None
+
+    def initialise(self) -> None:
+        super().initialise()
+        state = self.mission_state
+        self.leg_index, self._ticket, self._finished, self._skip, self._position = state.leg_index, None, True, None, None
+        if state.target is None:
+            self._skip, self.feedback_message = Status.FAILURE, "no active leg"
+        elif state.sampled(state.leg_index):
+            self._skip, self.feedback_message = Status.SUCCESS, f"leg {state.leg_index + 1}: already sampled"
+        else:
+            self._ticket = self.sampler.start(state.leg_index)
+            self._finished = False
+
+    def update(self) -> Status:
+        if self._skip is not None:
+            return self._skip
+        assert self.leg_index is not None
+        leg = f"leg {self.leg_index + 1}/{self.get('/mission/leg_count')}"
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        if position is not None:
+            self._position = position
+        status: SamplerStatus | None = self.get("/sampler/status")
+        mine = status is not None and status.ticket == self._ticket
+        if mine and status is not None and status.state is SamplerState.DONE:
+            self._finished = True
+            lat, lon = (self._position.lat, self._position.lon) if self._position is not None else (math.nan, math.nan)
+            self.mission_state.record_sample(SampleRecord(self.leg_index, lat, lon, status.reads, self.started, status.time))
+            self.feedback_message = f"{leg}: sampled, {len(status.reads)} reads"
+            return Status.SUCCESS
+        if mine and status is not None and status.state is SamplerState.FAILED:
+            self._finished = True
+            self.feedback_message = f"{leg}: sampler failed: {status.reason}"
+            return Status.FAILURE
+        if self.timeout_s is not None and self.elapsed > self.timeout_s:
+            self.sampler.cancel()
+            self._finished = True
+            self.feedback_message = f"{leg}: no sample after {self.timeout_s:g} s"
+            return Status.FAILURE
+        reads = len(status.reads) if mine and status is not None else 0
+        self.feedback_message = f"{leg}: sampling ({self.elapsed:.0f} s, {reads} reads)"
+        return Status.RUNNING
+
+    def terminate(self, new_status: Status) -> None:
+        if new_status == Status.INVALID and not self._finished:
+            self.sampler.cancel()  # interrupted: the sample in progress is abandoned, not recorded
+            self._finished = True
+            self.feedback_message = "interrupted: sample cancelled"

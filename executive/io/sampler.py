@@ -1,0 +1,169 @@
+"""The sample-taking instrument: started by the Sample action, serviced by the runtime, reported on ``/sampler/status``.
+
+A sampler never blocks. :meth:`Sampler.start` asks for a sample and returns a ticket;
+:meth:`Sampler.service` (called by the runtime once per tick, after the tree) takes the reads that
+are due and writes a :class:`~executive.state.SamplerStatus` carrying that ticket; the action
+watches for its ticket reaching DONE or FAILED.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import random
+import zlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+from executive import blackboard
+from executive.clock import Clock
+from executive.mission.model import SamplingOptions
+from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
+
+log = logging.getLogger(__name__)
+
+_EPSILON_S = 1e-6  # clock times closer than this are the same instant
+
+
+class Sampler(Protocol):
+    """What the Sample action and the runtime need from a sampling instrument."""
+
+    def start(self, leg_index: int) -> int:
+        """Start sampling for a leg (superseding any sample in progress); returns the ticket its status will carry."""
+        ...
+
+    def cancel(self) -> None:
+        """Stop the sample in progress: it ends FAILED ("cancelled"). Nothing happens when idle."""
+        ...
+
+    def service(self) -> None:
+        """Called by the runtime every tick: take what is due and publish ``/sampler/status``."""
+        ...
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """How a simulated sensor reads: a base value, a spatial variation of ``amplitude``, gaussian noise."""
+
+    unit: str
+    base: float
+    amplitude: float
+    noise: float
+    minimum: float | None = None  # no reading below this (turbidity cannot be negative)
+    decimals: int = 3
+
+
+#: Plausible coastal-water values for the sensors a sampling sonde carries.
+SENSOR_MODELS: dict[str, SensorModel] = {
+    "temperature": SensorModel("degC", 17.5, 1.5, 0.02, decimals=2),
+    "conductivity": SensorModel("mS/cm", 44.0, 3.0, 0.05, minimum=0.0, decimals=2),
+    "salinity": SensorModel("PSU", 31.0, 2.0, 0.03, minimum=0.0, decimals=2),
+    "ph": SensorModel("pH", 8.05, 0.12, 0.005, minimum=0.0),
+    "dissolved_oxygen": SensorModel("mg/L", 7.8, 0.6, 0.02, minimum=0.0, decimals=2),
+    "turbidity": SensorModel("NTU", 3.0, 2.0, 0.1, minimum=0.0, decimals=2),
+    "chlorophyll": SensorModel("ug/L", 2.5, 1.5, 0.05, minimum=0.0, decimals=2),
+}
+_UNKNOWN_SENSOR = SensorModel("", 0.0, 1.0, 0.01)
+_WAVELENGTH_M = 400.0  # how far apart the simulated water's patches are
+_M_PER_DEG = 111_320.0
+
+
+class SimulatedSampler:
+    """A simulated sonde: every ``1/rate_hz`` s one read per sensor, for ``duration_s``, then DONE.
+
+    Values vary smoothly with the vehicle's position (read-only from ``/vehicle/position``, or from
+    ``position``) plus seeded noise, so runs are repeatable and two sample points differ.
+    """
+
+    def __init__(self, clock: Clock, options: SamplingOptions, *, position: Callable[[], GlobalPosition | None] | None = None, seed: int = 0) -> None:
+        self._clock = clock
+        self.options = options
+        self._models = {name: SENSOR_MODELS.get(name.lower(), _UNKNOWN_SENSOR) for name in options.sensors}
+        unknown = [name for name in options.sensors if name.lower() not in SENSOR_MODELS]
+        if unknown:
+            log.warning("simulated sampler: no model for %s; they read noise around 0", ", ".join(unknown))
+        self._reader = blackboard.reader("sampler", ["/vehicle/position"])
+        self._position = position if position is not None else self._vehicle_position
+        self._random = random.Random(seed)
+        self._bb = blackboard.writer("sampler", ["/sampler/status"])
+        self._tickets = 0
+        self._status: SamplerStatus | None = None
+        self._leg_index: int | None = None
+        self._started = 0.0
+        self._taken = 0  # read rounds taken for the sample in progress
+        self._reads: list[SampleRead] = []
+
+    @property
+    def status(self) -> SamplerStatus | None:
+        """The status last published."""
+        return self._status
+
+    @property
+    def rounds(self) -> int:
+        """Read rounds (one read per sensor) in a sample: ``duration_s * rate_hz``, at least one."""
+        return max(1, math.floor(self.options.duration_s * self.options.rate_hz + 1e-9))
+
+    def start(self, leg_index: int) -> int:
+        self._tickets += 1
+        self._leg_index = leg_index
+        self._started = self._clock.now()
+        self._taken = 0
+        self._reads = []
+        log.info("sampler: sampling for leg %d (ticket %d)", leg_index + 1, self._tickets)
+        self._publish(SamplerState.SAMPLING, "")
+        return self._tickets
+
+    def cancel(self) -> None:
+        self.fail("cancelled")
+
+    def fail(self, reason: str) -> None:
+        """End the sample in progress FAILED (what a cancel or an instrument fault does)."""
+        if self._status is not None and self._status.state is SamplerState.SAMPLING:
+            log.warning("sampler: leg %d: %s", (self._leg_index or 0) + 1, reason)
+            self._publish(SamplerState.FAILED, reason)
+
+    def service(self) -> None:
+        if self._status is None or self._status.state is not SamplerState.SAMPLING:
+            return
+        now = self._clock.now()
+        taken_before = self._taken
+        while self._taken < self.rounds and self._due(self._taken + 1) <= now + _EPSILON_S:
+            self._taken += 1
+            self._read_round(self._due(self._taken))
+        if self._taken == self.rounds and now + _EPSILON_S >= self._started + self.options.duration_s:
+            self._publish(SamplerState.DONE, "")
+        elif self._taken != taken_before:
+            self._publish(SamplerState.SAMPLING, "")
+
+    # -- internals ---------------------------------------------------------------------------
+    def _vehicle_position(self) -> GlobalPosition | None:
+        position: GlobalPosition | None = self._reader.get("/vehicle/position")
+        return position
+
+    def _due(self, round_number: int) -> float:
+        """When read round ``round_number`` (1-based) is due: every ``1/rate_hz`` s, never after the end."""
+        return self._started + min(round_number / self.options.rate_hz, self.options.duration_s)
+
+    def _read_round(self, t: float) -> None:
+        here = self._position()
+        for name, model in self._models.items():
+            value = model.base + model.amplitude * self._field(name, here) + self._random.gauss(0.0, model.noise)
+            if model.minimum is not None:
+                value = max(model.minimum, value)
+            self._reads.append(SampleRead(name, round(value, model.decimals), model.unit, t))
+
+    @staticmethod
+    def _field(name: str, here: GlobalPosition | None) -> float:
+        """A smooth pattern in [-1, 1] over the water, different for each sensor."""
+        if here is None:
+            return 0.0
+        phase = (zlib.crc32(name.encode()) % 628) / 100.0
+        north = here.lat * _M_PER_DEG
+        east = here.lon * _M_PER_DEG * math.cos(math.radians(here.lat))
+        k = 2.0 * math.pi / _WAVELENGTH_M
+        return math.sin(k * north + phase) * math.cos(k * east - phase)
+
+    def _publish(self, state: SamplerState, reason: str) -> None:
+        self._status = SamplerStatus(self._tickets, state, tuple(self._reads), reason, self._clock.now())
+        self._bb.set("/sampler/status", self._status)

@@ -1,0 +1,81 @@
+"""The reader's altitude above the bottom: a downward DISTANCE_SENSOR or RANGEFINDER; nothing else, and no stale truth."""
+
+from __future__ import annotations
+
+import py_trees
+import pytest
+
+from executive.io.mavlink.dialect import mavlink
+from executive.io.mavlink.reader import MavlinkReader
+from tests_support import AUTOPILOT, Peer
+
+DOWN, FORWARD = mavlink.MAV_SENSOR_ROTATION_PITCH_270, mavlink.MAV_SENSOR_ROTATION_NONE
+KEY = "/vehicle/altitude_above_bottom_m"
+
+
+def altitude():
+    return py_trees.blackboard.Blackboard.get(KEY)
+
+
+def heartbeat(source=AUTOPILOT):
+    return source.heartbeat(mavlink.MAV_TYPE_SUBMARINE, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, mavlink.MAV_STATE_STANDBY)
+
+
+def distance_sensor(current_cm: int, orientation: int = DOWN, quality: int = 100, min_cm: int = 50, max_cm: int = 5000, source=AUTOPILOT):
+    return source.distance_sensor(
+        0, min_cm, max_cm, current_cm, mavlink.MAV_DISTANCE_SENSOR_ULTRASOUND, 0, orientation, 0, 0.0, 0.0, [0.0] * 4, quality
+    )
+
+
+@pytest.fixture
+def reader(link, clock, commander) -> MavlinkReader:
+    reader = MavlinkReader(link, clock, commander)
+    link.incoming.append(heartbeat())
+    reader.drain()
+    return reader
+
+
+def receive(reader, link, *messages) -> None:
+    link.incoming.extend(messages)
+    reader.drain()
+
+
+@pytest.mark.parametrize(
+    ("message", "expected"),
+    [
+        (distance_sensor(1234), 12.34),
+        (distance_sensor(1234, quality=0), 12.34),  # 0 = quality unknown: the reading stands
+        (distance_sensor(50), 0.5),  # at the ends of its range
+        (distance_sensor(5000), 50.0),
+        (distance_sensor(1234, quality=1), None),  # 1 = invalid
+        (distance_sensor(5001), None),  # beyond its range: says nothing
+        (distance_sensor(49), None),
+        (AUTOPILOT.rangefinder(7.5, 0.0), 7.5),
+        (AUTOPILOT.rangefinder(float("nan"), 0.0), None),
+        (AUTOPILOT.rangefinder(-1.0, 0.0), None),
+    ],
+)
+def test_altitude_above_bottom(reader, link, message, expected):
+    receive(reader, link, message)
+    assert altitude() == (None if expected is None else pytest.approx(expected))
+
+
+def test_an_invalid_reading_clears_the_last_valid_one(reader, link):
+    seen = []
+    for message in (distance_sensor(800), distance_sensor(800, quality=1), distance_sensor(650), AUTOPILOT.rangefinder(float("inf"), 0.0)):
+        receive(reader, link, message)
+        seen.append(altitude())
+    assert seen == [8.0, None, 6.5, None]
+
+
+def test_sensors_not_looking_down_and_other_systems_are_ignored(reader, link):
+    receive(reader, link, distance_sensor(900))
+    receive(reader, link, distance_sensor(300, orientation=FORWARD))  # an obstacle sensor
+    receive(reader, link, distance_sensor(100, source=Peer(2, 1)), Peer(2, 1).rangefinder(1.0, 0.0))
+    assert altitude() == 9.0
+
+
+def test_no_reading_until_a_rangefinder_reports(reader, link):
+    assert altitude() is None
+    receive(reader, link, distance_sensor(300, orientation=FORWARD))
+    assert altitude() is None
