@@ -31,15 +31,18 @@ def load_or_report(path: str) -> Mission | None:
         return None
 
 
-def faults_or_report(path: str, vehicle: str, clock: Clock) -> FaultInjector | None:
-    """A fault injector for the fault file in ``path``, or ``None`` after printing every error."""
+def faults_or_report(paths: list[str], vehicle: str, clock: Clock) -> FaultInjector | None:
+    """One fault injector playing every event/fault file in ``paths``, or ``None`` after printing every error."""
     from executive.sim.faults import FaultInjector, load_faults
 
+    faults = []
     try:
-        return FaultInjector(load_faults(path, vehicle=vehicle), clock)
+        for path in paths:
+            faults += load_faults(path, vehicle=vehicle).faults
     except MissionError as exc:
         print_errors(exc)
         return None
+    return FaultInjector(faults, clock)
 
 
 class BadInput(Exception):

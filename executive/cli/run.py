@@ -7,6 +7,7 @@ import contextlib
 import signal
 import sys
 from collections.abc import Iterator
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK
@@ -14,7 +15,7 @@ from executive.cli.common import faults_or_report, load_or_report, setup_logging
 from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
-from executive.mission.model import Mission
+from executive.mission.model import Mission, SimulatorOptions
 from executive.progress import Progress
 from executive.runtime import Runtime
 
@@ -51,16 +52,29 @@ def _vehicle_link(
             link.close()
         return
     from executive.sim import SimServer
+    from executive.sim.autopilot import DEFAULT_HOME
 
-    start = mission.home or mission.waypoints[0]
-    home = (start.lat, start.lon, getattr(start, "heading_deg", 0.0))
-    with SimServer(mission.vehicle, clock=clock, home=home, faults=faults, signing_key=signing_key) as sim:
-        print(f"executive: simulated {mission.vehicle} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
+    start = mission.home or (mission.waypoints[0] if mission.waypoints else None)
+    home = (start.lat, start.lon, getattr(start, "heading_deg", 0.0)) if start else DEFAULT_HOME
+    sim_options = mission.simulator or SimulatorOptions()
+    model = sim_options.model or mission.vehicle
+    with SimServer(model, clock=clock, home=home, faults=faults, signing_key=signing_key, ekf_ready_after_s=sim_options.ekf_ready_after_s) as sim:
+        print(f"executive: simulated {model} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
         link = PymavlinkLink(sim.url_for_client, **options)
         try:
             yield link
         finally:
             link.close()
+
+
+def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
+    """The mission's simulator event file (relative to the mission file) and --faults, in that order."""
+    files = []
+    if mission.simulator and mission.simulator.events:
+        files.append(str(Path(args.mission).parent / mission.simulator.events))
+    if args.faults:
+        files.append(args.faults)
+    return files
 
 
 def main(args: argparse.Namespace) -> int:
@@ -75,11 +89,12 @@ def main(args: argparse.Namespace) -> int:
         print("executive: run: --speedup applies to the simulator only; ignored with --mavlink", file=sys.stderr)
     clock = ScaledClock(1.0 if args.mavlink else args.speedup)
     faults = None
-    if args.faults is not None:
-        if args.mavlink:
-            print("executive: run: --faults applies to the built-in simulator only; it cannot be used with --mavlink", file=sys.stderr)
-            return EXIT_BAD_INPUT
-        faults = faults_or_report(args.faults, mission.vehicle, clock)
+    if args.faults is not None and args.mavlink:
+        print("executive: run: --faults applies to the built-in simulator only; it cannot be used with --mavlink", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    event_files = [] if args.mavlink else _event_files(args, mission)
+    if event_files:
+        faults = faults_or_report(event_files, mission.vehicle, clock)
         if faults is None:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)

@@ -157,6 +157,15 @@ class Waypoint(BaseModel):
     sample: bool = Field(False, description="goto_sample: hold here and run the sampler")
 
 
+class SimulatorOptions(BaseModel):
+    """How ``executive run`` sets up its built-in simulated vehicle (ignored with --mavlink)."""
+
+    model_config = _STRICT
+    model: Literal["rover", "boat", "bunker", "sub", "vtol"] | None = Field(None, description="simulated vehicle (default: the vehicle kind)")
+    events: str | None = Field(None, min_length=1, description="event file (faults, operator inputs) for the simulator, relative to the mission")
+    ekf_ready_after_s: float = Field(40.0, ge=0.0, le=600.0, description="how long the simulated EKF takes to use GPS after boot")
+
+
 class Mission(BaseModel):
     """A mission file."""
 
@@ -186,6 +195,7 @@ class Mission(BaseModel):
     sampling: SamplingOptions | None = Field(None, description="goto_sample options")
     vtol: VtolOptions | None = Field(None, description="vtol_transit options")
     rc_route: RcRouteOptions | None = Field(None, description="ugv_rc_route options")
+    simulator: SimulatorOptions | None = Field(None, description="the built-in simulated vehicle for `executive run` without --mavlink")
     waypoints: list[Waypoint] = Field(max_length=100_000, description="the route; only ugv_rc_route may start empty (the operator records it)")
 
 

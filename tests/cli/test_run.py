@@ -153,3 +153,18 @@ def test_a_mission_completes_over_a_lossy_link(square_mission):
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert proxy.up.dropped > 0 and proxy.down.dropped > 0
     assert runtime.reader.health.lost > 0  # the reader saw the gaps
+
+
+def test_the_mission_chooses_its_simulator_and_plays_its_event_file(tmp_path):
+    (tmp_path / "events.yaml").write_text("version: 1\nfaults:\n  - {kind: link_loss, at_s: 3, for_s: 5}\n")
+    mission = tmp_path / "tracked.yaml"
+    mission.write_text(
+        "version: 1\nname: tracked\nvehicle: rover\nauto_arm: true\nhome: {lat: -35.363261, lon: 149.165230}\n"
+        "simulator: {model: bunker, events: events.yaml, ekf_ready_after_s: 2}\n"
+        "waypoints:\n  - {lat: -35.3631710, lon: 149.1652300}\n"
+    )
+    proc = executive("run", str(mission), "--speedup", "20", "-v")
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert "simulated bunker" in err
+    assert "link lost" in err and "link up" in err  # the event file's link loss was played and recovered from
