@@ -1,61 +1,50 @@
-"""The progress line: mission state, leg i/n, distance to the next waypoint, mode, armed."""
+"""The status at 2 Hz for a person: a live line on a terminal, JSON lines otherwise."""
 
 from __future__ import annotations
 
+import json
 from typing import TextIO
 
-from executive import blackboard, geo
 from executive.clock import Clock
-from executive.mission.model import Waypoint
-from executive.state import GlobalPosition
+from executive.status import StatusSource, status_line
 
 
 class Progress:
-    """Writes the progress line: rewritten in place on a terminal, else a line when something changes.
+    """Writes the status every ``period_s`` of clock time (2 Hz by default).
 
-    On a terminal the line is refreshed every ``period_s`` of clock time; elsewhere (a log file, a
-    service journal) a line is written when the state, leg or mode changes, and every
-    ``quiet_period_s`` otherwise.
+    On a terminal it is one line rewritten in place; elsewhere (a log file, a pipe, a service
+    journal) one JSON object per line, with the clock time, for tools. ``quiet`` keeps the JSON
+    lines to changes of state, leg or mode (and one every ``quiet_period_s``).
     """
 
-    def __init__(self, stream: TextIO, clock: Clock, *, period_s: float = 0.5, quiet_period_s: float = 10.0) -> None:
+    def __init__(self, stream: TextIO, clock: Clock, *, period_s: float = 0.5, quiet: bool = False, quiet_period_s: float = 10.0) -> None:
         self._stream = stream
         self._clock = clock
         self._tty = stream.isatty()
-        self._period_s = period_s if self._tty else quiet_period_s
-        self._bb = blackboard.reader("progress", ["/mission/state", "/mission/leg_index", "/mission/leg_count", "/mission/target",
-                                                  "/vehicle/position", "/vehicle/mode", "/vehicle/armed"])  # fmt: skip
+        self._quiet = quiet and not self._tty
+        self._period_s = quiet_period_s if self._quiet else period_s
+        self._source = StatusSource("progress")
         self._next = float("-inf")
         self._last_key: tuple[object, ...] = ()
 
     def line(self) -> str:
-        """The current progress line."""
-        bb = self._bb
-        state, index, count = bb.get("/mission/state"), bb.get("/mission/leg_index"), bb.get("/mission/leg_count")
-        target: Waypoint | None = bb.get("/mission/target")
-        position: GlobalPosition | None = bb.get("/vehicle/position")
-        leg = f"leg {min(index + 1, count)}/{count}"
-        to_go = ""
-        if target is not None and position is not None:
-            distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
-            to_go = f"  {distance:7.1f} m at {bearing:03.0f}°"
-        armed = "armed" if bb.get("/vehicle/armed") else "disarmed"
-        return f"[{self._clock.now():8.1f} s] {state:<9} {leg}{to_go}  {bb.get('/vehicle/mode') or '-'} {armed}"
+        """The current status line."""
+        return f"[{self._clock.now():8.1f} s] {status_line(self._source.snapshot())}"
 
     def update(self, force: bool = False) -> None:
-        """Write the line if it is due (or ``force``)."""
+        """Write the status if it is due (or ``force``)."""
         now = self._clock.now()
-        bb = self._bb
-        key = (bb.get("/mission/state"), bb.get("/mission/leg_index"), bb.get("/vehicle/mode"), bb.get("/vehicle/armed"))
+        status = self._source.snapshot()
+        key = (status["state"], status["leg"], status["mode"], status["armed"])
         changed = key != self._last_key
-        if not (force or now >= self._next or (changed and not self._tty)):
+        if not (force or now >= self._next or (changed and self._quiet)):
             return
         self._next = now + self._period_s
         self._last_key = key
         if self._tty:
-            self._stream.write("\r\x1b[K" + self.line())
+            self._stream.write(f"\r\x1b[K[{now:8.1f} s] {status_line(status)}")
         else:
-            self._stream.write(self.line() + "\n")
+            self._stream.write(json.dumps({"t": round(now, 2), **status}) + "\n")
         self._stream.flush()
 
     def close(self) -> None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 import types
 from dataclasses import dataclass
+from typing import Any
 
 import py_trees
 from py_trees.common import Status
@@ -16,7 +17,9 @@ from py_trees.common import Status
 import trees
 from executive import blackboard
 from executive.clock import Clock
+from executive.io.control import ControlServer
 from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.mission_protocol import MissionTransfer
@@ -26,7 +29,9 @@ from executive.io.rc import RcReader
 from executive.io.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
+from executive.operator import Operator
 from executive.progress import Progress
+from executive.status import StatusSource
 from executive.vehicles import PROFILES
 
 log = logging.getLogger(__name__)
@@ -83,7 +88,13 @@ def explain_failure(root: py_trees.behaviour.Behaviour) -> str:
 
 
 class Runtime:
-    """One executive attached to one vehicle, running one mission."""
+    """One executive attached to one vehicle: IO, the mission lifecycle, and the tree of the running mission.
+
+    The tree is built when a mission starts (from READY, or again after it ended), so an operator
+    can upload another mission and start it without restarting the executive. ``serve`` keeps
+    the executive up between missions, waiting for operator requests, instead of returning when
+    the mission ends.
+    """
 
     def __init__(
         self,
@@ -96,8 +107,11 @@ class Runtime:
         progress: Progress | None = None,
         safe_timeout_s: float = 5.0,
         root: py_trees.behaviour.Behaviour | None = None,
+        control_socket: str | None = None,
+        gcs_link: Link | None = None,
+        gcs_systems: tuple[int, ...] = (255,),
     ) -> None:
-        """``root`` replaces the tree the mission selects (for tests and tools)."""
+        """``root`` replaces the tree the first mission selects (for tests and tools)."""
         blackboard.reset()
         self.mission = mission
         self.clock = clock
@@ -111,12 +125,19 @@ class Runtime:
         self.streams = StreamRequester(self.commander, rates_for(mission.vehicle))
         self.reader.on_reconnect = self.streams.restart
         self.mission_state = MissionState()
-        self.mission_state.upload(mission)
-        self.sampler = SimulatedSampler(clock, mission.sampling) if mission.sampling is not None else None
-        self.tree = py_trees.trees.BehaviourTree(root or trees.build(mission))
-        self.tree.setup(
-            clock=clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler
+        self.mission_state.listeners.append(self._on_transition)
+        self.status = StatusSource("runtime status")
+        self.operator = Operator(self.mission_state, mission.vehicle, status=self.status.snapshot)
+        self.gcs_link = gcs_link
+        self.ground_station = GroundStationControl(
+            [link, *([gcs_link] if gcs_link else [])], clock, self.operator, system_id=system_id, allowed_systems=gcs_systems
         )
+        self.reader.on_command = self.ground_station.on_command
+        self.control = ControlServer(control_socket, self._on_control_request) if control_socket else None
+        self.sampler: SimulatedSampler | None = None
+        self._next_root = root
+        self.tree: py_trees.trees.BehaviourTree | None = None
+        self.mission_state.upload(mission)
         self.progress = progress
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up"])
         self.safe_timeout_s = safe_timeout_s
@@ -136,50 +157,53 @@ class Runtime:
         return False
 
     def tick(self) -> Status:
-        """One tick: drain the link, tick the tree, send what it asked for."""
+        """One tick: drain the links, answer the operator, tick the tree, send what was asked for.
+
+        Returns the tree's status (INVALID when no mission is active).
+        """
         self.reader.drain()
         self.rc.service()
         self.heartbeat.service()
-        try:
-            self.tree.tick()
-        except Exception as exc:
-            node = _crashed_behaviour(exc.__traceback__)
-            raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
+        self._serve_operator()
+        status = Status.INVALID
+        if self.tree is not None and self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
+            try:
+                self.tree.tick()
+            except Exception as exc:
+                node = _crashed_behaviour(exc.__traceback__)
+                raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
+            status = self.tree.root.status
         if self.sampler is not None:
             self.sampler.service()
         self.streams.service()
+        self.ground_station.service()
         self.commander.flush()
         self.mission_transfer.flush()
         self.ticks += 1
-        return self.tree.root.status
+        return status
 
     def request_stop(self, reason: str) -> None:
         """Ask the loop to stop at the next tick (safe from a signal handler)."""
         self._stop_reason = reason
 
-    def run(self) -> Outcome:
-        """Start the mission and tick at the fixed rate until it completes, fails or is stopped."""
-        self.mission_state.start()
+    def run(self, *, start: bool = True, serve: bool = False) -> Outcome:
+        """Tick at the fixed rate: start the mission (or wait for the operator to), until it ends or, with ``serve``, until stopped."""
+        if start:
+            self.mission_state.start()
+        outcome = Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
         next_tick = self.clock.now()
         try:
             while True:
                 if self._stop_reason is not None:
-                    return self._abort(f"stopped: {self._stop_reason}")
-                try:
-                    status = self.tick()
-                except BehaviourCrashed as crash:
-                    log.error("behaviour crashed: %s", crash, exc_info=crash.error)
-                    return self._abort(f"behaviour crashed: {crash}")
-                if self.progress:
-                    self.progress.update()
-                if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
+                    if self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
+                        return self._abort(f"stopped: {self._stop_reason}")
                     self.make_safe()
-                    return Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
-                if status == Status.SUCCESS:
-                    self.mission_state.complete()
-                    return Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks)
-                if status == Status.FAILURE:
-                    return self._abort(explain_failure(self.tree.root))
+                    return outcome
+                ended = self._tick_once()
+                if ended is not None:
+                    outcome = ended
+                    if not serve:
+                        return outcome
                 next_tick += self.period_s
                 now = self.clock.now()
                 if next_tick < now - self.period_s:  # fell behind by more than a tick: do not try to catch up
@@ -190,9 +214,15 @@ class Runtime:
                 self.progress.update(force=True)
                 self.progress.close()
 
+    def close(self) -> None:
+        """Release the control socket."""
+        if self.control is not None:
+            self.control.close()
+
     def make_safe(self) -> bool:
         """Command the vehicle's safe mode and wait (bounded) for the heartbeat to confirm it."""
-        self.tree.interrupt()
+        if self.tree is not None:
+            self.tree.interrupt()
         safe = self.profile.safe_mode
         deadline = self.clock.now() + self.safe_timeout_s
         requested = False
@@ -215,3 +245,56 @@ class Runtime:
         self.make_safe()
         self.mission_state.abort(reason)
         return Outcome(MissionStatus.ABORTED, reason, self.ticks)
+
+    def _tick_once(self) -> Outcome | None:
+        """Tick, and end the active mission if it is over; returns how it ended, if it did."""
+        active = self.tree is not None
+        try:
+            status = self.tick()
+        except BehaviourCrashed as crash:
+            log.error("behaviour crashed: %s", crash, exc_info=crash.error)
+            return self._end(self._abort(f"behaviour crashed: {crash}"))
+        if self.progress:
+            self.progress.update()
+        if not active:
+            return None
+        if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
+            self.make_safe()
+            return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
+        if status == Status.SUCCESS:
+            self.mission_state.complete()
+            return self._end(Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks))
+        if status == Status.FAILURE:
+            return self._end(self._abort(explain_failure(self.tree.root)))  # type: ignore[union-attr]
+        return None
+
+    def _end(self, outcome: Outcome) -> Outcome:
+        self.tree = None
+        return outcome
+
+    def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
+        if after is MissionStatus.RUNNING and before is not MissionStatus.PAUSED:
+            self._install_tree()
+
+    def _install_tree(self) -> None:
+        """Build the tree (and its sampler) of the mission that is starting."""
+        mission = self.mission_state.mission
+        assert mission is not None
+        root, self._next_root = self._next_root or trees.build(mission), None
+        self.sampler = SimulatedSampler(self.clock, mission.sampling) if mission.sampling is not None else None
+        self.tree = py_trees.trees.BehaviourTree(root)
+        self.tree.setup(
+            clock=self.clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler
+        )
+
+    def _serve_operator(self) -> None:
+        if self.gcs_link is not None:
+            while (msg := self.gcs_link.recv()) is not None:
+                if msg.get_type() == "COMMAND_LONG":
+                    self.ground_station.on_command(msg, self.gcs_link)
+        if self.control is not None:
+            self.control.service()
+
+    def _on_control_request(self, request: dict[str, Any]) -> dict[str, Any]:
+        args = {k: v for k, v in request.items() if k != "op"}
+        return self.operator.request(request["op"], source="ctl", **args).to_dict()

@@ -66,6 +66,7 @@ def test_a_tick_drains_then_ticks_then_sends(square_mission, link, clock):
 
     runtime = make_runtime(square_mission, link, clock, root=Probe("probe"))
     ObedientAutopilot(link).beat()
+    runtime.mission_state.start()
     runtime.tick()
     assert seen == ["GUIDED"]
     assert [m.param2 for m in link.take("COMMAND_LONG") if m.command == mavlink.MAV_CMD_DO_SET_MODE] == [HOLD]
@@ -77,10 +78,11 @@ def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mis
     autopilot = ObedientAutopilot(link)
     autopilot.beat()
     assert runtime.connect(1.0)
+    runtime.mission_state.start()
     with pytest.raises(BehaviourCrashed) as crash:
         runtime.tick()
     assert crash.value.path == "Mission/Divide"
-    outcome = runtime.run()
+    outcome = runtime.run(start=False)
     assert outcome.status is MissionStatus.ABORTED
     assert "behaviour crashed: Mission/Divide: ZeroDivisionError: boom" in outcome.reason
     assert autopilot.mode == HOLD

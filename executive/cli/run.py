@@ -99,7 +99,7 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)
     with _vehicle_link(args, mission, clock, faults, signing_key) as link:
-        runtime = Runtime(mission, link, clock, rate_hz=args.rate, system_id=args.sysid, progress=Progress(sys.stderr, clock))
+        runtime = Runtime(mission, link, clock, rate_hz=args.rate, system_id=args.sysid, progress=Progress(sys.stdout, clock))
         if not runtime.connect(args.connect_timeout * clock.speedup):
             print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)
             return EXIT_NO_VEHICLE

@@ -181,8 +181,8 @@ def test_the_runtime_services_the_sampler_of_a_sampling_mission(clock, link, squ
         }
     )
     runtime = Runtime(mission, link, clock, root=Sample())
+    runtime.mission_state.start()  # the sampler comes with the mission's tree, when it starts
     assert isinstance(runtime.sampler, SimulatedSampler)
-    runtime.mission_state.start()
     statuses = []
     for _ in range(7):
         clock.advance(0.25)

@@ -53,6 +53,8 @@ class MavlinkReader:
         self.health = LinkHealth()
         #: Called when the autopilot is first found, comes back after a link loss, or rebooted.
         self.on_reconnect: Callable[[], None] | None = None
+        #: Called with (message, link) for a COMMAND_LONG that did not come from the autopilot.
+        self.on_command: Callable[[MAVLinkMessage, Link], object] | None = None
         self._handlers: dict[str, Callable[[MAVLinkMessage, float], None]] = {
             "HEARTBEAT": self._on_heartbeat,
             "GLOBAL_POSITION_INT": self._on_global_position,
@@ -111,6 +113,8 @@ class MavlinkReader:
         if kind == "HEARTBEAT" and self._autopilot is None:
             self._maybe_adopt_autopilot(msg)
         if self._autopilot != (msg.get_srcSystem(), msg.get_srcComponent()):
+            if kind == "COMMAND_LONG" and self.on_command is not None:
+                self.on_command(msg, self._link)  # a ground station (routed by the autopilot) commanding us
             return
         self._messages += 1
         self.health.on_packet(msg.get_seq())

@@ -1,0 +1,63 @@
+"""The executive's status, as the operator sees it: one snapshot of the blackboard.
+
+Shown on the progress line, returned by ``executive ctl status``, written as JSON lines and sent
+to the ground station. Battery, position, yaw, pitch/roll, vehicle id and armed come from the
+ASV node's 2 Hz status; mode, mission state, leg and distance/bearing from the executive.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import py_trees
+
+from executive import blackboard, geo
+
+KEYS = (
+    "/mission/state", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
+    "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
+)  # fmt: skip
+
+
+class StatusSource:
+    """Reads the status keys (a read-only blackboard client)."""
+
+    def __init__(self, name: str = "status") -> None:
+        self._bb: py_trees.blackboard.Client = blackboard.reader(name, KEYS)
+
+    def snapshot(self) -> dict[str, Any]:
+        """Plain values, ready for JSON: None where not known yet."""
+        bb = self._bb
+        position, attitude, battery, target = (bb.get(k) for k in ("/vehicle/position", "/vehicle/attitude", "/vehicle/battery", "/mission/target"))
+        index, count = bb.get("/mission/leg_index"), bb.get("/mission/leg_count")
+        distance = bearing = None
+        if target is not None and position is not None:
+            distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
+        return {
+            "state": bb.get("/mission/state"),
+            "leg": min(index + 1, count),
+            "legs": count,
+            "distance_m": None if distance is None else round(distance, 2),
+            "bearing_deg": None if bearing is None else round(bearing, 1),
+            "samples": len(bb.get("/mission/samples")),
+            "mode": bb.get("/vehicle/mode"),
+            "armed": bool(bb.get("/vehicle/armed")),
+            "vehicle_id": bb.get("/link/system_id"),
+            "link_up": bool(bb.get("/link/up")),
+            "lat": None if position is None else round(position.lat, 7),
+            "lon": None if position is None else round(position.lon, 7),
+            "yaw_deg": None if attitude is None else round(attitude.yaw_deg, 1),
+            "pitch_deg": None if attitude is None else round(attitude.pitch_deg, 1),
+            "roll_deg": None if attitude is None else round(attitude.roll_deg, 1),
+            "battery_v": None if battery is None else battery.voltage_v,
+            "battery_pct": None if battery is None else battery.remaining_pct,
+        }
+
+
+def status_line(status: dict[str, Any]) -> str:
+    """``RUNNING   leg 2/4    12.3 m at 090°  GUIDED armed  batt 87%``"""
+    to_go = "" if status["distance_m"] is None else f"  {status['distance_m']:7.1f} m at {status['bearing_deg']:03.0f}°"
+    battery = "" if status["battery_pct"] is None else f"  batt {status['battery_pct']}%"
+    samples = f"  samples {status['samples']}" if status["samples"] else ""
+    armed = "armed" if status["armed"] else "disarmed"
+    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}"
