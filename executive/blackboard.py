@@ -5,6 +5,7 @@ Namespaces:
 - ``/link``: the MAVLink link to the autopilot (mavlink reader) and its mission transfers (mission transfer).
 - ``/vehicle``: the vehicle's state as the autopilot reports it (mavlink reader; its mission: mission transfer).
 - ``/rc``: the RC receiver, from MAVLink RC_CHANNELS or the CAN bus (mavlink / CAN reader).
+- ``/base``: the AgileX tracked base over CAN: its state frames (CAN reader) and the drive commands sent to it (drive bridge).
 - ``/heading``: the heading sanity filter's verdict (heading filter).
 - ``/mission``: the mission lifecycle and progress (mission state code only).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
@@ -77,6 +78,20 @@ _KEYS: tuple[Key, ...] = (
     Key("/rc/fresh", False, "rc reader", "RC reports arrive (within rc.fresh_timeout_s) and are not frozen"),
     Key("/rc/switches", None, "rc reader", "RcSwitches: SWA..SWD and knob VRA, from RC channels or CAN"),
     Key("/rc/stale_reason", "no RC report yet", "rc reader", "why /rc/fresh is False; empty when fresh"),
+    Key("/rc/sticks", None, "can reader", "RcSticks: the AgileX transmitter's sticks in [-100, 100] (CAN 0x241)"),
+    Key("/base/up", False, "can reader", "a valid frame from the base arrived within the CAN reader's base timeout"),
+    Key("/base/last_update", None, "can reader", "clock time of the last valid frame from the base (0x211, 0x221, 0x241, 0x311)"),
+    Key("/base/system", None, "can reader", "BaseSystem (0x211): vehicle state, control mode (RC/CAN), battery voltage, fault code"),
+    Key("/base/faults", (), "can reader", "names of the faults the base reports (0x211), e.g. ('RC_SIGNAL_LOSS',); () = none"),
+    Key("/base/motion", None, "can reader", "BaseMotion (0x221): linear m/s and angular rad/s the base measures"),
+    Key("/base/odometry", None, "can reader", "BaseOdometry (0x311): distance each track has run, m"),
+    Key("/base/frames", 0, "can reader", "CAN frames received"),
+    Key("/base/bad_frames", 0, "can reader", "AgileX frames that could not be used: wrong length, values out of range"),
+    Key("/base/other_frames", 0, "can reader", "CAN frames with ids the executive does not read"),
+    Key("/base/rc_counter_repeats", 0, "can reader", "0x241 frames whose rolling counter did not move (a frozen counter = stale RC)"),
+    Key("/base/bus_errors", 0, "can reader", "errors reading the CAN bus"),
+    Key("/base/drive", None, "drive bridge", "DriveStatus: the motion command sent to the base (0x111) and why it is zero, if it is"),
+    Key("/base/send_errors", 0, "drive bridge", "CAN frames the drive bridge could not send"),
     Key("/heading/deg", None, "heading filter", "filtered heading, degrees [0, 360)"),
     Key("/heading/ok", None, "heading filter", "the compass agrees with the filter; None = not judged yet"),
     Key("/heading/bias_deg", None, "heading filter", "estimated compass bias against course over ground"),

@@ -28,9 +28,10 @@ from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.io.rc import RcReader
 from executive.io.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission
+from executive.mission.model import Mission, SamplingOptions
 from executive.operator import Operator
 from executive.progress import Progress
+from executive.state import SwitchPosition
 from executive.status import StatusSource
 from executive.vehicles import PROFILES
 
@@ -139,7 +140,7 @@ class Runtime:
         self.tree: py_trees.trees.BehaviourTree | None = None
         self.mission_state.upload(mission)
         self.progress = progress
-        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up"])
+        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
         self._stop_reason: str | None = None
@@ -223,7 +224,12 @@ class Runtime:
         """Command the vehicle's safe mode and wait (bounded) for the heartbeat to confirm it."""
         if self.tree is not None:
             self.tree.interrupt()
+            self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
         safe = self.profile.safe_mode
+        person = self._person_has_the_vehicle()
+        if person:
+            log.warning("not commanding %s: %s", safe, person)
+            return False
         deadline = self.clock.now() + self.safe_timeout_s
         requested = False
         while self.clock.now() < deadline:
@@ -239,6 +245,16 @@ class Runtime:
             self.clock.sleep_until(self.clock.now() + self.period_s / 2)
         log.error("could not confirm %s within %g s", safe, self.safe_timeout_s)
         return False
+
+    def _person_has_the_vehicle(self) -> str | None:
+        """Why a person has the vehicle (the RC take-over switch high, or switch C in MANUAL), if one has: then hands off."""
+        rc = self.mission.rc
+        if rc.source == "mavlink":
+            channels = self._bb.get("/rc/channels")
+            value = channels[rc.takeover_channel - 1] if len(channels) >= rc.takeover_channel else 0
+            return f"RC channel {rc.takeover_channel} high ({value} µs): a person has the vehicle" if value > rc.takeover_above_us else None
+        switches = self._bb.get("/rc/switches")
+        return "RC switch C in MANUAL: a person has the vehicle" if switches is not None and switches.swc == SwitchPosition.UP else None
 
     def _abort(self, reason: str) -> Outcome:
         log.warning("mission aborted: %s", reason)
@@ -281,7 +297,8 @@ class Runtime:
         mission = self.mission_state.mission
         assert mission is not None
         root, self._next_root = self._next_root or trees.build(mission), None
-        self.sampler = SimulatedSampler(self.clock, mission.sampling) if mission.sampling is not None else None
+        takes_samples = mission.sampling is not None or any(wp.sample for wp in mission.waypoints)  # the sampling: section is optional
+        self.sampler = SimulatedSampler(self.clock, mission.sampling or SamplingOptions()) if takes_samples else None
         self.tree = py_trees.trees.BehaviourTree(root)
         self.tree.setup(
             clock=self.clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler

@@ -182,10 +182,11 @@ class CommandState(StrEnum):
     ACCEPTED = "ACCEPTED"
     REJECTED = "REJECTED"  # any other MAV_RESULT
     TIMED_OUT = "TIMED_OUT"  # no ack after every retry
+    CANCELLED = "CANCELLED"  # the requester no longer wants it: no more retries, a late ack is ignored
 
     @property
     def done(self) -> bool:
-        return self in (CommandState.ACCEPTED, CommandState.REJECTED, CommandState.TIMED_OUT)
+        return self in (CommandState.ACCEPTED, CommandState.REJECTED, CommandState.TIMED_OUT, CommandState.CANCELLED)
 
 
 @dataclass(frozen=True, slots=True)

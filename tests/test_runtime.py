@@ -154,3 +154,17 @@ def test_an_operator_abort_ends_the_run_with_the_vehicle_safe(square_mission, li
     outcome = runtime.run()
     assert (outcome.status, outcome.reason, outcome.ticks) == (MissionStatus.ABORTED, "operator: abort", 3)
     assert autopilot.mode == HOLD
+
+
+def test_hands_off_when_a_person_has_the_vehicle(square_mission, link, clock, vehicle):
+    """Ending a mission must not take the vehicle back from a pilot who flipped the take-over switch."""
+    runtime = make_runtime(square_mission, link, clock, root=py_trees.behaviours.Running("forever"))
+    autopilot = ObedientAutopilot(link)
+    autopilot.mode = 0  # MANUAL: the pilot drives
+    autopilot.beat()
+    vehicle.set(rc__channels=(1500,) * 5 + (1900,))
+    runtime.request_stop("SIGTERM")
+    outcome = runtime.run()
+    assert outcome.status is MissionStatus.ABORTED
+    assert autopilot.mode == 0
+    assert not [m for m in link.sent if m.get_type() == "COMMAND_LONG" and m.command == mavlink.MAV_CMD_DO_SET_MODE]

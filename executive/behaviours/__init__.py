@@ -12,9 +12,11 @@ from executive.behaviours.actions import (
     HoldFor,
     Land,
     SetMode,
+    Surface,
     TakeOff,
     VtolTransition,
 )
+from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
 from executive.behaviours.flow import ForEachLeg, UnlessPaused, WaitForGuards, WaitUntil
 from executive.behaviours.guards import (
     AllWaypointsWithin,
@@ -28,6 +30,7 @@ from executive.behaviours.guards import (
     InsideGeofence,
     LinkAlive,
     ModeIs,
+    PositionKnown,
     RcAutoMode,
     RcFresh,
     RcNotTakingOver,
@@ -36,12 +39,14 @@ from executive.behaviours.guards import (
     inside_geofence,
     rc_auto_mode,
 )
-from executive.behaviours.sampling import Sample
+from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
+from executive.behaviours.sampling import NothingToSample, Sample
 
 __all__ = [
     "AllWaypointsWithin",
     "AltitudeWithin",
     "Arm",
+    "ArmSwitch",
     "Armed",
     "BatteryAbove",
     "ChangeAltitude",
@@ -50,6 +55,7 @@ __all__ = [
     "CommandAction",
     "DepthWithin",
     "Disarm",
+    "DriveRouteInAuto",
     "EkfOk",
     "ForEachLeg",
     "GoTo",
@@ -58,15 +64,21 @@ __all__ = [
     "HeadingSane",
     "HoldFor",
     "InsideGeofence",
+    "KeepRouteOnAutopilot",
     "Land",
     "LinkAlive",
     "ModeIs",
+    "ModeSwitch",
+    "NothingToSample",
+    "PositionKnown",
     "RcAutoMode",
     "RcFresh",
     "RcNotTakingOver",
+    "RouteEditSwitch",
     "Sample",
     "SetMode",
     "SpeedWithin",
+    "Surface",
     "TakeOff",
     "TargetWithin",
     "UnlessPaused",

@@ -72,7 +72,13 @@ class CommandAction(TimedBehaviour):
 
     def initialise(self) -> None:
         super().initialise()
-        self._ticket = None if self.confirmed() else self.request()
+        self._ticket = None  # a new run: the ack of the previous one (ChangeSpeed's confirmation) says nothing about it
+        if not self.confirmed():
+            self._ticket = self.request()
+
+    def terminate(self, new_status: Status) -> None:
+        if new_status == Status.INVALID:  # interrupted: what it asked for no longer matters
+            self.commander.cancel(self._ticket)
 
     def update(self) -> Status:
         if self.confirmed():
@@ -432,6 +438,46 @@ class ChangeAltitude(_VerticalSetpoint):
         self.commander.depth_target(lat, lon, altitude_m=target_m)
 
 
+class Surface(CommandAction):
+    """Sub: come up with ArduSub's SURFACE mode; SUCCESS once the vehicle is at the surface and SURFACE is done.
+
+    SURFACE climbs at PILOT_SPEED_UP (``climb_m_s``, 0.5 m/s by default) and hands over to
+    ALT_HOLD by itself at the surface (ModeReason SURFACE_COMPLETE). Confirmed by the depth
+    (``/vehicle/position``, within ``surface_m``) in any mode but SURFACE: the heartbeat may never
+    show SURFACE at all when the vehicle is nearly up. Already there: SUCCESS without a command.
+    Refused (no depth sensor...): FAILURE; not up after the climb's time plus ``margin_s``: FAILURE.
+    """
+
+    reads = ("/vehicle/position", "/vehicle/mode")
+    command_name = "DO_SET_MODE"
+
+    def __init__(self, name: str = "Surface", surface_m: float = 0.5, climb_m_s: float = 0.5, margin_s: float = 30.0) -> None:
+        super().__init__(name, margin_s)
+        self.surface_m = surface_m
+        self.climb_m_s = climb_m_s
+        self.margin_s = margin_s
+
+    def _depth(self) -> float | None:
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        return -position.alt_rel_m if position is not None else None
+
+    def initialise(self) -> None:
+        depth = self._depth()
+        self.confirm_timeout_s = self.margin_s + max(0.0, depth or 0.0) / self.climb_m_s
+        super().initialise()
+
+    def request(self) -> int:
+        return self.commander.set_mode("SURFACE")
+
+    def confirmed(self) -> bool:
+        depth = self._depth()
+        return depth is not None and depth <= self.surface_m and self.get("/vehicle/mode") != "SURFACE"
+
+    def progress(self) -> str | None:
+        depth = self._depth()
+        return f"depth {depth:.1f} m in {self.get('/vehicle/mode')}" if depth is not None else "no position"
+
+
 class TakeOff(CommandAction):
     """Climb to ``alt_m`` above home (a VTOL climbs as a multicopter) with MAV_CMD_NAV_TAKEOFF.
 
@@ -578,39 +624,64 @@ class VtolTransition(TimedBehaviour):
 
 
 class GoToLocal(TimedBehaviour):
-    """Go to a point of the local frame given in ENU (ROS), sent as SET_POSITION_TARGET_LOCAL_NED (MAVLink).
+    """Go to a point of the local frame given in ENU (ROS): MAVLink's frames are NED, so it goes as NED.
 
-    The setpoint (no ack) is re-sent every ``resend_s``. Arrival is judged from the global position
-    taken to the local frame with home as its origin (ArduPilot and PX4 put the local origin where
-    home was set at the first fix; a home moved later would shift this judgement): SUCCESS within
-    ``acceptance_radius_m`` (3-D), FAILURE after ``timeout_s``.
+    Arrival is judged from the global position taken to the local frame with home as its origin
+    (ArduPilot and PX4 put the local origin where home was set at the first fix; a home moved
+    later would shift this judgement): SUCCESS within ``acceptance_radius_m`` (3-D), FAILURE after
+    ``timeout_s``. ``method``:
+
+    - ``"setpoint"``: SET_POSITION_TARGET_LOCAL_NED (MAV_FRAME_LOCAL_NED), re-sent every
+      ``resend_s`` (no ack exists): PX4 (offboard), ArduCopter, ArduRover and ArduSub in GUIDED.
+    - ``"reposition"``: ArduPlane takes from SET_POSITION_TARGET_LOCAL_NED only an altitude change
+      (MAV_FRAME_LOCAL_OFFSET_NED, in GUIDED; any other frame or mode is ignored), so the NED point
+      is taken to latitude and longitude from home (the local origin), at ``up`` metres above home,
+      and sent as MAV_CMD_DO_REPOSITION (acked; switches to GUIDED): once, and again only when
+      refused or unanswered, at most every ``resend_s``. Nothing is sent before home is known. A
+      QuadPlane with Q_GUIDED_MODE=1 flies a point within WP_LOITER_RAD on its lift motors and
+      hovers there; otherwise it flies there as a plane and circles the point.
     """
 
-    reads = ("/vehicle/position", "/vehicle/home")
+    reads = ("/vehicle/position", "/vehicle/home", "/vehicle/statustext", blackboard.command_key("DO_REPOSITION"))
     needs = ("clock", "commander")
     commander: Commander
 
-    def __init__(self, target: frames.Enu, acceptance_radius_m: float, timeout_s: float, name: str | None = None, resend_s: float = 1.0) -> None:
+    def __init__(
+        self,
+        target: frames.Enu,
+        acceptance_radius_m: float,
+        timeout_s: float,
+        name: str | None = None,
+        resend_s: float = 1.0,
+        method: Literal["setpoint", "reposition"] = "setpoint",
+    ) -> None:
+        if method not in ("setpoint", "reposition"):
+            raise ValueError(f"method must be setpoint or reposition, not {method!r}")
         super().__init__(name or f"Go to local E{target.east:g} N{target.north:g} U{target.up:g}")
         self.target = frames.Enu(*target)
         self.ned = frames.enu_to_ned(self.target)
         self.acceptance_radius_m = acceptance_radius_m
         self.timeout_s = timeout_s
         self.resend_s = resend_s
+        self.method = method
         self.distance_m: float | None = None
 
     def initialise(self) -> None:
         super().initialise()
         self._last_sent = float("-inf")
+        self._ticket: int | None = None
+        self._refusal: str | None = None
         self.distance_m = None
 
     def update(self) -> Status:
         now = self.clock.now()
-        if now - self._last_sent >= self.resend_s:
-            self.commander.local_setpoint(*self.ned)
-            self._last_sent = now
         position: GlobalPosition | None = self.get("/vehicle/position")
         home: HomePosition | None = self.get("/vehicle/home")
+        if self.method == "setpoint" and now - self._last_sent >= self.resend_s:
+            self.commander.local_setpoint(*self.ned)
+            self._last_sent = now
+        elif self.method == "reposition" and home is not None:
+            self._reposition(home, now)
         if position is not None and home is not None:
             north, east = frames.global_to_local(home.lat, home.lon, position.lat, position.lon)
             self.distance_m = math.dist((north, east, -position.alt_rel_m), self.ned)
@@ -619,7 +690,19 @@ class GoToLocal(TimedBehaviour):
                 return Status.SUCCESS
         left = f"{self.distance_m:.1f} m" if self.distance_m is not None else "no position or home"
         if self.elapsed > self.timeout_s:
-            self.feedback_message = f"timed out after {self.timeout_s:g} s: {left}"
+            why = f" (DO_REPOSITION {self._refusal})" if self._refusal else ""
+            self.feedback_message = f"timed out after {self.timeout_s:g} s: {left}{why}"
             return Status.FAILURE
         self.feedback_message = left
         return Status.RUNNING
+
+    def _reposition(self, home: HomePosition, now: float) -> None:
+        if now - self._last_sent < self.resend_s:
+            return
+        if self._ticket is not None:
+            self._refusal = _refusal(self.get(blackboard.command_key("DO_REPOSITION")), self._ticket, self.get("/vehicle/statustext"))
+            if self._refusal is None:
+                return  # accepted or still waiting for the ack: the autopilot has the target
+        lat, lon = frames.local_to_global(home.lat, home.lon, self.ned.north, self.ned.east)
+        self._ticket = self.commander.reposition(lat, lon, -self.ned.down)
+        self._last_sent = now

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Sequence
 
 import py_trees
-from py_trees.common import Status
+from py_trees.common import Access, Status
 
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
@@ -65,28 +65,50 @@ class WaitUntil(py_trees.decorators.Decorator):
         return Status.RUNNING
 
 
+def hold_mode_for(vtol_state: str | None, hold_mode: str | None, fixed_wing_hold_mode: str | None) -> str | None:
+    """The mode to hold in: ``fixed_wing_hold_mode`` (if any) for a VTOL flying as a plane, which cannot hover, else ``hold_mode``."""
+    return fixed_wing_hold_mode if fixed_wing_hold_mode and vtol_state == "FW" else hold_mode
+
+
 class WaitForGuards(TimedBehaviour):
     """RUNNING while one of ``guards`` fails this tick (waiting for it to recover), up to ``limit_s``.
 
     Put it after the guarded branch in a reactive selector. When every guard holds, the branch
     itself failed, and so does this: there is nothing to wait for. On entry it asks for
-    ``hold_mode`` unless a failing guard says a person has the vehicle.
+    ``hold_mode`` unless a failing guard says a person has the vehicle; a VTOL in fixed-wing
+    flight (``/vehicle/vtol_state`` FW) is held in ``fixed_wing_hold_mode`` instead, when given.
     """
 
+    reads = ("/vehicle/vtol_state",)
     needs = ("clock", "commander")
     commander: Commander
 
-    def __init__(self, guards: Sequence[Guard], limit_s: float, hold_mode: str | None = None, name: str = "Wait for guards") -> None:
+    def __init__(
+        self,
+        guards: Sequence[Guard],
+        limit_s: float,
+        hold_mode: str | None = None,
+        name: str = "Wait for guards",
+        fixed_wing_hold_mode: str | None = None,
+    ) -> None:
         super().__init__(name)
         self.guards = tuple(guards)
         self.limit_s = limit_s
         self.hold_mode = hold_mode
+        self.fixed_wing_hold_mode = fixed_wing_hold_mode
+        self._ticket: int | None = None
 
     def initialise(self) -> None:
         super().initialise()
         failing = [g for g in self.guards if g.status == Status.FAILURE]
-        if self.hold_mode and failing and not any(g.pilot_in_control for g in failing):
-            self.commander.set_mode(self.hold_mode)
+        mode = hold_mode_for(self.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode)
+        self._ticket = None
+        if mode and failing and not any(g.pilot_in_control for g in failing):
+            self._ticket = self.commander.set_mode(mode)
+
+    def terminate(self, new_status: Status) -> None:
+        # The guards recovered (or the mission ended): a hold still being retried must not reach the vehicle now.
+        self.commander.cancel(self._ticket)
 
     def update(self) -> Status:
         failing = [g for g in self.guards if g.status == Status.FAILURE]
@@ -140,10 +162,18 @@ class ForEachLeg(py_trees.decorators.Decorator):
             self.feedback_message = f"{state.leg_index}/{state.leg_count} legs done"
             return Status.SUCCESS
         if self.decorated.status == Status.FAILURE:
-            self.feedback_message = f"leg {state.leg_index + 1}/{state.leg_count} failed: {self.decorated.feedback_message}"
+            self.feedback_message = f"leg {state.leg_index + 1}/{state.leg_count} failed: {_why_failed(self.decorated)}"
             return Status.FAILURE
         self.feedback_message = f"leg {state.leg_index + 1}/{state.leg_count}"
         return Status.RUNNING
+
+
+def _why_failed(node: py_trees.behaviour.Behaviour) -> str:
+    """The reason of the deepest failed behaviour under ``node`` that gives one (a composite gives none)."""
+    for child in node.iterate():  # children before their parents
+        if child.status == Status.FAILURE and child.feedback_message:
+            return child.feedback_message if child is node else f"{child.name}: {child.feedback_message}"
+    return ""
 
 
 class UnlessPaused(py_trees.decorators.Decorator):
@@ -151,14 +181,21 @@ class UnlessPaused(py_trees.decorators.Decorator):
 
     The body keeps no progress of its own (the leg is in the mission state), so on resume it
     starts again from its first child and carries on with the same leg: back to GUIDED, same target.
+    A VTOL in fixed-wing flight is held in ``fixed_wing_hold_mode`` instead, when given.
     """
 
-    def __init__(self, child: py_trees.behaviour.Behaviour, hold_mode: str, name: str = "Unless paused") -> None:
+    def __init__(
+        self, child: py_trees.behaviour.Behaviour, hold_mode: str, name: str = "Unless paused", fixed_wing_hold_mode: str | None = None
+    ) -> None:
         super().__init__(name=name, child=child)
         self.hold_mode = hold_mode
+        self.fixed_wing_hold_mode = fixed_wing_hold_mode
         self.mission_state: MissionState | None = None
         self.commander: Commander | None = None
-        self._holding = False
+        self._holding: str | None = None  # the mode asked for while paused
+        self._hold_ticket: int | None = None
+        self._bb = self.attach_blackboard_client()
+        self._bb.register_key(key="/vehicle/vtol_state", access=Access.READ)
 
     def setup(self, **services: object) -> None:
         missing = [n for n in ("mission_state", "commander") if services.get(n) is None]
@@ -175,13 +212,15 @@ class UnlessPaused(py_trees.decorators.Decorator):
         if state.status is MissionStatus.PAUSED:
             if self.decorated.status == Status.RUNNING:
                 self.decorated.stop(Status.INVALID)
-            if not self._holding:
-                self.commander.set_mode(self.hold_mode)
-                self._holding = True
-            self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: holding in {self.hold_mode}"
+            if self._holding is None:
+                self._holding = hold_mode_for(self._bb.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode) or self.hold_mode
+                self._hold_ticket = self.commander.set_mode(self._holding)
+            self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: holding in {self._holding}"
             new_status = Status.RUNNING
         else:
-            self._holding = False
+            if self._holding is not None:  # resumed: a hold still being retried must not undo the resumed leg
+                self.commander.cancel(self._hold_ticket)
+            self._holding = None
             yield from self.decorated.tick()
             self.feedback_message = ""
             new_status = self.decorated.status

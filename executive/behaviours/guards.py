@@ -15,7 +15,7 @@ from py_trees.common import Status
 from executive.behaviours.base import ExecutiveBehaviour
 from executive.geo import distance
 from executive.geofence import Geofence
-from executive.mission.model import Mission, Range, RcConfig
+from executive.mission.model import Mission, Range, RcConfig, Waypoint
 from executive.state import Battery, EkfStatus, GlobalPosition, HomePosition, RcSwitches, SwitchPosition
 
 
@@ -193,6 +193,18 @@ class TargetWithin(Guard):
         return f"target is {d:.0f} m away, over {self.max_distance_m:g} m" if d > self.max_distance_m else None
 
 
+class PositionKnown(Guard):
+    """The autopilot reports where the vehicle is (/vehicle/position: a GLOBAL_POSITION_INT with a fix)."""
+
+    reads = ("/vehicle/position",)
+
+    def __init__(self, name: str = "Position known?") -> None:
+        super().__init__(name)
+
+    def check(self) -> str | None:
+        return None if self.get("/vehicle/position") is not None else "no position"
+
+
 class AllWaypointsWithin(Guard):
     """Every waypoint is within ``max_distance_m`` of the vehicle's live position (the AUV's 1 km rule).
 
@@ -288,17 +300,25 @@ class AltitudeWithin(Guard):
     """A sub's height above the seabed (/vehicle/altitude_above_bottom_m) is in ``limit``, give or take ``tolerance_m``.
 
     No valid rangefinder reading (none yet, out of its range, invalid) fails: the guard cannot
-    tell the seabed is far enough.
+    tell the seabed is far enough. ``altitude_legs_only``: judged only while the current leg
+    (/mission/target) has control_mode ``altitude``; on other legs it passes with a note.
     """
 
-    reads = ("/vehicle/altitude_above_bottom_m",)
+    reads = ("/vehicle/altitude_above_bottom_m", "/mission/target")
 
-    def __init__(self, limit: Range, tolerance_m: float = 0.5, name: str | None = None) -> None:
-        super().__init__(name or f"Altitude within [{limit.min:g}, {limit.max:g}] m?")
+    def __init__(self, limit: Range, tolerance_m: float = 0.5, name: str | None = None, altitude_legs_only: bool = False) -> None:
+        default = f"Altitude within [{limit.min:g}, {limit.max:g}] m{' on altitude legs' if altitude_legs_only else ''}?"
+        super().__init__(name or default)
         self.limit = limit
         self.tolerance_m = tolerance_m
+        self.altitude_legs_only = altitude_legs_only
 
     def check(self) -> str | None:
+        if self.altitude_legs_only:
+            target: Waypoint | None = self.get("/mission/target")
+            if target is None or target.control_mode != "altitude":
+                self.note = "not an altitude leg"
+                return None
         altitude: float | None = self.get("/vehicle/altitude_above_bottom_m")
         if altitude is None:
             return "no altitude above the seabed (no valid rangefinder reading)"

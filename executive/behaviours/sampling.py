@@ -7,8 +7,10 @@ import math
 from py_trees.common import Status
 
 from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.guards import Guard
 from executive.io.sampler import Sampler
 from executive.mission.lifecycle import MissionState
+from executive.mission.model import Waypoint
 from executive.state import GlobalPosition, SamplerState, SamplerStatus
 from executive.state import Sample as SampleRecord
 
@@ -85,3 +87,31 @@ class Sample(TimedBehaviour):
             self.sampler.cancel()  # interrupted: the sample in progress is abandoned, not recorded
             self._finished = True
             self.feedback_message = "interrupted: sample cancelled"
+
+
+class NothingToSample(Guard):
+    """The current leg needs no sample: its waypoint is not a sample point (``sample: true``), or its sample is already recorded.
+
+    FAILURE ("sample due") at a sample point not sampled yet in this run: put the sampling after it
+    in a selector. No active leg passes with a note.
+    """
+
+    reads = ("/mission/target", "/mission/leg_index", "/mission/samples")
+
+    def __init__(self, name: str = "Nothing to sample here?") -> None:
+        super().__init__(name)
+
+    def check(self) -> str | None:
+        target: Waypoint | None = self.get("/mission/target")
+        if target is None:
+            self.note = "no active leg"
+            return None
+        leg: int = self.get("/mission/leg_index")
+        samples: tuple[SampleRecord, ...] = self.get("/mission/samples")
+        if not target.sample:
+            self.note = f"leg {leg + 1} is not a sample point"
+            return None
+        if any(s.leg_index == leg for s in samples):
+            self.note = f"leg {leg + 1} already sampled"
+            return None
+        return f"leg {leg + 1}: sample due"

@@ -15,28 +15,33 @@ EXIT_FAILED = 1  # mission aborted or failed at run time
 EXIT_BAD_INPUT = 2  # usage error, invalid mission file
 EXIT_NO_VEHICLE = 3  # could not reach the vehicle
 
+
+class BadInput(Exception):
+    """Input a subcommand cannot use; ``main`` prints it and exits 2."""
+
+
 #: Subcommand modules of this package; each has ``register(subparsers)`` setting ``func``.
-SUBCOMMANDS = ("validate", "show", "run", "sim", "schema")
+SUBCOMMANDS = ("validate", "show", "run", "sim", "schema", "ctl", "report", "replay", "can")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The command line; with ``only``, just that subcommand (its module alone is imported: ``ctl`` starts fast)."""
     parser = argparse.ArgumentParser(prog="executive", description="Onboard behaviour-tree mission executive.")
     parser.add_argument("--version", action="version", version=f"executive {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name in SUBCOMMANDS:
+    for name in SUBCOMMANDS if only is None else (only,):
         importlib.import_module(f"executive.cli.{name}").register(sub)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``executive`` console script; returns the exit code."""
-    parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(argv[0] if argv and argv[0] in SUBCOMMANDS else None)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
         return int(exc.code or 0)
-    from executive.cli.common import BadInput
-
     try:
         return int(args.func(args))
     except BadInput as exc:

@@ -6,6 +6,7 @@ import logging
 import sys
 from typing import TYPE_CHECKING
 
+from executive.cli import BadInput
 from executive.clock import Clock
 from executive.io.mavlink.link import load_signing_key
 from executive.mission.errors import MissionError
@@ -43,10 +44,6 @@ def faults_or_report(paths: list[str], vehicle: str, clock: Clock) -> FaultInjec
         print_errors(exc)
         return None
     return FaultInjector(faults, clock)
-
-
-class BadInput(Exception):
-    """Input the command cannot use; ``main`` prints it and exits 2."""
 
 
 def signing_key_arg(path: str | None) -> bytes | None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
 from collections.abc import Iterator
@@ -13,6 +14,7 @@ from typing import TYPE_CHECKING
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK
 from executive.cli.common import faults_or_report, load_or_report, setup_logging, signing_key_arg
 from executive.clock import ScaledClock
+from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
@@ -34,6 +36,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--faults", metavar="FILE", help="simulator only: YAML list of faults to inject into the simulated vehicle")
     p.add_argument("--tlog", metavar="FILE", help="record the whole MAVLink link in FILE (.tlog, for Mission Planner and pymavlink)")
     p.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key (32 bytes, 64 hex digits or a passphrase)")
+    p.add_argument("--socket", metavar="PATH", default=default_socket_path(), help="control socket for `executive ctl` (default %(default)s)")
+    p.add_argument("--wait", action="store_true", help="load the mission READY, wait for `ctl start`, and keep serving after it ends")
+    p.add_argument("--gcs", metavar="URL", help="a MAVLink endpoint for ground stations (e.g. udpin:0.0.0.0:14551)")
+    p.add_argument("--gcs-sysid", type=int, action="append", metavar="N", help="system id allowed to command us (repeatable; default 255)")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-v info, -vv debug)")
     p.set_defaults(func=main)
 
@@ -58,13 +64,39 @@ def _vehicle_link(
     home = (start.lat, start.lon, getattr(start, "heading_deg", 0.0)) if start else DEFAULT_HOME
     sim_options = mission.simulator or SimulatorOptions()
     model = sim_options.model or mission.vehicle
-    with SimServer(model, clock=clock, home=home, faults=faults, signing_key=signing_key, ekf_ready_after_s=sim_options.ekf_ready_after_s) as sim:
+    firmware = {"q_guided_mode": sim_options.q_guided_mode} if model == "vtol" else {}
+    with SimServer(
+        model, clock=clock, home=home, faults=faults, signing_key=signing_key, ekf_ready_after_s=sim_options.ekf_ready_after_s, **firmware
+    ) as sim:
         print(f"executive: simulated {model} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
         link = PymavlinkLink(sim.url_for_client, **options)
         try:
             yield link
         finally:
             link.close()
+
+
+@contextlib.contextmanager
+def _gcs_link(url: str | None) -> Iterator[PymavlinkLink | None]:
+    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer)."""
+    if url is None:
+        yield None
+        return
+    link = PymavlinkLink(url)
+    try:
+        yield link
+    finally:
+        link.close()
+
+
+def _usable_socket(path: str) -> str | None:
+    """``path`` unless another executive serves it (then no control socket, with a warning)."""
+    if path.lower() == "none":
+        return None
+    if os.path.exists(path) and socket_alive(path):
+        print(f"executive: run: {path}: another executive is listening there; running without a control socket", file=sys.stderr)
+        return None
+    return path
 
 
 def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
@@ -98,16 +130,32 @@ def main(args: argparse.Namespace) -> int:
         if faults is None:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)
-    with _vehicle_link(args, mission, clock, faults, signing_key) as link:
-        runtime = Runtime(mission, link, clock, rate_hz=args.rate, system_id=args.sysid, progress=Progress(sys.stdout, clock))
-        if not runtime.connect(args.connect_timeout * clock.speedup):
-            print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)
-            return EXIT_NO_VEHICLE
-        previous = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
+    with _vehicle_link(args, mission, clock, faults, signing_key) as link, _gcs_link(args.gcs) as gcs_link:
+        runtime = Runtime(
+            mission,
+            link,
+            clock,
+            rate_hz=args.rate,
+            system_id=args.sysid,
+            progress=Progress(sys.stdout, clock),
+            control_socket=_usable_socket(args.socket),
+            gcs_link=gcs_link,
+            gcs_systems=tuple(args.gcs_sysid or (255,)),
+        )
         try:
-            outcome = runtime.run()
+            if not runtime.connect(args.connect_timeout * clock.speedup):
+                print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)
+                return EXIT_NO_VEHICLE
+            stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
+            try:
+                outcome = runtime.run(start=not args.wait, serve=args.wait)
+            finally:
+                for sig, handler in stop.items():
+                    signal.signal(sig, handler)
         finally:
-            for sig, handler in previous.items():
-                signal.signal(sig, handler)
+            runtime.close()
     print(f"executive: mission {mission.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
+    if runtime.mission_state.samples:
+        count = len(runtime.mission_state.samples)
+        print(f"executive: {count} sample{'' if count == 1 else 's'} recorded", file=sys.stderr)
     return EXIT_OK if outcome.status is MissionStatus.COMPLETED else EXIT_FAILED

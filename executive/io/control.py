@@ -39,7 +39,7 @@ class ControlServer:
         self.path = path
         self._handler = handler
         if os.path.exists(path):
-            if _alive(path):
+            if socket_alive(path):
                 raise SocketInUse(f"{path}: another executive is listening there")
             os.unlink(path)  # left behind by a crash
         self._server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
@@ -119,7 +119,8 @@ class ControlServer:
         client.close()
 
 
-def _alive(path: str) -> bool:
+def socket_alive(path: str) -> bool:
+    """Whether an executive answers on the Unix socket at ``path``."""
     probe = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     try:
         probe.connect(path)
@@ -145,4 +146,4 @@ def request(path: str, op: str, timeout_s: float = 10.0, **args: Any) -> dict[st
     return json.loads(reply)
 
 
-__all__ = ["ControlServer", "SocketInUse", "default_socket_path", "request"]
+__all__ = ["ControlServer", "SocketInUse", "default_socket_path", "request", "socket_alive"]

@@ -15,16 +15,22 @@ re-entered (a guard recovered, the mission resumed) never takes it twice. Sample
 ``upload`` and ``start`` begin with none. A restarted executive (after a crash) must not take a
 sample twice either: whoever restores its progress (the journal) hands the samples it recorded to
 :meth:`MissionState.restore_samples` after ``start`` and before the first tick.
+
+The route itself may change while the mission is loaded (an operator records or edits it):
+:meth:`MissionState.set_route` keeps the new route here, so a guard failure or a pause does not lose
+it, and tells the route listeners. The operations that make new routes are in
+:mod:`executive.mission.route`.
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from enum import StrEnum
 
 from executive import blackboard
 from executive.mission.model import Mission, Waypoint
+from executive.mission.route import Route
 from executive.state import Sample
 
 log = logging.getLogger(__name__)
@@ -54,6 +60,10 @@ TRANSITIONS: dict[str, tuple[frozenset[MissionStatus], MissionStatus]] = {
 Listener = Callable[[MissionStatus, MissionStatus, str], None]
 #: Told of every sample recorded (a journal keeps them).
 SampleListener = Callable[[Sample], None]
+#: Told of every change of the route: the new route and why (a journal keeps it).
+RouteListener = Callable[[Route, str], None]
+#: States in which the route may be changed.
+ROUTE_EDITABLE = frozenset({MissionStatus.READY, MissionStatus.RUNNING, MissionStatus.PAUSED})
 
 
 class Refused(Exception):
@@ -72,6 +82,7 @@ class MissionState:
         self.samples: tuple[Sample, ...] = ()
         self.listeners: list[Listener] = []
         self.sample_listeners: list[SampleListener] = []
+        self.route_listeners: list[RouteListener] = []
 
     # -- requests ----------------------------------------------------------------------------
     def upload(self, mission: Mission) -> None:
@@ -131,6 +142,36 @@ class MissionState:
         self.leg_index = min(self.leg_index + 1, self.leg_count)
         log.info("leg %d/%d done", self.leg_index, self.leg_count)
         self._publish()
+
+    # -- the route ---------------------------------------------------------------------------
+    @property
+    def route(self) -> Route:
+        """The mission's waypoints and the current leg (the input of a route operation)."""
+        waypoints = tuple(self.mission.waypoints) if self.mission else ()
+        return Route(waypoints, min(self.leg_index, len(waypoints)))
+
+    def set_route(self, waypoints: Sequence[Waypoint], reason: str, *, leg_index: int | None = None) -> None:
+        """Replace the mission's waypoints (an operator's edit): publish the new route and tell the route listeners.
+
+        Allowed while READY, RUNNING or PAUSED. ``leg_index`` (the waypoint the vehicle heads for)
+        defaults to the current one, kept inside the new route. Samples keep the legs they were
+        taken at. Refused (nothing changes) without a mission, in other states, or with a leg
+        index outside the route.
+        """
+        if self.mission is None:
+            raise Refused("cannot change the route: no mission loaded")
+        if self.status not in ROUTE_EDITABLE:
+            raise Refused(f"cannot change the route while {self.status} (allowed while {', '.join(sorted(ROUTE_EDITABLE))})")
+        leg = min(self.leg_index, len(waypoints)) if leg_index is None else leg_index
+        if not 0 <= leg <= len(waypoints):
+            raise Refused(f"leg {leg + 1} is outside a route of {len(waypoints)} waypoints")
+        self.mission = self.mission.model_copy(update={"waypoints": list(waypoints)})
+        self.leg_index = leg
+        self._publish()
+        log.info("route changed: %s (%d waypoints, heading for %d)", reason, len(waypoints), leg + 1)
+        route = self.route
+        for listener in self.route_listeners:
+            listener(route, reason)
 
     # -- samples -----------------------------------------------------------------------------
     def sampled(self, leg_index: int) -> bool:

@@ -8,17 +8,24 @@ location in the file.
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from executive.geofence import Geofence, open_ring, polygon_problems
 from executive.mission.errors import Path
+from executive.vehicles import PROFILES
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
 ControlMode = Literal["depth", "altitude"]
 
 _STRICT = ConfigDict(strict=True, extra="forbid", frozen=True, allow_inf_nan=False)
+
+#: A vtol flies its legs as a plane and circles each point at WP_LOITER_RAD (60 m): a leg counts as reached from farther out.
+VTOL_MIN_ACCEPTANCE_RADIUS_M = 70.0
+#: ArduPlane (Q_GUIDED_MODE=1) flies a GUIDED target on its lift motors only within WP_LOITER_RAD of the aircraft: 60 m less a margin.
+VTOL_HOVER_RADIUS_M = 50.0
 
 Latitude = Annotated[float, Field(ge=-90.0, le=90.0, description="WGS84 latitude, degrees")]
 Longitude = Annotated[float, Field(ge=-180.0, le=180.0, description="WGS84 longitude, degrees")]
@@ -92,6 +99,15 @@ class SamplingOptions(BaseModel):
     hold_mode: str = Field("LOITER", description="the mode the vehicle holds the sample point in")
 
 
+class EnuPoint(BaseModel):
+    """A point of the local frame in ROS's ENU axes: metres east, north and up from home (the local origin)."""
+
+    model_config = _STRICT
+    east_m: float = Field(ge=-10_000.0, le=10_000.0)
+    north_m: float = Field(ge=-10_000.0, le=10_000.0)
+    up_m: float = Field(ge=5.0, le=500.0, description="height above home")
+
+
 class VtolOptions(BaseModel):
     """vtol_transit: take-off, transitions and landing."""
 
@@ -99,6 +115,11 @@ class VtolOptions(BaseModel):
     takeoff_alt_m: float = Field(30.0, ge=5.0, le=500.0, description="climb as a multicopter to this height above home")
     land: Literal["home", "last"] = Field("home", description="land back at home or at the last waypoint")
     transition_timeout_s: float = Field(30.0, gt=0.0, le=300.0, description="a transition not confirmed by EXTENDED_SYS_STATE by then fails")
+    hover_enu: EnuPoint | None = Field(
+        None,
+        description=f"a local point flown as a multicopter after take-off, before the transition: within {VTOL_HOVER_RADIUS_M:g} m of home, "
+        "and the aircraft needs Q_GUIDED_MODE=1 (simulator.q_guided_mode for the built-in one)",
+    )
 
 
 class RcRouteOptions(BaseModel):
@@ -164,6 +185,9 @@ class SimulatorOptions(BaseModel):
     model: Literal["rover", "boat", "bunker", "sub", "vtol"] | None = Field(None, description="simulated vehicle (default: the vehicle kind)")
     events: str | None = Field(None, min_length=1, description="event file (faults, operator inputs) for the simulator, relative to the mission")
     ekf_ready_after_s: float = Field(40.0, ge=0.0, le=600.0, description="how long the simulated EKF takes to use GPS after boot")
+    q_guided_mode: int = Field(
+        0, ge=0, le=1, description="vtol: ArduPlane's Q_GUIDED_MODE (1: GUIDED targets end in a hover; near ones are flown as a multicopter)"
+    )
 
 
 class Mission(BaseModel):
@@ -219,6 +243,10 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
     for other in ("sampling", "vtol", "rc_route"):
         if other != section and getattr(mission, other) is not None:
             errors.append(((other,), f"only used by tree {next(t for t, (_, s) in TREE_RULES.items() if s == other)} (tree is {mission.tree})"))
+    aux_mode = mission.rc_route.aux_mode if mission.rc_route is not None else None
+    if aux_mode is not None and aux_mode.upper() not in PROFILES[mission.vehicle].modes:
+        known = ", ".join(m for m in PROFILES[mission.vehicle].modes if m != "INITIALISING")
+        errors.append((("rc_route", "aux_mode"), f"{aux_mode!r}: not a {mission.vehicle} mode (known: {known})"))
     if not mission.waypoints and mission.tree != "ugv_rc_route":
         errors.append((("waypoints",), "at least one waypoint is needed"))
     if mission.tree == "goto_sample" and not any(wp.sample for wp in mission.waypoints):
@@ -246,8 +274,27 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
             errors.append(((*here, "altitude_m"), "control_mode altitude needs altitude_m"))
         if wp.control_mode != "altitude" and wp.altitude_m is not None:
             errors.append(((*here, "altitude_m"), "altitude_m is only used with control_mode altitude"))
+    if mission.vehicle == "vtol":
+        errors += _vtol_errors(mission)
+    if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":
+        errors.append((("simulator", "q_guided_mode"), "only the simulated vtol (ArduPlane) has Q_GUIDED_MODE"))
     if mission.geofence is not None:
         errors += _geofence_errors(mission)
+    return errors
+
+
+def _vtol_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """A vtol's legs are flown as a plane; its hover point as a multicopter, near home."""
+    errors: list[tuple[Path, str]] = []
+    radius = mission.limits.acceptance_radius_m
+    if radius < VTOL_MIN_ACCEPTANCE_RADIUS_M:
+        default = "" if "acceptance_radius_m" in mission.limits.model_fields_set else " (the default)"
+        errors.append((("limits", "acceptance_radius_m"), f"{radius:g} m{default} is too small for a vtol: it flies its legs as a plane, "
+                       f"circling each point at WP_LOITER_RAD (60 m); use at least {VTOL_MIN_ACCEPTANCE_RADIUS_M:g} m"))  # fmt: skip
+    hover = mission.vtol.hover_enu if mission.vtol is not None else None
+    if hover is not None and math.hypot(hover.east_m, hover.north_m) > VTOL_HOVER_RADIUS_M:
+        errors.append((("vtol", "hover_enu"), f"{math.hypot(hover.east_m, hover.north_m):.0f} m from home, over {VTOL_HOVER_RADIUS_M:g} m: "
+                       "ArduPlane flies a farther GUIDED target as a plane, not on its lift motors"))  # fmt: skip
     return errors
 
 

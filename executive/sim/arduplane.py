@@ -19,9 +19,11 @@ What follows ArduPlane's source (4.x, a standard "SLT" QuadPlane with default pa
 - GUIDED targets: DO_REPOSITION (in GUIDED, or with the change-mode flag; FAILED otherwise) sets
   the guided waypoint and ends any VTOL hover: the aircraft transitions and circles the point at
   WP_LOITER_RAD (60 m, or param3) as a plane. With Q_GUIDED_MODE=1 it switches to VTOL and hovers
-  there once it reaches the circle. SET_POSITION_TARGET_GLOBAL_INT changes only the altitude of
-  the guided target in ArduPlane (its lat/lon are not used); entering GUIDED targets the current
-  position.
+  there once it reaches the circle, or at once when it is inside the circle (L1 counts that as on
+  the circle): a target that near is flown on the lift motors. SET_POSITION_TARGET_GLOBAL_INT
+  changes only the altitude of the guided target in ArduPlane (its lat/lon are not used);
+  SET_POSITION_TARGET_LOCAL_NED, only an altitude change in MAV_FRAME_LOCAL_OFFSET_NED (not
+  simulated: the message is ignored here). Entering GUIDED targets the current position.
 - LOITER and CIRCLE circle where they start; RTL flies home and circles at 100 m (ALT_HOLD_RTL,
   Q_RTL_MODE=0). QRTL returns on the lift motors at no less than Q_RTL_ALT (15 m) and lands; entered
   while wing-borne it first brakes (reported TRANSITION_TO_MC, an approximation of ArduPlane's
@@ -241,8 +243,8 @@ class QuadPlaneSim(ArduPilotSim):
         v = self.vehicle
         if self._guided_takeoff and v.alt_m >= v.target_alt_m - 0.1:
             self._guided_takeoff = False  # reached: the VTOL position controller holds there
-        elif not self._guided_vtol and self.q_guided_mode and self.flying and v.arrived:
-            # Q_GUIDED_MODE: at the loiter circle, switch to a VTOL hover over the point
+        elif not self._guided_vtol and self.q_guided_mode and self.flying and (v.arrived or v.distance_to(*v.target) < self._guided_radius):
+            # Q_GUIDED_MODE: at the loiter circle (inside it is "on" it for L1), switch to a VTOL hover over the point
             self._guided_vtol = True
             v.hover_at(*v.target, v.target_alt_m)
 

@@ -25,7 +25,8 @@ class SimServer:
     pymavlink's ``tcpin`` serves one client at a time. The autopilot runs in ``clock`` time; the
     loop sleeps ``period_s`` of wall time between iterations whatever the speed-up. Hold
     :attr:`lock` to touch :attr:`autopilot` from another thread. ``faults`` (on the same clock)
-    are injected from the moment the server is created, the simulated vehicle's boot.
+    are injected from the moment the server is created, the simulated vehicle's boot. Other
+    keyword arguments go to the simulated firmware (``q_guided_mode=1`` for the vtol's ArduPlane).
     """
 
     MAX_DRAIN = 200  # messages handled per iteration: a flood cannot starve the telemetry
@@ -41,9 +42,12 @@ class SimServer:
         period_s: float = 0.005,
         faults: FaultInjector | None = None,
         signing_key: bytes | None = None,
+        **firmware_options: float,
     ) -> None:
         self.clock = clock if clock is not None else faults.clock if faults is not None else ScaledClock()
-        self.autopilot: ArduPilotSim = make_autopilot(vehicle_kind, self.clock, home, system_id=system_id, ekf_ready_after_s=ekf_ready_after_s)
+        self.autopilot: ArduPilotSim = make_autopilot(
+            vehicle_kind, self.clock, home, system_id=system_id, ekf_ready_after_s=ekf_ready_after_s, **firmware_options
+        )
         self.faults = faults
         if faults is not None:
             faults.attach(self.autopilot)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, LinkAlive, RcNotTakingOver, WaitForGuards, WaitUntil
+from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, LinkAlive, RcNotTakingOver, UnlessPaused, WaitForGuards, WaitUntil
 from executive.io.mavlink.dialect import mavlink
 
 
@@ -137,3 +137,30 @@ def test_guards_only_read_the_blackboard():
     for guard in (LinkAlive(), EkfOk(), Armed(), RcNotTakingOver(6, 1700)):
         assert guard.bb.read == set(guard.reads)
         assert not guard.bb.write and not guard.bb.exclusive
+
+
+def test_the_hold_asked_during_a_link_loss_is_not_retried_once_the_guards_recover(harness, vehicle):
+    """A HOLD still being retried when the link returns would undo the leg the tree resumed."""
+    vehicle.set(link__up=True, vehicle__armed=True)
+    h, _ = guarded(harness, py_trees.behaviours.Running("leg"))
+    h.tick()
+    vehicle.set(link__up=False)
+    h.tick()
+    assert [m.param2 for m in h.link.take("COMMAND_LONG")] == [4]  # HOLD, unanswered: the link is down
+    vehicle.set(link__up=True)
+    for _ in range(60):  # 6 s: well past the commander's retry interval
+        h.tick()
+    assert h.link.take("COMMAND_LONG") == []
+
+
+def test_a_hold_asked_while_paused_is_not_retried_after_resume(harness, mission_state, vehicle):
+    mission_state.start()
+    h = harness(UnlessPaused(py_trees.behaviours.Running("body"), hold_mode="HOLD"))
+    h.tick()
+    mission_state.pause()
+    h.tick()
+    assert [m.param2 for m in h.link.take("COMMAND_LONG")] == [4]
+    mission_state.resume()
+    for _ in range(60):
+        h.tick()
+    assert h.link.take("COMMAND_LONG") == []

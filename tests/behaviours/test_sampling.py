@@ -9,12 +9,12 @@ import pytest
 from py_trees.common import Status
 
 from executive import blackboard
-from executive.behaviours import RcNotTakingOver, Sample
+from executive.behaviours import NothingToSample, RcNotTakingOver, Sample
 from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.io.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState
-from executive.mission.model import SamplingOptions
+from executive.mission.model import Mission, SamplingOptions
 from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
 from executive.state import Sample as SampleRecord
 
@@ -198,3 +198,26 @@ def test_setup_needs_a_sampler(clock, commander, mission_state):
     tree = py_trees.trees.BehaviourTree(Sample())
     with pytest.raises(RuntimeError, match="needs sampler"):
         tree.setup(clock=clock, commander=commander, mission_state=mission_state)
+
+
+@pytest.mark.parametrize(
+    ("leg", "recorded", "expected", "feedback"),
+    [
+        (0, (), S, "leg 1 is not a sample point"),
+        (1, (), F, "leg 2: sample due"),
+        (1, (1,), S, "leg 2 already sampled"),
+        (1, (0,), F, "leg 2: sample due"),  # another leg's sample does not count
+        (2, (), S, "no active leg"),
+    ],
+)
+def test_nothing_to_sample_here_unless_a_sample_point_is_not_sampled_yet(leg, recorded, expected, feedback):
+    points = [{"lat": 1.0, "lon": 2.0}, {"lat": 1.0, "lon": 2.001, "sample": True}]
+    state = MissionState()
+    state.upload(Mission.model_validate({"version": 1, "name": "s", "vehicle": "boat", "tree": "goto_sample", "waypoints": points}))
+    state.start()
+    state.restore_samples(SampleRecord(i, 1.0, 2.0, (), 0.0, 1.0) for i in recorded)
+    for _ in range(leg):
+        state.advance_leg()
+    node = NothingToSample()
+    py_trees.trees.BehaviourTree(node).tick()
+    assert (node.status, node.feedback_message) == (expected, feedback)

@@ -16,6 +16,7 @@ from executive.cli import main
 from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import mavutil
 from executive.io.mavlink.link import load_signing_key
+from executive.mission.loader import load_mission
 from executive.sim import SimServer
 
 ROOT = Path(__file__).parents[2]
@@ -32,6 +33,9 @@ def test_every_example_mission_completes_in_the_simulator(mission):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     assert "COMPLETED: every waypoint reached" in err
+    sample_points = sum(wp.sample for wp in load_mission(mission).waypoints)
+    if sample_points:  # a sampling mission's last line counts its samples
+        assert err.splitlines()[-1] == f"executive: {sample_points} samples recorded", err
 
 
 def test_ctrl_c_leaves_the_vehicle_in_its_safe_mode():

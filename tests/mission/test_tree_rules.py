@@ -40,7 +40,7 @@ SAMPLE_WP = "waypoints:\n  - {lat: 1.0, lon: 2.0, sample: true}\n"
             "vehicle: rover\ntree: waypoints\nwaypoints:\n  - {lat: 1.0, lon: 2.0, sample: true}\n",
             ["m.yaml:6:34: waypoints[0].sample: only goto_sample takes samples"],
         ),
-        ("vehicle: vtol\ntree: vtol_transit\nvtol: {takeoff_alt_m: 40}\n" + WP, []),
+        ("vehicle: vtol\ntree: vtol_transit\nlimits: {acceptance_radius_m: 80}\nvtol: {takeoff_alt_m: 40}\n" + WP, []),
         (
             "vehicle: rover\ntree: waypoints\nvtol: {takeoff_alt_m: 40}\n" + WP,
             ["m.yaml:5:7: vtol: only used by tree vtol_transit (tree is waypoints)"],

@@ -163,6 +163,22 @@ def test_back_to_multicopter_in_qloiter(make_gcs: MakeGcs) -> None:
     assert gcs.ap.vehicle.alt_m == pytest.approx(30.0, abs=0.5)
 
 
+def test_with_q_guided_mode_a_near_target_is_flown_as_a_multicopter_a_far_one_as_a_plane(make_gcs: MakeGcs) -> None:
+    gcs = airborne(make_gcs, 20.0)
+    gcs.ap.q_guided_mode = 1  # Q_GUIDED_MODE=1
+    near = gcs.east(40.0)  # inside WP_LOITER_RAD: L1 is "on the circle" at once, the lift motors fly it
+    assert gcs.reposition(*near, 25.0).result == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(20.0, step=0.5)
+    assert set(states(out)) == {(MC, IN_AIR)}
+    assert gcs.ap.vehicle.distance_to(*near) < 0.5 and gcs.ap.vehicle.alt_m == pytest.approx(25.0, abs=0.5)
+    far = gcs.north(400.0)
+    assert gcs.reposition(*far, 25.0).result == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(90.0, step=0.5)
+    seen = [vtol for vtol, _ in states(out)]
+    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, FW, MC]  # a plane to the circle, then a hover
+    assert gcs.ap.vehicle.distance_to(*far) < 0.5 and gcs.ap.vehicle.speed_m_s == pytest.approx(0.0, abs=0.05)
+
+
 def test_qrtl_from_fixed_wing_brakes_then_returns_and_lands(make_gcs: MakeGcs) -> None:
     gcs = in_fixed_wing_flight(make_gcs)
     assert gcs.set_mode("QRTL") == m.MAV_RESULT_ACCEPTED

@@ -174,6 +174,19 @@ class Commander:
             )
         )  # fmt: skip
 
+    def cancel(self, ticket: int | None) -> bool:
+        """Forget a request that no longer matters (its behaviour was interrupted); returns whether one was pending.
+
+        A mode change asked for while a guard failed must not be retried after the guard
+        recovered: it would undo what the tree asked for since.
+        """
+        for command, entry in list(self._in_flight.items()):
+            if entry.status.ticket == ticket:
+                del self._in_flight[command]
+                self._publish(entry, CommandState.CANCELLED, None, self._clock.now())
+                return True
+        return False
+
     # -- IO side (called by the runtime and the reader) --------------------------------------
     def on_ack(self, msg: MAVLinkMessage) -> None:
         """A COMMAND_ACK arrived (the reader calls this)."""

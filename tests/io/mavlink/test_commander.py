@@ -169,3 +169,24 @@ def test_mode_name_wins_over_number(commander, link):
     assert [m.param2 for m in link.take()] == [15]
     with pytest.raises(KeyError):
         commander.set_mode()
+
+
+def test_a_cancelled_request_is_not_retried_and_its_late_ack_is_ignored(commander, link, clock):
+    ticket = commander.set_mode("HOLD")
+    commander.flush()
+    assert commander.cancel(ticket)
+    assert status().state is CommandState.CANCELLED
+    for _ in range(20):
+        clock.advance(0.5)
+        commander.flush()
+    assert len(link.take("COMMAND_LONG")) == 1  # the first send only, no retries
+    commander.on_ack(ack(DO_SET_MODE))
+    assert status().state is CommandState.CANCELLED
+    assert not commander.cancel(ticket)  # nothing pending any more
+
+
+def test_cancel_leaves_a_newer_request_alone(commander):
+    first = commander.set_mode("HOLD")
+    second = commander.set_mode("GUIDED")
+    assert not commander.cancel(first)
+    assert status().ticket == second and status().state is CommandState.QUEUED

@@ -1,0 +1,200 @@
+"""The route on the autopilot and driven in AUTO: ArduPilot drives its own mission, the executive keeps and follows it.
+
+The route lives in the mission state (an operator records and edits it while driving); these
+behaviours keep the autopilot's mission equal to it and follow the autopilot while AUTO drives it:
+
+- :class:`KeepRouteOnAutopilot` uploads the route whenever what the autopilot holds (as last read
+  back, ``/vehicle/mission_items``) is not it: one NAV_WAYPOINT per waypoint, items 1..n after a
+  home item 0, read back item by item before the upload counts.
+- :class:`DriveRouteInAuto` waits for the operator to put the vehicle in AUTO with the route on the
+  autopilot, follows MISSION_CURRENT and MISSION_ITEM_REACHED into the mission's leg index, and
+  succeeds when the last waypoint is reached.
+
+Both need ``mission_state`` (and the first ``mission_transfer``) from ``tree.setup``. A waypoint's
+``speed_m_s`` is not uploaded: AUTO drives at the autopilot's own speed (WP_SPEED).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from py_trees.common import Status
+
+from executive import geo
+from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
+from executive.clock import Clock
+from executive.io.mavlink.mission_protocol import (
+    MissionCurrent,
+    MissionItem,
+    MissionItemReached,
+    MissionTransfer,
+    MissionTransferStatus,
+    TransferState,
+    first_mismatch,
+    waypoint_items,
+)
+from executive.mission.lifecycle import MissionState
+from executive.mission.model import Waypoint
+from executive.mission.route import Route
+from executive.state import GlobalPosition, HomePosition
+
+#: The autopilot mode that drives its own mission.
+AUTO = "AUTO"
+
+
+def route_items(waypoints: Sequence[Waypoint]) -> tuple[MissionItem, ...]:
+    """The mission items 1..n a route is uploaded as: a NAV_WAYPOINT per waypoint."""
+    return waypoint_items((wp.lat, wp.lon, wp.alt_m) for wp in waypoints)
+
+
+def route_not_on_autopilot(waypoints: Sequence[Waypoint], held: Sequence[MissionItem] | None) -> str | None:
+    """Why the autopilot's mission (``held``, ``/vehicle/mission_items``) is not ``waypoints``; None when it is."""
+    if held is None:
+        return "the autopilot's mission is not known yet"
+    mismatch = first_mismatch(route_items(waypoints), held)
+    return None if mismatch is None else f"the autopilot's mission differs ({mismatch})"
+
+
+class KeepRouteOnAutopilot(ExecutiveBehaviour):
+    """Upload the mission state's route whenever the autopilot's mission is not it; never ends (RUNNING).
+
+    One upload at a time, with the autopilot's home (``/vehicle/home``, else a placeholder ArduPilot
+    replaces) as item 0 and a read-back before it counts. A route changed during an upload is
+    uploaded again once that one ends. A failed upload is tried again ``retry_s`` later; the
+    reason stays in the feedback meanwhile. Another component's transfer in progress is waited for.
+    """
+
+    reads = ("/link/mission_transfer", "/vehicle/mission_items", "/vehicle/home")
+    needs = ("clock", "mission_state", "mission_transfer")
+    clock: Clock
+    mission_state: MissionState
+    mission_transfer: MissionTransfer
+
+    def __init__(self, name: str = "Keep the route on the autopilot", retry_s: float = 5.0) -> None:
+        super().__init__(name)
+        self.retry_s = retry_s
+        # kept across re-entries: an upload started before a guard failed goes on in the transfer
+        self._ticket: int | None = None
+        self._failure = ""
+        self._failed_at = float("-inf")
+
+    def update(self) -> Status:
+        now = self.clock.now()
+        self._settle(self.get("/link/mission_transfer"), now)
+        if self._ticket is not None:
+            return Status.RUNNING
+        waypoints = self.mission_state.route.waypoints
+        why = route_not_on_autopilot(waypoints, self.get("/vehicle/mission_items"))
+        if why is None:
+            self._failure = ""
+            self.feedback_message = f"the autopilot holds the route: {len(waypoints)} waypoints, read back"
+            return Status.RUNNING
+        if self._failure and now - self._failed_at < self.retry_s:
+            self.feedback_message = f"upload failed ({self._failure}); trying again in {self._failed_at + self.retry_s - now:.0f} s"
+            return Status.RUNNING
+        if not self.mission_transfer.idle:
+            self.feedback_message = "waiting for another mission transfer to end"
+            return Status.RUNNING
+        home: HomePosition | None = self.get("/vehicle/home")
+        self._ticket = self.mission_transfer.upload(route_items(waypoints), (home.lat, home.lon, home.alt_m) if home else None)
+        self.feedback_message = f"uploading {len(waypoints)} waypoints: {why}"
+        return Status.RUNNING
+
+    def _settle(self, status: MissionTransferStatus | None, now: float) -> None:
+        """Follow our upload: the feedback while it runs, the reason when it failed."""
+        if self._ticket is None:
+            return
+        if status is None or status.ticket != self._ticket:  # superseded by another request
+            self._ticket = None
+        elif status.state is TransferState.IN_PROGRESS:
+            step = "reading back" if status.verifying else "sending"
+            self.feedback_message = f"uploading the route: {step} {status.progress}/{status.total} items"
+        else:
+            self._ticket = None
+            if status.state is TransferState.FAILED:
+                self._failure, self._failed_at = status.reason, now
+
+
+class DriveRouteInAuto(TimedBehaviour):
+    """Wait for the operator to drive the route in AUTO, follow the autopilot along it; SUCCESS at the last waypoint.
+
+    Waiting (RUNNING, saying for what): a route recorded, the same route on the autopilot, the
+    mode AUTO, the vehicle armed. Waiting longer than ``operator_timeout_s`` at a stretch: FAILURE.
+    The wait starts again whenever the drive stops (the operator takes the vehicle out of AUTO or
+    disarms it, the route changes and is uploaded again).
+
+    Driving: the autopilot's MISSION_CURRENT (item k: legs before k done) and MISSION_ITEM_REACHED
+    (item k: legs up to k done) reported since the drive started move the mission's leg index
+    forward; the feedback is the next waypoint, its distance and bearing. SUCCESS when the last
+    waypoint is reached.
+    """
+
+    reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/mission_items", "/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/position")
+    needs = ("clock", "mission_state")
+    mission_state: MissionState
+
+    def __init__(self, operator_timeout_s: float, name: str = "Drive the route in AUTO") -> None:
+        super().__init__(name)
+        self.operator_timeout_s = operator_timeout_s
+        self._waiting_since = 0.0
+        self._driving_since: float | None = None
+
+    def initialise(self) -> None:
+        super().initialise()
+        self._waiting_since = self.started
+        self._driving_since = None
+
+    def update(self) -> Status:
+        now = self.clock.now()
+        route = self.mission_state.route
+        why = self._why_not_driving(route)
+        if why is not None:
+            if self._driving_since is not None:
+                self._driving_since, self._waiting_since = None, now
+            waited = now - self._waiting_since
+            if waited > self.operator_timeout_s:
+                self.feedback_message = f"the operator did not drive the route within {self.operator_timeout_s:g} s: {why}"
+                return Status.FAILURE
+            self.feedback_message = f"waiting for the operator ({waited:.0f}/{self.operator_timeout_s:g} s): {why}"
+            return Status.RUNNING
+        if self._driving_since is None:
+            self._driving_since = now
+        self._follow_autopilot(len(route))
+        n, leg = len(route), self.mission_state.leg_index
+        if leg >= n:
+            self.feedback_message = f"route done: {n}/{n} waypoints reached"
+            return Status.SUCCESS
+        target = route.waypoints[leg]
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        where = ""
+        if position is not None:
+            distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
+            where = f": {distance:.1f} m at {bearing:03.0f}°"
+        self.feedback_message = f"waypoint {leg + 1}/{n}{where}"
+        return Status.RUNNING
+
+    def _why_not_driving(self, route: Route) -> str | None:
+        if not route.waypoints:
+            return "no route recorded (switch A down with the knob in the middle adds a waypoint here)"
+        why = route_not_on_autopilot(route.waypoints, self.get("/vehicle/mission_items"))
+        if why is not None:
+            return f"the route is not on the autopilot yet: {why}"
+        mode = self.get("/vehicle/mode")
+        if mode != AUTO:
+            return f"switch C to the middle (AUTO) drives the route; the mode is {mode}"
+        if not self.get("/vehicle/armed"):
+            return "the vehicle is disarmed (it arms in MANUAL only: switch C up, switch D down)"
+        return None
+
+    def _follow_autopilot(self, n: int) -> None:
+        """Move the leg index up to what the autopilot reported since the drive started."""
+        assert self._driving_since is not None
+        done = 0
+        current: MissionCurrent | None = self.get("/vehicle/mission_current")
+        if current is not None and current.time >= self._driving_since and current.seq >= 1:
+            done = current.seq - 1
+        reached: MissionItemReached | None = self.get("/vehicle/mission_reached")
+        if reached is not None and reached.time >= self._driving_since:
+            done = max(done, reached.seq)
+        while self.mission_state.leg_index < min(done, n):
+            self.mission_state.advance_leg()

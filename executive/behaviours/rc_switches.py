@@ -1,0 +1,258 @@
+"""The operator's RC switches as commands (the tracked UGV's AgileX / FlySky transmitter).
+
+Each behaviour watches one switch of ``/rc/switches`` (the RC reader writes it from RC channels; a
+CAN reader from frame 0x241) and acts when the switch MOVES:
+
+- the first position seen is only taken note of: a switch left down at start-up arms nothing;
+- a position already acted on is not acted on again when the behaviour is re-entered (a guard
+  recovered, a pause ended), so the executive does not fight a ground station or a failsafe that
+  changed the mode since;
+- a move made while the behaviour was not ticked (RC stale, link lost) is acted on when it is
+  seen: it is the operator's latest wish.
+
+They never end: RUNNING, with the outcome of the last move in the feedback. A refusal (by these
+rules or by the autopilot) is the operator's to answer by moving the switch again; it does not end
+the mission. Guard them with :class:`~executive.behaviours.guards.RcFresh`: a frozen report must not
+pass for a switch held still.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+from py_trees.common import Status
+
+from executive import blackboard
+from executive.behaviours.actions import _refusal
+from executive.behaviours.auto_route import AUTO, route_not_on_autopilot
+from executive.behaviours.base import ExecutiveBehaviour
+from executive.clock import Clock
+from executive.io.mavlink.commander import Commander
+from executive.mission.lifecycle import MissionState, Refused
+from executive.mission.model import Waypoint
+from executive.mission.route import RouteError, add_at_end, clear, current_index, remove_current
+from executive.state import EkfStatus, GlobalPosition, RcSwitches, SwitchPosition
+
+log = logging.getLogger(__name__)
+
+UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
+
+#: The knob VRA does not always come back to 0: within 25 either side it is in the middle (the thesis's margin).
+KNOB_MIDDLE = 25
+#: ArduRover arms only in this mode, as the thesis states (its rc_arm_disarm node relies on it).
+ARMABLE_MODE = "MANUAL"
+
+
+class SwitchWatcher(ExecutiveBehaviour):
+    """Calls :meth:`moved` when ``switch`` (``"swa"`` .. ``"swd"``) takes a new position, :meth:`follow` on every tick."""
+
+    def __init__(self, switch: str, name: str) -> None:
+        self.reads = ("/rc/switches", *self.reads)
+        super().__init__(name)
+        self.switch = switch
+        self.label = f"switch {switch[-1].upper()}"
+        self.position: SwitchPosition | None = None  # the last position seen, kept across re-entries
+
+    def update(self) -> Status:
+        switches: RcSwitches | None = self.get("/rc/switches")
+        now: SwitchPosition | None = getattr(switches, self.switch) if switches is not None else None
+        if now is None and self.position is None:
+            self.feedback_message = f"no {self.label} position yet"
+        elif now is not None and now != self.position:
+            first, self.position = self.position is None, now
+            if first:
+                self.feedback_message = f"{self.label} {now}: move it to act"
+            else:
+                assert switches is not None
+                self.moved(now, switches)
+        self.follow()
+        return Status.RUNNING
+
+    def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
+        """The switch was moved to ``position``."""
+        raise NotImplementedError
+
+    def report(self, message: str) -> None:
+        """What a move did, or came to: the feedback, and the log (the operator's actions are worth a line each)."""
+        self.feedback_message = message
+        log.info("%s", message)
+
+    def follow(self) -> None:
+        """Watch what the last move asked for (every tick)."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Asking:
+    """A command a switch move asked for: what, its ticket, and when it was asked."""
+
+    what: str
+    ticket: int
+    at: float
+
+
+class ModeSwitch(SwitchWatcher):
+    """Switch C sets the mode: up MANUAL, middle AUTO, down ``aux_mode`` (none: ignored).
+
+    AUTO is asked only with a route recorded, and only once the autopilot holds it (an upload in
+    progress is waited for; a later move replaces the wait). A mode already shown by the heartbeat
+    is not asked again. Confirmed by the heartbeat; refused, unanswered or not shown within
+    ``confirm_timeout_s``: said in the feedback.
+    """
+
+    reads = ("/vehicle/mode", "/vehicle/statustext", "/vehicle/mission_items", blackboard.command_key("DO_SET_MODE"))
+    needs = ("clock", "commander", "mission_state")
+    clock: Clock
+    commander: Commander
+    mission_state: MissionState
+
+    def __init__(self, aux_mode: str | None = None, name: str = "Switch C: mode", confirm_timeout_s: float = 5.0) -> None:
+        super().__init__("swc", name)
+        self.modes = {UP: "MANUAL", MIDDLE: AUTO, DOWN: aux_mode.upper() if aux_mode else None}
+        self.confirm_timeout_s = confirm_timeout_s
+        self._wanted: str | None = None
+        self._asking: _Asking | None = None
+
+    def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
+        self._asking = None
+        self._wanted = self.modes[position]
+        if self._wanted is None:
+            self.report(f"{self.label} {position}: no aux mode set (rc_route.aux_mode): ignored")
+
+    def follow(self) -> None:
+        mode = self._wanted
+        if mode is None:
+            return
+        said = f"{self.label} {self.position}: {mode}"
+        shown = self.get("/vehicle/mode")
+        if shown == self.commander.modes.canonical(mode):
+            self.report(said if self._asking else f"{said} (already)")
+            self._wanted = self._asking = None
+            return
+        if self._asking is None:
+            if mode == AUTO and not self.mission_state.route.waypoints:
+                self.report(f"{said} not asked: no route recorded")
+                self._wanted = None
+                return
+            waiting = route_not_on_autopilot(self.mission_state.route.waypoints, self.get("/vehicle/mission_items")) if mode == AUTO else None
+            if waiting is not None:
+                self.feedback_message = f"{said} waits for the route upload: {waiting}"
+                return
+            self._asking = _Asking(mode, self.commander.set_mode(mode), self.clock.now())
+            self.report(f"{said}: asked")
+            return
+        refusal = _refusal(self.get(blackboard.command_key("DO_SET_MODE")), self._asking.ticket, self.get("/vehicle/statustext"))
+        waited = self.clock.now() - self._asking.at
+        if refusal is None and waited <= self.confirm_timeout_s:
+            self.feedback_message = f"{said}: asked, mode is {shown}"
+            return
+        why = refusal or f"not shown after {self.confirm_timeout_s:g} s (mode is {shown})"
+        self.report(f"{said} {why}")
+        self._wanted = self._asking = None
+
+
+class ArmSwitch(SwitchWatcher):
+    """Switch D arms (down) and disarms (up); arming only in MANUAL (else refused here, with the reason).
+
+    Nothing is asked when the vehicle already is as the switch says. Confirmed by the heartbeat;
+    refused (pre-arm checks), unanswered or not shown within ``confirm_timeout_s``: said in the feedback.
+    """
+
+    reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/statustext", blackboard.command_key("COMPONENT_ARM_DISARM"))
+    needs = ("clock", "commander")
+    clock: Clock
+    commander: Commander
+
+    def __init__(self, name: str = "Switch D: arm", confirm_timeout_s: float = 5.0) -> None:
+        super().__init__("swd", name)
+        self.confirm_timeout_s = confirm_timeout_s
+        self._asking: _Asking | None = None
+
+    def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
+        self._asking = None
+        said = f"{self.label} {position}"
+        if position is MIDDLE:
+            self.report(f"{said}: a two-position switch has no middle: ignored")
+            return
+        arm = position is DOWN
+        what = "armed" if arm else "disarmed"
+        if bool(self.get("/vehicle/armed")) == arm:
+            self.report(f"{said}: already {what}")
+            return
+        mode = self.get("/vehicle/mode")
+        if arm and mode != self.commander.modes.canonical(ARMABLE_MODE):
+            self.report(f"{said}: arming refused: the mode is {mode}; ArduRover arms only in {ARMABLE_MODE} (switch C up)")
+            return
+        self._asking = _Asking(what, self.commander.arm() if arm else self.commander.disarm(), self.clock.now())
+        self.report(f"{said}: asked to be {what}")
+
+    def follow(self) -> None:
+        if self._asking is None:
+            return
+        said, what = f"{self.label} {self.position}", self._asking.what
+        if bool(self.get("/vehicle/armed")) == (what == "armed"):
+            self.report(f"{said}: {what}")
+            self._asking = None
+            return
+        refusal = _refusal(self.get(blackboard.command_key("COMPONENT_ARM_DISARM")), self._asking.ticket, self.get("/vehicle/statustext"))
+        if refusal is None and self.clock.now() - self._asking.at <= self.confirm_timeout_s:
+            return
+        self.report(f"{said}: not {what}: {refusal or f'not shown after {self.confirm_timeout_s:g} s'}")
+        self._asking = None
+
+
+class RouteEditSwitch(SwitchWatcher):
+    """Switch A down edits the route, one edit per flip; the knob VRA says which edit.
+
+    Knob in [-100, -26]: clear the route; [26, 100]: remove the current waypoint (the one the
+    vehicle heads for, the last once the route is done); [-25, 25]: add a waypoint where the vehicle
+    is, at the end. Adding needs a position the EKF vouches for, no older than
+    ``max_position_age_s``. The new route goes to the mission state (``set_route``); refusals are
+    said in the feedback and change nothing.
+    """
+
+    reads = ("/vehicle/position", "/vehicle/ekf")
+    needs = ("clock", "mission_state")
+    clock: Clock
+    mission_state: MissionState
+
+    def __init__(self, name: str = "Switch A: edit the route", max_position_age_s: float = 1.0) -> None:
+        super().__init__("swa", name)
+        self.max_position_age_s = max_position_age_s
+
+    def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
+        if position is not DOWN:
+            return
+        knob = switches.knob
+        if knob is None:
+            self.report(f"{self.label} DOWN: no knob VRA position: nothing done")
+            return
+        said = f"{self.label} DOWN, knob {knob:+d}"
+        route = self.mission_state.route
+        edit = "clear the route" if knob < -KNOB_MIDDLE else "remove the current waypoint" if knob > KNOB_MIDDLE else "add a waypoint here"
+        try:
+            if knob < -KNOB_MIDDLE:
+                new, done = clear(route), f"route cleared ({len(route)} waypoints removed)"
+            elif knob > KNOB_MIDDLE:
+                new, done = remove_current(route), f"waypoint {(current_index(route) or 0) + 1}/{len(route)} removed"
+            else:
+                here = self._here()
+                new, done = add_at_end(route, here), f"waypoint {len(route) + 1} added at {here.lat:.7f}, {here.lon:.7f}"
+            self.mission_state.set_route(new.waypoints, f"{said}: {done}", leg_index=new.current)
+        except (RouteError, Refused) as exc:
+            self.report(f"{said}: {edit} refused: {exc}")
+            return
+        self.report(f"{said}: {done}")
+
+    def _here(self) -> Waypoint:
+        """A waypoint where the vehicle is; RouteError when that is not known well enough."""
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        ekf: EkfStatus | None = self.get("/vehicle/ekf")
+        if position is None:
+            raise RouteError("no position")
+        if ekf is None or not ekf.position_ok():
+            raise RouteError("the EKF has no position estimate")
+        age = self.clock.now() - position.time
+        if age > self.max_position_age_s:
+            raise RouteError(f"the last position is {age:.1f} s old")
+        return Waypoint(lat=position.lat, lon=position.lon)

@@ -1,0 +1,261 @@
+"""``executive can decode FILE.log [--json]``, ``executive can monitor IFACE:CHANNEL [--duration S] [--json]``.
+
+What the executive makes of a CAN bus: one line per frame (time since the first frame, id, bytes,
+the decoded AgileX frame, and what is wrong with it), then a summary: frames per id, bad frames,
+frames of other ids, and every stretch where the RC frame's (0x241) rolling counter froze, which
+is how the executive notices a lost transmitter in CAN command mode. ``--json`` prints one JSON
+object per frame and the summary as the last one (``{"summary": ...}``).
+
+``decode`` reads any log python-can reads (by extension): candump ``-L`` ``.log`` files, ``.asc``,
+``.blf``, ``.trc``, ``.csv``. ``monitor`` watches a live bus until ``--duration`` or Ctrl-C.
+Exit codes: 0 done, 2 bad input (no such file, unreadable log, bad IFACE:CHANNEL), 3 the bus
+cannot be opened.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import can
+
+from executive.cli import EXIT_BAD_INPUT, EXIT_NO_VEHICLE, EXIT_OK
+from executive.io.can.agilex import RC_STATE_ID, FrameStats, RcState, decode, is_agilex
+from executive.io.can.bus import CanOpenError, CanSpecError, open_can
+
+
+@dataclass
+class Freeze:
+    """A stretch of 0x241 frames repeating one rolling counter value."""
+
+    counter: int
+    from_t: float
+    to_t: float
+    repeats: int  # frames after the first that carried the same counter
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"counter": self.counter, "from_t": round(self.from_t, 6), "to_t": round(self.to_t, 6), "repeats": self.repeats}
+
+
+@dataclass
+class Analysis:
+    """Reads frames in order: what each is, and the summary of all of them."""
+
+    stats: FrameStats = field(default_factory=FrameStats)
+    freezes: list[Freeze] = field(default_factory=list)
+    _start: float | None = None
+    _counter: int | None = None
+    _counter_t: float = 0.0
+    _freeze: Freeze | None = None
+
+    def feed(self, msg: can.Message) -> dict[str, Any]:
+        """One frame: a JSON-ready record of what it is."""
+        if self._start is None:
+            self._start = msg.timestamp
+        t = msg.timestamp - self._start
+        frame = decode(msg)
+        usable = self.stats.record(msg, frame)
+        record: dict[str, Any] = {
+            "t": round(t, 6),
+            "timestamp": msg.timestamp,
+            "id": f"0x{msg.arbitration_id:03X}",
+            "extended": msg.is_extended_id,
+            "data": bytes(msg.data).hex().upper() if not msg.is_remote_frame else None,
+            "kind": frame.KIND if frame is not None else None,
+            "valid": usable,
+        }
+        if msg.is_error_frame:
+            record["problem"] = "error frame"
+        elif msg.is_remote_frame:
+            record["problem"] = "remote frame"
+        elif frame is None and is_agilex(msg):
+            record["problem"] = f"wrong length {len(msg.data)}"
+        elif frame is None:
+            record["problem"] = "id not read by the executive"
+        elif not usable:
+            record["problem"] = "values out of range"
+        if frame is not None:
+            record["fields"] = frame.fields()
+            record["text"] = frame.describe()
+        if usable and isinstance(frame, RcState):
+            record["counter_frozen"] = self._on_counter(frame.counter, t)
+        return record
+
+    def _on_counter(self, counter: int, t: float) -> bool:
+        if counter != self._counter:
+            self._counter, self._counter_t, self._freeze = counter, t, None
+            return False
+        if self._freeze is None:
+            self._freeze = Freeze(counter, self._counter_t, t, 0)
+            self.freezes.append(self._freeze)
+        self._freeze.to_t = t
+        self._freeze.repeats += 1
+        return True
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "frames": self.stats.frames,
+            "per_id": {f"0x{i:03X}": n for i, n in sorted(self.stats.per_id.items())},
+            "bad": self.stats.bad,
+            "other": self.stats.other,
+            "rc_frames": self.stats.per_id.get(RC_STATE_ID, 0),
+            "rc_counter_freezes": [f.as_dict() for f in self.freezes],
+        }
+
+
+def frame_line(record: dict[str, Any]) -> str:
+    """The text line of one frame record."""
+    data = record["data"]
+    raw = " ".join(data[i : i + 2] for i in range(0, len(data), 2)) if data is not None else "(remote)"
+    nbytes = len(data) // 2 if data is not None else 0
+    text = record.get("text", "")
+    notes = []
+    if "problem" in record:
+        notes.append(f"[{record['problem']}]")
+    if record.get("counter_frozen"):
+        notes.append("[RC counter frozen]")
+    id_text = record["id"][2:] if not record["extended"] else record["id"][2:].rjust(8, "0")
+    return " ".join(part for part in (f"{record['t']:12.6f}", f"{id_text:>3}", f"[{nbytes}]", f"{raw:<23}", text, *notes) if part).rstrip()
+
+
+def summary_lines(summary: dict[str, Any]) -> list[str]:
+    per_id = ", ".join(f"{i} x{n}" for i, n in summary["per_id"].items()) or "none"
+    freezes = summary["rc_counter_freezes"]
+    lines = [f"summary: {summary['frames']} frames ({per_id}); bad {summary['bad']}; other ids {summary['other']}; RC counter freezes {len(freezes)}"]
+    for f in freezes:
+        lines.append(
+            f"  RC counter froze at {f['counter']} (0x{f['counter']:02X}): {f['repeats']} repeated frames, "
+            f"t={f['from_t']:.6f}..{f['to_t']:.6f} ({f['to_t'] - f['from_t']:.3f} s)"
+        )
+    return lines
+
+
+class _Printer:
+    def __init__(self, as_json: bool) -> None:
+        self.as_json = as_json
+
+    def frame(self, record: dict[str, Any]) -> None:
+        print(json.dumps(record) if self.as_json else frame_line(record), flush=True)
+
+    def summary(self, summary: dict[str, Any]) -> None:
+        if self.as_json:
+            print(json.dumps({"summary": summary}), flush=True)
+        else:
+            print("\n".join(summary_lines(summary)), flush=True)
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``can`` subcommand and its ``decode`` and ``monitor`` actions."""
+    parser = subparsers.add_parser(
+        "can", help="what the executive makes of a CAN bus (a log, or live)", description="Decode the AgileX frames of a CAN log or a live bus."
+    )
+    actions = parser.add_subparsers(dest="can_action", required=True, metavar="ACTION")
+    decode_parser = actions.add_parser("decode", help="decode a CAN log (candump -L .log, .asc, .blf, ...)")
+    decode_parser.add_argument("file", metavar="FILE", help="the log; its extension names the format")
+    decode_parser.add_argument("--json", action="store_true", help="one JSON object per frame, the summary last")
+    decode_parser.set_defaults(func=run_decode)
+    monitor = actions.add_parser("monitor", help="watch a live CAN bus")
+    monitor.add_argument("bus", metavar="IFACE:CHANNEL", help="e.g. socketcan:can0, slcan:/dev/ttyACM0@115200, pcan:PCAN_USBBUS1, virtual:test")
+    monitor.add_argument("--duration", metavar="S", type=_duration, help="stop after S seconds (default: at Ctrl-C)")
+    bitrate = "CAN bit rate (default: %(default)s; socketcan: ip link sets it)"
+    monitor.add_argument("--bitrate", metavar="BIT/S", type=int, default=500_000, help=bitrate)
+    monitor.add_argument("--json", action="store_true", help="one JSON object per frame, the summary last")
+    monitor.set_defaults(func=run_monitor)
+
+
+def _duration(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return value
+
+
+def _error(text: str) -> None:
+    print(f"executive: can: {text}", file=sys.stderr)
+
+
+def _failing_line(path: Path, frames_read: int) -> int | None:
+    """The line of a candump .log that failed to parse: the one after the last frame read (empty lines are skipped)."""
+    try:
+        with path.open(encoding="utf-8", errors="replace") as f:
+            seen = 0
+            for number, line in enumerate(f, 1):
+                if line.strip():
+                    seen += 1
+                    if seen > frames_read:
+                        return number
+    except OSError:
+        return None
+    return None
+
+
+def run_decode(args: argparse.Namespace) -> int:
+    """Decode every frame of a log file."""
+    path = Path(args.file)
+    printer = _Printer(args.json)
+    analysis = Analysis()
+    try:
+        reader = can.LogReader(path)
+    except (OSError, ValueError) as exc:
+        _error(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}")
+        return EXIT_BAD_INPUT
+    try:
+        with reader:
+            for msg in reader:
+                printer.frame(analysis.feed(msg))
+    except Exception as exc:  # python-can's readers raise ValueError, IndexError, UnicodeDecodeError... on a damaged log
+        line = _failing_line(path, analysis.stats.frames) if path.suffix.lower() == ".log" else None
+        where = f"{path}:{line}" if line is not None else f"{path} (after frame {analysis.stats.frames})"
+        printer.summary(analysis.summary())
+        _error(f"{where}: not a CAN log line python-can can read: {exc}")
+        return EXIT_BAD_INPUT
+    printer.summary(analysis.summary())
+    return EXIT_OK
+
+
+def run_monitor(args: argparse.Namespace) -> int:
+    """Watch a live bus and print what each frame is."""
+    try:
+        bus = open_can(args.bus, bitrate=args.bitrate)
+    except CanSpecError as exc:
+        _error(str(exc))
+        return EXIT_BAD_INPUT
+    except CanOpenError as exc:
+        _error(str(exc))
+        return EXIT_NO_VEHICLE
+    printer = _Printer(args.json)
+    analysis = Analysis()
+    try:
+        for msg in _receive(bus, args.duration):
+            printer.frame(analysis.feed(msg))
+    except KeyboardInterrupt:
+        pass
+    except can.CanError as exc:
+        printer.summary(analysis.summary())
+        _error(f"{args.bus}: the bus failed: {exc}")
+        return EXIT_NO_VEHICLE
+    finally:
+        bus.shutdown()
+    printer.summary(analysis.summary())
+    return EXIT_OK
+
+
+def _receive(bus: can.BusABC, duration: float | None) -> Iterable[can.Message]:
+    """Frames as they arrive, until ``duration`` seconds of wall time have passed (forever without one)."""
+    deadline = None if duration is None else time.monotonic() + duration
+    while True:
+        remaining = 0.1 if deadline is None else min(0.1, deadline - time.monotonic())
+        if remaining <= 0:
+            return
+        msg = bus.recv(remaining)
+        if msg is not None:
+            yield msg

@@ -1,0 +1,70 @@
+"""``executive report DB``: what a run did - state changes, legs, samples, events - from the journal."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sqlite3
+import sys
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from executive.cli import EXIT_BAD_INPUT, EXIT_OK
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("report", help="what a recorded run did: state changes, legs, samples, events")
+    p.add_argument("journal", metavar="DB", help="the journal written by `executive run --journal DB`")
+    p.add_argument("--run", type=int, help="which run (default: the last)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    p.set_defaults(func=main)
+
+
+def _when(wall: float | None) -> str:
+    return "-" if wall is None else datetime.fromtimestamp(wall, UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+
+
+def render(report: dict[str, Any]) -> str:
+    """The report for a person."""
+    lines = [
+        f"run {report['id']}: mission {report['mission']!r} ({report['vehicle']})"
+        + (f", resuming run {report['resumed_from']}" if report["resumed_from"] else ""),
+        f"  started {_when(report['started'])}, ended {_when(report['ended'])}: {report['outcome'] or 'UNFINISHED'} {report['reason'] or ''}".rstrip(),  # noqa: E501
+        "state changes:",
+        *(f"  [{t['t']:9.1f} s] {t['before']} -> {t['after']}: {t['reason']}" for t in report["transitions"]),
+        "legs:",
+        *(f"  [{leg['t']:9.1f} s] heading for waypoint {leg['leg'] + 1}" for leg in report["legs"]),
+        f"samples ({len(report['samples'])}):",
+    ]
+    for sample in report["samples"]:
+        reads: dict[str, list[float]] = {}
+        for read in sample["reads"]:
+            reads.setdefault(f"{read['sensor']} ({read['unit']})" if read["unit"] else read["sensor"], []).append(read["value"])
+        summary = ", ".join(f"{name} {sum(v) / len(v):.2f}" for name, v in reads.items())
+        lines.append(
+            f"  waypoint {sample['leg_index'] + 1} at {sample['lat']:.7f}, {sample['lon']:.7f}: {len(sample['reads'])} reads, mean {summary}"
+        )
+    lines.append(f"events ({len(report['events'])}):")
+    lines += [f"  [{e['t']:9.1f} s] {e['kind']}: {e['text']}" for e in report["events"]]
+    return "\n".join(lines)
+
+
+def main(args: argparse.Namespace) -> int:
+    from executive.clock import ScaledClock
+    from executive.journal import Journal
+
+    if not Path(args.journal).is_file():
+        print(f"{args.journal}:1:1: (file): no such journal", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        journal = Journal(args.journal, ScaledClock())
+        try:
+            report = journal.report(args.run)
+        finally:
+            journal.close()
+    except (sqlite3.DatabaseError, LookupError) as exc:
+        print(f"{args.journal}:1:1: (journal): {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(json.dumps(report, indent=2) if args.json else render(report))
+    return EXIT_OK

@@ -1,0 +1,304 @@
+"""The heading sanity filter: does the compass tell the truth?
+
+The thesis rover's compass read ~20° off and swung by up to 45° when the motors started, so the
+track snaked. This filter catches both, from what the MAVLink reader already writes:
+
+- a Kalman filter (filterpy) of heading and yaw rate, *in the compass's frame*, fed by the compass
+  (ATTITUDE yaw), the gyro (ATTITUDE yawspeed) and, while moving, the GPS course over ground
+  (atan2(ve, vn)) shifted by the estimated compass bias. Each compass and course reading is gated
+  on its wrapped innovation (y²/S against a chi-square gate) *before* the update; a glitch is
+  rejected and the heading does not jump. After N consecutive rejections that agree with each
+  other (the filter, not the compass, is wrong: a glitched first reading, a step) it re-initialises
+  from the compass;
+- a slow filter of the wrapped compass - course difference, sampled only while driving straight
+  (low gyro rate for a while, above a minimum speed) with a compass the gate accepted: the compass
+  bias. It averages quickly at first, then follows with a time constant of about a minute; a
+  bias sample far from the estimate is rejected, and when the mean of the last N samples is outside
+  the gate the estimate re-initialises to it (the bias changed for good, e.g. when the motors started);
+- the verdict: /heading/ok is False while the compass is being rejected persistently (a share of
+  its readings over a window) or the bias exceeds a threshold (with hysteresis); True once the bias
+  was judged (enough straight driving) and neither holds; None before (a stationary vehicle cannot
+  judge its compass against its course) or when the attitude is stale.
+
+/heading/deg is the filter's heading with the bias taken off once judged (before, the compass's own
+heading, filtered): the best guess of the true heading. /heading/bias_deg is the estimate once judged
+(None before). Course over ground differs
+from heading by any crab angle (a boat in a current, a skidding track), which this reads as bias.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+from filterpy.common import Q_discrete_white_noise
+from filterpy.kalman import KalmanFilter
+
+from executive import blackboard
+from executive.clock import Clock
+from executive.state import Attitude, GlobalPosition
+
+_H_HEADING = np.array([[1.0, 0.0]])
+_H_RATE = np.array([[0.0, 1.0]])
+
+
+def wrap180(deg: float) -> float:
+    """An angle in [-180, 180)."""
+    return (deg + 180.0) % 360.0 - 180.0
+
+
+def circular_mean(degrees: list[float]) -> float:
+    """The mean direction of angles, in [-180, 180) (359° and 1° average to 0°, not 180°)."""
+    s = sum(math.sin(math.radians(d)) for d in degrees)
+    c = sum(math.cos(math.radians(d)) for d in degrees)
+    return wrap180(math.degrees(math.atan2(s, c)))
+
+
+@dataclass(frozen=True)
+class HeadingFilterConfig:
+    """The filter's numbers; the defaults suit a rover or a boat at 1-4 m/s with 5-10 Hz ATTITUDE."""
+
+    compass_sigma_deg: float = 3.0  # compass noise
+    gyro_sigma_deg_s: float = 1.0  # gyro (ATTITUDE yawspeed) noise
+    yaw_accel_sigma_deg_s2: float = 30.0  # process noise: how hard the vehicle can change its turn rate
+    gps_velocity_sigma_m_s: float = 0.15  # GPS velocity noise; course noise is atan(sigma / speed)
+    timing_sigma_s: float = 0.05  # readings are stamped at reception: at a turn rate r this adds r * sigma
+    gate: float = 9.0  # chi-square gate on y²/S (9 = 3 sigma, one degree of freedom)
+    reinit_after: int = 10  # consecutive compass rejections that re-initialise the filter ...
+    reinit_spread_deg: float = 10.0  # ... if their innovations agree within this (a lock-out or a step, not swings)
+    min_course_speed_m_s: float = 0.5  # below this the course over ground means nothing
+    straight_rate_deg_s: float = 3.0  # driving straight: |gyro rate| below this ...
+    straight_settle_s: float = 1.0  # ... for this long (the course lags the heading out of a turn)
+    bias_prior_sigma_deg: float = 30.0  # bias uncertainty before the first sample
+    bias_drift_deg_per_sqrt_s: float = 0.05  # how fast the bias may wander: a settled estimate follows in ~1 min
+    bias_reinit_window: int = 10  # the bias re-initialises when the mean of this many recent samples ...
+    bias_change_gate: float = 16.0  # ... is this far out (chi-square; 4 sigma: tested at every sample, so stricter than the gate)
+    bias_judged_after_s: float = 5.0  # straight driving needed before the bias is judged ...
+    bias_judged_sigma_deg: float = 2.0  # ... and the estimate's uncertainty below this
+    bias_threshold_deg: float = 10.0  # |bias| above this: the compass is not ok
+    bias_clear_deg: float = 8.0  # ... until it is back below this
+    rejection_window_s: float = 5.0  # the compass's recent readings ...
+    rejection_flag_share: float = 0.2  # ... of which this share rejected: not ok
+    rejection_clear_share: float = 0.05  # ... until the share is back below this
+    rejection_min_count: int = 3  # ... and at least this many (one or two glitches are not persistent)
+    stale_after_s: float = 2.0  # an attitude older than this: no heading, no verdict; the filter restarts
+
+
+class HeadingFilter:
+    """Writes /heading/deg, /heading/ok and /heading/bias_deg; call :meth:`service` once per tick after the MAVLink reader drains."""
+
+    def __init__(self, clock: Clock, config: HeadingFilterConfig | None = None) -> None:
+        self.config = config or HeadingFilterConfig()
+        self._clock = clock
+        self._in = blackboard.reader("heading filter in", ["/vehicle/attitude", "/vehicle/position"])
+        self._out = blackboard.writer("heading filter", ["/heading/deg", "/heading/ok", "/heading/bias_deg"])
+        self._kf = KalmanFilter(dim_x=2, dim_z=1)
+        self._t: float | None = None  # time of the filter's state; None = not initialised
+        self._attitude: Attitude | None = None
+        self._position: GlobalPosition | None = None
+        self._compass: tuple[float, float, float] | None = None  # (time, yaw, rate) of the last accepted compass reading
+        self._straight_since: float | None = None
+        self._rejected_run: list[float] = []  # innovations of consecutive rejected compass readings
+        self._verdicts: deque[tuple[float, bool]] = deque()  # (time, rejected) of recent compass readings
+        self._rejecting = False
+        self._last_rejection = -math.inf
+        # the bias filter (scalar Kalman filter of compass - course)
+        self._bias = 0.0
+        self._bias_var = self.config.bias_prior_sigma_deg**2
+        self._bias_t: float | None = None
+        self._bias_straight_s = 0.0
+        self._bias_window: deque[tuple[float, float]] = deque(maxlen=self.config.bias_reinit_window)  # recent (sample, variance)
+        self._bias_flagged = False
+        #: Counters, for diagnostics and tests.
+        self.compass_accepted = self.compass_rejected = self.course_accepted = self.course_rejected = 0
+        self.bias_samples = self.bias_rejected = self.reinits = self.bias_reinits = 0
+        #: The wrapped innovation of the latest compass reading, degrees.
+        self.last_compass_innovation_deg: float | None = None
+
+    # -- what it concluded ---------------------------------------------------------------------
+    @property
+    def heading_deg(self) -> float | None:
+        """The filtered heading, less the bias once judged, [0, 360); None before the first compass reading."""
+        if self._t is None:
+            return None
+        return (float(self._kf.x[0, 0]) - (self._bias if self.bias_judged else 0.0)) % 360.0
+
+    @property
+    def bias_estimate_deg(self) -> float | None:
+        """The compass bias estimate so far (judged or not); None before the first sample."""
+        return self._bias if self.bias_samples else None
+
+    @property
+    def bias_judged(self) -> bool:
+        """Enough straight driving to trust the bias estimate."""
+        cfg = self.config
+        return self._bias_straight_s >= cfg.bias_judged_after_s and self._bias_var <= cfg.bias_judged_sigma_deg**2
+
+    @property
+    def rejected_share(self) -> float:
+        """The share of the compass readings in the window that the gate rejected."""
+        return sum(r for _, r in self._verdicts) / len(self._verdicts) if self._verdicts else 0.0
+
+    @property
+    def reason(self) -> str:
+        """Why the compass is not ok; empty when it is (or is not judged)."""
+        if self._rejecting:
+            return f"compass rejected in {self.rejected_share:.0%} of its readings over {self.config.rejection_window_s:g} s"
+        if self._bias_flagged:
+            return f"compass reads {self._bias:+.1f}° off the course over ground"
+        return ""
+
+    # -- each tick -----------------------------------------------------------------------------
+    def service(self) -> None:
+        """Take the new attitude and position readings (in time order), then publish the verdict."""
+        attitude: Attitude | None = self._in.get("/vehicle/attitude")
+        position: GlobalPosition | None = self._in.get("/vehicle/position")
+        new: list[Attitude | GlobalPosition] = []
+        if attitude is not None and attitude != self._attitude:
+            self._attitude = attitude
+            new.append(attitude)
+        if position is not None and position != self._position:
+            self._position = position
+            new.append(position)
+        for reading in sorted(new, key=lambda r: (r.time, isinstance(r, GlobalPosition))):
+            if isinstance(reading, Attitude):
+                self._on_attitude(reading)
+            else:
+                self._on_position(reading)
+        self._publish(self._clock.now())
+
+    # -- the heading filter --------------------------------------------------------------------
+    def _start(self, yaw_deg: float, rate_deg_s: float, t: float) -> None:
+        cfg = self.config
+        self._kf.x = np.array([[yaw_deg % 360.0], [rate_deg_s]])
+        self._kf.P = np.diag([cfg.compass_sigma_deg**2, cfg.gyro_sigma_deg_s**2])
+        self._t = t
+        self._rejected_run.clear()
+
+    def _predict_to(self, t: float) -> None:
+        assert self._t is not None
+        dt = t - self._t
+        if dt > 0.0:
+            self._kf.predict(F=np.array([[1.0, dt], [0.0, 1.0]]), Q=Q_discrete_white_noise(2, dt=dt, var=self.config.yaw_accel_sigma_deg_s2**2))
+            self._kf.x[0, 0] %= 360.0
+            self._t = t
+
+    def _gated_update(self, z_deg: float, r_var: float) -> tuple[bool, float]:
+        """Update the heading with ``z_deg`` unless its wrapped innovation fails the gate; returns (accepted, innovation)."""
+        x = float(self._kf.x[0, 0])
+        y = wrap180(z_deg - x)
+        s = float(self._kf.P[0, 0]) + r_var
+        if y * y / s > self.config.gate:
+            return False, y
+        self._kf.update(np.array([[x + y]]), R=np.array([[r_var]]), H=_H_HEADING)  # z chosen so filterpy's innovation is y
+        self._kf.x[0, 0] %= 360.0
+        return True, y
+
+    def _on_attitude(self, a: Attitude) -> None:
+        cfg = self.config
+        straight = abs(a.yaw_rate_deg_s) <= cfg.straight_rate_deg_s
+        self._straight_since = (self._straight_since if self._straight_since is not None else a.time) if straight else None
+        if self._t is None or a.time - self._t > cfg.stale_after_s:
+            self._start(a.yaw_deg, a.yaw_rate_deg_s, a.time)
+            self._compass = (a.time, a.yaw_deg, a.yaw_rate_deg_s)
+            return
+        self._predict_to(a.time)
+        self._kf.update(np.array([[a.yaw_rate_deg_s]]), R=np.array([[cfg.gyro_sigma_deg_s**2]]), H=_H_RATE)
+        r_var = cfg.compass_sigma_deg**2 + (a.yaw_rate_deg_s * cfg.timing_sigma_s) ** 2
+        accepted, y = self._gated_update(a.yaw_deg, r_var)
+        self.last_compass_innovation_deg = y
+        self._verdicts.append((a.time, not accepted))
+        if accepted:
+            self.compass_accepted += 1
+            self._rejected_run.clear()
+            self._compass = (a.time, a.yaw_deg, a.yaw_rate_deg_s)
+            return
+        self.compass_rejected += 1
+        self._last_rejection = a.time
+        self._rejected_run.append(y)
+        run = self._rejected_run
+        if len(run) >= cfg.reinit_after:
+            centre = circular_mean(run)
+            if max(abs(wrap180(v - centre)) for v in run) <= cfg.reinit_spread_deg:
+                self.reinits += 1
+                self._start(a.yaw_deg, a.yaw_rate_deg_s, a.time)
+                self._compass = (a.time, a.yaw_deg, a.yaw_rate_deg_s)
+            else:
+                del run[0]
+
+    def _on_position(self, p: GlobalPosition) -> None:
+        cfg = self.config
+        speed = p.ground_speed_m_s
+        if self._t is None or speed < cfg.min_course_speed_m_s or p.time - self._t > cfg.stale_after_s:
+            return
+        course = math.degrees(math.atan2(p.ve_m_s, p.vn_m_s)) % 360.0
+        rate = float(self._kf.x[1, 0])
+        cog_var = math.degrees(math.atan2(cfg.gps_velocity_sigma_m_s, speed)) ** 2 + (rate * cfg.timing_sigma_s) ** 2
+        self._predict_to(p.time)
+        if self.bias_judged and abs(wrap180(course + self._bias - float(self._kf.x[0, 0]))) > 120.0:
+            return  # driving backwards (a tracked vehicle can): the course is the heading's opposite
+        accepted, _ = self._gated_update(course + self._bias, cog_var + self._bias_var)
+        if accepted:
+            self.course_accepted += 1
+        else:
+            self.course_rejected += 1
+        compass = self._compass
+        if self._straight_since is None or p.time - self._straight_since < cfg.straight_settle_s:
+            return
+        if compass is None or p.time - compass[0] > 0.5:  # no accepted compass reading to compare with
+            return
+        if self._rejecting or p.time - self._last_rejection < cfg.straight_settle_s:  # readings between glitches are suspect too
+            return
+        _, yaw, yaw_rate = compass
+        self._bias_sample(p.time, wrap180(yaw + yaw_rate * (p.time - compass[0]) - course), cfg.compass_sigma_deg**2 + cog_var)
+
+    # -- the bias filter -----------------------------------------------------------------------
+    def _bias_sample(self, t: float, d: float, d_var: float) -> None:
+        cfg = self.config
+        dt = 0.0 if self._bias_t is None else min(max(t - self._bias_t, 0.0), 1.0)
+        self._bias_t = t
+        self._bias_var += cfg.bias_drift_deg_per_sqrt_s**2 * dt
+        self._bias_window.append((d, d_var))
+        y = wrap180(d - self._bias)
+        if self.bias_samples and y * y / (self._bias_var + d_var) > cfg.gate:
+            self.bias_rejected += 1
+        else:
+            self.bias_samples += 1
+            self._bias_straight_s += dt
+            gain = self._bias_var / (self._bias_var + d_var)
+            self._bias = wrap180(self._bias + gain * y)
+            self._bias_var *= 1.0 - gain
+        # A bias that changed for good (the motors started): the mean of the recent samples, whose noise is
+        # sqrt(n) times smaller than one sample's, is outside the gate. A lone glitch moves the mean too little.
+        window = self._bias_window
+        if len(window) == window.maxlen:
+            mean = circular_mean([d for d, _ in window])
+            mean_var = sum(v for _, v in window) / len(window) ** 2
+            if wrap180(mean - self._bias) ** 2 / (self._bias_var + mean_var) > cfg.bias_change_gate:
+                self.bias_reinits += 1
+                self._bias, self._bias_var = mean, mean_var
+                window.clear()
+
+    # -- the verdict ---------------------------------------------------------------------------
+    def _publish(self, now: float) -> None:
+        cfg = self.config
+        while self._verdicts and self._verdicts[0][0] < now - cfg.rejection_window_s:
+            self._verdicts.popleft()
+        share = self.rejected_share
+        if share >= cfg.rejection_flag_share and sum(r for _, r in self._verdicts) >= cfg.rejection_min_count:
+            self._rejecting = True
+        elif share < cfg.rejection_clear_share:
+            self._rejecting = False
+        judged = self.bias_judged
+        if judged:
+            limit = cfg.bias_clear_deg if self._bias_flagged else cfg.bias_threshold_deg
+            self._bias_flagged = abs(self._bias) > limit
+        stale = self._attitude is None or now - self._attitude.time > cfg.stale_after_s
+        ok: bool | None = None
+        if not stale:
+            ok = False if self._rejecting or self._bias_flagged else True if judged else None
+        self._out.set("/heading/deg", None if stale else self.heading_deg)
+        self._out.set("/heading/ok", ok)
+        self._out.set("/heading/bias_deg", self._bias if judged else None)

@@ -1,0 +1,175 @@
+"""The journal: what each run did, in SQLite, so that a crash or a power cut loses nothing.
+
+One row per run; its lifecycle transitions, leg progress, samples and events. The database is in
+WAL mode with full sync, and every state change and sample is committed at once: once the
+executive has said it, it is on the disk. ``executive run --resume`` reads the last unfinished run
+of the same mission back: the leg to continue from and the samples already taken.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sqlite3
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from executive.clock import Clock
+from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.model import Mission
+from executive.state import Sample, SampleRead
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS runs (
+    id INTEGER PRIMARY KEY, mission TEXT NOT NULL, mission_hash TEXT NOT NULL, mission_json TEXT NOT NULL,
+    vehicle TEXT NOT NULL, started REAL NOT NULL, ended REAL, outcome TEXT, reason TEXT, resumed_from INTEGER
+);
+CREATE TABLE IF NOT EXISTS transitions (
+    run INTEGER NOT NULL REFERENCES runs(id), t REAL NOT NULL, wall REAL NOT NULL, before TEXT NOT NULL, after TEXT NOT NULL, reason TEXT
+);
+CREATE TABLE IF NOT EXISTS legs (
+    run INTEGER NOT NULL REFERENCES runs(id), t REAL NOT NULL, wall REAL NOT NULL, leg INTEGER NOT NULL, lat REAL, lon REAL
+);
+CREATE TABLE IF NOT EXISTS samples (
+    run INTEGER NOT NULL REFERENCES runs(id), leg INTEGER NOT NULL, lat REAL, lon REAL, started REAL, finished REAL, reads TEXT NOT NULL,
+    UNIQUE (run, leg)
+);
+CREATE TABLE IF NOT EXISTS events (
+    run INTEGER NOT NULL REFERENCES runs(id), t REAL NOT NULL, wall REAL NOT NULL, kind TEXT NOT NULL, text TEXT NOT NULL
+);
+"""
+
+
+@dataclass(frozen=True)
+class ResumePoint:
+    """Where an unfinished run stopped: the leg to continue from and the samples it had taken."""
+
+    run: int
+    leg_index: int
+    samples: tuple[Sample, ...]
+
+
+def mission_hash(mission: Mission) -> str:
+    """Identifies a mission's content (a resumed run must be the same mission)."""
+    return hashlib.sha256(mission.model_dump_json().encode()).hexdigest()[:16]
+
+
+class Journal:
+    """An SQLite journal of runs; :meth:`attach` it to a run's mission state."""
+
+    def __init__(self, path: str | Path, clock: Clock) -> None:
+        self.path = str(path)
+        self._clock = clock
+        self._db = sqlite3.connect(self.path, isolation_level=None)  # autocommit: every statement is durable on return
+        self._db.execute("PRAGMA journal_mode=WAL")
+        self._db.execute("PRAGMA synchronous=FULL")
+        self._db.executescript(SCHEMA)
+        self.run: int | None = None
+        self._leg: int | None = None
+
+    # -- writing -------------------------------------------------------------------------------
+    def begin_run(self, mission: Mission, resumed_from: int | None = None) -> int:
+        cursor = self._db.execute(
+            "INSERT INTO runs (mission, mission_hash, mission_json, vehicle, started, resumed_from) VALUES (?, ?, ?, ?, ?, ?)",
+            (mission.name, mission_hash(mission), mission.model_dump_json(), mission.vehicle, time.time(), resumed_from),
+        )
+        self.run = int(cursor.lastrowid or 0)
+        self._leg = None
+        return self.run
+
+    def attach(self, state: MissionState) -> None:
+        """Record the state's transitions and samples as they happen."""
+        state.listeners.append(self._on_transition)
+        state.sample_listeners.append(self._on_sample)
+
+    def observe_leg(self, state: MissionState, lat: float | None, lon: float | None) -> None:
+        """Called every tick: records the leg when it changes (with where the vehicle is)."""
+        if self.run is None or state.status not in (MissionStatus.RUNNING, MissionStatus.PAUSED) or state.leg_index == self._leg:
+            return
+        self._leg = state.leg_index
+        self._insert("legs", run=self.run, t=self._clock.now(), wall=time.time(), leg=state.leg_index, lat=lat, lon=lon)
+
+    def event(self, kind: str, text: str) -> None:
+        if self.run is not None:
+            self._insert("events", run=self.run, t=self._clock.now(), wall=time.time(), kind=kind, text=text)
+
+    def end_run(self, outcome: str, reason: str) -> None:
+        if self.run is not None:
+            self._db.execute("UPDATE runs SET ended = ?, outcome = ?, reason = ? WHERE id = ?", (time.time(), outcome, reason, self.run))
+
+    def close(self) -> None:
+        self._db.close()
+
+    # -- reading -------------------------------------------------------------------------------
+    def resume_point(self, mission: Mission) -> ResumePoint | None:
+        """The last run of this very mission that never ended (a crash, kill -9, power cut), if any."""
+        row = self._db.execute("SELECT id FROM runs WHERE mission_hash = ? ORDER BY id DESC LIMIT 1", (mission_hash(mission),)).fetchone()
+        if row is None:
+            return None
+        run = row[0]
+        if self._db.execute("SELECT ended FROM runs WHERE id = ?", (run,)).fetchone()[0] is not None:
+            return None
+        leg = self._db.execute("SELECT MAX(leg) FROM legs WHERE run = ?", (run,)).fetchone()[0] or 0
+        return ResumePoint(run, leg, self.samples(run))
+
+    def samples(self, run: int) -> tuple[Sample, ...]:
+        rows = self._db.execute("SELECT leg, lat, lon, started, finished, reads FROM samples WHERE run = ? ORDER BY leg", (run,))
+        return tuple(
+            Sample(leg, lat, lon, tuple(SampleRead(**r) for r in json.loads(reads)), started, finished)
+            for leg, lat, lon, started, finished, reads in rows
+        )
+
+    def report(self, run: int | None = None) -> dict[str, Any]:
+        """Everything about one run (the last by default), as plain data."""
+        if run is None:
+            row = self._db.execute("SELECT MAX(id) FROM runs").fetchone()
+            run = row[0] if row else None
+        if run is None:
+            raise LookupError(f"{self.path}: no run recorded")
+        columns = ("id", "mission", "vehicle", "started", "ended", "outcome", "reason", "resumed_from")
+        head = self._db.execute(f"SELECT {', '.join(columns)} FROM runs WHERE id = ?", (run,)).fetchone()
+        if head is None:
+            raise LookupError(f"{self.path}: no run {run}")
+        return {
+            **dict(zip(columns, head, strict=True)),
+            "transitions": self._rows("SELECT t, before, after, reason FROM transitions WHERE run = ? ORDER BY rowid", run),
+            "legs": self._rows("SELECT t, leg, lat, lon FROM legs WHERE run = ? ORDER BY rowid", run),
+            "samples": [asdict(s) for s in self.samples(run)],
+            "events": self._rows("SELECT t, kind, text FROM events WHERE run = ? ORDER BY rowid", run),
+        }
+
+    def runs(self) -> list[int]:
+        return [r[0] for r in self._db.execute("SELECT id FROM runs ORDER BY id")]
+
+    # -- internals -------------------------------------------------------------------------------
+    def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
+        if self.run is not None:
+            self._insert("transitions", run=self.run, t=self._clock.now(), wall=time.time(), before=str(before), after=str(after), reason=reason)
+
+    def _on_sample(self, sample: Sample) -> None:
+        if self.run is not None:
+            reads = json.dumps([asdict(r) for r in sample.reads])
+            row = {"run": self.run, "leg": sample.leg_index, "lat": sample.lat, "lon": sample.lon}
+            self._insert("samples", **row, started=sample.started, finished=sample.finished, reads=reads)
+
+    def _insert(self, table: str, **row: Any) -> None:
+        names = ", ".join(row)
+        self._db.execute(f"INSERT INTO {table} ({names}) VALUES ({', '.join('?' * len(row))})", tuple(row.values()))
+
+    def _rows(self, sql: str, run: int) -> list[dict[str, Any]]:
+        cursor = self._db.execute(sql, (run,))
+        names = [column[0] for column in cursor.description]
+        return [dict(zip(names, r, strict=True)) for r in cursor]
+
+
+@contextmanager
+def open_journal(path: str | Path, clock: Clock) -> Iterator[Journal]:
+    journal = Journal(path, clock)
+    try:
+        yield journal
+    finally:
+        journal.close()

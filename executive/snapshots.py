@@ -1,0 +1,169 @@
+"""Per-tick snapshots of a running tree, and their replay: what the tree did, tick by tick.
+
+A snapshot file is JSON lines. A ``tree`` line describes the nodes (pre-order: id, name, type,
+parent). Each tick line holds only what changed since the tick before: node statuses (``s``),
+feedback messages (``f``) and blackboard values (``bb``, as short text). Every ``keyframe_every``
+ticks a keyframe holds everything, so a file can start anywhere. When a file grows past
+``max_bytes`` it is rotated to ``FILE.1`` (the one before is dropped): the disk use stays below
+twice ``max_bytes`` however long the run.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TextIO
+
+import py_trees
+
+from executive import blackboard
+
+STATUS_CODES = {py_trees.common.Status.SUCCESS: "S", py_trees.common.Status.FAILURE: "F", py_trees.common.Status.RUNNING: "R"}
+MAX_VALUE_CHARS = 160
+
+
+def _show(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= MAX_VALUE_CHARS else text[: MAX_VALUE_CHARS - 3] + "..."
+
+
+def _preorder(node: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:
+    yield node
+    for child in node.children:
+        yield from _preorder(child)
+
+
+class SnapshotRecorder:
+    """Writes one line per tick of ``tree`` to ``path``; call :meth:`record` after each tick."""
+
+    def __init__(self, path: str | Path, *, max_bytes: int = 50 << 20, keyframe_every: int = 100) -> None:
+        self.path = Path(path)
+        self.max_bytes = max_bytes
+        self.keyframe_every = keyframe_every
+        self._file: TextIO = self.path.open("w", encoding="utf-8")
+        self._nodes: list[py_trees.behaviour.Behaviour] = []
+        self._tree_line = ""
+        self._status: list[str] = []
+        self._feedback: list[str] = []
+        self._values: dict[str, str] = {}
+        self._since_keyframe = 0
+
+    def attach(self, root: py_trees.behaviour.Behaviour) -> None:
+        """Start recording a (new) tree: describes it and forces a keyframe."""
+        self._nodes = list(_preorder(root))
+        ids = {id(node): i for i, node in enumerate(self._nodes)}
+        nodes = [{"id": i, "name": n.name, "type": type(n).__name__, "parent": ids.get(id(n.parent))} for i, n in enumerate(self._nodes)]
+        self._tree_line = json.dumps({"tree": nodes})
+        self._write(self._tree_line)
+        self._status, self._feedback, self._values = [], [], {}
+        self._since_keyframe = self.keyframe_every
+
+    def record(self, tick: int, t: float) -> None:
+        """Write what changed during tick ``tick`` (clock time ``t``)."""
+        keyframe = self._since_keyframe >= self.keyframe_every
+        self._since_keyframe = 0 if keyframe else self._since_keyframe + 1
+        status = [STATUS_CODES.get(n.status, "-") for n in self._nodes]
+        feedback = [n.feedback_message or "" for n in self._nodes]
+        values = {key: _show(py_trees.blackboard.Blackboard.storage.get(key)) for key in blackboard.KEYS}
+        line: dict[str, Any] = {"tick": tick, "t": round(t, 3)}
+        if keyframe:
+            line["key"] = True
+        changed = {i: s for i, s in enumerate(status) if keyframe or i >= len(self._status) or self._status[i] != s}
+        notes = {i: m for i, m in enumerate(feedback) if keyframe or i >= len(self._feedback) or self._feedback[i] != m}
+        keys = {k: v for k, v in values.items() if keyframe or self._values.get(k) != v}
+        if changed:
+            line["s"] = changed
+        if notes:
+            line["f"] = notes
+        if keys:
+            line["bb"] = keys
+        self._status, self._feedback, self._values = status, feedback, values
+        self._write(json.dumps(line, ensure_ascii=False))
+
+    def close(self) -> None:
+        self._file.close()
+
+    def _write(self, line: str) -> None:
+        self._file.write(line + "\n")
+        self._file.flush()
+        if self._file.tell() > self.max_bytes:
+            self._rotate()
+
+    def _rotate(self) -> None:
+        self._file.close()
+        os.replace(self.path, self.path.with_name(self.path.name + ".1"))
+        self._file = self.path.open("w", encoding="utf-8")
+        self._file.write(self._tree_line + "\n")
+        self._since_keyframe = self.keyframe_every  # the new file starts with a keyframe
+
+
+@dataclass
+class TickState:
+    """The tree and the blackboard as they were at one tick."""
+
+    tick: int
+    t: float
+    nodes: list[dict[str, Any]]
+    status: dict[int, str] = field(default_factory=dict)
+    feedback: dict[int, str] = field(default_factory=dict)
+    blackboard: dict[str, str] = field(default_factory=dict)
+    changed: set[str] = field(default_factory=set)
+
+
+def _lines(path: Path) -> Iterator[dict[str, Any]]:
+    for part in (path.with_name(path.name + ".1"), path):
+        if part.exists():
+            with part.open(encoding="utf-8") as f:
+                for number, line in enumerate(f, 1):
+                    try:
+                        yield json.loads(line)
+                    except json.JSONDecodeError as exc:
+                        raise ValueError(f"{part}:{number}:{exc.colno}: (snapshot): {exc.msg}") from exc
+
+
+def replay(path: str | Path, tick: int | None = None) -> TickState:
+    """The state at ``tick`` (the last recorded tick when None); LookupError if it was not recorded."""
+    path = Path(path)
+    if not path.exists() and not path.with_name(path.name + ".1").exists():
+        raise FileNotFoundError(path)
+    state: TickState | None = None
+    nodes: list[dict[str, Any]] = []
+    for line in _lines(path):
+        if "tree" in line:
+            nodes = line["tree"]
+            state = None
+            continue
+        if tick is not None and line["tick"] > tick:
+            break
+        previous = dict(state.blackboard) if state else {}
+        if state is None or line.get("key"):
+            state = TickState(line["tick"], line["t"], nodes)
+        state.tick, state.t = line["tick"], line["t"]
+        state.status.update({int(i): s for i, s in line.get("s", {}).items()})
+        state.feedback.update({int(i): m for i, m in line.get("f", {}).items()})
+        values = line.get("bb", {})
+        state.blackboard.update(values)
+        state.changed = {k for k, v in values.items() if previous.get(k) != v}  # a keyframe repeats what did not change
+    if state is None or (tick is not None and state.tick != tick):
+        raise LookupError(f"{path}: tick {tick} is not in the recording")
+    return state
+
+
+SYMBOLS = {"S": "✓", "F": "✕", "R": "*", "-": "-"}
+
+
+def render(state: TickState, *, all_keys: bool = False) -> Iterable[str]:
+    """The tree at that tick, like ``py_trees.display.unicode_tree`` with statuses, then the blackboard."""
+    yield f"tick {state.tick} at {state.t:.1f} s"
+    depth: dict[int, int] = {}
+    for node in state.nodes:
+        depth[node["id"]] = 0 if node["parent"] is None else depth[node["parent"]] + 1
+        status = state.status.get(node["id"], "-")
+        note = state.feedback.get(node["id"], "")
+        yield f"{'    ' * depth[node['id']]}{SYMBOLS[status]} {node['name']}" + (f" -- {note}" if note else "")
+    yield "blackboard" + (":" if all_keys else " (changed at this tick):")
+    for key in sorted(state.blackboard if all_keys else state.changed):
+        yield f"  {key}: {state.blackboard[key]}"

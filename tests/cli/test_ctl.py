@@ -1,0 +1,141 @@
+"""Operator control of a running executive, end to end: `executive run` in one process, `ctl` and a ground station in others."""
+
+from __future__ import annotations
+
+import json
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from executive.cli import main
+from executive.io.control import request
+from executive.io.mavlink.dialect import mavlink, mavutil
+
+ROOT = Path(__file__).parents[2]
+MISSION = """\
+version: 1
+name: two-legs
+vehicle: rover
+auto_arm: true
+home: {lat: -35.363261, lon: 149.165230}
+simulator: {ekf_ready_after_s: 2}
+waypoints:
+  - {lat: -35.3629906, lon: 149.1652300}
+  - {lat: -35.3629906, lon: 149.1665504}  # 120 m east: time for an operator to act on this leg
+"""
+
+
+@pytest.fixture
+def mission(tmp_path) -> Path:
+    path = tmp_path / "two_legs.yaml"
+    path.write_text(MISSION)
+    return path
+
+
+def run_executive(mission: Path, sock: Path, *extra: str, speedup: float = 10.0) -> subprocess.Popen:
+    args = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", str(speedup), "--socket", str(sock), "-v", *extra]
+    return subprocess.Popen(args, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def ctl(sock: Path, *args: str) -> dict:
+    proc = subprocess.run(
+        [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "--json", *args], cwd=ROOT, capture_output=True, text=True
+    )
+    return json.loads(proc.stdout)
+
+
+def wait_status(sock: Path, predicate, timeout_s: float = 30.0) -> dict:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if sock.exists():
+            reply = ctl(sock, "status")
+            if reply.get("ok") and predicate(reply["status"]):
+                return reply["status"]
+        time.sleep(0.05)
+    pytest.fail("the executive never reached the expected status")
+
+
+def test_pause_holds_resume_keeps_the_leg_abort_makes_safe(mission, tmp_path):
+    sock = tmp_path / "ctl.sock"
+    run = run_executive(mission, sock)
+    try:
+        wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
+        paused = ctl(sock, "pause")
+        assert (paused["ok"], paused["state"]) == (True, "PAUSED")
+        wait_status(sock, lambda s: s["mode"] == "HOLD")
+        time.sleep(0.3)  # 3 s of vehicle time: the rover has braked to a stop
+        held = request(str(sock), "status")["status"]
+        time.sleep(0.3)  # and a held rover does not move
+        later = request(str(sock), "status")["status"]
+        assert (later["lat"], later["lon"], later["leg"]) == (held["lat"], held["lon"], 2)
+        refused = ctl(sock, "pause")
+        assert refused["ok"] is False and "cannot pause while PAUSED" in refused["reason"]
+        assert ctl(sock, "resume")["state"] == "RUNNING"
+        resumed = wait_status(sock, lambda s: s["mode"] == "GUIDED")
+        assert resumed["leg"] == 2
+        assert ctl(sock, "abort")["state"] == "ABORTED"
+        _, err = run.communicate(timeout=30)
+        assert run.returncode == 1
+        assert "vehicle in HOLD" in err and "ABORTED: ctl: abort" in err
+    finally:
+        run.kill()
+
+
+def test_a_ground_station_pause_from_another_process_is_obeyed_and_acked(mission, tmp_path):
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    sock = tmp_path / "ctl.sock"
+    run = run_executive(mission, sock, "--gcs", f"udpin:127.0.0.1:{port}")
+    gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255, source_component=190, dialect="ardupilotmega")
+    try:
+        wait_status(sock, lambda s: s["state"] == "RUNNING" and s["mode"] == "GUIDED")
+        gcs.mav.command_long_send(1, 191, mavlink.MAV_CMD_DO_PAUSE_CONTINUE, 0, 0, 0, 0, 0, 0, 0, 0)
+        ack = gcs.recv_match(type="COMMAND_ACK", blocking=True, timeout=10)
+        assert ack is not None and (ack.command, ack.result) == (mavlink.MAV_CMD_DO_PAUSE_CONTINUE, mavlink.MAV_RESULT_ACCEPTED)
+        assert wait_status(sock, lambda s: s["mode"] == "HOLD")["state"] == "PAUSED"
+        report = gcs.recv_match(type="NAMED_VALUE_FLOAT", condition="NAMED_VALUE_FLOAT.name=='MSN_STATE'", blocking=True, timeout=10)
+        assert report is not None and report.value == 3.0  # PAUSED
+    finally:
+        gcs.close()
+        run.kill()
+        run.communicate(timeout=10)
+
+
+def test_wait_mode_serves_mission_after_mission(tmp_path):
+    mission = tmp_path / "short.yaml"
+    mission.write_text(MISSION.split("  - {lat: -35.3629906, lon: 149.1665504}")[0])  # the first leg only
+    sock = tmp_path / "ctl.sock"
+    run = run_executive(mission, sock, "--wait", speedup=25)
+    try:
+        assert wait_status(sock, lambda s: True)["state"] == "READY"
+        assert ctl(sock, "start")["state"] == "RUNNING"
+        wait_status(sock, lambda s: s["state"] == "COMPLETED")
+        uploaded = ctl(sock, "upload", str(mission))
+        assert (uploaded["ok"], uploaded["state"]) == (True, "READY")
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(MISSION.replace("lat: -35.3629906", "lat: -95.0", 1))
+        refused = ctl(sock, "upload", str(bad))
+        assert refused["ok"] is False and f"{bad}:8:" in refused["reason"]
+        assert ctl(sock, "start")["state"] == "RUNNING"
+        wait_status(sock, lambda s: s["state"] == "COMPLETED")
+        run.send_signal(signal.SIGTERM)
+        _, err = run.communicate(timeout=30)
+        assert run.returncode == 0, err
+    finally:
+        run.kill()
+
+
+def test_ctl_without_an_executive_exits_3(tmp_path, capsys):
+    assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "status"]) == 3
+    assert "no executive answers" in capsys.readouterr().err
+
+
+def test_ctl_upload_needs_a_readable_file(tmp_path, capsys):
+    assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload"]) == 2
+    assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload", str(tmp_path / "missing.yaml")]) == 2

@@ -1,0 +1,79 @@
+"""Ground-station control: pause/continue and mission start from allow-listed systems, acked; reports at 1 Hz and on changes."""
+
+from __future__ import annotations
+
+import pytest
+
+from executive.io.mavlink.dialect import mavlink
+from executive.io.mavlink.gcs import STATE_CODES, GroundStationControl
+from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.operator import Operator
+from tests_support import GCS, Peer
+
+US = (1, 191)
+
+
+@pytest.fixture
+def control(square_mission, link, clock):
+    state = MissionState()
+    state.upload(square_mission)
+    return GroundStationControl([link], clock, Operator(state, "rover"), allowed_systems=(255,))
+
+
+def command(command_id: int, *params: float, sender: Peer = GCS, target: tuple[int, int] = US):
+    padded = (*params, *([0.0] * (7 - len(params))))
+    return sender.command_long(*target, command_id, 0, *padded)
+
+
+def acks(link):
+    return [(m.command, m.result, m.target_system) for m in link.take("COMMAND_ACK")]
+
+
+def test_mission_start_then_pause_and_continue(control, link):
+    state = control._operator.mission_state
+    assert control.on_command(command(mavlink.MAV_CMD_MISSION_START), link)
+    assert state.status is MissionStatus.RUNNING
+    control.on_command(command(mavlink.MAV_CMD_DO_PAUSE_CONTINUE, 0), link)
+    assert state.status is MissionStatus.PAUSED and state.reason == "ground station 255: pause"
+    control.on_command(command(mavlink.MAV_CMD_DO_PAUSE_CONTINUE, 1), link)
+    assert state.status is MissionStatus.RUNNING
+    assert acks(link) == [
+        (mavlink.MAV_CMD_MISSION_START, mavlink.MAV_RESULT_ACCEPTED, 255),
+        (mavlink.MAV_CMD_DO_PAUSE_CONTINUE, mavlink.MAV_RESULT_ACCEPTED, 255),
+        (mavlink.MAV_CMD_DO_PAUSE_CONTINUE, mavlink.MAV_RESULT_ACCEPTED, 255),
+    ]
+
+
+def test_a_request_the_lifecycle_refuses_is_temporarily_rejected_with_a_text(control, link):
+    control.on_command(command(mavlink.MAV_CMD_DO_PAUSE_CONTINUE, 0), link)  # READY: nothing to pause
+    assert acks(link) == [(mavlink.MAV_CMD_DO_PAUSE_CONTINUE, mavlink.MAV_RESULT_TEMPORARILY_REJECTED, 255)]
+    control.service()
+    (text,) = link.take("STATUSTEXT")
+    assert text.text.startswith("executive: pause refused: cannot pause while READY")
+
+
+def test_systems_not_allow_listed_are_denied(control, link):
+    control.on_command(command(mavlink.MAV_CMD_MISSION_START, sender=Peer(42, 190)), link)
+    assert acks(link) == [(mavlink.MAV_CMD_MISSION_START, mavlink.MAV_RESULT_DENIED, 42)]
+    assert control._operator.mission_state.status is MissionStatus.READY
+
+
+def test_other_commands_to_us_are_unsupported_and_commands_to_others_are_not_ours(control, link):
+    assert control.on_command(command(mavlink.MAV_CMD_DO_SET_SERVO, 1, 1500), link)
+    assert acks(link) == [(mavlink.MAV_CMD_DO_SET_SERVO, mavlink.MAV_RESULT_UNSUPPORTED, 255)]
+    assert not control.on_command(command(mavlink.MAV_CMD_MISSION_START, target=(1, 1)), link)  # for the autopilot
+    assert acks(link) == []
+
+
+def test_reports_named_values_at_1_hz_and_text_on_changes(control, link, clock):
+    sent = []
+    for _ in range(25):  # 2.5 s
+        control.service()
+        sent += link.take("NAMED_VALUE_FLOAT")
+        clock.advance(0.1)
+    assert [m.name for m in sent] == ["MSN_STATE", "MSN_LEG", "WP_DIST"] * 3
+    assert sent[0].value == STATE_CODES[MissionStatus.READY]
+    control.on_command(command(mavlink.MAV_CMD_MISSION_START), link)
+    control.service()
+    (text,) = link.take("STATUSTEXT")
+    assert text.text == "mission RUNNING: started from the first waypoint"

@@ -1,0 +1,295 @@
+"""The heading sanity filter: synthetic drives tick by tick, and the simulator's compass faults over a real UDP link."""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Callable
+
+import py_trees
+import pytest
+
+from executive.clock import ManualClock
+from executive.io.heading import HeadingFilter, circular_mean, wrap180
+from executive.state import Attitude, GlobalPosition
+
+TICK_S = 0.1  # the runtime's 10 Hz; ATTITUDE every tick, GLOBAL_POSITION_INT every other one (5 Hz)
+
+
+def bb(key: str):
+    return py_trees.blackboard.Blackboard.get(key)
+
+
+class Drive:
+    """A vehicle driven by a script, reported as the MAVLink reader would, with the heading filter serviced each tick.
+
+    ``compass_error(t)`` is added to the true heading in ATTITUDE (t from the start of the drive);
+    the gyro and the GPS velocity tell the truth, give or take their noise.
+    """
+
+    def __init__(self, vehicle, clock: ManualClock, heading_deg: float = 60.0, seed: int = 1) -> None:
+        self.vehicle = vehicle
+        self.clock = clock
+        self.filter = HeadingFilter(clock)
+        self.heading = heading_deg
+        self.rate = 0.0
+        self.speed = 0.0
+        self.compass_error: Callable[[float], float] = lambda t: 0.0
+        self.rng = random.Random(seed)
+        self.t0 = clock.now()
+        self.ticks = 0
+        self.log: list[tuple[float, float, float | None, bool | None]] = []  # (t, true heading, /heading/deg, /heading/ok)
+
+    @property
+    def t(self) -> float:
+        return self.clock.now() - self.t0
+
+    def run(self, seconds: float, speed: float | None = None, rate: float | None = None) -> None:
+        """Drive for ``seconds`` at ``speed`` m/s turning at ``rate`` °/s (unchanged if None)."""
+        self.speed = self.speed if speed is None else speed
+        self.rate = self.rate if rate is None else rate
+        for _ in range(round(seconds / TICK_S)):
+            self.clock.advance(TICK_S)
+            self.heading = (self.heading + self.rate * TICK_S) % 360.0
+            now = self.clock.now()
+            compass = (self.heading + self.compass_error(self.t) + self.rng.gauss(0.0, 1.5)) % 360.0
+            gyro = self.rate + self.rng.gauss(0.0, 0.3)
+            self.vehicle.set(vehicle__attitude=Attitude(0.0, 0.0, compass, gyro, now))
+            if self.ticks % 2 == 0:
+                vn = self.speed * math.cos(math.radians(self.heading)) + self.rng.gauss(0.0, 0.05)
+                ve = self.speed * math.sin(math.radians(self.heading)) + self.rng.gauss(0.0, 0.05)
+                self.vehicle.set(vehicle__position=GlobalPosition(47.4, 8.5, 0.0, vn, ve, 0.0, None, now))
+            self.ticks += 1
+            self.filter.service()
+            self.log.append((self.t, self.heading, bb("/heading/deg"), bb("/heading/ok")))
+
+    def first(self, condition: Callable[[float | None, bool | None], bool], since: float = 0.0) -> float | None:
+        """The drive time at which ``condition(deg, ok)`` first held (at or after ``since``)."""
+        return next((t for t, _, deg, ok in self.log if t >= since - 1e-9 and condition(deg, ok)), None)
+
+    def max_error(self, since: float = 0.0, until: float = math.inf) -> float:
+        """The largest |/heading/deg - true heading| between two drive times."""
+        return max(abs(wrap180(deg - true)) for t, true, deg, _ in self.log if since <= t <= until and deg is not None)
+
+
+@pytest.fixture
+def drive(vehicle, clock) -> Drive:
+    return Drive(vehicle, clock)
+
+
+def test_angles_wrap():
+    assert wrap180(359.0 - 1.0) == pytest.approx(-2.0)
+    assert wrap180(1.0 - 359.0) == pytest.approx(2.0)
+    assert wrap180(180.0) == pytest.approx(-180.0)
+    assert circular_mean([359.0, 1.0, 3.0]) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_nothing_is_judged_before_any_reading(drive):
+    drive.filter.service()
+    assert (bb("/heading/deg"), bb("/heading/ok"), bb("/heading/bias_deg")) == (None, None, None)
+
+
+def test_a_good_compass_stays_ok_with_no_bias(drive):
+    drive.run(3.0)  # standing: a heading, no verdict yet
+    assert bb("/heading/deg") == pytest.approx(60.0, abs=3.0)
+    assert bb("/heading/ok") is None and bb("/heading/bias_deg") is None
+    drive.run(30.0, speed=2.0)
+    judged = drive.first(lambda deg, ok: ok is not None, since=3.0)
+    assert judged is not None and judged <= 3.0 + 7.0  # 1 s to settle out of standing, 5 s of straight driving
+    assert all(ok is not False for _, _, _, ok in drive.log)
+    assert bb("/heading/ok") is True
+    assert bb("/heading/bias_deg") == pytest.approx(0.0, abs=1.5)
+    assert drive.max_error() < 4.0
+    assert drive.filter.compass_rejected <= 2  # 1.5° noise against a 3-sigma gate on 3°: hardly ever
+    drive.run(20.0, speed=2.0, rate=15.0)  # turns: the course lags nothing here, and the compass keeps up
+    assert bb("/heading/ok") is True and drive.max_error(since=33.0) < 4.0
+
+
+def test_a_20_degree_bias_is_flagged_within_7_s_of_straight_driving(drive):
+    drive.compass_error = lambda t: 20.0
+    drive.run(2.0)
+    assert bb("/heading/ok") is None  # standing still, a bias cannot be seen
+    drive.run(20.0, speed=2.0)
+    flagged = drive.first(lambda deg, ok: ok is False)
+    assert flagged is not None and flagged - 2.0 <= 7.0
+    assert drive.first(lambda deg, ok: ok is True) is None  # never ok on the way
+    assert bb("/heading/ok") is False
+    assert bb("/heading/bias_deg") == pytest.approx(20.0, abs=3.0)
+    assert "off the course over ground" in drive.filter.reason
+    assert bb("/heading/deg") == pytest.approx(60.0, abs=3.0)  # the true heading: the bias taken off
+    drive.run(10.0, speed=0.0)  # stopped: the bias estimate is kept, and so is the verdict
+    assert bb("/heading/ok") is False and bb("/heading/bias_deg") == pytest.approx(20.0, abs=3.0)
+
+
+def test_a_bias_that_appears_when_the_motors_start_is_flagged(drive):
+    drive.run(12.0, speed=2.0)
+    assert bb("/heading/ok") is True
+    drive.compass_error = lambda t: 20.0 if t >= 12.0 else 0.0  # a step, for good
+    drive.run(20.0)
+    flagged = drive.first(lambda deg, ok: ok is False, since=12.0)
+    assert flagged is not None and flagged - 12.0 <= 5.0
+    assert bb("/heading/ok") is False and bb("/heading/bias_deg") == pytest.approx(20.0, abs=3.0)
+    assert drive.max_error(since=20.0) < 4.0
+
+
+def test_a_single_45_degree_glitch_is_rejected(drive):
+    drive.run(12.0, speed=2.0)
+    assert bb("/heading/ok") is True
+    before = bb("/heading/deg")
+    drive.compass_error = lambda t: 45.0 if 12.0 < t < 12.15 else 0.0  # one reading
+    drive.run(0.2)
+    assert drive.filter.compass_rejected >= 1
+    assert abs(drive.filter.last_compass_innovation_deg or 0.0) < 10.0  # the next reading is fine again
+    assert abs(wrap180(bb("/heading/deg") - before)) < 2.0
+    drive.run(10.0)
+    assert all(ok is True for t, _, _, ok in drive.log if t >= 12.0)
+    assert drive.max_error(since=12.0) < 4.0
+
+
+def test_a_short_burst_of_glitches_does_not_move_the_heading(drive):
+    drive.run(12.0, speed=2.0)
+    drive.compass_error = lambda t: 45.0 if 12.0 < t < 12.45 else 0.0  # four readings: below the persistent share
+    drive.run(10.0)
+    assert all(ok is True for t, _, _, ok in drive.log if t >= 12.0)
+    assert drive.max_error(since=12.0) < 4.0
+    assert drive.filter.reinits == 0
+
+
+@pytest.mark.parametrize("speed", [2.0, 0.0], ids=["driving", "standing"])
+def test_sustained_45_degree_swings_are_rejected_and_flagged(drive, speed):
+    drive.run(12.0, speed=2.0)
+    drive.run(1.0, speed=speed)
+    assert bb("/heading/ok") is True
+    drive.compass_error = lambda t: 45.0 * math.sin(2.0 * math.pi * 0.5 * (t - 13.0)) if 13.0 <= t < 23.0 else 0.0
+    drive.run(10.0)
+    flagged = drive.first(lambda deg, ok: ok is False, since=13.0)
+    assert flagged is not None and flagged - 13.0 <= 2.0
+    assert all(ok is False for t, _, _, ok in drive.log if flagged <= t < 23.0)
+    assert drive.max_error(since=13.0, until=23.0) < 5.0  # the swings never reach the heading
+    assert drive.filter.reinits == 0  # swings are not a step: the filter is not re-initialised on them
+    assert "compass rejected" in drive.filter.reason
+    drive.run(10.0)
+    recovered = drive.first(lambda deg, ok: ok is True, since=23.0)
+    assert recovered is not None and recovered - 23.0 <= 6.0
+    assert bb("/heading/ok") is True and bb("/heading/bias_deg") == pytest.approx(0.0, abs=2.0)
+
+
+def test_turning_through_north_does_not_make_a_358_degree_innovation(vehicle, clock):
+    drive = Drive(vehicle, clock, heading_deg=355.0)
+    innovations = []
+    drive.run(1.0, speed=2.0)
+    for _ in range(40):  # 355° -> 15° at 5 °/s, one tick at a time
+        drive.run(TICK_S, rate=5.0)
+        innovations.append(drive.filter.last_compass_innovation_deg)
+    assert max(abs(y) for y in innovations if y is not None) < 10.0
+    assert drive.filter.compass_rejected == 0 and drive.filter.course_rejected == 0
+    assert drive.max_error() < 4.0
+    assert 10.0 < bb("/heading/deg") < 20.0
+
+
+def test_a_compass_hovering_around_north_does_not_flap(vehicle, clock):
+    drive = Drive(vehicle, clock, heading_deg=0.0)  # noise makes readings like 359.2, 0.7, 358.9...
+    drive.run(15.0, speed=2.0)
+    assert drive.filter.compass_rejected <= 2 and drive.filter.reinits == 0
+    assert bb("/heading/ok") is True and bb("/heading/bias_deg") == pytest.approx(0.0, abs=1.5)
+    assert drive.max_error() < 4.0
+
+
+def test_a_glitched_first_reading_does_not_lock_the_filter_out(drive):
+    drive.compass_error = lambda t: 45.0 if t < 0.15 else 0.0
+    drive.run(5.0)
+    assert drive.filter.reinits == 1
+    assert bb("/heading/deg") == pytest.approx(60.0, abs=3.0)
+
+
+def test_a_standing_vehicle_does_not_use_its_course(drive):
+    drive.compass_error = lambda t: 20.0
+    drive.run(30.0, speed=0.2)  # GPS velocity noise and creeping: the course over ground is meaningless
+    assert drive.filter.course_accepted == drive.filter.course_rejected == 0
+    assert drive.filter.bias_samples == 0
+    assert bb("/heading/ok") is None and bb("/heading/bias_deg") is None
+    assert bb("/heading/deg") == pytest.approx(80.0, abs=3.0)  # the compass as it reads: no bias known
+
+
+def test_a_stale_attitude_gives_no_heading_and_no_verdict(drive):
+    drive.run(12.0, speed=2.0)
+    assert bb("/heading/ok") is True
+    drive.clock.advance(3.0)
+    drive.filter.service()
+    assert bb("/heading/deg") is None and bb("/heading/ok") is None
+    assert bb("/heading/bias_deg") == pytest.approx(0.0, abs=1.5)  # the bias is a property of the vehicle: kept
+    drive.run(1.0)
+    assert bb("/heading/ok") is True
+
+
+def test_driving_backwards_is_not_a_180_degree_bias(drive):
+    drive.run(12.0, speed=2.0)
+    drive.run(10.0, speed=-1.5)  # a tracked vehicle reversing: the course is the heading + 180°
+    assert bb("/heading/ok") is True and bb("/heading/bias_deg") == pytest.approx(0.0, abs=1.5)
+    assert drive.filter.bias_reinits == 0
+
+
+# -- against the simulator ---------------------------------------------------------------------
+
+
+def test_the_simulators_compass_bias_is_flagged_over_udp():
+    """compass_bias 20° from boot and a compass_glitch while driving a GUIDED leg, at 50x, over a real UDP link."""
+    from executive.clock import ScaledClock
+    from executive.geo import destination
+    from executive.io.mavlink.commander import Commander
+    from executive.io.mavlink.heartbeat import Heartbeat
+    from executive.io.mavlink.link import PymavlinkLink
+    from executive.io.mavlink.reader import MavlinkReader
+    from executive.io.mavlink.streams import StreamRequester, rates_for
+    from executive.sim import SimServer
+    from executive.sim.faults import CompassBias, CompassGlitch, FaultInjector
+    from executive.vehicles import PROFILES
+
+    clock = ScaledClock(50.0)
+    home = (-35.363261, 149.165230, 0.0)
+    faults = FaultInjector(
+        [CompassBias(kind="compass_bias", at_s=0.0, bias_deg=20.0), CompassGlitch(kind="compass_glitch", at_s=40.0, for_s=4.0)], clock
+    )
+    with SimServer("rover", clock=clock, home=home, ekf_ready_after_s=2.0, faults=faults) as sim:
+        link = PymavlinkLink(sim.url_for_client)
+        try:
+            commander = Commander(link, clock, PROFILES["rover"])
+            reader = MavlinkReader(link, clock, commander)
+            streams = StreamRequester(commander, rates_for("rover"))
+            reader.on_reconnect = streams.restart
+            heartbeat = Heartbeat(link, clock)
+            heading = HeadingFilter(clock)
+            target = destination(home[0], home[1], 0.0, 150.0)
+            seen: list[tuple[float, bool | None, float | None, bool]] = []  # (boot time, ok, bias, rejecting)
+            moving_at = math.inf
+            next_tick, last_goto = clock.now(), -math.inf
+            while clock.now() < 80.0:
+                reader.drain()
+                heading.service()  # where the runtime will call it: right after the reader drains
+                heartbeat.service()
+                mode, armed = bb("/vehicle/mode"), bb("/vehicle/armed")
+                if reader.autopilot is not None and commander.idle and clock.now() > 4.0:
+                    if mode != "GUIDED":
+                        commander.set_mode("GUIDED")
+                    elif not armed:
+                        commander.arm()
+                if armed and mode == "GUIDED" and clock.now() - last_goto > 2.0:
+                    commander.goto(*target)
+                    last_goto = clock.now()
+                streams.service()
+                commander.flush()
+                position = bb("/vehicle/position")
+                if position is not None and position.ground_speed_m_s > 0.5:
+                    moving_at = min(moving_at, faults.elapsed_s)
+                seen.append((faults.elapsed_s, bb("/heading/ok"), bb("/heading/bias_deg"), "compass rejected" in heading.reason))
+                next_tick += 0.1
+                clock.sleep_until(next_tick)
+        finally:
+            link.close()
+    position = bb("/vehicle/position")
+    assert position is not None and position.lat > home[0] + 50.0 / 111_000  # it drove the leg
+    flagged = next((t for t, ok, _, _ in seen if ok is False), None)
+    assert flagged is not None and flagged - moving_at < 10.0, (moving_at, seen[::20])
+    assert bb("/heading/bias_deg") == pytest.approx(20.0, abs=3.0)
+    assert any(rejecting for t, _, _, rejecting in seen if 40.0 <= t < 46.0)  # the glitch was seen as such
+    assert all(ok is not True for _, ok, _, _ in seen)

@@ -1,0 +1,94 @@
+"""The journal: every transition, leg and sample on disk at once; an unfinished run can be resumed."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import pytest
+
+from executive.journal import Journal, mission_hash
+from executive.mission.lifecycle import MissionState
+from executive.state import Sample, SampleRead
+
+
+@pytest.fixture
+def journal(tmp_path, clock):
+    j = Journal(tmp_path / "run.db", clock)
+    yield j
+    j.close()
+
+
+def sample(leg: int) -> Sample:
+    return Sample(leg, 47.0, 8.0, (SampleRead("ph", 7.5, "", 1.0), SampleRead("temperature", 18.2, "°C", 1.0)), 1.0, 11.0)
+
+
+def reopen(journal, clock) -> Journal:
+    """A second connection, as a new process after a crash would have."""
+    return Journal(journal.path, clock)
+
+
+def test_a_run_is_recorded_as_it_happens(journal, clock, square_mission):
+    state = MissionState()
+    journal.attach(state)
+    state.upload(square_mission)
+    journal.begin_run(square_mission)
+    state.start()
+    journal.observe_leg(state, 47.0, 8.0)
+    state.record_sample(sample(0))
+    state.advance_leg()
+    clock.advance(5.0)
+    journal.observe_leg(state, 47.1, 8.1)
+    journal.observe_leg(state, 47.1, 8.1)  # no change, no row
+    journal.event("failsafe", "EKF lost: holding")
+    other = reopen(journal, clock)  # committed already: another connection sees it all
+    report = other.report()
+    other.close()
+    assert [(t["before"], t["after"]) for t in report["transitions"]] == [("READY", "RUNNING")]
+    assert [leg["leg"] for leg in report["legs"]] == [0, 1]
+    assert report["samples"][0]["reads"][1] == {"sensor": "temperature", "value": 18.2, "unit": "°C", "time": 1.0}
+    assert report["events"] == [{"t": clock.now(), "kind": "failsafe", "text": "EKF lost: holding"}]
+    assert report["outcome"] is None and report["ended"] is None
+
+
+def test_an_unfinished_run_resumes_at_its_last_leg_with_its_samples(journal, clock, square_mission):
+    state = MissionState()
+    journal.attach(state)
+    state.upload(square_mission)
+    run = journal.begin_run(square_mission)
+    state.start()
+    state.record_sample(sample(0))
+    state.advance_leg()
+    state.advance_leg()
+    journal.observe_leg(state, None, None)
+    # the process dies here (kill -9): nothing more is written
+    after_crash = reopen(journal, clock)
+    point = after_crash.resume_point(square_mission)
+    after_crash.close()
+    assert (point.run, point.leg_index) == (run, 2)
+    assert point.samples == (sample(0),)
+
+
+def test_a_finished_run_or_another_mission_is_not_resumed(journal, clock, square_mission):
+    journal.begin_run(square_mission)
+    journal.end_run("COMPLETED", "every waypoint reached")
+    assert journal.resume_point(square_mission) is None
+    other = square_mission.model_copy(update={"name": "other"})
+    journal.begin_run(other)
+    assert journal.resume_point(square_mission) is None
+    assert journal.resume_point(other) is not None
+    assert mission_hash(other) != mission_hash(square_mission)
+
+
+def test_a_sample_is_never_recorded_twice_for_a_leg(journal, square_mission):
+    state = MissionState()
+    journal.attach(state)
+    state.upload(square_mission)
+    journal.begin_run(square_mission)
+    state.start()
+    state.record_sample(sample(0))
+    with pytest.raises(sqlite3.IntegrityError):
+        journal._on_sample(sample(0))
+
+
+def test_the_database_is_in_wal_mode(journal):
+    assert journal._db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"

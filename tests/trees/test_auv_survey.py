@@ -1,0 +1,544 @@
+"""The AUV survey tree (the Zeno mission manager's rules), tick by tick against a scripted ArduSub, and once on the simulator."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+from py_trees.common import Status
+
+import trees
+from executive.clock import ManualClock, ScaledClock
+from executive.geo import destination, distance, distance_bearing
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import mavlink
+from executive.io.mavlink.modes import ArduPilotModes
+from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.loader import load_mission
+from executive.mission.model import Mission
+from executive.runtime import explain_failure
+from executive.state import EkfFlags, EkfStatus, GlobalPosition
+from executive.vehicles import PROFILES, SUB_MODES
+
+EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+START = (44.0950000, 9.8630000)
+SEABED_M = 30.0
+LIMITS = {
+    "max_goal_distance_m": 1000.0,
+    "speed_m_s": {"min": 0.1, "max": 1.0},
+    "depth_m": {"min": 0.0, "max": 100.0},
+    "altitude_m": {"min": 2.0, "max": 100.0},
+    "acceptance_radius_m": 2.0,
+    "leg_timeout_s": 60.0,
+    "recovery_timeout_s": 30.0,
+    "ekf_wait_s": 60.0,
+}
+ROOT = Path(__file__).parents[2]
+_M = mavlink
+
+
+def at(lat_lon: tuple[float, float], bearing_deg: float, metres: float) -> dict[str, float]:
+    lat, lon = destination(*lat_lon, bearing_deg, metres)
+    return {"lat": lat, "lon": lon}
+
+
+def sub_mission(*waypoints: dict[str, Any]) -> Mission:
+    return Mission.model_validate(
+        {
+            "version": 1,
+            "name": "survey",
+            "vehicle": "sub",
+            "tree": "auv_survey",
+            "auto_arm": True,
+            "limits": LIMITS,
+            "waypoints": list(waypoints),
+        }
+    )
+
+
+NORTH = at(START, 0.0, 30.0)
+EAST = at((NORTH["lat"], NORTH["lon"]), 90.0, 30.0)
+BACK = at((EAST["lat"], EAST["lon"]), 180.0, 30.0)
+#: a depth leg, an altitude leg, and a depth leg without a speed
+SURVEY = (
+    {**NORTH, "name": "north", "control_mode": "depth", "depth_m": 5.0, "speed_m_s": 0.5},
+    {**EAST, "name": "east", "control_mode": "altitude", "altitude_m": 20.0, "speed_m_s": 0.8},
+    {**BACK, "name": "back", "control_mode": "depth", "depth_m": 3.0},
+)
+
+
+class ScriptedSub:
+    """An ArduSub that obeys at once: modes, arming, speed; in GUIDED it steps toward its setpoint, horizontally and vertically.
+
+    ``commands`` is what it was told, readable: ``("mode", "GUIDED")``, ``("speed", 0.5)``,
+    ``("depth", 5.0, "north")`` (a setpoint, named by the waypoint it is at or ``"in place"``;
+    re-sent setpoints are listed once). SURFACE climbs and hands over to ALT_HOLD at the surface.
+    """
+
+    def __init__(self, harness: Any, vehicle: Any, mission: Mission, start: tuple[float, float] = START) -> None:
+        self.h, self.vehicle, self.mission = harness, vehicle, mission
+        self.lat, self.lon = start
+        self.depth, self.seabed_m, self.speed_over_m_s = 0.0, SEABED_M, 0.0
+        self.step_m, self.dz_m = 8.0, 1.0
+        self.mode, self.armed = "MANUAL", False
+        self.target: tuple[float, float] | None = None
+        self.depth_target: float | None = None
+        self.altitude_target: float | None = None
+        self.commands: list[tuple[Any, ...]] = []
+        self.received = 0
+        self.refuse: set[str] = set()
+        self.position_known = True
+        self.sonar = True
+        self.publish()
+
+    @property
+    def altitude(self) -> float:
+        return self.seabed_m - self.depth
+
+    def publish(self) -> None:
+        self.vehicle.set(vehicle__mode=self.mode, vehicle__armed=self.armed)
+        if self.position_known:
+            self.vehicle.set(vehicle__position=GlobalPosition(self.lat, self.lon, -self.depth, self.speed_over_m_s, 0, 0, 0, 0))
+        self.vehicle.set(vehicle__altitude_above_bottom_m=self.altitude if self.sonar else None)
+
+    def _where(self, lat: float, lon: float) -> str:
+        return next((wp.name for wp in self.mission.waypoints if distance(lat, lon, wp.lat, wp.lon) < 0.05), "in place")
+
+    def _record(self, entry: tuple[Any, ...]) -> None:
+        if entry[0] in ("depth", "altitude") and self.commands and self.commands[-1] == entry:
+            return
+        self.commands.append(entry)
+
+    def _command(self, msg: Any) -> None:
+        if msg.command == _M.MAV_CMD_DO_SET_MODE:
+            mode = ArduPilotModes(SUB_MODES).decode(int(msg.param2))
+            self._record(("mode", mode))
+            refused = mode in self.refuse
+            if not refused:
+                self.mode = mode
+                self.target = self.depth_target = self.altitude_target = None
+        elif msg.command == _M.MAV_CMD_COMPONENT_ARM_DISARM:
+            self._record(("arm", msg.param1))
+            refused = False
+            self.armed = bool(msg.param1)
+        elif msg.command == _M.MAV_CMD_DO_CHANGE_SPEED:
+            self._record(("speed", round(msg.param2, 3)))
+            refused = "speed" in self.refuse
+        else:
+            raise AssertionError(f"unexpected command {msg.command}")
+        self.h.ack(msg.command, _M.MAV_RESULT_DENIED if refused else _M.MAV_RESULT_ACCEPTED)
+
+    def _setpoint(self, msg: Any) -> None:
+        lat, lon = msg.lat_int / 1e7, msg.lon_int / 1e7
+        if msg.coordinate_frame == _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT:
+            self._record(("depth", round(-msg.alt, 3), self._where(lat, lon)))
+            self.depth_target, self.altitude_target = -msg.alt, None
+        elif msg.coordinate_frame == _M.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT:
+            self._record(("altitude", round(msg.alt, 3), self._where(lat, lon)))
+            self.depth_target, self.altitude_target = None, msg.alt
+        else:
+            raise AssertionError(f"unexpected frame {msg.coordinate_frame}")
+        self.target = (lat, lon)
+
+    def respond(self) -> None:
+        for msg in self.h.link.take():
+            self.received += 1
+            if msg.get_type() == "COMMAND_LONG":
+                self._command(msg)
+            elif msg.get_type() == "SET_POSITION_TARGET_GLOBAL_INT" and self.mode == "GUIDED":  # ignored silently elsewhere
+                self._setpoint(msg)
+        if self.armed and self.mode == "GUIDED" and self.target is not None:
+            d, b = distance_bearing(self.lat, self.lon, *self.target)
+            self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
+            wanted = self.depth_target if self.depth_target is not None else self.seabed_m - (self.altitude_target or 0.0)
+            self.depth += max(-self.dz_m, min(self.dz_m, wanted - self.depth))
+        elif self.armed and self.mode == "SURFACE":
+            self.depth = max(0.0, self.depth - self.dz_m)
+            if self.depth <= 0.1:
+                self.mode = "ALT_HOLD"  # ModeReason::SURFACE_COMPLETE
+        self.publish()
+
+    def run(self, ticks: int, until: Callable[[], bool] | None = None) -> list[Status]:
+        statuses = []
+        for _ in range(ticks):
+            statuses.append(self.h.tick())
+            self.respond()
+            if statuses[-1] != Status.RUNNING or (until is not None and until()):
+                break
+        return statuses
+
+
+class Survey:
+    """A mission's tree, started, over a scripted sub (at START unless told) with the EKF ready; notes the depths each leg ends at."""
+
+    def __init__(self, harness: Any, vehicle: Any, clock: ManualClock, state: MissionState, mission: Mission, start: tuple[float, float]) -> None:
+        self.clock, self.state, self.vehicle = clock, state, vehicle
+        state.upload(mission)
+        state.start()
+        self.root = trees.build(mission)
+        self.h = harness(self.root)
+        vehicle.set(link__up=True, vehicle__ekf=EKF_READY, rc__channels=(1500,) * 8)
+        self.sub = ScriptedSub(self.h, vehicle, mission, start)
+        self.depths_at_leg_end: list[tuple[float, float]] = []
+        advance = state.advance_leg
+
+        def note_and_advance() -> None:
+            self.depths_at_leg_end.append((self.sub.depth, self.sub.altitude))
+            advance()
+
+        state.advance_leg = note_and_advance  # type: ignore[method-assign]
+
+    def run(self, ticks: int, until: Callable[[], bool] | None = None) -> list[Status]:
+        return self.sub.run(ticks, until)
+
+    def run_to_leg(self, index: int) -> None:
+        assert self.run(500, until=lambda: self.state.leg_index >= index)[-1] == Status.RUNNING
+        assert self.state.leg_index == index
+
+    def under_way(self, kind: str, value: float, waypoint: str) -> None:
+        """Run until the sub is going to ``waypoint`` at its depth or altitude, a step out."""
+        assert self.run(100, until=lambda: self.sub.commands[-1] == (kind, value, waypoint))[-1] == Status.RUNNING
+        self.run(1)
+
+
+@pytest.fixture
+def commander(link: Any, clock: ManualClock) -> Commander:
+    """Replaces the shared rover's: ArduSub's mode numbers."""
+    return Commander(link, clock, PROFILES["sub"])
+
+
+@pytest.fixture
+def mission_state() -> MissionState:
+    """Replaces the shared square: each test uploads its own survey."""
+    return MissionState()
+
+
+MakeSurvey = Callable[..., Survey]
+
+
+@pytest.fixture
+def make_survey(harness: Any, vehicle: Any, clock: ManualClock, mission_state: MissionState) -> MakeSurvey:
+    """``make_survey(mission, start=START)``: the :class:`Survey` of a mission (one per test)."""
+
+    def make(mission: Mission, start: tuple[float, float] = START) -> Survey:
+        return Survey(harness, vehicle, clock, mission_state, mission, start)
+
+    return make
+
+
+# -- the whole survey ----------------------------------------------------------------------------
+
+
+def test_each_leg_sets_its_speed_reaches_its_depth_or_altitude_goes_there_then_the_sub_surfaces_and_holds(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    statuses = survey.run(400)
+    assert statuses[-1] == Status.SUCCESS and set(statuses[:-1]) == {Status.RUNNING}
+    assert survey.sub.commands == [
+        ("arm", 1.0),
+        ("mode", "GUIDED"),
+        ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north"),
+        ("speed", 0.8), ("altitude", 20.0, "north"), ("altitude", 20.0, "east"),  # first where the sub is (it stopped on north)
+        ("depth", 3.0, "east"), ("depth", 3.0, "back"),  # no speed on this leg: none is sent
+        ("mode", "SURFACE"),
+        ("mode", "POSHOLD"),
+    ]  # fmt: skip
+    assert survey.depths_at_leg_end == [(5.0, SEABED_M - 5.0), (SEABED_M - 20.0, 20.0), (3.0, SEABED_M - 3.0)]
+    assert (survey.sub.mode, survey.sub.depth, survey.sub.armed) == ("POSHOLD", 0.0, True)  # held at the surface, armed for the pick-up
+    assert survey.state.leg_index == 3
+
+
+@pytest.mark.parametrize(
+    ("waypoint", "setpoints"),
+    [
+        ({"control_mode": "depth", "depth_m": 5.0}, [("depth", 5.0, "in place"), ("depth", 5.0, "wp")]),
+        ({"depth_m": 5.0}, [("depth", 5.0, "in place"), ("depth", 5.0, "wp")]),  # no control mode: a depth
+        ({"control_mode": "altitude", "altitude_m": 20.0}, [("altitude", 20.0, "in place"), ("altitude", 20.0, "wp")]),
+        ({"control_mode": "depth"}, [("depth", 0.0, "wp")]),  # no depth: at the surface
+        ({"control_mode": "depth", "depth_m": 0.0}, [("depth", 0.0, "in place"), ("depth", 0.0, "wp")]),
+    ],
+    ids=["depth", "depth-by-default", "altitude", "depth-missing-surface", "depth-0"],
+)
+def test_the_control_mode_decides_the_setpoints_of_a_leg(make_survey: MakeSurvey, waypoint: dict[str, Any], setpoints: list[tuple[Any, ...]]) -> None:
+    survey = make_survey(sub_mission({**NORTH, "name": "wp", **waypoint}))
+    assert survey.run(100)[-1] == Status.SUCCESS
+    assert [c for c in survey.sub.commands if c[0] in ("depth", "altitude")] == setpoints
+
+
+def test_a_last_leg_at_the_surface_needs_no_surfacing(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission({**NORTH, "name": "wp", "control_mode": "depth", "depth_m": 0.0}))
+    assert survey.run(100)[-1] == Status.SUCCESS
+    assert survey.sub.commands[-2:] == [("depth", 0.0, "wp"), ("mode", "POSHOLD")]
+
+
+# -- the 1 km rule: the whole mission, against the live position, once ---------------------------
+
+
+@pytest.mark.parametrize(
+    ("vehicle_at", "far", "refusal"),
+    [
+        (START, 999.0, None),
+        (START, 1001.0, "waypoint 1 (far) is 1001 m away, over 1000 m"),
+        (destination(*START, 180.0, 1100.0), 0.0, "waypoint 0 (north) is 1130 m away, over 1000 m"),  # the live position, not the plan
+    ],
+    ids=["999-m-accepted", "1001-m-refused", "vehicle-1.1-km-off"],
+)
+def test_a_waypoint_over_1_km_from_the_live_position_refuses_the_whole_mission_before_anything_is_sent(
+    make_survey: MakeSurvey, vehicle_at: tuple[float, float], far: float, refusal: str | None
+) -> None:
+    survey = make_survey(sub_mission(SURVEY[0], {**at(START, 90.0, far), "name": "far", "depth_m": 2.0}), start=vehicle_at)
+    statuses = survey.run(1)
+    if refusal is None:
+        assert statuses == [Status.RUNNING]
+        assert survey.sub.commands == [("arm", 1.0)]
+        return
+    assert statuses == [Status.FAILURE]
+    assert (survey.sub.commands, survey.sub.received) == ([], 0)  # nothing at all went to the vehicle
+    assert explain_failure(survey.root) == f"All waypoints within 1000 m?: {refusal}"
+
+
+def test_acceptance_waits_for_the_ekf_then_for_a_position(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    survey.vehicle.set(vehicle__ekf=EKF_LOST)
+    assert survey.run(20) == [Status.RUNNING] * 20
+    survey.sub.position_known = False
+    survey.vehicle.set(vehicle__ekf=EKF_READY, vehicle__position=None)
+    assert survey.run(20) == [Status.RUNNING] * 20
+    assert survey.sub.received == 0
+    survey.sub.position_known = True
+    survey.sub.publish()
+    assert survey.run(1) == [Status.RUNNING]
+    assert survey.sub.commands == [("arm", 1.0)]
+
+
+def test_no_position_within_the_ekf_wait_fails_the_mission(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    survey.sub.position_known = False
+    survey.vehicle.set(vehicle__position=None)
+    statuses = survey.run(700)
+    assert statuses[-1] == Status.FAILURE and len(statuses) == 602  # ekf_wait_s = 60 s at 10 Hz, then the tick that gives up
+    assert explain_failure(survey.root) == "Wait until Position known?: gave up after 60 s: no position"
+    assert survey.sub.received == 0
+
+
+def test_the_1_km_rule_is_checked_once_so_resuming_far_from_the_first_waypoint_carries_on(make_survey: MakeSurvey) -> None:
+    """900 m out and 1.8 km back: accepted at the start (both within 1 km); from the turn the second is 1.8 km away."""
+    out, back = at(START, 0.0, 900.0), at(START, 180.0, 900.0)
+    survey = make_survey(sub_mission({**out, "name": "out", "depth_m": 2.0}, {**back, "name": "back", "depth_m": 2.0}))
+    survey.sub.step_m = 100.0
+    survey.run_to_leg(1)
+    survey.state.pause("operator: pause")
+    survey.run(5)
+    survey.state.resume()
+    statuses = survey.run(100)
+    assert statuses[-1] == Status.SUCCESS
+    assert survey.state.leg_index == 2
+
+
+# -- guards: hold in POSHOLD and wait; the same leg afterwards ------------------------------------
+
+
+def _depth(survey: Survey, metres: float) -> None:
+    survey.sub.depth = metres
+
+
+def _seabed_rises(survey: Survey, altitude_m: float) -> None:
+    survey.sub.seabed_m = survey.sub.depth + altitude_m
+
+
+GUARD_CASES = [
+    # (leg, what goes wrong, put it right, does the executive hold the vehicle?)
+    pytest.param(0, lambda s: _depth(s, 101.0), lambda s: _depth(s, 5.0), True, id="deeper-than-100-m"),
+    pytest.param(0, lambda s: setattr(s.sub, "speed_over_m_s", 1.5), lambda s: setattr(s.sub, "speed_over_m_s", 0.0), True, id="too-fast"),
+    pytest.param(1, lambda s: _seabed_rises(s, 1.0), lambda s: _seabed_rises(s, 20.0), True, id="altitude-leg-1-m-above-the-seabed"),
+    pytest.param(1, lambda s: setattr(s.sub, "sonar", False), lambda s: setattr(s.sub, "sonar", True), True, id="altitude-leg-no-sonar"),
+    pytest.param(0, lambda s: _seabed_rises(s, 1.0), lambda s: _seabed_rises(s, 25.0), False, id="depth-leg-1-m-above-the-seabed-not-judged"),
+    pytest.param(0, lambda s: s.vehicle.set(vehicle__ekf=EKF_LOST), lambda s: s.vehicle.set(vehicle__ekf=EKF_READY), True, id="ekf-lost"),
+    pytest.param(0, lambda s: s.vehicle.set(link__up=False), lambda s: s.vehicle.set(link__up=True), True, id="link-lost"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("leg", "break_it", "mend_it", "holds"), GUARD_CASES)
+def test_a_failed_guard_holds_the_sub_until_it_recovers_then_the_same_leg_goes_on(
+    make_survey: MakeSurvey, leg: int, break_it: Callable[[Survey], None], mend_it: Callable[[Survey], None], holds: bool
+) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    wp = SURVEY[leg]
+    survey.run_to_leg(leg)
+    survey.under_way(*(("depth", wp["depth_m"]) if "depth_m" in wp else ("altitude", wp["altitude_m"])), wp["name"])
+    before = len(survey.sub.commands)
+    break_it(survey)
+    survey.sub.publish()
+    if holds:
+        assert survey.run(30) == [Status.RUNNING] * 30
+        assert survey.sub.commands[before:] == [("mode", "POSHOLD")]  # asked once, then waited
+        assert survey.state.leg_index == leg
+    else:  # not judged on this leg: the leg goes on to its end
+        assert survey.run(30, until=lambda: survey.state.leg_index > leg)[-1] == Status.RUNNING
+        assert ("mode", "POSHOLD") not in survey.sub.commands[before:]
+        assert survey.state.leg_index == leg + 1
+    mend_it(survey)
+    survey.sub.publish()
+    survey.run(3)
+    if holds:
+        assert survey.sub.commands[before + 1] == ("mode", "GUIDED")
+        assert survey.state.leg_index == leg
+    assert survey.run(400)[-1] == Status.SUCCESS
+
+
+def test_a_take_over_sends_nothing_while_the_pilot_has_the_sub(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    survey.under_way("depth", 5.0, "north")
+    before = len(survey.sub.commands)
+    survey.vehicle.set(rc__channels=(1500,) * 5 + (1900,))  # the pilot flips the take-over switch and drives
+    survey.sub.mode = "MANUAL"
+    assert survey.run(30) == [Status.RUNNING] * 30
+    assert survey.sub.commands[before:] == []  # no POSHOLD, no GUIDED while the pilot has it
+    assert survey.state.leg_index == 0
+    survey.vehicle.set(rc__channels=(1500,) * 8)
+    survey.run(10, until=lambda: len(survey.sub.commands) == before + 4)
+    assert survey.sub.commands[before:] == [("mode", "GUIDED"), ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north")]
+    assert survey.state.leg_index == 0
+    assert survey.run(400)[-1] == Status.SUCCESS
+
+
+def test_a_guard_that_never_recovers_fails_the_mission_with_its_reason(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    survey.under_way("depth", 5.0, "north")
+    survey.sub.depth = 101.0
+    survey.sub.publish()
+    statuses = survey.run(400)
+    assert statuses[-1] == Status.FAILURE and len(statuses) == 302  # recovery_timeout_s = 30 s
+    assert explain_failure(survey.root) == "Wait for guards: not recovered after 30 s: Depth within [0, 100] m? depth 101.0 m outside [0, 100] m"
+
+
+# -- what ends a survey early --------------------------------------------------------------------
+
+
+def _refuse(what: str) -> Callable[[ScriptedSub], None]:
+    return lambda sub: sub.refuse.add(what)
+
+
+FAILURES = [
+    # (what goes wrong, the runtime's reason, when (s after the start))
+    pytest.param(_refuse("speed"), "For each leg: leg 1/3 failed: Change speed: refused: DENIED", 0.4, id="speed-refused"),
+    pytest.param(lambda sub: setattr(sub, "dz_m", 0.0), "For each leg: leg 1/3 failed: Change depth: depth 0.0 m, target 5 m, not reached after 60 s",
+                 60.5, id="depth-never-reached"),
+    pytest.param(lambda sub: setattr(sub, "step_m", 0.01),
+                 "For each leg: leg 1/3 failed: Go to waypoint: leg 1/3: timed out after 60 s, 24.0 m short", 61.0, id="waypoint-never-reached"),
+    pytest.param(_refuse("SURFACE"), "Surface: refused: DENIED", None, id="surface-refused"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("break_it", "reason", "after_s"), FAILURES)
+def test_a_refusal_or_a_timeout_ends_the_survey_with_its_reason(
+    make_survey: MakeSurvey, break_it: Callable[[ScriptedSub], None], reason: str, after_s: float | None
+) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    break_it(survey.sub)
+    statuses = survey.run(2000)
+    assert statuses[-1] == Status.FAILURE and set(statuses[:-1]) <= {Status.RUNNING}
+    assert explain_failure(survey.root) == reason
+    if after_s is not None:
+        assert survey.clock.now() - 100.0 == pytest.approx(after_s, abs=0.05)
+
+
+def test_a_sub_that_does_not_come_up_fails_after_the_climb_time_and_a_margin(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    survey.run_to_leg(2)
+    assert survey.run(400, until=lambda: survey.sub.commands[-1] == ("mode", "SURFACE"))[-1] == Status.RUNNING
+    started = survey.clock.now()
+    survey.sub.dz_m = 0.0  # stuck 2 m down (it came up 1 m on the first tick)
+    statuses = survey.run(1000)
+    assert statuses[-1] == Status.FAILURE
+    assert survey.clock.now() - started == pytest.approx(30.0 + 3.0 / 0.5, abs=0.15)
+    assert explain_failure(survey.root) == "Surface: not confirmed after 36 s: depth 2.0 m in SURFACE"
+
+
+# -- the lifecycle: pause holds, resume carries on with the same leg at the same depth -----------
+
+
+def test_pausing_mid_leg_holds_and_resuming_continues_the_same_leg_at_the_same_depth(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    survey.under_way("depth", 5.0, "north")
+    before = len(survey.sub.commands)
+    survey.state.pause("operator: pause")
+    assert survey.run(20) == [Status.RUNNING] * 20
+    assert survey.sub.commands[before:] == [("mode", "POSHOLD")]  # asked once
+    held = (survey.sub.lat, survey.sub.lon, survey.sub.depth)
+    survey.run(10)
+    assert (survey.sub.lat, survey.sub.lon, survey.sub.depth) == held == (*held[:2], 5.0)
+    assert (survey.state.status, survey.state.leg_index) == (MissionStatus.PAUSED, 0)
+    survey.state.resume()
+    survey.run(100, until=lambda: survey.state.leg_index == 1)
+    assert survey.sub.commands[before + 1 :][:4] == [("mode", "GUIDED"), ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north")]
+    assert survey.depths_at_leg_end == [(5.0, SEABED_M - 5.0)]
+    assert survey.run(400)[-1] == Status.SUCCESS
+
+
+# -- the simulator: ArduSub over a modelled seabed, real MAVLink over UDP --------------------------
+
+
+def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) -> tuple[Any, list[dict[str, float]], dict[str, Any], float]:
+    from executive.io.mavlink.link import PymavlinkLink
+    from executive.runtime import Runtime
+    from executive.sim import SimServer
+
+    assert mission.simulator is not None
+    clock = ScaledClock(50.0)
+    legs: list[dict[str, float]] = []
+    wall = time.monotonic()
+    with SimServer("sub", clock=clock, home=home, ekf_ready_after_s=mission.simulator.ekf_ready_after_s) as sim:
+        link = PymavlinkLink(sim.url_for_client)
+        try:
+            runtime = Runtime(mission, link, clock)
+            assert runtime.connect(10.0 * clock.speedup)
+            advance = runtime.mission_state.advance_leg
+
+            def note_and_advance() -> None:
+                wp = mission.waypoints[runtime.mission_state.leg_index]
+                with sim.lock:
+                    v = sim.autopilot.vehicle
+                    legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": clock.now()})
+                advance()
+
+            runtime.mission_state.advance_leg = note_and_advance  # type: ignore[method-assign]
+            started = clock.now()
+            outcome = runtime.run()
+            with sim.lock:
+                ap = sim.autopilot
+                end = {"mode": ap.mode, "armed": ap.armed, "depth": ap.vehicle.depth_m, "moved_m": ap.vehicle.distance_to(home[0], home[1])}
+            end["vehicle_s"] = clock.now() - started
+        finally:
+            link.close()
+    return outcome, legs, end, time.monotonic() - wall
+
+
+def test_the_example_survey_on_the_simulated_ardusub_reaches_each_waypoint_at_its_depth_or_altitude() -> None:
+    mission = load_mission(ROOT / "missions" / "auv_survey.yaml")
+    assert mission.home is not None
+    outcome, legs, end, _wall_s = _run_on_the_simulator(mission, (mission.home.lat, mission.home.lon, mission.home.heading_deg))
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    assert len(legs) == len(mission.waypoints) == 4
+    for wp, leg in zip(mission.waypoints, legs, strict=True):
+        assert leg["off_m"] <= mission.limits.acceptance_radius_m
+        if wp.control_mode == "altitude":
+            assert leg["altitude"] == pytest.approx(wp.altitude_m, abs=0.5), wp.name
+        else:
+            assert leg["depth"] == pytest.approx(wp.depth_m, abs=0.5), wp.name
+    assert legs[2]["depth"] > 6.0  # 24 m above a seabed 30.5 m deep there: the altitude leg follows the seabed, not a depth
+    assert (end["mode"], end["armed"]) == ("POSHOLD", True) and end["depth"] < 0.2  # surfaced, holding for the pick-up
+    assert end["vehicle_s"] < 180.0
+
+
+def test_on_the_simulator_a_sub_1_km_off_refuses_the_survey_without_arming_or_moving() -> None:
+    mission = load_mission(ROOT / "missions" / "auv_survey.yaml")
+    assert mission.home is not None
+    home = (*destination(mission.home.lat, mission.home.lon, 270.0, 1200.0), 0.0)
+    outcome, legs, end, _ = _run_on_the_simulator(mission, home)
+    assert str(outcome.status) == "ABORTED"
+    assert outcome.reason.startswith("All waypoints within 1000 m?: waypoint 0 (start) is 120")
+    assert (legs, end["armed"]) == ([], False) and end["moved_m"] < 0.01

@@ -1,0 +1,730 @@
+"""The tracked UGV's RC route tree, tick by tick against a scripted ArduRover, and once end to end on the simulated Bunker.
+
+The scripted rover obeys mode and arm commands at once (or refuses them when told to), answers the
+mission protocol with the simulator's own mission store (ArduPilot's conventions: home at item 0,
+MISSION_REQUEST, read-back as stored), and in AUTO steps toward the current mission item, reporting
+MISSION_CURRENT and MISSION_ITEM_REACHED as ArduRover does.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Iterator
+from pathlib import Path
+
+import py_trees
+import pytest
+from py_trees.common import Status
+
+import trees
+from executive import geo
+from executive.clock import ManualClock, ScaledClock
+from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
+from executive.io.mavlink.link import PymavlinkLink
+from executive.io.mavlink.mission_protocol import MissionItemReached, MissionTransfer
+from executive.io.mavlink.modes import ArduPilotModes
+from executive.io.rc import RcReader
+from executive.mission.errors import MissionError
+from executive.mission.lifecycle import MissionState
+from executive.mission.loader import load_mission, load_mission_text
+from executive.mission.model import Mission
+from executive.runtime import Outcome, Runtime
+from executive.sim import SimServer
+from executive.sim.faults import FaultInjector, RcInput, load_faults
+from executive.sim.mission_store import MissionStore
+from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
+from executive.vehicles import ROVER_MODES
+from tests_support import ack
+
+UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
+PWM = {UP: 1000, MIDDLE: 1500, DOWN: 2000}
+EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+START = (-35.363261, 149.165230)
+ROOT = Path(__file__).parents[2]
+_M = mavlink
+_EXECUTIVE = mavlink.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)
+
+
+def mission_with(**changes: object) -> Mission:
+    doc: dict[str, object] = {
+        "version": 1, "name": "rc-route", "vehicle": "rover", "tree": "ugv_rc_route",
+        "limits": {"recovery_timeout_s": 10.0, "ekf_wait_s": 20.0},
+        "rc_route": {"aux_mode": "HOLD", "operator_timeout_s": 30.0},
+        "waypoints": [],
+    }  # fmt: skip
+    doc.update(changes)
+    return Mission.model_validate(doc)
+
+
+def ahead(north_m: float, east_m: float = 0.0) -> tuple[float, float]:
+    """A point north and east of START."""
+    lat, lon = geo.destination(*START, 0.0, north_m)
+    return geo.destination(lat, lon, 90.0, east_m)
+
+
+def flat(points) -> list[float]:
+    """Latitudes and longitudes in one list, for pytest.approx."""
+    return [x for point in points for x in point]
+
+
+def wire(msg: MAVLinkMessage) -> MAVLinkMessage:
+    """As the vehicle receives it: packed by the executive (system 1, component 191), decoded."""
+    return mavlink.MAVLink(None).decode(bytearray(msg.pack(_EXECUTIVE)))
+
+
+class Rig:
+    """The tree of ``mission`` ticked by hand (10 Hz) against a scripted ArduRover; IO as the runtime does it."""
+
+    def __init__(self, mission: Mission, clock: ManualClock, link, commander, vehicle) -> None:
+        self.mission, self.clock, self.link, self.commander, self.vehicle = mission, clock, link, commander, vehicle
+        self.transfer = MissionTransfer(link, clock)
+        self.rc_reader = RcReader(mission.rc, clock)
+        self.state = MissionState()
+        self.state.upload(mission)
+        self.state.start()
+        self.root = trees.build(mission)
+        self.tree = py_trees.trees.BehaviourTree(self.root)
+        self.tree.setup(clock=clock, commander=commander, mission_state=self.state, mission_transfer=self.transfer)
+        # the scripted rover (and the mission store's owner)
+        self.system_id = self.component_id = 1
+        self.home: tuple[float, float] | None = START
+        self.lat, self.lon = START
+        self.mode, self.armed, self.ekf = "MANUAL", False, EKF_READY
+        self.link_up = self.rc_alive = self.mission_answers = True
+        self.refuse: set[str] = set()  # "arm", or mode names refused with FAILED
+        self.step_m = 2.0
+        self.position_age_s = 0.0  # how old the position reports are
+        self.store = MissionStore(self, self._emit, lambda severity, text: self.vehicle.set(vehicle__statustext=(severity, text)))
+        self._replies: list[MAVLinkMessage] = []
+        self.commands: list[tuple[object, ...]] = []
+        self.channels = [1500] * 16
+        switches = mission.rc.switch_channels
+        self._channel = {"swa": switches.swa, "swb": switches.swb, "swc": switches.swc, "swd": switches.swd, "knob": switches.knob}
+        self.rc(swa=UP, swb=UP, swc=UP, swd=UP, knob=0)
+        self._rc_time = clock.now()
+
+    # -- the operator ----------------------------------------------------------------------------
+    def rc(self, **positions: SwitchPosition | int | None) -> None:
+        """``rc(swc=MIDDLE, knob=-50)``: the operator moves switches (None: the channel reads 0)."""
+        for name, where in positions.items():
+            pwm = 0 if where is None else 1500 + 5 * where if name == "knob" else PWM[where]  # type: ignore[index, operator]
+            self.channels[self._channel[name] - 1] = pwm
+
+    # -- ticking ---------------------------------------------------------------------------------
+    def tick(self) -> Status:
+        self.clock.advance(0.1)
+        self._publish()
+        self.rc_reader.service()
+        self.tree.tick()
+        self.commander.flush()
+        self.transfer.flush()
+        self._respond()
+        return self.root.status
+
+    def run(self, ticks: int) -> list[Status]:
+        statuses = []
+        for _ in range(ticks):
+            statuses.append(self.tick())
+            if statuses[-1] != Status.RUNNING:
+                break
+        return statuses
+
+    def run_until(self, done, limit: int = 600) -> int:
+        """Ticks until ``done()``; fails the test if it never is."""
+        for n in range(1, limit + 1):
+            assert self.tick() == Status.RUNNING
+            if done():
+                return n
+        raise AssertionError(f"not done after {limit} ticks")
+
+    def take(self) -> list[tuple[object, ...]]:
+        """The commands the rover received since the last take."""
+        taken, self.commands = self.commands, []
+        return taken
+
+    def feedback(self, name: str) -> str:
+        return next(node.feedback_message for node in self.root.iterate() if node.name == name)
+
+    def waypoints(self) -> list[tuple[float, float]]:
+        """The route in the mission state."""
+        return [(wp.lat, wp.lon) for wp in self.state.route.waypoints]
+
+    def held(self) -> list[tuple[float, float]]:
+        """The route in the rover's mission store (items 1..n)."""
+        return [(self.store.command(seq).lat, self.store.command(seq).lon) for seq in range(1, self.store.count)]
+
+    # -- the scripted rover ----------------------------------------------------------------------
+    def _publish(self) -> None:
+        now = self.clock.now()
+        if self.rc_alive:
+            self._rc_time = now
+            self.vehicle.set(rc__channels=tuple(self.channels))
+        self.vehicle.set(
+            link__up=self.link_up, vehicle__mode=self.mode, vehicle__armed=self.armed, vehicle__ekf=self.ekf,
+            vehicle__position=GlobalPosition(self.lat, self.lon, 0.0, 0.0, 0.0, 0.0, None, now - self.position_age_s), rc__last_update=self._rc_time,
+        )  # fmt: skip
+
+    def _emit(self, msg: MAVLinkMessage) -> None:
+        self._replies.append(msg)
+
+    def _respond(self) -> None:
+        for _ in range(50):  # the rover answers at once: a whole upload and read-back within one tick
+            sent = self.link.take()
+            if not sent:
+                break
+            for msg in sent:
+                self._receive(msg)
+            self._deliver()
+            self.transfer.flush()
+            self.commander.flush()
+        self._drive_auto()
+        self._deliver()
+
+    def _receive(self, msg: MAVLinkMessage) -> None:
+        kind = msg.get_type()
+        if kind == "COMMAND_LONG" and msg.command == _M.MAV_CMD_DO_SET_MODE:
+            mode = ArduPilotModes(ROVER_MODES).decode(int(msg.param2))
+            self.commands.append(("mode", mode))
+            refused = mode in self.refuse or (mode == "AUTO" and not self.store.present)
+            if refused:
+                self.vehicle.set(vehicle__statustext=(4, "Flight mode change failed"))
+            else:
+                if self.mode == "AUTO":
+                    self.store.stop()
+                self.mode = mode
+                if mode == "AUTO":
+                    self.store.start_or_resume()
+            self.commander.on_ack(ack(msg.command, _M.MAV_RESULT_FAILED if refused else _M.MAV_RESULT_ACCEPTED))
+        elif kind == "COMMAND_LONG" and msg.command == _M.MAV_CMD_COMPONENT_ARM_DISARM:
+            self.commands.append(("arm", msg.param1))
+            refused = msg.param1 == 1.0 and "arm" in self.refuse
+            if refused:
+                self.vehicle.set(vehicle__statustext=(2, "PreArm: AHRS: not using configured AHRS type"))
+            else:
+                self.armed = msg.param1 == 1.0
+            self.commander.on_ack(ack(msg.command, _M.MAV_RESULT_FAILED if refused else _M.MAV_RESULT_ACCEPTED))
+        elif kind in MissionStore.MESSAGES:
+            if kind == "MISSION_COUNT":
+                self.commands.append(("upload", msg.count - 1))  # waypoints after home
+            elif kind == "MISSION_REQUEST_LIST":
+                self.commands.append(("read back",))
+            if self.mission_answers:
+                self.store.handle(wire(msg))
+
+    def _deliver(self) -> None:
+        """The rover's mission replies, as the MAVLink reader hands them to the transfer."""
+        handlers = {
+            "MISSION_REQUEST": self.transfer.on_request, "MISSION_REQUEST_INT": self.transfer.on_request,
+            "MISSION_ACK": self.transfer.on_ack, "MISSION_COUNT": self.transfer.on_count, "MISSION_ITEM_INT": self.transfer.on_item,
+            "MISSION_CURRENT": self.transfer.on_current, "MISSION_ITEM_REACHED": self.transfer.on_reached,
+        }  # fmt: skip
+        replies, self._replies = self._replies, []
+        for msg in replies:
+            handlers[msg.get_type()](msg, self.clock.now())
+
+    def _drive_auto(self) -> None:
+        """AUTO: a step toward the current item; within 0.3 m it is reached and the next one is current."""
+        if self.mode != "AUTO":
+            return
+        item = self.store.current
+        if item is not None and self.armed:
+            d, b = geo.distance_bearing(self.lat, self.lon, item.lat, item.lon)
+            self.lat, self.lon = geo.destination(self.lat, self.lon, b, min(d, self.step_m))
+            if d <= self.step_m:
+                self.store.advance()
+        self._emit(self.store.current_message())
+
+
+@pytest.fixture
+def rig_for(clock, link, commander, vehicle):
+    """``rig_for(mission)``: a :class:`Rig` running the mission's tree."""
+    return lambda mission: Rig(mission, clock, link, commander, vehicle)
+
+
+@pytest.fixture
+def rig(rig_for) -> Rig:
+    """An empty route, the rover in MANUAL and disarmed; ticked once: the empty route is on the rover."""
+    r = rig_for(mission_with())
+    assert r.tick() == Status.RUNNING
+    assert r.take() == [("upload", 0), ("read back",)]  # the mission's route (none) replaces whatever the rover held
+    return r
+
+
+def record(r: Rig, *points: tuple[float, float]) -> None:
+    """Drive to each point and flip switch A down and up there, the knob in the middle."""
+    r.rc(knob=0)
+    for point in points:
+        r.lat, r.lon = point
+        r.rc(swa=DOWN)
+        r.tick()
+        r.rc(swa=UP)
+        r.tick()
+
+
+# -- the whole story, tick by tick ---------------------------------------------------------------
+
+
+def test_the_operator_arms_records_a_route_and_auto_drives_it_to_the_end(rig: Rig) -> None:
+    rig.rc(swd=DOWN)
+    assert rig.tick() == Status.RUNNING
+    assert rig.take() == [("arm", 1.0)] and rig.armed
+    assert rig.feedback("Switch D: arm") == "switch D DOWN: asked to be armed"
+    rig.tick()
+    assert rig.feedback("Switch D: arm") == "switch D DOWN: armed"  # the heartbeat shows it
+    points = [ahead(10.0), ahead(20.0), ahead(20.0, 10.0)]
+    for n, point in enumerate(points, start=1):
+        rig.lat, rig.lon = point
+        rig.rc(swa=DOWN)
+        assert rig.tick() == Status.RUNNING
+        assert rig.take() == [("upload", n), ("read back",)]
+        assert rig.feedback("Switch A: edit the route") == f"switch A DOWN, knob +0: waypoint {n} added at {point[0]:.7f}, {point[1]:.7f}"
+        assert rig.waypoints() == points[:n]
+        assert flat(rig.held()) == pytest.approx(flat(points[:n]), abs=1e-7)
+        rig.rc(swa=UP)
+        assert rig.tick() == Status.RUNNING
+        assert rig.take() == []
+    assert rig.feedback("Keep the route on the autopilot") == "the autopilot holds the route: 3 waypoints, read back"
+    assert rig.feedback("Drive the route in AUTO").startswith("waiting for the operator (")
+    assert rig.feedback("Drive the route in AUTO").endswith("switch C to the middle (AUTO) drives the route; the mode is MANUAL")
+    rig.rc(swc=MIDDLE)
+    assert rig.tick() == Status.RUNNING
+    assert rig.take() == [("mode", "AUTO")]
+    legs = []
+    while (status := rig.tick()) == Status.RUNNING:
+        legs.append(rig.state.leg_index)
+    assert status == Status.SUCCESS
+    assert sorted(set(legs)) == [0, 1, 2, 3]  # the leg index followed the rover through every waypoint
+    assert rig.take() == [("mode", "HOLD")]  # held at the end; nothing else was asked on the way
+    assert (rig.lat, rig.lon) == pytest.approx(points[-1], abs=1e-7)  # at the last waypoint, as the rover stored it
+
+
+# -- switch C: the mode --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("aux", "mode", "route", "before", "after", "commands", "feedback"),
+    [
+        ("HOLD", "MANUAL", 0, UP, DOWN, [("mode", "HOLD")], "switch C DOWN: HOLD"),
+        (None, "MANUAL", 0, UP, DOWN, [], "switch C DOWN: no aux mode set (rc_route.aux_mode): ignored"),
+        ("HOLD", "HOLD", 0, DOWN, UP, [("mode", "MANUAL")], "switch C UP: MANUAL"),
+        ("HOLD", "MANUAL", 0, DOWN, UP, [], "switch C UP: MANUAL (already)"),
+        ("HOLD", "MANUAL", 1, UP, MIDDLE, [("mode", "AUTO")], "switch C MIDDLE: AUTO"),
+        ("HOLD", "MANUAL", 0, UP, MIDDLE, [], "switch C MIDDLE: AUTO not asked: no route recorded"),
+    ],
+)
+def test_switch_c_sets_the_mode_when_it_moves(rig_for, aux, mode, route, before, after, commands, feedback) -> None:
+    r = rig_for(mission_with(rc_route={"aux_mode": aux}, waypoints=[{"lat": ahead(5.0)[0], "lon": START[1]}] * route))
+    r.mode = mode
+    r.rc(swc=before)
+    assert r.run(3) == [Status.RUNNING] * 3
+    assert r.take() == [("upload", route), ("read back",)]  # the first position is only noted
+    r.rc(swc=after)
+    assert r.run(2) == [Status.RUNNING] * 2
+    assert r.take() == commands
+    assert r.feedback("Switch C: mode") == feedback
+
+
+def test_switch_c_does_not_fight_a_ground_station_nor_act_again_after_a_hold(rig: Rig) -> None:
+    rig.rc(swc=DOWN)
+    rig.tick()
+    assert rig.take() == [("mode", "HOLD")]
+    rig.mode = "GUIDED"  # a ground station takes the vehicle
+    assert rig.run(20) == [Status.RUNNING] * 20
+    assert rig.take() == []
+    rig.link_up = False  # a guard fails: the vehicle is held...
+    rig.tick()
+    assert rig.take() == [("mode", "HOLD")]
+    rig.link_up = True  # ...and when the guard recovers, switch C (still down) is not acted on again
+    rig.mode = "MANUAL"
+    assert rig.run(10) == [Status.RUNNING] * 10
+    assert rig.take() == []
+
+
+def test_auto_waits_for_the_route_upload_then_is_asked(rig: Rig) -> None:
+    rig.mission_answers = False  # the rover does not answer the mission protocol for now
+    record(rig, ahead(10.0))
+    rig.rc(swc=MIDDLE)
+    rig.tick()
+    assert rig.take() == [("upload", 1)]  # the count, unanswered; no AUTO
+    assert rig.feedback("Switch C: mode").startswith("switch C MIDDLE: AUTO waits for the route upload: the autopilot's mission differs")
+    assert rig.feedback("Keep the route on the autopilot") == "uploading the route: sending 0/2 items"
+    rig.mission_answers = True
+    n = rig.run_until(lambda: rig.mode == "AUTO", limit=30)
+    assert rig.take() == [("upload", 1), ("read back",), ("mode", "AUTO")]  # the count resent after 1.5 s, then all went through
+    assert 14 <= n <= 17
+    assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO: asked"
+    rig.tick()
+    assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO"  # the heartbeat shows it
+
+
+def test_a_mode_refused_by_the_autopilot_is_reported_and_the_mission_goes_on(rig: Rig) -> None:
+    record(rig, ahead(10.0))
+    rig.take()
+    rig.refuse.add("AUTO")
+    rig.rc(swc=MIDDLE)
+    assert rig.run(10) == [Status.RUNNING] * 10
+    assert rig.take() == [("mode", "AUTO")]  # asked once, never again by itself
+    assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO refused: FAILED (Flight mode change failed)"
+    rig.refuse.clear()
+    rig.rc(swc=UP)
+    rig.tick()
+    rig.rc(swc=MIDDLE)  # the operator tries again
+    rig.tick()
+    assert rig.take() == [("mode", "AUTO")] and rig.mode == "AUTO"
+
+
+# -- switch D: arming ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("mode", "armed", "before", "after", "commands", "feedback"),
+    [
+        ("MANUAL", False, UP, DOWN, [("arm", 1.0)], "switch D DOWN: armed"),
+        ("HOLD", False, UP, DOWN, [], "switch D DOWN: arming refused: the mode is HOLD; ArduRover arms only in MANUAL (switch C up)"),
+        ("AUTO", False, UP, DOWN, [], "switch D DOWN: arming refused: the mode is AUTO; ArduRover arms only in MANUAL (switch C up)"),
+        ("MANUAL", True, DOWN, UP, [("arm", 0.0)], "switch D UP: disarmed"),
+        ("AUTO", True, DOWN, UP, [("arm", 0.0)], "switch D UP: disarmed"),  # disarming is allowed in any mode
+        ("MANUAL", True, UP, DOWN, [], "switch D DOWN: already armed"),
+        ("MANUAL", False, DOWN, UP, [], "switch D UP: already disarmed"),
+        ("MANUAL", False, UP, MIDDLE, [], "switch D MIDDLE: a two-position switch has no middle: ignored"),
+    ],
+)
+def test_switch_d_arms_only_in_manual_and_disarms(rig_for, mode, armed, before, after, commands, feedback) -> None:
+    r = rig_for(mission_with())
+    r.mode, r.armed = mode, armed
+    r.rc(swd=before)
+    r.tick()
+    assert r.take() == [("upload", 0), ("read back",)]  # the first position is only noted
+    r.rc(swd=after)
+    assert r.run(2) == [Status.RUNNING] * 2
+    assert r.take() == commands
+    assert r.feedback("Switch D: arm") == feedback
+
+
+def test_an_arm_refused_by_the_autopilot_says_why_and_is_not_retried(rig: Rig) -> None:
+    rig.refuse.add("arm")
+    rig.rc(swd=DOWN)
+    assert rig.run(60) == [Status.RUNNING] * 60
+    assert rig.take() == [("arm", 1.0)]
+    assert rig.feedback("Switch D: arm") == "switch D DOWN: not armed: refused: FAILED (PreArm: AHRS: not using configured AHRS type)"
+
+
+# -- switch A and the knob: route edits ----------------------------------------------------------
+
+ROUTE = [ahead(10.0), ahead(20.0), ahead(30.0)]
+
+
+@pytest.mark.parametrize(
+    ("knob", "edit", "route_after", "leg_after"),
+    [
+        (-100, "route cleared (3 waypoints removed)", [], 0),
+        (-26, "route cleared (3 waypoints removed)", [], 0),
+        (-25, "waypoint 4 added at {here}", [*ROUTE, "here"], 1),
+        (0, "waypoint 4 added at {here}", [*ROUTE, "here"], 1),
+        (25, "waypoint 4 added at {here}", [*ROUTE, "here"], 1),
+        (26, "waypoint 2/3 removed", [ROUTE[0], ROUTE[2]], 1),  # the current one: the rover heads for waypoint 2
+        (100, "waypoint 2/3 removed", [ROUTE[0], ROUTE[2]], 1),
+    ],
+)
+def test_switch_a_edits_the_route_by_the_knob_and_the_edit_is_uploaded(rig_for, knob, edit, route_after, leg_after) -> None:
+    r = rig_for(mission_with(waypoints=[{"lat": lat, "lon": lon} for lat, lon in ROUTE]))
+    r.tick()
+    r.state.advance_leg()  # waypoint 1 is behind: heading for waypoint 2
+    r.lat, r.lon = here = ahead(15.0, 5.0)
+    r.rc(knob=knob)
+    r.tick()
+    assert r.take() == [("upload", 3), ("read back",)]
+    r.rc(swa=DOWN)
+    assert r.tick() == Status.RUNNING
+    expected = [here if p == "here" else p for p in route_after]
+    assert r.take() == [("upload", len(expected)), ("read back",)]
+    assert r.waypoints() == expected
+    assert flat(r.held()) == pytest.approx(flat(expected), abs=1e-7)
+    assert r.state.leg_index == leg_after
+    assert r.feedback("Switch A: edit the route") == f"switch A DOWN, knob {knob:+d}: " + edit.format(here=f"{here[0]:.7f}, {here[1]:.7f}")
+
+
+@pytest.mark.parametrize(
+    ("trouble", "knob", "feedback"),
+    [
+        ("ekf", 0, "switch A DOWN, knob +0: add a waypoint here refused: the EKF has no position estimate"),
+        ("old position", 0, "switch A DOWN, knob +0: add a waypoint here refused: the last position is 1.6 s old"),
+        ("empty", 60, "switch A DOWN, knob +60: remove the current waypoint refused: the route is empty: no waypoint to remove"),
+        ("no knob", None, "switch A DOWN: no knob VRA position: nothing done"),
+    ],
+)
+def test_a_route_edit_that_cannot_be_done_changes_nothing_and_says_why(rig: Rig, trouble, knob, feedback) -> None:
+    record(rig, ahead(5.0))
+    if trouble == "empty":
+        rig.rc(knob=-100, swa=DOWN)
+        rig.tick()
+        rig.rc(swa=UP)
+        rig.tick()
+    rig.take()
+    before = rig.waypoints()
+    rig.rc(knob=knob)
+    if trouble == "ekf":
+        rig.ekf = EKF_LOST
+    if trouble == "old position":
+        rig.position_age_s = 1.6  # GLOBAL_POSITION_INT stopped coming 1.6 s ago
+    rig.tick()
+    rig.rc(swa=DOWN)
+    rig.tick()
+    assert rig.take() == []
+    assert rig.waypoints() == before
+    assert rig.feedback("Switch A: edit the route") == feedback
+
+
+def test_one_edit_per_flip_of_switch_a(rig: Rig) -> None:
+    rig.rc(swa=DOWN)
+    assert rig.run(30) == [Status.RUNNING] * 30  # held down: one waypoint
+    rig.rc(swa=UP)
+    assert rig.run(5) == [Status.RUNNING] * 5  # up: nothing
+    assert rig.waypoints() == [START]
+    rig.rc(swa=DOWN)
+    rig.tick()
+    assert rig.waypoints() == [START, START]
+    assert rig.take() == [("upload", 1), ("read back",), ("upload", 2), ("read back",)]
+
+
+def test_a_failed_upload_is_tried_again_later_and_auto_waits_for_it(rig: Rig) -> None:
+    rig.mission_answers = False
+    record(rig, ahead(10.0))
+    n = rig.run_until(lambda: "upload failed" in rig.feedback("Keep the route on the autopilot"), limit=100)
+    assert 90 <= n <= 97  # the count and 5 resends 1.5 s apart (checked at 10 Hz), then the transfer gives up
+    assert rig.take() == [("upload", 1)] * 6
+    assert rig.feedback("Keep the route on the autopilot") == "upload failed (no MISSION_REQUEST for item 0 after 5 retries); trying again in 5 s"
+    rig.mission_answers = True
+    rig.rc(swc=MIDDLE)
+    assert rig.run(49) == [Status.RUNNING] * 49
+    assert rig.take() == []  # no upload and no AUTO for 5 s
+    rig.run_until(lambda: rig.mode == "AUTO", limit=3)
+    assert rig.take() == [("upload", 1), ("read back",), ("mode", "AUTO")]
+
+
+# -- driving the route ---------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("left_undone", "why"),
+    [
+        ("no route", "no route recorded (switch A down with the knob in the middle adds a waypoint here)"),
+        ("no upload", "the route is not on the autopilot yet: the autopilot's mission differs (the vehicle holds 0 items, 1 were sent)"),
+        ("MANUAL", "switch C to the middle (AUTO) drives the route; the mode is MANUAL"),
+        ("disarmed", "the vehicle is disarmed (it arms in MANUAL only: switch C up, switch D down)"),
+    ],
+)
+def test_the_operator_not_driving_the_route_in_time_fails_the_mission(rig: Rig, left_undone: str, why: str) -> None:
+    rig.mission_answers = left_undone != "no upload"
+    if left_undone != "no route":
+        record(rig, ahead(10.0))  # 0.2 s of the 30 s are gone
+    else:
+        rig.run(2)
+    if left_undone == "disarmed":
+        rig.mode = "AUTO"
+    statuses = rig.run(400)
+    assert statuses == [Status.RUNNING] * 298 + [Status.FAILURE]
+    assert rig.feedback("Drive the route in AUTO") == f"the operator did not drive the route within 30 s: {why}"
+
+
+def test_leaving_auto_keeps_the_leg_restarts_the_wait_and_auto_resumes_there(rig: Rig) -> None:
+    rig.armed = True
+    record(rig, ahead(10.0), ahead(20.0), ahead(30.0))
+    rig.rc(swc=MIDDLE)
+    rig.run_until(lambda: rig.state.leg_index == 1)
+    rig.rc(swc=UP)  # the operator takes the vehicle back for a while
+    rig.tick()
+    assert rig.mode == "MANUAL" and rig.state.leg_index == 1
+    assert rig.run(290) == [Status.RUNNING] * 290  # 29 s: the wait restarted when the drive stopped
+    rig.rc(swc=MIDDLE)
+    rig.run_until(lambda: rig.state.leg_index == 2)
+    assert rig.store.current_seq == 3
+    assert rig.run(100)[-1] == Status.SUCCESS
+
+
+def test_a_reached_report_from_before_the_drive_does_not_count(rig: Rig, vehicle) -> None:
+    rig.armed = True
+    record(rig, ahead(10.0), ahead(20.0))
+    vehicle.set(vehicle__mission_reached=MissionItemReached(2, rig.clock.now()))  # left over from an earlier drive
+    rig.tick()
+    rig.rc(swc=MIDDLE)
+    rig.step_m = 0.5
+    rig.run(3)
+    assert rig.state.leg_index == 0
+    assert rig.feedback("Drive the route in AUTO").startswith("waypoint 1/2: ")
+
+
+def test_removing_the_current_waypoint_while_driving_sends_the_rover_to_the_next(rig: Rig) -> None:
+    rig.armed, rig.step_m = True, 0.5
+    record(rig, ahead(10.0), ahead(20.0), ahead(30.0))
+    rig.rc(swc=MIDDLE)
+    rig.run_until(lambda: rig.state.leg_index == 1)
+    rig.take()
+    rig.rc(knob=80, swa=DOWN)
+    rig.tick()
+    assert rig.take() == [("upload", 2), ("read back",)]
+    assert rig.waypoints() == [ahead(10.0), ahead(30.0)] and rig.state.leg_index == 1
+    statuses = [rig.tick() for _ in range(100)]
+    assert Status.SUCCESS in statuses
+    assert (rig.lat, rig.lon) == pytest.approx(ahead(30.0), abs=1e-6)
+
+
+# -- guards, pre-flight, pause -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("trouble", ["rc stale", "link lost"])
+def test_a_failed_guard_holds_the_vehicle_and_ends_the_mission_if_it_does_not_recover(rig: Rig, trouble: str) -> None:
+    record(rig, ahead(10.0))
+    rig.take()
+    if trouble == "rc stale":
+        rig.rc_alive = False  # the receiver's report freezes (CAN: the base repeats the last frame)
+        assert rig.run(10) == [Status.RUNNING] * 10  # fresh for rc.fresh_timeout_s (1 s)
+        assert rig.take() == []
+    else:
+        rig.link_up = False
+    rig.rc(swc=MIDDLE)  # unseen while RC is stale
+    rig.tick()
+    assert rig.take() == [("mode", "HOLD")]
+    assert rig.feedback("Wait for guards").startswith("holding (0/10 s): ")
+    statuses = rig.run(200)
+    assert statuses == [Status.RUNNING] * 100 + [Status.FAILURE]
+    assert rig.take() == []
+
+
+def test_switch_moves_wait_out_stale_rc_and_count_when_it_is_back(rig: Rig) -> None:
+    record(rig, ahead(10.0))
+    rig.take()
+    rig.rc_alive = False
+    rig.run(12)
+    assert rig.take() == [("mode", "HOLD")]
+    assert rig.feedback("Wait for guards") == "holding (0/10 s): RC fresh? no RC report within 1 s"
+    rig.rc(swc=MIDDLE)
+    assert rig.run(20) == [Status.RUNNING] * 20
+    assert rig.take() == []
+    rig.rc_alive = True
+    rig.tick()
+    assert rig.take() == [("mode", "AUTO")]  # the operator's latest wish, once it can be read
+
+
+def test_the_switches_wait_for_the_ekf_and_the_mission_fails_without_one(rig_for) -> None:
+    r = rig_for(mission_with())
+    r.ekf = EKF_LOST
+    r.rc(swd=DOWN)
+    statuses = r.run(300)
+    assert statuses == [Status.RUNNING] * 201 + [Status.FAILURE]  # limits.ekf_wait_s: 20 s
+    assert r.take() == []  # no upload, no arming
+
+
+def test_pause_holds_and_resume_acts_on_nothing_already_done(rig: Rig) -> None:
+    record(rig, ahead(10.0))
+    rig.rc(swc=DOWN)
+    rig.tick()
+    rig.rc(swc=UP)
+    rig.tick()
+    rig.take()
+    rig.state.pause("operator: pause")
+    assert rig.run(10) == [Status.RUNNING] * 10
+    assert rig.take() == [("mode", "HOLD")]
+    rig.state.resume()
+    assert rig.run(10) == [Status.RUNNING] * 10
+    assert rig.take() == []  # switch C is still up: no MANUAL again; the route is still on the rover
+    assert rig.waypoints() == [ahead(10.0)]
+
+
+# -- the mission file ----------------------------------------------------------------------------
+
+
+def test_an_aux_mode_the_rover_lacks_is_refused_before_anything_runs() -> None:
+    text = "version: 1\nname: m\nvehicle: rover\ntree: ugv_rc_route\nrc_route: {aux_mode: LOITR}\nwaypoints: []\n"
+    with pytest.raises(MissionError) as refused:
+        load_mission_text(text, "m.yaml")
+    assert [str(e) for e in refused.value.errors] == [
+        "m.yaml:5:22: rc_route.aux_mode: 'LOITR': not a rover mode (known: MANUAL, ACRO, STEERING, HOLD, LOITER, FOLLOW, SIMPLE, DOCK, CIRCLE, "
+        "AUTO, RTL, SMART_RTL, GUIDED)"
+    ]
+
+
+def test_the_example_mission_shows_its_tree() -> None:
+    text = py_trees.display.unicode_tree(trees.build(load_mission(ROOT / "missions/ugv_rc_route.yaml")))
+    for name in ("Switch A: edit the route", "Keep the route on the autopilot", "Switch C: mode", "Switch D: arm", "Drive the route in AUTO"):
+        assert name in text
+
+
+# -- end to end: the simulated Bunker and the scripted operator -----------------------------------
+
+
+class Observer(FaultInjector):
+    """Plays the operator's event file and watches the simulated vehicle: where it was at each flip of switch A,
+    its mode and distance at each waypoint reached, and whether it was ever armed outside MANUAL."""
+
+    def __init__(self, plan, clock, swa_channel: int) -> None:
+        super().__init__(plan, clock)
+        self.swa_channel = swa_channel
+        self.flips: list[tuple[float, float]] = []
+        self.reached: list[tuple[int, str, float]] = []
+        self.armed_in: set[str] = set()
+        self._swa = 0
+        self._armed = False
+
+    def attach(self, autopilot) -> None:
+        super().attach(autopilot)
+        store, advance = autopilot.mission, autopilot.mission.advance
+
+        def reached():
+            item = store.current
+            self.reached.append((store.current_seq, autopilot.mode, autopilot.vehicle.distance_to(item.lat, item.lon)))
+            return advance()
+
+        store.advance = reached
+
+    def update(self, autopilot) -> None:
+        super().update(autopilot)
+        swa = autopilot.rc_channels[self.swa_channel - 1]
+        if swa > 1700 >= self._swa:
+            self.flips.append((autopilot.vehicle.lat, autopilot.vehicle.lon))
+        self._swa = swa
+        if autopilot.armed and not self._armed:
+            self.armed_in.add(autopilot.mode)
+        self._armed = autopilot.armed
+
+
+@pytest.fixture
+def scenario() -> Iterator[tuple[Observer, Runtime, Outcome, SimServer]]:
+    mission = load_mission(ROOT / "missions/ugv_rc_route.yaml")
+    assert mission.simulator is not None and mission.simulator.events is not None and mission.home is not None
+    clock = ScaledClock(50.0)
+    plan = load_faults(ROOT / "missions" / mission.simulator.events, vehicle="rover")
+    assert all(isinstance(f, RcInput) for f in plan.faults)
+    observer = Observer(plan, clock, mission.rc.switch_channels.swa)
+    home = (mission.home.lat, mission.home.lon, mission.home.heading_deg)
+    with SimServer("bunker", clock=clock, home=home, faults=observer, ekf_ready_after_s=mission.simulator.ekf_ready_after_s) as sim:
+        link = PymavlinkLink(sim.url_for_client)
+        try:
+            runtime = Runtime(mission, link, clock)
+            assert runtime.connect(10.0 * clock.speedup)
+            outcome = runtime.run()
+        finally:
+            link.close()
+        yield observer, runtime, outcome, sim
+
+
+def test_scenario_the_operator_records_a_route_on_the_simulated_bunker_and_auto_drives_it(scenario) -> None:
+    observer, runtime, outcome, sim = scenario
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    recorded = [(wp.lat, wp.lon) for wp in runtime.mission_state.route.waypoints]
+    assert len(recorded) == len(observer.flips) == 4
+    # where the vehicle was at each flip of switch A (the operator stops to record: what the executive hears a few
+    # reports later, RC_CHANNELS and GLOBAL_POSITION_INT at 5 Hz, is still that place)
+    for (lat, lon), flip in zip(recorded, observer.flips, strict=True):
+        assert geo.distance(lat, lon, *flip) < 0.1
+    assert min(geo.distance(*a, *b) for a, b in itertools.pairwise(recorded)) > 5.0  # four distinct places
+    assert flat((i.x, i.y) for i in runtime.mission_transfer.items) == pytest.approx(flat(recorded), abs=1e-7)  # read back
+    store = sim.autopilot.mission
+    assert flat((store.command(s).lat, store.command(s).lon) for s in range(1, store.count)) == pytest.approx(flat(recorded), abs=1e-7)
+    assert [(seq, mode) for seq, mode, _ in observer.reached] == [(1, "AUTO"), (2, "AUTO"), (3, "AUTO"), (4, "AUTO")]
+    assert all(d <= 0.5 for _, _, d in observer.reached)
+    assert observer.armed_in == {"MANUAL"}  # switch D down in HOLD armed nothing
+    assert runtime.mission_state.leg_index == 4
+    assert sim.autopilot.mode == "HOLD"
+    assert sim.autopilot.elapsed_s < 180.0

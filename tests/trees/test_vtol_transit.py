@@ -1,0 +1,524 @@
+"""The VTOL transit tree (seed system 3 on an ArduPlane QuadPlane), tick by tick against a scripted QuadPlane, and once on the simulator."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+from py_trees.common import Status
+
+import trees
+from executive import blackboard
+from executive.clock import ManualClock, ScaledClock
+from executive.frames import global_to_local, local_to_global
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import mavlink
+from executive.io.mavlink.modes import ArduPilotModes
+from executive.mission.lifecycle import MissionState
+from executive.mission.loader import load_mission
+from executive.mission.model import Mission
+from executive.runtime import explain_failure
+from executive.state import EkfFlags, EkfStatus, GlobalPosition, HomePosition
+from executive.vehicles import PLANE_MODES, PROFILES
+
+R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
+_M = mavlink
+EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+HOME = (-35.363261, 149.165230)
+ROOT = Path(__file__).parents[2]
+WP1, WP2 = (500.0, 100.0), (500.0, 400.0)  # metres north, east of home: beyond the transition's point 300 m ahead
+LOITER_RADIUS_M = 60.0
+MODES = ArduPilotModes(PLANE_MODES)
+
+
+def at(north: float, east: float, alt_m: float = 40.0) -> dict[str, float]:
+    lat, lon = local_to_global(*HOME, north, east)
+    return {"lat": lat, "lon": lon, "alt_m": alt_m}
+
+
+def vtol_mission(land: str = "home", hover: dict[str, float] | None = None, **limits: float) -> Mission:
+    vtol: dict[str, Any] = {"takeoff_alt_m": 30.0, "land": land, "transition_timeout_s": 30.0}
+    if hover is not None:
+        vtol["hover_enu"] = hover
+    return Mission.model_validate(
+        {
+            "version": 1,
+            "name": "transit",
+            "vehicle": "vtol",
+            "tree": "vtol_transit",
+            "auto_arm": True,
+            "limits": {"acceptance_radius_m": 100.0, "leg_timeout_s": 120.0, "recovery_timeout_s": 30.0, "ekf_wait_s": 60.0, **limits},
+            "vtol": vtol,
+            "waypoints": [at(*WP1), at(*WP2)],
+        }
+    )
+
+
+HOVER = {"east_m": 30.0, "north_m": 20.0, "up_m": 30.0}
+
+
+class ScriptedQuadPlane:
+    """An ArduPlane QuadPlane (Q_GUIDED_MODE=1) that obeys at once and moves a step per tick, in metres from home.
+
+    Modes and arming are acked at once. NAV_TAKEOFF (GUIDED, armed, on the ground) climbs
+    (landed TAKEOFF, then IN_AIR). DO_REPOSITION puts it in GUIDED: from a hover, within
+    WP_LOITER_RAD, it flies there as a multicopter; otherwise it transitions (TRANSITION_TO_FW for
+    ``transition_ticks``) and flies as a plane, circling the point at 60 m. QLOITER hovers (MC)
+    where it is; LOITER circles (a plane); QRTL flies home as a multicopter and lands; QLAND lands;
+    on the ground it disarms. ``commands`` is what it was told, readable: ``("mode", "GUIDED")``,
+    ``("takeoff", 30.0)``, ``("reposition", north, east, alt)`` (metres from home, rounded).
+    """
+
+    MC_STEP_M, FW_STEP_M, CLIMB_STEP_M = 2.0, 10.0, 2.0
+
+    def __init__(self, harness: Any, vehicle: Any) -> None:
+        self.h, self.vehicle = harness, vehicle
+        self.n = self.e = self.alt = 0.0
+        self.mode, self.armed, self.vtol, self.landed = "MANUAL", False, "FW", "ON_GROUND"
+        self.target: tuple[float, float, float] | None = None
+        self.transition_ticks, self._transition_left = 20, 0
+        self.landing = self.returning = False
+        self.commands: list[tuple[Any, ...]] = []
+        self.refuse: set[str] = set()  # command kinds answered FAILED: "takeoff", "QLOITER", ...
+        self.stuck_in: str | None = None  # a vtol_state it never leaves once in it
+        self.report_takeoff = False  # landed_state stays TAKEOFF after the climb
+        self.keeps_armed = False  # never disarms after landing
+        self.publish()
+
+    @property
+    def flying(self) -> bool:
+        return self.alt > 0.0 or self.landed == "TAKEOFF"
+
+    def publish(self) -> None:
+        lat, lon = local_to_global(*HOME, self.n, self.e)
+        self.vehicle.set(
+            vehicle__mode=self.mode,
+            vehicle__armed=self.armed,
+            vehicle__position=GlobalPosition(lat, lon, self.alt, 0.0, 0.0, 0.0, 0.0, 0.0),
+            vehicle__vtol_state=self.vtol,
+            vehicle__landed_state=self.landed,
+        )
+
+    def _set_vtol(self, state: str) -> None:
+        if self.stuck_in != self.vtol:
+            self.vtol = state
+
+    def _ack(self, msg: Any, kind: str) -> bool:
+        ok = kind not in self.refuse
+        self.h.ack(msg.command, _M.MAV_RESULT_ACCEPTED if ok else _M.MAV_RESULT_FAILED)
+        return ok
+
+    def _set_mode(self, mode: str) -> None:
+        self.mode, self.landing, self.returning = mode, False, False
+        here = (self.n, self.e, self.alt)
+        if mode in ("QLOITER", "QRTL", "QLAND"):
+            self._set_vtol("MC")
+            self.target, self.returning, self.landing = here, mode == "QRTL", mode == "QLAND"
+            if self.returning:
+                self.target = (0.0, 0.0, max(15.0, self.alt))
+        elif mode == "LOITER" or (mode == "GUIDED" and self.vtol == "FW"):
+            self.target = here  # a plane circles where it is
+        elif mode == "GUIDED":
+            self.target = here  # Q_GUIDED_MODE: a hover where it stops
+
+    def _command(self, msg: Any) -> None:
+        if msg.command == _M.MAV_CMD_DO_SET_MODE:
+            mode = MODES.decode(int(msg.param2))
+            self.commands.append(("mode", mode))
+            if self._ack(msg, mode):
+                self._set_mode(mode)
+        elif msg.command == _M.MAV_CMD_COMPONENT_ARM_DISARM:
+            self.commands.append(("arm", msg.param1))
+            if self._ack(msg, "arm"):
+                self.armed = bool(msg.param1)
+        elif msg.command == _M.MAV_CMD_NAV_TAKEOFF:
+            self.commands.append(("takeoff", msg.param7))
+            if self._ack(msg, "takeoff") and self.mode == "GUIDED" and self.armed and not self.flying:
+                self.landed, self.target = "TAKEOFF", (self.n, self.e, msg.param7)
+                self._set_vtol("MC")
+        elif msg.command == _M.MAV_CMD_DO_REPOSITION:
+            north, east = global_to_local(*HOME, msg.x / 1e7, msg.y / 1e7)
+            self.commands.append(("reposition", round(north), round(east), msg.z))
+            if self._ack(msg, "reposition"):
+                self.mode, self.landing, self.returning = "GUIDED", False, False
+                near = math.hypot(north - self.n, east - self.e) < LOITER_RADIUS_M
+                if not (self.vtol == "MC" and near):
+                    self._start_transition()
+                self.target = (north, east, msg.z)
+
+    def _start_transition(self) -> None:
+        if self.vtol == "MC" and self.flying:
+            self._set_vtol("TRANSITION_TO_FW")
+            self._transition_left = self.transition_ticks
+
+    def _move(self) -> None:
+        if self.vtol == "TRANSITION_TO_FW":
+            self._transition_left -= 1
+            if self._transition_left <= 0:
+                self._set_vtol("FW")
+        if self.target is None or not self.armed:
+            return
+        tn, te, talt = self.target
+        distance = math.hypot(tn - self.n, te - self.e)
+        stop_at = LOITER_RADIUS_M if self.vtol == "FW" else 0.0
+        step = min(self.FW_STEP_M if self.vtol != "MC" else self.MC_STEP_M, max(0.0, distance - stop_at))
+        if distance > 0:
+            self.n += (tn - self.n) / distance * step
+            self.e += (te - self.e) / distance * step
+        if self.returning and distance <= 0.5:
+            self.returning, self.landing = False, True
+        if self.landing:
+            talt = 0.0
+        self.alt += max(-self.CLIMB_STEP_M, min(self.CLIMB_STEP_M, talt - self.alt))
+        if self.landed == "TAKEOFF" and self.alt >= talt and not self.report_takeoff:
+            self.landed = "IN_AIR"
+        elif self.landing:
+            self.landed = "LANDING" if self.alt > 0 else "ON_GROUND"
+            if self.alt <= 0 and not self.keeps_armed:
+                self.armed = False
+
+    def respond(self) -> None:
+        for msg in self.h.link.take():
+            if msg.get_type() in ("COMMAND_LONG", "COMMAND_INT"):
+                self._command(msg)
+        self._move()
+        self.publish()
+
+    def run(self, ticks: int, until: Callable[[], bool] | None = None) -> list[Status]:
+        statuses = []
+        for _ in range(ticks):
+            statuses.append(self.h.tick())
+            self.respond()
+            if statuses[-1] != R or (until is not None and until()):
+                break
+        return statuses
+
+
+class Transit:
+    """A vtol_transit mission's tree, started, over a scripted QuadPlane at home with the EKF ready; notes the vtol states seen."""
+
+    def __init__(self, harness: Any, vehicle: Any, state: MissionState, mission: Mission) -> None:
+        self.state, self.vehicle = state, vehicle
+        state.upload(mission)
+        state.start()
+        self.root = trees.build(mission)
+        self.h = harness(self.root)
+        vehicle.set(link__up=True, vehicle__ekf=EKF_READY, rc__channels=(1500,) * 8, vehicle__home=HomePosition(*HOME, 584.0, 0.0))
+        self.plane = ScriptedQuadPlane(self.h, vehicle)
+        self.vtol_states: list[str] = []
+
+    def run(self, ticks: int, until: Callable[[], bool] | None = None) -> list[Status]:
+        def note() -> bool:
+            if not self.vtol_states or self.vtol_states[-1] != self.plane.vtol:
+                self.vtol_states.append(self.plane.vtol)
+            return until is not None and until()
+
+        return self.plane.run(ticks, note)
+
+    def run_until_command(self, command: tuple[Any, ...], ticks: int = 2000) -> None:
+        """Run until the plane was told ``command``; the mission still running."""
+        assert self.run(ticks, until=lambda: command in self.plane.commands)[-1] == R
+        assert command in self.plane.commands
+
+    @property
+    def why(self) -> str:
+        return explain_failure(self.root)
+
+
+@pytest.fixture
+def commander(link: Any, clock: ManualClock) -> Commander:
+    """Replaces the shared rover's: ArduPlane's mode numbers."""
+    return Commander(link, clock, PROFILES["vtol"])
+
+
+@pytest.fixture
+def mission_state() -> MissionState:
+    """Replaces the shared square: each test starts its own transit."""
+    return MissionState()
+
+
+MakeTransit = Callable[[Mission], Transit]
+
+
+@pytest.fixture
+def make_transit(harness: Any, vehicle: Any, mission_state: MissionState) -> MakeTransit:
+    """``make_transit(mission)``: the :class:`Transit` of a mission (one per test)."""
+    return lambda mission: Transit(harness, vehicle, mission_state, mission)
+
+
+def off_m(plane: ScriptedQuadPlane, north: float, east: float) -> float:
+    return math.hypot(plane.n - north, plane.e - east)
+
+
+# -- the whole flight ----------------------------------------------------------------------------
+
+TAKEOFF = [("arm", 1.0), ("mode", "GUIDED"), ("takeoff", 30.0)]
+HOVER_TO = ("reposition", 20, 30, 30.0)  # ENU E30 N20 U30 is NED N20 E30 D-30: 20 m north, 30 m east, 30 m up
+LEGS = [("reposition", *WP1, 40.0), ("reposition", *WP2, 40.0)]
+
+
+@pytest.mark.parametrize(
+    ("land", "hover", "commands"),
+    [
+        (
+            "home",
+            HOVER,
+            [*TAKEOFF, HOVER_TO, ("reposition", 320, 30, 30.0), *LEGS, ("reposition", 0, 0, 30.0), ("mode", "QLOITER"), ("mode", "QRTL")],
+        ),
+        ("last", HOVER, [*TAKEOFF, HOVER_TO, ("reposition", 320, 30, 30.0), *LEGS, ("mode", "QLOITER"), ("mode", "QLAND")]),
+        ("home", None, [*TAKEOFF, ("reposition", 300, 0, 30.0), *LEGS, ("reposition", 0, 0, 30.0), ("mode", "QLOITER"), ("mode", "QRTL")]),
+    ],
+    ids=["land-home", "land-last", "no-hover-point"],
+)
+def test_mc_take_off_fw_legs_mc_landing(
+    make_transit: MakeTransit, land: str, hover: dict[str, float] | None, commands: list[tuple[Any, ...]]
+) -> None:
+    transit = make_transit(vtol_mission(land, hover))
+    statuses = transit.run(3000)
+    assert statuses[-1] == S, transit.why
+    assert transit.plane.commands == commands
+    assert transit.vtol_states == ["FW", "MC", "TRANSITION_TO_FW", "FW", "MC"]  # on the ground as a plane, then MC -> FW -> MC
+    assert (transit.plane.armed, transit.plane.landed, transit.state.leg_index) == (False, "ON_GROUND", 2)
+    landed_at = (0.0, 0.0) if land == "home" else WP2
+    limit = 0.5 if land == "home" else 100.0  # QRTL comes down on home; QLAND where the last leg ended
+    assert off_m(transit.plane, *landed_at) <= limit
+
+
+def test_the_hover_point_is_flown_as_a_multicopter_and_reached_before_the_transition(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission(hover=HOVER))
+    transit.run_until_command(HOVER_TO)
+    track: list[tuple[float, str, int]] = []  # distance to the hover point, vtol state, commands so far
+
+    def note() -> bool:
+        track.append(
+            (math.dist((transit.plane.n, transit.plane.e, transit.plane.alt), (20.0, 30.0, 30.0)), transit.plane.vtol, len(transit.plane.commands))
+        )
+        return len(transit.plane.commands) > 4
+
+    assert transit.plane.run(200, note)[-1] == R
+    assert transit.plane.commands[4] == ("reposition", 320, 30, 30.0)  # the transition's: 300 m ahead of the hover point
+    before_transition = [(d, vtol) for d, vtol, n in track if n == 4]
+    assert {vtol for _, vtol in before_transition} == {"MC"}
+    assert before_transition[-1][0] <= 2.0  # there, as a multicopter, when the transition was asked for
+
+
+# -- take-off ------------------------------------------------------------------------------------
+
+
+def test_take_off_waits_for_in_air_and_for_the_height(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission(hover=HOVER))
+    transit.plane.report_takeoff = True  # the climb is done, EXTENDED_SYS_STATE still says TAKEOFF
+    transit.run_until_command(("takeoff", 30.0))
+    assert transit.run(60) == [R] * 60
+    assert transit.plane.alt == 30.0 and transit.plane.commands[-1] == ("takeoff", 30.0)  # nothing more until IN_AIR
+    transit.plane.landed = "IN_AIR"
+    transit.plane.alt = 27.0  # IN_AIR, but under 95 % of 30 m
+    transit.plane.target = (0.0, 0.0, 27.0)
+    transit.plane.publish()
+    assert transit.run(5) == [R] * 5 and transit.plane.commands[-1] == ("takeoff", 30.0)
+    transit.plane.target = (0.0, 0.0, 30.0)
+    transit.run(5)
+    assert transit.plane.commands[-1] == HOVER_TO
+
+
+def test_a_refused_take_off_fails_the_mission_with_the_reason(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission())
+    transit.plane.refuse.add("takeoff")
+    statuses = transit.run(100)
+    assert statuses[-1] == F
+    assert transit.why == "Take off to 30 m: refused: FAILED"
+    assert transit.plane.commands == TAKEOFF
+
+
+# -- transitions ---------------------------------------------------------------------------------
+
+
+def test_the_transition_to_fw_counts_only_when_extended_sys_state_says_fw_and_fails_after_its_timeout(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission())
+    transit.plane.stuck_in = "TRANSITION_TO_FW"  # flies on, but EXTENDED_SYS_STATE never says FW
+    transit.run_until_command(("reposition", 300, 0, 30.0))
+    ticks_left = 30 * 10
+    statuses = transit.run(ticks_left + 10)
+    assert statuses[: ticks_left - 1] == [R] * (ticks_left - 1) and statuses[-1] == F
+    assert transit.why == "Transition to FW: still TRANSITION_TO_FW after 30 s (by reposition 300 m ahead)"
+    assert [c for c in transit.plane.commands if c[0] == "reposition"] == [("reposition", 300, 0, 30.0)]  # no leg was started
+
+
+@pytest.mark.parametrize(
+    ("refuse", "stuck_in", "why"),
+    [
+        ("QLOITER", None, "Transition to MC: QLOITER refused: FAILED; still FW"),
+        (None, "FW", "Transition to MC: still FW after 30 s (by QLOITER)"),
+    ],
+)
+def test_the_transition_to_mc_fails_when_qloiter_is_refused_or_never_shows_mc(
+    make_transit: MakeTransit, refuse: str | None, stuck_in: str | None, why: str
+) -> None:
+    transit = make_transit(vtol_mission())
+    if refuse:
+        transit.plane.refuse.add(refuse)
+    transit.run_until_command(("reposition", 0, 0, 30.0))
+    transit.plane.stuck_in = stuck_in
+    statuses = transit.run(400)
+    assert statuses[-1] == F
+    assert transit.why == why
+    assert transit.plane.commands[-1] == ("mode", "QLOITER") and not any(c == ("mode", "QRTL") for c in transit.plane.commands)
+
+
+# -- legs and landing ----------------------------------------------------------------------------
+
+
+def test_a_leg_is_reached_within_the_acceptance_radius_though_the_plane_circles_at_60_m(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission())
+    transit.run_until_command(LEGS[1])
+    assert 60.0 <= off_m(transit.plane, *WP1) <= 100.0  # leg 1 counted from 100 m, never closer than its circle
+    assert transit.state.leg_index == 1
+
+
+def test_a_leg_that_never_gets_within_the_acceptance_radius_times_out(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission(acceptance_radius_m=70.0, leg_timeout_s=30.0))
+    transit.run_until_command(LEGS[0])
+    transit.plane.FW_STEP_M = 0.01  # a headwind: 0.1 m/s over the ground
+    statuses = transit.run(30 * 10 + 10)
+    assert statuses[-1] == F
+    assert transit.why == "For each leg: leg 1/2 failed: leg 1/2: timed out after 30 s, 303.2 m short"
+
+
+def test_landing_ends_only_disarmed_on_the_ground_and_fails_after_the_leg_timeout(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission(land="last", leg_timeout_s=40.0))
+    transit.plane.keeps_armed = True
+    transit.run_until_command(("mode", "QLAND"))
+    statuses = transit.run(40 * 10 + 10)
+    assert statuses[:-1] == [R] * (len(statuses) - 1) and statuses[-1] == F
+    assert transit.plane.landed == "ON_GROUND"
+    assert transit.why == "Land here (QLAND): not confirmed after 40 s: ON_GROUND at 0.0 m, armed"
+
+
+# -- guards --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("phase", "hold"),
+    [(HOVER_TO, ("mode", "QLOITER")), (LEGS[1], ("mode", "LOITER"))],
+    ids=["multicopter-holds-in-qloiter", "plane-holds-in-loiter"],
+)
+def test_ekf_loss_holds_by_the_vtol_state_then_the_same_phase_goes_on(
+    make_transit: MakeTransit, phase: tuple[Any, ...], hold: tuple[str, str]
+) -> None:
+    transit = make_transit(vtol_mission(hover=HOVER))
+    transit.run_until_command(phase)
+    transit.run(3)
+    leg = transit.state.leg_index
+    transit.vehicle.set(vehicle__ekf=EKF_LOST)
+    before = len(transit.plane.commands)
+    assert transit.run(20) == [R] * 20
+    assert transit.plane.commands[before:] == [hold]
+    transit.vehicle.set(vehicle__ekf=EKF_READY)
+    transit.run(3)
+    assert transit.plane.commands[before + 1 :][:1] == [phase]  # the same point again (taken off and hovered: not again)
+    assert transit.state.leg_index == leg
+    assert transit.run(3000)[-1] == S
+
+
+def test_an_rc_take_over_sends_nothing_while_the_pilot_has_it_then_the_same_leg_goes_on(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission())
+    transit.run_until_command(LEGS[0])
+    transit.run(3)
+    transit.vehicle.set(rc__channels=(1500,) * 5 + (1900,) + (1500,) * 2)
+    before = len(transit.plane.commands)
+    assert transit.run(50) == [R] * 50
+    assert transit.plane.commands[before:] == []
+    transit.vehicle.set(rc__channels=(1500,) * 8)
+    transit.run(2)
+    assert transit.plane.commands[before:][:1] == [LEGS[0]]  # the same leg (the pilot may have flown it meanwhile)
+    assert transit.run(3000)[-1] == S
+
+
+def test_a_guard_that_never_recovers_fails_the_mission(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission())
+    transit.run_until_command(LEGS[0])
+    transit.vehicle.set(link__up=False)
+    statuses = transit.run(30 * 10 + 20)
+    assert statuses[-1] == F
+    assert transit.why.startswith("Wait for guards: not recovered after 30 s: Link alive? no heartbeat")
+
+
+def test_pause_in_fixed_wing_flight_loiters_and_resume_goes_on_with_the_same_leg(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission())
+    transit.run_until_command(LEGS[1])
+    transit.run(3)
+    transit.state.pause("operator: pause")
+    before = len(transit.plane.commands)
+    assert transit.run(20) == [R] * 20
+    assert transit.plane.commands[before:] == [("mode", "LOITER")]
+    transit.state.resume()
+    transit.run(2)
+    assert transit.plane.commands[before + 1 :] == [LEGS[1]]  # still FW: no new transition; taken off: no take-off
+    assert transit.run(3000)[-1] == S
+
+
+# -- on the simulated ArduPlane ------------------------------------------------------------------
+
+
+class Recorder:
+    """Stands in for the status line: notes the vtol state and where the aircraft was at each tick."""
+
+    def __init__(self, clock: ScaledClock) -> None:
+        self.clock = clock
+        self.bb = blackboard.reader("test recorder", ["/vehicle/vtol_state", "/vehicle/position", "/mission/leg_index"])
+        self.vtol_states: list[str] = []
+        self.positions: list[tuple[int, float, float, float]] = []  # leg index, lat, lon, alt
+
+    def update(self, force: bool = False) -> None:
+        state = self.bb.get("/vehicle/vtol_state")
+        if state is not None and (not self.vtol_states or self.vtol_states[-1] != state):
+            self.vtol_states.append(state)
+        position = self.bb.get("/vehicle/position")
+        if position is not None:
+            self.positions.append((self.bb.get("/mission/leg_index"), position.lat, position.lon, position.alt_rel_m))
+
+    def close(self) -> None:
+        pass
+
+
+def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_each_waypoint_and_lands_at_home() -> None:
+    from executive.io.mavlink.link import PymavlinkLink
+    from executive.runtime import Runtime
+    from executive.sim import SimServer
+
+    mission = load_mission(ROOT / "missions" / "vtol_transit.yaml")
+    assert mission.home is not None and mission.simulator is not None and mission.vtol is not None and mission.vtol.hover_enu is not None
+    clock = ScaledClock(50.0)
+    wall = time.monotonic()
+    home = (mission.home.lat, mission.home.lon, mission.home.heading_deg)
+    sim_options = {"ekf_ready_after_s": mission.simulator.ekf_ready_after_s, "q_guided_mode": mission.simulator.q_guided_mode}
+    with SimServer("vtol", clock=clock, home=home, **sim_options) as sim:  # type: ignore[arg-type]
+        link = PymavlinkLink(sim.url_for_client)
+        try:
+            runtime = Runtime(mission, link, clock)
+            recorder = Recorder(clock)
+            runtime.progress = recorder  # type: ignore[assignment]
+            assert runtime.connect(10.0 * clock.speedup)
+            started = clock.now()
+            outcome = runtime.run()
+            vehicle_s = clock.now() - started
+            with sim.lock:
+                ap = sim.autopilot
+                end = {"armed": ap.armed, "landed": ap.landed_state, "off_home_m": ap.vehicle.distance_to(mission.home.lat, mission.home.lon)}
+        finally:
+            link.close()
+    wall_s = time.monotonic() - wall
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    assert recorder.vtol_states[recorder.vtol_states.index("MC") :] == ["MC", "TRANSITION_TO_FW", "FW", "MC"]
+    hover = mission.vtol.hover_enu
+    assert min(math.dist(global_to_local(*HOME, lat, lon), (hover.north_m, hover.east_m)) for _, lat, lon, _ in recorder.positions) < 2.0
+    for i, wp in enumerate(mission.waypoints):
+        closest = min(math.dist(global_to_local(wp.lat, wp.lon, lat, lon), (0, 0)) for _, lat, lon, _ in recorder.positions)
+        assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
+    assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 2.5
+    assert vehicle_s < 180.0 and wall_s < 8.0

@@ -1,0 +1,100 @@
+"""The AUV survey (the Zeno AUV's mission manager): accept the route, dive and run it leg by leg under guards, surface, hold.
+
+::
+
+    Mission: while PAUSED, hold in POSHOLD (the leg is kept); otherwise run:
+    ├── Accept the mission (once): wait for the EKF and a position, then every waypoint within 1 km of it?
+    │   (a waypoint farther away refuses the whole mission, before anything is sent to the vehicle)
+    ├── Pre-flight: wait for the EKF, arm (or wait for the operator to)
+    ├── Guarded survey or hold (reactive selector)
+    │   ├── Guarded survey: link alive? EKF ok? armed? RC not taking over? speed, depth and (altitude legs) altitude within limits?
+    │   │   -> for each leg: set GUIDED, change speed, reach the depth or the altitude above the seabed, go to the waypoint at it
+    │   └── Wait for guards: hold in POSHOLD (unless a person has the vehicle) until they recover, within a limit
+    ├── Surface: ArduSub's SURFACE mode (it hands over to ALT_HOLD by itself at the surface)
+    └── Hold at the surface: POSHOLD
+
+The end: an AUV comes up at the end of a survey to be seen, to get GPS and radio back and to be
+picked up; POSHOLD then keeps it on the last waypoint (ALT_HOLD, where SURFACE leaves it, holds
+only the depth and would let it drift). It stays armed: the crew disarms it at the pick-up.
+Surfacing is not guarded: holding would stop the one manoeuvre that makes a sub safe.
+
+A leg follows the waypoint's control mode: ``depth`` dives (or rises) to ``depth_m`` where the
+vehicle is, then goes to the waypoint at that depth; ``altitude`` does the same at ``altitude_m``
+above the seabed (the terrain frame, judged by the downward sonar). A depth leg without
+``depth_m`` runs at the surface (depth 0, as the Zeno vehicle is run). The 1 km rule is checked
+once, at the start: pausing and resuming a mission does not accept it again.
+"""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.common import OneShotPolicy
+
+from executive.behaviours import (
+    AllWaypointsWithin,
+    AltitudeWithin,
+    ChangeAltitude,
+    ChangeDepth,
+    ChangeSpeed,
+    DepthWithin,
+    EkfOk,
+    ForEachLeg,
+    GoTo,
+    Guard,
+    PositionKnown,
+    SetMode,
+    SpeedWithin,
+    Surface,
+    WaitUntil,
+)
+from executive.mission.model import Mission
+from executive.vehicles import PROFILES
+from trees._parts import guarded, mission_root, preflight, safe_mode, standard_guards
+
+
+def acceptance(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """Once: the EKF's position, then every waypoint within ``max_goal_distance_m`` of it (else the mission fails, naming the waypoint)."""
+    limits = mission.limits
+    check = py_trees.composites.Sequence(
+        "Accept the mission",
+        memory=True,
+        children=[
+            WaitUntil(EkfOk(), limits.ekf_wait_s),
+            WaitUntil(PositionKnown(), limits.ekf_wait_s),
+            AllWaypointsWithin(mission.waypoints, limits.max_goal_distance_m),
+        ],
+    )
+    return py_trees.decorators.OneShot("Once", check, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
+
+
+def survey_guards(mission: Mission) -> list[Guard]:
+    """The standard guards, and the mission's speed, depth and (on altitude legs) altitude limits."""
+    limits = mission.limits
+    return [
+        *standard_guards(mission),
+        SpeedWithin(limits.speed_m_s),
+        DepthWithin(limits.depth_m),
+        AltitudeWithin(limits.altitude_m, altitude_legs_only=True),
+    ]
+
+
+def leg(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """One leg: GUIDED, the leg's speed, its depth or altitude where the vehicle is, then the waypoint at that depth or altitude."""
+    limits = mission.limits
+    return py_trees.composites.Sequence(
+        "Leg",
+        memory=True,
+        children=[
+            SetMode(PROFILES[mission.vehicle].guided_mode),
+            ChangeSpeed(),
+            ChangeDepth(timeout_s=limits.leg_timeout_s),
+            ChangeAltitude(timeout_s=limits.leg_timeout_s),
+            GoTo(limits.acceptance_radius_m, limits.leg_timeout_s),
+        ],
+    )
+
+
+def build(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """The tree for a ``tree: auv_survey`` mission."""
+    survey = guarded(ForEachLeg(leg(mission)), survey_guards(mission), mission, name="Guarded survey")
+    return mission_root(mission, acceptance(mission), preflight(mission), survey, Surface(), SetMode(safe_mode(mission), name="Hold at the surface"))

@@ -1,0 +1,119 @@
+"""The ASV go-to-and-sample node (seed system 1): accept the go-to, drive the path under guards, sample at the sample points.
+
+::
+
+    Mission: while PAUSED, hold the vehicle (the leg is kept); otherwise run:
+    ├── Pre-flight: wait for the EKF, arm (or wait for the operator to arm)
+    ├── Ready: auto_arm: set LOITER (as the boat's operator would); else nothing: the operator had to
+    ├── Accept the go-to (else rejected, nothing sent that moves the vehicle): armed? in LOITER? every point within 5 km?
+    ├── Go-to (reactive: every check every tick)
+    │   ├── RC in auto? (else leave: the go-to fails with the reason)
+    │   ├── EKF ok, else wait in MANUAL (selector with memory: a recovery started is finished)
+    │   │   ├── EKF ok?
+    │   │   ├── Disarmed (the pilot has it)? -> the guards below wait, hands off
+    │   │   └── Wait in MANUAL: set MANUAL, disarm, wait until the EKF is ok, re-arm
+    │   └── Guarded path or hold (reactive selector)
+    │       ├── Guarded path: link alive? armed? (disarmed = the RC took over) -> for each point:
+    │       │   ├── Go to the point: GUIDED (else set it), go to (within 1.5 m; over 60 s fails)
+    │       │   └── Sample if due: nothing to sample here? or: LOITER (else set it), sample (recorded)
+    │       └── Wait for guards: hold (unless a person has the vehicle) until they recover, within a limit
+    └── Hold at the end (LOITER for a boat)
+
+"LOITER" before the go-to is the vehicle's hold, the mode the executive itself holds it in (a boat's
+LOITER, a rover's HOLD), so a go-to resumed after a pause (accepted again) starts from there.
+Without auto_arm the operator's arming is the go-to request: the vehicle must be in its hold by
+then, or the go-to is rejected.
+
+An RC change or a guard failing during a sample stops the Sample action, which cancels the
+sampler: nothing is recorded, and the sample is taken again when the leg resumes (a sample already
+recorded is never taken again). An operator's cancel (abort) ends the run: the runtime stops the
+tree, which cancels a sample in progress the same way.
+"""
+
+from __future__ import annotations
+
+import py_trees
+
+from executive.behaviours import (
+    AllWaypointsWithin,
+    Arm,
+    Armed,
+    Disarm,
+    EkfOk,
+    ForEachLeg,
+    GoTo,
+    LinkAlive,
+    ModeIs,
+    NothingToSample,
+    Sample,
+    SetMode,
+    WaitUntil,
+    rc_auto_mode,
+)
+from executive.mission.model import Mission, SamplingOptions
+from executive.vehicles import PROFILES
+from trees._parts import ARM_RETRY_S, guarded, mission_root, preflight, safe_mode
+
+
+def _sample_hold_mode(mission: Mission) -> str:
+    """The mode a sample point is held in (sampling.hold_mode, LOITER by default)."""
+    return (mission.sampling or SamplingOptions()).hold_mode.upper()
+
+
+def accept(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """The go-to's acceptance checks, once, when it starts: a failure rejects it (the mission fails with the reason)."""
+    hold, limit = safe_mode(mission), mission.limits.max_goal_distance_m
+    return py_trees.composites.Sequence(
+        "Accept the go-to",
+        memory=False,
+        children=[Armed(), ModeIs(hold), AllWaypointsWithin(mission.waypoints, limit, name=f"Every point within {limit:g} m?")],
+    )
+
+
+def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """EKF ok, else (the vehicle armed) MANUAL, disarmed until the EKF recovers, then re-armed.
+
+    A selector with memory: once started, the recovery runs to its end (it disarms the vehicle
+    itself, which must not read as a pilot's take-over). A vehicle already disarmed belongs to the
+    pilot: it is left alone, and the guarded path waits for it to be armed again.
+    """
+    limits, manual = mission.limits, PROFILES[mission.vehicle].manual_mode
+    wait = py_trees.composites.Sequence(
+        f"Wait in {manual}",
+        memory=True,
+        children=[
+            SetMode(manual),
+            Disarm(),
+            WaitUntil(EkfOk(), limits.recovery_timeout_s, name="Wait until the EKF recovers"),
+            WaitUntil(Arm(), limits.recovery_timeout_s, name="Re-arm", retry_s=ARM_RETRY_S),
+        ],
+    )
+    pilot_has_it = py_trees.decorators.Inverter(name="Disarmed (the pilot has it)?", child=Armed())
+    return py_trees.composites.Selector(f"EKF ok, else wait in {manual}", memory=True, children=[EkfOk(), pilot_has_it, wait])
+
+
+def point(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """One point of the path: go there in GUIDED; at a sample point not sampled yet, hold in LOITER and sample."""
+    limits, hold = mission.limits, _sample_hold_mode(mission)
+    guided = PROFILES[mission.vehicle].guided_mode
+    go = py_trees.composites.Sequence(
+        "Go to the point",
+        memory=False,  # the mode is checked every tick (someone may change it): set again when it is not GUIDED
+        children=[SetMode(guided, name=f"{guided} (else set it)"), GoTo(limits.acceptance_radius_m, limits.leg_timeout_s)],
+    )
+    sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), Sample()])
+    due = py_trees.composites.Selector("Sample if due", memory=False, children=[NothingToSample(), sample])
+    return py_trees.composites.Sequence("Point", memory=True, children=[go, due])
+
+
+def build(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """The tree for a ``tree: goto_sample`` mission."""
+    path = guarded(ForEachLeg(point(mission)), [LinkAlive(), Armed()], mission, name="Guarded path")
+    goto = py_trees.composites.Sequence(
+        "Go-to", memory=False, children=[rc_auto_mode(mission.rc, "RC in auto? (else leave)"), ekf_or_wait_in_manual(mission), path]
+    )
+    steps: list[py_trees.behaviour.Behaviour] = [preflight(mission)]
+    if mission.auto_arm:
+        steps.append(SetMode(safe_mode(mission), name=f"Ready: set {safe_mode(mission)}"))
+    steps += [accept(mission), goto, SetMode(safe_mode(mission), name="Hold at the end")]
+    return mission_root(mission, *steps)

@@ -1,0 +1,94 @@
+"""VTOL transit (seed system 3): take off as a multicopter, fly the route as a plane, come back a multicopter and land.
+
+::
+
+    Mission: while PAUSED, hold in QLOITER (flying as a plane: LOITER); otherwise run:
+    ├── Pre-flight: wait for the EKF, arm (or wait for the operator to)
+    ├── Guarded flight or hold (reactive selector)
+    │   ├── Guarded flight: link alive? EKF ok? armed? RC not taking over? -> Flight:
+    │   │   ├── Take off (once): set GUIDED, NAV_TAKEOFF to vtol.takeoff_alt_m (EXTENDED_SYS_STATE IN_AIR, and the height)
+    │   │   ├── Hover point (once, with vtol.hover_enu): ENU -> NED -> lat/lon from home, DO_REPOSITION, flown as a multicopter
+    │   │   ├── Wing-borne (once): transition to FW (EXTENDED_SYS_STATE FW) -> for each leg: go to (DO_REPOSITION)
+    │   │   │                      -> vtol.land home: back to home (the local origin, DO_REPOSITION)
+    │   │   └── Transition to MC: QLOITER (EXTENDED_SYS_STATE MC)
+    │   └── Wait for guards: hold in QLOITER (flying as a plane: LOITER) until they recover, within a limit
+    └── Land: vtol.land home: QRTL (over home on the lift motors, then down); last: QLAND where it is; done when disarmed on the ground
+
+How ArduPlane (a QuadPlane) is flown here, and why:
+
+- GUIDED targets go as MAV_CMD_DO_REPOSITION: ArduPlane takes only the altitude from a position
+  setpoint, global or local (SET_POSITION_TARGET_LOCAL_NED: MAV_FRAME_LOCAL_OFFSET_NED in GUIDED,
+  its z alone). The hover point, given in ROS's ENU like the seed's local setpoints, is taken to
+  NED and then to a latitude and longitude with home as the local origin.
+- A plane circles a GUIDED point at WP_LOITER_RAD (60 m): a wing-borne leg counts as reached
+  within the mission's acceptance radius (at least 70 m for a vtol, checked when the mission is
+  loaded). Only with Q_GUIDED_MODE=1 does ArduPlane fly a GUIDED point on its lift motors, and only
+  within WP_LOITER_RAD of the aircraft: the hover point needs both (its 50 m rule is checked too).
+- DO_VTOL_TRANSITION works in AUTO only: to FW the aircraft is repositioned ahead (GUIDED flies
+  wing-borne), to MC it is put in QLOITER; each transition counts only once EXTENDED_SYS_STATE
+  says so, and fails after vtol.transition_timeout_s.
+- A plane cannot stop on a point: braking on the lift motors from cruise speed takes ~80 m. QRTL
+  is ArduPlane's way back over home on the lift motors; it ends in the same descent as QLAND.
+- The landing is not guarded: disarming is how it ends, and QRTL/QLAND are what ArduPlane's own
+  failsafes do anyway; an executive hold would only stop it in the air.
+- Each phase done is not flown again when a guard recovers or the mission resumes (a hold in
+  QLOITER stops a wing-borne leg: the transition to FW comes again, then the same leg). A guard
+  failing during the climb is the exception: ArduPlane refuses NAV_TAKEOFF in the air, so the
+  mission fails and the vehicle is left in its safe mode.
+"""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.common import OneShotPolicy
+
+from executive import frames
+from executive.behaviours import ForEachLeg, GoTo, GoToLocal, Land, SetMode, TakeOff, VtolTransition
+from executive.mission.model import Mission, VtolOptions
+from executive.vehicles import PROFILES
+from trees._parts import guarded, mission_root, preflight, standard_guards
+
+#: How close to the hover point (3-D) counts as there: a multicopter stops on a point.
+HOVER_ACCEPTANCE_M = 2.0
+
+
+def once(name: str, *steps: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour:
+    """``steps`` in order until they have all succeeded once; after that, SUCCESS without ticking them."""
+    body = py_trees.composites.Sequence(name, memory=True, children=list(steps))
+    return py_trees.decorators.OneShot(f"{name} (once)", body, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
+
+
+def home_enu(options: VtolOptions) -> frames.Enu:
+    """Home, the local origin, at the take-off height."""
+    return frames.Enu(0.0, 0.0, options.takeoff_alt_m)
+
+
+def flight(mission: Mission, options: VtolOptions) -> py_trees.behaviour.Behaviour:
+    """Take-off, hover point, wing-borne route (and return home), back to multicopter."""
+    limits = mission.limits
+    steps: list[py_trees.behaviour.Behaviour] = [
+        once("Take off", SetMode(PROFILES[mission.vehicle].guided_mode), TakeOff(options.takeoff_alt_m, confirm_timeout_s=limits.leg_timeout_s))
+    ]
+    if options.hover_enu is not None:
+        point = frames.Enu(options.hover_enu.east_m, options.hover_enu.north_m, options.hover_enu.up_m)
+        steps.append(once("Hover point", GoToLocal(point, HOVER_ACCEPTANCE_M, limits.leg_timeout_s, method="reposition")))
+    leg = GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, method="reposition")
+    wing_borne: list[py_trees.behaviour.Behaviour] = [VtolTransition("FW", options.transition_timeout_s), ForEachLeg(leg)]
+    if options.land == "home":
+        wing_borne.append(GoToLocal(home_enu(options), limits.acceptance_radius_m, limits.leg_timeout_s, name="Back to home", method="reposition"))
+    steps += [once("Wing-borne", *wing_borne), VtolTransition("MC", options.transition_timeout_s)]
+    return py_trees.composites.Sequence("Flight", memory=True, children=steps)
+
+
+def land(mission: Mission, options: VtolOptions) -> py_trees.behaviour.Behaviour:
+    """QRTL back over home (vtol.land home) or QLAND where the aircraft is (last); SUCCESS once disarmed on the ground."""
+    if options.land == "home":
+        return Land("QRTL", name="Land at home (QRTL)", confirm_timeout_s=mission.limits.leg_timeout_s)
+    return Land("QLAND", name="Land here (QLAND)", confirm_timeout_s=mission.limits.leg_timeout_s)
+
+
+def build(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """The tree for a ``tree: vtol_transit`` mission."""
+    options = mission.vtol or VtolOptions()
+    work = guarded(flight(mission, options), standard_guards(mission), mission, name="Guarded flight")
+    return mission_root(mission, preflight(mission), work, land(mission, options))
