@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import sqlite3
 import time
 from collections.abc import Iterator
@@ -173,3 +174,17 @@ def open_journal(path: str | Path, clock: Clock) -> Iterator[Journal]:
         yield journal
     finally:
         journal.close()
+
+
+class JournalLogHandler(logging.Handler):
+    """Puts the executive's warnings and errors (link lost, guards failing, refusals, crashes) in the journal as events."""
+
+    def __init__(self, journal: Journal, level: int = logging.WARNING) -> None:
+        super().__init__(level)
+        self._journal = journal
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            self._journal.event(record.name.rsplit(".", 1)[-1], record.getMessage())
+        except Exception:  # the journal must never take the executive down with it
+            self.handleError(record)

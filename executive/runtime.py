@@ -27,10 +27,12 @@ from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.io.rc import RcReader
 from executive.io.sampler import SimulatedSampler
+from executive.journal import Journal, ResumePoint
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SamplingOptions
 from executive.operator import Operator
 from executive.progress import Progress
+from executive.snapshots import SnapshotRecorder
 from executive.state import SwitchPosition
 from executive.status import StatusSource
 from executive.vehicles import PROFILES
@@ -111,6 +113,8 @@ class Runtime:
         control_socket: str | None = None,
         gcs_link: Link | None = None,
         gcs_systems: tuple[int, ...] = (255,),
+        journal: Journal | None = None,
+        snapshots: SnapshotRecorder | None = None,
     ) -> None:
         """``root`` replaces the tree the first mission selects (for tests and tools)."""
         blackboard.reset()
@@ -135,12 +139,17 @@ class Runtime:
         )
         self.reader.on_command = self.ground_station.on_command
         self.control = ControlServer(control_socket, self._on_control_request) if control_socket else None
+        self.journal = journal
+        self.snapshots = snapshots
+        self._resume: ResumePoint | None = None
+        if journal is not None:
+            journal.attach(self.mission_state)
         self.sampler: SimulatedSampler | None = None
         self._next_root = root
         self.tree: py_trees.trees.BehaviourTree | None = None
         self.mission_state.upload(mission)
         self.progress = progress
-        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches"])
+        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches", "/vehicle/position"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
         self._stop_reason: str | None = None
@@ -174,6 +183,11 @@ class Runtime:
                 node = _crashed_behaviour(exc.__traceback__)
                 raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
             status = self.tree.root.status
+            if self.snapshots is not None:
+                self.snapshots.record(self.ticks, self.clock.now())
+        if self.journal is not None:
+            position = self._bb.get("/vehicle/position")
+            self.journal.observe_leg(self.mission_state, *((position.lat, position.lon) if position else (None, None)))
         if self.sampler is not None:
             self.sampler.service()
         self.streams.service()
@@ -187,10 +201,17 @@ class Runtime:
         """Ask the loop to stop at the next tick (safe from a signal handler)."""
         self._stop_reason = reason
 
-    def run(self, *, start: bool = True, serve: bool = False) -> Outcome:
-        """Tick at the fixed rate: start the mission (or wait for the operator to), until it ends or, with ``serve``, until stopped."""
+    def run(self, *, start: bool = True, serve: bool = False, resume: ResumePoint | None = None) -> Outcome:
+        """Tick at the fixed rate: start the mission (or wait for the operator to), until it ends or, with ``serve``, until stopped.
+
+        ``resume`` (from the journal of a run that never ended) continues at its first unfinished
+        leg with the samples it had taken: none is taken twice.
+        """
         if start:
+            self._resume = resume
             self.mission_state.start()
+            if resume is not None:
+                self.mission_state.continue_from(resume.leg_index, resume.samples)
         outcome = Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
         next_tick = self.clock.now()
         try:
@@ -286,6 +307,8 @@ class Runtime:
 
     def _end(self, outcome: Outcome) -> Outcome:
         self.tree = None
+        if self.journal is not None:
+            self.journal.end_run(str(outcome.status), outcome.reason)
         return outcome
 
     def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
@@ -300,6 +323,11 @@ class Runtime:
         takes_samples = mission.sampling is not None or any(wp.sample for wp in mission.waypoints)  # the sampling: section is optional
         self.sampler = SimulatedSampler(self.clock, mission.sampling or SamplingOptions()) if takes_samples else None
         self.tree = py_trees.trees.BehaviourTree(root)
+        if self.journal is not None:
+            self.journal.begin_run(mission, resumed_from=self._resume.run if self._resume else None)
+            self._resume = None
+        if self.snapshots is not None:
+            self.snapshots.attach(root)
         self.tree.setup(
             clock=self.clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler
         )

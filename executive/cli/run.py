@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import logging
 import os
 import signal
 import sys
@@ -11,15 +12,17 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput
 from executive.cli.common import faults_or_report, load_or_report, setup_logging, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.link import PymavlinkLink
+from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.progress import Progress
 from executive.runtime import Runtime
+from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
     from executive.sim.faults import FaultInjector
@@ -40,6 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--wait", action="store_true", help="load the mission READY, wait for `ctl start`, and keep serving after it ends")
     p.add_argument("--gcs", metavar="URL", help="a MAVLink endpoint for ground stations (e.g. udpin:0.0.0.0:14551)")
     p.add_argument("--gcs-sysid", type=int, action="append", metavar="N", help="system id allowed to command us (repeatable; default 255)")
+    p.add_argument("--journal", metavar="DB", help="record the run (transitions, legs, samples, events) in this SQLite journal")
+    p.add_argument("--resume", action="store_true", help="continue the last unfinished run of this mission in --journal (after a crash)")
+    p.add_argument("--snapshots", metavar="FILE", help="record every tick (node statuses, blackboard changes) for `executive replay`")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-v info, -vv debug)")
     p.set_defaults(func=main)
 
@@ -99,6 +105,27 @@ def _usable_socket(path: str) -> str | None:
     return path
 
 
+def _recorders(args: argparse.Namespace, clock: ScaledClock, stack: contextlib.ExitStack) -> tuple[Journal | None, SnapshotRecorder | None]:
+    """The journal (with the log's warnings as its events) and the snapshot recorder asked for, closed with ``stack``."""
+    journal = snapshots = None
+    if args.journal:
+        journal = Journal(args.journal, clock)
+        stack.callback(journal.close)
+        handler = JournalLogHandler(journal)
+        logging.getLogger("executive").addHandler(handler)
+        stack.callback(logging.getLogger("executive").removeHandler, handler)
+    if args.snapshots:
+        snapshots = SnapshotRecorder(args.snapshots)
+        stack.callback(snapshots.close)
+    return journal, snapshots
+
+
+def _resume_text(resume: ResumePoint | None) -> str:
+    if resume is None:
+        return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
+    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} with {len(resume.samples)} sample(s) already taken"
+
+
 def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
     """The mission's simulator event file (relative to the mission file) and --faults, in that order."""
     files = []
@@ -117,6 +144,8 @@ def main(args: argparse.Namespace) -> int:
     if args.rate <= 0 or args.speedup <= 0:
         print("executive: run: --rate and --speedup must be > 0", file=sys.stderr)
         return EXIT_BAD_INPUT
+    if args.resume and not args.journal:
+        raise BadInput("--resume needs --journal DB")
     if args.mavlink and args.speedup != 1.0:
         print("executive: run: --speedup applies to the simulator only; ignored with --mavlink", file=sys.stderr)
     clock = ScaledClock(1.0 if args.mavlink else args.speedup)
@@ -130,7 +159,14 @@ def main(args: argparse.Namespace) -> int:
         if faults is None:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)
-    with _vehicle_link(args, mission, clock, faults, signing_key) as link, _gcs_link(args.gcs) as gcs_link:
+    with contextlib.ExitStack() as stack:
+        link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
+        gcs_link = stack.enter_context(_gcs_link(args.gcs))
+        journal, snapshots = _recorders(args, clock, stack)
+        resume = None
+        if journal is not None and args.resume:
+            resume = journal.resume_point(mission)
+            print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
         runtime = Runtime(
             mission,
             link,
@@ -141,19 +177,19 @@ def main(args: argparse.Namespace) -> int:
             control_socket=_usable_socket(args.socket),
             gcs_link=gcs_link,
             gcs_systems=tuple(args.gcs_sysid or (255,)),
+            journal=journal,
+            snapshots=snapshots,
         )
+        stack.callback(runtime.close)
+        if not runtime.connect(args.connect_timeout * clock.speedup):
+            print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)
+            return EXIT_NO_VEHICLE
+        stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
-            if not runtime.connect(args.connect_timeout * clock.speedup):
-                print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)
-                return EXIT_NO_VEHICLE
-            stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
-            try:
-                outcome = runtime.run(start=not args.wait, serve=args.wait)
-            finally:
-                for sig, handler in stop.items():
-                    signal.signal(sig, handler)
+            outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
         finally:
-            runtime.close()
+            for sig, handler in stop.items():
+                signal.signal(sig, handler)
     print(f"executive: mission {mission.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
     if runtime.mission_state.samples:
         count = len(runtime.mission_state.samples)

@@ -135,6 +135,22 @@ class MissionState:
             return None
         return self.mission.waypoints[self.leg_index]
 
+    def continue_from(self, leg_index: int, samples: Iterable[Sample] = ()) -> None:
+        """After a restart (crash, kill -9, power cut): carry on the running mission at ``leg_index`` with the samples already taken.
+
+        Called right after :meth:`start` and before the first tick, by whoever restores progress
+        (the journal); the listeners are not told about the samples: they recorded them.
+        """
+        if self.status is not MissionStatus.RUNNING:
+            raise Refused(f"cannot continue a mission while {self.status}")
+        if not 0 <= leg_index <= self.leg_count:
+            raise Refused(f"leg {leg_index + 1} is outside a route of {self.leg_count} waypoints")
+        self.leg_index = leg_index
+        self.restore_samples(samples)
+        self.reason = f"continued at leg {leg_index + 1} after a restart"
+        log.info("mission continues at leg %d/%d with %d sample(s) already taken", leg_index + 1, self.leg_count, len(self.samples))
+        self._publish()
+
     def advance_leg(self) -> None:
         """The current leg is done: head for the next waypoint."""
         if self.status is not MissionStatus.RUNNING:
