@@ -11,13 +11,16 @@ import types
 from dataclasses import dataclass
 from typing import Any
 
+import can
 import py_trees
 from py_trees.common import Status
 
 import trees
 from executive import blackboard
 from executive.clock import Clock
+from executive.io.can import CanReader, DriveBridge
 from executive.io.control import ControlServer
+from executive.io.heading import HeadingFilter
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
@@ -115,6 +118,7 @@ class Runtime:
         gcs_systems: tuple[int, ...] = (255,),
         journal: Journal | None = None,
         snapshots: SnapshotRecorder | None = None,
+        can_bus: can.BusABC | None = None,
     ) -> None:
         """``root`` replaces the tree the first mission selects (for tests and tools)."""
         blackboard.reset()
@@ -126,6 +130,10 @@ class Runtime:
         self.mission_transfer = MissionTransfer(link, clock, system_id=system_id)
         self.reader = MavlinkReader(link, clock, self.commander, link_timeout_s=mission.limits.link_timeout_s, mission=self.mission_transfer)
         self.rc = RcReader(mission.rc, clock)
+        self.heading = HeadingFilter(clock)
+        #: The AgileX base: its frames read each tick; the autopilot's skid-steer outputs driven onto it at 50 Hz.
+        self.can_reader = CanReader(can_bus, clock, rc=mission.rc.source == "can") if can_bus is not None else None
+        self.drive = DriveBridge(can_bus, clock) if can_bus is not None else None
         self.heartbeat = Heartbeat(link, clock, system_id=system_id)
         self.streams = StreamRequester(self.commander, rates_for(mission.vehicle))
         self.reader.on_reconnect = self.streams.restart
@@ -172,6 +180,9 @@ class Runtime:
         Returns the tree's status (INVALID when no mission is active).
         """
         self.reader.drain()
+        if self.can_reader is not None:
+            self.can_reader.drain()
+        self.heading.service()
         self.rc.service()
         self.heartbeat.service()
         self._serve_operator()
@@ -192,6 +203,8 @@ class Runtime:
             self.sampler.service()
         self.streams.service()
         self.ground_station.service()
+        if self.drive is not None:
+            self.drive.in_control = self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
         self.commander.flush()
         self.mission_transfer.flush()
         self.ticks += 1
@@ -230,11 +243,20 @@ class Runtime:
                 now = self.clock.now()
                 if next_tick < now - self.period_s:  # fell behind by more than a tick: do not try to catch up
                     next_tick = now
-                self.clock.sleep_until(next_tick)
+                self._wait_until(next_tick)
         finally:
             if self.progress:
                 self.progress.update(force=True)
                 self.progress.close()
+
+    def _wait_until(self, t: float) -> None:
+        """Sleep until the next tick, sending the base its motion commands (50 Hz) meanwhile."""
+        if self.drive is None:
+            self.clock.sleep_until(t)
+            return
+        while self.clock.now() < t:
+            self.drive.service()
+            self.clock.sleep_until(min(t, self.drive.next_due))
 
     def close(self) -> None:
         """Release the control socket."""
@@ -247,6 +269,9 @@ class Runtime:
             self.tree.interrupt()
             self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
         safe = self.profile.safe_mode
+        if self.drive is not None:  # the base stops at once; the autopilot is told below
+            self.drive.in_control = False
+            self.drive.service()
         person = self._person_has_the_vehicle()
         if person:
             log.warning("not commanding %s: %s", safe, person)

@@ -20,6 +20,10 @@ class BadInput(Exception):
     """Input a subcommand cannot use; ``main`` prints it and exits 2."""
 
 
+class NoVehicle(Exception):
+    """The vehicle (its link or bus) cannot be reached; ``main`` prints it and exits 3."""
+
+
 #: Subcommand modules of this package; each has ``register(subparsers)`` setting ``func``.
 SUBCOMMANDS = ("validate", "show", "run", "sim", "schema", "ctl", "report", "replay", "can")
 
@@ -47,6 +51,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BadInput as exc:
         print(f"executive: {args.command}: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except NoVehicle as exc:
+        print(f"executive: {args.command}: {exc}", file=sys.stderr)
+        return EXIT_NO_VEHICLE
 
 
 if __name__ == "__main__":

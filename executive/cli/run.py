@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
 from executive.cli.common import faults_or_report, load_or_report, setup_logging, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
@@ -25,6 +25,8 @@ from executive.runtime import Runtime
 from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
+    import can
+
     from executive.sim.faults import FaultInjector
 
 
@@ -46,6 +48,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--journal", metavar="DB", help="record the run (transitions, legs, samples, events) in this SQLite journal")
     p.add_argument("--resume", action="store_true", help="continue the last unfinished run of this mission in --journal (after a crash)")
     p.add_argument("--snapshots", metavar="FILE", help="record every tick (node statuses, blackboard changes) for `executive replay`")
+    p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
+    p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-v info, -vv debug)")
     p.set_defaults(func=main)
 
@@ -120,6 +124,27 @@ def _recorders(args: argparse.Namespace, clock: ScaledClock, stack: contextlib.E
     return journal, snapshots
 
 
+def _can_bus(args: argparse.Namespace, stack: contextlib.ExitStack) -> can.BusABC | None:
+    """The bus of --can (recorded with --can-log), shut down with ``stack``; BadInput / NoBus when it cannot be had."""
+    if args.can is None:
+        if args.can_log:
+            raise BadInput("--can-log needs --can IFACE:CHANNEL")
+        return None
+    from executive.io.can import CanOpenError, CanSpecError, open_can
+    from executive.io.can.recording import RecordingBus
+
+    try:
+        bus = open_can(args.can)
+    except CanSpecError as exc:
+        raise BadInput(f"--can: {exc}") from exc
+    except CanOpenError as exc:
+        raise NoVehicle(f"--can: {exc}") from exc
+    if args.can_log:
+        bus = RecordingBus(bus, args.can_log)
+    stack.callback(bus.shutdown)
+    return bus
+
+
 def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
@@ -163,6 +188,7 @@ def main(args: argparse.Namespace) -> int:
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
         gcs_link = stack.enter_context(_gcs_link(args.gcs))
         journal, snapshots = _recorders(args, clock, stack)
+        can_bus = _can_bus(args, stack)
         resume = None
         if journal is not None and args.resume:
             resume = journal.resume_point(mission)
@@ -179,6 +205,7 @@ def main(args: argparse.Namespace) -> int:
             gcs_systems=tuple(args.gcs_sysid or (255,)),
             journal=journal,
             snapshots=snapshots,
+            can_bus=can_bus,
         )
         stack.callback(runtime.close)
         if not runtime.connect(args.connect_timeout * clock.speedup):
