@@ -2,6 +2,10 @@
 
 Every request follows the lifecycle's transition table; a refused one changes nothing and says
 why. The reply carries the resulting state so a client never has to ask twice.
+
+``route`` requests edit the route (``{"op": "route", "operation": "offset", "distance_m": 5,
+"bearing_deg": 90}``; the operations and their arguments are :func:`executive.mission.route.apply`'s)
+or show it (``"operation": "show"``); their reply carries the route and what the autopilot holds.
 """
 
 from __future__ import annotations
@@ -10,12 +14,17 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from executive import blackboard
+from executive.behaviours.auto_route import route_not_on_autopilot
+from executive.clock import Clock
+from executive.mission import route as routes
 from executive.mission.errors import MissionError
 from executive.mission.lifecycle import MissionState, Refused
 from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
+from executive.state import EkfStatus, GlobalPosition
 
-REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload")
+REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route")
 
 
 @dataclass(frozen=True)
@@ -26,6 +35,7 @@ class Reply:
     reason: str
     state: str
     status: dict[str, Any] | None = None
+    route: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {k: v for k, v in asdict(self).items() if v is not None}
@@ -35,13 +45,25 @@ class Operator:
     """Applies operator requests to a :class:`MissionState`.
 
     ``status`` supplies the status snapshot for ``status`` requests; ``vehicle`` is the kind of
-    vehicle this executive drives (an uploaded mission for another kind is refused).
+    vehicle this executive drives (an uploaded mission for another kind is refused). A route edit
+    at the vehicle's position needs one the EKF vouches for, no older than ``max_position_age_s``
+    (checked with ``clock``, when given).
     """
 
-    def __init__(self, mission_state: MissionState, vehicle: str, status: Callable[[], dict[str, Any]] | None = None) -> None:
+    def __init__(
+        self,
+        mission_state: MissionState,
+        vehicle: str,
+        status: Callable[[], dict[str, Any]] | None = None,
+        clock: Clock | None = None,
+        max_position_age_s: float = 2.0,
+    ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
         self._status = status
+        self._clock = clock
+        self.max_position_age_s = max_position_age_s
+        self._bb = blackboard.reader("operator", ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload"])
 
     def request(self, op: str, source: str = "operator", **args: Any) -> Reply:
         """Apply one request; ``source`` (ctl, gcs, rc) is recorded in the reasons."""
@@ -61,6 +83,8 @@ class Operator:
                 state.delete()
             elif op == "upload":
                 return self._upload(str(args.get("filename", "<upload>")), args.get("text"))
+            elif op == "route":
+                return self._route(args, source)
             else:
                 return self._reply(False, f"unknown request {op!r} (known: {', '.join(REQUESTS)})")
         except Refused as refused:
@@ -79,6 +103,50 @@ class Operator:
         self.mission_state.upload(mission)
         return self._reply(True, self.mission_state.reason)
 
-    def _reply(self, ok: bool, reason: str, with_status: bool = False) -> Reply:
+    def _route(self, args: dict[str, Any], source: str) -> Reply:
+        """Edit the route (refused with the reason, changing nothing), or show it."""
+        state = self.mission_state
+        operation = args.get("operation")
+        params = {k: v for k, v in args.items() if k != "operation"}
+        if operation == "show":
+            return self._reply(True, f"{len(state.route)} waypoints", route=self._route_view())
+        refusal = state.route_refusal()
+        if refusal is not None:
+            return self._reply(False, refusal)
+        try:
+            new, done = routes.apply(state.route, operation, params, self._here)
+            state.set_route(new.waypoints, f"{source}: {done}", leg_index=new.current, home=new.home)
+        except (routes.RouteError, Refused) as exc:
+            return self._reply(False, f"route {operation}: {exc}")
+        return self._reply(True, f"{source}: {done}", route=self._route_view())
+
+    def _here(self) -> tuple[float, float]:
+        """The vehicle's position, if it is known well enough to put a waypoint or the home there."""
+        position: GlobalPosition | None = self._bb.get("/vehicle/position")
+        ekf: EkfStatus | None = self._bb.get("/vehicle/ekf")
+        if position is None:
+            raise routes.RouteError("no position")
+        if ekf is None or not ekf.position_ok():
+            raise routes.RouteError("the EKF has no position estimate")
+        if self._clock is not None and (age := self._clock.now() - position.time) > self.max_position_age_s:
+            raise routes.RouteError(f"the last position is {age:.1f} s old")
+        return position.lat, position.lon
+
+    def _route_view(self) -> dict[str, Any]:
+        """The route as JSON: waypoints (lat, lon, alt_m), the one heading for (1-based; legs + 1 when done), home, and the autopilot's copy."""
+        route = self.mission_state.route
+        upload = self._bb.get("/link/route_upload")
+        upload_view = (
+            None if upload is None else {"state": str(upload.state), "edit": upload.edit, "attempt": upload.attempt, "detail": upload.detail}
+        )
+        return {
+            "waypoints": [[wp.lat, wp.lon, wp.alt_m] for wp in route.waypoints],
+            "current": route.current + 1,
+            "home": None if route.home is None else [route.home.lat, route.home.lon],
+            "on_autopilot": route_not_on_autopilot(route.waypoints, self._bb.get("/vehicle/mission_items")) is None,
+            "upload": upload_view,
+        }
+
+    def _reply(self, ok: bool, reason: str, with_status: bool = False, route: dict[str, Any] | None = None) -> Reply:
         status = self._status() if with_status and self._status else None
-        return Reply(ok, reason, str(self.mission_state.status), status)
+        return Reply(ok, reason, str(self.mission_state.status), status, route)

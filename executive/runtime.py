@@ -17,6 +17,7 @@ from py_trees.common import Status
 
 import trees
 from executive import blackboard
+from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import Clock
 from executive.io.can import CanReader, DriveBridge
 from executive.io.control import ControlServer
@@ -27,6 +28,7 @@ from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
+from executive.io.mavlink.route_keeper import RouteKeeper
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.io.rc import RcReader
 from executive.io.sampler import SimulatedSampler
@@ -128,7 +130,14 @@ class Runtime:
         self.profile = PROFILES[mission.vehicle]
         self.commander = Commander(link, clock, self.profile, system_id=system_id)
         self.mission_transfer = MissionTransfer(link, clock, system_id=system_id)
-        self.reader = MavlinkReader(link, clock, self.commander, link_timeout_s=mission.limits.link_timeout_s, mission=self.mission_transfer)
+        self.reader = MavlinkReader(
+            link,
+            clock,
+            self.commander,
+            link_timeout_s=mission.limits.link_timeout_s,
+            mission=self.mission_transfer,
+            rc_source=mission.rc.source == "mavlink",
+        )
         self.rc = RcReader(mission.rc, clock)
         self.heading = HeadingFilter(clock)
         #: The AgileX base: its frames read each tick; the autopilot's skid-steer outputs driven onto it at 50 Hz.
@@ -139,8 +148,10 @@ class Runtime:
         self.reader.on_reconnect = self.streams.restart
         self.mission_state = MissionState()
         self.mission_state.listeners.append(self._on_transition)
+        #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.
+        self.route_keeper = RouteKeeper(self.mission_state, self.mission_transfer, self.commander, clock)
         self.status = StatusSource("runtime status")
-        self.operator = Operator(self.mission_state, mission.vehicle, status=self.status.snapshot)
+        self.operator = Operator(self.mission_state, mission.vehicle, status=self.status.snapshot, clock=clock)
         self.gcs_link = gcs_link
         self.ground_station = GroundStationControl(
             [link, *([gcs_link] if gcs_link else [])], clock, self.operator, system_id=system_id, allowed_systems=gcs_systems
@@ -203,6 +214,7 @@ class Runtime:
             self.sampler.service()
         self.streams.service()
         self.ground_station.service()
+        self.route_keeper.service()
         if self.drive is not None:
             self.drive.in_control = self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
         self.commander.flush()
@@ -264,11 +276,12 @@ class Runtime:
             self.control.close()
 
     def make_safe(self) -> bool:
-        """Command the vehicle's safe mode and wait (bounded) for the heartbeat to confirm it."""
+        """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) and wait (bounded) for the heartbeat to confirm it."""
+        safe = self.profile.safe_mode
         if self.tree is not None:
+            safe = failsafe_mode(self.tree.root) or safe  # an RTL or a surfacing the mission's failsafe asked for is not undone
             self.tree.interrupt()
             self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
-        safe = self.profile.safe_mode
         if self.drive is not None:  # the base stops at once; the autopilot is told below
             self.drive.in_control = False
             self.drive.service()

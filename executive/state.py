@@ -22,6 +22,7 @@ class GlobalPosition:
     vd_m_s: float
     heading_deg: float | None  # None when the autopilot does not know it
     time: float  # executive clock time of reception
+    boot_s: float | None = None  # when the autopilot measured it (its boot clock): exact intervals, whatever the link's jitter
 
     @property
     def ground_speed_m_s(self) -> float:
@@ -37,6 +38,7 @@ class Attitude:
     yaw_deg: float
     yaw_rate_deg_s: float
     time: float
+    boot_s: float | None = None  # when the autopilot measured it (its boot clock)
 
 
 class EkfFlags(IntFlag):

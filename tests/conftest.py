@@ -12,6 +12,7 @@ from py_trees.common import Status
 
 from executive import blackboard
 from executive.clock import ManualClock
+from executive.io.heading import wait_for_filterpy
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
@@ -78,6 +79,12 @@ class Harness:
     def ack(self, command: int, result: int = mavlink.MAV_RESULT_ACCEPTED) -> None:
         """A COMMAND_ACK arrives from the autopilot."""
         self.commander.on_ack(ack(command, result))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def filterpy_loaded() -> None:
+    """The heading filter loads filterpy in the background; tests want it judging from the first reading."""
+    assert wait_for_filterpy()
 
 
 @pytest.fixture(autouse=True)

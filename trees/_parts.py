@@ -1,4 +1,4 @@
-"""Pieces every mission tree is made of: pre-flight, guarded work that holds when a guard fails, pause."""
+"""Pieces every mission tree is made of: pre-flight, guarded work under the mission's failsafes, pause."""
 
 from __future__ import annotations
 
@@ -9,15 +9,21 @@ import py_trees
 from executive.behaviours import (
     Arm,
     Armed,
+    BatteryAbove,
     EkfOk,
+    Failsafe,
+    GpsNotGlitching,
     Guard,
+    HeadingSane,
     LinkAlive,
+    RcNotLost,
     RcNotTakingOver,
     UnlessPaused,
-    WaitForGuards,
     WaitUntil,
+    inside_geofence,
 )
-from executive.mission.model import Mission
+from executive.behaviours.failsafe import condition_of
+from executive.mission.model import FailsafePolicy, Mission, failsafe_policy
 from executive.vehicles import PROFILES
 
 ARM_RETRY_S = 2.0
@@ -57,16 +63,55 @@ def standard_guards(mission: Mission) -> list[Guard]:
     return [LinkAlive(), EkfOk(), Armed(), RcNotTakingOver(mission.rc.takeover_channel, mission.rc.takeover_above_us)]
 
 
+def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
+    """``guards``, then guards for the failsafe conditions they leave out: GPS glitch, heading (surface vehicles), battery, RC loss, geofence.
+
+    The heading filter judges the compass against the course over ground, which tells the heading
+    only for a vehicle that goes where it points: a sub moves sideways, a vtol hovers or crabs.
+    An Armed guard is added when a reaction disarms: the vehicle must be armed again before the work resumes.
+    """
+    limits, covered = mission.limits, {condition_of(g) for g in guards}
+    battery_checked = limits.battery_min_pct is not None or limits.battery_min_v is not None
+    candidates: list[tuple[str, Guard | None]] = [
+        ("gps_glitch", GpsNotGlitching()),
+        ("heading_insane", HeadingSane() if PROFILES[mission.vehicle].surface else None),
+        ("battery_low", BatteryAbove(limits.battery_min_pct, limits.battery_min_v) if battery_checked else None),
+        ("rc_loss", RcNotLost(mission.rc.source)),
+        ("geofence_breach", inside_geofence(mission)),
+    ]
+    extra = [guard for condition, guard in candidates if condition not in covered and guard is not None]
+    policy = failsafe_policy(mission)
+    checked_conditions = covered | {condition_of(g) for g in extra}
+    if "disarmed" not in covered and any(policy[c].reaction == "disarm" for c in checked_conditions if c in policy):
+        extra.append(Armed())
+    return [*guards, *extra]
+
+
+def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for guards") -> Failsafe:
+    """The mission's failsafe for ``guards``; a guard of no failsafe condition (a limit) holds and resumes within ``limits.recovery_timeout_s``."""
+    fallback = FailsafePolicy("limit", "hold", "resume", mission.limits.recovery_timeout_s)
+    return Failsafe(guards, failsafe_policy(mission), mission.vehicle, fallback, name=name)
+
+
 def guarded(
     work: py_trees.behaviour.Behaviour, guards: Sequence[Guard], mission: Mission, name: str = "Guarded route"
 ) -> py_trees.behaviour.Behaviour:
-    """``work`` under ``guards``, re-checked every tick; when one fails, hold and wait for it to recover (within a limit).
+    """``work`` under ``guards`` (and :func:`failsafe_guards`), re-checked every tick; when one fails, its failsafe (the mission's policy).
 
-    Progress is kept in the mission state, so the work resumes where it was when the guard recovers.
+    The failsafe commands the reaction in the tick the guard fails, then waits for the guard to
+    recover (within its time limit) or aborts the mission. Progress is kept in the mission state,
+    so the work resumes where it was when the guard recovers.
     """
+    guards = failsafe_guards(mission, guards)
     route = py_trees.composites.Sequence(name, memory=False, children=[*guards, work])
-    wait = WaitForGuards(guards, mission.limits.recovery_timeout_s, hold_mode=safe_mode(mission), fixed_wing_hold_mode=fixed_wing_hold_mode(mission))
-    return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, wait])
+    return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, failsafe(guards, mission)])
+
+
+def checked(guard: Guard, mission: Mission, name: str | None = None) -> py_trees.behaviour.Behaviour:
+    """One guard on its own, with its failsafe: SUCCESS while it holds; else the reaction, then RUNNING until it recovers, or FAILURE."""
+    return py_trees.composites.Selector(
+        name or f"{guard.name} or failsafe", memory=False, children=[guard, failsafe([guard], mission, name="Failsafe")]
+    )
 
 
 def mission_root(mission: Mission, *steps: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour:

@@ -9,7 +9,7 @@
     ├── Guarded survey or hold (reactive selector)
     │   ├── Guarded survey: link alive? EKF ok? armed? RC not taking over? speed, depth and (altitude legs) altitude within limits?
     │   │   -> for each leg: set GUIDED, change speed, reach the depth or the altitude above the seabed, go to the waypoint at it
-    │   └── Wait for guards: hold in POSHOLD (unless a person has the vehicle) until they recover, within a limit
+    │   └── Wait for guards: the failing guard's failsafe (by default hold in POSHOLD; a limit: hold) until it recovers, within a limit
     ├── Surface: ArduSub's SURFACE mode (it hands over to ALT_HOLD by itself at the surface)
     └── Hold at the surface: POSHOLD
 

@@ -7,16 +7,16 @@
     ├── Ready: auto_arm: set LOITER (as the boat's operator would); else nothing: the operator had to
     ├── Accept the go-to (else rejected, nothing sent that moves the vehicle): armed? in LOITER? every point within 5 km?
     ├── Go-to (reactive: every check every tick)
-    │   ├── RC in auto? (else leave: the go-to fails with the reason)
-    │   ├── EKF ok, else wait in MANUAL (selector with memory: a recovery started is finished)
+    │   ├── RC in auto? else its failsafe (rc_takeover; the seed's default: leave, the go-to fails with the reason)
+    │   ├── EKF ok, else wait in MANUAL (ekf_loss; the seed's default; selector with memory: a recovery started is finished)
     │   │   ├── EKF ok?
     │   │   ├── Disarmed (the pilot has it)? -> the guards below wait, hands off
     │   │   └── Wait in MANUAL: set MANUAL, disarm, wait until the EKF is ok, re-arm
     │   └── Guarded path or hold (reactive selector)
-    │       ├── Guarded path: link alive? armed? (disarmed = the RC took over) -> for each point:
+    │       ├── Guarded path: link alive? armed? (disarmed = the RC took over), and the failsafe guards -> for each point:
     │       │   ├── Go to the point: GUIDED (else set it), go to (within 1.5 m; over 60 s fails)
     │       │   └── Sample if due: nothing to sample here? or: LOITER (else set it), sample (recorded)
-    │       └── Wait for guards: hold (unless a person has the vehicle) until they recover, within a limit
+    │       └── Wait for guards: the failsafe of the failing guard (mission failsafe: policy)
     └── Hold at the end (LOITER for a boat)
 
 "LOITER" before the go-to is the vehicle's hold, the mode the executive itself holds it in (a boat's
@@ -28,6 +28,10 @@ An RC change or a guard failing during a sample stops the Sample action, which c
 sampler: nothing is recorded, and the sample is taken again when the leg resumes (a sample already
 recorded is never taken again). An operator's cancel (abort) ends the run: the runtime stops the
 tree, which cancels a sample in progress the same way.
+
+The seed's two rules are this tree's failsafe defaults (rc_takeover: wait, abort; ekf_loss: disarm,
+resume); a mission that sets another policy for either gets the generic failsafe instead (the EKF
+then guarded with the path).
 """
 
 from __future__ import annotations
@@ -50,9 +54,10 @@ from executive.behaviours import (
     WaitUntil,
     rc_auto_mode,
 )
-from executive.mission.model import Mission, SamplingOptions
+from executive.behaviours.failsafe import FailsafeNote
+from executive.mission.model import Mission, SamplingOptions, failsafe_policy
 from executive.vehicles import PROFILES
-from trees._parts import ARM_RETRY_S, guarded, mission_root, preflight, safe_mode
+from trees._parts import ARM_RETRY_S, checked, guarded, mission_root, preflight, safe_mode
 
 
 def _sample_hold_mode(mission: Mission) -> str:
@@ -77,19 +82,22 @@ def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
     itself, which must not read as a pilot's take-over). A vehicle already disarmed belongs to the
     pilot: it is left alone, and the guarded path waits for it to be armed again.
     """
-    limits, manual = mission.limits, PROFILES[mission.vehicle].manual_mode
+    manual, limit = PROFILES[mission.vehicle].manual_mode, failsafe_policy(mission)["ekf_loss"].timeout_s
+    ekf = EkfOk()
     wait = py_trees.composites.Sequence(
         f"Wait in {manual}",
         memory=True,
         children=[
+            FailsafeNote("ekf_loss", f"disarm in {manual}, resume when it recovers (within {limit:g} s)", guard=ekf),
             SetMode(manual),
             Disarm(),
-            WaitUntil(EkfOk(), limits.recovery_timeout_s, name="Wait until the EKF recovers"),
-            WaitUntil(Arm(), limits.recovery_timeout_s, name="Re-arm", retry_s=ARM_RETRY_S),
+            WaitUntil(EkfOk(), limit, name="Wait until the EKF recovers"),
+            WaitUntil(Arm(), limit, name="Re-arm", retry_s=ARM_RETRY_S),
+            FailsafeNote("ekf_loss", "recovered, re-armed -> resume"),
         ],
     )
     pilot_has_it = py_trees.decorators.Inverter(name="Disarmed (the pilot has it)?", child=Armed())
-    return py_trees.composites.Selector(f"EKF ok, else wait in {manual}", memory=True, children=[EkfOk(), pilot_has_it, wait])
+    return py_trees.composites.Selector(f"EKF ok, else wait in {manual}", memory=True, children=[ekf, pilot_has_it, wait])
 
 
 def point(mission: Mission) -> py_trees.behaviour.Behaviour:
@@ -108,10 +116,12 @@ def point(mission: Mission) -> py_trees.behaviour.Behaviour:
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     """The tree for a ``tree: goto_sample`` mission."""
-    path = guarded(ForEachLeg(point(mission)), [LinkAlive(), Armed()], mission, name="Guarded path")
-    goto = py_trees.composites.Sequence(
-        "Go-to", memory=False, children=[rc_auto_mode(mission.rc, "RC in auto? (else leave)"), ekf_or_wait_in_manual(mission), path]
-    )
+    ekf_loss = failsafe_policy(mission)["ekf_loss"]
+    seed_ekf_rule = (ekf_loss.reaction, ekf_loss.recovery) == ("disarm", "resume")
+    path = guarded(ForEachLeg(point(mission)), [LinkAlive(), Armed(), *([] if seed_ekf_rule else [EkfOk()])], mission, name="Guarded path")
+    leave = failsafe_policy(mission)["rc_takeover"].recovery == "abort"
+    rc = checked(rc_auto_mode(mission.rc, "RC in auto? (else leave)" if leave else "RC in auto?"), mission)
+    goto = py_trees.composites.Sequence("Go-to", memory=False, children=[rc, *([ekf_or_wait_in_manual(mission)] if seed_ekf_rule else []), path])
     steps: list[py_trees.behaviour.Behaviour] = [preflight(mission)]
     if mission.auto_arm:
         steps.append(SetMode(safe_mode(mission), name=f"Ready: set {safe_mode(mission)}"))

@@ -14,7 +14,7 @@ transmitter's switches while driving, and the autopilot drives it in AUTO.
     │   │   ├── Switch D: arm: down arm (only in MANUAL), up disarm
     │   │   └── Drive the route in AUTO: wait for the operator (within rc_route.operator_timeout_s),
     │   │       follow MISSION_CURRENT / MISSION_ITEM_REACHED; done at the last waypoint
-    │   └── Wait for guards: hold until they recover, within a limit
+    │   └── Wait for guards: the failing guard's failsafe (by default hold) until it recovers, within a limit
     └── Hold at the end (HOLD)
 
 The switches act when they move (edge-triggered): the position first seen is only noted, and the

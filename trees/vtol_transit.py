@@ -11,7 +11,7 @@
     │   │   ├── Wing-borne (once): transition to FW (EXTENDED_SYS_STATE FW) -> for each leg: go to (DO_REPOSITION)
     │   │   │                      -> vtol.land home: back to home (the local origin, DO_REPOSITION)
     │   │   └── Transition to MC: QLOITER (EXTENDED_SYS_STATE MC)
-    │   └── Wait for guards: hold in QLOITER (flying as a plane: LOITER) until they recover, within a limit
+    │   └── Wait for guards: the failing guard's failsafe (by default QLOITER, as a plane LOITER; low battery QRTL/RTL and abort)
     └── Land: vtol.land home: QRTL (over home on the lift motors, then down); last: QLAND where it is; done when disarmed on the ground
 
 How ArduPlane (a QuadPlane) is flown here, and why:

@@ -5,8 +5,9 @@
     Mission: while PAUSED, hold the vehicle (the leg is kept); otherwise run:
     ├── Pre-flight: wait for the EKF, arm (or wait for the operator to)
     ├── Guarded route or hold (reactive selector)
-    │   ├── Guarded route: link alive? EKF ok? armed? RC not taking over? -> for each leg: set GUIDED, go to
-    │   └── Wait for guards: hold (unless a person has the vehicle) until they recover, within a limit
+    │   ├── Guarded route: link alive? EKF ok? armed? RC not taking over? (+ the failsafe guards: GPS, heading, battery, RC loss,
+    │   │   geofence) -> for each leg: set GUIDED, go to
+    │   └── Wait for guards: the failing guard's failsafe (the mission's failsafe: policy): its reaction at once, then resume or abort
     └── Hold at the end (the vehicle's safe mode)
 """
 

@@ -17,6 +17,7 @@ from executive.behaviours.actions import (
     VtolTransition,
 )
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
+from executive.behaviours.failsafe import Failsafe
 from executive.behaviours.flow import ForEachLeg, UnlessPaused, WaitForGuards, WaitUntil
 from executive.behaviours.guards import (
     AllWaypointsWithin,
@@ -25,6 +26,7 @@ from executive.behaviours.guards import (
     BatteryAbove,
     DepthWithin,
     EkfOk,
+    GpsNotGlitching,
     Guard,
     HeadingSane,
     InsideGeofence,
@@ -33,6 +35,7 @@ from executive.behaviours.guards import (
     PositionKnown,
     RcAutoMode,
     RcFresh,
+    RcNotLost,
     RcNotTakingOver,
     SpeedWithin,
     TargetWithin,
@@ -57,9 +60,11 @@ __all__ = [
     "Disarm",
     "DriveRouteInAuto",
     "EkfOk",
+    "Failsafe",
     "ForEachLeg",
     "GoTo",
     "GoToLocal",
+    "GpsNotGlitching",
     "Guard",
     "HeadingSane",
     "HoldFor",
@@ -73,6 +78,7 @@ __all__ = [
     "PositionKnown",
     "RcAutoMode",
     "RcFresh",
+    "RcNotLost",
     "RcNotTakingOver",
     "RouteEditSwitch",
     "Sample",

@@ -156,7 +156,8 @@ class GoTo(TimedBehaviour):
     """Go to the current leg's waypoint in GUIDED.
 
     RUNNING with feedback (distance, bearing) on the way; SUCCESS inside the acceptance radius;
-    FAILURE after the leg timeout. ``method``:
+    FAILURE after the leg timeout. A target changed during the leg (an operator edited the route)
+    is followed at once. ``method``:
 
     - ``"setpoint"``: SET_POSITION_TARGET_GLOBAL_INT, re-sent every ``resend_s``: ArduPilot gives no
       ack for it and drops it silently outside GUIDED. A sub's waypoint goes with its depth (or its
@@ -203,6 +204,9 @@ class GoTo(TimedBehaviour):
         self._refusal: str | None = None
 
     def update(self) -> Status:
+        target = self.get("/mission/target")
+        if target is not None and target != self.target:  # an operator edited the route during the leg: head for the waypoint as it is now
+            self.target, self._last_sent, self._ticket = target, float("-inf"), None
         if self.target is None:
             self.feedback_message = "no active leg"
             return Status.FAILURE

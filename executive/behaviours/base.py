@@ -25,7 +25,8 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
 
     def __init__(self, name: str) -> None:
         super().__init__(name)
-        self.bb = self.attach_blackboard_client()
+        self.bb = blackboard.Client(name=name)  # attach_blackboard_client(), with the fast get
+        self.blackboards.append(self.bb)
         for key in self.reads:
             if key not in blackboard.KEYS:
                 raise KeyError(f"{type(self).__name__} reads undocumented blackboard key {key!r}")

@@ -16,7 +16,7 @@ from executive.behaviours.base import ExecutiveBehaviour
 from executive.geo import distance
 from executive.geofence import Geofence
 from executive.mission.model import Mission, Range, RcConfig, Waypoint
-from executive.state import Battery, EkfStatus, GlobalPosition, HomePosition, RcSwitches, SwitchPosition
+from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition, HomePosition, RcSwitches, SwitchPosition
 
 
 class Guard(ExecutiveBehaviour):
@@ -69,6 +69,22 @@ class EkfOk(Guard):
         if not ekf.variances_ok(self.variance_threshold):
             return f"EKF variances over {self.variance_threshold}"
         return None
+
+
+class GpsNotGlitching(Guard):
+    """The EKF does not flag a GPS glitch (EKF_STATUS_REPORT GPS_GLITCHING); no EKF report yet passes with a note."""
+
+    reads = ("/vehicle/ekf",)
+
+    def __init__(self, name: str = "GPS not glitching?") -> None:
+        super().__init__(name)
+
+    def check(self) -> str | None:
+        ekf: EkfStatus | None = self.get("/vehicle/ekf")
+        if ekf is None:
+            self.note = "no EKF status yet"
+            return None
+        return "the EKF flags a GPS glitch (GPS_GLITCHING)" if ekf.flags & EkfFlags.GPS_GLITCHING else None
 
 
 class Armed(Guard):
@@ -166,6 +182,32 @@ class RcFresh(Guard):
 
     def check(self) -> str | None:
         return None if self.get("/rc/fresh") else self.get("/rc/stale_reason") or "RC is stale"
+
+
+class RcNotLost(Guard):
+    """The RC transmitter seen earlier is still there; never seen passes with a note (a vehicle run without RC).
+
+    ``source="mavlink"``: lost when the autopilot reports every channel 0 (/rc/connected false);
+    reports that stop coming are the link's business (a link loss is not an RC loss). ``source="can"``:
+    lost when the RC reader finds the reports stale (/rc/fresh: after a signal loss the base
+    repeats its last frame, the counter frozen).
+    """
+
+    reads = ("/rc/connected", "/rc/fresh", "/rc/stale_reason")
+
+    def __init__(self, source: Literal["mavlink", "can"] = "mavlink", name: str = "RC not lost?") -> None:
+        super().__init__(name)
+        self.source = source
+        self._seen = False
+
+    def check(self) -> str | None:
+        if self.get("/rc/connected" if self.source == "mavlink" else "/rc/fresh"):
+            self._seen = True
+            return None
+        if not self._seen:
+            self.note = "no RC seen yet"
+            return None
+        return "RC transmitter gone (every channel 0)" if self.source == "mavlink" else self.get("/rc/stale_reason") or "RC is stale"
 
 
 class _HasLatLon(Protocol):

@@ -24,24 +24,27 @@ class NoVehicle(Exception):
     """The vehicle (its link or bus) cannot be reached; ``main`` prints it and exits 3."""
 
 
-#: Subcommand modules of this package; each has ``register(subparsers)`` setting ``func``.
-SUBCOMMANDS = ("validate", "show", "run", "sim", "schema", "ctl", "report", "replay", "can")
+#: Command -> the module of this package that registers it (``register(subparsers)`` setting ``func``).
+COMMANDS = {
+    "validate": "validate", "show": "show", "run": "run", "sim": "sim", "schema": "schema", "ctl": "ctl", "report": "report",
+    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files",
+}  # fmt: skip
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
-    """The command line; with ``only``, just that subcommand (its module alone is imported: ``ctl`` starts fast)."""
+    """The command line; with ``only`` (a command), just its module is imported: ``ctl`` starts fast."""
     parser = argparse.ArgumentParser(prog="executive", description="Onboard behaviour-tree mission executive.")
     parser.add_argument("--version", action="version", version=f"executive {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name in SUBCOMMANDS if only is None else (only,):
-        importlib.import_module(f"executive.cli.{name}").register(sub)
+    for module in dict.fromkeys(COMMANDS.values()) if only is None else (COMMANDS[only],):
+        importlib.import_module(f"executive.cli.{module}").register(sub)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``executive`` console script; returns the exit code."""
     argv = list(sys.argv[1:] if argv is None else argv)
-    parser = build_parser(argv[0] if argv and argv[0] in SUBCOMMANDS else None)
+    parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help

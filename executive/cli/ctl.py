@@ -1,4 +1,9 @@
-"""``executive ctl``: operator control of a running executive over its control socket."""
+"""``executive ctl``: operator control of a running executive over its control socket.
+
+``executive ctl [--socket PATH] [--json] REQUEST [ARGS]``; ``route`` takes an operation and its
+arguments (``executive ctl route OPERATION --help``). Waypoint numbers are 1-based, as the status
+line counts them.
+"""
 
 from __future__ import annotations
 
@@ -6,46 +11,147 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK
 from executive.io.control import default_socket_path, request
 from executive.status import status_line
 
-REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload")
+REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route")
+_PLAIN = {
+    "status": "the mission's state and the vehicle's",
+    "start": "start the loaded mission",
+    "pause": "pause the mission: the vehicle holds",
+    "resume": "resume a paused mission",
+    "abort": "abort the mission: the vehicle holds",
+    "delete": "delete the loaded mission",
+}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("ctl", help="control a running executive: status, start, pause, resume, abort, delete, upload MISSION")
+    p = sub.add_parser("ctl", help="control a running executive: status, start, pause, resume, abort, delete, upload MISSION, route OPERATION")
     p.add_argument("--socket", metavar="PATH", default=default_socket_path(), help="the executive's control socket (default %(default)s)")
     p.add_argument("--json", action="store_true", help="print the reply as JSON")
-    p.add_argument("request", choices=REQUESTS, help="what to ask")
-    p.add_argument("mission", nargs="?", help="upload: the mission file")
+    # the same options after the request too: SUPPRESS keeps what was given before it
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--socket", metavar="PATH", default=argparse.SUPPRESS, help="the executive's control socket")
+    common.add_argument("--json", action="store_true", default=argparse.SUPPRESS, help="print the reply as JSON")
+    requests = p.add_subparsers(dest="request", required=True, metavar="REQUEST")
+    for name, text in _PLAIN.items():
+        requests.add_parser(name, parents=[common], help=text, description=text)
+    upload = requests.add_parser("upload", parents=[common], help="load a mission file (while not running)")
+    upload.add_argument("mission", help="the mission file")
+    _register_route(requests.add_parser("route", parents=[common], help="show or edit the route", description=_ROUTE_HELP), common)
     p.set_defaults(func=main)
 
 
+_ROUTE_HELP = """Show or edit the route of the loaded mission (while READY, RUNNING or PAUSED). After an edit the
+executive uploads the route to the autopilot and reads it back. Waypoint numbers are 1-based."""
+
+
+def _register_route(route: argparse.ArgumentParser, common: argparse.ArgumentParser) -> None:
+    ops = route.add_subparsers(dest="operation", required=True, metavar="OPERATION")
+
+    def op(name: str, text: str) -> argparse.ArgumentParser:
+        return ops.add_parser(name, parents=[common], help=text, description=text)
+
+    op("show", "the route, the waypoint the vehicle heads for, and whether the autopilot holds it")
+    add = op("add", "add a waypoint at the vehicle's position (or --lat/--lon): at the end, after the current one or after waypoint N")
+    add.add_argument("--after", type=_after, default="end", metavar="end|current|N", help="where: end (default), current, or N (0: first)")
+    _position_options(add)
+    add.add_argument("--alt", type=float, dest="alt_m", metavar="M", help="altitude above home, m (air vehicles)")
+    remove = op("remove", "remove the last waypoint, the current one, or waypoint N")
+    remove.add_argument("waypoint", type=_which, metavar="last|current|N")
+    op("clear", "remove every waypoint (home stays)")
+    op("backwards", "reverse the waypoints: the vehicle finishes its leg, then drives back")
+    offset = op("offset", "move every waypoint (or --waypoint N) a distance toward a compass bearing (GPS drift between days)")
+    offset.add_argument("distance_m", type=float, metavar="DIST_M", help="metres (negative: the opposite way)")
+    offset.add_argument("bearing_deg", type=float, metavar="BEARING_DEG", help="compass bearing, degrees")
+    offset.add_argument("--waypoint", "--index", type=_number, metavar="N", help="only waypoint N")
+    scale = op("scale-rotate", "scale the route and turn it (clockwise) about the centre of its bounding box")
+    scale.add_argument("scale", type=float, metavar="SCALE", help="distance factor, > 0 (1: same size)")
+    scale.add_argument("angle_deg", type=float, metavar="ANGLE_DEG", help="degrees clockwise (negative: anticlockwise)")
+    _centre_option(scale)
+    mirror = op("mirror", "mirror the route across an axis through the centre of its bounding box")
+    mirror.add_argument("bearing_deg", type=float, metavar="BEARING_DEG", help="the axis's compass bearing, degrees")
+    _centre_option(mirror)
+    _position_options(op("set-home", "make the vehicle's position (or --lat/--lon) the mission's home, and the autopilot's"))
+
+
+def _position_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--lat", type=float, metavar="DEG", help="latitude (with --lon; default: the vehicle's position)")
+    parser.add_argument("--lon", type=float, metavar="DEG", help="longitude (with --lat)")
+
+
+def _centre_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--centre", type=float, nargs=2, metavar=("LAT", "LON"), help="about this point instead (to undo an edit exactly)")
+
+
+def _number(value: str) -> int:
+    if not value.isdigit() or int(value) < 1:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a waypoint number (1, 2, ...)")
+    return int(value)
+
+
+def _which(value: str) -> str | int:
+    return value if value in ("last", "current") else _number(value)
+
+
+def _after(value: str) -> str | int:
+    return value if value in ("end", "current") else 0 if value == "0" else _number(value)
+
+
+def _route_request(args: argparse.Namespace) -> dict[str, Any]:
+    """The route request's arguments: the operation and what was given of its options."""
+    names = ("after", "lat", "lon", "alt_m", "waypoint", "distance_m", "bearing_deg", "scale", "angle_deg", "centre")
+    extra = {name: getattr(args, name) for name in names if getattr(args, name, None) is not None}
+    if ("lat" in extra) != ("lon" in extra):
+        raise ValueError("--lat and --lon go together")
+    return {"operation": args.operation.replace("-", "_"), **extra}
+
+
 def main(args: argparse.Namespace) -> int:
-    extra = {}
+    extra: dict[str, Any] = {}
     if args.request == "upload":
-        if not args.mission:
-            print("executive: ctl: upload needs a MISSION file", file=sys.stderr)
-            return EXIT_BAD_INPUT
         try:
             extra = {"filename": args.mission, "text": Path(args.mission).read_text(encoding="utf-8")}
         except (OSError, UnicodeDecodeError) as exc:
             print(f"{args.mission}:1:1: (file): {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT
-    elif args.mission:
-        print(f"executive: ctl: {args.request} takes no file", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    elif args.request == "route":
+        try:
+            extra = _route_request(args)
+        except ValueError as exc:
+            print(f"executive: ctl: route {args.operation}: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
     try:
         reply = request(args.socket, args.request, **extra)
     except OSError as exc:
         print(f"executive: ctl: no executive answers on {args.socket}: {exc}", file=sys.stderr)
         return EXIT_NO_VEHICLE
+    what = args.request if args.request != "route" else f"route {args.operation}"
     if args.json:
         print(json.dumps(reply))
-    elif reply.get("ok"):
-        print(status_line(reply["status"]) if "status" in reply else f"{reply['state']}: {reply['reason']}")
+    elif not reply.get("ok"):
+        print(f"executive: ctl: {what} refused ({reply.get('state', '?')}): {reply.get('reason')}", file=sys.stderr)
+    elif "status" in reply:
+        print(status_line(reply["status"]))
     else:
-        print(f"executive: ctl: {args.request} refused ({reply.get('state', '?')}): {reply.get('reason')}", file=sys.stderr)
+        print(f"{reply['state']}: {reply['reason']}")
+        if "route" in reply:
+            print(route_lines(reply["route"]))
     return EXIT_OK if reply.get("ok") else EXIT_FAILED
+
+
+def route_lines(route: dict[str, Any]) -> str:
+    """The route of a reply, for a person: one line per waypoint, ``>`` on the one the vehicle heads for."""
+    upload = route.get("upload")
+    held = "yes" if route["on_autopilot"] else "no"
+    if upload is not None and upload["state"] != "DONE":
+        held += f" ({upload['state'].lower()}: {upload['detail']})"
+    lines = [f"{len(route['waypoints'])} waypoints; on the autopilot: {held}"]
+    for number, (lat, lon, alt) in enumerate(route["waypoints"], start=1):
+        lines.append(f"{'>' if number == route['current'] else ' '} {number:3d}  {lat:.7f}, {lon:.7f}{f'  alt {alt:g} m' if alt else ''}")
+    if route["home"] is not None:
+        lines.append(f"  home {route['home'][0]:.7f}, {route['home'][1]:.7f}")
+    return "\n".join(lines)

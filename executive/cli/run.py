@@ -75,15 +75,27 @@ def _vehicle_link(
     sim_options = mission.simulator or SimulatorOptions()
     model = sim_options.model or mission.vehicle
     firmware = {"q_guided_mode": sim_options.q_guided_mode} if model == "vtol" else {}
-    with SimServer(
-        model, clock=clock, home=home, faults=faults, signing_key=signing_key, ekf_ready_after_s=sim_options.ekf_ready_after_s, **firmware
-    ) as sim:
-        print(f"executive: simulated {model} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
-        link = PymavlinkLink(sim.url_for_client, **options)
-        try:
-            yield link
-        finally:
-            link.close()
+    base_bus = _open_can(args.can) if args.can and model == "bunker" else None  # the simulated base's end of the bus
+    try:
+        with SimServer(
+            model,
+            clock=clock,
+            home=home,
+            faults=faults,
+            signing_key=signing_key,
+            ekf_ready_after_s=sim_options.ekf_ready_after_s,
+            can_bus=base_bus,
+            **firmware,
+        ) as sim:
+            print(f"executive: simulated {model} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
+            link = PymavlinkLink(sim.url_for_client, **options)
+            try:
+                yield link
+            finally:
+                link.close()
+    finally:
+        if base_bus is not None:
+            base_bus.shutdown()
 
 
 @contextlib.contextmanager
@@ -130,19 +142,24 @@ def _can_bus(args: argparse.Namespace, stack: contextlib.ExitStack) -> can.BusAB
         if args.can_log:
             raise BadInput("--can-log needs --can IFACE:CHANNEL")
         return None
-    from executive.io.can import CanOpenError, CanSpecError, open_can
     from executive.io.can.recording import RecordingBus
 
-    try:
-        bus = open_can(args.can)
-    except CanSpecError as exc:
-        raise BadInput(f"--can: {exc}") from exc
-    except CanOpenError as exc:
-        raise NoVehicle(f"--can: {exc}") from exc
+    bus = _open_can(args.can)
     if args.can_log:
         bus = RecordingBus(bus, args.can_log)
     stack.callback(bus.shutdown)
     return bus
+
+
+def _open_can(spec: str) -> can.BusABC:
+    from executive.io.can import CanOpenError, CanSpecError, open_can
+
+    try:
+        return open_can(spec)
+    except CanSpecError as exc:
+        raise BadInput(f"--can: {exc}") from exc
+    except CanOpenError as exc:
+        raise NoVehicle(f"--can: {exc}") from exc
 
 
 def _resume_text(resume: ResumePoint | None) -> str:

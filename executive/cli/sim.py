@@ -8,12 +8,18 @@ import signal
 import sys
 import threading
 from types import FrameType
+from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
 from executive.cli.common import faults_or_report, signing_key_arg
 from executive.clock import ScaledClock
 from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, Home
 from executive.sim.server import SimServer
+
+if TYPE_CHECKING:
+    import can
+
+    from executive.sim.faults import FaultInjector
 
 
 def _home(text: str) -> Home:
@@ -56,11 +62,16 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--duration", metavar="S", type=positive, help="exit after S simulated seconds")
     parser.add_argument("--faults", metavar="FILE", help="YAML list of faults to inject (link loss, EKF, GPS, compass, RC, battery)")
     parser.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key: sign everything, drop unsigned packets")
+    can_help = "bunker: the AgileX base on this CAN bus (socketcan:vcan0, virtual:x...): RC and state frames out, motion commands in"
+    parser.add_argument("--can", metavar="IFACE:CHANNEL", help=can_help)
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Serve the simulated vehicle in the foreground."""
+    if args.can is not None and args.vehicle != "bunker":
+        print(f"executive sim: --can simulates the AgileX base of the tracked UGV: use it with --vehicle bunker, not {args.vehicle}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     clock = ScaledClock(args.speedup)
     faults = None
     if args.faults is not None:
@@ -68,6 +79,26 @@ def run(args: argparse.Namespace) -> int:
         if faults is None:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)
+    can_bus = None
+    if args.can is not None:
+        from executive.io.can import CanOpenError, CanSpecError, open_can
+
+        try:
+            can_bus = open_can(args.can)
+        except CanSpecError as exc:
+            print(f"executive sim: --can: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        except CanOpenError as exc:
+            print(f"executive sim: --can: {exc}", file=sys.stderr)
+            return EXIT_FAILED
+    try:
+        return _serve(args, clock, faults, signing_key, can_bus)
+    finally:
+        if can_bus is not None:
+            can_bus.shutdown()
+
+
+def _serve(args: argparse.Namespace, clock: ScaledClock, faults: FaultInjector | None, signing_key: bytes | None, can_bus: can.BusABC | None) -> int:
     try:
         server = SimServer(
             args.vehicle,
@@ -77,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
             ekf_ready_after_s=args.ekf_ready_after,
             faults=faults,
             signing_key=signing_key,
+            can_bus=can_bus,
         )
     except (OSError, ValueError) as exc:
         print(f"executive sim: cannot listen on {args.mavlink}: {exc}", file=sys.stderr)
@@ -95,6 +127,9 @@ def run(args: argparse.Namespace) -> int:
     )
     if faults is not None:
         print(f"executive sim: injecting {len(faults.faults)} fault(s) from {args.faults}", flush=True)
+    if can_bus is not None:
+        only_here = " (a virtual bus is seen only by this process)" if args.can.lower().startswith("virtual:") else ""
+        print(f"executive sim: AgileX base on CAN {args.can}{only_here}", flush=True)
     end = None if args.duration is None else clock.now() + args.duration
     try:
         with server:

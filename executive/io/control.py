@@ -9,15 +9,21 @@ from __future__ import annotations
 import contextlib
 import json
 import logging
+import math
 import os
 import socket
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 log = logging.getLogger(__name__)
 
 MAX_REQUEST_BYTES = 4 << 20  # an upload carries a mission file (<= 1 MiB) as JSON text
+MAX_CLIENTS = 32  # connections served at once; one more is told so and closed
+MAX_ACCEPTS_PER_SERVICE = 64  # a storm of connections cannot hold up a tick
+MAX_REQUESTS_PER_SERVICE = 16  # per connection and tick: a flood of requests is answered over several ticks
+MAX_UNREAD_REPLY_BYTES = 1 << 20  # a client leaving more replies than this unread is dropped
 
 Handler = Callable[[dict[str, Any]], dict[str, Any]]
 
@@ -30,6 +36,15 @@ def default_socket_path() -> str:
 
 class SocketInUse(OSError):
     """Another executive is serving on this socket path."""
+
+
+@dataclass
+class _Connection:
+    """One client: bytes read but not yet answered, replies not yet sent, whether it has stopped sending."""
+
+    inbox: bytearray = field(default_factory=bytearray)
+    outbox: bytearray = field(default_factory=bytearray)
+    eof: bool = False
 
 
 class ControlServer:
@@ -51,38 +66,27 @@ class ControlServer:
         os.chmod(path, 0o600)
         self._server.listen(8)
         self._server.setblocking(False)
-        self._clients: dict[socket.socket, bytearray] = {}
+        self._clients: dict[socket.socket, _Connection] = {}
+        self.accept_errors = 0
 
     def service(self) -> int:
-        """Accept, read and answer what is waiting; returns the number of requests answered."""
-        while True:
-            try:
-                client, _ = self._server.accept()
-            except (BlockingIOError, InterruptedError):
-                break
-            client.setblocking(False)
-            self._clients[client] = bytearray()
+        """Read and answer what is waiting, accept new connections (and answer them); returns the requests answered. Never blocks."""
+        served = self._serve(list(self._clients))  # first, so that connections their clients closed make room
+        return served + self._serve(self._accept())
+
+    def _serve(self, clients: list[socket.socket]) -> int:
+        """Read from each of ``clients``, answer its complete lines, send what it can take; close it once it is done."""
         answered = 0
-        for client, buffer in list(self._clients.items()):
-            try:
-                data = client.recv(65536)
-            except (BlockingIOError, InterruptedError):
-                continue
-            except OSError:
-                data = b""
-            if not data:
+        for client in clients:
+            conn = self._clients[client]
+            if not conn.eof and len(conn.inbox) <= MAX_REQUEST_BYTES:  # a flood of requests waits in the kernel, not here
+                self._read(client, conn)
+            if client in self._clients:
+                answered += self._answer_lines(client, conn)
+            if client in self._clients:
+                self._flush(client, conn)
+            if client in self._clients and conn.eof and not conn.inbox and not conn.outbox:
                 self._drop(client)
-                continue
-            buffer += data
-            if len(buffer) > MAX_REQUEST_BYTES:
-                self._send(client, {"ok": False, "reason": f"request over {MAX_REQUEST_BYTES} bytes"})
-                self._drop(client)
-                continue
-            while b"\n" in buffer:
-                line, _, rest = bytes(buffer).partition(b"\n")
-                buffer[:] = rest
-                self._send(client, self._answer(line))
-                answered += 1
         return answered
 
     def close(self) -> None:
@@ -92,11 +96,66 @@ class ControlServer:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(self.path)
 
+    def _accept(self) -> list[socket.socket]:
+        accepted: list[socket.socket] = []
+        for _ in range(MAX_ACCEPTS_PER_SERVICE):
+            try:
+                client, _ = self._server.accept()
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError as exc:  # out of file descriptors (EMFILE, ENFILE) or buffers: the connection waits in the backlog
+                self.accept_errors += 1
+                if self.accept_errors == 1 or self.accept_errors % 100 == 0:
+                    log.warning("control socket: cannot accept a connection (%d so far): %s", self.accept_errors, exc)
+                break
+            client.setblocking(False)
+            if len(self._clients) >= MAX_CLIENTS:
+                with contextlib.suppress(OSError):
+                    client.send(_encode({"ok": False, "reason": f"too many connections (at most {MAX_CLIENTS})"}))
+                client.close()
+                continue
+            self._clients[client] = _Connection()
+            accepted.append(client)
+        return accepted
+
+    def _read(self, client: socket.socket, conn: _Connection) -> None:
+        try:
+            data = client.recv(65536)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError:
+            data = b""
+        if not data:
+            conn.eof = True  # answer what is complete (and a last line without its newline), then close
+            return
+        conn.inbox += data
+
+    def _answer_lines(self, client: socket.socket, conn: _Connection) -> int:
+        """Answer up to MAX_REQUESTS_PER_SERVICE complete lines; a line over MAX_REQUEST_BYTES drops the client."""
+        answered = 0
+        while answered < MAX_REQUESTS_PER_SERVICE:
+            end = conn.inbox.find(b"\n")
+            if (end if end >= 0 else len(conn.inbox)) > MAX_REQUEST_BYTES:
+                conn.outbox += _encode({"ok": False, "reason": f"request over {MAX_REQUEST_BYTES} bytes"})
+                self._flush(client, conn)
+                self._drop(client)
+                break
+            if end < 0 and not (conn.eof and conn.inbox):
+                break
+            line = bytes(conn.inbox[:end] if end >= 0 else conn.inbox)
+            del conn.inbox[: end + 1 if end >= 0 else len(conn.inbox)]
+            conn.outbox += _encode(self._answer(line))
+            answered += 1
+            if len(conn.outbox) > MAX_UNREAD_REPLY_BYTES:  # it asks and never reads
+                self._drop(client)
+                break
+        return answered
+
     def _answer(self, line: bytes) -> dict[str, Any]:
         try:
-            request = json.loads(line)
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            return {"ok": False, "reason": f"not a JSON request: {exc}"}
+            request = json.loads(line, parse_constant=_not_finite, parse_float=_finite)
+        except (ValueError, RecursionError) as exc:  # not UTF-8, not JSON, NaN, 1e999, an integer of over 4300 digits, nested too deep
+            return {"ok": False, "reason": f"not a JSON request: {type(exc).__name__}: {str(exc)[:200]}"}
         if not isinstance(request, dict) or not isinstance(request.get("op"), str):
             return {"ok": False, "reason": 'a request is a JSON object with a string "op"'}
         try:
@@ -105,18 +164,40 @@ class ControlServer:
             log.exception("control request %r failed", request.get("op"))
             return {"ok": False, "reason": f"{type(exc).__name__}: {exc}"}
 
-    def _send(self, client: socket.socket, reply: dict[str, Any]) -> None:
-        try:
-            client.setblocking(True)  # a reply is small; the client is waiting for it
-            client.settimeout(1.0)
-            client.sendall(json.dumps(reply).encode() + b"\n")
-            client.setblocking(False)
-        except OSError:
-            self._drop(client)
+    def _flush(self, client: socket.socket, conn: _Connection) -> None:
+        """Send what the socket takes now; the rest waits for the next service."""
+        while conn.outbox:
+            try:
+                sent = client.send(conn.outbox)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:  # the client went away
+                self._drop(client)
+                return
+            del conn.outbox[:sent]
 
     def _drop(self, client: socket.socket) -> None:
         self._clients.pop(client, None)
         client.close()
+
+
+def _finite(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{text[:40]} is not a finite number")
+    return value
+
+
+def _not_finite(text: str) -> float:
+    raise ValueError(f"{text} is not a number")
+
+
+def _encode(reply: dict[str, Any]) -> bytes:
+    """A reply as one JSON line; one that cannot be encoded says so."""
+    try:
+        return json.dumps(reply).encode() + b"\n"
+    except (TypeError, ValueError) as exc:
+        return json.dumps({"ok": False, "reason": f"the reply could not be encoded: {exc}"}).encode() + b"\n"
 
 
 def socket_alive(path: str) -> bool:

@@ -3,7 +3,7 @@
 The thesis rover's compass read ~20° off and swung by up to 45° when the motors started, so the
 track snaked. This filter catches both, from what the MAVLink reader already writes:
 
-- a Kalman filter (filterpy) of heading and yaw rate, *in the compass's frame*, fed by the compass
+- a Kalman filter of heading and yaw rate, *in the compass's frame*, fed by the compass
   (ATTITUDE yaw), the gyro (ATTITUDE yawspeed) and, while moving, the GPS course over ground
   (atan2(ve, vn)) shifted by the estimated compass bias. Each compass and course reading is gated
   on its wrapped innovation (y²/S against a chi-square gate) *before* the update; a glitch is
@@ -22,26 +22,92 @@ track snaked. This filter catches both, from what the MAVLink reader already wri
 
 /heading/deg is the filter's heading with the bias taken off once judged (before, the compass's own
 heading, filtered): the best guess of the true heading. /heading/bias_deg is the estimate once judged
-(None before). Course over ground differs
-from heading by any crab angle (a boat in a current, a skidding track), which this reads as bias.
+(None before). Course over ground differs from heading by any crab angle (a boat in a current, a
+skidding track), which this reads as bias. The runtime calls :meth:`HeadingFilter.service` once per
+tick, right after the MAVLink reader drains.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
 import math
+import threading
 from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
-from filterpy.common import Q_discrete_white_noise
-from filterpy.kalman import KalmanFilter
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.state import Attitude, GlobalPosition
 
-_H_HEADING = np.array([[1.0, 0.0]])
-_H_RATE = np.array([[0.0, 1.0]])
+_HEADING, _RATE = 0, 1  # the state's components (and the row of H that measures each)
+
+Matrix2 = tuple[tuple[float, float], tuple[float, float]]
+
+
+class HeadingKalman:
+    """Heading and turn rate in filterpy's ``KalmanFilter`` (constant-rate model, discrete white-noise acceleration).
+
+    ``x`` and ``P`` are kept as plain floats for the caller (which wraps the heading itself: filterpy
+    has no angle hook); each step hands them to filterpy and reads them back. filterpy brings scipy
+    (~0.7 s to import): :func:`load_filterpy` runs in the background so the first tick does not wait.
+    """
+
+    def __init__(self) -> None:
+        from filterpy.common import Q_discrete_white_noise
+        from filterpy.kalman import KalmanFilter
+
+        self._kf = KalmanFilter(dim_x=2, dim_z=1)
+        self._q = Q_discrete_white_noise
+        self.x: list[float] = [0.0, 0.0]
+        self.P: Matrix2 = ((1.0, 0.0), (0.0, 1.0))
+
+    def predict(self, dt: float, var: float) -> None:
+        kf = self._kf
+        self._push()
+        kf.F = np.array([[1.0, dt], [0.0, 1.0]])
+        kf.Q = self._q(dim=2, dt=dt, var=var)
+        kf.predict()
+        self._pull()
+
+    def update(self, z: float, r: float, i: int) -> None:
+        """Take a measurement ``z`` of state component ``i`` whose variance is ``r``."""
+        self._push()
+        self._kf.update(np.array([[z]]), R=np.array([[r]]), H=_H[i])
+        self._pull()
+
+    def _push(self) -> None:
+        self._kf.x = np.array([[self.x[0]], [self.x[1]]])
+        self._kf.P = np.array(self.P, dtype=float)
+
+    def _pull(self) -> None:
+        x, p = self._kf.x, self._kf.P
+        self.x = [x[0, 0].item(), x[1, 0].item()]
+        self.P = ((p[0, 0].item(), p[0, 1].item()), (p[1, 0].item(), p[1, 1].item()))
+
+
+_H = (np.array([[1.0, 0.0]]), np.array([[0.0, 1.0]]))
+_filterpy_ready = threading.Event()
+
+
+def load_filterpy() -> None:
+    """Import filterpy (and scipy) once, in a thread of its own; :class:`HeadingFilter` judges nothing until it is in."""
+
+    def load() -> None:
+        importlib.import_module("filterpy.kalman")
+        importlib.import_module("filterpy.common")
+        _filterpy_ready.set()
+
+    if not _filterpy_ready.is_set() and not any(t.name == "load filterpy" for t in threading.enumerate()):
+        threading.Thread(target=load, name="load filterpy", daemon=True).start()
+
+
+def wait_for_filterpy(timeout_s: float = 30.0) -> bool:
+    """Block until filterpy is loaded (tools and tests that want a judging filter from the first reading)."""
+    load_filterpy()
+    return _filterpy_ready.wait(timeout_s)
 
 
 def wrap180(deg: float) -> float:
@@ -94,7 +160,8 @@ class HeadingFilter:
         self._clock = clock
         self._in = blackboard.reader("heading filter in", ["/vehicle/attitude", "/vehicle/position"])
         self._out = blackboard.writer("heading filter", ["/heading/deg", "/heading/ok", "/heading/bias_deg"])
-        self._kf = KalmanFilter(dim_x=2, dim_z=1)
+        self._kf: HeadingKalman = None  # type: ignore[assignment]  # made on the first tick after filterpy is loaded
+        load_filterpy()
         self._t: float | None = None  # time of the filter's state; None = not initialised
         self._attitude: Attitude | None = None
         self._position: GlobalPosition | None = None
@@ -102,6 +169,7 @@ class HeadingFilter:
         self._straight_since: float | None = None
         self._rejected_run: list[float] = []  # innovations of consecutive rejected compass readings
         self._verdicts: deque[tuple[float, bool]] = deque()  # (time, rejected) of recent compass readings
+        self._rejections = 0  # how many of them were rejected (kept with the deque: no sum over it every tick)
         self._rejecting = False
         self._last_rejection = -math.inf
         # the bias filter (scalar Kalman filter of compass - course)
@@ -123,7 +191,7 @@ class HeadingFilter:
         """The filtered heading, less the bias once judged, [0, 360); None before the first compass reading."""
         if self._t is None:
             return None
-        return (float(self._kf.x[0, 0]) - (self._bias if self.bias_judged else 0.0)) % 360.0
+        return (self._kf.x[_HEADING] - (self._bias if self.bias_judged else 0.0)) % 360.0
 
     @property
     def bias_estimate_deg(self) -> float | None:
@@ -139,7 +207,7 @@ class HeadingFilter:
     @property
     def rejected_share(self) -> float:
         """The share of the compass readings in the window that the gate rejected."""
-        return sum(r for _, r in self._verdicts) / len(self._verdicts) if self._verdicts else 0.0
+        return self._rejections / len(self._verdicts) if self._verdicts else 0.0
 
     @property
     def reason(self) -> str:
@@ -153,6 +221,11 @@ class HeadingFilter:
     # -- each tick -----------------------------------------------------------------------------
     def service(self) -> None:
         """Take the new attitude and position readings (in time order), then publish the verdict."""
+        if self._kf is None:
+            if not _filterpy_ready.is_set():  # still loading: nothing judged yet (/heading/ok stays None)
+                self._publish(self._clock.now())
+                return
+            self._kf = HeadingKalman()
         attitude: Attitude | None = self._in.get("/vehicle/attitude")
         position: GlobalPosition | None = self._in.get("/vehicle/position")
         new: list[Attitude | GlobalPosition] = []
@@ -162,7 +235,10 @@ class HeadingFilter:
         if position is not None and position != self._position:
             self._position = position
             new.append(position)
-        for reading in sorted(new, key=lambda r: (r.time, isinstance(r, GlobalPosition))):
+        # The filter runs on when the autopilot measured (its boot clock): reception times jitter with the link,
+        # and a turn's rate times that jitter reads as a compass error.
+        measured = [dataclasses.replace(r, time=r.boot_s) if r.boot_s is not None else r for r in new]
+        for reading in sorted(measured, key=lambda r: (r.time, isinstance(r, GlobalPosition))):
             if isinstance(reading, Attitude):
                 self._on_attitude(reading)
             else:
@@ -172,8 +248,8 @@ class HeadingFilter:
     # -- the heading filter --------------------------------------------------------------------
     def _start(self, yaw_deg: float, rate_deg_s: float, t: float) -> None:
         cfg = self.config
-        self._kf.x = np.array([[yaw_deg % 360.0], [rate_deg_s]])
-        self._kf.P = np.diag([cfg.compass_sigma_deg**2, cfg.gyro_sigma_deg_s**2])
+        self._kf.x = [yaw_deg % 360.0, rate_deg_s]
+        self._kf.P = ((cfg.compass_sigma_deg**2, 0.0), (0.0, cfg.gyro_sigma_deg_s**2))
         self._t = t
         self._rejected_run.clear()
 
@@ -181,35 +257,36 @@ class HeadingFilter:
         assert self._t is not None
         dt = t - self._t
         if dt > 0.0:
-            self._kf.predict(F=np.array([[1.0, dt], [0.0, 1.0]]), Q=Q_discrete_white_noise(2, dt=dt, var=self.config.yaw_accel_sigma_deg_s2**2))
-            self._kf.x[0, 0] %= 360.0
+            self._kf.predict(dt, self.config.yaw_accel_sigma_deg_s2**2)
+            self._kf.x[_HEADING] %= 360.0
             self._t = t
 
     def _gated_update(self, z_deg: float, r_var: float) -> tuple[bool, float]:
         """Update the heading with ``z_deg`` unless its wrapped innovation fails the gate; returns (accepted, innovation)."""
-        x = float(self._kf.x[0, 0])
+        x = self._kf.x[_HEADING]
         y = wrap180(z_deg - x)
-        s = float(self._kf.P[0, 0]) + r_var
+        s = self._kf.P[0][0] + r_var
         if y * y / s > self.config.gate:
             return False, y
-        self._kf.update(np.array([[x + y]]), R=np.array([[r_var]]), H=_H_HEADING)  # z chosen so filterpy's innovation is y
-        self._kf.x[0, 0] %= 360.0
+        self._kf.update(x + y, r_var, _HEADING)  # z chosen so the filter's innovation is y
+        self._kf.x[_HEADING] %= 360.0
         return True, y
 
     def _on_attitude(self, a: Attitude) -> None:
         cfg = self.config
         straight = abs(a.yaw_rate_deg_s) <= cfg.straight_rate_deg_s
         self._straight_since = (self._straight_since if self._straight_since is not None else a.time) if straight else None
-        if self._t is None or a.time - self._t > cfg.stale_after_s:
+        if self._t is None or a.time - self._t > cfg.stale_after_s or a.time < self._t - cfg.stale_after_s:  # a gap, or a reboot
             self._start(a.yaw_deg, a.yaw_rate_deg_s, a.time)
             self._compass = (a.time, a.yaw_deg, a.yaw_rate_deg_s)
             return
         self._predict_to(a.time)
-        self._kf.update(np.array([[a.yaw_rate_deg_s]]), R=np.array([[cfg.gyro_sigma_deg_s**2]]), H=_H_RATE)
+        self._kf.update(a.yaw_rate_deg_s, cfg.gyro_sigma_deg_s**2, _RATE)
         r_var = cfg.compass_sigma_deg**2 + (a.yaw_rate_deg_s * cfg.timing_sigma_s) ** 2
         accepted, y = self._gated_update(a.yaw_deg, r_var)
         self.last_compass_innovation_deg = y
         self._verdicts.append((a.time, not accepted))
+        self._rejections += not accepted
         if accepted:
             self.compass_accepted += 1
             self._rejected_run.clear()
@@ -234,10 +311,10 @@ class HeadingFilter:
         if self._t is None or speed < cfg.min_course_speed_m_s or p.time - self._t > cfg.stale_after_s:
             return
         course = math.degrees(math.atan2(p.ve_m_s, p.vn_m_s)) % 360.0
-        rate = float(self._kf.x[1, 0])
+        rate = self._kf.x[_RATE]
         cog_var = math.degrees(math.atan2(cfg.gps_velocity_sigma_m_s, speed)) ** 2 + (rate * cfg.timing_sigma_s) ** 2
         self._predict_to(p.time)
-        if self.bias_judged and abs(wrap180(course + self._bias - float(self._kf.x[0, 0]))) > 120.0:
+        if self.bias_judged and abs(wrap180(course + self._bias - self._kf.x[_HEADING])) > 120.0:
             return  # driving backwards (a tracked vehicle can): the course is the heading's opposite
         accepted, _ = self._gated_update(course + self._bias, cog_var + self._bias_var)
         if accepted:
@@ -285,9 +362,9 @@ class HeadingFilter:
     def _publish(self, now: float) -> None:
         cfg = self.config
         while self._verdicts and self._verdicts[0][0] < now - cfg.rejection_window_s:
-            self._verdicts.popleft()
+            self._rejections -= self._verdicts.popleft()[1]
         share = self.rejected_share
-        if share >= cfg.rejection_flag_share and sum(r for _, r in self._verdicts) >= cfg.rejection_min_count:
+        if share >= cfg.rejection_flag_share and self._rejections >= cfg.rejection_min_count:
             self._rejecting = True
         elif share < cfg.rejection_clear_share:
             self._rejecting = False

@@ -19,7 +19,10 @@ sample twice either: whoever restores its progress (the journal) hands the sampl
 The route itself may change while the mission is loaded (an operator records or edits it):
 :meth:`MissionState.set_route` keeps the new route here, so a guard failure or a pause does not lose
 it, and tells the route listeners. The operations that make new routes are in
-:mod:`executive.mission.route`.
+:mod:`executive.mission.route`. The route carries the mission's home (``Mission.home``, not a
+waypoint): SET_HOME changes it through ``set_route(..., home=...)``, and the route listeners (the
+route keeper) take it to the autopilot. An edit that would break the mission's rules (a waypoint
+outside the geofence, no waypoint left for a tree that needs one) is refused.
 """
 
 from __future__ import annotations
@@ -29,7 +32,8 @@ from collections.abc import Callable, Iterable, Sequence
 from enum import StrEnum
 
 from executive import blackboard
-from executive.mission.model import Mission, Waypoint
+from executive.mission.errors import format_path
+from executive.mission.model import Home, Mission, Waypoint, cross_field_errors
 from executive.mission.route import Route
 from executive.state import Sample
 
@@ -164,24 +168,36 @@ class MissionState:
     def route(self) -> Route:
         """The mission's waypoints and the current leg (the input of a route operation)."""
         waypoints = tuple(self.mission.waypoints) if self.mission else ()
-        return Route(waypoints, min(self.leg_index, len(waypoints)))
+        return Route(waypoints, min(self.leg_index, len(waypoints)), self.mission.home if self.mission else None)
 
-    def set_route(self, waypoints: Sequence[Waypoint], reason: str, *, leg_index: int | None = None) -> None:
-        """Replace the mission's waypoints (an operator's edit): publish the new route and tell the route listeners.
+    def route_refusal(self) -> str | None:
+        """Why the route cannot be changed now; None when it can."""
+        if self.mission is None:
+            return "cannot change the route: no mission loaded"
+        if self.status not in ROUTE_EDITABLE:
+            return f"cannot change the route while {self.status} (allowed while {', '.join(sorted(ROUTE_EDITABLE))})"
+        return None
+
+    def set_route(self, waypoints: Sequence[Waypoint], reason: str, *, leg_index: int | None = None, home: Home | None = None) -> None:
+        """Replace the mission's waypoints (an operator's edit), and its home if given: publish the new route and tell the route listeners.
 
         Allowed while READY, RUNNING or PAUSED. ``leg_index`` (the waypoint the vehicle heads for)
         defaults to the current one, kept inside the new route. Samples keep the legs they were
-        taken at. Refused (nothing changes) without a mission, in other states, or with a leg
-        index outside the route.
+        taken at. Refused (nothing changes) without a mission, in other states, with a leg index
+        outside the route, or when the edited mission breaks the mission file's rules.
         """
-        if self.mission is None:
-            raise Refused("cannot change the route: no mission loaded")
-        if self.status not in ROUTE_EDITABLE:
-            raise Refused(f"cannot change the route while {self.status} (allowed while {', '.join(sorted(ROUTE_EDITABLE))})")
+        refusal = self.route_refusal()
+        if refusal is not None:
+            raise Refused(refusal)
+        assert self.mission is not None
         leg = min(self.leg_index, len(waypoints)) if leg_index is None else leg_index
         if not 0 <= leg <= len(waypoints):
             raise Refused(f"leg {leg + 1} is outside a route of {len(waypoints)} waypoints")
-        self.mission = self.mission.model_copy(update={"waypoints": list(waypoints)})
+        edited = self.mission.model_copy(update={"waypoints": list(waypoints), "home": self.mission.home if home is None else home})
+        errors = cross_field_errors(edited)
+        if errors:
+            raise Refused("the edited mission breaks its rules: " + "; ".join(f"{format_path(path)}: {why}" for path, why in errors))
+        self.mission = edited
         self.leg_index = leg
         self._publish()
         log.info("route changed: %s (%d waypoints, heading for %d)", reason, len(waypoints), leg + 1)

@@ -8,6 +8,7 @@ that every pydantic and cross-field error points at the line and column of the o
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from collections.abc import Callable, Iterator
@@ -30,7 +31,17 @@ M = TypeVar("M", bound=BaseModel)
 Checks = Callable[[M], list[tuple[Path, str]]]
 
 _MERGE_TAG = "tag:yaml.org,2002:merge"
+_LINE_BREAK = re.compile("\r\n|[\r\n\x85\u2028\u2029]")  # what YAML counts as the end of a line
 _EXPONENT_WITHOUT_DOT_OR_SIGN = re.compile(r"[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+")  # what YAML 1.1 reads as a string
+
+#: YAML tags -> what a value with the tag must be (messages of values the tag cannot hold).
+_TAG_KINDS = {
+    "tag:yaml.org,2002:int": "an integer",
+    "tag:yaml.org,2002:float": "a number",
+    "tag:yaml.org,2002:bool": "a boolean",
+    "tag:yaml.org,2002:timestamp": "a timestamp",
+    "tag:yaml.org,2002:binary": "base64 binary",
+}
 
 #: pydantic type errors -> what the file should have had there.
 _EXPECTED = {
@@ -85,6 +96,17 @@ class _Loader(yaml.SafeLoader):
         if getattr(event, "anchor", None) is not None:
             self._sizes[id(node)] = self._expanded - before
         return node
+
+    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
+        """As SafeLoader's, but a value its tag cannot hold (``!!int abc``, a 5000-digit integer) is a located error, not a crash."""
+        try:
+            return super().construct_object(node, deep)
+        except yaml.MarkedYAMLError:
+            raise
+        except (ValueError, TypeError, KeyError, AttributeError, OverflowError, ArithmeticError):
+            kind = _TAG_KINDS.get(node.tag, node.tag.rsplit(":", 1)[-1])
+            shown = _show(node.value) if isinstance(node, yaml.ScalarNode) else "this value"
+            raise yaml.constructor.ConstructorError(problem=f"cannot read {shown} as {kind}", problem_mark=node.start_mark) from None
 
     def index_paths(self, node: yaml.Node, path: Path = ()) -> None:
         """Map ``path`` and everything below it to nodes, as the constructor will see them."""
@@ -204,6 +226,8 @@ def _file_path(loc: tuple[int | str, ...], data: Any, missing: bool = False) -> 
     for i, part in enumerate(loc):
         # ('faults', 0, 'link_loss', 'direction'): 'link_loss' is no key of the fault but the value of its tag field
         last_missing = missing and i == len(loc) - 1
+        if isinstance(here, dict) and part not in here:  # pydantic names a key that is no string or integer (null, 1.5, a date) by its repr
+            part = next((k for k in here if not isinstance(k, str | int) and repr(k) == part), part)
         if not last_missing and isinstance(here, dict) and part not in here and any(v == part for v in here.values() if isinstance(v, str)):
             continue
         path.append(part)
@@ -222,8 +246,10 @@ def _located(file: str, mark: yaml.Mark | None, field: str, message: str) -> Fie
 
 
 def _located_after(file: str, before: str, field: str, message: str) -> FieldError:
-    """An error right after ``before``, the text from the start of the file up to the problem."""
-    return FieldError(file, before.count("\n") + 1, len(before) - before.rfind("\n"), field, message)
+    """An error right after ``before``, the text from the start of the file up to the problem (lines and columns as YAML counts them)."""
+    breaks = [m.end() for m in _LINE_BREAK.finditer(before)]
+    line_start = breaks[-1] if breaks else int(before.startswith("\ufeff"))  # a BOM takes no column
+    return FieldError(file, len(breaks) + 1, len(before) - line_start + 1, field, message)
 
 
 def _check_size(name: str, size: int, what: str) -> None:
@@ -298,6 +324,8 @@ def _models_in(annotation: Any) -> list[type[BaseModel]]:
 
 def _show(value: Any) -> str:
     """A value as YAML spells it, shortened."""
+    if isinstance(value, int) and value.bit_length() > 512:  # str() refuses integers of more than 4300 digits
+        return f"{'-' if value < 0 else ''}<an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
     text = "null" if value is None else str(value).lower() if isinstance(value, bool) else repr(value) if isinstance(value, str) else str(value)
     return text if len(text) <= 40 else f"{text[:37]}..."
 

@@ -4,12 +4,46 @@ Strict means: no silent coercion (``"5"`` is not a number, ``yes`` is not a floa
 fields, every value in range. Rules that relate several fields (a waypoint speed inside the
 mission's speed limits, say) are in :func:`cross_field_errors` so that each gets its own
 location in the file.
+
+The ``failsafe:`` section says, per condition, what the executive does when it becomes true during
+the guarded part of a mission: a *reaction* commanded in the same tick, then a *recovery* (resume
+the same leg once the condition clears, within ``timeout_s``, default ``limits.recovery_timeout_s``;
+or abort the mission at once, the vehicle left in the reaction's mode). An entry, or a field of
+one, left out takes the default of the vehicle kind, or of the tree where a seed system has its
+own rule (:func:`failsafe_policy`). Defaults (reaction, recovery):
+
+================  ==============  ==============  =================  ============================
+condition         rover           boat            sub                vtol
+================  ==============  ==============  =================  ============================
+link_loss         hold, resume    loiter, resume  surface, resume    hold, resume
+rc_takeover       wait, resume    wait, resume    wait, resume       wait, resume
+disarmed          wait, resume    wait, resume    wait, resume       wait, resume
+rc_loss           hold, resume    loiter, resume  hold, resume       hold, resume
+ekf_loss          hold, resume    hold, resume    hold, resume       hold, resume
+gps_glitch        hold, resume    hold, resume    hold, resume       hold, resume
+heading_insane    hold, resume    hold, resume    hold, resume       hold, resume
+battery_low       rtl, abort      rtl, abort      surface, abort     rtl, abort
+geofence_breach   hold, abort     rtl, abort      surface, abort     rtl, abort
+================  ==============  ==============  =================  ============================
+
+Seed rules, the defaults of their trees: ``goto_sample`` (the ASV) ekf_loss disarm, resume (MANUAL,
+disarmed until the EKF recovers, then re-armed) and rc_takeover wait, abort (the RC leaving auto
+ends the go-to); ``auv_survey`` link_loss hold, resume (the survey holds in POSHOLD).
+
+Reactions (:data:`REACTION_MODES`): ``hold`` rover/boat HOLD, sub POSHOLD, vtol QLOITER; ``loiter``
+rover/boat LOITER, sub POSHOLD, vtol QLOITER; ``rtl`` rover/boat RTL, vtol QRTL (no sub); ``surface``
+sub SURFACE only; ``disarm`` the manual mode, then disarm, re-armed on resume (no vtol); ``wait``
+nothing: hands off. A vtol flying as a plane holds, loiters in LOITER and returns in RTL.
+heading_insane is judged on rovers and boats only (the heading filter checks the compass against
+the course over ground, which a sub or a vtol does not follow); geofence_breach only with a
+``geofence:`` section; rc_loss once an RC transmitter has been seen (or, ugv_rc_route, stale RC).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from dataclasses import dataclass
+from typing import Annotated, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -130,6 +164,79 @@ class RcRouteOptions(BaseModel):
     operator_timeout_s: float = Field(3600.0, gt=0.0, le=86400.0, description="give up if the operator has not started the route by then")
 
 
+FailsafeCondition = Literal[
+    "link_loss", "rc_takeover", "disarmed", "rc_loss", "ekf_loss", "gps_glitch", "heading_insane", "battery_low", "geofence_breach"
+]
+FailsafeReaction = Literal["hold", "loiter", "rtl", "surface", "disarm", "wait"]
+FailsafeRecovery = Literal["resume", "abort"]
+FAILSAFE_CONDITIONS: tuple[str, ...] = get_args(FailsafeCondition)
+
+#: reaction -> vehicle kind -> the mode it commands (a vtol flying as a plane: the second); a kind left out has no such reaction.
+REACTION_MODES: dict[str, dict[str, tuple[str, str]]] = {
+    "hold": {"rover": ("HOLD", "HOLD"), "boat": ("HOLD", "HOLD"), "sub": ("POSHOLD", "POSHOLD"), "vtol": ("QLOITER", "LOITER")},
+    "loiter": {"rover": ("LOITER", "LOITER"), "boat": ("LOITER", "LOITER"), "sub": ("POSHOLD", "POSHOLD"), "vtol": ("QLOITER", "LOITER")},
+    "rtl": {"rover": ("RTL", "RTL"), "boat": ("RTL", "RTL"), "vtol": ("QRTL", "RTL")},
+    "surface": {"sub": ("SURFACE", "SURFACE")},
+    "disarm": {"rover": ("MANUAL", "MANUAL"), "boat": ("MANUAL", "MANUAL"), "sub": ("MANUAL", "MANUAL")},
+}
+_NO_REACTION = {"rtl": "a sub has no RTL: use surface", "surface": "only a sub can surface", "disarm": "disarming a vtol would drop it"}
+
+_R, _W, _A = "resume", "wait", "abort"
+_COMMON = {"rc_takeover": (_W, _R), "disarmed": (_W, _R), "ekf_loss": ("hold", _R), "gps_glitch": ("hold", _R), "heading_insane": ("hold", _R)}
+#: The default failsafe policy of each vehicle kind: condition -> (reaction, recovery). The table in the module docstring.
+VEHICLE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
+    "rover": _COMMON | {"link_loss": ("hold", _R), "rc_loss": ("hold", _R), "battery_low": ("rtl", _A), "geofence_breach": ("hold", _A)},
+    "boat": _COMMON | {"link_loss": ("loiter", _R), "rc_loss": ("loiter", _R), "battery_low": ("rtl", _A), "geofence_breach": ("rtl", _A)},
+    "sub": _COMMON | {"link_loss": ("surface", _R), "rc_loss": ("hold", _R), "battery_low": ("surface", _A), "geofence_breach": ("surface", _A)},
+    "vtol": _COMMON | {"link_loss": ("hold", _R), "rc_loss": ("hold", _R), "battery_low": ("rtl", _A), "geofence_breach": ("rtl", _A)},
+}
+#: Seed systems' rules that differ from their vehicle's defaults: the defaults of their trees.
+TREE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
+    "goto_sample": {"ekf_loss": ("disarm", _R), "rc_takeover": (_W, _A)},
+    "auv_survey": {"link_loss": ("hold", _R)},
+}
+
+
+class FailsafeRule(BaseModel):
+    """What the executive does when one condition becomes true; a field left out takes the default."""
+
+    model_config = _STRICT
+    reaction: FailsafeReaction | None = Field(
+        None, description="commanded in the tick the condition becomes true: hold, loiter, rtl, surface, disarm (manual mode), wait (hands off)"
+    )
+    recovery: FailsafeRecovery | None = Field(
+        None, description="resume: the same leg once the condition clears; abort: the mission ends at once, the vehicle left in the reaction's mode"
+    )
+    timeout_s: float | None = Field(
+        None, gt=0.0, le=86400.0, description="resume: how long the condition may last before the mission aborts (default limits.recovery_timeout_s)"
+    )
+
+
+class FailsafeConfig(BaseModel):
+    """failsafe: one entry per condition (see the table of defaults in executive/mission/model.py)."""
+
+    model_config = _STRICT
+    link_loss: FailsafeRule | None = Field(None, description="no HEARTBEAT from the autopilot within limits.link_timeout_s")
+    rc_takeover: FailsafeRule | None = Field(None, description="a person takes over: the RC take-over switch high (or out of AUTO)")
+    disarmed: FailsafeRule | None = Field(None, description="the vehicle disarmed mid-mission (a pilot, or the autopilot's own failsafe)")
+    rc_loss: FailsafeRule | None = Field(None, description="the RC transmitter seen during the mission is gone, or its reports are stale")
+    ekf_loss: FailsafeRule | None = Field(None, description="the EKF has no position estimate or its variances are over the threshold")
+    gps_glitch: FailsafeRule | None = Field(None, description="the EKF flags GPS_GLITCHING")
+    heading_insane: FailsafeRule | None = Field(None, description="the heading filter does not trust the compass (/heading/ok false)")
+    battery_low: FailsafeRule | None = Field(None, description="the battery below limits.battery_min_pct or limits.battery_min_v")
+    geofence_breach: FailsafeRule | None = Field(None, description="the vehicle outside the mission's geofence (only with a geofence: section)")
+
+
+@dataclass(frozen=True)
+class FailsafePolicy:
+    """One condition's policy, every field decided."""
+
+    condition: str
+    reaction: str
+    recovery: str
+    timeout_s: float
+
+
 class Home(BaseModel):
     """Where the vehicle is expected to start (the simulated vehicle starts here)."""
 
@@ -216,6 +323,7 @@ class Mission(BaseModel):
     geofence: GeofenceConfig | None = Field(None, description="where the vehicle may be")
     limits: Limits = Field(default_factory=Limits)
     rc: RcConfig = Field(default_factory=RcConfig)
+    failsafe: FailsafeConfig = Field(default_factory=FailsafeConfig, description="what each failing condition makes the executive do")
     sampling: SamplingOptions | None = Field(None, description="goto_sample options")
     vtol: VtolOptions | None = Field(None, description="vtol_transit options")
     rc_route: RcRouteOptions | None = Field(None, description="ugv_rc_route options")
@@ -280,6 +388,38 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
         errors.append((("simulator", "q_guided_mode"), "only the simulated vtol (ArduPlane) has Q_GUIDED_MODE"))
     if mission.geofence is not None:
         errors += _geofence_errors(mission)
+    errors += _failsafe_errors(mission)
+    return errors
+
+
+def failsafe_policy(mission: Mission) -> dict[str, FailsafePolicy]:
+    """Every condition's failsafe for this mission: its ``failsafe:`` entry, else the tree's default, else the vehicle kind's."""
+    defaults = VEHICLE_FAILSAFES[mission.vehicle] | TREE_FAILSAFES.get(mission.tree, {})
+    policy = {}
+    for condition in FAILSAFE_CONDITIONS:
+        rule: FailsafeRule = getattr(mission.failsafe, condition) or FailsafeRule()
+        reaction, recovery = defaults[condition]
+        timeout_s = rule.timeout_s if rule.timeout_s is not None else mission.limits.recovery_timeout_s
+        policy[condition] = FailsafePolicy(condition, rule.reaction or reaction, rule.recovery or recovery, timeout_s)
+    return policy
+
+
+def _failsafe_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """Each reaction exists for the vehicle; a time limit only where the mission resumes."""
+    errors: list[tuple[Path, str]] = []
+    policy = failsafe_policy(mission)
+    for condition in FAILSAFE_CONDITIONS:
+        rule: FailsafeRule | None = getattr(mission.failsafe, condition)
+        if rule is None:
+            continue
+        here: Path = ("failsafe", condition)
+        reaction = policy[condition].reaction
+        if reaction != "wait" and mission.vehicle not in REACTION_MODES[reaction]:
+            errors.append(((*here, "reaction"), f"{reaction}: not for a {mission.vehicle} ({_NO_REACTION[reaction]})"))
+        elif reaction == "disarm" and mission.tree == "ugv_rc_route":
+            errors.append(((*here, "reaction"), "disarm: not in tree ugv_rc_route (the operator arms and disarms with switch D)"))
+        if rule.timeout_s is not None and policy[condition].recovery == "abort":
+            errors.append(((*here, "timeout_s"), "recovery abort ends the mission at once: a time limit is only for resume"))
     return errors
 
 

@@ -4,14 +4,16 @@ ArduRover's skid-steer frame drives the left track from SERVO1 (SERVO1_FUNCTION=
 and the right one from SERVO3 (SERVO3_FUNCTION=74, ThrottleRight); here those outputs span
 1000..2000 us around a 1500 us trim, and a disarmed vehicle outputs the trim (MOT_SAFE_DISARM=0).
 A CAN drive bridge reads them from :attr:`BunkerSim.track_pwm` (holding the server's lock), as the
-real one reads SERVO_OUTPUT_RAW.
+real one reads SERVO_OUTPUT_RAW. With a CAN bus, the server adds the base's own controller on it
+(:class:`~executive.sim.agilex_base.SimulatedBase`): in CAN command mode the tracks obey its motion
+commands, not these outputs.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from executive.sim.autopilot import ArduRoverSim, Home
+from executive.sim.autopilot import BATTERY_EMPTY_V, BATTERY_FULL_V, BATTERY_MAH, BATTERY_SAG_V_PER_A, ArduRoverSim, Home
 from executive.sim.vehicle import BUNKER_LIMITS, Limits, SkidSteerVehicle, VehicleModel
 
 PWM_TRIM, PWM_SPAN = 1500, 500  # SERVOn_TRIM, and SERVOn_MAX - SERVOn_TRIM (MIN 1000, MAX 2000)
@@ -39,6 +41,12 @@ class BunkerSim(ArduRoverSim):
         """SERVO1 (left track) and SERVO3 (right track) in microseconds."""
         left, right = self.vehicle.track_throttles
         return throttle_pwm(left), throttle_pwm(right)
+
+    @property
+    def battery_v(self) -> float:
+        """The battery's voltage now, as SYS_STATUS reports it (for the base's 0x211)."""
+        remaining = max(0.0, 1.0 - self.consumed_mah / BATTERY_MAH)
+        return BATTERY_EMPTY_V + (BATTERY_FULL_V - BATTERY_EMPTY_V) * remaining - BATTERY_SAG_V_PER_A * self._current_a()
 
     def _servo_outputs(self) -> Sequence[int]:
         outputs = [0] * 16

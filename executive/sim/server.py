@@ -12,6 +12,9 @@ from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, mavutil
 from executive.sim.autopilot import DEFAULT_HOME, ArduPilotSim, Home, make_autopilot
 
 if TYPE_CHECKING:
+    import can
+
+    from executive.sim.agilex_base import SimulatedBase
     from executive.sim.faults import FaultInjector
 
 log = logging.getLogger(__name__)
@@ -27,6 +30,8 @@ class SimServer:
     :attr:`lock` to touch :attr:`autopilot` from another thread. ``faults`` (on the same clock)
     are injected from the moment the server is created, the simulated vehicle's boot. Other
     keyword arguments go to the simulated firmware (``q_guided_mode=1`` for the vtol's ArduPlane).
+    With ``can_bus`` (bunker only; the caller shuts it down), :attr:`base` is the AgileX base's
+    controller on that bus, serviced each iteration: then the tracks obey its motion commands.
     """
 
     MAX_DRAIN = 200  # messages handled per iteration: a flood cannot starve the telemetry
@@ -42,6 +47,7 @@ class SimServer:
         period_s: float = 0.005,
         faults: FaultInjector | None = None,
         signing_key: bytes | None = None,
+        can_bus: can.BusABC | None = None,
         **firmware_options: float,
     ) -> None:
         self.clock = clock if clock is not None else faults.clock if faults is not None else ScaledClock()
@@ -51,6 +57,11 @@ class SimServer:
         self.faults = faults
         if faults is not None:
             faults.attach(self.autopilot)
+        self.base: SimulatedBase | None = None
+        if can_bus is not None:
+            from executive.sim.agilex_base import SimulatedBase  # python-can only when a bus is simulated
+
+            self.base = SimulatedBase(can_bus, self.clock, self.autopilot, faults=faults)
         self.url = url
         self.period_s = period_s
         self.lock = threading.Lock()
@@ -114,6 +125,8 @@ class SimServer:
                 if msg.get_type() != "BAD_DATA" and receiving:  # during an uplink loss what arrives is lost
                     out += self.autopilot.handle(msg)
             out += self.autopilot.update()
+            if self.base is not None:
+                self.base.service()
             if self.faults is not None:
                 out = self.faults.transform(out)
         for msg in out:

@@ -211,6 +211,10 @@ class SurfaceVehicle:
             self._speed = self._yaw_rate = 0.0
             return
         self._speed, self._yaw_rate = self._actuate(*self._control(), h)
+        self._move(h)
+
+    def _move(self, h: float) -> None:
+        """Turn and travel ``h`` seconds at the present speed and turn rate."""
         self._yaw = _wrap_pi(self._yaw + self._yaw_rate * h)
         vn, ve, _ = self.velocity_ned
         self._n += vn * h
@@ -264,31 +268,86 @@ class SkidSteerVehicle(SurfaceVehicle):
     demand goes through ArduRover's skid-steer mixer (throttle +/- steering, scaled back together
     when they saturate) to a left and a right track throttle in [-1, 1] (:attr:`track_throttles`),
     and the vehicle moves as its tracks do, slipping in turns. Unpowered, both throttles are 0.
+
+    With :attr:`base_command` set (a simulated AgileX base in CAN command mode), the throttles are
+    only the autopilot's outputs: the base's own controller drives the tracks at the commanded
+    linear and angular speed instead, whether the autopilot is armed or not (the base has power of
+    its own). The autopilot then ramps its speed demand on its own, without seeing the base's speed.
     """
 
     def __init__(self, lat: float, lon: float, heading_deg: float = 0.0, limits: Limits = BUNKER_LIMITS, tracks: Tracks = BUNKER_TRACKS) -> None:
         super().__init__(lat, lon, heading_deg, limits)
         self.tracks = tracks
+        #: (linear m/s, angular rad/s, positive counter-clockwise) the base's controller drives at; None: the throttles drive the tracks.
+        self.base_command: tuple[float, float] | None = None
         self._left = self._right = 0.0
+        self._demand_m_s = 0.0  # the autopilot's speed demand
+        self._track_speeds = (0.0, 0.0)
+        self._odometry = (0.0, 0.0)
 
     @property
     def track_throttles(self) -> tuple[float, float]:
         """Left and right track throttle in [-1, 1] (positive = forward), as last commanded."""
         return self._left, self._right
 
+    @property
+    def track_speeds_m_s(self) -> tuple[float, float]:
+        """How fast the left and right tracks run now (positive = forward)."""
+        return self._track_speeds
+
+    @property
+    def odometry_m(self) -> tuple[float, float]:
+        """Distance the left and right tracks have run since the start (backwards counts down)."""
+        return self._odometry
+
     def _substep(self, h: float) -> None:
         if not self.powered:
-            self._left = self._right = 0.0
-        super()._substep(h)
+            self._left = self._right = self._demand_m_s = 0.0
+            self._track_speeds = (0.0, 0.0)
+        if self.base_command is not None and not self.powered:
+            self._speed, self._yaw_rate = self._follow_base_command(h)
+            self._move(h)
+        else:
+            super()._substep(h)
+        left, right = self._track_speeds
+        self._odometry = (self._odometry[0] + left * h, self._odometry[1] + right * h)
 
     def _actuate(self, want_speed: float, want_rate: float, h: float) -> tuple[float, float]:
-        speed, rate = super()._actuate(want_speed, want_rate, h)
+        if self.base_command is None:
+            speed, rate = super()._actuate(want_speed, want_rate, h)
+        else:
+            change = want_speed - self._demand_m_s
+            speed, rate = self._demand_m_s + _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h), want_rate
+        self._demand_m_s = speed
         t = self.tracks
         # a turn-rate controller learns the steering the slip needs: ask the tracks for it
         throttle = speed / t.max_m_s
         steering = rate * t.width_m * t.slip_factor / 2.0 / t.max_m_s  # positive = right turn
         self._left, self._right = skid_steer_mix(throttle, steering)
+        if self.base_command is not None:
+            return self._follow_base_command(h)
         left, right = self._left * t.max_m_s, self._right * t.max_m_s
+        self._track_speeds = (left, right)
+        return (left + right) / 2.0, (left - right) / (t.width_m * t.slip_factor)
+
+    def _follow_base_command(self, h: float) -> tuple[float, float]:
+        """The base's controller: speed and turn rate (clockwise) reached after ``h`` s of :attr:`base_command`.
+
+        Its speed ramps within the vehicle's limits; it asks the tracks for the turn rate the slip
+        needs, and when a track would exceed its top speed both are scaled back (the turn's
+        curvature is kept).
+        """
+        assert self.base_command is not None
+        linear, angular = self.base_command
+        t = self.tracks
+        change = linear - self._speed
+        linear = self._speed + _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h)
+        half_difference = -angular * t.width_m * t.slip_factor / 2.0  # counter-clockwise: the right track runs faster
+        left, right = linear + half_difference, linear - half_difference
+        over = max(abs(left), abs(right)) / t.max_m_s
+        if over > 1.0:
+            left, right = left / over, right / over
+        self._track_speeds = (left, right)
         return (left + right) / 2.0, (left - right) / (t.width_m * t.slip_factor)
 
 

@@ -165,3 +165,19 @@ class TestGoTo:
         node = GoTo(1.5, 60.0)
         assert harness(node).tick() == Status.FAILURE
         assert node.feedback_message == "no active leg"
+
+    def test_an_edited_target_is_followed_at_once(self, harness, vehicle, running, mission_state):
+        vehicle.set(vehicle__position=at(*destination(running.lat, running.lon, 180.0, 30.0)))
+        node = GoTo(1.5, 60.0)
+        h = harness(node)
+        h.tick()
+        h.link.take()
+        moved = running.model_copy(update={"lon": destination(running.lat, running.lon, 90.0, 5.0)[1]})
+        mission_state.set_route([moved, *mission_state.route.waypoints[1:]], "test: offset 5 m east")
+        assert h.tick() == Status.RUNNING
+        (sent,) = h.link.take()  # sent now, not at the next resend
+        assert (sent.lat_int, sent.lon_int) == (round(moved.lat * 1e7), round(moved.lon * 1e7))
+        vehicle.set(vehicle__position=at(running.lat, running.lon))  # the old target is 5 m short of the new one
+        assert h.tick() == Status.RUNNING
+        vehicle.set(vehicle__position=at(moved.lat, moved.lon))
+        assert h.tick() == Status.SUCCESS

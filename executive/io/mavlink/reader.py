@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import logging
 import math
+import operator
 from collections.abc import Callable
 
 from executive import blackboard
@@ -30,18 +31,48 @@ _NOT_AUTOPILOTS = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_ONBOARD_CONTROLLER, ma
 #: HEARTBEAT system_status values of an autopilot that is (re)starting.
 _STARTING = {mavlink.MAV_STATE_UNINIT, mavlink.MAV_STATE_BOOT, mavlink.MAV_STATE_CALIBRATING}
 
+#: Message types that carry the sender's boot clock (``time_boot_ms``): a reboot shows in any of them.
+_BOOT_TIME_KINDS = frozenset(cls.msgname for cls in mavlink.mavlink_map.values() if "time_boot_ms" in cls.fieldnames)
+
 
 def _finite(*values: float) -> bool:
-    return all(math.isfinite(v) for v in values)
+    return all(map(math.isfinite, values))
+
+
+#: Hostile-input bounds. An Euler roll or pitch is within +-pi, a yaw within +-pi or [0, 2pi); a little over is float32
+#: rounding, far over is no attitude. No vehicle turns faster than 100 rad/s (16 turns a second).
+_MAX_ANGLE_RAD = math.pi + 0.01
+_MAX_RATE_RAD_S = 100.0
+#: RC PWM a receiver can report, µs; outside it (UINT16_MAX = unused channel, or nonsense) a channel has no signal (0).
+_PWM_MIN_US, _PWM_MAX_US = 500, 2500
+_GPS_FIX_TYPES = frozenset(mavlink.enums["GPS_FIX_TYPE"])
+
+
+def _on_the_globe(lat: float, lon: float) -> bool:
+    """A real position: on the globe and not 0/0 (what autopilots send for 'no fix' or 'not set')."""
+    return -90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0 and (lat, lon) != (0.0, 0.0)
+
+
+_RC_CHANNELS = operator.attrgetter(*(f"chan{i}_raw" for i in range(1, 19)))  # RC_CHANNELS chan1_raw..chan18_raw, as a tuple
+_SERVOS = operator.attrgetter(*(f"servo{i}_raw" for i in range(1, 17)))  # SERVO_OUTPUT_RAW servo1_raw..servo16_raw
 
 
 class MavlinkReader:
     """Drains a :class:`Link`, dispatches each message by type, keeps ``/link``, ``/vehicle`` and ``/rc``."""
 
     def __init__(
-        self, link: Link, clock: Clock, commander: Commander, *, link_timeout_s: float = 3.0, mission: MissionTransfer | None = None
+        self,
+        link: Link,
+        clock: Clock,
+        commander: Commander,
+        *,
+        link_timeout_s: float = 3.0,
+        mission: MissionTransfer | None = None,
+        rc_source: bool = True,
     ) -> None:
+        """``rc_source``: the autopilot's RC_CHANNELS are the RC receiver (False when the RC is read from CAN)."""
         self._link = link
+        self._rc_source = rc_source
         self._clock = clock
         self._commander = commander
         self._mission = mission
@@ -92,12 +123,13 @@ class MavlinkReader:
         """Handle every message waiting on the link (at most ``max_messages``); returns how many."""
         now = self._clock.now()
         count = 0
+        recv, dispatch = self._link.recv, self.dispatch
         while count < max_messages:
-            msg = self._link.recv()
+            msg = recv()
             if msg is None:
                 break
             count += 1
-            self.dispatch(msg, now)
+            dispatch(msg, now)
         self._update_link_health(now)
         return count
 
@@ -118,8 +150,7 @@ class MavlinkReader:
             return
         self._messages += 1
         self.health.on_packet(msg.get_seq())
-        boot_ms = getattr(msg, "time_boot_ms", None)
-        if boot_ms is not None and self.health.on_boot_time(boot_ms):
+        if kind in _BOOT_TIME_KINDS and self.health.on_boot_time(msg.time_boot_ms):
             log.warning("autopilot rebooted")
             self._reconnected()
         handler = self._handlers.get(kind)
@@ -159,23 +190,35 @@ class MavlinkReader:
 
     def _on_global_position(self, msg: MAVLinkMessage, now: float) -> None:
         lat, lon = msg.lat / 1e7, msg.lon / 1e7
-        if (msg.lat == 0 and msg.lon == 0) or not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        if not _on_the_globe(lat, lon):
             return  # no fix yet, or nonsense
-        heading = None if msg.hdg == 65535 else msg.hdg / 100.0
-        position = GlobalPosition(lat, lon, msg.relative_alt / 1000.0, msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0, heading, now)
+        heading = msg.hdg / 100.0 if msg.hdg < 36000 else None  # 0..35999 cdeg; UINT16_MAX = unknown, the rest nonsense
+        position = GlobalPosition(
+            lat, lon, msg.relative_alt / 1000.0, msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0, heading, now, msg.time_boot_ms / 1000.0
+        )
         self._bb.set("/vehicle/position", position)
 
     def _on_attitude(self, msg: MAVLinkMessage, now: float) -> None:
         if not _finite(msg.roll, msg.pitch, msg.yaw, msg.yawspeed):
             return
+        if max(abs(msg.roll), abs(msg.pitch), abs(msg.yaw) / 2.0) > _MAX_ANGLE_RAD or abs(msg.yawspeed) > _MAX_RATE_RAD_S:
+            return  # no attitude at all (a yaw may come in [0, 2pi))
+        yaw = math.degrees(msg.yaw) % 360.0  # -1e-30 % 360 == 360.0
         self._bb.set(
             "/vehicle/attitude",
-            Attitude(math.degrees(msg.roll), math.degrees(msg.pitch), math.degrees(msg.yaw) % 360.0, math.degrees(msg.yawspeed), now),
+            Attitude(
+                math.degrees(msg.roll),
+                math.degrees(msg.pitch),
+                0.0 if yaw == 360.0 else yaw,
+                math.degrees(msg.yawspeed),
+                now,
+                msg.time_boot_ms / 1000.0,
+            ),
         )
 
     def _on_ekf_status(self, msg: MAVLinkMessage, now: float) -> None:
         variances = (msg.velocity_variance, msg.pos_horiz_variance, msg.pos_vert_variance, msg.compass_variance, msg.terrain_alt_variance)
-        if not _finite(*variances):
+        if not _finite(*variances) or min(variances) < 0.0:
             return
         self._bb.set("/vehicle/ekf", EkfStatus(EkfFlags(msg.flags), *variances, now))
 
@@ -185,17 +228,20 @@ class MavlinkReader:
             Battery(
                 None if msg.voltage_battery == 65535 else msg.voltage_battery / 1000.0,
                 None if msg.current_battery == -1 else msg.current_battery / 100.0,
-                None if msg.battery_remaining == -1 else msg.battery_remaining,
+                msg.battery_remaining if 0 <= msg.battery_remaining <= 100 else None,  # -1 = unknown; the rest nonsense
                 now,
             ),
         )
 
     def _on_rc_channels(self, msg: MAVLinkMessage, now: float) -> None:
         count = min(msg.chancount, 18)
-        channels = tuple(getattr(msg, f"chan{i}_raw") for i in range(1, count + 1))
+        channels = _RC_CHANNELS(msg)[:count]
+        if not all(_PWM_MIN_US <= c <= _PWM_MAX_US or c == 0 for c in channels):
+            channels = tuple(c if _PWM_MIN_US <= c <= _PWM_MAX_US else 0 for c in channels)
         self._bb.set("/rc/channels", channels)
         self._bb.set("/rc/rssi", None if msg.rssi == 255 else msg.rssi)
-        self._bb.set("/rc/last_update", now)
+        if self._rc_source:  # with RC on CAN, only a new 0x241 counter says the receiver is alive
+            self._bb.set("/rc/last_update", now)
         self._bb.set("/rc/connected", any(channels))
 
     def _on_command_ack(self, msg: MAVLinkMessage, now: float) -> None:
@@ -208,22 +254,25 @@ class MavlinkReader:
 
     def _on_home_position(self, msg: MAVLinkMessage, now: float) -> None:
         lat, lon = msg.latitude / 1e7, msg.longitude / 1e7
-        if -90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0:
+        if _on_the_globe(lat, lon):  # 0/0: no home yet
             self._bb.set("/vehicle/home", HomePosition(lat, lon, msg.altitude / 1000.0, now))
 
     def _on_vfr_hud(self, msg: MAVLinkMessage, now: float) -> None:
         if _finite(msg.groundspeed) and 0.0 <= msg.groundspeed < 1000.0:
             self._bb.set("/vehicle/ground_speed_m_s", msg.groundspeed)
-        self._bb.set("/vehicle/heading_deg", float(msg.heading % 360))
+        if 0 <= msg.heading <= 360:  # int16, degrees
+            self._bb.set("/vehicle/heading_deg", float(msg.heading % 360))
 
     def _on_gps_raw(self, msg: MAVLinkMessage, now: float) -> None:
+        if msg.fix_type not in _GPS_FIX_TYPES:
+            return  # fix_type 200 is not a 3D fix
         satellites = None if msg.satellites_visible == 255 else msg.satellites_visible
         hdop = None if msg.eph == 65535 else msg.eph / 100.0
         self._bb.set("/vehicle/gps", GpsFix(msg.fix_type, satellites, hdop, now))
 
     def _on_servo_output(self, msg: MAVLinkMessage, now: float) -> None:
         if msg.port == 0:
-            self._bb.set("/vehicle/servo_outputs", tuple(getattr(msg, f"servo{i}_raw") for i in range(1, 17)))
+            self._bb.set("/vehicle/servo_outputs", _SERVOS(msg))
 
     def _on_extended_sys_state(self, msg: MAVLinkMessage, now: float) -> None:
         vtol = mavlink.enums["MAV_VTOL_STATE"].get(msg.vtol_state)
@@ -255,8 +304,12 @@ class MavlinkReader:
             elif last is not None:
                 log.warning("link lost: no heartbeat for %.1f s", now - last)
         self._bb.set("/link/heartbeat_age_s", None if last is None else now - last)
-        self._bb.set("/link/messages", self._messages)
-        self._bb.set("/link/packets_lost", self.health.lost)
-        self._bb.set("/link/loss_pct", self.health.loss_pct)
-        self._bb.set("/link/reboots", self.health.reboots)
-        self._bb.set("/link/unsigned_dropped", getattr(self._link, "unsigned_dropped", 0))
+        self._set_if_changed("/link/messages", self._messages)
+        self._set_if_changed("/link/packets_lost", self.health.lost)
+        self._set_if_changed("/link/loss_pct", self.health.loss_pct)
+        self._set_if_changed("/link/reboots", self.health.reboots)
+        self._set_if_changed("/link/unsigned_dropped", getattr(self._link, "unsigned_dropped", 0))
+
+    def _set_if_changed(self, key: str, value: object) -> None:
+        if self._bb.get(key) != value:
+            self._bb.set(key, value)

@@ -1,0 +1,4 @@
+"""Benchmarks of the executive: tick cost, MAVLink ingest, CAN decode, reaction latency, simulator speed, start-up and memory.
+
+Run them all with ``python -m benchmarks`` (see the README's Benchmarks section); each module's ``run`` returns its rows.
+"""

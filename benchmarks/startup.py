@@ -1,0 +1,100 @@
+"""Start-up and memory: ``executive run`` as a subprocess, from launch to its first tick, and its resident memory while it runs.
+
+The first tick is the first status JSON line on stdout (the runtime writes one after every tick
+when it is due, and the first at once). Memory is the process's VmRSS (sampled) and VmHWM (its
+peak) from /proc while it drives the rover square on the built-in simulator.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from benchmarks.common import Row, median
+
+ROOT = Path(__file__).resolve().parent.parent
+MISSION = ROOT / "missions" / "rover_square.yaml"
+MAX_FIRST_TICK_S = 1.0
+MAX_MEMORY_MB = 80.0
+
+
+def _status_kb(pid: int) -> dict[str, int]:
+    """VmRSS and VmHWM of a process, kB."""
+    values = {}
+    with open(f"/proc/{pid}/status", encoding="ascii") as f:
+        for line in f:
+            name, _, rest = line.partition(":")
+            if name in ("VmRSS", "VmHWM"):
+                values[name] = int(rest.split()[0])
+    return values
+
+
+def run_once(sample_s: float, speedup: float = 20.0) -> tuple[float, int, int]:
+    """Seconds to the first tick, then the largest VmRSS sampled and VmHWM (kB) over ``sample_s`` of running."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    cmd = [sys.executable, "-m", "executive", "run", str(MISSION), "--speedup", str(speedup), "--socket", "none"]
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    assert proc.stdout is not None
+    try:
+        first = proc.stdout.readline()
+        first_tick_s = time.perf_counter() - t0
+        if not first:
+            raise RuntimeError(f"executive run exited ({proc.wait()}) before its first tick")
+        json.loads(first)  # a status line, not something else
+        rss = hwm = 0
+        selector = selectors.DefaultSelector()
+        selector.register(proc.stdout, selectors.EVENT_READ)
+        end = time.perf_counter() + sample_s
+        while time.perf_counter() < end and proc.poll() is None:
+            try:
+                kb = _status_kb(proc.pid)
+            except FileNotFoundError:
+                break
+            rss, hwm = max(rss, kb.get("VmRSS", 0)), max(hwm, kb.get("VmHWM", 0))
+            for key, _ in selector.select(timeout=0.05):  # keep the pipe drained
+                key.fileobj.readline()  # type: ignore[union-attr]
+        return first_tick_s, rss, hwm
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+        try:
+            proc.communicate(timeout=15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.communicate()
+
+
+def run(runs: int = 3, sample_s: float = 4.0) -> list[Row]:
+    """Median time to the first tick over ``runs`` launches; memory over the first ``sample_s`` seconds of the first run."""
+    results = [run_once(sample_s if i == 0 else 0.0) for i in range(runs)]
+    first = [r[0] for r in results]
+    rss_mb, hwm_mb = results[0][1] / 1024.0, results[0][2] / 1024.0
+    return [
+        Row(
+            "startup",
+            "start-up: `executive run` to first tick",
+            round(median(first), 3),
+            "s median",
+            f"<= {MAX_FIRST_TICK_S:g} s",
+            median(first) <= MAX_FIRST_TICK_S,
+            f"{runs} launches: {', '.join(f'{x:.2f}' for x in first)} s (rover_square, built-in simulator)",
+            {"first_tick_s": first},
+        ),
+        Row(
+            "startup",
+            "memory during a run (VmHWM)",
+            round(hwm_mb, 1),
+            "MB peak",
+            f"<= {MAX_MEMORY_MB:g} MB",
+            hwm_mb <= MAX_MEMORY_MB,
+            f"VmRSS up to {rss_mb:.1f} MB over the first {sample_s:g} s (--speedup 20: pre-flight, arming, driving)",
+            {"vmrss_mb": rss_mb, "vmhwm_mb": hwm_mb},
+        ),
+    ]

@@ -1,0 +1,275 @@
+"""Failsafes: when a guard of the mission fails, the reaction its policy names, at once, then its recovery.
+
+Every guard stands for a condition of the mission's ``failsafe:`` policy (:data:`CONDITIONS`:
+:class:`~executive.behaviours.guards.LinkAlive` failing is ``link_loss``...); a guard standing for
+none (a speed or depth limit) holds the vehicle and resumes, within ``limits.recovery_timeout_s``.
+
+:class:`Failsafe` stands behind the guarded work in a reactive selector (``trees._parts.guarded``):
+the guards are ticked every tick before the work, so the tick in which a condition becomes true on
+the blackboard (the readers write it before the tree ticks) is the tick in which the route fails
+and the failsafe runs; it asks the commander for the reaction there and then, and the runtime
+sends it when that tick ends. Nothing in between waits or retries later: zero ticks of delay.
+
+While it runs, every guard is judged each tick (not only the first that failed), so a condition
+that becomes true during another one's reaction gets its own. A person who has the vehicle (a
+failing ``wait`` guard that says so: the take-over switch, disarmed) is never fought: nothing is
+commanded meanwhile. Each cause, reaction, recovery and abort is logged as a warning (the journal
+keeps it as an event).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+import py_trees
+from py_trees.common import Status
+
+from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.guards import (
+    Armed,
+    BatteryAbove,
+    EkfOk,
+    GpsNotGlitching,
+    Guard,
+    HeadingSane,
+    InsideGeofence,
+    LinkAlive,
+    RcAutoMode,
+    RcFresh,
+    RcNotLost,
+    RcNotTakingOver,
+)
+from executive.io.mavlink.commander import Commander
+from executive.mission.model import REACTION_MODES, FailsafePolicy
+
+log = logging.getLogger(__name__)
+
+#: Which failsafe condition a failing guard is.
+CONDITIONS: tuple[tuple[type[Guard], str], ...] = (
+    (LinkAlive, "link_loss"),
+    (EkfOk, "ekf_loss"),
+    (Armed, "disarmed"),
+    (RcNotTakingOver, "rc_takeover"),
+    (RcAutoMode, "rc_takeover"),
+    (RcFresh, "rc_loss"),
+    (RcNotLost, "rc_loss"),
+    (GpsNotGlitching, "gps_glitch"),
+    (HeadingSane, "heading_insane"),
+    (BatteryAbove, "battery_low"),
+    (InsideGeofence, "geofence_breach"),
+)
+#: A stronger reaction replaces a weaker one in force, never the reverse (a surfacing sub is not stopped by a later hold).
+RANK = {"wait": 0, "hold": 1, "loiter": 1, "rtl": 2, "surface": 2, "disarm": 3}
+REARM_RETRY_S = 2.0
+
+
+def condition_of(guard: Guard) -> str | None:
+    """The failsafe condition ``guard`` failing is, if any."""
+    return next((condition for kind, condition in CONDITIONS if isinstance(guard, kind)), None)
+
+
+@dataclass(frozen=True)
+class _Reaction:
+    guard: Guard
+    policy: FailsafePolicy
+
+    @property
+    def rank(self) -> int:
+        return RANK[self.policy.reaction]
+
+
+class Failsafe(TimedBehaviour):
+    """RUNNING while a guard fails and its policy says resume (the reaction commanded), FAILURE on abort or time-out.
+
+    ``policy``: condition -> :class:`~executive.mission.model.FailsafePolicy`; ``fallback`` is the policy
+    of a guard that stands for no condition. When every guard holds the branch it stands behind
+    failed for another reason: FAILURE, with nothing to add. An abort leaves its feedback empty
+    when the guard that caused it says why in the tree already; :attr:`left_in` is the mode it
+    left the vehicle in (the runtime then leaves it there).
+    """
+
+    reads = ("/vehicle/vtol_state", "/vehicle/armed", "/mission/leg_index", "/mission/leg_count")
+    needs = ("clock", "commander")
+    commander: Commander
+
+    def __init__(
+        self, guards: Sequence[Guard], policy: Mapping[str, FailsafePolicy], vehicle: str, fallback: FailsafePolicy, name: str = "Wait for guards"
+    ) -> None:
+        super().__init__(name)
+        self.guards = tuple(guards)
+        self.policy = dict(policy)
+        self.vehicle = vehicle
+        self.fallback = fallback
+        self._conditions = {g: condition_of(g) for g in self.guards}
+        self.left_in: str | None = None
+        self._own_disarm = False  # kept across a pause: the vehicle is still ours to re-arm
+        self._leg = 0
+        self._reset()
+
+    def _reset(self) -> None:
+        self._since: dict[Guard, float] = {}
+        self._in_force: _Reaction | None = None
+        self._mode_in_force: str | None = None
+        self._tickets: list[int] = []
+        self._rearm_from: float | None = None
+        self._rearm_at = float("-inf")
+
+    def initialise(self) -> None:
+        super().initialise()
+        self._reset()
+        self.left_in = None
+        self._leg = self.get("/mission/leg_index")  # the leg to resume (the work may finish it in the tick it resumes)
+
+    def policy_of(self, guard: Guard) -> FailsafePolicy:
+        condition = self._conditions.get(guard)
+        return self.policy.get(condition, self.fallback) if condition else self.fallback
+
+    def _name(self, guard: Guard) -> str:
+        return self._conditions.get(guard) or guard.name
+
+    def terminate(self, new_status: Status) -> None:
+        if self.left_in is not None or new_status == Status.FAILURE:
+            return  # ended the mission: the reaction must reach the vehicle
+        # interrupted: by the guards recovering (the work resumes) or by a pause; a reaction still being retried must not undo either
+        for ticket in self._tickets:
+            self.commander.cancel(ticket)
+        if self._since and all(g.status == Status.SUCCESS for g in self.guards):
+            causes = ", ".join(self._name(g) for g in self._since)
+            log.warning(
+                "failsafe %s: recovered after %.1f s -> resume leg %d/%d", causes, self.elapsed, self._leg + 1, self.get("/mission/leg_count")
+            )
+        self._since = {}
+
+    def update(self) -> Status:
+        now = self.clock.now()
+        if self.get("/vehicle/armed"):
+            self._own_disarm = False
+        failing = {g: why for g in self.guards if (why := g.check()) is not None}
+        if self._own_disarm:  # disarmed by this failsafe, not by a person
+            failing = {g: why for g, why in failing.items() if self._conditions.get(g) != "disarmed"}
+        for g in [g for g in self._since if g not in failing]:
+            del self._since[g]
+        new = [g for g in failing if g not in self._since]
+        for g in new:
+            self._since[g] = now
+        if not failing:
+            return self._rearm(now) if self._own_disarm else self._nothing_to_wait_for()
+        self._rearm_from = None
+        why = "; ".join(f"{g.name} {reason}" for g, reason in failing.items())
+        person = next((g for g in failing if g.pilot_in_control and self.policy_of(g).reaction == "wait"), None)
+        aborting = [_Reaction(g, self.policy_of(g)) for g in failing if self.policy_of(g).recovery == "abort"]
+        if aborting:
+            cause = max(aborting, key=lambda r: r.rank)
+            mode = None if person else self._react(cause)
+            self._log(cause, failing[cause.guard], person, "abort the mission")
+            self.left_in = mode or self._mode_in_force
+            self.feedback_message = "" if cause.guard.status == Status.FAILURE else f"{cause.guard.name} {failing[cause.guard]}"
+            return Status.FAILURE
+        if person is None:
+            self._react_to_strongest(failing, new)
+        for g in new:
+            reaction = _Reaction(g, self.policy_of(g))
+            self._log(reaction, failing[g], person, f"resume when it recovers (within {reaction.policy.timeout_s:g} s)")
+        late = [g for g in failing if now - self._since[g] > self.policy_of(g).timeout_s]
+        if late:
+            limit = self.policy_of(late[0]).timeout_s
+            log.warning("failsafe %s: not recovered within %g s -> abort the mission", self._name(late[0]), limit)
+            self.left_in = self._mode_in_force
+            self.feedback_message = f"not recovered after {limit:g} s: {why}"
+            return Status.FAILURE
+        waited, limit = max(((now - self._since[g], self.policy_of(g).timeout_s) for g in failing), key=lambda x: x[0] / x[1])
+        self.feedback_message = f"holding ({waited:.0f}/{limit:g} s): {why}"
+        return Status.RUNNING
+
+    # -- reactions ---------------------------------------------------------------------------
+
+    def _react_to_strongest(self, failing: Iterable[Guard], new: list[Guard]) -> None:
+        """Command the strongest reaction among the failing conditions, unless one as strong is in force (a new one: stronger or equal)."""
+        candidates = [_Reaction(g, self.policy_of(g)) for g in failing if self.policy_of(g).reaction != "wait"]
+        if not candidates:
+            return
+        strongest = max(candidates, key=lambda r: (r.rank, r.guard in new))
+        in_force = self._in_force.rank if self._in_force is not None else -1
+        if strongest.rank > in_force or (strongest.guard in new and strongest.rank == in_force):
+            self._react(strongest)
+
+    def _react(self, reaction: _Reaction) -> str | None:
+        """Ask for ``reaction`` (unless its mode is in force already); the mode it puts the vehicle in, if any."""
+        self._in_force = reaction
+        what = reaction.policy.reaction
+        if what == "wait":
+            return None
+        modes = REACTION_MODES[what][self.vehicle]
+        mode = modes[1] if self.get("/vehicle/vtol_state") == "FW" else modes[0]
+        if mode == self._mode_in_force and what != "disarm":
+            return mode
+        try:
+            self._tickets.append(self.commander.set_mode(mode))
+        except KeyError:
+            log.error("failsafe %s: the autopilot has no mode %s", self._name(reaction.guard), mode)
+            return None
+        if what == "disarm":
+            self._tickets.append(self.commander.disarm())
+            self._own_disarm = True
+        self._mode_in_force = mode
+        return mode
+
+    def _rearm(self, now: float) -> Status:
+        """Every condition cleared, the vehicle disarmed by this failsafe: arm it again (retried), then the work resumes."""
+        if self._rearm_from is None:
+            self._rearm_from = now
+            log.warning("failsafe %s: recovered -> re-arm, then resume", self._name(self._in_force.guard) if self._in_force else "disarm")
+        limit = self._in_force.policy.timeout_s if self._in_force else self.fallback.timeout_s
+        if now - self._rearm_from > limit:
+            log.warning("failsafe: could not re-arm within %g s -> abort the mission", limit)
+            self.left_in = self._mode_in_force
+            self.feedback_message = f"could not re-arm within {limit:g} s"
+            return Status.FAILURE
+        if now - self._rearm_at >= REARM_RETRY_S:
+            self._rearm_at = now
+            self._tickets.append(self.commander.arm())
+        self.feedback_message = f"re-arming ({now - self._rearm_from:.0f}/{limit:g} s)"
+        return Status.RUNNING
+
+    def _nothing_to_wait_for(self) -> Status:
+        self.feedback_message = ""  # the branch it stands behind failed: that is the reason to report
+        return Status.FAILURE
+
+    def _log(self, reaction: _Reaction, reason: str, person: Guard | None, recovery: str) -> None:
+        """``failsafe <condition>: <reason> -> <reaction>, <recovery>``: a warning, so an event in the journal."""
+        what = reaction.policy.reaction
+        if person is not None:
+            done = f"wait: hands off ({person.name.rstrip('?')} fails: a person has the vehicle)"
+        elif what == "wait":
+            done = "wait: hands off"
+        else:
+            modes = REACTION_MODES[what][self.vehicle]
+            mode = modes[1] if self.get("/vehicle/vtol_state") == "FW" else modes[0]
+            done = f"disarm in {mode}" if what == "disarm" else f"{what} ({mode})"
+            stronger = self._in_force
+            if stronger is not None and stronger.rank > reaction.rank:
+                done += f" not commanded: {stronger.policy.reaction} ({self._mode_in_force}) for {self._name(stronger.guard)} in force"
+        log.warning("failsafe %s: %s -> %s, %s", self._name(reaction.guard), reason, done, recovery)
+
+
+class FailsafeNote(py_trees.behaviour.Behaviour):
+    """Logs a failsafe event for a tree that reacts with its own behaviours (the ASV's EKF wait), then SUCCESS.
+
+    With ``guard``, its reason goes in the text: ``failsafe ekf_loss: <reason> -> <text>``.
+    """
+
+    def __init__(self, condition: str, text: str, guard: Guard | None = None, name: str | None = None) -> None:
+        super().__init__(name or f"Journal: {condition}")
+        self.condition, self.text, self.guard = condition, text, guard
+
+    def update(self) -> Status:
+        reason = f"{self.guard.feedback_message} -> " if self.guard is not None else ""
+        log.warning("failsafe %s: %s%s", self.condition, reason, self.text)
+        return Status.SUCCESS
+
+
+def failsafe_mode(root: py_trees.behaviour.Behaviour) -> str | None:
+    """The mode a failsafe that ended the mission left the vehicle in, if one did."""
+    return next((node.left_in for node in root.iterate() if isinstance(node, Failsafe) and node.left_in), None)

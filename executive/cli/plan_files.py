@@ -1,0 +1,132 @@
+"""``executive import FILE -o MISSION.yaml`` and ``executive export MISSION --format plan|waypoints``: ground-station mission files.
+
+Both subcommands live here (``register`` adds the two): QGroundControl ``.plan`` and Mission Planner
+``.waypoints`` files in and out, through :mod:`executive.mission.plan_files`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import yaml
+
+from executive.cli import EXIT_BAD_INPUT, EXIT_OK
+from executive.cli.common import load_or_report, print_errors
+from executive.mission.errors import MissionError, format_path
+from executive.mission.errors import Path as MissionPath
+from executive.mission.plan_files import WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
+
+KINDS = ("rover", "boat", "sub", "vtol")
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``import`` and ``export`` subcommands."""
+    imp = subparsers.add_parser(
+        "import",
+        help="make a mission file from a QGroundControl .plan or Mission Planner .waypoints file",
+        description="Make a mission file from a QGroundControl .plan or a Mission Planner QGC WPL 110 (.waypoints) file. What a mission "
+        "file cannot hold is reported on stderr, located, and listed at the top of the mission; errors go to stderr as "
+        "FILE:LINE:COL: FIELD: message (exit 2).",
+    )
+    imp.add_argument("file", metavar="FILE", help="FILE.plan or FILE.waypoints")
+    imp.add_argument("-o", "--output", metavar="MISSION.yaml", help="write the mission here (default: stdout)")
+    imp.add_argument("--vehicle", choices=KINDS, help="the vehicle kind (needed for .waypoints; a .plan's vehicleType otherwise)")
+    imp.add_argument("--name", help="the mission's name (default: the file's name)")
+    imp.add_argument("--auto-arm", action="store_true", help="arm the vehicle in pre-flight (auto_arm: true)")
+    imp.set_defaults(func=run_import)
+    exp = subparsers.add_parser(
+        "export",
+        help="write a mission as a QGroundControl .plan or Mission Planner .waypoints file",
+        description="Write a mission's route, home and geofence as a QGroundControl .plan or a Mission Planner QGC WPL 110 file. "
+        "What the format cannot carry is reported on stderr.",
+    )
+    exp.add_argument("mission", metavar="MISSION", help="mission file (YAML)")
+    exp.add_argument("--format", choices=("plan", "waypoints"), help="output format (default: from the -o file's suffix)")
+    exp.add_argument("-o", "--output", metavar="FILE", help="write here (default: stdout)")
+    exp.set_defaults(func=run_export)
+
+
+def run_import(args: argparse.Namespace) -> int:
+    """Import, report what was not imported, write the mission; 2 on bad input."""
+    try:
+        imported = import_file(args.file, vehicle=args.vehicle, name=args.name, auto_arm=args.auto_arm)
+    except MissionError as exc:
+        print_errors(exc)
+        return EXIT_BAD_INPUT
+    for warning in imported.warnings:
+        print(f"{warning} (warning)", file=sys.stderr)
+    if not _write(args.output, imported.yaml_text, "import"):
+        return EXIT_BAD_INPUT
+    if args.output is not None:
+        print(f"{args.output}: {len(imported.mission.waypoints)} waypoints, vehicle {imported.mission.vehicle}", file=sys.stderr)
+    return EXIT_OK
+
+
+def run_export(args: argparse.Namespace) -> int:
+    """Export a mission; 2 if it is invalid or the format cannot be told."""
+    fmt = args.format or _format_from_suffix(args.output)
+    if fmt is None:
+        print("executive: export: --format plan|waypoints is needed (or an -o file ending in .plan or .waypoints)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    mission = load_or_report(args.mission)
+    if mission is None:
+        return EXIT_BAD_INPUT
+    exported = export_plan(mission) if fmt == "plan" else export_waypoints(mission)
+    _report(args.mission, exported)
+    return EXIT_OK if _write(args.output, exported.text, "export") else EXIT_BAD_INPUT
+
+
+def _format_from_suffix(output: str | None) -> str | None:
+    if output is None:
+        return None
+    suffix = os.path.splitext(output)[1].lower()
+    return "plan" if suffix == ".plan" else "waypoints" if suffix in WPL_SUFFIXES else None
+
+
+def _report(mission_file: str, exported: Exported) -> None:
+    """What the format could not carry, located in the mission file."""
+    if not exported.warnings:
+        return
+    locate = _locator(mission_file)
+    for (line, column), path, why in sorted((locate(path), path, why) for path, why in exported.warnings):
+        print(f"{mission_file}:{line}:{column}: {format_path(path)}: {why} (warning)", file=sys.stderr)
+
+
+def _locator(mission_file: str) -> Callable[[MissionPath], tuple[int, int]]:
+    """``locate(path) -> (line, column)`` in a (valid) mission file: of the value at ``path`` or of its nearest enclosing value."""
+    marks: dict[MissionPath, tuple[int, int]] = {}
+
+    def index(node: yaml.Node, path: MissionPath) -> None:
+        marks[path] = (node.start_mark.line + 1, node.start_mark.column + 1)
+        if isinstance(node, yaml.SequenceNode):
+            for i, child in enumerate(node.value):
+                index(child, (*path, i))
+        elif isinstance(node, yaml.MappingNode):
+            for key, value in node.value:
+                if isinstance(key, yaml.ScalarNode):
+                    index(value, (*path, key.value))
+
+    try:
+        root = yaml.compose(Path(mission_file).read_text(encoding="utf-8"), Loader=yaml.SafeLoader)
+        if root is not None:
+            index(root, ())
+    except (OSError, yaml.YAMLError):
+        pass
+    return lambda path: next((marks[path[:n]] for n in range(len(path), -1, -1) if path[:n] in marks), (1, 1))
+
+
+def _write(output: str | None, text: str, command: str) -> bool:
+    """Write ``text`` to ``output`` (stdout if None); False after saying why it could not."""
+    if output is None:
+        sys.stdout.write(text)
+        return True
+    try:
+        Path(output).write_text(text, encoding="utf-8")
+    except OSError as exc:
+        print(f"executive: {command}: cannot write {output}: {exc.strerror or exc}", file=sys.stderr)
+        return False
+    return True

@@ -1,0 +1,247 @@
+"""Each failsafe in the simulator: the fault file of missions/faults/ injected into a running mission, over real UDP at 50x.
+
+The mission drives a straight 100 m line north in four legs (no corner: at 50x the heading filter's
+reception time stamps are too coarse for a 90° turn). The fault files are timed for
+missions/rover_square.yaml (EKF ready at 40 s); here the EKF is ready at 2 s, so every fault comes
+38 s earlier: on the second leg. Each scenario checks that the policy's reaction leaves in the tick
+the condition became true on the blackboard (or the next), the recovery (the same leg resumes and
+the mission completes, or it aborts with the vehicle in the reaction's mode) and the journal's event.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import subprocess
+import sys
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from executive import blackboard
+from executive.clock import ScaledClock
+from executive.geofence import Geofence
+from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.link import PymavlinkLink
+from executive.journal import Journal, JournalLogHandler
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.model import Mission
+from executive.runtime import Runtime
+from executive.sim import SimServer
+from executive.sim.faults import FaultInjector, load_faults
+from executive.state import EkfFlags
+
+ROOT = Path(__file__).parents[2]
+FAULTS = ROOT / "missions" / "faults"
+SHIFT_S = 38.0  # the fault files' EKF is ready at 40 s, this mission's at 2 s
+HOME = (-35.363261, 149.165230)
+LINE = [{"lat": HOME[0] + 0.0002248 * n, "lon": HOME[1]} for n in range(1, 5)]  # every 25 m north
+FENCE_M = 110.0
+BB_KEYS = ["/link/up", "/vehicle/ekf", "/rc/channels", "/rc/connected", "/heading/ok", "/vehicle/battery", "/vehicle/position", "/mission/leg_index"]
+
+
+def line_mission(**changes: Any) -> Mission:
+    fields: dict[str, Any] = {
+        "version": 1,
+        "name": "failsafe line",
+        "vehicle": "rover",
+        "auto_arm": True,
+        "home": {"lat": HOME[0], "lon": HOME[1], "heading_deg": 0.0},
+        "limits": {"acceptance_radius_m": 1.5, "leg_timeout_s": 60, "link_timeout_s": 3, "recovery_timeout_s": 30},
+        "simulator": {"ekf_ready_after_s": 40.0 - SHIFT_S},
+        "waypoints": LINE,
+    }
+    return Mission.model_validate(fields | changes)
+
+
+Fact = Callable[[dict[str, Any]], bool]
+
+
+def _ekf_lost(bb: dict[str, Any]) -> bool:
+    ekf = bb["/vehicle/ekf"]
+    return ekf is not None and not (ekf.position_ok() and ekf.variances_ok(0.8))
+
+
+def _outside(bb: dict[str, Any]) -> bool:
+    p = bb["/vehicle/position"]
+    return p is not None and Geofence((), FENCE_M).why_outside(p.lat, p.lon, HOME) is not None
+
+
+@dataclass(frozen=True)
+class Scenario:
+    condition: str
+    fault_file: str
+    fact: Fact  # the condition, judged from the blackboard independently of the guards
+    mode: str | None  # the reaction's mode; None: wait (nothing commanded)
+    recovery: str
+    changes: dict[str, Any] = field(default_factory=dict)  # to the mission
+    fault_changes: dict[str, Any] = field(default_factory=dict)
+
+
+SCENARIOS = [
+    # downlink only: the vehicle hears the hold (both ways, it would keep driving in GUIDED, deaf)
+    Scenario("link_loss", "link_loss.yaml", lambda bb: not bb["/link/up"], "HOLD", "resume", fault_changes={"direction": "downlink"}),
+    Scenario("rc_takeover", "rc_takeover.yaml", lambda bb: len(bb["/rc/channels"]) >= 6 and bb["/rc/channels"][5] > 1700, None, "resume"),
+    Scenario("rc_loss", "rc_loss.yaml", lambda bb: not bb["/rc/connected"], "HOLD", "resume"),
+    Scenario("ekf_loss", "ekf_loss.yaml", _ekf_lost, "HOLD", "resume"),
+    Scenario(
+        "gps_glitch", "gps_glitch.yaml", lambda bb: bool(bb["/vehicle/ekf"] and bb["/vehicle/ekf"].flags & EkfFlags.GPS_GLITCHING), "HOLD", "resume"
+    ),
+    Scenario("heading_insane", "heading_insane.yaml", lambda bb: bb["/heading/ok"] is False, "HOLD", "resume"),
+    Scenario(
+        "battery_low", "battery_low.yaml", lambda bb: bool(bb["/vehicle/battery"] and bb["/vehicle/battery"].remaining_pct < 20), "RTL", "abort"
+    ),
+    Scenario("geofence_breach", "geofence_breach.yaml", _outside, "HOLD", "abort", {"geofence": {"max_distance_from_home_m": FENCE_M}}),
+]
+
+
+@dataclass
+class Record:
+    """What a run did, tick by tick (a tick's number is the runtime's count before it)."""
+
+    facts: list[dict[str, Any]] = field(default_factory=list)  # the blackboard after each tick
+    modes: list[tuple[int, str]] = field(default_factory=list)  # DO_SET_MODE sent: (tick, mode)
+    warnings: list[tuple[int, str]] = field(default_factory=list)  # the executive's warnings: (tick, text)
+
+    def first(self, fact: Fact, after: int = 0) -> int:
+        return next(tick for tick, bb in enumerate(self.facts) if tick >= after and fact(bb))
+
+
+class _Warnings(logging.Handler):
+    def __init__(self, record: Record, runtime: Runtime) -> None:
+        super().__init__(logging.WARNING)
+        self.record, self.runtime = record, runtime
+
+    def emit(self, r: logging.LogRecord) -> None:
+        self.record.warnings.append((self.runtime.ticks, r.getMessage()))
+
+
+def shifted_faults(name: str, **changes: Any) -> list[Any]:
+    return [f.model_copy(update={"at_s": max(0.0, f.at_s - SHIFT_S), **changes}) for f in load_faults(FAULTS / name, "rover").faults]
+
+
+@pytest.fixture
+def run_scenario(tmp_path: Path) -> Iterator[Callable[[Scenario], tuple[Any, Record, dict[str, Any], str]]]:
+    """Runs a scenario's mission with its faults: the outcome, the record, the journal's report and the vehicle's final mode."""
+    handlers: list[logging.Handler] = []
+
+    def run(scenario: Scenario) -> tuple[Any, Record, dict[str, Any], str]:
+        mission = line_mission(**scenario.changes)
+        clock = ScaledClock(50.0)
+        faults = FaultInjector(shifted_faults(scenario.fault_file, **scenario.fault_changes), clock)
+        record = Record()
+        journal = Journal(tmp_path / f"{scenario.condition}.db", clock)
+        with SimServer("rover", clock=clock, home=(*HOME, 0.0), faults=faults, ekf_ready_after_s=40.0 - SHIFT_S) as sim:
+            link = PymavlinkLink(sim.url_for_client)
+            try:
+                runtime = Runtime(mission, link, clock, journal=journal)
+                send = link.send
+
+                def spy(msg: MAVLinkMessage) -> None:  # a command leaves in the flush at the end of tick runtime.ticks
+                    if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+                        record.modes.append((runtime.ticks, runtime.commander.modes.decode(int(msg.param2))))
+                    send(msg)
+
+                link.send = spy  # type: ignore[method-assign]
+                bb = blackboard.reader("scenario", BB_KEYS)
+                tick = runtime.tick
+
+                def observed_tick() -> Any:
+                    status = tick()
+                    record.facts.append({key: bb.get(key) for key in BB_KEYS})
+                    return status
+
+                runtime.tick = observed_tick  # type: ignore[method-assign]
+                for handler in (_Warnings(record, runtime), JournalLogHandler(journal)):
+                    logging.getLogger("executive").addHandler(handler)
+                    handlers.append(handler)
+                assert runtime.connect(10.0 * clock.speedup)
+                outcome = runtime.run()
+            finally:
+                link.close()
+            final_mode = sim.autopilot.mode
+        report = journal.report()
+        journal.close()
+        return outcome, record, report, final_mode
+
+    yield run
+    for handler in handlers:
+        logging.getLogger("executive").removeHandler(handler)
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS, ids=lambda s: s.condition)
+def test_a_fault_gets_its_failsafe_within_one_tick_and_its_recovery(run_scenario, scenario: Scenario) -> None:
+    outcome, record, report, final_mode = run_scenario(scenario)
+    became_true = record.first(scenario.fact, after=int(10 / 0.1))  # after pre-flight; the faults start at 24 s
+    prefix = f"failsafe {scenario.condition}: "
+    reacted = next(tick for tick, text in record.warnings if text.startswith(prefix))
+    if scenario.mode is not None:
+        reacted = next(tick for tick, mode in record.modes if tick >= became_true and mode == scenario.mode)
+        assert not [m for t, m in record.modes if became_true <= t < reacted], "something else was commanded first"
+    print(f"\n{scenario.condition}: true at tick {became_true}, reaction at tick {reacted}: {reacted - became_true} tick(s)")
+    assert 0 <= reacted - became_true <= 1
+    leg = record.facts[became_true]["/mission/leg_index"]
+    events = [e["text"] for e in report["events"] if e["kind"] == "failsafe"]
+    assert any(e.startswith(prefix) for e in events), events
+    if scenario.recovery == "resume":
+        assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+        resumed = next(tick for tick, text in record.warnings if text.startswith(prefix) and "recovered" in text)
+        assert f"-> resume leg {leg + 1}/4" in dict(record.warnings)[resumed]
+        assert {bb["/mission/leg_index"] for bb in record.facts[became_true:resumed]} == {leg}  # held on that leg until it recovered
+        assert (resumed, "GUIDED") in record.modes  # the leg again, in GUIDED
+        if scenario.mode is None:
+            assert not [m for t, m in record.modes if became_true <= t < resumed]  # hands off: nothing at all
+    else:
+        assert outcome.status is MissionStatus.ABORTED
+        assert final_mode == scenario.mode  # the runtime left the vehicle in the reaction's mode, not its safe mode
+        assert any(e.startswith(prefix) and e.endswith("abort the mission") for e in events), events
+        assert report["outcome"] == "ABORTED"
+
+
+def test_a_failsafe_abort_exits_1_and_the_report_has_the_event(tmp_path: Path) -> None:
+    """``executive run --faults --journal`` as a process: battery_low, exit 1, the vehicle in RTL, the event in ``executive report --json``."""
+    mission = tmp_path / "line.yaml"
+    mission.write_text(yaml.safe_dump(line_mission().model_dump(mode="json", exclude_none=True)))
+    faults = tmp_path / "battery_low.yaml"
+    plan = {"version": 1, "faults": [f.model_dump(mode="json", exclude_none=True) for f in shifted_faults("battery_low.yaml")]}
+    faults.write_text(yaml.safe_dump(plan))
+    db = tmp_path / "journal.db"
+    run = [
+        sys.executable,
+        "-m",
+        "executive",
+        "run",
+        str(mission),
+        "--faults",
+        str(faults),
+        "--speedup",
+        "50",
+        "--journal",
+        str(db),
+        "--socket",
+        "none",
+        "-v",
+    ]
+    proc = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 1, proc.stderr
+    assert "ABORTED: Battery above floor?: battery" in proc.stderr
+    assert "vehicle in RTL" in proc.stderr  # the runtime saw the heartbeat confirm it
+    report = subprocess.run([sys.executable, "-m", "executive", "report", str(db), "--json"], cwd=ROOT, capture_output=True, text=True, timeout=30)
+    assert report.returncode == 0, report.stderr
+    events = [e for e in json.loads(report.stdout)["events"] if e["kind"] == "failsafe"]
+    assert [e["text"].split(":")[0] for e in events] == ["failsafe battery_low"]
+    assert events[0]["text"].endswith("-> rtl (RTL), abort the mission")
+
+
+def test_the_policy_of_the_mission_file_is_the_one_played(run_scenario) -> None:
+    """The same link loss with ``failsafe: {link_loss: {reaction: rtl, recovery: abort}}``: RTL at once, and the mission ends there."""
+    changes = {"failsafe": {"link_loss": {"reaction": "rtl", "recovery": "abort"}}}
+    scenario = Scenario("link_loss", "link_loss.yaml", lambda bb: not bb["/link/up"], "RTL", "abort", changes)
+    outcome, record, _, _ = run_scenario(scenario)
+    became_true = record.first(scenario.fact, after=100)
+    assert (became_true, "RTL") in record.modes
+    assert outcome.status is MissionStatus.ABORTED and outcome.reason == "Link alive?: no heartbeat from the autopilot"

@@ -1,0 +1,319 @@
+"""The Failsafe behaviour tick by tick on a fake link: the reaction leaves in the tick its condition fails, then the recovery."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from typing import Any
+
+import py_trees
+import pytest
+from conftest import FakeLink, Harness, Vehicle
+from py_trees.common import Status
+
+import trees
+from executive.behaviours import Failsafe
+from executive.behaviours.failsafe import failsafe_mode
+from executive.clock import ManualClock
+from executive.geo import destination
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import mavlink
+from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.model import Mission
+from executive.runtime import Runtime
+from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
+from executive.vehicles import PROFILES
+from tests_support import AUTOPILOT
+from trees._parts import guarded, mission_root, standard_guards
+
+R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
+HOME = (47.397742, 8.545594)
+EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+EKF_GLITCH = EkfStatus(EkfFlags(831) | EkfFlags.GPS_GLITCHING, 0.1, 1.0, 0.1, 0.1, 0.0, 0.0)
+RC_OK = (1500,) * 8
+RC_TAKEOVER = (1500,) * 5 + (1900, 1500, 1500)
+
+
+def make_mission(vehicle: str = "rover", **changes: Any) -> Mission:
+    fields: dict[str, Any] = {
+        "version": 1,
+        "name": "failsafe",
+        "vehicle": vehicle,
+        "home": {"lat": HOME[0], "lon": HOME[1]},
+        "limits": {"recovery_timeout_s": 30.0, **({"acceptance_radius_m": 80.0} if vehicle == "vtol" else {})},
+        "waypoints": [{"lat": HOME[0] + 0.0002, "lon": HOME[1]}],
+    }
+    return Mission.model_validate(fields | changes)
+
+
+def position(north_m: float = 0.0) -> GlobalPosition:
+    lat, lon = destination(*HOME, 0.0, north_m)
+    return GlobalPosition(lat, lon, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+class Rig:
+    """``guarded(work, standard guards, mission)`` for one vehicle kind, ticked by hand; the vehicle healthy until a test breaks it."""
+
+    def __init__(self, mission: Mission, clock: ManualClock, vehicle: Vehicle) -> None:
+        self.mission, self.clock, self.vehicle = mission, clock, vehicle
+        self.link = FakeLink()
+        self.commander = Commander(self.link, clock, PROFILES[mission.vehicle])
+        self.state = MissionState()
+        self.state.upload(mission)
+        self.state.start()
+        self.work = py_trees.behaviours.Running("Work")
+        self.root = guarded(self.work, standard_guards(mission), mission)
+        self.h = Harness(self.root, clock, self.link, self.commander, self.state)
+        self.failsafe = next(n for n in self.root.iterate() if isinstance(n, Failsafe))
+        self.acks, self._sent = True, []
+        vehicle.set(
+            link__up=True, vehicle__armed=True, vehicle__mode="GUIDED", vehicle__ekf=EKF_READY, rc__channels=RC_OK, rc__connected=True,
+            vehicle__battery=Battery(12.4, 2.0, 80, 0.0), vehicle__position=position(), heading__ok=True,
+        )  # fmt: skip
+
+    def tick(self, n: int = 1) -> list[Status]:
+        """Up to ``n`` ticks, stopping at the first that is not RUNNING; the autopilot accepts every command (unless ``acks`` is off)."""
+        statuses = []
+        for _ in range(n):
+            statuses.append(self.h.tick())
+            sent = self.link.take("COMMAND_LONG")
+            self._sent += sent
+            for msg in sent if self.acks else ():
+                self.h.ack(msg.command)
+            if statuses[-1] != R:
+                break
+        return statuses
+
+    def sent(self) -> list[tuple[str, Any]]:
+        """What left on the link since the last call: ("mode", name) or ("arm", 1.0 / 0.0)."""
+        out: list[tuple[str, Any]] = []
+        sent, self._sent = self._sent, []
+        for msg in sent:
+            if msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+                out.append(("mode", self.commander.modes.decode(int(msg.param2))))
+            elif msg.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
+                out.append(("arm", msg.param1))
+        return out
+
+
+@pytest.fixture
+def rig(clock: ManualClock, vehicle: Vehicle) -> Callable[..., Rig]:
+    def make(vehicle_kind: str = "rover", **changes: Any) -> Rig:
+        r = Rig(make_mission(vehicle_kind, **changes), clock, vehicle)
+        assert r.tick() == [R] and r.work.status == R and r.sent() == []  # healthy: the work runs, nothing is asked
+        return r
+
+    return make
+
+
+FENCE = {"geofence": {"max_distance_from_home_m": 50.0}}
+FW = {"vehicle__vtol_state": "FW"}
+
+# (vehicle, mission changes, facts before, what breaks, the commands of that very tick, the status of that tick)
+REACTIONS = [
+    pytest.param("rover", {}, {}, {"link__up": False}, [("mode", "HOLD")], R, id="rover-link_loss-hold"),
+    pytest.param("boat", {}, {}, {"link__up": False}, [("mode", "LOITER")], R, id="boat-link_loss-loiter"),
+    pytest.param("sub", {}, {}, {"link__up": False}, [("mode", "SURFACE")], R, id="sub-link_loss-surface"),
+    pytest.param("vtol", {}, {}, {"link__up": False}, [("mode", "QLOITER")], R, id="vtol-link_loss-qloiter"),
+    pytest.param("vtol", {}, FW, {"link__up": False}, [("mode", "LOITER")], R, id="vtol-as-a-plane-link_loss-loiter"),
+    pytest.param("rover", {}, {}, {"rc__channels": RC_TAKEOVER}, [], R, id="rover-rc_takeover-wait"),
+    pytest.param("rover", {}, {}, {"vehicle__armed": False}, [], R, id="rover-disarmed-wait"),
+    pytest.param("rover", {}, {}, {"rc__connected": False}, [("mode", "HOLD")], R, id="rover-rc_loss-hold"),
+    pytest.param("boat", {}, {}, {"rc__connected": False}, [("mode", "LOITER")], R, id="boat-rc_loss-loiter"),
+    pytest.param("rover", {}, {}, {"vehicle__ekf": EKF_LOST}, [("mode", "HOLD")], R, id="rover-ekf_loss-hold"),
+    pytest.param("boat", {}, {}, {"vehicle__ekf": EKF_LOST}, [("mode", "HOLD")], R, id="boat-ekf_loss-hold-needs-no-position"),
+    pytest.param("rover", {}, {}, {"vehicle__ekf": EKF_GLITCH}, [("mode", "HOLD")], R, id="rover-gps_glitch-hold"),
+    pytest.param("boat", {}, {}, {"heading__ok": False}, [("mode", "HOLD")], R, id="boat-heading_insane-hold"),
+    pytest.param("sub", {}, {}, {"heading__ok": False}, [], S, id="sub-heading-not-judged"),  # a sub's course says nothing of its heading
+    pytest.param("rover", {}, {}, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [("mode", "RTL")], F, id="rover-battery_low-rtl-abort"),
+    pytest.param("boat", {}, {}, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [("mode", "RTL")], F, id="boat-battery_low-rtl-abort"),
+    pytest.param("sub", {}, {}, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [("mode", "SURFACE")], F, id="sub-battery_low-surface-abort"),
+    pytest.param("vtol", {}, {}, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [("mode", "QRTL")], F, id="vtol-battery_low-qrtl-abort"),
+    pytest.param("vtol", {}, FW, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [("mode", "RTL")], F, id="vtol-as-a-plane-battery_low-rtl"),
+    pytest.param("rover", FENCE, {}, {"vehicle__position": position(60.0)}, [("mode", "HOLD")], F, id="rover-geofence_breach-hold-abort"),
+    pytest.param("boat", FENCE, {}, {"vehicle__position": position(60.0)}, [("mode", "RTL")], F, id="boat-geofence_breach-rtl-abort"),
+    pytest.param("rover", {"failsafe": {"link_loss": {"reaction": "loiter"}}}, {}, {"link__up": False}, [("mode", "LOITER")], R, id="mission-policy"),
+    pytest.param("rover", {"failsafe": {"rc_takeover": {"reaction": "hold"}}}, {}, {"rc__channels": RC_TAKEOVER}, [("mode", "HOLD")], R,
+                 id="mission-policy-hold-on-take-over"),
+    pytest.param("rover", {"limits": {"battery_min_pct": None}}, {}, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [], S, id="no-battery-floor"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("kind", "changes", "before", "breaks", "commands", "status"), REACTIONS)
+def test_the_reaction_leaves_in_the_tick_the_condition_becomes_true(rig, kind, changes, before, breaks, commands, status) -> None:
+    """``status`` S: no failsafe at all, the work goes on."""
+    r = rig(kind, **changes)
+    r.vehicle.set(**before)
+    assert r.tick() == [R] and r.sent() == []
+    r.vehicle.set(**breaks)
+    assert r.tick() == [R if status == S else status]
+    assert r.sent() == commands  # flushed at the end of that very tick: zero ticks of delay
+    assert r.work.status == (R if status == S else Status.INVALID)  # the work stopped while the failsafe acts
+    if status == F:
+        assert failsafe_mode(r.root) == commands[0][1]  # where the runtime leaves the vehicle
+
+
+def test_resume_cancels_the_reaction_and_logs_cause_and_recovery(rig, caplog) -> None:
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover")
+    r.acks = False  # the autopilot does not answer: the commander would retry the hold every 1.5 s...
+    r.vehicle.set(vehicle__ekf=EKF_LOST)
+    assert r.tick(10) == [R] * 10 and r.sent() == [("mode", "HOLD")]
+    r.vehicle.set(vehicle__ekf=EKF_READY)
+    assert r.tick() == [R] and r.work.status == R  # ...but the guard recovers: the work resumes in that tick
+    assert r.tick(30) == [R] * 30 and r.sent() == []  # and the hold is not retried over it
+    assert r.commander.idle
+    assert [rec.getMessage() for rec in caplog.records] == [
+        "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> hold (HOLD), resume when it recovers (within 30 s)",
+        "failsafe ekf_loss: recovered after 1.0 s -> resume leg 1/1",
+    ]
+    assert {rec.name for rec in caplog.records} == {"executive.behaviours.failsafe"}  # the journal's event kind: "failsafe"
+
+
+def test_a_condition_that_lasts_past_its_own_time_limit_aborts(rig, caplog) -> None:
+    r = rig("rover", failsafe={"gps_glitch": {"timeout_s": 5.0}})
+    r.vehicle.set(link__up=False)
+    assert r.tick(20) == [R] * 20  # 2 s of link loss (limit 30 s)
+    r.vehicle.set(vehicle__ekf=EKF_GLITCH)
+    statuses = r.tick(100)
+    assert statuses == [R] * 51 + [F]  # over the glitch's own 5 s
+    assert r.failsafe.feedback_message == (
+        "not recovered after 5 s: Link alive? no heartbeat from the autopilot; GPS not glitching? the EKF flags a GPS glitch (GPS_GLITCHING)"
+    )
+    assert failsafe_mode(r.root) == "HOLD"
+    assert caplog.records[-1].getMessage() == "failsafe gps_glitch: not recovered within 5 s -> abort the mission"
+
+
+def test_while_holding_the_feedback_counts_toward_the_nearest_limit(rig) -> None:
+    r = rig("rover")
+    r.vehicle.set(link__up=False)
+    r.tick(31)
+    assert r.failsafe.feedback_message == "holding (3/30 s): Link alive? no heartbeat from the autopilot"
+
+
+def test_a_stronger_condition_replaces_the_reaction_in_force_and_a_weaker_one_does_not(rig, caplog) -> None:
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("sub")
+    r.vehicle.set(link__up=False)
+    assert r.tick() == [R] and r.sent() == [("mode", "SURFACE")]
+    r.vehicle.set(vehicle__ekf=EKF_LOST)  # hold (POSHOLD) would stop the surfacing
+    assert r.tick(5) == [R] * 5 and r.sent() == []
+    assert caplog.records[-1].getMessage() == (
+        "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> hold (POSHOLD) not commanded: surface (SURFACE) for link_loss in force, "
+        "resume when it recovers (within 30 s)"
+    )
+    r.vehicle.set(vehicle__battery=Battery(11.0, 2.0, 15, 1.0))  # surface, abort: already surfacing
+    assert r.tick() == [F] and r.sent() == []
+    assert failsafe_mode(r.root) == "SURFACE"
+
+
+def test_an_abort_during_a_hold_commands_its_own_reaction_at_once(rig) -> None:
+    r = rig("rover")
+    r.vehicle.set(link__up=False)
+    assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
+    r.vehicle.set(link__up=True, vehicle__battery=Battery(11.0, 2.0, 15, 1.0))
+    assert r.tick() == [F] and r.sent() == [("mode", "RTL")]
+
+
+def test_nothing_is_commanded_while_a_person_has_the_vehicle_and_the_reaction_comes_when_they_let_go(rig) -> None:
+    r = rig("rover")
+    r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__mode="MANUAL")
+    r.tick()
+    r.vehicle.set(link__up=False, vehicle__ekf=EKF_LOST)
+    assert r.tick(20) == [R] * 20 and r.sent() == []  # the pilot drives: not fought
+    r.vehicle.set(rc__channels=RC_OK)  # the switch goes back, the link is still down
+    assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
+
+
+def test_a_person_with_the_vehicle_is_not_fought_by_an_abort_either(rig) -> None:
+    r = rig("rover")
+    r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__battery=Battery(11.0, 2.0, 15, 1.0))
+    assert r.tick() == [F] and r.sent() == []
+    assert failsafe_mode(r.root) is None  # the runtime then sees the take-over switch and keeps its hands off too
+
+
+def test_disarm_puts_the_vehicle_in_manual_disarmed_then_re_arms_it_and_the_work_resumes(rig, caplog) -> None:
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("boat", failsafe={"ekf_loss": {"reaction": "disarm"}})
+    r.vehicle.set(vehicle__ekf=EKF_LOST)
+    assert r.tick() == [R] and r.sent() == [("mode", "MANUAL"), ("arm", 0.0)]  # both in the tick the EKF fails
+    r.vehicle.set(vehicle__mode="MANUAL", vehicle__armed=False)
+    assert r.tick(30) == [R] * 30 and r.sent() == []  # its own disarm is not a person's: no hands-off, no time-out of "disarmed"
+    r.vehicle.set(vehicle__ekf=EKF_READY)
+    assert r.tick() == [R] and r.sent() == [("arm", 1.0)]
+    assert r.tick(18) == [R] * 18 and r.sent() == []  # the autopilot has not armed yet: asked again 2 s later
+    assert r.tick(3) == [R] * 3 and r.sent() == [("arm", 1.0)]
+    r.vehicle.set(vehicle__armed=True)
+    assert r.tick() == [R] and r.work.status == R
+    assert [m.getMessage() for m in caplog.records] == [
+        "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> disarm in MANUAL, resume when it recovers (within 30 s)",
+        "failsafe ekf_loss: recovered -> re-arm, then resume",
+    ]
+
+
+def test_a_disarm_reaction_brings_an_armed_guard_with_it() -> None:
+    from executive.behaviours import Armed, LinkAlive, RcFresh
+    from trees._parts import failsafe_guards
+
+    plain, disarming = make_mission(), make_mission(failsafe={"link_loss": {"reaction": "disarm"}})
+    assert not any(isinstance(g, Armed) for g in failsafe_guards(plain, [LinkAlive(), RcFresh()]))
+    assert any(isinstance(g, Armed) for g in failsafe_guards(disarming, [LinkAlive(), RcFresh()]))
+
+
+class ObedientRover:
+    """Answers mode commands at once on the fake link and beats every tick, armed."""
+
+    def __init__(self, link: FakeLink) -> None:
+        self.link, self.mode = link, "GUIDED"
+        self._send = link.send
+        link.send = self.receive  # type: ignore[method-assign]
+
+    def receive(self, msg: Any) -> None:
+        self._send(msg)
+        if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+            self.mode = {v: k for k, v in PROFILES["rover"].modes.items()}[int(msg.param2)]
+            self.link.incoming.append(AUTOPILOT.command_ack(msg.command, 0, 0, 0, 1, 191))
+        if msg.get_type() == "HEARTBEAT":
+            base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
+            self.link.incoming.append(AUTOPILOT.heartbeat(mavlink.MAV_TYPE_GROUND_ROVER, 3, base, PROFILES["rover"].modes[self.mode], 4))
+
+
+def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(clock: ManualClock, vehicle: Vehicle) -> None:
+    mission = make_mission()
+    link = FakeLink()
+    root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
+    runtime = Runtime(mission, link, clock, root=root, safe_timeout_s=2.0)
+    rover = ObedientRover(link)
+    runtime.mission_state.start()
+    original = runtime.tick
+
+    def tick() -> Status:  # the vehicle's facts the fake link does not carry, as the readers would write them
+        vehicle.set(vehicle__ekf=EKF_READY, rc__channels=RC_OK, vehicle__position=position())
+        vehicle.set(vehicle__battery=Battery(11.0, 2.0, 15 if runtime.ticks >= 5 else 80, 0.0))
+        return original()
+
+    runtime.tick = tick  # type: ignore[method-assign]
+    outcome = runtime.run(start=False)
+    assert (outcome.status, outcome.reason) == (MissionStatus.ABORTED, "Battery above floor?: battery 15% below 20%")
+    assert rover.mode == "RTL"  # not HOLD, the rover's safe mode
+
+
+def test_the_asv_ekf_rule_is_journalled_and_another_ekf_policy_replaces_it(clock: ManualClock, vehicle: Vehicle, caplog) -> None:
+    from trees.goto_sample import ekf_or_wait_in_manual
+
+    caplog.set_level(logging.WARNING, logger="executive")
+    sampling = {"tree": "goto_sample", "waypoints": [{"lat": HOME[0] + 0.0002, "lon": HOME[1], "sample": True}]}
+    mission = make_mission("boat", **sampling)
+    link = FakeLink()
+    commander = Commander(link, clock, PROFILES["boat"])
+    h = Harness(ekf_or_wait_in_manual(mission), clock, link, commander, MissionState())
+    vehicle.set(vehicle__armed=True, vehicle__ekf=EKF_LOST)
+    assert h.tick() == R
+    assert [m.command for m in link.take("COMMAND_LONG")] == [mavlink.MAV_CMD_DO_SET_MODE]  # MANUAL, in that tick
+    assert caplog.records[-1].getMessage() == (
+        "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> disarm in MANUAL, resume when it recovers (within 30 s)"
+    )
+    names = {n.name for n in trees.build(make_mission("boat", **sampling, failsafe={"ekf_loss": {"reaction": "hold"}})).iterate()}
+    assert "EKF ok, else wait in MANUAL" not in names and "EKF ok?" in names  # then the EKF is one of the path's guards
+    assert "EKF ok, else wait in MANUAL" in {n.name for n in trees.build(mission).iterate()}

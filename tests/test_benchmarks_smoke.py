@@ -1,0 +1,54 @@
+"""Every benchmark runs, with the fewest iterations that exercise it (no timing is asserted: the figures come from ``python -m benchmarks``)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from benchmarks import __main__ as bench
+from benchmarks import can_decode, ingest, reaction, simspeed, startup, tick
+from benchmarks.common import Row
+
+
+def _check(rows: list[Row], count: int) -> None:
+    assert len(rows) == count
+    for row in rows:
+        assert math.isfinite(row.value), row
+        assert row.passed in (True, False), row
+        json.dumps(row.to_dict())
+    assert bench.table(rows).count("\n") == count + 1
+
+
+def test_tick() -> None:
+    _check(tick.run(ticks=10, sizes=(2, 3), warmup_ticks=1), 3)
+
+
+def test_ingest() -> None:
+    _check(ingest.run(seconds=3.0, repeats=1), 1)
+
+
+def test_can_decode() -> None:
+    _check(can_decode.run(frames=600, repeats=1), 2)
+
+
+def test_reaction() -> None:
+    _check(reaction.run(trials=1, settle_s=0.2), 1)
+
+
+def test_simulator_speed() -> None:
+    _check(simspeed.run(speedups=(20.0,), length_m=20.0, runs=1, ekf_ready_after_s=1.0), 1)
+
+
+def test_startup_and_memory() -> None:
+    _check(startup.run(runs=1, sample_s=0.2), 2)
+
+
+def test_the_command_writes_json(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.setitem(bench.BENCHMARKS, "can", lambda: can_decode.run(frames=60, repeats=1))
+    out = tmp_path / "bench.json"
+    assert bench.main(["--only", "can", "--json", str(out)]) == 0
+    assert "CAN decode" in capsys.readouterr().out
+    assert [row["group"] for row in json.loads(out.read_text())["rows"]] == ["can", "can"]
