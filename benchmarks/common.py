@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import math
 import statistics
-from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
+from executive.io.mavlink.link import MemoryLink
 from executive.mission.model import Mission
 from executive.runtime import Runtime
 from executive.sim import ArduPilotSim, make_autopilot
@@ -81,23 +81,6 @@ def rover_mission(points: Sequence[tuple[float, float]], *, name: str = "bench",
             "waypoints": [{"lat": lat, "lon": lon} for lat, lon in points],
         }
     )
-
-
-class MemoryLink:
-    """A Link in memory (as the tests' FakeLink): decoded messages queued for reception, sent messages collected."""
-
-    def __init__(self) -> None:
-        self.incoming: deque[MAVLinkMessage] = deque()
-        self.sent: list[MAVLinkMessage] = []
-
-    def recv(self) -> MAVLinkMessage | None:
-        return self.incoming.popleft() if self.incoming else None
-
-    def send(self, msg: MAVLinkMessage) -> None:
-        self.sent.append(msg)
-
-    def close(self) -> None:
-        pass
 
 
 class _Wire:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -15,27 +14,15 @@ from executive.clock import ManualClock
 from executive.io.heading import wait_for_filterpy
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.link import MemoryLink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.vehicles import PROFILES
 from tests_support import ack
 
 
-class FakeLink:
+class FakeLink(MemoryLink):
     """A Link that records what is sent and returns what a test queued for reception."""
-
-    def __init__(self) -> None:
-        self.incoming: deque[MAVLinkMessage] = deque()
-        self.sent: list[MAVLinkMessage] = []
-
-    def recv(self) -> MAVLinkMessage | None:
-        return self.incoming.popleft() if self.incoming else None
-
-    def send(self, msg: MAVLinkMessage) -> None:
-        self.sent.append(msg)
-
-    def close(self) -> None:
-        pass
 
     def take(self, kind: str | None = None) -> list[MAVLinkMessage]:
         """Messages sent since the last take (of one type, if given), oldest first."""

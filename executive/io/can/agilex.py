@@ -35,7 +35,7 @@ from __future__ import annotations
 import struct
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Self
 
 import can
 
@@ -81,9 +81,8 @@ _CODES = {_UP: 2, _MIDDLE: 1, _DOWN: 3}
 
 _RC = struct.Struct(">B5bxB")
 _SYSTEM = struct.Struct(">BBHHxB")
-_MOTION = struct.Struct(">hh4x")
+_SPEEDS = struct.Struct(">hh4x")  # 0x221 and 0x111
 _ODOMETRY = struct.Struct(">ii")
-_COMMAND = struct.Struct(">hh4x")
 
 
 def _message(arbitration_id: int, data: bytes) -> can.Message:
@@ -217,11 +216,12 @@ class SystemState:
 
 
 @dataclass(frozen=True, slots=True)
-class MotionState:
-    """0x221: the speed the base measures."""
+class _Speeds:
+    """A linear (mm/s) and angular (0.001 rad/s) speed pair, int16 big-endian: what 0x221 reports and 0x111 commands."""
 
-    ID: ClassVar[int] = MOTION_STATE_ID
-    KIND: ClassVar[str] = "motion"
+    ID: ClassVar[int]
+    KIND: ClassVar[str]
+    LABEL: ClassVar[str]
 
     linear_mm_s: int
     angular_mrad_s: int
@@ -237,17 +237,26 @@ class MotionState:
         return self.angular_mrad_s / 1000.0
 
     @classmethod
-    def from_data(cls, data: bytes) -> MotionState | None:
-        return cls(*_MOTION.unpack(data)) if len(data) == 8 else None
+    def from_data(cls, data: bytes) -> Self | None:
+        return cls(*_SPEEDS.unpack(data)) if len(data) == 8 else None
 
     def encode(self) -> can.Message:
-        return _message(self.ID, _MOTION.pack(self.linear_mm_s, self.angular_mrad_s))
+        return _message(self.ID, _SPEEDS.pack(self.linear_mm_s, self.angular_mrad_s))
 
     def describe(self) -> str:
-        return f"MOTION linear={self.linear_m_s:+.3f}m/s angular={self.angular_rad_s:+.3f}rad/s"
+        return f"{self.LABEL} linear={self.linear_m_s:+.3f}m/s angular={self.angular_rad_s:+.3f}rad/s"
 
     def fields(self) -> dict[str, Any]:
         return {"linear_m_s": self.linear_m_s, "angular_rad_s": self.angular_rad_s}
+
+
+@dataclass(frozen=True, slots=True)
+class MotionState(_Speeds):
+    """0x221: the speed the base measures."""
+
+    ID: ClassVar[int] = MOTION_STATE_ID
+    KIND: ClassVar[str] = "motion"
+    LABEL: ClassVar[str] = "MOTION"
 
 
 @dataclass(frozen=True, slots=True)
@@ -277,16 +286,12 @@ class Odometry:
 
 
 @dataclass(frozen=True, slots=True)
-class MotionCommand:
+class MotionCommand(_Speeds):
     """0x111: the speed the base is told to drive at."""
 
     ID: ClassVar[int] = MOTION_COMMAND_ID
     KIND: ClassVar[str] = "command"
-
-    linear_mm_s: int
-    angular_mrad_s: int
-
-    valid: ClassVar[bool] = True
+    LABEL: ClassVar[str] = "COMMAND"
 
     @classmethod
     def from_si(cls, linear_m_s: float, angular_rad_s: float) -> MotionCommand:
@@ -295,27 +300,6 @@ class MotionCommand:
         if not (INT16_MIN <= linear <= INT16_MAX and INT16_MIN <= angular <= INT16_MAX):
             raise ValueError(f"motion command out of range: {linear_m_s} m/s, {angular_rad_s} rad/s")
         return cls(linear, angular)
-
-    @property
-    def linear_m_s(self) -> float:
-        return self.linear_mm_s / 1000.0
-
-    @property
-    def angular_rad_s(self) -> float:
-        return self.angular_mrad_s / 1000.0
-
-    @classmethod
-    def from_data(cls, data: bytes) -> MotionCommand | None:
-        return cls(*_COMMAND.unpack(data)) if len(data) == 8 else None
-
-    def encode(self) -> can.Message:
-        return _message(self.ID, _COMMAND.pack(self.linear_mm_s, self.angular_mrad_s))
-
-    def describe(self) -> str:
-        return f"COMMAND linear={self.linear_m_s:+.3f}m/s angular={self.angular_rad_s:+.3f}rad/s"
-
-    def fields(self) -> dict[str, Any]:
-        return {"linear_m_s": self.linear_m_s, "angular_rad_s": self.angular_rad_s}
 
 
 @dataclass(frozen=True, slots=True)

@@ -6,6 +6,7 @@ import hashlib
 import os
 import struct
 import time
+from collections import deque
 from pathlib import Path
 from typing import BinaryIO, Protocol
 
@@ -24,6 +25,23 @@ class Link(Protocol):
         ...
 
     def close(self) -> None: ...
+
+
+class MemoryLink:
+    """A Link in memory: messages queued in ``incoming`` are received, sent ones collected in ``sent`` (tests, benchmarks, tools)."""
+
+    def __init__(self) -> None:
+        self.incoming: deque[MAVLinkMessage] = deque()
+        self.sent: list[MAVLinkMessage] = []
+
+    def recv(self) -> MAVLinkMessage | None:
+        return self.incoming.popleft() if self.incoming else None
+
+    def send(self, msg: MAVLinkMessage) -> None:
+        self.sent.append(msg)
+
+    def close(self) -> None:
+        pass
 
 
 def load_signing_key(path: str | os.PathLike[str]) -> bytes:
