@@ -29,7 +29,8 @@ def executive(*args: str, **popen) -> subprocess.Popen:
 
 @pytest.mark.parametrize("mission", MISSIONS, ids=lambda p: p.name)
 def test_every_example_mission_completes_in_the_simulator(mission):
-    proc = executive("run", str(mission), "--speedup", "50")
+    """As issue 2 checks it: every file of missions/ completes at speed-up 20 within a minute."""
+    proc = executive("run", str(mission), "--speedup", "20", "--socket", "none", stdout=subprocess.DEVNULL)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     assert "COMPLETED: every waypoint reached" in err
