@@ -194,6 +194,9 @@ VEHICLE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
 TREE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
     "goto_sample": {"ekf_loss": ("disarm", _R), "rc_takeover": (_W, _A)},
     "auv_survey": {"link_loss": ("hold", _R)},
+    # The operator drives the tracked UGV (MANUAL) or ArduRover does (AUTO), and skidding tracks take the course off the
+    # heading in every turn: a bad compass is flagged and journalled, the vehicle left as it is (a mission may say hold).
+    "ugv_rc_route": {"heading_insane": (_W, _R)},
 }
 
 
