@@ -8,7 +8,6 @@ from typing import Any
 
 import py_trees
 import pytest
-from conftest import FakeLink, Harness, Vehicle
 from py_trees.common import Status
 
 import trees
@@ -23,7 +22,7 @@ from executive.mission.model import Mission
 from executive.runtime import Runtime
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
 from executive.vehicles import PROFILES
-from tests_support import AUTOPILOT
+from tests_support import AUTOPILOT, FakeLink, Harness, Vehicle
 from trees._parts import guarded, mission_root, standard_guards
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
