@@ -10,7 +10,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 
-from benchmarks import can_decode, ingest, reaction, simspeed, startup, tick
+from benchmarks import can_decode, ingest, reaction, simspeed, soak, startup, tick
 from benchmarks.common import Row
 
 #: name -> the benchmark (each returns its rows); in the order they run.
@@ -21,6 +21,7 @@ BENCHMARKS: dict[str, Callable[[], list[Row]]] = {
     "reaction": reaction.run,
     "sim": simspeed.run,
     "startup": startup.run,
+    "soak": soak.run,
 }
 
 

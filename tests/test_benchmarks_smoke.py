@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks import __main__ as bench
-from benchmarks import can_decode, ingest, reaction, simspeed, startup, tick
+from benchmarks import can_decode, ingest, reaction, simspeed, soak, startup, tick
 from benchmarks.common import Row
 
 
@@ -32,6 +32,10 @@ def test_ingest() -> None:
 
 def test_can_decode() -> None:
     _check(can_decode.run(frames=600, repeats=1), 2)
+
+
+def test_soak() -> None:
+    _check(soak.run(legs=2), 2)
 
 
 def test_reaction() -> None:
