@@ -25,7 +25,8 @@ MAX_HEAP_GROWTH_MB = 1.0
 def measure(legs: int, leg_m: float = 200.0, samples: int = 40) -> dict[str, float]:
     """Drive the whole mission; tick times (µs) and heap size (bytes) sampled ``samples`` times along it."""
     wait_for_filterpy()  # loaded in the background: its imports must not count as growth
-    loop = SimLoop(rover_mission(serpentine(legs, leg_m, row_m=20.0), leg_timeout_s=600.0))
+    # no battery floor: an hour of driving drains the simulated battery, and the battery failsafe would (rightly) end it
+    loop = SimLoop(rover_mission(serpentine(legs, leg_m, row_m=20.0), leg_timeout_s=600.0, battery_min_pct=None))
     rt = loop.runtime
     loop.connect()
     rt.mission_state.start()

@@ -361,7 +361,8 @@ class HeadingFilter:
     # -- the verdict ---------------------------------------------------------------------------
     def _publish(self, now: float) -> None:
         cfg = self.config
-        while self._verdicts and self._verdicts[0][0] < now - cfg.rejection_window_s:
+        latest = self._verdicts[-1][0] if self._verdicts else now  # verdicts are stamped with measurement time (the autopilot's clock)
+        while self._verdicts and self._verdicts[0][0] < latest - cfg.rejection_window_s:
             self._rejections -= self._verdicts.popleft()[1]
         share = self.rejected_share
         if share >= cfg.rejection_flag_share and self._rejections >= cfg.rejection_min_count:

@@ -9,6 +9,7 @@ from collections.abc import Callable
 import py_trees
 import pytest
 
+from executive import blackboard
 from executive.clock import ManualClock
 from executive.io.heading import HeadingFilter, circular_mean, wrap180
 from executive.state import Attitude, GlobalPosition
@@ -293,3 +294,17 @@ def test_the_simulators_compass_bias_is_flagged_over_udp():
     assert bb("/heading/bias_deg") == pytest.approx(20.0, abs=3.0)
     assert any(rejecting for t, _, _, rejecting in seen if 40.0 <= t < 46.0)  # the glitch was seen as such
     assert all(ok is not True for _, ok, _, _ in seen)
+
+
+def test_the_rejection_window_runs_on_the_autopilots_clock_whatever_the_executives(clock):
+    """Readings carry the autopilot's boot time; an executive clock far from it must not empty or freeze the window."""
+    writer = blackboard.writer("test attitude", ["/vehicle/attitude"])
+    heading = HeadingFilter(clock)
+    clock.advance(5000.0)  # the executive has been up far longer than the autopilot
+    for i in range(200):  # 20 s of 10 Hz compass readings swinging 45° (rejected)
+        clock.advance(0.1)
+        yaw = 90.0 + (45.0 if i % 10 >= 5 else 0.0)
+        writer.set("/vehicle/attitude", Attitude(0.0, 0.0, yaw, 0.0, clock.now(), boot_s=10.0 + i * 0.1))
+        heading.service()
+    assert 0 < len(heading._verdicts) <= 60  # a 5 s window of 10 Hz readings, not everything and not nothing
+    assert py_trees.blackboard.Blackboard.get("/heading/ok") is False
