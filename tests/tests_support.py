@@ -85,3 +85,15 @@ class Harness:
     def ack(self, command: int, result: int = mavlink.MAV_RESULT_ACCEPTED) -> None:
         """A COMMAND_ACK arrives from the autopilot."""
         self.commander.on_ack(ack(command, result))
+
+
+def mission_errors(text: str, filename: str = "m.yaml") -> list[str]:
+    """Every located error of a mission text (none when it is valid)."""
+    from executive.mission.errors import MissionError
+    from executive.mission.loader import load_mission_text
+
+    try:
+        load_mission_text(text, filename)
+    except MissionError as exc:
+        return [str(e) for e in exc.errors]
+    return []

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from executive.sim.vehicle import _EARTH_RADIUS_M, _clamp, _wrap_pi
+from executive.sim.vehicle import LocalFrame, _clamp, _wrap_pi
 
 GRAVITY_M_S2 = 9.80665
 
@@ -50,7 +50,7 @@ class Regime(Enum):
     FIXED_WING = "fw"
 
 
-class QuadPlaneModel:
+class QuadPlaneModel(LocalFrame):
     """Position, velocity and heading of a QuadPlane, with a controller for each regime.
 
     Multicopter orders: :meth:`hover_at` (go to a point and altitude and hover there),
@@ -72,9 +72,7 @@ class QuadPlaneModel:
         self.limits = limits
         self.powered = False
         self.regime = Regime.MULTICOPTER
-        self._lat0, self._lon0 = lat, lon
-        self._m_per_deg_lat = math.radians(1.0) * _EARTH_RADIUS_M
-        self._m_per_deg_lon = self._m_per_deg_lat * math.cos(math.radians(lat))
+        self._init_frame(lat, lon)
         self._n = self._e = self._h = 0.0
         self._vn = self._ve = self._vd = 0.0
         self._yaw = _wrap_pi(math.radians(heading_deg))
@@ -84,14 +82,6 @@ class QuadPlaneModel:
         self._landing = False
         self._radius = 0.0  # > 0: orbit the target; 0: fly straight on (fixed wing)
         self._ccw = False
-
-    # -- local flat-earth frame --------------------------------------------------------------
-
-    def _ne(self, lat: float, lon: float) -> tuple[float, float]:
-        return (lat - self._lat0) * self._m_per_deg_lat, (lon - self._lon0) * self._m_per_deg_lon
-
-    def _latlon(self, n: float, e: float) -> tuple[float, float]:
-        return self._lat0 + n / self._m_per_deg_lat, self._lon0 + e / self._m_per_deg_lon
 
     # -- state -------------------------------------------------------------------------------
 

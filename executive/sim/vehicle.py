@@ -77,7 +77,22 @@ ROVER_LIMITS = Limits()
 BOAT_LIMITS = Limits(accel_m_s2=0.6, decel_m_s2=1.0, turn_rate_deg_s=45.0, drift_m_s=0.03, drift_toward_deg=60.0)
 
 
-class SurfaceVehicle:
+class LocalFrame:
+    """A local flat-earth frame (north, east in metres) about a start point: adequate over a simulated mission's few km."""
+
+    def _init_frame(self, lat: float, lon: float) -> None:
+        self._lat0, self._lon0 = lat, lon
+        self._m_per_deg_lat = math.radians(1.0) * _EARTH_RADIUS_M
+        self._m_per_deg_lon = self._m_per_deg_lat * math.cos(math.radians(lat))
+
+    def _ne(self, lat: float, lon: float) -> tuple[float, float]:
+        return (lat - self._lat0) * self._m_per_deg_lat, (lon - self._lon0) * self._m_per_deg_lon
+
+    def _latlon(self, n: float, e: float) -> tuple[float, float]:
+        return self._lat0 + n / self._m_per_deg_lat, self._lon0 + e / self._m_per_deg_lon
+
+
+class SurfaceVehicle(LocalFrame):
     """A rover or a boat: position, heading and forward speed, with a drive-to-target controller.
 
     The controller turns toward the target (turn-rate limited), drives at the requested speed
@@ -93,9 +108,7 @@ class SurfaceVehicle:
         self.limits = limits
         self.powered = False
         self.heading_bias_deg = 0.0  # compass error the controller steers by (fault injection): it heads this far off
-        self._lat0, self._lon0 = lat, lon
-        self._m_per_deg_lat = math.radians(1.0) * _EARTH_RADIUS_M
-        self._m_per_deg_lon = self._m_per_deg_lat * math.cos(math.radians(lat))
+        self._init_frame(lat, lon)
         self._n = self._e = 0.0
         self._yaw = _wrap_pi(math.radians(heading_deg))
         self._speed = 0.0
@@ -106,14 +119,6 @@ class SurfaceVehicle:
         self._manual: tuple[float, float] | None = None  # (throttle, steering) from a pilot
         toward = math.radians(limits.drift_toward_deg)
         self._drift = (limits.drift_m_s * math.cos(toward), limits.drift_m_s * math.sin(toward))
-
-    # -- local flat-earth frame --------------------------------------------------------------
-
-    def _ne(self, lat: float, lon: float) -> tuple[float, float]:
-        return (lat - self._lat0) * self._m_per_deg_lat, (lon - self._lon0) * self._m_per_deg_lon
-
-    def _latlon(self, n: float, e: float) -> tuple[float, float]:
-        return self._lat0 + n / self._m_per_deg_lat, self._lon0 + e / self._m_per_deg_lon
 
     # -- state ---------------------------------------------------------------------------------
 

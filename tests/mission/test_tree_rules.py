@@ -5,21 +5,12 @@ from __future__ import annotations
 import pytest
 
 import trees
-from executive.mission.errors import MissionError
-from executive.mission.loader import load_mission_text
+from tests_support import mission_errors as errors_of
 
 
 @pytest.fixture(autouse=True)
 def every_tree(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(trees, "available", lambda: ["waypoints", "goto_sample", "auv_survey", "vtol_transit", "ugv_rc_route"])
-
-
-def errors_of(text: str) -> list[str]:
-    try:
-        load_mission_text(text, "m.yaml")
-    except MissionError as exc:
-        return [str(e) for e in exc.errors]
-    return []
 
 
 HEAD = "version: 1\nname: m\n"
