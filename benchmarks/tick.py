@@ -6,6 +6,7 @@ import time
 from collections.abc import Sequence
 
 from benchmarks.common import Row, SimLoop, median, percentile, rover_mission, serpentine
+from executive.io.heading import wait_for_filterpy
 from executive.mission.lifecycle import MissionStatus
 
 #: The full tick may cost this much more than the bare tree tick.
@@ -20,6 +21,7 @@ def measure(waypoints: int, ticks: int, warmup_ticks: int = 50) -> dict[str, flo
     The legs are long enough that even the shortest mission is still on its route at the end: every
     size is measured in the same phase (a leg being driven, and now and then the next one starting).
     """
+    wait_for_filterpy()  # the heading filter at work in every size (it loads in the background, ~0.7 s into a run)
     loop = SimLoop(rover_mission(serpentine(waypoints, 50.0, row_m=500.0)))
     rt = loop.runtime
     loop.connect()

@@ -29,7 +29,6 @@ tick, right after the MAVLink reader drains.
 
 from __future__ import annotations
 
-import dataclasses
 import importlib
 import math
 import threading
@@ -44,47 +43,63 @@ from executive.state import Attitude, GlobalPosition
 
 _HEADING, _RATE = 0, 1  # the state's components (and the row of H that measures each)
 
-Matrix2 = tuple[tuple[float, float], tuple[float, float]]
-
 
 class HeadingKalman:
     """Heading and turn rate in filterpy's ``KalmanFilter`` (constant-rate model, discrete white-noise acceleration).
 
-    ``x`` and ``P`` are kept as plain floats for the caller (which wraps the heading itself: filterpy
-    has no angle hook); each step hands them to filterpy and reads them back. filterpy brings scipy
-    (~0.7 s to import): :func:`load_filterpy` runs in the background so the first tick does not wait.
+    The state stays in filterpy's arrays, changed in place (building arrays each step cost more than
+    the filter's own arithmetic); the caller reads plain floats and wraps the heading itself (filterpy
+    has no angle hook). filterpy brings scipy (~0.7 s to import): :func:`load_filterpy` runs in the
+    background so the first tick does not wait.
     """
 
     def __init__(self) -> None:
         from filterpy.kalman import KalmanFilter
 
-        self._kf = KalmanFilter(dim_x=2, dim_z=1)
-        self.x: list[float] = [0.0, 0.0]
-        self.P: Matrix2 = ((1.0, 0.0), (0.0, 1.0))
+        kf = self._kf = KalmanFilter(dim_x=2, dim_z=1)
+        kf.inv = _inverse_1x1  # filterpy's hook for the innovation's inverse: S is 1x1 here
+        self._z = np.zeros((1, 1))
+        self._r = np.zeros((1, 1))
+
+    @property
+    def heading(self) -> float:
+        return float(self._kf.x[0, 0])
+
+    @heading.setter
+    def heading(self, deg: float) -> None:
+        self._kf.x[0, 0] = deg
+
+    @property
+    def rate(self) -> float:
+        return float(self._kf.x[1, 0])
+
+    @property
+    def heading_var(self) -> float:
+        return float(self._kf.P[0, 0])
+
+    def reset(self, heading: float, rate: float, heading_var: float, rate_var: float) -> None:
+        """Start again from these readings, uncorrelated."""
+        kf = self._kf
+        kf.x[0, 0], kf.x[1, 0] = heading, rate
+        kf.P[:] = ((heading_var, 0.0), (0.0, rate_var))
 
     def predict(self, dt: float, var: float) -> None:
         kf = self._kf
-        self._push()
-        kf.F = np.array([[1.0, dt], [0.0, 1.0]])
+        kf.F[0, 1] = dt
         # filterpy's Q_discrete_white_noise(dim=2, dt, var), written out: its scipy block_diag costs more than the rest of the step
-        kf.Q = np.array([[dt**4 / 4.0, dt**3 / 2.0], [dt**3 / 2.0, dt**2]]) * var
+        q = kf.Q
+        q[0, 0], q[0, 1], q[1, 1] = dt**4 / 4.0 * var, dt**3 / 2.0 * var, dt**2 * var
+        q[1, 0] = q[0, 1]
         kf.predict()
-        self._pull()
 
     def update(self, z: float, r: float, i: int) -> None:
         """Take a measurement ``z`` of state component ``i`` whose variance is ``r``."""
-        self._push()
-        self._kf.update(np.array([[z]]), R=np.array([[r]]), H=_H[i])
-        self._pull()
+        self._z[0, 0], self._r[0, 0] = z, r
+        self._kf.update(self._z, R=self._r, H=_H[i])
 
-    def _push(self) -> None:
-        self._kf.x = np.array([[self.x[0]], [self.x[1]]])
-        self._kf.P = np.array(self.P, dtype=float)
 
-    def _pull(self) -> None:
-        x, p = self._kf.x, self._kf.P
-        self.x = [x[0, 0].item(), x[1, 0].item()]
-        self.P = ((p[0, 0].item(), p[0, 1].item()), (p[1, 0].item(), p[1, 1].item()))
+def _inverse_1x1(s: np.ndarray) -> np.ndarray:
+    return 1.0 / s
 
 
 _H = (np.array([[1.0, 0.0]]), np.array([[0.0, 1.0]]))
@@ -106,6 +121,11 @@ def wait_for_filterpy(timeout_s: float = 30.0) -> bool:
     """Block until filterpy is loaded (tools and tests that want a judging filter from the first reading)."""
     load_filterpy()
     return _filterpy_ready.wait(timeout_s)
+
+
+def _measured_at(reading: Attitude | GlobalPosition) -> float:
+    """When the autopilot measured ``reading`` (its boot clock) if it said, else when it arrived."""
+    return reading.boot_s if reading.boot_s is not None else reading.time
 
 
 def wrap180(deg: float) -> float:
@@ -189,7 +209,7 @@ class HeadingFilter:
         """The filtered heading, less the bias once judged, [0, 360); None before the first compass reading."""
         if self._t is None:
             return None
-        return (self._kf.x[_HEADING] - (self._bias if self.bias_judged else 0.0)) % 360.0
+        return (self._kf.heading - (self._bias if self.bias_judged else 0.0)) % 360.0
 
     @property
     def bias_estimate_deg(self) -> float | None:
@@ -235,19 +255,19 @@ class HeadingFilter:
             new.append(position)
         # The filter runs on when the autopilot measured (its boot clock): reception times jitter with the link,
         # and a turn's rate times that jitter reads as a compass error.
-        measured = [dataclasses.replace(r, time=r.boot_s) if r.boot_s is not None else r for r in new]
-        for reading in sorted(measured, key=lambda r: (r.time, isinstance(r, GlobalPosition))):
+        if len(new) == 2 and _measured_at(new[1]) < _measured_at(new[0]):
+            new.reverse()
+        for reading in new:
             if isinstance(reading, Attitude):
-                self._on_attitude(reading)
+                self._on_attitude(reading, _measured_at(reading))
             else:
-                self._on_position(reading)
+                self._on_position(reading, _measured_at(reading))
         self._publish(self._clock.now())
 
     # -- the heading filter --------------------------------------------------------------------
     def _start(self, yaw_deg: float, rate_deg_s: float, t: float) -> None:
         cfg = self.config
-        self._kf.x = [yaw_deg % 360.0, rate_deg_s]
-        self._kf.P = ((cfg.compass_sigma_deg**2, 0.0), (0.0, cfg.gyro_sigma_deg_s**2))
+        self._kf.reset(yaw_deg % 360.0, rate_deg_s, cfg.compass_sigma_deg**2, cfg.gyro_sigma_deg_s**2)
         self._t = t
         self._rejected_run.clear()
 
@@ -256,63 +276,63 @@ class HeadingFilter:
         dt = t - self._t
         if dt > 0.0:
             self._kf.predict(dt, self.config.yaw_accel_sigma_deg_s2**2)
-            self._kf.x[_HEADING] %= 360.0
+            self._kf.heading %= 360.0
             self._t = t
 
     def _gated_update(self, z_deg: float, r_var: float) -> tuple[bool, float]:
         """Update the heading with ``z_deg`` unless its wrapped innovation fails the gate; returns (accepted, innovation)."""
-        x = self._kf.x[_HEADING]
+        x = self._kf.heading
         y = wrap180(z_deg - x)
-        s = self._kf.P[0][0] + r_var
+        s = self._kf.heading_var + r_var
         if y * y / s > self.config.gate:
             return False, y
         self._kf.update(x + y, r_var, _HEADING)  # z chosen so the filter's innovation is y
-        self._kf.x[_HEADING] %= 360.0
+        self._kf.heading %= 360.0
         return True, y
 
-    def _on_attitude(self, a: Attitude) -> None:
+    def _on_attitude(self, a: Attitude, t: float) -> None:
         cfg = self.config
         straight = abs(a.yaw_rate_deg_s) <= cfg.straight_rate_deg_s
-        self._straight_since = (self._straight_since if self._straight_since is not None else a.time) if straight else None
-        if self._t is None or a.time - self._t > cfg.stale_after_s or a.time < self._t - cfg.stale_after_s:  # a gap, or a reboot
-            self._start(a.yaw_deg, a.yaw_rate_deg_s, a.time)
-            self._compass = (a.time, a.yaw_deg, a.yaw_rate_deg_s)
+        self._straight_since = (self._straight_since if self._straight_since is not None else t) if straight else None
+        if self._t is None or t - self._t > cfg.stale_after_s or t < self._t - cfg.stale_after_s:  # a gap, or a reboot
+            self._start(a.yaw_deg, a.yaw_rate_deg_s, t)
+            self._compass = (t, a.yaw_deg, a.yaw_rate_deg_s)
             return
-        self._predict_to(a.time)
+        self._predict_to(t)
         self._kf.update(a.yaw_rate_deg_s, cfg.gyro_sigma_deg_s**2, _RATE)
         r_var = cfg.compass_sigma_deg**2 + (a.yaw_rate_deg_s * cfg.timing_sigma_s) ** 2
         accepted, y = self._gated_update(a.yaw_deg, r_var)
         self.last_compass_innovation_deg = y
-        self._verdicts.append((a.time, not accepted))
+        self._verdicts.append((t, not accepted))
         self._rejections += not accepted
         if accepted:
             self.compass_accepted += 1
             self._rejected_run.clear()
-            self._compass = (a.time, a.yaw_deg, a.yaw_rate_deg_s)
+            self._compass = (t, a.yaw_deg, a.yaw_rate_deg_s)
             return
         self.compass_rejected += 1
-        self._last_rejection = a.time
+        self._last_rejection = t
         self._rejected_run.append(y)
         run = self._rejected_run
         if len(run) >= cfg.reinit_after:
             centre = circular_mean(run)
             if max(abs(wrap180(v - centre)) for v in run) <= cfg.reinit_spread_deg:
                 self.reinits += 1
-                self._start(a.yaw_deg, a.yaw_rate_deg_s, a.time)
-                self._compass = (a.time, a.yaw_deg, a.yaw_rate_deg_s)
+                self._start(a.yaw_deg, a.yaw_rate_deg_s, t)
+                self._compass = (t, a.yaw_deg, a.yaw_rate_deg_s)
             else:
                 del run[0]
 
-    def _on_position(self, p: GlobalPosition) -> None:
+    def _on_position(self, p: GlobalPosition, t: float) -> None:
         cfg = self.config
         speed = p.ground_speed_m_s
-        if self._t is None or speed < cfg.min_course_speed_m_s or p.time - self._t > cfg.stale_after_s:
+        if self._t is None or speed < cfg.min_course_speed_m_s or t - self._t > cfg.stale_after_s:
             return
         course = math.degrees(math.atan2(p.ve_m_s, p.vn_m_s)) % 360.0
-        rate = self._kf.x[_RATE]
+        rate = self._kf.rate
         cog_var = math.degrees(math.atan2(cfg.gps_velocity_sigma_m_s, speed)) ** 2 + (rate * cfg.timing_sigma_s) ** 2
-        self._predict_to(p.time)
-        if self.bias_judged and abs(wrap180(course + self._bias - self._kf.x[_HEADING])) > 120.0:
+        self._predict_to(t)
+        if self.bias_judged and abs(wrap180(course + self._bias - self._kf.heading)) > 120.0:
             return  # driving backwards (a tracked vehicle can): the course is the heading's opposite
         accepted, _ = self._gated_update(course + self._bias, cog_var + self._bias_var)
         if accepted:
@@ -320,14 +340,14 @@ class HeadingFilter:
         else:
             self.course_rejected += 1
         compass = self._compass
-        if self._straight_since is None or p.time - self._straight_since < cfg.straight_settle_s:
+        if self._straight_since is None or t - self._straight_since < cfg.straight_settle_s:
             return
-        if compass is None or p.time - compass[0] > 0.5:  # no accepted compass reading to compare with
+        if compass is None or t - compass[0] > 0.5:  # no accepted compass reading to compare with
             return
-        if self._rejecting or p.time - self._last_rejection < cfg.straight_settle_s:  # readings between glitches are suspect too
+        if self._rejecting or t - self._last_rejection < cfg.straight_settle_s:  # readings between glitches are suspect too
             return
         _, yaw, yaw_rate = compass
-        self._bias_sample(p.time, wrap180(yaw + yaw_rate * (p.time - compass[0]) - course), cfg.compass_sigma_deg**2 + cog_var)
+        self._bias_sample(t, wrap180(yaw + yaw_rate * (t - compass[0]) - course), cfg.compass_sigma_deg**2 + cog_var)
 
     # -- the bias filter -----------------------------------------------------------------------
     def _bias_sample(self, t: float, d: float, d_var: float) -> None:
