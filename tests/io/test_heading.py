@@ -36,6 +36,7 @@ class Drive:
         self.rate = 0.0
         self.speed = 0.0
         self.compass_error: Callable[[float], float] = lambda t: 0.0
+        self.report_every = 1  # ATTITUDE every this many ticks, GLOBAL_POSITION_INT every other ATTITUDE
         self.rng = random.Random(seed)
         self.t0 = clock.now()
         self.ticks = 0
@@ -55,8 +56,9 @@ class Drive:
             now = self.clock.now()
             compass = (self.heading + self.compass_error(self.t) + self.rng.gauss(0.0, 1.5)) % 360.0
             gyro = self.rate + self.rng.gauss(0.0, 0.3)
-            self.vehicle.set(vehicle__attitude=Attitude(0.0, 0.0, compass, gyro, now))
-            if self.ticks % 2 == 0:
+            if self.ticks % self.report_every == 0:
+                self.vehicle.set(vehicle__attitude=Attitude(0.0, 0.0, compass, gyro, now))
+            if self.ticks % (2 * self.report_every) == 0:
                 vn = self.speed * math.cos(math.radians(self.heading)) + self.rng.gauss(0.0, 0.05)
                 ve = self.speed * math.sin(math.radians(self.heading)) + self.rng.gauss(0.0, 0.05)
                 self.vehicle.set(vehicle__position=GlobalPosition(47.4, 8.5, 0.0, vn, ve, 0.0, None, now))
@@ -104,6 +106,25 @@ def test_a_good_compass_stays_ok_with_no_bias(drive):
     assert drive.filter.compass_rejected <= 2  # 1.5° noise against a 3-sigma gate on 3°: hardly ever
     drive.run(20.0, speed=2.0, rate=15.0)  # turns: the course lags nothing here, and the compass keeps up
     assert bb("/heading/ok") is True and drive.max_error(since=33.0) < 4.0
+
+
+def test_pivot_turns_on_a_slow_telemetry_link_are_not_a_compass_fault(drive):
+    """A skid-steer pivot starts and stops its turn at once; ATTITUDE at 3.3 Hz (a telemetry radio) sees a rate step mid-interval."""
+    drive.report_every = 3
+    drive.run(2.0)
+    drive.run(15.0, speed=2.0)
+    assert bb("/heading/ok") is True
+    for rate in (-90.0, 90.0, -60.0, 120.0):  # U-turns at the ends of survey lines
+        while drive.ticks % drive.report_every != 1:  # the turn starts just after a reading: the whole interval unseen
+            drive.run(TICK_S)
+        drive.run(1.5, speed=0.3, rate=rate)  # at once into the turn ...
+        for share in (0.5, 0.25, 0.1):  # ... and easing out of it onto the new line, as a steering controller does
+            drive.run(0.3, rate=rate * share)
+        drive.run(8.0, speed=2.0, rate=0.0)
+    assert all(ok is not False for _, _, _, ok in drive.log)
+    assert drive.filter.compass_rejected <= 1
+    assert drive.max_error(since=17.0) < 36.0  # the heading is as of the last reading: 0.3 s of a 120°/s pivot at most ...
+    assert drive.max_error(since=drive.t - 5.0) < 4.0  # ... and on the compass again once straight
 
 
 def test_a_20_degree_bias_is_flagged_within_7_s_of_straight_driving(drive):
