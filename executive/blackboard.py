@@ -97,6 +97,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/heading/deg", None, "heading filter", "filtered heading, degrees [0, 360)"),
     Key("/heading/ok", None, "heading filter", "the compass agrees with the filter; None = not judged yet"),
     Key("/heading/bias_deg", None, "heading filter", "estimated compass bias against course over ground"),
+    Key("/heading/reason", "", "heading filter", "why the compass is not ok (empty when it is, or is not judged)"),
     Key("/mission/state", "IDLE", "mission state", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
     Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
     Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),

@@ -372,7 +372,7 @@ class AltitudeWithin(Guard):
 class HeadingSane(Guard):
     """The heading filter trusts the compass (/heading/ok); not judged yet passes with a note."""
 
-    reads = ("/heading/ok", "/heading/bias_deg")
+    reads = ("/heading/ok", "/heading/reason")
 
     def __init__(self, name: str = "Heading sane?") -> None:
         super().__init__(name)
@@ -384,8 +384,7 @@ class HeadingSane(Guard):
             return None
         if ok:
             return None
-        bias: float | None = self.get("/heading/bias_deg")
-        return "compass disagrees with the course over ground" + (f" (bias {bias:+.0f}°)" if bias is not None else "")
+        return self.get("/heading/reason") or "the heading filter does not trust the compass"
 
 
 class BatteryAbove(Guard):

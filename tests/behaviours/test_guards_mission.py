@@ -159,17 +159,17 @@ CASES = [
     (lambda: HeadingSane(), {"heading__ok": True, "heading__bias_deg": 2.0}, Status.SUCCESS, "ok"),
     (
         lambda: HeadingSane(),
-        {"heading__ok": False, "heading__bias_deg": 20.4},
+        {"heading__ok": False, "heading__bias_deg": 20.4, "heading__reason": "compass reads +20.4° off the course over ground"},
         Status.FAILURE,
-        "compass disagrees with the course over ground (bias +20°)",
+        "compass reads +20.4° off the course over ground",
     ),
     (
         lambda: HeadingSane(),
-        {"heading__ok": False, "heading__bias_deg": -44.6},
+        {"heading__ok": False, "heading__reason": "compass rejected in 25% of its readings over 5 s"},
         Status.FAILURE,
-        "compass disagrees with the course over ground (bias -45°)",
+        "compass rejected in 25% of its readings over 5 s",
     ),
-    (lambda: HeadingSane(), {"heading__ok": False}, Status.FAILURE, "compass disagrees with the course over ground"),
+    (lambda: HeadingSane(), {"heading__ok": False}, Status.FAILURE, "the heading filter does not trust the compass"),
     (lambda: BatteryAbove(20.0, 10.5), {}, Status.SUCCESS, "battery not reported yet"),
     (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(12.0, 50)}, Status.SUCCESS, "ok"),
     (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(12.0, 20)}, Status.SUCCESS, "ok"),  # at the floor is not below it

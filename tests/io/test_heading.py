@@ -138,6 +138,7 @@ def test_a_20_degree_bias_is_flagged_within_7_s_of_straight_driving(drive):
     assert bb("/heading/ok") is False
     assert bb("/heading/bias_deg") == pytest.approx(20.0, abs=3.0)
     assert "off the course over ground" in drive.filter.reason
+    assert bb("/heading/reason") == drive.filter.reason
     assert bb("/heading/deg") == pytest.approx(60.0, abs=3.0)  # the true heading: the bias taken off
     drive.run(10.0, speed=0.0)  # stopped: the bias estimate is kept, and so is the verdict
     assert bb("/heading/ok") is False and bb("/heading/bias_deg") == pytest.approx(20.0, abs=3.0)
@@ -190,6 +191,7 @@ def test_sustained_45_degree_swings_are_rejected_and_flagged(drive, speed):
     assert drive.max_error(since=13.0, until=23.0) < 5.0  # the swings never reach the heading
     assert drive.filter.reinits == 0  # swings are not a step: the filter is not re-initialised on them
     assert "compass rejected" in drive.filter.reason
+    assert bb("/heading/reason") == drive.filter.reason  # what the heading-sane guard and the failsafe report
     drive.run(10.0)
     recovered = drive.first(lambda deg, ok: ok is True, since=23.0)
     assert recovered is not None and recovered - 23.0 <= 6.0
