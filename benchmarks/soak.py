@@ -1,21 +1,35 @@
-"""Soak: a long mission at full speed (simulator and runtime on a manual clock); memory and tick time must not grow.
+"""Soak: long missions, memory and tick time must not grow.
+
+In process: simulator and runtime on a manual clock, as fast as they go.
 
 A rover drives a serpentine of ``legs`` 200 m legs (40 km, about 5 hours of vehicle time with the defaults).
 The run is cut in quarters: the last quarter's median tick time, Python heap (the interpreter's
 allocated blocks) and resident memory against the first quarter's, after the pre-flight, show
 whether anything accumulates as a run goes on. The records are preallocated, so the benchmark's own
 bookkeeping does not grow with the run (tracemalloc's did: ~10 MB of RSS over the same run).
+
+Over real sockets: ``executive run --speedup 50`` as a subprocess (the built-in simulator over
+loopback UDP, with a journal and a tlog being written), its VmRSS sampled from /proc while it
+drives ``process_legs`` legs; the last quarter of the route against the first.
 """
 
 from __future__ import annotations
 
 import gc
+import json
+import os
 import resource
+import subprocess
 import sys
+import tempfile
 import time
 from array import array
+from pathlib import Path
+
+import yaml
 
 from benchmarks.common import Row, SimLoop, median, rover_mission, serpentine
+from benchmarks.startup import ROOT, _status_kb
 from executive.io.heading import wait_for_filterpy
 from executive.mission.lifecycle import MissionStatus
 
@@ -83,7 +97,48 @@ def measure(legs: int, leg_m: float = 200.0, rate_hz: float = 10.0, sample_every
     }
 
 
-def run(legs: int = 200, sample_every: int = SAMPLE_EVERY) -> list[Row]:
+def measure_process(legs: int, speedup: float = 50.0, leg_m: float = 200.0) -> dict[str, float]:
+    """Run ``executive run`` on a ``legs``-leg mission; VmRSS (kB) sampled along the route, by leg."""
+    mission = rover_mission(serpentine(legs, leg_m, row_m=20.0), name="soak", leg_timeout_s=LEG_TIMEOUT_S, battery_min_pct=None)
+    with tempfile.TemporaryDirectory(prefix="executive-soak-") as tmp:
+        path = Path(tmp) / "soak.yaml"
+        path.write_text(yaml.safe_dump(mission.model_dump(mode="json", exclude_defaults=True), sort_keys=False), encoding="utf-8")
+        env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+        cmd = [sys.executable, "-m", "executive", "run", str(path), "--speedup", f"{speedup:g}", "--socket", "none"]
+        cmd += ["--journal", str(Path(tmp) / "journal.db"), "--tlog", str(Path(tmp) / "link.tlog")]
+        started = time.perf_counter()
+        proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        assert proc.stdout is not None
+        samples: list[tuple[int, int]] = []  # (leg, VmRSS kB), one per status line once on the route
+        state, status = "", {}
+        for line in proc.stdout:  # a status line every 0.5 s of vehicle time
+            status = json.loads(line)
+            state = status.get("state", state)
+            if state == "RUNNING" and status.get("leg", 0) >= 2:  # past the pre-flight and the first leg
+                try:
+                    samples.append((status["leg"], _status_kb(proc.pid)["VmRSS"]))
+                except (FileNotFoundError, KeyError):
+                    break
+        code = proc.wait()
+        wall_s = time.perf_counter() - started
+        tlog_mb = (Path(tmp) / "link.tlog").stat().st_size / 1e6 if (Path(tmp) / "link.tlog").exists() else 0.0
+    quarter = max(1, len(samples) // 4)
+    rss = [kb for _, kb in samples]
+    return {
+        "completed": code == 0 and state == "COMPLETED",
+        "exit_code": code,
+        "vehicle_h": status.get("t", 0.0) / 3600.0,
+        "wall_s": wall_s,
+        "samples": len(samples),
+        "rss_first_mb": median(rss[:quarter]) * 1024 / 1e6,
+        "rss_last_mb": median(rss[-quarter:]) * 1024 / 1e6,
+        "tlog_mb": tlog_mb,
+    }
+
+
+def run(legs: int = 200, sample_every: int = SAMPLE_EVERY, process_legs: int = 30) -> list[Row]:
+    p = measure_process(process_legs)
+    process_growth = p["rss_last_mb"] - p["rss_first_mb"]
     m = measure(legs, sample_every=sample_every)
     tick_growth = m["tick_last_us"] / m["tick_first_us"]
     block_growth = m["blocks_last"] - m["blocks_first"]
@@ -119,5 +174,17 @@ def run(legs: int = 200, sample_every: int = SAMPLE_EVERY) -> list[Row]:
             rss_growth <= MAX_RSS_GROWTH_MB,
             f"{m['rss_first_mb']:.2f} -> {m['rss_last_mb']:.2f} MB (VmRSS); peak {m['rss_peak_mb']:.0f} MiB",
             m,
+        ),
+        Row(
+            "soak",
+            "soak over UDP (executive run): resident memory, last - first quarter",
+            process_growth,
+            "MB",
+            f"<= {MAX_RSS_GROWTH_MB} MB",
+            p["completed"] and process_growth <= MAX_RSS_GROWTH_MB,
+            f"{p['rss_first_mb']:.2f} -> {p['rss_last_mb']:.2f} MB (VmRSS, {p['samples']} samples); {process_legs} legs, "
+            f"{p['vehicle_h']:.1f} h of vehicle time at 50x in {p['wall_s']:.0f} s, journal and {p['tlog_mb']:.0f} MB tlog written; "
+            f"completed: {p['completed']}",
+            p,
         ),
     ]
