@@ -9,7 +9,7 @@ whether anything accumulates as a run goes on. The records are preallocated, so 
 bookkeeping does not grow with the run (tracemalloc's did: ~10 MB of RSS over the same run).
 
 Over real sockets: ``executive run --speedup 50`` as a subprocess (the built-in simulator over
-loopback UDP, with a journal and a tlog being written), its VmRSS sampled from /proc while it
+loopback UDP, with a journal and a tlog being written, and a link or EKF loss every few minutes), its VmRSS sampled from /proc while it
 drives ``process_legs`` legs; the last quarter of the route against the first.
 """
 
@@ -97,31 +97,49 @@ def measure(legs: int, leg_m: float = 200.0, rate_hz: float = 10.0, sample_every
     }
 
 
-def measure_process(legs: int, speedup: float = 50.0, leg_m: float = 200.0) -> dict[str, float]:
-    """Run ``executive run`` on a ``legs``-leg mission; VmRSS (kB) sampled along the route, by leg."""
+def recurring_faults(first_s: float, every_s: float, until_s: float, for_s: float = 6.0) -> list[dict[str, object]]:
+    """A link loss and an EKF position loss by turns, every ``every_s`` from ``first_s``: each a failsafe hold, then the leg resumed."""
+    faults: list[dict[str, object]] = []
+    at = first_s
+    while at < until_s:
+        if len(faults) % 2 == 0:
+            faults.append({"kind": "link_loss", "at_s": at, "for_s": for_s, "direction": "both"})
+        else:
+            faults.append({"kind": "ekf_degradation", "at_s": at, "for_s": for_s, "variance": 1.2, "lose_position": True})
+        at += every_s
+    return faults
+
+
+def measure_process(legs: int, speedup: float = 50.0, leg_m: float = 200.0, faults_every_s: float = 240.0) -> dict[str, float]:
+    """Run ``executive run`` on a ``legs``-leg mission with recurring faults; VmRSS (kB) sampled along the route."""
     mission = rover_mission(serpentine(legs, leg_m, row_m=20.0), name="soak", leg_timeout_s=LEG_TIMEOUT_S, battery_min_pct=None)
+    faults = recurring_faults(120.0, faults_every_s, legs * 90.0)  # legs take ~90 s
     with tempfile.TemporaryDirectory(prefix="executive-soak-") as tmp:
-        path = Path(tmp) / "soak.yaml"
+        path, faults_path, log_path = Path(tmp) / "soak.yaml", Path(tmp) / "faults.yaml", Path(tmp) / "run.log"
         path.write_text(yaml.safe_dump(mission.model_dump(mode="json", exclude_defaults=True), sort_keys=False), encoding="utf-8")
+        faults_path.write_text(yaml.safe_dump({"version": 1, "faults": faults}, sort_keys=False), encoding="utf-8")
         env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
         cmd = [sys.executable, "-m", "executive", "run", str(path), "--speedup", f"{speedup:g}", "--socket", "none"]
-        cmd += ["--journal", str(Path(tmp) / "journal.db"), "--tlog", str(Path(tmp) / "link.tlog")]
+        cmd += ["--journal", str(Path(tmp) / "journal.db"), "--tlog", str(Path(tmp) / "link.tlog"), "--faults", str(faults_path)]
         started = time.perf_counter()
-        proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-        assert proc.stdout is not None
-        samples: list[tuple[int, int]] = []  # (leg, VmRSS kB), one per status line once on the route
-        state, status = "", {}
-        for line in proc.stdout:  # a status line every 0.5 s of vehicle time
-            status = json.loads(line)
-            state = status.get("state", state)
-            if state == "RUNNING" and status.get("leg", 0) >= 2:  # past the pre-flight and the first leg
-                try:
-                    samples.append((status["leg"], _status_kb(proc.pid)["VmRSS"]))
-                except (FileNotFoundError, KeyError):
-                    break
-        code = proc.wait()
+        with open(log_path, "w", encoding="utf-8") as log:
+            proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=log, text=True)
+            assert proc.stdout is not None
+            samples: list[tuple[int, int]] = []  # (leg, VmRSS kB), one per status line once on the route
+            state, status = "", {}
+            for line in proc.stdout:  # a status line every 0.5 s of vehicle time
+                status = json.loads(line)
+                state = status.get("state", state)
+                if state == "RUNNING" and status.get("leg", 0) >= 2:  # past the pre-flight and the first leg
+                    try:
+                        samples.append((status["leg"], _status_kb(proc.pid)["VmRSS"]))
+                    except (FileNotFoundError, KeyError):
+                        break
+            code = proc.wait()
         wall_s = time.perf_counter() - started
         tlog_mb = (Path(tmp) / "link.tlog").stat().st_size / 1e6 if (Path(tmp) / "link.tlog").exists() else 0.0
+        text = log_path.read_text(encoding="utf-8")
+        injected = sum(1 for f in faults if float(f["at_s"]) < status.get("t", 0.0))  # type: ignore[arg-type]
     quarter = max(1, len(samples) // 4)
     rss = [kb for _, kb in samples]
     return {
@@ -133,6 +151,9 @@ def measure_process(legs: int, speedup: float = 50.0, leg_m: float = 200.0) -> d
         "rss_first_mb": median(rss[:quarter]) * 1024 / 1e6,
         "rss_last_mb": median(rss[-quarter:]) * 1024 / 1e6,
         "tlog_mb": tlog_mb,
+        "faults_injected": injected,
+        "failsafes": text.count("failsafe ") - text.count("recovered after"),
+        "recoveries": text.count("recovered after"),
     }
 
 
@@ -184,6 +205,7 @@ def run(legs: int = 200, sample_every: int = SAMPLE_EVERY, process_legs: int = 3
             p["completed"] and process_growth <= MAX_RSS_GROWTH_MB,
             f"{p['rss_first_mb']:.2f} -> {p['rss_last_mb']:.2f} MB (VmRSS, {p['samples']} samples); {process_legs} legs, "
             f"{p['vehicle_h']:.1f} h of vehicle time at 50x in {p['wall_s']:.0f} s, journal and {p['tlog_mb']:.0f} MB tlog written; "
+            f"{p['faults_injected']} faults injected (link loss, EKF loss by turns): {p['failsafes']} failsafes, {p['recoveries']} resumed; "
             f"completed: {p['completed']}",
             p,
         ),
