@@ -7,6 +7,7 @@ Namespaces:
 - ``/rc``: the RC receiver, from MAVLink RC_CHANNELS or the CAN bus (mavlink / CAN reader).
 - ``/base``: the AgileX tracked base over CAN: its state frames (CAN reader) and the drive commands sent to it (drive bridge).
 - ``/heading``: the heading sanity filter's verdict (heading filter).
+- ``/obstacles``: a camera's obstacle distances (obstacle receiver) and their forwarding to the autopilot (obstacle forwarder).
 - ``/mission``: the mission lifecycle and progress (mission state code only).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
 - ``/sampler``: the sample-taking instrument (sampler).
@@ -98,6 +99,11 @@ _KEYS: tuple[Key, ...] = (
     Key("/heading/ok", None, "heading filter", "the compass agrees with the filter; None = not judged yet"),
     Key("/heading/bias_deg", None, "heading filter", "estimated compass bias against course over ground"),
     Key("/heading/reason", "", "heading filter", "why the compass is not ok (empty when it is, or is not judged)"),
+    Key("/obstacles/scan", None, "obstacle receiver", "ObstacleScan: the camera's latest valid scan"),
+    Key("/obstacles/received", 0, "obstacle receiver", "valid scans received"),
+    Key("/obstacles/rejected", 0, "obstacle receiver", "datagrams dropped as not a scan"),
+    Key("/obstacles/last_error", "", "obstacle receiver", "why the latest dropped datagram was dropped (field: reason)"),
+    Key("/obstacles/forwarded", 0, "obstacle forwarder", "OBSTACLE_DISTANCE messages sent to the autopilot"),
     Key("/mission/state", "IDLE", "mission state", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
     Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
     Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),

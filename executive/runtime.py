@@ -7,6 +7,7 @@ exception inside a behaviour all end with the vehicle commanded into its safe mo
 from __future__ import annotations
 
 import logging
+import socket
 import types
 from dataclasses import dataclass
 from typing import Any
@@ -30,6 +31,7 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.route_keeper import RouteKeeper
 from executive.io.mavlink.streams import StreamRequester, rates_for
+from executive.io.obstacles import ObstacleForwarder, ObstacleReceiver
 from executive.io.rc import RcReader
 from executive.io.sampler import SimulatedSampler
 from executive.journal import Journal, ResumePoint
@@ -121,6 +123,7 @@ class Runtime:
         journal: Journal | None = None,
         snapshots: SnapshotRecorder | None = None,
         can_bus: can.BusABC | None = None,
+        obstacle_socket: socket.socket | None = None,
     ) -> None:
         """``root`` replaces the tree the first mission selects (for tests and tools)."""
         blackboard.reset()
@@ -143,6 +146,9 @@ class Runtime:
         #: The AgileX base: its frames read each tick; the autopilot's skid-steer outputs driven onto it at 50 Hz.
         self.can_reader = CanReader(can_bus, clock, rc=mission.rc.source == "can") if can_bus is not None else None
         self.drive = DriveBridge(can_bus, clock) if can_bus is not None else None
+        #: A camera's obstacle distances: read each tick, each new scan sent on to the autopilot.
+        self.obstacles = ObstacleReceiver(obstacle_socket, clock) if obstacle_socket is not None else None
+        self.obstacle_forwarder = ObstacleForwarder(link, clock) if obstacle_socket is not None else None
         self.heartbeat = Heartbeat(link, clock, system_id=system_id)
         self.streams = StreamRequester(self.commander, rates_for(mission.vehicle))
         self.reader.on_reconnect = self.streams.restart
@@ -193,6 +199,8 @@ class Runtime:
         self.reader.drain()
         if self.can_reader is not None:
             self.can_reader.drain()
+        if self.obstacles is not None:
+            self.obstacles.drain()
         self.heading.service()
         self.rc.service()
         self.heartbeat.service()
@@ -217,6 +225,8 @@ class Runtime:
         self.route_keeper.service()
         if self.drive is not None:
             self.drive.in_control = self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
+        if self.obstacle_forwarder is not None:
+            self.obstacle_forwarder.service()
         self.commander.flush()
         self.mission_transfer.flush()
         self.ticks += 1

@@ -25,6 +25,8 @@ from executive.runtime import Runtime
 from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
+    import socket
+
     import can
 
     from executive.sim.faults import FaultInjector
@@ -50,6 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--snapshots", metavar="FILE", help="record every tick (node statuses, blackboard changes) for `executive replay`")
     p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
     p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
+    p.add_argument("--obstacles", metavar="URL", help="a camera's obstacle distances (JSON over UDP, udpin:HOST:PORT), sent on as OBSTACLE_DISTANCE")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-v info, -vv debug)")
     p.set_defaults(func=main)
 
@@ -162,6 +165,20 @@ def _open_can(spec: str) -> can.BusABC:
         raise NoVehicle(f"--can: {exc}") from exc
 
 
+def _obstacle_socket(spec: str | None, stack: contextlib.ExitStack) -> socket.socket | None:
+    """The bound socket of --obstacles (its URL checked already), closed with ``stack``; NoVehicle when it cannot be bound."""
+    if spec is None:
+        return None
+    from executive.io.obstacles import open_endpoint
+
+    try:
+        sock = open_endpoint(spec)
+    except OSError as exc:
+        raise NoVehicle(f"--obstacles: cannot listen on {spec}: {exc}") from exc
+    stack.callback(sock.close)
+    return sock
+
+
 def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
@@ -201,7 +218,15 @@ def main(args: argparse.Namespace) -> int:
         if faults is None:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)
+    if args.obstacles is not None:
+        from executive.io.obstacles import ObstacleSpecError, parse_endpoint
+
+        try:
+            parse_endpoint(args.obstacles)  # a usage error before anything is opened
+        except ObstacleSpecError as exc:
+            raise BadInput(f"--obstacles: {exc}") from exc
     with contextlib.ExitStack() as stack:
+        obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
         gcs_link = stack.enter_context(_gcs_link(args.gcs))
         journal, snapshots = _recorders(args, clock, stack)
@@ -223,6 +248,7 @@ def main(args: argparse.Namespace) -> int:
             journal=journal,
             snapshots=snapshots,
             can_bus=can_bus,
+            obstacle_socket=obstacle_socket,
         )
         stack.callback(runtime.close)
         if not runtime.connect(args.connect_timeout * clock.speedup):

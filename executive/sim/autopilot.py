@@ -24,6 +24,7 @@ from typing import ClassVar
 from executive.clock import Clock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.sim.mission_store import MissionStore, StoredCommand
+from executive.sim.proximity import Proximity
 from executive.sim.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.vehicles import PROFILES, VehicleProfile
 
@@ -159,6 +160,7 @@ class ArduPilotSim(ABC):
         self._prearm_reported_at = -math.inf
         self._text_id = 0
         self.mission = MissionStore(self, self._emit, self._text)
+        self.proximity = Proximity()  # a MAVLink proximity sensor (PRX1_TYPE 2): what OBSTACLE_DISTANCE tells
         self._builders = self._message_builders()
         self._handlers = self._message_handlers()
         self._commands = self._command_handlers()
@@ -260,6 +262,7 @@ class ArduPilotSim(ABC):
             "COMMAND_INT": self._on_command,
             "SET_MODE": self._on_set_mode,
             **dict.fromkeys(MissionStore.MESSAGES, self.mission.handle),
+            "OBSTACLE_DISTANCE": lambda msg: self.proximity.handle(msg, self.elapsed_s),
         }
 
     def _command_handlers(self) -> dict[int, Callable[[Command], int]]:

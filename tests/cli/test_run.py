@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -70,6 +71,23 @@ def test_a_broken_mission_exits_2_before_anything_starts(tmp_path, capsys):
 def test_no_vehicle_exits_3(capsys):
     assert main(["run", str(ROOT / "missions/rover_square.yaml"), "--mavlink", "udpout:127.0.0.1:9", "--connect-timeout", "0.3"]) == 3
     assert "no heartbeat from an autopilot" in capsys.readouterr().err
+
+
+def test_a_bad_obstacles_url_exits_2_before_anything_starts(capsys):
+    assert main(["run", str(ROOT / "missions/rover_square.yaml"), "--obstacles", "tcp:0.0.0.0:14600", "--socket", "none"]) == 2
+    err = capsys.readouterr().err
+    assert "--obstacles: 'tcp:0.0.0.0:14600': expected udpin:HOST:PORT" in err
+    assert "simulated" not in err
+
+
+def test_an_obstacles_port_in_use_exits_3_before_the_vehicle_is_started(capsys):
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        port = taken.getsockname()[1]
+        assert main(["run", str(ROOT / "missions/rover_square.yaml"), "--obstacles", f"udpin:127.0.0.1:{port}", "--socket", "none"]) == 3
+    err = capsys.readouterr().err
+    assert f"--obstacles: cannot listen on udpin:127.0.0.1:{port}" in err
+    assert "simulated" not in err
 
 
 def test_runs_against_a_simulator_in_another_process(tmp_path):

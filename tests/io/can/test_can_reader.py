@@ -175,7 +175,8 @@ class BrokenBus(can.BusABC):
 
 
 def test_a_bus_error_is_counted_not_raised(clock: ManualClock) -> None:
-    reader = CanReader(BrokenBus(), clock)
-    assert reader.drain() == 0
-    assert reader.drain() == 0
+    with BrokenBus() as broken:
+        reader = CanReader(broken, clock)
+        assert reader.drain() == 0
+        assert reader.drain() == 0
     assert bb("/base/bus_errors") == 2

@@ -57,8 +57,9 @@ def autopilot() -> Autopilot:
 
 
 @pytest.fixture
-def bus(clock: ManualClock) -> RecordingBus:
-    return RecordingBus(clock)
+def bus(clock: ManualClock) -> Iterator[RecordingBus]:
+    with RecordingBus(clock) as recording:
+        yield recording
 
 
 @pytest.mark.parametrize(
@@ -197,10 +198,11 @@ def test_send_errors_are_counted_not_raised(clock: ManualClock) -> None:
         def send(self, msg: can.Message, timeout: float | None = None) -> None:
             raise can.CanOperationError("No buffer space available [Error Code 105]")
 
-    bridge = DriveBridge(FullBus(clock), clock)
-    assert bridge.service()
-    clock.advance(0.02)
-    assert bridge.service()
+    with FullBus(clock) as full:
+        bridge = DriveBridge(full, clock)
+        assert bridge.service()
+        clock.advance(0.02)
+        assert bridge.service()
     assert py_trees.blackboard.Blackboard.get("/base/send_errors") == 2
     assert bridge.sent == 0
 
