@@ -206,7 +206,8 @@ class RouteEditSwitch(SwitchWatcher):
 
     Knob in [-100, -26]: clear the route; [26, 100]: remove the current waypoint (the one the
     vehicle heads for, the last once the route is done); [-25, 25]: add a waypoint where the vehicle
-    is, at the end. Adding needs a position the EKF vouches for, no older than
+    is, at the end. A flip while switch B is down does nothing (the thesis's guard against an edit
+    by a slip of the hand). Adding needs a position the EKF vouches for, no older than
     ``max_position_age_s``. The new route goes to the mission state (``set_route``); refusals are
     said in the feedback and change nothing.
     """
@@ -222,6 +223,9 @@ class RouteEditSwitch(SwitchWatcher):
 
     def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
         if position is not DOWN:
+            return
+        if switches.swb is DOWN:
+            self.report(f"{self.label} DOWN: ignored while switch B is down")
             return
         knob = switches.knob
         if knob is None:

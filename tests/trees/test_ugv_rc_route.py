@@ -488,6 +488,22 @@ def test_one_edit_per_flip_of_switch_a(rig: Rig) -> None:
     assert rig.take() == [("upload", 1), ("read back",), ("upload", 2), ("read back",)]
 
 
+def test_switch_a_does_nothing_while_switch_b_is_down(rig: Rig) -> None:
+    rig.rc(swb=DOWN)
+    rig.tick()
+    rig.rc(swa=DOWN)
+    rig.tick()
+    assert rig.feedback("Switch A: edit the route") == "switch A DOWN: ignored while switch B is down"
+    rig.rc(swb=UP)
+    assert rig.run(5) == [Status.RUNNING] * 5  # switch B up again: still the same flip, still nothing
+    assert rig.waypoints() == [] and rig.take() == []
+    rig.rc(swa=UP)
+    rig.tick()
+    rig.rc(swa=DOWN)
+    rig.tick()
+    assert rig.waypoints() == [START]
+
+
 def test_a_failed_upload_is_tried_again_later_and_auto_waits_for_it(rig: Rig) -> None:
     rig.mission_answers = False
     record(rig, ahead(10.0))
