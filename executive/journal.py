@@ -3,7 +3,8 @@
 One row per run; its lifecycle transitions, leg progress, samples and events. The database is in
 WAL mode with full sync, and every state change and sample is committed at once: once the
 executive has said it, it is on the disk. ``executive run --resume`` reads the last unfinished run
-of the same mission back: the leg to continue from and the samples already taken.
+of the same mission back: the leg to continue from, the samples already taken and the route as
+the operator last edited it (RC switches, ``ctl route``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ from typing import Any
 
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission
+from executive.mission.model import Home, Mission, Waypoint
+from executive.mission.route import Route
 from executive.state import Sample, SampleRead
 
 SCHEMA = """
@@ -42,16 +44,21 @@ CREATE TABLE IF NOT EXISTS samples (
 CREATE TABLE IF NOT EXISTS events (
     run INTEGER NOT NULL REFERENCES runs(id), t REAL NOT NULL, wall REAL NOT NULL, kind TEXT NOT NULL, text TEXT NOT NULL
 );
+CREATE TABLE IF NOT EXISTS routes (
+    run INTEGER NOT NULL REFERENCES runs(id), t REAL NOT NULL, wall REAL NOT NULL, leg INTEGER NOT NULL, home TEXT,
+    waypoints TEXT NOT NULL, reason TEXT NOT NULL
+);
 """
 
 
 @dataclass(frozen=True)
 class ResumePoint:
-    """Where an unfinished run stopped: the leg to continue from and the samples it had taken."""
+    """Where an unfinished run stopped: the leg to continue from, the samples it had taken, and its route if it was edited."""
 
     run: int
     leg_index: int
     samples: tuple[Sample, ...]
+    route: Route | None = None  # None: the mission file's own
 
 
 def mission_hash(mission: Mission) -> str:
@@ -83,9 +90,10 @@ class Journal:
         return self.run
 
     def attach(self, state: MissionState) -> None:
-        """Record the state's transitions and samples as they happen."""
+        """Record the state's transitions, samples and route edits as they happen."""
         state.listeners.append(self._on_transition)
         state.sample_listeners.append(self._on_sample)
+        state.route_listeners.append(self._on_route)
 
     def observe_leg(self, state: MissionState, lat: float | None, lon: float | None) -> None:
         """Called every tick: records the leg when it changes (with where the vehicle is)."""
@@ -114,8 +122,21 @@ class Journal:
         run = row[0]
         if self._db.execute("SELECT ended FROM runs WHERE id = ?", (run,)).fetchone()[0] is not None:
             return None
-        leg = self._db.execute("SELECT MAX(leg) FROM legs WHERE run = ?", (run,)).fetchone()[0] or 0
-        return ResumePoint(run, leg, self.samples(run))
+        # the latest word on the leg: a leg change, or a route edit (which may renumber the legs)
+        latest = self._db.execute(
+            "SELECT leg FROM (SELECT t, leg, 0 AS edit, rowid AS n FROM legs WHERE run = ? "
+            "UNION ALL SELECT t, leg, 1 AS edit, rowid AS n FROM routes WHERE run = ?) ORDER BY t DESC, edit ASC, n DESC LIMIT 1",
+            (run, run),
+        ).fetchone()
+        return ResumePoint(run, latest[0] if latest else 0, self.samples(run), self.route(run))
+
+    def route(self, run: int) -> Route | None:
+        """The run's route as last edited (None: never edited)."""
+        row = self._db.execute("SELECT leg, home, waypoints FROM routes WHERE run = ? ORDER BY rowid DESC LIMIT 1", (run,)).fetchone()
+        if row is None:
+            return None
+        leg, home, waypoints = row
+        return Route(tuple(Waypoint.model_validate(w) for w in json.loads(waypoints)), leg, Home.model_validate_json(home) if home else None)
 
     def samples(self, run: int) -> tuple[Sample, ...]:
         rows = self._db.execute("SELECT leg, lat, lon, started, finished, reads FROM samples WHERE run = ? ORDER BY leg", (run,))
@@ -141,6 +162,10 @@ class Journal:
             "legs": self._rows("SELECT t, leg, lat, lon FROM legs WHERE run = ? ORDER BY rowid", run),
             "samples": [asdict(s) for s in self.samples(run)],
             "events": self._rows("SELECT t, kind, text FROM events WHERE run = ? ORDER BY rowid", run),
+            "routes": [
+                {"t": r["t"], "leg": r["leg"], "waypoints": len(json.loads(r["waypoints"])), "reason": r["reason"]}
+                for r in self._rows("SELECT t, leg, waypoints, reason FROM routes WHERE run = ? ORDER BY rowid", run)
+            ],
         }
 
     def runs(self) -> list[int]:
@@ -156,6 +181,13 @@ class Journal:
             reads = json.dumps([asdict(r) for r in sample.reads])
             row = {"run": self.run, "leg": sample.leg_index, "lat": sample.lat, "lon": sample.lon}
             self._insert("samples", **row, started=sample.started, finished=sample.finished, reads=reads)
+
+    def _on_route(self, route: Route, reason: str) -> None:
+        if self.run is not None:
+            waypoints = json.dumps([w.model_dump(mode="json", exclude_defaults=True) for w in route.waypoints])
+            home = route.home.model_dump_json() if route.home is not None else None
+            row = {"run": self.run, "t": self._clock.now(), "wall": time.time(), "leg": route.current}
+            self._insert("routes", **row, home=home, waypoints=waypoints, reason=reason)
 
     def _insert(self, table: str, **row: Any) -> None:
         names = ", ".join(row)

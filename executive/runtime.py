@@ -246,6 +246,10 @@ class Runtime:
             self._resume = resume
             self.mission_state.start()
             if resume is not None:
+                if resume.route is not None:  # the operator had edited it: that is the route being driven
+                    route = resume.route
+                    reason = "the route as last edited, from the journal"
+                    self.mission_state.set_route(route.waypoints, reason, leg_index=route.current, home=route.home)
                 self.mission_state.continue_from(resume.leg_index, resume.samples)
         outcome = Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
         next_tick = self.clock.now()

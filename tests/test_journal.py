@@ -6,8 +6,11 @@ import sqlite3
 
 import pytest
 
+from executive.cli.report import render
 from executive.journal import Journal, mission_hash
 from executive.mission.lifecycle import MissionState
+from executive.mission.model import Home, Waypoint
+from executive.mission.route import Route
 from executive.state import Sample, SampleRead
 
 
@@ -66,6 +69,48 @@ def test_an_unfinished_run_resumes_at_its_last_leg_with_its_samples(journal, clo
     after_crash.close()
     assert (point.run, point.leg_index) == (run, 2)
     assert point.samples == (sample(0),)
+    assert point.route is None  # never edited: the mission file's route
+
+
+def test_an_edited_route_is_recorded_and_resumed_as_edited(journal, clock, square_mission):
+    state = MissionState()
+    journal.attach(state)
+    state.upload(square_mission)
+    run = journal.begin_run(square_mission)
+    state.start()
+    state.advance_leg()
+    journal.observe_leg(state, None, None)  # heading for waypoint 2 of 4
+    clock.advance(3.0)
+    first, *_, last = square_mission.waypoints
+    extra = Waypoint(lat=47.4, lon=8.55, name="added")
+    state.set_route([first, extra, last], "ctl route: remove 2 and 3, add one")  # renumbers: heading for waypoint 2 of 3
+    home = Home(lat=47.39, lon=8.54, heading_deg=90.0)
+    clock.advance(1.0)
+    state.set_route([first, extra, last], "switch A: home here", leg_index=2, home=home)
+    after_crash = reopen(journal, clock)
+    point = after_crash.resume_point(square_mission)
+    report = after_crash.report(run)
+    after_crash.close()
+    assert point.route == Route((first, extra, last), 2, home)
+    assert point.leg_index == 2  # the route edit is the latest word on the leg
+    assert [(r["leg"], r["waypoints"], r["reason"]) for r in report["routes"]] == [
+        (1, 3, "ctl route: remove 2 and 3, add one"),
+        (2, 3, "switch A: home here"),
+    ]
+    assert "route edits (2):" in render(report)
+
+
+def test_a_leg_change_after_an_edit_is_where_it_resumes(journal, clock, square_mission):
+    state = MissionState()
+    journal.attach(state)
+    state.upload(square_mission)
+    journal.begin_run(square_mission)
+    state.start()
+    state.set_route(square_mission.waypoints[:2], "switch A: remove")
+    state.advance_leg()
+    journal.observe_leg(state, None, None)  # same clock time as the edit: recorded after it
+    point = journal.resume_point(square_mission)
+    assert (point.leg_index, len(point.route)) == (1, 2)
 
 
 def test_a_finished_run_or_another_mission_is_not_resumed(journal, clock, square_mission):

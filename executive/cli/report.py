@@ -45,6 +45,9 @@ def render(report: dict[str, Any]) -> str:
         lines.append(
             f"  waypoint {sample['leg_index'] + 1} at {sample['lat']:.7f}, {sample['lon']:.7f}: {len(sample['reads'])} reads, mean {summary}"
         )
+    if report.get("routes"):
+        lines.append(f"route edits ({len(report['routes'])}):")
+        lines += [f"  [{r['t']:9.1f} s] {r['waypoints']} waypoints, heading for {r['leg'] + 1}: {r['reason']}" for r in report["routes"]]
     lines.append(f"events ({len(report['events'])}):")
     lines += [f"  [{e['t']:9.1f} s] {e['kind']}: {e['text']}" for e in report["events"]]
     return "\n".join(lines)

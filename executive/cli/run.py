@@ -182,7 +182,8 @@ def _obstacle_socket(spec: str | None, stack: contextlib.ExitStack) -> socket.so
 def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
-    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} with {len(resume.samples)} sample(s) already taken"
+    edited = f", on its route as last edited ({len(resume.route)} waypoints)" if resume.route is not None else ""
+    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} with {len(resume.samples)} sample(s) already taken{edited}"
 
 
 def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:

@@ -95,3 +95,28 @@ def test_replay_shows_the_recorded_tree(tmp_path, capsys):
     out = capsys.readouterr().out
     assert out.startswith("tick 500 at")
     assert "Go to waypoint -- leg" in out  # the leg being driven at that tick, with its distance
+
+
+def test_a_route_edited_before_a_crash_is_the_route_resumed(tmp_path, capsys):
+    db, sock = tmp_path / "journal.db", tmp_path / "ctl.sock"
+    square = str(ROOT / "missions" / "rover_square.yaml")
+    command = [sys.executable, "-m", "executive", "run", square, "--speedup", "40", "--journal", str(db)]
+    first = subprocess.Popen([*command, "--socket", str(sock)], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert first.stdout is not None
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and json.loads(first.stdout.readline())["leg"] < 2:  # heading for waypoint 2 of 4
+        pass
+    assert main(["ctl", "--socket", str(sock), "route", "remove", "3"]) == 0  # on the disk before the reply
+    capsys.readouterr()
+    first.send_signal(signal.SIGKILL)
+    first.communicate(timeout=10)
+
+    second = subprocess.Popen([*command, "--socket", "none", "--resume"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    _, err = second.communicate(timeout=90)
+    assert second.returncode == 0, err
+    assert "resuming run 1 at waypoint 2 with 0 sample(s) already taken, on its route as last edited (3 waypoints)" in err
+    crashed, resumed = report(db, 1, capsys), report(db, 2, capsys)
+    assert [r["waypoints"] for r in crashed["routes"]] == [3]
+    assert [r["waypoints"] for r in resumed["routes"]] == [3]  # restored, and recorded again for the next crash
+    assert resumed["outcome"] == "COMPLETED"
+    assert [leg["leg"] for leg in resumed["legs"]] == [1, 2, 3]  # waypoints 2 and 3 of the edited route, then done (4 waypoints: 4)
