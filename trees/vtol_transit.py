@@ -6,7 +6,8 @@
     ├── Pre-flight: wait for the EKF, arm (or wait for the operator to)
     ├── Guarded flight or hold (reactive selector)
     │   ├── Guarded flight: link alive? EKF ok? armed? RC not taking over? -> Flight:
-    │   │   ├── Take off (once): set GUIDED, NAV_TAKEOFF to vtol.takeoff_alt_m (EXTENDED_SYS_STATE IN_AIR, and the height)
+    │   │   ├── Take off (once): set GUIDED, NAV_TAKEOFF to vtol.takeoff_alt_m (EXTENDED_SYS_STATE IN_AIR, and the height;
+    │   │   │                    already in the air after a hold: DO_REPOSITION over where it is)
     │   │   ├── Hover point (once, with vtol.hover_enu): ENU -> NED -> lat/lon from home, DO_REPOSITION, flown as a multicopter
     │   │   ├── Wing-borne (once): transition to FW (EXTENDED_SYS_STATE FW) -> for each leg: go to (DO_REPOSITION)
     │   │   │                      -> vtol.land home: back to home (the local origin, DO_REPOSITION)
@@ -32,9 +33,9 @@ How ArduPlane (a QuadPlane) is flown here, and why:
 - The landing is not guarded: disarming is how it ends, and QRTL/QLAND are what ArduPlane's own
   failsafes do anyway; an executive hold would only stop it in the air.
 - Each phase done is not flown again when a guard recovers or the mission resumes (a hold in
-  QLOITER stops a wing-borne leg: the transition to FW comes again, then the same leg). A guard
-  failing during the climb is the exception: ArduPlane refuses NAV_TAKEOFF in the air, so the
-  mission fails and the vehicle is left in its safe mode.
+  QLOITER stops a wing-borne leg: the transition to FW comes again, then the same leg). A climb
+  stopped by a guard goes on with DO_REPOSITION straight above the aircraft at the take-off height
+  (ArduPlane refuses NAV_TAKEOFF in the air).
 """
 
 from __future__ import annotations

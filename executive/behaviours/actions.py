@@ -490,9 +490,13 @@ class TakeOff(CommandAction):
     is at least ``reached_fraction`` of ``alt_m``; FAILURE when refused or not there in time. On
     PX4 param7 is an altitude above sea level: home's plus ``alt_m`` (NaN, PX4's default take-off
     altitude, before home is known).
+
+    Already off the ground (a climb stopped by a failsafe hold, then resumed), ArduPilot refuses
+    NAV_TAKEOFF: the climb goes on with DO_REPOSITION straight above where the vehicle is (a QuadPlane
+    with Q_GUIDED_MODE=1 flies it on its lift motors, as it does the hover point).
     """
 
-    reads = ("/vehicle/landed_state", "/vehicle/position", "/vehicle/home")
+    reads = ("/vehicle/landed_state", "/vehicle/position", "/vehicle/home", blackboard.command_key("DO_REPOSITION"))
     command_name = "NAV_TAKEOFF"
 
     def __init__(self, alt_m: float, name: str | None = None, confirm_timeout_s: float = 60.0, reached_fraction: float = 0.95) -> None:
@@ -501,7 +505,12 @@ class TakeOff(CommandAction):
         self.reached_fraction = reached_fraction
 
     def request(self) -> int:
+        self.command_name = type(self).command_name
         if isinstance(self.commander.modes, ArduPilotModes):
+            position: GlobalPosition | None = self.get("/vehicle/position")
+            if self.get("/vehicle/landed_state") in ("TAKEOFF", "IN_AIR") and position is not None:
+                self.command_name = "DO_REPOSITION"  # its ack, not NAV_TAKEOFF's, says whether the climb was taken
+                return self.commander.reposition(position.lat, position.lon, self.alt_m)
             return self.commander.takeoff(self.alt_m)
         home: HomePosition | None = self.get("/vehicle/home")
         return self.commander.takeoff(home.alt_m + self.alt_m if home is not None else math.nan)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +22,7 @@ from executive.io.mavlink.modes import ArduPilotModes
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.runtime import explain_failure
+from executive.runtime import Outcome, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, HomePosition
 from executive.vehicles import PLANE_MODES, PROFILES
 
@@ -425,6 +426,26 @@ def test_ekf_loss_holds_by_the_vtol_state_then_the_same_phase_goes_on(
     assert transit.run(3000)[-1] == S
 
 
+def test_a_climb_stopped_by_a_failsafe_goes_on_above_the_same_spot_once_it_recovers(make_transit: MakeTransit) -> None:
+    transit = make_transit(vtol_mission(hover=HOVER))
+    transit.run_until_command(("takeoff", 30.0))
+    transit.run(6)
+    assert 0.0 < transit.plane.alt < 30.0 and transit.plane.landed == "TAKEOFF"
+    transit.vehicle.set(vehicle__ekf=EKF_LOST)
+    before = len(transit.plane.commands)
+    assert transit.run(20) == [R] * 20
+    assert transit.plane.commands[before:] == [("mode", "QLOITER")]
+    held_at = transit.plane.alt
+    transit.vehicle.set(vehicle__ekf=EKF_READY)
+    transit.run(3)
+    # GUIDED again, then (NAV_TAKEOFF being refused in the air) DO_REPOSITION over the spot it is hovering on, at 30 m
+    assert transit.plane.commands[before + 1 :] == [("mode", "GUIDED"), ("reposition", 0, 0, 30.0)]
+    assert transit.plane.alt > held_at
+    transit.run_until_command(HOVER_TO)  # at 30 m: on to the hover point
+    assert transit.plane.alt == pytest.approx(30.0)
+    assert transit.run(3000)[-1] == S
+
+
 def test_an_rc_take_over_sends_nothing_while_the_pilot_has_it_then_the_same_leg_goes_on(make_transit: MakeTransit) -> None:
     transit = make_transit(vtol_mission())
     transit.run_until_command(LEGS[0])
@@ -486,18 +507,33 @@ class Recorder:
         pass
 
 
-def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_each_waypoint_and_lands_at_home() -> None:
+@dataclass
+class Flight:
+    """How the example transit went on the simulated QuadPlane."""
+
+    mission: Mission
+    outcome: Outcome
+    recorder: Recorder
+    end: dict[str, Any]
+    vehicle_s: float
+    wall_s: float
+
+
+def fly_the_example(faults: list[dict[str, Any]] | None = None) -> Flight:
+    """``missions/vtol_transit.yaml`` on the simulated QuadPlane over loopback UDP at 50x, with ``faults`` injected."""
     from executive.io.mavlink.link import PymavlinkLink
     from executive.runtime import Runtime
     from executive.sim import SimServer
+    from executive.sim.faults import FaultInjector, FaultPlan
 
     mission = load_mission(ROOT / "missions" / "vtol_transit.yaml")
-    assert mission.home is not None and mission.simulator is not None and mission.vtol is not None and mission.vtol.hover_enu is not None
+    assert mission.home is not None and mission.simulator is not None
     clock = ScaledClock(50.0)
     wall = time.monotonic()
     home = (mission.home.lat, mission.home.lon, mission.home.heading_deg)
+    injector = FaultInjector(FaultPlan.model_validate({"version": 1, "faults": faults}), clock) if faults else None
     sim_options = {"ekf_ready_after_s": mission.simulator.ekf_ready_after_s, "q_guided_mode": mission.simulator.q_guided_mode}
-    with SimServer("vtol", clock=clock, home=home, **sim_options) as sim:  # type: ignore[arg-type]
+    with SimServer("vtol", clock=clock, home=home, faults=injector, **sim_options) as sim:  # type: ignore[arg-type]
         link = PymavlinkLink(sim.url_for_client)
         try:
             runtime = Runtime(mission, link, clock)
@@ -512,8 +548,14 @@ def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_eac
                 end = {"armed": ap.armed, "landed": ap.landed_state, "off_home_m": ap.vehicle.distance_to(mission.home.lat, mission.home.lon)}
         finally:
             link.close()
-    wall_s = time.monotonic() - wall
-    assert str(outcome.status) == "COMPLETED", outcome.reason
+    return Flight(mission, outcome, recorder, end, vehicle_s, time.monotonic() - wall)
+
+
+def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_each_waypoint_and_lands_at_home() -> None:
+    flight = fly_the_example()
+    mission, recorder, end = flight.mission, flight.recorder, flight.end
+    assert mission.home is not None and mission.vtol is not None and mission.vtol.hover_enu is not None
+    assert str(flight.outcome.status) == "COMPLETED", flight.outcome.reason
     assert recorder.vtol_states[recorder.vtol_states.index("MC") :] == ["MC", "TRANSITION_TO_FW", "FW", "MC"]
     hover = mission.vtol.hover_enu
     assert min(math.dist(global_to_local(*HOME, lat, lon), (hover.north_m, hover.east_m)) for _, lat, lon, _ in recorder.positions) < 2.0
@@ -521,4 +563,13 @@ def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_eac
         closest = min(math.dist(global_to_local(wp.lat, wp.lon, lat, lon), (0, 0)) for _, lat, lon, _ in recorder.positions)
         assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
     assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 2.5
-    assert vehicle_s < 180.0 and wall_s < 8.0
+    assert flight.vehicle_s < 180.0 and flight.wall_s < 8.0
+
+
+def test_the_simulated_quadplane_loses_its_ekf_during_the_climb_and_the_climb_goes_on_once_it_is_back() -> None:
+    # the climb starts ~7 s after boot (EKF ready at 5 s, arming, GUIDED) at ~2.5 m/s: at 10 s it is a few metres up
+    flight = fly_the_example([{"kind": "ekf_degradation", "at_s": 10.0, "for_s": 6.0, "variance": 1.2, "lose_position": True}])
+    assert str(flight.outcome.status) == "COMPLETED", flight.outcome.reason
+    assert flight.recorder.vtol_states[flight.recorder.vtol_states.index("MC") :] == ["MC", "TRANSITION_TO_FW", "FW", "MC"]
+    assert max(alt for *_, alt in flight.recorder.positions) == pytest.approx(40.0, abs=1.0)  # the legs' height: the flight went on
+    assert (flight.end["armed"], flight.end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and flight.end["off_home_m"] < 2.5
