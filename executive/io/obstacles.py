@@ -25,7 +25,6 @@ import json
 import logging
 import math
 import socket
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -175,8 +174,8 @@ class ObstacleReceiver:
                 self.rejected += 1
                 self._bb.set("/obstacles/rejected", self.rejected)
                 self._bb.set("/obstacles/last_error", str(exc))
-                if time.monotonic() - self._last_warning >= 5.0:  # a broken camera must not flood the log
-                    self._last_warning = time.monotonic()
+                if now - self._last_warning >= 5.0:  # a broken camera must not flood the log
+                    self._last_warning = now
                     log.warning("obstacle scan dropped (%d so far): %s", self.rejected, exc)
         if latest is not None:
             self._bb.set("/obstacles/scan", latest)
