@@ -86,14 +86,6 @@ class QuadPlaneModel(LocalFrame):
     # -- state -------------------------------------------------------------------------------
 
     @property
-    def lat(self) -> float:
-        return self._latlon(self._n, self._e)[0]
-
-    @property
-    def lon(self) -> float:
-        return self._latlon(self._n, self._e)[1]
-
-    @property
     def alt_m(self) -> float:
         """Height above the start point (>= 0)."""
         return self._h

@@ -78,7 +78,21 @@ BOAT_LIMITS = Limits(accel_m_s2=0.6, decel_m_s2=1.0, turn_rate_deg_s=45.0, drift
 
 
 class LocalFrame:
-    """A local flat-earth frame (north, east in metres) about a start point: adequate over a simulated mission's few km."""
+    """A local flat-earth frame (north, east in metres) about a start point: adequate over a simulated mission's few km.
+
+    Subclasses keep their position in ``_n``, ``_e`` (metres from the start point).
+    """
+
+    _n: float
+    _e: float
+
+    @property
+    def lat(self) -> float:
+        return self._latlon(self._n, self._e)[0]
+
+    @property
+    def lon(self) -> float:
+        return self._latlon(self._n, self._e)[1]
 
     def _init_frame(self, lat: float, lon: float) -> None:
         self._lat0, self._lon0 = lat, lon
@@ -121,14 +135,6 @@ class SurfaceVehicle(LocalFrame):
         self._drift = (limits.drift_m_s * math.cos(toward), limits.drift_m_s * math.sin(toward))
 
     # -- state ---------------------------------------------------------------------------------
-
-    @property
-    def lat(self) -> float:
-        return self._latlon(self._n, self._e)[0]
-
-    @property
-    def lon(self) -> float:
-        return self._latlon(self._n, self._e)[1]
 
     @property
     def alt_m(self) -> float:
