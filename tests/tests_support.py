@@ -1,4 +1,4 @@
-"""Message factories for tests: MAVLink peers whose messages look as if they came off the wire."""
+"""Test helpers: MAVLink peers whose messages look as if they came off the wire, fake links and vehicles, a runtime over a real socket."""
 
 from __future__ import annotations
 
@@ -9,11 +9,13 @@ import py_trees
 from py_trees.common import Status
 
 from executive import blackboard
-from executive.clock import ManualClock
+from executive.clock import ManualClock, ScaledClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavlink
-from executive.io.mavlink.link import MemoryLink
+from executive.io.mavlink.link import MemoryLink, PymavlinkLink
 from executive.mission.lifecycle import MissionState
+from executive.mission.model import Mission
+from executive.runtime import Outcome, Runtime
 
 
 class Peer:
@@ -97,3 +99,17 @@ def mission_errors(text: str, filename: str = "m.yaml") -> list[str]:
     except MissionError as exc:
         return [str(e) for e in exc.errors]
     return []
+
+
+def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> tuple[Runtime, Outcome]:
+    """A runtime on a real link to ``url`` (a simulator), connected and run to the mission's end; the link closed after.
+
+    ``options`` go to :class:`Runtime` (progress, can_bus, obstacle_socket...).
+    """
+    link = PymavlinkLink(url)
+    try:
+        runtime = Runtime(mission, link, clock, **options)
+        assert runtime.connect(10.0 * clock.speedup)
+        return runtime, runtime.run()
+    finally:
+        link.close()

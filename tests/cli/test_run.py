@@ -19,6 +19,7 @@ from executive.io.mavlink.dialect import mavutil
 from executive.io.mavlink.link import load_signing_key
 from executive.mission.loader import load_mission
 from executive.sim import SimServer
+from tests_support import run_over
 
 ROOT = Path(__file__).parents[2]
 MISSIONS = sorted((ROOT / "missions").glob("*.yaml"))
@@ -110,19 +111,11 @@ def test_runs_against_a_simulator_in_another_process(tmp_path):
 
 def test_in_process_run_against_a_sim_server(square_mission):
     """The runtime over a real loopback socket, in one process: what `run` does without --mavlink."""
-    from executive.io.mavlink.link import PymavlinkLink
-    from executive.runtime import Runtime
 
     clock = ScaledClock(50.0)
     first = square_mission.waypoints[0]
     with SimServer("rover", clock=clock, home=(first.lat - 0.0002, first.lon, 0.0)) as sim:
-        link = PymavlinkLink(sim.url_for_client)
-        try:
-            runtime = Runtime(square_mission, link, clock)
-            assert runtime.connect(10.0 * clock.speedup)
-            outcome = runtime.run()
-        finally:
-            link.close()
+        _, outcome = run_over(sim.url_for_client, square_mission, clock)
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert os.environ.get("MAVLINK20") == "1"
 
@@ -157,8 +150,6 @@ def test_an_unreadable_signing_key_is_bad_input(tmp_path, capsys):
 
 def test_a_mission_completes_over_a_lossy_link(square_mission):
     """10 % of datagrams lost each way and 5 % reordered: retries and guards carry the mission through."""
-    from executive.io.mavlink.link import PymavlinkLink
-    from executive.runtime import Runtime
     from lossy_udp import LossyUdpProxy
 
     clock = ScaledClock(25.0)
@@ -167,13 +158,7 @@ def test_a_mission_completes_over_a_lossy_link(square_mission):
         SimServer("rover", clock=clock, home=(first.lat - 0.0002, first.lon, 0.0)) as sim,
         LossyUdpProxy(sim.port, drop=0.1, reorder=0.05, seed=3, lifetime_s=30.0) as proxy,
     ):
-        link = PymavlinkLink(f"udpout:127.0.0.1:{proxy.port}")
-        try:
-            runtime = Runtime(square_mission, link, clock)
-            assert runtime.connect(10.0 * clock.speedup)
-            outcome = runtime.run()
-        finally:
-            link.close()
+        runtime, outcome = run_over(f"udpout:127.0.0.1:{proxy.port}", square_mission, clock)
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert proxy.up.dropped > 0 and proxy.down.dropped > 0
     assert runtime.reader.health.lost > 0  # the reader saw the gaps

@@ -26,7 +26,7 @@ from executive.runtime import Runtime, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SamplerState
 from executive.state import Sample as SampleRecord
 from executive.vehicles import PROFILES, ROVER_MODES
-from tests_support import ack
+from tests_support import ack, run_over
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 ROOT = Path(__file__).parents[2]
@@ -462,7 +462,6 @@ def test_a_goto_sample_mission_without_a_sampling_section_gets_the_default_sampl
 
 def test_the_example_mission_samples_every_sample_point_once_in_the_simulator(caplog):
     """missions/asv_sampling.yaml with its event file (an EKF dropout on the way), over real UDP at 50x."""
-    from executive.io.mavlink.link import PymavlinkLink
     from executive.sim import SimServer
     from executive.sim.faults import FaultInjector, load_faults
 
@@ -473,13 +472,7 @@ def test_the_example_mission_samples_every_sample_point_once_in_the_simulator(ca
     faults = FaultInjector(load_faults(path.parent / mission.simulator.events, "boat"), clock)
     caplog.set_level(logging.INFO, logger="executive.io.mavlink.reader")
     with SimServer("boat", clock=clock, home=(mission.home.lat, mission.home.lon, mission.home.heading_deg), faults=faults) as sim:
-        link = PymavlinkLink(sim.url_for_client)
-        try:
-            runtime = Runtime(mission, link, clock)
-            assert runtime.connect(10.0 * clock.speedup)
-            outcome = runtime.run()
-        finally:
-            link.close()
+        runtime, outcome = run_over(sim.url_for_client, mission, clock)
         final_mode, armed = sim.autopilot.mode, sim.autopilot.armed
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert (final_mode, armed) == ("LOITER", True)

@@ -20,7 +20,6 @@ import trees
 from executive import geo
 from executive.clock import ManualClock, ScaledClock
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
-from executive.io.mavlink.link import PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionItemReached, MissionTransfer
 from executive.io.mavlink.modes import ArduPilotModes
 from executive.io.rc import RcReader
@@ -34,7 +33,7 @@ from executive.sim.faults import FaultInjector, RcInput, load_faults
 from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
 from executive.vehicles import ROVER_MODES
-from tests_support import ack
+from tests_support import ack, run_over
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 PWM = {UP: 1000, MIDDLE: 1500, DOWN: 2000}
@@ -717,13 +716,7 @@ def scenario() -> Iterator[tuple[Observer, Runtime, Outcome, SimServer]]:
     observer = Observer(plan, clock, mission.rc.switch_channels.swa)
     home = (mission.home.lat, mission.home.lon, mission.home.heading_deg)
     with SimServer("bunker", clock=clock, home=home, faults=observer, ekf_ready_after_s=mission.simulator.ekf_ready_after_s, period_s=0.002) as sim:
-        link = PymavlinkLink(sim.url_for_client)
-        try:
-            runtime = Runtime(mission, link, clock)
-            assert runtime.connect(10.0 * clock.speedup)
-            outcome = runtime.run()
-        finally:
-            link.close()
+        runtime, outcome = run_over(sim.url_for_client, mission, clock)
         yield observer, runtime, outcome, sim
 
 

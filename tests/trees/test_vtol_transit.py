@@ -25,6 +25,7 @@ from executive.mission.model import Mission
 from executive.runtime import Outcome, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, HomePosition
 from executive.vehicles import PLANE_MODES, PROFILES
+from tests_support import run_over
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 _M = mavlink
@@ -521,8 +522,6 @@ class Flight:
 
 def fly_the_example(faults: list[dict[str, Any]] | None = None) -> Flight:
     """``missions/vtol_transit.yaml`` on the simulated QuadPlane over loopback UDP at 50x, with ``faults`` injected."""
-    from executive.io.mavlink.link import PymavlinkLink
-    from executive.runtime import Runtime
     from executive.sim import SimServer
     from executive.sim.faults import FaultInjector, FaultPlan
 
@@ -534,20 +533,13 @@ def fly_the_example(faults: list[dict[str, Any]] | None = None) -> Flight:
     injector = FaultInjector(FaultPlan.model_validate({"version": 1, "faults": faults}), clock) if faults else None
     sim_options = {"ekf_ready_after_s": mission.simulator.ekf_ready_after_s, "q_guided_mode": mission.simulator.q_guided_mode}
     with SimServer("vtol", clock=clock, home=home, faults=injector, **sim_options) as sim:  # type: ignore[arg-type]
-        link = PymavlinkLink(sim.url_for_client)
-        try:
-            runtime = Runtime(mission, link, clock)
-            recorder = Recorder(clock)
-            runtime.progress = recorder  # type: ignore[assignment]
-            assert runtime.connect(10.0 * clock.speedup)
-            started = clock.now()
-            outcome = runtime.run()
-            vehicle_s = clock.now() - started
-            with sim.lock:
-                ap = sim.autopilot
-                end = {"armed": ap.armed, "landed": ap.landed_state, "off_home_m": ap.vehicle.distance_to(mission.home.lat, mission.home.lon)}
-        finally:
-            link.close()
+        recorder = Recorder(clock)
+        started = clock.now()
+        _, outcome = run_over(sim.url_for_client, mission, clock, progress=recorder)
+        vehicle_s = clock.now() - started  # from connecting: a few seconds more than the run itself
+        with sim.lock:
+            ap = sim.autopilot
+            end = {"armed": ap.armed, "landed": ap.landed_state, "off_home_m": ap.vehicle.distance_to(mission.home.lat, mission.home.lon)}
     return Flight(mission, outcome, recorder, end, vehicle_s, time.monotonic() - wall)
 
 
