@@ -21,7 +21,7 @@ from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.progress import Progress
-from executive.runtime import Runtime, SeveralAutopilots
+from executive.runtime import SURVEY_S, Runtime, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
@@ -258,7 +258,8 @@ def main(args: argparse.Namespace) -> int:
         )
         stack.callback(runtime.close)
         try:
-            connected = runtime.connect(args.connect_timeout * clock.speedup)
+            # the built-in simulator is alone on its link: no other autopilot to listen for
+            connected = runtime.connect(args.connect_timeout * clock.speedup, survey_s=SURVEY_S if args.mavlink else 0.0)
         except SeveralAutopilots as exc:
             print(f"executive: run: {exc}", file=sys.stderr)
             return EXIT_NO_VEHICLE
