@@ -152,9 +152,7 @@ def _filler(mav: mavlink.MAVLink, name: str, boot_ms: int, t_us: int) -> MAVLink
 
 
 class SimLoop:
-    """The runtime and the mission's simulated vehicle in one loop on a manual clock, joined by in-memory links.
-
-    The vehicle starts at the mission's home (else :data:`HOME`).
+    """The runtime and the built-in simulated rover in one loop on a manual clock, joined by in-memory links.
 
     Each :meth:`step` moves the vehicle one tick period, packs what it sends (its telemetry and a
     companion port's other streams, :data:`FILLER_RATES`) into bytes as on the wire, parses them
@@ -166,8 +164,7 @@ class SimLoop:
         self.clock = ManualClock(0.0)
         self.link = MemoryLink()
         self.period_s = 1.0 / rate_hz
-        home = (mission.home.lat, mission.home.lon, mission.home.heading_deg) if mission.home else HOME
-        self.ap: ArduPilotSim = make_autopilot(mission.vehicle, self.clock, home, ekf_ready_after_s=ekf_ready_after_s)
+        self.ap: ArduPilotSim = make_autopilot("rover", self.clock, HOME, ekf_ready_after_s=ekf_ready_after_s)
         self._wire = _Wire()
         self._ap_mav = mavlink.MAVLink(self._wire, srcSystem=1, srcComponent=AUTOPILOT_COMPONENT)
         self._exec_mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)

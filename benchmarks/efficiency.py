@@ -3,7 +3,8 @@
 In process, lock-step on a manual clock (deterministic): the example missions ``rover_square`` and
 ``boat_survey`` on their simulated vehicle, from the mission's home.
 
-- GUIDED: the executive runs the mission (its ``waypoints`` tree); timed from the autopilot entering
+- GUIDED: the executive runs the mission (its ``waypoints`` tree, its own tick loop, on
+  :class:`executive.testing.Lockstep`); timed from the autopilot entering
   GUIDED to the vehicle within the mission's acceptance radius of the last waypoint.
 - AUTO: the same waypoints uploaded as a mission (NAV_WAYPOINTs, as a ground station would), the
   vehicle armed and put in AUTO; timed from entering AUTO to the same point.
@@ -13,16 +14,17 @@ Both run at the vehicle's default speed (no waypoint sets one). The row is GUIDE
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks.common import Row, SimLoop
+from benchmarks.common import Row
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.sim import ArduPilotSim, make_autopilot
+from executive.sim.options import simulated_home
+from executive.testing import Lockstep
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 TARGET_RATIO = 1.10
@@ -37,11 +39,6 @@ class Timing:
 
     mode: str
     seconds: float
-
-
-def _home(mission: Mission) -> tuple[float, float, float]:
-    assert mission.home is not None, "an efficiency mission starts at its home"
-    return mission.home.lat, mission.home.lon, mission.home.heading_deg
 
 
 class _Route:
@@ -63,38 +60,42 @@ class _Route:
         return self.next > last
 
 
-def _time_in_mode(clock: ManualClock, ap: ArduPilotSim, mission: Mission, mode: str, step: Callable[[], None]) -> Timing:
-    """Step until the vehicle is at the last waypoint; vehicle time from the autopilot first being in ``mode``."""
-    entered: float | None = None
-    route = _Route(mission)
-    deadline = clock.now() + LIMIT_S
-    while True:
-        if entered is None and ap.mode == mode and ap.armed:
-            entered = clock.now()
-        if entered is not None and route.done(ap):
-            return Timing(mode, clock.now() - entered)
-        if clock.now() > deadline:
-            raise RuntimeError(f"{mission.name}: {mode} did not reach the last waypoint within {LIMIT_S:g} s")
-        step()
+class _Stopwatch:
+    """Vehicle time from the autopilot first being armed in ``mode`` to the vehicle at the last waypoint."""
+
+    def __init__(self, mission: Mission, mode: str) -> None:
+        self.mission = mission
+        self.mode = mode
+        self.route = _Route(mission)
+        self.entered: float | None = None
+        self.seconds: float | None = None
+
+    def observe(self, now: float, ap: ArduPilotSim) -> bool:
+        """Look at the vehicle now; True once it is at the last waypoint."""
+        if self.entered is None and ap.mode == self.mode and ap.armed:
+            self.entered = now
+        if self.entered is not None and self.seconds is None and self.route.done(ap):
+            self.seconds = now - self.entered
+        return self.seconds is not None
+
+    def timing(self) -> Timing:
+        if self.seconds is None:
+            raise RuntimeError(f"{self.mission.name}: {self.mode} did not reach the last waypoint within {LIMIT_S:g} s")
+        return Timing(self.mode, self.seconds)
 
 
 def time_guided(mission: Mission, rate_hz: float = RATE_HZ) -> Timing:
-    """The executive drives the mission in GUIDED (its tree, its tick rate)."""
-    loop = SimLoop(mission, rate_hz=rate_hz, filler=False, ekf_ready_after_s=EKF_READY_S)
-    loop.connect()
-    loop.runtime.mission_state.start()
-
-    def step() -> None:
-        loop.step()
-        loop.runtime._tick_once()
-
-    return _time_in_mode(loop.clock, loop.ap, mission, "GUIDED", step)
+    """The executive drives the mission in GUIDED (its tree, its own tick loop) on the lock-step simulation."""
+    with Lockstep(mission, ekf_ready_after_s=EKF_READY_S, rate_hz=rate_hz) as sim:
+        watch = _Stopwatch(mission, "GUIDED")
+        sim.run(LIMIT_S, until=lambda: watch.observe(sim.clock.now(), sim.autopilot))
+    return watch.timing()
 
 
 def time_auto(mission: Mission, period_s: float = 1.0 / RATE_HZ) -> Timing:
     """The autopilot drives the same waypoints as its own AUTO mission."""
     clock = ManualClock(0.0)
-    ap = make_autopilot(mission.vehicle, clock, _home(mission), ekf_ready_after_s=EKF_READY_S)
+    ap = make_autopilot(mission.vehicle, clock, simulated_home(mission), ekf_ready_after_s=EKF_READY_S)
     mav = encoder(1, EXECUTIVE_COMPONENT)
 
     def send(msg: mavlink.MAVLink_message) -> list[mavlink.MAVLink_message]:
@@ -117,7 +118,11 @@ def time_auto(mission: Mission, period_s: float = 1.0 / RATE_HZ) -> Timing:
     command = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
     send(mav.command_long_encode(1, 1, command, 0, 1, 0, 0, 0, 0, 0, 0))
     send(mav.command_long_encode(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0, 1, ap.profile.modes["AUTO"], 0, 0, 0, 0, 0))
-    return _time_in_mode(clock, ap, mission, "AUTO", step)
+    watch = _Stopwatch(mission, "AUTO")
+    deadline = clock.now() + LIMIT_S
+    while not watch.observe(clock.now(), ap) and clock.now() < deadline:
+        step()
+    return watch.timing()
 
 
 def ratio_row(name: str) -> Row:

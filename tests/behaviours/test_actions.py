@@ -9,7 +9,7 @@ from executive.behaviours import Arm, Disarm, GoTo, SetMode
 from executive.geo import destination
 from executive.io.mavlink.dialect import mavlink
 from executive.state import GlobalPosition
-from tests_support import ack
+from executive.testing.links import ack
 
 DO_SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 ARM_DISARM = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
