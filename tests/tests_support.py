@@ -9,6 +9,7 @@ import py_trees
 from py_trees.common import Status
 
 from executive import blackboard
+from executive.assembly import build_runtime
 from executive.clock import ManualClock, ScaledClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavlink
@@ -104,11 +105,11 @@ def mission_errors(text: str, filename: str = "m.yaml") -> list[str]:
 def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> tuple[Runtime, Outcome]:
     """A runtime on a real link to ``url`` (a simulator), connected and run to the mission's end; the link closed after.
 
-    ``options`` go to :class:`Runtime` (progress, can_bus, obstacle_socket...).
+    ``options`` go to :func:`build_runtime` (progress, plugs...).
     """
     link = PymavlinkLink(url)
     try:
-        runtime = Runtime(mission, link, clock, **options)
+        runtime = build_runtime(mission, link, clock, **options)
         assert runtime.connect(10.0 * clock.speedup)
         return runtime, runtime.run()
     finally:
