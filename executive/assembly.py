@@ -77,11 +77,20 @@ class Wiring:
 Plug = Callable[[Wiring], None]
 
 
-def _autopilot_link(mission: Mission, link: Link, clock: Clock, state: MissionState, operator: Operator, system_id: int) -> AutopilotLink:
+def _autopilot_link(
+    mission: Mission, link: Link, clock: Clock, state: MissionState, operator: Operator, system_id: int, target: tuple[int | None, int]
+) -> AutopilotLink:
     commander = Commander(link, clock, PROFILES[mission.vehicle], system_id=system_id)
     transfer = MissionTransfer(link, clock, system_id=system_id)
     reader = MavlinkReader(
-        link, clock, commander, link_timeout_s=mission.limits.link_timeout_s, mission=transfer, rc_source=mission.rc.source == "mavlink"
+        link,
+        clock,
+        commander,
+        link_timeout_s=mission.limits.link_timeout_s,
+        mission=transfer,
+        rc_source=mission.rc.source == "mavlink",
+        target_system=target[0],
+        target_component=target[1],
     )
     streams = StreamRequester(commander, rates_for(mission.vehicle))
     reader.on_reconnect = streams.restart
@@ -100,12 +109,16 @@ def build_runtime(
     *,
     plugs: Sequence[Plug] = (),
     system_id: int = 1,
+    target_system: int | None = None,
+    target_component: int = 1,
     rate_hz: float = 10.0,
     safe_timeout_s: float = 5.0,
     root: py_trees.behaviour.Behaviour | None = None,
     progress: Progress | None = None,
 ) -> Runtime:
     """A runtime for ``mission`` on the autopilot at the other end of ``link``, with the optional parts ``plugs`` add.
+
+    ``target_system``/``target_component``: the autopilot to command, alone (None: the only one on the link).
 
     Readers run in this order: the autopilot link, the plugs' readers (other links, sensors,
     operator inputs), then what derives from them (heading filter, RC switches) and our heartbeat.
@@ -116,7 +129,7 @@ def build_runtime(
     state = MissionState()
     status = StatusSource("runtime status")
     operator = Operator(state, mission.vehicle, status=status.snapshot, clock=clock)
-    autopilot = _autopilot_link(mission, link, clock, state, operator, system_id)
+    autopilot = _autopilot_link(mission, link, clock, state, operator, system_id, (target_system, target_component))
     wiring = Wiring(mission, clock, system_id, state, status, operator, autopilot)
     wiring.readers.append(Step("mavlink reader", autopilot.reader.drain))
     wiring.writers += [autopilot.streams, autopilot.ground_station, autopilot.route_keeper]
