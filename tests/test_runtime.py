@@ -12,7 +12,7 @@ from executive.assembly import build_runtime
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime import BehaviourCrashed, Runtime, explain_failure
-from tests_support import AUTOPILOT
+from executive.testing import AUTOPILOT
 
 HOLD, GUIDED = 4, 15
 
