@@ -108,6 +108,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
     Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),
     Key("/mission/target", None, "mission state", "the Waypoint of the current leg; None when no leg is active"),
+    Key("/mission/next_target", None, "mission state", "the Waypoint of the leg after the current one; None on the last leg"),
     Key("/mission/reason", "", "mission state", "why the last request was refused or the mission ended"),
     Key("/mission/samples", (), "mission state", "Samples recorded in this run, oldest first"),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
