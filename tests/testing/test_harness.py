@@ -26,7 +26,7 @@ def test_readme_s_walk_through(h: Harness) -> None:
 
 
 def test_a_path_that_names_no_node_or_several_lists_the_tree(h: Harness) -> None:
-    with pytest.raises(KeyError, match="no node at 'Nowhere'.*Mission/Run/Pre-flight"):
+    with pytest.raises(KeyError, match=r"no node at 'Nowhere'.*Mission/Run/Pre-flight"):
         h.node("Nowhere")
     with pytest.raises(KeyError, match=r"\d+ nodes at 'EKF ok\?'"):
         h.node("EKF ok?")  # in the pre-flight wait and among the route's guards
