@@ -44,6 +44,7 @@ WAITING_REL_ALT_M = 9.7  # the wrong altitude GLOBAL_POSITION_INT carries before
 PREARM_AHRS = "AHRS: not using configured AHRS type"
 PREARM_REPORT_S = 30.0  # a disarmed ArduPilot repeats its failing pre-arm checks this often
 BATTERY_MAH = 10000.0
+RELAYS = 16  # ArduPilot 4.5: RELAY1..RELAY16 (AP_Relay)
 BATTERY_FULL_V, BATTERY_EMPTY_V, BATTERY_SAG_V_PER_A = 12.6, 10.5, 0.03
 
 _M = mavlink
@@ -166,6 +167,7 @@ class ArduPilotSim(ABC):
         self._text_id = 0
         self.mission = self.MISSION_STORE(self, self._emit, self._text)
         self.proximity = Proximity()  # a MAVLink proximity sensor (PRX1_TYPE 2): what OBSTACLE_DISTANCE tells
+        self.relays: dict[int, bool] = {}  # relay instance -> on, as MAV_CMD_DO_SET_RELAY left it
         self._builders = self._message_builders()
         self._handlers = self._message_handlers()
         self._commands = self._command_handlers()
@@ -279,6 +281,7 @@ class ArduPilotSim(ABC):
             _M.MAV_CMD_REQUEST_MESSAGE: self._cmd_request_message,
             _M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: self._cmd_request_capabilities,
             _M.MAV_CMD_DO_SET_HOME: self._cmd_set_home,
+            _M.MAV_CMD_DO_SET_RELAY: self._cmd_set_relay,
             _M.MAV_CMD_DO_SET_MISSION_CURRENT: lambda cmd: self.mission.command_set_current(cmd.params[0], cmd.params[1]),
         }
 
@@ -485,6 +488,14 @@ class ArduPilotSim(ABC):
     def _cmd_request_capabilities(self, cmd: Command) -> int:
         if cmd.params[0] == 1.0:
             self._emit(self._msg_autopilot_version())
+        return _M.MAV_RESULT_ACCEPTED
+
+    def _cmd_set_relay(self, cmd: Command) -> int:
+        # libraries/GCS_MAVLink/GCS_ServoRelay.cpp: ACCEPTED when AP_ServoRelayEvents::do_set_relay(instance, state) succeeds
+        instance, state = int(cmd.params[0]), int(cmd.params[1])
+        if not 0 <= instance < RELAYS or state not in (0, 1):
+            return _M.MAV_RESULT_FAILED
+        self.relays[instance] = bool(state)
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_set_home(self, cmd: Command) -> int:
