@@ -18,6 +18,8 @@ from py_trees.common import Status
 
 import trees
 from executive import blackboard
+from executive.autopilot import AutopilotName
+from executive.autopilot.selection import Autopilot
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import Clock
 from executive.io.can import CanReader, DriveBridge
@@ -124,8 +126,9 @@ class Runtime:
         snapshots: SnapshotRecorder | None = None,
         can_bus: can.BusABC | None = None,
         obstacle_socket: socket.socket | None = None,
+        autopilot: AutopilotName | None = None,
     ) -> None:
-        """``root`` replaces the tree the first mission selects (for tests and tools)."""
+        """``root`` replaces the tree the first mission selects (for tests and tools); ``autopilot`` forces a back end (else the heartbeat's)."""
         blackboard.reset()
         self.mission = mission
         self.clock = clock
@@ -152,6 +155,9 @@ class Runtime:
         self.heartbeat = Heartbeat(link, clock, system_id=system_id)
         self.streams = StreamRequester(self.commander, rates_for(mission.vehicle))
         self.reader.on_reconnect = self.streams.restart
+        #: What the tree asks of the autopilot: intents, turned into its firmware's commands by the back end its heartbeat names.
+        self.autopilot = Autopilot(self.commander, self.mission_transfer, self.profile, forced=autopilot)
+        self.reader.on_autopilot = self.autopilot.adopt
         self.mission_state = MissionState()
         self.mission_state.listeners.append(self._on_transition)
         #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.
@@ -291,7 +297,7 @@ class Runtime:
 
     def make_safe(self) -> bool:
         """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) and wait (bounded) for the heartbeat to confirm it."""
-        safe = self.profile.safe_mode
+        safe = self.autopilot.capabilities.safe_mode
         if self.tree is not None:
             safe = failsafe_mode(self.tree.root) or safe  # an RTL or a surfacing the mission's failsafe asked for is not undone
             self.tree.interrupt()
@@ -308,11 +314,11 @@ class Runtime:
         while self.clock.now() < deadline:
             self.reader.drain()
             self.heartbeat.service()
-            if self._bb.get("/link/up") and self._bb.get("/vehicle/mode") == safe:
+            if self._bb.get("/link/up") and self._bb.get("/vehicle/mode") == self.autopilot.mode_name(safe):
                 log.info("vehicle in %s", safe)
                 return True
             if not requested:
-                self.commander.set_mode(safe)
+                self.autopilot.set_mode(safe)
                 requested = True
             self.commander.flush()
             self.clock.sleep_until(self.clock.now() + self.period_s / 2)
@@ -380,9 +386,7 @@ class Runtime:
             self._resume = None
         if self.snapshots is not None:
             self.snapshots.attach(root)
-        self.tree.setup(
-            clock=self.clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler
-        )
+        self.tree.setup(clock=self.clock, autopilot=self.autopilot, mission_state=self.mission_state, sampler=self.sampler)
 
     def _serve_operator(self) -> None:
         if self.gcs_link is not None:

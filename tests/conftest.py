@@ -9,13 +9,14 @@ import py_trees
 import pytest
 
 from executive import blackboard
+from executive.autopilot.selection import Autopilot
 from executive.clock import ManualClock
 from executive.io.heading import wait_for_filterpy
 from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.vehicles import PROFILES
-from tests_support import FakeLink, Harness, Vehicle
+from tests_support import FakeLink, Harness, Vehicle, port_for
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -47,6 +48,12 @@ def commander(link: FakeLink, clock: ManualClock) -> Commander:
 
 
 @pytest.fixture
+def autopilot(commander: Commander) -> Autopilot:
+    """The autopilot port over the shared commander (ArduPilot; ``autopilot.adopt`` for PX4)."""
+    return port_for(commander)
+
+
+@pytest.fixture
 def vehicle() -> Vehicle:
     return Vehicle()
 
@@ -75,11 +82,11 @@ def mission_state(square_mission: Mission) -> MissionState:
 
 
 @pytest.fixture
-def harness(clock: ManualClock, link: FakeLink, commander: Commander, mission_state: MissionState):
+def harness(clock: ManualClock, link: FakeLink, commander: Commander, autopilot: Autopilot, mission_state: MissionState):
     """``harness(root)`` -> a :class:`Harness` ticking ``root`` with the shared fakes."""
 
     def make(root: py_trees.behaviour.Behaviour) -> Harness:
-        return Harness(root, clock, link, commander, mission_state)
+        return Harness(root, clock, link, commander, mission_state, autopilot)
 
     return make
 

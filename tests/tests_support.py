@@ -9,10 +9,12 @@ import py_trees
 from py_trees.common import Status
 
 from executive import blackboard
+from executive.autopilot.selection import Autopilot
 from executive.clock import ManualClock, ScaledClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import MemoryLink, PymavlinkLink
+from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.runtime import Outcome, Runtime
@@ -64,19 +66,31 @@ class Vehicle:
             self.bb.set("/" + name.replace("__", "/"), value)
 
 
+def port_for(commander: Commander, transfer: MissionTransfer | None = None) -> Autopilot:
+    """The autopilot port over ``commander`` (ArduPilot until a heartbeat, or ``adopt``, says otherwise)."""
+    return Autopilot(commander, transfer, commander.profile)
+
+
 class Harness:
     """A tree ticked by hand: the clock advances ``dt`` before each tick; commands are flushed after."""
 
     def __init__(
-        self, root: py_trees.behaviour.Behaviour, clock: ManualClock, link: FakeLink, commander: Commander, mission_state: MissionState
+        self,
+        root: py_trees.behaviour.Behaviour,
+        clock: ManualClock,
+        link: FakeLink,
+        commander: Commander,
+        mission_state: MissionState,
+        autopilot: Autopilot | None = None,
     ) -> None:
         self.root = root
         self.clock = clock
         self.link = link
         self.commander = commander
+        self.autopilot = autopilot or port_for(commander)
         self.mission_state = mission_state
         self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup(clock=clock, commander=commander, mission_state=mission_state)
+        self.tree.setup(clock=clock, autopilot=self.autopilot, mission_state=mission_state)
 
     def tick(self, dt: float = 0.1) -> Status:
         self.clock.advance(dt)
