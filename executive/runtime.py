@@ -58,6 +58,19 @@ class BehaviourCrashed(RuntimeError):
         self.error = error
 
 
+class SeveralAutopilots(RuntimeError):
+    """More than one autopilot answers on the link and none was named (``--target-system``): commanding one would be a guess."""
+
+    def __init__(self, systems: dict[int, int]) -> None:
+        heard = ", ".join(f"system {sysid} (MAV_TYPE {mav_type})" for sysid, mav_type in sorted(systems.items()))
+        super().__init__(f"{len(systems)} autopilots on the link: {heard}; name the one to command with --target-system N")
+        self.systems = dict(systems)
+
+
+#: After the first autopilot's heartbeat, how long (vehicle time) to listen for others when none was named.
+SURVEY_S = 3.0
+
+
 @dataclass(frozen=True)
 class Outcome:
     """How a run ended."""
@@ -116,6 +129,8 @@ class Runtime:
         *,
         rate_hz: float = 10.0,
         system_id: int = 1,
+        target_system: int | None = None,
+        target_component: int = 1,
         progress: Progress | None = None,
         safe_timeout_s: float = 5.0,
         root: py_trees.behaviour.Behaviour | None = None,
@@ -128,7 +143,11 @@ class Runtime:
         obstacle_socket: socket.socket | None = None,
         autopilot: AutopilotName | None = None,
     ) -> None:
-        """``root`` replaces the tree the first mission selects (for tests and tools); ``autopilot`` forces a back end (else the heartbeat's)."""
+        """``root`` replaces the tree the first mission selects (for tests and tools).
+
+        ``target_system``/``target_component``: the autopilot to command, alone (None: the only one on the link).
+        ``autopilot``: the back end to use whatever the heartbeat says (None: the heartbeat's).
+        """
         blackboard.reset()
         self.mission = mission
         self.clock = clock
@@ -143,6 +162,8 @@ class Runtime:
             link_timeout_s=mission.limits.link_timeout_s,
             mission=self.mission_transfer,
             rc_source=mission.rc.source == "mavlink",
+            target_system=target_system,
+            target_component=target_component,
         )
         self.rc = RcReader(mission.rc, clock)
         self.heading = HeadingFilter(clock)
@@ -186,16 +207,30 @@ class Runtime:
         self._stop_reason: str | None = None
 
     # -- phases ------------------------------------------------------------------------------
-    def connect(self, timeout_s: float) -> bool:
-        """Announce ourselves and wait for the autopilot's heartbeat (bounded)."""
+    def connect(self, timeout_s: float, survey_s: float = SURVEY_S) -> bool:
+        """Announce ourselves and wait for the autopilot's heartbeat (bounded).
+
+        With no target system named, listen ``survey_s`` longer: a second autopilot heard raises
+        :class:`SeveralAutopilots` (nothing has been sent to either but our heartbeat).
+        """
         deadline = self.clock.now() + timeout_s
         while self.clock.now() < deadline:
             self.heartbeat.service()
             self.reader.drain()
             if self.reader.autopilot is not None:
-                return True
+                break
             self.clock.sleep_until(self.clock.now() + self.period_s)
-        return False
+        else:
+            return False
+        if self.reader.target_system is None:
+            survey_end = self.clock.now() + survey_s
+            while len(self.reader.autopilots_heard) < 2 and self.clock.now() < survey_end:
+                self.clock.sleep_until(self.clock.now() + self.period_s)
+                self.heartbeat.service()
+                self.reader.drain()
+            if len(self.reader.autopilots_heard) > 1:
+                raise SeveralAutopilots(self.reader.autopilots_heard)
+        return True
 
     def tick(self) -> Status:
         """One tick: drain the links, answer the operator, tick the tree, send what was asked for.

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
-from executive.cli.common import faults_or_report, load_or_report, setup_logging, signing_key_arg
+from executive.cli.common import faults_or_report, load_or_report, mavlink_id, setup_logging, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.link import PymavlinkLink
@@ -21,7 +21,7 @@ from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.progress import Progress
-from executive.runtime import Runtime
+from executive.runtime import SURVEY_S, Runtime, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
@@ -38,7 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mavlink", metavar="URL", help="autopilot link: udpin:0.0.0.0:14550, tcp:HOST:PORT, /dev/ttyACM0[,BAUD]")
     p.add_argument("--rate", type=float, default=10.0, metavar="HZ", help="tick rate (default 10)")
     p.add_argument("--speedup", type=float, default=1.0, metavar="X", help="simulator only: run X times faster than real time")
-    p.add_argument("--sysid", type=int, default=1, help="our MAVLink system id (default 1, the vehicle's)")
+    p.add_argument("--sysid", type=mavlink_id, default=1, help="our MAVLink system id (default 1, the vehicle's)")
+    target = "the autopilot to command, alone (its HEARTBEAT's system id); required when several vehicles share the link"
+    p.add_argument("--target-system", type=mavlink_id, metavar="N", help=target)
+    p.add_argument("--target-component", type=mavlink_id, default=1, metavar="N", help="the autopilot's component id (default 1)")
     p.add_argument("--connect-timeout", type=float, default=30.0, metavar="S", help="seconds to wait for the autopilot (default 30)")
     p.add_argument("--faults", metavar="FILE", help="simulator only: YAML list of faults to inject into the simulated vehicle")
     p.add_argument("--tlog", metavar="FILE", help="record the whole MAVLink link in FILE (.tlog, for Mission Planner and pymavlink)")
@@ -242,6 +245,8 @@ def main(args: argparse.Namespace) -> int:
             clock,
             rate_hz=args.rate,
             system_id=args.sysid,
+            target_system=args.target_system,
+            target_component=args.target_component,
             progress=Progress(sys.stdout, clock),
             control_socket=_usable_socket(args.socket),
             gcs_link=gcs_link,
@@ -252,8 +257,15 @@ def main(args: argparse.Namespace) -> int:
             obstacle_socket=obstacle_socket,
         )
         stack.callback(runtime.close)
-        if not runtime.connect(args.connect_timeout * clock.speedup):
-            print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)
+        try:
+            # the built-in simulator is alone on its link: no other autopilot to listen for
+            connected = runtime.connect(args.connect_timeout * clock.speedup, survey_s=SURVEY_S if args.mavlink else 0.0)
+        except SeveralAutopilots as exc:
+            print(f"executive: run: {exc}", file=sys.stderr)
+            return EXIT_NO_VEHICLE
+        if not connected:
+            which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
+            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s", file=sys.stderr)
             return EXIT_NO_VEHICLE
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:

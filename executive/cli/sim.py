@@ -11,7 +11,7 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
-from executive.cli.common import faults_or_report, signing_key_arg
+from executive.cli.common import faults_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
 from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, Home
 from executive.sim.server import SimServer
@@ -59,6 +59,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--speedup", metavar="X", type=positive, default=1.0, help="simulated time runs X times faster")
     ekf = "simulated seconds before the EKF uses GPS and arming is possible (default: %(default)g)"
     parser.add_argument("--ekf-ready-after", metavar="S", type=non_negative, default=40.0, help=ekf)
+    sysid = "the vehicle's MAVLink system id, 1-255 (SYSID_THISMAV; default: %(default)s)"
+    parser.add_argument("--sysid", metavar="N", type=mavlink_id, default=1, help=sysid)
     parser.add_argument("--duration", metavar="S", type=positive, help="exit after S simulated seconds")
     parser.add_argument("--faults", metavar="FILE", help="YAML list of faults to inject (link loss, EKF, GPS, compass, RC, battery)")
     parser.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key: sign everything, drop unsigned packets")
@@ -105,6 +107,7 @@ def _serve(args: argparse.Namespace, clock: ScaledClock, faults: FaultInjector |
             args.mavlink,
             clock=clock,
             home=args.home,
+            system_id=args.sysid,
             ekf_ready_after_s=args.ekf_ready_after,
             faults=faults,
             signing_key=signing_key,
@@ -122,7 +125,8 @@ def _serve(args: argparse.Namespace, clock: ScaledClock, faults: FaultInjector |
     previous = signal.signal(signal.SIGTERM, on_sigterm) if in_main_thread else None
     ap = server.autopilot
     print(
-        f"executive sim: {ap.FIRMWARE} {args.vehicle} listening on {args.mavlink} (connect to {server.url_for_client}), speed-up {args.speedup:g}x",
+        f"executive sim: {ap.FIRMWARE} {args.vehicle} listening on {args.mavlink} (connect to {server.url_for_client}), "
+        f"system {args.sysid}, speed-up {args.speedup:g}x",
         flush=True,
     )
     if faults is not None:
