@@ -11,7 +11,7 @@ from py_trees.common import Status
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime import BehaviourCrashed, Runtime, explain_failure
-from tests_support import AUTOPILOT
+from executive.testing import AUTOPILOT
 
 HOLD, GUIDED = 4, 15
 

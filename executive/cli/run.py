@@ -74,24 +74,21 @@ def _vehicle_link(
             link.close()
         return
     from executive.sim import SimServer
-    from executive.sim.autopilot import DEFAULT_HOME
+    from executive.sim.options import firmware_options, simulated_home
 
-    start = mission.home or (mission.waypoints[0] if mission.waypoints else None)
-    home = (start.lat, start.lon, getattr(start, "heading_deg", 0.0)) if start else DEFAULT_HOME
     sim_options = mission.simulator or SimulatorOptions()
     model = sim_options.model or mission.vehicle
-    firmware = {"q_guided_mode": sim_options.q_guided_mode} if model == "vtol" else {}
     base_bus = _open_can(args.can) if args.can and model == "bunker" else None  # the simulated base's end of the bus
     try:
         with SimServer(
             model,
             clock=clock,
-            home=home,
+            home=simulated_home(mission),
             faults=faults,
             signing_key=signing_key,
             ekf_ready_after_s=sim_options.ekf_ready_after_s,
             can_bus=base_bus,
-            **firmware,
+            **firmware_options(mission),
         ) as sim:
             print(f"executive: simulated {model} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
             link = PymavlinkLink(sim.url_for_client, **options)

@@ -123,6 +123,7 @@ class ArduPilotSim(ABC):
     POSITION_MODES: ClassVar[frozenset[str]] = frozenset()  # refused while armed without a position estimate
     UNARMABLE_MODES: ClassVar[frozenset[str]] = frozenset()
     NAV_PERIOD_S: ClassVar[float] = 0.1  # how often mode logic runs, in clock time
+    MISSION_STORE: ClassVar[type[MissionStore]] = MissionStore  # the firmware's side of the mission protocol
 
     def __init__(
         self,
@@ -159,7 +160,7 @@ class ArduPilotSim(ABC):
         self._booted = self._origin_set = False
         self._prearm_reported_at = -math.inf
         self._text_id = 0
-        self.mission = MissionStore(self, self._emit, self._text)
+        self.mission = self.MISSION_STORE(self, self._emit, self._text)
         self.proximity = Proximity()  # a MAVLink proximity sensor (PRX1_TYPE 2): what OBSTACLE_DISTANCE tells
         self._builders = self._message_builders()
         self._handlers = self._message_handlers()
@@ -367,13 +368,18 @@ class ArduPilotSim(ABC):
         target_component = getattr(msg, "target_component", 0)
         return target_system in (0, self.system_id) and target_component in (0, self.component_id)
 
-    def _on_command(self, msg: MAVLinkMessage) -> None:
+    @staticmethod
+    def _command_of(msg: MAVLinkMessage) -> Command:
+        """A received COMMAND_LONG or COMMAND_INT as a :class:`Command`."""
         if msg.get_type() == "COMMAND_INT":
             params = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
         else:
             params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
         is_int = msg.get_type() == "COMMAND_INT"
-        cmd = Command(msg.command, params, is_int, msg.frame if is_int else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT)
+        return Command(msg.command, params, is_int, msg.frame if is_int else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT)
+
+    def _on_command(self, msg: MAVLinkMessage) -> None:
+        cmd = self._command_of(msg)
         handler = self._commands.get(cmd.command)
         self._ack_first(msg, cmd.command, lambda: handler(cmd) if handler else _M.MAV_RESULT_UNSUPPORTED)
 
@@ -828,8 +834,24 @@ AUTOPILOTS: Mapping[str, type[ArduPilotSim]] = _Firmwares()
 PROFILE_OF: Mapping[str, str] = MappingProxyType({"bunker": "rover"})
 
 
-def make_autopilot(kind: str, clock: Clock, home: Home = DEFAULT_HOME, **options: float) -> ArduPilotSim:
+#: The simulated autopilot firmwares (``executive sim --autopilot``).
+FIRMWARES = ("ardupilot", "px4")
+
+
+def firmwares_for(autopilot: str) -> Mapping[str, type[ArduPilotSim]]:
+    """Vehicle kind -> simulated firmware class, for one autopilot (``ardupilot`` or ``px4``)."""
+    if autopilot == "px4":
+        from executive.sim.px4 import PX4_AUTOPILOTS  # subclasses this module's classes
+
+        return PX4_AUTOPILOTS
+    if autopilot != "ardupilot":
+        raise ValueError(f"no simulated autopilot {autopilot!r} (known: {', '.join(FIRMWARES)})")
+    return AUTOPILOTS
+
+
+def make_autopilot(kind: str, clock: Clock, home: Home = DEFAULT_HOME, *, autopilot: str = "ardupilot", **options: float) -> ArduPilotSim:
     """The simulated autopilot for a vehicle kind; ``options`` go to its class (:class:`ArduPilotSim` and the firmware's own)."""
-    if kind not in AUTOPILOTS:
-        raise ValueError(f"no simulated vehicle of kind {kind!r} (known: {', '.join(AUTOPILOTS)})")
-    return AUTOPILOTS[kind](PROFILES[PROFILE_OF.get(kind, kind)], clock, home, **options)
+    firmwares = firmwares_for(autopilot)
+    if kind not in firmwares:
+        raise ValueError(f"no simulated vehicle of kind {kind!r} on {autopilot} (known: {', '.join(firmwares)})")
+    return firmwares[kind](PROFILES[PROFILE_OF.get(kind, kind)], clock, home, **options)

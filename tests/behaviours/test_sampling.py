@@ -17,7 +17,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
 from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
 from executive.state import Sample as SampleRecord
-from tests_support import port_for
+from executive.testing import port_for
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 OPTIONS = SamplingOptions(duration_s=2.0, rate_hz=1.0, sensors=["ph", "temperature"])

@@ -21,8 +21,8 @@ from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.runtime import Runtime
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
+from executive.testing import AUTOPILOT, FakeLink, Harness, Vehicle
 from executive.vehicles import PROFILES
-from tests_support import AUTOPILOT, FakeLink, Harness, Vehicle
 from trees._parts import guarded, mission_root, standard_guards
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE

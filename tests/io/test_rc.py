@@ -10,7 +10,7 @@ from executive.io.rc import RcReader, knob_value, switch_position
 from executive.mission.model import RcConfig, SwitchChannels
 from executive.runtime import Runtime
 from executive.state import RcSwitches, SwitchPosition
-from tests_support import AUTOPILOT
+from executive.testing import AUTOPILOT
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 

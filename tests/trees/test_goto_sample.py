@@ -25,8 +25,9 @@ from executive.mission.model import Mission
 from executive.runtime import Runtime, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SamplerState
 from executive.state import Sample as SampleRecord
+from executive.testing import ack, port_for
 from executive.vehicles import PROFILES, ROVER_MODES
-from tests_support import ack, port_for, run_over
+from tests_support import run_over
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 ROOT = Path(__file__).parents[2]

@@ -32,8 +32,9 @@ from executive.sim import SimServer
 from executive.sim.faults import FaultInjector, RcInput, load_faults
 from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
+from executive.testing import ack, port_for
 from executive.vehicles import ROVER_MODES
-from tests_support import ack, port_for, run_over
+from tests_support import run_over
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 PWM = {UP: 1000, MIDDLE: 1500, DOWN: 2000}

@@ -10,7 +10,7 @@ import pytest
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.reader import MavlinkReader
 from executive.state import CommandState, EkfFlags
-from tests_support import AUTOPILOT, GCS, Peer, ack
+from executive.testing import AUTOPILOT, GCS, Peer, ack
 
 ARMED = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
 
