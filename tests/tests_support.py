@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from executive.assembly import build_runtime
 from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.model import Mission
@@ -13,11 +14,11 @@ from executive.runtime import Outcome, Runtime
 def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> tuple[Runtime, Outcome]:
     """A runtime on a real link to ``url`` (a simulator), connected and run to the mission's end; the link closed after.
 
-    ``options`` go to :class:`Runtime` (progress, can_bus, obstacle_socket...).
+    ``options`` go to :func:`~executive.assembly.build_runtime` (progress, plugs...).
     """
     link = PymavlinkLink(url)
     try:
-        runtime = Runtime(mission, link, clock, **options)
+        runtime = build_runtime(mission, link, clock, **options)
         assert runtime.connect(10.0 * clock.speedup)
         return runtime, runtime.run()
     finally:

@@ -14,7 +14,8 @@
     │   │   └── Wait in MANUAL: set MANUAL, disarm, wait until the EKF is ok, re-arm
     │   └── Guarded path or hold (reactive selector)
     │       ├── Guarded path: link alive? armed? (disarmed = the RC took over), and the failsafe guards -> for each point:
-    │       │   ├── Go to the point: GUIDED (else set it), go to (within 1.5 m; over 60 s fails)
+    │       │   ├── Go to the point: GUIDED (else set it), go to (within 1.5 m; over 60 s fails; a point
+    │       │   │   that is neither a sample point nor the last is driven through toward the next)
     │       │   └── Sample if due: nothing to sample here? or: LOITER (else set it), sample (recorded)
     │       └── Wait for guards: the failsafe of the failing guard (mission failsafe: policy)
     └── Hold at the end (LOITER for a boat)
@@ -107,7 +108,7 @@ def point(mission: Mission) -> py_trees.behaviour.Behaviour:
     go = py_trees.composites.Sequence(
         "Go to the point",
         memory=False,  # the mode is checked every tick (someone may change it): set again when it is not GUIDED
-        children=[SetMode(guided, name=f"{guided} (else set it)"), GoTo(limits.acceptance_radius_m, limits.leg_timeout_s)],
+        children=[SetMode(guided, name=f"{guided} (else set it)"), GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True)],
     )
     sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), Sample()])
     due = py_trees.composites.Selector("Sample if due", memory=False, children=[NothingToSample(), sample])

@@ -139,6 +139,15 @@ class MissionState:
             return None
         return self.mission.waypoints[self.leg_index]
 
+    @property
+    def next_target(self) -> Waypoint | None:
+        """The waypoint after the current leg's, if there is one (the leg may be driven through toward it)."""
+        target = self.target
+        if target is None or self.leg_index + 1 >= self.leg_count:
+            return None
+        assert self.mission is not None
+        return self.mission.waypoints[self.leg_index + 1]
+
     def continue_from(self, leg_index: int, samples: Iterable[Sample] = ()) -> None:
         """After a restart (crash, kill -9, power cut): carry on the running mission at ``leg_index`` with the samples already taken.
 
@@ -258,4 +267,5 @@ class MissionState:
         self._bb.set("/mission/leg_index", self.leg_index)
         self._bb.set("/mission/leg_count", self.leg_count)
         self._bb.set("/mission/target", self.target)
+        self._bb.set("/mission/next_target", self.next_target)
         self._bb.set("/mission/samples", self.samples)

@@ -622,6 +622,7 @@ class ArduRoverSim(ArduPilotSim):
     _guided_speed: float | None = None
     _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
     _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
+    _auto_hold_until = 0.0  # elapsed_s at which a waypoint's hold time ends
 
     @property
     def is_boat(self) -> bool:
@@ -663,9 +664,14 @@ class ArduRoverSim(ArduPilotSim):
         self.vehicle.hold()
         return True
 
-    def _drive(self, lat: float, lon: float, speed_m_s: float | None = None) -> None:
+    def _drive(self, lat: float, lon: float, speed_m_s: float | None = None, then: tuple[float, float] | None = None) -> None:
+        """Drive to a point and stop there; with ``then`` (AUTO's next waypoint), through it (a "fast waypoint")."""
         self._destination, self._driving, self._loitering = (lat, lon), True, False
-        self.vehicle.drive_to(lat, lon, speed_m_s)
+        if then is None:
+            self.vehicle.drive_to(lat, lon, speed_m_s)
+        else:
+            assert isinstance(self.vehicle, SurfaceVehicle)
+            self.vehicle.drive_to(lat, lon, speed_m_s, then=then)
 
     def _enter_mode(self, mode: str) -> bool:
         if mode == "AUTO":
@@ -726,7 +732,12 @@ class ArduRoverSim(ArduPilotSim):
         self.vehicle.drive_manual(stick(self.rc_channels[2]), stick(self.rc_channels[0]))
 
     def _update_auto(self) -> None:
-        """Start the mission once the EKF has an origin, drive to each NAV_WAYPOINT, pass over other items, stop at the end."""
+        """Start the mission once the EKF has an origin, drive to each NAV_WAYPOINT, pass over other items, stop at the end.
+
+        As ModeAuto::do_nav_wp (Rover/mode_auto.cpp): a waypoint followed by another navigation command and
+        without a hold time is driven through toward that one (AR_WPNav's "fast waypoint": no stop, the corner
+        cut within WP_RADIUS); the last one, or one with a hold time, is a stop. The next item starts at once.
+        """
         if self._auto_waiting:
             if not self.position_ok:
                 return
@@ -737,17 +748,32 @@ class ArduRoverSim(ArduPilotSim):
             if self._driving or self._loitering:
                 self._stop()
             return
-        if (self.mission.current_seq, item) != self._auto_item:  # the next item, a set-current, or an upload replaced it
-            self._auto_item = (self.mission.current_seq, item)
-            if item.command == _M.MAV_CMD_NAV_WAYPOINT:
-                self._drive(item.lat, item.lon, self._guided_speed)
-            else:
-                self.mission.advance()
-        elif self._driving and self.vehicle.arrived:
-            self._driving = False
-            self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{self.mission.current_seq}")
-            if self.mission.advance() is None:
+        if (self.mission.current_seq, item) == self._auto_item:
+            if self._driving and self.vehicle.arrived:
+                self._driving = False
+                hold_s = item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
+                self._auto_hold_until = self.elapsed_s + hold_s
+                seq = self.mission.current_seq
+                self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{seq}" + (f". Loiter for {hold_s:.0f} seconds" if hold_s else ""))
+            if self._driving or self.elapsed_s < self._auto_hold_until - _EPSILON_S:
+                return
+            item = self.mission.advance()
+            if item is None:
                 self._stop()
+                return
+        # the next item, a set-current, or an upload replaced it
+        self._auto_item = (self.mission.current_seq, item)
+        if item.command == _M.MAV_CMD_NAV_WAYPOINT:
+            self._drive(item.lat, item.lon, self._guided_speed, then=self._next_corner(item))
+        else:
+            self.mission.advance()
+
+    def _next_corner(self, item: StoredCommand) -> tuple[float, float] | None:
+        """Where AUTO goes after the waypoint ``item`` without stopping there, if it does not stop (ModeAuto::do_nav_wp)."""
+        if item.params[0] > 0 or self.mission.current_seq is None:  # a hold time: always a stop
+            return None
+        after = self.mission.next_nav_after(self.mission.current_seq)
+        return (after.lat, after.lon) if after is not None else None
 
     def _desired_location(self) -> tuple[float, float] | None:
         return self._destination

@@ -343,6 +343,18 @@ class MissionStore:
             return None
         return self._commands[self.current_seq]
 
+    def next_nav_after(self, seq: int) -> StoredCommand | None:
+        """The navigation command after item ``seq`` (AP_Mission::get_next_nav_cmd), if it has a location; None at the end.
+
+        A DO_JUMP on the way ends the look-ahead here (the vehicle then stops at ``seq``: the jump is not followed).
+        """
+        for cmd in self._commands[seq + 1 :]:
+            if cmd.command == _M.MAV_CMD_DO_JUMP:
+                return None
+            if cmd.command < _M.MAV_CMD_NAV_LAST:
+                return cmd if cmd.command in LOCATION_COMMANDS else None
+        return None
+
     def advance(self) -> StoredCommand | None:
         """The current item is done: MISSION_ITEM_REACHED, then the next item, or None (and "Mission Complete") after the last."""
         if self.current_seq is None or not self.running:

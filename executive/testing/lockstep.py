@@ -14,12 +14,13 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from executive.assembly import build_runtime, can_base, obstacle_camera
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.link import MemoryLink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
-from executive.runtime import Outcome, Runtime
+from executive.runtime import Outcome
 from executive.sim import ArduPilotSim, make_autopilot
 from executive.sim.autopilot import Home
 from executive.sim.options import firmware_options, simulated_home
@@ -96,7 +97,7 @@ class Lockstep:
     the mission's own ``simulator.events`` (a path relative to ``mission_dir``). ``can=True`` puts
     the simulated AgileX base (bunker only) and the runtime on an in-process CAN bus;
     ``obstacles=True`` gives the runtime a camera (:meth:`send_obstacles`). Other keyword arguments
-    go to :class:`~executive.runtime.Runtime` (``root=``, ``journal=``, ``progress=``...).
+    go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=[journal_recorder(j)]``...).
     ``firmware`` options go to the simulated autopilot. Everything the runtime sends reaches the
     autopilot at the instant it is sent; what the autopilot sends arrives at the runtime's next
     tick (one tick of latency, as over a fast link), each with its header; ``as_bytes`` packs and
@@ -152,9 +153,10 @@ class Lockstep:
         self._scheduled: list[tuple[float, Callable[[Lockstep], object]]] = []
         self._started = False
         self._stop_when: Callable[[], bool] | None = None
-        self.runtime = Runtime(
-            mission, self.link, self.clock, rate_hz=rate_hz, can_bus=self.can_bus, obstacle_socket=obstacle_socket, **runtime_options
-        )
+        plugs = list(runtime_options.pop("plugs", ()))
+        plugs += [can_base(self.can_bus)] if self.can_bus is not None else []
+        plugs += [obstacle_camera(obstacle_socket)] if obstacle_socket is not None else []
+        self.runtime = build_runtime(mission, self.link, self.clock, rate_hz=rate_hz, plugs=plugs, **runtime_options)
 
     # -- set-up ---------------------------------------------------------------------------------
     def _injector(self, mission: Mission, events: Sequence[str | Path | Fault], mission_dir: str | Path | None) -> FaultInjector | None:

@@ -11,6 +11,7 @@ import pytest
 from py_trees.common import Status
 
 import trees
+from executive.assembly import build_runtime
 from executive.clock import ManualClock, ScaledClock
 from executive.geo import destination, distance, distance_bearing
 from executive.io.mavlink.commander import Commander
@@ -484,7 +485,6 @@ def test_pausing_mid_leg_holds_and_resuming_continues_the_same_leg_at_the_same_d
 
 def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) -> tuple[Any, list[dict[str, float]], dict[str, Any], float]:
     from executive.io.mavlink.link import PymavlinkLink
-    from executive.runtime import Runtime
     from executive.sim import SimServer
 
     assert mission.simulator is not None
@@ -494,7 +494,7 @@ def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) ->
     with SimServer("sub", clock=clock, home=home, ekf_ready_after_s=mission.simulator.ekf_ready_after_s) as sim:
         link = PymavlinkLink(sim.url_for_client)
         try:
-            runtime = Runtime(mission, link, clock)
+            runtime = build_runtime(mission, link, clock)
             assert runtime.connect(10.0 * clock.speedup)
             advance = runtime.mission_state.advance_leg
 

@@ -13,6 +13,7 @@ from py_trees.common import Status
 
 import trees
 from executive import blackboard
+from executive.assembly import build_runtime
 from executive.clock import ManualClock, ScaledClock
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
@@ -442,7 +443,7 @@ def test_a_sample_point_already_sampled_is_not_sampled_again(run):
 
 
 def test_a_cancel_during_a_sample_cancels_the_sampler_and_records_nothing(clock, link):
-    runtime = Runtime(make_mission(), link, clock, safe_timeout_s=0.5)
+    runtime = build_runtime(make_mission(), link, clock, safe_timeout_s=0.5)
     run = Run(make_mission(), clock, link, runtime=runtime)
     run.until(run.sampling)
     run.state.abort("operator: cancel")  # what `executive ctl abort` does; the runtime then makes the boat safe
@@ -453,7 +454,7 @@ def test_a_cancel_during_a_sample_cancels_the_sampler_and_records_nothing(clock,
 
 def test_a_goto_sample_mission_without_a_sampling_section_gets_the_default_sampler(clock, link):
     fields = make_mission().model_dump(exclude_none=True, exclude={"sampling"})
-    runtime = Runtime(Mission.model_validate(fields), link, clock)
+    runtime = build_runtime(Mission.model_validate(fields), link, clock)
     runtime.mission_state.start()
     assert runtime.sampler is not None and runtime.sampler.options.sensors == ["temperature", "conductivity", "ph", "dissolved_oxygen"]
 
