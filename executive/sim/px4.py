@@ -102,10 +102,12 @@ ESTIMATOR_OK = (
     | _M.ESTIMATOR_POS_HORIZ_ABS | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_PRED_POS_HORIZ_REL | _M.ESTIMATOR_PRED_POS_HORIZ_ABS
 )  # fmt: skip
 ESTIMATOR_NO_POSITION = _M.ESTIMATOR_ATTITUDE | _M.ESTIMATOR_VELOCITY_VERT | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_CONST_POS_MODE
+# SYS_STATUS (src/modules/mavlink/streams/SYS_STATUS.hpp): each component's present/enabled/health from the health
+# report; the AHRS bit is the local position estimate; the pre-arm bit is only ever set in the health field.
 SENSORS = (
     _M.MAV_SYS_STATUS_SENSOR_3D_GYRO | _M.MAV_SYS_STATUS_SENSOR_3D_ACCEL | _M.MAV_SYS_STATUS_SENSOR_3D_MAG
     | _M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_DIFFERENTIAL_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_GPS
-    | _M.MAV_SYS_STATUS_AHRS | _M.MAV_SYS_STATUS_SENSOR_BATTERY | _M.MAV_SYS_STATUS_PREARM_CHECK
+    | _M.MAV_SYS_STATUS_AHRS | _M.MAV_SYS_STATUS_SENSOR_BATTERY | _M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS
 )  # fmt: skip
 POSITION_SENSORS = _M.MAV_SYS_STATUS_SENSOR_GPS | _M.MAV_SYS_STATUS_AHRS  # healthy only with a position estimate
 
@@ -732,16 +734,12 @@ class Px4Sim(ArduPilotSim):
             base_mode |= _M.MAV_MODE_FLAG_SAFETY_ARMED
         return self._mav.heartbeat_encode(self.profile.mav_type, _M.MAV_AUTOPILOT_PX4, base_mode, self.mode_number, self._system_status())
 
-    def _msg_sys_status(self) -> MAVLinkMessage:
-        health = SENSORS
-        if not self.position_ok:
-            health &= ~POSITION_SENSORS
-        if not (self.armed or self.can_arm()):
-            health &= ~_M.MAV_SYS_STATUS_PREARM_CHECK
-        msg = super()._msg_sys_status()
-        msg.onboard_control_sensors_present = msg.onboard_control_sensors_enabled = SENSORS
-        msg.onboard_control_sensors_health = health
-        return msg
+    def sensor_status(self) -> tuple[int, int, int]:
+        """SYS_STATUS present, enabled, health: the pre-arm bit healthy when arming in the current mode would pass."""
+        health = SENSORS if self.position_ok else SENSORS & ~POSITION_SENSORS
+        if self.can_arm():
+            health |= _M.MAV_SYS_STATUS_PREARM_CHECK
+        return SENSORS, SENSORS, health
 
     def _msg_estimator_status(self) -> MAVLinkMessage:
         if self.position_ok:
