@@ -604,6 +604,7 @@ class Px4Sim(ArduPilotSim):
             _M.MAV_CMD_DO_REPOSITION: self._cmd_reposition,
             _M.MAV_CMD_DO_VTOL_TRANSITION: self._cmd_vtol_transition,
             _M.MAV_CMD_MISSION_START: self._cmd_mission_start,
+            _M.MAV_CMD_DO_CHANGE_SPEED: self._cmd_change_speed,
         }
 
     def _mode_command(self, mode: str, announce: str = "") -> int:
@@ -671,7 +672,9 @@ class Px4Sim(ArduPilotSim):
         return _M.MAV_RESULT_ACCEPTED if self.request_mode("AUTO.TAKEOFF") else _M.MAV_RESULT_TEMPORARILY_REJECTED
 
     def _cmd_reposition(self, cmd: Command) -> int:
-        """Commander.cpp: only with the change-mode flag (and no other bit); the navigator flies there in AUTO.LOITER."""
+        """Commander.cpp: only with the change-mode flag (and no other bit); the navigator flies there in AUTO.LOITER.
+
+        Latitude and longitude NaN keep the position (navigator_main.cpp)."""
         flags = int(cmd.params[1])
         if not flags & _M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE or flags & ~_M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE:
             return _M.MAV_RESULT_UNSUPPORTED
@@ -681,11 +684,8 @@ class Px4Sim(ArduPilotSim):
         lat, lon = cmd.lat_lon
         if not (math.isfinite(lat) and math.isfinite(lon)) or not _valid_latlon(lat, lon):
             lat, lon = v.lat, v.lon
-        alt = cmd.params[6]
-        if not math.isfinite(alt):
-            alt = v.alt_m
-        elif cmd.frame in (_M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT) or not cmd.is_int:
-            alt -= self.home_amsl_m  # an altitude above sea level (always, in a COMMAND_LONG)
+        # navigator_main.cpp: param7 is the altitude above sea level whatever the COMMAND_INT's frame (NaN: keep it)
+        alt = cmd.params[6] - self.home_amsl_m if math.isfinite(cmd.params[6]) else v.alt_m
         radius = cmd.params[2] if math.isfinite(cmd.params[2]) and cmd.params[2] > 0 else NAV_LOITER_RAD
         self._fly_to(lat, lon, alt, radius)
         return _M.MAV_RESULT_ACCEPTED
@@ -698,6 +698,14 @@ class Px4Sim(ArduPilotSim):
         if self._landed or (state == _M.MAV_VTOL_STATE_FW and self.mode in ("AUTO.TAKEOFF", "AUTO.LAND", "AUTO.RTL")):
             return _M.MAV_RESULT_TEMPORARILY_REJECTED
         self._transition_to(state)
+        return _M.MAV_RESULT_ACCEPTED
+
+    def _cmd_change_speed(self, cmd: Command) -> int:
+        """The navigator's cruise speed (param2, m/s; ground and air speed alike): here the multicopter speed."""
+        if not cmd.params[1] > 0:
+            return _M.MAV_RESULT_DENIED
+        self._limits = dataclasses.replace(self._limits, mc_speed_m_s=cmd.params[1])
+        self.vehicle.limits = self._limits
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_mission_start(self, cmd: Command) -> int:
