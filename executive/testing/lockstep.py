@@ -131,7 +131,7 @@ class Lockstep:
             home or simulated_home(mission),
             autopilot=autopilot,
             ekf_ready_after_s=sim.ekf_ready_after_s if ekf_ready_after_s is None else ekf_ready_after_s,
-            **{**firmware_options(mission), **(firmware or {})},
+            **{**(firmware_options(mission) if autopilot == "ardupilot" else {}), **(firmware or {})},  # q_guided_mode is ArduPlane's
         )
         self.faults = self._injector(mission, events, mission_dir)
         if self.faults is not None:
