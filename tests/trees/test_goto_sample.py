@@ -26,13 +26,12 @@ from executive.mission.model import Mission
 from executive.runtime import Runtime, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SamplerState
 from executive.state import Sample as SampleRecord
-from executive.testing import ack
+from executive.testing import EKF_READY, ack, port_for
 from executive.vehicles import PROFILES, ROVER_MODES
 from tests_support import run_over
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 ROOT = Path(__file__).parents[2]
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 1.2, 1.2, 1.2, 1.2, 0.0, 0.0)
 RC_AUTO = (1500,) * 5 + (1000,)  # channel 6 low: the RC leaves the boat to the executive
 RC_MANUAL = (1500,) * 5 + (1900,)  # channel 6 high: manual interruption
@@ -126,7 +125,7 @@ class Run:
             self.state.upload(mission)
             self.sampler = SimulatedSampler(clock, mission.sampling, seed=1)
             self.tree = py_trees.trees.BehaviourTree(trees.build(mission))
-            self.tree.setup(clock=clock, commander=self.commander, mission_state=self.state, sampler=self.sampler)
+            self.tree.setup(clock=clock, autopilot=port_for(self.commander), mission_state=self.state, sampler=self.sampler)
             self.state.start()
         else:
             runtime.mission_state.start()  # builds the tree and its sampler
