@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import select
 from collections.abc import Iterator
 
 import py_trees
@@ -23,7 +24,12 @@ class Ctd:
         self.port = os.ttyname(self._slave)
 
     def print(self, *lines: str) -> None:
-        os.write(self.master, "".join(f"{line}\r\n" for line in lines).encode())
+        self.write("".join(f"{line}\r\n" for line in lines).encode())
+
+    def write(self, data: bytes) -> None:
+        """Send ``data`` and wait until the terminal has passed it on (the kernel does it a moment later)."""
+        os.write(self.master, data)
+        assert select.select([self._slave], [], [], 2.0)[0], "the pseudo-terminal passed nothing on"
 
     def close(self) -> None:
         os.close(self.master)
@@ -75,9 +81,9 @@ def test_each_line_is_a_reading_of_the_columns_stamped_when_read(clock, ctd):
 def test_a_line_split_across_reads_and_lines_it_cannot_read(clock, ctd, caplog):
     s = sampler(clock, ctd, columns=["depth", "temperature"], units={"depth": "m"})
     s.start(0)
-    os.write(ctd.master, b"12.5,1")
+    ctd.write(b"12.5,1")
     serviced(s, clock, 0.5)
-    os.write(ctd.master, b"8.25\n12.5\nnan,3\n13.0,18.5\n")
+    ctd.write(b"8.25\n12.5\nnan,3\n13.0,18.5\n")
     serviced(s, clock, 0.5)
     assert [(r.sensor, r.value, r.unit) for r in status().reads] == [("depth", 12.5, "m"), ("temperature", 18.25, "degC"),
                                                                      ("depth", 13.0, "m"), ("temperature", 18.5, "degC")]  # fmt: skip
