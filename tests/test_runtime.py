@@ -8,10 +8,11 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
+from executive.assembly import build_runtime
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime import BehaviourCrashed, Runtime, explain_failure
-from tests_support import AUTOPILOT
+from executive.testing import AUTOPILOT
 
 HOLD, GUIDED = 4, 15
 
@@ -43,7 +44,7 @@ class ObedientAutopilot:
 
 
 def make_runtime(square_mission, link, clock, root=None) -> Runtime:
-    return Runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
+    return build_runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
 
 
 def test_connect_waits_for_an_autopilot_heartbeat(square_mission, link, clock):

@@ -43,8 +43,8 @@ EKF_FLAGS_WAITING = 0xA7  # attitude, velocities, vertical position, constant-po
 WAITING_REL_ALT_M = 9.7  # the wrong altitude GLOBAL_POSITION_INT carries before the EKF has an origin
 PREARM_AHRS = "AHRS: not using configured AHRS type"
 PREARM_REPORT_S = 30.0  # a disarmed ArduPilot repeats its failing pre-arm checks this often
-PREARM_BIT_LEAD_S = 10.0  # quirk: SYS_STATUS says "pre-arm healthy" this long before arming is possible
 BATTERY_MAH = 10000.0
+RELAYS = 16  # ArduPilot 4.5: RELAY1..RELAY16 (AP_Relay)
 BATTERY_FULL_V, BATTERY_EMPTY_V, BATTERY_SAG_V_PER_A = 12.6, 10.5, 0.03
 
 _M = mavlink
@@ -58,13 +58,18 @@ POS_BITS = _M.POSITION_TARGET_TYPEMASK_X_IGNORE | _M.POSITION_TARGET_TYPEMASK_Y_
 ACC_BITS = _M.POSITION_TARGET_TYPEMASK_AX_IGNORE | _M.POSITION_TARGET_TYPEMASK_AY_IGNORE | _M.POSITION_TARGET_TYPEMASK_AZ_IGNORE
 TARGET_REPORT_MASK = 0xFDF8  # what ArduRover puts in POSITION_TARGET_GLOBAL_INT: position only
 
+# SYS_STATUS bits (GCS::update_sensor_status_flags, libraries/GCS_MAVLink/GCS.cpp): the sensors every simulated
+# ArduPilot has and keeps healthy (a GPS with a 3D fix from the start, no safety switch, RC seen)...
 SENSORS = (
-    _M.MAV_SYS_STATUS_SENSOR_3D_GYRO | _M.MAV_SYS_STATUS_SENSOR_3D_ACCEL | _M.MAV_SYS_STATUS_SENSOR_3D_MAG
-    | _M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_GPS | _M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL
-    | _M.MAV_SYS_STATUS_SENSOR_ATTITUDE_STABILIZATION | _M.MAV_SYS_STATUS_SENSOR_YAW_POSITION
-    | _M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL | _M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS | _M.MAV_SYS_STATUS_SENSOR_RC_RECEIVER
-    | _M.MAV_SYS_STATUS_AHRS | _M.MAV_SYS_STATUS_SENSOR_BATTERY | _M.MAV_SYS_STATUS_PREARM_CHECK
+    _M.MAV_SYS_STATUS_SENSOR_3D_MAG | _M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_GPS
+    | _M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS | _M.MAV_SYS_STATUS_SENSOR_RC_RECEIVER | _M.MAV_SYS_STATUS_SENSOR_BATTERY
 )  # fmt: skip
+# ... the inertial sensors (not enabled while they calibrate at boot) and the AHRS (enabled once initialised,
+# healthy with the EKF: NavEKF3_core::healthy, libraries/AP_NavEKF3/AP_NavEKF3_Control.cpp)...
+STARTED_AFTER_BOOT = _M.MAV_SYS_STATUS_SENSOR_3D_GYRO | _M.MAV_SYS_STATUS_SENSOR_3D_ACCEL | _M.MAV_SYS_STATUS_AHRS
+# ... and the controllers the mode uses (each firmware's update_vehicle_sensor_status_flags).
+RATE_ATTITUDE = _M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL | _M.MAV_SYS_STATUS_SENSOR_ATTITUDE_STABILIZATION
+NAVIGATION = _M.MAV_SYS_STATUS_SENSOR_YAW_POSITION | _M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL
 
 _STREAM_S = 0.25  # ArduRover's telemetry arrives at ~4 Hz without being asked
 #: Messages sent unasked, with their default interval (s). Others are sent only on request.
@@ -123,6 +128,7 @@ class ArduPilotSim(ABC):
     POSITION_MODES: ClassVar[frozenset[str]] = frozenset()  # refused while armed without a position estimate
     UNARMABLE_MODES: ClassVar[frozenset[str]] = frozenset()
     NAV_PERIOD_S: ClassVar[float] = 0.1  # how often mode logic runs, in clock time
+    MISSION_STORE: ClassVar[type[MissionStore]] = MissionStore  # the firmware's side of the mission protocol
 
     def __init__(
         self,
@@ -159,8 +165,9 @@ class ArduPilotSim(ABC):
         self._booted = self._origin_set = False
         self._prearm_reported_at = -math.inf
         self._text_id = 0
-        self.mission = MissionStore(self, self._emit, self._text)
+        self.mission = self.MISSION_STORE(self, self._emit, self._text)
         self.proximity = Proximity()  # a MAVLink proximity sensor (PRX1_TYPE 2): what OBSTACLE_DISTANCE tells
+        self.relays: dict[int, bool] = {}  # relay instance -> on, as MAV_CMD_DO_SET_RELAY left it
         self._builders = self._message_builders()
         self._handlers = self._message_handlers()
         self._commands = self._command_handlers()
@@ -274,6 +281,7 @@ class ArduPilotSim(ABC):
             _M.MAV_CMD_REQUEST_MESSAGE: self._cmd_request_message,
             _M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: self._cmd_request_capabilities,
             _M.MAV_CMD_DO_SET_HOME: self._cmd_set_home,
+            _M.MAV_CMD_DO_SET_RELAY: self._cmd_set_relay,
             _M.MAV_CMD_DO_SET_MISSION_CURRENT: lambda cmd: self.mission.command_set_current(cmd.params[0], cmd.params[1]),
         }
 
@@ -367,13 +375,18 @@ class ArduPilotSim(ABC):
         target_component = getattr(msg, "target_component", 0)
         return target_system in (0, self.system_id) and target_component in (0, self.component_id)
 
-    def _on_command(self, msg: MAVLinkMessage) -> None:
+    @staticmethod
+    def _command_of(msg: MAVLinkMessage) -> Command:
+        """A received COMMAND_LONG or COMMAND_INT as a :class:`Command`."""
         if msg.get_type() == "COMMAND_INT":
             params = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
         else:
             params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
         is_int = msg.get_type() == "COMMAND_INT"
-        cmd = Command(msg.command, params, is_int, msg.frame if is_int else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT)
+        return Command(msg.command, params, is_int, msg.frame if is_int else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT)
+
+    def _on_command(self, msg: MAVLinkMessage) -> None:
+        cmd = self._command_of(msg)
         handler = self._commands.get(cmd.command)
         self._ack_first(msg, cmd.command, lambda: handler(cmd) if handler else _M.MAV_RESULT_UNSUPPORTED)
 
@@ -477,6 +490,14 @@ class ArduPilotSim(ABC):
             self._emit(self._msg_autopilot_version())
         return _M.MAV_RESULT_ACCEPTED
 
+    def _cmd_set_relay(self, cmd: Command) -> int:
+        # libraries/GCS_MAVLink/GCS_ServoRelay.cpp: ACCEPTED when AP_ServoRelayEvents::do_set_relay(instance, state) succeeds
+        instance, state = int(cmd.params[0]), int(cmd.params[1])
+        if not 0 <= instance < RELAYS or state not in (0, 1):
+            return _M.MAV_RESULT_FAILED
+        self.relays[instance] = bool(state)
+        return _M.MAV_RESULT_ACCEPTED
+
     def _cmd_set_home(self, cmd: Command) -> int:
         lat, lon = cmd.lat_lon
         use_current = cmd.params[0] == 1.0 or (lat == 0.0 and lon == 0.0)
@@ -502,15 +523,34 @@ class ArduPilotSim(ABC):
             base_mode |= _M.MAV_MODE_FLAG_SAFETY_ARMED
         return self._mav.heartbeat_encode(self.profile.mav_type, _M.MAV_AUTOPILOT_ARDUPILOTMEGA, base_mode, self.mode_number, self._system_status())
 
+    def sensor_status(self) -> tuple[int, int, int]:
+        """SYS_STATUS present, enabled and health bits, from the firmware's state (libraries/GCS_MAVLink/GCS.cpp).
+
+        The pre-arm bit is healthy exactly when armed or when the pre-arm checks pass (AP_Notify's
+        pre_arm_check, set from AP_Arming::pre_arm_checks once a second in Rover.cpp, Plane.cpp...):
+        a ground station's "armable" never says yes while arming would be refused.
+        """
+        present = SENSORS | STARTED_AFTER_BOOT | _M.MAV_SYS_STATUS_PREARM_CHECK
+        enabled = health = SENSORS
+        enabled |= _M.MAV_SYS_STATUS_PREARM_CHECK  # ARMING_CHECK enables all checks
+        if self.booted:
+            enabled |= STARTED_AFTER_BOOT
+            health |= STARTED_AFTER_BOOT
+        if self.armed or not self._prearm_failures():
+            health |= _M.MAV_SYS_STATUS_PREARM_CHECK
+        controls, enabled_controls = self._control_sensors()
+        return present | controls, enabled | enabled_controls, health | enabled_controls
+
+    def _control_sensors(self) -> tuple[int, int]:
+        """The controllers this firmware reports (present) and those the current mode uses (enabled and healthy)."""
+        return 0, 0
+
     def _msg_sys_status(self) -> MAVLinkMessage:
-        health = SENSORS
-        if self.elapsed_s < self.ekf_ready_after_s - PREARM_BIT_LEAD_S:
-            health &= ~_M.MAV_SYS_STATUS_PREARM_CHECK
         current = self._current_a()
         remaining = max(0.0, 1.0 - self.consumed_mah / BATTERY_MAH)
         volts = BATTERY_EMPTY_V + (BATTERY_FULL_V - BATTERY_EMPTY_V) * remaining - BATTERY_SAG_V_PER_A * current
         battery = (round(volts * 1000), round(current * 100), round(remaining * 100))
-        return self._mav.sys_status_encode(SENSORS, SENSORS, health, 150, *battery, 0, 0, 0, 0, 0, 0)
+        return self._mav.sys_status_encode(*self.sensor_status(), 150, *battery, 0, 0, 0, 0, 0, 0)
 
     def _msg_gps_raw_int(self) -> MAVLinkMessage:
         v = self.vehicle
@@ -616,6 +656,7 @@ class ArduRoverSim(ArduPilotSim):
     _guided_speed: float | None = None
     _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
     _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
+    _auto_hold_until = 0.0  # elapsed_s at which a waypoint's hold time ends
 
     @property
     def is_boat(self) -> bool:
@@ -657,9 +698,14 @@ class ArduRoverSim(ArduPilotSim):
         self.vehicle.hold()
         return True
 
-    def _drive(self, lat: float, lon: float, speed_m_s: float | None = None) -> None:
+    def _drive(self, lat: float, lon: float, speed_m_s: float | None = None, then: tuple[float, float] | None = None) -> None:
+        """Drive to a point and stop there; with ``then`` (AUTO's next waypoint), through it (a "fast waypoint")."""
         self._destination, self._driving, self._loitering = (lat, lon), True, False
-        self.vehicle.drive_to(lat, lon, speed_m_s)
+        if then is None:
+            self.vehicle.drive_to(lat, lon, speed_m_s)
+        else:
+            assert isinstance(self.vehicle, SurfaceVehicle)
+            self.vehicle.drive_to(lat, lon, speed_m_s, then=then)
 
     def _enter_mode(self, mode: str) -> bool:
         if mode == "AUTO":
@@ -720,7 +766,12 @@ class ArduRoverSim(ArduPilotSim):
         self.vehicle.drive_manual(stick(self.rc_channels[2]), stick(self.rc_channels[0]))
 
     def _update_auto(self) -> None:
-        """Start the mission once the EKF has an origin, drive to each NAV_WAYPOINT, pass over other items, stop at the end."""
+        """Start the mission once the EKF has an origin, drive to each NAV_WAYPOINT, pass over other items, stop at the end.
+
+        As ModeAuto::do_nav_wp (Rover/mode_auto.cpp): a waypoint followed by another navigation command and
+        without a hold time is driven through toward that one (AR_WPNav's "fast waypoint": no stop, the corner
+        cut within WP_RADIUS); the last one, or one with a hold time, is a stop. The next item starts at once.
+        """
         if self._auto_waiting:
             if not self.position_ok:
                 return
@@ -731,17 +782,32 @@ class ArduRoverSim(ArduPilotSim):
             if self._driving or self._loitering:
                 self._stop()
             return
-        if (self.mission.current_seq, item) != self._auto_item:  # the next item, a set-current, or an upload replaced it
-            self._auto_item = (self.mission.current_seq, item)
-            if item.command == _M.MAV_CMD_NAV_WAYPOINT:
-                self._drive(item.lat, item.lon, self._guided_speed)
-            else:
-                self.mission.advance()
-        elif self._driving and self.vehicle.arrived:
-            self._driving = False
-            self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{self.mission.current_seq}")
-            if self.mission.advance() is None:
+        if (self.mission.current_seq, item) == self._auto_item:
+            if self._driving and self.vehicle.arrived:
+                self._driving = False
+                hold_s = item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
+                self._auto_hold_until = self.elapsed_s + hold_s
+                seq = self.mission.current_seq
+                self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{seq}" + (f". Loiter for {hold_s:.0f} seconds" if hold_s else ""))
+            if self._driving or self.elapsed_s < self._auto_hold_until - _EPSILON_S:
+                return
+            item = self.mission.advance()
+            if item is None:
                 self._stop()
+                return
+        # the next item, a set-current, or an upload replaced it
+        self._auto_item = (self.mission.current_seq, item)
+        if item.command == _M.MAV_CMD_NAV_WAYPOINT:
+            self._drive(item.lat, item.lon, self._guided_speed, then=self._next_corner(item))
+        else:
+            self.mission.advance()
+
+    def _next_corner(self, item: StoredCommand) -> tuple[float, float] | None:
+        """Where AUTO goes after the waypoint ``item`` without stopping there, if it does not stop (ModeAuto::do_nav_wp)."""
+        if item.params[0] > 0 or self.mission.current_seq is None:  # a hold time: always a stop
+            return None
+        after = self.mission.next_nav_after(self.mission.current_seq)
+        return (after.lat, after.lon) if after is not None else None
 
     def _desired_location(self) -> tuple[float, float] | None:
         return self._destination
@@ -750,6 +816,15 @@ class ArduRoverSim(ArduPilotSim):
         if self.mode == self.BOOT_MODE:
             return _M.MAV_STATE_CALIBRATING
         return _M.MAV_STATE_STANDBY if self.mode == "HOLD" else _M.MAV_STATE_ACTIVE
+
+    def _control_sensors(self) -> tuple[int, int]:
+        """GCS_Rover::update_vehicle_sensor_status_flags (Rover/GCS_Rover.cpp): rate and attitude control in the
+        modes that stabilise the heading (all but MANUAL, HOLD and INITIALISING: Rover/mode.h), yaw and position
+        control in the autopilot modes."""
+        enabled = RATE_ATTITUDE if self.mode not in ("MANUAL", "HOLD", "INITIALISING") else 0
+        if self.mode in self.AUTOPILOT_MODES:
+            enabled |= NAVIGATION
+        return RATE_ATTITUDE | NAVIGATION, enabled
 
     def _throttle(self) -> float:
         return min(1.0, abs(self.vehicle.speed_m_s) / self.limits.max_m_s) if self.armed else 0.0
@@ -828,8 +903,24 @@ AUTOPILOTS: Mapping[str, type[ArduPilotSim]] = _Firmwares()
 PROFILE_OF: Mapping[str, str] = MappingProxyType({"bunker": "rover"})
 
 
-def make_autopilot(kind: str, clock: Clock, home: Home = DEFAULT_HOME, **options: float) -> ArduPilotSim:
+#: The simulated autopilot firmwares (``executive sim --autopilot``).
+FIRMWARES = ("ardupilot", "px4")
+
+
+def firmwares_for(autopilot: str) -> Mapping[str, type[ArduPilotSim]]:
+    """Vehicle kind -> simulated firmware class, for one autopilot (``ardupilot`` or ``px4``)."""
+    if autopilot == "px4":
+        from executive.sim.px4 import PX4_AUTOPILOTS  # subclasses this module's classes
+
+        return PX4_AUTOPILOTS
+    if autopilot != "ardupilot":
+        raise ValueError(f"no simulated autopilot {autopilot!r} (known: {', '.join(FIRMWARES)})")
+    return AUTOPILOTS
+
+
+def make_autopilot(kind: str, clock: Clock, home: Home = DEFAULT_HOME, *, autopilot: str = "ardupilot", **options: float) -> ArduPilotSim:
     """The simulated autopilot for a vehicle kind; ``options`` go to its class (:class:`ArduPilotSim` and the firmware's own)."""
-    if kind not in AUTOPILOTS:
-        raise ValueError(f"no simulated vehicle of kind {kind!r} (known: {', '.join(AUTOPILOTS)})")
-    return AUTOPILOTS[kind](PROFILES[PROFILE_OF.get(kind, kind)], clock, home, **options)
+    firmwares = firmwares_for(autopilot)
+    if kind not in firmwares:
+        raise ValueError(f"no simulated vehicle of kind {kind!r} on {autopilot} (known: {', '.join(firmwares)})")
+    return firmwares[kind](PROFILES[PROFILE_OF.get(kind, kind)], clock, home, **options)

@@ -24,6 +24,7 @@ import pytest
 import yaml
 
 from executive import blackboard
+from executive.assembly import build_runtime, journal_recorder
 from executive.behaviours import (
     BatteryAbove,
     EkfOk,
@@ -156,7 +157,7 @@ def run_scenario(tmp_path: Path) -> Iterator[Callable[[Scenario], tuple[Any, Rec
         with SimServer("rover", clock=clock, home=(*HOME, 0.0), faults=faults, ekf_ready_after_s=40.0 - SHIFT_S) as sim:
             link = PymavlinkLink(sim.url_for_client)
             try:
-                runtime = Runtime(mission, link, clock, journal=journal)
+                runtime = build_runtime(mission, link, clock, plugs=[journal_recorder(journal)])
                 send = link.send
 
                 def spy(msg: MAVLinkMessage) -> None:  # a command leaves in the flush at the end of tick runtime.ticks
