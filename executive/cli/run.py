@@ -21,6 +21,7 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
+from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -234,6 +235,15 @@ def main(args: argparse.Namespace) -> int:
         raise BadInput("--resume needs --journal DB")
     if args.mavlink and args.speedup != 1.0:
         print("executive: run: --speedup applies to the simulator only; ignored with --mavlink", file=sys.stderr)
+    elif not args.mavlink and args.rate * args.speedup > MAX_TICKS_PER_WALL_S:
+        most = MAX_TICKS_PER_WALL_S / args.rate
+        print(
+            f"executive: run: --speedup {args.speedup:g}: the executive cannot follow it: {args.rate:g} ticks per second of vehicle time "
+            f"would be {args.rate * args.speedup:g} per second of wall time, and it keeps up with at most {MAX_TICKS_PER_WALL_S:g} "
+            f"(--speedup {most:g} at --rate {args.rate:g}); on a busy machine the speed-up is capped lower as it runs",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     clock = ScaledClock(1.0 if args.mavlink else args.speedup)
     faults = None
     if args.faults is not None and args.mavlink:
@@ -274,6 +284,8 @@ def main(args: argparse.Namespace) -> int:
             progress=Progress(sys.stdout, clock),
         )
         stack.callback(runtime.close)
+        if not args.mavlink and clock.speedup > 1.0:  # the simulated world slows down to what the executive follows
+            runtime.pacer.listeners.append(SpeedGovernor(clock))
         try:
             # the built-in simulator is alone on its link: no other autopilot to listen for
             connected = runtime.connect(args.connect_timeout * clock.speedup, survey_s=SURVEY_S if args.mavlink else 0.0)
