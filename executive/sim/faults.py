@@ -349,6 +349,9 @@ class FaultInjector:
         elif kind == "SYS_STATUS":
             if any(isinstance(f, RcLoss) for f in active):
                 msg.onboard_control_sensors_health &= ~_M.MAV_SYS_STATUS_SENSOR_RC_RECEIVER
+            if any(isinstance(f, EkfDegradation) and f.variance > 1.0 for f in active):
+                # every test ratio over 1: NavEKF3_core::healthy() is false, and with it the AHRS bit (GCS.cpp)
+                msg.onboard_control_sensors_health &= ~_M.MAV_SYS_STATUS_AHRS
             for f in active:
                 if isinstance(f, BatterySag):
                     if msg.voltage_battery != 65535:  # 65535: voltage unknown

@@ -102,10 +102,12 @@ ESTIMATOR_OK = (
     | _M.ESTIMATOR_POS_HORIZ_ABS | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_PRED_POS_HORIZ_REL | _M.ESTIMATOR_PRED_POS_HORIZ_ABS
 )  # fmt: skip
 ESTIMATOR_NO_POSITION = _M.ESTIMATOR_ATTITUDE | _M.ESTIMATOR_VELOCITY_VERT | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_CONST_POS_MODE
+# SYS_STATUS (src/modules/mavlink/streams/SYS_STATUS.hpp): each component's present/enabled/health from the health
+# report; the AHRS bit is the local position estimate; the pre-arm bit is only ever set in the health field.
 SENSORS = (
     _M.MAV_SYS_STATUS_SENSOR_3D_GYRO | _M.MAV_SYS_STATUS_SENSOR_3D_ACCEL | _M.MAV_SYS_STATUS_SENSOR_3D_MAG
     | _M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_DIFFERENTIAL_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_GPS
-    | _M.MAV_SYS_STATUS_AHRS | _M.MAV_SYS_STATUS_SENSOR_BATTERY | _M.MAV_SYS_STATUS_PREARM_CHECK
+    | _M.MAV_SYS_STATUS_AHRS | _M.MAV_SYS_STATUS_SENSOR_BATTERY | _M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS
 )  # fmt: skip
 POSITION_SENSORS = _M.MAV_SYS_STATUS_SENSOR_GPS | _M.MAV_SYS_STATUS_AHRS  # healthy only with a position estimate
 
@@ -602,6 +604,7 @@ class Px4Sim(ArduPilotSim):
             _M.MAV_CMD_DO_REPOSITION: self._cmd_reposition,
             _M.MAV_CMD_DO_VTOL_TRANSITION: self._cmd_vtol_transition,
             _M.MAV_CMD_MISSION_START: self._cmd_mission_start,
+            _M.MAV_CMD_DO_CHANGE_SPEED: self._cmd_change_speed,
         }
 
     def _mode_command(self, mode: str, announce: str = "") -> int:
@@ -669,7 +672,9 @@ class Px4Sim(ArduPilotSim):
         return _M.MAV_RESULT_ACCEPTED if self.request_mode("AUTO.TAKEOFF") else _M.MAV_RESULT_TEMPORARILY_REJECTED
 
     def _cmd_reposition(self, cmd: Command) -> int:
-        """Commander.cpp: only with the change-mode flag (and no other bit); the navigator flies there in AUTO.LOITER."""
+        """Commander.cpp: only with the change-mode flag (and no other bit); the navigator flies there in AUTO.LOITER.
+
+        Latitude and longitude NaN keep the position (navigator_main.cpp)."""
         flags = int(cmd.params[1])
         if not flags & _M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE or flags & ~_M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE:
             return _M.MAV_RESULT_UNSUPPORTED
@@ -679,11 +684,8 @@ class Px4Sim(ArduPilotSim):
         lat, lon = cmd.lat_lon
         if not (math.isfinite(lat) and math.isfinite(lon)) or not _valid_latlon(lat, lon):
             lat, lon = v.lat, v.lon
-        alt = cmd.params[6]
-        if not math.isfinite(alt):
-            alt = v.alt_m
-        elif cmd.frame in (_M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT) or not cmd.is_int:
-            alt -= self.home_amsl_m  # an altitude above sea level (always, in a COMMAND_LONG)
+        # navigator_main.cpp: param7 is the altitude above sea level whatever the COMMAND_INT's frame (NaN: keep it)
+        alt = cmd.params[6] - self.home_amsl_m if math.isfinite(cmd.params[6]) else v.alt_m
         radius = cmd.params[2] if math.isfinite(cmd.params[2]) and cmd.params[2] > 0 else NAV_LOITER_RAD
         self._fly_to(lat, lon, alt, radius)
         return _M.MAV_RESULT_ACCEPTED
@@ -696,6 +698,14 @@ class Px4Sim(ArduPilotSim):
         if self._landed or (state == _M.MAV_VTOL_STATE_FW and self.mode in ("AUTO.TAKEOFF", "AUTO.LAND", "AUTO.RTL")):
             return _M.MAV_RESULT_TEMPORARILY_REJECTED
         self._transition_to(state)
+        return _M.MAV_RESULT_ACCEPTED
+
+    def _cmd_change_speed(self, cmd: Command) -> int:
+        """The navigator's cruise speed (param2, m/s; ground and air speed alike): here the multicopter speed."""
+        if not cmd.params[1] > 0:
+            return _M.MAV_RESULT_DENIED
+        self._limits = dataclasses.replace(self._limits, mc_speed_m_s=cmd.params[1])
+        self.vehicle.limits = self._limits
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_mission_start(self, cmd: Command) -> int:
@@ -732,16 +742,12 @@ class Px4Sim(ArduPilotSim):
             base_mode |= _M.MAV_MODE_FLAG_SAFETY_ARMED
         return self._mav.heartbeat_encode(self.profile.mav_type, _M.MAV_AUTOPILOT_PX4, base_mode, self.mode_number, self._system_status())
 
-    def _msg_sys_status(self) -> MAVLinkMessage:
-        health = SENSORS
-        if not self.position_ok:
-            health &= ~POSITION_SENSORS
-        if not (self.armed or self.can_arm()):
-            health &= ~_M.MAV_SYS_STATUS_PREARM_CHECK
-        msg = super()._msg_sys_status()
-        msg.onboard_control_sensors_present = msg.onboard_control_sensors_enabled = SENSORS
-        msg.onboard_control_sensors_health = health
-        return msg
+    def sensor_status(self) -> tuple[int, int, int]:
+        """SYS_STATUS present, enabled, health: the pre-arm bit healthy when arming in the current mode would pass."""
+        health = SENSORS if self.position_ok else SENSORS & ~POSITION_SENSORS
+        if self.can_arm():
+            health |= _M.MAV_SYS_STATUS_PREARM_CHECK
+        return SENSORS, SENSORS, health
 
     def _msg_estimator_status(self) -> MAVLinkMessage:
         if self.position_ok:

@@ -30,7 +30,7 @@ Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``comman
 (``lockstep(mission, ...)``, closed after the test).
 """
 
-from executive.testing.harness import START_S, Harness, Vehicle, describe
+from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, describe
 from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
 from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
 from executive.testing.missions import mission_errors
@@ -38,6 +38,7 @@ from executive.testing.scripted import ScriptedAutopilot
 
 __all__ = [
     "AUTOPILOT",
+    "EKF_READY",
     "GCS",
     "START_S",
     "FakeLink",

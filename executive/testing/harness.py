@@ -14,11 +14,14 @@ from executive.io.mavlink.commander import Commander, command_name
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
+from executive.state import EkfFlags, EkfStatus
 from executive.testing.links import FakeLink, ack
 from executive.vehicles import PROFILES
 
 #: Where a tick test's clock starts (any positive time: the executive never assumes 0).
 START_S = 100.0
+#: An EKF report as ArduPilot sends it once the EKF uses GPS (flags 0x33F, small variances): ``vehicle.set(vehicle__ekf=EKF_READY)``.
+EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 
 
 class Vehicle:

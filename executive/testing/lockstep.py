@@ -98,8 +98,8 @@ class Lockstep:
     the simulated AgileX base (bunker only) and the runtime on an in-process CAN bus;
     ``obstacles=True`` gives the runtime a camera (:meth:`send_obstacles`). Other keyword arguments
     go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=[journal_recorder(j)]``...).
-    ``firmware`` options go to the simulated autopilot. Everything the runtime sends reaches the
-    autopilot at the instant it is sent; what the autopilot sends arrives at the runtime's next
+    ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4 instead
+    of ArduPilot. Everything the runtime sends reaches the autopilot at the instant it is sent; what the autopilot sends arrives at the runtime's next
     tick (one tick of latency, as over a fast link), each with its header; ``as_bytes`` packs and
     parses them as a real link does (see :class:`Wire`).
     """
@@ -119,6 +119,7 @@ class Lockstep:
         obstacles: bool = False,
         firmware: dict[str, float] | None = None,
         as_bytes: bool = False,
+        autopilot: str = "ardupilot",
         **runtime_options: Any,
     ) -> None:
         sim = mission.simulator or SimulatorOptions()
@@ -128,8 +129,9 @@ class Lockstep:
             model or sim.model or mission.vehicle,
             self.clock,
             home or simulated_home(mission),
+            autopilot=autopilot,
             ekf_ready_after_s=sim.ekf_ready_after_s if ekf_ready_after_s is None else ekf_ready_after_s,
-            **{**firmware_options(mission), **(firmware or {})},
+            **{**(firmware_options(mission) if autopilot == "ardupilot" else {}), **(firmware or {})},  # q_guided_mode is ArduPlane's
         )
         self.faults = self._injector(mission, events, mission_dir)
         if self.faults is not None:

@@ -103,6 +103,30 @@ def test_runs_against_a_simulator_in_another_process(tmp_path):
         sim.communicate(timeout=10)
 
 
+def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp_path):
+    """A simulator in another process at 8x (as a SITL at --speedup 8): told so, the executive ticks ~10 times a vehicle second, not a wall one."""
+    mission = tmp_path / "north.yaml"
+    mission.write_text(
+        "version: 1\nname: north\nvehicle: rover\nauto_arm: true\n"
+        "waypoints:\n  - {lat: -35.3629906, lon: 149.1652300}\n"  # 30 m north of the simulator's home: 15 s and more of driving
+    )
+    port = "14593"
+    home = "-35.363261,149.165230"
+    sim = executive("sim", "--vehicle", "rover", "--mavlink", f"udpin:127.0.0.1:{port}", "--home", home, "--ekf-ready-after", "0.5", "--speedup", "8")
+    try:
+        run = executive("run", str(mission), "--mavlink", f"udpout:127.0.0.1:{port}", "--speedup", "8", "--socket", "none", "--connect-timeout", "40")
+        _, err = run.communicate(timeout=60)
+    finally:
+        sim.send_signal(signal.SIGTERM)
+        sim.communicate(timeout=10)
+    assert run.returncode == 0, err
+    assert "the vehicle's time runs 8x real time" in err
+    ticks = int(err.rsplit("(", 1)[1].split(" ticks")[0])
+    # ~20 s of vehicle time: 200 ticks at 10 Hz of vehicle time (fewer on a busy machine: late ticks are not caught up);
+    # ticking on the wall clock it would be ~25
+    assert ticks >= 100
+
+
 def test_in_process_run_against_a_sim_server(square_mission):
     """The runtime over a real loopback socket, in one process: what `run` does without --mavlink."""
 

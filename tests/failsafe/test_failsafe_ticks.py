@@ -21,13 +21,12 @@ from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
-from executive.testing import AUTOPILOT, FakeLink, Harness, Vehicle
+from executive.testing import AUTOPILOT, EKF_READY, FakeLink, Harness, Vehicle
 from executive.vehicles import PROFILES
 from trees._parts import guarded, mission_root, standard_guards
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 HOME = (47.397742, 8.545594)
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_GLITCH = EkfStatus(EkfFlags(831) | EkfFlags.GPS_GLITCHING, 0.1, 1.0, 0.1, 0.1, 0.0, 0.0)
 RC_OK = (1500,) * 8

@@ -331,3 +331,41 @@ def test_server_sends_messages_outside_the_dialect(client_for: Callable[[str], C
         client.wait("UNKNOWN_411")  # CURRENT_EVENT_SEQUENCE, a raw MAVLink 2 frame pymavlink's dialect cannot decode
         client.wait("UNKNOWN_380")
         client.wait("OPEN_DRONE_ID_LOCATION")
+
+
+def test_reposition_altitude_is_above_sea_level_whatever_the_frame(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    x, y = (round(v * 1e7) for v in gcs.north(20.0))
+    frame = m.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT  # navigator_main.cpp takes param7 as AMSL all the same
+    gcs.send(gcs.mav.command_int_encode(1, 1, frame, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, HOME_AMSL_M + 25.0))
+    gcs.run(20.0)
+    assert gcs.ap.vehicle.alt_m == pytest.approx(25.0, abs=0.6)
+
+
+def test_a_transit_flight_takeoff_transition_fly_back_transition_land(px4: MakePx4) -> None:
+    gcs = airborne(px4, 30.0)
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, FW) == m.MAV_RESULT_ACCEPTED
+    far = gcs.north(800.0)
+    x, y = round(far[0] * 1e7), round(far[1] * 1e7)
+    direct = gcs.send(
+        gcs.mav.command_int_encode(1, 1, m.MAV_FRAME_GLOBAL_INT, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, HOME_AMSL_M + 30.0)
+    )
+    assert direct == []  # the commander answers on its next loop
+    gcs.run(90.0)
+    assert gcs.ap.vtol_state == FW and gcs.ap.vehicle.distance_to(*far) == pytest.approx(80.0, abs=10.0)  # circling it
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, MC) == m.MAV_RESULT_ACCEPTED
+    gcs.run(10.0)
+    assert gcs.ap.vtol_state == MC
+    assert gcs.px4_mode(LAND) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(60.0)
+    assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
+    assert not gcs.ap.armed and gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_ON_GROUND
+
+
+def test_change_speed_sets_the_cruise_speed(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    assert gcs.result(m.MAV_CMD_DO_CHANGE_SPEED, 1, 3.0, -1) == m.MAV_RESULT_ACCEPTED
+    x, y = (round(v * 1e7) for v in gcs.north(200.0))
+    gcs.send(gcs.mav.command_int_encode(1, 1, m.MAV_FRAME_GLOBAL_INT, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, HOME_AMSL_M + 20.0))
+    gcs.run(20.0)
+    assert gcs.ap.vehicle.speed_m_s == pytest.approx(3.0, abs=0.1)

@@ -94,3 +94,11 @@ def test_a_lockstep_is_usable_as_a_context_manager() -> None:
     with Lockstep(mission, can=False) as sim:
         sim.connect()
         assert sim.runtime.reader.autopilot is not None
+
+
+def test_a_simulated_px4_answers_the_runtime(lockstep) -> None:
+    mission = load_mission(MISSIONS / "vtol_transit.yaml")
+    sim = lockstep(mission, autopilot="px4")
+    sim.connect()
+    assert type(sim.autopilot).__module__ == "executive.sim.px4"
+    assert py_trees.blackboard.Blackboard.get("/link/up") is True

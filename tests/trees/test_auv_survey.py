@@ -22,9 +22,9 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition
+from executive.testing import EKF_READY
 from executive.vehicles import PROFILES, SUB_MODES
 
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 START = (44.0950000, 9.8630000)
 SEABED_M = 30.0
