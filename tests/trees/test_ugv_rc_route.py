@@ -32,7 +32,7 @@ from executive.sim import SimServer
 from executive.sim.faults import FaultInjector, RcInput, load_faults
 from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
-from executive.testing import EKF_READY, ack
+from executive.testing import EKF_READY, ack, port_for
 from executive.vehicles import ROVER_MODES
 from tests_support import run_over
 
@@ -84,7 +84,7 @@ class Rig:
         self.state.start()
         self.root = trees.build(mission)
         self.tree = py_trees.trees.BehaviourTree(self.root)
-        self.tree.setup(clock=clock, commander=commander, mission_state=self.state, mission_transfer=self.transfer)
+        self.tree.setup(clock=clock, autopilot=port_for(commander, self.transfer), mission_state=self.state)
         # the scripted rover (and the mission store's owner)
         self.system_id = self.component_id = 1
         self.home: tuple[float, float] | None = START
