@@ -97,11 +97,12 @@ class Lockstep:
     the mission's own ``simulator.events`` (a path relative to ``mission_dir``). ``can=True`` puts
     the simulated AgileX base (bunker only) and the runtime on an in-process CAN bus;
     ``obstacles=True`` gives the runtime a camera (:meth:`send_obstacles`). Other keyword arguments
-    go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=[journal_recorder(j)]``...).
-    ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4 instead
-    of ArduPilot. Everything the runtime sends reaches the autopilot at the instant it is sent; what the autopilot sends arrives at the runtime's next
-    tick (one tick of latency, as over a fast link), each with its header; ``as_bytes`` packs and
-    parses them as a real link does (see :class:`Wire`).
+    go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=``...);
+    ``options_for_clock(clock)`` returns more of them, made with the simulation's clock (a journal's
+    plug). ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4
+    instead of ArduPilot. Everything the runtime sends reaches the autopilot at the instant it is
+    sent; what the autopilot sends arrives at the runtime's next tick (one tick of latency, as over
+    a fast link), each with its header; ``as_bytes`` packs and parses them as a real link does (see :class:`Wire`).
     """
 
     def __init__(
@@ -120,6 +121,7 @@ class Lockstep:
         firmware: dict[str, float] | None = None,
         as_bytes: bool = False,
         autopilot: str = "ardupilot",
+        options_for_clock: Callable[[LockstepClock], dict[str, Any]] | None = None,
         **runtime_options: Any,
     ) -> None:
         sim = mission.simulator or SimulatorOptions()
@@ -155,6 +157,8 @@ class Lockstep:
         self._scheduled: list[tuple[float, Callable[[Lockstep], object]]] = []
         self._started = False
         self._stop_when: Callable[[], bool] | None = None
+        if options_for_clock is not None:  # what needs the clock itself (a journal, a recorder) is made here
+            runtime_options = {**runtime_options, **options_for_clock(self.clock)}
         plugs = list(runtime_options.pop("plugs", ()))
         plugs += [can_base(self.can_bus)] if self.can_bus is not None else []
         plugs += [obstacle_camera(obstacle_socket)] if obstacle_socket is not None else []
