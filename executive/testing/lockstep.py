@@ -99,7 +99,8 @@ class Lockstep:
     ``obstacles=True`` gives the runtime a camera (:meth:`send_obstacles`). Other keyword arguments
     go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=``...);
     ``options_for_clock(clock)`` returns more of them, made with the simulation's clock (a journal's
-    plug). ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4
+    plug); ``injector(faults, clock)`` makes the fault injector (a subclass that watches the vehicle).
+    ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4
     instead of ArduPilot. Everything the runtime sends reaches the autopilot at the instant it is
     sent; what the autopilot sends arrives at the runtime's next tick (one tick of latency, as over
     a fast link), each with its header; ``as_bytes`` packs and parses them as a real link does (see :class:`Wire`).
@@ -122,6 +123,7 @@ class Lockstep:
         as_bytes: bool = False,
         autopilot: str = "ardupilot",
         options_for_clock: Callable[[LockstepClock], dict[str, Any]] | None = None,
+        injector: Callable[[list[Fault], LockstepClock], FaultInjector] | None = None,
         **runtime_options: Any,
     ) -> None:
         sim = mission.simulator or SimulatorOptions()
@@ -135,7 +137,7 @@ class Lockstep:
             ekf_ready_after_s=sim.ekf_ready_after_s if ekf_ready_after_s is None else ekf_ready_after_s,
             **{**(firmware_options(mission) if autopilot == "ardupilot" else {}), **(firmware or {})},  # q_guided_mode is ArduPlane's
         )
-        self.faults = self._injector(mission, events, mission_dir)
+        self.faults = self._injector(mission, events, mission_dir, injector)
         if self.faults is not None:
             self.faults.attach(self.autopilot)
         self.uplink = Wire(1, EXECUTIVE_COMPONENT, as_bytes=as_bytes)
@@ -165,7 +167,13 @@ class Lockstep:
         self.runtime = build_runtime(mission, self.link, self.clock, rate_hz=rate_hz, plugs=plugs, **runtime_options)
 
     # -- set-up ---------------------------------------------------------------------------------
-    def _injector(self, mission: Mission, events: Sequence[str | Path | Fault], mission_dir: str | Path | None) -> FaultInjector | None:
+    def _injector(
+        self,
+        mission: Mission,
+        events: Sequence[str | Path | Fault],
+        mission_dir: str | Path | None,
+        make: Callable[[list[Fault], LockstepClock], FaultInjector] | None,
+    ) -> FaultInjector | None:
         from executive.sim.faults import FaultInjector, load_faults
 
         faults: list[Fault] = []
@@ -173,6 +181,8 @@ class Lockstep:
         sources: list[str | Path | Fault] = [Path(mission_dir or ".") / own] if own else []
         for source in [*sources, *events]:
             faults += load_faults(source, vehicle=mission.vehicle).faults if isinstance(source, str | Path) else [source]
+        if make is not None:
+            return make(faults, self.clock)
         return FaultInjector(faults, self.clock) if faults else None
 
     def _open_can(self) -> can.BusABC:
