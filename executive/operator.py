@@ -15,8 +15,8 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from executive import blackboard
-from executive.behaviours.auto_route import route_not_on_autopilot
 from executive.clock import Clock
+from executive.io.mavlink.mission_protocol import route_not_on_autopilot
 from executive.mission import route as routes
 from executive.mission.errors import MissionError
 from executive.mission.lifecycle import MissionState, Refused

@@ -120,6 +120,8 @@ class Runtime:
         self.profile = PROFILES[self.mission.vehicle]
         autopilot = wiring.autopilot
         self.commander = autopilot.commander
+        #: What the tree asks of the autopilot: intents, turned into its firmware's commands by the back end its heartbeat names.
+        self.autopilot = autopilot.port
         self.mission_transfer = autopilot.mission_transfer
         self.reader = autopilot.reader
         self.heartbeat = autopilot.heartbeat
@@ -259,7 +261,7 @@ class Runtime:
 
     def make_safe(self) -> bool:
         """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) and wait (bounded) for the heartbeat to confirm it."""
-        safe = self.profile.safe_mode
+        safe = self.autopilot.capabilities.safe_mode
         if self.tree is not None:
             safe = failsafe_mode(self.tree.root) or safe  # an RTL or a surfacing the mission's failsafe asked for is not undone
             self.tree.interrupt()
@@ -275,11 +277,11 @@ class Runtime:
         while self.clock.now() < deadline:
             self.reader.drain()
             self.heartbeat.service()
-            if self._bb.get("/link/up") and self._bb.get("/vehicle/mode") == safe:
+            if self._bb.get("/link/up") and self._bb.get("/vehicle/mode") == self.autopilot.mode_name(safe):
                 log.info("vehicle in %s", safe)
                 return True
             if not requested:
-                self.commander.set_mode(safe)
+                self.autopilot.set_mode(safe)
                 requested = True
             self.commander.flush()
             self.clock.sleep_until(self.clock.now() + self.period_s / 2)
@@ -346,6 +348,4 @@ class Runtime:
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)
-        self.tree.setup(
-            clock=self.clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler
-        )
+        self.tree.setup(clock=self.clock, autopilot=self.autopilot, mission_state=self.mission_state, sampler=self.sampler)

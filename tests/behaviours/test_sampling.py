@@ -17,6 +17,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
 from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
 from executive.state import Sample as SampleRecord
+from executive.testing import port_for
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 OPTIONS = SamplingOptions(duration_s=2.0, rate_hz=1.0, sensors=["ph", "temperature"])
@@ -56,7 +57,7 @@ class SamplingHarness:
     def __init__(self, root, clock: ManualClock, link, commander: Commander, mission_state: MissionState, sampler) -> None:
         self.root, self.clock, self.link, self.commander, self.sampler = root, clock, link, commander, sampler
         self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup(clock=clock, commander=commander, mission_state=mission_state, sampler=sampler)
+        self.tree.setup(clock=clock, autopilot=port_for(commander), mission_state=mission_state, sampler=sampler)
 
     def tick(self, dt: float = 0.5) -> Status:
         self.clock.advance(dt)
@@ -197,7 +198,7 @@ def test_a_timeout_cancels_the_sampler(make, running):
 def test_setup_needs_a_sampler(clock, commander, mission_state):
     tree = py_trees.trees.BehaviourTree(Sample())
     with pytest.raises(RuntimeError, match="needs sampler"):
-        tree.setup(clock=clock, commander=commander, mission_state=mission_state)
+        tree.setup(clock=clock, autopilot=port_for(commander), mission_state=mission_state)
 
 
 @pytest.mark.parametrize(

@@ -26,7 +26,7 @@ from executive.mission.model import Mission
 from executive.runtime import Runtime, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SamplerState
 from executive.state import Sample as SampleRecord
-from executive.testing import EKF_READY, ack
+from executive.testing import EKF_READY, ack, port_for
 from executive.vehicles import PROFILES, ROVER_MODES
 from tests_support import run_over
 
@@ -125,7 +125,7 @@ class Run:
             self.state.upload(mission)
             self.sampler = SimulatedSampler(clock, mission.sampling, seed=1)
             self.tree = py_trees.trees.BehaviourTree(trees.build(mission))
-            self.tree.setup(clock=clock, commander=self.commander, mission_state=self.state, sampler=self.sampler)
+            self.tree.setup(clock=clock, autopilot=port_for(self.commander), mission_state=self.state, sampler=self.sampler)
             self.state.start()
         else:
             runtime.mission_state.start()  # builds the tree and its sampler

@@ -30,7 +30,7 @@ from executive.runtime import Outcome, Runtime
 from executive.sim.faults import FaultInjector, RcInput
 from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
-from executive.testing import EKF_READY, Lockstep, ack
+from executive.testing import EKF_READY, Lockstep, ack, port_for
 from executive.vehicles import ROVER_MODES
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
@@ -81,7 +81,7 @@ class Rig:
         self.state.start()
         self.root = trees.build(mission)
         self.tree = py_trees.trees.BehaviourTree(self.root)
-        self.tree.setup(clock=clock, commander=commander, mission_state=self.state, mission_transfer=self.transfer)
+        self.tree.setup(clock=clock, autopilot=port_for(commander, self.transfer), mission_state=self.state)
         # the scripted rover (and the mission store's owner)
         self.system_id = self.component_id = 1
         self.home: tuple[float, float] | None = START
