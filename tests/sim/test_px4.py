@@ -81,11 +81,11 @@ MakePx4 = Callable[..., Px4Gcs]
 
 @pytest.fixture
 def px4() -> MakePx4:
-    """A simulated PX4 VTOL, ``run_s`` seconds after boot, and a ground station talking to it."""
+    """A simulated PX4 vehicle (VTOL by default), ``run_s`` seconds after boot, and a ground station talking to it."""
 
-    def make(run_s: float = 5.0) -> Px4Gcs:
+    def make(run_s: float = 5.0, kind: str = "vtol") -> Px4Gcs:
         clock = ManualClock()
-        gcs = Px4Gcs(make_autopilot("vtol", clock, HOME, autopilot="px4"), clock)
+        gcs = Px4Gcs(make_autopilot(kind, clock, HOME, autopilot="px4"), clock)
         gcs.update()
         gcs.run(run_s)
         return gcs
@@ -369,3 +369,69 @@ def test_change_speed_sets_the_cruise_speed(px4: MakePx4) -> None:
     gcs.send(gcs.mav.command_int_encode(1, 1, m.MAV_FRAME_GLOBAL_INT, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, HOME_AMSL_M + 20.0))
     gcs.run(20.0)
     assert gcs.ap.vehicle.speed_m_s == pytest.approx(3.0, abs=0.1)
+
+
+# -- the rover -----------------------------------------------------------------------------------
+
+
+def reposition_to(gcs: Px4Gcs, lat: float, lon: float) -> list[int]:
+    x, y = round(lat * 1e7), round(lon * 1e7)
+    direct = gcs.send(gcs.mav.command_int_encode(1, 1, m.MAV_FRAME_GLOBAL_INT, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, math.nan))
+    gcs.clock.advance(0.01)
+    return [ack.result for ack in direct + gcs.update() if ack.get_type() == "COMMAND_ACK"]
+
+
+def test_rover_is_a_px4_ground_rover_that_cannot_take_off_or_transition(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    hb = gcs.heartbeat()
+    assert (hb.autopilot, hb.type, hb.custom_mode) == (m.MAV_AUTOPILOT_PX4, m.MAV_TYPE_GROUND_ROVER, LOITER)
+    assert gcs.last("EXTENDED_SYS_STATE").vtol_state == m.MAV_VTOL_STATE_UNDEFINED
+    replies = gcs.command(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + 5.0)
+    assert [msg.result for msg in gcs.of_type(replies, "COMMAND_ACK")] == [m.MAV_RESULT_TEMPORARILY_REJECTED]
+    assert "Switching to Takeoff is currently not available" in gcs.texts(replies)
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, FW) == m.MAV_RESULT_UNSUPPORTED
+
+
+def test_rover_armed_is_not_landed_so_it_never_disarms_itself_on_the_ground(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    gcs.run(COM_DISARM_PRFLT + 5.0)
+    assert gcs.ap.armed and "Takeoff detected" in gcs.texts(gcs.log)  # RoverLandDetector: armed means not landed
+    assert gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_IN_AIR
+
+
+def test_rover_reposition_drives_there_and_stops(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    target = gcs.north(20.0)
+    assert reposition_to(gcs, *target) == [m.MAV_RESULT_ACCEPTED]
+    gcs.run(25.0)
+    assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.distance_to(*target) < 0.5 and gcs.ap.vehicle.speed_m_s == 0.0
+
+
+def test_rover_offboard_loss_stops_it_then_land_mode_disarms_it(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    goal = (*gcs.east(15.0), 0.0)
+    gcs.stream(1.0, goal)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.stream(15.0, goal)
+    assert gcs.ap.vehicle.distance_to(*goal[:2]) < 0.5
+    gcs.run(COM_OF_LOSS_T + 0.2)
+    assert gcs.ap.mode == "POSCTL"
+    out = gcs.run(COM_FAIL_ACT_T + 3.0)
+    assert gcs.last("HEARTBEAT").custom_mode == LAND and not gcs.ap.armed
+    assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
+
+
+def test_rover_mission_drives_every_waypoint_then_holds(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    items = [(m.MAV_CMD_NAV_WAYPOINT, *gcs.north(10.0), 0.0), (m.MAV_CMD_NAV_WAYPOINT, *gcs.east(10.0), 0.0)]
+    upload(gcs, items)
+    gcs.run(MISSION_CHECK_S)
+    assert gcs.px4_mode(MISSION) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(40.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [0, 1]
+    assert gcs.last("MISSION_CURRENT").mission_state == m.MISSION_STATE_COMPLETE
+    assert gcs.last("HEARTBEAT").custom_mode == LOITER and gcs.ap.vehicle.distance_to(*gcs.east(10.0)) < 0.5
