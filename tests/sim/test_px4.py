@@ -435,3 +435,15 @@ def test_rover_mission_drives_every_waypoint_then_holds(px4: MakePx4) -> None:
     assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [0, 1]
     assert gcs.last("MISSION_CURRENT").mission_state == m.MISSION_STATE_COMPLETE
     assert gcs.last("HEARTBEAT").custom_mode == LOITER and gcs.ap.vehicle.distance_to(*gcs.east(10.0)) < 0.5
+
+
+def test_heartbeat_loss_of_a_mission_computer_and_of_a_ground_station_is_reported(px4: MakePx4) -> None:
+    gcs = px4()
+    for kind in (m.MAV_TYPE_ONBOARD_CONTROLLER, m.MAV_TYPE_GCS):
+        gcs.send(gcs.mav.heartbeat_encode(kind, m.MAV_AUTOPILOT_INVALID, 0, 0, 0))
+    out = gcs.run(5.5)
+    assert gcs.texts(out) == ["Connection to mission computer lost"]  # COM_OBC_LOSS_T: 5 s
+    out = gcs.run(5.0)
+    assert gcs.texts(out) == ["Connection to ground station lost"]  # COM_DL_LOSS_T: 10 s
+    assert gcs.texts(gcs.send(gcs.mav.heartbeat_encode(m.MAV_TYPE_GCS, m.MAV_AUTOPILOT_INVALID, 0, 0, 0))) == ["GCS connection regained"]
+    assert gcs.ap.mode == "AUTO.LOITER"  # NAV_DLL_ACT disabled: nothing else

@@ -615,6 +615,7 @@ def test_switch_moves_wait_out_stale_rc_and_count_when_it_is_back(rig: Rig) -> N
     assert rig.run(20) == [Status.RUNNING] * 20
     assert rig.take() == []
     rig.rc_alive = True
+    assert rig.run(20) == [Status.RUNNING] * 20 and rig.take() == []  # the reports fresh for RcFresh's 2 s first
     rig.tick()
     assert rig.take() == [("mode", "AUTO")]  # the operator's latest wish, once it can be read
 
