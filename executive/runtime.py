@@ -22,6 +22,7 @@ from executive.io.sampler import InstrumentError, InstrumentSampler, Unavailable
 from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import SamplingOptions
+from executive.pacing import TickPacer
 from executive.progress import Progress
 from executive.services import PacedService, RunObserver, Service
 from executive.state import SwitchPosition
@@ -152,6 +153,8 @@ class Runtime:
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches", "/vehicle/position"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
+        #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.
+        self.pacer = TickPacer(self.clock, self.period_s)
         self._stop_reason: str | None = None
 
     # -- phases ------------------------------------------------------------------------------
@@ -224,7 +227,7 @@ class Runtime:
                     self.mission_state.set_route(route.waypoints, reason, leg_index=route.current, home=route.home)
                 self.mission_state.continue_from(resume.leg_index, resume.samples)
         outcome = Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
-        next_tick = self.clock.now()
+        self.pacer.restart()
         try:
             while True:
                 if self._stop_reason is not None:
@@ -232,17 +235,16 @@ class Runtime:
                         return self._abort(f"stopped: {self._stop_reason}")
                     self.make_safe()
                     return outcome
+                self.pacer.tick_started()
                 ended = self._tick_once()
                 if ended is not None:
                     outcome = ended
                     if not serve:
                         return outcome
-                next_tick += self.period_s
-                now = self.clock.now()
-                if next_tick < now - self.period_s:  # fell behind by more than a tick: do not try to catch up
-                    next_tick = now
-                self._wait_until(next_tick)
+                self._wait_until(self.pacer.next_due())
         finally:
+            if self.pacer.late or self.pacer.skipped:
+                log.warning("the loop ran behind its %g Hz: %s", 1.0 / self.period_s, self.pacer.summary())
             if self.progress:
                 self.progress.update(force=True)
                 self.progress.close()

@@ -21,6 +21,7 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
+from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -259,6 +260,15 @@ def main(args: argparse.Namespace) -> int:
         # a SITL at --speedup 5 drives 5 s in each wall second: ticking on the wall clock, the executive would react five times
         # less often in the vehicle's time (issue 14: GUIDED 44.4 s at 1x, 49.2 s at 10x)
         print(f"executive: run: the vehicle's time runs {args.speedup:g}x real time (a simulator's speed-up)", file=sys.stderr)
+    elif not args.mavlink and args.rate * args.speedup > MAX_TICKS_PER_WALL_S:
+        most = MAX_TICKS_PER_WALL_S / args.rate
+        print(
+            f"executive: run: --speedup {args.speedup:g}: the executive cannot follow it: {args.rate:g} ticks per second of vehicle time "
+            f"would be {args.rate * args.speedup:g} per second of wall time, and it keeps up with at most {MAX_TICKS_PER_WALL_S:g} "
+            f"(--speedup {most:g} at --rate {args.rate:g}); on a busy machine the speed-up is capped lower as it runs",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     clock = ScaledClock(args.speedup)
     faults = None
     if args.faults is not None and args.mavlink:
@@ -301,6 +311,8 @@ def main(args: argparse.Namespace) -> int:
             simulated_vehicle=not args.mavlink,
         )
         stack.callback(runtime.close)
+        if not args.mavlink and clock.speedup > 1.0:  # the simulated world slows down to what the executive follows
+            runtime.pacer.listeners.append(SpeedGovernor(clock))
         try:
             # the built-in simulator is alone on its link: no other autopilot to listen for
             connected = runtime.connect(args.connect_timeout * clock.speedup, survey_s=SURVEY_S if args.mavlink else 0.0)
