@@ -20,6 +20,7 @@ import trees
 from executive import blackboard
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import Clock
+from executive.intervention import InterventionWatch
 from executive.io.can import CanReader, DriveBridge
 from executive.io.control import ControlServer
 from executive.io.heading import HeadingFilter
@@ -174,6 +175,8 @@ class Runtime:
         self.tree: py_trees.trees.BehaviourTree | None = None
         self.mission_state.upload(mission)
         self.progress = progress
+        #: A mode change we did not ask for, mid-mission, pauses the mission: a person has the vehicle.
+        self.intervention = InterventionWatch(clock, self.commander, self.mission_state, self.profile, takeover=self._takeover)
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches", "/vehicle/position"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
@@ -203,6 +206,7 @@ class Runtime:
             self.obstacles.drain()
         self.heading.service()
         self.rc.service()
+        self.intervention.service()
         self.heartbeat.service()
         self._serve_operator()
         status = Status.INVALID
@@ -299,7 +303,7 @@ class Runtime:
         if self.drive is not None:  # the base stops at once; the autopilot is told below
             self.drive.in_control = False
             self.drive.service()
-        person = self._person_has_the_vehicle()
+        person = self._person_has_the_vehicle(safe)
         if person:
             log.warning("not commanding %s: %s", safe, person)
             return False
@@ -319,8 +323,23 @@ class Runtime:
         log.error("could not confirm %s within %g s", safe, self.safe_timeout_s)
         return False
 
-    def _person_has_the_vehicle(self) -> str | None:
-        """Why a person has the vehicle (the RC take-over switch high, or switch C in MANUAL), if one has: then hands off."""
+    def _person_has_the_vehicle(self, ours: str) -> str | None:
+        """Why a person has the vehicle, if one has: then hands off.
+
+        The RC take-over switch high, switch C in MANUAL, or a mode in which a person drives (MANUAL,
+        ACRO...) other than ``ours`` (the mode a failsafe of ours left it in): set by the RC, a ground
+        station, or by us at the operator's request (handed over).
+        """
+        takeover = self._takeover()
+        if takeover is not None:
+            return takeover
+        mode = self._bb.get("/vehicle/mode")
+        if mode in self.profile.pilot_modes and mode != ours:
+            return f"the vehicle is in {mode}: a person drives it"
+        return None
+
+    def _takeover(self) -> str | None:
+        """Why the RC says a person has the vehicle (the take-over switch high, or switch C in MANUAL), if it does."""
         rc = self.mission.rc
         if rc.source == "mavlink":
             channels = self._bb.get("/rc/channels")

@@ -11,35 +11,14 @@ from py_trees.common import Status
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime import BehaviourCrashed, Runtime, explain_failure
-from tests_support import AUTOPILOT
+from tests_support import ObedientAutopilot
 
-HOLD, GUIDED = 4, 15
+HOLD = 4
 
 
 class Explodes(py_trees.behaviour.Behaviour):
     def update(self) -> Status:
         raise ZeroDivisionError("boom")
-
-
-class ObedientAutopilot:
-    """Answers on the fake link: heartbeats every tick and instant mode changes."""
-
-    def __init__(self, link) -> None:
-        self.link, self.mode = link, GUIDED
-        self._send = link.send
-        link.send = self.receive
-
-    def receive(self, msg) -> None:
-        self._send(msg)
-        if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-            self.mode = int(msg.param2)
-            self.link.incoming.append(AUTOPILOT.command_ack(msg.command, 0, 0, 0, 1, 191))
-        if msg.get_type() == "HEARTBEAT":
-            self.beat()
-
-    def beat(self) -> None:
-        base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
-        self.link.incoming.append(AUTOPILOT.heartbeat(mavlink.MAV_TYPE_GROUND_ROVER, 3, base, self.mode, 4))
 
 
 def make_runtime(square_mission, link, clock, root=None) -> Runtime:

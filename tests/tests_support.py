@@ -52,6 +52,27 @@ class FakeLink(MemoryLink):
         return taken
 
 
+class ObedientAutopilot:
+    """Answers on the fake link: heartbeats every tick and instant mode changes."""
+
+    def __init__(self, link) -> None:
+        self.link, self.mode = link, 15  # GUIDED
+        self._send = link.send
+        link.send = self.receive
+
+    def receive(self, msg) -> None:
+        self._send(msg)
+        if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+            self.mode = int(msg.param2)
+            self.link.incoming.append(AUTOPILOT.command_ack(msg.command, 0, 0, 0, 1, 191))
+        if msg.get_type() == "HEARTBEAT":
+            self.beat()
+
+    def beat(self) -> None:
+        base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
+        self.link.incoming.append(AUTOPILOT.heartbeat(mavlink.MAV_TYPE_GROUND_ROVER, 3, base, self.mode, 4))
+
+
 class Vehicle:
     """Writes vehicle facts to the blackboard as the reader would (for tick tests)."""
 

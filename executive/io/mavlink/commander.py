@@ -74,6 +74,10 @@ class Commander:
         self.target_component = 1
         #: The autopilot's mode table; the reader replaces it once the HEARTBEAT tells the firmware.
         self.modes: ModeTable = ArduPilotModes(profile.modes)
+        #: Each mode asked for (its name as the heartbeat shows it) and when it was last asked: a mode change is ours or someone else's.
+        self.modes_asked: dict[str, float] = {}
+        #: The mode asked for last, if any.
+        self.last_mode_asked: str | None = None
 
     # -- requests (from behaviours; never block) ---------------------------------------------
     def command_long(self, command: int, params: Sequence[float] = ()) -> int:
@@ -90,6 +94,9 @@ class Commander:
         if chosen is None:
             raise KeyError("no mode given")
         main, sub = self.modes.encode(chosen)
+        name = self.modes.canonical(chosen) if isinstance(chosen, str) else self.modes.decode(int(main))
+        self.modes_asked[name] = self._clock.now()
+        self.last_mode_asked = name
         return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub))
 
     def arm(self, *, force: bool = False) -> int:
