@@ -10,7 +10,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 
-from benchmarks import can_decode, ingest, reaction, simspeed, soak, startup, tick
+from benchmarks import can_decode, efficiency, ingest, reaction, simspeed, soak, startup, tick
 from benchmarks.common import Row
 
 #: name -> the benchmark (each returns its rows); in the order they run.
@@ -22,6 +22,7 @@ BENCHMARKS: dict[str, Callable[[], list[Row]]] = {
     "sim": simspeed.run,
     "startup": startup.run,
     "soak": soak.run,
+    "efficiency": efficiency.run,
 }
 
 

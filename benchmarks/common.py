@@ -8,11 +8,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from executive.assembly import build_runtime
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.link import MemoryLink
 from executive.mission.model import Mission
-from executive.runtime import Runtime
 from executive.sim import ArduPilotSim, make_autopilot
 
 #: Where the benchmark missions start (ArduPilot SITL's home field).
@@ -174,7 +174,7 @@ class SimLoop:
         self._filler_due = dict.fromkeys(FILLER_RATES, 0.0)
         self.recording: bytearray | None = None
         self.messages = 0
-        self.runtime = Runtime(mission, self.link, self.clock, rate_hz=rate_hz)
+        self.runtime = build_runtime(mission, self.link, self.clock, rate_hz=rate_hz)
 
     def step(self) -> int:
         """Deliver what the runtime sent, move the vehicle one period, queue what it sent back; returns how many it sent."""

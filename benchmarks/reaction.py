@@ -15,6 +15,7 @@ import threading
 import time
 
 from benchmarks.common import Row, median, offset, rover_mission
+from executive.assembly import build_runtime
 from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.link import PymavlinkLink
@@ -101,7 +102,7 @@ def run(trials: int = 8, seed: int = 1, settle_s: float = 3.0) -> list[Row]:
     with SimServer("rover", clock=clock, home=(-35.363261, 149.165230, 0.0), ekf_ready_after_s=1.0) as sim:
         link = PymavlinkLink(sim.url_for_client)
         try:
-            runtime = Runtime(mission, link, clock, rate_hz=RATE_HZ)
+            runtime = build_runtime(mission, link, clock, rate_hz=RATE_HZ)
             probe = _Probe(runtime.profile.modes[runtime.profile.safe_mode])
             _instrument(sim, link, runtime, probe)
             if not runtime.connect(10.0):

@@ -17,10 +17,10 @@ import time
 from collections.abc import Sequence
 
 from benchmarks.common import HOME, Row, offset, rover_mission
+from executive.assembly import build_runtime
 from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
-from executive.runtime import Runtime
 from executive.sim import SimServer
 
 MIN_SPEEDUP = 50.0
@@ -61,7 +61,7 @@ def run_once(speedup: float, length_m: float, ekf_ready_after_s: float, timeout_
     with SimServer("rover", clock=clock, home=HOME, ekf_ready_after_s=ekf_ready_after_s) as sim:
         link = PymavlinkLink(sim.url_for_client)
         try:
-            runtime = Runtime(mission, link, clock)
+            runtime = build_runtime(mission, link, clock)
             if not runtime.connect(10.0 * speedup):
                 return False, clock.now(), time.perf_counter() - wall0, 0, "no heartbeat"
             watchdog = threading.Timer(timeout_s, runtime.request_stop, ("benchmark time limit",))

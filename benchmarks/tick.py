@@ -6,7 +6,7 @@ import time
 from collections.abc import Sequence
 
 from benchmarks.common import Row, SimLoop, median, percentile, rover_mission, serpentine
-from executive.io.heading import wait_for_filterpy
+from executive.io.heading import HeadingFilter, wait_for_filterpy
 from executive.mission.lifecycle import MissionStatus
 
 #: The full tick may cost this much more than the bare tree tick.
@@ -38,14 +38,15 @@ def measure(waypoints: int, ticks: int, warmup_ticks: int = 50) -> dict[str, flo
 
     tree.tick = timed_tree_tick  # type: ignore[method-assign]
     heading: list[int] = []  # the heading filter's share (filterpy): where the full tick's time goes
-    heading_service = rt.heading.service
+    heading_filter = next(s for s in rt.readers if isinstance(s, HeadingFilter))
+    heading_service = heading_filter.service
 
     def timed_heading_service() -> None:
         t0 = time.perf_counter_ns()
         heading_service()
         heading.append(time.perf_counter_ns() - t0)
 
-    rt.heading.service = timed_heading_service  # type: ignore[method-assign]
+    heading_filter.service = timed_heading_service  # type: ignore[method-assign]
     # pre-flight (EKF, arming), then the route: the steady state of a mission is a leg being driven
     loop.run_until(lambda: rt.mission_state.leg_index >= 1 and rt._bb.get("/vehicle/mode") == "GUIDED", 120.0)
     for _ in range(warmup_ticks):

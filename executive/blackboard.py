@@ -108,6 +108,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
     Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),
     Key("/mission/target", None, "mission state", "the Waypoint of the current leg; None when no leg is active"),
+    Key("/mission/next_target", None, "mission state", "the Waypoint of the leg after the current one; None on the last leg"),
     Key("/mission/reason", "", "mission state", "why the last request was refused or the mission ended"),
     Key("/mission/samples", (), "mission state", "Samples recorded in this run, oldest first"),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
@@ -151,7 +152,7 @@ def document_command(name: str) -> str:
     key = command_key(name)
     if key not in KEYS:
         KEYS[key] = _command_doc(name)
-        py_trees.blackboard.Blackboard.set(key, None)
+        PyTreesBoard.set(key, None)
     return key
 
 
@@ -161,16 +162,47 @@ def reset(*, activity_stream: bool = False) -> None:
     The activity stream (every read and write, for debugging displays) costs time on each
     access, so it is off unless asked for.
     """
-    py_trees.blackboard.Blackboard.clear()
-    if activity_stream:
-        py_trees.blackboard.Blackboard.enable_activity_stream()
+    PyTreesBoard.clear(activity_stream=activity_stream)
     for key in KEYS.values():
-        py_trees.blackboard.Blackboard.set(key.name, key.default)
+        PyTreesBoard.set(key.name, key.default)
+
+
+def value(key: str) -> Any:
+    """The value of ``key`` now (None if it is not there), read without a client: for recorders, never for behaviours."""
+    return PyTreesBoard.value(key)
 
 
 def keys_under(*prefixes: str) -> list[str]:
     """Documented keys whose names start with one of ``prefixes`` (e.g. ``"/vehicle/"``)."""
     return [name for name in KEYS if name.startswith(prefixes)]
+
+
+class PyTreesBoard:
+    """The one place the blackboard meets py_trees: its process-global storage, and the clients below."""
+
+    @staticmethod
+    def clear(*, activity_stream: bool) -> None:
+        Blackboard.clear()
+        if activity_stream:
+            Blackboard.enable_activity_stream()
+
+    @staticmethod
+    def set(key: str, value: Any) -> None:
+        Blackboard.set(key, value)
+
+    @staticmethod
+    def value(key: str) -> Any:
+        return Blackboard.storage.get(key)
+
+    @staticmethod
+    def client(name: str, keys: Iterable[str], access: Access) -> Client:
+        """A client registered for ``keys`` (each documented) with ``access``."""
+        client = Client(name=name)
+        for key in keys:
+            if key not in KEYS:
+                raise KeyError(f"undocumented blackboard key {key!r}")
+            client.register_key(key=key, access=access)
+        return client
 
 
 class Client(py_trees.blackboard.Client):
@@ -201,19 +233,9 @@ class Client(py_trees.blackboard.Client):
 
 def writer(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
     """A client that may write ``keys``: for IO readers and mission state code only."""
-    client = Client(name=name)
-    for key in keys:
-        if key not in KEYS:
-            raise KeyError(f"undocumented blackboard key {key!r}")
-        client.register_key(key=key, access=Access.WRITE)
-    return client
+    return PyTreesBoard.client(name, keys, Access.WRITE)
 
 
 def reader(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
     """A read-only client (what a behaviour holds)."""
-    client = Client(name=name)
-    for key in keys:
-        if key not in KEYS:
-            raise KeyError(f"undocumented blackboard key {key!r}")
-        client.register_key(key=key, access=Access.READ)
-    return client
+    return PyTreesBoard.client(name, keys, Access.READ)

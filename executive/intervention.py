@@ -18,12 +18,13 @@ from __future__ import annotations
 
 import logging
 from collections import deque
-from collections.abc import Callable
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.model import RcConfig
+from executive.state import RcSwitches, SwitchPosition
 from executive.vehicles import VehicleProfile
 
 log = logging.getLogger(__name__)
@@ -34,26 +35,27 @@ SWITCH_JUMP_US = 300
 EXPLAINS_WITHIN_S = 2.0
 
 
+def rc_takeover(rc: RcConfig, channels: tuple[int, ...], switches: RcSwitches | None) -> str | None:
+    """Why the RC says a person has the vehicle (the take-over channel high, or switch C in MANUAL), if it does."""
+    if rc.source == "mavlink":
+        value = channels[rc.takeover_channel - 1] if len(channels) >= rc.takeover_channel else 0
+        return f"RC channel {rc.takeover_channel} high ({value} µs): a person has the vehicle" if value > rc.takeover_above_us else None
+    return "RC switch C in MANUAL: a person has the vehicle" if switches is not None and switches.swc == SwitchPosition.UP else None
+
+
 class InterventionWatch:
-    """Call :meth:`service` once per tick, after the readers drained and before the tree ticks."""
+    """A reader service: call :meth:`service` once per tick, after the RC reader and before the tree ticks."""
 
     def __init__(
-        self,
-        clock: Clock,
-        commander: Commander,
-        mission_state: MissionState,
-        profile: VehicleProfile,
-        *,
-        takeover: Callable[[], str | None] = lambda: None,
-        asked_within_s: float = 10.0,
+        self, clock: Clock, commander: Commander, mission_state: MissionState, profile: VehicleProfile, rc: RcConfig, *, asked_within_s: float = 10.0
     ) -> None:
         self._clock = clock
         self._commander = commander
         self.mission_state = mission_state
         self.profile = profile
-        self._takeover = takeover
+        self.rc = rc
         self.asked_within_s = asked_within_s
-        self._bb = blackboard.reader("intervention watch", ["/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels"])
+        self._bb = blackboard.reader("intervention watch", ["/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches"])
         self._shown: str | None = None  # the mode the heartbeat showed at the last tick
         #: The mode the executive put the vehicle in (the current leg's); None until it has in this run.
         self.expected: str | None = None
@@ -84,7 +86,7 @@ class InterventionWatch:
         if self._ours(mode, previous, now):
             self.expected = mode
             return
-        if self.expected is None or self._takeover() is not None:
+        if self.expected is None or rc_takeover(self.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches")) is not None:
             return  # not yet mid-mission (nothing of ours to keep), or a take-over the rc_takeover failsafe answers
         reason = f"{mode} set by {self._who(now)}"
         log.warning("intervention: %s (the leg was in %s) -> pause, hands off", reason, self.expected)

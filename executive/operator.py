@@ -100,7 +100,11 @@ class Operator:
             return self._reply(False, "\n".join(str(e) for e in exc.errors))
         if mission.vehicle != self.vehicle:
             return self._reply(False, f"{filename}: vehicle: this executive drives a {self.vehicle}, not a {mission.vehicle}")
-        self.mission_state.upload(mission)
+        try:
+            here = self._here()
+        except routes.RouteError:
+            here = None  # not known well enough: the tree checks the distances when the mission starts
+        self.mission_state.upload(mission, vehicle_at=here)
         return self._reply(True, self.mission_state.reason)
 
     def _route(self, args: dict[str, Any], source: str) -> Reply:

@@ -7,43 +7,27 @@ exception inside a behaviour all end with the vehicle commanded into its safe mo
 from __future__ import annotations
 
 import logging
-import socket
 import types
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
-import can
 import py_trees
 from py_trees.common import Status
 
 import trees
 from executive import blackboard
 from executive.behaviours.failsafe import failsafe_mode
-from executive.clock import Clock
-from executive.intervention import InterventionWatch
-from executive.io.can import CanReader, DriveBridge
-from executive.io.control import ControlServer
-from executive.io.heading import HeadingFilter
-from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.gcs import GroundStationControl
-from executive.io.mavlink.heartbeat import Heartbeat
-from executive.io.mavlink.link import Link
-from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.io.mavlink.reader import MavlinkReader
-from executive.io.mavlink.route_keeper import RouteKeeper
-from executive.io.mavlink.streams import StreamRequester, rates_for
-from executive.io.obstacles import ObstacleForwarder, ObstacleReceiver
-from executive.io.rc import RcReader
+from executive.intervention import rc_takeover
 from executive.io.sampler import SimulatedSampler
-from executive.journal import Journal, ResumePoint
-from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission, SamplingOptions
-from executive.operator import Operator
+from executive.journal import ResumePoint
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.model import SamplingOptions
 from executive.progress import Progress
-from executive.snapshots import SnapshotRecorder
-from executive.state import SwitchPosition
-from executive.status import StatusSource
+from executive.services import PacedService, RunObserver, Service
 from executive.vehicles import PROFILES
+
+if TYPE_CHECKING:
+    from executive.assembly import Wiring
 
 log = logging.getLogger(__name__)
 
@@ -55,6 +39,19 @@ class BehaviourCrashed(RuntimeError):
         super().__init__(f"{path}: {type(error).__name__}: {error}")
         self.path = path
         self.error = error
+
+
+class SeveralAutopilots(RuntimeError):
+    """More than one autopilot answers on the link and none was named (``--target-system``): commanding one would be a guess."""
+
+    def __init__(self, systems: dict[int, int]) -> None:
+        heard = ", ".join(f"system {sysid} (MAV_TYPE {mav_type})" for sysid, mav_type in sorted(systems.items()))
+        super().__init__(f"{len(systems)} autopilots on the link: {heard}; name the one to command with --target-system N")
+        self.systems = dict(systems)
+
+
+#: After the first autopilot's heartbeat, how long (vehicle time) to listen for others when none was named.
+SURVEY_S = 3.0
 
 
 @dataclass(frozen=True)
@@ -109,106 +106,82 @@ class Runtime:
 
     def __init__(
         self,
-        mission: Mission,
-        link: Link,
-        clock: Clock,
+        wiring: Wiring,
         *,
         rate_hz: float = 10.0,
-        system_id: int = 1,
-        progress: Progress | None = None,
         safe_timeout_s: float = 5.0,
         root: py_trees.behaviour.Behaviour | None = None,
-        control_socket: str | None = None,
-        gcs_link: Link | None = None,
-        gcs_systems: tuple[int, ...] = (255,),
-        journal: Journal | None = None,
-        snapshots: SnapshotRecorder | None = None,
-        can_bus: can.BusABC | None = None,
-        obstacle_socket: socket.socket | None = None,
+        progress: Progress | None = None,
     ) -> None:
-        """``root`` replaces the tree the first mission selects (for tests and tools)."""
-        blackboard.reset()
-        self.mission = mission
-        self.clock = clock
+        """Built by :func:`executive.assembly.build_runtime`; ``root`` replaces the tree the first mission selects (for tests and tools)."""
+        self.mission = wiring.mission
+        self.clock = wiring.clock
         self.period_s = 1.0 / rate_hz
-        self.profile = PROFILES[mission.vehicle]
-        self.commander = Commander(link, clock, self.profile, system_id=system_id)
-        self.mission_transfer = MissionTransfer(link, clock, system_id=system_id)
-        self.reader = MavlinkReader(
-            link,
-            clock,
-            self.commander,
-            link_timeout_s=mission.limits.link_timeout_s,
-            mission=self.mission_transfer,
-            rc_source=mission.rc.source == "mavlink",
-        )
-        self.rc = RcReader(mission.rc, clock)
-        self.heading = HeadingFilter(clock)
-        #: The AgileX base: its frames read each tick; the autopilot's skid-steer outputs driven onto it at 50 Hz.
-        self.can_reader = CanReader(can_bus, clock, rc=mission.rc.source == "can") if can_bus is not None else None
-        self.drive = DriveBridge(can_bus, clock) if can_bus is not None else None
-        #: A camera's obstacle distances: read each tick, each new scan sent on to the autopilot.
-        self.obstacles = ObstacleReceiver(obstacle_socket, clock) if obstacle_socket is not None else None
-        self.obstacle_forwarder = ObstacleForwarder(link, clock) if obstacle_socket is not None else None
-        self.heartbeat = Heartbeat(link, clock, system_id=system_id)
-        self.streams = StreamRequester(self.commander, rates_for(mission.vehicle))
-        self.reader.on_reconnect = self.streams.restart
-        self.mission_state = MissionState()
-        self.mission_state.listeners.append(self._on_transition)
-        #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.
-        self.route_keeper = RouteKeeper(self.mission_state, self.mission_transfer, self.commander, clock)
-        self.status = StatusSource("runtime status")
-        self.operator = Operator(self.mission_state, mission.vehicle, status=self.status.snapshot, clock=clock)
-        self.gcs_link = gcs_link
-        self.ground_station = GroundStationControl(
-            [link, *([gcs_link] if gcs_link else [])], clock, self.operator, system_id=system_id, allowed_systems=gcs_systems
-        )
-        self.reader.on_command = self.ground_station.on_command
-        self.control = ControlServer(control_socket, self._on_control_request) if control_socket else None
-        self.journal = journal
-        self.snapshots = snapshots
+        self.profile = PROFILES[self.mission.vehicle]
+        autopilot = wiring.autopilot
+        self.commander = autopilot.commander
+        self.mission_transfer = autopilot.mission_transfer
+        self.reader = autopilot.reader
+        self.heartbeat = autopilot.heartbeat
+        self.streams = autopilot.streams
+        self.mission_state = wiring.mission_state
+        # first: the tree (and the journal's run) exist before any other listener hears of the start
+        self.mission_state.listeners.insert(0, self._on_transition)
+        self.status = wiring.status
+        self.operator = wiring.operator
+        #: Drained before the tree ticks, in order.
+        self.readers: list[Service] = list(wiring.readers)
+        #: Serviced after the tree ticks, in order (after the running mission's own: its sampler).
+        self.writers: list[Service] = list(wiring.writers)
+        #: Serviced between ticks too, until each is due.
+        self.paced: list[PacedService] = list(wiring.paced)
+        self.observers: list[RunObserver] = list(wiring.observers)
+        self._closers = list(wiring.closers)
         self._resume: ResumePoint | None = None
-        if journal is not None:
-            journal.attach(self.mission_state)
         self.sampler: SimulatedSampler | None = None
+        self._run_writers: list[Service] = []
         self._next_root = root
         self.tree: py_trees.trees.BehaviourTree | None = None
-        self.mission_state.upload(mission)
+        self.mission_state.upload(self.mission)
         self.progress = progress
-        #: A mode change we did not ask for, mid-mission, pauses the mission: a person has the vehicle.
-        self.intervention = InterventionWatch(clock, self.commander, self.mission_state, self.profile, takeover=self._takeover)
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches", "/vehicle/position"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
         self._stop_reason: str | None = None
 
     # -- phases ------------------------------------------------------------------------------
-    def connect(self, timeout_s: float) -> bool:
-        """Announce ourselves and wait for the autopilot's heartbeat (bounded)."""
+    def connect(self, timeout_s: float, survey_s: float = SURVEY_S) -> bool:
+        """Announce ourselves and wait for the autopilot's heartbeat (bounded).
+
+        With no target system named, listen ``survey_s`` longer: a second autopilot heard raises
+        :class:`SeveralAutopilots` (nothing has been sent to either but our heartbeat).
+        """
         deadline = self.clock.now() + timeout_s
         while self.clock.now() < deadline:
             self.heartbeat.service()
             self.reader.drain()
             if self.reader.autopilot is not None:
-                return True
+                break
             self.clock.sleep_until(self.clock.now() + self.period_s)
-        return False
+        else:
+            return False
+        if self.reader.target_system is None:
+            survey_end = self.clock.now() + survey_s
+            while len(self.reader.autopilots_heard) < 2 and self.clock.now() < survey_end:
+                self.clock.sleep_until(self.clock.now() + self.period_s)
+                self.heartbeat.service()
+                self.reader.drain()
+            if len(self.reader.autopilots_heard) > 1:
+                raise SeveralAutopilots(self.reader.autopilots_heard)
+        return True
 
     def tick(self) -> Status:
         """One tick: drain the links, answer the operator, tick the tree, send what was asked for.
 
         Returns the tree's status (INVALID when no mission is active).
         """
-        self.reader.drain()
-        if self.can_reader is not None:
-            self.can_reader.drain()
-        if self.obstacles is not None:
-            self.obstacles.drain()
-        self.heading.service()
-        self.rc.service()
-        self.intervention.service()
-        self.heartbeat.service()
-        self._serve_operator()
+        for reader in self.readers:
+            reader.service()
         status = Status.INVALID
         if self.tree is not None and self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
             try:
@@ -217,22 +190,12 @@ class Runtime:
                 node = _crashed_behaviour(exc.__traceback__)
                 raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
             status = self.tree.root.status
-            if self.snapshots is not None:
-                self.snapshots.record(self.ticks, self.clock.now())
-        if self.journal is not None:
-            position = self._bb.get("/vehicle/position")
-            self.journal.observe_leg(self.mission_state, *((position.lat, position.lon) if position else (None, None)))
-        if self.sampler is not None:
-            self.sampler.service()
-        self.streams.service()
-        self.ground_station.service()
-        self.route_keeper.service()
-        if self.drive is not None:
-            self.drive.in_control = self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
-        if self.obstacle_forwarder is not None:
-            self.obstacle_forwarder.service()
-        self.commander.flush()
-        self.mission_transfer.flush()
+            for observer in self.observers:
+                observer.ticked(self.ticks, self.clock.now())
+        for writer in self._run_writers:
+            writer.service()
+        for writer in self.writers:
+            writer.service()
         self.ticks += 1
         return status
 
@@ -280,18 +243,19 @@ class Runtime:
                 self.progress.close()
 
     def _wait_until(self, t: float) -> None:
-        """Sleep until the next tick, sending the base its motion commands (50 Hz) meanwhile."""
-        if self.drive is None:
+        """Sleep until the next tick, servicing the paced services (the base's 50 Hz motion commands) meanwhile."""
+        if not self.paced:
             self.clock.sleep_until(t)
             return
         while self.clock.now() < t:
-            self.drive.service()
-            self.clock.sleep_until(min(t, self.drive.next_due))
+            for paced in self.paced:
+                paced.pace()
+            self.clock.sleep_until(min(t, *(paced.next_due for paced in self.paced)))
 
     def close(self) -> None:
-        """Release the control socket."""
-        if self.control is not None:
-            self.control.close()
+        """Release what the services hold (the control socket)."""
+        for close in self._closers:
+            close()
 
     def make_safe(self) -> bool:
         """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) and wait (bounded) for the heartbeat to confirm it."""
@@ -300,9 +264,8 @@ class Runtime:
             safe = failsafe_mode(self.tree.root) or safe  # an RTL or a surfacing the mission's failsafe asked for is not undone
             self.tree.interrupt()
             self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
-        if self.drive is not None:  # the base stops at once; the autopilot is told below
-            self.drive.in_control = False
-            self.drive.service()
+        for paced in self.paced:  # the base stops at once; the autopilot is told below
+            paced.stop()
         person = self._person_has_the_vehicle(safe)
         if person:
             log.warning("not commanding %s: %s", safe, person)
@@ -330,23 +293,13 @@ class Runtime:
         ACRO...) other than ``ours`` (the mode a failsafe of ours left it in): set by the RC, a ground
         station, or by us at the operator's request (handed over).
         """
-        takeover = self._takeover()
+        takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
         if takeover is not None:
             return takeover
         mode = self._bb.get("/vehicle/mode")
         if mode in self.profile.pilot_modes and mode != ours:
             return f"the vehicle is in {mode}: a person drives it"
         return None
-
-    def _takeover(self) -> str | None:
-        """Why the RC says a person has the vehicle (the take-over switch high, or switch C in MANUAL), if it does."""
-        rc = self.mission.rc
-        if rc.source == "mavlink":
-            channels = self._bb.get("/rc/channels")
-            value = channels[rc.takeover_channel - 1] if len(channels) >= rc.takeover_channel else 0
-            return f"RC channel {rc.takeover_channel} high ({value} µs): a person has the vehicle" if value > rc.takeover_above_us else None
-        switches = self._bb.get("/rc/switches")
-        return "RC switch C in MANUAL: a person has the vehicle" if switches is not None and switches.swc == SwitchPosition.UP else None
 
     def _abort(self, reason: str) -> Outcome:
         log.warning("mission aborted: %s", reason)
@@ -378,8 +331,8 @@ class Runtime:
 
     def _end(self, outcome: Outcome) -> Outcome:
         self.tree = None
-        if self.journal is not None:
-            self.journal.end_run(str(outcome.status), outcome.reason)
+        for observer in self.observers:
+            observer.end(str(outcome.status), outcome.reason)
         return outcome
 
     def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
@@ -393,24 +346,11 @@ class Runtime:
         root, self._next_root = self._next_root or trees.build(mission), None
         takes_samples = mission.sampling is not None or any(wp.sample for wp in mission.waypoints)  # the sampling: section is optional
         self.sampler = SimulatedSampler(self.clock, mission.sampling or SamplingOptions()) if takes_samples else None
+        self._run_writers = [self.sampler] if self.sampler is not None else []
         self.tree = py_trees.trees.BehaviourTree(root)
-        if self.journal is not None:
-            self.journal.begin_run(mission, resumed_from=self._resume.run if self._resume else None)
-            self._resume = None
-        if self.snapshots is not None:
-            self.snapshots.attach(root)
+        resumed_from, self._resume = (self._resume.run if self._resume else None), None
+        for observer in self.observers:
+            observer.begin(mission, root, resumed_from)
         self.tree.setup(
             clock=self.clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler
         )
-
-    def _serve_operator(self) -> None:
-        if self.gcs_link is not None:
-            while (msg := self.gcs_link.recv()) is not None:
-                if msg.get_type() == "COMMAND_LONG":
-                    self.ground_station.on_command(msg, self.gcs_link)
-        if self.control is not None:
-            self.control.service()
-
-    def _on_control_request(self, request: dict[str, Any]) -> dict[str, Any]:
-        args = {k: v for k, v in request.items() if k != "op"}
-        return self.operator.request(request["op"], source="ctl", **args).to_dict()

@@ -67,7 +67,7 @@ class SnapshotRecorder:
         self._since_keyframe = 0 if keyframe else self._since_keyframe + 1
         status = [STATUS_CODES.get(n.status, "-") for n in self._nodes]
         feedback = [n.feedback_message or "" for n in self._nodes]
-        values = {key: _show(py_trees.blackboard.Blackboard.storage.get(key)) for key in blackboard.KEYS}
+        values = {key: _show(blackboard.value(key)) for key in blackboard.KEYS}
         line: dict[str, Any] = {"tick": tick, "t": round(t, 3)}
         if keyframe:
             line["key"] = True

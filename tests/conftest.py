@@ -1,21 +1,14 @@
-"""Fixtures shared by every test: a clean blackboard, a manual clock, a fake MAVLink link."""
+"""Fixtures every test shares: a clean blackboard, the square mission (the kit's clock, link, harness... come from executive.testing)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 
-import py_trees
 import pytest
 
-from executive import blackboard
-from executive.clock import ManualClock
 from executive.io.heading import wait_for_filterpy
-from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
-from executive.vehicles import PROFILES
-from tests_support import FakeLink, Harness, Vehicle
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -25,30 +18,8 @@ def filterpy_loaded() -> None:
 
 
 @pytest.fixture(autouse=True)
-def clean_blackboard() -> Iterator[None]:
-    blackboard.reset()
-    yield
-    py_trees.blackboard.Blackboard.clear()
-
-
-@pytest.fixture
-def clock() -> ManualClock:
-    return ManualClock(start=100.0)
-
-
-@pytest.fixture
-def link() -> FakeLink:
-    return FakeLink()
-
-
-@pytest.fixture
-def commander(link: FakeLink, clock: ManualClock) -> Commander:
-    return Commander(link, clock, PROFILES["rover"])
-
-
-@pytest.fixture
-def vehicle() -> Vehicle:
-    return Vehicle()
+def every_test_on_a_clean_blackboard(clean_blackboard: None) -> None:
+    """The kit's ``clean_blackboard``, for every test."""
 
 
 @pytest.fixture
@@ -72,16 +43,6 @@ def mission_state(square_mission: Mission) -> MissionState:
     state = MissionState()
     state.upload(square_mission)
     return state
-
-
-@pytest.fixture
-def harness(clock: ManualClock, link: FakeLink, commander: Commander, mission_state: MissionState):
-    """``harness(root)`` -> a :class:`Harness` ticking ``root`` with the shared fakes."""
-
-    def make(root: py_trees.behaviour.Behaviour) -> Harness:
-        return Harness(root, clock, link, commander, mission_state)
-
-    return make
 
 
 DATA = Path(__file__).parent / "data"

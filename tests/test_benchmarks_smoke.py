@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks import __main__ as bench
-from benchmarks import can_decode, ingest, reaction, simspeed, soak, startup, tick
+from benchmarks import can_decode, efficiency, ingest, reaction, simspeed, soak, startup, tick
 from benchmarks.common import Row
 
 
@@ -48,6 +48,10 @@ def test_simulator_speed() -> None:
 
 def test_startup_and_memory() -> None:
     _check(startup.run(runs=1, sample_s=0.2), 2)
+
+
+def test_efficiency() -> None:
+    _check(efficiency.run(missions=("rover_square",)), 1)
 
 
 def test_the_command_writes_json(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.operator import Operator
 
 S = MissionStatus
@@ -77,3 +77,35 @@ def test_upload_replaces_a_ready_mission_but_not_a_running_one(operator):
     operator.request("start")
     reply = operator.request("upload", filename="rover_square.yaml", text=text)
     assert not reply.ok and reply.reason.startswith("cannot upload while RUNNING")
+
+
+AUV = (MISSIONS / "auv_survey.yaml").read_text()
+
+
+def test_an_auv_mission_out_of_reach_is_refused_at_upload(vehicle):
+    """Issue 13: the AUV's 1 km rule was checked at start; the Zeno vehicle refuses such a mission at upload, READY never reached."""
+    from executive.state import EkfFlags, EkfStatus, GlobalPosition
+
+    state = MissionState()
+    operator = Operator(state, "sub")
+    first = next(line for line in AUV.splitlines() if "name: start" in line)
+    lat = float(first.split("lat:")[1].split(",")[0])
+    ekf = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+    vehicle.set(vehicle__position=GlobalPosition(lat - 0.0135, 9.8630000, 0.0, 0, 0, 0, None, 0.0), vehicle__ekf=ekf)  # 1.5 km south
+    reply = operator.request("upload", filename="auv_survey.yaml", text=AUV)
+    assert not reply.ok and reply.state == "IDLE"
+    assert reply.reason.startswith(
+        "mission 'auv-survey' refused: waypoints[0] (start): 1500 m from the vehicle, over limits.max_goal_distance_m (1000 m)"
+    )
+    vehicle.set(vehicle__position=GlobalPosition(lat - 0.0045, 9.8630000, 0.0, 0, 0, 0, None, 0.0))  # 500 m south
+    assert operator.request("upload", filename="auv_survey.yaml", text=AUV).ok
+    assert state.status is S.READY
+
+
+def test_every_limit_is_checked_at_upload(square_mission):
+    """A mission built in code (never through the loader) breaking a limit is refused READY, with the reason."""
+    fast = square_mission.model_copy(update={"waypoints": [square_mission.waypoints[0].model_copy(update={"speed_m_s": 9.0})]})
+    state = MissionState()
+    with pytest.raises(Refused, match=r"refused: waypoints\[0\]\.speed_m_s: 9.0 m/s is outside limits.speed_m_s \[0.1, 5.0\]"):
+        state.upload(fast)
+    assert state.status is S.IDLE and state.mission is None

@@ -10,8 +10,8 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.model import GeofenceConfig, Home, Mission
 from executive.operator import Operator
 from executive.state import EkfFlags, EkfStatus, GlobalPosition
+from executive.testing import EKF_READY
 
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 HERE = (47.3979, 8.5457)
 

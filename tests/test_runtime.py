@@ -8,6 +8,7 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
+from executive.assembly import build_runtime
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime import BehaviourCrashed, Runtime, explain_failure
@@ -22,7 +23,7 @@ class Explodes(py_trees.behaviour.Behaviour):
 
 
 def make_runtime(square_mission, link, clock, root=None) -> Runtime:
-    return Runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
+    return build_runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
 
 
 def test_connect_waits_for_an_autopilot_heartbeat(square_mission, link, clock):

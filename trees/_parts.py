@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import py_trees
 
 from executive.behaviours import (
+    AllWaypointsWithin,
     Arm,
     Armed,
     BatteryAbove,
@@ -16,6 +17,7 @@ from executive.behaviours import (
     Guard,
     HeadingSane,
     LinkAlive,
+    PositionKnown,
     RcNotLost,
     RcNotTakingOver,
     UnlessPaused,
@@ -45,6 +47,24 @@ def fixed_wing_hold_mode(mission: Mission) -> str | None:
 def wait_for_ekf(mission: Mission) -> py_trees.behaviour.Behaviour:
     """RUNNING until the EKF has a usable position (SUCCESS), FAILURE after ``limits.ekf_wait_s``."""
     return WaitUntil(EkfOk(), mission.limits.ekf_wait_s)
+
+
+def within_reach(mission: Mission, name: str, check_name: str | None = None) -> py_trees.behaviour.Behaviour:
+    """The EKF's position, then every waypoint within ``limits.max_goal_distance_m`` of it (else FAILURE naming the waypoint).
+
+    Put before anything that moves the vehicle or changes its mode: a mission out of reach is
+    rejected with nothing sent.
+    """
+    limits = mission.limits
+    return py_trees.composites.Sequence(
+        name,
+        memory=True,
+        children=[
+            wait_for_ekf(mission),
+            WaitUntil(PositionKnown(), limits.ekf_wait_s),
+            AllWaypointsWithin(mission.waypoints, limits.max_goal_distance_m, name=check_name),
+        ],
+    )
 
 
 def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -31,40 +31,26 @@ import py_trees
 from py_trees.common import OneShotPolicy
 
 from executive.behaviours import (
-    AllWaypointsWithin,
     AltitudeWithin,
     ChangeAltitude,
     ChangeDepth,
     ChangeSpeed,
     DepthWithin,
-    EkfOk,
     ForEachLeg,
     GoTo,
     Guard,
-    PositionKnown,
     SetMode,
     SpeedWithin,
     Surface,
-    WaitUntil,
 )
 from executive.mission.model import Mission
 from executive.vehicles import PROFILES
-from trees._parts import guarded, mission_root, preflight, safe_mode, standard_guards
+from trees._parts import guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
 
 
 def acceptance(mission: Mission) -> py_trees.behaviour.Behaviour:
     """Once: the EKF's position, then every waypoint within ``max_goal_distance_m`` of it (else the mission fails, naming the waypoint)."""
-    limits = mission.limits
-    check = py_trees.composites.Sequence(
-        "Accept the mission",
-        memory=True,
-        children=[
-            WaitUntil(EkfOk(), limits.ekf_wait_s),
-            WaitUntil(PositionKnown(), limits.ekf_wait_s),
-            AllWaypointsWithin(mission.waypoints, limits.max_goal_distance_m),
-        ],
-    )
-    return py_trees.decorators.OneShot("Once", check, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
+    return py_trees.decorators.OneShot("Once", within_reach(mission, "Accept the mission"), OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
 
 
 def survey_guards(mission: Mission) -> list[Guard]:

@@ -3,9 +3,10 @@
 ::
 
     Mission: while PAUSED, hold the vehicle (the leg is kept); otherwise run:
+    ├── Within reach: wait for the EKF's position; every point within 5 km? (else rejected before arming or any mode change)
     ├── Pre-flight: wait for the EKF, arm (or wait for the operator to arm)
     ├── Ready: auto_arm: set LOITER (as the boat's operator would); else nothing: the operator had to
-    ├── Accept the go-to (else rejected, nothing sent that moves the vehicle): armed? in LOITER? every point within 5 km?
+    ├── Accept the go-to (else rejected, nothing sent that moves the vehicle): armed? in LOITER?
     ├── Go-to (reactive: every check every tick)
     │   ├── RC in auto? else its failsafe (rc_takeover; the seed's default: leave, the go-to fails with the reason)
     │   ├── EKF ok, else wait in MANUAL (ekf_loss; the seed's default; selector with memory: a recovery started is finished)
@@ -14,7 +15,8 @@
     │   │   └── Wait in MANUAL: set MANUAL, disarm, wait until the EKF is ok, re-arm
     │   └── Guarded path or hold (reactive selector)
     │       ├── Guarded path: link alive? armed? (disarmed = the RC took over), and the failsafe guards -> for each point:
-    │       │   ├── Go to the point: GUIDED (else set it), go to (within 1.5 m; over 60 s fails)
+    │       │   ├── Go to the point: GUIDED (else set it), go to (within 1.5 m; over 60 s fails; a point
+    │       │   │   that is neither a sample point nor the last is driven through toward the next)
     │       │   └── Sample if due: nothing to sample here? or: LOITER (else set it), sample (recorded)
     │       └── Wait for guards: the failsafe of the failing guard (mission failsafe: policy)
     └── Hold at the end (LOITER for a boat)
@@ -39,7 +41,6 @@ from __future__ import annotations
 import py_trees
 
 from executive.behaviours import (
-    AllWaypointsWithin,
     Arm,
     Armed,
     Disarm,
@@ -57,7 +58,7 @@ from executive.behaviours import (
 from executive.behaviours.failsafe import FailsafeNote
 from executive.mission.model import Mission, SamplingOptions, failsafe_policy
 from executive.vehicles import PROFILES
-from trees._parts import ARM_RETRY_S, checked, guarded, mission_root, preflight, safe_mode
+from trees._parts import ARM_RETRY_S, checked, guarded, mission_root, preflight, safe_mode, within_reach
 
 
 def _sample_hold_mode(mission: Mission) -> str:
@@ -66,13 +67,17 @@ def _sample_hold_mode(mission: Mission) -> str:
 
 
 def accept(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """The go-to's acceptance checks, once, when it starts: a failure rejects it (the mission fails with the reason)."""
-    hold, limit = safe_mode(mission), mission.limits.max_goal_distance_m
-    return py_trees.composites.Sequence(
-        "Accept the go-to",
-        memory=False,
-        children=[Armed(), ModeIs(hold), AllWaypointsWithin(mission.waypoints, limit, name=f"Every point within {limit:g} m?")],
-    )
+    """The go-to's acceptance checks on the operator's part, once the vehicle is ready: a failure rejects it (the mission fails with the reason).
+
+    The distance rule is checked before, by :func:`within_reach`: nothing is armed or set for a go-to out of reach.
+    """
+    return py_trees.composites.Sequence("Accept the go-to", memory=False, children=[Armed(), ModeIs(safe_mode(mission))])
+
+
+def reach(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """The seed's 5 km rule (``limits.max_goal_distance_m``), from the vehicle's position, before anything is sent."""
+    limit = mission.limits.max_goal_distance_m
+    return within_reach(mission, "Within reach", check_name=f"Every point within {limit:g} m?")
 
 
 def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
@@ -107,7 +112,7 @@ def point(mission: Mission) -> py_trees.behaviour.Behaviour:
     go = py_trees.composites.Sequence(
         "Go to the point",
         memory=False,  # the mode is checked every tick (someone may change it): set again when it is not GUIDED
-        children=[SetMode(guided, name=f"{guided} (else set it)"), GoTo(limits.acceptance_radius_m, limits.leg_timeout_s)],
+        children=[SetMode(guided, name=f"{guided} (else set it)"), GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True)],
     )
     sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), Sample()])
     due = py_trees.composites.Selector("Sample if due", memory=False, children=[NothingToSample(), sample])
@@ -122,7 +127,7 @@ def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     leave = failsafe_policy(mission)["rc_takeover"].recovery == "abort"
     rc = checked(rc_auto_mode(mission.rc, "RC in auto? (else leave)" if leave else "RC in auto?"), mission)
     goto = py_trees.composites.Sequence("Go-to", memory=False, children=[rc, *([ekf_or_wait_in_manual(mission)] if seed_ekf_rule else []), path])
-    steps: list[py_trees.behaviour.Behaviour] = [preflight(mission)]
+    steps: list[py_trees.behaviour.Behaviour] = [reach(mission), preflight(mission)]
     if mission.auto_arm:
         steps.append(SetMode(safe_mode(mission), name=f"Ready: set {safe_mode(mission)}"))
     steps += [accept(mission), goto, SetMode(safe_mode(mission), name="Hold at the end")]

@@ -6,7 +6,7 @@
     ├── Pre-flight: wait for the EKF, arm (or wait for the operator to)
     ├── Guarded route or hold (reactive selector)
     │   ├── Guarded route: link alive? EKF ok? armed? RC not taking over? (+ the failsafe guards: GPS, heading, battery, RC loss,
-    │   │   geofence) -> for each leg: set GUIDED, go to
+    │   │   geofence) -> for each leg: set GUIDED, go to (through each waypoint but the last, toward the next)
     │   └── Wait for guards: the failing guard's failsafe (the mission's failsafe: policy): its reaction at once, then resume or abort
     └── Hold at the end (the vehicle's safe mode)
 """
@@ -22,11 +22,11 @@ from trees._parts import guarded, mission_root, preflight, safe_mode, standard_g
 
 
 def leg(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """One leg: GUIDED, then drive to the waypoint."""
+    """One leg: GUIDED, then drive to the waypoint (through it, toward the next, unless it is the last)."""
     limits = mission.limits
-    return py_trees.composites.Sequence(
-        "Leg", memory=True, children=[SetMode(PROFILES[mission.vehicle].guided_mode), GoTo(limits.acceptance_radius_m, limits.leg_timeout_s)]
-    )
+    go = GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True)
+    guided = SetMode(PROFILES[mission.vehicle].guided_mode, confirm_by_ack=True)  # moving a tick after the ack, not at the next heartbeat
+    return py_trees.composites.Sequence("Leg", memory=True, children=[guided, go])
 
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -97,19 +97,29 @@ class CommandAction(TimedBehaviour):
 
 
 class SetMode(CommandAction):
-    """Put the autopilot in a flight mode (by name); confirmed by the heartbeat."""
+    """Put the autopilot in a flight mode (by name); confirmed by the heartbeat.
+
+    With ``confirm_by_ack`` the ack ACCEPTED of its own request confirms it too: ArduPilot changes
+    mode before it acks (GCS_MAVLINK::_set_mode_common, libraries/GCS_MAVLink/GCS_Common.cpp, acks
+    ACCEPTED only when set_mode succeeded), while its heartbeat comes once a second. For a step
+    that runs once (in a sequence with memory): a step re-ticked every tick would ask again until
+    the heartbeat shows the mode.
+    """
 
     reads = ("/vehicle/mode",)
     command_name = "DO_SET_MODE"
 
-    def __init__(self, mode: str, name: str | None = None, confirm_timeout_s: float = 5.0) -> None:
+    def __init__(self, mode: str, name: str | None = None, confirm_timeout_s: float = 5.0, confirm_by_ack: bool = False) -> None:
         super().__init__(name or f"Set {mode.upper()}", confirm_timeout_s)
         self.mode = mode.upper()
+        self.confirm_by_ack = confirm_by_ack
 
     def request(self) -> int:
         return self.commander.set_mode(self.mode)
 
     def confirmed(self) -> bool:
+        if self.confirm_by_ack and _accepted(self.get(blackboard.command_key(self.command_name)), self._ticket):
+            return True
         return self.get("/vehicle/mode") == self.commander.modes.canonical(self.mode)
 
 
@@ -152,6 +162,12 @@ def _send_setpoint(commander: Commander, target: Waypoint) -> None:
         commander.goto(target.lat, target.lon, target.alt_m)
 
 
+#: GoTo's look-ahead: the time the next target takes to act (telemetry's age, a tick, the link), s ...
+LOOK_AHEAD_LEAD_S = 0.5
+#: ... and the braking the autopilot's stop point is assumed to use, m/s/s (ArduRover's WP_ACCEL/ATC_ACCEL_MAX are 1-2).
+LOOK_AHEAD_BRAKING_M_S2 = 1.0
+
+
 class GoTo(TimedBehaviour):
     """Go to the current leg's waypoint in GUIDED.
 
@@ -167,11 +183,20 @@ class GoTo(TimedBehaviour):
       altitude from a setpoint. A waypoint without an altitude (``alt_m`` 0, which ArduPlane refuses)
       is flown at the vehicle's current height. A plane circles the point at WP_LOITER_RAD
       (60 m by default): give it an acceptance radius larger than that.
+
+    With ``look_ahead``, a waypoint that needs no stop (another follows, ``/mission/next_target``,
+    and it is not a sample point) is driven through: SUCCESS, so the next leg's target goes out,
+    once the vehicle is within :meth:`pass_distance_m` of it. ArduRover takes a GUIDED position
+    target as a stop point (AR_WPNav::set_desired_location_expect_fast_update, no next destination:
+    Rover/mode_guided.cpp) and starts braking for it, while its AUTO drives a waypoint with a next
+    one through (a "fast waypoint", Rover/mode_auto.cpp do_nav_wp); a target replaced before the
+    vehicle brakes keeps its speed (the shaped target carries its velocity over:
+    AR_PosControl::input_pos_target). The last leg and sample points stop within the acceptance radius.
     """
 
     reads = (
-        "/mission/target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position", "/vehicle/statustext",
-        blackboard.command_key("DO_REPOSITION"),
+        "/mission/target", "/mission/next_target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position",
+        "/vehicle/statustext", blackboard.command_key("DO_REPOSITION"),
     )  # fmt: skip
     needs = ("clock", "commander")
     commander: Commander
@@ -183,6 +208,9 @@ class GoTo(TimedBehaviour):
         name: str = "Go to waypoint",
         resend_s: float = 1.0,
         method: Literal["setpoint", "reposition"] = "setpoint",
+        look_ahead: bool = False,
+        lead_s: float = LOOK_AHEAD_LEAD_S,
+        braking_m_s2: float = LOOK_AHEAD_BRAKING_M_S2,
     ) -> None:
         if method not in ("setpoint", "reposition"):
             raise ValueError(f"method must be setpoint or reposition, not {method!r}")
@@ -191,6 +219,9 @@ class GoTo(TimedBehaviour):
         self.leg_timeout_s = leg_timeout_s
         self.resend_s = resend_s
         self.method = method
+        self.look_ahead = look_ahead
+        self.lead_s = lead_s
+        self.braking_m_s2 = braking_m_s2
         self.distance_m: float | None = None
         self.bearing_deg: float | None = None
         self._ticket: int | None = None
@@ -218,6 +249,10 @@ class GoTo(TimedBehaviour):
             if self.distance_m <= self.acceptance_radius_m:
                 self.feedback_message = f"{leg}: reached ({self.distance_m:.1f} m)"
                 return Status.SUCCESS
+            through = self.pass_distance_m(position)
+            if through is not None and self.distance_m <= through:
+                self.feedback_message = f"{leg}: driven through ({self.distance_m:.1f} m, within {through:.1f} m)"
+                return Status.SUCCESS
         if self.elapsed > self.leg_timeout_s:
             short = f", {self.distance_m:.1f} m short" if self.distance_m is not None else ""
             why = f" (DO_REPOSITION {self._refusal})" if self._refusal else ""
@@ -228,6 +263,27 @@ class GoTo(TimedBehaviour):
         else:
             self.feedback_message = f"{leg}: {self.distance_m:.1f} m at {self.bearing_deg:03.0f}°"
         return Status.RUNNING
+
+    def pass_distance_m(self, position: GlobalPosition) -> float | None:
+        """How near the waypoint the next leg's target goes out; None when this leg ends in a stop.
+
+        Far enough ahead that the autopilot has not begun braking for the stop point yet: the distance
+        covered in ``lead_s`` (the telemetry's age, a tick, the link) plus the braking distance at
+        ``braking_m_s2``, at the present ground speed. Turn-dependent, as AR_WPNav bounds a fast
+        waypoint's corner (SCurve::advance_target_along_track keeps the turn's apex within
+        WP_RADIUS): for a turn of angle t, at most 2 x acceptance radius / sin(t / 2), so a sharp turn
+        is not cut wider than a gentle one. Never less than the acceptance radius.
+        """
+        following: Waypoint | None = self.get("/mission/next_target")
+        if not self.look_ahead or self.method != "setpoint" or following is None or self.target is None or self.target.sample:
+            return None
+        speed = position.ground_speed_m_s
+        ahead = speed * self.lead_s + speed * speed / (2.0 * self.braking_m_s2)
+        inbound = geo.distance_bearing(position.lat, position.lon, self.target.lat, self.target.lon)[1]
+        outbound = geo.distance_bearing(self.target.lat, self.target.lon, following.lat, following.lon)[1]
+        turn = math.radians(abs((outbound - inbound + 180.0) % 360.0 - 180.0))
+        apex_bound = 2.0 * self.acceptance_radius_m / max(math.sin(turn / 2.0), 1e-6)
+        return max(self.acceptance_radius_m, min(ahead, apex_bound))
 
     def _send(self, position: GlobalPosition | None) -> None:
         assert self.target is not None

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import logging
 import sys
 from typing import TYPE_CHECKING
@@ -60,3 +61,14 @@ def setup_logging(verbose: int = 0) -> None:
     """Log to stderr: warnings by default, info with -v, debug with -vv."""
     level = (logging.WARNING, logging.INFO, logging.DEBUG)[min(verbose, 2)]
     logging.basicConfig(level=level, format="executive: %(levelname)s: %(name)s: %(message)s", stream=sys.stderr, force=True)
+
+
+def mavlink_id(text: str) -> int:
+    """A MAVLink system or component id: 1-255."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if not 1 <= value <= 255:
+        raise argparse.ArgumentTypeError(f"must be 1-255, got {value}")
+    return value

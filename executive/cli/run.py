@@ -12,8 +12,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from executive.assembly import Plug, build_runtime, can_base, control_socket, ground_stations, journal_recorder, obstacle_camera, snapshot_recorder
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
-from executive.cli.common import faults_or_report, load_or_report, setup_logging, signing_key_arg
+from executive.cli.common import faults_or_report, load_or_report, mavlink_id, setup_logging, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.link import PymavlinkLink
@@ -21,7 +22,7 @@ from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.progress import Progress
-from executive.runtime import Runtime
+from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
@@ -37,8 +38,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("mission", help="mission YAML file")
     p.add_argument("--mavlink", metavar="URL", help="autopilot link: udpin:0.0.0.0:14550, tcp:HOST:PORT, /dev/ttyACM0[,BAUD]")
     p.add_argument("--rate", type=float, default=10.0, metavar="HZ", help="tick rate (default 10)")
-    p.add_argument("--speedup", type=float, default=1.0, metavar="X", help="simulator only: run X times faster than real time")
-    p.add_argument("--sysid", type=int, default=1, help="our MAVLink system id (default 1, the vehicle's)")
+    p.add_argument(
+        "--speedup",
+        type=float,
+        default=1.0,
+        metavar="X",
+        help="the built-in simulator runs X times faster than real time; with --mavlink, the vehicle's own speed-up (ArduPilot SITL's "
+        "--speedup): the executive ticks and counts its timeouts in the vehicle's time. Never with a real vehicle",
+    )
+    p.add_argument("--sysid", type=mavlink_id, default=1, help="our MAVLink system id (default 1, the vehicle's)")
+    target = "the autopilot to command, alone (its HEARTBEAT's system id); required when several vehicles share the link"
+    p.add_argument("--target-system", type=mavlink_id, metavar="N", help=target)
+    p.add_argument("--target-component", type=mavlink_id, default=1, metavar="N", help="the autopilot's component id (default 1)")
     p.add_argument("--connect-timeout", type=float, default=30.0, metavar="S", help="seconds to wait for the autopilot (default 30)")
     p.add_argument("--faults", metavar="FILE", help="simulator only: YAML list of faults to inject into the simulated vehicle")
     p.add_argument("--tlog", metavar="FILE", help="record the whole MAVLink link in FILE (.tlog, for Mission Planner and pymavlink)")
@@ -71,24 +82,21 @@ def _vehicle_link(
             link.close()
         return
     from executive.sim import SimServer
-    from executive.sim.autopilot import DEFAULT_HOME
+    from executive.sim.options import firmware_options, simulated_home
 
-    start = mission.home or (mission.waypoints[0] if mission.waypoints else None)
-    home = (start.lat, start.lon, getattr(start, "heading_deg", 0.0)) if start else DEFAULT_HOME
     sim_options = mission.simulator or SimulatorOptions()
     model = sim_options.model or mission.vehicle
-    firmware = {"q_guided_mode": sim_options.q_guided_mode} if model == "vtol" else {}
     base_bus = _open_can(args.can) if args.can and model == "bunker" else None  # the simulated base's end of the bus
     try:
         with SimServer(
             model,
             clock=clock,
-            home=home,
+            home=simulated_home(mission),
             faults=faults,
             signing_key=signing_key,
             ekf_ready_after_s=sim_options.ekf_ready_after_s,
             can_bus=base_bus,
-            **firmware,
+            **firmware_options(mission),
         ) as sim:
             print(f"executive: simulated {model} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
             link = PymavlinkLink(sim.url_for_client, **options)
@@ -196,6 +204,31 @@ def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
     return files
 
 
+def _plugs(
+    args: argparse.Namespace,
+    journal: Journal | None,
+    snapshots: SnapshotRecorder | None,
+    can_bus: can.BusABC | None,
+    obstacle_socket: socket.socket | None,
+    gcs_link: PymavlinkLink | None,
+) -> list[Plug]:
+    """The optional parts of this run, as the command line asks for them."""
+    plugs = []
+    if gcs_link is not None:
+        plugs.append(ground_stations(gcs_link, args.gcs_sysid or (255,)))
+    if (socket_path := _usable_socket(args.socket)) is not None:
+        plugs.append(control_socket(socket_path))
+    if journal is not None:
+        plugs.append(journal_recorder(journal))
+    if snapshots is not None:
+        plugs.append(snapshot_recorder(snapshots))
+    if can_bus is not None:
+        plugs.append(can_base(can_bus))
+    if obstacle_socket is not None:
+        plugs.append(obstacle_camera(obstacle_socket))
+    return plugs
+
+
 def main(args: argparse.Namespace) -> int:
     setup_logging(args.verbose)
     mission = load_or_report(args.mission)
@@ -207,8 +240,10 @@ def main(args: argparse.Namespace) -> int:
     if args.resume and not args.journal:
         raise BadInput("--resume needs --journal DB")
     if args.mavlink and args.speedup != 1.0:
-        print("executive: run: --speedup applies to the simulator only; ignored with --mavlink", file=sys.stderr)
-    clock = ScaledClock(1.0 if args.mavlink else args.speedup)
+        # a SITL at --speedup 5 drives 5 s in each wall second: ticking on the wall clock, the executive would react five times
+        # less often in the vehicle's time (issue 14: GUIDED 44.4 s at 1x, 49.2 s at 10x)
+        print(f"executive: run: the vehicle's time runs {args.speedup:g}x real time (a simulator's speed-up)", file=sys.stderr)
+    clock = ScaledClock(args.speedup)
     faults = None
     if args.faults is not None and args.mavlink:
         print("executive: run: --faults applies to the built-in simulator only; it cannot be used with --mavlink", file=sys.stderr)
@@ -236,24 +271,27 @@ def main(args: argparse.Namespace) -> int:
         if journal is not None and args.resume:
             resume = journal.resume_point(mission)
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
-        runtime = Runtime(
+        runtime = build_runtime(
             mission,
             link,
             clock,
+            plugs=_plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link),
             rate_hz=args.rate,
             system_id=args.sysid,
+            target_system=args.target_system,
+            target_component=args.target_component,
             progress=Progress(sys.stdout, clock),
-            control_socket=_usable_socket(args.socket),
-            gcs_link=gcs_link,
-            gcs_systems=tuple(args.gcs_sysid or (255,)),
-            journal=journal,
-            snapshots=snapshots,
-            can_bus=can_bus,
-            obstacle_socket=obstacle_socket,
         )
         stack.callback(runtime.close)
-        if not runtime.connect(args.connect_timeout * clock.speedup):
-            print(f"executive: run: no heartbeat from an autopilot within {args.connect_timeout:g} s", file=sys.stderr)
+        try:
+            # the built-in simulator is alone on its link: no other autopilot to listen for
+            connected = runtime.connect(args.connect_timeout * clock.speedup, survey_s=SURVEY_S if args.mavlink else 0.0)
+        except SeveralAutopilots as exc:
+            print(f"executive: run: {exc}", file=sys.stderr)
+            return EXIT_NO_VEHICLE
+        if not connected:
+            which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
+            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s", file=sys.stderr)
             return EXIT_NO_VEHICLE
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:

@@ -11,9 +11,9 @@ from types import FrameType
 from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
-from executive.cli.common import faults_or_report, signing_key_arg
+from executive.cli.common import faults_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
-from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, Home
+from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, FIRMWARES, Home, firmwares_for
 from executive.sim.server import SimServer
 
 if TYPE_CHECKING:
@@ -46,19 +46,23 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser = subparsers.add_parser(
         "sim",
         help="run the simulated vehicle alone",
-        description="Run a simulated ArduPilot vehicle speaking MAVLink 2, until Ctrl-C or SIGTERM.",
+        description="Run a simulated ArduPilot or PX4 vehicle speaking MAVLink 2, until Ctrl-C or SIGTERM.",
     )
     # let "--home -35.36,149.16" through: argparse would take a negative latitude for an option
     parser._negative_number_matcher = re.compile(r"^-\.?\d[\d.,]*$")
     parser.add_argument("--vehicle", choices=sorted(AUTOPILOTS), default="rover", help="vehicle kind (default: %(default)s)")
+    firmware = "the simulated autopilot firmware (default: %(default)s; px4 simulates the vtol)"
+    parser.add_argument("--autopilot", choices=FIRMWARES, default="ardupilot", help=firmware)
     where = "where to listen: tcpin:HOST:PORT or udpin:HOST:PORT (default: %(default)s, as SITL)"
     parser.add_argument("--mavlink", metavar="URL", default="tcpin:127.0.0.1:5760", help=where)
     start = "start position and heading in degrees (default: ArduPilot SITL's CMAC)"
     parser.add_argument("--home", metavar="LAT,LON[,HEADING]", type=_home, default=DEFAULT_HOME, help=start)
     positive, non_negative = (lambda s: _seconds(s, positive=True)), (lambda s: _seconds(s, positive=False))
     parser.add_argument("--speedup", metavar="X", type=positive, default=1.0, help="simulated time runs X times faster")
-    ekf = "simulated seconds before the EKF uses GPS and arming is possible (default: %(default)g)"
-    parser.add_argument("--ekf-ready-after", metavar="S", type=non_negative, default=40.0, help=ekf)
+    ekf = "simulated seconds before the EKF uses GPS and arming is possible (default: the firmware's, ArduPilot 40, PX4 3)"
+    parser.add_argument("--ekf-ready-after", metavar="S", type=non_negative, help=ekf)
+    sysid = "the vehicle's MAVLink system id, 1-255 (SYSID_THISMAV; default: %(default)s)"
+    parser.add_argument("--sysid", metavar="N", type=mavlink_id, default=1, help=sysid)
     parser.add_argument("--duration", metavar="S", type=positive, help="exit after S simulated seconds")
     parser.add_argument("--faults", metavar="FILE", help="YAML list of faults to inject (link loss, EKF, GPS, compass, RC, battery)")
     parser.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key: sign everything, drop unsigned packets")
@@ -69,6 +73,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 def run(args: argparse.Namespace) -> int:
     """Serve the simulated vehicle in the foreground."""
+    if args.vehicle not in firmwares_for(args.autopilot):
+        known = ", ".join(firmwares_for(args.autopilot))
+        print(f"executive sim: no simulated {args.autopilot} {args.vehicle} (known: {known})", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if args.can is not None and args.vehicle != "bunker":
         print(f"executive sim: --can simulates the AgileX base of the tracked UGV: use it with --vehicle bunker, not {args.vehicle}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -105,10 +113,12 @@ def _serve(args: argparse.Namespace, clock: ScaledClock, faults: FaultInjector |
             args.mavlink,
             clock=clock,
             home=args.home,
+            system_id=args.sysid,
             ekf_ready_after_s=args.ekf_ready_after,
             faults=faults,
             signing_key=signing_key,
             can_bus=can_bus,
+            autopilot=args.autopilot,
         )
     except (OSError, ValueError) as exc:
         print(f"executive sim: cannot listen on {args.mavlink}: {exc}", file=sys.stderr)
@@ -122,7 +132,8 @@ def _serve(args: argparse.Namespace, clock: ScaledClock, faults: FaultInjector |
     previous = signal.signal(signal.SIGTERM, on_sigterm) if in_main_thread else None
     ap = server.autopilot
     print(
-        f"executive sim: {ap.FIRMWARE} {args.vehicle} listening on {args.mavlink} (connect to {server.url_for_client}), speed-up {args.speedup:g}x",
+        f"executive sim: {ap.FIRMWARE} {args.vehicle} listening on {args.mavlink} (connect to {server.url_for_client}), "
+        f"system {args.sysid}, speed-up {args.speedup:g}x",
         flush=True,
     )
     if faults is not None:

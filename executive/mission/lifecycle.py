@@ -32,6 +32,7 @@ from collections.abc import Callable, Iterable, Sequence
 from enum import StrEnum
 
 from executive import blackboard
+from executive.geo import distance
 from executive.mission.errors import format_path
 from executive.mission.model import Home, Mission, Waypoint, cross_field_errors
 from executive.mission.route import Route
@@ -70,6 +71,18 @@ RouteListener = Callable[[Route, str], None]
 ROUTE_EDITABLE = frozenset({MissionStatus.READY, MissionStatus.RUNNING, MissionStatus.PAUSED})
 
 
+def out_of_reach(mission: Mission, lat: float, lon: float) -> list[str]:
+    """The waypoints farther than ``limits.max_goal_distance_m`` from (lat, lon), each with its distance."""
+    limit = mission.limits.max_goal_distance_m
+    found = []
+    for i, wp in enumerate(mission.waypoints):
+        d = distance(lat, lon, wp.lat, wp.lon)
+        if d > limit:
+            named = f" ({wp.name})" if wp.name else ""
+            found.append(f"waypoints[{i}]{named}: {d:.0f} m from the vehicle, over limits.max_goal_distance_m ({limit:g} m)")
+    return found
+
+
 class Refused(Exception):
     """A lifecycle request that is not allowed in the current state; ``str()`` says why."""
 
@@ -91,8 +104,20 @@ class MissionState:
         self.hold_while_paused = True
 
     # -- requests ----------------------------------------------------------------------------
-    def upload(self, mission: Mission) -> None:
+    def upload(self, mission: Mission, vehicle_at: tuple[float, float] | None = None) -> None:
+        """Load a mission READY; refused (nothing changes) when it breaks a limit or, with the vehicle's position, a waypoint is out of reach.
+
+        The rules between fields are checked again (a mission built in code never went through the
+        loader), and every waypoint must be within ``limits.max_goal_distance_m`` of ``vehicle_at``
+        (the AUV's 1 km rule: the Zeno vehicle refuses such a mission at upload). Without a position
+        the trees check it when the mission starts.
+        """
         self._check("upload")
+        problems = [f"{format_path(path)}: {why}" for path, why in cross_field_errors(mission)]
+        if vehicle_at is not None:
+            problems += out_of_reach(mission, *vehicle_at)
+        if problems:
+            raise Refused(f"mission {mission.name!r} refused: " + "; ".join(problems))
         self.mission = mission
         self.leg_index = 0
         self.samples = ()
@@ -143,6 +168,15 @@ class MissionState:
         if self.mission is None or self.status not in (MissionStatus.RUNNING, MissionStatus.PAUSED) or self.leg_index >= self.leg_count:
             return None
         return self.mission.waypoints[self.leg_index]
+
+    @property
+    def next_target(self) -> Waypoint | None:
+        """The waypoint after the current leg's, if there is one (the leg may be driven through toward it)."""
+        target = self.target
+        if target is None or self.leg_index + 1 >= self.leg_count:
+            return None
+        assert self.mission is not None
+        return self.mission.waypoints[self.leg_index + 1]
 
     def continue_from(self, leg_index: int, samples: Iterable[Sample] = ()) -> None:
         """After a restart (crash, kill -9, power cut): carry on the running mission at ``leg_index`` with the samples already taken.
@@ -263,4 +297,5 @@ class MissionState:
         self._bb.set("/mission/leg_index", self.leg_index)
         self._bb.set("/mission/leg_count", self.leg_count)
         self._bb.set("/mission/target", self.target)
+        self._bb.set("/mission/next_target", self.next_target)
         self._bb.set("/mission/samples", self.samples)

@@ -209,11 +209,95 @@ def load_model_text(text: str, filename: str, model: type[M], checks: Checks[M] 
             if key is not None and e["type"] == "invalid_key":
                 path = (*path[:-1], key.value)  # 'on: 1' has the key True: name it as written
             errors.append(error(path, _message(e, key or loader.values.get(path), model), key))
+        if checks is not None:  # the rules between fields too, on the values that are valid: every error in one pass
+            errors += [error(path, message) for path, message in _checks_on_the_valid_part(data, model, checks)]
         raise MissionError(errors) from None
     errors += [error(path, message) for path, message in (checks(result) if checks else [])]
     if errors:
         raise MissionError(errors)
     return result
+
+
+#: Passes of leaving out what pydantic refuses before the rules between fields give up.
+_MAX_PRUNING_PASSES = 8
+#: pydantic errors that name a field missing from its mapping: the mapping itself cannot be kept.
+_MISSING = frozenset({"missing", "union_tag_not_found"})
+
+
+def _checks_on_the_valid_part(data: dict[str, Any], model: type[M], checks: Checks[M]) -> list[tuple[Path, str]]:
+    """``checks`` run on ``data`` without its invalid values (paths in ``data``), so that one pass reports every error.
+
+    Each value pydantic refuses is left out (a field then takes its default); a mapping that then
+    lacks a required field is left out whole (a list item is dropped, its siblings keep their
+    paths). A rule's error about a value left out, about what held it (a mapping or a list that
+    lost it), or judged by one (its message names it) is not reported: it would judge a value
+    that is not the file's. Nothing when the document itself
+    cannot be kept.
+    """
+    dropped: set[Path] = set()
+    for _ in range(_MAX_PRUNING_PASSES):
+        pruned, kept = _without(data, dropped)
+        try:
+            result = model.model_validate(pruned)
+        except ValidationError as exc:
+            refused = set()
+            for e in exc.errors(include_url=False):
+                path = _file_path(e["loc"], pruned, missing=e["type"] == "missing")
+                path = _original_path(path[:-1] if e["type"] in _MISSING else path, kept)
+                if not path:
+                    return []
+                refused.add(path)
+            if refused <= dropped:
+                return []
+            dropped |= refused
+            continue
+        found = []
+        for path, message in checks(result):
+            original = _original_path(path, kept)
+            if any(_related(original, d) or format_path(d) in message for d in dropped):
+                continue  # about a value left out or what holds it, or judged by one (its message names it)
+            found.append((original, message))
+        return found
+    return []
+
+
+def _without(value: Any, dropped: set[Path], path: Path = ()) -> tuple[Any, dict[Path, list[int]]]:
+    """A copy of ``value`` without the values at ``dropped``, and for each list the indices (in ``value``) of the items kept."""
+    kept: dict[Path, list[int]] = {}
+    if isinstance(value, dict):
+        copy = {}
+        for key, item in value.items():
+            if (*path, key) not in dropped:
+                copy[key], below = _without(item, dropped, (*path, key))
+                kept |= below
+        return copy, kept
+    if isinstance(value, list):
+        indices = [i for i in range(len(value)) if (*path, i) not in dropped]
+        kept[path] = indices
+        items = []
+        for i in indices:
+            item, below = _without(value[i], dropped, (*path, i))
+            items.append(item)
+            kept |= below
+        return items, kept
+    return value, kept
+
+
+def _original_path(path: Path, kept: dict[Path, list[int]]) -> Path:
+    """A path in the pruned copy as a path in the original document."""
+    original: list[int | str] = []
+    for part in path:
+        indices = kept.get(tuple(original))
+        if indices is not None and isinstance(part, int) and 0 <= part < len(indices):
+            part = indices[part]
+        original.append(part)
+    return tuple(original)
+
+
+def _related(path: Path, dropped: Path) -> bool:
+    """``path`` is the value left out, inside it, or a mapping or list that lost it."""
+    n = min(len(path), len(dropped))
+    return path[:n] == dropped[:n]
 
 
 def _file_path(loc: tuple[int | str, ...], data: Any, missing: bool = False) -> Path:

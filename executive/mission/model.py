@@ -82,14 +82,26 @@ class Range(BaseModel):
         return self.min <= value <= self.max
 
 
+#: Limits a vehicle kind has by default, where its seed system says other than :class:`Limits`: the AUV (Zeno)
+#: takes speeds of 0.1-1 m/s and refuses a mission with a waypoint over 1 km from it.
+VEHICLE_LIMITS: dict[str, dict[str, object]] = {
+    "sub": {"speed_m_s": {"min": 0.1, "max": 1.0}, "max_goal_distance_m": 1000.0},
+}
+
+
 class Limits(BaseModel):
-    """Numbers the guards and actions enforce."""
+    """Numbers the guards and actions enforce (a sub's defaults: :data:`VEHICLE_LIMITS`)."""
 
     model_config = _STRICT
     acceptance_radius_m: float = Field(2.0, gt=0.0, le=1000.0, description="a waypoint counts as reached within this distance")
     leg_timeout_s: float = Field(120.0, gt=0.0, le=86400.0, description="a leg taking longer than this is abandoned")
-    max_goal_distance_m: float = Field(5000.0, gt=0.0, le=100_000.0, description="targets farther than this from the vehicle are refused")
-    speed_m_s: Range = Field(default_factory=lambda: Range(min=0.1, max=5.0), description="allowed waypoint speeds")
+    max_goal_distance_m: float = Field(
+        5000.0,
+        gt=0.0,
+        le=100_000.0,
+        description="a waypoint farther than this from the vehicle is refused, at upload and at start (sub: 1000 by default)",
+    )
+    speed_m_s: Range = Field(default_factory=lambda: Range(min=0.1, max=5.0), description="allowed waypoint speeds (sub: 0.1-1 by default)")
     depth_m: Range = Field(default_factory=lambda: Range(min=0.0, max=100.0), description="allowed depths (sub)")
     altitude_m: Range = Field(default_factory=lambda: Range(min=2.0, max=100.0), description="allowed altitudes above seabed/ground")
     link_timeout_s: float = Field(3.0, gt=0.0, le=60.0, description="heartbeat age after which the link counts as lost")
@@ -332,6 +344,17 @@ class Mission(BaseModel):
     rc_route: RcRouteOptions | None = Field(None, description="ugv_rc_route options")
     simulator: SimulatorOptions | None = Field(None, description="the built-in simulated vehicle for `executive run` without --mavlink")
     waypoints: list[Waypoint] = Field(max_length=100_000, description="the route; only ugv_rc_route may start empty (the operator records it)")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _vehicle_limits(cls, data: object) -> object:
+        """The vehicle kind's default limits (:data:`VEHICLE_LIMITS`) where the file gives none."""
+        if not isinstance(data, dict) or not isinstance(data.get("vehicle"), str) or data["vehicle"] not in VEHICLE_LIMITS:
+            return data
+        limits = data.get("limits", {})
+        if not isinstance(limits, dict):
+            return data  # the error is reported as it is
+        return {**data, "limits": VEHICLE_LIMITS[data["vehicle"]] | limits}
 
 
 #: Tree -> the vehicle kinds it can drive and the options section it reads.

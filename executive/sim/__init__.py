@@ -1,6 +1,6 @@
-"""The built-in simulated vehicles: ArduPilot firmware behaviour over a real MAVLink link."""
+"""The built-in simulated vehicles: ArduPilot or PX4 firmware behaviour over a real MAVLink link."""
 
-from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, ArduPilotSim, ArduRoverSim, Home, make_autopilot
+from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, FIRMWARES, ArduPilotSim, ArduRoverSim, Home, firmwares_for, make_autopilot
 from executive.sim.server import SimServer
 from executive.sim.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 
@@ -8,6 +8,7 @@ __all__ = [
     "AUTOPILOTS",
     "BOAT_LIMITS",
     "DEFAULT_HOME",
+    "FIRMWARES",
     "ROVER_LIMITS",
     "ArduPilotSim",
     "ArduRoverSim",
@@ -16,5 +17,6 @@ __all__ = [
     "SimServer",
     "SurfaceVehicle",
     "VehicleModel",
+    "firmwares_for",
     "make_autopilot",
 ]

@@ -45,6 +45,7 @@ PREARM_AHRS = "AHRS: not using configured AHRS type"
 PREARM_REPORT_S = 30.0  # a disarmed ArduPilot repeats its failing pre-arm checks this often
 PREARM_BIT_LEAD_S = 10.0  # quirk: SYS_STATUS says "pre-arm healthy" this long before arming is possible
 BATTERY_MAH = 10000.0
+RELAYS = 16  # ArduPilot 4.5: RELAY1..RELAY16 (AP_Relay)
 BATTERY_FULL_V, BATTERY_EMPTY_V, BATTERY_SAG_V_PER_A = 12.6, 10.5, 0.03
 
 _M = mavlink
@@ -123,6 +124,7 @@ class ArduPilotSim(ABC):
     POSITION_MODES: ClassVar[frozenset[str]] = frozenset()  # refused while armed without a position estimate
     UNARMABLE_MODES: ClassVar[frozenset[str]] = frozenset()
     NAV_PERIOD_S: ClassVar[float] = 0.1  # how often mode logic runs, in clock time
+    MISSION_STORE: ClassVar[type[MissionStore]] = MissionStore  # the firmware's side of the mission protocol
 
     def __init__(
         self,
@@ -159,8 +161,9 @@ class ArduPilotSim(ABC):
         self._booted = self._origin_set = False
         self._prearm_reported_at = -math.inf
         self._text_id = 0
-        self.mission = MissionStore(self, self._emit, self._text)
+        self.mission = self.MISSION_STORE(self, self._emit, self._text)
         self.proximity = Proximity()  # a MAVLink proximity sensor (PRX1_TYPE 2): what OBSTACLE_DISTANCE tells
+        self.relays: dict[int, bool] = {}  # relay instance -> on, as MAV_CMD_DO_SET_RELAY left it
         self._builders = self._message_builders()
         self._handlers = self._message_handlers()
         self._commands = self._command_handlers()
@@ -274,6 +277,7 @@ class ArduPilotSim(ABC):
             _M.MAV_CMD_REQUEST_MESSAGE: self._cmd_request_message,
             _M.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES: self._cmd_request_capabilities,
             _M.MAV_CMD_DO_SET_HOME: self._cmd_set_home,
+            _M.MAV_CMD_DO_SET_RELAY: self._cmd_set_relay,
             _M.MAV_CMD_DO_SET_MISSION_CURRENT: lambda cmd: self.mission.command_set_current(cmd.params[0], cmd.params[1]),
         }
 
@@ -367,13 +371,18 @@ class ArduPilotSim(ABC):
         target_component = getattr(msg, "target_component", 0)
         return target_system in (0, self.system_id) and target_component in (0, self.component_id)
 
-    def _on_command(self, msg: MAVLinkMessage) -> None:
+    @staticmethod
+    def _command_of(msg: MAVLinkMessage) -> Command:
+        """A received COMMAND_LONG or COMMAND_INT as a :class:`Command`."""
         if msg.get_type() == "COMMAND_INT":
             params = (msg.param1, msg.param2, msg.param3, msg.param4, float(msg.x), float(msg.y), msg.z)
         else:
             params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6, msg.param7)
         is_int = msg.get_type() == "COMMAND_INT"
-        cmd = Command(msg.command, params, is_int, msg.frame if is_int else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT)
+        return Command(msg.command, params, is_int, msg.frame if is_int else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT)
+
+    def _on_command(self, msg: MAVLinkMessage) -> None:
+        cmd = self._command_of(msg)
         handler = self._commands.get(cmd.command)
         self._ack_first(msg, cmd.command, lambda: handler(cmd) if handler else _M.MAV_RESULT_UNSUPPORTED)
 
@@ -475,6 +484,14 @@ class ArduPilotSim(ABC):
     def _cmd_request_capabilities(self, cmd: Command) -> int:
         if cmd.params[0] == 1.0:
             self._emit(self._msg_autopilot_version())
+        return _M.MAV_RESULT_ACCEPTED
+
+    def _cmd_set_relay(self, cmd: Command) -> int:
+        # libraries/GCS_MAVLink/GCS_ServoRelay.cpp: ACCEPTED when AP_ServoRelayEvents::do_set_relay(instance, state) succeeds
+        instance, state = int(cmd.params[0]), int(cmd.params[1])
+        if not 0 <= instance < RELAYS or state not in (0, 1):
+            return _M.MAV_RESULT_FAILED
+        self.relays[instance] = bool(state)
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_set_home(self, cmd: Command) -> int:
@@ -616,6 +633,7 @@ class ArduRoverSim(ArduPilotSim):
     _guided_speed: float | None = None
     _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
     _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
+    _auto_hold_until = 0.0  # elapsed_s at which a waypoint's hold time ends
 
     @property
     def is_boat(self) -> bool:
@@ -657,9 +675,14 @@ class ArduRoverSim(ArduPilotSim):
         self.vehicle.hold()
         return True
 
-    def _drive(self, lat: float, lon: float, speed_m_s: float | None = None) -> None:
+    def _drive(self, lat: float, lon: float, speed_m_s: float | None = None, then: tuple[float, float] | None = None) -> None:
+        """Drive to a point and stop there; with ``then`` (AUTO's next waypoint), through it (a "fast waypoint")."""
         self._destination, self._driving, self._loitering = (lat, lon), True, False
-        self.vehicle.drive_to(lat, lon, speed_m_s)
+        if then is None:
+            self.vehicle.drive_to(lat, lon, speed_m_s)
+        else:
+            assert isinstance(self.vehicle, SurfaceVehicle)
+            self.vehicle.drive_to(lat, lon, speed_m_s, then=then)
 
     def _enter_mode(self, mode: str) -> bool:
         if mode == "AUTO":
@@ -720,7 +743,12 @@ class ArduRoverSim(ArduPilotSim):
         self.vehicle.drive_manual(stick(self.rc_channels[2]), stick(self.rc_channels[0]))
 
     def _update_auto(self) -> None:
-        """Start the mission once the EKF has an origin, drive to each NAV_WAYPOINT, pass over other items, stop at the end."""
+        """Start the mission once the EKF has an origin, drive to each NAV_WAYPOINT, pass over other items, stop at the end.
+
+        As ModeAuto::do_nav_wp (Rover/mode_auto.cpp): a waypoint followed by another navigation command and
+        without a hold time is driven through toward that one (AR_WPNav's "fast waypoint": no stop, the corner
+        cut within WP_RADIUS); the last one, or one with a hold time, is a stop. The next item starts at once.
+        """
         if self._auto_waiting:
             if not self.position_ok:
                 return
@@ -731,17 +759,32 @@ class ArduRoverSim(ArduPilotSim):
             if self._driving or self._loitering:
                 self._stop()
             return
-        if (self.mission.current_seq, item) != self._auto_item:  # the next item, a set-current, or an upload replaced it
-            self._auto_item = (self.mission.current_seq, item)
-            if item.command == _M.MAV_CMD_NAV_WAYPOINT:
-                self._drive(item.lat, item.lon, self._guided_speed)
-            else:
-                self.mission.advance()
-        elif self._driving and self.vehicle.arrived:
-            self._driving = False
-            self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{self.mission.current_seq}")
-            if self.mission.advance() is None:
+        if (self.mission.current_seq, item) == self._auto_item:
+            if self._driving and self.vehicle.arrived:
+                self._driving = False
+                hold_s = item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
+                self._auto_hold_until = self.elapsed_s + hold_s
+                seq = self.mission.current_seq
+                self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{seq}" + (f". Loiter for {hold_s:.0f} seconds" if hold_s else ""))
+            if self._driving or self.elapsed_s < self._auto_hold_until - _EPSILON_S:
+                return
+            item = self.mission.advance()
+            if item is None:
                 self._stop()
+                return
+        # the next item, a set-current, or an upload replaced it
+        self._auto_item = (self.mission.current_seq, item)
+        if item.command == _M.MAV_CMD_NAV_WAYPOINT:
+            self._drive(item.lat, item.lon, self._guided_speed, then=self._next_corner(item))
+        else:
+            self.mission.advance()
+
+    def _next_corner(self, item: StoredCommand) -> tuple[float, float] | None:
+        """Where AUTO goes after the waypoint ``item`` without stopping there, if it does not stop (ModeAuto::do_nav_wp)."""
+        if item.params[0] > 0 or self.mission.current_seq is None:  # a hold time: always a stop
+            return None
+        after = self.mission.next_nav_after(self.mission.current_seq)
+        return (after.lat, after.lon) if after is not None else None
 
     def _desired_location(self) -> tuple[float, float] | None:
         return self._destination
@@ -828,8 +871,24 @@ AUTOPILOTS: Mapping[str, type[ArduPilotSim]] = _Firmwares()
 PROFILE_OF: Mapping[str, str] = MappingProxyType({"bunker": "rover"})
 
 
-def make_autopilot(kind: str, clock: Clock, home: Home = DEFAULT_HOME, **options: float) -> ArduPilotSim:
+#: The simulated autopilot firmwares (``executive sim --autopilot``).
+FIRMWARES = ("ardupilot", "px4")
+
+
+def firmwares_for(autopilot: str) -> Mapping[str, type[ArduPilotSim]]:
+    """Vehicle kind -> simulated firmware class, for one autopilot (``ardupilot`` or ``px4``)."""
+    if autopilot == "px4":
+        from executive.sim.px4 import PX4_AUTOPILOTS  # subclasses this module's classes
+
+        return PX4_AUTOPILOTS
+    if autopilot != "ardupilot":
+        raise ValueError(f"no simulated autopilot {autopilot!r} (known: {', '.join(FIRMWARES)})")
+    return AUTOPILOTS
+
+
+def make_autopilot(kind: str, clock: Clock, home: Home = DEFAULT_HOME, *, autopilot: str = "ardupilot", **options: float) -> ArduPilotSim:
     """The simulated autopilot for a vehicle kind; ``options`` go to its class (:class:`ArduPilotSim` and the firmware's own)."""
-    if kind not in AUTOPILOTS:
-        raise ValueError(f"no simulated vehicle of kind {kind!r} (known: {', '.join(AUTOPILOTS)})")
-    return AUTOPILOTS[kind](PROFILES[PROFILE_OF.get(kind, kind)], clock, home, **options)
+    firmwares = firmwares_for(autopilot)
+    if kind not in firmwares:
+        raise ValueError(f"no simulated vehicle of kind {kind!r} on {autopilot} (known: {', '.join(firmwares)})")
+    return firmwares[kind](PROFILES[PROFILE_OF.get(kind, kind)], clock, home, **options)

@@ -126,6 +126,8 @@ class MissionStore:
     MESSAGES: ClassVar[frozenset[str]] = frozenset(
         {"MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT", "MISSION_CLEAR_ALL", "MISSION_SET_CURRENT"}
     )
+    HOME_SLOT: ClassVar[bool] = True  # item 0 is home (ArduPilot); the mission proper starts at 1
+    AUTO_MODE: ClassVar[str] = "AUTO"  # the mode that runs the mission (MISSION_CURRENT mission_mode)
     RE_REQUEST_S = 1.0  # MissionItemProtocol: ask again for an item after this long without it
     UPLOAD_TIMEOUT_S = 8.0  # ... and give up on the upload after this long
     MAX_ITEMS = 700  # depends on the board's storage
@@ -145,6 +147,7 @@ class MissionStore:
         self._request_i = self._request_last = 0
         self._uploader = (0, 0)  # system and component id of whoever uploads
         self._last_item_at = self._last_request_at = 0.0
+        self.uploaded_at: float | None = None  # clock time of the last completed upload
         self._handlers: dict[str, Callable[[MAVLinkMessage], None]] = {
             "MISSION_COUNT": self._on_count,
             "MISSION_ITEM_INT": self._on_item,
@@ -160,9 +163,14 @@ class MissionStore:
         return len(self._commands)
 
     @property
+    def first_item(self) -> int:
+        """The seq of the mission's first item: 1 after a home slot, else 0."""
+        return 1 if self.HOME_SLOT else 0
+
+    @property
     def present(self) -> bool:
         """There is a mission: something after home."""
-        return self.count > 1
+        return self.count > self.first_item
 
     @property
     def running(self) -> bool:
@@ -170,7 +178,7 @@ class MissionStore:
 
     def command(self, seq: int) -> StoredCommand:
         """Item ``seq`` as it would be read back (item 0: the current home)."""
-        if seq == 0:
+        if seq == 0 and self.HOME_SLOT:
             lat, lon = self._owner.home or (0.0, 0.0)
             return StoredCommand(_M.MAV_CMD_NAV_WAYPOINT, (0.0, 0.0, 0.0, 0.0), round(lat * 1e7), round(lon * 1e7), 0, _M.MAV_FRAME_GLOBAL)
         return self._commands[seq]
@@ -205,6 +213,10 @@ class MissionStore:
     def _request(self) -> None:
         self._last_request_at = self._owner.clock.now()
         self._emit(self._mav.mission_request_encode(*self._uploader, self._request_i, _MISSION))
+
+    def _received(self) -> None:
+        """An upload completed (ArduPilot says so in a STATUSTEXT)."""
+        self._text(_M.MAV_SEVERITY_INFO, "Flight plan received")
 
     def _on_count(self, msg: MAVLinkMessage) -> None:
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
@@ -251,7 +263,8 @@ class MissionStore:
 
     def _upload_complete(self, msg: MAVLinkMessage) -> None:
         self.receiving = False
-        self._text(_M.MAV_SEVERITY_INFO, "Flight plan received")
+        self.uploaded_at = self._owner.clock.now()
+        self._received()
         self._ack(msg, _M.MAV_MISSION_ACCEPTED)
 
     def _on_request_list(self, msg: MAVLinkMessage) -> None:
@@ -264,7 +277,7 @@ class MissionStore:
         if self.receiving:
             self._ack(msg, _M.MAV_MISSION_DENIED)
             return
-        if msg.seq != 0 and msg.seq >= self.count:  # home can always be read
+        if (msg.seq != 0 or not self.HOME_SLOT) and msg.seq >= self.count:  # home can always be read
             self._emit(self._mav.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), self.count, _MISSION))  # the real size
             self._ack(msg, _M.MAV_MISSION_ERROR)
             return
@@ -305,7 +318,7 @@ class MissionStore:
         """Make item ``seq`` the one to execute next (0 means the first); False, changing nothing, if there is no such item."""
         if not self.present or seq >= self.count:
             return False
-        self.current_seq = max(seq, 1)
+        self.current_seq = max(seq, self.first_item)
         if self.state is MissionState.COMPLETE:
             self.state = MissionState.STOPPED
         return True
@@ -315,7 +328,7 @@ class MissionStore:
         if not self.present:
             return
         if self.state is MissionState.COMPLETE or self.current_seq is None or self.current_seq >= self.count:
-            self.current_seq = 1
+            self.current_seq = self.first_item
         self.state = MissionState.RUNNING
 
     def stop(self) -> None:
@@ -330,6 +343,18 @@ class MissionStore:
             return None
         return self._commands[self.current_seq]
 
+    def next_nav_after(self, seq: int) -> StoredCommand | None:
+        """The navigation command after item ``seq`` (AP_Mission::get_next_nav_cmd), if it has a location; None at the end.
+
+        A DO_JUMP on the way ends the look-ahead here (the vehicle then stops at ``seq``: the jump is not followed).
+        """
+        for cmd in self._commands[seq + 1 :]:
+            if cmd.command == _M.MAV_CMD_DO_JUMP:
+                return None
+            if cmd.command < _M.MAV_CMD_NAV_LAST:
+                return cmd if cmd.command in LOCATION_COMMANDS else None
+        return None
+
     def advance(self) -> StoredCommand | None:
         """The current item is done: MISSION_ITEM_REACHED, then the next item, or None (and "Mission Complete") after the last."""
         if self.current_seq is None or not self.running:
@@ -339,8 +364,12 @@ class MissionStore:
             self.current_seq += 1
             return self._commands[self.current_seq]
         self.state = MissionState.COMPLETE
-        self._text(_M.MAV_SEVERITY_NOTICE, "Mission Complete")
+        self._completed()
         return None
+
+    def _completed(self) -> None:
+        """The last item is done (ArduPilot says so in a STATUSTEXT)."""
+        self._text(_M.MAV_SEVERITY_NOTICE, "Mission Complete")
 
     def current_message(self, seq: int | None = None) -> MAVLinkMessage:
         """MISSION_CURRENT as ArduPilot streams it; ``seq`` replaces the item (to echo MISSION_SET_CURRENT)."""
@@ -353,4 +382,5 @@ class MissionStore:
                 MissionState.COMPLETE: _M.MISSION_STATE_COMPLETE,
             }[self.state]
         seq = (self.current_seq or 0) if seq is None else seq
-        return self._mav.mission_current_encode(seq, max(self.count - 1, 0), state, int(self._owner.mode == "AUTO"))
+        total = max(self.count - self.first_item, 0)
+        return self._mav.mission_current_encode(seq, total, state, int(self._owner.mode == self.AUTO_MODE))

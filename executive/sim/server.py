@@ -21,7 +21,7 @@ log = logging.getLogger(__name__)
 
 
 class SimServer:
-    """A simulated ArduPilot vehicle listening on ``url`` (``udpin:HOST:PORT`` or ``tcpin:HOST:PORT``).
+    """A simulated vehicle (ArduPilot, or PX4 with ``autopilot="px4"``) listening on ``url`` (``udpin:HOST:PORT`` or ``tcpin:HOST:PORT``).
 
     Port 0 lets the OS choose: :attr:`port` and :attr:`url_for_client` tell where it landed. As on
     a real vehicle behind a ``udpin`` endpoint, nothing is sent until a peer has sent something.
@@ -30,6 +30,7 @@ class SimServer:
     :attr:`lock` to touch :attr:`autopilot` from another thread. ``faults`` (on the same clock)
     are injected from the moment the server is created, the simulated vehicle's boot. Other
     keyword arguments go to the simulated firmware (``q_guided_mode=1`` for the vtol's ArduPlane).
+    ``ekf_ready_after_s`` None keeps the firmware's own default (ArduPilot 40 s, PX4 3 s).
     With ``can_bus`` (bunker only; the caller shuts it down), :attr:`base` is the AgileX base's
     controller on that bus, serviced each iteration: then the tracks obey its motion commands.
     """
@@ -43,17 +44,18 @@ class SimServer:
         clock: Clock | None = None,
         home: Home = DEFAULT_HOME,
         system_id: int = 1,
-        ekf_ready_after_s: float = 40.0,
+        ekf_ready_after_s: float | None = None,
         period_s: float = 0.005,
         faults: FaultInjector | None = None,
         signing_key: bytes | None = None,
         can_bus: can.BusABC | None = None,
+        autopilot: str = "ardupilot",
         **firmware_options: float,
     ) -> None:
         self.clock = clock if clock is not None else faults.clock if faults is not None else ScaledClock()
-        self.autopilot: ArduPilotSim = make_autopilot(
-            vehicle_kind, self.clock, home, system_id=system_id, ekf_ready_after_s=ekf_ready_after_s, **firmware_options
-        )
+        if ekf_ready_after_s is not None:
+            firmware_options["ekf_ready_after_s"] = ekf_ready_after_s
+        self.autopilot: ArduPilotSim = make_autopilot(vehicle_kind, self.clock, home, autopilot=autopilot, system_id=system_id, **firmware_options)
         self.faults = faults
         if faults is not None:
             faults.attach(self.autopilot)

@@ -71,10 +71,23 @@ class Limits:
     arrive_m: float = 0.3  # closer than this to its target, the vehicle stops and holds
     drift_m_s: float = 0.0  # a water current (boats) that pushes a powered vehicle: LOITER corrects it
     drift_toward_deg: float = 0.0
+    #: The sideways acceleration a turn may take: ATC_TURN_MAX_G, 0.6 g by default (libraries/APM_Control/AR_AttitudeControl.cpp).
+    lat_accel_m_s2: float = 0.6 * 9.80665
+    #: TURN_RADIUS (Rover/Parameters.cpp, 0.9 m by default). AR_PosControl::update keeps the forward speed in a turn at
+    #: least sqrt(0.5 * lateral acceleration * TURN_RADIUS) (the vehicle drives round, it does not stop to turn).
+    #: 0: the vehicle pivots on the spot (skid steering: AR_WPNav::set_turn_params zeroes it when a pivot is possible).
+    turn_radius_m: float = 0.0
+    #: WP_RADIUS (libraries/AR_WPNav/AR_WPNav.cpp, 2 m by default): how far from a waypoint the apex of a corner through it may be.
+    wp_radius_m: float = 2.0
+
+    @property
+    def turn_speed_min_m_s(self) -> float:
+        """The least forward speed in a turn (AR_PosControl::update's turn_speed_min)."""
+        return math.sqrt(0.5 * self.lat_accel_m_s2 * self.turn_radius_m)
 
 
-ROVER_LIMITS = Limits()
-BOAT_LIMITS = Limits(accel_m_s2=0.6, decel_m_s2=1.0, turn_rate_deg_s=45.0, drift_m_s=0.03, drift_toward_deg=60.0)
+ROVER_LIMITS = Limits(turn_radius_m=0.9)
+BOAT_LIMITS = Limits(accel_m_s2=0.6, decel_m_s2=1.0, turn_rate_deg_s=45.0, drift_m_s=0.03, drift_toward_deg=60.0, turn_radius_m=0.9)
 
 
 class LocalFrame:
@@ -109,9 +122,14 @@ class LocalFrame:
 class SurfaceVehicle(LocalFrame):
     """A rover or a boat: position, heading and forward speed, with a drive-to-target controller.
 
-    The controller turns toward the target (turn-rate limited), drives at the requested speed
-    (acceleration limited), slows down on a profile it can always brake to, and stops within
-    ``limits.arrive_m`` of the target. Without a target it brakes to a stop and stays there.
+    The controller turns toward the target (turn-rate and lateral-acceleration limited), drives at
+    the requested speed (acceleration limited), slows down on a profile it can always brake to, and
+    stops within ``limits.arrive_m`` of the target. Without a target it brakes to a stop and stays there.
+
+    A target given with the point after it (``then``) is a corner driven through, as ArduRover's AUTO
+    drives a "fast waypoint" (AR_WPNav::set_desired_location with a next destination): the vehicle
+    does not stop there; it counts as arrived where it turns onto the next leg (:meth:`turn_in_m`),
+    and the caller gives it the next target then.
     """
 
     SUBSTEP_S = 0.05
@@ -129,6 +147,7 @@ class SurfaceVehicle(LocalFrame):
         self._yaw_rate = 0.0
         self._target: tuple[float, float] | None = None  # north, east (m)
         self._target_speed = limits.cruise_m_s
+        self._then: tuple[float, float] | None = None  # north, east of the point after the target (driven through)
         self._arrived = False
         self._manual: tuple[float, float] | None = None  # (throttle, steering) from a pilot
         toward = math.radians(limits.drift_toward_deg)
@@ -190,22 +209,40 @@ class SurfaceVehicle(LocalFrame):
 
     # -- orders ------------------------------------------------------------------------------
 
-    def drive_to(self, lat: float, lon: float, speed_m_s: float | None = None) -> None:
-        """Drive to a point at ``speed_m_s`` (default cruise, capped at the maximum) and stop there."""
+    def drive_to(self, lat: float, lon: float, speed_m_s: float | None = None, then: tuple[float, float] | None = None) -> None:
+        """Drive to a point at ``speed_m_s`` (default cruise, capped at the maximum) and stop there; with ``then``, through it toward ``then``."""
         self._target = self._ne(lat, lon)
+        self._then = None if then is None else self._ne(*then)
         self._manual = None
         self._target_speed = min(speed_m_s if speed_m_s and speed_m_s > 0 else self.limits.cruise_m_s, self.limits.max_m_s)
         self._arrived = False
 
+    def turn_in_m(self) -> float:
+        """How far before a corner driven through the vehicle turns onto the next leg (0 without one).
+
+        AR_WPNav's SCurves start the next leg while this one decelerates (SCurve::advance_target_along_track,
+        libraries/AP_Math/SCurve.cpp): from where braking at the leg's acceleration would begin,
+        v^2 / (2 a), and only once the apex of the blended turn (for a turn of angle t, about half
+        that distance times sin(t / 2) from the waypoint) is within WP_RADIUS.
+        """
+        if self._target is None or self._then is None:
+            return 0.0
+        (tn, te), (nn, ne) = self._target, self._then
+        turn = abs(_wrap_pi(math.atan2(ne - te, nn - tn) - math.atan2(te - self._e, tn - self._n)))
+        braking = self._speed * self._speed / (2.0 * self.limits.accel_m_s2)
+        apex_bound = 2.0 * self.limits.wp_radius_m / max(math.sin(turn / 2.0), 1e-6)
+        return max(self.limits.arrive_m, min(braking, apex_bound))
+
     def hold(self) -> None:
         """Forget the target and brake to a stop."""
         self._target = None
+        self._then = None
         self._arrived = False
         self._manual = None
 
     def drive_manual(self, throttle: float, steering: float) -> None:
         """A pilot's sticks, each in [-1, 1]: forward speed and turn rate as fractions of the maximum."""
-        self._target = None
+        self._target = self._then = None
         self._manual = (_clamp(throttle, 1.0), _clamp(steering, 1.0))
 
     # -- physics -------------------------------------------------------------------------------
@@ -241,20 +278,29 @@ class SurfaceVehicle(LocalFrame):
         if self._manual is not None:
             throttle, steering = self._manual
             return throttle * self.limits.max_m_s, steering * math.radians(self.limits.turn_rate_deg_s)
-        if self._target is None or self._arrived:
+        if self._target is None or (self._arrived and self._then is None):
             return 0.0, 0.0
         dn, de = self._target[0] - self._n, self._target[1] - self._e
         distance = math.hypot(dn, de)
+        if self._then is not None and (self._arrived or distance <= self.turn_in_m()):
+            self._arrived = True  # driven through: on as it goes until the caller gives the next leg
+            return self._speed, self._yaw_rate
         if distance <= self.limits.arrive_m:
             self._arrived = True
             return 0.0, 0.0
+        limits = self.limits
         error = _wrap_pi(math.atan2(de, dn) - self._yaw - math.radians(self.heading_bias_deg))
-        rate = _clamp(self.HEADING_GAIN * error, math.radians(self.limits.turn_rate_deg_s))
+        rate_max = math.radians(limits.turn_rate_deg_s)
+        if abs(self._speed) > 1e-3:
+            rate_max = min(rate_max, limits.lat_accel_m_s2 / abs(self._speed))  # ATC_TURN_MAX_G
+        rate = _clamp(self.HEADING_GAIN * error, rate_max)
         # a braking profile with margin, then a linear approach: never overshoots the target
-        brake = math.sqrt(2.0 * 0.8 * self.limits.decel_m_s2 * distance)
+        brake = math.sqrt(2.0 * 0.8 * limits.decel_m_s2 * distance)
         speed = min(self._target_speed, brake, self.APPROACH_GAIN * distance)
-        # turn toward a target behind before driving to it: no circling around it
-        return speed * max(0.0, math.cos(error)), rate
+        # turn toward a target behind before driving to it (the forward part of the speed); a vehicle under way that
+        # cannot pivot keeps the least turning speed through the turn (AR_PosControl::update,
+        # libraries/APM_Control/AR_PosControl.cpp); one at rest turns first (as LOITER does, Rover/mode_loiter.cpp)
+        return max(speed * math.cos(error), min(speed, limits.turn_speed_min_m_s, abs(self._speed))), rate
 
 
 @dataclass(frozen=True)

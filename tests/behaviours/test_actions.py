@@ -9,13 +9,14 @@ from executive.behaviours import Arm, Disarm, GoTo, SetMode
 from executive.geo import destination
 from executive.io.mavlink.dialect import mavlink
 from executive.state import GlobalPosition
+from executive.testing.links import ack
 
 DO_SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 ARM_DISARM = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
 
 
-def at(lat: float, lon: float, t: float = 0.0) -> GlobalPosition:
-    return GlobalPosition(lat, lon, 0.0, 0.0, 0.0, 0.0, 0.0, t)
+def at(lat: float, lon: float, t: float = 0.0, vn: float = 0.0, ve: float = 0.0) -> GlobalPosition:
+    return GlobalPosition(lat, lon, 0.0, vn, ve, 0.0, 0.0, t)
 
 
 class TestSetMode:
@@ -38,6 +39,26 @@ class TestSetMode:
         vehicle.set(vehicle__mode="GUIDED")
         assert h.tick() == Status.SUCCESS
         assert h.link.take() == []  # no retry after the ack
+
+    def test_confirm_by_ack_does_not_wait_for_the_heartbeat(self, harness, vehicle):
+        vehicle.set(vehicle__mode="HOLD")
+        h = harness(SetMode("GUIDED", confirm_by_ack=True))
+        assert h.tick() == Status.RUNNING
+        assert len(h.link.take("COMMAND_LONG")) == 1
+        assert h.tick() == Status.RUNNING  # no ack yet
+        h.ack(DO_SET_MODE)
+        assert h.tick() == Status.SUCCESS  # ArduPilot acks ACCEPTED once the mode is set; the heartbeat still says HOLD
+        assert h.link.take() == []
+
+    def test_confirm_by_ack_ignores_a_refusal_and_an_earlier_ack(self, harness, vehicle, commander):
+        vehicle.set(vehicle__mode="HOLD")
+        commander.set_mode("LOITER")  # someone else's request, acked before this one is sent
+        commander.on_ack(ack(DO_SET_MODE))
+        node = SetMode("GUIDED", confirm_by_ack=True)
+        h = harness(node)
+        assert h.tick() == Status.RUNNING
+        h.ack(DO_SET_MODE, mavlink.MAV_RESULT_FAILED)
+        assert h.tick() == Status.FAILURE
 
     def test_refused_mode_fails_with_the_reason(self, harness, vehicle):
         vehicle.set(vehicle__mode="HOLD", vehicle__statustext=(4, "Flight mode change failed"))
@@ -181,3 +202,79 @@ class TestGoTo:
         assert h.tick() == Status.RUNNING
         vehicle.set(vehicle__position=at(moved.lat, moved.lon))
         assert h.tick() == Status.SUCCESS
+
+
+class TestGoToLookAhead:
+    """Leg 2/4 of the square: heading north for the north-west corner, then east (a 90° turn)."""
+
+    @pytest.fixture
+    def corner(self, mission_state):
+        mission_state.start()
+        mission_state.advance_leg()
+        return mission_state.target
+
+    def approach(self, h, vehicle, corner, distances, speed=2.0):
+        """Tick once at each distance south of the corner, heading north at ``speed``; the statuses."""
+        statuses = []
+        for distance in distances:
+            vehicle.set(vehicle__position=at(*destination(corner.lat, corner.lon, 180.0, distance), vn=speed))
+            statuses.append(h.tick())
+        return statuses
+
+    def test_a_corner_is_driven_through_before_the_vehicle_brakes(self, harness, vehicle, corner):
+        # 2 m/s: 0.5 s of lead (1 m) + braking at 1 m/s/s (2 m) = 3 m; a 90° turn allows up to 2 x 1.5 / sin 45° = 4.2 m
+        node = GoTo(1.5, 60.0, look_ahead=True)
+        h = harness(node)
+        assert self.approach(h, vehicle, corner, (10.0, 5.0, 3.1, 2.9)) == [Status.RUNNING] * 3 + [Status.SUCCESS]
+        assert node.feedback_message == "leg 2/4: driven through (2.9 m, within 3.0 m)"
+
+    def test_without_look_ahead_the_leg_ends_inside_the_acceptance_radius(self, harness, vehicle, corner):
+        h = harness(GoTo(1.5, 60.0))
+        assert self.approach(h, vehicle, corner, (5.0, 2.9, 1.6, 1.4)) == [Status.RUNNING] * 3 + [Status.SUCCESS]
+
+    def test_the_distance_grows_with_the_speed_and_a_vehicle_at_rest_stops(self, harness, vehicle, corner):
+        fast = GoTo(1.5, 60.0, look_ahead=True)
+        assert self.approach(harness(fast), vehicle, corner, (4.5, 4.1), speed=2.5) == [Status.RUNNING, Status.SUCCESS]  # capped at 4.2 m
+        slow = GoTo(1.5, 60.0, look_ahead=True)
+        assert self.approach(harness(slow), vehicle, corner, (2.0, 1.6, 1.4), speed=0.0) == [Status.RUNNING] * 2 + [Status.SUCCESS]
+
+    def test_a_sharper_turn_is_passed_nearer(self, harness, vehicle, corner, mission_state):
+        # at 3 m/s the look-ahead is 1.5 + 4.5 = 6 m: straight on it applies; back south (180°) only 2 x 1.5 / sin 90° = 3 m
+        waypoints = list(mission_state.route.waypoints)
+        straight = waypoints[2].model_copy(update={"lat": corner.lat + 0.0003, "lon": corner.lon})
+        mission_state.set_route([waypoints[0], corner, straight, waypoints[3]], "test: straight on")
+        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (6.5, 5.9), speed=3.0) == [Status.RUNNING, Status.SUCCESS]
+        back = waypoints[2].model_copy(update={"lat": corner.lat - 0.0003, "lon": corner.lon})
+        mission_state.set_route([waypoints[0], corner, back, waypoints[3]], "test: back south")
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (5.9, 3.1, 2.9), speed=3.0)
+        assert statuses == [Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+
+    def test_the_last_leg_stops(self, harness, vehicle, mission_state):
+        mission_state.start()
+        for _ in range(3):
+            mission_state.advance_leg()
+        last = mission_state.target
+        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, last, (2.9, 1.6, 1.4)) == [Status.RUNNING] * 2 + [Status.SUCCESS]
+
+    def test_a_sample_point_stops(self, harness, vehicle, mission_state, square_mission):
+        waypoints = list(square_mission.waypoints)
+        waypoints[1] = waypoints[1].model_copy(update={"sample": True})
+        mission_state.upload(square_mission.model_copy(update={"tree": "goto_sample", "waypoints": waypoints}))
+        mission_state.start()
+        mission_state.advance_leg()
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, waypoints[1], (2.9, 1.6, 1.4))
+        assert statuses == [Status.RUNNING] * 2 + [Status.SUCCESS]
+
+    def test_the_next_target_goes_out_on_the_tick_after(self, harness, vehicle, corner, mission_state):
+        # ForEachLeg advances on the SUCCESS; the next leg's GoTo sends its waypoint at its first tick
+        from executive.behaviours import ForEachLeg
+
+        h = harness(ForEachLeg(GoTo(1.5, 60.0, look_ahead=True)))
+        self.approach(h, vehicle, corner, (10.0,))
+        h.link.take()
+        self.approach(h, vehicle, corner, (2.9,))
+        assert mission_state.leg_index == 2
+        h.tick()
+        (sent,) = h.link.take("SET_POSITION_TARGET_GLOBAL_INT")
+        following = mission_state.target
+        assert (sent.lat_int, sent.lon_int) == (round(following.lat * 1e7), round(following.lon * 1e7))

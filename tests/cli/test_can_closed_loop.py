@@ -15,6 +15,7 @@ import py_trees
 import pytest
 
 from executive import geo
+from executive.assembly import build_runtime, can_base
 from executive.cli import main
 from executive.clock import ScaledClock
 from executive.io.can.agilex import RC_STATE_ID, SYSTEM_STATE_ID, MotionCommand
@@ -105,7 +106,7 @@ def run_against_the_base(channel: str, faults: list[dict[str, object]] | None = 
         link = PymavlinkLink(sim.url_for_client)
         watch = Watch(sim, stop_after_s)
         try:
-            runtime = watch.runtime = Runtime(mission(), link, clock, can_bus=executive_bus, progress=watch)  # type: ignore[arg-type]
+            runtime = watch.runtime = build_runtime(mission(), link, clock, plugs=[can_base(executive_bus)], progress=watch)  # type: ignore[arg-type]
             assert runtime.connect(10.0 * SPEEDUP)
             outcome = runtime.run()
         finally:

@@ -23,6 +23,7 @@ import pytest
 import yaml
 
 from executive import blackboard
+from executive.assembly import build_runtime, journal_recorder
 from executive.clock import ScaledClock
 from executive.geofence import Geofence
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
@@ -138,7 +139,7 @@ def run_scenario(tmp_path: Path) -> Iterator[Callable[[Scenario], tuple[Any, Rec
         with SimServer("rover", clock=clock, home=(*HOME, 0.0), faults=faults, ekf_ready_after_s=40.0 - SHIFT_S) as sim:
             link = PymavlinkLink(sim.url_for_client)
             try:
-                runtime = Runtime(mission, link, clock, journal=journal)
+                runtime = build_runtime(mission, link, clock, plugs=[journal_recorder(journal)])
                 send = link.send
 
                 def spy(msg: MAVLinkMessage) -> None:  # a command leaves in the flush at the end of tick runtime.ticks

@@ -11,6 +11,7 @@ import pytest
 from py_trees.common import Status
 
 import trees
+from executive.assembly import build_runtime
 from executive.behaviours import Failsafe
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import ManualClock
@@ -19,15 +20,13 @@ from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
-from executive.runtime import Runtime
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
+from executive.testing import AUTOPILOT, EKF_READY, FakeLink, Harness, Vehicle
 from executive.vehicles import PROFILES
-from tests_support import AUTOPILOT, FakeLink, Harness, Vehicle
 from trees._parts import guarded, mission_root, standard_guards
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 HOME = (47.397742, 8.545594)
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_GLITCH = EkfStatus(EkfFlags(831) | EkfFlags.GPS_GLITCHING, 0.1, 1.0, 0.1, 0.1, 0.0, 0.0)
 RC_OK = (1500,) * 8
@@ -300,7 +299,7 @@ def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_t
     mission = make_mission()
     link = FakeLink()
     root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
-    runtime = Runtime(mission, link, clock, root=root, safe_timeout_s=2.0)
+    runtime = build_runtime(mission, link, clock, root=root, safe_timeout_s=2.0)
     rover = ObedientRover(link)
     runtime.mission_state.start()
     original = runtime.tick

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import py_trees
 
+from executive.assembly import obstacle_camera
 from executive.clock import ScaledClock
 from executive.io.obstacles import open_endpoint
 from executive.mission.lifecycle import MissionStatus
@@ -60,7 +61,7 @@ def test_scans_reach_the_autopilot_while_the_camera_sends_and_time_out_after() -
         listening = open_endpoint("udpin:127.0.0.1:0")
         camera = Camera(sim, listening.getsockname())
         try:
-            _, outcome = run_over(sim.url_for_client, mission(), clock, obstacle_socket=listening, progress=camera)
+            _, outcome = run_over(sim.url_for_client, mission(), clock, plugs=[obstacle_camera(listening)], progress=camera)
         finally:
             listening.close()
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason

@@ -6,11 +6,11 @@ import py_trees
 import pytest
 
 from executive import blackboard
+from executive.assembly import build_runtime
 from executive.io.rc import RcReader, knob_value, switch_position
 from executive.mission.model import RcConfig, SwitchChannels
-from executive.runtime import Runtime
 from executive.state import RcSwitches, SwitchPosition
-from tests_support import AUTOPILOT
+from executive.testing import AUTOPILOT
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 
@@ -133,7 +133,7 @@ def test_can_source_leaves_the_switches_to_the_can_reader(clock, rc_report):
 
 
 def test_the_runtime_judges_rc_after_draining_the_link(square_mission, link, clock):
-    runtime = Runtime(square_mission, link, clock, root=py_trees.behaviours.Running("idle"))
+    runtime = build_runtime(square_mission, link, clock, root=py_trees.behaviours.Running("idle"))
     link.incoming.append(AUTOPILOT.heartbeat(10, 3, 0, 4, 4))
     runtime.tick()
     assert (bb("/rc/fresh"), bb("/rc/switches")) == (False, None)

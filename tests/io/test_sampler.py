@@ -5,12 +5,12 @@ from __future__ import annotations
 import py_trees
 import pytest
 
+from executive.assembly import build_runtime
 from executive.behaviours import Sample
 from executive.clock import ManualClock
 from executive.geo import destination
 from executive.io.sampler import SENSOR_MODELS, SimulatedSampler
 from executive.mission.model import Mission, SamplingOptions
-from executive.runtime import Runtime
 from executive.state import GlobalPosition, SamplerState, SamplerStatus
 
 HERE = GlobalPosition(47.397742, 8.545594, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
@@ -180,7 +180,7 @@ def test_the_runtime_services_the_sampler_of_a_sampling_mission(clock, link, squ
             "waypoints": [{"lat": HERE.lat, "lon": HERE.lon, "sample": True}],
         }
     )
-    runtime = Runtime(mission, link, clock, root=Sample())
+    runtime = build_runtime(mission, link, clock, root=Sample())
     runtime.mission_state.start()  # the sampler comes with the mission's tree, when it starts
     assert isinstance(runtime.sampler, SimulatedSampler)
     statuses = []
@@ -191,4 +191,4 @@ def test_the_runtime_services_the_sampler_of_a_sampling_mission(clock, link, squ
     assert statuses == [R] * 5 + [S, S]  # started at 100.25; reads at 100.75 and 101.25 (done), seen at 101.5; then already sampled
     (sample,) = runtime.mission_state.samples
     assert len(sample.reads) == 8 and sample.finished == 101.25
-    assert Runtime(square_mission, link, clock, root=py_trees.behaviours.Running("idle")).sampler is None  # no sampling section, no sampler
+    assert build_runtime(square_mission, link, clock, root=py_trees.behaviours.Running("idle")).sampler is None  # no sampling section, no sampler

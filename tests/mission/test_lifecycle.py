@@ -123,6 +123,9 @@ def test_progress_is_published(state_in, square_mission):
     state = state_in(S.RUNNING)
     state.advance_leg()
     assert (bb("/mission/leg_index"), bb("/mission/leg_count"), bb("/mission/target")) == (1, 4, square_mission.waypoints[1])
-    for _ in range(3):
-        state.advance_leg()
-    assert bb("/mission/target") is None
+    assert bb("/mission/next_target") == square_mission.waypoints[2]  # the leg may be driven through toward it
+    state.advance_leg()
+    state.advance_leg()
+    assert (bb("/mission/target"), bb("/mission/next_target")) == (square_mission.waypoints[3], None)  # the last leg stops
+    state.advance_leg()
+    assert (bb("/mission/target"), bb("/mission/next_target")) == (None, None)

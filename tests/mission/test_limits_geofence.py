@@ -41,6 +41,19 @@ def test_battery_limits_default_to_20_percent_and_no_voltage() -> None:
     assert (limits.battery_min_pct, limits.battery_min_v) == (20.0, None)
 
 
+def test_a_sub_takes_the_auv_seeds_limits_by_default() -> None:
+    """Issue 13: a sub's default speed limit was 5 m/s; the AUV seed says 0.1-1 m/s, depth 0-100 m, altitude 2-100 m, waypoints within 1 km."""
+    sub = load(HEAD.replace("vehicle: rover", "vehicle: sub") + WP).limits
+    assert (sub.speed_m_s.min, sub.speed_m_s.max, sub.max_goal_distance_m) == (0.1, 1.0, 1000.0)
+    assert (sub.depth_m.min, sub.depth_m.max, sub.altitude_m.min, sub.altitude_m.max) == (0.0, 100.0, 2.0, 100.0)
+    rover = load(HEAD + WP).limits
+    assert (rover.speed_m_s.max, rover.max_goal_distance_m) == (5.0, 5000.0)
+    fast = HEAD.replace("vehicle: rover", "vehicle: sub") + "waypoints:\n  - {lat: 47.3978, lon: 8.5456, speed_m_s: 1.5}\n"
+    assert errors_of(fast) == ["m.yaml:6:44: waypoints[0].speed_m_s: 1.5 m/s is outside limits.speed_m_s [0.1, 1.0]"]
+    own = load(HEAD.replace("vehicle: rover", "vehicle: sub") + "limits: {speed_m_s: {min: 0.2, max: 1.5}}\n" + WP).limits
+    assert (own.speed_m_s.max, own.max_goal_distance_m) == (1.5, 1000.0)  # a field the file sets wins; the others keep the sub's
+
+
 def test_battery_limits_can_be_switched_off_or_set() -> None:
     limits = load(HEAD + "limits: {battery_min_pct: null, battery_min_v: 10.5}\n" + WP).limits
     assert (limits.battery_min_pct, limits.battery_min_v) == (None, 10.5)

@@ -234,3 +234,51 @@ def test_any_text_gives_a_mission_or_located_errors(text: str) -> None:
     except MissionError as exc:
         assert exc.errors
         assert all(1 <= e.line <= text.count("\n") + 1 and e.column >= 1 and e.field for e in exc.errors)
+
+
+ONE_PASS = """\
+version: 1
+name: stages
+vehicle: sub
+bogus: 1
+limits:
+  speed_m_s: {min: 0.1, max: "fast"}
+  link_timeout_s: -1
+waypoints:
+  - {lat: 44.09, lon: 9.86, depth_m: 150, control_mode: depth, speed_m_s: 2.0}
+  - {lat: 444.0, lon: 9.86, depth_m: 5}
+  - {lat: 44.09, lon: 9.86, control_mode: altitude, altitude_m: 1, colour: red}
+  - {lat: 44.09, lon: 9.86, control_mode: depth, depth_m: -2}
+  - {lat: 44.09, lon: 9.86, speed_m_s: 0.5, sample: true}
+"""
+
+
+def test_every_error_comes_in_one_pass_cross_field_ones_included() -> None:
+    """Issue 13: depth 150 and altitude 1 were reported only once the 6 other errors were fixed."""
+    assert errors_of(ONE_PASS) == [
+        "m.yaml:4:1: bogus: unknown field (allowed: version, name, vehicle, tree, description, auto_arm, home, geofence, limits, rc, "
+        "failsafe, sampling, vtol, rc_route, simulator, waypoints)",
+        "m.yaml:6:30: limits.speed_m_s.max: expected a number, got string 'fast'",
+        "m.yaml:7:19: limits.link_timeout_s: -1: Input should be greater than 0",
+        "m.yaml:9:38: waypoints[0].depth_m: 150.0 m is outside limits.depth_m [0.0, 100.0]",
+        "m.yaml:10:11: waypoints[1].lat: 444.0: Input should be less than or equal to 90",
+        "m.yaml:11:65: waypoints[2].altitude_m: 1.0 m is outside limits.altitude_m [2.0, 100.0]",
+        "m.yaml:11:68: waypoints[2].colour: unknown field (allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode, sample)",
+        "m.yaml:12:59: waypoints[3].depth_m: -2: Input should be greater than or equal to 0",
+        "m.yaml:13:53: waypoints[4].sample: only goto_sample takes samples",
+    ]
+
+
+def test_a_rule_judged_by_a_value_left_out_is_not_reported() -> None:
+    """The waypoint speeds are not checked against limits the file got wrong (that would judge them by the defaults)."""
+    errors = errors_of(ONE_PASS)
+    assert not any("].speed_m_s:" in e for e in errors)
+    with_limits = errors_of(ONE_PASS.replace('"fast"', "1.0"))  # the file's own limits: judged by them
+    assert "m.yaml:9:75: waypoints[0].speed_m_s: 2.0 m/s is outside limits.speed_m_s [0.1, 1.0]" in with_limits
+
+
+def test_a_list_that_lost_an_item_is_not_judged_whole(monkeypatch: pytest.MonkeyPatch) -> None:
+    """goto_sample's 'a waypoint with sample: true' is not claimed missing when the sample point itself was refused."""
+    monkeypatch.setattr(trees, "available", lambda: ["goto_sample"])
+    text = "version: 1\nname: s\nvehicle: boat\ntree: goto_sample\nwaypoints:\n  - {lat: 1.0, lon: 1.0}\n  - {lat: 100.0, lon: 1.0, sample: true}\n"
+    assert errors_of(text) == ["m.yaml:7:11: waypoints[1].lat: 100.0: Input should be less than or equal to 90"]

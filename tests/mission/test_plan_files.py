@@ -223,7 +223,7 @@ def missions(draw: st.DrawFn) -> Mission:
     for _ in range(draw(st.integers(1, 6))):
         wp: dict[str, Any] = {"lat": lat0 + draw(near), "lon": lon0 + draw(near)}
         if draw(st.booleans()):
-            wp["speed_m_s"] = draw(st.floats(0.1, 5.0))
+            wp["speed_m_s"] = draw(st.floats(0.1, 1.0 if kind == "sub" else 5.0))  # a sub's default limit: 1 m/s
         if kind == "sub":
             mode = draw(st.sampled_from([None, "depth", "altitude"]))
             if mode == "depth":

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import trees
-from tests_support import mission_errors as errors_of
+from executive.testing import mission_errors as errors_of
 
 
 @pytest.fixture(autouse=True)

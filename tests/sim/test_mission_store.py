@@ -214,3 +214,41 @@ def test_leaving_auto_stops_the_mission_and_auto_resumes_it(make_gcs: MakeGcs) -
     gcs.set_mode("AUTO")
     out = gcs.run(40.0)
     assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [2, 3]
+
+
+def _drive_auto(gcs: Gcs, items: list[MAVLinkMessage], seconds: float) -> list[tuple[float, float, float]]:
+    """Upload, arm, AUTO; then (north m, east m, speed) of the vehicle every 0.1 s for ``seconds``."""
+    upload(gcs, items)
+    gcs.arm()
+    gcs.set_mode("AUTO")
+    track = []
+    for _ in range(round(seconds / 0.1)):
+        gcs.run(0.1)
+        north, east = gcs.ap.vehicle.north_east_m
+        track.append((north, east, gcs.ap.vehicle.speed_m_s))
+    return track
+
+
+def test_auto_drives_through_a_waypoint_followed_by_another_without_stopping(make_gcs: MakeGcs) -> None:
+    # ModeAuto::do_nav_wp gives AR_WPNav the next waypoint: a "fast waypoint", its corner cut within WP_RADIUS
+    gcs = make_gcs(ekf_ready=True)
+    track = _drive_auto(gcs, square(gcs, side_m=30.0), 60.0)
+    corners = [(30.0, 0.0), (30.0, 30.0)]
+    for corner in corners:
+        nearest = min(range(len(track)), key=lambda i: math.dist(track[i][:2], corner))
+        assert math.dist(track[nearest][:2], corner) <= 2.0  # WP_RADIUS
+        assert track[nearest][2] >= 1.2  # through the corner at speed (cruise 2 m/s), not stopped
+    assert [t for t in gcs.texts(gcs.log) if t.startswith("Reached")] == ["Reached waypoint #1", "Reached waypoint #2", "Reached waypoint #3"]
+    assert math.dist(track[-1][:2], (0.0, 30.0)) <= 0.5 and track[-1][2] == 0.0  # the last one is a stop
+
+
+def test_auto_stops_at_a_waypoint_with_a_hold_time_and_waits_it_out(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    items = square(gcs, side_m=30.0)
+    items[1] = item(gcs, 1, items[1].x / 1e7, items[1].y / 1e7, param1=5.0)  # hold 5 s at the first corner
+    track = _drive_auto(gcs, items, 30.0)
+    stopped_there = [i for i, (n, e, v) in enumerate(track) if math.dist((n, e), (30.0, 0.0)) <= 0.5 and v < 0.05]
+    assert stopped_there and (stopped_there[-1] - stopped_there[0]) * 0.1 >= 4.5
+    assert "Reached waypoint #1. Loiter for 5 seconds" in gcs.texts(gcs.log)
+    reached = gcs.of_type(gcs.log, "MISSION_ITEM_REACHED")
+    assert [msg.seq for msg in reached][:1] == [1]

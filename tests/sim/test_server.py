@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from executive.cli import EXIT_BAD_INPUT
 from executive.cli import sim as sim_cli
 from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import MAVLinkMessage
@@ -101,10 +102,19 @@ def parse(*argv: str) -> argparse.Namespace:
 
 def test_cli_runs_for_a_duration_and_says_where_it_listens(capsys: pytest.CaptureFixture[str]) -> None:
     args = parse("--vehicle", "boat", "--mavlink", "udpin:127.0.0.1:0", "--speedup", "50", "--duration", "2", "--home", "-35.4,149.1,90")
-    assert (args.home, args.ekf_ready_after, args.speedup) == ((-35.4, 149.1, 90.0), 40.0, 50.0)
+    assert (args.home, args.ekf_ready_after, args.speedup) == ((-35.4, 149.1, 90.0), None, 50.0)  # None: the firmware's own
     assert args.func(args) == 0
     out = capsys.readouterr().out
     assert "ArduRover boat listening on udpin:127.0.0.1:0 (connect to udpout:127.0.0.1:" in out
+
+
+def test_cli_simulates_px4_on_the_vtol_only(capsys: pytest.CaptureFixture[str]) -> None:
+    args = parse("--vehicle", "vtol", "--autopilot", "px4", "--mavlink", "udpin:127.0.0.1:0", "--speedup", "50", "--duration", "1")
+    assert args.func(args) == 0
+    assert "PX4 vtol listening on udpin:127.0.0.1:0" in capsys.readouterr().out
+    args = parse("--vehicle", "boat", "--autopilot", "px4", "--duration", "1")
+    assert args.func(args) == EXIT_BAD_INPUT
+    assert "no simulated px4 boat (known: vtol)" in capsys.readouterr().err
 
 
 def test_cli_defaults_and_bad_values(capsys: pytest.CaptureFixture[str]) -> None:

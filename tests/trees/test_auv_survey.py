@@ -11,6 +11,7 @@ import pytest
 from py_trees.common import Status
 
 import trees
+from executive.assembly import build_runtime
 from executive.clock import ManualClock, ScaledClock
 from executive.geo import destination, distance, distance_bearing
 from executive.io.mavlink.commander import Commander
@@ -21,9 +22,9 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition
+from executive.testing import EKF_READY
 from executive.vehicles import PROFILES, SUB_MODES
 
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 START = (44.0950000, 9.8630000)
 SEABED_M = 30.0
@@ -484,7 +485,6 @@ def test_pausing_mid_leg_holds_and_resuming_continues_the_same_leg_at_the_same_d
 
 def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) -> tuple[Any, list[dict[str, float]], dict[str, Any], float]:
     from executive.io.mavlink.link import PymavlinkLink
-    from executive.runtime import Runtime
     from executive.sim import SimServer
 
     assert mission.simulator is not None
@@ -494,7 +494,7 @@ def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) ->
     with SimServer("sub", clock=clock, home=home, ekf_ready_after_s=mission.simulator.ekf_ready_after_s) as sim:
         link = PymavlinkLink(sim.url_for_client)
         try:
-            runtime = Runtime(mission, link, clock)
+            runtime = build_runtime(mission, link, clock)
             assert runtime.connect(10.0 * clock.speedup)
             advance = runtime.mission_state.advance_leg
 

@@ -13,6 +13,7 @@ from py_trees.common import Status
 
 import trees
 from executive import blackboard
+from executive.assembly import build_runtime
 from executive.clock import ManualClock, ScaledClock
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
@@ -25,12 +26,12 @@ from executive.mission.model import Mission
 from executive.runtime import Runtime, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SamplerState
 from executive.state import Sample as SampleRecord
+from executive.testing import EKF_READY, ack
 from executive.vehicles import PROFILES, ROVER_MODES
-from tests_support import ack, run_over
+from tests_support import run_over
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 ROOT = Path(__file__).parents[2]
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 1.2, 1.2, 1.2, 1.2, 0.0, 0.0)
 RC_AUTO = (1500,) * 5 + (1000,)  # channel 6 low: the RC leaves the boat to the executive
 RC_MANUAL = (1500,) * 5 + (1900,)  # channel 6 high: manual interruption
@@ -226,15 +227,6 @@ def test_without_auto_arm_the_operator_readies_the_boat_and_arming_requests_the_
             "Mode is LOITER?: mode is MANUAL, not LOITER",
             id="not in LOITER",
         ),
-        pytest.param(
-            True,
-            destination(*START, 180.0, 5200.0),
-            lambda boat: None,
-            [R, R, F],
-            [ARM, mode("LOITER")],
-            "Every point within 5000 m?: waypoint 0 (p0) is 5230 m away, over 5000 m",
-            id="a point over 5 km away",
-        ),
     ],
 )
 def test_the_go_to_is_rejected(clock, link, auto_arm, at, between_ticks, ticks, commands, reason):
@@ -246,6 +238,16 @@ def test_the_go_to_is_rejected(clock, link, auto_arm, at, between_ticks, ticks, 
     assert run.boat.commands == commands  # no GUIDED...
     assert run.boat.setpoints == 0 and run.link.take() == []  # ...no target: nothing that moves the boat
     assert run.reason == reason
+
+
+@pytest.mark.parametrize("auto_arm", [True, False])
+def test_a_point_over_5_km_away_is_rejected_before_arming_or_any_mode_change(clock, link, auto_arm):
+    """Issue 13: the ASV armed and set LOITER before rejecting a point over 5 km away."""
+    run = Run(make_mission(auto_arm=auto_arm), clock, link, at=destination(*START, 180.0, 5200.0))
+    run.boat.mode, run.boat.armed = ("MANUAL", False) if auto_arm else ("LOITER", True)  # without auto_arm, the operator had readied it
+    assert run.tick(10) == [F]
+    assert run.boat.commands == [] and run.boat.setpoints == 0 and run.link.take() == []
+    assert run.reason == "Every point within 5000 m?: waypoint 0 (p0) is 5230 m away, over 5000 m"
 
 
 def test_a_go_to_in_progress_refuses_another(run):
@@ -441,7 +443,7 @@ def test_a_sample_point_already_sampled_is_not_sampled_again(run):
 
 
 def test_a_cancel_during_a_sample_cancels_the_sampler_and_records_nothing(clock, link):
-    runtime = Runtime(make_mission(), link, clock, safe_timeout_s=0.5)
+    runtime = build_runtime(make_mission(), link, clock, safe_timeout_s=0.5)
     run = Run(make_mission(), clock, link, runtime=runtime)
     run.until(run.sampling)
     run.state.abort("operator: cancel")  # what `executive ctl abort` does; the runtime then makes the boat safe
@@ -452,7 +454,7 @@ def test_a_cancel_during_a_sample_cancels_the_sampler_and_records_nothing(clock,
 
 def test_a_goto_sample_mission_without_a_sampling_section_gets_the_default_sampler(clock, link):
     fields = make_mission().model_dump(exclude_none=True, exclude={"sampling"})
-    runtime = Runtime(Mission.model_validate(fields), link, clock)
+    runtime = build_runtime(Mission.model_validate(fields), link, clock)
     runtime.mission_state.start()
     assert runtime.sampler is not None and runtime.sampler.options.sensors == ["temperature", "conductivity", "ph", "dissolved_oxygen"]
 

@@ -33,12 +33,12 @@ from executive.sim import SimServer
 from executive.sim.faults import FaultInjector, RcInput, load_faults
 from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
+from executive.testing import EKF_READY, ack
 from executive.vehicles import ROVER_MODES
-from tests_support import ack, run_over
+from tests_support import run_over
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 PWM = {UP: 1000, MIDDLE: 1500, DOWN: 2000}
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 START = (-35.363261, 149.165230)
 ROOT = Path(__file__).parents[2]

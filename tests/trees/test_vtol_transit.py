@@ -24,12 +24,12 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import Outcome, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, HomePosition
+from executive.testing import EKF_READY
 from executive.vehicles import PLANE_MODES, PROFILES
 from tests_support import run_over
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 _M = mavlink
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 HOME = (-35.363261, 149.165230)
 ROOT = Path(__file__).parents[2]

@@ -10,9 +10,9 @@ from executive.geo import destination, distance_bearing
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.modes import ArduPilotModes
 from executive.state import EkfFlags, EkfStatus, GlobalPosition
+from executive.testing import EKF_READY
 from executive.vehicles import ROVER_MODES
 
-EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 
 

@@ -1,8 +1,11 @@
 """The MAVLink reader: drains the link each tick and writes what the autopilot says on the blackboard.
 
 It is the only consumer of incoming messages (``recv_match`` would drop the others). The autopilot
-is the first component whose HEARTBEAT names a real autopilot; vehicle facts from anyone else
-(a ground station, another companion computer) are ignored. Values that cannot be true (no fix,
+is the one named by ``target_system``/``target_component`` (``--target-system``), else the first
+component whose HEARTBEAT names a real autopilot; vehicle facts from anyone else (another vehicle
+on the same link, a ground station, another companion computer) are ignored. Every autopilot heard
+is listed in :attr:`MavlinkReader.autopilots_heard`, so that a link carrying several vehicles is
+noticed before one is commanded. Values that cannot be true (no fix,
 coordinates off the globe, NaN) never reach the blackboard.
 """
 
@@ -16,7 +19,7 @@ from collections.abc import Callable
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.link_health import LinkHealth
 from executive.io.mavlink.mission_protocol import MissionTransfer
@@ -69,8 +72,14 @@ class MavlinkReader:
         link_timeout_s: float = 3.0,
         mission: MissionTransfer | None = None,
         rc_source: bool = True,
+        target_system: int | None = None,
+        target_component: int = AUTOPILOT_COMPONENT,
     ) -> None:
-        """``rc_source``: the autopilot's RC_CHANNELS are the RC receiver (False when the RC is read from CAN)."""
+        """``rc_source``: the autopilot's RC_CHANNELS are the RC receiver (False when the RC is read from CAN).
+
+        ``target_system``: bind only to the autopilot of that system (and ``target_component``);
+        None: the first autopilot heard.
+        """
         self._link = link
         self._rc_source = rc_source
         self._clock = clock
@@ -79,6 +88,12 @@ class MavlinkReader:
         self.link_timeout_s = link_timeout_s
         self._bb = blackboard.writer("mavlink reader", blackboard.keys_under("/link/", "/vehicle/", "/rc/"))
         self._autopilot: tuple[int, int] | None = None
+        self.target_system = target_system
+        self.target_component = target_component
+        #: system id -> MAV_TYPE of every autopilot whose HEARTBEAT was heard (the bound one included).
+        self.autopilots_heard: dict[int, int] = {}
+        if target_system is not None:  # everything is addressed to it from the first message, before its heartbeat
+            self._set_targets((target_system, target_component))
         self._messages = 0
         self._bad_data = 0
         self.health = LinkHealth()
@@ -142,9 +157,10 @@ class MavlinkReader:
             self._bad_data += 1
             self._bb.set("/link/bad_data", self._bad_data)
             return
-        if kind == "HEARTBEAT" and self._autopilot is None:
-            self._maybe_adopt_autopilot(msg)
-        if self._autopilot != (msg.get_srcSystem(), msg.get_srcComponent()):
+        source = (msg.get_srcSystem(), msg.get_srcComponent())
+        if kind == "HEARTBEAT" and source != self._autopilot:
+            self._heard_heartbeat(msg, source)
+        if self._autopilot != source:
             if kind == "COMMAND_LONG" and self.on_command is not None:
                 self.on_command(msg, self._link)  # a ground station (routed by the autopilot) commanding us
             return
@@ -158,13 +174,26 @@ class MavlinkReader:
             handler(msg, now)
 
     # -- handlers ----------------------------------------------------------------------------
-    def _maybe_adopt_autopilot(self, msg: MAVLinkMessage) -> None:
+    def _heard_heartbeat(self, msg: MAVLinkMessage, source: tuple[int, int]) -> None:
+        """A HEARTBEAT from someone other than our autopilot: note an autopilot, adopt it if it is the one we want."""
         if msg.autopilot == mavlink.MAV_AUTOPILOT_INVALID or msg.type in _NOT_AUTOPILOTS:
             return
-        self._autopilot = (msg.get_srcSystem(), msg.get_srcComponent())
-        self._commander.target_system, self._commander.target_component = self._autopilot
+        if source[0] not in self.autopilots_heard:
+            self.autopilots_heard[source[0]] = msg.type
+            if self._autopilot is not None:
+                log.warning("another autopilot on the link: system %d component %d (MAV_TYPE %d): ignored", *source, msg.type)
+        wanted = self._autopilot is None and (self.target_system is None or source == (self.target_system, self.target_component))
+        if wanted:
+            self._adopt_autopilot(msg, source)
+
+    def _set_targets(self, autopilot: tuple[int, int]) -> None:
+        self._commander.target_system, self._commander.target_component = autopilot
         if self._mission is not None:
-            self._mission.target_system, self._mission.target_component = self._autopilot
+            self._mission.target_system, self._mission.target_component = autopilot
+
+    def _adopt_autopilot(self, msg: MAVLinkMessage, source: tuple[int, int]) -> None:
+        self._autopilot = source
+        self._set_targets(source)
         self._commander.modes = mode_table(msg.autopilot, msg.type)
         self._bb.set("/link/system_id", self._autopilot[0])
         self._bb.set("/link/component_id", self._autopilot[1])

@@ -8,7 +8,7 @@ import pytest
 from executive import blackboard
 from executive.io.mavlink.dialect import mavlink
 from executive.state import CommandState
-from tests_support import ack
+from executive.testing import ack
 
 DO_SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 

@@ -8,7 +8,7 @@ from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.gcs import STATE_CODES, GroundStationControl
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.operator import Operator
-from tests_support import GCS, Peer
+from executive.testing import GCS, Peer
 
 US = (1, 191)
 

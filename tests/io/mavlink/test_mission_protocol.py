@@ -22,7 +22,7 @@ from executive.io.mavlink.mission_protocol import (
     waypoint_items,
 )
 from executive.io.mavlink.reader import MavlinkReader
-from tests_support import AUTOPILOT, GCS
+from executive.testing import AUTOPILOT, GCS
 
 HOME = (47.397742, 8.545594)
 POINTS = [(47.3979220, 8.5455940, 0.0), (47.3979220, 8.5458600, 2.5)]

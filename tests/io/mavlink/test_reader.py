@@ -10,7 +10,7 @@ import pytest
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.reader import MavlinkReader
 from executive.state import CommandState, EkfFlags
-from tests_support import AUTOPILOT, GCS, Peer, ack
+from executive.testing import AUTOPILOT, GCS, Peer, ack
 
 ARMED = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
 
@@ -40,6 +40,27 @@ def test_adopts_the_autopilot_not_the_ground_station(reader, link, commander):
     assert reader.autopilot == (1, 1)
     assert (bb("/link/system_id"), bb("/link/component_id")) == (1, 1)
     assert (commander.target_system, commander.target_component) == (1, 1)
+
+
+def test_a_target_system_binds_to_that_autopilot_alone(link, clock, commander):
+    """Issue 13: with vehicles 1 and 2 on the link, --target-system 2 must not bind to the first heartbeat (vehicle 1's)."""
+    reader = MavlinkReader(link, clock, commander, target_system=2)
+    assert (commander.target_system, commander.target_component) == (2, 1)  # addressed from the start
+    other, mine = Peer(1, 1), Peer(2, 1)
+    receive(reader, link, heartbeat(custom_mode=15, source=other))
+    assert reader.autopilot is None and bb("/vehicle/mode") is None
+    receive(reader, link, heartbeat(custom_mode=4, source=mine), heartbeat(custom_mode=15, source=other))
+    assert reader.autopilot == (2, 1)
+    assert bb("/vehicle/mode") == "HOLD"  # vehicle 1's GUIDED, heard after, is not ours
+    assert reader.autopilots_heard == {1: mavlink.MAV_TYPE_GROUND_ROVER, 2: mavlink.MAV_TYPE_GROUND_ROVER}
+    receive(reader, link, other.command_ack(mavlink.MAV_CMD_DO_SET_MODE, 0, 0, 0, 1, 191))
+    assert (commander.target_system, commander.target_component) == (2, 1)
+
+
+def test_no_target_system_binds_to_the_first_autopilot_and_notes_every_other(reader, link):
+    receive(reader, link, heartbeat(), heartbeat(source=Peer(3, 1)))
+    assert reader.autopilot == (1, 1)
+    assert sorted(reader.autopilots_heard) == [1, 3]
 
 
 def test_heartbeat_gives_mode_by_name_armed_and_link_up(reader, link):

@@ -7,7 +7,7 @@ import pytest
 
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.reader import MavlinkReader
-from tests_support import AUTOPILOT, Peer
+from executive.testing import AUTOPILOT, Peer
 
 DOWN, FORWARD = mavlink.MAV_SENSOR_ROTATION_PITCH_270, mavlink.MAV_SENSOR_ROTATION_NONE
 KEY = "/vehicle/altitude_above_bottom_m"

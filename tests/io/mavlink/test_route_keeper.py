@@ -20,7 +20,7 @@ from executive.mission.model import Home, Mission
 from executive.mission.route import offset
 from executive.sim.mission_store import MissionStore
 from executive.state import HomePosition
-from tests_support import ack
+from executive.testing import ack
 
 _M = mavlink
 _EXECUTIVE = mavlink.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import py_trees
 import pytest
 
+from executive.assembly import build_runtime
 from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
 from executive.runtime import Runtime
@@ -34,7 +35,7 @@ def idle_runtime(square_mission):
 
     def make(url: str, clock: ScaledClock) -> Runtime:
         links.append(PymavlinkLink(url))
-        return Runtime(square_mission, links[-1], clock, root=py_trees.behaviours.Running("idle"))
+        return build_runtime(square_mission, links[-1], clock, root=py_trees.behaviours.Running("idle"))
 
     yield make
     for link in links:

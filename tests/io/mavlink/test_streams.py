@@ -6,7 +6,7 @@ import pytest
 
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.streams import StreamRequester
-from tests_support import ack
+from executive.testing import ack
 
 RATES = {"GLOBAL_POSITION_INT": 5.0, "ATTITUDE": 10.0, "HOME_POSITION": 0.2}
 

@@ -1,0 +1,283 @@
+"""How a runtime is put together: the autopilot link every run has, and plugs for the optional parts.
+
+:func:`build_runtime` is the builder (``executive run`` composes its plugs from the command line;
+tests and benchmarks call it directly). A plug is a function of the :class:`Wiring` that adds
+services to it: a new link (a sensor, a viewer, another autopilot's protocol) is a new plug.
+"""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from executive import blackboard
+from executive.clock import Clock
+from executive.intervention import InterventionWatch
+from executive.io.heading import HeadingFilter
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.gcs import GroundStationControl
+from executive.io.mavlink.heartbeat import Heartbeat
+from executive.io.mavlink.link import Link
+from executive.io.mavlink.mission_protocol import MissionTransfer
+from executive.io.mavlink.reader import MavlinkReader
+from executive.io.mavlink.route_keeper import RouteKeeper
+from executive.io.mavlink.streams import StreamRequester, rates_for
+from executive.io.rc import RcReader
+from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.model import Mission
+from executive.operator import Operator
+from executive.runtime import Runtime
+from executive.services import PacedService, RunObserver, Service, Step
+from executive.status import StatusSource
+from executive.vehicles import PROFILES
+
+if TYPE_CHECKING:
+    import can
+    import py_trees
+
+    from executive.io.can.drive import DriveBridge
+    from executive.journal import Journal
+    from executive.progress import Progress
+    from executive.snapshots import SnapshotRecorder
+
+
+@dataclass
+class AutopilotLink:
+    """The MAVLink side of every run: commands and acks, mission transfers, telemetry, our heartbeat, streams, route uploads, ground stations."""
+
+    link: Link
+    commander: Commander
+    mission_transfer: MissionTransfer
+    reader: MavlinkReader
+    heartbeat: Heartbeat
+    streams: StreamRequester
+    route_keeper: RouteKeeper
+    ground_station: GroundStationControl
+
+
+@dataclass
+class Wiring:
+    """What the plugs see and add to; the runtime runs its services in list order."""
+
+    mission: Mission
+    clock: Clock
+    system_id: int
+    mission_state: MissionState
+    status: StatusSource
+    operator: Operator
+    autopilot: AutopilotLink
+    readers: list[Service] = field(default_factory=list)
+    writers: list[Service] = field(default_factory=list)
+    paced: list[PacedService] = field(default_factory=list)
+    observers: list[RunObserver] = field(default_factory=list)
+    closers: list[Callable[[], object]] = field(default_factory=list)
+
+
+Plug = Callable[[Wiring], None]
+
+
+def _autopilot_link(
+    mission: Mission, link: Link, clock: Clock, state: MissionState, operator: Operator, system_id: int, target: tuple[int | None, int]
+) -> AutopilotLink:
+    commander = Commander(link, clock, PROFILES[mission.vehicle], system_id=system_id)
+    transfer = MissionTransfer(link, clock, system_id=system_id)
+    reader = MavlinkReader(
+        link,
+        clock,
+        commander,
+        link_timeout_s=mission.limits.link_timeout_s,
+        mission=transfer,
+        rc_source=mission.rc.source == "mavlink",
+        target_system=target[0],
+        target_component=target[1],
+    )
+    streams = StreamRequester(commander, rates_for(mission.vehicle))
+    reader.on_reconnect = streams.restart
+    #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.
+    keeper = RouteKeeper(state, transfer, commander, clock)
+    ground_station = GroundStationControl([link], clock, operator, system_id=system_id)
+    reader.on_command = ground_station.on_command
+    heartbeat = Heartbeat(link, clock, system_id=system_id)
+    return AutopilotLink(link, commander, transfer, reader, heartbeat, streams, keeper, ground_station)
+
+
+def build_runtime(
+    mission: Mission,
+    link: Link,
+    clock: Clock,
+    *,
+    plugs: Sequence[Plug] = (),
+    system_id: int = 1,
+    target_system: int | None = None,
+    target_component: int = 1,
+    rate_hz: float = 10.0,
+    safe_timeout_s: float = 5.0,
+    root: py_trees.behaviour.Behaviour | None = None,
+    progress: Progress | None = None,
+) -> Runtime:
+    """A runtime for ``mission`` on the autopilot at the other end of ``link``, with the optional parts ``plugs`` add.
+
+    ``target_system``/``target_component``: the autopilot to command, alone (None: the only one on the link).
+
+    Readers run in this order: the autopilot link, the plugs' readers (other links, sensors,
+    operator inputs), then what derives from them (heading filter, RC switches) and our heartbeat.
+    Writers: the autopilot's streams, ground-station reports and route uploads, the plugs'
+    writers, then the commands the tick asked for.
+    """
+    blackboard.reset()
+    state = MissionState()
+    status = StatusSource("runtime status")
+    operator = Operator(state, mission.vehicle, status=status.snapshot, clock=clock)
+    autopilot = _autopilot_link(mission, link, clock, state, operator, system_id, (target_system, target_component))
+    wiring = Wiring(mission, clock, system_id, state, status, operator, autopilot)
+    wiring.readers.append(Step("mavlink reader", autopilot.reader.drain))
+    wiring.writers += [autopilot.streams, autopilot.ground_station, autopilot.route_keeper]
+    for plug in plugs:
+        plug(wiring)
+    # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
+    intervention = InterventionWatch(clock, autopilot.commander, state, PROFILES[mission.vehicle], mission.rc)
+    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), intervention, autopilot.heartbeat]
+    wiring.writers += [Step("commands", autopilot.commander.flush), Step("mission transfers", autopilot.mission_transfer.flush)]
+    return Runtime(wiring, rate_hz=rate_hz, safe_timeout_s=safe_timeout_s, root=root, progress=progress)
+
+
+# -- plugs -----------------------------------------------------------------------------------
+
+
+class _BaseDrive:
+    """The AgileX base driven at its own rate: the autopilot's skid-steer outputs while a mission runs, else zero motion."""
+
+    def __init__(self, drive: DriveBridge, state: MissionState) -> None:
+        self._drive = drive
+        self._state = state
+
+    def service(self) -> None:
+        self._drive.in_control = self._state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
+
+    @property
+    def next_due(self) -> float:
+        return self._drive.next_due
+
+    def pace(self) -> bool:
+        return self._drive.service()
+
+    def stop(self) -> None:
+        self._drive.in_control = False
+        self._drive.service()
+
+
+def can_base(bus: can.BusABC) -> Plug:
+    """The AgileX base on ``bus``: its frames read each tick; the autopilot's skid-steer outputs driven onto it at 50 Hz."""
+
+    def plug(w: Wiring) -> None:
+        from executive.io.can import CanReader, DriveBridge
+
+        reader = CanReader(bus, w.clock, rc=w.mission.rc.source == "can")
+        w.readers.append(Step("can reader", reader.drain))
+        drive = _BaseDrive(DriveBridge(bus, w.clock), w.mission_state)
+        w.writers.append(drive)
+        w.paced.append(drive)
+
+    return plug
+
+
+def obstacle_camera(sock: socket.socket) -> Plug:
+    """A camera's obstacle distances on ``sock``: read each tick, each new scan sent on to the autopilot."""
+
+    def plug(w: Wiring) -> None:
+        from executive.io.obstacles import ObstacleForwarder, ObstacleReceiver
+
+        receiver = ObstacleReceiver(sock, w.clock)
+        w.readers.append(Step("obstacle receiver", receiver.drain))
+        w.writers.append(ObstacleForwarder(w.autopilot.link, w.clock))
+
+    return plug
+
+
+def ground_stations(link: Link, allowed_systems: Iterable[int] = (255,)) -> Plug:
+    """Ground stations on their own endpoint ``link``: their commands answered (from ``allowed_systems`` only), the mission reported to them."""
+
+    def plug(w: Wiring) -> None:
+        gcs = w.autopilot.ground_station
+        gcs.links.append(link)
+        gcs.allowed_systems = frozenset(allowed_systems)
+
+        def listen() -> None:
+            while (msg := link.recv()) is not None:
+                if msg.get_type() == "COMMAND_LONG":
+                    gcs.on_command(msg, link)
+
+        w.readers.append(Step("ground stations", listen))
+
+    return plug
+
+
+def control_socket(path: str) -> Plug:
+    """The control socket at ``path`` for ``executive ctl``: its requests go to the operator."""
+
+    def plug(w: Wiring) -> None:
+        from executive.io.control import ControlServer
+
+        def answer(request: dict[str, Any]) -> dict[str, Any]:
+            args = {k: v for k, v in request.items() if k != "op"}
+            return w.operator.request(request["op"], source="ctl", **args).to_dict()
+
+        server = ControlServer(path, answer)
+        w.readers.append(server)
+        w.closers.append(server.close)
+
+    return plug
+
+
+class _JournalRuns:
+    """The journal's part in a run: the run begun and ended, each leg recorded (with where the vehicle was) as it changes."""
+
+    def __init__(self, journal: Journal, state: MissionState) -> None:
+        self._journal = journal
+        self._state = state
+        self._bb = blackboard.reader("journal", ["/vehicle/position"])
+
+    def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
+        self._journal.begin_run(mission, resumed_from=resumed_from)
+
+    def ticked(self, tick: int, now: float) -> None:
+        position = self._bb.get("/vehicle/position")
+        self._journal.observe_leg(self._state, *((position.lat, position.lon) if position else (None, None)))
+
+    def end(self, status: str, reason: str) -> None:
+        self._journal.end_run(status, reason)
+
+
+def journal_recorder(journal: Journal) -> Plug:
+    """Record the run in ``journal``: transitions, legs, samples, route edits, the outcome."""
+
+    def plug(w: Wiring) -> None:
+        journal.attach(w.mission_state)
+        w.observers.append(_JournalRuns(journal, w.mission_state))
+
+    return plug
+
+
+class _SnapshotRuns:
+    def __init__(self, recorder: SnapshotRecorder) -> None:
+        self._recorder = recorder
+
+    def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
+        self._recorder.attach(root)
+
+    def ticked(self, tick: int, now: float) -> None:
+        self._recorder.record(tick, now)
+
+    def end(self, status: str, reason: str) -> None:
+        pass  # the file goes on with the next run's tree
+
+
+def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
+    """Record every tick of the tree (node statuses, blackboard changes) for ``executive replay``."""
+
+    def plug(w: Wiring) -> None:
+        w.observers.append(_SnapshotRuns(recorder))
+
+    return plug

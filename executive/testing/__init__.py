@@ -1,0 +1,56 @@
+"""``executive.testing``: test a behaviour tree tick by tick, and a whole mission in a deterministic simulation.
+
+Installed with the package; its pytest plugin (entry point ``pytest11``) gives the fixtures below
+to any project that installs ``executive``. Nothing here touches a socket or the wall clock.
+
+Tick by tick (:class:`Harness`)
+    ``h = Harness.build(mission, root=my_tree)`` sets a tree up as the runtime does, on a
+    :class:`~executive.clock.ManualClock`, with the mission started. Script the inputs between
+    ticks with ``h.vehicle.set(vehicle__mode="GUIDED", link__up=True, vehicle__ekf=...)`` (any
+    documented blackboard key under ``/vehicle/``, ``/link/``, ``/rc/``, ``/heading/``), tick
+    with ``h.tick(dt)``, answer commands with ``h.ack(MAV_CMD_...)`` and assert on
+    ``h.asked()`` (``[("mode", "HOLD"), ("arm", True), ("goto", lat, lon, alt)...]``) and on
+    ``h.status("Mission/.../My guard")`` / ``h.feedback(...)`` by path.
+
+A scripted autopilot (:class:`ScriptedAutopilot`)
+    Behind a harness, it acks modes and arming at once, steps toward GUIDED targets each tick
+    and publishes mode, armed and position; ``refuse`` makes it say no. Subclass it to script
+    another firmware (``on_command``, ``on_setpoint``, ``enter_mode``, ``move``, ``facts``).
+
+A whole mission (:class:`Lockstep`)
+    ``Lockstep(mission, events=["faults.yaml"]).run_to_end(limit_s=900)`` runs the runtime
+    against the built-in simulated autopilot of the mission's kind (rover, boat, bunker with
+    its CAN base, sub, vtol), with fault and operator-event files, on one clock stepped only
+    when the runtime waits: deterministic, and as fast as the CPU allows. ``run(until=...)``
+    stops at a moment of interest; ``at(t, action)`` and ``observers`` act and watch on the
+    vehicle's clock.
+
+Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``commander``,
+``vehicle``, ``mission_state``, ``harness`` (``harness(root)``), ``lockstep``
+(``lockstep(mission, ...)``, closed after the test).
+"""
+
+from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, describe
+from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
+from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
+from executive.testing.missions import mission_errors
+from executive.testing.scripted import ScriptedAutopilot
+
+__all__ = [
+    "AUTOPILOT",
+    "EKF_READY",
+    "GCS",
+    "START_S",
+    "FakeLink",
+    "Harness",
+    "Lockstep",
+    "LockstepClock",
+    "Peer",
+    "ScriptedAutopilot",
+    "Vehicle",
+    "VehicleTimeLimit",
+    "Wire",
+    "ack",
+    "describe",
+    "mission_errors",
+]

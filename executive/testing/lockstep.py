@@ -1,0 +1,281 @@
+"""A whole mission in one thread on one manual clock: the runtime, a simulated autopilot, the CAN base and instruments over in-memory links.
+
+Nothing waits for the wall clock: when the runtime sleeps until its next tick, the simulated
+world is stepped to that instant instead, so a mission runs deterministically, as fast as the
+CPU allows, and a busy machine changes nothing but how long it takes.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import socket
+from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from executive.assembly import build_runtime, can_base, obstacle_camera
+from executive.clock import ManualClock
+from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
+from executive.io.mavlink.link import MemoryLink
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.model import Mission, SimulatorOptions
+from executive.runtime import Outcome
+from executive.sim import ArduPilotSim, make_autopilot
+from executive.sim.autopilot import Home
+from executive.sim.options import firmware_options, simulated_home
+
+if TYPE_CHECKING:
+    import can
+
+    from executive.sim.agilex_base import SimulatedBase
+    from executive.sim.faults import Fault, FaultInjector
+
+_channels = itertools.count()
+
+
+class VehicleTimeLimit(AssertionError):
+    """The simulation reached its limit of vehicle time before the run ended."""
+
+
+class LockstepClock(ManualClock):
+    """A manual clock whose :meth:`sleep_until` steps the simulated world to that instant (at most ``max_step_s`` at a time)."""
+
+    def __init__(self, step: Callable[[float], None], start: float = 0.0, max_step_s: float = 0.1) -> None:
+        super().__init__(start)
+        self._step = step
+        self.max_step_s = max_step_s
+        #: Past this vehicle time, :meth:`sleep_until` raises :class:`VehicleTimeLimit` (None: no limit).
+        self.deadline: float | None = None
+
+    def sleep_until(self, t: float) -> None:
+        while self.now() < t:
+            if self.deadline is not None and self.now() >= self.deadline:
+                raise VehicleTimeLimit(f"still running at {self.now():.1f} s of vehicle time (the limit)")
+            self._step(min(t, self.now() + self.max_step_s))
+
+
+class Wire:
+    """One way of a MAVLink link in memory: each message gets its header (system, component, sequence) as when sent.
+
+    With ``as_bytes`` the messages are packed into bytes and parsed back, exactly as a link carries
+    them (values at their wire precision; it costs about a third of a simulation's time).
+    """
+
+    def __init__(self, system_id: int, component_id: int, *, as_bytes: bool = False) -> None:
+        self._buffer = bytearray()
+        self._mav = mavlink.MAVLink(self, srcSystem=system_id, srcComponent=component_id)
+        self._parser = mavlink.MAVLink(None)
+        self._parser.robust_parsing = True
+        self.as_bytes = as_bytes
+        #: Every byte carried, when a test asks to keep them (a bytearray, with ``as_bytes``; None: not kept).
+        self.recording: bytearray | None = None
+
+    def write(self, data: bytes) -> None:
+        self._buffer += data
+
+    def carry(self, messages: Iterable[MAVLinkMessage]) -> list[MAVLinkMessage]:
+        """``messages`` as the other end receives them."""
+        if not self.as_bytes:
+            for msg in messages:
+                msg.pack(self._mav)
+                self._mav.seq = (self._mav.seq + 1) % 256
+            return list(messages)
+        for msg in messages:
+            self._mav.send(msg)
+        data = bytes(self._buffer)
+        self._buffer.clear()
+        if self.recording is not None:
+            self.recording += data
+        return self._parser.parse_buffer(data) or []
+
+
+class Lockstep:
+    """The runtime and a simulated autopilot of the mission's kind in one loop, on one :class:`LockstepClock`.
+
+    ``events`` are fault/event files (and ``Fault`` objects) played on the vehicle's clock, after
+    the mission's own ``simulator.events`` (a path relative to ``mission_dir``). ``can=True`` puts
+    the simulated AgileX base (bunker only) and the runtime on an in-process CAN bus;
+    ``obstacles=True`` gives the runtime a camera (:meth:`send_obstacles`). Other keyword arguments
+    go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=[journal_recorder(j)]``...).
+    ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4 instead
+    of ArduPilot. Everything the runtime sends reaches the autopilot at the instant it is sent; what the autopilot sends arrives at the runtime's next
+    tick (one tick of latency, as over a fast link), each with its header; ``as_bytes`` packs and
+    parses them as a real link does (see :class:`Wire`).
+    """
+
+    def __init__(
+        self,
+        mission: Mission,
+        *,
+        model: str | None = None,
+        home: Home | None = None,
+        events: Sequence[str | Path | Fault] = (),
+        mission_dir: str | Path | None = None,
+        ekf_ready_after_s: float | None = None,
+        rate_hz: float = 10.0,
+        start_s: float = 0.0,
+        can: bool = False,
+        obstacles: bool = False,
+        firmware: dict[str, float] | None = None,
+        as_bytes: bool = False,
+        autopilot: str = "ardupilot",
+        **runtime_options: Any,
+    ) -> None:
+        sim = mission.simulator or SimulatorOptions()
+        self.mission = mission
+        self.clock = LockstepClock(self._step_to, start_s, max_step_s=1.0 / rate_hz)
+        self.autopilot: ArduPilotSim = make_autopilot(
+            model or sim.model or mission.vehicle,
+            self.clock,
+            home or simulated_home(mission),
+            autopilot=autopilot,
+            ekf_ready_after_s=sim.ekf_ready_after_s if ekf_ready_after_s is None else ekf_ready_after_s,
+            **{**firmware_options(mission), **(firmware or {})},
+        )
+        self.faults = self._injector(mission, events, mission_dir)
+        if self.faults is not None:
+            self.faults.attach(self.autopilot)
+        self.uplink = Wire(1, EXECUTIVE_COMPONENT, as_bytes=as_bytes)
+        self.downlink = Wire(self.autopilot.system_id, AUTOPILOT_COMPONENT, as_bytes=as_bytes)
+        self.link = MemoryLink()
+        self.base: SimulatedBase | None = None
+        self.can_bus: can.BusABC | None = None
+        self._buses: list[can.BusABC] = []
+        if can:
+            self.can_bus = self._open_can()
+        self._camera: socket.socket | None = None
+        obstacle_socket = None
+        if obstacles:
+            obstacle_socket, self._camera = socket.socketpair(socket.AF_UNIX, socket.SOCK_DGRAM)
+            obstacle_socket.setblocking(False)
+        self._sockets = [s for s in (obstacle_socket, self._camera) if s is not None]
+        #: Called after each step of the world with this simulation (watch the vehicle, act at a moment).
+        self.observers: list[Callable[[Lockstep], object]] = []
+        self._scheduled: list[tuple[float, Callable[[Lockstep], object]]] = []
+        self._started = False
+        self._stop_when: Callable[[], bool] | None = None
+        plugs = list(runtime_options.pop("plugs", ()))
+        plugs += [can_base(self.can_bus)] if self.can_bus is not None else []
+        plugs += [obstacle_camera(obstacle_socket)] if obstacle_socket is not None else []
+        self.runtime = build_runtime(mission, self.link, self.clock, rate_hz=rate_hz, plugs=plugs, **runtime_options)
+
+    # -- set-up ---------------------------------------------------------------------------------
+    def _injector(self, mission: Mission, events: Sequence[str | Path | Fault], mission_dir: str | Path | None) -> FaultInjector | None:
+        from executive.sim.faults import FaultInjector, load_faults
+
+        faults: list[Fault] = []
+        own = mission.simulator.events if mission.simulator else None
+        sources: list[str | Path | Fault] = [Path(mission_dir or ".") / own] if own else []
+        for source in [*sources, *events]:
+            faults += load_faults(source, vehicle=mission.vehicle).faults if isinstance(source, str | Path) else [source]
+        return FaultInjector(faults, self.clock) if faults else None
+
+    def _open_can(self) -> can.BusABC:
+        import can as python_can
+
+        from executive.sim.agilex_base import SimulatedBase
+
+        channel = f"executive-lockstep-{next(_channels)}"
+        ours, base_end = (python_can.Bus(interface="virtual", channel=channel, receive_own_messages=False) for _ in range(2))
+        self._buses = [ours, base_end]
+        self.base = SimulatedBase(base_end, self.clock, self.autopilot, faults=self.faults)
+        return ours
+
+    def close(self) -> None:
+        """Shut the CAN buses and sockets (idempotent)."""
+        for bus in self._buses:
+            bus.shutdown()
+        for sock in self._sockets:
+            sock.close()
+        self._buses, self._sockets = [], []
+        self.runtime.close()
+
+    def __enter__(self) -> Lockstep:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- the world ------------------------------------------------------------------------------
+    def _step_to(self, t: float) -> None:
+        """What the runtime sent reaches the autopilot; the world moves to ``t``; what the vehicle sends is queued for the runtime."""
+        faults = self.faults
+        if faults is not None:
+            faults.update(self.autopilot)
+        sent, self.link.sent = self.link.sent, []
+        out: list[MAVLinkMessage] = []
+        if faults is None or faults.receiving:  # during an uplink loss what is sent is lost
+            for msg in self.uplink.carry(sent):
+                out += self.autopilot.handle(msg)
+        ManualClock.sleep_until(self.clock, t)
+        if faults is not None:
+            faults.update(self.autopilot)
+        out += self.autopilot.update()
+        if self.base is not None:
+            self.base.service()
+        if faults is not None:
+            out = faults.transform(out)
+        self.link.incoming.extend(self.downlink.carry(out))
+        while self._scheduled and self._scheduled[0][0] <= t + 1e-9:
+            _, action = self._scheduled.pop(0)
+            action(self)
+        for observer in self.observers:
+            observer(self)
+        if self._stop_when is not None and self._stop_when():
+            raise _Stopped
+
+    def step(self, dt: float) -> None:
+        """Move the world ``dt`` seconds without ticking the runtime (before it connects, between runs)."""
+        self.clock.sleep_until(self.clock.now() + dt)
+
+    def at(self, t_s: float, action: Callable[[Lockstep], object]) -> None:
+        """Call ``action(self)`` at ``t_s`` seconds of vehicle time (an operator's request, a camera's scan...)."""
+        self._scheduled.append((t_s, action))
+        self._scheduled.sort(key=lambda entry: entry[0])
+
+    def send_obstacles(self, scan: dict[str, Any]) -> None:
+        """The camera sends one scan (the JSON object of README's ``--obstacles``); needs ``obstacles=True``."""
+        if self._camera is None:
+            raise RuntimeError("this simulation has no camera: Lockstep(..., obstacles=True)")
+        self._camera.send(json.dumps(scan).encode())
+
+    # -- running --------------------------------------------------------------------------------
+    def connect(self, limit_s: float = 10.0) -> None:
+        """Until the runtime has heard the autopilot (VehicleTimeLimit after ``limit_s`` of vehicle time)."""
+        if self.runtime.reader.autopilot is None and not self.runtime.connect(limit_s):
+            raise VehicleTimeLimit(f"no heartbeat from the simulated autopilot within {limit_s:g} s")
+
+    def run(self, limit_s: float = 600.0, *, until: Callable[[], bool] | None = None, serve: bool = False) -> Outcome | None:
+        """Connect, start the mission (the first time) and run the runtime's own loop until the mission ends.
+
+        Returns its :class:`Outcome`; or None as soon as ``until()`` is true after a step (call
+        :meth:`run` again to go on). VehicleTimeLimit when ``limit_s`` more seconds of vehicle time
+        pass first. ``serve``: the runtime's ``--wait`` loop (ends only when stopped).
+        """
+        self.clock.deadline = self.clock.now() + limit_s
+        self._stop_when = until
+        try:
+            self.connect(limit_s)
+            start, self._started = not self._started, True
+            return self.runtime.run(start=start and not serve, serve=serve)
+        except _Stopped:
+            return None
+        finally:
+            self.clock.deadline = None
+            self._stop_when = None
+
+    def run_to_end(self, limit_s: float = 600.0) -> Outcome:
+        """:meth:`run`, asserting the mission ended (COMPLETED or not) within ``limit_s`` of vehicle time."""
+        outcome = self.run(limit_s)
+        assert outcome is not None
+        return outcome
+
+    @property
+    def status(self) -> MissionStatus:
+        """The mission's status now."""
+        return self.runtime.mission_state.status
+
+
+class _Stopped(Exception):
+    """``until()`` came true: unwinds the runtime's loop to :meth:`Lockstep.run`."""

@@ -1,0 +1,84 @@
+"""The pytest plugin of :mod:`executive.testing` (entry point ``pytest11``): its pieces as fixtures.
+
+A project's own fixture of the same name wins (``mission_state`` with its mission uploaded, say).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import py_trees
+import pytest
+
+from executive import blackboard
+from executive.clock import ManualClock
+from executive.io.mavlink.commander import Commander
+from executive.mission.lifecycle import MissionState
+from executive.mission.model import Mission
+from executive.testing.harness import START_S, Harness, Vehicle
+from executive.testing.links import FakeLink
+from executive.testing.lockstep import Lockstep
+from executive.vehicles import PROFILES
+
+
+@pytest.fixture
+def clean_blackboard() -> Iterator[None]:
+    """The (process-global) blackboard reset before the test, every documented key at its default, and cleared after."""
+    blackboard.reset()
+    yield
+    py_trees.blackboard.Blackboard.clear()
+
+
+@pytest.fixture
+def clock() -> ManualClock:
+    """A manual clock at :data:`~executive.testing.START_S`."""
+    return ManualClock(start=START_S)
+
+
+@pytest.fixture
+def link() -> FakeLink:
+    """A link that records what is sent and returns what the test queues."""
+    return FakeLink()
+
+
+@pytest.fixture
+def commander(link: FakeLink, clock: ManualClock) -> Commander:
+    """A rover's commander on :func:`link`."""
+    return Commander(link, clock, PROFILES["rover"])
+
+
+@pytest.fixture
+def vehicle(clean_blackboard: None) -> Vehicle:
+    """Writes vehicle facts to the blackboard: ``vehicle.set(vehicle__mode="GUIDED", link__up=True)``."""
+    return Vehicle()
+
+
+@pytest.fixture
+def mission_state() -> MissionState:
+    """A mission lifecycle with no mission (override it with one that has yours uploaded)."""
+    return MissionState()
+
+
+@pytest.fixture
+def harness(clean_blackboard: None, clock: ManualClock, link: FakeLink, commander: Commander, mission_state: MissionState) -> Callable[..., Harness]:
+    """``harness(root)`` -> a :class:`Harness` ticking ``root`` with the fixtures' clock, link, commander and mission state."""
+
+    def make(root: py_trees.behaviour.Behaviour, **setup: Any) -> Harness:
+        return Harness(root, clock, link, commander, mission_state, **setup)
+
+    return make
+
+
+@pytest.fixture
+def lockstep() -> Iterator[Callable[..., Lockstep]]:
+    """``lockstep(mission, **options)`` -> a :class:`Lockstep` simulation, closed after the test."""
+    made: list[Lockstep] = []
+
+    def make(mission: Mission, **options: Any) -> Lockstep:
+        made.append(Lockstep(mission, **options))
+        return made[-1]
+
+    yield make
+    for sim in made:
+        sim.close()

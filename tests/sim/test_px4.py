@@ -1,0 +1,333 @@
+"""The simulated PX4 (standard VTOL): every quirk the real firmware showed over MAVLink (issue 12), on a manual clock."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import pytest
+from conftest import HOME, Gcs
+
+from executive.clock import ManualClock
+from executive.io.mavlink.dialect import MAVLinkMessage
+from executive.io.mavlink.dialect import mavlink as m
+from executive.io.mavlink.modes import PX4_MODES
+from executive.sim import SimServer, make_autopilot
+from executive.sim.px4 import (
+    COM_DISARM_PRFLT,
+    COM_FAIL_ACT_T,
+    COM_OF_LOSS_T,
+    ESTIMATOR_OK,
+    HOME_AMSL_M,
+    MIS_TAKEOFF_ALT,
+    MISSION_CHECK_S,
+    TRANSITION_AIRSPEED_M_S,
+    Px4Sim,
+)
+
+if TYPE_CHECKING:
+    from conftest import Client
+
+MC, FW, TO_FW, TO_MC = m.MAV_VTOL_STATE_MC, m.MAV_VTOL_STATE_FW, m.MAV_VTOL_STATE_TRANSITION_TO_FW, m.MAV_VTOL_STATE_TRANSITION_TO_MC
+CUSTOM = m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+LOITER, OFFBOARD, TAKEOFF, MISSION, POSCTL, LAND = (
+    PX4_MODES["AUTO.LOITER"], PX4_MODES["OFFBOARD"], PX4_MODES["AUTO.TAKEOFF"], PX4_MODES["AUTO.MISSION"], PX4_MODES["POSCTL"],
+    PX4_MODES["AUTO.LAND"],
+)  # fmt: skip
+POSITION_ONLY = 0x0DF8  # type_mask: position, no velocity, acceleration or yaw
+
+
+class Px4Gcs(Gcs):
+    """A ground station for PX4: the commander answers on its next loop, so an ack comes from the next update."""
+
+    ap: Px4Sim
+
+    def command(self, command: int, *params: float, target: tuple[int, int] = (1, 1)) -> list[MAVLinkMessage]:
+        """Send a COMMAND_LONG; returns the receiver's direct replies plus what the commander's next loop sends."""
+        direct = super().command(command, *params, target=target)
+        self.clock.advance(0.01)
+        return direct + self.update()
+
+    def acks(self, command: int, *params: float) -> list[int]:
+        return [msg.result for msg in self.command(command, *params) if msg.get_type() == "COMMAND_ACK" and msg.command == command]
+
+    def result(self, command: int, *params: float) -> int:
+        results = self.acks(command, *params)
+        assert len(results) == 1, results
+        return results[0]
+
+    def px4_mode(self, number: int) -> list[int]:
+        """DO_SET_MODE with PX4's main mode (param2) and sub mode (param3); both acks."""
+        return self.acks(m.MAV_CMD_DO_SET_MODE, CUSTOM, (number >> 16) & 0xFF, (number >> 24) & 0xFF)
+
+    def heartbeat(self) -> MAVLinkMessage:
+        self.run(1.0)
+        return self.last("HEARTBEAT")
+
+    def setpoint(self, lat: float, lon: float, rel_alt: float) -> None:
+        x, y, frame = round(lat * 1e7), round(lon * 1e7), m.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+        self.send(self.mav.set_position_target_global_int_encode(0, 1, 1, frame, POSITION_ONLY, x, y, rel_alt, *[0.0] * 8))
+
+    def stream(self, seconds: float, goal: tuple[float, float, float], rate_hz: float = 5.0) -> None:
+        """Stream a position setpoint at ``rate_hz`` while ``seconds`` pass."""
+        for _ in range(round(seconds * rate_hz)):
+            self.setpoint(*goal)
+            self.run(1.0 / rate_hz, step=1.0 / rate_hz / 2)
+
+
+MakePx4 = Callable[..., Px4Gcs]
+
+
+@pytest.fixture
+def px4() -> MakePx4:
+    """A simulated PX4 VTOL, ``run_s`` seconds after boot, and a ground station talking to it."""
+
+    def make(run_s: float = 5.0) -> Px4Gcs:
+        clock = ManualClock()
+        gcs = Px4Gcs(make_autopilot("vtol", clock, HOME, autopilot="px4"), clock)
+        gcs.update()
+        gcs.run(run_s)
+        return gcs
+
+    return make
+
+
+def airborne(px4: MakePx4, metres: float = 20.0) -> Px4Gcs:
+    gcs = px4()
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + metres) == m.MAV_RESULT_ACCEPTED
+    gcs.run(metres / 2.0 + 6.0)
+    assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(metres, abs=0.6)
+    return gcs
+
+
+# -- identity and modes ------------------------------------------------------------------------
+
+
+def test_heartbeat_is_px4_standard_vtol_in_auto_loiter_on_the_ground(px4: MakePx4) -> None:
+    hb = px4().heartbeat()
+    assert (hb.autopilot, hb.type) == (m.MAV_AUTOPILOT_PX4, 22)
+    assert hb.custom_mode == 0x03040000 == LOITER  # main mode 4 in bits 16-23, sub mode 3 in bits 24-31
+    assert hb.base_mode & CUSTOM and not hb.base_mode & m.MAV_MODE_FLAG_SAFETY_ARMED
+
+
+def test_do_set_mode_is_acked_twice_and_confirmed_by_the_heartbeat(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    direct = gcs.send(gcs.mav.command_long_encode(1, 1, m.MAV_CMD_DO_SET_MODE, 0, CUSTOM, 4, 6, 0, 0, 0, 0))
+    assert [(msg.command, msg.result) for msg in direct] == [(m.MAV_CMD_DO_SET_MODE, m.MAV_RESULT_ACCEPTED)]  # the receiver, at once
+    assert gcs.ap.mode == "AUTO.LOITER"  # nothing changed yet
+    gcs.clock.advance(0.01)
+    later = gcs.update()
+    assert [msg.result for msg in later if msg.get_type() == "COMMAND_ACK"] == [m.MAV_RESULT_ACCEPTED]  # the commander's
+    assert gcs.heartbeat().custom_mode == LAND
+
+
+def test_offboard_without_a_setpoint_stream_is_accepted_then_temporarily_rejected(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    replies = gcs.command(m.MAV_CMD_DO_SET_MODE, CUSTOM, 6, 0)
+    acks = [msg.result for msg in replies if msg.get_type() == "COMMAND_ACK"]
+    assert acks == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_TEMPORARILY_REJECTED]
+    assert "Switching to Offboard is currently not available" in gcs.texts(replies)
+    assert gcs.heartbeat().custom_mode == LOITER
+
+
+def test_set_mode_message_is_answered_by_the_commander_as_do_set_mode(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    assert gcs.send(gcs.mav.set_mode_encode(1, CUSTOM, LAND)) == []
+    gcs.clock.advance(0.01)
+    assert [(msg.command, msg.result) for msg in gcs.update() if msg.get_type() == "COMMAND_ACK"] == [(m.MAV_CMD_DO_SET_MODE, 0)]
+
+
+def test_pilot_modes_are_unavailable_without_rc(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    assert gcs.px4_mode(POSCTL) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_TEMPORARILY_REJECTED]
+
+
+# -- arming and health ---------------------------------------------------------------------------
+
+
+def test_arming_is_refused_until_the_estimator_has_a_position(px4: MakePx4) -> None:
+    gcs = px4(run_s=1.5)
+    replies = gcs.command(m.MAV_CMD_COMPONENT_ARM_DISARM, 1, 21196)  # forced: the checks still run for an external command
+    assert [msg.result for msg in replies if msg.get_type() == "COMMAND_ACK"] == [m.MAV_RESULT_TEMPORARILY_REJECTED]
+    assert gcs.texts(replies) == ["Arming denied: Resolve system health failures first"]
+    assert [msg.chunk_seq for msg in gcs.of_type(replies, "STATUSTEXT")] == [0, 1]  # 52 bytes: two chunks sharing an id
+    assert gcs.of_type(replies, "STATUSTEXT")[0].id != 0
+    assert not gcs.last("SYS_STATUS").onboard_control_sensors_health & m.MAV_SYS_STATUS_PREARM_CHECK
+    gcs.run(2.0)
+    status = gcs.last("SYS_STATUS")
+    assert status.onboard_control_sensors_health & m.MAV_SYS_STATUS_PREARM_CHECK
+    assert gcs.last("ESTIMATOR_STATUS").flags == ESTIMATOR_OK
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+
+
+def test_no_ekf_status_report_but_estimator_status(px4: MakePx4) -> None:
+    gcs = px4()
+    kinds = {msg.get_type() for msg in gcs.log}
+    assert "ESTIMATOR_STATUS" in kinds and "EKF_STATUS_REPORT" not in kinds
+    assert gcs.of_type(gcs.log, "ESTIMATOR_STATUS")[0].flags & m.ESTIMATOR_CONST_POS_MODE  # before the position came
+
+
+def test_armed_and_not_taking_off_disarms_itself(px4: MakePx4) -> None:
+    gcs = px4()
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(COM_DISARM_PRFLT + 0.5)
+    assert "Disarmed by auto preflight disarming" in gcs.texts(out) and not gcs.ap.armed
+
+
+# -- take-off, reposition ------------------------------------------------------------------------
+
+
+def test_takeoff_altitude_is_above_sea_level_then_it_loiters(px4: MakePx4) -> None:
+    gcs = px4()
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + 15.0) == m.MAV_RESULT_ACCEPTED
+    assert gcs.heartbeat().custom_mode == TAKEOFF
+    gcs.run(12.0)
+    assert gcs.heartbeat().custom_mode == LOITER
+    position = gcs.last("GLOBAL_POSITION_INT")
+    assert position.relative_alt == pytest.approx(15_000, abs=600)
+    assert position.alt == pytest.approx((HOME_AMSL_M + 15.0) * 1000, abs=600)
+    assert gcs.last("HOME_POSITION").altitude == round(HOME_AMSL_M * 1000)
+
+
+def test_takeoff_without_an_altitude_climbs_to_the_default_height(px4: MakePx4) -> None:
+    gcs = px4()
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, math.nan)
+    gcs.run(8.0)
+    assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(MIS_TAKEOFF_ALT, abs=0.6)
+
+
+def test_reposition_as_command_int_flies_there_in_auto_loiter(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    lat, lon = gcs.north(60.0)
+    frame = m.MAV_FRAME_GLOBAL_INT
+
+    def reposition(flags: int) -> list[int]:
+        x, y = round(lat * 1e7), round(lon * 1e7)
+        msg = gcs.mav.command_int_encode(1, 1, frame, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, flags, 0, math.nan, x, y, HOME_AMSL_M + 25.0)
+        direct = gcs.send(msg)
+        gcs.clock.advance(0.01)
+        return [ack.result for ack in direct + gcs.update() if ack.get_type() == "COMMAND_ACK"]
+
+    assert reposition(0) == [m.MAV_RESULT_UNSUPPORTED]  # Commander.cpp: the change-mode flag is required
+    assert reposition(m.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE) == [m.MAV_RESULT_ACCEPTED]
+    gcs.run(25.0)
+    assert gcs.heartbeat().custom_mode == LOITER
+    assert gcs.ap.vehicle.distance_to(lat, lon) < 1.5 and gcs.ap.vehicle.alt_m == pytest.approx(25.0, abs=0.6)
+
+
+# -- offboard ------------------------------------------------------------------------------------
+
+
+def test_offboard_needs_the_stream_first_and_its_loss_is_the_failsafe(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    goal = (*gcs.north(30.0), 20.0)
+    gcs.stream(1.0, goal)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.stream(15.0, goal)
+    assert gcs.last("HEARTBEAT").custom_mode == OFFBOARD and gcs.ap.vehicle.distance_to(*goal[:2]) < 1.5
+    out = gcs.run(COM_OF_LOSS_T + 0.2)  # the stream stops
+    assert gcs.ap.mode == "POSCTL" and gcs.ap.in_failsafe
+    assert any("no offboard signal" in text for text in gcs.texts(out))
+    out = gcs.run(COM_FAIL_ACT_T + 0.5)
+    assert gcs.last("HEARTBEAT").custom_mode == LAND
+    gcs.run(25.0)
+    assert not gcs.ap.armed and gcs.ap.vehicle.on_ground
+
+
+def test_a_gap_shorter_than_the_loss_time_keeps_offboard(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    goal = (*gcs.north(10.0), 20.0)
+    gcs.stream(1.0, goal)
+    gcs.px4_mode(OFFBOARD)
+    gcs.run(COM_OF_LOSS_T - 0.2)
+    gcs.stream(1.0, goal, rate_hz=2.5)
+    assert gcs.ap.mode == "OFFBOARD" and not gcs.ap.in_failsafe
+
+
+def test_leaving_offboard_before_stopping_the_stream_is_no_failsafe(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    goal = (*gcs.north(10.0), 20.0)
+    gcs.stream(1.0, goal)
+    gcs.px4_mode(OFFBOARD)
+    assert gcs.px4_mode(LOITER) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.run(COM_FAIL_ACT_T + 2.0)
+    assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.armed and not gcs.ap.in_failsafe
+
+
+# -- missions ------------------------------------------------------------------------------------
+
+
+def upload(gcs: Px4Gcs, items: list[tuple[int, float, float, float]]) -> list[MAVLinkMessage]:
+    """Upload (command, lat, lon, rel_alt) items answering each MISSION_REQUEST_INT; returns what the vehicle sent."""
+    sent = gcs.send(gcs.mav.mission_count_encode(1, 1, len(items), m.MAV_MISSION_TYPE_MISSION))
+    replies = list(sent)
+    while sent and sent[-1].get_type() == "MISSION_REQUEST_INT":
+        seq = sent[-1].seq
+        command, lat, lon, alt = items[seq]
+        frame = m.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+        item = gcs.mav.mission_item_int_encode(1, 1, seq, frame, command, 0, 1, 0, 0, 0, math.nan, round(lat * 1e7), round(lon * 1e7), alt, 0)
+        sent = gcs.send(item)
+        replies += sent
+    return replies
+
+
+def test_mission_upload_requests_int_items_from_zero_and_auto_mission_waits_for_the_check(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    items = [(m.MAV_CMD_NAV_WAYPOINT, *gcs.north(40.0), 20.0), (m.MAV_CMD_NAV_WAYPOINT, *gcs.east(40.0), 20.0)]
+    replies = upload(gcs, items)
+    assert [msg.seq for msg in gcs.of_type(replies, "MISSION_REQUEST_INT")] == [0, 1]
+    assert not gcs.of_type(replies, "MISSION_REQUEST")
+    assert gcs.of_type(replies, "MISSION_ACK")[-1].type == m.MAV_MISSION_ACCEPTED
+    assert gcs.px4_mode(MISSION) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_TEMPORARILY_REJECTED]  # still checking it
+    gcs.run(MISSION_CHECK_S)
+    assert gcs.px4_mode(MISSION) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(60.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [0, 1]
+    current = gcs.last("MISSION_CURRENT")
+    assert (current.mission_state, current.total) == (m.MISSION_STATE_COMPLETE, 2)
+    assert gcs.last("HEARTBEAT").custom_mode == LOITER and gcs.ap.armed
+
+
+# -- VTOL ----------------------------------------------------------------------------------------
+
+
+def test_transition_to_fixed_wing_and_back(px4: MakePx4) -> None:
+    gcs = airborne(px4, 30.0)
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, FW) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(20.0)
+    states = [msg.vtol_state for msg in gcs.of_type(out, "EXTENDED_SYS_STATE")]
+    assert states[0] == TO_FW and states[-1] == FW and set(states) == {TO_FW, FW}
+    assert gcs.ap.vehicle.speed_m_s >= TRANSITION_AIRSPEED_M_S
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, MC) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(10.0)
+    states = [msg.vtol_state for msg in gcs.of_type(out, "EXTENDED_SYS_STATE")]
+    assert states[0] == TO_MC and states[-1] == MC
+
+
+def test_transition_is_refused_on_the_ground(px4: MakePx4) -> None:
+    gcs = px4()
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, FW) == m.MAV_RESULT_TEMPORARILY_REJECTED
+    assert gcs.ap.vtol_state == MC
+
+
+# -- over a socket -------------------------------------------------------------------------------
+
+
+def test_server_sends_messages_outside_the_dialect(client_for: Callable[[str], Client]) -> None:
+    with SimServer("vtol", autopilot="px4", clock=ManualClock(), home=HOME) as server:
+        client = client_for(server.url_for_client)
+        client.conn.mav.heartbeat_send(m.MAV_TYPE_GCS, m.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        clock = server.clock
+        assert isinstance(clock, ManualClock)
+        for _ in range(30):
+            clock.advance(0.1)
+            server.step()
+        hb = client.wait("HEARTBEAT")
+        assert hb.autopilot == m.MAV_AUTOPILOT_PX4
+        client.wait("UNKNOWN_411")  # CURRENT_EVENT_SEQUENCE, a raw MAVLink 2 frame pymavlink's dialect cannot decode
+        client.wait("UNKNOWN_380")
+        client.wait("OPEN_DRONE_ID_LOCATION")

@@ -1,0 +1,93 @@
+"""The runtime as a loop over services: a plug's readers run before the tree, its writers after, its paced service between ticks."""
+
+from __future__ import annotations
+
+import py_trees
+from py_trees.common import Status
+
+from executive.assembly import Wiring, build_runtime
+from executive.services import Step, service_name
+
+
+class Paced:
+    """A paced service every 1/32 s of clock time (exact in binary), that notes when it was stopped."""
+
+    def __init__(self, clock, events: list[str]) -> None:
+        self.clock, self.events = clock, events
+        self.next_due = 0.0
+        self.times: list[float] = []
+
+    def pace(self) -> None:
+        if self.clock.now() >= self.next_due:
+            self.times.append(self.clock.now())
+            self.next_due = self.clock.now() + 0.03125
+
+    def stop(self) -> None:
+        self.events.append("stopped")
+
+
+class Observer:
+    def __init__(self, events: list[str]) -> None:
+        self.events = events
+
+    def begin(self, mission, root, resumed_from) -> None:
+        self.events.append(f"begin {root.name} resumed_from={resumed_from}")
+
+    def ticked(self, tick: int, now: float) -> None:
+        self.events.append(f"ticked {tick}")
+
+    def end(self, status: str, reason: str) -> None:
+        self.events.append(f"end {status}")
+
+
+def test_a_plug_adds_services_run_around_the_tree(square_mission, link, clock):
+    events: list[str] = []
+    paced: list[Paced] = []
+
+    class Probe(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            events.append("tree")
+            return Status.SUCCESS
+
+    def sensor(w: Wiring) -> None:
+        w.readers.append(Step("sensor", lambda: events.append("read")))
+        w.writers.append(Step("viewer", lambda: events.append("write")))
+        w.observers.append(Observer(events))
+        paced.append(Paced(w.clock, events))
+        w.paced.append(paced[0])
+        w.closers.append(lambda: events.append("closed"))
+
+    runtime = build_runtime(square_mission, link, clock, plugs=[sensor], root=Probe("probe"), safe_timeout_s=0.0)
+    runtime.tick()
+    assert events == ["read", "write"]  # no mission running: no tree, the services still run
+    events.clear()
+    runtime.run()
+    assert events[:5] == ["begin probe resumed_from=None", "read", "tree", "ticked 1", "write"]
+    assert events[5:] == ["end COMPLETED"]  # the mission ended at its first tick, nothing waited between ticks
+    events.clear()
+    runtime.make_safe()
+    assert events == ["stopped"]
+    runtime.close()
+    assert events == ["stopped", "closed"]
+
+
+def test_paced_services_run_between_ticks(square_mission, link, clock):
+    paced: list[Paced] = []
+
+    def drive(w: Wiring) -> None:
+        paced.append(Paced(w.clock, []))
+        w.paced.append(paced[0])
+
+    runtime = build_runtime(square_mission, link, clock, plugs=[drive], root=py_trees.behaviours.Running("idle"))
+    start = clock.now()
+    runtime._wait_until(start + 0.125)
+    assert [t - start for t in paced[0].times] == [0.0, 0.03125, 0.0625, 0.09375]  # at its own rate until the next tick
+    assert clock.now() == start + 0.125
+
+
+def test_the_mavlink_link_and_the_estimators_are_services_in_order(square_mission, link, clock):
+    runtime = build_runtime(square_mission, link, clock)
+    names = [service_name(s) for s in runtime.readers]
+    assert names == ["mavlink reader", "HeadingFilter", "RcReader", "Heartbeat"]
+    names = [service_name(s) for s in runtime.writers]
+    assert names == ["StreamRequester", "GroundStationControl", "RouteKeeper", "commands", "mission transfers"]
