@@ -40,6 +40,12 @@ class _InFlight:
     deadline: float
 
 
+def result_name(result: int | None) -> str:
+    """``1`` -> ``TEMPORARILY_REJECTED``; None -> ``no ack``."""
+    entry = mavlink.enums["MAV_RESULT"].get(result) if result is not None else None
+    return entry.name.removeprefix("MAV_RESULT_") if entry else "no ack"
+
+
 def command_name(command: int) -> str:
     """``176`` -> ``DO_SET_MODE``."""
     entry = mavlink.enums["MAV_CMD"].get(command)
@@ -258,7 +264,7 @@ class Commander:
     def _publish(self, entry: _InFlight, state: CommandState, result: int | None, now: float, attempts: int | None = None) -> None:
         if attempts is None:
             attempts = entry.status.attempts
-        entry.status = replace(entry.status, state=state, result=result, time=now, attempts=attempts)
+        entry.status = replace(entry.status, state=state, result=result, time=now, attempts=attempts, result_name=result_name(result))
         key = blackboard.command_key(entry.status.name)
         if key not in self._bb.write:
             self._bb.register_key(key=blackboard.document_command(entry.status.name), access=Access.WRITE)

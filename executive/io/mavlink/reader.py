@@ -99,6 +99,8 @@ class MavlinkReader:
         self.health = LinkHealth()
         #: Called when the autopilot is first found, comes back after a link loss, or rebooted.
         self.on_reconnect: Callable[[], None] | None = None
+        #: Called with the HEARTBEAT's (``autopilot``, ``type``) when the autopilot is first found: the port picks its back end.
+        self.on_autopilot: Callable[[int, int], None] | None = None
         #: Called with (message, link) for a COMMAND_LONG that did not come from the autopilot.
         self.on_command: Callable[[MAVLinkMessage, Link], object] | None = None
         self._handlers: dict[str, Callable[[MAVLinkMessage, float], None]] = {
@@ -195,6 +197,8 @@ class MavlinkReader:
         self._autopilot = source
         self._set_targets(source)
         self._commander.modes = mode_table(msg.autopilot, msg.type)
+        if self.on_autopilot is not None:
+            self.on_autopilot(msg.autopilot, msg.type)
         self._bb.set("/link/system_id", self._autopilot[0])
         self._bb.set("/link/component_id", self._autopilot[1])
         log.info("autopilot found: system %d component %d (MAV_TYPE %d)", *self._autopilot, msg.type)
