@@ -17,7 +17,8 @@ from py_trees.common import Status
 import trees
 from executive import blackboard
 from executive.behaviours.failsafe import failsafe_mode
-from executive.io.sampler import SimulatedSampler
+from executive.io.instruments import open_sampler
+from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import SamplingOptions
@@ -141,7 +142,9 @@ class Runtime:
         self.observers: list[RunObserver] = list(wiring.observers)
         self._closers = list(wiring.closers)
         self._resume: ResumePoint | None = None
-        self.sampler: SimulatedSampler | None = None
+        #: The vehicle is the built-in simulator: a simulated instrument may take the samples.
+        self.simulated_vehicle = wiring.simulated_vehicle
+        self.sampler: InstrumentSampler | None = None
         self._run_writers: list[Service] = []
         self._next_root = root
         self.tree: py_trees.trees.BehaviourTree | None = None
@@ -257,9 +260,15 @@ class Runtime:
             self.clock.sleep_until(min(t, *(paced.next_due for paced in self.paced)))
 
     def close(self) -> None:
-        """Release what the services hold (the control socket)."""
+        """Release what the services hold (the control socket) and the instrument."""
+        self._close_sampler()
         for close in self._closers:
             close()
+
+    def _close_sampler(self) -> None:
+        if self.sampler is not None:
+            self.sampler.close()
+            self.sampler = None
 
     def make_safe(self) -> bool:
         """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) and wait (bounded) for the heartbeat to confirm it."""
@@ -343,8 +352,12 @@ class Runtime:
         mission = self.mission_state.mission
         assert mission is not None
         root, self._next_root = self._next_root or trees.build(mission), None
-        takes_samples = mission.sampling is not None or any(wp.sample for wp in mission.waypoints)  # the sampling: section is optional
-        self.sampler = SimulatedSampler(self.clock, mission.sampling or SamplingOptions()) if takes_samples else None
+        self._close_sampler()
+        try:
+            self.sampler = open_sampler(mission, self.clock, simulator=self.simulated_vehicle)
+        except InstrumentError as exc:  # checked before the run and at upload: the instrument has gone since
+            log.error("%s", exc)
+            self.sampler = UnavailableSampler(self.clock, mission.sampling or SamplingOptions(), str(exc))
         self._run_writers = [self.sampler] if self.sampler is not None else []
         self.tree = py_trees.trees.BehaviourTree(root)
         resumed_from, self._resume = (self._resume.run if self._resume else None), None

@@ -230,6 +230,22 @@ def _plugs(
     return plugs
 
 
+def _check_instrument(mission: Mission, *, simulator: bool) -> None:
+    """Before anything moves: the mission's samples can be real here (BadInput), and its instrument answers (NoVehicle)."""
+    from executive.io.instruments import open_sampler, refusal
+    from executive.io.sampler import InstrumentError
+
+    why = refusal(mission, simulator=simulator)
+    if why is not None:
+        raise BadInput(why)
+    try:
+        sampler = open_sampler(mission, ScaledClock(), simulator=simulator)
+    except InstrumentError as exc:
+        raise NoVehicle(str(exc)) from exc
+    if sampler is not None:
+        sampler.close()  # the runtime opens it again when the mission starts
+
+
 def main(args: argparse.Namespace) -> int:
     setup_logging(args.verbose)
     mission = load_or_report(args.mission)
@@ -264,6 +280,7 @@ def main(args: argparse.Namespace) -> int:
         if faults is None:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)
+    _check_instrument(mission, simulator=not args.mavlink)
     if args.obstacles is not None:
         from executive.io.obstacles import ObstacleSpecError, parse_endpoint
 
@@ -291,6 +308,7 @@ def main(args: argparse.Namespace) -> int:
             target_system=args.target_system,
             target_component=args.target_component,
             progress=Progress(sys.stdout, clock),
+            simulated_vehicle=not args.mavlink,
         )
         stack.callback(runtime.close)
         if not args.mavlink and clock.speedup > 1.0:  # the simulated world slows down to what the executive follows
