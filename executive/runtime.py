@@ -17,10 +17,12 @@ from py_trees.common import Status
 import trees
 from executive import blackboard
 from executive.behaviours.failsafe import failsafe_mode
-from executive.io.sampler import SimulatedSampler
+from executive.io.instruments import open_sampler
+from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import SamplingOptions
+from executive.pacing import TickPacer
 from executive.progress import Progress
 from executive.services import PacedService, RunObserver, Service
 from executive.state import SwitchPosition
@@ -140,7 +142,9 @@ class Runtime:
         self.observers: list[RunObserver] = list(wiring.observers)
         self._closers = list(wiring.closers)
         self._resume: ResumePoint | None = None
-        self.sampler: SimulatedSampler | None = None
+        #: The vehicle is the built-in simulator: a simulated instrument may take the samples.
+        self.simulated_vehicle = wiring.simulated_vehicle
+        self.sampler: InstrumentSampler | None = None
         self._run_writers: list[Service] = []
         self._next_root = root
         self.tree: py_trees.trees.BehaviourTree | None = None
@@ -149,6 +153,8 @@ class Runtime:
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches", "/vehicle/position"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
+        #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.
+        self.pacer = TickPacer(self.clock, self.period_s)
         self._stop_reason: str | None = None
 
     # -- phases ------------------------------------------------------------------------------
@@ -221,7 +227,7 @@ class Runtime:
                     self.mission_state.set_route(route.waypoints, reason, leg_index=route.current, home=route.home)
                 self.mission_state.continue_from(resume.leg_index, resume.samples)
         outcome = Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
-        next_tick = self.clock.now()
+        self.pacer.restart()
         try:
             while True:
                 if self._stop_reason is not None:
@@ -229,17 +235,16 @@ class Runtime:
                         return self._abort(f"stopped: {self._stop_reason}")
                     self.make_safe()
                     return outcome
+                self.pacer.tick_started()
                 ended = self._tick_once()
                 if ended is not None:
                     outcome = ended
                     if not serve:
                         return outcome
-                next_tick += self.period_s
-                now = self.clock.now()
-                if next_tick < now - self.period_s:  # fell behind by more than a tick: do not try to catch up
-                    next_tick = now
-                self._wait_until(next_tick)
+                self._wait_until(self.pacer.next_due())
         finally:
+            if self.pacer.late or self.pacer.skipped:
+                log.warning("the loop ran behind its %g Hz: %s", 1.0 / self.period_s, self.pacer.summary())
             if self.progress:
                 self.progress.update(force=True)
                 self.progress.close()
@@ -255,9 +260,15 @@ class Runtime:
             self.clock.sleep_until(min(t, *(paced.next_due for paced in self.paced)))
 
     def close(self) -> None:
-        """Release what the services hold (the control socket)."""
+        """Release what the services hold (the control socket) and the instrument."""
+        self._close_sampler()
         for close in self._closers:
             close()
+
+    def _close_sampler(self) -> None:
+        if self.sampler is not None:
+            self.sampler.close()
+            self.sampler = None
 
     def make_safe(self) -> bool:
         """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) and wait (bounded) for the heartbeat to confirm it."""
@@ -342,8 +353,12 @@ class Runtime:
         mission = self.mission_state.mission
         assert mission is not None
         root, self._next_root = self._next_root or trees.build(mission), None
-        takes_samples = mission.sampling is not None or any(wp.sample for wp in mission.waypoints)  # the sampling: section is optional
-        self.sampler = SimulatedSampler(self.clock, mission.sampling or SamplingOptions()) if takes_samples else None
+        self._close_sampler()
+        try:
+            self.sampler = open_sampler(mission, self.clock, simulator=self.simulated_vehicle)
+        except InstrumentError as exc:  # checked before the run and at upload: the instrument has gone since
+            log.error("%s", exc)
+            self.sampler = UnavailableSampler(self.clock, mission.sampling or SamplingOptions(), str(exc))
         self._run_writers = [self.sampler] if self.sampler is not None else []
         self.tree = py_trees.trees.BehaviourTree(root)
         resumed_from, self._resume = (self._resume.run if self._resume else None), None

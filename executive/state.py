@@ -161,6 +161,7 @@ class SamplerStatus:
     reads: tuple[SampleRead, ...]
     reason: str
     time: float
+    instrument: str = ""  # which instrument reads ("simulated", "serial:/dev/ttyUSB0")
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,6 +174,7 @@ class Sample:
     reads: tuple[SampleRead, ...]
     started: float
     finished: float
+    instrument: str = ""  # which instrument took it ("" in journals from before instruments were recorded)
 
 
 class CommandState(StrEnum):

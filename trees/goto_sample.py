@@ -89,6 +89,7 @@ def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
     """
     manual, limit = PROFILES[mission.vehicle].manual_mode, failsafe_policy(mission)["ekf_loss"].timeout_s
     ekf = EkfOk()
+    ekf.resume_after_s = 0.0  # its recovery is the wait branch's to judge (a sane EKF for EkfOk.resume_after_s)
     wait = py_trees.composites.Sequence(
         f"Wait in {manual}",
         memory=True,
@@ -96,7 +97,7 @@ def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
             FailsafeNote("ekf_loss", f"disarm in {manual}, resume when it recovers (within {limit:g} s)", guard=ekf),
             SetMode(manual),
             Disarm(),
-            WaitUntil(EkfOk(), limit, name="Wait until the EKF recovers"),
+            WaitUntil(EkfOk().awaiting_recovery(), limit, name="Wait until the EKF recovers"),
             WaitUntil(Arm(), limit, name="Re-arm", retry_s=ARM_RETRY_S),
             FailsafeNote("ekf_loss", "recovered, re-armed -> resume"),
         ],

@@ -146,7 +146,7 @@ class Failsafe(TimedBehaviour):
         now = self.clock.now()
         if self.get("/vehicle/armed"):
             self._own_disarm = False
-        failing = {g: why for g in self.guards if (why := g.check()) is not None}
+        failing = {g: why for g in self.guards if (why := g.judge()) is not None}  # debounced: see guards
         if self._own_disarm:  # disarmed by this failsafe, not by a person
             failing = {g: why for g, why in failing.items() if self._conditions.get(g) != "disarmed"}
         for g in [g for g in self._since if g not in failing]:

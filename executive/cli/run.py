@@ -21,6 +21,7 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
+from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -238,6 +239,22 @@ def _plugs(
     return plugs
 
 
+def _check_instrument(mission: Mission, *, simulator: bool) -> None:
+    """Before anything moves: the mission's samples can be real here (BadInput), and its instrument answers (NoVehicle)."""
+    from executive.io.instruments import open_sampler, refusal
+    from executive.io.sampler import InstrumentError
+
+    why = refusal(mission, simulator=simulator)
+    if why is not None:
+        raise BadInput(why)
+    try:
+        sampler = open_sampler(mission, ScaledClock(), simulator=simulator)
+    except InstrumentError as exc:
+        raise NoVehicle(str(exc)) from exc
+    if sampler is not None:
+        sampler.close()  # the runtime opens it again when the mission starts
+
+
 def main(args: argparse.Namespace) -> int:
     setup_logging(args.verbose)
     mission = load_or_report(args.mission)
@@ -254,6 +271,15 @@ def main(args: argparse.Namespace) -> int:
         # a SITL at --speedup 5 drives 5 s in each wall second: ticking on the wall clock, the executive would react five times
         # less often in the vehicle's time (issue 14: GUIDED 44.4 s at 1x, 49.2 s at 10x)
         print(f"executive: run: the vehicle's time runs {args.speedup:g}x real time (a simulator's speed-up)", file=sys.stderr)
+    elif not args.mavlink and args.rate * args.speedup > MAX_TICKS_PER_WALL_S:
+        most = MAX_TICKS_PER_WALL_S / args.rate
+        print(
+            f"executive: run: --speedup {args.speedup:g}: the executive cannot follow it: {args.rate:g} ticks per second of vehicle time "
+            f"would be {args.rate * args.speedup:g} per second of wall time, and it keeps up with at most {MAX_TICKS_PER_WALL_S:g} "
+            f"(--speedup {most:g} at --rate {args.rate:g}); on a busy machine the speed-up is capped lower as it runs",
+            file=sys.stderr,
+        )
+        return EXIT_BAD_INPUT
     clock = ScaledClock(args.speedup)
     faults = None
     if args.faults is not None and args.mavlink:
@@ -265,6 +291,7 @@ def main(args: argparse.Namespace) -> int:
         if faults is None:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)
+    _check_instrument(mission, simulator=not args.mavlink)
     if args.obstacles is not None:
         from executive.io.obstacles import ObstacleSpecError, parse_endpoint
 
@@ -293,8 +320,11 @@ def main(args: argparse.Namespace) -> int:
             target_component=args.target_component,
             progress=Progress(sys.stdout, clock),
             autopilot=args.autopilot or mission.autopilot,
+            simulated_vehicle=not args.mavlink,
         )
         stack.callback(runtime.close)
+        if not args.mavlink and clock.speedup > 1.0:  # the simulated world slows down to what the executive follows
+            runtime.pacer.listeners.append(SpeedGovernor(clock))
         try:
             # the built-in simulator is alone on its link: no other autopilot to listen for
             connected = runtime.connect(args.connect_timeout * clock.speedup, survey_s=SURVEY_S if args.mavlink else 0.0)

@@ -135,6 +135,18 @@ class RcConfig(BaseModel):
     switch_channels: SwitchChannels = Field(default_factory=SwitchChannels)
 
 
+class InstrumentConfig(BaseModel):
+    """The instrument that takes the samples: its ``type`` (a back end), and that back end's own fields.
+
+    Built in: ``simulated`` (the built-in simulator only) and ``serial`` (``port``, ``baud``,
+    ``columns``, ``units``: a line-protocol CTD or sonde); plugins add types (the
+    ``executive.instruments`` entry-point group). Each back end checks its fields.
+    """
+
+    model_config = ConfigDict(strict=True, extra="allow", frozen=True, allow_inf_nan=False)
+    type: str = Field(min_length=1, max_length=64, description="simulated, serial, or a plugin's type")
+
+
 class SamplingOptions(BaseModel):
     """goto_sample: what happens at a sample point."""
 
@@ -143,6 +155,9 @@ class SamplingOptions(BaseModel):
     rate_hz: float = Field(1.0, gt=0.0, le=100.0, description="sensor reads per second")
     sensors: list[str] = Field(default_factory=lambda: ["temperature", "conductivity", "ph", "dissolved_oxygen"], min_length=1, max_length=32)
     hold_mode: str = Field("LOITER", description="the mode the vehicle holds the sample point in")
+    instrument: InstrumentConfig | None = Field(
+        None, description="what takes the samples (default: the simulated instrument, with the built-in simulator only)"
+    )
 
 
 class EnuPoint(BaseModel):
@@ -436,6 +451,10 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
         errors += [(("autopilot",), why) for why in autopilot_errors(mission, mission.autopilot)]
     if mission.geofence is not None:
         errors += _geofence_errors(mission)
+    if mission.sampling is not None and mission.sampling.instrument is not None:
+        from executive.io.instruments import option_errors  # the back ends (and their plugins) import this module
+
+        errors += option_errors(mission.sampling.instrument, ("sampling", "instrument"))
     errors += _failsafe_errors(mission)
     return errors
 

@@ -34,6 +34,10 @@ MAVLink (issue 12) and as its source reads:
 - MAV_CMD_DO_VTOL_TRANSITION in flight: EXTENDED_SYS_STATE vtol_state 3 (MC) -> 1 (TRANSITION_TO_FW)
   -> 4 (FW) once the airspeed reaches ~9.7 m/s (as the real standard VTOL did), and 2
   (TRANSITION_TO_MC) -> 3 back. In FW, holding a point is circling it at NAV_LOITER_RAD (80 m).
+- It watches the HEARTBEATs of ground stations and mission computers (Commander::dataLinkCheck): after
+  COM_DL_LOSS_T (10 s) without one from a GCS, "Connection to ground station lost"; after COM_OBC_LOSS_T
+  (5 s) without one from an onboard controller (the executive), "Connection to mission computer lost";
+  each says "... regained" when they resume. With NAV_DLL_ACT at its default (disabled) nothing else happens.
 - Messages outside the ardupilotmega dialect go out as raw MAVLink 2 frames (CURRENT_EVENT_SEQUENCE
   411, TIME_ESTIMATE_TO_TARGET 380), and OPEN_DRONE_ID_LOCATION; STATUSTEXTs over 50 bytes go in
   chunks sharing an ``id`` (``chunk_seq`` 0, 1...).
@@ -79,6 +83,8 @@ RTL_RETURN_ALT = 60.0  # RTL flies home at least this high
 TRANSITION_AIRSPEED_M_S = 9.7  # the real standard VTOL's front transition ended at ~9.7 m/s (issue 12)
 VT_B_TRANS_DUR = 4.0  # back transition: at most this long
 MISSION_CHECK_S = 1.0  # after an upload, AUTO.MISSION is refused this long (issue 12)
+COM_DL_LOSS_T = 10.0  # no ground-station HEARTBEAT this long: "Connection to ground station lost"
+COM_OBC_LOSS_T = 5.0  # no onboard-computer HEARTBEAT this long: "Connection to mission computer lost"
 DISARMED_TIMEOUT_S = math.inf
 
 #: PX4 mode name -> custom_mode, as the executive's mode table numbers them.
@@ -128,6 +134,12 @@ PX4_INTERVALS: Mapping[int, float] = MappingProxyType({
     _M.MAVLINK_MSG_ID_MISSION_CURRENT: 1.0, _M.MAVLINK_MSG_ID_POSITION_TARGET_GLOBAL_INT: 1.0,
     _M.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT: 1.0, _M.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW: 1.0,
     _M.MAVLINK_MSG_ID_OPEN_DRONE_ID_LOCATION: 1.0, CURRENT_EVENT_SEQUENCE[0]: 1.0, TIME_ESTIMATE_TO_TARGET[0]: 1.0,
+})  # fmt: skip
+
+#: HEARTBEAT type -> what the commander says when its heartbeats stop, and when they come back (Commander.cpp).
+LINK_LOSS_TEXTS: Mapping[int, tuple[str, str]] = MappingProxyType({
+    _M.MAV_TYPE_GCS: ("Connection to ground station lost", "GCS connection regained"),
+    _M.MAV_TYPE_ONBOARD_CONTROLLER: ("Connection to mission computer lost", "Onboard controller regained"),
 })  # fmt: skip
 
 _TYPES = {"uint8_t": "B", "int8_t": "b", "uint16_t": "H", "int16_t": "h", "uint32_t": "I", "int32_t": "i", "float": "f"}
@@ -216,6 +228,8 @@ class Px4Sim(ArduPilotSim):
         self._landed_at: float | None = None
         self._mission_item: tuple[int | None, object] | None = None
         self._event_sequence = 0
+        # Commander::dataLinkCheck: HEARTBEAT type -> (last seen, lost), for a ground station and a mission computer
+        self._links: dict[int, tuple[float, bool]] = {}
         modes = MappingProxyType(dict(PX4_MODE_NUMBERS))
         profile = dataclasses.replace(profile, mav_type=self.MAV_TYPE, modes=modes)
         super().__init__(profile, clock, home, ekf_ready_after_s=ekf_ready_after_s, **options)
@@ -383,6 +397,7 @@ class Px4Sim(ArduPilotSim):
 
     def _update_mode(self) -> None:
         v = self.vehicle
+        self._update_links()
         self._update_land_detector()
         if not self.armed:
             return
@@ -485,7 +500,25 @@ class Px4Sim(ArduPilotSim):
             **super()._message_handlers(),
             "SET_POSITION_TARGET_LOCAL_NED": self._on_setpoint,
             "SET_POSITION_TARGET_GLOBAL_INT": self._on_setpoint,
+            "HEARTBEAT": self._on_heartbeat,
         }
+
+    def _on_heartbeat(self, msg: MAVLinkMessage) -> None:
+        """Commander::dataLinkCheck: a ground station's or a mission computer's HEARTBEAT keeps its link up."""
+        if msg.type not in LINK_LOSS_TEXTS:
+            return
+        _, lost = self._links.get(msg.type, (0.0, False))
+        if lost:
+            self._text(_M.MAV_SEVERITY_INFO, LINK_LOSS_TEXTS[msg.type][1])
+        self._links[msg.type] = (self.elapsed_s, False)
+
+    def _update_links(self) -> None:
+        for kind, (seen_at, lost) in self._links.items():
+            timeout = COM_DL_LOSS_T if kind == _M.MAV_TYPE_GCS else COM_OBC_LOSS_T
+            if not lost and self.elapsed_s - seen_at > timeout:
+                self._links[kind] = (seen_at, True)
+                severity = _M.MAV_SEVERITY_INFO if kind == _M.MAV_TYPE_GCS else _M.MAV_SEVERITY_CRITICAL
+                self._text(severity, LINK_LOSS_TEXTS[kind][0])
 
     def _on_command(self, msg: MAVLinkMessage) -> None:
         if msg.command in RECEIVER_COMMANDS:
@@ -505,13 +538,14 @@ class Px4Sim(ArduPilotSim):
 
     def _on_setpoint(self, msg: MAVLinkMessage) -> None:
         """SET_POSITION_TARGET_*: any setpoint keeps the offboard signal alive; in OFFBOARD a position is flown to."""
-        values = (msg.vx, msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw)
+        local = msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED"
+        values = (msg.vx, msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, *((msg.x, msg.y, msg.z) if local else (msg.alt,)))
         if not all(math.isfinite(value) for value in values):
-            return  # mavlink_receiver.cpp: only finite setpoints are taken
+            return  # mavlink_receiver.cpp: a setpoint with any non-finite value is dropped whole, ignored fields too
         goal = None
         if not msg.type_mask & 0x7:  # any position bit set: the position is ignored
-            if msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
-                if msg.coordinate_frame != _M.MAV_FRAME_LOCAL_NED or not all(map(math.isfinite, (msg.x, msg.y, msg.z))):
+            if local:
+                if msg.coordinate_frame != _M.MAV_FRAME_LOCAL_NED:
                     return
                 lat, lon = self.vehicle._latlon(msg.x, msg.y)
                 goal = (lat, lon, -msg.z)

@@ -97,7 +97,7 @@ def test_samples_and_records_the_sample(make, running, vehicle):
     assert (recorded.lat, recorded.lon) == (running.target.lat, running.target.lon)
     assert recorded.reads == status().reads and len(recorded.reads) == 4
     assert py_trees.blackboard.Blackboard.get("/mission/samples") == (recorded,)
-    assert node.feedback_message == "leg 1/4: sampled, 4 reads"
+    assert node.feedback_message == "leg 1/4: sampled, 4 reads (simulated)"
 
 
 def test_feedback_while_sampling(make, running):
@@ -172,6 +172,7 @@ def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, run
     assert (status().ticket, status().state, status().reason) == (first_ticket, SamplerState.FAILED, "cancelled")
     assert node.status == Status.INVALID and running.samples == ()
     vehicle.set(rc__channels=RC_LOW)
+    assert [h.tick() for _ in range(2)] == [F, F]  # the switch back for 1 s (two ticks of 0.5 s) before the work goes on
     statuses = [h.tick() for _ in range(6)]
     assert statuses == [R, R, R, R, R, S]
     assert status().ticket == first_ticket + 1 and len(running.samples) == 1

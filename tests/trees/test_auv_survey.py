@@ -371,21 +371,28 @@ def test_a_failed_guard_holds_the_sub_until_it_recovers_then_the_same_leg_goes_o
     survey.run_to_leg(leg)
     survey.under_way(*(("depth", wp["depth_m"]) if "depth_m" in wp else ("altitude", wp["altitude_m"])), wp["name"])
     before = len(survey.sub.commands)
+    # stuck (a current, a thruster): what goes wrong lasts past the guard's hold time, and the leg does not end meanwhile
+    step, dz = survey.sub.step_m, survey.sub.dz_m
+    if holds:
+        survey.sub.step_m = survey.sub.dz_m = 0.0
     break_it(survey)
     survey.sub.publish()
     if holds:
-        assert survey.run(30) == [Status.RUNNING] * 30
-        assert survey.sub.commands[before:] == [("mode", "POSHOLD")]  # asked once, then waited
+        assert survey.run(30) == [Status.RUNNING] * 30  # (a guard may wait up to 2 s of a bad reading before it holds)
+        held = survey.sub.commands.index(("mode", "POSHOLD"), before)
+        assert [c for c in survey.sub.commands[before:] if c[0] == "mode"] == [("mode", "POSHOLD")]
+        assert survey.sub.commands[held + 1 :] == []  # asked once, then waited
         assert survey.state.leg_index == leg
     else:  # not judged on this leg: the leg goes on to its end
         assert survey.run(30, until=lambda: survey.state.leg_index > leg)[-1] == Status.RUNNING
         assert ("mode", "POSHOLD") not in survey.sub.commands[before:]
         assert survey.state.leg_index == leg + 1
     mend_it(survey)
+    survey.sub.step_m, survey.sub.dz_m = step, dz
     survey.sub.publish()
-    survey.run(3)
     if holds:
-        assert survey.sub.commands[before + 1] == ("mode", "GUIDED")
+        survey.run(31, until=lambda: len(survey.sub.commands) > held + 1)  # the guard's resume time: up to 3 s of good readings
+        assert survey.sub.commands[held + 1] == ("mode", "GUIDED")
         assert survey.state.leg_index == leg
     assert survey.run(400)[-1] == Status.SUCCESS
 
@@ -400,7 +407,7 @@ def test_a_take_over_sends_nothing_while_the_pilot_has_the_sub(make_survey: Make
     assert survey.sub.commands[before:] == []  # no POSHOLD, no GUIDED while the pilot has it
     assert survey.state.leg_index == 0
     survey.vehicle.set(rc__channels=(1500,) * 8)
-    survey.run(10, until=lambda: len(survey.sub.commands) == before + 4)
+    survey.run(20, until=lambda: len(survey.sub.commands) == before + 4)  # the switch back for 1 s first
     assert survey.sub.commands[before:] == [("mode", "GUIDED"), ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north")]
     assert survey.state.leg_index == 0
     assert survey.run(400)[-1] == Status.SUCCESS
@@ -409,10 +416,10 @@ def test_a_take_over_sends_nothing_while_the_pilot_has_the_sub(make_survey: Make
 def test_a_guard_that_never_recovers_fails_the_mission_with_its_reason(make_survey: MakeSurvey) -> None:
     survey = make_survey(sub_mission(*SURVEY))
     survey.under_way("depth", 5.0, "north")
-    survey.sub.depth = 101.0
+    survey.sub.depth, survey.sub.dz_m, survey.sub.step_m = 101.0, 0.0, 0.0  # stuck down there
     survey.sub.publish()
     statuses = survey.run(400)
-    assert statuses[-1] == Status.FAILURE and len(statuses) == 302  # recovery_timeout_s = 30 s
+    assert statuses[-1] == Status.FAILURE and len(statuses) == 312  # DepthWithin's 1 s hold time, then recovery_timeout_s = 30 s
     assert explain_failure(survey.root) == "Wait for guards: not recovered after 30 s: Depth within [0, 100] m? depth 101.0 m outside [0, 100] m"
 
 

@@ -298,8 +298,10 @@ def test_a_bad_ekf_waits_in_manual_disarmed_then_re_arms_and_continues_the_same_
     assert run.tick(100) == [R] * 100  # waiting, hands off, no target sent
     assert run.boat.commands == [mode("MANUAL"), DISARM] and run.boat.setpoints == setpoints
     run.boat.ekf = EKF_READY
+    assert run.tick(29) == [R] * 29 and run.boat.commands == [mode("MANUAL"), DISARM]  # the EKF sane for 3 s first
     assert run.tick(3) == [R, R, R]
     assert run.boat.commands == [mode("MANUAL"), DISARM, ARM, mode("GUIDED")]
+    assert run.tick() == [R]
     assert run.state.leg_index == 0 and run.boat.setpoints == setpoints + 1  # the same leg, its target again
     assert run.tick(400)[-1] == S
     assert len(run.state.samples) == 2
@@ -351,7 +353,8 @@ def test_a_failing_guard_is_waited_out_then_the_same_leg_continues(run, fact, ho
     assert run.tick(100) == [R] * 100
     assert run.boat.commands == hold  # hold in LOITER, unless a person has the boat
     setattr(run.boat, fact, True)
-    assert run.tick(2) == [R, R]
+    ticks = 22 if fact == "link_up" else 2  # the link back for LinkAlive's 2 s first; re-armed: at once
+    assert run.tick(ticks) == [R] * ticks
     assert run.boat.commands == hold + back
     assert run.state.leg_index == 0
     assert run.tick(400)[-1] == S

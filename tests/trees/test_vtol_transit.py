@@ -421,7 +421,7 @@ def test_ekf_loss_holds_by_the_vtol_state_then_the_same_phase_goes_on(
     assert transit.run(20) == [R] * 20
     assert transit.plane.commands[before:] == [hold]
     transit.vehicle.set(vehicle__ekf=EKF_READY)
-    transit.run(3)
+    transit.run(33)  # the EKF sane for EkfOk's 3 s first
     assert transit.plane.commands[before + 1 :][:1] == [phase]  # the same point again (taken off and hovered: not again)
     assert transit.state.leg_index == leg
     assert transit.run(3000)[-1] == S
@@ -438,7 +438,7 @@ def test_a_climb_stopped_by_a_failsafe_goes_on_above_the_same_spot_once_it_recov
     assert transit.plane.commands[before:] == [("mode", "QLOITER")]
     held_at = transit.plane.alt
     transit.vehicle.set(vehicle__ekf=EKF_READY)
-    transit.run(3)
+    transit.run(33)  # the EKF sane for EkfOk's 3 s first
     # GUIDED again, then (NAV_TAKEOFF being refused in the air) DO_REPOSITION over the spot it is hovering on, at 30 m
     assert transit.plane.commands[before + 1 :] == [("mode", "GUIDED"), ("reposition", 0, 0, 30.0)]
     assert transit.plane.alt > held_at
@@ -456,7 +456,7 @@ def test_an_rc_take_over_sends_nothing_while_the_pilot_has_it_then_the_same_leg_
     assert transit.run(50) == [R] * 50
     assert transit.plane.commands[before:] == []
     transit.vehicle.set(rc__channels=(1500,) * 8)
-    transit.run(2)
+    transit.run(12)  # the switch back for 1 s first
     assert transit.plane.commands[before:][:1] == [LEGS[0]]  # the same leg (the pilot may have flown it meanwhile)
     assert transit.run(3000)[-1] == S
 
