@@ -114,6 +114,11 @@ def _autopilot_link(
     heartbeat = Heartbeat(link, clock, system_id=system_id)
     port = Autopilot(commander, transfer, PROFILES[mission.vehicle], forced=forced)
     reader.on_autopilot = port.adopt
+
+    def streams_of(name: str) -> None:
+        streams.rates = rates_for(mission.vehicle, name)
+
+    port.on_backend = streams_of
     return AutopilotLink(link, commander, transfer, reader, heartbeat, streams, keeper, ground_station, port)
 
 
@@ -157,7 +162,11 @@ def build_runtime(
     for plug in plugs:
         plug(wiring)
     wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), ap.heartbeat]
-    wiring.writers += [Step("commands", ap.commander.flush), Step("mission transfers", ap.mission_transfer.flush)]
+    wiring.writers += [
+        Step("autopilot port", ap.port.service),
+        Step("commands", ap.commander.flush),
+        Step("mission transfers", ap.mission_transfer.flush),
+    ]
     return Runtime(wiring, rate_hz=rate_hz, safe_timeout_s=safe_timeout_s, root=root, progress=progress)
 
 

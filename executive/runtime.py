@@ -294,6 +294,7 @@ class Runtime:
             if not requested:
                 self.autopilot.set_mode(safe)
                 requested = True
+            self.autopilot.service()  # PX4: the offboard stream goes on until the heartbeat shows we left OFFBOARD
             self.commander.flush()
             self.clock.sleep_until(self.clock.now() + self.period_s / 2)
         log.error("could not confirm %s within %g s", safe, self.safe_timeout_s)
