@@ -8,6 +8,7 @@ Namespaces:
 - ``/base``: the AgileX tracked base over CAN: its state frames (CAN reader) and the drive commands sent to it (drive bridge).
 - ``/heading``: the heading sanity filter's verdict (heading filter).
 - ``/obstacles``: a camera's obstacle distances (obstacle receiver) and their forwarding to the autopilot (obstacle forwarder).
+- ``/runtime``: the loop itself: late and skipped ticks, the rate it achieves (tick pacer).
 - ``/mission``: the mission lifecycle and progress (mission state code only).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
 - ``/sampler``: the sample-taking instrument (sampler).
@@ -104,6 +105,9 @@ _KEYS: tuple[Key, ...] = (
     Key("/obstacles/rejected", 0, "obstacle receiver", "datagrams dropped as not a scan"),
     Key("/obstacles/last_error", "", "obstacle receiver", "why the latest dropped datagram was dropped (field: reason)"),
     Key("/obstacles/forwarded", 0, "obstacle forwarder", "OBSTACLE_DISTANCE messages sent to the autopilot"),
+    Key("/runtime/late_ticks", 0, "tick pacer", "ticks that started more than half a period after they were due"),
+    Key("/runtime/skipped_ticks", 0, "tick pacer", "ticks never run: the loop fell more than a period behind and restarted its schedule"),
+    Key("/runtime/rate_hz", None, "tick pacer", "ticks per second of clock time over the last window (5 s); None until the first"),
     Key("/mission/state", "IDLE", "mission state", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
     Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
     Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),

@@ -27,21 +27,34 @@ class ScaledClock:
     """Wall-clock time run ``speedup`` times faster (1.0 = real time).
 
     The runtime and the simulated vehicle share one instance, so a 10 Hz tick stays 10 Hz of
-    vehicle time whatever the speed-up.
+    vehicle time whatever the speed-up. The speed-up can be lowered while running
+    (:meth:`set_speedup`): the time line goes on from where it is, only slower.
     """
 
     def __init__(self, speedup: float = 1.0) -> None:
         if speedup <= 0:
             raise ValueError(f"speed-up must be > 0, got {speedup}")
-        self.speedup = speedup
-        self._origin = time.monotonic()
+        # (wall time, clock time then, speed-up since): one tuple, replaced whole, so another thread never sees half a change
+        self._base = (time.monotonic(), 0.0, float(speedup))
+
+    @property
+    def speedup(self) -> float:
+        return self._base[2]
+
+    def set_speedup(self, speedup: float) -> None:
+        """Run at ``speedup`` from now on; ``now()`` goes on from its current value."""
+        if speedup <= 0:
+            raise ValueError(f"speed-up must be > 0, got {speedup}")
+        wall = time.monotonic()
+        wall0, t0, current = self._base
+        self._base = (wall, t0 + (wall - wall0) * current, float(speedup))
 
     def now(self) -> float:
-        return (time.monotonic() - self._origin) * self.speedup
+        wall0, t0, speedup = self._base
+        return t0 + (time.monotonic() - wall0) * speedup
 
     def sleep_until(self, t: float) -> None:
-        delay = (t - self.now()) / self.speedup
-        if delay > 0:
+        while (delay := (t - self.now()) / self.speedup) > 0:  # again if the speed-up was lowered meanwhile
             time.sleep(delay)
 
 

@@ -18,10 +18,12 @@ import trees
 from executive import blackboard
 from executive.behaviours.failsafe import failsafe_mode
 from executive.intervention import rc_takeover
-from executive.io.sampler import SimulatedSampler
+from executive.io.instruments import open_sampler
+from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import SamplingOptions
+from executive.pacing import TickPacer
 from executive.progress import Progress
 from executive.services import PacedService, RunObserver, Service
 from executive.vehicles import PROFILES
@@ -120,6 +122,8 @@ class Runtime:
         self.profile = PROFILES[self.mission.vehicle]
         autopilot = wiring.autopilot
         self.commander = autopilot.commander
+        #: What the tree asks of the autopilot: intents, turned into its firmware's commands by the back end its heartbeat names.
+        self.autopilot = autopilot.port
         self.mission_transfer = autopilot.mission_transfer
         self.reader = autopilot.reader
         self.heartbeat = autopilot.heartbeat
@@ -138,7 +142,9 @@ class Runtime:
         self.observers: list[RunObserver] = list(wiring.observers)
         self._closers = list(wiring.closers)
         self._resume: ResumePoint | None = None
-        self.sampler: SimulatedSampler | None = None
+        #: The vehicle is the built-in simulator: a simulated instrument may take the samples.
+        self.simulated_vehicle = wiring.simulated_vehicle
+        self.sampler: InstrumentSampler | None = None
         self._run_writers: list[Service] = []
         self._next_root = root
         self.tree: py_trees.trees.BehaviourTree | None = None
@@ -147,6 +153,8 @@ class Runtime:
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches", "/vehicle/position"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
+        #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.
+        self.pacer = TickPacer(self.clock, self.period_s)
         self._stop_reason: str | None = None
 
     # -- phases ------------------------------------------------------------------------------
@@ -219,7 +227,7 @@ class Runtime:
                     self.mission_state.set_route(route.waypoints, reason, leg_index=route.current, home=route.home)
                 self.mission_state.continue_from(resume.leg_index, resume.samples)
         outcome = Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
-        next_tick = self.clock.now()
+        self.pacer.restart()
         try:
             while True:
                 if self._stop_reason is not None:
@@ -227,17 +235,16 @@ class Runtime:
                         return self._abort(f"stopped: {self._stop_reason}")
                     self.make_safe()
                     return outcome
+                self.pacer.tick_started()
                 ended = self._tick_once()
                 if ended is not None:
                     outcome = ended
                     if not serve:
                         return outcome
-                next_tick += self.period_s
-                now = self.clock.now()
-                if next_tick < now - self.period_s:  # fell behind by more than a tick: do not try to catch up
-                    next_tick = now
-                self._wait_until(next_tick)
+                self._wait_until(self.pacer.next_due())
         finally:
+            if self.pacer.late or self.pacer.skipped:
+                log.warning("the loop ran behind its %g Hz: %s", 1.0 / self.period_s, self.pacer.summary())
             if self.progress:
                 self.progress.update(force=True)
                 self.progress.close()
@@ -253,13 +260,19 @@ class Runtime:
             self.clock.sleep_until(min(t, *(paced.next_due for paced in self.paced)))
 
     def close(self) -> None:
-        """Release what the services hold (the control socket)."""
+        """Release what the services hold (the control socket) and the instrument."""
+        self._close_sampler()
         for close in self._closers:
             close()
 
+    def _close_sampler(self) -> None:
+        if self.sampler is not None:
+            self.sampler.close()
+            self.sampler = None
+
     def make_safe(self) -> bool:
         """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) and wait (bounded) for the heartbeat to confirm it."""
-        safe = self.profile.safe_mode
+        safe = self.autopilot.capabilities.safe_mode
         if self.tree is not None:
             safe = failsafe_mode(self.tree.root) or safe  # an RTL or a surfacing the mission's failsafe asked for is not undone
             self.tree.interrupt()
@@ -275,12 +288,13 @@ class Runtime:
         while self.clock.now() < deadline:
             self.reader.drain()
             self.heartbeat.service()
-            if self._bb.get("/link/up") and self._bb.get("/vehicle/mode") == safe:
+            if self._bb.get("/link/up") and self._bb.get("/vehicle/mode") == self.autopilot.mode_name(safe):
                 log.info("vehicle in %s", safe)
                 return True
             if not requested:
-                self.commander.set_mode(safe)
+                self.autopilot.set_mode(safe)
                 requested = True
+            self.autopilot.service()  # PX4: the offboard stream goes on until the heartbeat shows we left OFFBOARD
             self.commander.flush()
             self.clock.sleep_until(self.clock.now() + self.period_s / 2)
         log.error("could not confirm %s within %g s", safe, self.safe_timeout_s)
@@ -344,13 +358,15 @@ class Runtime:
         mission = self.mission_state.mission
         assert mission is not None
         root, self._next_root = self._next_root or trees.build(mission), None
-        takes_samples = mission.sampling is not None or any(wp.sample for wp in mission.waypoints)  # the sampling: section is optional
-        self.sampler = SimulatedSampler(self.clock, mission.sampling or SamplingOptions()) if takes_samples else None
+        self._close_sampler()
+        try:
+            self.sampler = open_sampler(mission, self.clock, simulator=self.simulated_vehicle)
+        except InstrumentError as exc:  # checked before the run and at upload: the instrument has gone since
+            log.error("%s", exc)
+            self.sampler = UnavailableSampler(self.clock, mission.sampling or SamplingOptions(), str(exc))
         self._run_writers = [self.sampler] if self.sampler is not None else []
         self.tree = py_trees.trees.BehaviourTree(root)
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)
-        self.tree.setup(
-            clock=self.clock, commander=self.commander, mission_state=self.mission_state, mission_transfer=self.mission_transfer, sampler=self.sampler
-        )
+        self.tree.setup(clock=self.clock, autopilot=self.autopilot, mission_state=self.mission_state, sampler=self.sampler)

@@ -161,6 +161,7 @@ class SamplerStatus:
     reads: tuple[SampleRead, ...]
     reason: str
     time: float
+    instrument: str = ""  # which instrument reads ("simulated", "serial:/dev/ttyUSB0")
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,6 +174,7 @@ class Sample:
     reads: tuple[SampleRead, ...]
     started: float
     finished: float
+    instrument: str = ""  # which instrument took it ("" in journals from before instruments were recorded)
 
 
 class CommandState(StrEnum):
@@ -202,3 +204,61 @@ class CommandStatus:
     result: int | None  # MAV_RESULT of the last ack
     attempts: int
     time: float
+    result_name: str = "no ack"  # the result without the MAV_RESULT_ prefix, e.g. TEMPORARILY_REJECTED
+
+
+class TransferOperation(StrEnum):
+    """What a mission transfer does."""
+
+    UPLOAD = "UPLOAD"
+    DOWNLOAD = "DOWNLOAD"
+    CLEAR = "CLEAR"
+    SET_CURRENT = "SET_CURRENT"
+
+
+class TransferState(StrEnum):
+    """Where a mission transfer stands."""
+
+    IN_PROGRESS = "IN_PROGRESS"
+    DONE = "DONE"
+    FAILED = "FAILED"
+
+
+@dataclass(frozen=True, slots=True)
+class MissionTransferStatus:
+    """The latest mission transfer and what became of it (``/link/mission_transfer``)."""
+
+    ticket: int  # unique per request; a behaviour keeps the ticket it was given
+    operation: TransferOperation
+    state: TransferState
+    progress: int  # items through so far, home included
+    total: int  # items to go through, home included; 0 until known
+    reason: str  # why it failed; "" otherwise
+    result: int | None  # MAV_MISSION_RESULT of the MISSION_ACK that decided it, if one did
+    retries: int  # messages resent after a timeout, over the whole transfer
+    verifying: bool  # an upload is reading the mission back
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
+class MissionCurrent:
+    """MISSION_CURRENT: the item the vehicle is on and the mission's state."""
+
+    seq: int
+    total: int  # items after home; 0 if the firmware does not say
+    state: int  # MISSION_STATE; 0 (unknown) if the firmware does not say
+    in_mission_mode: bool  # the vehicle is in its mission mode (AUTO)
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
+class MissionItemReached:
+    """MISSION_ITEM_REACHED: the last item the vehicle reported reached, and the highest since the vehicle's mission last changed.
+
+    ``highest`` is latched by the reader: two reports drained in one tick (item 3, then a GUIDED
+    arrival's item 0) lose nothing.
+    """
+
+    seq: int
+    time: float
+    highest: int = -1

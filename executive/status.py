@@ -16,6 +16,7 @@ from executive import blackboard, geo
 KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
+    "/runtime/late_ticks",
 )  # fmt: skip
 
 
@@ -52,6 +53,7 @@ class StatusSource:
             "roll_deg": None if attitude is None else round(attitude.roll_deg, 1),
             "battery_v": None if battery is None else battery.voltage_v,
             "battery_pct": None if battery is None else battery.remaining_pct,
+            "late_ticks": bb.get("/runtime/late_ticks"),
         }
 
 

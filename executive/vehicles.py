@@ -74,6 +74,14 @@ _BY_MAV_TYPE = {
 }
 
 
+#: Autopilot firmware -> the vehicle kinds it drives here. PX4 has VTOL and rover airframes; it has no ArduSub (a sub) and
+#: no boat of ours (its rover modules drive wheels).
+AutopilotName = Literal["ardupilot", "px4"]
+AUTOPILOT_VEHICLES: MappingProxyType[str, frozenset[str]] = MappingProxyType(
+    {"ardupilot": frozenset({"rover", "boat", "sub", "vtol"}), "px4": frozenset({"vtol", "rover"})}
+)
+
+
 def profile_for_mav_type(mav_type: int) -> VehicleProfile | None:
     """The profile matching a HEARTBEAT ``type``, if it is one of ours."""
     kind = _BY_MAV_TYPE.get(mav_type)

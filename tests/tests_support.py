@@ -9,6 +9,7 @@ from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.model import Mission
+from executive.pacing import SpeedGovernor
 from executive.runtime import Outcome, Runtime
 from executive.testing import AUTOPILOT
 
@@ -21,6 +22,7 @@ def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> 
     link = PymavlinkLink(url)
     try:
         runtime = build_runtime(mission, link, clock, **options)
+        runtime.pacer.listeners.append(SpeedGovernor(clock))  # as `executive run` does: a busy machine slows the world, not the verdict
         assert runtime.connect(10.0 * clock.speedup)
         return runtime, runtime.run()
     finally:

@@ -89,6 +89,7 @@ def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
     """
     manual, limit = PROFILES[mission.vehicle].manual_mode, failsafe_policy(mission)["ekf_loss"].timeout_s
     ekf = EkfOk()
+    ekf.resume_after_s = 0.0  # its recovery is the wait branch's to judge (a sane EKF for EkfOk.resume_after_s)
     wait = py_trees.composites.Sequence(
         f"Wait in {manual}",
         memory=True,
@@ -96,7 +97,7 @@ def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
             FailsafeNote("ekf_loss", f"disarm in {manual}, resume when it recovers (within {limit:g} s)", guard=ekf),
             SetMode(manual),
             Disarm(),
-            WaitUntil(EkfOk(), limit, name="Wait until the EKF recovers"),
+            WaitUntil(EkfOk().awaiting_recovery(), limit, name="Wait until the EKF recovers"),
             WaitUntil(Arm(), limit, name="Re-arm", retry_s=ARM_RETRY_S),
             FailsafeNote("ekf_loss", "recovered, re-armed -> resume"),
         ],
@@ -112,7 +113,10 @@ def point(mission: Mission) -> py_trees.behaviour.Behaviour:
     go = py_trees.composites.Sequence(
         "Go to the point",
         memory=False,  # the mode is checked every tick (someone may change it): set again when it is not GUIDED
-        children=[SetMode(guided, name=f"{guided} (else set it)"), GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True)],
+        children=[
+            SetMode(guided, name=f"{guided} (else set it)", confirm_by_ack=True),  # moving a tick after the ack, not at the next heartbeat
+            GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True),
+        ],
     )
     sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), Sample()])
     due = py_trees.composites.Selector("Sample if due", memory=False, children=[NothingToSample(), sample])

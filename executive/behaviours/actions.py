@@ -1,12 +1,12 @@
-"""Actions: ask the commander for a command, then watch the blackboard for its effect.
+"""Actions: ask the autopilot port for a command, then watch the blackboard for its effect.
 
-An action never waits inside a tick. It sends in ``initialise`` (the commander transmits after
+An action never waits inside a tick. It sends in ``initialise`` (the command goes out after
 the tick) and each ``update`` looks at what came back: the ack in ``/command/...`` and, for the
 effect itself, the vehicle state (ArduPilot can ack a mode change that the heartbeat never shows).
 Setpoints have no ack: a setpoint action re-sends its target and watches the vehicle get there.
 
-Every action needs the ``clock`` and the ``commander`` from ``tree.setup``; the current leg's
-waypoint comes from ``/mission/target``.
+Every action needs the ``clock`` and the ``autopilot`` (an :class:`~executive.autopilot.AutopilotPort`)
+from ``tree.setup``; the current leg's waypoint comes from ``/mission/target``.
 """
 
 from __future__ import annotations
@@ -17,49 +17,42 @@ from typing import Literal
 from py_trees.common import Status
 
 from executive import blackboard, frames, geo
+from executive.autopilot import AutopilotPort, Request, VtolState
 from executive.behaviours.base import TimedBehaviour
-from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.modes import ArduPilotModes
 from executive.mission.model import Waypoint
 from executive.state import CommandState, CommandStatus, GlobalPosition, HomePosition
 
 
-def _result_name(result: int | None) -> str:
-    entry = mavlink.enums["MAV_RESULT"].get(result) if result is not None else None
-    return entry.name.removeprefix("MAV_RESULT_") if entry else "no ack"
-
-
-def _refusal(status: CommandStatus | None, ticket: int | None, statustext: tuple[int, str] | None) -> str | None:
-    """Why the command with ``ticket`` failed (refused, or no ack after every retry); None if it has not."""
-    if status is None or ticket is None or status.ticket != ticket:
+def _refusal(status: CommandStatus | None, request: Request | None, statustext: tuple[int, str] | None) -> str | None:
+    """Why the command of ``request`` failed (refused, or no ack after every retry); None if it has not."""
+    if status is None or request is None or status.ticket != request.ticket:
         return None
     if status.state is CommandState.TIMED_OUT:
         return f"no ack after {status.attempts} attempts"
     if status.state is CommandState.REJECTED:
-        return f"refused: {_result_name(status.result)}" + (f" ({statustext[1]})" if statustext else "")
+        return f"refused: {status.result_name}" + (f" ({statustext[1]})" if statustext else "")
     return None
 
 
-def _accepted(status: CommandStatus | None, ticket: int | None) -> bool:
-    return status is not None and ticket is not None and status.ticket == ticket and status.state is CommandState.ACCEPTED
+def _accepted(status: CommandStatus | None, request: Request | None) -> bool:
+    return status is not None and request is not None and status.ticket == request.ticket and status.state is CommandState.ACCEPTED
 
 
 class CommandAction(TimedBehaviour):
     """Request a command once; SUCCESS when the vehicle state confirms it, FAILURE when refused or unconfirmed."""
 
-    needs = ("clock", "commander")
-    commander: Commander
+    needs = ("clock", "autopilot")
+    autopilot: AutopilotPort
     command_name = ""  # MAV_CMD name without prefix
 
     def __init__(self, name: str, confirm_timeout_s: float = 5.0) -> None:
         self.reads = (*self.reads, blackboard.command_key(self.command_name), "/vehicle/statustext")
         super().__init__(name)
         self.confirm_timeout_s = confirm_timeout_s
-        self._ticket: int | None = None
+        self._ticket: Request | None = None
 
-    def request(self) -> int:
-        """Ask the commander for the command; returns its ticket."""
+    def request(self) -> Request:
+        """Ask the autopilot for the command; returns its request."""
         raise NotImplementedError
 
     def confirmed(self) -> bool:
@@ -78,7 +71,7 @@ class CommandAction(TimedBehaviour):
 
     def terminate(self, new_status: Status) -> None:
         if new_status == Status.INVALID:  # interrupted: what it asked for no longer matters
-            self.commander.cancel(self._ticket)
+            self.autopilot.cancel(self._ticket)
 
     def update(self) -> Status:
         if self.confirmed():
@@ -99,28 +92,36 @@ class CommandAction(TimedBehaviour):
 class SetMode(CommandAction):
     """Put the autopilot in a flight mode (by name); confirmed by the heartbeat.
 
-    With ``confirm_by_ack`` the ack ACCEPTED of its own request confirms it too: ArduPilot changes
-    mode before it acks (GCS_MAVLINK::_set_mode_common, libraries/GCS_MAVLink/GCS_Common.cpp, acks
-    ACCEPTED only when set_mode succeeded), while its heartbeat comes once a second. For a step
-    that runs once (in a sequence with memory): a step re-ticked every tick would ask again until
-    the heartbeat shows the mode.
+    With ``confirm_by_ack`` the ack ACCEPTED of its own latest request confirms it too, until the
+    next heartbeat speaks: ArduPilot changes mode before it acks (GCS_MAVLINK::_set_mode_common,
+    libraries/GCS_MAVLink/GCS_Common.cpp, acks ACCEPTED only when set_mode succeeded), while its
+    heartbeat comes once a second. A step re-ticked every tick does not ask again meanwhile; a
+    heartbeat after the ack showing another mode (someone changed it since) is believed.
     """
 
-    reads = ("/vehicle/mode",)
+    reads = ("/vehicle/mode", "/link/last_heartbeat")
     command_name = "DO_SET_MODE"
 
     def __init__(self, mode: str, name: str | None = None, confirm_timeout_s: float = 5.0, confirm_by_ack: bool = False) -> None:
         super().__init__(name or f"Set {mode.upper()}", confirm_timeout_s)
         self.mode = mode.upper()
         self.confirm_by_ack = confirm_by_ack
+        self._last_request: Request | None = None  # kept across runs: its ack still counts until a heartbeat comes
 
-    def request(self) -> int:
-        return self.commander.set_mode(self.mode)
+    def request(self) -> Request:
+        self._last_request = self.autopilot.set_mode(self.mode)
+        return self._last_request
 
     def confirmed(self) -> bool:
-        if self.confirm_by_ack and _accepted(self.get(blackboard.command_key(self.command_name)), self._ticket):
+        if self.get("/vehicle/mode") == self.autopilot.mode_name(self.mode):
             return True
-        return self.get("/vehicle/mode") == self.commander.modes.canonical(self.mode)
+        if not self.confirm_by_ack:
+            return False
+        status: CommandStatus | None = self.get(blackboard.command_key(self.command_name))
+        heartbeat: float | None = self.get("/link/last_heartbeat")
+        if status is None or heartbeat is None or not _accepted(status, self._last_request):
+            return False
+        return heartbeat <= status.time
 
 
 class Arm(CommandAction):
@@ -132,8 +133,8 @@ class Arm(CommandAction):
     def __init__(self, name: str = "Arm", confirm_timeout_s: float = 5.0) -> None:
         super().__init__(name, confirm_timeout_s)
 
-    def request(self) -> int:
-        return self.commander.arm()
+    def request(self) -> Request:
+        return self.autopilot.arm()
 
     def confirmed(self) -> bool:
         return bool(self.get("/vehicle/armed"))
@@ -145,21 +146,11 @@ class Disarm(Arm):
     def __init__(self, name: str = "Disarm", confirm_timeout_s: float = 5.0) -> None:
         super().__init__(name, confirm_timeout_s)
 
-    def request(self) -> int:
-        return self.commander.disarm()
+    def request(self) -> Request:
+        return self.autopilot.disarm()
 
     def confirmed(self) -> bool:
         return not self.get("/vehicle/armed")
-
-
-def _send_setpoint(commander: Commander, target: Waypoint) -> None:
-    """The GUIDED target for a waypoint: a sub's waypoint carries its depth (or height above the seabed), others their altitude."""
-    if target.control_mode == "altitude" and target.altitude_m is not None:
-        commander.depth_target(target.lat, target.lon, altitude_m=target.altitude_m)
-    elif target.depth_m is not None:
-        commander.depth_target(target.lat, target.lon, depth_m=target.depth_m)
-    else:
-        commander.goto(target.lat, target.lon, target.alt_m)
 
 
 #: GoTo's look-ahead: the time the next target takes to act (telemetry's age, a tick, the link), s ...
@@ -198,8 +189,8 @@ class GoTo(TimedBehaviour):
         "/mission/target", "/mission/next_target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position",
         "/vehicle/statustext", blackboard.command_key("DO_REPOSITION"),
     )  # fmt: skip
-    needs = ("clock", "commander")
-    commander: Commander
+    needs = ("clock", "autopilot")
+    autopilot: AutopilotPort
 
     def __init__(
         self,
@@ -224,7 +215,7 @@ class GoTo(TimedBehaviour):
         self.braking_m_s2 = braking_m_s2
         self.distance_m: float | None = None
         self.bearing_deg: float | None = None
-        self._ticket: int | None = None
+        self._ticket: Request | None = None
 
     def initialise(self) -> None:
         super().initialise()
@@ -291,7 +282,7 @@ class GoTo(TimedBehaviour):
         if now - self._last_sent < self.resend_s:
             return
         if self.method == "setpoint":
-            _send_setpoint(self.commander, self.target)
+            self.autopilot.go_to(self.target)
             self._last_sent = now
             return
         if self._ticket is not None:
@@ -303,7 +294,7 @@ class GoTo(TimedBehaviour):
             alt = -self.target.depth_m
         elif alt == 0.0 and position is not None:
             alt = position.alt_rel_m
-        self._ticket = self.commander.reposition(self.target.lat, self.target.lon, alt)
+        self._ticket = self.autopilot.reposition(self.target.lat, self.target.lon, alt)
         self._last_sent = now
 
 
@@ -361,9 +352,9 @@ class ChangeSpeed(CommandAction):
         self.speed_m_s = target.speed_m_s if target is not None else None
         super().initialise()
 
-    def request(self) -> int:
+    def request(self) -> Request:
         assert self.speed_m_s is not None
-        return self.commander.change_speed(self.speed_m_s, airspeed=self.airspeed)
+        return self.autopilot.change_speed(self.speed_m_s, airspeed=self.airspeed)
 
     def confirmed(self) -> bool:
         return self.speed_m_s is None or _accepted(self.get(blackboard.command_key(self.command_name)), self._ticket)
@@ -384,8 +375,8 @@ class _VerticalSetpoint(TimedBehaviour):
     """
 
     reads = ("/mission/target", "/vehicle/position", "/vehicle/mode")
-    needs = ("clock", "commander")
-    commander: Commander
+    needs = ("clock", "autopilot")
+    autopilot: AutopilotPort
     what = ""
 
     def __init__(self, name: str, tolerance_m: float, timeout_s: float, resend_s: float) -> None:
@@ -465,7 +456,7 @@ class ChangeDepth(_VerticalSetpoint):
         return -position.alt_rel_m
 
     def send(self, lat: float, lon: float, target_m: float) -> None:
-        self.commander.depth_target(lat, lon, depth_m=target_m)
+        self.autopilot.hold_depth(lat, lon, depth_m=target_m)
 
 
 class ChangeAltitude(_VerticalSetpoint):
@@ -491,11 +482,11 @@ class ChangeAltitude(_VerticalSetpoint):
 
     def refuse(self) -> str | None:
         mode = self.get("/vehicle/mode")
-        guided = self.commander.modes.canonical("GUIDED")
+        guided = self.autopilot.capabilities.guided_mode
         return None if mode == guided else f"needs {guided} to keep a height above the seabed (mode is {mode})"
 
     def send(self, lat: float, lon: float, target_m: float) -> None:
-        self.commander.depth_target(lat, lon, altitude_m=target_m)
+        self.autopilot.hold_depth(lat, lon, altitude_m=target_m)
 
 
 class Surface(CommandAction):
@@ -526,8 +517,8 @@ class Surface(CommandAction):
         self.confirm_timeout_s = self.margin_s + max(0.0, depth or 0.0) / self.climb_m_s
         super().initialise()
 
-    def request(self) -> int:
-        return self.commander.set_mode("SURFACE")
+    def request(self) -> Request:
+        return self.autopilot.set_mode("SURFACE")
 
     def confirmed(self) -> bool:
         depth = self._depth()
@@ -560,16 +551,15 @@ class TakeOff(CommandAction):
         self.alt_m = alt_m
         self.reached_fraction = reached_fraction
 
-    def request(self) -> int:
-        self.command_name = type(self).command_name
-        if isinstance(self.commander.modes, ArduPilotModes):
-            position: GlobalPosition | None = self.get("/vehicle/position")
-            if self.get("/vehicle/landed_state") in ("TAKEOFF", "IN_AIR") and position is not None:
-                self.command_name = "DO_REPOSITION"  # its ack, not NAV_TAKEOFF's, says whether the climb was taken
-                return self.commander.reposition(position.lat, position.lon, self.alt_m)
-            return self.commander.takeoff(self.alt_m)
-        home: HomePosition | None = self.get("/vehicle/home")
-        return self.commander.takeoff(home.alt_m + self.alt_m if home is not None else math.nan)
+    def request(self) -> Request:
+        request = self.autopilot.take_off(
+            self.alt_m,
+            home=self.get("/vehicle/home"),
+            position=self.get("/vehicle/position"),
+            airborne=self.get("/vehicle/landed_state") in ("TAKEOFF", "IN_AIR"),
+        )
+        self.command_name = request.command  # ArduPilot climbs on in the air with DO_REPOSITION: its ack says whether the climb was taken
+        return request
 
     def confirmed(self) -> bool:
         position: GlobalPosition | None = self.get("/vehicle/position")
@@ -597,8 +587,8 @@ class Land(CommandAction):
         super().__init__(name, confirm_timeout_s)
         self.mode = mode.upper()
 
-    def request(self) -> int:
-        return self.commander.set_mode(self.mode)
+    def request(self) -> Request:
+        return self.autopilot.land(self.mode)
 
     def confirmed(self) -> bool:
         return self.get("/vehicle/landed_state") == "ON_GROUND" and not self.get("/vehicle/armed")
@@ -610,20 +600,19 @@ class Land(CommandAction):
         return f"{self.get('/vehicle/landed_state') or 'landed state unknown'}{alt}, {armed}"
 
 
-VtolState = Literal["FW", "MC"]
-
-
 class VtolTransition(TimedBehaviour):
     """Transition a VTOL to fixed-wing (``"FW"``) or multicopter (``"MC"``) flight.
 
     SUCCESS only when ``/vehicle/vtol_state`` (EXTENDED_SYS_STATE) reports the state asked for:
     an ack says nothing about the transition. How it is asked depends on the firmware:
 
-    - ArduPilot (``commander.modes`` is ArduPilotModes) accepts MAV_CMD_DO_VTOL_TRANSITION in AUTO
-      only, so there it is used in AUTO; elsewhere the mode decides: to FW, a DO_REPOSITION to a
-      point ``ahead_m`` ahead on the current heading at the current height (GUIDED, wing-borne: a
-      GoTo with ``method="reposition"`` takes over from there); to MC, the mode ``mc_mode`` (QLOITER).
-    - PX4 (any other table) takes MAV_CMD_DO_VTOL_TRANSITION in flight.
+    - ArduPilot accepts MAV_CMD_DO_VTOL_TRANSITION in AUTO only, so there it is used in AUTO;
+      elsewhere the mode decides: to FW, a DO_REPOSITION to a point ``ahead_m`` ahead on the current
+      heading at the current height (GUIDED, wing-borne: a GoTo with ``method="reposition"`` takes
+      over from there); to MC, the mode ``mc_mode`` (QLOITER).
+    - PX4 takes MAV_CMD_DO_VTOL_TRANSITION in flight.
+
+    The autopilot port chooses (:meth:`~executive.autopilot.AutopilotPort.transition`).
 
     FAILURE when the request is refused or unanswered, or after ``timeout_s`` with the last state seen.
     """
@@ -632,8 +621,8 @@ class VtolTransition(TimedBehaviour):
         "/vehicle/vtol_state", "/vehicle/mode", "/vehicle/position", "/vehicle/heading_deg", "/vehicle/statustext",
         blackboard.command_key("DO_VTOL_TRANSITION"), blackboard.command_key("DO_REPOSITION"), blackboard.command_key("DO_SET_MODE"),
     )  # fmt: skip
-    needs = ("clock", "commander")
-    commander: Commander
+    needs = ("clock", "autopilot")
+    autopilot: AutopilotPort
 
     def __init__(self, to: VtolState, timeout_s: float = 30.0, name: str | None = None, mc_mode: str = "QLOITER", ahead_m: float = 300.0) -> None:
         if to not in ("FW", "MC"):
@@ -645,31 +634,23 @@ class VtolTransition(TimedBehaviour):
         self.ahead_m = ahead_m
         self.last_state: str | None = None
         self.how = ""
-        self._ticket: int | None = None
-        self._command = ""
+        self._ticket: Request | None = None
 
     def initialise(self) -> None:
         super().initialise()
         self.last_state = self.get("/vehicle/vtol_state")
-        self._ticket, self._command, self.how = None, "", ""
+        self._ticket, self.how = None, ""
         if self.last_state != self.to:
             self._request()
 
     def _request(self) -> None:
-        if not isinstance(self.commander.modes, ArduPilotModes) or self.get("/vehicle/mode") == "AUTO":
-            self._command, self.how = "DO_VTOL_TRANSITION", "DO_VTOL_TRANSITION"
-            self._ticket = self.commander.vtol_transition(self.to)
-        elif self.to == "MC":
-            self._command, self.how = "DO_SET_MODE", self.mc_mode
-            self._ticket = self.commander.set_mode(self.mc_mode)
-        else:
-            position: GlobalPosition | None = self.get("/vehicle/position")
-            if position is None:
-                return  # update() fails: there is no "ahead" without a position
-            heading = position.heading_deg if position.heading_deg is not None else self.get("/vehicle/heading_deg") or 0.0
-            lat, lon = geo.destination(position.lat, position.lon, heading, self.ahead_m)
-            self._command, self.how = "DO_REPOSITION", f"reposition {self.ahead_m:g} m ahead"
-            self._ticket = self.commander.reposition(lat, lon, position.alt_rel_m)
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        heading = position.heading_deg if position is not None and position.heading_deg is not None else self.get("/vehicle/heading_deg") or 0.0
+        self._ticket = self.autopilot.transition(
+            self.to, mode=self.get("/vehicle/mode"), position=position, heading_deg=heading, mc_mode=self.mc_mode, ahead_m=self.ahead_m
+        )
+        if self._ticket is not None:  # None: update() fails, there is no "ahead" without a position
+            self.how = self._ticket.how or self._ticket.command
 
     def update(self) -> Status:
         state = self.get("/vehicle/vtol_state")
@@ -681,7 +662,7 @@ class VtolTransition(TimedBehaviour):
         if self._ticket is None:
             self.feedback_message = "no position to transition from"
             return Status.FAILURE
-        refusal = _refusal(self.get(blackboard.command_key(self._command)), self._ticket, self.get("/vehicle/statustext"))
+        refusal = _refusal(self.get(blackboard.command_key(self._ticket.command)), self._ticket, self.get("/vehicle/statustext"))
         if refusal is not None:
             self.feedback_message = f"{self.how} {refusal}; still {self.last_state}"
             return Status.FAILURE
@@ -712,8 +693,8 @@ class GoToLocal(TimedBehaviour):
     """
 
     reads = ("/vehicle/position", "/vehicle/home", "/vehicle/statustext", blackboard.command_key("DO_REPOSITION"))
-    needs = ("clock", "commander")
-    commander: Commander
+    needs = ("clock", "autopilot")
+    autopilot: AutopilotPort
 
     def __init__(
         self,
@@ -738,7 +719,7 @@ class GoToLocal(TimedBehaviour):
     def initialise(self) -> None:
         super().initialise()
         self._last_sent = float("-inf")
-        self._ticket: int | None = None
+        self._ticket: Request | None = None
         self._refusal: str | None = None
         self.distance_m = None
 
@@ -747,7 +728,7 @@ class GoToLocal(TimedBehaviour):
         position: GlobalPosition | None = self.get("/vehicle/position")
         home: HomePosition | None = self.get("/vehicle/home")
         if self.method == "setpoint" and now - self._last_sent >= self.resend_s:
-            self.commander.local_setpoint(*self.ned)
+            self.autopilot.go_to_local(*self.ned)
             self._last_sent = now
         elif self.method == "reposition" and home is not None:
             self._reposition(home, now)
@@ -773,5 +754,5 @@ class GoToLocal(TimedBehaviour):
             if self._refusal is None:
                 return  # accepted or still waiting for the ack: the autopilot has the target
         lat, lon = frames.local_to_global(home.lat, home.lon, self.ned.north, self.ned.east)
-        self._ticket = self.commander.reposition(lat, lon, -self.ned.down)
+        self._ticket = self.autopilot.reposition(lat, lon, -self.ned.down)
         self._last_sent = now

@@ -10,49 +10,24 @@ behaviours keep the autopilot's mission equal to it and follow the autopilot whi
   autopilot, follows MISSION_CURRENT and MISSION_ITEM_REACHED into the mission's leg index, and
   succeeds when the last waypoint is reached.
 
-Both need ``mission_state`` (and the first ``mission_transfer``) from ``tree.setup``. A waypoint's
+Both need ``mission_state`` and the ``autopilot`` port from ``tree.setup``. A waypoint's
 ``speed_m_s`` is not uploaded: AUTO drives at the autopilot's own speed (WP_SPEED).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 from py_trees.common import Status
 
 from executive import geo
+from executive.autopilot import AutopilotPort
 from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
 from executive.clock import Clock
-from executive.io.mavlink.mission_protocol import (
-    MissionCurrent,
-    MissionItem,
-    MissionItemReached,
-    MissionTransfer,
-    MissionTransferStatus,
-    TransferState,
-    first_mismatch,
-    waypoint_items,
-)
 from executive.mission.lifecycle import MissionState
-from executive.mission.model import Waypoint
 from executive.mission.route import Route
-from executive.state import GlobalPosition, HomePosition
+from executive.state import GlobalPosition, HomePosition, MissionCurrent, MissionItemReached, MissionTransferStatus, TransferState
 
 #: The autopilot mode that drives its own mission.
 AUTO = "AUTO"
-
-
-def route_items(waypoints: Sequence[Waypoint]) -> tuple[MissionItem, ...]:
-    """The mission items 1..n a route is uploaded as: a NAV_WAYPOINT per waypoint."""
-    return waypoint_items((wp.lat, wp.lon, wp.alt_m) for wp in waypoints)
-
-
-def route_not_on_autopilot(waypoints: Sequence[Waypoint], held: Sequence[MissionItem] | None) -> str | None:
-    """Why the autopilot's mission (``held``, ``/vehicle/mission_items``) is not ``waypoints``; None when it is."""
-    if held is None:
-        return "the autopilot's mission is not known yet"
-    mismatch = first_mismatch(route_items(waypoints), held)
-    return None if mismatch is None else f"the autopilot's mission differs ({mismatch})"
 
 
 class KeepRouteOnAutopilot(ExecutiveBehaviour):
@@ -65,10 +40,10 @@ class KeepRouteOnAutopilot(ExecutiveBehaviour):
     """
 
     reads = ("/link/mission_transfer", "/vehicle/mission_items", "/vehicle/home")
-    needs = ("clock", "mission_state", "mission_transfer")
+    needs = ("clock", "mission_state", "autopilot")
     clock: Clock
     mission_state: MissionState
-    mission_transfer: MissionTransfer
+    autopilot: AutopilotPort
 
     def __init__(self, name: str = "Keep the route on the autopilot", retry_s: float = 5.0) -> None:
         super().__init__(name)
@@ -84,7 +59,7 @@ class KeepRouteOnAutopilot(ExecutiveBehaviour):
         if self._ticket is not None:
             return Status.RUNNING
         waypoints = self.mission_state.route.waypoints
-        why = route_not_on_autopilot(waypoints, self.get("/vehicle/mission_items"))
+        why = self.autopilot.route_differs(waypoints, self.get("/vehicle/mission_items"))
         if why is None:
             self._failure = ""
             self.feedback_message = f"the autopilot holds the route: {len(waypoints)} waypoints, read back"
@@ -92,11 +67,11 @@ class KeepRouteOnAutopilot(ExecutiveBehaviour):
         if self._failure and now - self._failed_at < self.retry_s:
             self.feedback_message = f"upload failed ({self._failure}); trying again in {self._failed_at + self.retry_s - now:.0f} s"
             return Status.RUNNING
-        if not self.mission_transfer.idle:
+        if not self.autopilot.route_transfer_idle:
             self.feedback_message = "waiting for another mission transfer to end"
             return Status.RUNNING
         home: HomePosition | None = self.get("/vehicle/home")
-        self._ticket = self.mission_transfer.upload(route_items(waypoints), (home.lat, home.lon, home.alt_m) if home else None)
+        self._ticket = self.autopilot.upload_route(waypoints, home)
         self.feedback_message = f"uploading {len(waypoints)} waypoints: {why}"
         return Status.RUNNING
 
@@ -140,8 +115,9 @@ class DriveRouteInAuto(TimedBehaviour):
     """
 
     reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/mission_items", "/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/position")
-    needs = ("clock", "mission_state")
+    needs = ("clock", "mission_state", "autopilot")
     mission_state: MissionState
+    autopilot: AutopilotPort
 
     def __init__(self, operator_timeout_s: float, name: str = "Drive the route in AUTO", leg_timeout_s: float = 600.0) -> None:
         super().__init__(name)
@@ -210,7 +186,7 @@ class DriveRouteInAuto(TimedBehaviour):
     def _why_not_driving(self, route: Route) -> str | None:
         if not route.waypoints:
             return "no route recorded (switch A down with the knob in the middle adds a waypoint here)"
-        why = route_not_on_autopilot(route.waypoints, self.get("/vehicle/mission_items"))
+        why = self.autopilot.route_differs(route.waypoints, self.get("/vehicle/mission_items"))
         if why is not None:
             return f"the route is not on the autopilot yet: {why}"
         mode = self.get("/vehicle/mode")

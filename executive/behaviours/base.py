@@ -1,6 +1,6 @@
 """What every executive behaviour shares: read-only blackboard access and injected services.
 
-Services (the clock, the commander, the mission state) are handed to ``tree.setup(**services)``,
+Services (the clock, the autopilot port, the mission state) are handed to ``tree.setup(**services)``,
 which passes them to every behaviour's ``setup``; a behaviour takes what it needs.
 """
 
@@ -20,7 +20,7 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
 
     #: Blackboard keys this behaviour reads.
     reads: tuple[str, ...] = ()
-    #: Names of the services ``setup`` must receive (``clock``, ``commander``, ``mission_state``).
+    #: Names of the services ``setup`` must receive (``clock``, ``autopilot``, ``mission_state``).
     needs: tuple[str, ...] = ()
 
     def __init__(self, name: str) -> None:

@@ -7,7 +7,7 @@ none (a speed or depth limit) holds the vehicle and resumes, within ``limits.rec
 :class:`Failsafe` stands behind the guarded work in a reactive selector (``trees._parts.guarded``):
 the guards are ticked every tick before the work, so the tick in which a condition becomes true on
 the blackboard (the readers write it before the tree ticks) is the tick in which the route fails
-and the failsafe runs; it asks the commander for the reaction there and then, and the runtime
+and the failsafe runs; it asks the autopilot for the reaction there and then, and the runtime
 sends it when that tick ends. Nothing in between waits or retries later: zero ticks of delay.
 
 While it runs, every guard is judged each tick (not only the first that failed), so a condition
@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import py_trees
 from py_trees.common import Status
 
+from executive.autopilot import AutopilotPort, Request
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import (
     Armed,
@@ -42,7 +43,6 @@ from executive.behaviours.guards import (
     RcNotLost,
     RcNotTakingOver,
 )
-from executive.io.mavlink.commander import Commander
 from executive.mission.model import REACTION_MODES, FailsafePolicy
 from executive.vehicles import PROFILES
 
@@ -93,8 +93,8 @@ class Failsafe(TimedBehaviour):
     """
 
     reads = ("/vehicle/vtol_state", "/vehicle/armed", "/vehicle/mode", "/mission/leg_index", "/mission/leg_count")
-    needs = ("clock", "commander")
-    commander: Commander
+    needs = ("clock", "autopilot")
+    autopilot: AutopilotPort
 
     def __init__(
         self, guards: Sequence[Guard], policy: Mapping[str, FailsafePolicy], vehicle: str, fallback: FailsafePolicy, name: str = "Wait for guards"
@@ -114,7 +114,7 @@ class Failsafe(TimedBehaviour):
         self._since: dict[Guard, float] = {}
         self._in_force: _Reaction | None = None
         self._mode_in_force: str | None = None
-        self._tickets: list[int] = []
+        self._tickets: list[Request] = []
         self._rearm_from: float | None = None
         self._rearm_at = float("-inf")
 
@@ -136,7 +136,7 @@ class Failsafe(TimedBehaviour):
             return  # ended the mission: the reaction must reach the vehicle
         # interrupted: by the guards recovering (the work resumes) or by a pause; a reaction still being retried must not undo either
         for ticket in self._tickets:
-            self.commander.cancel(ticket)
+            self.autopilot.cancel(ticket)
         if self._since and all(g.status == Status.SUCCESS for g in self.guards):
             causes = ", ".join(self._name(g) for g in self._since)
             log.warning(
@@ -148,7 +148,7 @@ class Failsafe(TimedBehaviour):
         now = self.clock.now()
         if self.get("/vehicle/armed"):
             self._own_disarm = False
-        failing = {g: why for g in self.guards if (why := g.check()) is not None}
+        failing = {g: why for g in self.guards if (why := g.judge()) is not None}  # debounced: see guards
         if self._own_disarm:  # disarmed by this failsafe, not by a person
             failing = {g: why for g, why in failing.items() if self._conditions.get(g) != "disarmed"}
         for g in [g for g in self._since if g not in failing]:
@@ -210,12 +210,12 @@ class Failsafe(TimedBehaviour):
         if mode == self._mode_in_force and what != "disarm":
             return mode
         try:
-            self._tickets.append(self.commander.set_mode(mode))
+            self._tickets.append(self.autopilot.set_mode(mode))
         except KeyError:
             log.error("failsafe %s: the autopilot has no mode %s", self._name(reaction.guard), mode)
             return None
         if what == "disarm":
-            self._tickets.append(self.commander.disarm())
+            self._tickets.append(self.autopilot.disarm())
             self._own_disarm = True
         self._mode_in_force = mode
         return mode
@@ -233,7 +233,7 @@ class Failsafe(TimedBehaviour):
             return Status.FAILURE
         if now - self._rearm_at >= REARM_RETRY_S:
             self._rearm_at = now
-            self._tickets.append(self.commander.arm())
+            self._tickets.append(self.autopilot.arm())
         self.feedback_message = f"re-arming ({now - self._rearm_from:.0f}/{limit:g} s)"
         return Status.RUNNING
 

@@ -7,10 +7,10 @@ from collections.abc import Iterator, Sequence
 import py_trees
 from py_trees.common import Access, Status
 
+from executive.autopilot import AutopilotPort, Request
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
 from executive.clock import Clock
-from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState, MissionStatus
 
 
@@ -80,8 +80,8 @@ class WaitForGuards(TimedBehaviour):
     """
 
     reads = ("/vehicle/vtol_state",)
-    needs = ("clock", "commander")
-    commander: Commander
+    needs = ("clock", "autopilot")
+    autopilot: AutopilotPort
 
     def __init__(
         self,
@@ -96,7 +96,7 @@ class WaitForGuards(TimedBehaviour):
         self.limit_s = limit_s
         self.hold_mode = hold_mode
         self.fixed_wing_hold_mode = fixed_wing_hold_mode
-        self._ticket: int | None = None
+        self._ticket: Request | None = None
 
     def initialise(self) -> None:
         super().initialise()
@@ -104,11 +104,11 @@ class WaitForGuards(TimedBehaviour):
         mode = hold_mode_for(self.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode)
         self._ticket = None
         if mode and failing and not any(g.pilot_in_control for g in failing):
-            self._ticket = self.commander.set_mode(mode)
+            self._ticket = self.autopilot.set_mode(mode)
 
     def terminate(self, new_status: Status) -> None:
         # The guards recovered (or the mission ended): a hold still being retried must not reach the vehicle now.
-        self.commander.cancel(self._ticket)
+        self.autopilot.cancel(self._ticket)
 
     def update(self) -> Status:
         failing = [g for g in self.guards if g.status == Status.FAILURE]
@@ -193,21 +193,21 @@ class UnlessPaused(py_trees.decorators.Decorator):
         self.hold_mode = hold_mode
         self.fixed_wing_hold_mode = fixed_wing_hold_mode
         self.mission_state: MissionState | None = None
-        self.commander: Commander | None = None
+        self.autopilot: AutopilotPort | None = None
         self._holding: str | None = None  # the mode asked for while paused
-        self._hold_ticket: int | None = None
+        self._hold_ticket: Request | None = None
         self._bb = self.attach_blackboard_client()
         self._bb.register_key(key="/vehicle/vtol_state", access=Access.READ)
 
     def setup(self, **services: object) -> None:
-        missing = [n for n in ("mission_state", "commander") if services.get(n) is None]
+        missing = [n for n in ("mission_state", "autopilot") if services.get(n) is None]
         if missing:
             raise RuntimeError(f"{self.name}: setup() needs {', '.join(missing)}")
         self.mission_state = services["mission_state"]  # type: ignore[assignment]
-        self.commander = services["commander"]  # type: ignore[assignment]
+        self.autopilot = services["autopilot"]  # type: ignore[assignment]
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        assert self.mission_state is not None and self.commander is not None
+        assert self.mission_state is not None and self.autopilot is not None
         if self.status != Status.RUNNING:
             self.initialise()
         state = self.mission_state
@@ -219,12 +219,12 @@ class UnlessPaused(py_trees.decorators.Decorator):
             else:
                 if self._holding is None:
                     self._holding = hold_mode_for(self._bb.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode) or self.hold_mode
-                    self._hold_ticket = self.commander.set_mode(self._holding)
+                    self._hold_ticket = self.autopilot.set_mode(self._holding)
                 self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: holding in {self._holding}"
             new_status = Status.RUNNING
         else:
             if self._holding is not None:  # resumed: a hold still being retried must not undo the resumed leg
-                self.commander.cancel(self._hold_ticket)
+                self.autopilot.cancel(self._hold_ticket)
             self._holding = None
             yield from self.decorated.tick()
             self.feedback_message = ""

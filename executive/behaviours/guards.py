@@ -3,20 +3,30 @@
 Guards read the blackboard and nothing else; they never return RUNNING. A guard that passes
 without being able to judge (no battery report yet, heading not judged yet) says so in its
 feedback.
+
+Every guard is debounced in vehicle time (the injected clock), so that its failsafe never flaps:
+once it has passed, a condition must fail for ``hold_after_s`` before the guard fails (a shorter
+bad spell passes, with a note), and once failed it must hold again for ``resume_after_s`` before
+the guard passes. Each guard documents its two figures and why (the README's failsafe table lists
+them). A guard that has never passed fails at once: there is nothing to hold yet (the EKF before
+pre-flight, a first reading). Without a clock (a guard ticked on its own) the verdict is the raw one.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal, Protocol
+from typing import Any, Literal, Protocol
 
 from py_trees.common import Status
 
 from executive.behaviours.base import ExecutiveBehaviour
+from executive.clock import Clock
 from executive.geo import distance
 from executive.geofence import Geofence
 from executive.mission.model import Mission, Range, RcConfig, Waypoint
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition, HomePosition, RcSwitches, SwitchPosition
+
+_EPSILON_S = 1e-6  # ten ticks of 0.1 s add up to a hair under 1 s
 
 
 class Guard(ExecutiveBehaviour):
@@ -28,19 +38,77 @@ class Guard(ExecutiveBehaviour):
     #: Set by :meth:`check` to qualify a pass (e.g. "battery not reported yet"); shown instead of "ok".
     note: str = ""
 
+    #: Vehicle seconds the condition must fail (after having held) before the guard fails.
+    hold_after_s: float = 0.0
+    #: Vehicle seconds the condition must hold again, once the guard failed, before it passes.
+    resume_after_s: float = 0.0
+
+    def __init__(self, name: str) -> None:
+        super().__init__(name)
+        self.clock: Clock | None = None
+        self._passed = False  # has held at least once: from then on a failure is debounced
+        self._failed = False  # the debounced verdict is "fails" (latched until it holds for resume_after_s)
+        self._bad_since: float | None = None
+        self._good_since: float | None = None
+
+    def setup(self, **services: Any) -> None:
+        super().setup(**services)
+        self.clock = services.get("clock")
+
+    def awaiting_recovery(self) -> Guard:
+        """This guard, judged as failed already: it passes once the condition has held for ``resume_after_s`` (a wait for a recovery)."""
+        self._passed = self._failed = True
+        return self
+
     def check(self) -> str | None:
-        """``None`` when the condition holds, else why it does not."""
+        """``None`` when the condition holds, else why it does not (the raw reading, not debounced)."""
         raise NotImplementedError
 
-    def update(self) -> Status:
+    def judge(self) -> str | None:
+        """The debounced verdict: ``None`` when the guard passes, else why it fails (see the module's docstring).
+
+        Judging twice at the same vehicle time gives the same verdict (the tree and the failsafe both judge).
+        """
         self.note = ""
         reason = self.check()
+        if self.clock is None:
+            return reason
+        now = self.clock.now()
+        if reason is None:
+            self._bad_since = None
+            if not self._failed:
+                self._passed = True
+                return None
+            self._good_since = now if self._good_since is None else self._good_since
+            if now - self._good_since >= self.resume_after_s - _EPSILON_S:
+                self._failed, self._good_since, self._passed = False, None, True
+                return None
+            return f"recovering (holds for {now - self._good_since:.1f}/{self.resume_after_s:g} s)"
+        self._good_since = None
+        if self._failed or not self._passed:
+            self._failed = self._passed
+            return reason
+        self._bad_since = now if self._bad_since is None else self._bad_since
+        if now - self._bad_since >= self.hold_after_s - _EPSILON_S:
+            self._failed, self._bad_since = True, None
+            return reason
+        self.note = f"{reason} for {now - self._bad_since:.1f}/{self.hold_after_s:g} s: not yet"
+        return None
+
+    def update(self) -> Status:
+        reason = self.judge()
         self.feedback_message = reason or self.note or "ok"
         return Status.FAILURE if reason else Status.SUCCESS
 
 
 class LinkAlive(Guard):
-    """The autopilot's heartbeat is fresh."""
+    """The autopilot's heartbeat is fresh.
+
+    Debounce: holds at once (no heartbeat for ``link_timeout_s`` is already the bad spell);
+    resumes after 2 s of fresh heartbeats (two at ArduPilot's 1 Hz).
+    """
+
+    resume_after_s = 2.0
 
     reads = ("/link/up",)
 
@@ -52,7 +120,14 @@ class LinkAlive(Guard):
 
 
 class EkfOk(Guard):
-    """The EKF has a horizontal position (not constant-position mode) and its variances are sane."""
+    """The EKF has a horizontal position (not constant-position mode) and its variances are sane.
+
+    Debounce: holds at once (the flags are the EKF's own filtered verdict, and a vehicle driving
+    without a position must stop within the reaction budget: one tick); resumes after 3 s of a
+    sane EKF (several EKF_STATUS_REPORTs in a row).
+    """
+
+    resume_after_s = 3.0
 
     reads = ("/vehicle/ekf",)
 
@@ -72,7 +147,13 @@ class EkfOk(Guard):
 
 
 class GpsNotGlitching(Guard):
-    """The EKF does not flag a GPS glitch (EKF_STATUS_REPORT GPS_GLITCHING); no EKF report yet passes with a note."""
+    """The EKF does not flag a GPS glitch (EKF_STATUS_REPORT GPS_GLITCHING); no EKF report yet passes with a note.
+
+    Debounce: holds at once (the EKF raises the flag only after rejecting GPS: filtered already);
+    resumes after 3 s without the flag.
+    """
+
+    resume_after_s = 3.0
 
     reads = ("/vehicle/ekf",)
 
@@ -88,7 +169,11 @@ class GpsNotGlitching(Guard):
 
 
 class Armed(Guard):
-    """The vehicle is armed (disarmed mid-mission means the RC took over)."""
+    """The vehicle is armed (disarmed mid-mission means the RC took over).
+
+    Debounce: none either way (0 s, 0 s): arming is a person's (or the failsafe's) act, reported by
+    the heartbeat, not a noisy reading.
+    """
 
     reads = ("/vehicle/armed",)
     pilot_in_control = True
@@ -101,7 +186,11 @@ class Armed(Guard):
 
 
 class ModeIs(Guard):
-    """The autopilot is in a given flight mode."""
+    """The autopilot is in a given flight mode.
+
+    Debounce: none (0 s, 0 s): the heartbeat's mode is a fact, and the trees use this guard as a
+    condition, not as a failsafe.
+    """
 
     reads = ("/vehicle/mode",)
 
@@ -115,7 +204,13 @@ class ModeIs(Guard):
 
 
 class RcNotTakingOver(Guard):
-    """The RC take-over switch is not high (a missing transmitter is not a take-over)."""
+    """The RC take-over switch is not high (a missing transmitter is not a take-over).
+
+    Debounce: fails at once (a person wins); passes again once the switch has been back for 1 s
+    (a bouncing switch does not start the work again).
+    """
+
+    resume_after_s = 1.0
 
     reads = ("/rc/channels",)
     pilot_in_control = True
@@ -140,12 +235,15 @@ _SWC_MEANS = {SwitchPosition.UP: "MANUAL", SwitchPosition.DOWN: "aux mode"}
 class RcAutoMode(Guard):
     """The operator's mode switch is in AUTO.
 
+    Debounce: as :class:`RcNotTakingOver`: fails at once, passes after 1 s back in AUTO.
+
     ``source="mavlink"``: the take-over channel is not high (as :class:`RcNotTakingOver`; a missing
     transmitter is not a take-over). ``source="can"``: switch C is in the middle (AgileX: up
     MANUAL, middle AUTO, down aux mode); no switch report yet fails.
     """
 
     reads = ("/rc/channels", "/rc/switches")
+    resume_after_s = 1.0
     pilot_in_control = True
 
     def __init__(
@@ -173,7 +271,12 @@ def rc_auto_mode(rc: RcConfig, name: str = "RC in auto?") -> RcAutoMode:
 
 
 class RcFresh(Guard):
-    """RC reports arrive and are not frozen, and the transmitter is there (the RC reader judges: /rc/fresh)."""
+    """RC reports arrive and are not frozen, and the transmitter is there (the RC reader judges: /rc/fresh).
+
+    Debounce: fails at once (the reader judges staleness over time already); passes after 2 s of fresh reports.
+    """
+
+    resume_after_s = 2.0
 
     reads = ("/rc/fresh", "/rc/stale_reason")
 
@@ -187,6 +290,9 @@ class RcFresh(Guard):
 class RcNotLost(Guard):
     """The RC transmitter seen earlier is still there; never seen passes with a note (a vehicle run without RC).
 
+    Debounce: fails at once (the autopilot reports every channel 0 only after its own RC failsafe
+    timeout; the CAN reader judges staleness over time); passes after 2 s of the transmitter back.
+
     ``source="mavlink"``: lost when the autopilot reports every channel 0 (/rc/connected false);
     reports that stop coming are the link's business (a link loss is not an RC loss). ``source="can"``:
     lost when the RC reader finds the reports stale (/rc/fresh: after a signal loss the base
@@ -194,6 +300,7 @@ class RcNotLost(Guard):
     """
 
     reads = ("/rc/connected", "/rc/fresh", "/rc/stale_reason")
+    resume_after_s = 2.0
 
     def __init__(self, source: Literal["mavlink", "can"] = "mavlink", name: str = "RC not lost?") -> None:
         super().__init__(name)
@@ -216,7 +323,10 @@ class _HasLatLon(Protocol):
 
 
 class TargetWithin(Guard):
-    """The current leg's target (/mission/target) is within ``max_distance_m`` of the vehicle (go-to refusal, 5 km)."""
+    """The current leg's target (/mission/target) is within ``max_distance_m`` of the vehicle (go-to refusal, 5 km).
+
+    Debounce: none (0 s, 0 s): a refusal of the target, not a reading to filter.
+    """
 
     reads = ("/mission/target", "/vehicle/position")
 
@@ -236,7 +346,10 @@ class TargetWithin(Guard):
 
 
 class PositionKnown(Guard):
-    """The autopilot reports where the vehicle is (/vehicle/position: a GLOBAL_POSITION_INT with a fix)."""
+    """The autopilot reports where the vehicle is (/vehicle/position: a GLOBAL_POSITION_INT with a fix).
+
+    Debounce: none (0 s, 0 s): used to wait for the first position.
+    """
 
     reads = ("/vehicle/position",)
 
@@ -249,6 +362,8 @@ class PositionKnown(Guard):
 
 class AllWaypointsWithin(Guard):
     """Every waypoint is within ``max_distance_m`` of the vehicle's live position (the AUV's 1 km rule).
+
+    Debounce: none (0 s, 0 s): judged once, to accept or refuse the mission.
 
     Each verdict is remembered with the position it was computed at: while every waypoint was
     within ``max_distance_m - moved`` there, the triangle inequality says they still are, and
@@ -290,6 +405,9 @@ def _speed(position: GlobalPosition | None, ground_speed: float | None) -> float
 class SpeedWithin(Guard):
     """The vehicle is not faster than the mission allows.
 
+    Debounce: fails after 2 s over the limit (a current, a wave or a settling speed controller
+    overshoots briefly); passes after 2 s within it.
+
     Rule: FAILURE when the ground speed exceeds ``limit.max`` by more than
     ``max(tolerance_m_s, tolerance_fraction * limit.max)`` (an autopilot overshoots a little while
     settling on a speed). ``limit.min`` is never enforced: a vehicle is slower while accelerating,
@@ -298,6 +416,8 @@ class SpeedWithin(Guard):
     """
 
     reads = ("/vehicle/position", "/vehicle/ground_speed_m_s")
+    hold_after_s = 2.0
+    resume_after_s = 2.0
 
     def __init__(self, limit: Range, tolerance_m_s: float = 0.3, tolerance_fraction: float = 0.1, name: str | None = None) -> None:
         super().__init__(name or f"Speed within {limit.max:g} m/s?")
@@ -319,7 +439,13 @@ def _outside(value: float, limit: Range, tolerance: float) -> bool:
 
 
 class DepthWithin(Guard):
-    """A sub's depth (-/vehicle/position.alt_rel_m) is in ``limit``, give or take ``tolerance_m`` (waves, sensor noise)."""
+    """A sub's depth (-/vehicle/position.alt_rel_m) is in ``limit``, give or take ``tolerance_m`` (waves, sensor noise).
+
+    Debounce: fails after 1 s outside (a wave, a pressure spike); passes after 2 s inside.
+    """
+
+    hold_after_s = 1.0
+    resume_after_s = 2.0
 
     reads = ("/vehicle/position",)
 
@@ -341,12 +467,17 @@ class DepthWithin(Guard):
 class AltitudeWithin(Guard):
     """A sub's height above the seabed (/vehicle/altitude_above_bottom_m) is in ``limit``, give or take ``tolerance_m``.
 
+    Debounce: fails after 2 s without a good reading or outside (an echo sounder drops single
+    pings over weed, fish or a steep slope); passes after 2 s of good readings inside.
+
     No valid rangefinder reading (none yet, out of its range, invalid) fails: the guard cannot
     tell the seabed is far enough. ``altitude_legs_only``: judged only while the current leg
     (/mission/target) has control_mode ``altitude``; on other legs it passes with a note.
     """
 
     reads = ("/vehicle/altitude_above_bottom_m", "/mission/target")
+    hold_after_s = 2.0
+    resume_after_s = 2.0
 
     def __init__(self, limit: Range, tolerance_m: float = 0.5, name: str | None = None, altitude_legs_only: bool = False) -> None:
         default = f"Altitude within [{limit.min:g}, {limit.max:g}] m{' on altitude legs' if altitude_legs_only else ''}?"
@@ -370,7 +501,13 @@ class AltitudeWithin(Guard):
 
 
 class HeadingSane(Guard):
-    """The heading filter trusts the compass (/heading/ok); not judged yet passes with a note."""
+    """The heading filter trusts the compass (/heading/ok); not judged yet passes with a note.
+
+    Debounce: fails at once (the filter judges the compass over time already: a bias estimate, repeated
+    rejections); passes after 3 s of trust.
+    """
+
+    resume_after_s = 3.0
 
     reads = ("/heading/ok", "/heading/reason")
 
@@ -390,10 +527,15 @@ class HeadingSane(Guard):
 class BatteryAbove(Guard):
     """The battery is above ``floor_pct`` remaining and ``floor_v`` volts (either None: not checked).
 
+    Debounce: fails after 2 s below (the voltage sags for a moment when the motors pull hard);
+    passes after 5 s above (a sagging battery recovers while resting).
+
     A value the autopilot does not report (no SYS_STATUS yet, 'unknown' fields) passes with a note.
     """
 
     reads = ("/vehicle/battery",)
+    hold_after_s = 2.0
+    resume_after_s = 5.0
 
     def __init__(self, floor_pct: float | None, floor_v: float | None = None, name: str = "Battery above floor?") -> None:
         super().__init__(name)
@@ -423,12 +565,16 @@ class BatteryAbove(Guard):
 class InsideGeofence(Guard):
     """The vehicle is inside ``fence``: its polygon, and its maximum distance from home.
 
+    Debounce: fails at once (the EKF's position is filtered already, and outside is outside);
+    passes after 2 s inside.
+
     Home is the autopilot's (/vehicle/home: where RTL goes and what its own fence measures from),
     else ``mission_home`` until the autopilot reports one; with neither, a fence with a maximum
     distance fails ("no home to measure the distance from").
     """
 
     reads = ("/vehicle/position", "/vehicle/home")
+    resume_after_s = 2.0
 
     def __init__(self, fence: Geofence, mission_home: tuple[float, float] | None = None, name: str = "Inside geofence?") -> None:
         super().__init__(name)

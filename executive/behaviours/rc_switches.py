@@ -25,11 +25,11 @@ from dataclasses import dataclass
 from py_trees.common import Status
 
 from executive import blackboard
+from executive.autopilot import AutopilotPort, Request
 from executive.behaviours.actions import _refusal
-from executive.behaviours.auto_route import AUTO, route_not_on_autopilot
+from executive.behaviours.auto_route import AUTO
 from executive.behaviours.base import ExecutiveBehaviour
 from executive.clock import Clock
-from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState, Refused
 from executive.mission.model import Waypoint
 from executive.mission.route import RouteError, add_at_end, clear, current_index, remove_current
@@ -88,7 +88,7 @@ class _Asking:
     """A command a switch move asked for: what, its ticket, and when it was asked."""
 
     what: str
-    ticket: int
+    ticket: Request
     at: float
 
 
@@ -109,9 +109,9 @@ class ModeSwitch(SwitchWatcher):
     """
 
     reads = ("/vehicle/mode", "/vehicle/statustext", "/vehicle/mission_items", blackboard.command_key("DO_SET_MODE"))
-    needs = ("clock", "commander", "mission_state")
+    needs = ("clock", "autopilot", "mission_state")
     clock: Clock
-    commander: Commander
+    autopilot: AutopilotPort
     mission_state: MissionState
 
     def __init__(
@@ -163,7 +163,7 @@ class ModeSwitch(SwitchWatcher):
         now = self.clock.now()
         said = f"{self.label} {self.position}: {mode}"
         shown = self.get("/vehicle/mode")
-        if shown == self.commander.modes.canonical(mode):
+        if shown == self.autopilot.mode_name(mode):
             self.report(said if self._asking or self._refused_at > float("-inf") else f"{said} (already)")
             self._wanted = self._asking = None
             return
@@ -174,11 +174,11 @@ class ModeSwitch(SwitchWatcher):
                 self.report(f"{said} not asked: no route recorded")
                 self._wanted = None
                 return
-            waiting = route_not_on_autopilot(self.mission_state.route.waypoints, self.get("/vehicle/mission_items")) if mode == AUTO else None
+            waiting = self.autopilot.route_differs(self.mission_state.route.waypoints, self.get("/vehicle/mission_items")) if mode == AUTO else None
             if waiting is not None:
                 self.feedback_message = f"{said} waits for the route upload: {waiting}"
                 return
-            self._asking = _Asking(mode, self.commander.set_mode(mode), now)
+            self._asking = _Asking(mode, self.autopilot.set_mode(mode), now)
             self.report(f"{said}: asked" + (" again" if self._refused_at > float("-inf") else ""))
             return
         refusal = _refusal(self.get(blackboard.command_key("DO_SET_MODE")), self._asking.ticket, self.get("/vehicle/statustext"))
@@ -204,9 +204,9 @@ class ArmSwitch(SwitchWatcher):
     """
 
     reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/statustext", blackboard.command_key("COMPONENT_ARM_DISARM"))
-    needs = ("clock", "commander")
+    needs = ("clock", "autopilot")
     clock: Clock
-    commander: Commander
+    autopilot: AutopilotPort
 
     def __init__(self, name: str = "Switch D: arm", confirm_timeout_s: float = 5.0) -> None:
         super().__init__("swd", name)
@@ -225,10 +225,10 @@ class ArmSwitch(SwitchWatcher):
             self.report(f"{said}: already {what}")
             return
         mode = self.get("/vehicle/mode")
-        if arm and mode != self.commander.modes.canonical(ARMABLE_MODE):
+        if arm and mode != self.autopilot.mode_name(ARMABLE_MODE):
             self.report(f"{said}: arming refused: the mode is {mode}; ArduRover arms only in {ARMABLE_MODE} (switch C up)")
             return
-        self._asking = _Asking(what, self.commander.arm() if arm else self.commander.disarm(), self.clock.now())
+        self._asking = _Asking(what, self.autopilot.arm() if arm else self.autopilot.disarm(), self.clock.now())
         self.report(f"{said}: asked to be {what}")
 
     def follow(self) -> None:

@@ -51,7 +51,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     # let "--home -35.36,149.16" through: argparse would take a negative latitude for an option
     parser._negative_number_matcher = re.compile(r"^-\.?\d[\d.,]*$")
     parser.add_argument("--vehicle", choices=sorted(AUTOPILOTS), default="rover", help="vehicle kind (default: %(default)s)")
-    firmware = "the simulated autopilot firmware (default: %(default)s; px4 simulates the vtol)"
+    firmware = "the simulated autopilot firmware (default: %(default)s; px4 simulates the vtol and the rover)"
     parser.add_argument("--autopilot", choices=FIRMWARES, default="ardupilot", help=firmware)
     where = "where to listen: tcpin:HOST:PORT or udpin:HOST:PORT (default: %(default)s, as SITL)"
     parser.add_argument("--mavlink", metavar="URL", default="tcpin:127.0.0.1:5760", help=where)

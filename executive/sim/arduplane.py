@@ -42,7 +42,18 @@ from enum import Enum
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.sim.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
-from executive.sim.autopilot import DEFAULT_HOME, GLOBAL_FRAMES, TARGET_REPORT_MASK, ArduPilotSim, Command, Home, _e7, _valid_latlon
+from executive.sim.autopilot import (
+    DEFAULT_HOME,
+    GLOBAL_FRAMES,
+    NAVIGATION,
+    RATE_ATTITUDE,
+    TARGET_REPORT_MASK,
+    ArduPilotSim,
+    Command,
+    Home,
+    _e7,
+    _valid_latlon,
+)
 from executive.sim.vehicle import VehicleModel
 from executive.vehicles import PLANE_MODES, VehicleProfile
 
@@ -148,6 +159,17 @@ class QuadPlaneSim(ArduPilotSim):
         if self.mode == self.BOOT_MODE:
             return _M.MAV_STATE_CALIBRATING
         return _M.MAV_STATE_ACTIVE if self.flying else _M.MAV_STATE_STANDBY
+
+    def _control_sensors(self) -> tuple[int, int]:
+        """GCS_Plane::update_vehicle_sensor_status_flags (ArduPlane/GCS_Plane.cpp): which controllers each mode uses."""
+        present = RATE_ATTITUDE | NAVIGATION | _M.MAV_SYS_STATUS_SENSOR_Z_ALTITUDE_CONTROL
+        if self.mode in self.AUTOPILOT_MODES:  # AUTO, RTL, LOITER, GUIDED, CIRCLE, QRTL... (and the newer TAKEOFF, THERMAL)
+            return present, present
+        if self.mode in ("ACRO", "QACRO"):
+            return present, _M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL
+        if self.mode in ("MANUAL", "INITIALISING"):
+            return present, 0
+        return present, RATE_ATTITUDE  # the stabilised modes, Q modes included
 
     def _throttle(self) -> float:
         if not self.armed or not self.flying:

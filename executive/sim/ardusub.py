@@ -28,6 +28,7 @@ from executive.sim.autopilot import (
     DEFAULT_INTERVALS,
     GLOBAL_FRAMES,
     POS_BITS,
+    RATE_ATTITUDE,
     TARGET_REPORT_MASK,
     ArduPilotSim,
     Command,
@@ -106,6 +107,13 @@ class ArduSubSim(ArduPilotSim):
         if not self.booted:
             return _M.MAV_STATE_BOOT
         return _M.MAV_STATE_ACTIVE if self.armed else _M.MAV_STATE_STANDBY
+
+    def _control_sensors(self) -> tuple[int, int]:
+        """ArduSub/GCS_Sub.cpp: rate, attitude and yaw control always; depth and position control in the modes that hold them."""
+        depth_position = _M.MAV_SYS_STATUS_SENSOR_Z_ALTITUDE_CONTROL | _M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL
+        always = RATE_ATTITUDE | _M.MAV_SYS_STATUS_SENSOR_YAW_POSITION
+        holding = self.mode in ("ALT_HOLD", "AUTO", "GUIDED", "CIRCLE", "SURFACE", "POSHOLD", "SURFTRAK")
+        return always | depth_position, always | (depth_position if holding else 0)
 
     def _throttle(self) -> float:
         if not self.armed:

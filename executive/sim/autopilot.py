@@ -43,7 +43,6 @@ EKF_FLAGS_WAITING = 0xA7  # attitude, velocities, vertical position, constant-po
 WAITING_REL_ALT_M = 9.7  # the wrong altitude GLOBAL_POSITION_INT carries before the EKF has an origin
 PREARM_AHRS = "AHRS: not using configured AHRS type"
 PREARM_REPORT_S = 30.0  # a disarmed ArduPilot repeats its failing pre-arm checks this often
-PREARM_BIT_LEAD_S = 10.0  # quirk: SYS_STATUS says "pre-arm healthy" this long before arming is possible
 BATTERY_MAH = 10000.0
 RELAYS = 16  # ArduPilot 4.5: RELAY1..RELAY16 (AP_Relay)
 BATTERY_FULL_V, BATTERY_EMPTY_V, BATTERY_SAG_V_PER_A = 12.6, 10.5, 0.03
@@ -59,13 +58,18 @@ POS_BITS = _M.POSITION_TARGET_TYPEMASK_X_IGNORE | _M.POSITION_TARGET_TYPEMASK_Y_
 ACC_BITS = _M.POSITION_TARGET_TYPEMASK_AX_IGNORE | _M.POSITION_TARGET_TYPEMASK_AY_IGNORE | _M.POSITION_TARGET_TYPEMASK_AZ_IGNORE
 TARGET_REPORT_MASK = 0xFDF8  # what ArduRover puts in POSITION_TARGET_GLOBAL_INT: position only
 
+# SYS_STATUS bits (GCS::update_sensor_status_flags, libraries/GCS_MAVLink/GCS.cpp): the sensors every simulated
+# ArduPilot has and keeps healthy (a GPS with a 3D fix from the start, no safety switch, RC seen)...
 SENSORS = (
-    _M.MAV_SYS_STATUS_SENSOR_3D_GYRO | _M.MAV_SYS_STATUS_SENSOR_3D_ACCEL | _M.MAV_SYS_STATUS_SENSOR_3D_MAG
-    | _M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_GPS | _M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL
-    | _M.MAV_SYS_STATUS_SENSOR_ATTITUDE_STABILIZATION | _M.MAV_SYS_STATUS_SENSOR_YAW_POSITION
-    | _M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL | _M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS | _M.MAV_SYS_STATUS_SENSOR_RC_RECEIVER
-    | _M.MAV_SYS_STATUS_AHRS | _M.MAV_SYS_STATUS_SENSOR_BATTERY | _M.MAV_SYS_STATUS_PREARM_CHECK
+    _M.MAV_SYS_STATUS_SENSOR_3D_MAG | _M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_GPS
+    | _M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS | _M.MAV_SYS_STATUS_SENSOR_RC_RECEIVER | _M.MAV_SYS_STATUS_SENSOR_BATTERY
 )  # fmt: skip
+# ... the inertial sensors (not enabled while they calibrate at boot) and the AHRS (enabled once initialised,
+# healthy with the EKF: NavEKF3_core::healthy, libraries/AP_NavEKF3/AP_NavEKF3_Control.cpp)...
+STARTED_AFTER_BOOT = _M.MAV_SYS_STATUS_SENSOR_3D_GYRO | _M.MAV_SYS_STATUS_SENSOR_3D_ACCEL | _M.MAV_SYS_STATUS_AHRS
+# ... and the controllers the mode uses (each firmware's update_vehicle_sensor_status_flags).
+RATE_ATTITUDE = _M.MAV_SYS_STATUS_SENSOR_ANGULAR_RATE_CONTROL | _M.MAV_SYS_STATUS_SENSOR_ATTITUDE_STABILIZATION
+NAVIGATION = _M.MAV_SYS_STATUS_SENSOR_YAW_POSITION | _M.MAV_SYS_STATUS_SENSOR_XY_POSITION_CONTROL
 
 _STREAM_S = 0.25  # ArduRover's telemetry arrives at ~4 Hz without being asked
 #: Messages sent unasked, with their default interval (s). Others are sent only on request.
@@ -519,15 +523,34 @@ class ArduPilotSim(ABC):
             base_mode |= _M.MAV_MODE_FLAG_SAFETY_ARMED
         return self._mav.heartbeat_encode(self.profile.mav_type, _M.MAV_AUTOPILOT_ARDUPILOTMEGA, base_mode, self.mode_number, self._system_status())
 
+    def sensor_status(self) -> tuple[int, int, int]:
+        """SYS_STATUS present, enabled and health bits, from the firmware's state (libraries/GCS_MAVLink/GCS.cpp).
+
+        The pre-arm bit is healthy exactly when armed or when the pre-arm checks pass (AP_Notify's
+        pre_arm_check, set from AP_Arming::pre_arm_checks once a second in Rover.cpp, Plane.cpp...):
+        a ground station's "armable" never says yes while arming would be refused.
+        """
+        present = SENSORS | STARTED_AFTER_BOOT | _M.MAV_SYS_STATUS_PREARM_CHECK
+        enabled = health = SENSORS
+        enabled |= _M.MAV_SYS_STATUS_PREARM_CHECK  # ARMING_CHECK enables all checks
+        if self.booted:
+            enabled |= STARTED_AFTER_BOOT
+            health |= STARTED_AFTER_BOOT
+        if self.armed or not self._prearm_failures():
+            health |= _M.MAV_SYS_STATUS_PREARM_CHECK
+        controls, enabled_controls = self._control_sensors()
+        return present | controls, enabled | enabled_controls, health | enabled_controls
+
+    def _control_sensors(self) -> tuple[int, int]:
+        """The controllers this firmware reports (present) and those the current mode uses (enabled and healthy)."""
+        return 0, 0
+
     def _msg_sys_status(self) -> MAVLinkMessage:
-        health = SENSORS
-        if self.elapsed_s < self.ekf_ready_after_s - PREARM_BIT_LEAD_S:
-            health &= ~_M.MAV_SYS_STATUS_PREARM_CHECK
         current = self._current_a()
         remaining = max(0.0, 1.0 - self.consumed_mah / BATTERY_MAH)
         volts = BATTERY_EMPTY_V + (BATTERY_FULL_V - BATTERY_EMPTY_V) * remaining - BATTERY_SAG_V_PER_A * current
         battery = (round(volts * 1000), round(current * 100), round(remaining * 100))
-        return self._mav.sys_status_encode(SENSORS, SENSORS, health, 150, *battery, 0, 0, 0, 0, 0, 0)
+        return self._mav.sys_status_encode(*self.sensor_status(), 150, *battery, 0, 0, 0, 0, 0, 0)
 
     def _msg_gps_raw_int(self) -> MAVLinkMessage:
         v = self.vehicle
@@ -793,6 +816,15 @@ class ArduRoverSim(ArduPilotSim):
         if self.mode == self.BOOT_MODE:
             return _M.MAV_STATE_CALIBRATING
         return _M.MAV_STATE_STANDBY if self.mode == "HOLD" else _M.MAV_STATE_ACTIVE
+
+    def _control_sensors(self) -> tuple[int, int]:
+        """GCS_Rover::update_vehicle_sensor_status_flags (Rover/GCS_Rover.cpp): rate and attitude control in the
+        modes that stabilise the heading (all but MANUAL, HOLD and INITIALISING: Rover/mode.h), yaw and position
+        control in the autopilot modes."""
+        enabled = RATE_ATTITUDE if self.mode not in ("MANUAL", "HOLD", "INITIALISING") else 0
+        if self.mode in self.AUTOPILOT_MODES:
+            enabled |= NAVIGATION
+        return RATE_ATTITUDE | NAVIGATION, enabled
 
     def _throttle(self) -> float:
         return min(1.0, abs(self.vehicle.speed_m_s) / self.limits.max_m_s) if self.armed else 0.0

@@ -342,6 +342,14 @@ class FaultInjector:
                 elif isinstance(f, GpsGlitch):
                     msg.flags |= _M.EKF_GPS_GLITCHING
                     msg.pos_horiz_variance = max(msg.pos_horiz_variance, GLITCH_POS_VARIANCE)
+        elif kind == "ESTIMATOR_STATUS":  # PX4's estimator health: innovation test ratios (the position loss is the autopilot's own)
+            for f in active:
+                if isinstance(f, EkfDegradation):
+                    for field in ("vel_ratio", "pos_horiz_ratio", "pos_vert_ratio", "mag_ratio"):
+                        setattr(msg, field, max(getattr(msg, field), f.variance))
+                elif isinstance(f, GpsGlitch):
+                    msg.flags |= _M.ESTIMATOR_GPS_GLITCH
+                    msg.pos_horiz_ratio = max(msg.pos_horiz_ratio, GLITCH_POS_VARIANCE)
         elif kind == "RC_CHANNELS" and any(isinstance(f, RcLoss) for f in active):
             msg.chancount, msg.rssi = 0, 0
             for n in range(1, 19):
@@ -349,6 +357,9 @@ class FaultInjector:
         elif kind == "SYS_STATUS":
             if any(isinstance(f, RcLoss) for f in active):
                 msg.onboard_control_sensors_health &= ~_M.MAV_SYS_STATUS_SENSOR_RC_RECEIVER
+            if any(isinstance(f, EkfDegradation) and f.variance > 1.0 for f in active):
+                # every test ratio over 1: NavEKF3_core::healthy() is false, and with it the AHRS bit (GCS.cpp)
+                msg.onboard_control_sensors_health &= ~_M.MAV_SYS_STATUS_AHRS
             for f in active:
                 if isinstance(f, BatterySag):
                     if msg.voltage_battery != 65535:  # 65535: voltage unknown

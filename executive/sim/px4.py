@@ -1,10 +1,10 @@
-"""PX4 as the simulated vehicles' autopilot: a standard VTOL flying the simulated QuadPlane airframe.
+"""PX4 as the simulated vehicles' autopilot: a standard VTOL (the simulated QuadPlane airframe) and a rover.
 
 It reuses the simulated ArduPilot's machinery (clock, vehicle models, telemetry streams, mission
 store, fault injection) and replaces what PX4 does differently, as PX4 main (2025) behaved over
 MAVLink (issue 12) and as its source reads:
 
-- HEARTBEAT autopilot 12 (MAV_AUTOPILOT_PX4), type 22 for a standard VTOL; ``custom_mode`` packs
+- HEARTBEAT autopilot 12 (MAV_AUTOPILOT_PX4), type 22 for a standard VTOL, 10 for a rover; ``custom_mode`` packs
   the main mode in bits 16-23 and the sub mode in bits 24-31; it sits in AUTO.LOITER (0x03040000)
   from boot, on the ground too.
 - Commands go from the MAVLink receiver to the commander (src/modules/mavlink/mavlink_receiver.cpp,
@@ -34,6 +34,10 @@ MAVLink (issue 12) and as its source reads:
 - MAV_CMD_DO_VTOL_TRANSITION in flight: EXTENDED_SYS_STATE vtol_state 3 (MC) -> 1 (TRANSITION_TO_FW)
   -> 4 (FW) once the airspeed reaches ~9.7 m/s (as the real standard VTOL did), and 2
   (TRANSITION_TO_MC) -> 3 back. In FW, holding a point is circling it at NAV_LOITER_RAD (80 m).
+- It watches the HEARTBEATs of ground stations and mission computers (Commander::dataLinkCheck): after
+  COM_DL_LOSS_T (10 s) without one from a GCS, "Connection to ground station lost"; after COM_OBC_LOSS_T
+  (5 s) without one from an onboard controller (the executive), "Connection to mission computer lost";
+  each says "... regained" when they resume. With NAV_DLL_ACT at its default (disabled) nothing else happens.
 - Messages outside the ardupilotmega dialect go out as raw MAVLink 2 frames (CURRENT_EVENT_SEQUENCE
   411, TIME_ESTIMATE_TO_TARGET 380), and OPEN_DRONE_ID_LOCATION; STATUSTEXTs over 50 bytes go in
   chunks sharing an ``id`` (``chunk_seq`` 0, 1...).
@@ -48,8 +52,10 @@ from __future__ import annotations
 import dataclasses
 import math
 import struct
+from abc import abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
+from typing import ClassVar
 
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
@@ -57,7 +63,7 @@ from executive.io.mavlink.modes import PX4_MODES
 from executive.sim.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
 from executive.sim.autopilot import DEFAULT_HOME, ArduPilotSim, Command, Home, _e7, _valid_latlon
 from executive.sim.mission_store import MissionState, MissionStore
-from executive.sim.vehicle import VehicleModel
+from executive.sim.vehicle import ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.vehicles import VehicleProfile
 
 _M = mavlink
@@ -77,6 +83,8 @@ RTL_RETURN_ALT = 60.0  # RTL flies home at least this high
 TRANSITION_AIRSPEED_M_S = 9.7  # the real standard VTOL's front transition ended at ~9.7 m/s (issue 12)
 VT_B_TRANS_DUR = 4.0  # back transition: at most this long
 MISSION_CHECK_S = 1.0  # after an upload, AUTO.MISSION is refused this long (issue 12)
+COM_DL_LOSS_T = 10.0  # no ground-station HEARTBEAT this long: "Connection to ground station lost"
+COM_OBC_LOSS_T = 5.0  # no onboard-computer HEARTBEAT this long: "Connection to mission computer lost"
 DISARMED_TIMEOUT_S = math.inf
 
 #: PX4 mode name -> custom_mode, as the executive's mode table numbers them.
@@ -102,10 +110,12 @@ ESTIMATOR_OK = (
     | _M.ESTIMATOR_POS_HORIZ_ABS | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_PRED_POS_HORIZ_REL | _M.ESTIMATOR_PRED_POS_HORIZ_ABS
 )  # fmt: skip
 ESTIMATOR_NO_POSITION = _M.ESTIMATOR_ATTITUDE | _M.ESTIMATOR_VELOCITY_VERT | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_CONST_POS_MODE
+# SYS_STATUS (src/modules/mavlink/streams/SYS_STATUS.hpp): each component's present/enabled/health from the health
+# report; the AHRS bit is the local position estimate; the pre-arm bit is only ever set in the health field.
 SENSORS = (
     _M.MAV_SYS_STATUS_SENSOR_3D_GYRO | _M.MAV_SYS_STATUS_SENSOR_3D_ACCEL | _M.MAV_SYS_STATUS_SENSOR_3D_MAG
     | _M.MAV_SYS_STATUS_SENSOR_ABSOLUTE_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_DIFFERENTIAL_PRESSURE | _M.MAV_SYS_STATUS_SENSOR_GPS
-    | _M.MAV_SYS_STATUS_AHRS | _M.MAV_SYS_STATUS_SENSOR_BATTERY | _M.MAV_SYS_STATUS_PREARM_CHECK
+    | _M.MAV_SYS_STATUS_AHRS | _M.MAV_SYS_STATUS_SENSOR_BATTERY | _M.MAV_SYS_STATUS_SENSOR_MOTOR_OUTPUTS
 )  # fmt: skip
 POSITION_SENSORS = _M.MAV_SYS_STATUS_SENSOR_GPS | _M.MAV_SYS_STATUS_AHRS  # healthy only with a position estimate
 
@@ -124,6 +134,12 @@ PX4_INTERVALS: Mapping[int, float] = MappingProxyType({
     _M.MAVLINK_MSG_ID_MISSION_CURRENT: 1.0, _M.MAVLINK_MSG_ID_POSITION_TARGET_GLOBAL_INT: 1.0,
     _M.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT: 1.0, _M.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW: 1.0,
     _M.MAVLINK_MSG_ID_OPEN_DRONE_ID_LOCATION: 1.0, CURRENT_EVENT_SEQUENCE[0]: 1.0, TIME_ESTIMATE_TO_TARGET[0]: 1.0,
+})  # fmt: skip
+
+#: HEARTBEAT type -> what the commander says when its heartbeats stop, and when they come back (Commander.cpp).
+LINK_LOSS_TEXTS: Mapping[int, tuple[str, str]] = MappingProxyType({
+    _M.MAV_TYPE_GCS: ("Connection to ground station lost", "GCS connection regained"),
+    _M.MAV_TYPE_ONBOARD_CONTROLLER: ("Connection to mission computer lost", "Onboard controller regained"),
 })  # fmt: skip
 
 _TYPES = {"uint8_t": "B", "int8_t": "b", "uint16_t": "H", "int16_t": "h", "uint32_t": "I", "int32_t": "i", "float": "f"}
@@ -170,7 +186,7 @@ class Px4MissionStore(MissionStore):
 
 
 class Px4Sim(ArduPilotSim):
-    """PX4 on a standard VTOL (see the module's docstring for what differs from ArduPilot).
+    """What every simulated PX4 does alike (see the module's docstring); a subclass per airframe moves its vehicle model.
 
     ``home_amsl_m`` is the start point's altitude above sea level (NAV_TAKEOFF's param7 counts from
     sea level). Like every simulated autopilot, :meth:`handle` and :meth:`update` return what to send.
@@ -183,8 +199,9 @@ class Px4Sim(ArduPilotSim):
     STREAMS = PX4_INTERVALS
     MISSION_STORE = Px4MissionStore
     AUTOPILOT_MODES = frozenset({"AUTO.LOITER", "AUTO.MISSION", "AUTO.RTL", "AUTO.LAND", "AUTO.TAKEOFF", "OFFBOARD"})
-
-    vehicle: QuadPlaneModel
+    MAV_TYPE: ClassVar[int]
+    FLIES: ClassVar[bool]  # takes off and lands (mission take-off and landing items are passed over otherwise)
+    UNAVAILABLE_MODES: ClassVar[frozenset[str]] = frozenset()  # modes this airframe has not
 
     def __init__(
         self,
@@ -194,14 +211,10 @@ class Px4Sim(ArduPilotSim):
         *,
         home_amsl_m: float = HOME_AMSL_M,
         ekf_ready_after_s: float = ESTIMATOR_READY_S,
-        limits: AircraftLimits = QUADPLANE_LIMITS,
         **options: float,
     ) -> None:
         self.home_amsl_m = home_amsl_m
-        self._limits = limits
         self._pending: list[tuple[Command, tuple[int, int]]] = []  # commands for the commander's next loop
-        self._vtol = _M.MAV_VTOL_STATE_MC
-        self._back_started = 0.0
         self._goal: tuple[float, float, float] | None = None  # lat, lon, height above home the mode flies to
         self._goal_radius = NAV_LOITER_RAD
         self._landing = False
@@ -215,19 +228,13 @@ class Px4Sim(ArduPilotSim):
         self._landed_at: float | None = None
         self._mission_item: tuple[int | None, object] | None = None
         self._event_sequence = 0
+        # Commander::dataLinkCheck: HEARTBEAT type -> (last seen, lost), for a ground station and a mission computer
+        self._links: dict[int, tuple[float, bool]] = {}
         modes = MappingProxyType(dict(PX4_MODE_NUMBERS))
-        profile = dataclasses.replace(profile, mav_type=MAV_TYPE_VTOL_FIXEDROTOR, modes=modes)
+        profile = dataclasses.replace(profile, mav_type=self.MAV_TYPE, modes=modes)
         super().__init__(profile, clock, home, ekf_ready_after_s=ekf_ready_after_s, **options)
 
-    def _make_vehicle(self, home: Home) -> VehicleModel:
-        return QuadPlaneModel(home[0], home[1], home[2], self._limits)
-
     # -- the state PX4 reports ---------------------------------------------------------------------
-
-    @property
-    def vtol_state(self) -> int:
-        """EXTENDED_SYS_STATE vtol_state (MAV_VTOL_STATE)."""
-        return self._vtol
 
     @property
     def landed(self) -> bool:
@@ -259,22 +266,6 @@ class Px4Sim(ArduPilotSim):
             return _M.MAV_STATE_CRITICAL
         return _M.MAV_STATE_ACTIVE if self.armed else _M.MAV_STATE_STANDBY
 
-    def _throttle(self) -> float:
-        if not self.armed or self._landed:
-            return 0.0
-        if self.vehicle.regime is Regime.MULTICOPTER:
-            return 0.5
-        return min(1.0, 0.3 + 0.5 * self.vehicle.speed_m_s / self._limits.cruise_m_s)
-
-    def _servo_outputs(self) -> Sequence[int]:
-        """MAIN1-4 the lift motors, MAIN5 the pusher."""
-        outputs = [0] * 16
-        flying = self.armed and not self._landed
-        lifting = flying and self._vtol != _M.MAV_VTOL_STATE_FW
-        outputs[0:4] = [1500 if lifting else 900] * 4
-        outputs[4] = round(1000 + 1000 * self._throttle()) if flying and self.vehicle.regime is Regime.FIXED_WING else 1000
-        return outputs
-
     def _desired_location(self) -> tuple[float, float] | None:
         return None if self._goal is None else self._goal[:2]
 
@@ -282,7 +273,7 @@ class Px4Sim(ArduPilotSim):
 
     def _can_run(self, mode: str) -> bool:
         """The mode's requirements (ModeChecks): what makes "Switching to X is currently not available"."""
-        if mode in PILOT_MODES or mode in NOT_SIMULATED or mode not in PX4_MODE_NUMBERS:
+        if mode in PILOT_MODES or mode in NOT_SIMULATED or mode in self.UNAVAILABLE_MODES or mode not in PX4_MODE_NUMBERS:
             return False
         if not self.position_ok:
             return False
@@ -335,7 +326,7 @@ class Px4Sim(ArduPilotSim):
                 self._takeoff_alt = MIS_TAKEOFF_ALT
             self._goal = (v.lat, v.lon, max(self._takeoff_alt, v.alt_m))
             if self.armed:
-                v.hover_at(*self._goal)
+                self._steer()
         elif mode == "OFFBOARD":
             if self._offboard_goal is not None:
                 self._fly_to(*self._offboard_goal)
@@ -348,13 +339,6 @@ class Px4Sim(ArduPilotSim):
 
     # -- where the vehicle goes ------------------------------------------------------------------
 
-    def _hold_here(self) -> None:
-        v = self.vehicle
-        if self._vtol == _M.MAV_VTOL_STATE_FW:
-            self._fly_to(v.lat, v.lon, v.alt_m)
-        else:
-            self._fly_to(*v.stopping_point(), v.alt_m)
-
     def _fly_to(self, lat: float, lon: float, alt: float, radius: float = NAV_LOITER_RAD) -> None:
         """Go to a point and hold there: hover over it (multicopter) or circle it (fixed wing)."""
         self._goal, self._goal_radius = (lat, lon, max(0.0, alt)), radius
@@ -362,57 +346,43 @@ class Px4Sim(ArduPilotSim):
             return  # the navigator does not take off to go somewhere
         self._steer()
 
-    def _steer(self) -> None:
-        """Give the airframe the order that takes it to the goal in the present VTOL state."""
-        v, goal = self.vehicle, self._goal
-        if goal is None or self._landing:
-            return
-        if self._vtol == _M.MAV_VTOL_STATE_FW:
-            v.orbit(*goal, self._goal_radius)
-        elif self._vtol == _M.MAV_VTOL_STATE_TRANSITION_TO_FW:
-            v.cruise(goal[2])
-        elif self._vtol == _M.MAV_VTOL_STATE_TRANSITION_TO_MC:
-            v.hover_at(*v.stopping_point(), goal[2])
-        else:
-            v.hover_at(*goal)
-
-    def _start_landing(self) -> None:
-        if self._vtol in (_M.MAV_VTOL_STATE_FW, _M.MAV_VTOL_STATE_TRANSITION_TO_FW):
-            self._back_transition()  # a VTOL lands on its lift motors
-        self._landing = True
-        self._goal = None
-        if not self._landed:
-            self.vehicle.land()
-
     # -- transitions (vtol_att_control) ----------------------------------------------------------
 
-    def _front_transition(self) -> None:
-        if self._vtol in (_M.MAV_VTOL_STATE_MC, _M.MAV_VTOL_STATE_TRANSITION_TO_MC):
-            self._vtol = _M.MAV_VTOL_STATE_TRANSITION_TO_FW
-            self._text(_M.MAV_SEVERITY_INFO, "Transition to fixed-wing")
-            self._steer()
+    # -- the airframe (each PX4 vehicle's own) --------------------------------------------------
 
-    def _back_transition(self) -> None:
-        if self._vtol in (_M.MAV_VTOL_STATE_FW, _M.MAV_VTOL_STATE_TRANSITION_TO_FW):
-            self._vtol, self._back_started = _M.MAV_VTOL_STATE_TRANSITION_TO_MC, self.elapsed_s
-            self._text(_M.MAV_SEVERITY_INFO, "Transition to multicopter")
-            self._steer()
+    @property
+    def vtol_state(self) -> int:
+        """EXTENDED_SYS_STATE vtol_state (MAV_VTOL_STATE): UNDEFINED but on a VTOL."""
+        return _M.MAV_VTOL_STATE_UNDEFINED
 
-    def _update_transition(self) -> None:
-        v = self.vehicle
-        if self._vtol == _M.MAV_VTOL_STATE_TRANSITION_TO_FW and v.speed_m_s >= TRANSITION_AIRSPEED_M_S:
-            self._vtol = _M.MAV_VTOL_STATE_FW
-            self._text(_M.MAV_SEVERITY_INFO, "Transition to fixed-wing complete")
-            self._steer()
-        elif self._vtol == _M.MAV_VTOL_STATE_TRANSITION_TO_MC and (
-            v.speed_m_s <= self._limits.mc_speed_m_s or self.elapsed_s - self._back_started >= VT_B_TRANS_DUR
-        ):
-            self._vtol = _M.MAV_VTOL_STATE_MC
-            self._text(_M.MAV_SEVERITY_INFO, "Transition to multicopter complete")
-            if self._landing:
-                v.land()
-            else:
-                self._steer()
+    @abstractmethod
+    def _hold_here(self) -> None:
+        """Stop where the vehicle can, and hold there (sets the goal)."""
+
+    @abstractmethod
+    def _steer(self) -> None:
+        """Give the vehicle model the order that takes it to the goal."""
+
+    @abstractmethod
+    def _start_landing(self) -> None:
+        """Land (or stop) where the vehicle is."""
+
+    @abstractmethod
+    def _detect_landed(self) -> bool:
+        """The land detector's verdict now."""
+
+    @abstractmethod
+    def _reached(self, lat: float, lon: float, alt: float) -> bool:
+        """A mission waypoint is reached."""
+
+    def _update_airframe(self) -> None:
+        """What the airframe does on its own each step (transitions)."""
+
+    def _update_return(self, lat: float, lon: float) -> None:
+        """On the way home (RTL) or to a mission landing point: land once over it."""
+
+    def _transition_to(self, state: int) -> None:
+        """A VTOL transition (MAV_VTOL_STATE_FW or _MC); nothing on other airframes."""
 
     # -- the commander's loop --------------------------------------------------------------------
 
@@ -427,27 +397,25 @@ class Px4Sim(ArduPilotSim):
 
     def _update_mode(self) -> None:
         v = self.vehicle
+        self._update_links()
         self._update_land_detector()
         if not self.armed:
             return
-        self._update_transition()
+        self._update_airframe()
         self._update_offboard_failsafe()
         if self.mode == "AUTO.TAKEOFF" and self._goal is not None and v.alt_m >= self._goal[2] - 0.5 and not self._landed:
             self._takeoff_alt, there = None, self._goal
             self._switch("AUTO.LOITER")  # the takeoff is done: loiter there (Commander::checkForMissionUpdate)
             self._fly_to(*there)
         elif self.mode == "AUTO.RTL" and not self._landing and self.home is not None:
-            if self._vtol == _M.MAV_VTOL_STATE_FW and v.distance_to(*self.home) <= self._goal_radius * 1.1:
-                self._back_transition()
-            elif self._vtol == _M.MAV_VTOL_STATE_MC and v.arrived:
-                self._start_landing()
+            self._update_return(*self.home)
         elif self.mode == "AUTO.MISSION":
             self._update_mission()
         self._auto_disarm()
 
     def _update_land_detector(self) -> None:
         v = self.vehicle
-        landed = v.on_ground and not (self.armed and v.velocity_ned[2] < -0.1)
+        landed = self._detect_landed()
         if self.armed and landed and not self._landed and self._taken_off:
             self._text(_M.MAV_SEVERITY_INFO, "Landing detected")
             self._landed_at = self.elapsed_s
@@ -456,8 +424,6 @@ class Px4Sim(ArduPilotSim):
             self._taken_off = True
             self.home = self.home or (v.lat, v.lon)
         self._landed = landed
-        if landed and self._vtol != _M.MAV_VTOL_STATE_MC:
-            self._vtol = _M.MAV_VTOL_STATE_MC
 
     def _auto_disarm(self) -> None:
         if not self._taken_off and self.elapsed_s - self._armed_at >= COM_DISARM_PRFLT:
@@ -490,10 +456,10 @@ class Px4Sim(ArduPilotSim):
         started = self._mission_item == key
         self._mission_item = key
         cmd = item.command
-        if cmd in (_M.MAV_CMD_NAV_TAKEOFF, _M.MAV_CMD_NAV_VTOL_TAKEOFF):
+        if cmd in (_M.MAV_CMD_NAV_TAKEOFF, _M.MAV_CMD_NAV_VTOL_TAKEOFF) and self.FLIES:
             if not started:
                 self._goal = (v.lat, v.lon, alt)
-                v.hover_at(*self._goal)
+                self._steer()
             elif v.alt_m >= alt - 0.5:
                 self.mission.advance()
         elif cmd == _M.MAV_CMD_NAV_WAYPOINT or cmd == _M.MAV_CMD_NAV_LOITER_UNLIM:
@@ -501,34 +467,20 @@ class Px4Sim(ArduPilotSim):
                 self._fly_to(lat, lon, alt)
             elif cmd == _M.MAV_CMD_NAV_WAYPOINT and self._reached(lat, lon, alt):
                 self.mission.advance()
-        elif cmd in (_M.MAV_CMD_NAV_LAND, _M.MAV_CMD_NAV_VTOL_LAND):
+        elif cmd in (_M.MAV_CMD_NAV_LAND, _M.MAV_CMD_NAV_VTOL_LAND) and self.FLIES:
             if not started:
                 self._fly_to(lat, lon, v.alt_m)
-            elif not self._landing and self._vtol == _M.MAV_VTOL_STATE_FW and v.distance_to(lat, lon) <= self._goal_radius * 1.1:
-                self._back_transition()
-            elif not self._landing and self._vtol == _M.MAV_VTOL_STATE_MC and v.distance_to(lat, lon) <= NAV_ACC_RAD and v.arrived:
-                self._start_landing()
             elif self._landing and self._landed:
                 self.mission.advance()
-        elif cmd == _M.MAV_CMD_DO_VTOL_TRANSITION:
+            elif not self._landing:
+                self._update_return(lat, lon)  # over the point: land there
+        elif cmd == _M.MAV_CMD_DO_VTOL_TRANSITION and self.vtol_state != _M.MAV_VTOL_STATE_UNDEFINED:
             if not started:
                 self._transition_to(int(item.params[0] + 0.5))
-            elif self._vtol in (_M.MAV_VTOL_STATE_MC, _M.MAV_VTOL_STATE_FW):
+            elif self.vtol_state in (_M.MAV_VTOL_STATE_MC, _M.MAV_VTOL_STATE_FW):
                 self.mission.advance()
         else:  # not simulated: passed over
             self.mission.advance()
-
-    def _reached(self, lat: float, lon: float, alt: float) -> bool:
-        v = self.vehicle
-        if self._vtol == _M.MAV_VTOL_STATE_FW:
-            return v.distance_to(lat, lon) <= self._goal_radius * 1.1
-        return v.distance_to(lat, lon) <= NAV_ACC_RAD and abs(v.alt_m - alt) <= 1.0
-
-    def _transition_to(self, state: int) -> None:
-        if state == _M.MAV_VTOL_STATE_FW:
-            self._front_transition()
-        else:
-            self._back_transition()
 
     # -- time-driven behaviour -------------------------------------------------------------------
 
@@ -548,7 +500,25 @@ class Px4Sim(ArduPilotSim):
             **super()._message_handlers(),
             "SET_POSITION_TARGET_LOCAL_NED": self._on_setpoint,
             "SET_POSITION_TARGET_GLOBAL_INT": self._on_setpoint,
+            "HEARTBEAT": self._on_heartbeat,
         }
+
+    def _on_heartbeat(self, msg: MAVLinkMessage) -> None:
+        """Commander::dataLinkCheck: a ground station's or a mission computer's HEARTBEAT keeps its link up."""
+        if msg.type not in LINK_LOSS_TEXTS:
+            return
+        _, lost = self._links.get(msg.type, (0.0, False))
+        if lost:
+            self._text(_M.MAV_SEVERITY_INFO, LINK_LOSS_TEXTS[msg.type][1])
+        self._links[msg.type] = (self.elapsed_s, False)
+
+    def _update_links(self) -> None:
+        for kind, (seen_at, lost) in self._links.items():
+            timeout = COM_DL_LOSS_T if kind == _M.MAV_TYPE_GCS else COM_OBC_LOSS_T
+            if not lost and self.elapsed_s - seen_at > timeout:
+                self._links[kind] = (seen_at, True)
+                severity = _M.MAV_SEVERITY_INFO if kind == _M.MAV_TYPE_GCS else _M.MAV_SEVERITY_CRITICAL
+                self._text(severity, LINK_LOSS_TEXTS[kind][0])
 
     def _on_command(self, msg: MAVLinkMessage) -> None:
         if msg.command in RECEIVER_COMMANDS:
@@ -568,13 +538,14 @@ class Px4Sim(ArduPilotSim):
 
     def _on_setpoint(self, msg: MAVLinkMessage) -> None:
         """SET_POSITION_TARGET_*: any setpoint keeps the offboard signal alive; in OFFBOARD a position is flown to."""
-        values = (msg.vx, msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw)
+        local = msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED"
+        values = (msg.vx, msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, *((msg.x, msg.y, msg.z) if local else (msg.alt,)))
         if not all(math.isfinite(value) for value in values):
-            return  # mavlink_receiver.cpp: only finite setpoints are taken
+            return  # mavlink_receiver.cpp: a setpoint with any non-finite value is dropped whole, ignored fields too
         goal = None
         if not msg.type_mask & 0x7:  # any position bit set: the position is ignored
-            if msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
-                if msg.coordinate_frame != _M.MAV_FRAME_LOCAL_NED or not all(map(math.isfinite, (msg.x, msg.y, msg.z))):
+            if local:
+                if msg.coordinate_frame != _M.MAV_FRAME_LOCAL_NED:
                     return
                 lat, lon = self.vehicle._latlon(msg.x, msg.y)
                 goal = (lat, lon, -msg.z)
@@ -600,7 +571,6 @@ class Px4Sim(ArduPilotSim):
             _M.MAV_CMD_NAV_LAND: lambda cmd: self._mode_command("AUTO.LAND", "Landing at current position"),
             _M.MAV_CMD_NAV_RETURN_TO_LAUNCH: lambda cmd: self._mode_command("AUTO.RTL", "Returning to launch"),
             _M.MAV_CMD_DO_REPOSITION: self._cmd_reposition,
-            _M.MAV_CMD_DO_VTOL_TRANSITION: self._cmd_vtol_transition,
             _M.MAV_CMD_MISSION_START: self._cmd_mission_start,
         }
 
@@ -669,7 +639,9 @@ class Px4Sim(ArduPilotSim):
         return _M.MAV_RESULT_ACCEPTED if self.request_mode("AUTO.TAKEOFF") else _M.MAV_RESULT_TEMPORARILY_REJECTED
 
     def _cmd_reposition(self, cmd: Command) -> int:
-        """Commander.cpp: only with the change-mode flag (and no other bit); the navigator flies there in AUTO.LOITER."""
+        """Commander.cpp: only with the change-mode flag (and no other bit); the navigator flies there in AUTO.LOITER.
+
+        Latitude and longitude NaN keep the position (navigator_main.cpp)."""
         flags = int(cmd.params[1])
         if not flags & _M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE or flags & ~_M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE:
             return _M.MAV_RESULT_UNSUPPORTED
@@ -679,23 +651,10 @@ class Px4Sim(ArduPilotSim):
         lat, lon = cmd.lat_lon
         if not (math.isfinite(lat) and math.isfinite(lon)) or not _valid_latlon(lat, lon):
             lat, lon = v.lat, v.lon
-        alt = cmd.params[6]
-        if not math.isfinite(alt):
-            alt = v.alt_m
-        elif cmd.frame in (_M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT) or not cmd.is_int:
-            alt -= self.home_amsl_m  # an altitude above sea level (always, in a COMMAND_LONG)
+        # navigator_main.cpp: param7 is the altitude above sea level whatever the COMMAND_INT's frame (NaN: keep it)
+        alt = cmd.params[6] - self.home_amsl_m if math.isfinite(cmd.params[6]) else v.alt_m
         radius = cmd.params[2] if math.isfinite(cmd.params[2]) and cmd.params[2] > 0 else NAV_LOITER_RAD
         self._fly_to(lat, lon, alt, radius)
-        return _M.MAV_RESULT_ACCEPTED
-
-    def _cmd_vtol_transition(self, cmd: Command) -> int:
-        """vtol_att_control: a transition in flight; refused on the ground and, to fixed wing, in Takeoff, Land and Return."""
-        state = int(cmd.params[0] + 0.5)
-        if state not in (_M.MAV_VTOL_STATE_MC, _M.MAV_VTOL_STATE_FW):
-            return _M.MAV_RESULT_DENIED
-        if self._landed or (state == _M.MAV_VTOL_STATE_FW and self.mode in ("AUTO.TAKEOFF", "AUTO.LAND", "AUTO.RTL")):
-            return _M.MAV_RESULT_TEMPORARILY_REJECTED
-        self._transition_to(state)
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_mission_start(self, cmd: Command) -> int:
@@ -732,16 +691,12 @@ class Px4Sim(ArduPilotSim):
             base_mode |= _M.MAV_MODE_FLAG_SAFETY_ARMED
         return self._mav.heartbeat_encode(self.profile.mav_type, _M.MAV_AUTOPILOT_PX4, base_mode, self.mode_number, self._system_status())
 
-    def _msg_sys_status(self) -> MAVLinkMessage:
-        health = SENSORS
-        if not self.position_ok:
-            health &= ~POSITION_SENSORS
-        if not (self.armed or self.can_arm()):
-            health &= ~_M.MAV_SYS_STATUS_PREARM_CHECK
-        msg = super()._msg_sys_status()
-        msg.onboard_control_sensors_present = msg.onboard_control_sensors_enabled = SENSORS
-        msg.onboard_control_sensors_health = health
-        return msg
+    def sensor_status(self) -> tuple[int, int, int]:
+        """SYS_STATUS present, enabled, health: the pre-arm bit healthy when arming in the current mode would pass."""
+        health = SENSORS if self.position_ok else SENSORS & ~POSITION_SENSORS
+        if self.can_arm():
+            health |= _M.MAV_SYS_STATUS_PREARM_CHECK
+        return SENSORS, SENSORS, health
 
     def _msg_estimator_status(self) -> MAVLinkMessage:
         if self.position_ok:
@@ -805,5 +760,224 @@ class Px4Sim(ArduPilotSim):
         return RawMessage(TIME_ESTIMATE_TO_TARGET[0], TIME_ESTIMATE_TO_TARGET[1], TIME_ESTIMATE_TO_TARGET[2], (-1, -1, -1, -1, -1))
 
 
+class Px4VtolSim(Px4Sim):
+    """PX4 on a standard VTOL, flying the simulated QuadPlane airframe (the ArduPilot VTOL's, for like-for-like runs)."""
+
+    MAV_TYPE = MAV_TYPE_VTOL_FIXEDROTOR
+    FLIES = True
+
+    vehicle: QuadPlaneModel
+
+    def __init__(
+        self, profile: VehicleProfile, clock: Clock, home: Home = DEFAULT_HOME, *, limits: AircraftLimits = QUADPLANE_LIMITS, **options: float
+    ) -> None:
+        self._limits = limits
+        self._vtol = _M.MAV_VTOL_STATE_MC
+        self._back_started = 0.0
+        super().__init__(profile, clock, home, **options)
+
+    def _make_vehicle(self, home: Home) -> VehicleModel:
+        return QuadPlaneModel(home[0], home[1], home[2], self._limits)
+
+    @property
+    def vtol_state(self) -> int:
+        """EXTENDED_SYS_STATE vtol_state (MAV_VTOL_STATE)."""
+        return self._vtol
+
+    def _throttle(self) -> float:
+        if not self.armed or self._landed:
+            return 0.0
+        if self.vehicle.regime is Regime.MULTICOPTER:
+            return 0.5
+        return min(1.0, 0.3 + 0.5 * self.vehicle.speed_m_s / self._limits.cruise_m_s)
+
+    def _servo_outputs(self) -> Sequence[int]:
+        """MAIN1-4 the lift motors, MAIN5 the pusher."""
+        outputs = [0] * 16
+        flying = self.armed and not self._landed
+        lifting = flying and self._vtol != _M.MAV_VTOL_STATE_FW
+        outputs[0:4] = [1500 if lifting else 900] * 4
+        outputs[4] = round(1000 + 1000 * self._throttle()) if flying and self.vehicle.regime is Regime.FIXED_WING else 1000
+        return outputs
+
+    def _detect_landed(self) -> bool:
+        v = self.vehicle
+        return v.on_ground and not (self.armed and v.velocity_ned[2] < -0.1)
+
+    def _hold_here(self) -> None:
+        v = self.vehicle
+        if self._vtol == _M.MAV_VTOL_STATE_FW:
+            self._fly_to(v.lat, v.lon, v.alt_m)
+        else:
+            self._fly_to(*v.stopping_point(), v.alt_m)
+
+    def _steer(self) -> None:
+        """Give the airframe the order that takes it to the goal in the present VTOL state."""
+        v, goal = self.vehicle, self._goal
+        if goal is None or self._landing:
+            return
+        if self._vtol == _M.MAV_VTOL_STATE_FW:
+            v.orbit(*goal, self._goal_radius)
+        elif self._vtol == _M.MAV_VTOL_STATE_TRANSITION_TO_FW:
+            v.cruise(goal[2])
+        elif self._vtol == _M.MAV_VTOL_STATE_TRANSITION_TO_MC:
+            v.hover_at(*v.stopping_point(), goal[2])
+        else:
+            v.hover_at(*goal)
+
+    def _start_landing(self) -> None:
+        if self._vtol in (_M.MAV_VTOL_STATE_FW, _M.MAV_VTOL_STATE_TRANSITION_TO_FW):
+            self._back_transition()  # a VTOL lands on its lift motors
+        self._landing = True
+        self._goal = None
+        if not self._landed:
+            self.vehicle.land()
+
+    def _reached(self, lat: float, lon: float, alt: float) -> bool:
+        v = self.vehicle
+        if self._vtol == _M.MAV_VTOL_STATE_FW:
+            return v.distance_to(lat, lon) <= self._goal_radius * 1.1
+        return v.distance_to(lat, lon) <= NAV_ACC_RAD and abs(v.alt_m - alt) <= 1.0
+
+    def _update_return(self, lat: float, lon: float) -> None:
+        v = self.vehicle
+        if self._vtol == _M.MAV_VTOL_STATE_FW and v.distance_to(lat, lon) <= self._goal_radius * 1.1:
+            self._back_transition()  # over the point: back to the lift motors
+        elif self._vtol == _M.MAV_VTOL_STATE_MC and v.distance_to(lat, lon) <= NAV_ACC_RAD and v.arrived:
+            self._start_landing()
+
+    # -- transitions (vtol_att_control) ----------------------------------------------------------
+
+    def _transition_to(self, state: int) -> None:
+        if state == _M.MAV_VTOL_STATE_FW:
+            self._front_transition()
+        else:
+            self._back_transition()
+
+    def _front_transition(self) -> None:
+        if self._vtol in (_M.MAV_VTOL_STATE_MC, _M.MAV_VTOL_STATE_TRANSITION_TO_MC):
+            self._vtol = _M.MAV_VTOL_STATE_TRANSITION_TO_FW
+            self._text(_M.MAV_SEVERITY_INFO, "Transition to fixed-wing")
+            self._steer()
+
+    def _back_transition(self) -> None:
+        if self._vtol in (_M.MAV_VTOL_STATE_FW, _M.MAV_VTOL_STATE_TRANSITION_TO_FW):
+            self._vtol, self._back_started = _M.MAV_VTOL_STATE_TRANSITION_TO_MC, self.elapsed_s
+            self._text(_M.MAV_SEVERITY_INFO, "Transition to multicopter")
+            self._steer()
+
+    def _update_airframe(self) -> None:
+        if self._landed:
+            self._vtol = _M.MAV_VTOL_STATE_MC
+            return
+        self._update_transition()
+
+    def _update_transition(self) -> None:
+        v = self.vehicle
+        if self._vtol == _M.MAV_VTOL_STATE_TRANSITION_TO_FW and v.speed_m_s >= TRANSITION_AIRSPEED_M_S:
+            self._vtol = _M.MAV_VTOL_STATE_FW
+            self._text(_M.MAV_SEVERITY_INFO, "Transition to fixed-wing complete")
+            self._steer()
+        elif self._vtol == _M.MAV_VTOL_STATE_TRANSITION_TO_MC and (
+            v.speed_m_s <= self._limits.mc_speed_m_s or self.elapsed_s - self._back_started >= VT_B_TRANS_DUR
+        ):
+            self._vtol = _M.MAV_VTOL_STATE_MC
+            self._text(_M.MAV_SEVERITY_INFO, "Transition to multicopter complete")
+            if self._landing:
+                v.land()
+            else:
+                self._steer()
+
+    # -- commands --------------------------------------------------------------------------------
+
+    def _command_handlers(self) -> dict[int, Callable[[Command], int]]:
+        return {
+            **super()._command_handlers(),
+            _M.MAV_CMD_DO_VTOL_TRANSITION: self._cmd_vtol_transition,
+            _M.MAV_CMD_DO_CHANGE_SPEED: self._cmd_change_speed,
+        }
+
+    def _cmd_vtol_transition(self, cmd: Command) -> int:
+        """vtol_att_control: a transition in flight; refused on the ground and, to fixed wing, in Takeoff, Land and Return."""
+        state = int(cmd.params[0] + 0.5)
+        if state not in (_M.MAV_VTOL_STATE_MC, _M.MAV_VTOL_STATE_FW):
+            return _M.MAV_RESULT_DENIED
+        if self._landed or (state == _M.MAV_VTOL_STATE_FW and self.mode in ("AUTO.TAKEOFF", "AUTO.LAND", "AUTO.RTL")):
+            return _M.MAV_RESULT_TEMPORARILY_REJECTED
+        self._transition_to(state)
+        return _M.MAV_RESULT_ACCEPTED
+
+    def _cmd_change_speed(self, cmd: Command) -> int:
+        """The navigator's cruise speed (param2, m/s; ground and air speed alike): here the multicopter speed."""
+        if not cmd.params[1] > 0:
+            return _M.MAV_RESULT_DENIED
+        self._limits = dataclasses.replace(self._limits, mc_speed_m_s=cmd.params[1])
+        self.vehicle.limits = self._limits
+        return _M.MAV_RESULT_ACCEPTED
+
+
+class Px4RoverSim(Px4Sim):
+    """PX4 on a rover (a :class:`SurfaceVehicle`): AUTO.LOITER stops, the other modes drive to their point and stop there.
+
+    Its land detector (src/modules/land_detector/RoverLandDetector.cpp) says landed when disarmed or in
+    AUTO.LAND, so arming is a "take-off" (no preflight auto-disarm) and AUTO.LAND stops it and, being
+    "landed", it disarms after COM_DISARM_LAND. It has no take-off mode and no transitions (UNSUPPORTED).
+    """
+
+    MAV_TYPE = _M.MAV_TYPE_GROUND_ROVER
+    FLIES = False
+    UNAVAILABLE_MODES = frozenset({"AUTO.TAKEOFF"})
+
+    vehicle: SurfaceVehicle
+
+    def __init__(self, profile: VehicleProfile, clock: Clock, home: Home = DEFAULT_HOME, *, limits: Limits = ROVER_LIMITS, **options: float) -> None:
+        self._limits = limits
+        self._speed: float | None = None
+        super().__init__(profile, clock, home, **options)
+
+    def _make_vehicle(self, home: Home) -> VehicleModel:
+        return SurfaceVehicle(home[0], home[1], home[2], self._limits)
+
+    def _throttle(self) -> float:
+        return min(1.0, abs(self.vehicle.speed_m_s) / self._limits.max_m_s) if self.armed else 0.0
+
+    def _servo_outputs(self) -> Sequence[int]:
+        """MAIN1 steering, MAIN2 throttle."""
+        steer = max(-1.0, min(1.0, self.vehicle.yaw_rate_rad_s / math.radians(self._limits.turn_rate_deg_s)))
+        outputs = [0] * 16
+        outputs[0], outputs[1] = round(1500 + 500 * steer), round(1500 + 500 * self._throttle())
+        return outputs
+
+    def _detect_landed(self) -> bool:
+        return self.mode == "AUTO.LAND" or not self.armed
+
+    def _hold_here(self) -> None:
+        v = self.vehicle
+        self._goal = (*v.stopping_point(), 0.0)
+        v.hold()
+
+    def _steer(self) -> None:
+        if self._goal is not None and not self._landing:
+            self.vehicle.drive_to(*self._goal[:2], self._speed)
+
+    def _start_landing(self) -> None:
+        self._landing, self._goal = True, None
+        self.vehicle.hold()
+
+    def _reached(self, lat: float, lon: float, alt: float) -> bool:
+        return self.vehicle.arrived
+
+    def _command_handlers(self) -> dict[int, Callable[[Command], int]]:
+        return {**super()._command_handlers(), _M.MAV_CMD_DO_CHANGE_SPEED: self._cmd_change_speed}
+
+    def _cmd_change_speed(self, cmd: Command) -> int:
+        """The navigator's cruise speed (param2, m/s), capped at the rover's top speed."""
+        if not cmd.params[1] > 0:
+            return _M.MAV_RESULT_DENIED
+        self._speed = min(cmd.params[1], self._limits.max_m_s)
+        self._steer()
+        return _M.MAV_RESULT_ACCEPTED
+
+
 #: The simulated PX4 vehicle for each kind (``executive sim --autopilot px4``).
-PX4_AUTOPILOTS: Mapping[str, type[ArduPilotSim]] = MappingProxyType({"vtol": Px4Sim})
+PX4_AUTOPILOTS: Mapping[str, type[ArduPilotSim]] = MappingProxyType({"vtol": Px4VtolSim, "rover": Px4RoverSim})

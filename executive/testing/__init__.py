@@ -26,11 +26,11 @@ A whole mission (:class:`Lockstep`)
     vehicle's clock.
 
 Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``commander``,
-``vehicle``, ``mission_state``, ``harness`` (``harness(root)``), ``lockstep``
+``autopilot`` (the autopilot port over ``commander``), ``vehicle``, ``mission_state``, ``harness`` (``harness(root)``), ``lockstep``
 (``lockstep(mission, ...)``, closed after the test).
 """
 
-from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, describe
+from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, describe, port_for
 from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
 from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
 from executive.testing.missions import mission_errors
@@ -53,4 +53,5 @@ __all__ = [
     "ack",
     "describe",
     "mission_errors",
+    "port_for",
 ]

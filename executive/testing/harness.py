@@ -9,9 +9,11 @@ import py_trees
 from py_trees.common import Status
 
 from executive import blackboard
+from executive.autopilot.selection import Autopilot
 from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander, command_name
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.state import EkfFlags, EkfStatus
@@ -64,10 +66,16 @@ def describe(msg: MAVLinkMessage, commander: Commander) -> tuple[Any, ...]:
     return (kind,)
 
 
+def port_for(commander: Commander, transfer: MissionTransfer | None = None) -> Autopilot:
+    """The autopilot port over ``commander`` (ArduPilot until a heartbeat, or ``adopt``, says otherwise)."""
+    return Autopilot(commander, transfer, commander.profile)
+
+
 class Harness:
     """A tree ticked by hand: the clock advances ``dt`` before each tick; the commands it asked for are flushed to :attr:`link` after.
 
-    The tree is set up as the runtime sets it up (``clock``, ``commander``, ``mission_state``).
+    The tree is set up as the runtime sets it up (``clock``, ``autopilot``, ``mission_state``): the
+    autopilot port over ``commander`` (:attr:`autopilot`; ArduPilot unless given, or ``autopilot.adopt``).
     Script the inputs with :attr:`vehicle` (or any :class:`Vehicle`) between ticks, answer with
     :meth:`ack`, and assert on :meth:`asked` (or ``link.take()``) and on :meth:`status` /
     :meth:`feedback` of a node named by its path.
@@ -80,17 +88,19 @@ class Harness:
         link: FakeLink,
         commander: Commander,
         mission_state: MissionState,
+        autopilot: Autopilot | None = None,
         **setup: Any,
     ) -> None:
-        """``setup`` adds keyword arguments for the behaviours' ``setup`` (``sampler=``, ``mission_transfer=``...)."""
+        """``setup`` adds keyword arguments for the behaviours' ``setup`` (``sampler=``...)."""
         self.root = root
         self.clock = clock
         self.link = link
         self.commander = commander
+        self.autopilot = autopilot or port_for(commander)
         self.mission_state = mission_state
         self.vehicle = Vehicle()
         self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup(clock=clock, commander=commander, mission_state=mission_state, **setup)
+        self.tree.setup(clock=clock, autopilot=self.autopilot, mission_state=mission_state, **setup)
 
     @classmethod
     def build(

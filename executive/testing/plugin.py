@@ -12,11 +12,12 @@ import py_trees
 import pytest
 
 from executive import blackboard
+from executive.autopilot.selection import Autopilot
 from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
-from executive.testing.harness import START_S, Harness, Vehicle
+from executive.testing.harness import START_S, Harness, Vehicle, port_for
 from executive.testing.links import FakeLink
 from executive.testing.lockstep import Lockstep
 from executive.vehicles import PROFILES
@@ -49,6 +50,12 @@ def commander(link: FakeLink, clock: ManualClock) -> Commander:
 
 
 @pytest.fixture
+def autopilot(commander: Commander) -> Autopilot:
+    """The autopilot port over :func:`commander` (ArduPilot; ``autopilot.adopt(MAV_AUTOPILOT_PX4, ...)`` for PX4)."""
+    return port_for(commander)
+
+
+@pytest.fixture
 def vehicle(clean_blackboard: None) -> Vehicle:
     """Writes vehicle facts to the blackboard: ``vehicle.set(vehicle__mode="GUIDED", link__up=True)``."""
     return Vehicle()
@@ -61,11 +68,13 @@ def mission_state() -> MissionState:
 
 
 @pytest.fixture
-def harness(clean_blackboard: None, clock: ManualClock, link: FakeLink, commander: Commander, mission_state: MissionState) -> Callable[..., Harness]:
-    """``harness(root)`` -> a :class:`Harness` ticking ``root`` with the fixtures' clock, link, commander and mission state."""
+def harness(
+    clean_blackboard: None, clock: ManualClock, link: FakeLink, commander: Commander, autopilot: Autopilot, mission_state: MissionState
+) -> Callable[..., Harness]:
+    """``harness(root)`` -> a :class:`Harness` ticking ``root`` with the fixtures' clock, link, commander, autopilot port and mission state."""
 
     def make(root: py_trees.behaviour.Behaviour, **setup: Any) -> Harness:
-        return Harness(root, clock, link, commander, mission_state, **setup)
+        return Harness(root, clock, link, commander, mission_state, autopilot, **setup)
 
     return make
 

@@ -16,6 +16,7 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
+from executive.autopilot.selection import Autopilot
 from executive.behaviours import (
     Arm,
     ChangeAltitude,
@@ -93,6 +94,8 @@ class Bench:
         self.link = InProcessLink(self.autopilot)
         self.commander = Commander(self.link, self.clock, PROFILES[kind])
         self.reader = MavlinkReader(self.link, self.clock, self.commander)
+        self.port = Autopilot(self.commander, None, PROFILES[kind])
+        self.reader.on_autopilot = self.port.adopt
         self.streams = StreamRequester(self.commander, rates_for(kind))
         self.reader.on_reconnect = self.streams.restart
         mission = Mission.model_validate({"version": 1, "name": "bench", "vehicle": kind, "waypoints": waypoints})
@@ -112,7 +115,7 @@ class Bench:
     def run(self, root: py_trees.behaviour.Behaviour, limit_s: float, dt: float = 0.1) -> tuple[Status, float]:
         """Tick ``root`` until it finishes or ``limit_s`` passes; returns its status and the time it took."""
         self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup(clock=self.clock, commander=self.commander, mission_state=self.mission_state)
+        self.tree.setup(clock=self.clock, autopilot=self.port, mission_state=self.mission_state)
         start = self.clock.now()
         while self.clock.now() - start < limit_s:
             self._io(dt)
@@ -206,7 +209,7 @@ class TestVtol:
 def _run_watching(bench: Bench, root, limit_s: float, seen: list[str]) -> tuple[Status, float]:
     """As Bench.run, noting each new /vehicle/vtol_state."""
     tree = py_trees.trees.BehaviourTree(root)
-    tree.setup(clock=bench.clock, commander=bench.commander, mission_state=bench.mission_state)
+    tree.setup(clock=bench.clock, autopilot=bench.port, mission_state=bench.mission_state)
     start = bench.clock.now()
     while bench.clock.now() - start < limit_s:
         bench._io(0.1)

@@ -15,7 +15,7 @@ from executive.behaviours import ChangeAltitude, ChangeDepth, ChangeSpeed, GoTo,
 from executive.frames import Enu, local_to_global
 from executive.geo import destination
 from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.modes import ArduPilotModes, Px4Modes
+from executive.io.mavlink.modes import ArduPilotModes
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.state import GlobalPosition, HomePosition
@@ -260,8 +260,8 @@ def plane(commander):
 
 
 @pytest.fixture
-def px4(commander):
-    commander.modes = Px4Modes()
+def px4(autopilot):
+    autopilot.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_VTOL_QUADROTOR)
 
 
 class TestTakeOff:

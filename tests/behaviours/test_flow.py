@@ -58,6 +58,8 @@ def test_wait_for_guards_holds_then_gives_way_on_recovery(harness, vehicle):
     assert [h.tick() for _ in range(5)] == [Status.RUNNING] * 5
     assert h.link.take("COMMAND_LONG") == []
     vehicle.set(link__up=True)
+    assert [h.tick() for _ in range(20)] == [Status.RUNNING] * 20
+    assert wait.status == Status.RUNNING  # the link must stay up for 2 s (LinkAlive.resume_after_s)
     assert h.tick() == Status.RUNNING
     assert wait.status == Status.INVALID  # the route runs again
 
@@ -148,7 +150,10 @@ def test_the_hold_asked_during_a_link_loss_is_not_retried_once_the_guards_recove
     h.tick()
     assert [m.param2 for m in h.link.take("COMMAND_LONG")] == [4]  # HOLD, unanswered: the link is down
     vehicle.set(link__up=True)
-    for _ in range(60):  # 6 s: well past the commander's retry interval
+    for _ in range(20):  # while the link proves itself (2 s) the hold is still wanted: retried
+        h.tick()
+    h.link.take("COMMAND_LONG")
+    for _ in range(60):  # 6 s after the guards recovered: well past the commander's retry interval
         h.tick()
     assert h.link.take("COMMAND_LONG") == []
 

@@ -5,11 +5,16 @@ from __future__ import annotations
 import pytest
 from py_trees.common import Status
 
-from executive.behaviours import Armed, EkfOk, LinkAlive, ModeIs, RcNotTakingOver
-from executive.state import EkfFlags, EkfStatus
+from executive.behaviours import Armed, DepthWithin, EkfOk, LinkAlive, ModeIs, RcNotTakingOver
+from executive.mission.model import Range
+from executive.state import EkfFlags, EkfStatus, GlobalPosition
 
 READY = EkfFlags(831)  # what ArduRover reports once its EKF uses GPS
 CONST_POS = EkfFlags.ATTITUDE | EkfFlags.VELOCITY_HORIZ | EkfFlags.CONST_POS_MODE
+
+
+def position(depth_m: float) -> GlobalPosition:
+    return GlobalPosition(44.0, 9.0, -depth_m, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 def ekf(flags: EkfFlags, velocity: float = 0.1, position: float = 0.1, compass: float = 0.1) -> EkfStatus:
@@ -42,13 +47,76 @@ def test_guard(harness, vehicle, guard, facts, expected, why):
     assert h.link.take() == []  # a guard never sends anything
 
 
-def test_guard_follows_the_blackboard_tick_by_tick(harness, vehicle):
+def test_a_guard_never_passed_fails_and_passes_at_once(harness, vehicle):
+    """Before the condition has held once there is nothing to hold: the raw verdict (pre-flight waits on it)."""
+    h = harness(EkfOk())
+    assert h.tick() == Status.FAILURE  # no EKF report yet
+    vehicle.set(vehicle__ekf=ekf(READY))
+    assert h.tick() == Status.SUCCESS
+
+
+def test_a_guard_fails_at_once_and_passes_after_its_resume_time(harness, vehicle):
+    """LinkAlive: the link timeout is its bad spell (it fails at once); back after 2 s of heartbeats, not before."""
+    node = LinkAlive()
+    h = harness(node)
+    vehicle.set(link__up=True)
+    assert h.tick() == Status.SUCCESS
+    vehicle.set(link__up=False)
+    assert h.tick() == Status.FAILURE
+    vehicle.set(link__up=True)
+    statuses = [h.tick(0.5) for _ in range(6)]  # the first tick that sees it back is 0 s, then 0.5 s ... 2.5 s
+    assert statuses == [Status.FAILURE] * 4 + [Status.SUCCESS] * 2
+    assert h.tick() == Status.SUCCESS
+
+
+def test_a_bad_spell_resets_the_resume_time(harness, vehicle):
+    """Heartbeats back for 1.5 s, lost for one tick, back again: 2 s more from the last return."""
     h = harness(LinkAlive())
-    statuses = []
-    for up in (False, True, True, False, True):
+    for up, dt, expected in [
+        (True, 0.1, Status.SUCCESS),
+        (False, 0.1, Status.FAILURE),
+        (True, 0.1, Status.FAILURE),  # back at t0
+        (True, 1.5, Status.FAILURE),
+        (False, 0.1, Status.FAILURE),
+        (True, 0.1, Status.FAILURE),  # back again at t1
+        (True, 1.8, Status.FAILURE),
+        (True, 0.2, Status.SUCCESS),  # t1 + 2 s
+    ]:
         vehicle.set(link__up=up)
-        statuses.append(h.tick())
-    assert statuses == [Status.FAILURE, Status.SUCCESS, Status.SUCCESS, Status.FAILURE, Status.SUCCESS]
+        assert h.tick(dt) == expected
+
+
+def test_a_limit_guard_passes_a_short_bad_spell_with_a_note(harness, vehicle):
+    """DepthWithin holds after 1 s outside: 0.5 s outside passes (the feedback says so), 1 s outside fails."""
+    node = DepthWithin(Range(min=0.0, max=10.0))
+    h = harness(node)
+    vehicle.set(vehicle__position=position(depth_m=5.0))
+    assert h.tick() == Status.SUCCESS
+    vehicle.set(vehicle__position=position(depth_m=12.0))
+    assert h.tick(0.1) == Status.SUCCESS  # bad since now
+    assert h.tick(0.5) == Status.SUCCESS
+    assert "not yet" in node.feedback_message and "depth 12.0 m" in node.feedback_message
+    vehicle.set(vehicle__position=position(depth_m=5.0))  # the spell ends: it starts again from zero
+    assert h.tick(0.1) == Status.SUCCESS
+    vehicle.set(vehicle__position=position(depth_m=12.0))
+    assert h.tick(0.1) == Status.SUCCESS
+    assert h.tick(0.9) == Status.SUCCESS
+    assert h.tick(0.1) == Status.FAILURE  # 1 s outside
+
+
+def test_judging_twice_at_the_same_time_gives_the_same_verdict(harness, vehicle, clock):
+    """The tree's sequence and the failsafe both judge a guard in one tick."""
+    node = LinkAlive()
+    harness(node)
+    vehicle.set(link__up=True)
+    assert node.judge() is None
+    vehicle.set(link__up=False)
+    assert node.judge() == node.judge() == "no heartbeat from the autopilot"
+    vehicle.set(link__up=True)
+    clock.advance(2.0)
+    assert node.judge() == node.judge() is not None  # the resume time starts now
+    clock.advance(2.0)
+    assert node.judge() is None and node.judge() is None
 
 
 @pytest.mark.parametrize(

@@ -234,7 +234,7 @@ def test_a_note_does_not_outlive_its_tick(harness, facts):
         facts(vehicle__battery=b)
         h.tick()
         notes.append(node.feedback_message)
-    assert notes == ["battery not reported yet", "battery remaining unknown", "ok", "battery 10% below 20%"]
+    assert notes == ["battery not reported yet", "battery remaining unknown", "ok", "battery 10% below 20% for 0.0/2 s: not yet"]  # debounced
 
 
 def test_rc_guards_say_whether_a_person_has_the_vehicle():
@@ -261,10 +261,11 @@ def test_rc_auto_mode_from_the_missions_rc_section(harness, facts, rc, given, ex
 def test_rc_auto_mode_follows_switch_c_tick_by_tick(harness, facts):
     h = harness(RcAutoMode("can"))
     statuses = []
-    for swc in (UP, MIDDLE, MIDDLE, DOWN, MIDDLE, None):
+    for swc, dt in ((UP, 0.1), (MIDDLE, 0.1), (MIDDLE, 0.1), (DOWN, 0.1), (MIDDLE, 0.1), (MIDDLE, 1.0), (None, 0.1)):
         facts(rc__switches=switches(swc))
-        statuses.append(h.tick())
-    assert statuses == [Status.FAILURE, Status.SUCCESS, Status.SUCCESS, Status.FAILURE, Status.SUCCESS, Status.FAILURE]
+        statuses.append(h.tick(dt))
+    # back in AUTO after being out of it: AUTO for 1 s first (a bouncing switch does not restart the work)
+    assert statuses == [Status.FAILURE, Status.SUCCESS, Status.SUCCESS, Status.FAILURE, Status.FAILURE, Status.SUCCESS, Status.FAILURE]
 
 
 def test_all_waypoints_within_follows_the_vehicle(harness, facts):
@@ -310,14 +311,15 @@ def test_inside_geofence_from_the_mission(square_mission):
 def test_inside_geofence_tick_by_tick(harness, facts):
     h = harness(InsideGeofence(SQUARE_200, HOME))
     seen = []
-    for north, east in ((0, 0), (50, 50), (0, 110), (0, 90), (0, 130), (0, 0)):
+    for north, east, dt in ((0, 0, 0.1), (50, 50, 0.1), (0, 110, 0.1), (0, 90, 0.1), (0, 90, 2.0), (0, 130, 0.1), (0, 0, 0.1)):
         facts(vehicle__position=position(north, east))
-        seen.append((h.tick(), h.root.feedback_message))
+        seen.append((h.tick(dt), h.root.feedback_message))
     assert seen == [
         (Status.SUCCESS, "ok"),
         (Status.SUCCESS, "ok"),
-        (Status.FAILURE, "10 m outside the fence polygon"),
+        (Status.FAILURE, "10 m outside the fence polygon"),  # at once
+        (Status.FAILURE, "recovering (holds for 0.0/2 s)"),  # back inside: for 2 s first
         (Status.SUCCESS, "ok"),
         (Status.FAILURE, "30 m outside the fence polygon"),
-        (Status.SUCCESS, "ok"),
+        (Status.FAILURE, "recovering (holds for 0.0/2 s)"),
     ]

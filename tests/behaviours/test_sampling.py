@@ -17,6 +17,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
 from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
 from executive.state import Sample as SampleRecord
+from executive.testing import port_for
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 OPTIONS = SamplingOptions(duration_s=2.0, rate_hz=1.0, sensors=["ph", "temperature"])
@@ -56,7 +57,7 @@ class SamplingHarness:
     def __init__(self, root, clock: ManualClock, link, commander: Commander, mission_state: MissionState, sampler) -> None:
         self.root, self.clock, self.link, self.commander, self.sampler = root, clock, link, commander, sampler
         self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup(clock=clock, commander=commander, mission_state=mission_state, sampler=sampler)
+        self.tree.setup(clock=clock, autopilot=port_for(commander), mission_state=mission_state, sampler=sampler)
 
     def tick(self, dt: float = 0.5) -> Status:
         self.clock.advance(dt)
@@ -96,7 +97,7 @@ def test_samples_and_records_the_sample(make, running, vehicle):
     assert (recorded.lat, recorded.lon) == (running.target.lat, running.target.lon)
     assert recorded.reads == status().reads and len(recorded.reads) == 4
     assert py_trees.blackboard.Blackboard.get("/mission/samples") == (recorded,)
-    assert node.feedback_message == "leg 1/4: sampled, 4 reads"
+    assert node.feedback_message == "leg 1/4: sampled, 4 reads (simulated)"
 
 
 def test_feedback_while_sampling(make, running):
@@ -171,6 +172,7 @@ def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, run
     assert (status().ticket, status().state, status().reason) == (first_ticket, SamplerState.FAILED, "cancelled")
     assert node.status == Status.INVALID and running.samples == ()
     vehicle.set(rc__channels=RC_LOW)
+    assert [h.tick() for _ in range(2)] == [F, F]  # the switch back for 1 s (two ticks of 0.5 s) before the work goes on
     statuses = [h.tick() for _ in range(6)]
     assert statuses == [R, R, R, R, R, S]
     assert status().ticket == first_ticket + 1 and len(running.samples) == 1
@@ -197,7 +199,7 @@ def test_a_timeout_cancels_the_sampler(make, running):
 def test_setup_needs_a_sampler(clock, commander, mission_state):
     tree = py_trees.trees.BehaviourTree(Sample())
     with pytest.raises(RuntimeError, match="needs sampler"):
-        tree.setup(clock=clock, commander=commander, mission_state=mission_state)
+        tree.setup(clock=clock, autopilot=port_for(commander), mission_state=mission_state)
 
 
 @pytest.mark.parametrize(

@@ -1,4 +1,5 @@
-"""The Failsafe behaviour tick by tick on a fake link: the reaction leaves in the tick its condition fails, then the recovery."""
+"""The Failsafe behaviour tick by tick on a fake link: the reaction leaves in the tick its guard fails (its condition bad for the guard's
+hold time: most hold at once), then the recovery (the condition good again for the guard's resume time)."""
 
 from __future__ import annotations
 
@@ -139,12 +140,15 @@ REACTIONS = [
 
 
 @pytest.mark.parametrize(("kind", "changes", "before", "breaks", "commands", "status"), REACTIONS)
-def test_the_reaction_leaves_in_the_tick_the_condition_becomes_true(rig, kind, changes, before, breaks, commands, status) -> None:
-    """``status`` S: no failsafe at all, the work goes on."""
+def test_the_reaction_leaves_in_the_tick_the_guard_fails(rig, kind, changes, before, breaks, commands, status) -> None:
+    """The condition bad for its guard's hold time (0 s: the tick it becomes true); ``status`` S: no failsafe at all, the work goes on."""
     r = rig(kind, **changes)
     r.vehicle.set(**before)
     assert r.tick() == [R] and r.sent() == []
     r.vehicle.set(**breaks)
+    hold_s = max((g.hold_after_s for g in r.failsafe.guards if g.check() is not None), default=0.0)
+    for _ in range(round(hold_s / 0.1)):  # a shorter bad spell is noise: the work goes on, nothing is sent
+        assert r.tick() == [R] and r.work.status == R and r.sent() == []
     assert r.tick() == [R if status == S else status]
     assert r.sent() == commands  # flushed at the end of that very tick: zero ticks of delay
     assert r.work.status == (R if status == S else Status.INVALID)  # the work stopped while the failsafe acts
@@ -159,12 +163,14 @@ def test_resume_cancels_the_reaction_and_logs_cause_and_recovery(rig, caplog) ->
     r.vehicle.set(vehicle__ekf=EKF_LOST)
     assert r.tick(10) == [R] * 10 and r.sent() == [("mode", "HOLD")]
     r.vehicle.set(vehicle__ekf=EKF_READY)
-    assert r.tick() == [R] and r.work.status == R  # ...but the guard recovers: the work resumes in that tick
+    assert r.tick(30) == [R] * 30 and r.work.status != R  # ...the guard recovers: the EKF must stay sane for 3 s
+    assert set(r.sent()) == {("mode", "HOLD")}  # (meanwhile the unanswered hold is retried: still held)
+    assert r.tick() == [R] and r.work.status == R  # then the work resumes, in that tick
     assert r.tick(30) == [R] * 30 and r.sent() == []  # and the hold is not retried over it
     assert r.commander.idle
     assert [rec.getMessage() for rec in caplog.records] == [
         "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> hold (HOLD), resume when it recovers (within 30 s)",
-        "failsafe ekf_loss: recovered after 1.0 s -> resume leg 1/1",
+        "failsafe ekf_loss: recovered after 4.0 s -> resume leg 1/1",
     ]
     assert {rec.name for rec in caplog.records} == {"executive.behaviours.failsafe"}  # the journal's event kind: "failsafe"
 
@@ -201,8 +207,8 @@ def test_a_stronger_condition_replaces_the_reaction_in_force_and_a_weaker_one_do
         "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> hold (POSHOLD) not commanded: surface (SURFACE) for link_loss in force, "
         "resume when it recovers (within 30 s)"
     )
-    r.vehicle.set(vehicle__battery=Battery(11.0, 2.0, 15, 1.0))  # surface, abort: already surfacing
-    assert r.tick() == [F] and r.sent() == []
+    r.vehicle.set(vehicle__battery=Battery(11.0, 2.0, 15, 1.0))  # surface, abort: already surfacing (low for 2 s: a sag is not low)
+    assert r.tick(25) == [R] * 20 + [F] and r.sent() == []
     assert failsafe_mode(r.root) == "SURFACE"
 
 
@@ -211,7 +217,7 @@ def test_an_abort_during_a_hold_commands_its_own_reaction_at_once(rig) -> None:
     r.vehicle.set(link__up=False)
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
     r.vehicle.set(link__up=True, vehicle__battery=Battery(11.0, 2.0, 15, 1.0))
-    assert r.tick() == [F] and r.sent() == [("mode", "RTL")]
+    assert r.tick(25) == [R] * 20 + [F] and r.sent() == [("mode", "RTL")]  # the battery low for 2 s
 
 
 def test_nothing_is_commanded_while_a_person_has_the_vehicle_and_the_reaction_comes_when_they_let_go(rig) -> None:
@@ -221,8 +227,8 @@ def test_nothing_is_commanded_while_a_person_has_the_vehicle_and_the_reaction_co
     r.vehicle.set(link__up=False, vehicle__ekf=EKF_LOST)
     assert r.tick(20) == [R] * 20 and r.sent() == []  # the pilot drives: not fought
     r.vehicle.set(rc__channels=RC_OK)  # the switch goes back, the link is still down, the vehicle still in MANUAL: a person drives it
-    assert r.tick(5) == [R] * 5 and r.sent() == []
-    r.vehicle.set(vehicle__mode="GUIDED")  # out of the person's mode: the reaction at once
+    assert r.tick(20) == [R] * 20 and r.sent() == []
+    r.vehicle.set(vehicle__mode="GUIDED")  # out of the person's mode (and the switch back for over 1 s): the reaction at once
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
 
 
@@ -245,7 +251,7 @@ def test_no_failsafe_changes_the_mode_while_a_person_drives_in_a_pilot_mode(rig,
 def test_a_person_with_the_vehicle_is_not_fought_by_an_abort_either(rig) -> None:
     r = rig("rover")
     r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__battery=Battery(11.0, 2.0, 15, 1.0))
-    assert r.tick() == [F] and r.sent() == []
+    assert r.tick(25) == [R] * 20 + [F] and r.sent() == []  # the battery low for 2 s
     assert failsafe_mode(r.root) is None  # the runtime then sees the take-over switch and keeps its hands off too
 
 
@@ -257,6 +263,7 @@ def test_disarm_puts_the_vehicle_in_manual_disarmed_then_re_arms_it_and_the_work
     r.vehicle.set(vehicle__mode="MANUAL", vehicle__armed=False)
     assert r.tick(30) == [R] * 30 and r.sent() == []  # its own disarm is not a person's: no hands-off, no time-out of "disarmed"
     r.vehicle.set(vehicle__ekf=EKF_READY)
+    assert r.tick(30) == [R] * 30 and r.sent() == []  # the EKF sane for 3 s before it counts as recovered
     assert r.tick() == [R] and r.sent() == [("arm", 1.0)]
     assert r.tick(18) == [R] * 18 and r.sent() == []  # the autopilot has not armed yet: asked again 2 s later
     assert r.tick(3) == [R] * 3 and r.sent() == [("arm", 1.0)]

@@ -14,6 +14,7 @@ from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.io.mavlink.dialect import mavlink as m
 from executive.io.mavlink.modes import PX4_MODES
 from executive.sim import SimServer, make_autopilot
+from executive.sim.faults import EkfDegradation, FaultInjector, GpsGlitch
 from executive.sim.px4 import (
     COM_DISARM_PRFLT,
     COM_FAIL_ACT_T,
@@ -81,11 +82,11 @@ MakePx4 = Callable[..., Px4Gcs]
 
 @pytest.fixture
 def px4() -> MakePx4:
-    """A simulated PX4 VTOL, ``run_s`` seconds after boot, and a ground station talking to it."""
+    """A simulated PX4 vehicle (VTOL by default), ``run_s`` seconds after boot, and a ground station talking to it."""
 
-    def make(run_s: float = 5.0) -> Px4Gcs:
+    def make(run_s: float = 5.0, kind: str = "vtol") -> Px4Gcs:
         clock = ManualClock()
-        gcs = Px4Gcs(make_autopilot("vtol", clock, HOME, autopilot="px4"), clock)
+        gcs = Px4Gcs(make_autopilot(kind, clock, HOME, autopilot="px4"), clock)
         gcs.update()
         gcs.run(run_s)
         return gcs
@@ -331,3 +332,161 @@ def test_server_sends_messages_outside_the_dialect(client_for: Callable[[str], C
         client.wait("UNKNOWN_411")  # CURRENT_EVENT_SEQUENCE, a raw MAVLink 2 frame pymavlink's dialect cannot decode
         client.wait("UNKNOWN_380")
         client.wait("OPEN_DRONE_ID_LOCATION")
+
+
+def test_reposition_altitude_is_above_sea_level_whatever_the_frame(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    x, y = (round(v * 1e7) for v in gcs.north(20.0))
+    frame = m.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT  # navigator_main.cpp takes param7 as AMSL all the same
+    gcs.send(gcs.mav.command_int_encode(1, 1, frame, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, HOME_AMSL_M + 25.0))
+    gcs.run(20.0)
+    assert gcs.ap.vehicle.alt_m == pytest.approx(25.0, abs=0.6)
+
+
+def test_a_transit_flight_takeoff_transition_fly_back_transition_land(px4: MakePx4) -> None:
+    gcs = airborne(px4, 30.0)
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, FW) == m.MAV_RESULT_ACCEPTED
+    far = gcs.north(800.0)
+    x, y = round(far[0] * 1e7), round(far[1] * 1e7)
+    direct = gcs.send(
+        gcs.mav.command_int_encode(1, 1, m.MAV_FRAME_GLOBAL_INT, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, HOME_AMSL_M + 30.0)
+    )
+    assert direct == []  # the commander answers on its next loop
+    gcs.run(90.0)
+    assert gcs.ap.vtol_state == FW and gcs.ap.vehicle.distance_to(*far) == pytest.approx(80.0, abs=10.0)  # circling it
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, MC) == m.MAV_RESULT_ACCEPTED
+    gcs.run(10.0)
+    assert gcs.ap.vtol_state == MC
+    assert gcs.px4_mode(LAND) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(60.0)
+    assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
+    assert not gcs.ap.armed and gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_ON_GROUND
+
+
+def test_change_speed_sets_the_cruise_speed(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    assert gcs.result(m.MAV_CMD_DO_CHANGE_SPEED, 1, 3.0, -1) == m.MAV_RESULT_ACCEPTED
+    x, y = (round(v * 1e7) for v in gcs.north(200.0))
+    gcs.send(gcs.mav.command_int_encode(1, 1, m.MAV_FRAME_GLOBAL_INT, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, HOME_AMSL_M + 20.0))
+    gcs.run(20.0)
+    assert gcs.ap.vehicle.speed_m_s == pytest.approx(3.0, abs=0.1)
+
+
+# -- the rover -----------------------------------------------------------------------------------
+
+
+def reposition_to(gcs: Px4Gcs, lat: float, lon: float) -> list[int]:
+    x, y = round(lat * 1e7), round(lon * 1e7)
+    direct = gcs.send(gcs.mav.command_int_encode(1, 1, m.MAV_FRAME_GLOBAL_INT, m.MAV_CMD_DO_REPOSITION, 0, 0, -1, 1, 0, math.nan, x, y, math.nan))
+    gcs.clock.advance(0.01)
+    return [ack.result for ack in direct + gcs.update() if ack.get_type() == "COMMAND_ACK"]
+
+
+def test_rover_is_a_px4_ground_rover_that_cannot_take_off_or_transition(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    hb = gcs.heartbeat()
+    assert (hb.autopilot, hb.type, hb.custom_mode) == (m.MAV_AUTOPILOT_PX4, m.MAV_TYPE_GROUND_ROVER, LOITER)
+    assert gcs.last("EXTENDED_SYS_STATE").vtol_state == m.MAV_VTOL_STATE_UNDEFINED
+    replies = gcs.command(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + 5.0)
+    assert [msg.result for msg in gcs.of_type(replies, "COMMAND_ACK")] == [m.MAV_RESULT_TEMPORARILY_REJECTED]
+    assert "Switching to Takeoff is currently not available" in gcs.texts(replies)
+    assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, FW) == m.MAV_RESULT_UNSUPPORTED
+
+
+def test_rover_armed_is_not_landed_so_it_never_disarms_itself_on_the_ground(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    gcs.run(COM_DISARM_PRFLT + 5.0)
+    assert gcs.ap.armed and "Takeoff detected" in gcs.texts(gcs.log)  # RoverLandDetector: armed means not landed
+    assert gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_IN_AIR
+
+
+def test_rover_reposition_drives_there_and_stops(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    target = gcs.north(20.0)
+    assert reposition_to(gcs, *target) == [m.MAV_RESULT_ACCEPTED]
+    gcs.run(25.0)
+    assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.distance_to(*target) < 0.5 and gcs.ap.vehicle.speed_m_s == 0.0
+
+
+def test_rover_offboard_loss_stops_it_then_land_mode_disarms_it(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    goal = (*gcs.east(15.0), 0.0)
+    gcs.stream(1.0, goal)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.stream(15.0, goal)
+    assert gcs.ap.vehicle.distance_to(*goal[:2]) < 0.5
+    gcs.run(COM_OF_LOSS_T + 0.2)
+    assert gcs.ap.mode == "POSCTL"
+    out = gcs.run(COM_FAIL_ACT_T + 3.0)
+    assert gcs.last("HEARTBEAT").custom_mode == LAND and not gcs.ap.armed
+    assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
+
+
+def test_rover_mission_drives_every_waypoint_then_holds(px4: MakePx4) -> None:
+    gcs = px4(kind="rover")
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    items = [(m.MAV_CMD_NAV_WAYPOINT, *gcs.north(10.0), 0.0), (m.MAV_CMD_NAV_WAYPOINT, *gcs.east(10.0), 0.0)]
+    upload(gcs, items)
+    gcs.run(MISSION_CHECK_S)
+    assert gcs.px4_mode(MISSION) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(40.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [0, 1]
+    assert gcs.last("MISSION_CURRENT").mission_state == m.MISSION_STATE_COMPLETE
+    assert gcs.last("HEARTBEAT").custom_mode == LOITER and gcs.ap.vehicle.distance_to(*gcs.east(10.0)) < 0.5
+
+
+def test_heartbeat_loss_of_a_mission_computer_and_of_a_ground_station_is_reported(px4: MakePx4) -> None:
+    gcs = px4()
+    for kind in (m.MAV_TYPE_ONBOARD_CONTROLLER, m.MAV_TYPE_GCS):
+        gcs.send(gcs.mav.heartbeat_encode(kind, m.MAV_AUTOPILOT_INVALID, 0, 0, 0))
+    out = gcs.run(5.5)
+    assert gcs.texts(out) == ["Connection to mission computer lost"]  # COM_OBC_LOSS_T: 5 s
+    out = gcs.run(5.0)
+    assert gcs.texts(out) == ["Connection to ground station lost"]  # COM_DL_LOSS_T: 10 s
+    assert gcs.texts(gcs.send(gcs.mav.heartbeat_encode(m.MAV_TYPE_GCS, m.MAV_AUTOPILOT_INVALID, 0, 0, 0))) == ["GCS connection regained"]
+    assert gcs.ap.mode == "AUTO.LOITER"  # NAV_DLL_ACT disabled: nothing else
+
+
+def test_injected_estimator_faults_show_in_estimator_status(px4: MakePx4) -> None:
+    gcs = px4()
+    faults = FaultInjector(
+        [
+            EkfDegradation(kind="ekf_degradation", at_s=1.0, for_s=3.0, variance=1.5, lose_position=True),
+            GpsGlitch(kind="gps_glitch", at_s=1.0, for_s=3.0, offset_m=20.0),
+        ],
+        gcs.clock,
+    )
+    faults.attach(gcs.ap)
+    seen: list[MAVLinkMessage] = []
+    before = 0
+    for step in range(20):
+        gcs.clock.advance(0.1)
+        faults.update(gcs.ap)
+        seen += faults.transform(gcs.update())
+        before = len(seen) if step == 10 else before  # 1.1 s: the faults are on
+    status = gcs.of_type(seen, "ESTIMATOR_STATUS")[-1]
+    assert status.flags & m.ESTIMATOR_GPS_GLITCH and not status.flags & m.ESTIMATOR_POS_HORIZ_ABS
+    assert min(status.vel_ratio, status.pos_horiz_ratio, status.pos_vert_ratio) >= 1.5
+    health = gcs.of_type(seen, "SYS_STATUS")[-1].onboard_control_sensors_health
+    assert not health & (m.MAV_SYS_STATUS_AHRS | m.MAV_SYS_STATUS_PREARM_CHECK)
+    assert gcs.of_type(seen[:before], "GLOBAL_POSITION_INT") and not gcs.of_type(seen[before:], "GLOBAL_POSITION_INT")  # none without a position
+
+
+def test_a_setpoint_with_any_non_finite_value_is_dropped_whole(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    velocity_only = 0x0DC7  # position, acceleration and yaw ignored
+    for _ in range(5):  # position fields NaN though ignored: mavlink_receiver.cpp drops the message
+        gcs.send(
+            gcs.mav.set_position_target_local_ned_encode(
+                0, 1, 1, m.MAV_FRAME_LOCAL_NED, velocity_only, math.nan, math.nan, math.nan, 1, 0, 0, 0, 0, 0, 0, 0
+            )
+        )
+        gcs.run(0.2)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_TEMPORARILY_REJECTED]
+    for _ in range(5):  # the same with zeros keeps the offboard signal alive
+        gcs.send(gcs.mav.set_position_target_local_ned_encode(0, 1, 1, m.MAV_FRAME_LOCAL_NED, velocity_only, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0))
+        gcs.run(0.2)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]

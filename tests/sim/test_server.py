@@ -108,13 +108,13 @@ def test_cli_runs_for_a_duration_and_says_where_it_listens(capsys: pytest.Captur
     assert "ArduRover boat listening on udpin:127.0.0.1:0 (connect to udpout:127.0.0.1:" in out
 
 
-def test_cli_simulates_px4_on_the_vtol_only(capsys: pytest.CaptureFixture[str]) -> None:
+def test_cli_simulates_px4_on_the_vtol_and_the_rover_only(capsys: pytest.CaptureFixture[str]) -> None:
     args = parse("--vehicle", "vtol", "--autopilot", "px4", "--mavlink", "udpin:127.0.0.1:0", "--speedup", "50", "--duration", "1")
     assert args.func(args) == 0
     assert "PX4 vtol listening on udpin:127.0.0.1:0" in capsys.readouterr().out
     args = parse("--vehicle", "boat", "--autopilot", "px4", "--duration", "1")
     assert args.func(args) == EXIT_BAD_INPUT
-    assert "no simulated px4 boat (known: vtol)" in capsys.readouterr().err
+    assert "no simulated px4 boat (known: vtol, rover)" in capsys.readouterr().err
 
 
 def test_cli_defaults_and_bad_values(capsys: pytest.CaptureFixture[str]) -> None:

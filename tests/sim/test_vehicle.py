@@ -101,3 +101,32 @@ def test_a_powered_boat_drifts_slowly_when_holding() -> None:
     drive(boat, 100.0)
     assert boat.distance_to(HOME[0], HOME[1]) == pytest.approx(BOAT_LIMITS.drift_m_s * 100.0)
     assert boat.bearing_to(HOME[0], HOME[1]) == pytest.approx((BOAT_LIMITS.drift_toward_deg + 180.0) % 360.0)
+
+
+def test_a_rover_under_way_keeps_its_least_turning_speed_through_a_sharp_turn() -> None:
+    # AR_PosControl: not slower than sqrt(0.5 x ATC_TURN_MAX_G x TURN_RADIUS) = 1.63 m/s while it turns (it cannot pivot)
+    vehicle = powered()
+    vehicle.drive_to(*north_of(HOME[0], HOME[1], 100.0))
+    drive(vehicle, 5.0)
+    assert vehicle.speed_m_s == pytest.approx(ROVER_LIMITS.cruise_m_s)
+    lat, lon = vehicle.lat, vehicle.lon
+    vehicle.drive_to(lat, lon + 20.0 / (111_319.49 * 0.6764))  # 20 m east: a 90° turn
+    speeds = [speed for _, speed in drive(vehicle, 2.0)]
+    assert min(speeds) >= ROVER_LIMITS.turn_speed_min_m_s - 0.01
+    assert ROVER_LIMITS.turn_speed_min_m_s == pytest.approx(1.63, abs=0.01)
+
+
+def test_a_corner_driven_through_is_left_at_its_turn_in_distance_at_speed() -> None:
+    vehicle = powered()
+    corner = north_of(HOME[0], HOME[1], 30.0)
+    beyond = corner[0], corner[1] + 30.0 / (111_319.49 * 0.6764)  # then 30 m east
+    vehicle.drive_to(*corner, then=beyond)
+    for _ in range(600):  # 30 s
+        vehicle.step(0.05)
+        if vehicle.arrived:
+            break
+    assert vehicle.arrived
+    distance, speed = vehicle.distance_to(*corner), vehicle.speed_m_s
+    # braking from cruise at the leg's acceleration: 2^2 / (2 x 1) = 2 m (a 90° turn's apex bound, 5.7 m, allows it)
+    assert distance == pytest.approx(2.0, abs=0.25)
+    assert speed == pytest.approx(ROVER_LIMITS.cruise_m_s)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -11,8 +10,7 @@ import pytest
 from py_trees.common import Status
 
 import trees
-from executive.assembly import build_runtime
-from executive.clock import ManualClock, ScaledClock
+from executive.clock import ManualClock
 from executive.geo import destination, distance, distance_bearing
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
@@ -22,7 +20,7 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition
-from executive.testing import EKF_READY
+from executive.testing import EKF_READY, Lockstep
 from executive.vehicles import PROFILES, SUB_MODES
 
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
@@ -371,21 +369,28 @@ def test_a_failed_guard_holds_the_sub_until_it_recovers_then_the_same_leg_goes_o
     survey.run_to_leg(leg)
     survey.under_way(*(("depth", wp["depth_m"]) if "depth_m" in wp else ("altitude", wp["altitude_m"])), wp["name"])
     before = len(survey.sub.commands)
+    # stuck (a current, a thruster): what goes wrong lasts past the guard's hold time, and the leg does not end meanwhile
+    step, dz = survey.sub.step_m, survey.sub.dz_m
+    if holds:
+        survey.sub.step_m = survey.sub.dz_m = 0.0
     break_it(survey)
     survey.sub.publish()
     if holds:
-        assert survey.run(30) == [Status.RUNNING] * 30
-        assert survey.sub.commands[before:] == [("mode", "POSHOLD")]  # asked once, then waited
+        assert survey.run(30) == [Status.RUNNING] * 30  # (a guard may wait up to 2 s of a bad reading before it holds)
+        held = survey.sub.commands.index(("mode", "POSHOLD"), before)
+        assert [c for c in survey.sub.commands[before:] if c[0] == "mode"] == [("mode", "POSHOLD")]
+        assert survey.sub.commands[held + 1 :] == []  # asked once, then waited
         assert survey.state.leg_index == leg
     else:  # not judged on this leg: the leg goes on to its end
         assert survey.run(30, until=lambda: survey.state.leg_index > leg)[-1] == Status.RUNNING
         assert ("mode", "POSHOLD") not in survey.sub.commands[before:]
         assert survey.state.leg_index == leg + 1
     mend_it(survey)
+    survey.sub.step_m, survey.sub.dz_m = step, dz
     survey.sub.publish()
-    survey.run(3)
     if holds:
-        assert survey.sub.commands[before + 1] == ("mode", "GUIDED")
+        survey.run(31, until=lambda: len(survey.sub.commands) > held + 1)  # the guard's resume time: up to 3 s of good readings
+        assert survey.sub.commands[held + 1] == ("mode", "GUIDED")
         assert survey.state.leg_index == leg
     assert survey.run(400)[-1] == Status.SUCCESS
 
@@ -400,7 +405,7 @@ def test_a_take_over_sends_nothing_while_the_pilot_has_the_sub(make_survey: Make
     assert survey.sub.commands[before:] == []  # no POSHOLD, no GUIDED while the pilot has it
     assert survey.state.leg_index == 0
     survey.vehicle.set(rc__channels=(1500,) * 8)
-    survey.run(10, until=lambda: len(survey.sub.commands) == before + 4)
+    survey.run(20, until=lambda: len(survey.sub.commands) == before + 4)  # the switch back for 1 s first
     assert survey.sub.commands[before:] == [("mode", "GUIDED"), ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north")]
     assert survey.state.leg_index == 0
     assert survey.run(400)[-1] == Status.SUCCESS
@@ -409,10 +414,10 @@ def test_a_take_over_sends_nothing_while_the_pilot_has_the_sub(make_survey: Make
 def test_a_guard_that_never_recovers_fails_the_mission_with_its_reason(make_survey: MakeSurvey) -> None:
     survey = make_survey(sub_mission(*SURVEY))
     survey.under_way("depth", 5.0, "north")
-    survey.sub.depth = 101.0
+    survey.sub.depth, survey.sub.dz_m, survey.sub.step_m = 101.0, 0.0, 0.0  # stuck down there
     survey.sub.publish()
     statuses = survey.run(400)
-    assert statuses[-1] == Status.FAILURE and len(statuses) == 302  # recovery_timeout_s = 30 s
+    assert statuses[-1] == Status.FAILURE and len(statuses) == 312  # DepthWithin's 1 s hold time, then recovery_timeout_s = 30 s
     assert explain_failure(survey.root) == "Wait for guards: not recovered after 30 s: Depth within [0, 100] m? depth 101.0 m outside [0, 100] m"
 
 
@@ -480,47 +485,35 @@ def test_pausing_mid_leg_holds_and_resuming_continues_the_same_leg_at_the_same_d
     assert survey.run(400)[-1] == Status.SUCCESS
 
 
-# -- the simulator: ArduSub over a modelled seabed, real MAVLink over UDP --------------------------
+# -- the simulator: ArduSub over a modelled seabed, in the lock-step simulation ----------------------
 
 
-def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) -> tuple[Any, list[dict[str, float]], dict[str, Any], float]:
-    from executive.io.mavlink.link import PymavlinkLink
-    from executive.sim import SimServer
+def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) -> tuple[Any, list[dict[str, float]], dict[str, Any]]:
+    with Lockstep(mission, home=home) as sim:
+        runtime = sim.runtime
+        legs: list[dict[str, float]] = []
+        advance = runtime.mission_state.advance_leg
 
-    assert mission.simulator is not None
-    clock = ScaledClock(50.0)
-    legs: list[dict[str, float]] = []
-    wall = time.monotonic()
-    with SimServer("sub", clock=clock, home=home, ekf_ready_after_s=mission.simulator.ekf_ready_after_s) as sim:
-        link = PymavlinkLink(sim.url_for_client)
-        try:
-            runtime = build_runtime(mission, link, clock)
-            assert runtime.connect(10.0 * clock.speedup)
-            advance = runtime.mission_state.advance_leg
+        def note_and_advance() -> None:
+            wp = mission.waypoints[runtime.mission_state.leg_index]
+            v = sim.autopilot.vehicle
+            legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": sim.clock.now()})
+            advance()
 
-            def note_and_advance() -> None:
-                wp = mission.waypoints[runtime.mission_state.leg_index]
-                with sim.lock:
-                    v = sim.autopilot.vehicle
-                    legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": clock.now()})
-                advance()
-
-            runtime.mission_state.advance_leg = note_and_advance  # type: ignore[method-assign]
-            started = clock.now()
-            outcome = runtime.run()
-            with sim.lock:
-                ap = sim.autopilot
-                end = {"mode": ap.mode, "armed": ap.armed, "depth": ap.vehicle.depth_m, "moved_m": ap.vehicle.distance_to(home[0], home[1])}
-            end["vehicle_s"] = clock.now() - started
-        finally:
-            link.close()
-    return outcome, legs, end, time.monotonic() - wall
+        runtime.mission_state.advance_leg = note_and_advance  # type: ignore[method-assign]
+        sim.connect()
+        started = sim.clock.now()
+        outcome = sim.run_to_end(limit_s=600)
+        ap = sim.autopilot
+        end = {"mode": ap.mode, "armed": ap.armed, "depth": ap.vehicle.depth_m, "moved_m": ap.vehicle.distance_to(home[0], home[1])}
+        end["vehicle_s"] = sim.clock.now() - started
+    return outcome, legs, end
 
 
 def test_the_example_survey_on_the_simulated_ardusub_reaches_each_waypoint_at_its_depth_or_altitude() -> None:
     mission = load_mission(ROOT / "missions" / "auv_survey.yaml")
     assert mission.home is not None
-    outcome, legs, end, _wall_s = _run_on_the_simulator(mission, (mission.home.lat, mission.home.lon, mission.home.heading_deg))
+    outcome, legs, end = _run_on_the_simulator(mission, (mission.home.lat, mission.home.lon, mission.home.heading_deg))
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert len(legs) == len(mission.waypoints) == 4
     for wp, leg in zip(mission.waypoints, legs, strict=True):
@@ -538,7 +531,7 @@ def test_on_the_simulator_a_sub_1_km_off_refuses_the_survey_without_arming_or_mo
     mission = load_mission(ROOT / "missions" / "auv_survey.yaml")
     assert mission.home is not None
     home = (*destination(mission.home.lat, mission.home.lon, 270.0, 1200.0), 0.0)
-    outcome, legs, end, _ = _run_on_the_simulator(mission, home)
+    outcome, legs, end = _run_on_the_simulator(mission, home)
     assert str(outcome.status) == "ABORTED"
     assert outcome.reason.startswith("All waypoints within 1000 m?: waypoint 0 (start) is 120")
     assert (legs, end["armed"]) == ([], False) and end["moved_m"] < 0.01

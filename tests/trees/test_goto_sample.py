@@ -14,7 +14,7 @@ from py_trees.common import Status
 import trees
 from executive import blackboard
 from executive.assembly import build_runtime
-from executive.clock import ManualClock, ScaledClock
+from executive.clock import ManualClock
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
@@ -26,9 +26,8 @@ from executive.mission.model import Mission
 from executive.runtime import Runtime, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SamplerState
 from executive.state import Sample as SampleRecord
-from executive.testing import EKF_READY, ack
+from executive.testing import EKF_READY, ack, port_for
 from executive.vehicles import PROFILES, ROVER_MODES
-from tests_support import run_over
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 ROOT = Path(__file__).parents[2]
@@ -125,7 +124,7 @@ class Run:
             self.state.upload(mission)
             self.sampler = SimulatedSampler(clock, mission.sampling, seed=1)
             self.tree = py_trees.trees.BehaviourTree(trees.build(mission))
-            self.tree.setup(clock=clock, commander=self.commander, mission_state=self.state, sampler=self.sampler)
+            self.tree.setup(clock=clock, autopilot=port_for(self.commander), mission_state=self.state, sampler=self.sampler)
             self.state.start()
         else:
             runtime.mission_state.start()  # builds the tree and its sampler
@@ -298,8 +297,10 @@ def test_a_bad_ekf_waits_in_manual_disarmed_then_re_arms_and_continues_the_same_
     assert run.tick(100) == [R] * 100  # waiting, hands off, no target sent
     assert run.boat.commands == [mode("MANUAL"), DISARM] and run.boat.setpoints == setpoints
     run.boat.ekf = EKF_READY
+    assert run.tick(29) == [R] * 29 and run.boat.commands == [mode("MANUAL"), DISARM]  # the EKF sane for 3 s first
     assert run.tick(3) == [R, R, R]
     assert run.boat.commands == [mode("MANUAL"), DISARM, ARM, mode("GUIDED")]
+    assert run.tick() == [R]
     assert run.state.leg_index == 0 and run.boat.setpoints == setpoints + 1  # the same leg, its target again
     assert run.tick(400)[-1] == S
     assert len(run.state.samples) == 2
@@ -351,7 +352,8 @@ def test_a_failing_guard_is_waited_out_then_the_same_leg_continues(run, fact, ho
     assert run.tick(100) == [R] * 100
     assert run.boat.commands == hold  # hold in LOITER, unless a person has the boat
     setattr(run.boat, fact, True)
-    assert run.tick(2) == [R, R]
+    ticks = 22 if fact == "link_up" else 2  # the link back for LinkAlive's 2 s first; re-armed: at once
+    assert run.tick(ticks) == [R] * ticks
     assert run.boat.commands == hold + back
     assert run.state.leg_index == 0
     assert run.tick(400)[-1] == S
@@ -462,20 +464,15 @@ def test_a_goto_sample_mission_without_a_sampling_section_gets_the_default_sampl
 # -- the example mission in the simulator ---------------------------------------------------------
 
 
-def test_the_example_mission_samples_every_sample_point_once_in_the_simulator(caplog):
-    """missions/asv_sampling.yaml with its event file (an EKF dropout on the way), over real UDP at 50x."""
-    from executive.sim import SimServer
-    from executive.sim.faults import FaultInjector, load_faults
-
+def test_the_example_mission_samples_every_sample_point_once_in_the_simulator(caplog, lockstep):
+    """missions/asv_sampling.yaml with its event file (an EKF dropout on the way), in the lock-step simulation."""
     path = ROOT / "missions/asv_sampling.yaml"
     mission = load_mission(path)
     assert mission.home is not None and mission.sampling is not None and mission.simulator is not None and mission.simulator.events
-    clock = ScaledClock(50.0)
-    faults = FaultInjector(load_faults(path.parent / mission.simulator.events, "boat"), clock)
     caplog.set_level(logging.INFO, logger="executive.io.mavlink.reader")
-    with SimServer("boat", clock=clock, home=(mission.home.lat, mission.home.lon, mission.home.heading_deg), faults=faults) as sim:
-        runtime, outcome = run_over(sim.url_for_client, mission, clock)
-        final_mode, armed = sim.autopilot.mode, sim.autopilot.armed
+    sim = lockstep(mission, mission_dir=path.parent)
+    outcome = sim.run_to_end(limit_s=900)
+    runtime, final_mode, armed = sim.runtime, sim.autopilot.mode, sim.autopilot.armed
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert (final_mode, armed) == ("LOITER", True)
     sample_points = [i for i, wp in enumerate(mission.waypoints) if wp.sample]

@@ -111,6 +111,8 @@ def test_rc_takeover_mid_leg_waits_hands_off_then_resumes_the_same_leg(mission_r
     assert mission_run.commands[commands_before:] == []  # no HOLD, no GUIDED while the pilot drives
     assert mission_state.leg_index == 2
     vehicle.set(rc__channels=(1500,) * 6)
+    mission_run.run(10)
+    assert mission_run.commands[commands_before:] == []  # the switch back for 1 s first
     mission_run.run(2)
     assert mission_run.commands[commands_before:] == [("mode", "GUIDED")]
     assert mission_state.leg_index == 2
@@ -125,7 +127,9 @@ def test_ekf_loss_holds_the_vehicle_and_resumes_after_recovery(mission_run, miss
     assert mission_run.commands[-1] == ("mode", "HOLD")
     leg = mission_state.leg_index
     vehicle.set(vehicle__ekf=EKF_READY)
-    mission_run.run(2)
+    mission_run.run(28)
+    assert mission_run.commands[-1] == ("mode", "HOLD")  # the EKF sane for 3 s first
+    mission_run.run(4)
     assert mission_run.commands[-1] == ("mode", "GUIDED")
     assert mission_state.leg_index == leg
 

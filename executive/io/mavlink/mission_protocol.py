@@ -26,13 +26,17 @@ import logging
 import math
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, replace
-from enum import Enum, StrEnum
-from typing import Any
+from enum import Enum
+from typing import TYPE_CHECKING, Any
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import Link
+from executive.state import MissionCurrent, MissionItemReached, MissionTransferStatus, TransferOperation, TransferState
+
+if TYPE_CHECKING:
+    from executive.mission.model import Waypoint
 
 log = logging.getLogger(__name__)
 
@@ -132,61 +136,17 @@ def first_mismatch(sent: Sequence[MissionItem], held: Sequence[MissionItem]) -> 
     return None
 
 
-class TransferOperation(StrEnum):
-    """What a mission transfer does."""
-
-    UPLOAD = "UPLOAD"
-    DOWNLOAD = "DOWNLOAD"
-    CLEAR = "CLEAR"
-    SET_CURRENT = "SET_CURRENT"
+def route_items(waypoints: Sequence[Waypoint]) -> tuple[MissionItem, ...]:
+    """The mission items 1..n a route is uploaded as: a NAV_WAYPOINT per waypoint."""
+    return waypoint_items((wp.lat, wp.lon, wp.alt_m) for wp in waypoints)
 
 
-class TransferState(StrEnum):
-    """Where a mission transfer stands."""
-
-    IN_PROGRESS = "IN_PROGRESS"
-    DONE = "DONE"
-    FAILED = "FAILED"
-
-
-@dataclass(frozen=True, slots=True)
-class MissionTransferStatus:
-    """The latest mission transfer and what became of it (``/link/mission_transfer``)."""
-
-    ticket: int  # unique per request; a behaviour keeps the ticket it was given
-    operation: TransferOperation
-    state: TransferState
-    progress: int  # items through so far, home included
-    total: int  # items to go through, home included; 0 until known
-    reason: str  # why it failed; "" otherwise
-    result: int | None  # MAV_MISSION_RESULT of the MISSION_ACK that decided it, if one did
-    retries: int  # messages resent after a timeout, over the whole transfer
-    verifying: bool  # an upload is reading the mission back
-    time: float
-
-
-@dataclass(frozen=True, slots=True)
-class MissionCurrent:
-    """MISSION_CURRENT: the item the vehicle is on and the mission's state."""
-
-    seq: int
-    total: int  # items after home; 0 if the firmware does not say
-    state: int  # MISSION_STATE; 0 (unknown) if the firmware does not say
-    in_mission_mode: bool  # the vehicle is in its mission mode (AUTO)
-    time: float
-
-
-@dataclass(frozen=True, slots=True)
-class MissionItemReached:
-    """MISSION_ITEM_REACHED: the last item the vehicle reported reached, and the highest since the vehicle's mission last changed.
-
-    ``highest`` is latched by the reader: two reports drained in one tick (item 3, then a GUIDED
-    arrival's item 0) lose nothing.
-    """
-
-    seq: int
-    time: float
-    highest: int = -1
+def route_not_on_autopilot(waypoints: Sequence[Waypoint], held: Sequence[MissionItem] | None) -> str | None:
+    """Why the autopilot's mission (``held``, ``/vehicle/mission_items``) is not ``waypoints``; None when it is."""
+    if held is None:
+        return "the autopilot's mission is not known yet"
+    mismatch = first_mismatch(route_items(waypoints), held)
+    return None if mismatch is None else f"the autopilot's mission differs ({mismatch})"
 
 
 class _Step(Enum):

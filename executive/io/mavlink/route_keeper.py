@@ -25,11 +25,10 @@ from dataclasses import dataclass
 from enum import StrEnum
 
 from executive import blackboard
-from executive.behaviours.auto_route import route_items, route_not_on_autopilot
 from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.mission_protocol import MissionTransfer, MissionTransferStatus, TransferState
+from executive.io.mavlink.mission_protocol import MissionTransfer, MissionTransferStatus, TransferState, route_items, route_not_on_autopilot
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.route import Route
 from executive.state import CommandState, CommandStatus, HomePosition

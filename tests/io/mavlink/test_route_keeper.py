@@ -20,7 +20,7 @@ from executive.mission.model import Home, Mission
 from executive.mission.route import offset
 from executive.sim.mission_store import MissionStore
 from executive.state import HomePosition
-from executive.testing import ack
+from executive.testing import ack, port_for
 
 _M = mavlink
 _EXECUTIVE = mavlink.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)
@@ -99,7 +99,7 @@ class Rig:
         self.tree = None
         if tree is not None:
             self.tree = py_trees.trees.BehaviourTree(tree)
-            self.tree.setup(clock=clock, commander=commander, mission_state=self.state, mission_transfer=self.transfer)
+            self.tree.setup(clock=clock, autopilot=port_for(commander, self.transfer), mission_state=self.state)
         self.seen: list[RouteUpload] = []
 
     def tick(self, edit: Callable[[], None] | None = None) -> RouteUpload | None:

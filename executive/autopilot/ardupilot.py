@@ -1,0 +1,50 @@
+"""The ArduPilot back end of the autopilot port (ArduRover, ArduSub, ArduPlane QuadPlane)."""
+
+from __future__ import annotations
+
+from executive.autopilot.mavlink_port import MavlinkPort, ahead_of
+from executive.autopilot.port import Capabilities, Request, VtolState
+from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.mission_protocol import MissionTransfer
+from executive.state import GlobalPosition, HomePosition
+from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
+
+
+class ArduPilotPort(MavlinkPort):
+    """ArduPilot: modes named per vehicle firmware, NAV_TAKEOFF above home, VTOL transitions by mode outside AUTO."""
+
+    name = "ardupilot"
+
+    def __init__(self, commander: Commander, transfer: MissionTransfer | None, profile: VehicleProfile) -> None:
+        super().__init__(commander, transfer, profile)
+        self.capabilities = Capabilities(
+            autopilot="ardupilot",
+            safe_mode=profile.safe_mode,
+            guided_mode=profile.guided_mode,
+            route_mode="AUTO",
+            vehicles=AUTOPILOT_VEHICLES["ardupilot"],
+            transition_anywhere=False,
+            takeoff_alt_amsl=False,
+        )
+
+    def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:
+        if airborne and position is not None:
+            # ArduPlane refuses NAV_TAKEOFF in the air: the climb goes on with DO_REPOSITION above the vehicle
+            # (a QuadPlane with Q_GUIDED_MODE=1 flies it on its lift motors)
+            return self.reposition(position.lat, position.lon, alt_m)
+        return super().take_off(alt_m, home=home, position=position, airborne=airborne)
+
+    def transition(
+        self, to: VtolState, *, mode: str | None, position: GlobalPosition | None, heading_deg: float, mc_mode: str, ahead_m: float
+    ) -> Request | None:
+        # ArduPlane takes MAV_CMD_DO_VTOL_TRANSITION in AUTO only (GCS_MAVLink_Plane.cpp handle_command_DO_VTOL_TRANSITION):
+        # elsewhere the mode decides
+        if mode == "AUTO":
+            return super().transition(to, mode=mode, position=position, heading_deg=heading_deg, mc_mode=mc_mode, ahead_m=ahead_m)
+        if to == "MC":
+            return self.set_mode(mc_mode)
+        if position is None:
+            return None  # there is no "ahead" without a position
+        lat, lon = ahead_of(position, heading_deg, ahead_m)
+        request = self.reposition(lat, lon, position.alt_rel_m)
+        return Request(request.ticket, request.command, f"reposition {ahead_m:g} m ahead")

@@ -1,0 +1,115 @@
+"""What both MAVLink back ends share: intents sent through the :class:`Commander` and the route through the :class:`MissionTransfer`."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import ClassVar
+
+from executive import geo
+from executive.autopilot.port import Capabilities, Request, VtolState
+from executive.io.mavlink.commander import Commander, command_name
+from executive.io.mavlink.dialect import mavlink
+from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, route_items, route_not_on_autopilot
+from executive.mission.model import Waypoint
+from executive.state import GlobalPosition, HomePosition
+from executive.vehicles import VehicleProfile
+
+
+class MavlinkPort:
+    """The intents every MAVLink autopilot takes the same way; a back end overrides what its firmware does differently."""
+
+    capabilities: Capabilities
+    name: ClassVar[str] = ""
+
+    def __init__(self, commander: Commander, transfer: MissionTransfer | None, profile: VehicleProfile) -> None:
+        self.commander = commander
+        self.transfer = transfer
+        self.profile = profile
+
+    def _request(self, ticket: int, command: int, how: str = "") -> Request:
+        return Request(ticket, command_name(command), how)
+
+    def mode_name(self, mode: str) -> str:
+        return self.commander.modes.canonical(mode)
+
+    def service(self) -> None:
+        """What the back end keeps sending between requests (PX4's offboard setpoint stream); every tick, before the commands go out."""
+
+    # -- acked intents -----------------------------------------------------------------------
+    def set_mode(self, mode: str) -> Request:
+        return self._request(self.commander.set_mode(mode), mavlink.MAV_CMD_DO_SET_MODE, self.mode_name(mode))
+
+    def hold(self) -> Request:
+        return self.set_mode(self.capabilities.safe_mode)
+
+    def arm(self, *, force: bool = False) -> Request:
+        return self._request(self.commander.arm(force=force), mavlink.MAV_CMD_COMPONENT_ARM_DISARM)
+
+    def disarm(self, *, force: bool = False) -> Request:
+        return self._request(self.commander.disarm(force=force), mavlink.MAV_CMD_COMPONENT_ARM_DISARM)
+
+    def reposition(self, lat: float, lon: float, alt_m: float) -> Request:
+        return self._request(self.commander.reposition(lat, lon, alt_m), mavlink.MAV_CMD_DO_REPOSITION)
+
+    def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:
+        return self._request(self.commander.takeoff(alt_m), mavlink.MAV_CMD_NAV_TAKEOFF)
+
+    def land(self, mode: str | None = None) -> Request:
+        if mode is not None:
+            return self.set_mode(mode)
+        vtol = self.profile.kind == "vtol"
+        return self._request(self.commander.land(vtol=vtol), mavlink.MAV_CMD_NAV_VTOL_LAND if vtol else mavlink.MAV_CMD_NAV_LAND)
+
+    def return_home(self) -> Request:
+        return self.set_mode("RTL")
+
+    def transition(
+        self, to: VtolState, *, mode: str | None, position: GlobalPosition | None, heading_deg: float, mc_mode: str, ahead_m: float
+    ) -> Request | None:
+        return self._request(self.commander.vtol_transition(to), mavlink.MAV_CMD_DO_VTOL_TRANSITION, "DO_VTOL_TRANSITION")
+
+    def change_speed(self, speed_m_s: float, *, airspeed: bool = False) -> Request:
+        return self._request(self.commander.change_speed(speed_m_s, airspeed=airspeed), mavlink.MAV_CMD_DO_CHANGE_SPEED)
+
+    def start_route(self) -> Request:
+        return self.set_mode(self.capabilities.route_mode)
+
+    def set_home(self, lat: float | None = None, lon: float | None = None, alt_m: float = 0.0) -> Request:
+        return self._request(self.commander.set_home(lat, lon, alt_m), mavlink.MAV_CMD_DO_SET_HOME)
+
+    def cancel(self, request: Request | None) -> bool:
+        return request is not None and self.commander.cancel(request.ticket)
+
+    # -- setpoints -----------------------------------------------------------------------------
+    def go_to(self, target: Waypoint) -> None:
+        if target.control_mode == "altitude" and target.altitude_m is not None:
+            self.commander.depth_target(target.lat, target.lon, altitude_m=target.altitude_m)
+        elif target.depth_m is not None:
+            self.commander.depth_target(target.lat, target.lon, depth_m=target.depth_m)
+        else:
+            self.commander.goto(target.lat, target.lon, target.alt_m)
+
+    def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:
+        self.commander.local_setpoint(north_m, east_m, down_m)
+
+    def hold_depth(self, lat: float, lon: float, *, depth_m: float | None = None, altitude_m: float | None = None) -> None:
+        self.commander.depth_target(lat, lon, depth_m=depth_m, altitude_m=altitude_m)
+
+    # -- the autopilot's own route -------------------------------------------------------------
+    def route_differs(self, waypoints: Sequence[Waypoint], held: object | None) -> str | None:
+        items: Sequence[MissionItem] | None = held  # type: ignore[assignment]  # /vehicle/mission_items
+        return route_not_on_autopilot(waypoints, items)
+
+    @property
+    def route_transfer_idle(self) -> bool:
+        return self.transfer is None or self.transfer.idle
+
+    def upload_route(self, waypoints: Sequence[Waypoint], home: HomePosition | None) -> int:
+        if self.transfer is None:
+            raise RuntimeError("no mission transfer on this link")
+        return self.transfer.upload(route_items(waypoints), (home.lat, home.lon, home.alt_m) if home else None)
+
+
+def ahead_of(position: GlobalPosition, heading_deg: float, distance_m: float) -> tuple[float, float]:
+    """The point ``distance_m`` ahead of ``position`` on ``heading_deg``."""
+    return geo.destination(position.lat, position.lon, heading_deg, distance_m)

@@ -1,0 +1,126 @@
+"""The autopilot port: what behaviours and trees may ask of an autopilot, whatever its firmware.
+
+Behaviours ask for *intents* (hold, go to a point, take off, land, return, transition, change
+speed, start the autopilot's route, arm, disarm, a named mode where a tree really needs one) and
+read *capabilities*; a back end (ArduPilot, PX4) turns them into that firmware's messages. Acked
+intents return a :class:`Request`: its ticket and the command whose ack answers it
+(``/command/<name>`` on the blackboard). Setpoints have no ack and return nothing. Nothing here
+blocks: requests are sent after the tick, as the commander always did.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal, Protocol
+
+from executive.mission.model import Waypoint
+from executive.state import GlobalPosition, HomePosition
+from executive.vehicles import AutopilotName
+
+VtolState = Literal["FW", "MC"]
+
+
+@dataclass(frozen=True, slots=True)
+class Request:
+    """An acked request: its ticket, the command whose ack answers it (a ``/command/<name>`` key) and how it was asked."""
+
+    ticket: int
+    command: str  # MAV_CMD name without prefix: DO_SET_MODE, NAV_TAKEOFF...
+    how: str = ""  # for feedback: the mode, or the command, that carries the intent
+
+
+@dataclass(frozen=True, slots=True)
+class Capabilities:
+    """What one autopilot firmware offers a mission (mode names as its heartbeat shows them)."""
+
+    autopilot: AutopilotName
+    safe_mode: str  # where Ctrl-C, a crash or the end of a mission leaves the vehicle
+    guided_mode: str  # the mode that follows the executive's targets
+    route_mode: str  # the mode that flies the autopilot's own route
+    vehicles: frozenset[str]  # vehicle kinds (executive.vehicles) this firmware drives
+    transition_anywhere: bool  # a VTOL transition is taken by command in any mode in flight
+    takeoff_alt_amsl: bool  # NAV_TAKEOFF's altitude is above sea level (else above home)
+
+
+class AutopilotPort(Protocol):
+    """The intents and capabilities behaviours use; a back end per firmware implements them."""
+
+    @property
+    def capabilities(self) -> Capabilities: ...
+
+    def mode_name(self, mode: str) -> str:
+        """What the heartbeat shows for a mode the trees name the ArduPilot way (``GUIDED`` -> ``OFFBOARD`` on PX4)."""
+        ...
+
+    # -- acked intents -----------------------------------------------------------------------
+    def set_mode(self, mode: str) -> Request:
+        """A named mode, where a tree really needs one (KeyError if the firmware has no such mode)."""
+        ...
+
+    def hold(self) -> Request:
+        """Stop and hold where the vehicle is: the safe mode."""
+        ...
+
+    def arm(self, *, force: bool = False) -> Request: ...
+
+    def disarm(self, *, force: bool = False) -> Request: ...
+
+    def reposition(self, lat: float, lon: float, alt_m: float) -> Request:
+        """Go to a point (altitude above home), acked; the autopilot switches to the mode that does it."""
+        ...
+
+    def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:
+        """Climb to ``alt_m`` above home (already airborne: climb on above where the vehicle is)."""
+        ...
+
+    def land(self, mode: str | None = None) -> Request:
+        """Land where the vehicle is (``mode``: the tree's landing mode, else the firmware's)."""
+        ...
+
+    def return_home(self) -> Request: ...
+
+    def transition(
+        self, to: VtolState, *, mode: str | None, position: GlobalPosition | None, heading_deg: float, mc_mode: str, ahead_m: float
+    ) -> Request | None:
+        """A VTOL to fixed-wing or multicopter flight; None when it cannot be asked (no position to go ahead from)."""
+        ...
+
+    def change_speed(self, speed_m_s: float, *, airspeed: bool = False) -> Request: ...
+
+    def start_route(self) -> Request:
+        """Fly the route held by the autopilot."""
+        ...
+
+    def set_home(self, lat: float | None = None, lon: float | None = None, alt_m: float = 0.0) -> Request: ...
+
+    def cancel(self, request: Request | None) -> bool:
+        """Forget a request that no longer matters (its behaviour was interrupted); whether one was pending."""
+        ...
+
+    # -- setpoints (no ack; re-sent by the behaviour) ------------------------------------------
+    def go_to(self, target: Waypoint) -> None:
+        """Head for a waypoint in the guided mode (a sub's with its depth or height above the seabed)."""
+        ...
+
+    def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:
+        """Head for a point of the local NED frame in the guided mode."""
+        ...
+
+    def hold_depth(self, lat: float, lon: float, *, depth_m: float | None = None, altitude_m: float | None = None) -> None:
+        """A sub's depth (below the surface) or height above the seabed at a point."""
+        ...
+
+    # -- the autopilot's own route -------------------------------------------------------------
+    def route_differs(self, waypoints: Sequence[Waypoint], held: object | None) -> str | None:
+        """Why the autopilot's route (``/vehicle/mission_items``) is not ``waypoints``; None when it is."""
+        ...
+
+    @property
+    def route_transfer_idle(self) -> bool:
+        """No route transfer is running (another may have started one)."""
+        ...
+
+    def upload_route(self, waypoints: Sequence[Waypoint], home: HomePosition | None) -> int:
+        """Upload a route (read back before it counts); the transfer's ticket (``/link/mission_transfer``)."""
+        ...
