@@ -11,11 +11,10 @@ from executive.clock import ManualClock
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
-from executive.testing import AUTOPILOT, GCS, FakeLink
-from tests_support import ObedientAutopilot
+from executive.testing import AUTOPILOT, GCS, FakeLink, ObedientAutopilot
 from trees._parts import mission_root
 
-MANUAL, HOLD, LOITER, GUIDED = 0, 4, 5, 15
+MANUAL, HOLD, LOITER, GUIDED = "MANUAL", "HOLD", "LOITER", "GUIDED"
 
 
 class Rig:
@@ -35,8 +34,9 @@ class Rig:
             self.autopilot.beat()
             self.runtime.tick()
 
-    def modes_sent(self) -> list[int]:
-        return [int(m.param2) for m in self.link.take("COMMAND_LONG") if m.command == mavlink.MAV_CMD_DO_SET_MODE]
+    def modes_sent(self) -> list[str]:
+        modes = self.runtime.commander.modes
+        return [modes.decode(int(m.param2)) for m in self.link.take("COMMAND_LONG") if m.command == mavlink.MAV_CMD_DO_SET_MODE]
 
     def texts(self) -> list[str]:
         return [m.text for m in self.link.take("STATUSTEXT")]

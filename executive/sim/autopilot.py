@@ -858,8 +858,9 @@ class ArduRoverSim(ArduPilotSim):
         if self.mode not in ("GUIDED", "AUTO", "RTL", "SMART_RTL") or not 0.0 < speed <= self.vehicle.limits.max_m_s:
             return _M.MAV_RESULT_FAILED
         self._guided_speed = speed
-        if self._driving and self._destination is not None:
-            self.vehicle.drive_to(*self._destination, speed)
+        if self._driving:
+            assert isinstance(self.vehicle, SurfaceVehicle)
+            self.vehicle.change_speed(speed)  # the same target (a corner driven through stays one)
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_reposition(self, cmd: Command) -> int:
