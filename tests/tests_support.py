@@ -25,4 +25,3 @@ def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> 
         return runtime, runtime.run()
     finally:
         link.close()
-
