@@ -226,9 +226,26 @@ def test_nothing_is_commanded_while_a_person_has_the_vehicle_and_the_reaction_co
     r.tick()
     r.vehicle.set(link__up=False, vehicle__ekf=EKF_LOST)
     assert r.tick(20) == [R] * 20 and r.sent() == []  # the pilot drives: not fought
-    r.vehicle.set(rc__channels=RC_OK)  # the switch goes back, the link is still down
-    assert r.tick(10) == [R] * 10 and r.sent() == []  # the person has it until the switch has been back for 1 s
+    r.vehicle.set(rc__channels=RC_OK)  # the switch goes back, the link is still down, the vehicle still in MANUAL: a person drives it
+    assert r.tick(20) == [R] * 20 and r.sent() == []
+    r.vehicle.set(vehicle__mode="GUIDED")  # out of the person's mode (and the switch back for over 1 s): the reaction at once
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
+
+
+@pytest.mark.parametrize("mode", ["MANUAL", "ACRO", "STEERING"])
+def test_no_failsafe_changes_the_mode_while_a_person_drives_in_a_pilot_mode(rig, mode: str, caplog) -> None:
+    """A pilot mode (set by a ground station, the RC or us at the operator's request), no take-over switch: RC loss is the autopilot's job."""
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover")
+    r.vehicle.set(vehicle__mode=mode)
+    r.tick()
+    r.vehicle.set(rc__connected=False, rc__channels=(0,) * 8)  # the operator's transmitter drops out
+    assert r.tick(10) == [R] * 10 and r.sent() == []
+    said = f"failsafe rc_loss: RC transmitter gone (every channel 0) -> wait: hands off (the vehicle is in {mode}: a person drives it; "
+    assert said in caplog.text
+    assert "RC loss is the autopilot's own RC failsafe's job" in caplog.text
+    r.vehicle.set(rc__connected=True, rc__channels=RC_OK)  # back: the work goes on, nothing was commanded
+    assert r.tick() == [R] and r.sent() == []
 
 
 def test_a_person_with_the_vehicle_is_not_fought_by_an_abort_either(rig) -> None:
