@@ -28,6 +28,7 @@ import py_trees
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request
+from executive.behaviours.actions import SetMode
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import (
     Armed,
@@ -107,6 +108,10 @@ class Failsafe(TimedBehaviour):
         self._conditions = {g: condition_of(g) for g in self.guards}
         self.left_in: str | None = None
         self._own_disarm = False  # kept across a pause: the vehicle is still ours to re-arm
+        # kept across re-entries: after a recovery, until the recovered condition's time limit, a refused mode change is asked again
+        self._resume_until: float | None = None
+        self._resume_causes = ""
+        self._retry_said = False
         self._leg = 0
         self._reset()
 
@@ -139,6 +144,8 @@ class Failsafe(TimedBehaviour):
             self.autopilot.cancel(ticket)
         if self._since and all(g.status == Status.SUCCESS for g in self.guards):
             causes = ", ".join(self._name(g) for g in self._since)
+            self._resume_until = max(since + self.policy_of(g).timeout_s for g, since in self._since.items())
+            self._resume_causes, self._retry_said = causes, False
             log.warning(
                 "failsafe %s: recovered after %.1f s -> resume leg %d/%d", causes, self.elapsed, self._leg + 1, self.get("/mission/leg_count")
             )
@@ -157,7 +164,7 @@ class Failsafe(TimedBehaviour):
         for g in new:
             self._since[g] = now
         if not failing:
-            return self._rearm(now) if self._own_disarm else self._nothing_to_wait_for()
+            return self._rearm(now) if self._own_disarm else self._retry_refused_mode(now) or self._nothing_to_wait_for()
         self._rearm_from = None
         why = "; ".join(f"{g.name} {reason}" for g, reason in failing.items())
         person = next((g for g in failing if g.pilot_in_control and self.policy_of(g).reaction == "wait"), None)
@@ -236,6 +243,36 @@ class Failsafe(TimedBehaviour):
             self._tickets.append(self.autopilot.arm())
         self.feedback_message = f"re-arming ({now - self._rearm_from:.0f}/{limit:g} s)"
         return Status.RUNNING
+
+    def _retry_refused_mode(self, now: float) -> Status | None:
+        """RUNNING when the work, resumed after a recovery, failed on a refused mode change and the recovery's time is not up.
+
+        The firmware's own failsafe may still be latched (ArduRover refuses GUIDED and AUTO for about
+        a second after its EKF recovered: ``failsafe.ekf``, Rover/ekf_check.cpp, Rover/mode.cpp): the
+        work is ticked again next tick and asks again, until the recovered condition's time limit.
+        """
+        if self._resume_until is None or now > self._resume_until:
+            return None
+        refused = self._refused_mode_change()
+        if refused is None:
+            return None
+        if not self._retry_said:
+            self._retry_said = True
+            log.warning(
+                "failsafe %s: recovered, but %s -> asked again until the recovery's time limit (%.0f s more)",
+                self._resume_causes, refused, self._resume_until - now,
+            )  # fmt: skip
+        self.feedback_message = f"resuming after {self._resume_causes}: {refused}; asking again"
+        return Status.RUNNING
+
+    def _refused_mode_change(self) -> str | None:
+        """Why the guarded work failed on a mode change (the branch this failsafe stands behind), if it did."""
+        if self.parent is None or not self.parent.children or self.parent.children[0] is self:
+            return None
+        for node in self.parent.children[0].iterate():
+            if isinstance(node, SetMode) and node.status == Status.FAILURE:
+                return f"{node.name}: {node.feedback_message}"
+        return None
 
     def _nothing_to_wait_for(self) -> Status:
         self.feedback_message = ""  # the branch it stands behind failed: that is the reason to report
