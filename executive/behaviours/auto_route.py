@@ -24,7 +24,15 @@ from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState
 from executive.mission.route import Route
-from executive.state import GlobalPosition, HomePosition, MissionCurrent, MissionItemReached, MissionTransferStatus, TransferState
+from executive.state import (
+    MISSION_STATE_COMPLETE,
+    GlobalPosition,
+    HomePosition,
+    MissionCurrent,
+    MissionItemReached,
+    MissionTransferStatus,
+    TransferState,
+)
 
 #: The autopilot mode that drives its own mission.
 AUTO = "AUTO"
@@ -156,7 +164,7 @@ class DriveRouteInAuto(TimedBehaviour):
         if why is not None:
             return f"the route is not on the autopilot yet: {why}"
         mode = self.get("/vehicle/mode")
-        if mode != AUTO:
+        if mode != self.autopilot.mode_name(AUTO):
             return f"switch C to the middle (AUTO) drives the route; the mode is {mode}"
         if not self.get("/vehicle/armed"):
             return "the vehicle is disarmed (it arms in MANUAL only: switch C up, switch D down)"
@@ -169,6 +177,8 @@ class DriveRouteInAuto(TimedBehaviour):
         current: MissionCurrent | None = self.get("/vehicle/mission_current")
         if current is not None and current.time >= self._driving_since and current.seq >= 1:
             done = current.seq - 1
+        if current is not None and current.time >= self._driving_since and current.state == MISSION_STATE_COMPLETE:
+            done = n  # PX4 says so (and loiters at the end), rather than reporting the last item reached
         reached: MissionItemReached | None = self.get("/vehicle/mission_reached")
         if reached is not None and reached.time >= self._driving_since:
             done = max(done, reached.seq)
