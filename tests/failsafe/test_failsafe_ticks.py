@@ -22,7 +22,7 @@ from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
-from executive.testing import AUTOPILOT, EKF_READY, FakeLink, Harness, Vehicle
+from executive.testing import EKF_READY, FakeLink, Harness, ObedientAutopilot, Vehicle
 from executive.vehicles import PROFILES
 from trees._parts import guarded, mission_root, standard_guards
 
@@ -267,30 +267,12 @@ def test_a_disarm_reaction_brings_an_armed_guard_with_it() -> None:
     assert any(isinstance(g, Armed) for g in failsafe_guards(disarming, [LinkAlive(), RcFresh()]))
 
 
-class ObedientRover:
-    """Answers mode commands at once on the fake link and beats every tick, armed."""
-
-    def __init__(self, link: FakeLink) -> None:
-        self.link, self.mode = link, "GUIDED"
-        self._send = link.send
-        link.send = self.receive  # type: ignore[method-assign]
-
-    def receive(self, msg: Any) -> None:
-        self._send(msg)
-        if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-            self.mode = {v: k for k, v in PROFILES["rover"].modes.items()}[int(msg.param2)]
-            self.link.incoming.append(AUTOPILOT.command_ack(msg.command, 0, 0, 0, 1, 191))
-        if msg.get_type() == "HEARTBEAT":
-            base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
-            self.link.incoming.append(AUTOPILOT.heartbeat(mavlink.MAV_TYPE_GROUND_ROVER, 3, base, PROFILES["rover"].modes[self.mode], 4))
-
-
 def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(clock: ManualClock, vehicle: Vehicle) -> None:
     mission = make_mission()
     link = FakeLink()
     root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
     runtime = build_runtime(mission, link, clock, root=root, safe_timeout_s=2.0)
-    rover = ObedientRover(link)
+    rover = ObedientAutopilot(link)
     runtime.mission_state.start()
     original = runtime.tick
 
