@@ -48,7 +48,7 @@ def sent_modes(link) -> list[tuple[int, int]]:
 
 
 def test_the_first_accepted_of_a_mode_change_is_not_its_result(px4, harness, vehicle, link):
-    vehicle.set(vehicle__mode="AUTO.LOITER")
+    vehicle.set(vehicle__mode="AUTO.LOITER", link__last_heartbeat=99.0)
     node = SetMode("RTL", confirm_by_ack=True)
     h = harness(node)
     assert h.tick() == R
@@ -73,7 +73,7 @@ def test_a_mode_change_is_confirmed_by_the_heartbeat(px4, harness, vehicle, link
 
 
 def test_on_ardupilot_the_first_accepted_is_the_result(autopilot, harness, vehicle):
-    vehicle.set(vehicle__mode="HOLD")
+    vehicle.set(vehicle__mode="HOLD", link__last_heartbeat=99.0)
     node = SetMode("GUIDED", confirm_by_ack=True)
     h = harness(node)
     h.tick()
