@@ -16,6 +16,7 @@ from executive import blackboard
 from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.clock import Clock
+from executive.intervention import InterventionWatch
 from executive.io.heading import HeadingFilter
 from executive.io.instruments import refusal as instrument_refusal
 from executive.io.mavlink.commander import Commander
@@ -163,7 +164,9 @@ def build_runtime(
     wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper]
     for plug in plugs:
         plug(wiring)
-    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), ap.heartbeat]
+    # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
+    intervention = InterventionWatch(clock, ap.commander, state, PROFILES[mission.vehicle], mission.rc)
+    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), intervention, ap.heartbeat]
     wiring.writers += [
         Step("autopilot port", ap.port.service),
         Step("commands", ap.commander.flush),

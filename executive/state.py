@@ -257,7 +257,12 @@ class MissionCurrent:
 
 @dataclass(frozen=True, slots=True)
 class MissionItemReached:
-    """MISSION_ITEM_REACHED: the last item the vehicle reported reached."""
+    """MISSION_ITEM_REACHED: the last item the vehicle reported reached, and the highest since the vehicle's mission last changed.
+
+    ``highest`` is latched by the reader: two reports drained in one tick (item 3, then a GUIDED
+    arrival's item 0) lose nothing.
+    """
 
     seq: int
     time: float
+    highest: int = -1
