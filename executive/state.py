@@ -207,6 +207,10 @@ class CommandStatus:
     result_name: str = "no ack"  # the result without the MAV_RESULT_ prefix, e.g. TEMPORARILY_REJECTED
 
 
+#: MISSION_CURRENT.mission_state: the mission is finished (MAVLink's MISSION_STATE_COMPLETE; PX4 sends it, then loiters).
+MISSION_STATE_COMPLETE = 5
+
+
 class TransferOperation(StrEnum):
     """What a mission transfer does."""
 
@@ -253,7 +257,12 @@ class MissionCurrent:
 
 @dataclass(frozen=True, slots=True)
 class MissionItemReached:
-    """MISSION_ITEM_REACHED: the last item the vehicle reported reached."""
+    """MISSION_ITEM_REACHED: the last item the vehicle reported reached, and the highest since the vehicle's mission last changed.
+
+    ``highest`` is latched by the reader: two reports drained in one tick (item 3, then a GUIDED
+    arrival's item 0) lose nothing.
+    """
 
     seq: int
     time: float
+    highest: int = -1
