@@ -21,13 +21,14 @@ from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import explain_failure
-from executive.state import EkfFlags, EkfStatus, GlobalPosition
+from executive.state import EkfFlags, EkfStatus, GlobalPosition, Rangefinder
 from executive.testing import EKF_READY
 from executive.vehicles import PROFILES, SUB_MODES
 
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 START = (44.0950000, 9.8630000)
 SEABED_M = 30.0
+SONAR_MIN_M, SONAR_MAX_M = 0.5, 30.0  # RNGFND1_MIN/RNGFND1_MAX
 LIMITS = {
     "max_goal_distance_m": 1000.0,
     "speed_m_s": {"min": 0.1, "max": 1.0},
@@ -88,7 +89,6 @@ class ScriptedSub:
         self.mode, self.armed = "MANUAL", False
         self.target: tuple[float, float] | None = None
         self.depth_target: float | None = None
-        self.altitude_target: float | None = None
         self.commands: list[tuple[Any, ...]] = []
         self.received = 0
         self.refuse: set[str] = set()
@@ -104,13 +104,15 @@ class ScriptedSub:
         self.vehicle.set(vehicle__mode=self.mode, vehicle__armed=self.armed)
         if self.position_known:
             self.vehicle.set(vehicle__position=GlobalPosition(self.lat, self.lon, -self.depth, self.speed_over_m_s, 0, 0, 0, 0))
-        self.vehicle.set(vehicle__altitude_above_bottom_m=self.altitude if self.sonar else None)
+        good = self.sonar and SONAR_MIN_M <= self.altitude <= SONAR_MAX_M
+        reading = Rangefinder(self.altitude, SONAR_MIN_M, SONAR_MAX_M, "good" if good else "invalid", 0.0) if self.sonar else None
+        self.vehicle.set(vehicle__altitude_above_bottom_m=self.altitude if good else None, vehicle__rangefinder=reading)
 
     def _where(self, lat: float, lon: float) -> str:
         return next((wp.name for wp in self.mission.waypoints if distance(lat, lon, wp.lat, wp.lon) < 0.05), "in place")
 
     def _record(self, entry: tuple[Any, ...]) -> None:
-        if entry[0] in ("depth", "altitude") and self.commands and self.commands[-1] == entry:
+        if entry[0] == "depth" and self.commands and self.commands[-1] == entry:
             return
         self.commands.append(entry)
 
@@ -121,7 +123,7 @@ class ScriptedSub:
             refused = mode in self.refuse
             if not refused:
                 self.mode = mode
-                self.target = self.depth_target = self.altitude_target = None
+                self.target = self.depth_target = None
         elif msg.command == _M.MAV_CMD_COMPONENT_ARM_DISARM:
             self._record(("arm", msg.param1))
             refused = False
@@ -137,11 +139,8 @@ class ScriptedSub:
         lat, lon = msg.lat_int / 1e7, msg.lon_int / 1e7
         if msg.coordinate_frame == _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT:
             self._record(("depth", round(-msg.alt, 3), self._where(lat, lon)))
-            self.depth_target, self.altitude_target = -msg.alt, None
-        elif msg.coordinate_frame == _M.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT:
-            self._record(("altitude", round(msg.alt, 3), self._where(lat, lon)))
-            self.depth_target, self.altitude_target = None, msg.alt
-        else:
+            self.depth_target = -msg.alt
+        else:  # the terrain frame among them: ArduSub drops it without terrain data (GCS_MAVLink_Sub.cpp), never send it
             raise AssertionError(f"unexpected frame {msg.coordinate_frame}")
         self.target = (lat, lon)
 
@@ -155,8 +154,8 @@ class ScriptedSub:
         if self.armed and self.mode == "GUIDED" and self.target is not None:
             d, b = distance_bearing(self.lat, self.lon, *self.target)
             self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
-            wanted = self.depth_target if self.depth_target is not None else self.seabed_m - (self.altitude_target or 0.0)
-            self.depth += max(-self.dz_m, min(self.dz_m, wanted - self.depth))
+            if self.depth_target is not None:
+                self.depth += max(-self.dz_m, min(self.dz_m, self.depth_target - self.depth))
         elif self.armed and self.mode == "SURFACE":
             self.depth = max(0.0, self.depth - self.dz_m)
             if self.depth <= 0.1:
@@ -242,7 +241,8 @@ def test_each_leg_sets_its_speed_reaches_its_depth_or_altitude_goes_there_then_t
         ("arm", 1.0),
         ("mode", "GUIDED"),
         ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north"),
-        ("speed", 0.8), ("altitude", 20.0, "north"), ("altitude", 20.0, "east"),  # first where the sub is (it stopped on north)
+        # first where the sub is (it stopped on north), 20 m above the seabed as a depth: 5 m deep + 25 m measured - 20 m
+        ("speed", 0.8), ("depth", 10.0, "north"), ("depth", 10.0, "east"),
         ("depth", 3.0, "east"), ("depth", 3.0, "back"),  # no speed on this leg: none is sent
         ("mode", "SURFACE"),
         ("mode", "POSHOLD"),
@@ -257,7 +257,7 @@ def test_each_leg_sets_its_speed_reaches_its_depth_or_altitude_goes_there_then_t
     [
         ({"control_mode": "depth", "depth_m": 5.0}, [("depth", 5.0, "in place"), ("depth", 5.0, "wp")]),
         ({"depth_m": 5.0}, [("depth", 5.0, "in place"), ("depth", 5.0, "wp")]),  # no control mode: a depth
-        ({"control_mode": "altitude", "altitude_m": 20.0}, [("altitude", 20.0, "in place"), ("altitude", 20.0, "wp")]),
+        ({"control_mode": "altitude", "altitude_m": 20.0}, [("depth", 10.0, "in place"), ("depth", 10.0, "wp")]),  # 30 m measured - 20 m
         ({"control_mode": "depth"}, [("depth", 0.0, "wp")]),  # no depth: at the surface
         ({"control_mode": "depth", "depth_m": 0.0}, [("depth", 0.0, "in place"), ("depth", 0.0, "wp")]),
     ],
@@ -266,7 +266,7 @@ def test_each_leg_sets_its_speed_reaches_its_depth_or_altitude_goes_there_then_t
 def test_the_control_mode_decides_the_setpoints_of_a_leg(make_survey: MakeSurvey, waypoint: dict[str, Any], setpoints: list[tuple[Any, ...]]) -> None:
     survey = make_survey(sub_mission({**NORTH, "name": "wp", **waypoint}))
     assert survey.run(100)[-1] == Status.SUCCESS
-    assert [c for c in survey.sub.commands if c[0] in ("depth", "altitude")] == setpoints
+    assert [c for c in survey.sub.commands if c[0] == "depth"] == setpoints
 
 
 def test_a_last_leg_at_the_surface_needs_no_surfacing(make_survey: MakeSurvey) -> None:
@@ -369,7 +369,7 @@ def test_a_failed_guard_holds_the_sub_until_it_recovers_then_the_same_leg_goes_o
     survey = make_survey(sub_mission(*SURVEY))
     wp = SURVEY[leg]
     survey.run_to_leg(leg)
-    survey.under_way(*(("depth", wp["depth_m"]) if "depth_m" in wp else ("altitude", wp["altitude_m"])), wp["name"])
+    survey.under_way("depth", wp["depth_m"] if "depth_m" in wp else SEABED_M - wp["altitude_m"], wp["name"])  # an altitude leg: as a depth
     before = len(survey.sub.commands)
     # stuck (a current, a thruster): what goes wrong lasts past the guard's hold time, and the leg does not end meanwhile
     step, dz = survey.sub.step_m, survey.sub.dz_m
