@@ -16,7 +16,9 @@ from executive import blackboard
 from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.clock import Clock
+from executive.intervention import InterventionWatch
 from executive.io.heading import HeadingFilter
+from executive.io.instruments import refusal as instrument_refusal
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
@@ -71,6 +73,7 @@ class Wiring:
     status: StatusSource
     operator: Operator
     autopilot: AutopilotLink
+    simulated_vehicle: bool = True  # the built-in simulator: a simulated instrument may take the samples
     readers: list[Service] = field(default_factory=list)
     writers: list[Service] = field(default_factory=list)
     paced: list[PacedService] = field(default_factory=list)
@@ -112,6 +115,11 @@ def _autopilot_link(
     heartbeat = Heartbeat(link, clock, system_id=system_id)
     port = Autopilot(commander, transfer, PROFILES[mission.vehicle], forced=forced)
     reader.on_autopilot = port.adopt
+
+    def streams_of(name: str) -> None:
+        streams.rates = rates_for(mission.vehicle, name)
+
+    port.on_backend = streams_of
     return AutopilotLink(link, commander, transfer, reader, heartbeat, streams, keeper, ground_station, port)
 
 
@@ -129,11 +137,13 @@ def build_runtime(
     root: py_trees.behaviour.Behaviour | None = None,
     progress: Progress | None = None,
     autopilot: AutopilotName | None = None,
+    simulated_vehicle: bool = True,
 ) -> Runtime:
     """A runtime for ``mission`` on the autopilot at the other end of ``link``, with the optional parts ``plugs`` add.
 
     ``target_system``/``target_component``: the autopilot to command, alone (None: the only one on the link).
     ``autopilot``: the back end (``ardupilot``, ``px4``) whatever the heartbeat says (None: the heartbeat's).
+    ``simulated_vehicle``: the autopilot is the built-in simulator (False: samples must come from a real instrument).
 
     Readers run in this order: the autopilot link, the plugs' readers (other links, sensors,
     operator inputs), then what derives from them (heading filter, RC switches) and our heartbeat.
@@ -143,15 +153,23 @@ def build_runtime(
     blackboard.reset()
     state = MissionState()
     status = StatusSource("runtime status")
-    operator = Operator(state, mission.vehicle, status=status.snapshot, clock=clock)
+    operator = Operator(
+        state, mission.vehicle, status=status.snapshot, clock=clock, refuse=lambda m: instrument_refusal(m, simulator=simulated_vehicle)
+    )
     ap = _autopilot_link(mission, link, clock, state, operator, system_id, (target_system, target_component), autopilot)
-    wiring = Wiring(mission, clock, system_id, state, status, operator, ap)
+    wiring = Wiring(mission, clock, system_id, state, status, operator, ap, simulated_vehicle)
     wiring.readers.append(Step("mavlink reader", ap.reader.drain))
     wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper]
     for plug in plugs:
         plug(wiring)
-    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), ap.heartbeat]
-    wiring.writers += [Step("commands", ap.commander.flush), Step("mission transfers", ap.mission_transfer.flush)]
+    # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
+    intervention = InterventionWatch(clock, ap.commander, state, PROFILES[mission.vehicle], mission.rc)
+    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), intervention, ap.heartbeat]
+    wiring.writers += [
+        Step("autopilot port", ap.port.service),
+        Step("commands", ap.commander.flush),
+        Step("mission transfers", ap.mission_transfer.flush),
+    ]
     return Runtime(wiring, rate_hz=rate_hz, safe_timeout_s=safe_timeout_s, root=root, progress=progress)
 
 

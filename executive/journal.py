@@ -39,7 +39,7 @@ CREATE TABLE IF NOT EXISTS legs (
 );
 CREATE TABLE IF NOT EXISTS samples (
     run INTEGER NOT NULL REFERENCES runs(id), leg INTEGER NOT NULL, lat REAL, lon REAL, started REAL, finished REAL, reads TEXT NOT NULL,
-    UNIQUE (run, leg)
+    instrument TEXT NOT NULL DEFAULT '', UNIQUE (run, leg)
 );
 CREATE TABLE IF NOT EXISTS events (
     run INTEGER NOT NULL REFERENCES runs(id), t REAL NOT NULL, wall REAL NOT NULL, kind TEXT NOT NULL, text TEXT NOT NULL
@@ -76,6 +76,8 @@ class Journal:
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=FULL")
         self._db.executescript(SCHEMA)
+        if "instrument" not in {row[1] for row in self._db.execute("PRAGMA table_info(samples)")}:  # a journal from before instruments
+            self._db.execute("ALTER TABLE samples ADD COLUMN instrument TEXT NOT NULL DEFAULT ''")
         self.run: int | None = None
         self._leg: int | None = None
 
@@ -139,10 +141,10 @@ class Journal:
         return Route(tuple(Waypoint.model_validate(w) for w in json.loads(waypoints)), leg, Home.model_validate_json(home) if home else None)
 
     def samples(self, run: int) -> tuple[Sample, ...]:
-        rows = self._db.execute("SELECT leg, lat, lon, started, finished, reads FROM samples WHERE run = ? ORDER BY leg", (run,))
+        rows = self._db.execute("SELECT leg, lat, lon, started, finished, reads, instrument FROM samples WHERE run = ? ORDER BY leg", (run,))
         return tuple(
-            Sample(leg, lat, lon, tuple(SampleRead(**r) for r in json.loads(reads)), started, finished)
-            for leg, lat, lon, started, finished, reads in rows
+            Sample(leg, lat, lon, tuple(SampleRead(**r) for r in json.loads(reads)), started, finished, instrument)
+            for leg, lat, lon, started, finished, reads, instrument in rows
         )
 
     def report(self, run: int | None = None) -> dict[str, Any]:
@@ -180,7 +182,7 @@ class Journal:
         if self.run is not None:
             reads = json.dumps([asdict(r) for r in sample.reads])
             row = {"run": self.run, "leg": sample.leg_index, "lat": sample.lat, "lon": sample.lon}
-            self._insert("samples", **row, started=sample.started, finished=sample.finished, reads=reads)
+            self._insert("samples", **row, started=sample.started, finished=sample.finished, reads=reads, instrument=sample.instrument)
 
     def _on_route(self, route: Route, reason: str) -> None:
         if self.run is not None:

@@ -47,7 +47,8 @@ class Operator:
     ``status`` supplies the status snapshot for ``status`` requests; ``vehicle`` is the kind of
     vehicle this executive drives (an uploaded mission for another kind is refused). A route edit
     at the vehicle's position needs one the EKF vouches for, no older than ``max_position_age_s``
-    (checked with ``clock``, when given).
+    (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
+    (its samples could not be real), if it cannot.
     """
 
     def __init__(
@@ -57,12 +58,14 @@ class Operator:
         status: Callable[[], dict[str, Any]] | None = None,
         clock: Clock | None = None,
         max_position_age_s: float = 2.0,
+        refuse: Callable[[Mission], str | None] | None = None,
     ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
         self._status = status
         self._clock = clock
         self.max_position_age_s = max_position_age_s
+        self._refuse = refuse
         self._bb = blackboard.reader("operator", ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload"])
 
     def request(self, op: str, source: str = "operator", **args: Any) -> Reply:
@@ -100,6 +103,9 @@ class Operator:
             return self._reply(False, "\n".join(str(e) for e in exc.errors))
         if mission.vehicle != self.vehicle:
             return self._reply(False, f"{filename}: vehicle: this executive drives a {self.vehicle}, not a {mission.vehicle}")
+        why = self._refuse(mission) if self._refuse is not None else None
+        if why is not None:
+            return self._reply(False, f"{filename}: {why}")
         try:
             here = self._here()
         except routes.RouteError:

@@ -181,6 +181,7 @@ class SamplerStatus:
     reads: tuple[SampleRead, ...]
     reason: str
     time: float
+    instrument: str = ""  # which instrument reads ("simulated", "serial:/dev/ttyUSB0")
 
 
 @dataclass(frozen=True, slots=True)
@@ -193,6 +194,7 @@ class Sample:
     reads: tuple[SampleRead, ...]
     started: float
     finished: float
+    instrument: str = ""  # which instrument took it ("" in journals from before instruments were recorded)
 
 
 class CommandState(StrEnum):
@@ -271,7 +273,12 @@ class MissionCurrent:
 
 @dataclass(frozen=True, slots=True)
 class MissionItemReached:
-    """MISSION_ITEM_REACHED: the last item the vehicle reported reached."""
+    """MISSION_ITEM_REACHED: the last item the vehicle reported reached, and the highest since the vehicle's mission last changed.
+
+    ``highest`` is latched by the reader: two reports drained in one tick (item 3, then a GUIDED
+    arrival's item 0) lose nothing.
+    """
 
     seq: int
     time: float
+    highest: int = -1

@@ -17,6 +17,7 @@ from __future__ import annotations
 import py_trees
 
 from executive import blackboard
+from executive.autopilot.port import Request
 from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, GoTo, Guard, LinkAlive, SetMode, WaitForGuards, WaitUntil
 from executive.behaviours.actions import CommandAction
 from executive.io.mavlink.dialect import mavlink
@@ -50,12 +51,13 @@ class BeaconOn(CommandAction):
         super().__init__(name)
         self.relay = relay
 
-    def request(self) -> int:
-        return self.commander.command_long(mavlink.MAV_CMD_DO_SET_RELAY, [self.relay, 1])
+    def request(self) -> Request:
+        commander = self.autopilot.backend.commander  # the MAVLink back end's own: the autopilot port has no intent for a relay
+        return Request(commander.command_long(mavlink.MAV_CMD_DO_SET_RELAY, [self.relay, 1]), self.command_name, f"relay {self.relay} on")
 
     def confirmed(self) -> bool:
         status = self.get(blackboard.command_key(self.command_name))
-        return status is not None and status.ticket == self._ticket and status.state is CommandState.ACCEPTED
+        return status is not None and self._ticket is not None and status.ticket == self._ticket.ticket and status.state is CommandState.ACCEPTED
 
 
 def build(mission: Mission, satellites: int = 8) -> py_trees.behaviour.Behaviour:

@@ -7,7 +7,7 @@ from executive.autopilot.port import Capabilities, Request, VtolState
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.state import GlobalPosition, HomePosition
-from executive.vehicles import PROFILES, VehicleProfile
+from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 
 
 class ArduPilotPort(MavlinkPort):
@@ -22,7 +22,7 @@ class ArduPilotPort(MavlinkPort):
             safe_mode=profile.safe_mode,
             guided_mode=profile.guided_mode,
             route_mode="AUTO",
-            vehicles=frozenset(PROFILES),
+            vehicles=AUTOPILOT_VEHICLES["ardupilot"],
             transition_anywhere=False,
             takeoff_alt_amsl=False,
         )

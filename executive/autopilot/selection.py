@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from executive.autopilot.ardupilot import ArduPilotPort
 from executive.autopilot.mavlink_port import MavlinkPort
@@ -20,6 +20,9 @@ from executive.vehicles import VehicleProfile
 log = logging.getLogger(__name__)
 
 BACK_ENDS: dict[str, type[MavlinkPort]] = {"ardupilot": ArduPilotPort, "px4": Px4Port}
+#: Commands each firmware acks twice (the first ACCEPTED only says "received"): PX4's MAVLink receiver and then its
+#: commander both answer DO_SET_MODE (issue 12; src/modules/commander/Commander.cpp handle_command answers on its own loop).
+DOUBLE_ACKED: dict[str, frozenset[int]] = {"ardupilot": frozenset(), "px4": frozenset({mavlink.MAV_CMD_DO_SET_MODE})}
 
 
 def autopilot_name(heartbeat_autopilot: int) -> AutopilotName:
@@ -44,6 +47,9 @@ class Autopilot:
         self.backend: MavlinkPort = BACK_ENDS[forced or "ardupilot"](commander, transfer, profile)
         if forced == "px4":
             self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4, profile.mav_type)
+            self._commander.double_acked = DOUBLE_ACKED["px4"]
+        #: Called with the back end's name once it is known (the stream set-up differs per firmware).
+        self.on_backend: Callable[[str], None] | None = None
 
     def adopt(self, heartbeat_autopilot: int, mav_type: int) -> None:
         """The reader found the autopilot: use its back end (unless one was forced) and its mode table."""
@@ -51,9 +57,16 @@ class Autopilot:
         if self.forced is not None and name != autopilot_name(heartbeat_autopilot):
             log.warning("the autopilot's heartbeat says %s; %s was forced", autopilot_name(heartbeat_autopilot), name)
         self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4 if name == "px4" else heartbeat_autopilot, mav_type)
+        self._commander.double_acked = DOUBLE_ACKED[name]
         if name != self.backend.name:
             self.backend = BACK_ENDS[name](self._commander, self._transfer, self._profile)
             log.info("autopilot back end: %s", name)
+        if self.on_backend is not None:
+            self.on_backend(name)
+
+    def service(self) -> None:
+        """Every tick, before the commands are sent: the back end's own traffic (PX4's offboard setpoint stream)."""
+        self.backend.service()
 
     # -- the port, forwarded -------------------------------------------------------------------
     @property

@@ -93,28 +93,36 @@ class CommandAction(TimedBehaviour):
 class SetMode(CommandAction):
     """Put the autopilot in a flight mode (by name); confirmed by the heartbeat.
 
-    With ``confirm_by_ack`` the ack ACCEPTED of its own request confirms it too: ArduPilot changes
-    mode before it acks (GCS_MAVLINK::_set_mode_common, libraries/GCS_MAVLink/GCS_Common.cpp, acks
-    ACCEPTED only when set_mode succeeded), while its heartbeat comes once a second. For a step
-    that runs once (in a sequence with memory): a step re-ticked every tick would ask again until
-    the heartbeat shows the mode.
+    With ``confirm_by_ack`` the ack ACCEPTED of its own latest request confirms it too, until the
+    next heartbeat speaks: ArduPilot changes mode before it acks (GCS_MAVLINK::_set_mode_common,
+    libraries/GCS_MAVLink/GCS_Common.cpp, acks ACCEPTED only when set_mode succeeded), while its
+    heartbeat comes once a second. A step re-ticked every tick does not ask again meanwhile; a
+    heartbeat after the ack showing another mode (someone changed it since) is believed.
     """
 
-    reads = ("/vehicle/mode",)
+    reads = ("/vehicle/mode", "/link/last_heartbeat")
     command_name = "DO_SET_MODE"
 
     def __init__(self, mode: str, name: str | None = None, confirm_timeout_s: float = 5.0, confirm_by_ack: bool = False) -> None:
         super().__init__(name or f"Set {mode.upper()}", confirm_timeout_s)
         self.mode = mode.upper()
         self.confirm_by_ack = confirm_by_ack
+        self._last_request: Request | None = None  # kept across runs: its ack still counts until a heartbeat comes
 
     def request(self) -> Request:
-        return self.autopilot.set_mode(self.mode)
+        self._last_request = self.autopilot.set_mode(self.mode)
+        return self._last_request
 
     def confirmed(self) -> bool:
-        if self.confirm_by_ack and _accepted(self.get(blackboard.command_key(self.command_name)), self._ticket):
+        if self.get("/vehicle/mode") == self.autopilot.mode_name(self.mode):
             return True
-        return self.get("/vehicle/mode") == self.autopilot.mode_name(self.mode)
+        if not self.confirm_by_ack:
+            return False
+        status: CommandStatus | None = self.get(blackboard.command_key(self.command_name))
+        heartbeat: float | None = self.get("/link/last_heartbeat")
+        if status is None or heartbeat is None or not _accepted(status, self._last_request):
+            return False
+        return heartbeat <= status.time
 
 
 class Arm(CommandAction):

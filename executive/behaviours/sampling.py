@@ -66,8 +66,8 @@ class Sample(TimedBehaviour):
         if mine and status is not None and status.state is SamplerState.DONE:
             self._finished = True
             lat, lon = (self._position.lat, self._position.lon) if self._position is not None else (math.nan, math.nan)
-            self.mission_state.record_sample(SampleRecord(self.leg_index, lat, lon, status.reads, self.started, status.time))
-            self.feedback_message = f"{leg}: sampled, {len(status.reads)} reads"
+            self.mission_state.record_sample(SampleRecord(self.leg_index, lat, lon, status.reads, self.started, status.time, status.instrument))
+            self.feedback_message = f"{leg}: sampled, {len(status.reads)} reads ({status.instrument})"
             return Status.SUCCESS
         if mine and status is not None and status.state is SamplerState.FAILED:
             self._finished = True

@@ -44,6 +44,7 @@ def render(report: dict[str, Any]) -> str:
         summary = ", ".join(f"{name} {sum(v) / len(v):.2f}" for name, v in reads.items())
         lines.append(
             f"  waypoint {sample['leg_index'] + 1} at {sample['lat']:.7f}, {sample['lon']:.7f}: {len(sample['reads'])} reads, mean {summary}"
+            + (f" ({sample['instrument']})" if sample.get("instrument") else "")
         )
     if report.get("routes"):
         lines.append(f"route edits ({len(report['routes'])}):")

@@ -12,9 +12,12 @@ import logging
 import math
 import random
 import zlib
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import ClassVar, Protocol
+
+from pydantic import BaseModel, ConfigDict
 
 from executive import blackboard
 from executive.clock import Clock
@@ -26,8 +29,15 @@ log = logging.getLogger(__name__)
 _EPSILON_S = 1e-6  # clock times closer than this are the same instant
 
 
+class InstrumentError(Exception):
+    """An instrument that cannot be used (unknown, not allowed here, its port cannot be opened); ``str()`` says why."""
+
+
 class Sampler(Protocol):
     """What the Sample action and the runtime need from a sampling instrument."""
+
+    #: Which instrument takes the samples ("simulated", "serial:/dev/ttyUSB0"): every sample recorded says it.
+    instrument: str
 
     def start(self, leg_index: int) -> int:
         """Start sampling for a leg (superseding any sample in progress); returns the ticket its status will carry."""
@@ -40,6 +50,123 @@ class Sampler(Protocol):
     def service(self) -> None:
         """Called by the runtime every tick: take what is due and publish ``/sampler/status``."""
         ...
+
+    def close(self) -> None:
+        """Release the instrument (its port); the sampler is not used after."""
+        ...
+
+
+class NoOptions(BaseModel):
+    """An instrument that takes no options besides ``type``."""
+
+    model_config = ConfigDict(strict=True, extra="forbid", frozen=True)
+
+
+class InstrumentSampler(ABC):
+    """A sampler's bookkeeping, whatever the instrument: tickets, ``/sampler/status``, the sample's duration, cancel.
+
+    A back end (``sampling.instrument.type``) subclasses it: :meth:`_collect` returns the readings
+    the instrument gave since the last call (called every tick, sampling or not: readings outside
+    a sample are dropped), :attr:`instrument` names it, :meth:`close` releases it. ``Options``
+    validates the mission's ``sampling.instrument`` fields besides ``type``; ``simulated`` back ends
+    make readings up and run only with the built-in simulator. A sample is DONE after
+    ``sampling.duration_s`` with at least one reading, FAILED with none.
+    """
+
+    Options: ClassVar[type[BaseModel]] = NoOptions
+    simulated: ClassVar[bool] = False
+
+    def __init__(self, clock: Clock, sampling: SamplingOptions, options: BaseModel | None = None) -> None:
+        self._clock = clock
+        self.options = sampling
+        self.instrument_options = options if options is not None else self.Options()
+        self._bb = blackboard.writer("sampler", ["/sampler/status"])
+        self._tickets = 0
+        self._status: SamplerStatus | None = None
+        self._leg_index: int | None = None
+        self._started = 0.0
+        self._reads: list[SampleRead] = []
+
+    @property
+    @abstractmethod
+    def instrument(self) -> str:
+        """Which instrument this is, as samples record it."""
+
+    @abstractmethod
+    def _collect(self, now: float) -> list[SampleRead]:
+        """The readings the instrument gave since the last call (never blocks)."""
+
+    def _begin(self) -> None:  # noqa: B027 - a hook: most instruments need nothing
+        """A sample starts (after :attr:`_started` is set)."""
+
+    def close(self) -> None:  # noqa: B027 - a hook: most instruments hold nothing
+        """Release the instrument."""
+
+    @property
+    def status(self) -> SamplerStatus | None:
+        """The status last published."""
+        return self._status
+
+    @property
+    def sampling(self) -> bool:
+        return self._status is not None and self._status.state is SamplerState.SAMPLING
+
+    def start(self, leg_index: int) -> int:
+        self._tickets += 1
+        self._leg_index = leg_index
+        self._started = self._clock.now()
+        self._reads = []
+        self._begin()
+        log.info("sampler: sampling for leg %d with %s (ticket %d)", leg_index + 1, self.instrument, self._tickets)
+        self._publish(SamplerState.SAMPLING, "")
+        return self._tickets
+
+    def cancel(self) -> None:
+        self.fail("cancelled")
+
+    def fail(self, reason: str) -> None:
+        """End the sample in progress FAILED (what a cancel or an instrument fault does)."""
+        if self.sampling:
+            log.warning("sampler: leg %d: %s", (self._leg_index or 0) + 1, reason)
+            self._publish(SamplerState.FAILED, reason)
+
+    def service(self) -> None:
+        now = self._clock.now()
+        fresh = self._collect(now)
+        if not self.sampling:
+            return
+        self._reads += fresh
+        if now + _EPSILON_S >= self._started + self.options.duration_s:
+            if self._reads:
+                self._publish(SamplerState.DONE, "")
+            else:
+                self.fail(f"no reading from {self.instrument} in {self.options.duration_s:g} s")
+        elif fresh:
+            self._publish(SamplerState.SAMPLING, "")
+
+    def _publish(self, state: SamplerState, reason: str) -> None:
+        self._status = SamplerStatus(self._tickets, state, tuple(self._reads), reason, self._clock.now(), self.instrument)
+        self._bb.set("/sampler/status", self._status)
+
+
+class UnavailableSampler(InstrumentSampler):
+    """Stands for an instrument that could not be had (its port gone): every sample fails at once, with the reason."""
+
+    def __init__(self, clock: Clock, sampling: SamplingOptions, reason: str) -> None:
+        super().__init__(clock, sampling)
+        self.reason = reason
+
+    @property
+    def instrument(self) -> str:
+        return "no instrument"
+
+    def _collect(self, now: float) -> list[SampleRead]:
+        return []
+
+    def start(self, leg_index: int) -> int:
+        ticket = super().start(leg_index)
+        self.fail(self.reason)
+        return ticket
 
 
 @dataclass(frozen=True)
@@ -69,16 +196,26 @@ _WAVELENGTH_M = 400.0  # how far apart the simulated water's patches are
 _M_PER_DEG = 111_320.0
 
 
-class SimulatedSampler:
+class SimulatedSampler(InstrumentSampler):
     """A simulated sonde: every ``1/rate_hz`` s one read per sensor, for ``duration_s``, then DONE.
 
     Values vary smoothly with the vehicle's position (read-only from ``/vehicle/position``, or from
-    ``position``) plus seeded noise, so runs are repeatable and two sample points differ.
+    ``position``) plus seeded noise, so runs are repeatable and two sample points differ. Made-up
+    readings: only with the built-in simulator.
     """
 
-    def __init__(self, clock: Clock, options: SamplingOptions, *, position: Callable[[], GlobalPosition | None] | None = None, seed: int = 0) -> None:
-        self._clock = clock
-        self.options = options
+    simulated = True
+
+    def __init__(
+        self,
+        clock: Clock,
+        options: SamplingOptions,
+        instrument_options: BaseModel | None = None,
+        *,
+        position: Callable[[], GlobalPosition | None] | None = None,
+        seed: int = 0,
+    ) -> None:
+        super().__init__(clock, options, instrument_options)
         self._models = {name: SENSOR_MODELS.get(name.lower(), _UNKNOWN_SENSOR) for name in options.sensors}
         unknown = [name for name in options.sensors if name.lower() not in SENSOR_MODELS]
         if unknown:
@@ -86,55 +223,28 @@ class SimulatedSampler:
         self._reader = blackboard.reader("sampler", ["/vehicle/position"])
         self._position = position if position is not None else self._vehicle_position
         self._random = random.Random(seed)
-        self._bb = blackboard.writer("sampler", ["/sampler/status"])
-        self._tickets = 0
-        self._status: SamplerStatus | None = None
-        self._leg_index: int | None = None
-        self._started = 0.0
         self._taken = 0  # read rounds taken for the sample in progress
-        self._reads: list[SampleRead] = []
 
     @property
-    def status(self) -> SamplerStatus | None:
-        """The status last published."""
-        return self._status
+    def instrument(self) -> str:
+        return "simulated"
 
     @property
     def rounds(self) -> int:
         """Read rounds (one read per sensor) in a sample: ``duration_s * rate_hz``, at least one."""
         return max(1, math.floor(self.options.duration_s * self.options.rate_hz + 1e-9))
 
-    def start(self, leg_index: int) -> int:
-        self._tickets += 1
-        self._leg_index = leg_index
-        self._started = self._clock.now()
+    def _begin(self) -> None:
         self._taken = 0
-        self._reads = []
-        log.info("sampler: sampling for leg %d (ticket %d)", leg_index + 1, self._tickets)
-        self._publish(SamplerState.SAMPLING, "")
-        return self._tickets
 
-    def cancel(self) -> None:
-        self.fail("cancelled")
-
-    def fail(self, reason: str) -> None:
-        """End the sample in progress FAILED (what a cancel or an instrument fault does)."""
-        if self._status is not None and self._status.state is SamplerState.SAMPLING:
-            log.warning("sampler: leg %d: %s", (self._leg_index or 0) + 1, reason)
-            self._publish(SamplerState.FAILED, reason)
-
-    def service(self) -> None:
-        if self._status is None or self._status.state is not SamplerState.SAMPLING:
-            return
-        now = self._clock.now()
-        taken_before = self._taken
+    def _collect(self, now: float) -> list[SampleRead]:
+        if not self.sampling:
+            return []
+        reads: list[SampleRead] = []
         while self._taken < self.rounds and self._due(self._taken + 1) <= now + _EPSILON_S:
             self._taken += 1
-            self._read_round(self._due(self._taken))
-        if self._taken == self.rounds and now + _EPSILON_S >= self._started + self.options.duration_s:
-            self._publish(SamplerState.DONE, "")
-        elif self._taken != taken_before:
-            self._publish(SamplerState.SAMPLING, "")
+            reads += self._read_round(self._due(self._taken))
+        return reads
 
     # -- internals ---------------------------------------------------------------------------
     def _vehicle_position(self) -> GlobalPosition | None:
@@ -145,13 +255,15 @@ class SimulatedSampler:
         """When read round ``round_number`` (1-based) is due: every ``1/rate_hz`` s, never after the end."""
         return self._started + min(round_number / self.options.rate_hz, self.options.duration_s)
 
-    def _read_round(self, t: float) -> None:
+    def _read_round(self, t: float) -> list[SampleRead]:
         here = self._position()
+        reads = []
         for name, model in self._models.items():
             value = model.base + model.amplitude * self._field(name, here) + self._random.gauss(0.0, model.noise)
             if model.minimum is not None:
                 value = max(model.minimum, value)
-            self._reads.append(SampleRead(name, round(value, model.decimals), model.unit, t))
+            reads.append(SampleRead(name, round(value, model.decimals), model.unit, t))
+        return reads
 
     @staticmethod
     def _field(name: str, here: GlobalPosition | None) -> float:
@@ -163,7 +275,3 @@ class SimulatedSampler:
         east = here.lon * _M_PER_DEG * math.cos(math.radians(here.lat))
         k = 2.0 * math.pi / _WAVELENGTH_M
         return math.sin(k * north + phase) * math.cos(k * east - phase)
-
-    def _publish(self, state: SamplerState, reason: str) -> None:
-        self._status = SamplerStatus(self._tickets, state, tuple(self._reads), reason, self._clock.now())
-        self._bb.set("/sampler/status", self._status)

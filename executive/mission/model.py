@@ -49,7 +49,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from executive.geofence import Geofence, open_ring, polygon_problems
 from executive.mission.errors import Path
-from executive.vehicles import PROFILES
+from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES, AutopilotName
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
 ControlMode = Literal["depth", "altitude"]
@@ -135,6 +135,18 @@ class RcConfig(BaseModel):
     switch_channels: SwitchChannels = Field(default_factory=SwitchChannels)
 
 
+class InstrumentConfig(BaseModel):
+    """The instrument that takes the samples: its ``type`` (a back end), and that back end's own fields.
+
+    Built in: ``simulated`` (the built-in simulator only) and ``serial`` (``port``, ``baud``,
+    ``columns``, ``units``: a line-protocol CTD or sonde); plugins add types (the
+    ``executive.instruments`` entry-point group). Each back end checks its fields.
+    """
+
+    model_config = ConfigDict(strict=True, extra="allow", frozen=True, allow_inf_nan=False)
+    type: str = Field(min_length=1, max_length=64, description="simulated, serial, or a plugin's type")
+
+
 class SamplingOptions(BaseModel):
     """goto_sample: what happens at a sample point."""
 
@@ -143,6 +155,9 @@ class SamplingOptions(BaseModel):
     rate_hz: float = Field(1.0, gt=0.0, le=100.0, description="sensor reads per second")
     sensors: list[str] = Field(default_factory=lambda: ["temperature", "conductivity", "ph", "dissolved_oxygen"], min_length=1, max_length=32)
     hold_mode: str = Field("LOITER", description="the mode the vehicle holds the sample point in")
+    instrument: InstrumentConfig | None = Field(
+        None, description="what takes the samples (default: the simulated instrument, with the built-in simulator only)"
+    )
 
 
 class EnuPoint(BaseModel):
@@ -335,6 +350,9 @@ class Mission(BaseModel):
     version: Literal[1] = Field(description="mission file format version")
     name: str = Field(min_length=1, max_length=128)
     vehicle: VehicleKind
+    autopilot: AutopilotName | None = Field(
+        None, description="the autopilot firmware (default: the one the HEARTBEAT names); px4 starts a simulated PX4 without --mavlink"
+    )
     tree: str = Field("waypoints", pattern=r"^[a-z][a-z0-9_]*$", description="module of trees/ that builds the tree")
     description: str | None = Field(None, max_length=4096)
     auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
@@ -369,6 +387,23 @@ TREE_RULES: dict[str, tuple[frozenset[str], str | None]] = {
     "vtol_transit": (frozenset({"vtol"}), "vtol"),
     "ugv_rc_route": (frozenset({"rover"}), "rc_route"),
 }
+
+
+#: Trees that need what only ArduPilot does, and why.
+ARDUPILOT_ONLY_TREES: dict[str, str] = {
+    "ugv_rc_route": "its route is driven by the autopilot's own mission, uploaded the ArduPilot way (home at item 0; PX4 flies item 0)",
+}
+
+
+def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
+    """Why ``autopilot`` cannot fly ``mission`` (empty when it can)."""
+    errors = []
+    kinds = AUTOPILOT_VEHICLES[autopilot]
+    if mission.vehicle not in kinds:
+        errors.append(f"{autopilot} drives {', '.join(sorted(kinds))} here, not a {mission.vehicle}")
+    if autopilot != "ardupilot" and mission.tree in ARDUPILOT_ONLY_TREES:
+        errors.append(f"tree {mission.tree} needs ArduPilot: {ARDUPILOT_ONLY_TREES[mission.tree]}")
+    return errors
 
 
 def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
@@ -416,8 +451,14 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
         errors += _vtol_errors(mission)
     if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":
         errors.append((("simulator", "q_guided_mode"), "only the simulated vtol (ArduPlane) has Q_GUIDED_MODE"))
+    if mission.autopilot is not None:
+        errors += [(("autopilot",), why) for why in autopilot_errors(mission, mission.autopilot)]
     if mission.geofence is not None:
         errors += _geofence_errors(mission)
+    if mission.sampling is not None and mission.sampling.instrument is not None:
+        from executive.io.instruments import option_errors  # the back ends (and their plugins) import this module
+
+        errors += option_errors(mission.sampling.instrument, ("sampling", "instrument"))
     errors += _failsafe_errors(mission)
     return errors
 

@@ -342,6 +342,14 @@ class FaultInjector:
                 elif isinstance(f, GpsGlitch):
                     msg.flags |= _M.EKF_GPS_GLITCHING
                     msg.pos_horiz_variance = max(msg.pos_horiz_variance, GLITCH_POS_VARIANCE)
+        elif kind == "ESTIMATOR_STATUS":  # PX4's estimator health: innovation test ratios (the position loss is the autopilot's own)
+            for f in active:
+                if isinstance(f, EkfDegradation):
+                    for field in ("vel_ratio", "pos_horiz_ratio", "pos_vert_ratio", "mag_ratio"):
+                        setattr(msg, field, max(getattr(msg, field), f.variance))
+                elif isinstance(f, GpsGlitch):
+                    msg.flags |= _M.ESTIMATOR_GPS_GLITCH
+                    msg.pos_horiz_ratio = max(msg.pos_horiz_ratio, GLITCH_POS_VARIANCE)
         elif kind == "RC_CHANNELS" and any(isinstance(f, RcLoss) for f in active):
             msg.chancount, msg.rssi = 0, 0
             for n in range(1, 19):

@@ -538,13 +538,14 @@ class Px4Sim(ArduPilotSim):
 
     def _on_setpoint(self, msg: MAVLinkMessage) -> None:
         """SET_POSITION_TARGET_*: any setpoint keeps the offboard signal alive; in OFFBOARD a position is flown to."""
-        values = (msg.vx, msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw)
+        local = msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED"
+        values = (msg.vx, msg.vy, msg.vz, msg.afx, msg.afy, msg.afz, msg.yaw, *((msg.x, msg.y, msg.z) if local else (msg.alt,)))
         if not all(math.isfinite(value) for value in values):
-            return  # mavlink_receiver.cpp: only finite setpoints are taken
+            return  # mavlink_receiver.cpp: a setpoint with any non-finite value is dropped whole, ignored fields too
         goal = None
         if not msg.type_mask & 0x7:  # any position bit set: the position is ignored
-            if msg.get_type() == "SET_POSITION_TARGET_LOCAL_NED":
-                if msg.coordinate_frame != _M.MAV_FRAME_LOCAL_NED or not all(map(math.isfinite, (msg.x, msg.y, msg.z))):
+            if local:
+                if msg.coordinate_frame != _M.MAV_FRAME_LOCAL_NED:
                     return
                 lat, lon = self.vehicle._latlon(msg.x, msg.y)
                 goal = (lat, lon, -msg.z)

@@ -97,11 +97,13 @@ class Lockstep:
     the mission's own ``simulator.events`` (a path relative to ``mission_dir``). ``can=True`` puts
     the simulated AgileX base (bunker only) and the runtime on an in-process CAN bus;
     ``obstacles=True`` gives the runtime a camera (:meth:`send_obstacles`). Other keyword arguments
-    go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=[journal_recorder(j)]``...).
-    ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4 instead
-    of ArduPilot. Everything the runtime sends reaches the autopilot at the instant it is sent; what the autopilot sends arrives at the runtime's next
-    tick (one tick of latency, as over a fast link), each with its header; ``as_bytes`` packs and
-    parses them as a real link does (see :class:`Wire`).
+    go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=``...);
+    ``options_for_clock(clock)`` returns more of them, made with the simulation's clock (a journal's
+    plug); ``injector(faults, clock)`` makes the fault injector (a subclass that watches the vehicle).
+    ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4
+    instead of ArduPilot. Everything the runtime sends reaches the autopilot at the instant it is
+    sent; what the autopilot sends arrives at the runtime's next tick (one tick of latency, as over
+    a fast link), each with its header; ``as_bytes`` packs and parses them as a real link does (see :class:`Wire`).
     """
 
     def __init__(
@@ -120,6 +122,8 @@ class Lockstep:
         firmware: dict[str, float] | None = None,
         as_bytes: bool = False,
         autopilot: str = "ardupilot",
+        options_for_clock: Callable[[LockstepClock], dict[str, Any]] | None = None,
+        injector: Callable[[list[Fault], LockstepClock], FaultInjector] | None = None,
         **runtime_options: Any,
     ) -> None:
         sim = mission.simulator or SimulatorOptions()
@@ -133,7 +137,7 @@ class Lockstep:
             ekf_ready_after_s=sim.ekf_ready_after_s if ekf_ready_after_s is None else ekf_ready_after_s,
             **{**(firmware_options(mission) if autopilot == "ardupilot" else {}), **(firmware or {})},  # q_guided_mode is ArduPlane's
         )
-        self.faults = self._injector(mission, events, mission_dir)
+        self.faults = self._injector(mission, events, mission_dir, injector)
         if self.faults is not None:
             self.faults.attach(self.autopilot)
         self.uplink = Wire(1, EXECUTIVE_COMPONENT, as_bytes=as_bytes)
@@ -155,13 +159,21 @@ class Lockstep:
         self._scheduled: list[tuple[float, Callable[[Lockstep], object]]] = []
         self._started = False
         self._stop_when: Callable[[], bool] | None = None
+        if options_for_clock is not None:  # what needs the clock itself (a journal, a recorder) is made here
+            runtime_options = {**runtime_options, **options_for_clock(self.clock)}
         plugs = list(runtime_options.pop("plugs", ()))
         plugs += [can_base(self.can_bus)] if self.can_bus is not None else []
         plugs += [obstacle_camera(obstacle_socket)] if obstacle_socket is not None else []
         self.runtime = build_runtime(mission, self.link, self.clock, rate_hz=rate_hz, plugs=plugs, **runtime_options)
 
     # -- set-up ---------------------------------------------------------------------------------
-    def _injector(self, mission: Mission, events: Sequence[str | Path | Fault], mission_dir: str | Path | None) -> FaultInjector | None:
+    def _injector(
+        self,
+        mission: Mission,
+        events: Sequence[str | Path | Fault],
+        mission_dir: str | Path | None,
+        make: Callable[[list[Fault], LockstepClock], FaultInjector] | None,
+    ) -> FaultInjector | None:
         from executive.sim.faults import FaultInjector, load_faults
 
         faults: list[Fault] = []
@@ -169,6 +181,8 @@ class Lockstep:
         sources: list[str | Path | Fault] = [Path(mission_dir or ".") / own] if own else []
         for source in [*sources, *events]:
             faults += load_faults(source, vehicle=mission.vehicle).faults if isinstance(source, str | Path) else [source]
+        if make is not None:
+            return make(faults, self.clock)
         return FaultInjector(faults, self.clock) if faults else None
 
     def _open_can(self) -> can.BusABC:
@@ -234,11 +248,11 @@ class Lockstep:
         self._scheduled.append((t_s, action))
         self._scheduled.sort(key=lambda entry: entry[0])
 
-    def send_obstacles(self, scan: dict[str, Any]) -> None:
-        """The camera sends one scan (the JSON object of README's ``--obstacles``); needs ``obstacles=True``."""
+    def send_obstacles(self, scan: dict[str, Any] | bytes) -> None:
+        """The camera sends one datagram: a scan (the JSON object of README's ``--obstacles``), or raw bytes; needs ``obstacles=True``."""
         if self._camera is None:
             raise RuntimeError("this simulation has no camera: Lockstep(..., obstacles=True)")
-        self._camera.send(json.dumps(scan).encode())
+        self._camera.send(scan if isinstance(scan, bytes) else json.dumps(scan).encode())
 
     # -- running --------------------------------------------------------------------------------
     def connect(self, limit_s: float = 10.0) -> None:

@@ -97,7 +97,7 @@ def test_samples_and_records_the_sample(make, running, vehicle):
     assert (recorded.lat, recorded.lon) == (running.target.lat, running.target.lon)
     assert recorded.reads == status().reads and len(recorded.reads) == 4
     assert py_trees.blackboard.Blackboard.get("/mission/samples") == (recorded,)
-    assert node.feedback_message == "leg 1/4: sampled, 4 reads"
+    assert node.feedback_message == "leg 1/4: sampled, 4 reads (simulated)"
 
 
 def test_feedback_while_sampling(make, running):

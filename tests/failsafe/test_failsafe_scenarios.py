@@ -1,7 +1,6 @@
-"""Each failsafe in the simulator: the fault file of missions/faults/ injected into a running mission, over real UDP at 50x.
+"""Each failsafe in the simulator: the fault file of missions/faults/ injected into a running mission, in the lock-step simulation.
 
-The mission drives a straight 100 m line north in four legs (no corner: at 50x the heading filter's
-reception time stamps are too coarse for a 90° turn). The fault files are timed for
+The mission drives a straight 100 m line north in four legs. The fault files are timed for
 missions/rover_square.yaml (EKF ready at 40 s); here the EKF is ready at 2 s, so every fault comes
 38 s earlier: on the second leg. Each scenario checks that the policy's reaction leaves in the tick
 its guard fails (the condition true on the blackboard for the guard's hold time: most hold at once) or the next, that
@@ -24,7 +23,7 @@ import pytest
 import yaml
 
 from executive import blackboard
-from executive.assembly import build_runtime, journal_recorder
+from executive.assembly import journal_recorder
 from executive.behaviours import (
     BatteryAbove,
     EkfOk,
@@ -35,16 +34,14 @@ from executive.behaviours import (
     RcNotLost,
     RcNotTakingOver,
 )
-from executive.clock import ScaledClock
+from executive.clock import Clock
 from executive.geofence import Geofence
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
-from executive.io.mavlink.link import PymavlinkLink
 from executive.journal import Journal, JournalLogHandler
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.runtime import Runtime
-from executive.sim import SimServer
-from executive.sim.faults import FaultInjector, load_faults
+from executive.sim.faults import load_faults
 from executive.state import EkfFlags
 
 ROOT = Path(__file__).parents[2]
@@ -144,49 +141,47 @@ def shifted_faults(name: str, **changes: Any) -> list[Any]:
 
 
 @pytest.fixture
-def run_scenario(tmp_path: Path) -> Iterator[Callable[[Scenario], tuple[Any, Record, dict[str, Any], str]]]:
+def run_scenario(tmp_path: Path, lockstep) -> Iterator[Callable[[Scenario], tuple[Any, Record, dict[str, Any], str]]]:
     """Runs a scenario's mission with its faults: the outcome, the record, the journal's report and the vehicle's final mode."""
     handlers: list[logging.Handler] = []
 
     def run(scenario: Scenario) -> tuple[Any, Record, dict[str, Any], str]:
         mission = line_mission(**scenario.changes)
-        clock = ScaledClock(50.0)
-        faults = FaultInjector(shifted_faults(scenario.fault_file, **scenario.fault_changes), clock)
         record = Record()
-        journal = Journal(tmp_path / f"{scenario.condition}.db", clock)
-        with SimServer("rover", clock=clock, home=(*HOME, 0.0), faults=faults, ekf_ready_after_s=40.0 - SHIFT_S) as sim:
-            link = PymavlinkLink(sim.url_for_client)
-            try:
-                runtime = build_runtime(mission, link, clock, plugs=[journal_recorder(journal)])
-                send = link.send
+        journals: list[Journal] = []
 
-                def spy(msg: MAVLinkMessage) -> None:  # a command leaves in the flush at the end of tick runtime.ticks
-                    if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-                        record.modes.append((runtime.ticks, runtime.commander.modes.decode(int(msg.param2))))
-                    send(msg)
+        def journal_plug(clock: Clock) -> dict[str, Any]:
+            journals.append(Journal(tmp_path / f"{scenario.condition}.db", clock))
+            return {"plugs": [journal_recorder(journals[0])]}
 
-                link.send = spy  # type: ignore[method-assign]
-                bb = blackboard.reader("scenario", BB_KEYS)
-                tick = runtime.tick
+        faults = shifted_faults(scenario.fault_file, **scenario.fault_changes)
+        sim = lockstep(mission, home=(*HOME, 0.0), events=faults, options_for_clock=journal_plug)
+        runtime, link, journal = sim.runtime, sim.link, journals[0]
+        send = link.send
 
-                def observed_tick() -> Any:
-                    status = tick()
-                    record.facts.append({key: bb.get(key) for key in BB_KEYS})
-                    record.times.append(clock.now())
-                    return status
+        def spy(msg: MAVLinkMessage) -> None:  # a command leaves in the flush at the end of tick runtime.ticks
+            if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+                record.modes.append((runtime.ticks, runtime.commander.modes.decode(int(msg.param2))))
+            send(msg)
 
-                runtime.tick = observed_tick  # type: ignore[method-assign]
-                for handler in (_Warnings(record, runtime), JournalLogHandler(journal)):
-                    logging.getLogger("executive").addHandler(handler)
-                    handlers.append(handler)
-                assert runtime.connect(10.0 * clock.speedup)
-                outcome = runtime.run()
-            finally:
-                link.close()
-            final_mode = sim.autopilot.mode
+        link.send = spy  # type: ignore[method-assign]
+        bb = blackboard.reader("scenario", BB_KEYS)
+        tick = runtime.tick
+
+        def observed_tick() -> Any:
+            status = tick()
+            record.facts.append({key: bb.get(key) for key in BB_KEYS})
+            record.times.append(sim.clock.now())
+            return status
+
+        runtime.tick = observed_tick  # type: ignore[method-assign]
+        for handler in (_Warnings(record, runtime), JournalLogHandler(journal)):
+            logging.getLogger("executive").addHandler(handler)
+            handlers.append(handler)
+        outcome = sim.run_to_end(limit_s=600)
         report = journal.report()
         journal.close()
-        return outcome, record, report, final_mode
+        return outcome, record, report, sim.autopilot.mode
 
     yield run
     for handler in handlers:

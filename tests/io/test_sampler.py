@@ -33,7 +33,7 @@ def test_one_read_per_sensor_each_second_then_done(clock):
     sampler = sampler_at(clock)
     assert status() is None
     ticket = sampler.start(2)
-    assert status() == SamplerStatus(ticket, SamplerState.SAMPLING, (), "", 100.0)
+    assert status() == SamplerStatus(ticket, SamplerState.SAMPLING, (), "", 100.0, "simulated")
     timeline = []
     for _ in range(7):  # 0.5 ... 3.5 s
         clock.advance(0.5)

@@ -14,6 +14,7 @@ from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.io.mavlink.dialect import mavlink as m
 from executive.io.mavlink.modes import PX4_MODES
 from executive.sim import SimServer, make_autopilot
+from executive.sim.faults import EkfDegradation, FaultInjector, GpsGlitch
 from executive.sim.px4 import (
     COM_DISARM_PRFLT,
     COM_FAIL_ACT_T,
@@ -447,3 +448,45 @@ def test_heartbeat_loss_of_a_mission_computer_and_of_a_ground_station_is_reporte
     assert gcs.texts(out) == ["Connection to ground station lost"]  # COM_DL_LOSS_T: 10 s
     assert gcs.texts(gcs.send(gcs.mav.heartbeat_encode(m.MAV_TYPE_GCS, m.MAV_AUTOPILOT_INVALID, 0, 0, 0))) == ["GCS connection regained"]
     assert gcs.ap.mode == "AUTO.LOITER"  # NAV_DLL_ACT disabled: nothing else
+
+
+def test_injected_estimator_faults_show_in_estimator_status(px4: MakePx4) -> None:
+    gcs = px4()
+    faults = FaultInjector(
+        [
+            EkfDegradation(kind="ekf_degradation", at_s=1.0, for_s=3.0, variance=1.5, lose_position=True),
+            GpsGlitch(kind="gps_glitch", at_s=1.0, for_s=3.0, offset_m=20.0),
+        ],
+        gcs.clock,
+    )
+    faults.attach(gcs.ap)
+    seen: list[MAVLinkMessage] = []
+    before = 0
+    for step in range(20):
+        gcs.clock.advance(0.1)
+        faults.update(gcs.ap)
+        seen += faults.transform(gcs.update())
+        before = len(seen) if step == 10 else before  # 1.1 s: the faults are on
+    status = gcs.of_type(seen, "ESTIMATOR_STATUS")[-1]
+    assert status.flags & m.ESTIMATOR_GPS_GLITCH and not status.flags & m.ESTIMATOR_POS_HORIZ_ABS
+    assert min(status.vel_ratio, status.pos_horiz_ratio, status.pos_vert_ratio) >= 1.5
+    health = gcs.of_type(seen, "SYS_STATUS")[-1].onboard_control_sensors_health
+    assert not health & (m.MAV_SYS_STATUS_AHRS | m.MAV_SYS_STATUS_PREARM_CHECK)
+    assert gcs.of_type(seen[:before], "GLOBAL_POSITION_INT") and not gcs.of_type(seen[before:], "GLOBAL_POSITION_INT")  # none without a position
+
+
+def test_a_setpoint_with_any_non_finite_value_is_dropped_whole(px4: MakePx4) -> None:
+    gcs = airborne(px4)
+    velocity_only = 0x0DC7  # position, acceleration and yaw ignored
+    for _ in range(5):  # position fields NaN though ignored: mavlink_receiver.cpp drops the message
+        gcs.send(
+            gcs.mav.set_position_target_local_ned_encode(
+                0, 1, 1, m.MAV_FRAME_LOCAL_NED, velocity_only, math.nan, math.nan, math.nan, 1, 0, 0, 0, 0, 0, 0, 0
+            )
+        )
+        gcs.run(0.2)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_TEMPORARILY_REJECTED]
+    for _ in range(5):  # the same with zeros keeps the offboard signal alive
+        gcs.send(gcs.mav.set_position_target_local_ned_encode(0, 1, 1, m.MAV_FRAME_LOCAL_NED, velocity_only, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0))
+        gcs.run(0.2)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]

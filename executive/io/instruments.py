@@ -1,0 +1,117 @@
+"""Which instrument takes a mission's samples: the back ends (built in, and plugins of the ``executive.instruments`` entry-point group).
+
+A back end is an :class:`~executive.io.sampler.InstrumentSampler` subclass, named by the
+mission's ``sampling.instrument.type``: ``simulated`` (made-up readings, the built-in simulator
+only) and ``serial`` (a line-protocol instrument, :mod:`executive.io.serial_sampler`) are built
+in; a package adds one with an entry point, as python-can's interfaces are added::
+
+    [project.entry-points."executive.instruments"]
+    mysonde = "mypackage.sonde:SondeSampler"
+
+A mission that samples names its instrument; without one, the simulated instrument is used with
+the built-in simulator and the mission is refused against a real vehicle: samples are real or
+absent, never invented.
+"""
+
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import entry_points
+
+from pydantic import BaseModel, ValidationError
+
+from executive.clock import Clock
+from executive.io.sampler import InstrumentError, InstrumentSampler
+from executive.mission.errors import Path
+from executive.mission.model import InstrumentConfig, Mission, SamplingOptions
+
+GROUP = "executive.instruments"
+BUILT_IN = {"simulated": "executive.io.sampler:SimulatedSampler", "serial": "executive.io.serial_sampler:SerialSampler"}
+
+
+def known() -> list[str]:
+    """Every instrument type: the built-in ones and those plugins add."""
+    return sorted({*BUILT_IN, *(ep.name for ep in entry_points(group=GROUP))})
+
+
+def backend(kind: str) -> type[InstrumentSampler]:
+    """The sampler class of an instrument type; InstrumentError when there is none."""
+    if kind in BUILT_IN:
+        module, _, name = BUILT_IN[kind].partition(":")
+        found = getattr(importlib.import_module(module), name)
+    else:
+        points = [ep for ep in entry_points(group=GROUP) if ep.name == kind]
+        if not points:
+            raise InstrumentError(f"unknown instrument type {kind!r} (known: {', '.join(known())})")
+        found = points[0].load()
+    if not (isinstance(found, type) and issubclass(found, InstrumentSampler)):
+        raise InstrumentError(f"instrument type {kind!r}: {found!r} is not an InstrumentSampler")
+    return found
+
+
+def options_of(config: InstrumentConfig) -> BaseModel:
+    """The instrument's options, validated by its back end (ValidationError, InstrumentError)."""
+    return backend(config.type).Options.model_validate(config.model_extra or {})
+
+
+def option_errors(config: InstrumentConfig, at: Path) -> list[tuple[Path, str]]:
+    """What is wrong with ``sampling.instrument`` (at path ``at``): its type, each of its options."""
+    try:
+        options = backend(config.type).Options
+        options.model_validate(config.model_extra or {})
+    except InstrumentError as exc:
+        return [((*at, "type"), str(exc))]
+    except ValidationError as exc:
+        errors: list[tuple[Path, str]] = []
+        for e in exc.errors(include_url=False):
+            if e["type"] == "missing":
+                errors.append((at, f"{e['loc'][-1]}: required field is missing (type {config.type})"))
+            elif e["type"] == "extra_forbidden":
+                errors.append(((*at, *e["loc"]), f"unknown field (allowed for type {config.type}: {', '.join(['type', *options.model_fields])})"))
+            else:
+                shown = "" if isinstance(e["input"], dict | list) else f"{e['input']!r}: "
+                errors.append(((*at, *e["loc"]), shown + e["msg"].removeprefix("Value error, ")))
+        return errors
+    return []
+
+
+def samples(mission: Mission) -> bool:
+    """The mission takes samples (a sample point, or a sampling section)."""
+    return mission.sampling is not None or any(wp.sample for wp in mission.waypoints)
+
+
+def refusal(mission: Mission, *, simulator: bool) -> str | None:
+    """Why this mission's samples could not be real on this vehicle (``simulator``: the built-in one), or None."""
+    if not samples(mission):
+        return None
+    config = mission.sampling.instrument if mission.sampling is not None else None
+    if config is None:
+        if simulator:
+            return None
+        return (
+            "sampling.instrument: the mission takes samples and names no instrument; against a real vehicle the samples must come "
+            "from one (e.g. {type: serial, port: /dev/ttyUSB0}): the simulated instrument runs only with the built-in simulator"
+        )
+    try:
+        simulated = backend(config.type).simulated
+    except InstrumentError as exc:
+        return f"sampling.instrument.type: {exc}"
+    if simulated and not simulator:
+        return f"sampling.instrument: {config.type!r} makes readings up: only with the built-in simulator, not against a real vehicle"
+    return None
+
+
+def open_sampler(mission: Mission, clock: Clock, *, simulator: bool) -> InstrumentSampler | None:
+    """The sampler of a mission that takes samples (None for one that does not); InstrumentError when it cannot be had here."""
+    why = refusal(mission, simulator=simulator)
+    if why is not None:
+        raise InstrumentError(why)
+    if not samples(mission):
+        return None
+    sampling = mission.sampling or SamplingOptions()
+    config = sampling.instrument or InstrumentConfig(type="simulated")
+    try:
+        options = options_of(config)
+    except ValidationError as exc:
+        raise InstrumentError(f"sampling.instrument: {exc}") from None
+    return backend(config.type)(clock, sampling, options)
