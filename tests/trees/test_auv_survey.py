@@ -499,9 +499,10 @@ def test_the_example_survey_on_the_simulated_ardusub_reaches_each_waypoint_at_it
             assert leg["altitude"] == pytest.approx(wp.altitude_m, abs=0.5), wp.name
         else:
             assert leg["depth"] == pytest.approx(wp.depth_m, abs=0.5), wp.name
-    assert legs[2]["depth"] > 6.0  # 24 m above a seabed 30.5 m deep there: the altitude leg follows the seabed, not a depth
+    # 24 m above a seabed ~50 m deep (ArduSub's SITL), out of the sonar's 30 m from 5 m deep: dived to blind, then followed
+    assert legs[2]["depth"] > 25.0
     assert (end["mode"], end["armed"]) == ("POSHOLD", True) and end["depth"] < 0.2  # surfaced, holding for the pick-up
-    assert end["vehicle_s"] < 180.0
+    assert end["vehicle_s"] < 300.0
 
 
 def test_on_the_simulator_a_sub_1_km_off_refuses_the_survey_without_arming_or_moving() -> None:
