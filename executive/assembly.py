@@ -20,6 +20,7 @@ from executive.intervention import InterventionWatch
 from executive.io.heading import HeadingFilter
 from executive.io.instruments import refusal as instrument_refusal
 from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
@@ -118,6 +119,7 @@ def _autopilot_link(
 
     def streams_of(name: str) -> None:
         streams.rates = rates_for(mission.vehicle, name)
+        heartbeat.mav_type = mavlink.MAV_TYPE_GCS if name == "px4" else mavlink.MAV_TYPE_ONBOARD_CONTROLLER
 
     port.on_backend = streams_of
     return AutopilotLink(link, commander, transfer, reader, heartbeat, streams, keeper, ground_station, port)

@@ -227,6 +227,10 @@ class CommandStatus:
     result_name: str = "no ack"  # the result without the MAV_RESULT_ prefix, e.g. TEMPORARILY_REJECTED
 
 
+#: MISSION_CURRENT.mission_state: the mission is finished (MAVLink's MISSION_STATE_COMPLETE; PX4 sends it, then loiters).
+MISSION_STATE_COMPLETE = 5
+
+
 class TransferOperation(StrEnum):
     """What a mission transfer does."""
 

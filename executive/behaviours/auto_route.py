@@ -24,7 +24,15 @@ from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState
 from executive.mission.route import Route
-from executive.state import GlobalPosition, HomePosition, MissionCurrent, MissionItemReached, MissionTransferStatus, TransferState
+from executive.state import (
+    MISSION_STATE_COMPLETE,
+    GlobalPosition,
+    HomePosition,
+    MissionCurrent,
+    MissionItemReached,
+    MissionTransferStatus,
+    TransferState,
+)
 
 #: The autopilot mode that drives its own mission.
 AUTO = "AUTO"
@@ -90,8 +98,6 @@ class KeepRouteOnAutopilot(ExecutiveBehaviour):
                 self._failure, self._failed_at = status.reason, now
 
 
-#: MISSION_CURRENT mission_state: the autopilot has run its mission to the end.
-MISSION_STATE_COMPLETE = 5
 #: Waypoints closer than this to the first are the same place: a route of them was recorded by a vehicle that never moved.
 SAME_PLACE_M = 1.0
 
@@ -190,7 +196,7 @@ class DriveRouteInAuto(TimedBehaviour):
         if why is not None:
             return f"the route is not on the autopilot yet: {why}"
         mode = self.get("/vehicle/mode")
-        if mode != AUTO:
+        if mode != self.autopilot.mode_name(AUTO):
             return f"switch C to the middle (AUTO) drives the route; the mode is {mode}"
         if not self.get("/vehicle/armed"):
             return "the vehicle is disarmed (it arms in MANUAL only: switch C up, switch D down)"

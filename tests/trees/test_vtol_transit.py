@@ -467,14 +467,18 @@ class Recorder:
     """Stands in for the status line: notes the vtol state and where the aircraft was at each tick."""
 
     def __init__(self) -> None:
-        self.bb = blackboard.reader("test recorder", ["/vehicle/vtol_state", "/vehicle/position", "/mission/leg_index"])
+        self.bb = blackboard.reader("test recorder", ["/vehicle/vtol_state", "/vehicle/position", "/mission/leg_index", "/vehicle/mode"])
         self.vtol_states: list[str] = []
+        self.modes: list[str] = []
         self.positions: list[tuple[int, float, float, float]] = []  # leg index, lat, lon, alt
 
     def update(self, force: bool = False) -> None:
         state = self.bb.get("/vehicle/vtol_state")
         if state is not None and (not self.vtol_states or self.vtol_states[-1] != state):
             self.vtol_states.append(state)
+        mode = self.bb.get("/vehicle/mode")
+        if mode is not None and (not self.modes or self.modes[-1] != mode):
+            self.modes.append(mode)
         position = self.bb.get("/vehicle/position")
         if position is not None:
             self.positions.append((self.bb.get("/mission/leg_index"), position.lat, position.lon, position.alt_rel_m))
@@ -494,15 +498,15 @@ class Flight:
     vehicle_s: float
 
 
-def fly_the_example(faults: list[dict[str, Any]] | None = None) -> Flight:
-    """``missions/vtol_transit.yaml`` on the simulated QuadPlane in the lock-step simulation, with ``faults`` injected."""
+def fly_the_example(faults: list[dict[str, Any]] | None = None, autopilot: str = "ardupilot") -> Flight:
+    """``missions/vtol_transit.yaml`` on the simulated QuadPlane (or PX4 VTOL) in the lock-step simulation, with ``faults`` injected."""
     from executive.sim.faults import FaultPlan
 
     mission = load_mission(ROOT / "missions" / "vtol_transit.yaml")
     assert mission.home is not None and mission.simulator is not None
     events = FaultPlan.model_validate({"version": 1, "faults": faults}).faults if faults else ()
     recorder = Recorder()
-    with Lockstep(mission, events=events, progress=recorder) as sim:
+    with Lockstep(mission, events=events, progress=recorder, autopilot=autopilot) as sim:
         outcome = sim.run_to_end(limit_s=600)
         vehicle_s = sim.clock.now()  # from boot: a few seconds more than the run itself
         ap = sim.autopilot
@@ -523,6 +527,21 @@ def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_eac
         assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
     assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 2.5
     assert flight.vehicle_s < 180.0
+
+
+def test_the_same_example_file_flies_on_the_simulated_px4_vtol() -> None:
+    """The back end follows the heartbeat: OFFBOARD on a setpoint stream, NAV_TAKEOFF AMSL, DO_VTOL_TRANSITION, AUTO.RTL to land."""
+    flight = fly_the_example(autopilot="px4")
+    mission, recorder, end = flight.mission, flight.recorder, flight.end
+    assert str(flight.outcome.status) == "COMPLETED", flight.outcome.reason
+    assert recorder.modes[:4] == ["AUTO.LOITER", "OFFBOARD", "AUTO.TAKEOFF", "AUTO.LOITER"]
+    assert "AUTO.RTL" in recorder.modes
+    states = recorder.vtol_states[recorder.vtol_states.index("MC") :]
+    assert states == ["MC", "TRANSITION_TO_FW", "FW", "TRANSITION_TO_MC", "MC"]
+    for i, wp in enumerate(mission.waypoints):
+        closest = min(math.dist(global_to_local(wp.lat, wp.lon, lat, lon), (0, 0)) for _, lat, lon, _ in recorder.positions)
+        assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
+    assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 10.0
 
 
 def test_the_simulated_quadplane_loses_its_ekf_during_the_climb_and_the_climb_goes_on_once_it_is_back() -> None:
