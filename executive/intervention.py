@@ -10,8 +10,10 @@ the ground-station reporter, a STATUSTEXT; the leg is kept and nothing is comman
 MISSION_START or DO_PAUSE_CONTINUE, or when the vehicle is put back in the mode the leg was in
 (the operator switching back): the tree then starts the leg again, in its own mode.
 
-Not an intervention: a mode the autopilot leaves for its follow-on (ArduSub SURFACE -> ALT_HOLD), and
-a change while the RC take-over switch is high (the ``rc_takeover`` failsafe's business).
+Not an intervention: a mode the autopilot leaves for its follow-on (ArduSub SURFACE -> ALT_HOLD), a
+change while the RC take-over switch is high (the ``rc_takeover`` failsafe's business), and one the
+autopilot's own failsafe announces ("EKF failsafe": our failsafe for the same condition holds and
+resumes the leg, asking again for its mode while the firmware's latch refuses it).
 """
 
 from __future__ import annotations
@@ -88,6 +90,10 @@ class InterventionWatch:
             return
         if self.expected is None or rc_takeover(self.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches")) is not None:
             return  # not yet mid-mission (nothing of ours to keep), or a take-over the rc_takeover failsafe answers
+        failsafe = self._failsafe_text(now)
+        if failsafe is not None:  # the autopilot's own failsafe: our failsafes answer the same condition, and resume the leg's mode
+            log.warning("intervention: %s set by the autopilot (%s): left to the failsafes, no pause", mode, failsafe)
+            return
         reason = f"{mode} set by {self._who(now)}"
         log.warning("intervention: %s (the leg was in %s) -> pause, hands off", reason, self.expected)
         self._paused_here = True
@@ -98,10 +104,11 @@ class InterventionWatch:
         follow_on = previous is not None and mode in (self.profile.follow_on_modes.get(previous), self._commander.follow_on_modes.get(previous))
         return (asked is not None and now - asked <= self.asked_within_s) or follow_on
 
+    def _failsafe_text(self, now: float) -> str | None:
+        """The autopilot's failsafe notice just before the change ("EKF failsafe"), if it sent one."""
+        return next((text for t, text in reversed(self._texts) if now - t <= EXPLAINS_WITHIN_S and "failsafe" in text.lower()), None)
+
     def _who(self, now: float) -> str:
-        failsafe = next((text for t, text in reversed(self._texts) if now - t <= EXPLAINS_WITHIN_S and "failsafe" in text.lower()), None)
-        if failsafe is not None:
-            return f"the autopilot ({failsafe})"
         if now - self._switch_at <= EXPLAINS_WITHIN_S:
             return "the RC"
         return "the ground station"

@@ -101,11 +101,13 @@ def test_the_operator_switching_back_to_the_legs_mode_resumes(rig: Rig) -> None:
     assert rig.modes_sent() == []  # already in it
 
 
-def test_the_autopilots_own_failsafe_is_named(rig: Rig) -> None:
+def test_the_autopilots_own_failsafe_does_not_pause_the_mission(rig: Rig, caplog) -> None:
+    """Its notice ("EKF failsafe") comes with the change: our failsafe for the same condition holds and resumes the leg."""
     rig.link.incoming.append(AUTOPILOT.statustext(mavlink.MAV_SEVERITY_CRITICAL, b"EKF failsafe"))
     rig.autopilot.mode = HOLD
     rig.tick()
-    assert rig.runtime.mission_state.reason == "HOLD set by the autopilot (EKF failsafe)"
+    assert rig.state is MissionStatus.RUNNING
+    assert "intervention: HOLD set by the autopilot (EKF failsafe): left to the failsafes, no pause" in caplog.text
 
 
 def test_a_person_in_manual_is_not_taken_back_when_the_mission_ends(rig: Rig) -> None:
