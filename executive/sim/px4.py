@@ -42,9 +42,12 @@ MAVLink (issue 12) and as its source reads:
   411, TIME_ESTIMATE_TO_TARGET 380), and OPEN_DRONE_ID_LOCATION; STATUSTEXTs over 50 bytes go in
   chunks sharing an ``id`` (``chunk_seq`` 0, 1...).
 
-Not simulated: RC (so the manual modes, POSCTL included, cannot be selected), velocity and
-acceleration setpoints (they keep OFFBOARD alive; the vehicle holds), events (EVENT, 410), the
-return to OFFBOARD when the stream comes back during the failsafe.
+Not simulated, or simplified: RC (so the manual modes, POSCTL included, cannot be selected), velocity
+and acceleration setpoints (they keep OFFBOARD alive; the vehicle holds), events (EVENT, 410), the
+return to OFFBOARD when the stream comes back during the failsafe, parameters; RTL flies straight to
+home at RTL_RETURN_ALT (no climb first, no descent stage); in fixed-wing flight every point is
+circled at NAV_LOITER_RAD and a waypoint counts as reached on that circle; the failsafe texts are
+ours (PX4 reports them as events); unknown mission items are passed over.
 """
 
 from __future__ import annotations
