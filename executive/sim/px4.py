@@ -9,9 +9,9 @@ MAVLink (issue 12) and as its source reads:
   from boot, on the ground too.
 - Commands go from the MAVLink receiver to the commander (src/modules/mavlink/mavlink_receiver.cpp,
   handle_message_command_both): the receiver acks only its own few (message intervals, autopilot
-  version), the commander (src/modules/commander/Commander.cpp, handle_command / answer_command)
-  acks the rest on its next loop, here the next :meth:`update`. MAV_CMD_DO_SET_MODE is acked twice:
-  ACCEPTED at once, then the commander's result (ACCEPTED, or TEMPORARILY_REJECTED after a
+  version, REQUEST_MESSAGE), the commander (src/modules/commander/Commander.cpp, handle_command /
+  answer_command) acks the rest on its next loop, here the next :meth:`update`. MAV_CMD_DO_SET_MODE
+  is acked twice: the receiver passes it on yet acks it ACCEPTED at once, then the commander's result (ACCEPTED, or TEMPORARILY_REJECTED after a
   STATUSTEXT "Switching to <mode> is currently not available", Commander::printRejectMode). A
   SET_MODE message is a DO_SET_MODE for the commander: its ack carries command 176.
 - Arming is refused (TEMPORARILY_REJECTED, "Arming denied: Resolve system health failures first")
@@ -531,7 +531,8 @@ class Px4Sim(ArduPilotSim):
             return
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
         if msg.command == _M.MAV_CMD_DO_SET_MODE:
-            # the receiver's own ACCEPTED, then the commander's real result (seen on PX4 main, issue 12)
+            # mavlink_receiver.cpp handle_message_command_both publishes DO_SET_MODE to the commander *and* keeps
+            # send_ack (ACCEPTED): the receiver's ACCEPTED now, the commander's real result on its next loop
             self._emit(self._mav.command_ack_encode(msg.command, _M.MAV_RESULT_ACCEPTED, 0, 0, *sender))
         self._pending.append((self._command_of(msg), sender))
 
