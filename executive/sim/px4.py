@@ -126,7 +126,9 @@ TIME_ESTIMATE_TO_TARGET = (
     tuple(("int32_t", f) for f in ("safe_return", "land", "mission_next_item", "mission_end", "commanded_action")),
 )  # fmt: skip
 
-#: Messages sent unasked, with their interval (s), about as PX4's "normal" MAVLink mode streams them.
+#: Messages sent unasked, with their interval (s), as PX4's "normal" MAVLink mode streams them (mavlink_main.cpp,
+#: configure_streams: ESTIMATOR_STATUS 0.5 Hz, EXTENDED_SYS_STATE 1 Hz, GLOBAL_POSITION_INT 5 Hz, HOME_POSITION 0.5 Hz...);
+#: ATTITUDE at 4 Hz, not 15, to spare the simulation.
 PX4_INTERVALS: Mapping[int, float] = MappingProxyType({
     _M.MAVLINK_MSG_ID_HEARTBEAT: 1.0, _M.MAVLINK_MSG_ID_SYS_STATUS: 1.0, _M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 1.0,
     _M.MAVLINK_MSG_ID_ESTIMATOR_STATUS: 0.5, _M.MAVLINK_MSG_ID_ATTITUDE: 0.25, _M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 0.2,
