@@ -104,7 +104,7 @@ class InterventionWatch:
 
     def _ours(self, mode: str, previous: str | None, now: float) -> bool:
         asked = self._commander.modes_asked.get(mode)
-        follow_on = previous is not None and self.profile.follow_on_modes.get(previous) == mode
+        follow_on = previous is not None and mode in (self.profile.follow_on_modes.get(previous), self._commander.follow_on_modes.get(previous))
         return (asked is not None and now - asked <= self.asked_within_s) or follow_on
 
     def _failsafe_text(self, now: float) -> str | None:

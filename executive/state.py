@@ -92,6 +92,26 @@ class Battery:
 
 
 @dataclass(frozen=True, slots=True)
+class Rangefinder:
+    """The downward rangefinder (DISTANCE_SENSOR, orientation PITCH_270): its reading judged against its own range.
+
+    ``status``: ``good`` within [min_m, max_m]; ``too_far`` beyond max_m (the seabed or ground is
+    farther than it can measure: at least max_m away); ``too_close`` under min_m; ``invalid``
+    (signal quality 1). Only a ``good`` reading is a height above the bottom.
+    """
+
+    distance_m: float
+    min_m: float
+    max_m: float
+    status: str
+    time: float
+
+    @property
+    def good(self) -> bool:
+        return self.status == "good"
+
+
+@dataclass(frozen=True, slots=True)
 class HomePosition:
     """HOME_POSITION: where RTL goes and relative altitudes start."""
 

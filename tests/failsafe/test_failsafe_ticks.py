@@ -326,6 +326,44 @@ def test_the_asv_ekf_rule_is_journalled_and_another_ekf_policy_replaces_it(clock
     assert "EKF ok, else wait in MANUAL" in {n.name for n in trees.build(mission).iterate()}
 
 
+def test_two_rangefinder_sources_alternating_do_not_flap_the_altitude_failsafe(clock: ManualClock, vehicle: Vehicle, caplog) -> None:
+    """Issue 14's 915 flaps, at the failsafe: the height above the seabed None / 45.2 m turn by turn (every 0.2 s) for 400 s.
+
+    Undebounced (hold and resume at once) that is a hold and a resume every 0.4 s; debounced, a bad spell shorter than
+    AltitudeWithin's 2 s is noise: the survey goes on, nothing is commanded.
+    """
+    from executive.behaviours import AltitudeWithin
+    from executive.mission.model import Range
+
+    def holds_and_resumes(hold_after_s: float, resume_after_s: float) -> tuple[int, int, int]:
+        mission = make_mission("sub")
+        link, state = FakeLink(), MissionState()
+        state.upload(mission)
+        state.start()
+        altitude = AltitudeWithin(Range(min=2.0, max=100.0))
+        altitude.hold_after_s, altitude.resume_after_s = hold_after_s, resume_after_s
+        root = guarded(py_trees.behaviours.Running("Survey"), [*standard_guards(mission), altitude], mission)
+        commander = Commander(link, clock, PROFILES["sub"])
+        h = Harness(root, clock, link, commander, state)
+        vehicle.set(
+            link__up=True, vehicle__armed=True, vehicle__mode="GUIDED", vehicle__ekf=EKF_READY, rc__channels=RC_OK, rc__connected=True,
+            vehicle__battery=Battery(16.0, 2.0, 80, 0.0), vehicle__position=position(), vehicle__altitude_above_bottom_m=45.2,
+        )  # fmt: skip
+        caplog.clear()
+        for tick in range(4000):  # 400 s at 10 Hz
+            if tick % 2 == 0:
+                vehicle.set(vehicle__altitude_above_bottom_m=None if tick % 4 == 2 else 45.2)
+            assert h.tick() == R
+        texts = [r.getMessage() for r in caplog.records if r.name == "executive.behaviours.failsafe"]
+        modes = [m for m in link.take("COMMAND_LONG") if m.command == mavlink.MAV_CMD_DO_SET_MODE]
+        return sum("-> hold" in t for t in texts), sum("recovered" in t for t in texts), len(modes)
+
+    caplog.set_level(logging.WARNING, logger="executive")
+    undebounced = holds_and_resumes(0.0, 0.0)
+    assert undebounced[0] > 900 and undebounced[1] > 900  # the bug, reproduced: the guard flaps
+    assert holds_and_resumes(AltitudeWithin.hold_after_s, AltitudeWithin.resume_after_s) == (0, 0, 0)
+
+
 def leg_in_guided() -> py_trees.behaviour.Behaviour:
     return py_trees.composites.Sequence("Leg", memory=True, children=[SetMode("GUIDED"), py_trees.behaviours.Running("Drive")])
 
