@@ -58,6 +58,7 @@ class InterventionWatch:
         self.rc = rc
         self.asked_within_s = asked_within_s
         self._bb = blackboard.reader("intervention watch", ["/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches"])
+        self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by"])
         self._shown: str | None = None  # the mode the heartbeat showed at the last tick
         #: The mode the executive put the vehicle in (the current leg's); None until it has in this run.
         self.expected: str | None = None
@@ -76,6 +77,8 @@ class InterventionWatch:
         if mode is None or not self._bb.get("/link/up"):
             return
         previous, self._shown = self._shown, mode
+        if mode != previous and previous is not None and previous != "INITIALISING":
+            self._out.set("/vehicle/mode_set_by", "us" if self._ours(mode, previous, now) else "others")
         status = self.mission_state.status
         if status is MissionStatus.PAUSED and self._paused_here:
             if mode == self.expected:
