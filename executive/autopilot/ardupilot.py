@@ -25,6 +25,7 @@ class ArduPilotPort(MavlinkPort):
             vehicles=AUTOPILOT_VEHICLES["ardupilot"],
             transition_anywhere=False,
             takeoff_alt_amsl=False,
+            first_item_seq=1,
         )
 
     def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:

@@ -99,6 +99,7 @@ class Px4Port(MavlinkPort):
             vehicles=AUTOPILOT_VEHICLES["px4"],
             transition_anywhere=True,
             takeoff_alt_amsl=True,
+            first_item_seq=0,  # PX4's mission has no home slot: src/modules/mavlink/mavlink_mission.cpp stores item 0 as the first item
         )
         self.stream = OffboardStream(commander)
         self._bb = blackboard.reader("px4 port", ["/link/mission_transfer", "/vehicle/home"])
