@@ -34,6 +34,7 @@ from executive.behaviours.guards import (
     ModeIs,
     PositionKnown,
     RcAutoMode,
+    RcChannelHigh,
     RcFresh,
     RcNotLost,
     RcNotTakingOver,
@@ -42,6 +43,7 @@ from executive.behaviours.guards import (
     inside_geofence,
     rc_auto_mode,
 )
+from executive.behaviours.mode_switch import ModeSwitchClear
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
 from executive.behaviours.sampling import NothingToSample, Sample
 
@@ -74,9 +76,11 @@ __all__ = [
     "LinkAlive",
     "ModeIs",
     "ModeSwitch",
+    "ModeSwitchClear",
     "NothingToSample",
     "PositionKnown",
     "RcAutoMode",
+    "RcChannelHigh",
     "RcFresh",
     "RcNotLost",
     "RcNotTakingOver",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from executive.mission.model import Mission, SimulatorOptions
 from executive.sim.autopilot import DEFAULT_HOME, Home
 
@@ -12,7 +14,10 @@ def simulated_home(mission: Mission) -> Home:
     return (start.lat, start.lon, getattr(start, "heading_deg", 0.0)) if start else DEFAULT_HOME
 
 
-def firmware_options(mission: Mission) -> dict[str, float]:
-    """The simulated firmware's options a mission sets (``q_guided_mode`` for the vtol's ArduPlane)."""
+def firmware_options(mission: Mission) -> dict[str, Any]:
+    """The simulated firmware's options a mission sets (``q_guided_mode`` for the vtol's ArduPlane, parameters)."""
     options = mission.simulator or SimulatorOptions()
-    return {"q_guided_mode": options.q_guided_mode} if (options.model or mission.vehicle) == "vtol" else {}
+    found: dict[str, Any] = {"q_guided_mode": options.q_guided_mode} if (options.model or mission.vehicle) == "vtol" else {}
+    if options.params:
+        found["params"] = dict(options.params)
+    return found

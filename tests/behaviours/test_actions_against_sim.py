@@ -98,7 +98,8 @@ class Bench:
         self.reader.on_autopilot = self.port.adopt
         self.streams = StreamRequester(self.commander, rates_for(kind))
         self.reader.on_reconnect = self.streams.restart
-        mission = Mission.model_validate({"version": 1, "name": "bench", "vehicle": kind, "waypoints": waypoints})
+        limits = {"acceptance_radius_m": 70.0} if kind == "vtol" else {}  # a vtol's legs are flown as a plane (the upload checks it)
+        mission = Mission.model_validate({"version": 1, "name": "bench", "vehicle": kind, "limits": limits, "waypoints": waypoints})
         self.mission_state = MissionState()
         self.mission_state.upload(mission)
         self.mission_state.start()
