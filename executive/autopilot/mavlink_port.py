@@ -32,6 +32,9 @@ class MavlinkPort:
     def mode_name(self, mode: str) -> str:
         return self.commander.modes.canonical(mode)
 
+    def service(self) -> None:
+        """What the back end keeps sending between requests (PX4's offboard setpoint stream); every tick, before the commands go out."""
+
     # -- acked intents -----------------------------------------------------------------------
     def set_mode(self, mode: str) -> Request:
         return self._request(self.commander.set_mode(mode), mavlink.MAV_CMD_DO_SET_MODE, self.mode_name(mode))

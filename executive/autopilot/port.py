@@ -16,8 +16,8 @@ from typing import Literal, Protocol
 
 from executive.mission.model import Waypoint
 from executive.state import GlobalPosition, HomePosition
+from executive.vehicles import AutopilotName
 
-AutopilotName = Literal["ardupilot", "px4"]
 VtolState = Literal["FW", "MC"]
 
 

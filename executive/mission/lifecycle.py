@@ -100,6 +100,8 @@ class MissionState:
         self.listeners: list[Listener] = []
         self.sample_listeners: list[SampleListener] = []
         self.route_listeners: list[RouteListener] = []
+        #: While PAUSED, the tree holds the vehicle in its safe mode; False when a person paused it by taking the vehicle: hands off.
+        self.hold_while_paused = True
 
     # -- requests ----------------------------------------------------------------------------
     def upload(self, mission: Mission, vehicle_at: tuple[float, float] | None = None) -> None:
@@ -127,13 +129,16 @@ class MissionState:
         self.samples = ()
         self._transition("start", "started from the first waypoint")
 
-    def pause(self, reason: str = "pause requested") -> None:
+    def pause(self, reason: str = "pause requested", *, hold: bool = True) -> None:
+        """RUNNING -> PAUSED; ``hold=False``: a person has the vehicle (a mode change we did not ask for), nothing is commanded meanwhile."""
         self._check("pause")
+        self.hold_while_paused = hold
         self._transition("pause", reason)
 
-    def resume(self) -> None:
+    def resume(self, reason: str = "") -> None:
         self._check("resume")
-        self._transition("resume", f"resumed at leg {self.leg_index + 1}")
+        self.hold_while_paused = True
+        self._transition("resume", f"resumed at leg {self.leg_index + 1}" + (f": {reason}" if reason else ""))
 
     def delete(self) -> None:
         self._check("delete")

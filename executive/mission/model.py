@@ -50,7 +50,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from executive.geofence import Geofence, open_ring, polygon_problems
 from executive.mission.errors import Path
-from executive.vehicles import PROFILES
+from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES, AutopilotName
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
 ControlMode = Literal["depth", "altitude"]
@@ -332,6 +332,10 @@ class SimulatorOptions(BaseModel):
     q_guided_mode: int = Field(
         0, ge=0, le=1, description="vtol: ArduPlane's Q_GUIDED_MODE (1: GUIDED targets end in a hover; near ones are flown as a multicopter)"
     )
+    seabed_depth_m: float = Field(30.0, gt=1.0, le=1000.0, description="sub: water depth under the start point (ArduSub's SITL: 50 m)")
+    rangefinder_max_m: float = Field(
+        30.0, gt=1.0, le=700.0, description="sub: the downward rangefinder's maximum, RNGFND1_MAX (ArduSub's default sonar: 30 m)"
+    )
 
 
 class Mission(BaseModel):
@@ -353,6 +357,9 @@ class Mission(BaseModel):
     version: Literal[1] = Field(description="mission file format version")
     name: str = Field(min_length=1, max_length=128)
     vehicle: VehicleKind
+    autopilot: AutopilotName | None = Field(
+        None, description="the autopilot firmware (default: the one the HEARTBEAT names); px4 starts a simulated PX4 without --mavlink"
+    )
     tree: str = Field("waypoints", pattern=r"^[a-z][a-z0-9_]*$", description="module of trees/ that builds the tree")
     description: str | None = Field(None, max_length=4096)
     auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
@@ -420,6 +427,23 @@ def rc_switch_channels(mission: Mission) -> dict[int, str]:
     return dict(sorted(found.items()))
 
 
+#: Trees that need what only ArduPilot does, and why.
+ARDUPILOT_ONLY_TREES: dict[str, str] = {
+    "ugv_rc_route": "its route is driven by the autopilot's own mission, uploaded the ArduPilot way (home at item 0; PX4 flies item 0)",
+}
+
+
+def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
+    """Why ``autopilot`` cannot fly ``mission`` (empty when it can)."""
+    errors = []
+    kinds = AUTOPILOT_VEHICLES[autopilot]
+    if mission.vehicle not in kinds:
+        errors.append(f"{autopilot} drives {', '.join(sorted(kinds))} here, not a {mission.vehicle}")
+    if autopilot != "ardupilot" and mission.tree in ARDUPILOT_ONLY_TREES:
+        errors.append(f"tree {mission.tree} needs ArduPilot: {ARDUPILOT_ONLY_TREES[mission.tree]}")
+    return errors
+
+
 def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
     """Rules between fields; each error is the path of the offending value and why."""
     errors: list[tuple[Path, str]] = []
@@ -473,6 +497,8 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
         ]
     if mission.rc.arm_channel is not None and mission.rc.source != "mavlink":
         errors.append((("rc", "arm_channel"), "an arm switch is read from the autopilot's RC channels (rc.source: mavlink)"))
+    if mission.autopilot is not None:
+        errors += [(("autopilot",), why) for why in autopilot_errors(mission, mission.autopilot)]
     if mission.geofence is not None:
         errors += _geofence_errors(mission)
     if mission.sampling is not None and mission.sampling.instrument is not None:

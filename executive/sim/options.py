@@ -15,9 +15,14 @@ def simulated_home(mission: Mission) -> Home:
 
 
 def firmware_options(mission: Mission) -> dict[str, Any]:
-    """The simulated firmware's options a mission sets (``q_guided_mode`` for the vtol's ArduPlane, parameters)."""
+    """The simulated firmware's options a mission sets: ``q_guided_mode`` (ArduPlane), the seabed and rangefinder (ArduSub), parameters."""
     options = mission.simulator or SimulatorOptions()
-    found: dict[str, Any] = {"q_guided_mode": options.q_guided_mode} if (options.model or mission.vehicle) == "vtol" else {}
+    model = options.model or mission.vehicle
+    found: dict[str, Any] = {}
+    if model == "vtol":
+        found = {"q_guided_mode": options.q_guided_mode}
+    elif model == "sub":
+        found = {"seabed_depth_m": options.seabed_depth_m, "rangefinder_max_m": options.rangefinder_max_m}
     if options.params:
         found["params"] = dict(options.params)
     return found

@@ -217,6 +217,10 @@ class SurfaceVehicle(LocalFrame):
         self._target_speed = min(speed_m_s if speed_m_s and speed_m_s > 0 else self.limits.cruise_m_s, self.limits.max_m_s)
         self._arrived = False
 
+    def change_speed(self, speed_m_s: float) -> None:
+        """Drive on to the same target at another speed (capped at the maximum)."""
+        self._target_speed = min(speed_m_s, self.limits.max_m_s)
+
     def turn_in_m(self) -> float:
         """How far before a corner driven through the vehicle turns onto the next leg (0 without one).
 
@@ -294,9 +298,11 @@ class SurfaceVehicle(LocalFrame):
         if abs(self._speed) > 1e-3:
             rate_max = min(rate_max, limits.lat_accel_m_s2 / abs(self._speed))  # ATC_TURN_MAX_G
         rate = _clamp(self.HEADING_GAIN * error, rate_max)
-        # a braking profile with margin, then a linear approach: never overshoots the target
+        # a braking profile with margin, then a linear approach: never overshoots the target (the shape of ArduPilot's
+        # sqrt_controller stopping a shaped target, libraries/AP_Math/control.cpp); a corner driven through is left before
+        # the linear part, where the braking has not begun or, for a sharp turn, has slowed the vehicle enough to turn
         brake = math.sqrt(2.0 * 0.8 * limits.decel_m_s2 * distance)
-        speed = min(self._target_speed, brake, self.APPROACH_GAIN * distance)
+        speed = min(self._target_speed, brake) if self._then is not None else min(self._target_speed, brake, self.APPROACH_GAIN * distance)
         # turn toward a target behind before driving to it (the forward part of the speed); a vehicle under way that
         # cannot pivot keeps the least turning speed through the turn (AR_PosControl::update,
         # libraries/APM_Control/AR_PosControl.cpp); one at rest turns first (as LOITER does, Rover/mode_loiter.cpp)

@@ -252,3 +252,19 @@ def test_auto_stops_at_a_waypoint_with_a_hold_time_and_waits_it_out(make_gcs: Ma
     assert "Reached waypoint #1. Loiter for 5 seconds" in gcs.texts(gcs.log)
     reached = gcs.of_type(gcs.log, "MISSION_ITEM_REACHED")
     assert [msg.seq for msg in reached][:1] == [1]
+
+
+def test_a_speed_change_in_auto_keeps_the_corner_driven_through(make_gcs: MakeGcs) -> None:
+    gcs = make_gcs(ekf_ready=True)
+    upload(gcs, square(gcs, side_m=30.0))
+    gcs.arm()
+    gcs.set_mode("AUTO")
+    gcs.run(3.0)
+    assert gcs.ack(m.MAV_CMD_DO_CHANGE_SPEED, 1, 1.5).result == m.MAV_RESULT_ACCEPTED
+    nearest = (math.inf, 0.0)
+    for _ in range(300):
+        gcs.run(0.1)
+        north, east = gcs.ap.vehicle.north_east_m
+        nearest = min(nearest, (math.dist((north, east), (30.0, 0.0)), gcs.ap.vehicle.speed_m_s))
+    distance, speed = nearest
+    assert distance <= 2.0 and speed >= 1.0  # through the first corner at the new speed, not stopped there

@@ -14,7 +14,7 @@ from py_trees.common import Status
 import trees
 from executive import blackboard
 from executive.assembly import build_runtime
-from executive.clock import ManualClock, ScaledClock
+from executive.clock import ManualClock
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
@@ -28,7 +28,6 @@ from executive.state import EkfFlags, EkfStatus, GlobalPosition, SamplerState
 from executive.state import Sample as SampleRecord
 from executive.testing import EKF_READY, ack, port_for
 from executive.vehicles import PROFILES, ROVER_MODES
-from tests_support import run_over
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 ROOT = Path(__file__).parents[2]
@@ -476,20 +475,15 @@ def test_a_goto_sample_mission_without_a_sampling_section_gets_the_default_sampl
 # -- the example mission in the simulator ---------------------------------------------------------
 
 
-def test_the_example_mission_samples_every_sample_point_once_in_the_simulator(caplog):
-    """missions/asv_sampling.yaml with its event file (an EKF dropout on the way), over real UDP at 50x."""
-    from executive.sim import SimServer
-    from executive.sim.faults import FaultInjector, load_faults
-
+def test_the_example_mission_samples_every_sample_point_once_in_the_simulator(caplog, lockstep):
+    """missions/asv_sampling.yaml with its event file (an EKF dropout on the way), in the lock-step simulation."""
     path = ROOT / "missions/asv_sampling.yaml"
     mission = load_mission(path)
     assert mission.home is not None and mission.sampling is not None and mission.simulator is not None and mission.simulator.events
-    clock = ScaledClock(50.0)
-    faults = FaultInjector(load_faults(path.parent / mission.simulator.events, "boat"), clock)
     caplog.set_level(logging.INFO, logger="executive.io.mavlink.reader")
-    with SimServer("boat", clock=clock, home=(mission.home.lat, mission.home.lon, mission.home.heading_deg), faults=faults) as sim:
-        runtime, outcome = run_over(sim.url_for_client, mission, clock)
-        final_mode, armed = sim.autopilot.mode, sim.autopilot.armed
+    sim = lockstep(mission, mission_dir=path.parent)
+    outcome = sim.run_to_end(limit_s=900)
+    runtime, final_mode, armed = sim.runtime, sim.autopilot.mode, sim.autopilot.armed
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert (final_mode, armed) == ("LOITER", True)
     sample_points = [i for i, wp in enumerate(mission.waypoints) if wp.sample]
