@@ -16,9 +16,11 @@ from executive import blackboard
 from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.clock import Clock
+from executive.intervention import InterventionWatch
 from executive.io.heading import HeadingFilter
 from executive.io.instruments import refusal as instrument_refusal
 from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
@@ -117,6 +119,7 @@ def _autopilot_link(
 
     def streams_of(name: str) -> None:
         streams.rates = rates_for(mission.vehicle, name)
+        heartbeat.mav_type = mavlink.MAV_TYPE_GCS if name == "px4" else mavlink.MAV_TYPE_ONBOARD_CONTROLLER
 
     port.on_backend = streams_of
     return AutopilotLink(link, commander, transfer, reader, heartbeat, streams, keeper, ground_station, port)
@@ -161,7 +164,9 @@ def build_runtime(
     wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper]
     for plug in plugs:
         plug(wiring)
-    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), ap.heartbeat]
+    # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
+    intervention = InterventionWatch(clock, ap.commander, state, PROFILES[mission.vehicle], mission.rc)
+    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), intervention, ap.heartbeat]
     wiring.writers += [
         Step("autopilot port", ap.port.service),
         Step("commands", ap.commander.flush),

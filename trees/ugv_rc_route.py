@@ -54,7 +54,7 @@ def operator_and_route(mission: Mission) -> py_trees.behaviour.Behaviour:
             KeepRouteOnAutopilot(),
             ModeSwitch(options.aux_mode),
             ArmSwitch(),
-            DriveRouteInAuto(options.operator_timeout_s),
+            DriveRouteInAuto(options.operator_timeout_s, leg_timeout_s=mission.limits.leg_timeout_s),
         ],
     )
 

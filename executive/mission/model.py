@@ -325,6 +325,10 @@ class SimulatorOptions(BaseModel):
     q_guided_mode: int = Field(
         0, ge=0, le=1, description="vtol: ArduPlane's Q_GUIDED_MODE (1: GUIDED targets end in a hover; near ones are flown as a multicopter)"
     )
+    seabed_depth_m: float = Field(30.0, gt=1.0, le=1000.0, description="sub: water depth under the start point (ArduSub's SITL: 50 m)")
+    rangefinder_max_m: float = Field(
+        30.0, gt=1.0, le=700.0, description="sub: the downward rangefinder's maximum, RNGFND1_MAX (ArduSub's default sonar: 30 m)"
+    )
 
 
 class Mission(BaseModel):

@@ -13,6 +13,11 @@ def simulated_home(mission: Mission) -> Home:
 
 
 def firmware_options(mission: Mission) -> dict[str, float]:
-    """The simulated firmware's options a mission sets (``q_guided_mode`` for the vtol's ArduPlane)."""
+    """The simulated firmware's options a mission sets (``q_guided_mode`` for the vtol's ArduPlane; the seabed and rangefinder for ArduSub)."""
     options = mission.simulator or SimulatorOptions()
-    return {"q_guided_mode": options.q_guided_mode} if (options.model or mission.vehicle) == "vtol" else {}
+    model = options.model or mission.vehicle
+    if model == "vtol":
+        return {"q_guided_mode": options.q_guided_mode}
+    if model == "sub":
+        return {"seabed_depth_m": options.seabed_depth_m, "rangefinder_max_m": options.rangefinder_max_m}
+    return {}

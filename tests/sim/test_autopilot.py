@@ -275,3 +275,23 @@ def test_battery_drains_faster_when_driving(make_gcs: MakeGcs) -> None:
     status = last(gcs, "SYS_STATUS")
     assert status.current_battery > start.current_battery
     assert gcs.ap.consumed_mah > 2 * idle_mah
+
+
+def test_the_ekf_failsafe_latches_holds_and_refuses_position_modes_until_a_second_after_the_ekf_recovers(make_gcs: MakeGcs) -> None:
+    """Rover/ekf_check.cpp at 10 Hz: 10 bad checks latch failsafe.ekf (HOLD, "EKF failsafe"); Mode::enter refuses
+    position modes while it is latched; 10 good checks clear it ("EKF failsafe cleared")."""
+    gcs = armed_in_guided(make_gcs)
+    gcs.ap.ekf_position_lost = True
+    gcs.run(0.85)
+    assert gcs.ap.mode == "GUIDED" and not gcs.ap.failsafe_ekf  # 9 bad checks: not yet
+    gcs.run(0.2)
+    assert gcs.ap.mode == "HOLD" and gcs.ap.failsafe_ekf
+    assert "EKF failsafe" in gcs.texts(gcs.log)
+    gcs.ap.ekf_position_lost = False  # the EKF is healthy again...
+    gcs.run(0.5)
+    replies = gcs.command(m.MAV_CMD_DO_SET_MODE, m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, gcs.ap.profile.modes["GUIDED"])
+    assert (replies[0].result, gcs.texts(replies)) == (m.MAV_RESULT_FAILED, ["Flight mode change failed"])  # ...but still latched
+    assert gcs.set_mode("MANUAL") == m.MAV_RESULT_ACCEPTED and gcs.set_mode("HOLD") == m.MAV_RESULT_ACCEPTED  # no position needed
+    gcs.run(0.6)
+    assert not gcs.ap.failsafe_ekf and "EKF failsafe cleared" in gcs.texts(gcs.log)
+    assert gcs.set_mode("GUIDED") == m.MAV_RESULT_ACCEPTED

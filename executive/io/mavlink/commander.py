@@ -9,7 +9,7 @@ with ``confirmation + 1`` when no ack comes, and its fate is written to ``/comma
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 from py_trees.common import Access
@@ -81,6 +81,12 @@ class Commander:
         self.target_component = 1
         #: The autopilot's mode table; the reader replaces it once the HEARTBEAT tells the firmware.
         self.modes: ModeTable = ArduPilotModes(profile.modes)
+        #: Each mode asked for (its name as the heartbeat shows it) and when it was last asked: a mode change is ours or someone else's.
+        self.modes_asked: dict[str, float] = {}
+        #: The mode asked for last, if any.
+        self.last_mode_asked: str | None = None
+        #: Mode -> the mode the firmware goes on to by itself (PX4: AUTO.TAKEOFF -> AUTO.LOITER); the autopilot port sets it.
+        self.follow_on_modes: Mapping[str, str] = {}
         #: Commands the autopilot acks twice, the first ACCEPTED saying only "received": PX4's MAVLink receiver
         #: acks DO_SET_MODE at once, its commander the real result after (issue 12). The first ACCEPTED is not final.
         self.double_acked: frozenset[int] = frozenset()
@@ -104,6 +110,9 @@ class Commander:
         if chosen is None:
             raise KeyError("no mode given")
         main, sub = self.modes.encode(chosen)
+        name = self.modes.canonical(chosen) if isinstance(chosen, str) else self.modes.decode(int(main))
+        self.modes_asked[name] = self._clock.now()
+        self.last_mode_asked = name
         return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub), delay_s=delay_s)
 
     def arm(self, *, force: bool = False) -> int:

@@ -24,7 +24,7 @@ from executive.io.mavlink.link import Link
 from executive.io.mavlink.link_health import LinkHealth
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
-from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition
+from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, Rangefinder
 
 log = logging.getLogger(__name__)
 
@@ -121,6 +121,7 @@ class MavlinkReader:
             self._set_targets((target_system, target_component))
         self._messages = 0
         self._bad_data = 0
+        self._distance_sensor_seen = False  # a downward DISTANCE_SENSOR seen: the one source of the height above the bottom
         self._px4 = False  # the autopilot's HEARTBEAT says PX4: its estimator reports in ESTIMATOR_STATUS and SYS_STATUS
         self._estimator_status_at = float("-inf")
         self._chunks: dict[int, list[str]] = {}  # STATUSTEXT id -> the chunks so far
@@ -386,14 +387,35 @@ class MavlinkReader:
         self._bb.set("/vehicle/landed_state", landed.name.removeprefix("MAV_LANDED_STATE_") if landed else None)
 
     def _on_distance_sensor(self, msg: MAVLinkMessage, now: float) -> None:
+        """The downward rangefinder: the one source of the height above the bottom (and of its validity).
+
+        A reading counts only within the sensor's own range (min/max_distance: RNGFND1_MIN/MAX):
+        ArduPilot sends the raw distance whatever the sensor's status (AP_RangeFinder_Backend.cpp
+        update_status: beyond max is OutOfRangeHigh; GCS_Common.cpp send_distance_sensor).
+        """
         if msg.orientation != mavlink.MAV_SENSOR_ROTATION_PITCH_270:
             return  # not looking down: an obstacle sensor
-        # signal_quality 1 = invalid (0 = unknown); out of its range the reading says nothing
-        valid = msg.min_distance <= msg.current_distance <= msg.max_distance and getattr(msg, "signal_quality", 0) != 1
-        self._bb.set("/vehicle/altitude_above_bottom_m", msg.current_distance / 100.0 if valid else None)
+        self._distance_sensor_seen = True
+        distance, low, high = msg.current_distance / 100.0, msg.min_distance / 100.0, msg.max_distance / 100.0
+        if getattr(msg, "signal_quality", 0) == 1:  # 1 = invalid (0 = unknown)
+            status = "invalid"
+        elif distance > high:
+            status = "too_far"
+        elif distance < low:
+            status = "too_close"
+        else:
+            status = "good"
+        self._bb.set("/vehicle/rangefinder", Rangefinder(distance, low, high, status, now))
+        self._bb.set("/vehicle/altitude_above_bottom_m", distance if status == "good" else None)
 
     def _on_rangefinder(self, msg: MAVLinkMessage, now: float) -> None:
-        valid = _finite(msg.distance) and msg.distance >= 0.0  # ArduPilot sends RANGEFINDER for its downward (PITCH_270) rangefinder
+        """RANGEFINDER carries no range and no status (GCS_Common.cpp send_rangefinder sends distance() whatever the
+        sensor's status): it is read only from an autopilot that never sent a downward DISTANCE_SENSOR, which then
+        alone judges the reading, so the two never overwrite each other's verdict (issue 14: 915 holds in 400 s).
+        """
+        if self._distance_sensor_seen:
+            return
+        valid = _finite(msg.distance) and msg.distance >= 0.0
         self._bb.set("/vehicle/altitude_above_bottom_m", float(msg.distance) if valid else None)
 
     def _update_link_health(self, now: float) -> None:
