@@ -340,6 +340,8 @@ class Runtime:
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
             return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
+        if status == Status.SUCCESS and (undone := self.mission_state.work_left()) is not None:
+            return self._end(self._abort(f"the tree ended, but {undone}"))  # never report success for work not done
         if status == Status.SUCCESS:
             self.mission_state.complete()
             return self._end(Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks))

@@ -876,7 +876,12 @@ class ArduRoverSim(ArduPilotSim):
         if item.params[0] > 0 or self.mission.current_seq is None:  # a hold time: always a stop
             return None
         after = self.mission.next_nav_after(self.mission.current_seq)
-        return (after.lat, after.lon) if after is not None else None
+        if after is None:
+            return None
+        assert isinstance(self.vehicle, SurfaceVehicle)
+        if self.vehicle.pivots_at(item.lat, item.lon, (after.lat, after.lon)):
+            return None  # a skid-steered vehicle stops and pivots there
+        return after.lat, after.lon
 
     def _desired_location(self) -> tuple[float, float] | None:
         return self._destination
