@@ -181,6 +181,10 @@ class Runtime:
                 self.reader.drain()
             if len(self.reader.autopilots_heard) > 1:
                 raise SeveralAutopilots(self.reader.autopilots_heard)
+        param = self.autopilot.capabilities.mode_switch_param
+        if param is not None:  # known by pre-flight: the mission's switches are checked against it before arming
+            self.autopilot.read_parameter(param)
+            self.commander.flush()
         return True
 
     def tick(self) -> Status:
