@@ -535,6 +535,14 @@ def _failsafe_errors(mission: Mission) -> list[tuple[Path, str]]:
             errors.append(((*here, "reaction"), f"{reaction}: not for a {mission.vehicle} ({_NO_REACTION[reaction]})"))
         elif reaction == "disarm" and mission.tree == "ugv_rc_route":
             errors.append(((*here, "reaction"), "disarm: not in tree ugv_rc_route (the operator arms and disarms with switch D)"))
+        if condition == "geofence_breach" and policy[condition].recovery == "resume" and reaction != "rtl":
+            # a recovery that cannot happen from where the reaction leaves the vehicle: held outside, it stays outside
+            errors.append(
+                (
+                    (*here, "recovery"),
+                    f"resume after {reaction}: a vehicle held outside the fence never comes back in; use reaction rtl, or recovery abort",
+                )
+            )
         if rule.timeout_s is not None and policy[condition].recovery == "abort":
             errors.append(((*here, "timeout_s"), "recovery abort ends the mission at once: a time limit is only for resume"))
     return errors
