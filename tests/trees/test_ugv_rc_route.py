@@ -28,7 +28,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission
 from executive.runtime import Outcome, Runtime
-from executive.sim.faults import FaultInjector, RcInput
+from executive.sim.faults import FaultInjector, RcInput, RcLoss
 from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
 from executive.testing import EKF_READY, Lockstep, ack, port_for
@@ -88,6 +88,7 @@ class Rig:
         self.home: tuple[float, float] | None = START
         self.lat, self.lon = START
         self.mode, self.armed, self.ekf = "MANUAL", False, EKF_READY
+        self.mode_set_by: str | None = None  # the boot mode: nobody's; "us" once a DO_SET_MODE put it in its mode
         self.link_up = self.rc_alive = self.mission_answers = True
         self.refuse: set[str] = set()  # "arm", or mode names refused with FAILED
         self.step_m = 2.0
@@ -158,7 +159,7 @@ class Rig:
             self._rc_time = now
             self.vehicle.set(rc__channels=tuple(self.channels))
         self.vehicle.set(
-            link__up=self.link_up, vehicle__mode=self.mode, vehicle__armed=self.armed, vehicle__ekf=self.ekf,
+            link__up=self.link_up, vehicle__mode=self.mode, vehicle__mode_set_by=self.mode_set_by, vehicle__armed=self.armed, vehicle__ekf=self.ekf,
             vehicle__position=GlobalPosition(self.lat, self.lon, 0.0, 0.0, 0.0, 0.0, None, now - self.position_age_s), rc__last_update=self._rc_time,
         )  # fmt: skip
 
@@ -189,7 +190,7 @@ class Rig:
             else:
                 if self.mode == "AUTO":
                     self.store.stop()
-                self.mode = mode
+                self.mode, self.mode_set_by = mode, "us"
                 if mode == "AUTO":
                     self.store.start_or_resume()
             self.commander.on_ack(ack(msg.command, _M.MAV_RESULT_FAILED if refused else _M.MAV_RESULT_ACCEPTED))
@@ -688,6 +689,7 @@ def test_no_failsafe_takes_the_vehicle_from_the_operator_driving_in_manual(rig: 
     record(rig, ahead(10.0))
     rig.take()
     assert rig.mode == "MANUAL"
+    rig.mode_set_by = "others"  # MANUAL from the operator (the RC, or switch C up: asked for by us, a person's mode all the same)
     if trouble == "rc stale":
         rig.rc_alive = False
     else:
@@ -701,6 +703,7 @@ def test_no_failsafe_takes_the_vehicle_from_the_operator_driving_in_manual(rig: 
 def test_switch_moves_wait_out_stale_rc_and_count_when_it_is_back(rig: Rig) -> None:
     record(rig, ahead(10.0))
     rig.take()
+    rig.mode_set_by = "us"  # switch C up: MANUAL asked for at the operator's request
     rig.rc_alive = False
     rig.run(12)
     assert rig.take() == []  # in MANUAL: a person drives, nothing commanded
@@ -833,3 +836,19 @@ def test_scenario_the_operator_records_a_route_on_the_simulated_bunker_and_auto_
     assert runtime.mission_state.leg_index == 4
     assert sim.autopilot.mode == "HOLD"
     assert sim.autopilot.elapsed_s < 180.0
+
+
+def test_scenario_rc_gaps_while_the_operator_drives_in_manual_take_nothing_from_them(lockstep) -> None:
+    """The defect (ugv_rc_route.yaml at 20x): a short RC gap fired the RC-loss failsafe, which put the vehicle in HOLD while the
+    operator drove it in MANUAL; all 4 route points were recorded at home and the run ended COMPLETED. Two 0.6 s gaps while
+    the operator drives: the vehicle stays in MANUAL, the route is four places, and it is driven."""
+    mission = load_mission(ROOT / "missions/ugv_rc_route.yaml")
+    gaps = [RcLoss(kind="rc_loss", at_s=20.5, for_s=0.6), RcLoss(kind="rc_loss", at_s=30.5, for_s=0.6)]
+    sim = lockstep(mission, model="bunker", mission_dir=ROOT / "missions", events=gaps)
+    modes: list[tuple[float, str]] = []
+    sim.observers.append(lambda s: modes.append((s.autopilot.elapsed_s, s.autopilot.mode)))
+    outcome = sim.run_to_end(limit_s=600)
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    assert {mode for t, mode in modes if 14.5 <= t < 48.5} == {"MANUAL"}  # armed in MANUAL at 14 s, AUTO at 49 s: never held
+    recorded = [(wp.lat, wp.lon) for wp in sim.runtime.mission_state.route.waypoints]
+    assert len(recorded) == 4 and min(geo.distance(*a, *b) for a, b in itertools.pairwise(recorded)) > 5.0
