@@ -16,19 +16,22 @@ from executive import blackboard
 from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.clock import Clock
+from executive.intervention import InterventionWatch
 from executive.io.heading import HeadingFilter
 from executive.io.instruments import refusal as instrument_refusal
 from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.mission_protocol import MissionTransfer
+from executive.io.mavlink.parameters import ParameterWatch
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.route_keeper import RouteKeeper
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.io.rc import RcReader
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission
+from executive.mission.model import Mission, rc_switch_channels
 from executive.operator import Operator
 from executive.runtime import Runtime
 from executive.services import PacedService, RunObserver, Service, Step
@@ -114,6 +117,12 @@ def _autopilot_link(
     heartbeat = Heartbeat(link, clock, system_id=system_id)
     port = Autopilot(commander, transfer, PROFILES[mission.vehicle], forced=forced)
     reader.on_autopilot = port.adopt
+
+    def streams_of(name: str) -> None:
+        streams.rates = rates_for(mission.vehicle, name)
+        heartbeat.mav_type = mavlink.MAV_TYPE_GCS if name == "px4" else mavlink.MAV_TYPE_ONBOARD_CONTROLLER
+
+    port.on_backend = streams_of
     return AutopilotLink(link, commander, transfer, reader, heartbeat, streams, keeper, ground_station, port)
 
 
@@ -153,11 +162,17 @@ def build_runtime(
     ap = _autopilot_link(mission, link, clock, state, operator, system_id, (target_system, target_component), autopilot)
     wiring = Wiring(mission, clock, system_id, state, status, operator, ap, simulated_vehicle)
     wiring.readers.append(Step("mavlink reader", ap.reader.drain))
-    wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper]
+    wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper, ParameterWatch(ap.port, clock)]
     for plug in plugs:
         plug(wiring)
-    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), ap.heartbeat]
-    wiring.writers += [Step("commands", ap.commander.flush), Step("mission transfers", ap.mission_transfer.flush)]
+    # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
+    intervention = InterventionWatch(clock, ap.commander, state, PROFILES[mission.vehicle], mission.rc)
+    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), intervention, ap.heartbeat]
+    wiring.writers += [
+        Step("autopilot port", ap.port.service),
+        Step("commands", ap.commander.flush),
+        Step("mission transfers", ap.mission_transfer.flush),
+    ]
     return Runtime(wiring, rate_hz=rate_hz, safe_timeout_s=safe_timeout_s, root=root, progress=progress)
 
 

@@ -17,6 +17,7 @@ from py_trees.common import Status
 import trees
 from executive import blackboard
 from executive.behaviours.failsafe import failsafe_mode
+from executive.intervention import rc_takeover
 from executive.io.instruments import open_sampler
 from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
@@ -25,7 +26,6 @@ from executive.mission.model import SamplingOptions
 from executive.pacing import TickPacer
 from executive.progress import Progress
 from executive.services import PacedService, RunObserver, Service
-from executive.state import SwitchPosition
 from executive.vehicles import PROFILES
 
 if TYPE_CHECKING:
@@ -182,6 +182,10 @@ class Runtime:
                 self.reader.drain()
             if len(self.reader.autopilots_heard) > 1:
                 raise SeveralAutopilots(self.reader.autopilots_heard)
+        param = self.autopilot.capabilities.mode_switch_param
+        if param is not None:  # known by pre-flight: the mission's switches are checked against it before arming
+            self.autopilot.read_parameter(param)
+            self.commander.flush()
         return True
 
     def tick(self) -> Status:
@@ -280,7 +284,7 @@ class Runtime:
             self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
         for paced in self.paced:  # the base stops at once; the autopilot is told below
             paced.stop()
-        person = self._person_has_the_vehicle()
+        person = self._person_has_the_vehicle(safe)
         if person:
             log.warning("not commanding %s: %s", safe, person)
             return False
@@ -295,20 +299,26 @@ class Runtime:
             if not requested:
                 self.autopilot.set_mode(safe)
                 requested = True
+            self.autopilot.service()  # PX4: the offboard stream goes on until the heartbeat shows we left OFFBOARD
             self.commander.flush()
             self.clock.sleep_until(self.clock.now() + self.period_s / 2)
         log.error("could not confirm %s within %g s", safe, self.safe_timeout_s)
         return False
 
-    def _person_has_the_vehicle(self) -> str | None:
-        """Why a person has the vehicle (the RC take-over switch high, or switch C in MANUAL), if one has: then hands off."""
-        rc = self.mission.rc
-        if rc.source == "mavlink":
-            channels = self._bb.get("/rc/channels")
-            value = channels[rc.takeover_channel - 1] if len(channels) >= rc.takeover_channel else 0
-            return f"RC channel {rc.takeover_channel} high ({value} µs): a person has the vehicle" if value > rc.takeover_above_us else None
-        switches = self._bb.get("/rc/switches")
-        return "RC switch C in MANUAL: a person has the vehicle" if switches is not None and switches.swc == SwitchPosition.UP else None
+    def _person_has_the_vehicle(self, ours: str) -> str | None:
+        """Why a person has the vehicle, if one has: then hands off.
+
+        The RC take-over switch high, switch C in MANUAL, or a mode in which a person drives (MANUAL,
+        ACRO...) other than ``ours`` (the mode a failsafe of ours left it in): set by the RC, a ground
+        station, or by us at the operator's request (handed over).
+        """
+        takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
+        if takeover is not None:
+            return takeover
+        mode = self._bb.get("/vehicle/mode")
+        if mode in self.profile.pilot_modes and mode != ours:
+            return f"the vehicle is in {mode}: a person drives it"
+        return None
 
     def _abort(self, reason: str) -> Outcome:
         log.warning("mission aborted: %s", reason)
@@ -331,6 +341,8 @@ class Runtime:
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
             return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
+        if status == Status.SUCCESS and (undone := self.mission_state.work_left()) is not None:
+            return self._end(self._abort(f"the tree ended, but {undone}"))  # never report success for work not done
         if status == Status.SUCCESS:
             self.mission_state.complete()
             return self._end(Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks))

@@ -92,6 +92,26 @@ class Battery:
 
 
 @dataclass(frozen=True, slots=True)
+class Rangefinder:
+    """The downward rangefinder (DISTANCE_SENSOR, orientation PITCH_270): its reading judged against its own range.
+
+    ``status``: ``good`` within [min_m, max_m]; ``too_far`` beyond max_m (the seabed or ground is
+    farther than it can measure: at least max_m away); ``too_close`` under min_m; ``invalid``
+    (signal quality 1). Only a ``good`` reading is a height above the bottom.
+    """
+
+    distance_m: float
+    min_m: float
+    max_m: float
+    status: str
+    time: float
+
+    @property
+    def good(self) -> bool:
+        return self.status == "good"
+
+
+@dataclass(frozen=True, slots=True)
 class HomePosition:
     """HOME_POSITION: where RTL goes and relative altitudes start."""
 
@@ -207,6 +227,10 @@ class CommandStatus:
     result_name: str = "no ack"  # the result without the MAV_RESULT_ prefix, e.g. TEMPORARILY_REJECTED
 
 
+#: MISSION_CURRENT.mission_state: the mission is finished (MAVLink's MISSION_STATE_COMPLETE; PX4 sends it, then loiters).
+MISSION_STATE_COMPLETE = 5
+
+
 class TransferOperation(StrEnum):
     """What a mission transfer does."""
 
@@ -253,7 +277,12 @@ class MissionCurrent:
 
 @dataclass(frozen=True, slots=True)
 class MissionItemReached:
-    """MISSION_ITEM_REACHED: the last item the vehicle reported reached."""
+    """MISSION_ITEM_REACHED: the last item the vehicle reported reached, and the highest since the vehicle's mission last changed.
+
+    ``highest`` is latched by the reader: two reports drained in one tick (item 3, then a GUIDED
+    arrival's item 0) lose nothing.
+    """
 
     seq: int
     time: float
+    highest: int = -1

@@ -14,7 +14,7 @@ import py_trees
 from executive import blackboard, geo
 
 KEYS = (
-    "/mission/state", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
+    "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
     "/runtime/late_ticks",
 )  # fmt: skip
@@ -36,6 +36,7 @@ class StatusSource:
             distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
         return {
             "state": bb.get("/mission/state"),
+            "reason": bb.get("/mission/reason"),
             "leg": min(index + 1, count),
             "legs": count,
             "distance_m": None if distance is None else round(distance, 2),
@@ -62,4 +63,5 @@ def status_line(status: dict[str, Any]) -> str:
     battery = "" if status["battery_pct"] is None else f"  batt {status['battery_pct']}%"
     samples = f"  samples {status['samples']}" if status["samples"] else ""
     armed = "armed" if status["armed"] else "disarmed"
-    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}"
+    why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
+    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}{why}"

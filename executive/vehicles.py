@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Literal
 
@@ -42,13 +42,26 @@ class VehicleProfile:
     guided_mode: str
     manual_mode: str
     surface: bool  # moves on a surface: vertical position values are meaningless
+    #: Modes in which a person drives (sticks steer and set the throttle): no failsafe of the executive changes them.
+    pilot_modes: frozenset[str] = frozenset()
+    #: Modes the autopilot leaves on its own for another once done (mode -> the next): not a person's intervention.
+    follow_on_modes: MappingProxyType[str, str] = field(default_factory=lambda: MappingProxyType({}))
 
+
+#: ArduRover's pilot-driven modes (Rover/mode.h: MANUAL, ACRO, STEERING take the sticks' steering and throttle).
+_ROVER_PILOT = frozenset({"MANUAL", "ACRO", "STEERING"})
+#: ArduSub's modes in which the pilot steers (ALT_HOLD keeps the depth only).
+_SUB_PILOT = frozenset({"MANUAL", "STABILIZE", "ACRO", "ALT_HOLD"})
+#: ArduPlane's pilot-flown modes, wing-borne and on the lift motors.
+_PLANE_PILOT = frozenset({"MANUAL", "STABILIZE", "TRAINING", "ACRO", "FBWA", "FBWB", "CRUISE", "QSTABILIZE", "QHOVER", "QACRO"})
+#: ArduSub leaves SURFACE for ALT_HOLD once at the surface (ModeReason::SURFACE_COMPLETE, ArduSub/mode_surface.cpp).
+_SUB_FOLLOW_ON = MappingProxyType({"SURFACE": "ALT_HOLD"})
 
 PROFILES: MappingProxyType[str, VehicleProfile] = MappingProxyType({
-    "rover": VehicleProfile("rover", mavlink.MAV_TYPE_GROUND_ROVER, ROVER_MODES, "HOLD", "GUIDED", "MANUAL", True),
-    "boat": VehicleProfile("boat", mavlink.MAV_TYPE_SURFACE_BOAT, ROVER_MODES, "LOITER", "GUIDED", "MANUAL", True),
-    "sub": VehicleProfile("sub", mavlink.MAV_TYPE_SUBMARINE, SUB_MODES, "POSHOLD", "GUIDED", "MANUAL", False),
-    "vtol": VehicleProfile("vtol", mavlink.MAV_TYPE_VTOL_QUADROTOR, PLANE_MODES, "QLOITER", "GUIDED", "QSTABILIZE", False),
+    "rover": VehicleProfile("rover", mavlink.MAV_TYPE_GROUND_ROVER, ROVER_MODES, "HOLD", "GUIDED", "MANUAL", True, _ROVER_PILOT),
+    "boat": VehicleProfile("boat", mavlink.MAV_TYPE_SURFACE_BOAT, ROVER_MODES, "LOITER", "GUIDED", "MANUAL", True, _ROVER_PILOT),
+    "sub": VehicleProfile("sub", mavlink.MAV_TYPE_SUBMARINE, SUB_MODES, "POSHOLD", "GUIDED", "MANUAL", False, _SUB_PILOT, _SUB_FOLLOW_ON),
+    "vtol": VehicleProfile("vtol", mavlink.MAV_TYPE_VTOL_QUADROTOR, PLANE_MODES, "QLOITER", "GUIDED", "QSTABILIZE", False, _PLANE_PILOT),
 })  # fmt: skip
 
 _BY_MAV_TYPE = {
@@ -59,6 +72,14 @@ _BY_MAV_TYPE = {
     mavlink.MAV_TYPE_VTOL_QUADROTOR: "vtol",
     mavlink.MAV_TYPE_VTOL_TILTROTOR: "vtol",
 }
+
+
+#: Autopilot firmware -> the vehicle kinds it drives here. PX4 has VTOL and rover airframes; it has no ArduSub (a sub) and
+#: no boat of ours (its rover modules drive wheels).
+AutopilotName = Literal["ardupilot", "px4"]
+AUTOPILOT_VEHICLES: MappingProxyType[str, frozenset[str]] = MappingProxyType(
+    {"ardupilot": frozenset({"rover", "boat", "sub", "vtol"}), "px4": frozenset({"vtol", "rover"})}
+)
 
 
 def profile_for_mav_type(mav_type: int) -> VehicleProfile | None:

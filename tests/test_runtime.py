@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import py_trees
 import pytest
@@ -11,8 +12,9 @@ from py_trees.common import Status
 from executive.assembly import build_runtime
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission
 from executive.runtime import BehaviourCrashed, Runtime, explain_failure
-from executive.testing import AUTOPILOT
+from executive.testing import ObedientAutopilot
 
 HOLD, GUIDED = 4, 15
 
@@ -20,27 +22,6 @@ HOLD, GUIDED = 4, 15
 class Explodes(py_trees.behaviour.Behaviour):
     def update(self) -> Status:
         raise ZeroDivisionError("boom")
-
-
-class ObedientAutopilot:
-    """Answers on the fake link: heartbeats every tick and instant mode changes."""
-
-    def __init__(self, link) -> None:
-        self.link, self.mode = link, GUIDED
-        self._send = link.send
-        link.send = self.receive
-
-    def receive(self, msg) -> None:
-        self._send(msg)
-        if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-            self.mode = int(msg.param2)
-            self.link.incoming.append(AUTOPILOT.command_ack(msg.command, 0, 0, 0, 1, 191))
-        if msg.get_type() == "HEARTBEAT":
-            self.beat()
-
-    def beat(self) -> None:
-        base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
-        self.link.incoming.append(AUTOPILOT.heartbeat(mavlink.MAV_TYPE_GROUND_ROVER, 3, base, self.mode, 4))
 
 
 def make_runtime(square_mission, link, clock, root=None) -> Runtime:
@@ -86,7 +67,7 @@ def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mis
     outcome = runtime.run(start=False)
     assert outcome.status is MissionStatus.ABORTED
     assert "behaviour crashed: Mission/Divide: ZeroDivisionError: boom" in outcome.reason
-    assert autopilot.mode == HOLD
+    assert autopilot.mode == "HOLD"
     assert runtime.mission_state.status is MissionStatus.ABORTED
 
 
@@ -97,7 +78,7 @@ def test_a_stop_request_makes_the_vehicle_safe(square_mission, link, clock):
     runtime.request_stop("SIGTERM")
     outcome = runtime.run()
     assert (outcome.status, outcome.reason) == (MissionStatus.ABORTED, "stopped: SIGTERM")
-    assert autopilot.mode == HOLD
+    assert autopilot.mode == "HOLD"
 
 
 def test_make_safe_gives_up_when_the_vehicle_does_not_answer(square_mission, link, clock):
@@ -154,18 +135,28 @@ def test_an_operator_abort_ends_the_run_with_the_vehicle_safe(square_mission, li
     autopilot.beat()
     outcome = runtime.run()
     assert (outcome.status, outcome.reason, outcome.ticks) == (MissionStatus.ABORTED, "operator: abort", 3)
-    assert autopilot.mode == HOLD
+    assert autopilot.mode == "HOLD"
 
 
 def test_hands_off_when_a_person_has_the_vehicle(square_mission, link, clock, vehicle):
     """Ending a mission must not take the vehicle back from a pilot who flipped the take-over switch."""
     runtime = make_runtime(square_mission, link, clock, root=py_trees.behaviours.Running("forever"))
     autopilot = ObedientAutopilot(link)
-    autopilot.mode = 0  # MANUAL: the pilot drives
+    autopilot.mode = "MANUAL"  # the pilot drives
     autopilot.beat()
     vehicle.set(rc__channels=(1500,) * 5 + (1900,))
     runtime.request_stop("SIGTERM")
     outcome = runtime.run()
     assert outcome.status is MissionStatus.ABORTED
-    assert autopilot.mode == 0
+    assert autopilot.mode == "MANUAL"
     assert not [m for m in link.sent if m.get_type() == "COMMAND_LONG" and m.command == mavlink.MAV_CMD_DO_SET_MODE]
+
+
+def test_a_tree_that_ends_with_a_sample_point_unsampled_does_not_complete(link, clock):
+    """No fake success: a tree that returns SUCCESS with a sample not taken (a refused sample skipped) ends ABORTED, saying which."""
+    mission = load_mission(Path(__file__).parents[1] / "missions" / "asv_sampling.yaml")
+    runtime = build_runtime(mission, link, clock, root=py_trees.behaviours.Success("done"), safe_timeout_s=0.5, simulated_vehicle=True)
+    ObedientAutopilot(link, "boat").beat()
+    outcome = runtime.run()
+    assert outcome.status is MissionStatus.ABORTED
+    assert outcome.reason.startswith("the tree ended, but no sample was recorded at leg ")

@@ -5,6 +5,7 @@
     Mission: while PAUSED, hold in POSHOLD (the leg is kept); otherwise run:
     ├── Accept the mission (once): wait for the EKF and a position, then every waypoint within 1 km of it?
     │   (a waypoint farther away refuses the whole mission, before anything is sent to the vehicle)
+    │   and the downward rangefinder's range (RNGFND1_MIN/MAX) covers every altitude leg's height?
     ├── Pre-flight: wait for the EKF, arm (or wait for the operator to)
     ├── Guarded survey or hold (reactive selector)
     │   ├── Guarded survey: link alive? EKF ok? armed? RC not taking over? speed, depth and (altitude legs) altitude within limits?
@@ -20,7 +21,9 @@ Surfacing is not guarded: holding would stop the one manoeuvre that makes a sub 
 
 A leg follows the waypoint's control mode: ``depth`` dives (or rises) to ``depth_m`` where the
 vehicle is, then goes to the waypoint at that depth; ``altitude`` does the same at ``altitude_m``
-above the seabed (the terrain frame, judged by the downward sonar). A depth leg without
+above the seabed, flown as depth targets from the measured depth and the downward sonar, re-sent as
+the seabed changes (ArduSub drops terrain-frame targets: executive/seabed.py); with the seabed
+beyond the sonar's reach the sub first dives, without overshooting, until the sonar reads it. A depth leg without
 ``depth_m`` runs at the surface (depth 0, as the Zeno vehicle is run). The 1 km rule is checked
 once, at the start: pausing and resuming a mission does not accept it again.
 """
@@ -39,6 +42,7 @@ from executive.behaviours import (
     ForEachLeg,
     GoTo,
     Guard,
+    RangefinderReaches,
     SetMode,
     SpeedWithin,
     Surface,
@@ -49,8 +53,12 @@ from trees._parts import guarded, mission_root, preflight, safe_mode, standard_g
 
 
 def acceptance(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """Once: the EKF's position, then every waypoint within ``max_goal_distance_m`` of it (else the mission fails, naming the waypoint)."""
-    return py_trees.decorators.OneShot("Once", within_reach(mission, "Accept the mission"), OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
+    """Once: the EKF's position, then every waypoint within ``max_goal_distance_m`` of it, and the rangefinder's range covering
+    every altitude leg (else the mission fails, naming the waypoint, and the parameter and the value it needs)."""
+    check = py_trees.composites.Sequence(
+        "Accept the mission", memory=True, children=[within_reach(mission, "Waypoints within reach"), RangefinderReaches(mission.waypoints)]
+    )
+    return py_trees.decorators.OneShot("Once", check, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
 
 
 def survey_guards(mission: Mission) -> list[Guard]:

@@ -113,7 +113,10 @@ def point(mission: Mission) -> py_trees.behaviour.Behaviour:
     go = py_trees.composites.Sequence(
         "Go to the point",
         memory=False,  # the mode is checked every tick (someone may change it): set again when it is not GUIDED
-        children=[SetMode(guided, name=f"{guided} (else set it)"), GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True)],
+        children=[
+            SetMode(guided, name=f"{guided} (else set it)", confirm_by_ack=True),  # moving a tick after the ack, not at the next heartbeat
+            GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True),
+        ],
     )
     sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), Sample()])
     due = py_trees.composites.Selector("Sample if due", memory=False, children=[NothingToSample(), sample])

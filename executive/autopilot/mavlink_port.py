@@ -32,6 +32,9 @@ class MavlinkPort:
     def mode_name(self, mode: str) -> str:
         return self.commander.modes.canonical(mode)
 
+    def service(self) -> None:
+        """What the back end keeps sending between requests (PX4's offboard setpoint stream); every tick, before the commands go out."""
+
     # -- acked intents -----------------------------------------------------------------------
     def set_mode(self, mode: str) -> Request:
         return self._request(self.commander.set_mode(mode), mavlink.MAV_CMD_DO_SET_MODE, self.mode_name(mode))
@@ -76,6 +79,9 @@ class MavlinkPort:
 
     def cancel(self, request: Request | None) -> bool:
         return request is not None and self.commander.cancel(request.ticket)
+
+    def read_parameter(self, name: str) -> None:
+        self.commander.request_parameter(name)
 
     # -- setpoints -----------------------------------------------------------------------------
     def go_to(self, target: Waypoint) -> None:

@@ -1,23 +1,91 @@
-"""The PX4 back end of the autopilot port."""
+"""The PX4 back end of the autopilot port, as PX4 (main, 2025) behaves over MAVLink (issue 12).
+
+- Modes live in ``custom_mode`` (main mode bits 16-23, sub mode 24-31); trees name them the
+  ArduPilot way and get the equivalent (GUIDED is OFFBOARD, QLOITER AUTO.LOITER, QRTL AUTO.RTL).
+  DO_SET_MODE is acked twice, ACCEPTED by the MAVLink receiver at once and the real result by the
+  commander after (src/modules/commander/Commander.cpp handle_command answers it on its loop): the
+  commander here takes the first ACCEPTED as "received" only; a mode is confirmed by the heartbeat.
+- OFFBOARD is entered only while setpoints stream (the offboard signal counts as lost when the
+  last setpoint is older than COM_OF_LOSS_T, 1 s by default:
+  src/modules/commander/HealthAndArmingChecks/checks/offboardCheck.cpp). The stream starts before
+  the mode is asked (the request goes out :data:`STREAM_LEAD_S` later), runs at
+  :data:`STREAM_PERIOD_S` while OFFBOARD is asked for or shown, and stops only once the heartbeat
+  shows another mode: leaving OFFBOARD is asking for another mode (AUTO.LOITER, the safe mode),
+  never stopping the stream, which is PX4's offboard failsafe.
+- NAV_TAKEOFF param7 is an altitude above sea level (home's plus the height; NaN: PX4's default).
+- AUTO.MISSION is refused while PX4 checks a mission it was just given: it is asked
+  :data:`MISSION_CHECK_S` after the upload's MISSION_ACK at the earliest.
+- VTOL transitions go as MAV_CMD_DO_VTOL_TRANSITION, which PX4 takes in flight in any mode.
+"""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
+from executive import blackboard
 from executive.autopilot.mavlink_port import MavlinkPort
 from executive.autopilot.port import Capabilities, Request
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.state import GlobalPosition, HomePosition
-from executive.vehicles import VehicleProfile
+from executive.mission.model import Waypoint
+from executive.state import GlobalPosition, HomePosition, MissionTransferStatus, TransferOperation, TransferState
+from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 
-#: Vehicle kinds PX4 drives (of ours): VTOL and rover; it has no ArduSub equivalent.
-PX4_VEHICLES = frozenset({"vtol", "rover"})
+OFFBOARD = "OFFBOARD"
+#: Setpoints go out this often while OFFBOARD is wanted or shown: PX4 needs > 2 Hz.
+STREAM_PERIOD_S = 0.1
+#: The stream runs this long before OFFBOARD is asked (offboardCheck.cpp wants a recent setpoint when the commander looks).
+STREAM_LEAD_S = 0.5
+#: AUTO.MISSION is asked this long after the upload's MISSION_ACK at the earliest (PX4 checks the new mission meanwhile).
+MISSION_CHECK_S = 1.2
+
+
+class OffboardStream:
+    """The setpoint stream OFFBOARD lives on: the latest target (else where the vehicle is), re-sent every :data:`STREAM_PERIOD_S`."""
+
+    def __init__(self, commander: Commander) -> None:
+        self._commander = commander
+        self._bb = blackboard.reader("offboard stream", ["/vehicle/mode", "/vehicle/position"])
+        self.wanted = False  # OFFBOARD asked for, and no other mode since
+        self.target: Callable[[], None] | None = None  # queues the current setpoint
+        self.started_at: float | None = None
+        self._last_sent = -math.inf
+
+    @property
+    def running(self) -> bool:
+        return self.started_at is not None
+
+    def aim(self, send: Callable[[], None]) -> None:
+        """A new target (a setpoint): sent now and streamed from now on."""
+        self.target = send
+        self._send(self._commander.clock.now())
+
+    def service(self) -> None:
+        """Send the setpoint when due while OFFBOARD is wanted or shown; stop once the heartbeat shows another mode."""
+        now = self._commander.clock.now()
+        if not (self.wanted or self._bb.get("/vehicle/mode") == OFFBOARD):
+            self.target, self.started_at = None, None
+            return
+        if now - self._last_sent >= STREAM_PERIOD_S * 0.9:
+            self._send(now)
+
+    def _send(self, now: float) -> None:
+        if self.target is None:
+            position: GlobalPosition | None = self._bb.get("/vehicle/position")
+            if position is None:
+                return  # nothing to hold on to yet: no stream, and PX4 refuses OFFBOARD
+            lat, lon, alt = position.lat, position.lon, position.alt_rel_m
+            self.target = lambda: self._commander.goto(lat, lon, alt)
+        self.target()
+        self._last_sent = now
+        if self.started_at is None:
+            self.started_at = now
 
 
 class Px4Port(MavlinkPort):
-    """PX4: main/sub modes in ``custom_mode``, NAV_TAKEOFF above sea level, VTOL transitions by command in flight."""
+    """PX4: main/sub modes, the offboard setpoint stream, NAV_TAKEOFF above sea level, VTOL transitions by command in flight."""
 
     name = "px4"
 
@@ -26,14 +94,65 @@ class Px4Port(MavlinkPort):
         self.capabilities = Capabilities(
             autopilot="px4",
             safe_mode="AUTO.LOITER",
-            guided_mode="OFFBOARD",
+            guided_mode=OFFBOARD,
             route_mode="AUTO.MISSION",
-            vehicles=PX4_VEHICLES,
+            vehicles=AUTOPILOT_VEHICLES["px4"],
             transition_anywhere=True,
             takeoff_alt_amsl=True,
         )
+        self.stream = OffboardStream(commander)
+        self._bb = blackboard.reader("px4 port", ["/link/mission_transfer", "/vehicle/home"])
+
+    def service(self) -> None:
+        self.stream.service()
+
+    def set_mode(self, mode: str) -> Request:
+        name = self.mode_name(mode)
+        delay = 0.0
+        if name == OFFBOARD:
+            self.stream.wanted = True
+            now = self.commander.clock.now()
+            if not self.stream.running:
+                self.stream.service()  # the first setpoint goes with this tick
+            started = self.stream.started_at if self.stream.started_at is not None else now
+            delay = max(0.0, started + STREAM_LEAD_S - now)
+        else:
+            self.stream.wanted = False  # the stream goes on until the heartbeat shows we left OFFBOARD
+            if name == self.capabilities.route_mode:
+                delay = self._mission_check_wait()
+        return self._request(self.commander.set_mode(mode, delay_s=delay), mavlink.MAV_CMD_DO_SET_MODE, name)
+
+    def _mission_check_wait(self) -> float:
+        status: MissionTransferStatus | None = self._bb.get("/link/mission_transfer")
+        if status is None or status.operation is not TransferOperation.UPLOAD or status.state is not TransferState.DONE:
+            return 0.0
+        return max(0.0, status.time + MISSION_CHECK_S - self.commander.clock.now())
+
+    def _leaving_offboard(self) -> None:
+        self.stream.wanted = False
+
+    def reposition(self, lat: float, lon: float, alt_m: float) -> Request:
+        """DO_REPOSITION as COMMAND_INT (lat/lon x1e7) with the change-mode flag: PX4 flies there in AUTO.LOITER.
+
+        Its param7 is taken as an altitude above sea level whatever the frame (src/modules/navigator/navigator_main.cpp,
+        VEHICLE_CMD_DO_REPOSITION): home's plus ``alt_m`` (NaN, keep the altitude, before home is known).
+        """
+        self._leaving_offboard()
+        self.commander.modes_asked["AUTO.LOITER"] = self.commander.clock.now()  # the mode it puts PX4 in: ours, not a person's
+        home: HomePosition | None = self._bb.get("/vehicle/home")
+        amsl = home.alt_m + alt_m if home is not None else math.nan
+        flags = float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)
+        ticket = self.commander.command_int(mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_INT, (-1, flags, 0, math.nan, lat, lon, amsl))
+        return self._request(ticket, mavlink.MAV_CMD_DO_REPOSITION)
 
     def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:
-        # param7 is an altitude above sea level: home's plus the height (NaN: PX4's default take-off altitude)
+        self._leaving_offboard()  # NAV_TAKEOFF: AUTO.TAKEOFF, then AUTO.LOITER (a follow-on mode)
+        self.commander.modes_asked["AUTO.TAKEOFF"] = self.commander.clock.now()
         amsl = home.alt_m + alt_m if home is not None else math.nan
         return self._request(self.commander.takeoff(amsl), mavlink.MAV_CMD_NAV_TAKEOFF)
+
+    def go_to(self, target: Waypoint) -> None:
+        self.stream.aim(lambda: MavlinkPort.go_to(self, target))
+
+    def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:
+        self.stream.aim(lambda: self.commander.local_setpoint(north_m, east_m, down_m))

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from executive.autopilot.ardupilot import ArduPilotPort
 from executive.autopilot.mavlink_port import MavlinkPort
@@ -20,6 +20,15 @@ from executive.vehicles import VehicleProfile
 log = logging.getLogger(__name__)
 
 BACK_ENDS: dict[str, type[MavlinkPort]] = {"ardupilot": ArduPilotPort, "px4": Px4Port}
+#: Commands each firmware acks twice (the first ACCEPTED only says "received"): PX4's MAVLink receiver and then its
+#: commander both answer DO_SET_MODE (issue 12; src/modules/commander/Commander.cpp handle_command answers on its own loop).
+DOUBLE_ACKED: dict[str, frozenset[int]] = {"ardupilot": frozenset(), "px4": frozenset({mavlink.MAV_CMD_DO_SET_MODE})}
+#: Modes each firmware leaves for another by itself (beyond the vehicle profile's): PX4 loiters once a take-off or a
+#: mission is done (Commander::checkForMissionUpdate / navigator), and lands at the end of a return.
+FOLLOW_ON_MODES: dict[str, Mapping[str, str]] = {
+    "ardupilot": {},
+    "px4": {"AUTO.TAKEOFF": "AUTO.LOITER", "AUTO.MISSION": "AUTO.LOITER", "AUTO.RTL": "AUTO.LAND"},
+}
 
 
 def autopilot_name(heartbeat_autopilot: int) -> AutopilotName:
@@ -44,6 +53,10 @@ class Autopilot:
         self.backend: MavlinkPort = BACK_ENDS[forced or "ardupilot"](commander, transfer, profile)
         if forced == "px4":
             self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4, profile.mav_type)
+            self._commander.double_acked = DOUBLE_ACKED["px4"]
+            self._commander.follow_on_modes = FOLLOW_ON_MODES["px4"]
+        #: Called with the back end's name once it is known (the stream set-up differs per firmware).
+        self.on_backend: Callable[[str], None] | None = None
 
     def adopt(self, heartbeat_autopilot: int, mav_type: int) -> None:
         """The reader found the autopilot: use its back end (unless one was forced) and its mode table."""
@@ -51,9 +64,17 @@ class Autopilot:
         if self.forced is not None and name != autopilot_name(heartbeat_autopilot):
             log.warning("the autopilot's heartbeat says %s; %s was forced", autopilot_name(heartbeat_autopilot), name)
         self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4 if name == "px4" else heartbeat_autopilot, mav_type)
+        self._commander.double_acked = DOUBLE_ACKED[name]
+        self._commander.follow_on_modes = FOLLOW_ON_MODES[name]
         if name != self.backend.name:
             self.backend = BACK_ENDS[name](self._commander, self._transfer, self._profile)
             log.info("autopilot back end: %s", name)
+        if self.on_backend is not None:
+            self.on_backend(name)
+
+    def service(self) -> None:
+        """Every tick, before the commands are sent: the back end's own traffic (PX4's offboard setpoint stream)."""
+        self.backend.service()
 
     # -- the port, forwarded -------------------------------------------------------------------
     @property
@@ -103,6 +124,9 @@ class Autopilot:
 
     def cancel(self, request: Request | None) -> bool:
         return self.backend.cancel(request)
+
+    def read_parameter(self, name: str) -> None:
+        self.backend.read_parameter(name)
 
     def go_to(self, target: Waypoint) -> None:
         self.backend.go_to(target)

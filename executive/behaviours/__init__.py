@@ -33,7 +33,9 @@ from executive.behaviours.guards import (
     LinkAlive,
     ModeIs,
     PositionKnown,
+    RangefinderReaches,
     RcAutoMode,
+    RcChannelHigh,
     RcFresh,
     RcNotLost,
     RcNotTakingOver,
@@ -42,6 +44,7 @@ from executive.behaviours.guards import (
     inside_geofence,
     rc_auto_mode,
 )
+from executive.behaviours.mode_switch import ModeSwitchClear
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
 from executive.behaviours.sampling import NothingToSample, Sample
 
@@ -74,9 +77,12 @@ __all__ = [
     "LinkAlive",
     "ModeIs",
     "ModeSwitch",
+    "ModeSwitchClear",
     "NothingToSample",
     "PositionKnown",
+    "RangefinderReaches",
     "RcAutoMode",
+    "RcChannelHigh",
     "RcFresh",
     "RcNotLost",
     "RcNotTakingOver",

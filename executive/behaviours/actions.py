@@ -20,6 +20,7 @@ from executive import blackboard, frames, geo
 from executive.autopilot import AutopilotPort, Request, VtolState
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
+from executive.seabed import depth_for_altitude
 from executive.state import CommandState, CommandStatus, GlobalPosition, HomePosition
 
 
@@ -92,28 +93,36 @@ class CommandAction(TimedBehaviour):
 class SetMode(CommandAction):
     """Put the autopilot in a flight mode (by name); confirmed by the heartbeat.
 
-    With ``confirm_by_ack`` the ack ACCEPTED of its own request confirms it too: ArduPilot changes
-    mode before it acks (GCS_MAVLINK::_set_mode_common, libraries/GCS_MAVLink/GCS_Common.cpp, acks
-    ACCEPTED only when set_mode succeeded), while its heartbeat comes once a second. For a step
-    that runs once (in a sequence with memory): a step re-ticked every tick would ask again until
-    the heartbeat shows the mode.
+    With ``confirm_by_ack`` the ack ACCEPTED of its own latest request confirms it too, until the
+    next heartbeat speaks: ArduPilot changes mode before it acks (GCS_MAVLINK::_set_mode_common,
+    libraries/GCS_MAVLink/GCS_Common.cpp, acks ACCEPTED only when set_mode succeeded), while its
+    heartbeat comes once a second. A step re-ticked every tick does not ask again meanwhile; a
+    heartbeat after the ack showing another mode (someone changed it since) is believed.
     """
 
-    reads = ("/vehicle/mode",)
+    reads = ("/vehicle/mode", "/link/last_heartbeat")
     command_name = "DO_SET_MODE"
 
     def __init__(self, mode: str, name: str | None = None, confirm_timeout_s: float = 5.0, confirm_by_ack: bool = False) -> None:
         super().__init__(name or f"Set {mode.upper()}", confirm_timeout_s)
         self.mode = mode.upper()
         self.confirm_by_ack = confirm_by_ack
+        self._last_request: Request | None = None  # kept across runs: its ack still counts until a heartbeat comes
 
     def request(self) -> Request:
-        return self.autopilot.set_mode(self.mode)
+        self._last_request = self.autopilot.set_mode(self.mode)
+        return self._last_request
 
     def confirmed(self) -> bool:
-        if self.confirm_by_ack and _accepted(self.get(blackboard.command_key(self.command_name)), self._ticket):
+        if self.get("/vehicle/mode") == self.autopilot.mode_name(self.mode):
             return True
-        return self.get("/vehicle/mode") == self.autopilot.mode_name(self.mode)
+        if not self.confirm_by_ack:
+            return False
+        status: CommandStatus | None = self.get(blackboard.command_key(self.command_name))
+        heartbeat: float | None = self.get("/link/last_heartbeat")
+        if status is None or heartbeat is None or not _accepted(status, self._last_request):
+            return False
+        return heartbeat <= status.time
 
 
 class Arm(CommandAction):
@@ -159,8 +168,9 @@ class GoTo(TimedBehaviour):
     is followed at once. ``method``:
 
     - ``"setpoint"``: SET_POSITION_TARGET_GLOBAL_INT, re-sent every ``resend_s``: ArduPilot gives no
-      ack for it and drops it silently outside GUIDED. A sub's waypoint goes with its depth (or its
-      height above the seabed, control_mode altitude), so a leg never brings the sub up.
+      ack for it and drops it silently outside GUIDED. A sub's waypoint goes with its depth (an
+      altitude leg: the depth that keeps its height above the seabed, from the measured depth and
+      rangefinder, re-sent as the seabed changes), so a leg never brings the sub up.
     - ``"reposition"``: MAV_CMD_DO_REPOSITION (acked; switches to GUIDED), sent once and again only
       when refused or unanswered, at most every ``resend_s``. ArduPlane needs it: it takes only the
       altitude from a setpoint. A waypoint without an altitude (``alt_m`` 0, which ArduPlane refuses)
@@ -179,7 +189,7 @@ class GoTo(TimedBehaviour):
 
     reads = (
         "/mission/target", "/mission/next_target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position",
-        "/vehicle/statustext", blackboard.command_key("DO_REPOSITION"),
+        "/vehicle/statustext", "/vehicle/rangefinder", blackboard.command_key("DO_REPOSITION"),
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
@@ -216,6 +226,7 @@ class GoTo(TimedBehaviour):
         self._last_sent = float("-inf")
         self._ticket = None
         self._refusal: str | None = None
+        self._seabed_depth: float | None = None  # an altitude leg's last depth target
 
     def update(self) -> Status:
         target = self.get("/mission/target")
@@ -274,7 +285,9 @@ class GoTo(TimedBehaviour):
         if now - self._last_sent < self.resend_s:
             return
         if self.method == "setpoint":
-            self.autopilot.go_to(self.target)
+            target = self._as_depth(self.target, position)
+            if target is not None:
+                self.autopilot.go_to(target)
             self._last_sent = now
             return
         if self._ticket is not None:
@@ -288,6 +301,18 @@ class GoTo(TimedBehaviour):
             alt = position.alt_rel_m
         self._ticket = self.autopilot.reposition(self.target.lat, self.target.lon, alt)
         self._last_sent = now
+
+    def _as_depth(self, target: Waypoint, position: GlobalPosition | None) -> Waypoint | None:
+        """A sub's altitude leg as a depth target from the measured depth and rangefinder (executive.seabed: ArduSub drops
+        terrain-frame targets); the last one again while the reading says nothing, the current depth before any."""
+        if target.control_mode != "altitude" or target.altitude_m is None:
+            return target
+        if position is None:
+            return None
+        depth = depth_for_altitude(-position.alt_rel_m, self.get("/vehicle/rangefinder"), target.altitude_m)
+        depth = depth if depth is not None else self._seabed_depth if self._seabed_depth is not None else -position.alt_rel_m
+        self._seabed_depth = depth
+        return target.model_copy(update={"control_mode": "depth", "depth_m": depth, "altitude_m": None})
 
 
 class HoldFor(SetMode):
@@ -452,14 +477,16 @@ class ChangeDepth(_VerticalSetpoint):
 
 
 class ChangeAltitude(_VerticalSetpoint):
-    """Sub: keep the current leg's ``altitude_m`` above the seabed (control_mode ``altitude``), where the vehicle is.
+    """Sub: reach the current leg's ``altitude_m`` above the seabed (control_mode ``altitude``), where the vehicle is.
 
-    Sent in the terrain frame, which only GUIDED understands (ALT_HOLD would take the height for a
-    depth below the origin): outside GUIDED it is a FAILURE without sending anything. Confirmed by
-    the downward rangefinder (``/vehicle/altitude_above_bottom_m``). Other legs: SUCCESS at once.
+    Flown as depth targets computed from the measured depth and the downward rangefinder
+    (:func:`executive.seabed.depth_for_altitude`), re-sent every ``resend_s`` as the reading
+    changes: ArduSub silently drops a terrain-frame target. With the seabed beyond the
+    rangefinder's reach it dives, without overshooting, until the reading is good. Confirmed by the
+    rangefinder (``/vehicle/altitude_above_bottom_m``). Other legs: SUCCESS at once.
     """
 
-    reads = (*_VerticalSetpoint.reads, "/vehicle/altitude_above_bottom_m")
+    reads = (*_VerticalSetpoint.reads, "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder")
     what = "altitude"
 
     def __init__(self, name: str = "Change altitude", tolerance_m: float = 0.5, timeout_s: float = 120.0, resend_s: float = 1.0) -> None:
@@ -472,13 +499,13 @@ class ChangeAltitude(_VerticalSetpoint):
         value: float | None = self.get("/vehicle/altitude_above_bottom_m")
         return value
 
-    def refuse(self) -> str | None:
-        mode = self.get("/vehicle/mode")
-        guided = self.autopilot.capabilities.guided_mode
-        return None if mode == guided else f"needs {guided} to keep a height above the seabed (mode is {mode})"
-
     def send(self, lat: float, lon: float, target_m: float) -> None:
-        self.autopilot.hold_depth(lat, lon, altitude_m=target_m)
+        position: GlobalPosition | None = self.get("/vehicle/position")
+        if position is None:
+            return
+        depth = depth_for_altitude(-position.alt_rel_m, self.get("/vehicle/rangefinder"), target_m)
+        if depth is not None:  # an invalid reading: ArduSub keeps the last depth target
+            self.autopilot.hold_depth(lat, lon, depth_m=depth)
 
 
 class Surface(CommandAction):

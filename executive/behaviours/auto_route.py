@@ -24,7 +24,15 @@ from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState
 from executive.mission.route import Route
-from executive.state import GlobalPosition, HomePosition, MissionCurrent, MissionItemReached, MissionTransferStatus, TransferState
+from executive.state import (
+    MISSION_STATE_COMPLETE,
+    GlobalPosition,
+    HomePosition,
+    MissionCurrent,
+    MissionItemReached,
+    MissionTransferStatus,
+    TransferState,
+)
 
 #: The autopilot mode that drives its own mission.
 AUTO = "AUTO"
@@ -90,6 +98,10 @@ class KeepRouteOnAutopilot(ExecutiveBehaviour):
                 self._failure, self._failed_at = status.reason, now
 
 
+#: Waypoints closer than this to the first are the same place: a route of them was recorded by a vehicle that never moved.
+SAME_PLACE_M = 1.0
+
+
 class DriveRouteInAuto(TimedBehaviour):
     """Wait for the operator to drive the route in AUTO, follow the autopilot along it; SUCCESS at the last waypoint.
 
@@ -98,10 +110,14 @@ class DriveRouteInAuto(TimedBehaviour):
     The wait starts again whenever the drive stops (the operator takes the vehicle out of AUTO or
     disarms it, the route changes and is uploaded again).
 
-    Driving: the autopilot's MISSION_CURRENT (item k: legs before k done) and MISSION_ITEM_REACHED
-    (item k: legs up to k done) reported since the drive started move the mission's leg index
-    forward; the feedback is the next waypoint, its distance and bearing. SUCCESS when the last
-    waypoint is reached.
+    Driving: the autopilot's MISSION_CURRENT (item k: legs before k done; mission_state 5: all
+    done) reported since the tick before the drive started, and the highest MISSION_ITEM_REACHED
+    reported in this run (latched by the reader: one that arrives in the tick the vehicle enters
+    AUTO, or before its heartbeat shows AUTO, counts) move the mission's leg index forward; the
+    feedback is the next waypoint, its distance and bearing. No waypoint reached within
+    ``leg_timeout_s`` of driving: FAILURE (the autopilot holds still in AUTO, and says nothing).
+    SUCCESS when the last waypoint is reached, unless every waypoint is the same place (the vehicle
+    never moved while the route was recorded): then FAILURE, nothing was driven.
     """
 
     reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/mission_items", "/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/position")
@@ -109,19 +125,26 @@ class DriveRouteInAuto(TimedBehaviour):
     mission_state: MissionState
     autopilot: AutopilotPort
 
-    def __init__(self, operator_timeout_s: float, name: str = "Drive the route in AUTO") -> None:
+    def __init__(self, operator_timeout_s: float, name: str = "Drive the route in AUTO", leg_timeout_s: float = 600.0) -> None:
         super().__init__(name)
         self.operator_timeout_s = operator_timeout_s
+        self.leg_timeout_s = leg_timeout_s
         self._waiting_since = 0.0
         self._driving_since: float | None = None
+        self._run_started: float | None = None  # the first tick of this run: reports before it are another run's
+        self._last_update = float("-inf")
+        self._progress_at = 0.0  # when the leg index last moved while driving
 
     def initialise(self) -> None:
         super().initialise()
         self._waiting_since = self.started
         self._driving_since = None
+        if self._run_started is None:
+            self._run_started = self._last_update = self.started
 
     def update(self) -> Status:
-        now = self.clock.now()
+        now, before = self.clock.now(), self._last_update
+        self._last_update = now
         route = self.mission_state.route
         why = self._why_not_driving(route)
         if why is not None:
@@ -134,20 +157,37 @@ class DriveRouteInAuto(TimedBehaviour):
             self.feedback_message = f"waiting for the operator ({waited:.0f}/{self.operator_timeout_s:g} s): {why}"
             return Status.RUNNING
         if self._driving_since is None:
-            self._driving_since = now
+            self._driving_since = before  # what the readers drained in this tick arrived after the last one
+            self._progress_at = now
+        leg_before = self.mission_state.leg_index
         self._follow_autopilot(len(route))
         n, leg = len(route), self.mission_state.leg_index
+        if leg != leg_before:
+            self._progress_at = now
         if leg >= n:
-            self.feedback_message = f"route done: {n}/{n} waypoints reached"
-            return Status.SUCCESS
+            return self._done(route)
         target = route.waypoints[leg]
         position: GlobalPosition | None = self.get("/vehicle/position")
         where = ""
         if position is not None:
             distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
             where = f": {distance:.1f} m at {bearing:03.0f}°"
+        if now - self._progress_at > self.leg_timeout_s:
+            self.feedback_message = f"no progress in AUTO: waypoint {leg + 1}/{n} not reached within {self.leg_timeout_s:g} s{where}"
+            return Status.FAILURE
         self.feedback_message = f"waypoint {leg + 1}/{n}{where}"
         return Status.RUNNING
+
+    def _done(self, route: Route) -> Status:
+        n = len(route)
+        first = route.waypoints[0]
+        if n > 1 and all(geo.distance(first.lat, first.lon, wp.lat, wp.lon) < SAME_PLACE_M for wp in route.waypoints):
+            self.feedback_message = (
+                f"the route's {n} waypoints are all one place (the vehicle never moved while they were recorded): nothing was driven"
+            )
+            return Status.FAILURE
+        self.feedback_message = f"route done: {n}/{n} waypoints reached"
+        return Status.SUCCESS
 
     def _why_not_driving(self, route: Route) -> str | None:
         if not route.waypoints:
@@ -156,21 +196,24 @@ class DriveRouteInAuto(TimedBehaviour):
         if why is not None:
             return f"the route is not on the autopilot yet: {why}"
         mode = self.get("/vehicle/mode")
-        if mode != AUTO:
+        if mode != self.autopilot.mode_name(AUTO):
             return f"switch C to the middle (AUTO) drives the route; the mode is {mode}"
         if not self.get("/vehicle/armed"):
             return "the vehicle is disarmed (it arms in MANUAL only: switch C up, switch D down)"
         return None
 
     def _follow_autopilot(self, n: int) -> None:
-        """Move the leg index up to what the autopilot reported since the drive started."""
-        assert self._driving_since is not None
+        """Move the leg index up to what the autopilot reported."""
+        assert self._driving_since is not None and self._run_started is not None
         done = 0
         current: MissionCurrent | None = self.get("/vehicle/mission_current")
-        if current is not None and current.time >= self._driving_since and current.seq >= 1:
-            done = current.seq - 1
+        if current is not None and current.time > self._driving_since:
+            if current.state == MISSION_STATE_COMPLETE:
+                done = n
+            elif current.seq >= 1:
+                done = current.seq - 1
         reached: MissionItemReached | None = self.get("/vehicle/mission_reached")
-        if reached is not None and reached.time >= self._driving_since:
-            done = max(done, reached.seq)
+        if reached is not None and reached.time >= self._run_started:
+            done = max(done, reached.highest)
         while self.mission_state.leg_index < min(done, n):
             self.mission_state.advance_leg()

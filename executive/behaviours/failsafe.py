@@ -12,8 +12,9 @@ sends it when that tick ends. Nothing in between waits or retries later: zero ti
 
 While it runs, every guard is judged each tick (not only the first that failed), so a condition
 that becomes true during another one's reaction gets its own. A person who has the vehicle (a
-failing ``wait`` guard that says so: the take-over switch, disarmed) is never fought: nothing is
-commanded meanwhile. Each cause, reaction, recovery and abort is logged as a warning (the journal
+failing ``wait`` guard that says so: the take-over switch, disarmed), or who drives it in a mode
+of a person's (MANUAL, ACRO...: set by the RC, a ground station, or by us at the operator's request),
+is never fought: nothing is commanded meanwhile. Each cause, reaction, recovery and abort is logged as a warning (the journal
 keeps it as an event).
 """
 
@@ -27,6 +28,7 @@ import py_trees
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request
+from executive.behaviours.actions import SetMode
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import (
     Armed,
@@ -43,6 +45,7 @@ from executive.behaviours.guards import (
     RcNotTakingOver,
 )
 from executive.mission.model import REACTION_MODES, FailsafePolicy
+from executive.vehicles import PROFILES
 
 log = logging.getLogger(__name__)
 
@@ -90,7 +93,7 @@ class Failsafe(TimedBehaviour):
     left the vehicle in (the runtime then leaves it there).
     """
 
-    reads = ("/vehicle/vtol_state", "/vehicle/armed", "/mission/leg_index", "/mission/leg_count")
+    reads = ("/vehicle/vtol_state", "/vehicle/armed", "/vehicle/mode", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count")
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
 
@@ -105,6 +108,10 @@ class Failsafe(TimedBehaviour):
         self._conditions = {g: condition_of(g) for g in self.guards}
         self.left_in: str | None = None
         self._own_disarm = False  # kept across a pause: the vehicle is still ours to re-arm
+        # kept across re-entries: after a recovery, until the recovered condition's time limit, a refused mode change is asked again
+        self._resume_until: float | None = None
+        self._resume_causes = ""
+        self._retry_said = False
         self._leg = 0
         self._reset()
 
@@ -137,6 +144,8 @@ class Failsafe(TimedBehaviour):
             self.autopilot.cancel(ticket)
         if self._since and all(g.status == Status.SUCCESS for g in self.guards):
             causes = ", ".join(self._name(g) for g in self._since)
+            self._resume_until = max(since + self.policy_of(g).timeout_s for g, since in self._since.items())
+            self._resume_causes, self._retry_said = causes, False
             log.warning(
                 "failsafe %s: recovered after %.1f s -> resume leg %d/%d", causes, self.elapsed, self._leg + 1, self.get("/mission/leg_count")
             )
@@ -155,23 +164,25 @@ class Failsafe(TimedBehaviour):
         for g in new:
             self._since[g] = now
         if not failing:
-            return self._rearm(now) if self._own_disarm else self._nothing_to_wait_for()
+            return self._rearm(now) if self._own_disarm else self._retry_refused_mode(now) or self._nothing_to_wait_for()
         self._rearm_from = None
         why = "; ".join(f"{g.name} {reason}" for g, reason in failing.items())
         person = next((g for g in failing if g.pilot_in_control and self.policy_of(g).reaction == "wait"), None)
+        driving = self._person_drives()
+        hands_off = person is not None or driving is not None
         aborting = [_Reaction(g, self.policy_of(g)) for g in failing if self.policy_of(g).recovery == "abort"]
         if aborting:
             cause = max(aborting, key=lambda r: r.rank)
-            mode = None if person else self._react(cause)
-            self._log(cause, failing[cause.guard], person, "abort the mission")
+            mode = None if hands_off else self._react(cause)
+            self._log(cause, failing[cause.guard], person, "abort the mission", driving)
             self.left_in = mode or self._mode_in_force
             self.feedback_message = "" if cause.guard.status == Status.FAILURE else f"{cause.guard.name} {failing[cause.guard]}"
             return Status.FAILURE
-        if person is None:
+        if not hands_off:
             self._react_to_strongest(failing, new)
         for g in new:
             reaction = _Reaction(g, self.policy_of(g))
-            self._log(reaction, failing[g], person, f"resume when it recovers (within {reaction.policy.timeout_s:g} s)")
+            self._log(reaction, failing[g], person, f"resume when it recovers (within {reaction.policy.timeout_s:g} s)", driving)
         late = [g for g in failing if now - self._since[g] > self.policy_of(g).timeout_s]
         if late:
             limit = self.policy_of(late[0]).timeout_s
@@ -233,15 +244,60 @@ class Failsafe(TimedBehaviour):
         self.feedback_message = f"re-arming ({now - self._rearm_from:.0f}/{limit:g} s)"
         return Status.RUNNING
 
+    def _retry_refused_mode(self, now: float) -> Status | None:
+        """RUNNING when the work, resumed after a recovery, failed on a refused mode change and the recovery's time is not up.
+
+        The firmware's own failsafe may still be latched (ArduRover refuses GUIDED and AUTO for about
+        a second after its EKF recovered: ``failsafe.ekf``, Rover/ekf_check.cpp, Rover/mode.cpp): the
+        work is ticked again next tick and asks again, until the recovered condition's time limit.
+        """
+        if self._resume_until is None or now > self._resume_until:
+            return None
+        refused = self._refused_mode_change()
+        if refused is None:
+            return None
+        if not self._retry_said:
+            self._retry_said = True
+            log.warning(
+                "failsafe %s: recovered, but %s -> asked again until the recovery's time limit (%.0f s more)",
+                self._resume_causes, refused, self._resume_until - now,
+            )  # fmt: skip
+        self.feedback_message = f"resuming after {self._resume_causes}: {refused}; asking again"
+        return Status.RUNNING
+
+    def _refused_mode_change(self) -> str | None:
+        """Why the guarded work failed on a mode change (the branch this failsafe stands behind), if it did."""
+        if self.parent is None or not self.parent.children or self.parent.children[0] is self:
+            return None
+        for node in self.parent.children[0].iterate():
+            if isinstance(node, SetMode) and node.status == Status.FAILURE:
+                return f"{node.name}: {node.feedback_message}"
+        return None
+
     def _nothing_to_wait_for(self) -> Status:
         self.feedback_message = ""  # the branch it stands behind failed: that is the reason to report
         return Status.FAILURE
 
-    def _log(self, reaction: _Reaction, reason: str, person: Guard | None, recovery: str) -> None:
+    def _person_drives(self) -> str | None:
+        """Why a person drives the vehicle, if one does: a mode in which a person drives (MANUAL, ACRO...) that this failsafe did not ask for.
+
+        Set by the RC, a ground station, or by the executive at the operator's request (handed over):
+        no failsafe of ours changes it; RC loss meanwhile is the autopilot's own RC failsafe's job.
+        """
+        mode = self.get("/vehicle/mode")
+        set_by = self.get("/vehicle/mode_set_by")  # None: the boot mode, nobody's choice
+        if mode in PROFILES[self.vehicle].pilot_modes and set_by is not None and mode != self._mode_in_force:
+            return f"the vehicle is in {mode}: a person drives it"
+        return None
+
+    def _log(self, reaction: _Reaction, reason: str, person: Guard | None, recovery: str, driving: str | None = None) -> None:
         """``failsafe <condition>: <reason> -> <reaction>, <recovery>``: a warning, so an event in the journal."""
         what = reaction.policy.reaction
         if person is not None:
             done = f"wait: hands off ({person.name.rstrip('?')} fails: a person has the vehicle)"
+        elif driving is not None:
+            job = "; RC loss is the autopilot's own RC failsafe's job" if self._name(reaction.guard) == "rc_loss" else ""
+            done = f"wait: hands off ({driving}{job})"
         elif what == "wait":
             done = "wait: hands off"
         else:

@@ -179,6 +179,8 @@ def _why_failed(node: py_trees.behaviour.Behaviour) -> str:
 class UnlessPaused(py_trees.decorators.Decorator):
     """Runs the mission body, except while the mission is PAUSED: then the body is stopped and the vehicle held.
 
+    A pause by a person who took the vehicle (``MissionState.hold_while_paused`` false) commands nothing.
+
     The body keeps no progress of its own (the leg is in the mission state), so on resume it
     starts again from its first child and carries on with the same leg: back to GUIDED, same target.
     A VTOL in fixed-wing flight is held in ``fixed_wing_hold_mode`` instead, when given.
@@ -212,10 +214,13 @@ class UnlessPaused(py_trees.decorators.Decorator):
         if state.status is MissionStatus.PAUSED:
             if self.decorated.status == Status.RUNNING:
                 self.decorated.stop(Status.INVALID)
-            if self._holding is None:
-                self._holding = hold_mode_for(self._bb.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode) or self.hold_mode
-                self._hold_ticket = self.autopilot.set_mode(self._holding)
-            self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: holding in {self._holding}"
+            if not state.hold_while_paused:  # a person took the vehicle (a mode we did not ask for): hands off
+                self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: {state.reason}; hands off"
+            else:
+                if self._holding is None:
+                    self._holding = hold_mode_for(self._bb.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode) or self.hold_mode
+                    self._hold_ticket = self.autopilot.set_mode(self._holding)
+                self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: holding in {self._holding}"
             new_status = Status.RUNNING
         else:
             if self._holding is not None:  # resumed: a hold still being retried must not undo the resumed leg

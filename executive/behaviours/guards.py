@@ -24,7 +24,7 @@ from executive.clock import Clock
 from executive.geo import distance
 from executive.geofence import Geofence
 from executive.mission.model import Mission, Range, RcConfig, Waypoint
-from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition, HomePosition, RcSwitches, SwitchPosition
+from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition, HomePosition, Rangefinder, RcSwitches, SwitchPosition
 
 _EPSILON_S = 1e-6  # ten ticks of 0.1 s add up to a hair under 1 s
 
@@ -224,6 +224,22 @@ class RcNotTakingOver(Guard):
         return _takeover(self.get("/rc/channels"), self.channel, self.above_us)
 
 
+class RcChannelHigh(Guard):
+    """An RC channel is high (above ``above_us``): the ASV's arm switch (channel 5 high = armed)."""
+
+    reads = ("/rc/channels",)
+
+    def __init__(self, channel: int, above_us: int, name: str | None = None) -> None:
+        super().__init__(name or f"RC channel {channel} high?")
+        self.channel = channel
+        self.above_us = above_us
+
+    def check(self) -> str | None:
+        channels: tuple[int, ...] = self.get("/rc/channels")
+        value = channels[self.channel - 1] if len(channels) >= self.channel else 0
+        return None if value > self.above_us else f"RC channel {self.channel} low ({value} µs)"
+
+
 def _takeover(channels: tuple[int, ...], channel: int, above_us: int) -> str | None:
     value = channels[channel - 1] if len(channels) >= channel else 0
     return f"RC channel {channel} high ({value} µs): manual take-over" if value > above_us else None
@@ -398,6 +414,42 @@ class AllWaypointsWithin(Guard):
         return None
 
 
+class RangefinderReaches(Guard):
+    """The downward rangefinder can measure every altitude leg's height above the seabed (a mission's pre-flight check).
+
+    Its range is what the autopilot reports in DISTANCE_SENSOR (min/max_distance: ArduPilot's
+    RNGFND1_MIN and RNGFND1_MAX). An altitude leg is flown from the measured height
+    (:mod:`executive.seabed`), so each ``altitude_m`` must lie ``margin_m`` inside that range;
+    otherwise it fails naming the waypoint, the parameter and the value it needs. No downward
+    rangefinder reported fails too. A route without altitude legs passes.
+
+    Debounce: none (0 s, 0 s): judged once, to accept or refuse the mission.
+    """
+
+    reads = ("/vehicle/rangefinder",)
+
+    def __init__(self, waypoints: Sequence[Waypoint], margin_m: float = 1.0, name: str = "Rangefinder reaches the altitude legs?") -> None:
+        super().__init__(name)
+        self.legs = [(i, wp) for i, wp in enumerate(waypoints) if wp.control_mode == "altitude" and wp.altitude_m is not None]
+        self.margin_m = margin_m
+
+    def check(self) -> str | None:
+        if not self.legs:
+            self.note = "no altitude leg"
+            return None
+        reading: Rangefinder | None = self.get("/vehicle/rangefinder")
+        if reading is None:
+            return "no downward rangefinder reported (DISTANCE_SENSOR, PITCH_270): an altitude leg needs one (RNGFND1_TYPE, RNGFND1_ORIENT 25)"
+        for i, wp in self.legs:
+            assert wp.altitude_m is not None
+            named = f"waypoint {i}{f' ({wp.name})' if wp.name else ''} keeps {wp.altitude_m:g} m above the seabed"
+            if wp.altitude_m + self.margin_m > reading.max_m:
+                return f"{named}: the rangefinder reads to {reading.max_m:g} m: set RNGFND1_MAX to at least {wp.altitude_m + self.margin_m:g} m"
+            if wp.altitude_m - self.margin_m < reading.min_m:
+                return f"{named}: the rangefinder reads from {reading.min_m:g} m: set RNGFND1_MIN to at most {wp.altitude_m - self.margin_m:g} m"
+        return None
+
+
 def _speed(position: GlobalPosition | None, ground_speed: float | None) -> float | None:
     return position.ground_speed_m_s if position is not None else ground_speed
 
@@ -470,12 +522,15 @@ class AltitudeWithin(Guard):
     Debounce: fails after 2 s without a good reading or outside (an echo sounder drops single
     pings over weed, fish or a steep slope); passes after 2 s of good readings inside.
 
-    No valid rangefinder reading (none yet, out of its range, invalid) fails: the guard cannot
-    tell the seabed is far enough. ``altitude_legs_only``: judged only while the current leg
-    (/mission/target) has control_mode ``altitude``; on other legs it passes with a note.
+    No valid rangefinder reading (none yet, too close, invalid) fails: the guard cannot tell the
+    seabed is far enough. A seabed beyond the rangefinder's maximum (/vehicle/rangefinder too_far)
+    is at least that far: it passes with a note when that maximum is within the limit (the
+    sub dives to its altitude from there), and fails when the maximum is over the limit's top.
+    ``altitude_legs_only``: judged only while the current leg (/mission/target) has control_mode
+    ``altitude``; on other legs it passes with a note.
     """
 
-    reads = ("/vehicle/altitude_above_bottom_m", "/mission/target")
+    reads = ("/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder", "/mission/target")
     hold_after_s = 2.0
     resume_after_s = 2.0
 
@@ -493,6 +548,13 @@ class AltitudeWithin(Guard):
                 self.note = "not an altitude leg"
                 return None
         altitude: float | None = self.get("/vehicle/altitude_above_bottom_m")
+        reading: Rangefinder | None = self.get("/vehicle/rangefinder")
+        if altitude is None and reading is not None and reading.status == "too_far":
+            if reading.max_m > self.limit.max + self.tolerance_m:
+                return f"the seabed is beyond the rangefinder's {reading.max_m:g} m: over {self.limit.max:g} m below"
+            if reading.max_m >= self.limit.min - self.tolerance_m:
+                self.note = f"the seabed is beyond the rangefinder's {reading.max_m:g} m: at least that far"
+                return None
         if altitude is None:
             return "no altitude above the seabed (no valid rangefinder reading)"
         if _outside(altitude, self.limit, self.tolerance_m):
@@ -509,7 +571,7 @@ class HeadingSane(Guard):
 
     resume_after_s = 3.0
 
-    reads = ("/heading/ok", "/heading/reason")
+    reads = ("/heading/ok", "/heading/reason", "/heading/bias_deg")
 
     def __init__(self, name: str = "Heading sane?") -> None:
         super().__init__(name)
@@ -520,6 +582,9 @@ class HeadingSane(Guard):
             self.note = "not judged yet"
             return None
         if ok:
+            bias: float | None = self.get("/heading/bias_deg")
+            if bias is not None and abs(bias) >= 3.0:
+                self.note = f"compass bias {bias:+.1f}° compensated"
             return None
         return self.get("/heading/reason") or "the heading filter does not trust the compass"
 

@@ -1,7 +1,8 @@
 """The operator's RC switches as commands (the tracked UGV's AgileX / FlySky transmitter).
 
 Each behaviour watches one switch of ``/rc/switches`` (the RC reader writes it from RC channels; a
-CAN reader from frame 0x241) and acts when the switch MOVES:
+CAN reader from frame 0x241). Switch C (the mode) acts on its POSITION (:class:`ModeSwitch`); the
+others act when the switch MOVES:
 
 - the first position seen is only taken note of: a switch left down at start-up arms nothing;
 - a position already acted on is not acted on again when the behaviour is re-entered (a guard
@@ -92,12 +93,19 @@ class _Asking:
 
 
 class ModeSwitch(SwitchWatcher):
-    """Switch C sets the mode: up MANUAL, middle AUTO, down ``aux_mode`` (none: ignored).
+    """Switch C sets the mode by its position: up MANUAL, middle AUTO, down ``aux_mode`` (none: ignored).
+
+    The position is acted on when the switch moves and whenever the behaviour is (re-)entered: the
+    mission starts, a failsafe recovered, a pause ended. So a switch left in AUTO puts the vehicle
+    back in AUTO after a hold, and a switch already in AUTO at the start needs no flick. Between
+    those, a mode someone else set is not fought (the runtime pauses the mission meanwhile).
 
     AUTO is asked only with a route recorded, and only once the autopilot holds it (an upload in
     progress is waited for; a later move replaces the wait). A mode already shown by the heartbeat
-    is not asked again. Confirmed by the heartbeat; refused, unanswered or not shown within
-    ``confirm_timeout_s``: said in the feedback.
+    is not asked again. Confirmed by the heartbeat. Refused or not shown within
+    ``confirm_timeout_s``: asked again every ``retry_s`` (the firmware's own failsafe may still be
+    latched: ArduRover refuses AUTO while its EKF failsafe is) until ``give_up_after_s`` from the
+    wish, then said in the feedback and left to the operator.
     """
 
     reads = ("/vehicle/mode", "/vehicle/statustext", "/vehicle/mission_items", blackboard.command_key("DO_SET_MODE"))
@@ -106,16 +114,45 @@ class ModeSwitch(SwitchWatcher):
     autopilot: AutopilotPort
     mission_state: MissionState
 
-    def __init__(self, aux_mode: str | None = None, name: str = "Switch C: mode", confirm_timeout_s: float = 5.0) -> None:
+    def __init__(
+        self,
+        aux_mode: str | None = None,
+        name: str = "Switch C: mode",
+        confirm_timeout_s: float = 5.0,
+        retry_s: float = 2.0,
+        give_up_after_s: float = 20.0,
+    ) -> None:
         super().__init__("swc", name)
         self.modes = {UP: "MANUAL", MIDDLE: AUTO, DOWN: aux_mode.upper() if aux_mode else None}
         self.confirm_timeout_s = confirm_timeout_s
+        self.retry_s = retry_s
+        self.give_up_after_s = give_up_after_s
         self._wanted: str | None = None
+        self._wished_at = 0.0
         self._asking: _Asking | None = None
+        self._refused_at = float("-inf")
+        self._entered = False
+
+    def initialise(self) -> None:
+        self._entered = True  # act on the position the switch is in, once it is known
+
+    def update(self) -> Status:
+        switches: RcSwitches | None = self.get("/rc/switches")
+        now = switches.swc if switches is not None else None
+        if now is not None and (self._entered or now != self.position):
+            self._entered = False
+            self.position = now
+            self.moved(now, switches)  # type: ignore[arg-type]
+        elif self.position is None:
+            self.feedback_message = f"no {self.label} position yet"
+        self.follow()
+        return Status.RUNNING
 
     def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
         self._asking = None
+        self._refused_at = float("-inf")
         self._wanted = self.modes[position]
+        self._wished_at = self.clock.now()
         if self._wanted is None:
             self.report(f"{self.label} {position}: no aux mode set (rc_route.aux_mode): ignored")
 
@@ -123,13 +160,16 @@ class ModeSwitch(SwitchWatcher):
         mode = self._wanted
         if mode is None:
             return
+        now = self.clock.now()
         said = f"{self.label} {self.position}: {mode}"
         shown = self.get("/vehicle/mode")
         if shown == self.autopilot.mode_name(mode):
-            self.report(said if self._asking else f"{said} (already)")
+            self.report(said if self._asking or self._refused_at > float("-inf") else f"{said} (already)")
             self._wanted = self._asking = None
             return
         if self._asking is None:
+            if now - self._refused_at < self.retry_s:
+                return
             if mode == AUTO and not self.mission_state.route.waypoints:
                 self.report(f"{said} not asked: no route recorded")
                 self._wanted = None
@@ -138,17 +178,22 @@ class ModeSwitch(SwitchWatcher):
             if waiting is not None:
                 self.feedback_message = f"{said} waits for the route upload: {waiting}"
                 return
-            self._asking = _Asking(mode, self.autopilot.set_mode(mode), self.clock.now())
-            self.report(f"{said}: asked")
+            self._asking = _Asking(mode, self.autopilot.set_mode(mode), now)
+            self.report(f"{said}: asked" + (" again" if self._refused_at > float("-inf") else ""))
             return
         refusal = _refusal(self.get(blackboard.command_key("DO_SET_MODE")), self._asking.ticket, self.get("/vehicle/statustext"))
-        waited = self.clock.now() - self._asking.at
+        waited = now - self._asking.at
         if refusal is None and waited <= self.confirm_timeout_s:
             self.feedback_message = f"{said}: asked, mode is {shown}"
             return
         why = refusal or f"not shown after {self.confirm_timeout_s:g} s (mode is {shown})"
+        self._asking = None
+        if now - self._wished_at + self.retry_s <= self.give_up_after_s:
+            self._refused_at = now
+            self.report(f"{said} {why}; asking again in {self.retry_s:g} s")
+            return
         self.report(f"{said} {why}")
-        self._wanted = self._asking = None
+        self._wanted = None
 
 
 class ArmSwitch(SwitchWatcher):

@@ -20,7 +20,7 @@ from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.link import PymavlinkLink
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.mission.lifecycle import MissionStatus
-from executive.mission.model import Mission, SimulatorOptions
+from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
 from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
@@ -48,6 +48,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--speedup): the executive ticks and counts its timeouts in the vehicle's time. Never with a real vehicle",
     )
     p.add_argument("--sysid", type=mavlink_id, default=1, help="our MAVLink system id (default 1, the vehicle's)")
+    p.add_argument(
+        "--autopilot",
+        choices=("ardupilot", "px4"),
+        help="the autopilot firmware, whatever its HEARTBEAT says (default: the mission's autopilot:, else the HEARTBEAT's); "
+        "without --mavlink, the simulated vehicle runs it",
+    )
     target = "the autopilot to command, alone (its HEARTBEAT's system id); required when several vehicles share the link"
     p.add_argument("--target-system", type=mavlink_id, metavar="N", help=target)
     p.add_argument("--target-component", type=mavlink_id, default=1, metavar="N", help="the autopilot's component id (default 1)")
@@ -87,6 +93,7 @@ def _vehicle_link(
 
     sim_options = mission.simulator or SimulatorOptions()
     model = sim_options.model or mission.vehicle
+    firmware = args.autopilot or mission.autopilot or "ardupilot"
     base_bus = _open_can(args.can) if args.can and model == "bunker" else None  # the simulated base's end of the bus
     try:
         with SimServer(
@@ -97,9 +104,11 @@ def _vehicle_link(
             signing_key=signing_key,
             ekf_ready_after_s=sim_options.ekf_ready_after_s,
             can_bus=base_bus,
-            **firmware_options(mission),
+            autopilot=firmware,
+            **(firmware_options(mission) if firmware == "ardupilot" else {}),  # q_guided_mode is ArduPlane's
         ) as sim:
-            print(f"executive: simulated {model} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
+            on = "" if firmware == "ardupilot" else f" ({firmware})"
+            print(f"executive: simulated {model}{on} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
             link = PymavlinkLink(sim.url_for_client, **options)
             try:
                 yield link
@@ -256,6 +265,8 @@ def main(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     if args.resume and not args.journal:
         raise BadInput("--resume needs --journal DB")
+    if args.autopilot is not None and (refusals := autopilot_errors(mission, args.autopilot)):
+        raise BadInput(f"--autopilot {args.autopilot}: {'; '.join(refusals)}")
     if args.mavlink and args.speedup != 1.0:
         # a SITL at --speedup 5 drives 5 s in each wall second: ticking on the wall clock, the executive would react five times
         # less often in the vehicle's time (issue 14: GUIDED 44.4 s at 1x, 49.2 s at 10x)
@@ -308,6 +319,7 @@ def main(args: argparse.Namespace) -> int:
             target_system=args.target_system,
             target_component=args.target_component,
             progress=Progress(sys.stdout, clock),
+            autopilot=args.autopilot or mission.autopilot,
             simulated_vehicle=not args.mavlink,
         )
         stack.callback(runtime.close)

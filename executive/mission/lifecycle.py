@@ -100,6 +100,8 @@ class MissionState:
         self.listeners: list[Listener] = []
         self.sample_listeners: list[SampleListener] = []
         self.route_listeners: list[RouteListener] = []
+        #: While PAUSED, the tree holds the vehicle in its safe mode; False when a person paused it by taking the vehicle: hands off.
+        self.hold_while_paused = True
 
     # -- requests ----------------------------------------------------------------------------
     def upload(self, mission: Mission, vehicle_at: tuple[float, float] | None = None) -> None:
@@ -127,13 +129,16 @@ class MissionState:
         self.samples = ()
         self._transition("start", "started from the first waypoint")
 
-    def pause(self, reason: str = "pause requested") -> None:
+    def pause(self, reason: str = "pause requested", *, hold: bool = True) -> None:
+        """RUNNING -> PAUSED; ``hold=False``: a person has the vehicle (a mode change we did not ask for), nothing is commanded meanwhile."""
         self._check("pause")
+        self.hold_while_paused = hold
         self._transition("pause", reason)
 
-    def resume(self) -> None:
+    def resume(self, reason: str = "") -> None:
         self._check("resume")
-        self._transition("resume", f"resumed at leg {self.leg_index + 1}")
+        self.hold_while_paused = True
+        self._transition("resume", f"resumed at leg {self.leg_index + 1}" + (f": {reason}" if reason else ""))
 
     def delete(self) -> None:
         self._check("delete")
@@ -238,6 +243,15 @@ class MissionState:
         route = self.route
         for listener in self.route_listeners:
             listener(route, reason)
+
+    def work_left(self) -> str | None:
+        """What of the mission's work is not done (a sample point not sampled), if any: then it is not COMPLETED."""
+        if self.mission is None:
+            return None
+        unsampled = [i + 1 for i, wp in enumerate(self.mission.waypoints) if wp.sample and not self.sampled(i)]
+        if unsampled:
+            return f"no sample was recorded at leg {', '.join(map(str, unsampled))}"
+        return None
 
     # -- samples -----------------------------------------------------------------------------
     def sampled(self, leg_index: int) -> bool:

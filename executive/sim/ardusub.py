@@ -4,13 +4,21 @@ What follows ArduSub's source (4.x): every mode may be armed; GUIDED, POSHOLD, A
 need a position estimate even disarmed ("Mode change failed: X requires position"); SURFACE climbs
 at the waypoint climb speed and switches itself to ALT_HOLD at the surface; GUIDED takes
 SET_POSITION_TARGET_GLOBAL_INT with a position in the relative-altitude frames (altitude above
-home, negative below the surface), or in the terrain frames with a velocity, where ``alt`` is the
-height above the seabed to keep; the absolute frames are ignored; in ALT_HOLD the same message
+home, negative below the surface); the terrain and absolute frames are ignored; in ALT_HOLD the same message
 sets only the depth (``alt`` taken as metres above the EKF origin, whatever the frame).
 DO_REPOSITION goes to a point in GUIDED (or switches to it when asked); NAV_LAND means SURFACE and
 NAV_LOITER_UNLIM means POSHOLD. The height above the seabed comes from a downward rangefinder,
 reported in DISTANCE_SENSOR (orientation PITCH_270) with the EXTRA3 stream; ArduPilot 4.7 no
 longer streams the older RANGEFINDER message, which is sent only on request.
+
+The rangefinder (RNGFND1_MIN/RNGFND1_MAX, 0.5-30 m by default) reports the raw distance whatever
+its status, in DISTANCE_SENSOR with its range and in RANGEFINDER without (GCS_Common.cpp
+send_distance_sensor / send_rangefinder); beyond its maximum the reading is OutOfRangeHigh
+(AP_RangeFinder_Backend.cpp update_status), not a height. A terrain-frame GUIDED target is dropped
+silently: ArduSub converts it with Location::get_vector_from_origin_NEU_cm, which fails without
+terrain data, and the handler breaks (ArduSub/GCS_MAVLink_Sub.cpp, 4.7). SURFTRAK is entered
+without a good reading ("waiting for a rangefinder reading") and holds the depth until one comes,
+then the height it reads (ArduSub/mode_surftrak.cpp).
 """
 
 from __future__ import annotations
@@ -43,9 +51,9 @@ from executive.vehicles import SUB_MODES, VehicleProfile
 _M = mavlink
 RELATIVE_FRAMES = frozenset({_M.MAV_FRAME_GLOBAL_RELATIVE_ALT, _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT})
 TERRAIN_FRAMES = frozenset({_M.MAV_FRAME_GLOBAL_TERRAIN_ALT, _M.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT})
-VEL_BITS = _M.POSITION_TARGET_TYPEMASK_VX_IGNORE | _M.POSITION_TARGET_TYPEMASK_VY_IGNORE | _M.POSITION_TARGET_TYPEMASK_VZ_IGNORE
 SURFACE_DEPTH_M = 0.10  # SURFACE_DEPTH (-10 cm): shallower than this (with 5 cm of margin) the vehicle is at the surface
-RANGEFINDER_MIN_M, RANGEFINDER_MAX_M = 0.5, 50.0  # a Ping-class echo sounder looking down
+RANGEFINDER_MIN_M, RANGEFINDER_MAX_M = 0.5, 30.0  # RNGFND1_MIN/RNGFND1_MAX of ArduSub's simulated sonar
+RANGEFINDER_REACH_M = 655.35  # DISTANCE_SENSOR's current_distance is 16 bits of cm
 
 
 class ArduSubSim(ArduPilotSim):
@@ -80,9 +88,15 @@ class ArduSubSim(ArduPilotSim):
         *,
         seabed: Seabed | None = None,
         limits: SubLimits = SUB_LIMITS,
+        seabed_depth_m: float | None = None,
+        rangefinder_max_m: float = RANGEFINDER_MAX_M,
         **options: float,
     ) -> None:
+        """``seabed_depth_m``: a plane seabed that deep under the start (else ``seabed``, else 30 m); ``rangefinder_max_m``: RNGFND1_MAX."""
+        if seabed is None and seabed_depth_m is not None:
+            seabed = Seabed(depth_m=seabed_depth_m)
         self._seabed = seabed if seabed is not None else Seabed()
+        self.rangefinder_max_m = rangefinder_max_m
         self._limits = limits
         self._destination: tuple[float, float] | None = None  # GUIDED's horizontal target
         self._guided_speed: float | None = None
@@ -95,9 +109,14 @@ class ArduSubSim(ArduPilotSim):
 
     @property
     def rangefinder_m(self) -> float | None:
-        """The downward rangefinder's reading (height above the seabed), None out of its range."""
+        """The downward rangefinder's good reading (height above the seabed), None out of its range (RangeFinder::Status not Good)."""
         altitude = self.vehicle.altitude_m
-        return altitude if RANGEFINDER_MIN_M <= altitude <= RANGEFINDER_MAX_M else None
+        return altitude if RANGEFINDER_MIN_M <= altitude <= self.rangefinder_max_m else None
+
+    @property
+    def rangefinder_raw_m(self) -> float:
+        """What the sonar measures, in range or not (what ArduPilot reports)."""
+        return min(self.vehicle.altitude_m, RANGEFINDER_REACH_M)
 
     @property
     def at_surface(self) -> bool:
@@ -144,12 +163,12 @@ class ArduSubSim(ArduPilotSim):
         v = self.vehicle
         if mode in self.NOT_SIMULATED:
             return False
-        if mode == "SURFTRAK" and self.rangefinder_m is None:
-            self._text(_M.MAV_SEVERITY_WARNING, "Rangefinder not healthy")
-            return False
         self._destination = None
         v.hold()
-        if mode == "SURFTRAK":
+        if mode == "SURFTRAK" and self.rangefinder_m is None:
+            self._text(_M.MAV_SEVERITY_INFO, "waiting for a rangefinder reading")  # ModeSurftrak::init: entered all the same
+            v.hold_depth()
+        elif mode == "SURFTRAK":
             v.hold_altitude_at(v.altitude_m)
         elif mode == "SURFACE":
             v.hold_depth_at(0.0)
@@ -169,6 +188,8 @@ class ArduSubSim(ArduPilotSim):
                 v.hold_altitude_at(v.altitude_m)
             elif self.mode != "SURFACE":
                 v.hold_depth_at(v.depth_m)
+        if self.mode == "SURFTRAK" and self.armed and not v.holding_altitude and self.rangefinder_m is not None:
+            v.hold_altitude_at(self.rangefinder_m)  # the first good reading sets the target (update_surface_offset)
         if self.mode == "SURFACE" and self.armed and self.at_surface:
             self.set_mode(self.profile.modes["ALT_HOLD"])  # ModeReason::SURFACE_COMPLETE
         elif self.mode == "ALT_HOLD" and self.at_surface and (v.depth_target_m or 0.0) < SURFACE_DEPTH_M + 0.05:
@@ -221,9 +242,7 @@ class ArduSubSim(ArduPilotSim):
         if msg.coordinate_frame in RELATIVE_FRAMES:
             self._go(lat, lon)
             v.hold_depth_at(-msg.alt)
-        elif msg.coordinate_frame in TERRAIN_FRAMES and not msg.type_mask & VEL_BITS:
-            self._go(lat, lon)  # alt is the height above the seabed; the velocity (feed-forward) is not simulated
-            v.hold_altitude_at(msg.alt)
+        # the terrain frames: no terrain data under water, get_vector_from_origin_NEU_cm fails: dropped, silently;
         # the absolute frames (GLOBAL, GLOBAL_INT) are not supported by ArduSub's GUIDED
 
     def _go(self, lat: float, lon: float) -> None:
@@ -264,23 +283,22 @@ class ArduSubSim(ArduPilotSim):
         return _M.MAV_RESULT_ACCEPTED if self.armed and self.set_mode(self.profile.modes["AUTO"]) else _M.MAV_RESULT_FAILED
 
     def _msg_distance_sensor(self) -> MAVLinkMessage | None:
-        reading = self.rangefinder_m
-        distance_cm = round((reading if reading is not None else RANGEFINDER_MAX_M) * 100)
+        """The raw distance with the sensor's range: the reader judges it (beyond max_distance: not a height)."""
         return self._mav.distance_sensor_encode(
             self._ms(),
             round(RANGEFINDER_MIN_M * 100),
-            round(RANGEFINDER_MAX_M * 100),
-            distance_cm,
+            round(self.rangefinder_max_m * 100),
+            round(self.rangefinder_raw_m * 100),
             _M.MAV_DISTANCE_SENSOR_ULTRASOUND,
             0,
             _M.MAV_SENSOR_ROTATION_PITCH_270,
             0,
-            signal_quality=100 if reading is not None else 1,
+            signal_quality=0,  # unknown: the sonar backends report no quality
         )
 
     def _msg_rangefinder(self) -> MAVLinkMessage | None:
-        reading = self.rangefinder_m
-        return None if reading is None else self._mav.rangefinder_encode(reading, 0.0)
+        """The raw distance, whatever the sensor's status (GCS_Common.cpp send_rangefinder)."""
+        return self._mav.rangefinder_encode(self.rangefinder_raw_m, 0.0)
 
     def _msg_nav_controller_output(self) -> MAVLinkMessage | None:
         """ArduSub sends it in every mode: the waypoint controller's target, and the depth error."""

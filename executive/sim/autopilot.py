@@ -128,7 +128,12 @@ class ArduPilotSim(ABC):
     POSITION_MODES: ClassVar[frozenset[str]] = frozenset()  # refused while armed without a position estimate
     UNARMABLE_MODES: ClassVar[frozenset[str]] = frozenset()
     NAV_PERIOD_S: ClassVar[float] = 0.1  # how often mode logic runs, in clock time
+    #: The firmware's own EKF failsafe (Rover/ekf_check.cpp): the mode it puts a vehicle in a position mode in; None: not modelled.
+    EKF_FAILSAFE_MODE: ClassVar[str | None] = None
+    #: ekf_check runs at 10 Hz and latches after EKF_CHECK_ITERATIONS_MAX (10) bad checks in a row; it clears 10 good ones later.
+    EKF_CHECK_ITERATIONS_MAX: ClassVar[int] = 10
     MISSION_STORE: ClassVar[type[MissionStore]] = MissionStore  # the firmware's side of the mission protocol
+    PARAMS: ClassVar[Mapping[str, float]] = {}  # parameters answered to PARAM_REQUEST_READ, with the firmware's defaults
 
     def __init__(
         self,
@@ -140,8 +145,11 @@ class ArduPilotSim(ABC):
         component_id: int = AUTOPILOT_COMPONENT,
         ekf_ready_after_s: float = 40.0,
         boot_s: float = 1.0,
+        params: Mapping[str, float] | None = None,
     ) -> None:
+        """``params``: parameters set differently from the firmware's defaults (as SITL's --defaults file)."""
         self.profile = profile
+        self.params = {**self.PARAMS, **(params or {})}
         self.clock = clock
         self.system_id = system_id
         self.component_id = component_id
@@ -155,6 +163,9 @@ class ArduPilotSim(ABC):
         self.rc_channels = [1500] * 16
         self.rc_channels[4] = self.rc_channels[5] = 1000  # ch5/ch6 switches low
         self.ekf_position_lost = False  # set by fault injection: the EKF has no horizontal position
+        #: The firmware's EKF failsafe is latched (Rover ``failsafe.ekf``): position modes are refused meanwhile.
+        self.failsafe_ekf = False
+        self._ekf_fail_count = 0
         self.consumed_mah = 0.0
         self._mav = encoder(system_id, component_id)
         self._t0 = self._t = clock.now()
@@ -207,6 +218,7 @@ class ArduPilotSim(ABC):
         now = self.clock.now()
         while now - self._t > _EPSILON_S:
             h = min(self.NAV_PERIOD_S, now - self._t)
+            self._ekf_check()
             self._update_mode()
             self.vehicle.step(h)
             self._drain_battery(h)
@@ -215,6 +227,49 @@ class ArduPilotSim(ABC):
         self._events()
         self._telemetry()
         return self._flush()
+
+    def _ekf_check(self) -> None:
+        """The firmware's EKF failsafe, as Rover/ekf_check.cpp runs it at 10 Hz (once per NAV_PERIOD_S here).
+
+        Armed, with an EKF origin: each check without a position estimate counts up (to 10: latched,
+        "EKF failsafe", a position mode left for ``EKF_FAILSAFE_MODE``); each good one counts down,
+        and the latch clears at 0 ("EKF failsafe cleared"): about 1 s after the EKF recovered, during
+        which position modes are still refused. Disarmed: cleared at once. Variances are not modelled:
+        a lost position is what trips it (ekf_over_threshold returns !ekf_position_ok()).
+        """
+        if self.EKF_FAILSAFE_MODE is None or not self._origin_set:
+            return
+        if not self.armed:
+            self._ekf_fail_count = 0
+            self._ekf_failsafe_off()
+            return
+        if not self.position_ok:
+            if not self.failsafe_ekf:
+                self._ekf_fail_count += 1
+                if self._ekf_fail_count >= self.EKF_CHECK_ITERATIONS_MAX:
+                    self._ekf_fail_count = self.EKF_CHECK_ITERATIONS_MAX
+                    self.failsafe_ekf = True
+                    if self.mode in self.POSITION_MODES:  # failsafe_ekf_event: FS_EKF_ACTION 1, hold
+                        self._force_mode(self.EKF_FAILSAFE_MODE)
+                    self._text(_M.MAV_SEVERITY_CRITICAL, "EKF failsafe")
+        elif self._ekf_fail_count > 0:
+            self._ekf_fail_count -= 1
+            if self._ekf_fail_count == 0:
+                self._ekf_failsafe_off()
+
+    def _ekf_failsafe_off(self) -> None:
+        if self.failsafe_ekf:
+            self.failsafe_ekf = False
+            self._text(_M.MAV_SEVERITY_CRITICAL, "EKF failsafe cleared")
+
+    def _force_mode(self, name: str) -> None:
+        """A mode change of the firmware's own (a failsafe): no position check, the mode's entry only."""
+        if name == self.mode or not self._enter_mode(name):
+            return
+        if self.mode == "AUTO":
+            self.mission.stop()
+        self.mode = name
+        self._emit(self._msg_heartbeat())
 
     # -- hooks for each firmware ---------------------------------------------------------------
 
@@ -270,6 +325,7 @@ class ArduPilotSim(ABC):
             "SET_MODE": self._on_set_mode,
             **dict.fromkeys(MissionStore.MESSAGES, self.mission.handle),
             "OBSTACLE_DISTANCE": lambda msg: self.proximity.handle(msg, self.elapsed_s),
+            "PARAM_REQUEST_READ": self._on_param_request_read,
         }
 
     def _command_handlers(self) -> dict[int, Callable[[Command], int]]:
@@ -390,6 +446,15 @@ class ArduPilotSim(ABC):
         handler = self._commands.get(cmd.command)
         self._ack_first(msg, cmd.command, lambda: handler(cmd) if handler else _M.MAV_RESULT_UNSUPPORTED)
 
+    def _on_param_request_read(self, msg: MAVLinkMessage) -> None:
+        """PARAM_VALUE for a parameter by name (or by index, param_index >= 0); nothing for one the firmware does not have (GCS_Param.cpp)."""
+        names = sorted(self.params)
+        name = msg.param_id.rstrip("\x00") if isinstance(msg.param_id, str) else msg.param_id.decode("ascii", "replace").rstrip("\x00")
+        if msg.param_index >= 0:
+            name = names[msg.param_index] if msg.param_index < len(names) else ""
+        if name in self.params:
+            self._emit(self._mav.param_value_encode(name.encode(), self.params[name], _M.MAV_PARAM_TYPE_INT8, len(names), names.index(name)))
+
     def _on_set_mode(self, msg: MAVLinkMessage) -> None:
         # ArduPilot acks the SET_MODE message with a COMMAND_ACK whose command is the message id (11)
         self._ack_first(msg, _M.MAVLINK_MSG_ID_SET_MODE, lambda: self._set_mode_common(msg.base_mode, msg.custom_mode))
@@ -415,8 +480,10 @@ class ArduPilotSim(ABC):
             return False
         if name == self.mode:
             return True
-        # ArduPilot only checks the position estimate when armed: a disarmed vehicle may enter any mode
-        if (self.armed and name in self.POSITION_MODES and not self.position_ok) or not self._enter_mode(name):
+        # ArduPilot only checks the position estimate when armed: a disarmed vehicle may enter any mode. ArduRover's
+        # Mode::enter (Rover/mode.cpp) also refuses them while its EKF failsafe is latched: ekf_position_ok() && !failsafe.ekf
+        position_ok = self.position_ok and not self.failsafe_ekf
+        if (self.armed and name in self.POSITION_MODES and not position_ok) or not self._enter_mode(name):
             self._text(_M.MAV_SEVERITY_WARNING, "Flight mode change failed")
             return False
         if self.mode == "AUTO":
@@ -640,11 +707,13 @@ class ArduRoverSim(ArduPilotSim):
 
     FIRMWARE = "ArduRover"
     READY_TEXT = "Ready to drive"
+    PARAMS: ClassVar[Mapping[str, float]] = {"MODE_CH": 8}  # Rover/Parameters.cpp, MODE_CHANNEL 8 in Rover/config.h
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
     PILOT_DRIVEN_MODES: ClassVar[frozenset[str]] = frozenset({"MANUAL", "ACRO", "STEERING"})
     STICK_DEADZONE_US: ClassVar[int] = 30  # RC_DZ
     AUTOPILOT_MODES = frozenset({"AUTO", "GUIDED", "LOITER", "RTL", "SMART_RTL", "FOLLOW", "CIRCLE", "DOCK"})
     POSITION_MODES = frozenset({"LOITER", "FOLLOW", "SIMPLE", "CIRCLE", "DOCK", "AUTO", "RTL", "SMART_RTL", "GUIDED"})
+    EKF_FAILSAFE_MODE = "HOLD"
     UNARMABLE_MODES = frozenset({"RTL", "SMART_RTL"})
     NOT_SIMULATED = frozenset({"FOLLOW", "CIRCLE", "DOCK", "INITIALISING"})  # no target, beacon or pilot to use
     LOITER_RADIUS_M = 2.0  # LOIT_RADIUS
@@ -807,7 +876,12 @@ class ArduRoverSim(ArduPilotSim):
         if item.params[0] > 0 or self.mission.current_seq is None:  # a hold time: always a stop
             return None
         after = self.mission.next_nav_after(self.mission.current_seq)
-        return (after.lat, after.lon) if after is not None else None
+        if after is None:
+            return None
+        assert isinstance(self.vehicle, SurfaceVehicle)
+        if self.vehicle.pivots_at(item.lat, item.lon, (after.lat, after.lon)):
+            return None  # a skid-steered vehicle stops and pivots there
+        return after.lat, after.lon
 
     def _desired_location(self) -> tuple[float, float] | None:
         return self._destination
@@ -858,8 +932,9 @@ class ArduRoverSim(ArduPilotSim):
         if self.mode not in ("GUIDED", "AUTO", "RTL", "SMART_RTL") or not 0.0 < speed <= self.vehicle.limits.max_m_s:
             return _M.MAV_RESULT_FAILED
         self._guided_speed = speed
-        if self._driving and self._destination is not None:
-            self.vehicle.drive_to(*self._destination, speed)
+        if self._driving:
+            assert isinstance(self.vehicle, SurfaceVehicle)
+            self.vehicle.change_speed(speed)  # the same target (a corner driven through stays one)
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_reposition(self, cmd: Command) -> int:

@@ -79,6 +79,9 @@ class Limits:
     turn_radius_m: float = 0.0
     #: WP_RADIUS (libraries/AR_WPNav/AR_WPNav.cpp, 2 m by default): how far from a waypoint the apex of a corner through it may be.
     wp_radius_m: float = 2.0
+    #: WP_PIVOT_ANGLE for a vehicle that pivots (skid steering): a corner sharper than this is a stop and a pivot, not a
+    #: corner driven through (AR_WPNav::set_desired_location: _pivot_at_next_wp, AR_PivotTurn::would_activate). None: no pivots.
+    pivot_angle_deg: float | None = None
 
     @property
     def turn_speed_min_m_s(self) -> float:
@@ -217,6 +220,18 @@ class SurfaceVehicle(LocalFrame):
         self._target_speed = min(speed_m_s if speed_m_s and speed_m_s > 0 else self.limits.cruise_m_s, self.limits.max_m_s)
         self._arrived = False
 
+    def pivots_at(self, lat: float, lon: float, then: tuple[float, float]) -> bool:
+        """Whether the corner at (lat, lon), from where the vehicle is toward ``then``, is sharper than the pivot angle."""
+        if self.limits.pivot_angle_deg is None:
+            return False
+        (tn, te), (nn, ne) = self._ne(lat, lon), self._ne(*then)
+        turn = abs(_wrap_pi(math.atan2(ne - te, nn - tn) - math.atan2(te - self._e, tn - self._n)))
+        return math.degrees(turn) > self.limits.pivot_angle_deg
+
+    def change_speed(self, speed_m_s: float) -> None:
+        """Drive on to the same target at another speed (capped at the maximum)."""
+        self._target_speed = min(speed_m_s, self.limits.max_m_s)
+
     def turn_in_m(self) -> float:
         """How far before a corner driven through the vehicle turns onto the next leg (0 without one).
 
@@ -294,9 +309,11 @@ class SurfaceVehicle(LocalFrame):
         if abs(self._speed) > 1e-3:
             rate_max = min(rate_max, limits.lat_accel_m_s2 / abs(self._speed))  # ATC_TURN_MAX_G
         rate = _clamp(self.HEADING_GAIN * error, rate_max)
-        # a braking profile with margin, then a linear approach: never overshoots the target
+        # a braking profile with margin, then a linear approach: never overshoots the target (the shape of ArduPilot's
+        # sqrt_controller stopping a shaped target, libraries/AP_Math/control.cpp); a corner driven through is left before
+        # the linear part, where the braking has not begun or, for a sharp turn, has slowed the vehicle enough to turn
         brake = math.sqrt(2.0 * 0.8 * limits.decel_m_s2 * distance)
-        speed = min(self._target_speed, brake, self.APPROACH_GAIN * distance)
+        speed = min(self._target_speed, brake) if self._then is not None else min(self._target_speed, brake, self.APPROACH_GAIN * distance)
         # turn toward a target behind before driving to it (the forward part of the speed); a vehicle under way that
         # cannot pivot keeps the least turning speed through the turn (AR_PosControl::update,
         # libraries/APM_Control/AR_PosControl.cpp); one at rest turns first (as LOITER does, Rover/mode_loiter.cpp)
@@ -314,7 +331,7 @@ class Tracks:
     slip_factor: float = 1.3
 
 
-BUNKER_LIMITS = Limits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0)
+BUNKER_LIMITS = Limits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0, pivot_angle_deg=60.0)
 BUNKER_TRACKS = Tracks()
 
 

@@ -34,7 +34,7 @@ from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, desc
 from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
 from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
 from executive.testing.missions import mission_errors
-from executive.testing.scripted import ScriptedAutopilot
+from executive.testing.scripted import ObedientAutopilot, ScriptedAutopilot
 
 __all__ = [
     "AUTOPILOT",
@@ -45,6 +45,7 @@ __all__ = [
     "Harness",
     "Lockstep",
     "LockstepClock",
+    "ObedientAutopilot",
     "Peer",
     "ScriptedAutopilot",
     "Vehicle",

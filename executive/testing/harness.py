@@ -133,6 +133,7 @@ class Harness:
         """Advance the clock ``dt`` seconds, tick the tree once, send what it asked for; returns the root's status."""
         self.clock.advance(dt)
         self.tree.tick()
+        self.autopilot.service()  # as the runtime: the back end's own traffic (PX4's offboard stream), then the commands
         self.commander.flush()
         return self.root.status
 

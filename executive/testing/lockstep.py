@@ -248,11 +248,11 @@ class Lockstep:
         self._scheduled.append((t_s, action))
         self._scheduled.sort(key=lambda entry: entry[0])
 
-    def send_obstacles(self, scan: dict[str, Any]) -> None:
-        """The camera sends one scan (the JSON object of README's ``--obstacles``); needs ``obstacles=True``."""
+    def send_obstacles(self, scan: dict[str, Any] | bytes) -> None:
+        """The camera sends one datagram: a scan (the JSON object of README's ``--obstacles``), or raw bytes; needs ``obstacles=True``."""
         if self._camera is None:
             raise RuntimeError("this simulation has no camera: Lockstep(..., obstacles=True)")
-        self._camera.send(json.dumps(scan).encode())
+        self._camera.send(scan if isinstance(scan, bytes) else json.dumps(scan).encode())
 
     # -- running --------------------------------------------------------------------------------
     def connect(self, limit_s: float = 10.0) -> None:

@@ -9,8 +9,11 @@ from py_trees.common import Status
 
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.modes import ArduPilotModes, ModeTable
 from executive.state import GlobalPosition
 from executive.testing.harness import Harness
+from executive.testing.links import AUTOPILOT
+from executive.vehicles import PROFILES
 
 _M = mavlink
 
@@ -21,20 +24,22 @@ class ScriptedAutopilot:
     After each tick, :meth:`respond` takes what the tree sent, answers each message (acks go to
     the commander, as the reader would pass them on), moves the vehicle one tick (:meth:`move`)
     and publishes its facts to the blackboard (:meth:`facts`). :attr:`commands` is what it was
-    told, readable: ``("mode", "GUIDED")``, ``("arm", 1.0)``, ``("goto", lat, lon)``; a command kind
+    told, readable: ``("mode", "GUIDED")``, ``("arm", 1.0)``, ``("DO_CHANGE_SPEED",)``; :attr:`targets`
+    the GUIDED targets it followed, ``(lat, lon)``. A command kind
     (``"arm"``, a mode name, a command name such as ``"DO_CHANGE_SPEED"``) in :attr:`refuse` is
     answered :attr:`refusal`. Subclass it for another firmware: override :meth:`on_command`,
     :meth:`on_setpoint`, :meth:`enter_mode`, :meth:`move` and :meth:`facts`.
     """
 
-    def __init__(self, harness: Harness, start: tuple[float, float] = (0.0, 0.0), *, step_m: float = 8.0, mode: str = "MANUAL") -> None:
-        self.h = harness
+    def __init__(self, harness: Harness | None, start: tuple[float, float] = (0.0, 0.0), *, step_m: float = 8.0, mode: str = "MANUAL") -> None:
+        self.h = harness  # type: ignore[assignment]  # None only for a subclass that talks over a link (ObedientAutopilot)
         self.lat, self.lon = start
         self.alt = 0.0
         self.step_m = step_m
         self.mode, self.armed = mode, False
         self.target: tuple[float, float] | None = None
         self.commands: list[tuple[Any, ...]] = []
+        self.targets: list[tuple[float, float]] = []
         self.refuse: set[str] = set()
         self.refusal = _M.MAV_RESULT_FAILED
         self.received = 0
@@ -53,39 +58,57 @@ class ScriptedAutopilot:
         """Write :meth:`facts` to the blackboard."""
         self.h.vehicle.set(**self.facts())
 
+    @property
+    def modes(self) -> ModeTable:
+        """The firmware's mode numbers (the executive's own table: what it sent is decoded as it meant it)."""
+        return self.h.commander.modes
+
+    @property
+    def guided_mode(self) -> str:
+        """The mode that follows position targets."""
+        return self.h.commander.profile.guided_mode
+
+    def acknowledge(self, command: int, result: int) -> None:
+        """Send the COMMAND_ACK of ``command``."""
+        self.h.ack(command, result)
+
     # -- how it answers -------------------------------------------------------------------------
     def respond(self) -> None:
         """Answer what the tree sent since the last call, move one tick, publish."""
         for msg in self.h.link.take():
-            self.received += 1
-            kind = msg.get_type()
-            if kind in ("COMMAND_LONG", "COMMAND_INT"):
-                result = self.on_command(msg)
-                if result is not None:
-                    self.h.ack(msg.command, result)
-            elif kind.startswith("SET_POSITION_TARGET"):
-                self.on_setpoint(msg)
-            else:
-                self.on_message(msg)
+            self.answer(msg)
         self.move()
         self.publish()
 
-    def answer(self, kind: str) -> int:
+    def answer(self, msg: MAVLinkMessage) -> None:
+        """Answer one message the executive sent."""
+        self.received += 1
+        kind = msg.get_type()
+        if kind in ("COMMAND_LONG", "COMMAND_INT"):
+            result = self.on_command(msg)
+            if result is not None:
+                self.acknowledge(msg.command, result)
+        elif kind.startswith("SET_POSITION_TARGET"):
+            self.on_setpoint(msg)
+        else:
+            self.on_message(msg)
+
+    def result_for(self, kind: str) -> int:
         """The result for a command of ``kind``: refused if listed in :attr:`refuse`, else accepted."""
         return self.refusal if kind in self.refuse else _M.MAV_RESULT_ACCEPTED
 
     def on_command(self, msg: MAVLinkMessage) -> int | None:
         """Answer a COMMAND_LONG / COMMAND_INT: the MAV_RESULT to ack with (None: no ack). Modes and arming here; others accepted."""
         if msg.command == _M.MAV_CMD_DO_SET_MODE:
-            mode = self.h.commander.modes.decode(int(msg.param2))
+            mode = self.modes.decode(int(msg.param2))
             self.commands.append(("mode", mode))
-            result = self.answer(mode)
+            result = self.result_for(mode)
             if result == _M.MAV_RESULT_ACCEPTED and not self.enter_mode(mode):
                 result = _M.MAV_RESULT_FAILED
             return result
         if msg.command == _M.MAV_CMD_COMPONENT_ARM_DISARM:
             self.commands.append(("arm", msg.param1))
-            result = self.answer("arm")
+            result = self.result_for("arm")
             if result == _M.MAV_RESULT_ACCEPTED:
                 self.armed = bool(msg.param1)
             return result
@@ -93,7 +116,7 @@ class ScriptedAutopilot:
 
         name = command_name(msg.command)
         self.commands.append((name,))
-        return self.answer(name)
+        return self.result_for(name)
 
     def enter_mode(self, mode: str) -> bool:
         """Switch to ``mode`` (False refuses it); the target is forgotten, as a mode change does."""
@@ -102,16 +125,16 @@ class ScriptedAutopilot:
 
     def on_setpoint(self, msg: MAVLinkMessage) -> None:
         """A position target: followed in the guided mode (ignored silently elsewhere, as ArduPilot does)."""
-        if msg.get_type() == "SET_POSITION_TARGET_GLOBAL_INT" and self.mode == self.h.commander.profile.guided_mode:
+        if msg.get_type() == "SET_POSITION_TARGET_GLOBAL_INT" and self.mode == self.guided_mode:
             self.target = (msg.lat_int / 1e7, msg.lon_int / 1e7)
-            self.commands.append(("goto", round(self.target[0], 7), round(self.target[1], 7)))
+            self.targets.append(self.target)
 
     def on_message(self, msg: MAVLinkMessage) -> None:
         """Anything else the executive sent (ignored)."""
 
     def move(self) -> None:
         """One tick of motion: armed, in the guided mode, ``step_m`` toward the target."""
-        if self.target and self.armed and self.mode == self.h.commander.profile.guided_mode:
+        if self.target and self.armed and self.mode == self.guided_mode:
             d, b = distance_bearing(self.lat, self.lon, *self.target)
             self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
 
@@ -125,3 +148,47 @@ class ScriptedAutopilot:
             if statuses[-1] != Status.RUNNING or (until is not None and until()):
                 break
         return statuses
+
+
+class ObedientAutopilot(ScriptedAutopilot):
+    """The scripted autopilot behind a whole runtime's :class:`~executive.testing.FakeLink`: it answers as the messages are sent.
+
+    Each HEARTBEAT of the executive is answered with its own (type of ``vehicle``, :attr:`mode`,
+    :attr:`armed`), each command with a COMMAND_ACK queued on the link, as the reader would receive
+    them; :meth:`beat` sends a heartbeat now. Facts the heartbeat does not carry (EKF, position)
+    are the test's to write.
+    """
+
+    def __init__(self, link: Any, vehicle: str = "rover", *, mode: str = "GUIDED", armed: bool = True) -> None:
+        self.link, self.profile = link, PROFILES[vehicle]
+        self._modes = ArduPilotModes(self.profile.modes)
+        super().__init__(None, mode=mode)
+        self.armed = armed
+        self._send = link.send
+        link.send = self._receive
+
+    @property
+    def modes(self) -> ModeTable:
+        return self._modes
+
+    @property
+    def guided_mode(self) -> str:
+        return self.profile.guided_mode
+
+    def publish(self) -> None:
+        """Nothing to write: the heartbeat carries the mode and arming."""
+
+    def acknowledge(self, command: int, result: int) -> None:
+        self.link.incoming.append(AUTOPILOT.command_ack(command, result, 0, 0, 1, 191))
+
+    def _receive(self, msg: MAVLinkMessage) -> None:
+        self._send(msg)
+        if msg.get_type() == "HEARTBEAT":
+            self.beat()
+        else:
+            self.answer(msg)
+
+    def beat(self) -> None:
+        """The autopilot's HEARTBEAT arrives."""
+        base = _M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (_M.MAV_MODE_FLAG_SAFETY_ARMED if self.armed else 0)
+        self.link.incoming.append(AUTOPILOT.heartbeat(self.profile.mav_type, _M.MAV_AUTOPILOT_ARDUPILOTMEGA, base, self.profile.modes[self.mode], 4))

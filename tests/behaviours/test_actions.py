@@ -40,8 +40,8 @@ class TestSetMode:
         assert h.tick() == Status.SUCCESS
         assert h.link.take() == []  # no retry after the ack
 
-    def test_confirm_by_ack_does_not_wait_for_the_heartbeat(self, harness, vehicle):
-        vehicle.set(vehicle__mode="HOLD")
+    def test_confirm_by_ack_does_not_wait_for_the_heartbeat(self, harness, vehicle, clock):
+        vehicle.set(vehicle__mode="HOLD", link__last_heartbeat=clock.now())
         h = harness(SetMode("GUIDED", confirm_by_ack=True))
         assert h.tick() == Status.RUNNING
         assert len(h.link.take("COMMAND_LONG")) == 1
@@ -50,8 +50,8 @@ class TestSetMode:
         assert h.tick() == Status.SUCCESS  # ArduPilot acks ACCEPTED once the mode is set; the heartbeat still says HOLD
         assert h.link.take() == []
 
-    def test_confirm_by_ack_ignores_a_refusal_and_an_earlier_ack(self, harness, vehicle, commander):
-        vehicle.set(vehicle__mode="HOLD")
+    def test_confirm_by_ack_ignores_a_refusal_and_an_earlier_ack(self, harness, vehicle, commander, clock):
+        vehicle.set(vehicle__mode="HOLD", link__last_heartbeat=clock.now())
         commander.set_mode("LOITER")  # someone else's request, acked before this one is sent
         commander.on_ack(ack(DO_SET_MODE))
         node = SetMode("GUIDED", confirm_by_ack=True)
@@ -59,6 +59,21 @@ class TestSetMode:
         assert h.tick() == Status.RUNNING
         h.ack(DO_SET_MODE, mavlink.MAV_RESULT_FAILED)
         assert h.tick() == Status.FAILURE
+
+    def test_confirm_by_ack_holds_until_a_later_heartbeat_says_otherwise(self, harness, vehicle, clock):
+        # re-ticked every tick (a sequence without memory): no new request while the ack is the latest word
+        vehicle.set(vehicle__mode="HOLD", link__last_heartbeat=clock.now())
+        node = SetMode("GUIDED", confirm_by_ack=True)
+        h = harness(node)
+        assert h.tick() == Status.RUNNING
+        h.link.take()
+        h.ack(DO_SET_MODE)
+        assert h.tick() == Status.SUCCESS
+        assert [h.tick() for _ in range(3)] == [Status.SUCCESS] * 3
+        assert h.link.take("COMMAND_LONG") == []
+        vehicle.set(vehicle__mode="MANUAL", link__last_heartbeat=clock.now() + 0.05)  # a heartbeat after the ack: a person changed it
+        assert h.tick() == Status.RUNNING
+        assert len(h.link.take("COMMAND_LONG")) == 1  # asked again
 
     def test_refused_mode_fails_with_the_reason(self, harness, vehicle):
         vehicle.set(vehicle__mode="HOLD", vehicle__statustext=(4, "Flight mode change failed"))

@@ -36,7 +36,7 @@ from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONEN
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.mission.lifecycle import MissionState
-from executive.mission.model import Mission
+from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Mission
 from executive.sim import make_autopilot
 from executive.sim.aircraft import QUADPLANE_LIMITS
 from executive.sim.arduplane import LOITER_RADIUS_M
@@ -98,7 +98,9 @@ class Bench:
         self.reader.on_autopilot = self.port.adopt
         self.streams = StreamRequester(self.commander, rates_for(kind))
         self.reader.on_reconnect = self.streams.restart
-        mission = Mission.model_validate({"version": 1, "name": "bench", "vehicle": kind, "waypoints": waypoints})
+        # a vtol flies its legs as a plane: the mission rules refuse a radius under its loiter circle
+        limits = {"acceptance_radius_m": VTOL_MIN_ACCEPTANCE_RADIUS_M} if kind == "vtol" else {}
+        mission = Mission.model_validate({"version": 1, "name": "bench", "vehicle": kind, "limits": limits, "waypoints": waypoints})
         self.mission_state = MissionState()
         self.mission_state.upload(mission)
         self.mission_state.start()
@@ -258,13 +260,21 @@ class TestSub:
         assert bench.autopilot.vehicle.altitude_m == pytest.approx(5.0, abs=0.5)
         assert bench.autopilot.vehicle.depth_m == pytest.approx(bench.autopilot.vehicle.seabed_depth_m - 5.0, abs=0.5)
 
-    def test_change_altitude_outside_guided_sends_nothing(self):
-        bench = submerged_bench("ALT_HOLD")
+    @pytest.mark.parametrize("mode", ["GUIDED", "ALT_HOLD"])
+    def test_change_altitude_over_a_seabed_beyond_the_rangefinder(self, mode):
+        """ArduSub's SITL: the seabed 50 m down, the sonar to 30 m. The sub dives without a reading until the sonar reads the seabed,
+        then holds 5 m above it, with depth targets only (ArduSub drops terrain-frame ones)."""
+        bench = Bench("sub", SUB_ROUTE, seabed_depth_m=50.0)
+        assert bench.run(py_trees.composites.Sequence("Ready", memory=True, children=[SetMode(mode), Arm()]), 10.0)[0] == S
         bench.mission_state.advance_leg()
-        status, _ = bench.run(ChangeAltitude(), 5.0)
-        assert status == F
-        assert not [m for m in bench.link.sent if m.get_type() == "SET_POSITION_TARGET_GLOBAL_INT"]
-        assert bench.autopilot.vehicle.depth_m < 0.5
+        change = ChangeAltitude()
+        status, _ = bench.run(change, 200.0)
+        assert status == S, change.feedback_message
+        assert bench.autopilot.vehicle.altitude_m == pytest.approx(5.0, abs=0.6)  # within the action's 0.5 m, as last reported
+        bench.step(20.0)
+        assert bench.autopilot.vehicle.altitude_m == pytest.approx(5.0, abs=0.1)  # the last depth target was the right one
+        frames = {m.coordinate_frame for m in bench.link.sent if m.get_type() == "SET_POSITION_TARGET_GLOBAL_INT"}
+        assert frames == {mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT}
 
     def test_change_speed_then_goto_at_depth(self):
         bench = submerged_bench("GUIDED")

@@ -18,7 +18,7 @@ from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.modes import ArduPilotModes
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
-from executive.state import GlobalPosition, HomePosition
+from executive.state import GlobalPosition, HomePosition, Rangefinder
 from executive.vehicles import PLANE_MODES, SUB_MODES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
@@ -215,21 +215,41 @@ class TestChangeDepth:
         assert h.tick() == S and h.link.take() == []
 
 
+def sonar(distance_m: float, max_m: float = 30.0) -> dict:
+    """What the reader writes for a downward DISTANCE_SENSOR of range 0.5 to ``max_m``."""
+    status = "good" if 0.5 <= distance_m <= max_m else "too_far" if distance_m > max_m else "too_close"
+    return {
+        "vehicle__rangefinder": Rangefinder(distance_m, 0.5, max_m, status, 0.0),
+        "vehicle__altitude_above_bottom_m": distance_m if status == "good" else None,
+    }
+
+
 class TestChangeAltitude:
-    def test_keeps_the_leg_height_above_the_seabed_in_guided(self, harness, vehicle, mission_state, sub):
+    def test_keeps_the_leg_height_above_the_seabed_with_depth_targets(self, harness, vehicle, mission_state, sub):
+        """ArduSub drops terrain-frame targets: the height goes as the depth that gives it, from the measured depth and sonar."""
         on_leg(mission_state, 2)
-        vehicle.set(vehicle__mode="GUIDED", vehicle__position=pos(alt=-4.0), vehicle__altitude_above_bottom_m=12.0)
+        vehicle.set(vehicle__mode="GUIDED", vehicle__position=pos(alt=-4.0), **sonar(12.0))
         node = ChangeAltitude()
         h = harness(node)
         assert h.tick() == R
         (sent,) = h.link.take()
-        assert (sent.coordinate_frame, sent.type_mask, sent.alt) == (M.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT, 0x0DC0, 5.0)
-        assert (sent.vx, sent.vy, sent.vz) == (0.0, 0.0, 0.0)
+        assert (sent.coordinate_frame, sent.type_mask, sent.alt) == (M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, 0x0DF8, -11.0)  # 4 + 12 - 5 m deep
         assert node.feedback_message == "altitude 12.0 m -> 5 m"
-        vehicle.set(vehicle__altitude_above_bottom_m=5.6)
-        assert h.tick() == R
-        vehicle.set(vehicle__altitude_above_bottom_m=5.4)
+        vehicle.set(vehicle__position=pos(alt=-10.4), **sonar(5.6))
+        assert h.tick(1.0) == R
+        (sent,) = h.link.take()
+        assert sent.alt == pytest.approx(-11.0)  # re-sent from the new reading: the seabed has not changed
+        vehicle.set(**sonar(5.4))
         assert h.tick() == S
+
+    def test_a_seabed_beyond_the_sonar_is_dived_to_without_overshooting(self, harness, vehicle, mission_state, sub):
+        """5 m deep, the sonar reads to 30 m and sees nothing: the seabed is over 35 m down; 24 m above it is deeper than 11 m."""
+        on_leg(mission_state, 2)
+        vehicle.set(vehicle__mode="GUIDED", vehicle__position=pos(alt=-5.0), **sonar(45.0))
+        h = harness(ChangeAltitude())
+        assert h.tick() == R
+        (sent,) = h.link.take()
+        assert sent.alt == pytest.approx(-(5.0 + 30.0 - 5.0 - 1.0))  # depth + max - target altitude - 1 m margin (the leg keeps 5 m)
 
     def test_no_rangefinder_reading_waits(self, harness, vehicle, mission_state, sub):
         on_leg(mission_state, 2)
@@ -237,16 +257,8 @@ class TestChangeAltitude:
         node = ChangeAltitude(timeout_s=1.0)
         h = harness(node)
         assert [h.tick(0.5) for _ in range(4)] == [R, R, R, F]
+        assert h.link.take() == []  # nothing to compute a depth from
         assert node.feedback_message == "altitude unknown, target 5 m, not reached after 1 s"
-
-    def test_outside_guided_it_refuses_to_send(self, harness, vehicle, mission_state, sub):
-        on_leg(mission_state, 2)
-        vehicle.set(vehicle__mode="ALT_HOLD", vehicle__position=pos(alt=-4.0), vehicle__altitude_above_bottom_m=12.0)
-        node = ChangeAltitude()
-        h = harness(node)
-        assert h.tick() == F
-        assert h.link.take() == []
-        assert node.feedback_message == "needs GUIDED to keep a height above the seabed (mode is ALT_HOLD)"
 
     def test_a_depth_leg_succeeds_at_once(self, harness, vehicle, sub):
         vehicle.set(vehicle__mode="GUIDED", vehicle__position=pos(alt=-4.0))
@@ -533,12 +545,22 @@ class TestGoToSubSetpoint:
         assert (sent.lat_int, sent.lon_int, sent.alt) == (round(wp["lat"] * 1e7), round(wp["lon"] * 1e7), -10.0)
         assert (sent.coordinate_frame, sent.type_mask) == (M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, 0x0DF8)
 
-    def test_an_altitude_leg_goes_in_the_terrain_frame(self, harness, vehicle, mission_state, sub):
+    def test_an_altitude_leg_goes_as_the_depth_that_keeps_its_height_as_the_seabed_changes(self, harness, vehicle, mission_state, sub):
+        """Not in the terrain frame, which ArduSub drops without terrain data: the depth from the measured depth and sonar, each second."""
         on_leg(mission_state, 2)
+        vehicle.set(vehicle__position=pos(alt=-11.0), **sonar(5.0))
         h = harness(GoTo(1.5, 60.0))
         h.tick()
         (sent,) = h.link.take()
-        assert (sent.coordinate_frame, sent.type_mask, sent.alt) == (M.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT, 0x0DC0, 5.0)
+        assert (sent.coordinate_frame, sent.type_mask, sent.alt) == (M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, 0x0DF8, -11.0)
+        vehicle.set(**sonar(7.0))  # the seabed falls away 2 m
+        h.tick(1.0)
+        (sent,) = h.link.take()
+        assert sent.alt == pytest.approx(-13.0)
+        vehicle.set(vehicle__rangefinder=Rangefinder(7.0, 0.5, 30.0, "invalid", 0.0), vehicle__altitude_above_bottom_m=None)
+        h.tick(1.0)
+        (sent,) = h.link.take()
+        assert sent.alt == pytest.approx(-13.0)  # an invalid ping says nothing: the last depth again
 
     def test_other_legs_keep_their_altitude(self, harness, mission_state):
         on_leg(mission_state, 3)

@@ -1,4 +1,4 @@
-"""The thesis's closed loop in one process: the simulated Bunker's base on a virtual CAN channel, the executive's runtime on the same channel.
+"""The thesis's closed loop in one process: the simulated Bunker's base and the executive's runtime on one CAN bus, in the lock-step simulation.
 
 The autopilot's skid-steer outputs reach the tracks only through the executive: SERVO_OUTPUT_RAW over
 MAVLink -> the drive bridge -> 0x111 over CAN -> the base's controller. RC comes from 0x241 (rc.source can).
@@ -15,21 +15,17 @@ import py_trees
 import pytest
 
 from executive import geo
-from executive.assembly import build_runtime, can_base
 from executive.cli import main
-from executive.clock import ScaledClock
 from executive.io.can.agilex import RC_STATE_ID, SYSTEM_STATE_ID, MotionCommand
 from executive.io.can.drive import DriveBridge
-from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.runtime import Outcome, Runtime
-from executive.sim import SimServer
-from executive.sim.faults import FaultInjector, FaultPlan
+from executive.sim.faults import FaultPlan
+from executive.testing import Lockstep
 
 START = (-35.363261, 149.165230)
 TARGET = geo.destination(*geo.destination(*START, 0.0, 6.0), 90.0, 3.0)  # 6 m north, 3 m east: a turn and a drive
-SPEEDUP = 10.0
 _channels = itertools.count()
 
 
@@ -51,7 +47,7 @@ class Tick:
 class Watch:
     """Stands in for the runtime's status line: records every tick; stops the run once the autopilot has tried to drive for ``stop_after_s``."""
 
-    sim: SimServer
+    sim: Lockstep | None = None  # the simulation, once made
     stop_after_s: float | None = None
     runtime: Runtime | None = None
     ticks: list[Tick] = field(default_factory=list)
@@ -59,9 +55,9 @@ class Watch:
     _driving_since: float | None = None
 
     def update(self, force: bool = False) -> None:
-        with self.sim.lock:
-            ap = self.sim.autopilot
-            t, pwm, trying = ap.elapsed_s, max(ap.track_pwm), ap.armed and ap.mode == "GUIDED" and max(ap.track_pwm) > 1600
+        assert self.sim is not None
+        ap = self.sim.autopilot
+        t, pwm, trying = ap.elapsed_s, max(ap.track_pwm), ap.armed and ap.mode == "GUIDED" and max(ap.track_pwm) > 1600
         self.ticks.append(
             Tick(t, bb("/rc/fresh"), bb("/rc/stale_reason"), bb("/base/system"), bb("/base/drive"), bb("/base/rc_counter_repeats") or 0)
         )
@@ -76,7 +72,7 @@ class Watch:
 
 class Run(NamedTuple):
     outcome: Outcome
-    sim: SimServer
+    sim: Lockstep
     watch: Watch
 
 
@@ -94,30 +90,20 @@ def mission() -> Mission:
     })  # fmt: skip
 
 
-def run_against_the_base(channel: str, faults: list[dict[str, object]] | None = None, stop_after_s: float | None = None) -> Run:
-    """The runtime against an in-process bunker over loopback MAVLink, both on one virtual CAN channel."""
-    clock = ScaledClock(SPEEDUP)
-    injector = FaultInjector(FaultPlan.model_validate({"version": 1, "faults": faults}), clock) if faults else None
-    with (
-        can.Bus(interface="virtual", channel=channel) as base_bus,
-        can.Bus(interface="virtual", channel=channel) as executive_bus,
-        SimServer("bunker", clock=clock, home=(*START, 0.0), ekf_ready_after_s=1.0, period_s=0.002, faults=injector, can_bus=base_bus) as sim,
-    ):
-        link = PymavlinkLink(sim.url_for_client)
-        watch = Watch(sim, stop_after_s)
-        try:
-            runtime = watch.runtime = build_runtime(mission(), link, clock, plugs=[can_base(executive_bus)], progress=watch)  # type: ignore[arg-type]
-            assert runtime.connect(10.0 * SPEEDUP)
-            outcome = runtime.run()
-        finally:
-            link.close()
+def run_against_the_base(faults: list[dict[str, object]] | None = None, stop_after_s: float | None = None) -> Run:
+    """The runtime against a simulated bunker, both on one CAN bus (in-process), on the lock-step simulation's clock."""
+    events = FaultPlan.model_validate({"version": 1, "faults": faults}).faults if faults else ()
+    watch = Watch(stop_after_s=stop_after_s)
+    with Lockstep(mission(), model="bunker", home=(*START, 0.0), ekf_ready_after_s=1.0, events=events, can=True, progress=watch) as sim:
+        watch.sim, watch.runtime = sim, sim.runtime
+        outcome = sim.run_to_end(limit_s=300)
     return Run(outcome, sim, watch)
 
 
 @pytest.fixture(scope="module")
 def rc_loss_run() -> Run:
     """One mission, the transmitter lost from 4 s to 7 s after boot while the vehicle drives."""
-    return run_against_the_base(f"test-can-closed-loop-{next(_channels)}", faults=[{"kind": "rc_loss", "at_s": 4.0, "for_s": 3.0}])
+    return run_against_the_base(faults=[{"kind": "rc_loss", "at_s": 4.0, "for_s": 3.0}])
 
 
 def test_the_vehicle_reaches_its_waypoint_because_the_bridge_forwards_the_outputs(rc_loss_run: Run) -> None:
@@ -144,9 +130,9 @@ def test_a_frozen_counter_makes_rc_stale(rc_loss_run: Run) -> None:
     assert any(tick.fresh is True and tick.t < 4.0 for tick in ticks) and any(tick.fresh is True and tick.t > 7.5 for tick in ticks)
 
 
-def test_without_the_bridge_forwarding_the_vehicle_does_not_move(channel: str, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_without_the_bridge_forwarding_the_vehicle_does_not_move(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(DriveBridge, "in_control", property(lambda self: False, lambda self, value: None), raising=False)
-    outcome, sim, watch = run_against_the_base(channel, stop_after_s=3.0)
+    outcome, sim, watch = run_against_the_base(stop_after_s=3.0)
     assert outcome.status is MissionStatus.ABORTED and outcome.reason == "stopped: the autopilot has tried long enough"
     assert watch.max_track_pwm > 1700  # armed in GUIDED, the autopilot drove its outputs for 3 s ...
     assert sim.autopilot.vehicle.distance_to(*START) < 0.01  # ... and the tracks did not turn

@@ -13,7 +13,7 @@ from py_trees.common import Status
 
 import trees
 from executive.assembly import build_runtime
-from executive.behaviours import Failsafe
+from executive.behaviours import Failsafe, SetMode
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import ManualClock
 from executive.geo import destination
@@ -22,7 +22,7 @@ from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
-from executive.testing import AUTOPILOT, EKF_READY, FakeLink, Harness, Vehicle
+from executive.testing import EKF_READY, FakeLink, Harness, ObedientAutopilot, Vehicle
 from executive.vehicles import PROFILES
 from trees._parts import guarded, mission_root, standard_guards
 
@@ -54,18 +54,19 @@ def position(north_m: float = 0.0) -> GlobalPosition:
 class Rig:
     """``guarded(work, standard guards, mission)`` for one vehicle kind, ticked by hand; the vehicle healthy until a test breaks it."""
 
-    def __init__(self, mission: Mission, clock: ManualClock, vehicle: Vehicle) -> None:
+    def __init__(self, mission: Mission, clock: ManualClock, vehicle: Vehicle, work: py_trees.behaviour.Behaviour | None = None) -> None:
         self.mission, self.clock, self.vehicle = mission, clock, vehicle
         self.link = FakeLink()
         self.commander = Commander(self.link, clock, PROFILES[mission.vehicle])
         self.state = MissionState()
         self.state.upload(mission)
         self.state.start()
-        self.work = py_trees.behaviours.Running("Work")
+        self.work = work or py_trees.behaviours.Running("Work")
         self.root = guarded(self.work, standard_guards(mission), mission)
         self.h = Harness(self.root, clock, self.link, self.commander, self.state)
         self.failsafe = next(n for n in self.root.iterate() if isinstance(n, Failsafe))
         self.acks, self._sent = True, []
+        self.refuse: set[str] = set()  # modes the autopilot refuses (FAILED)
         vehicle.set(
             link__up=True, vehicle__armed=True, vehicle__mode="GUIDED", vehicle__ekf=EKF_READY, rc__channels=RC_OK, rc__connected=True,
             vehicle__battery=Battery(12.4, 2.0, 80, 0.0), vehicle__position=position(), heading__ok=True,
@@ -79,7 +80,8 @@ class Rig:
             sent = self.link.take("COMMAND_LONG")
             self._sent += sent
             for msg in sent if self.acks else ():
-                self.h.ack(msg.command)
+                refused = msg.command == mavlink.MAV_CMD_DO_SET_MODE and self.commander.modes.decode(int(msg.param2)) in self.refuse
+                self.h.ack(msg.command, mavlink.MAV_RESULT_FAILED if refused else mavlink.MAV_RESULT_ACCEPTED)
             if statuses[-1] != R:
                 break
         return statuses
@@ -98,8 +100,8 @@ class Rig:
 
 @pytest.fixture
 def rig(clock: ManualClock, vehicle: Vehicle) -> Callable[..., Rig]:
-    def make(vehicle_kind: str = "rover", **changes: Any) -> Rig:
-        r = Rig(make_mission(vehicle_kind, **changes), clock, vehicle)
+    def make(vehicle_kind: str = "rover", work: py_trees.behaviour.Behaviour | None = None, **changes: Any) -> Rig:
+        r = Rig(make_mission(vehicle_kind, **changes), clock, vehicle, work)
         assert r.tick() == [R] and r.work.status == R and r.sent() == []  # healthy: the work runs, nothing is asked
         return r
 
@@ -222,13 +224,30 @@ def test_an_abort_during_a_hold_commands_its_own_reaction_at_once(rig) -> None:
 
 def test_nothing_is_commanded_while_a_person_has_the_vehicle_and_the_reaction_comes_when_they_let_go(rig) -> None:
     r = rig("rover")
-    r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__mode="MANUAL")
+    r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__mode="MANUAL", vehicle__mode_set_by="others")
     r.tick()
     r.vehicle.set(link__up=False, vehicle__ekf=EKF_LOST)
     assert r.tick(20) == [R] * 20 and r.sent() == []  # the pilot drives: not fought
-    r.vehicle.set(rc__channels=RC_OK)  # the switch goes back, the link is still down
-    assert r.tick(10) == [R] * 10 and r.sent() == []  # the person has it until the switch has been back for 1 s
+    r.vehicle.set(rc__channels=RC_OK)  # the switch goes back, the link is still down, the vehicle still in MANUAL: a person drives it
+    assert r.tick(20) == [R] * 20 and r.sent() == []
+    r.vehicle.set(vehicle__mode="GUIDED")  # out of the person's mode (and the switch back for over 1 s): the reaction at once
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
+
+
+@pytest.mark.parametrize("mode", ["MANUAL", "ACRO", "STEERING"])
+def test_no_failsafe_changes_the_mode_while_a_person_drives_in_a_pilot_mode(rig, mode: str, caplog) -> None:
+    """A pilot mode (set by a ground station, the RC or us at the operator's request), no take-over switch: RC loss is the autopilot's job."""
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover")
+    r.vehicle.set(vehicle__mode=mode, vehicle__mode_set_by="others")
+    r.tick()
+    r.vehicle.set(rc__connected=False, rc__channels=(0,) * 8)  # the operator's transmitter drops out
+    assert r.tick(10) == [R] * 10 and r.sent() == []
+    said = f"failsafe rc_loss: RC transmitter gone (every channel 0) -> wait: hands off (the vehicle is in {mode}: a person drives it; "
+    assert said in caplog.text
+    assert "RC loss is the autopilot's own RC failsafe's job" in caplog.text
+    r.vehicle.set(rc__connected=True, rc__channels=RC_OK)  # back: the work goes on, nothing was commanded
+    assert r.tick() == [R] and r.sent() == []
 
 
 def test_a_person_with_the_vehicle_is_not_fought_by_an_abort_either(rig) -> None:
@@ -267,30 +286,12 @@ def test_a_disarm_reaction_brings_an_armed_guard_with_it() -> None:
     assert any(isinstance(g, Armed) for g in failsafe_guards(disarming, [LinkAlive(), RcFresh()]))
 
 
-class ObedientRover:
-    """Answers mode commands at once on the fake link and beats every tick, armed."""
-
-    def __init__(self, link: FakeLink) -> None:
-        self.link, self.mode = link, "GUIDED"
-        self._send = link.send
-        link.send = self.receive  # type: ignore[method-assign]
-
-    def receive(self, msg: Any) -> None:
-        self._send(msg)
-        if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-            self.mode = {v: k for k, v in PROFILES["rover"].modes.items()}[int(msg.param2)]
-            self.link.incoming.append(AUTOPILOT.command_ack(msg.command, 0, 0, 0, 1, 191))
-        if msg.get_type() == "HEARTBEAT":
-            base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
-            self.link.incoming.append(AUTOPILOT.heartbeat(mavlink.MAV_TYPE_GROUND_ROVER, 3, base, PROFILES["rover"].modes[self.mode], 4))
-
-
 def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(clock: ManualClock, vehicle: Vehicle) -> None:
     mission = make_mission()
     link = FakeLink()
     root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
     runtime = build_runtime(mission, link, clock, root=root, safe_timeout_s=2.0)
-    rover = ObedientRover(link)
+    rover = ObedientAutopilot(link)
     runtime.mission_state.start()
     original = runtime.tick
 
@@ -323,3 +324,83 @@ def test_the_asv_ekf_rule_is_journalled_and_another_ekf_policy_replaces_it(clock
     names = {n.name for n in trees.build(make_mission("boat", **sampling, failsafe={"ekf_loss": {"reaction": "hold"}})).iterate()}
     assert "EKF ok, else wait in MANUAL" not in names and "EKF ok?" in names  # then the EKF is one of the path's guards
     assert "EKF ok, else wait in MANUAL" in {n.name for n in trees.build(mission).iterate()}
+
+
+def test_two_rangefinder_sources_alternating_do_not_flap_the_altitude_failsafe(clock: ManualClock, vehicle: Vehicle, caplog) -> None:
+    """Issue 14's 915 flaps, at the failsafe: the height above the seabed None / 45.2 m turn by turn (every 0.2 s) for 400 s.
+
+    Undebounced (hold and resume at once) that is a hold and a resume every 0.4 s; debounced, a bad spell shorter than
+    AltitudeWithin's 2 s is noise: the survey goes on, nothing is commanded.
+    """
+    from executive.behaviours import AltitudeWithin
+    from executive.mission.model import Range
+
+    def holds_and_resumes(hold_after_s: float, resume_after_s: float) -> tuple[int, int, int]:
+        mission = make_mission("sub")
+        link, state = FakeLink(), MissionState()
+        state.upload(mission)
+        state.start()
+        altitude = AltitudeWithin(Range(min=2.0, max=100.0))
+        altitude.hold_after_s, altitude.resume_after_s = hold_after_s, resume_after_s
+        root = guarded(py_trees.behaviours.Running("Survey"), [*standard_guards(mission), altitude], mission)
+        commander = Commander(link, clock, PROFILES["sub"])
+        h = Harness(root, clock, link, commander, state)
+        vehicle.set(
+            link__up=True, vehicle__armed=True, vehicle__mode="GUIDED", vehicle__ekf=EKF_READY, rc__channels=RC_OK, rc__connected=True,
+            vehicle__battery=Battery(16.0, 2.0, 80, 0.0), vehicle__position=position(), vehicle__altitude_above_bottom_m=45.2,
+        )  # fmt: skip
+        caplog.clear()
+        for tick in range(4000):  # 400 s at 10 Hz
+            if tick % 2 == 0:
+                vehicle.set(vehicle__altitude_above_bottom_m=None if tick % 4 == 2 else 45.2)
+            assert h.tick() == R
+        texts = [r.getMessage() for r in caplog.records if r.name == "executive.behaviours.failsafe"]
+        modes = [m for m in link.take("COMMAND_LONG") if m.command == mavlink.MAV_CMD_DO_SET_MODE]
+        return sum("-> hold" in t for t in texts), sum("recovered" in t for t in texts), len(modes)
+
+    caplog.set_level(logging.WARNING, logger="executive")
+    undebounced = holds_and_resumes(0.0, 0.0)
+    assert undebounced[0] > 900 and undebounced[1] > 900  # the bug, reproduced: the guard flaps
+    assert holds_and_resumes(AltitudeWithin.hold_after_s, AltitudeWithin.resume_after_s) == (0, 0, 0)
+
+
+def leg_in_guided() -> py_trees.behaviour.Behaviour:
+    return py_trees.composites.Sequence("Leg", memory=True, children=[SetMode("GUIDED"), py_trees.behaviours.Running("Drive")])
+
+
+def test_a_mode_refused_after_a_recovery_is_asked_again_until_the_recovery_s_time_limit(rig, caplog) -> None:
+    """The defect (ArduRover SITL, GPS off 8 s): the EKF healthy again, GUIDED refused while the firmware's own EKF failsafe
+    stayed latched (~1 s), and the mission aborted at once: 'leg 3/4 failed: Set GUIDED: refused: FAILED'."""
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover", work=leg_in_guided())
+    r.vehicle.set(vehicle__ekf=EKF_LOST)
+    assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
+    r.vehicle.set(vehicle__mode="HOLD")
+    r.tick(20)
+    r.refuse.add("GUIDED")  # the firmware's EKF failsafe is still latched
+    r.vehicle.set(vehicle__ekf=EKF_READY)
+    assert r.tick(60) == [R] * 60  # the guard counts as recovered after 3 s of a healthy EKF, then GUIDED is asked for 3 s
+    asked = r.sent()
+    assert asked.count(("mode", "GUIDED")) >= 5 and set(asked) == {("mode", "GUIDED")}
+    assert "failsafe ekf_loss: recovered, but Set GUIDED: refused: FAILED -> asked again until the recovery's time limit" in caplog.text
+    r.refuse.clear()  # "EKF failsafe cleared"
+    assert r.tick(2) == [R] * 2 and r.sent() == [("mode", "GUIDED")]
+    r.vehicle.set(vehicle__mode="GUIDED")
+    assert r.tick(5) == [R] * 5 and r.work.children[1].status == R  # the leg drives again
+
+
+def test_a_mode_still_refused_at_the_recovery_s_time_limit_ends_the_mission(rig) -> None:
+    r = rig("rover", work=leg_in_guided())
+    r.vehicle.set(vehicle__ekf=EKF_LOST)
+    r.tick()
+    r.vehicle.set(vehicle__mode="HOLD", vehicle__ekf=EKF_READY)
+    r.refuse.add("GUIDED")
+    statuses = r.tick(400)
+    assert statuses[-1] == F and 280 <= len(statuses) <= 310  # 30 s (limits.recovery_timeout_s) from the EKF loss
+
+
+def test_the_boot_mode_is_nobodys_the_failsafe_reacts(rig) -> None:
+    """MANUAL as the autopilot booted (no one chose it): not a person driving."""
+    r = rig("rover")
+    r.vehicle.set(vehicle__mode="MANUAL", vehicle__mode_set_by=None, link__up=False)
+    assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]

@@ -1,23 +1,16 @@
-"""A camera's scans reach the simulated autopilot's proximity sensor, over real sockets, while a mission runs."""
+"""A camera's scans reach the simulated autopilot's proximity sensor while a mission runs, in the lock-step simulation."""
 
 from __future__ import annotations
 
-import json
-import socket
 from dataclasses import dataclass, field
 
 import py_trees
 
-from executive.assembly import obstacle_camera
-from executive.clock import ScaledClock
-from executive.io.obstacles import open_endpoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
-from executive.sim import SimServer
-from tests_support import run_over
+from executive.testing import Lockstep
 
 START = (-35.363261, 149.165230)
-SPEEDUP = 10.0
 CAMERA_UNTIL_S = 12.0  # vehicle seconds after boot: then the camera goes quiet
 #: 5° sectors from 90° left to 85° right; one obstacle 3.5 m ahead, a wall 9 m away on the left.
 SCAN = {"distances_cm": [900] * 9 + [2000] * 9 + [350] + [2000] * 17, "increment_deg": 5, "angle_offset_deg": -90}
@@ -36,34 +29,28 @@ def mission() -> Mission:
 class Camera:
     """Stands in for the status line: each tick, sends a scan (from the autopilot's boot until CAMERA_UNTIL_S) and notes what its sensor holds."""
 
-    sim: SimServer
-    address: tuple[str, int]
-    sock: socket.socket = field(default_factory=lambda: socket.socket(socket.AF_INET, socket.SOCK_DGRAM))
+    sim: Lockstep | None = None  # the simulation, once made
     sent: int = 0
     seen: list[tuple[float, tuple[int, float] | None]] = field(default_factory=list)  # (autopilot time, closest obstacle)
 
     def update(self, force: bool = False) -> None:
-        with self.sim.lock:
-            now, booted = self.sim.autopilot.elapsed_s, self.sim.autopilot.booted
-            self.seen.append((now, self.sim.autopilot.proximity.closest(now)))
+        assert self.sim is not None
+        autopilot = self.sim.autopilot
+        now, booted = autopilot.elapsed_s, autopilot.booted
+        self.seen.append((now, autopilot.proximity.closest(now)))
         if booted and now < CAMERA_UNTIL_S:  # an autopilot still initialising handles no message: the camera waits for it
-            self.sock.sendto(json.dumps(SCAN).encode(), self.address)
-            self.sock.sendto(b'{"distances_cm": "broken", "increment_deg": 5}', self.address)  # a camera bug: dropped, counted, never forwarded
+            self.sim.send_obstacles(SCAN)
+            self.sim.send_obstacles(b'{"distances_cm": "broken", "increment_deg": 5}')  # a camera bug: dropped, counted, never forwarded
             self.sent += 1
 
     def close(self) -> None:
-        self.sock.close()
+        pass
 
 
-def test_scans_reach_the_autopilot_while_the_camera_sends_and_time_out_after() -> None:
-    clock = ScaledClock(SPEEDUP)
-    with SimServer("boat", clock=clock, home=(*START, 0.0), ekf_ready_after_s=2.0, period_s=0.002) as sim:
-        listening = open_endpoint("udpin:127.0.0.1:0")
-        camera = Camera(sim, listening.getsockname())
-        try:
-            _, outcome = run_over(sim.url_for_client, mission(), clock, plugs=[obstacle_camera(listening)], progress=camera)
-        finally:
-            listening.close()
+def test_scans_reach_the_autopilot_while_the_camera_sends_and_time_out_after(lockstep) -> None:
+    camera = Camera()
+    sim = camera.sim = lockstep(mission(), obstacles=True, progress=camera)
+    outcome = sim.run_to_end(limit_s=300)
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     storage = py_trees.blackboard.Blackboard.storage
     assert camera.sent > 50

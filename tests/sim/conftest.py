@@ -112,9 +112,9 @@ class Gcs:
 def make_gcs() -> Callable[..., Gcs]:
     """An autopilot of a kind (EKF ready after ``EKF_READY_S``), booted, and a ground station talking to it."""
 
-    def make(kind: str = "rover", ekf_ready: bool = False, run_s: float | None = None) -> Gcs:
+    def make(kind: str = "rover", ekf_ready: bool = False, run_s: float | None = None, **options: float) -> Gcs:
         clock = ManualClock()
-        gcs = Gcs(make_autopilot(kind, clock, HOME, ekf_ready_after_s=EKF_READY_S), clock)
+        gcs = Gcs(make_autopilot(kind, clock, HOME, ekf_ready_after_s=EKF_READY_S, **options), clock)
         gcs.update()
         gcs.run(run_s if run_s is not None else EKF_READY_S + 0.5 if ekf_ready else 1.5)
         return gcs

@@ -275,3 +275,43 @@ def test_battery_drains_faster_when_driving(make_gcs: MakeGcs) -> None:
     status = last(gcs, "SYS_STATUS")
     assert status.current_battery > start.current_battery
     assert gcs.ap.consumed_mah > 2 * idle_mah
+
+
+@pytest.mark.parametrize(("kind", "param"), [("rover", "MODE_CH"), ("boat", "MODE_CH"), ("vtol", "FLTMODE_CH")])
+def test_the_mode_switch_channel_is_answered_as_the_firmware_does(make_gcs: MakeGcs, kind: str, param: str) -> None:
+    """ArduRover MODE_CH and ArduPlane FLTMODE_CH are channel 8 by default; an unknown parameter gets no answer."""
+    gcs = make_gcs(kind)
+    (value,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, param.encode(), -1))
+    assert (value.param_id, value.param_value, value.param_type) == (param, 8.0, m.MAV_PARAM_TYPE_INT8)
+    (by_index,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, b"", 0))
+    assert by_index.param_id == param
+    assert gcs.send(gcs.mav.param_request_read_encode(1, 1, b"NO_SUCH_PARAM", -1)) == []
+    assert gcs.send(gcs.mav.param_request_read_encode(2, 1, param.encode(), -1)) == []  # another vehicle's
+
+
+def test_a_parameter_set_for_the_simulator_is_answered() -> None:
+    from executive.clock import ManualClock
+    from executive.sim.autopilot import make_autopilot
+
+    ap = make_autopilot("rover", ManualClock(), params={"MODE_CH": 0})
+    assert ap.params == {"MODE_CH": 0}
+
+
+def test_the_ekf_failsafe_latches_holds_and_refuses_position_modes_until_a_second_after_the_ekf_recovers(make_gcs: MakeGcs) -> None:
+    """Rover/ekf_check.cpp at 10 Hz: 10 bad checks latch failsafe.ekf (HOLD, "EKF failsafe"); Mode::enter refuses
+    position modes while it is latched; 10 good checks clear it ("EKF failsafe cleared")."""
+    gcs = armed_in_guided(make_gcs)
+    gcs.ap.ekf_position_lost = True
+    gcs.run(0.85)
+    assert gcs.ap.mode == "GUIDED" and not gcs.ap.failsafe_ekf  # 9 bad checks: not yet
+    gcs.run(0.2)
+    assert gcs.ap.mode == "HOLD" and gcs.ap.failsafe_ekf
+    assert "EKF failsafe" in gcs.texts(gcs.log)
+    gcs.ap.ekf_position_lost = False  # the EKF is healthy again...
+    gcs.run(0.5)
+    replies = gcs.command(m.MAV_CMD_DO_SET_MODE, m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, gcs.ap.profile.modes["GUIDED"])
+    assert (replies[0].result, gcs.texts(replies)) == (m.MAV_RESULT_FAILED, ["Flight mode change failed"])  # ...but still latched
+    assert gcs.set_mode("MANUAL") == m.MAV_RESULT_ACCEPTED and gcs.set_mode("HOLD") == m.MAV_RESULT_ACCEPTED  # no position needed
+    gcs.run(0.6)
+    assert not gcs.ap.failsafe_ekf and "EKF failsafe cleared" in gcs.texts(gcs.log)
+    assert gcs.set_mode("GUIDED") == m.MAV_RESULT_ACCEPTED

@@ -344,15 +344,21 @@ def test_rc_loss_failsafe_acts_after_fs_timeout_on_an_armed_vehicle_only(armed: 
     assert ap.mode == "GUIDED"  # once per loss
 
 
-def test_losing_the_ekf_position_refuses_position_modes_while_it_lasts() -> None:
+def test_losing_the_ekf_position_refuses_position_modes_until_the_firmware_latch_clears() -> None:
+    # Rover/ekf_check.cpp at 10 Hz: 10 bad checks latch failsafe.ekf, 10 good ones count down to clear it, and
+    # Mode::enter (Rover/mode.cpp) refuses a position mode meanwhile: about 1 s after the EKF is good again
     clock = ManualClock()
     ap = armed_rover(clock, "HOLD")
-    injector = FaultInjector(plan({"kind": "ekf_degradation", "at_s": 1.0, "for_s": 1.0, "lose_position": True}), clock)
-    run(injector, ap, 1.5)
-    assert not ap.position_ok
-    assert not ap.set_mode(ap.profile.modes["LOITER"])
+    injector = FaultInjector(plan({"kind": "ekf_degradation", "at_s": 1.0, "for_s": 2.0, "lose_position": True}), clock)
     run(injector, ap, 2.5)
-    assert ap.position_ok
+    assert not ap.position_ok and ap.failsafe_ekf
+    assert not ap.set_mode(ap.profile.modes["LOITER"])
+    out = run(injector, ap, 3.5)  # the EKF is good again for 0.5 s: still latched
+    assert ap.position_ok and ap.failsafe_ekf
+    assert not ap.set_mode(ap.profile.modes["LOITER"])
+    out += run(injector, ap, 4.5)
+    assert not ap.failsafe_ekf
+    assert "EKF failsafe cleared" in [msg.text for msg in out if msg.get_type() == "STATUSTEXT"]
     assert ap.set_mode(ap.profile.modes["LOITER"])
 
 
@@ -520,3 +526,20 @@ def test_rc_input_is_validated(tmp_path):
     with pytest.raises(MissionError) as refused:
         load_faults(path)
     assert any("channels" in str(e) and ":3:" in str(e) for e in refused.value.errors)
+
+
+def test_px4_mode_names_are_checked_against_px4_and_steer_a_simulated_px4(tmp_path: Path) -> None:
+    bad = write(tmp_path, "version: 1\nfaults:\n  - {kind: rc_takeover, at_s: 4, mode: QLAND}\n")
+    with pytest.raises(FaultFileError, match="'QLAND': not a PX4 mode"):
+        load_faults(bad, "vtol", autopilot="px4")
+    path = write(tmp_path, "version: 1\nfaults:\n  - {kind: rc_takeover, at_s: 4, mode: AUTO.LAND}\n")
+    assert "not a vtol mode" in errors_of(path, "vtol")[0]  # ArduPlane has no such mode
+    clock = ManualClock()
+    ap = make_autopilot("vtol", clock, HOME, autopilot="px4")
+    injector = FaultInjector(load_faults(path, "vtol", autopilot="px4"), clock)
+    injector.attach(ap)
+    for _ in range(50):  # 5 s: the estimator has a position at 3 s, the pilot switches at 4 s
+        clock.advance(0.1)
+        injector.update(ap)
+        ap.update()
+    assert ap.mode == "AUTO.LAND"

@@ -20,8 +20,8 @@ MakeGcs = Callable[..., "Gcs"]
 TERRAIN_POS_VEL = 0x0DC0  # position and velocity used, acceleration/yaw ignored
 
 
-def armed_in(make_gcs: MakeGcs, mode: str) -> Gcs:
-    gcs = make_gcs("sub", ekf_ready=True)
+def armed_in(make_gcs: MakeGcs, mode: str, **options: float) -> Gcs:
+    gcs = make_gcs("sub", ekf_ready=True, **options)
     assert gcs.set_mode(mode) == m.MAV_RESULT_ACCEPTED
     assert gcs.arm() == m.MAV_RESULT_ACCEPTED
     return gcs
@@ -126,7 +126,7 @@ def test_the_rangefinder_reads_the_height_above_the_seabed(make_gcs: MakeGcs) ->
     gcs = armed_in(make_gcs, "GUIDED")
     seabed = gcs.ap.vehicle.seabed
     sensor = gcs.last("DISTANCE_SENSOR")  # streamed unasked, like GLOBAL_POSITION_INT
-    assert (sensor.orientation, sensor.min_distance, sensor.max_distance) == (m.MAV_SENSOR_ROTATION_PITCH_270, 50, 5000)
+    assert (sensor.orientation, sensor.min_distance, sensor.max_distance) == (m.MAV_SENSOR_ROTATION_PITCH_270, 50, 3000)  # RNGFND1_MIN/MAX
     assert sensor.current_distance == round(seabed.depth_at(0.0, 0.0) * 100) == 3000
     gcs.goto(*gcs.east(60.0), alt=-5.0)  # the default seabed deepens toward the east
     gcs.run(90.0, step=0.5)
@@ -139,12 +139,42 @@ def test_the_rangefinder_reads_the_height_above_the_seabed(make_gcs: MakeGcs) ->
     assert replies[1].distance == pytest.approx(expected, abs=0.01)
 
 
-def test_guided_in_the_terrain_frame_follows_the_seabed(make_gcs: MakeGcs) -> None:
+def test_beyond_its_maximum_the_rangefinder_reports_the_raw_distance_and_its_range(make_gcs: MakeGcs) -> None:
+    """ArduSub's SITL: the seabed 50 m down, the sonar to 30 m: 45 m at 5 m deep, in DISTANCE_SENSOR beyond its max_distance
+    (invalid) and in RANGEFINDER without a range (as issue 14 saw it: 45 m and 45.2 m); SURFTRAK waits for a good reading."""
+    gcs = armed_in(make_gcs, "GUIDED", seabed_depth_m=50.0)
+    dive_to(gcs, 5.0)
+    sensor = gcs.last("DISTANCE_SENSOR")
+    assert sensor.max_distance == 3000 and sensor.current_distance == pytest.approx(4500, abs=2)  # beyond its max: invalid
+    assert gcs.ap.rangefinder_m is None  # not a height: RangeFinder::Status OutOfRangeHigh
+    replies = gcs.command(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_RANGEFINDER)
+    assert replies[1].distance == pytest.approx(45.0, abs=0.05)
+    assert gcs.set_mode("SURFTRAK") == m.MAV_RESULT_ACCEPTED  # entered all the same ("waiting for a rangefinder reading")
+    gcs.run(10.0, step=0.5)
+    assert depth(gcs) == pytest.approx(5.0, abs=0.1)  # it holds the depth meanwhile
+
+
+def test_the_rangefinder_maximum_is_an_option(make_gcs: MakeGcs) -> None:
+    gcs = armed_in(make_gcs, "GUIDED", seabed_depth_m=50.0, rangefinder_max_m=60.0)
+    assert gcs.last("DISTANCE_SENSOR").max_distance == 6000 and gcs.ap.rangefinder_m == pytest.approx(50.0, abs=0.05)
+
+
+def test_guided_drops_a_terrain_frame_target_silently(make_gcs: MakeGcs) -> None:
+    """ArduSub/GCS_MAVLink_Sub.cpp: no terrain data under water, the conversion fails and the handler breaks: no ack, no move."""
     gcs = armed_in(make_gcs, "GUIDED")
-    gcs.goto(*gcs.east(80.0), type_mask=TERRAIN_POS_VEL, frame=m.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT, alt=4.0)  # 4 m above the seabed
-    gcs.run(120.0, step=0.5)
-    assert gcs.last("DISTANCE_SENSOR").current_distance == pytest.approx(400, abs=2)
-    assert depth(gcs) == pytest.approx(30.0 + 0.02 * 80.0 - 4.0, abs=0.05)
+    dive_to(gcs, 4.9)
+    replies = gcs.goto(*gcs.east(80.0), type_mask=TERRAIN_POS_VEL, frame=m.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT, alt=24.0)  # as issue 14 sent it
+    said = gcs.run(60.0, step=0.5)
+    assert depth(gcs) == pytest.approx(4.9, abs=0.05) and gcs.ap.vehicle.north_east_m[1] == pytest.approx(0.0, abs=0.3)
+    assert replies == [] and gcs.texts(said) == []
+
+
+def test_surftrak_keeps_the_height_of_its_first_good_reading(make_gcs: MakeGcs) -> None:
+    gcs = armed_in(make_gcs, "GUIDED", seabed_depth_m=20.0)
+    dive_to(gcs, 6.0)
+    assert gcs.set_mode("SURFTRAK") == m.MAV_RESULT_ACCEPTED
+    gcs.run(5.0, step=0.5)
+    assert gcs.ap.vehicle.holding_altitude and gcs.ap.rangefinder_m == pytest.approx(14.0, abs=0.1)
 
 
 def test_do_reposition(make_gcs: MakeGcs) -> None:

@@ -11,21 +11,21 @@ from py_trees.common import Status
 
 import trees
 from executive.clock import ManualClock
-from executive.geo import destination, distance, distance_bearing
+from executive.geo import destination, distance
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.modes import ArduPilotModes
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import explain_failure
-from executive.state import EkfFlags, EkfStatus, GlobalPosition
-from executive.testing import EKF_READY, Lockstep
-from executive.vehicles import PROFILES, SUB_MODES
+from executive.state import EkfFlags, EkfStatus, GlobalPosition, Rangefinder
+from executive.testing import EKF_READY, Lockstep, ScriptedAutopilot
+from executive.vehicles import PROFILES
 
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 START = (44.0950000, 9.8630000)
 SEABED_M = 30.0
+SONAR_MIN_M, SONAR_MAX_M = 0.5, 30.0  # RNGFND1_MIN/RNGFND1_MAX
 LIMITS = {
     "max_goal_distance_m": 1000.0,
     "speed_m_s": {"min": 0.1, "max": 1.0},
@@ -70,105 +70,81 @@ SURVEY = (
 )
 
 
-class ScriptedSub:
+class ScriptedSub(ScriptedAutopilot):
     """An ArduSub that obeys at once: modes, arming, speed; in GUIDED it steps toward its setpoint, horizontally and vertically.
 
     ``commands`` is what it was told, readable: ``("mode", "GUIDED")``, ``("speed", 0.5)``,
     ``("depth", 5.0, "north")`` (a setpoint, named by the waypoint it is at or ``"in place"``;
     re-sent setpoints are listed once). SURFACE climbs and hands over to ALT_HOLD at the surface.
+    Refusals are DENIED.
     """
 
-    def __init__(self, harness: Any, vehicle: Any, mission: Mission, start: tuple[float, float] = START) -> None:
-        self.h, self.vehicle, self.mission = harness, vehicle, mission
-        self.lat, self.lon = start
+    def __init__(self, harness: Any, mission: Mission, start: tuple[float, float] = START) -> None:
+        self.mission = mission
         self.depth, self.seabed_m, self.speed_over_m_s = 0.0, SEABED_M, 0.0
-        self.step_m, self.dz_m = 8.0, 1.0
-        self.mode, self.armed = "MANUAL", False
-        self.target: tuple[float, float] | None = None
+        self.dz_m = 1.0
         self.depth_target: float | None = None
-        self.altitude_target: float | None = None
-        self.commands: list[tuple[Any, ...]] = []
-        self.received = 0
-        self.refuse: set[str] = set()
         self.position_known = True
         self.sonar = True
-        self.publish()
+        super().__init__(harness, start, step_m=8.0)
+        self.refusal = _M.MAV_RESULT_DENIED
 
     @property
     def altitude(self) -> float:
         return self.seabed_m - self.depth
 
-    def publish(self) -> None:
-        self.vehicle.set(vehicle__mode=self.mode, vehicle__armed=self.armed)
+    def facts(self) -> dict[str, object]:
+        facts: dict[str, object] = {"vehicle__mode": self.mode, "vehicle__armed": self.armed}
         if self.position_known:
-            self.vehicle.set(vehicle__position=GlobalPosition(self.lat, self.lon, -self.depth, self.speed_over_m_s, 0, 0, 0, 0))
-        self.vehicle.set(vehicle__altitude_above_bottom_m=self.altitude if self.sonar else None)
+            facts["vehicle__position"] = GlobalPosition(self.lat, self.lon, -self.depth, self.speed_over_m_s, 0, 0, 0, 0)
+        good = self.sonar and SONAR_MIN_M <= self.altitude <= SONAR_MAX_M
+        facts["vehicle__rangefinder"] = (
+            Rangefinder(self.altitude, SONAR_MIN_M, SONAR_MAX_M, "good" if good else "invalid", 0.0) if self.sonar else None
+        )
+        facts["vehicle__altitude_above_bottom_m"] = self.altitude if good else None
+        return facts
 
     def _where(self, lat: float, lon: float) -> str:
         return next((wp.name for wp in self.mission.waypoints if distance(lat, lon, wp.lat, wp.lon) < 0.05), "in place")
 
     def _record(self, entry: tuple[Any, ...]) -> None:
-        if entry[0] in ("depth", "altitude") and self.commands and self.commands[-1] == entry:
+        if self.commands and self.commands[-1] == entry:
             return
         self.commands.append(entry)
 
-    def _command(self, msg: Any) -> None:
-        if msg.command == _M.MAV_CMD_DO_SET_MODE:
-            mode = ArduPilotModes(SUB_MODES).decode(int(msg.param2))
-            self._record(("mode", mode))
-            refused = mode in self.refuse
-            if not refused:
-                self.mode = mode
-                self.target = self.depth_target = self.altitude_target = None
-        elif msg.command == _M.MAV_CMD_COMPONENT_ARM_DISARM:
-            self._record(("arm", msg.param1))
-            refused = False
-            self.armed = bool(msg.param1)
-        elif msg.command == _M.MAV_CMD_DO_CHANGE_SPEED:
-            self._record(("speed", round(msg.param2, 3)))
-            refused = "speed" in self.refuse
-        else:
-            raise AssertionError(f"unexpected command {msg.command}")
-        self.h.ack(msg.command, _M.MAV_RESULT_DENIED if refused else _M.MAV_RESULT_ACCEPTED)
+    def enter_mode(self, mode: str) -> bool:
+        self.mode = mode
+        self.target = self.depth_target = None
+        return True
 
-    def _setpoint(self, msg: Any) -> None:
+    def on_command(self, msg: Any) -> int | None:
+        if msg.command == _M.MAV_CMD_DO_CHANGE_SPEED:
+            self.commands.append(("speed", round(msg.param2, 3)))
+            return self.result_for("speed")
+        if msg.command in (_M.MAV_CMD_DO_SET_MODE, _M.MAV_CMD_COMPONENT_ARM_DISARM):
+            return super().on_command(msg)
+        raise AssertionError(f"unexpected command {msg.command}")
+
+    def on_setpoint(self, msg: Any) -> None:
+        if msg.get_type() != "SET_POSITION_TARGET_GLOBAL_INT" or self.mode != "GUIDED":  # ignored silently elsewhere
+            return
         lat, lon = msg.lat_int / 1e7, msg.lon_int / 1e7
         if msg.coordinate_frame == _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT:
             self._record(("depth", round(-msg.alt, 3), self._where(lat, lon)))
-            self.depth_target, self.altitude_target = -msg.alt, None
-        elif msg.coordinate_frame == _M.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT:
-            self._record(("altitude", round(msg.alt, 3), self._where(lat, lon)))
-            self.depth_target, self.altitude_target = None, msg.alt
-        else:
+            self.depth_target = -msg.alt
+        else:  # the terrain frame among them: ArduSub drops it without terrain data (GCS_MAVLink_Sub.cpp), never send it
             raise AssertionError(f"unexpected frame {msg.coordinate_frame}")
         self.target = (lat, lon)
 
-    def respond(self) -> None:
-        for msg in self.h.link.take():
-            self.received += 1
-            if msg.get_type() == "COMMAND_LONG":
-                self._command(msg)
-            elif msg.get_type() == "SET_POSITION_TARGET_GLOBAL_INT" and self.mode == "GUIDED":  # ignored silently elsewhere
-                self._setpoint(msg)
+    def move(self) -> None:
         if self.armed and self.mode == "GUIDED" and self.target is not None:
-            d, b = distance_bearing(self.lat, self.lon, *self.target)
-            self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
-            wanted = self.depth_target if self.depth_target is not None else self.seabed_m - (self.altitude_target or 0.0)
-            self.depth += max(-self.dz_m, min(self.dz_m, wanted - self.depth))
+            super().move()
+            if self.depth_target is not None:
+                self.depth += max(-self.dz_m, min(self.dz_m, self.depth_target - self.depth))
         elif self.armed and self.mode == "SURFACE":
             self.depth = max(0.0, self.depth - self.dz_m)
             if self.depth <= 0.1:
                 self.mode = "ALT_HOLD"  # ModeReason::SURFACE_COMPLETE
-        self.publish()
-
-    def run(self, ticks: int, until: Callable[[], bool] | None = None) -> list[Status]:
-        statuses = []
-        for _ in range(ticks):
-            statuses.append(self.h.tick())
-            self.respond()
-            if statuses[-1] != Status.RUNNING or (until is not None and until()):
-                break
-        return statuses
 
 
 class Survey:
@@ -181,7 +157,7 @@ class Survey:
         self.root = trees.build(mission)
         self.h = harness(self.root)
         vehicle.set(link__up=True, vehicle__ekf=EKF_READY, rc__channels=(1500,) * 8)
-        self.sub = ScriptedSub(self.h, vehicle, mission, start)
+        self.sub = ScriptedSub(self.h, mission, start)
         self.depths_at_leg_end: list[tuple[float, float]] = []
         advance = state.advance_leg
 
@@ -240,7 +216,8 @@ def test_each_leg_sets_its_speed_reaches_its_depth_or_altitude_goes_there_then_t
         ("arm", 1.0),
         ("mode", "GUIDED"),
         ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north"),
-        ("speed", 0.8), ("altitude", 20.0, "north"), ("altitude", 20.0, "east"),  # first where the sub is (it stopped on north)
+        # first where the sub is (it stopped on north), 20 m above the seabed as a depth: 5 m deep + 25 m measured - 20 m
+        ("speed", 0.8), ("depth", 10.0, "north"), ("depth", 10.0, "east"),
         ("depth", 3.0, "east"), ("depth", 3.0, "back"),  # no speed on this leg: none is sent
         ("mode", "SURFACE"),
         ("mode", "POSHOLD"),
@@ -255,7 +232,7 @@ def test_each_leg_sets_its_speed_reaches_its_depth_or_altitude_goes_there_then_t
     [
         ({"control_mode": "depth", "depth_m": 5.0}, [("depth", 5.0, "in place"), ("depth", 5.0, "wp")]),
         ({"depth_m": 5.0}, [("depth", 5.0, "in place"), ("depth", 5.0, "wp")]),  # no control mode: a depth
-        ({"control_mode": "altitude", "altitude_m": 20.0}, [("altitude", 20.0, "in place"), ("altitude", 20.0, "wp")]),
+        ({"control_mode": "altitude", "altitude_m": 20.0}, [("depth", 10.0, "in place"), ("depth", 10.0, "wp")]),  # 30 m measured - 20 m
         ({"control_mode": "depth"}, [("depth", 0.0, "wp")]),  # no depth: at the surface
         ({"control_mode": "depth", "depth_m": 0.0}, [("depth", 0.0, "in place"), ("depth", 0.0, "wp")]),
     ],
@@ -264,7 +241,7 @@ def test_each_leg_sets_its_speed_reaches_its_depth_or_altitude_goes_there_then_t
 def test_the_control_mode_decides_the_setpoints_of_a_leg(make_survey: MakeSurvey, waypoint: dict[str, Any], setpoints: list[tuple[Any, ...]]) -> None:
     survey = make_survey(sub_mission({**NORTH, "name": "wp", **waypoint}))
     assert survey.run(100)[-1] == Status.SUCCESS
-    assert [c for c in survey.sub.commands if c[0] in ("depth", "altitude")] == setpoints
+    assert [c for c in survey.sub.commands if c[0] == "depth"] == setpoints
 
 
 def test_a_last_leg_at_the_surface_needs_no_surfacing(make_survey: MakeSurvey) -> None:
@@ -367,7 +344,7 @@ def test_a_failed_guard_holds_the_sub_until_it_recovers_then_the_same_leg_goes_o
     survey = make_survey(sub_mission(*SURVEY))
     wp = SURVEY[leg]
     survey.run_to_leg(leg)
-    survey.under_way(*(("depth", wp["depth_m"]) if "depth_m" in wp else ("altitude", wp["altitude_m"])), wp["name"])
+    survey.under_way("depth", wp["depth_m"] if "depth_m" in wp else SEABED_M - wp["altitude_m"], wp["name"])  # an altitude leg: as a depth
     before = len(survey.sub.commands)
     # stuck (a current, a thruster): what goes wrong lasts past the guard's hold time, and the leg does not end meanwhile
     step, dz = survey.sub.step_m, survey.sub.dz_m
@@ -522,9 +499,10 @@ def test_the_example_survey_on_the_simulated_ardusub_reaches_each_waypoint_at_it
             assert leg["altitude"] == pytest.approx(wp.altitude_m, abs=0.5), wp.name
         else:
             assert leg["depth"] == pytest.approx(wp.depth_m, abs=0.5), wp.name
-    assert legs[2]["depth"] > 6.0  # 24 m above a seabed 30.5 m deep there: the altitude leg follows the seabed, not a depth
+    # 24 m above a seabed ~50 m deep (ArduSub's SITL), out of the sonar's 30 m from 5 m deep: dived to blind, then followed
+    assert legs[2]["depth"] > 25.0
     assert (end["mode"], end["armed"]) == ("POSHOLD", True) and end["depth"] < 0.2  # surfaced, holding for the pick-up
-    assert end["vehicle_s"] < 180.0
+    assert end["vehicle_s"] < 300.0
 
 
 def test_on_the_simulator_a_sub_1_km_off_refuses_the_survey_without_arming_or_moving() -> None:

@@ -17,9 +17,10 @@ from py_trees.common import Status
 
 import trees
 from executive import geo
+from executive.behaviours.auto_route import MISSION_STATE_COMPLETE
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
-from executive.io.mavlink.mission_protocol import MissionItemReached, MissionTransfer
+from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemReached, MissionTransfer
 from executive.io.mavlink.modes import ArduPilotModes
 from executive.io.rc import RcReader
 from executive.mission.errors import MissionError
@@ -27,7 +28,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission
 from executive.runtime import Outcome, Runtime
-from executive.sim.faults import FaultInjector, RcInput
+from executive.sim.faults import FaultInjector, RcInput, RcLoss
 from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
 from executive.testing import EKF_READY, Lockstep, ack, port_for
@@ -87,6 +88,7 @@ class Rig:
         self.home: tuple[float, float] | None = START
         self.lat, self.lon = START
         self.mode, self.armed, self.ekf = "MANUAL", False, EKF_READY
+        self.mode_set_by: str | None = None  # the boot mode: nobody's; "us" once a DO_SET_MODE put it in its mode
         self.link_up = self.rc_alive = self.mission_answers = True
         self.refuse: set[str] = set()  # "arm", or mode names refused with FAILED
         self.step_m = 2.0
@@ -157,7 +159,7 @@ class Rig:
             self._rc_time = now
             self.vehicle.set(rc__channels=tuple(self.channels))
         self.vehicle.set(
-            link__up=self.link_up, vehicle__mode=self.mode, vehicle__armed=self.armed, vehicle__ekf=self.ekf,
+            link__up=self.link_up, vehicle__mode=self.mode, vehicle__mode_set_by=self.mode_set_by, vehicle__armed=self.armed, vehicle__ekf=self.ekf,
             vehicle__position=GlobalPosition(self.lat, self.lon, 0.0, 0.0, 0.0, 0.0, None, now - self.position_age_s), rc__last_update=self._rc_time,
         )  # fmt: skip
 
@@ -188,7 +190,7 @@ class Rig:
             else:
                 if self.mode == "AUTO":
                     self.store.stop()
-                self.mode = mode
+                self.mode, self.mode_set_by = mode, "us"
                 if mode == "AUTO":
                     self.store.start_or_resume()
             self.commander.on_ack(ack(msg.command, _M.MAV_RESULT_FAILED if refused else _M.MAV_RESULT_ACCEPTED))
@@ -304,7 +306,7 @@ def test_the_operator_arms_records_a_route_and_auto_drives_it_to_the_end(rig: Ri
         ("HOLD", "MANUAL", 0, UP, DOWN, [("mode", "HOLD")], "switch C DOWN: HOLD"),
         (None, "MANUAL", 0, UP, DOWN, [], "switch C DOWN: no aux mode set (rc_route.aux_mode): ignored"),
         ("HOLD", "HOLD", 0, DOWN, UP, [("mode", "MANUAL")], "switch C UP: MANUAL"),
-        ("HOLD", "MANUAL", 0, DOWN, UP, [], "switch C UP: MANUAL (already)"),
+        ("HOLD", "MANUAL", 0, MIDDLE, UP, [], "switch C UP: MANUAL (already)"),
         ("HOLD", "MANUAL", 1, UP, MIDDLE, [("mode", "AUTO")], "switch C MIDDLE: AUTO"),
         ("HOLD", "MANUAL", 0, UP, MIDDLE, [], "switch C MIDDLE: AUTO not asked: no route recorded"),
     ],
@@ -314,27 +316,46 @@ def test_switch_c_sets_the_mode_when_it_moves(rig_for, aux, mode, route, before,
     r.mode = mode
     r.rc(swc=before)
     assert r.run(3) == [Status.RUNNING] * 3
-    assert r.take() == [("upload", route), ("read back",)]  # the first position is only noted
+    assert r.take() == [("upload", route), ("read back",)]  # the first position is acted on: nothing to do in these
     r.rc(swc=after)
     assert r.run(2) == [Status.RUNNING] * 2
     assert r.take() == commands
     assert r.feedback("Switch C: mode") == feedback
 
 
-def test_switch_c_does_not_fight_a_ground_station_nor_act_again_after_a_hold(rig: Rig) -> None:
+def test_switch_c_does_not_fight_a_ground_station(rig: Rig) -> None:
     rig.rc(swc=DOWN)
     rig.tick()
     assert rig.take() == [("mode", "HOLD")]
-    rig.mode = "GUIDED"  # a ground station takes the vehicle
+    rig.mode = "GUIDED"  # a ground station takes the vehicle (the runtime pauses the mission: see tests/test_intervention.py)
     assert rig.run(20) == [Status.RUNNING] * 20
     assert rig.take() == []
-    rig.link_up = False  # a guard fails: the vehicle is held...
-    rig.tick()
-    assert rig.take() == [("mode", "HOLD")]
-    rig.link_up = True  # ...and when the guard recovers, switch C (still down) is not acted on again
-    rig.mode = "MANUAL"
-    assert rig.run(10) == [Status.RUNNING] * 10
-    assert rig.take() == []
+
+
+def test_a_switch_already_in_auto_at_the_start_drives_the_route_without_a_flick(rig_for) -> None:
+    """The defect: the tree waited for switch C to change; with it already in AUTO the mission timed out."""
+    r = rig_for(mission_with(waypoints=[{"lat": ahead(5.0)[0], "lon": START[1]}, {"lat": ahead(10.0)[0], "lon": START[1]}]))
+    r.armed = True
+    r.rc(swc=MIDDLE)
+    statuses = r.run(100)
+    assert statuses[-1] == Status.SUCCESS
+    assert r.take() == [("upload", 2), ("read back",), ("mode", "AUTO"), ("mode", "HOLD")]
+
+
+def test_after_a_failsafe_hold_the_vehicle_is_put_back_in_the_switchs_mode(rig: Rig) -> None:
+    """The defect: 'resume leg 1/4' was logged but the mode stayed HOLD, switch C still in AUTO."""
+    rig.armed, rig.step_m = True, 0.05
+    record(rig, ahead(10.0), ahead(20.0))
+    rig.rc(swc=MIDDLE)
+    rig.run(3)
+    assert rig.mode == "AUTO"
+    rig.take()
+    rig.rc_alive = False  # the receiver's report freezes
+    rig.run(12)
+    assert rig.take() == [("mode", "HOLD")] and rig.mode == "HOLD"
+    rig.rc_alive = True
+    rig.run_until(lambda: rig.mode == "AUTO", limit=40)  # once the guard counts as recovered (its hysteresis)
+    assert rig.take() == [("mode", "AUTO")]
 
 
 def test_auto_waits_for_the_route_upload_then_is_asked(rig: Rig) -> None:
@@ -360,7 +381,10 @@ def test_a_mode_refused_by_the_autopilot_is_reported_and_the_mission_goes_on(rig
     rig.refuse.add("AUTO")
     rig.rc(swc=MIDDLE)
     assert rig.run(10) == [Status.RUNNING] * 10
-    assert rig.take() == [("mode", "AUTO")]  # asked once, never again by itself
+    assert rig.take() == [("mode", "AUTO")]
+    assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO refused: FAILED (Flight mode change failed); asking again in 2 s"
+    assert rig.run(220) == [Status.RUNNING] * 220
+    assert rig.take() == [("mode", "AUTO")] * 9  # every 2 s, for 20 s from the flick (a firmware failsafe may be latched), then no more
     assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO refused: FAILED (Flight mode change failed)"
     rig.refuse.clear()
     rig.rc(swc=UP)
@@ -389,7 +413,7 @@ def test_a_mode_refused_by_the_autopilot_is_reported_and_the_mission_goes_on(rig
 def test_switch_d_arms_only_in_manual_and_disarms(rig_for, mode, armed, before, after, commands, feedback) -> None:
     r = rig_for(mission_with())
     r.mode, r.armed = mode, armed
-    r.rc(swd=before)
+    r.rc(swd=before, swc={"MANUAL": UP, "HOLD": DOWN, "AUTO": MIDDLE}[mode])  # switch C where the mode is (AUTO: no route, not asked)
     r.tick()
     assert r.take() == [("upload", 0), ("read back",)]  # the first position is only noted
     r.rc(swd=after)
@@ -555,16 +579,67 @@ def test_leaving_auto_keeps_the_leg_restarts_the_wait_and_auto_resumes_there(rig
     assert rig.run(100)[-1] == Status.SUCCESS
 
 
-def test_a_reached_report_from_before_the_drive_does_not_count(rig: Rig, vehicle) -> None:
+def test_a_reached_report_from_before_the_run_does_not_count(rig: Rig, vehicle) -> None:
     rig.armed = True
     record(rig, ahead(10.0), ahead(20.0))
-    vehicle.set(vehicle__mission_reached=MissionItemReached(2, rig.clock.now()))  # left over from an earlier drive
+    vehicle.set(vehicle__mission_reached=MissionItemReached(2, 0.0, 2))  # left over from an earlier run
     rig.tick()
     rig.rc(swc=MIDDLE)
     rig.step_m = 0.5
     rig.run(3)
     assert rig.state.leg_index == 0
     assert rig.feedback("Drive the route in AUTO").startswith("waypoint 1/2: ")
+
+
+def auto_asked(rig: Rig) -> None:
+    """Two waypoints recorded ahead, the rover back at the start, armed, standing still in AUTO (step 0)."""
+    rig.armed, rig.step_m = True, 0.0
+    record(rig, ahead(10.0), ahead(20.0))
+    rig.lat, rig.lon = START
+    rig.rc(swc=MIDDLE)
+    rig.tick()
+    assert rig.mode == "AUTO"  # the rover is in AUTO; the executive sees it in the next tick
+
+
+def test_an_item_reached_before_the_heartbeat_shows_auto_is_not_lost(rig: Rig, vehicle) -> None:
+    """The defect: a MISSION_ITEM_REACHED drained in the tick the switch to AUTO shows was ignored (the drive 'started' after it)."""
+    auto_asked(rig)
+    vehicle.set(vehicle__mission_reached=MissionItemReached(1, rig.clock.now() + 0.05, 1))  # arrives between two ticks
+    rig.tick()
+    assert rig.state.leg_index == 1
+
+
+def test_mission_current_complete_ends_the_drive(rig: Rig, vehicle) -> None:
+    """The defect: MISSION_CURRENT mission_state 5 (the autopilot ran its mission to the end) was ignored."""
+    auto_asked(rig)
+    rig.tick()
+    vehicle.set(vehicle__mission_current=MissionCurrent(2, 2, MISSION_STATE_COMPLETE, True, rig.clock.now() + 0.05))
+    rig.tick()
+    assert rig.state.leg_index == 2
+    assert rig.run(3)[-1] == Status.SUCCESS  # held at the end
+    assert rig.feedback("Drive the route in AUTO") == "route done: 2/2 waypoints reached"
+
+
+def test_a_drive_in_auto_that_makes_no_progress_fails_within_the_leg_timeout(rig_for) -> None:
+    """The defect: one run sat RUNNING at 0.0 m for 1,440 s; AUTO had no progress bound."""
+    r = rig_for(mission_with(limits={"recovery_timeout_s": 10.0, "ekf_wait_s": 20.0, "leg_timeout_s": 5.0}))
+    r.tick()
+    auto_asked(r)
+    statuses = r.run(100)
+    assert statuses == [Status.RUNNING] * 51 + [Status.FAILURE]
+    assert r.feedback("Drive the route in AUTO") == "no progress in AUTO: waypoint 1/2 not reached within 5 s: 10.0 m at 000°"
+
+
+def test_a_route_of_one_place_recorded_by_a_vehicle_that_never_moved_does_not_complete(rig: Rig) -> None:
+    """The defect: the operator's vehicle was held, all 4 route points were recorded at home, and the run ended COMPLETED."""
+    rig.armed = True
+    record(rig, START, START, START, START)
+    rig.rc(swc=MIDDLE)
+    statuses = rig.run(20)
+    assert statuses[-1] == Status.FAILURE
+    assert rig.feedback("Drive the route in AUTO") == (
+        "the route's 4 waypoints are all one place (the vehicle never moved while they were recorded): nothing was driven"
+    )
 
 
 def test_removing_the_current_waypoint_while_driving_sends_the_rover_to_the_next(rig: Rig) -> None:
@@ -577,8 +652,7 @@ def test_removing_the_current_waypoint_while_driving_sends_the_rover_to_the_next
     rig.tick()
     assert rig.take() == [("upload", 2), ("read back",)]
     assert rig.waypoints() == [ahead(10.0), ahead(30.0)] and rig.state.leg_index == 1
-    statuses = [rig.tick() for _ in range(100)]
-    assert Status.SUCCESS in statuses
+    assert rig.run(100)[-1] == Status.SUCCESS  # the mission ends there
     assert (rig.lat, rig.lon) == pytest.approx(ahead(30.0), abs=1e-6)
 
 
@@ -587,7 +661,12 @@ def test_removing_the_current_waypoint_while_driving_sends_the_rover_to_the_next
 
 @pytest.mark.parametrize("trouble", ["rc stale", "link lost"])
 def test_a_failed_guard_holds_the_vehicle_and_ends_the_mission_if_it_does_not_recover(rig: Rig, trouble: str) -> None:
+    rig.armed, rig.step_m = True, 0.001
     record(rig, ahead(10.0))
+    rig.lat, rig.lon = START  # 10 m to go
+    rig.rc(swc=MIDDLE)
+    rig.run(3)
+    assert rig.mode == "AUTO"
     rig.take()
     if trouble == "rc stale":
         rig.rc_alive = False  # the receiver's report freezes (CAN: the base repeats the last frame)
@@ -595,7 +674,7 @@ def test_a_failed_guard_holds_the_vehicle_and_ends_the_mission_if_it_does_not_re
         assert rig.take() == []
     else:
         rig.link_up = False
-    rig.rc(swc=MIDDLE)  # unseen while RC is stale
+    rig.rc(swc=UP)  # unseen while RC is stale
     rig.tick()
     assert rig.take() == [("mode", "HOLD")]
     assert rig.feedback("Wait for guards").startswith("holding (0/10 s): ")
@@ -604,12 +683,30 @@ def test_a_failed_guard_holds_the_vehicle_and_ends_the_mission_if_it_does_not_re
     assert rig.take() == []
 
 
+@pytest.mark.parametrize("trouble", ["rc stale", "link lost"])
+def test_no_failsafe_takes_the_vehicle_from_the_operator_driving_in_manual(rig: Rig, trouble: str) -> None:
+    """The defect: a 0.2 s RC gap at 20x put the vehicle in HOLD while the operator drove it in MANUAL (switch C up)."""
+    record(rig, ahead(10.0))
+    rig.take()
+    assert rig.mode == "MANUAL"
+    rig.mode_set_by = "others"  # MANUAL from the operator (the RC, or switch C up: asked for by us, a person's mode all the same)
+    if trouble == "rc stale":
+        rig.rc_alive = False
+    else:
+        rig.link_up = False
+    assert rig.run(30) == [Status.RUNNING] * 30
+    assert rig.take() == [] and rig.mode == "MANUAL"  # the autopilot's own RC failsafe answers an RC loss
+    rig.rc_alive = rig.link_up = True
+    assert rig.run(5) == [Status.RUNNING] * 5 and rig.take() == []
+
+
 def test_switch_moves_wait_out_stale_rc_and_count_when_it_is_back(rig: Rig) -> None:
     record(rig, ahead(10.0))
     rig.take()
+    rig.mode_set_by = "us"  # switch C up: MANUAL asked for at the operator's request
     rig.rc_alive = False
     rig.run(12)
-    assert rig.take() == [("mode", "HOLD")]
+    assert rig.take() == []  # in MANUAL: a person drives, nothing commanded
     assert rig.feedback("Wait for guards") == "holding (0/10 s): RC fresh? no RC report within 1 s"
     rig.rc(swc=MIDDLE)
     assert rig.run(20) == [Status.RUNNING] * 20
@@ -629,7 +726,7 @@ def test_the_switches_wait_for_the_ekf_and_the_mission_fails_without_one(rig_for
     assert r.take() == []  # no upload, no arming
 
 
-def test_pause_holds_and_resume_acts_on_nothing_already_done(rig: Rig) -> None:
+def test_pause_holds_and_resume_puts_back_the_switchs_mode_and_redoes_nothing_else(rig: Rig) -> None:
     record(rig, ahead(10.0))
     rig.rc(swc=DOWN)
     rig.tick()
@@ -641,7 +738,7 @@ def test_pause_holds_and_resume_acts_on_nothing_already_done(rig: Rig) -> None:
     assert rig.take() == [("mode", "HOLD")]
     rig.state.resume()
     assert rig.run(10) == [Status.RUNNING] * 10
-    assert rig.take() == []  # switch C is still up: no MANUAL again; the route is still on the rover
+    assert rig.take() == [("mode", "MANUAL")]  # switch C is still up: MANUAL again; the route is still on the rover: no upload
     assert rig.waypoints() == [ahead(10.0)]
 
 
@@ -732,8 +829,26 @@ def test_scenario_the_operator_records_a_route_on_the_simulated_bunker_and_auto_
     store = sim.autopilot.mission
     assert flat((store.command(s).lat, store.command(s).lon) for s in range(1, store.count)) == pytest.approx(flat(recorded), abs=1e-7)
     assert [(seq, mode) for seq, mode, _ in observer.reached] == [(1, "AUTO"), (2, "AUTO"), (3, "AUTO"), (4, "AUTO")]
-    assert all(d <= 0.5 for _, _, d in observer.reached)
+    *corners, last = observer.reached  # AUTO drives through a corner, cut within WP_RADIUS (AR_WPNav's fast waypoint); the last is a stop
+    limits = sim.autopilot.limits
+    assert all(d <= limits.wp_radius_m for _, _, d in corners) and last[2] <= limits.arrive_m, observer.reached
     assert observer.armed_in == {"MANUAL"}  # switch D down in HOLD armed nothing
     assert runtime.mission_state.leg_index == 4
     assert sim.autopilot.mode == "HOLD"
     assert sim.autopilot.elapsed_s < 180.0
+
+
+def test_scenario_rc_gaps_while_the_operator_drives_in_manual_take_nothing_from_them(lockstep) -> None:
+    """The defect (ugv_rc_route.yaml at 20x): a short RC gap fired the RC-loss failsafe, which put the vehicle in HOLD while the
+    operator drove it in MANUAL; all 4 route points were recorded at home and the run ended COMPLETED. Two 0.6 s gaps while
+    the operator drives: the vehicle stays in MANUAL, the route is four places, and it is driven."""
+    mission = load_mission(ROOT / "missions/ugv_rc_route.yaml")
+    gaps = [RcLoss(kind="rc_loss", at_s=20.5, for_s=0.6), RcLoss(kind="rc_loss", at_s=30.5, for_s=0.6)]
+    sim = lockstep(mission, model="bunker", mission_dir=ROOT / "missions", events=gaps)
+    modes: list[tuple[float, str]] = []
+    sim.observers.append(lambda s: modes.append((s.autopilot.elapsed_s, s.autopilot.mode)))
+    outcome = sim.run_to_end(limit_s=600)
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    assert {mode for t, mode in modes if 14.5 <= t < 48.5} == {"MANUAL"}  # armed in MANUAL at 14 s, AUTO at 49 s: never held
+    recorded = [(wp.lat, wp.lon) for wp in sim.runtime.mission_state.route.waypoints]
+    assert len(recorded) == 4 and min(geo.distance(*a, *b) for a, b in itertools.pairwise(recorded)) > 5.0

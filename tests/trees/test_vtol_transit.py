@@ -23,7 +23,7 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import Outcome, explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, HomePosition
-from executive.testing import EKF_READY, Lockstep
+from executive.testing import EKF_READY, Lockstep, ScriptedAutopilot
 from executive.vehicles import PLANE_MODES, PROFILES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
@@ -62,7 +62,7 @@ def vtol_mission(land: str = "home", hover: dict[str, float] | None = None, **li
 HOVER = {"east_m": 30.0, "north_m": 20.0, "up_m": 30.0}
 
 
-class ScriptedQuadPlane:
+class ScriptedQuadPlane(ScriptedAutopilot):
     """An ArduPlane QuadPlane (Q_GUIDED_MODE=1) that obeys at once and moves a step per tick, in metres from home.
 
     Modes and arming are acked at once. NAV_TAKEOFF (GUIDED, armed, on the ground) climbs
@@ -76,44 +76,36 @@ class ScriptedQuadPlane:
 
     MC_STEP_M, FW_STEP_M, CLIMB_STEP_M = 2.0, 10.0, 2.0
 
-    def __init__(self, harness: Any, vehicle: Any) -> None:
-        self.h, self.vehicle = harness, vehicle
-        self.n = self.e = self.alt = 0.0
-        self.mode, self.armed, self.vtol, self.landed = "MANUAL", False, "FW", "ON_GROUND"
-        self.target: tuple[float, float, float] | None = None
+    def __init__(self, harness: Any) -> None:
+        self.n = self.e = 0.0
+        self.vtol, self.landed = "FW", "ON_GROUND"
         self.transition_ticks, self._transition_left = 20, 0
         self.landing = self.returning = False
-        self.commands: list[tuple[Any, ...]] = []
-        self.refuse: set[str] = set()  # command kinds answered FAILED: "takeoff", "QLOITER", ...
         self.stuck_in: str | None = None  # a vtol_state it never leaves once in it
         self.report_takeoff = False  # landed_state stays TAKEOFF after the climb
         self.keeps_armed = False  # never disarms after landing
-        self.publish()
+        super().__init__(harness)  # MANUAL, disarmed; refuse: command kinds answered FAILED: "takeoff", "QLOITER", ...
+        self.target: tuple[float, float, float] | None = None  # type: ignore[assignment]  # north, east, alt from home
 
     @property
     def flying(self) -> bool:
         return self.alt > 0.0 or self.landed == "TAKEOFF"
 
-    def publish(self) -> None:
+    def facts(self) -> dict[str, object]:
         lat, lon = local_to_global(*HOME, self.n, self.e)
-        self.vehicle.set(
-            vehicle__mode=self.mode,
-            vehicle__armed=self.armed,
-            vehicle__position=GlobalPosition(lat, lon, self.alt, 0.0, 0.0, 0.0, 0.0, 0.0),
-            vehicle__vtol_state=self.vtol,
-            vehicle__landed_state=self.landed,
-        )
+        return {
+            "vehicle__mode": self.mode,
+            "vehicle__armed": self.armed,
+            "vehicle__position": GlobalPosition(lat, lon, self.alt, 0.0, 0.0, 0.0, 0.0, 0.0),
+            "vehicle__vtol_state": self.vtol,
+            "vehicle__landed_state": self.landed,
+        }
 
     def _set_vtol(self, state: str) -> None:
         if self.stuck_in != self.vtol:
             self.vtol = state
 
-    def _ack(self, msg: Any, kind: str) -> bool:
-        ok = kind not in self.refuse
-        self.h.ack(msg.command, _M.MAV_RESULT_ACCEPTED if ok else _M.MAV_RESULT_FAILED)
-        return ok
-
-    def _set_mode(self, mode: str) -> None:
+    def enter_mode(self, mode: str) -> bool:
         self.mode, self.landing, self.returning = mode, False, False
         here = (self.n, self.e, self.alt)
         if mode in ("QLOITER", "QRTL", "QLAND"):
@@ -125,38 +117,40 @@ class ScriptedQuadPlane:
             self.target = here  # a plane circles where it is
         elif mode == "GUIDED":
             self.target = here  # Q_GUIDED_MODE: a hover where it stops
+        return True
 
-    def _command(self, msg: Any) -> None:
-        if msg.command == _M.MAV_CMD_DO_SET_MODE:
-            mode = MODES.decode(int(msg.param2))
-            self.commands.append(("mode", mode))
-            if self._ack(msg, mode):
-                self._set_mode(mode)
-        elif msg.command == _M.MAV_CMD_COMPONENT_ARM_DISARM:
-            self.commands.append(("arm", msg.param1))
-            if self._ack(msg, "arm"):
-                self.armed = bool(msg.param1)
-        elif msg.command == _M.MAV_CMD_NAV_TAKEOFF:
+    def on_command(self, msg: Any) -> int | None:
+        if msg.command == _M.MAV_CMD_NAV_TAKEOFF:
             self.commands.append(("takeoff", msg.param7))
-            if self._ack(msg, "takeoff") and self.mode == "GUIDED" and self.armed and not self.flying:
+            result = self.result_for("takeoff")
+            if result == _M.MAV_RESULT_ACCEPTED and self.mode == "GUIDED" and self.armed and not self.flying:
                 self.landed, self.target = "TAKEOFF", (self.n, self.e, msg.param7)
                 self._set_vtol("MC")
-        elif msg.command == _M.MAV_CMD_DO_REPOSITION:
+            return result
+        if msg.command == _M.MAV_CMD_DO_REPOSITION:
             north, east = global_to_local(*HOME, msg.x / 1e7, msg.y / 1e7)
             self.commands.append(("reposition", round(north), round(east), msg.z))
-            if self._ack(msg, "reposition"):
+            result = self.result_for("reposition")
+            if result == _M.MAV_RESULT_ACCEPTED:
                 self.mode, self.landing, self.returning = "GUIDED", False, False
                 near = math.hypot(north - self.n, east - self.e) < LOITER_RADIUS_M
                 if not (self.vtol == "MC" and near):
                     self._start_transition()
                 self.target = (north, east, msg.z)
+            return result
+        if msg.command in (_M.MAV_CMD_DO_SET_MODE, _M.MAV_CMD_COMPONENT_ARM_DISARM):
+            return super().on_command(msg)
+        return None  # anything else goes unanswered
+
+    def on_setpoint(self, msg: Any) -> None:
+        """Position targets are not how this QuadPlane is flown (DO_REPOSITION is): ignored."""
 
     def _start_transition(self) -> None:
         if self.vtol == "MC" and self.flying:
             self._set_vtol("TRANSITION_TO_FW")
             self._transition_left = self.transition_ticks
 
-    def _move(self) -> None:
+    def move(self) -> None:
         if self.vtol == "TRANSITION_TO_FW":
             self._transition_left -= 1
             if self._transition_left <= 0:
@@ -182,22 +176,6 @@ class ScriptedQuadPlane:
             if self.alt <= 0 and not self.keeps_armed:
                 self.armed = False
 
-    def respond(self) -> None:
-        for msg in self.h.link.take():
-            if msg.get_type() in ("COMMAND_LONG", "COMMAND_INT"):
-                self._command(msg)
-        self._move()
-        self.publish()
-
-    def run(self, ticks: int, until: Callable[[], bool] | None = None) -> list[Status]:
-        statuses = []
-        for _ in range(ticks):
-            statuses.append(self.h.tick())
-            self.respond()
-            if statuses[-1] != R or (until is not None and until()):
-                break
-        return statuses
-
 
 class Transit:
     """A vtol_transit mission's tree, started, over a scripted QuadPlane at home with the EKF ready; notes the vtol states seen."""
@@ -209,7 +187,7 @@ class Transit:
         self.root = trees.build(mission)
         self.h = harness(self.root)
         vehicle.set(link__up=True, vehicle__ekf=EKF_READY, rc__channels=(1500,) * 8, vehicle__home=HomePosition(*HOME, 584.0, 0.0))
-        self.plane = ScriptedQuadPlane(self.h, vehicle)
+        self.plane = ScriptedQuadPlane(self.h)
         self.vtol_states: list[str] = []
 
     def run(self, ticks: int, until: Callable[[], bool] | None = None) -> list[Status]:
@@ -489,14 +467,18 @@ class Recorder:
     """Stands in for the status line: notes the vtol state and where the aircraft was at each tick."""
 
     def __init__(self) -> None:
-        self.bb = blackboard.reader("test recorder", ["/vehicle/vtol_state", "/vehicle/position", "/mission/leg_index"])
+        self.bb = blackboard.reader("test recorder", ["/vehicle/vtol_state", "/vehicle/position", "/mission/leg_index", "/vehicle/mode"])
         self.vtol_states: list[str] = []
+        self.modes: list[str] = []
         self.positions: list[tuple[int, float, float, float]] = []  # leg index, lat, lon, alt
 
     def update(self, force: bool = False) -> None:
         state = self.bb.get("/vehicle/vtol_state")
         if state is not None and (not self.vtol_states or self.vtol_states[-1] != state):
             self.vtol_states.append(state)
+        mode = self.bb.get("/vehicle/mode")
+        if mode is not None and (not self.modes or self.modes[-1] != mode):
+            self.modes.append(mode)
         position = self.bb.get("/vehicle/position")
         if position is not None:
             self.positions.append((self.bb.get("/mission/leg_index"), position.lat, position.lon, position.alt_rel_m))
@@ -516,15 +498,15 @@ class Flight:
     vehicle_s: float
 
 
-def fly_the_example(faults: list[dict[str, Any]] | None = None) -> Flight:
-    """``missions/vtol_transit.yaml`` on the simulated QuadPlane in the lock-step simulation, with ``faults`` injected."""
+def fly_the_example(faults: list[dict[str, Any]] | None = None, autopilot: str = "ardupilot") -> Flight:
+    """``missions/vtol_transit.yaml`` on the simulated QuadPlane (or PX4 VTOL) in the lock-step simulation, with ``faults`` injected."""
     from executive.sim.faults import FaultPlan
 
     mission = load_mission(ROOT / "missions" / "vtol_transit.yaml")
     assert mission.home is not None and mission.simulator is not None
     events = FaultPlan.model_validate({"version": 1, "faults": faults}).faults if faults else ()
     recorder = Recorder()
-    with Lockstep(mission, events=events, progress=recorder) as sim:
+    with Lockstep(mission, events=events, progress=recorder, autopilot=autopilot) as sim:
         outcome = sim.run_to_end(limit_s=600)
         vehicle_s = sim.clock.now()  # from boot: a few seconds more than the run itself
         ap = sim.autopilot
@@ -545,6 +527,21 @@ def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_eac
         assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
     assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 2.5
     assert flight.vehicle_s < 180.0
+
+
+def test_the_same_example_file_flies_on_the_simulated_px4_vtol() -> None:
+    """The back end follows the heartbeat: OFFBOARD on a setpoint stream, NAV_TAKEOFF AMSL, DO_VTOL_TRANSITION, AUTO.RTL to land."""
+    flight = fly_the_example(autopilot="px4")
+    mission, recorder, end = flight.mission, flight.recorder, flight.end
+    assert str(flight.outcome.status) == "COMPLETED", flight.outcome.reason
+    assert recorder.modes[:4] == ["AUTO.LOITER", "OFFBOARD", "AUTO.TAKEOFF", "AUTO.LOITER"]
+    assert "AUTO.RTL" in recorder.modes
+    states = recorder.vtol_states[recorder.vtol_states.index("MC") :]
+    assert states == ["MC", "TRANSITION_TO_FW", "FW", "TRANSITION_TO_MC", "MC"]
+    for i, wp in enumerate(mission.waypoints):
+        closest = min(math.dist(global_to_local(wp.lat, wp.lon, lat, lon), (0, 0)) for _, lat, lon, _ in recorder.positions)
+        assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
+    assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 10.0
 
 
 def test_the_simulated_quadplane_loses_its_ekf_during_the_climb_and_the_climb_goes_on_once_it_is_back() -> None:

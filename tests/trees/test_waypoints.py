@@ -6,60 +6,11 @@ import pytest
 from py_trees.common import Status
 
 import trees
-from executive.geo import destination, distance_bearing
-from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.modes import ArduPilotModes
-from executive.state import EkfFlags, EkfStatus, GlobalPosition
-from executive.testing import EKF_READY
-from executive.vehicles import ROVER_MODES
+from executive.geo import destination
+from executive.state import EkfFlags, EkfStatus
+from executive.testing import EKF_READY, ScriptedAutopilot
 
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
-
-
-class ScriptedAutopilot:
-    """Obeys mode and arm commands at once and jumps a step toward each GUIDED target per tick."""
-
-    def __init__(self, harness, vehicle, start: tuple[float, float], step_m: float = 8.0) -> None:
-        self.h, self.vehicle, self.step_m = harness, vehicle, step_m
-        self.lat, self.lon = start
-        self.mode, self.armed, self.target = "MANUAL", False, None
-        self.commands: list[tuple[str, float]] = []
-        self.refuse_arm = False
-        self.publish()
-
-    def publish(self) -> None:
-        self.vehicle.set(
-            vehicle__mode=self.mode,
-            vehicle__armed=self.armed,
-            vehicle__position=GlobalPosition(self.lat, self.lon, 0, 0, 0, 0, 0, 0),
-        )
-
-    def respond(self) -> None:
-        for msg in self.h.link.take():
-            if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-                self.mode = ArduPilotModes(ROVER_MODES).decode(int(msg.param2))
-                self.commands.append(("mode", self.mode))
-                self.h.ack(msg.command)
-            elif msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
-                self.commands.append(("arm", msg.param1))
-                result = mavlink.MAV_RESULT_FAILED if self.refuse_arm else mavlink.MAV_RESULT_ACCEPTED
-                self.armed = self.armed if self.refuse_arm else bool(msg.param1)
-                self.h.ack(msg.command, result)
-            elif msg.get_type() == "SET_POSITION_TARGET_GLOBAL_INT" and self.mode == "GUIDED":
-                self.target = (msg.lat_int / 1e7, msg.lon_int / 1e7)
-        if self.target and self.mode == "GUIDED" and self.armed:
-            d, b = distance_bearing(self.lat, self.lon, *self.target)
-            self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
-        self.publish()
-
-    def run(self, ticks: int) -> list[Status]:
-        statuses = []
-        for _ in range(ticks):
-            statuses.append(self.h.tick())
-            self.respond()
-            if statuses[-1] != Status.RUNNING:
-                break
-        return statuses
 
 
 @pytest.fixture
@@ -69,7 +20,7 @@ def mission_run(harness, vehicle, square_mission, mission_state):
     mission_state.start()
     h = harness(trees.build(square_mission))
     vehicle.set(link__up=True, vehicle__ekf=EKF_READY)
-    return ScriptedAutopilot(h, vehicle, destination(first.lat, first.lon, 180.0, 30.0))
+    return ScriptedAutopilot(h, destination(first.lat, first.lon, 180.0, 30.0))
 
 
 def test_the_square_completes_and_ends_held(mission_run, mission_state):
@@ -94,7 +45,7 @@ def test_preflight_waits_for_the_ekf_before_arming(mission_run, vehicle):
 
 
 def test_preflight_retries_a_refused_arm_then_gives_up(mission_run, square_mission):
-    mission_run.refuse_arm = True
+    mission_run.refuse.add("arm")
     statuses = mission_run.run(int(square_mission.limits.ekf_wait_s * 10) + 20)
     assert statuses[-1] == Status.FAILURE
     arms = [c for c in mission_run.commands if c[0] == "arm"]

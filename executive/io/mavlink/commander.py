@@ -9,7 +9,7 @@ with ``confirmation + 1`` when no ack comes, and its fate is written to ``/comma
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 from py_trees.common import Access
@@ -38,6 +38,7 @@ class _InFlight:
     frame: int | None  # set for COMMAND_INT
     due: float | None  # when to (re)send; None = waiting for an ack until ``deadline``
     deadline: float
+    provisional_seen: bool = False  # a double-acked command's first ACCEPTED came: the next ack decides
 
 
 def result_name(result: int | None) -> str:
@@ -80,23 +81,39 @@ class Commander:
         self.target_component = 1
         #: The autopilot's mode table; the reader replaces it once the HEARTBEAT tells the firmware.
         self.modes: ModeTable = ArduPilotModes(profile.modes)
+        #: Each mode asked for (its name as the heartbeat shows it) and when it was last asked: a mode change is ours or someone else's.
+        self.modes_asked: dict[str, float] = {}
+        #: The mode asked for last, if any.
+        self.last_mode_asked: str | None = None
+        #: Mode -> the mode the firmware goes on to by itself (PX4: AUTO.TAKEOFF -> AUTO.LOITER); the autopilot port sets it.
+        self.follow_on_modes: Mapping[str, str] = {}
+        #: Commands the autopilot acks twice, the first ACCEPTED saying only "received": PX4's MAVLink receiver
+        #: acks DO_SET_MODE at once, its commander the real result after (issue 12). The first ACCEPTED is not final.
+        self.double_acked: frozenset[int] = frozenset()
+
+    @property
+    def clock(self) -> Clock:
+        return self._clock
 
     # -- requests (from behaviours; never block) ---------------------------------------------
-    def command_long(self, command: int, params: Sequence[float] = ()) -> int:
-        """Queue a COMMAND_LONG; returns the ticket to look for in ``/command/<name>``."""
-        return self._request(command, params, frame=None)
+    def command_long(self, command: int, params: Sequence[float] = (), *, delay_s: float = 0.0) -> int:
+        """Queue a COMMAND_LONG (sent ``delay_s`` from now); returns the ticket to look for in ``/command/<name>``."""
+        return self._request(command, params, frame=None, delay_s=delay_s)
 
     def command_int(self, command: int, frame: int, params: Sequence[float] = ()) -> int:
         """Queue a COMMAND_INT; ``params`` are param1-4, x, y (degrees: scaled here), z."""
         return self._request(command, params, frame=frame)
 
-    def set_mode(self, mode: str | int | None = None, *, number: int | None = None) -> int:
-        """Ask for a flight mode by name or number; given both, the name wins. KeyError if unknown."""
+    def set_mode(self, mode: str | int | None = None, *, number: int | None = None, delay_s: float = 0.0) -> int:
+        """Ask for a flight mode by name or number (sent ``delay_s`` from now); given both, the name wins. KeyError if unknown."""
         chosen = mode if mode is not None else number
         if chosen is None:
             raise KeyError("no mode given")
         main, sub = self.modes.encode(chosen)
-        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub))
+        name = self.modes.canonical(chosen) if isinstance(chosen, str) else self.modes.decode(int(main))
+        self.modes_asked[name] = self._clock.now()
+        self.last_mode_asked = name
+        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub), delay_s=delay_s)
 
     def arm(self, *, force: bool = False) -> int:
         return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0, FORCE_ARM_MAGIC if force else 0.0))
@@ -180,6 +197,10 @@ class Commander:
             )
         )  # fmt: skip
 
+    def request_parameter(self, name: str) -> None:
+        """Queue a PARAM_REQUEST_READ by name; the PARAM_VALUE answer goes to ``/vehicle/params`` (no ack: ask again if none comes)."""
+        self._outbox.append(self._encoder.param_request_read_encode(self.target_system, self.target_component, name.encode(), -1))
+
     def cancel(self, ticket: int | None) -> bool:
         """Forget a request that no longer matters (its behaviour was interrupted); returns whether one was pending.
 
@@ -200,7 +221,11 @@ class Commander:
         if entry is None:
             return
         now = self._clock.now()
-        if msg.result == mavlink.MAV_RESULT_IN_PROGRESS:
+        if entry.due is not None:
+            return  # not sent yet (a delayed request): an ack of an earlier one of its kind says nothing of it
+        first_of_two = msg.command in self.double_acked and not entry.provisional_seen and msg.result == mavlink.MAV_RESULT_ACCEPTED
+        if msg.result == mavlink.MAV_RESULT_IN_PROGRESS or first_of_two:
+            entry.provisional_seen = entry.provisional_seen or first_of_two
             entry.deadline = now + self._ack_timeout_s * 4
             entry.due = None
             self._publish(entry, CommandState.IN_PROGRESS, msg.result, now)
@@ -225,6 +250,7 @@ class Commander:
                     continue
                 entry.due = now
             if entry.due is not None and entry.due <= now:
+                entry.provisional_seen = False  # a new send: its acks start again
                 self._link.send(self._encode(command, entry))
                 sent += 1
                 entry.due = None
@@ -238,7 +264,7 @@ class Commander:
         return not self._outbox and not self._in_flight
 
     # -- internals ---------------------------------------------------------------------------
-    def _request(self, command: int, params: Sequence[float], frame: int | None) -> int:
+    def _request(self, command: int, params: Sequence[float], frame: int | None, delay_s: float = 0.0) -> int:
         if len(params) > 7:
             raise ValueError(f"a command has at most 7 parameters, got {len(params)}")
         now = self._clock.now()
@@ -246,7 +272,7 @@ class Commander:
         status = CommandStatus(ticket, command, command_name(command), CommandState.QUEUED, None, 0, now)
         padded = (*(float(p) for p in params), *([0.0] * (7 - len(params))))
         # A newer request of the same kind supersedes the one in flight: its ack could not be told apart.
-        entry = _InFlight(status, padded, frame, due=now, deadline=now + self._ack_timeout_s)
+        entry = _InFlight(status, padded, frame, due=now + delay_s, deadline=now + delay_s + self._ack_timeout_s)
         self._in_flight[command] = entry
         self._publish(entry, CommandState.QUEUED, None, now)
         return ticket

@@ -1,7 +1,7 @@
 """Ground-station control of the executive over MAVLink, as the onboard-computer component.
 
 Mission Planner or QGroundControl can pause, continue and start the mission with COMMAND_LONG
-addressed to us (MAV_CMD_DO_PAUSE_CONTINUE, MAV_CMD_MISSION_START), acked as ArduPilot acks
+addressed to us (MAV_CMD_DO_PAUSE_CONTINUE, MAV_CMD_MISSION_START: continues a paused one), acked as ArduPilot acks
 commands; only allow-listed system ids are obeyed. The mission state, current leg and distance
 to the next waypoint are reported as STATUSTEXT on every change and NAMED_VALUE_FLOAT at 1 Hz.
 """
@@ -60,8 +60,8 @@ class GroundStationControl:
             result = mavlink.MAV_RESULT_DENIED
         elif msg.command == mavlink.MAV_CMD_DO_PAUSE_CONTINUE:
             result = self._apply("resume" if round(msg.param1) == 1 else "pause", msg)
-        elif msg.command == mavlink.MAV_CMD_MISSION_START:
-            result = self._apply("start", msg)
+        elif msg.command == mavlink.MAV_CMD_MISSION_START:  # a paused mission is continued, not started again
+            result = self._apply("resume" if self._operator.mission_state.status is MissionStatus.PAUSED else "start", msg)
         else:
             result = mavlink.MAV_RESULT_UNSUPPORTED
         reply_to.send(self._encoder.command_ack_encode(msg.command, result, 0, 0, sender, msg.get_srcComponent()))

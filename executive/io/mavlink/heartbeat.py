@@ -17,6 +17,9 @@ class Heartbeat:
         self._period_s = period_s
         self._next = float("-inf")
         self.system_status = mavlink.MAV_STATE_ACTIVE
+        #: What we say we are: an onboard computer; a ground station to PX4, whose commander counts only MAV_TYPE_GCS
+        #: heartbeats as the ground link (Commander.cpp: telemetry_status.heartbeat_type_gcs, gcs_connection_lost).
+        self.mav_type = mavlink.MAV_TYPE_ONBOARD_CONTROLLER
 
     def service(self) -> bool:
         """Send a heartbeat if one is due; returns whether it did."""
@@ -24,6 +27,6 @@ class Heartbeat:
         if now < self._next:
             return False
         self._next = now + self._period_s
-        msg = self._encoder.heartbeat_encode(mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, self.system_status)
+        msg = self._encoder.heartbeat_encode(self.mav_type, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, self.system_status)
         self._link.send(msg)
         return True

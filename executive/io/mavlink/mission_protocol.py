@@ -209,6 +209,7 @@ class MissionTransfer:
         self._wanted_current = 0
         self.home: MissionItem | None = None
         self.items: tuple[MissionItem, ...] | None = None
+        self._reached: MissionItemReached | None = None  # latched: the highest item reached since the mission changed
 
     # -- requests (from behaviours; never block) ---------------------------------------------
     def upload(self, items: Iterable[MissionItem], home: Sequence[float] | None = None, *, verify: bool | None = None) -> int:
@@ -376,7 +377,9 @@ class MissionTransfer:
 
     def on_reached(self, msg: MAVLinkMessage, now: float) -> None:
         """MISSION_ITEM_REACHED."""
-        self._bb.set("/vehicle/mission_reached", MissionItemReached(msg.seq, now))
+        before = self._reached
+        self._reached = MissionItemReached(msg.seq, now, max(msg.seq, before.highest if before else -1))
+        self._bb.set("/vehicle/mission_reached", self._reached)
 
     # -- internals ---------------------------------------------------------------------------
     def _for_us(self, msg: MAVLinkMessage) -> bool:
@@ -430,7 +433,10 @@ class MissionTransfer:
         self._finish(now, None)
 
     def _hold(self, home: MissionItem | None, items: tuple[MissionItem, ...]) -> None:
-        """What the vehicle holds, as far as we know."""
+        """What the vehicle holds, as far as we know; another mission's reports of items reached say nothing about this one."""
+        if items != self.items:
+            self._reached = None
+            self._bb.set("/vehicle/mission_reached", None)
         self.home, self.items = home, items
         self._bb.set("/vehicle/mission_home", home)
         self._bb.set("/vehicle/mission_items", items)

@@ -24,7 +24,7 @@ from executive.io.mavlink.link import Link
 from executive.io.mavlink.link_health import LinkHealth
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
-from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition
+from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, Rangefinder
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +36,31 @@ _STARTING = {mavlink.MAV_STATE_UNINIT, mavlink.MAV_STATE_BOOT, mavlink.MAV_STATE
 
 #: Message types that carry the sender's boot clock (``time_boot_ms``): a reboot shows in any of them.
 _BOOT_TIME_KINDS = frozenset(cls.msgname for cls in mavlink.mavlink_map.values() if "time_boot_ms" in cls.fieldnames)
+#: ESTIMATOR_STATUS is taken as stale (SYS_STATUS health bits stand in for it on PX4) after this long.
+_ESTIMATOR_STATUS_STALE_S = 3.0
+#: STATUSTEXT's text field: a chunk this long is not the last one.
+_STATUSTEXT_CHUNK = 50
+#: ESTIMATOR_STATUS_FLAGS that mean what EKF_STATUS_REPORT's flags of the same value mean (bits 0-9).
+_SHARED_ESTIMATOR_FLAGS = 0x3FF
+
+
+def _estimator_flags(flags: int) -> EkfFlags:
+    """ESTIMATOR_STATUS flags as EkfFlags: bits 0-9 alike; ESTIMATOR_GPS_GLITCH (1024) is EKF_GPS_GLITCHING, not EKF_UNINITIALIZED."""
+    ekf = EkfFlags(flags & _SHARED_ESTIMATOR_FLAGS)
+    if flags & mavlink.ESTIMATOR_GPS_GLITCH:
+        ekf |= EkfFlags.GPS_GLITCHING
+    return ekf
+
+
+def _ekf_from_health(present: int, health: int, now: float) -> EkfStatus:
+    """An estimator status from SYS_STATUS alone: attitude while the AHRS bit is healthy, a position while the GPS bit is healthy too."""
+    healthy = present & health
+    flags = EkfFlags(0)
+    if healthy & mavlink.MAV_SYS_STATUS_AHRS:
+        flags |= EkfFlags.ATTITUDE | EkfFlags.VELOCITY_VERT | EkfFlags.POS_VERT_ABS
+        if healthy & mavlink.MAV_SYS_STATUS_SENSOR_GPS:
+            flags |= EkfFlags.VELOCITY_HORIZ | EkfFlags.POS_HORIZ_ABS | EkfFlags.POS_HORIZ_REL | EkfFlags.PRED_POS_HORIZ_ABS
+    return EkfStatus(flags, 0.0, 0.0, 0.0, 0.0, 0.0, now)
 
 
 def _finite(*values: float) -> bool:
@@ -96,6 +121,10 @@ class MavlinkReader:
             self._set_targets((target_system, target_component))
         self._messages = 0
         self._bad_data = 0
+        self._distance_sensor_seen = False  # a downward DISTANCE_SENSOR seen: the one source of the height above the bottom
+        self._px4 = False  # the autopilot's HEARTBEAT says PX4: its estimator reports in ESTIMATOR_STATUS and SYS_STATUS
+        self._estimator_status_at = float("-inf")
+        self._chunks: dict[int, list[str]] = {}  # STATUSTEXT id -> the chunks so far
         self.health = LinkHealth()
         #: Called when the autopilot is first found, comes back after a link loss, or rebooted.
         self.on_reconnect: Callable[[], None] | None = None
@@ -108,6 +137,7 @@ class MavlinkReader:
             "GLOBAL_POSITION_INT": self._on_global_position,
             "ATTITUDE": self._on_attitude,
             "EKF_STATUS_REPORT": self._on_ekf_status,
+            "ESTIMATOR_STATUS": self._on_estimator_status,
             "SYS_STATUS": self._on_sys_status,
             "RC_CHANNELS": self._on_rc_channels,
             "COMMAND_ACK": self._on_command_ack,
@@ -119,6 +149,7 @@ class MavlinkReader:
             "EXTENDED_SYS_STATE": self._on_extended_sys_state,
             "DISTANCE_SENSOR": self._on_distance_sensor,
             "RANGEFINDER": self._on_rangefinder,
+            "PARAM_VALUE": self._on_param_value,
         }
         if mission is not None:  # the mission protocol's replies go to the transfer, as COMMAND_ACK goes to the commander
             self._handlers |= {
@@ -159,6 +190,9 @@ class MavlinkReader:
             self._bad_data += 1
             self._bb.set("/link/bad_data", self._bad_data)
             return
+        if kind.startswith("UNKNOWN_"):  # outside our dialect (PX4's EVENT 410, CURRENT_EVENT_SEQUENCE 411...): only its sequence counts
+            self._on_unknown(msg)
+            return
         source = (msg.get_srcSystem(), msg.get_srcComponent())
         if kind == "HEARTBEAT" and source != self._autopilot:
             self._heard_heartbeat(msg, source)
@@ -197,6 +231,7 @@ class MavlinkReader:
         self._autopilot = source
         self._set_targets(source)
         self._commander.modes = mode_table(msg.autopilot, msg.type)
+        self._px4 = msg.autopilot == mavlink.MAV_AUTOPILOT_PX4
         if self.on_autopilot is not None:
             self.on_autopilot(msg.autopilot, msg.type)
         self._bb.set("/link/system_id", self._autopilot[0])
@@ -255,7 +290,19 @@ class MavlinkReader:
             return
         self._bb.set("/vehicle/ekf", EkfStatus(EkfFlags(msg.flags), *variances, now))
 
+    def _on_estimator_status(self, msg: MAVLinkMessage, now: float) -> None:
+        """PX4's estimator: ESTIMATOR_STATUS flags (ESTIMATOR_STATUS_FLAGS; src/modules/mavlink/streams/ESTIMATOR_STATUS.hpp sends
+        estimator_status.solution_status_flags) and innovation test ratios (1.0 = at the gate) in place of the variances."""
+        ratios = (msg.vel_ratio, msg.pos_horiz_ratio, msg.pos_vert_ratio, msg.mag_ratio, msg.hagl_ratio)
+        if not _finite(*ratios) or min(ratios) < 0.0:
+            return
+        self._estimator_status_at = now
+        self._bb.set("/vehicle/ekf", EkfStatus(_estimator_flags(msg.flags), *ratios, now))
+
     def _on_sys_status(self, msg: MAVLinkMessage, now: float) -> None:
+        if self._px4 and now - self._estimator_status_at > _ESTIMATOR_STATUS_STALE_S:
+            # PX4 without ESTIMATOR_STATUS (a link that does not stream it): its health bits say whether it has a position
+            self._bb.set("/vehicle/ekf", _ekf_from_health(msg.onboard_control_sensors_present, msg.onboard_control_sensors_health, now))
         self._bb.set(
             "/vehicle/battery",
             Battery(
@@ -267,23 +314,57 @@ class MavlinkReader:
         )
 
     def _on_rc_channels(self, msg: MAVLinkMessage, now: float) -> None:
-        count = min(msg.chancount, 18)
-        channels = _RC_CHANNELS(msg)[:count]
+        # every field, whatever chancount says: ArduPilot acts on an RC override of a channel past it (chancount 8, chan9_raw 1500)
+        channels = _RC_CHANNELS(msg)
         if not all(_PWM_MIN_US <= c <= _PWM_MAX_US or c == 0 for c in channels):
             channels = tuple(c if _PWM_MIN_US <= c <= _PWM_MAX_US else 0 for c in channels)
         self._bb.set("/rc/channels", channels)
         self._bb.set("/rc/rssi", None if msg.rssi == 255 else msg.rssi)
+        if self._bb.get("/rc/chancount") != msg.chancount:
+            self._bb.set("/rc/chancount", msg.chancount)
         if self._rc_source:  # with RC on CAN, only a new 0x241 counter says the receiver is alive
             self._bb.set("/rc/last_update", now)
         self._bb.set("/rc/connected", any(channels))
+
+    def _on_param_value(self, msg: MAVLinkMessage, now: float) -> None:
+        name = msg.param_id.rstrip("\x00") if isinstance(msg.param_id, str) else msg.param_id.decode("ascii", "replace").rstrip("\x00")
+        if name and _finite(msg.param_value):
+            self._bb.set("/vehicle/params", {**(self._bb.get("/vehicle/params") or {}), name: msg.param_value})
 
     def _on_command_ack(self, msg: MAVLinkMessage, now: float) -> None:
         self._commander.on_ack(msg)
 
     def _on_statustext(self, msg: MAVLinkMessage, now: float) -> None:
         text = msg.text.rstrip("\x00") if isinstance(msg.text, str) else msg.text.decode("utf-8", "replace").rstrip("\x00")
+        if getattr(msg, "id", 0):  # one chunk of a long text (MAVLink 2 id, chunk_seq): joined, said once whole
+            joined = self._join_chunk(msg.id, msg.chunk_seq, text)
+            if joined is None:
+                return
+            text = joined
         log.log(logging.WARNING if msg.severity <= mavlink.MAV_SEVERITY_WARNING else logging.INFO, "autopilot: %s", text)
         self._bb.set("/vehicle/statustext", (msg.severity, text))
+
+    def _join_chunk(self, text_id: int, seq: int, text: str) -> str | None:
+        """The whole text once its last chunk (shorter than the 50-byte field) came; a lost chunk shows as "..."."""
+        for other in [i for i in self._chunks if i != text_id]:  # a new text began: the unfinished one is said as it is
+            log.info("autopilot: %s", "".join(self._chunks.pop(other)))
+        chunks = self._chunks.setdefault(text_id, [])
+        if seq > len(chunks):
+            chunks.append("...")
+        chunks.append(text)
+        if len(text.encode("utf-8")) >= _STATUSTEXT_CHUNK:
+            return None
+        return "".join(self._chunks.pop(text_id))
+
+    def _on_unknown(self, msg: MAVLinkMessage) -> None:
+        """A message our dialect lacks: counted for the link's health when it comes from the autopilot (its header read from the frame)."""
+        buf = msg.get_msgbuf()
+        if len(buf) < 7:
+            return
+        seq, source = (buf[4], (buf[5], buf[6])) if buf[0] == mavlink.PROTOCOL_MARKER_V2 else (buf[2], (buf[3], buf[4]))
+        if source == self._autopilot:
+            self._messages += 1
+            self.health.on_packet(seq)
 
     def _on_home_position(self, msg: MAVLinkMessage, now: float) -> None:
         lat, lon = msg.latitude / 1e7, msg.longitude / 1e7
@@ -314,14 +395,35 @@ class MavlinkReader:
         self._bb.set("/vehicle/landed_state", landed.name.removeprefix("MAV_LANDED_STATE_") if landed else None)
 
     def _on_distance_sensor(self, msg: MAVLinkMessage, now: float) -> None:
+        """The downward rangefinder: the one source of the height above the bottom (and of its validity).
+
+        A reading counts only within the sensor's own range (min/max_distance: RNGFND1_MIN/MAX):
+        ArduPilot sends the raw distance whatever the sensor's status (AP_RangeFinder_Backend.cpp
+        update_status: beyond max is OutOfRangeHigh; GCS_Common.cpp send_distance_sensor).
+        """
         if msg.orientation != mavlink.MAV_SENSOR_ROTATION_PITCH_270:
             return  # not looking down: an obstacle sensor
-        # signal_quality 1 = invalid (0 = unknown); out of its range the reading says nothing
-        valid = msg.min_distance <= msg.current_distance <= msg.max_distance and getattr(msg, "signal_quality", 0) != 1
-        self._bb.set("/vehicle/altitude_above_bottom_m", msg.current_distance / 100.0 if valid else None)
+        self._distance_sensor_seen = True
+        distance, low, high = msg.current_distance / 100.0, msg.min_distance / 100.0, msg.max_distance / 100.0
+        if getattr(msg, "signal_quality", 0) == 1:  # 1 = invalid (0 = unknown)
+            status = "invalid"
+        elif distance > high:
+            status = "too_far"
+        elif distance < low:
+            status = "too_close"
+        else:
+            status = "good"
+        self._bb.set("/vehicle/rangefinder", Rangefinder(distance, low, high, status, now))
+        self._bb.set("/vehicle/altitude_above_bottom_m", distance if status == "good" else None)
 
     def _on_rangefinder(self, msg: MAVLinkMessage, now: float) -> None:
-        valid = _finite(msg.distance) and msg.distance >= 0.0  # ArduPilot sends RANGEFINDER for its downward (PITCH_270) rangefinder
+        """RANGEFINDER carries no range and no status (GCS_Common.cpp send_rangefinder sends distance() whatever the
+        sensor's status): it is read only from an autopilot that never sent a downward DISTANCE_SENSOR, which then
+        alone judges the reading, so the two never overwrite each other's verdict (issue 14: 915 holds in 400 s).
+        """
+        if self._distance_sensor_seen:
+            return
+        valid = _finite(msg.distance) and msg.distance >= 0.0
         self._bb.set("/vehicle/altitude_above_bottom_m", float(msg.distance) if valid else None)
 
     def _update_link_health(self, now: float) -> None:

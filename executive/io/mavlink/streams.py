@@ -33,11 +33,18 @@ DEFAULT_RATES: dict[str, float] = {
 _KEY = blackboard.command_key("SET_MESSAGE_INTERVAL")
 
 
-def rates_for(kind: str) -> dict[str, float]:
-    """The streams a kind of vehicle has: only aircraft report VTOL and landed state, only subs a downward sonar."""
-    rates = {name: hz for name, hz in DEFAULT_RATES.items() if kind == "vtol" or name != "EXTENDED_SYS_STATE"}
+def rates_for(kind: str, autopilot: str = "ardupilot") -> dict[str, float]:
+    """The streams a kind of vehicle has: only aircraft report VTOL and landed state, only subs a downward sonar.
+
+    PX4 reports its estimator in ESTIMATOR_STATUS (it has no EKF_STATUS_REPORT) and its landed state in
+    EXTENDED_SYS_STATE on every vehicle.
+    """
+    rates = {name: hz for name, hz in DEFAULT_RATES.items() if kind == "vtol" or autopilot == "px4" or name != "EXTENDED_SYS_STATE"}
     if kind == "sub":
         rates["DISTANCE_SENSOR"] = 5.0
+    if autopilot == "px4":
+        del rates["EKF_STATUS_REPORT"]
+        rates["ESTIMATOR_STATUS"] = 2.0
     return rates
 
 

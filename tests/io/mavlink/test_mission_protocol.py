@@ -378,9 +378,19 @@ def test_only_replies_for_us_and_for_the_mission_count(x: Exchange) -> None:
 
 def test_reached_and_current_reach_the_blackboard_without_a_transfer(x: Exchange) -> None:
     x.tick(AUTOPILOT.mission_item_reached(3), AUTOPILOT.mission_current(4, 5, m.MISSION_STATE_ACTIVE, 1))
-    assert bb("/vehicle/mission_reached") == MissionItemReached(3, x.clock.now())
+    assert bb("/vehicle/mission_reached") == MissionItemReached(3, x.clock.now(), 3)
     assert bb("/vehicle/mission_current").seq == 4
     assert bb("/link/mission_transfer") is None
+
+
+def test_the_highest_item_reached_is_latched_until_the_mission_changes(x: Exchange) -> None:
+    """Two reports drained in one tick (item 3, then a GUIDED arrival's item 0): the 3 is not lost."""
+    x.tick(AUTOPILOT.mission_item_reached(3), AUTOPILOT.mission_item_reached(0))
+    assert bb("/vehicle/mission_reached") == MissionItemReached(0, x.clock.now(), 3)
+    x.transfer._hold(None, ())  # the vehicle's mission is another one now (an upload or a download found it)
+    assert bb("/vehicle/mission_reached") is None
+    x.tick(AUTOPILOT.mission_item_reached(1))
+    assert bb("/vehicle/mission_reached").highest == 1
 
 
 def test_targets_follow_the_adopted_autopilot(link, clock, commander, transfer) -> None:

@@ -1,4 +1,5 @@
-"""The reader's altitude above the bottom: a downward DISTANCE_SENSOR or RANGEFINDER; nothing else, and no stale truth."""
+"""The reader's altitude above the bottom: a downward DISTANCE_SENSOR (or, from an autopilot that sends none, RANGEFINDER); nothing else,
+one source of truth, and no stale truth."""
 
 from __future__ import annotations
 
@@ -62,10 +63,37 @@ def test_altitude_above_bottom(reader, link, message, expected):
 
 def test_an_invalid_reading_clears_the_last_valid_one(reader, link):
     seen = []
-    for message in (distance_sensor(800), distance_sensor(800, quality=1), distance_sensor(650), AUTOPILOT.rangefinder(float("inf"), 0.0)):
+    for message in (distance_sensor(800), distance_sensor(800, quality=1), distance_sensor(650), distance_sensor(6500)):
         receive(reader, link, message)
         seen.append(altitude())
     assert seen == [8.0, None, 6.5, None]
+
+
+def test_the_rangefinder_verdict_keeps_the_range(reader, link):
+    """What the legs and the guard need to know beyond "no reading": the seabed is farther than the sensor reaches."""
+    receive(reader, link, distance_sensor(4500, max_cm=3000))
+    reading = py_trees.blackboard.Blackboard.get("/vehicle/rangefinder")
+    assert (reading.distance_m, reading.min_m, reading.max_m, reading.status) == (45.0, 0.5, 30.0, "too_far")
+    receive(reader, link, distance_sensor(20, max_cm=3000))
+    assert py_trees.blackboard.Blackboard.get("/vehicle/rangefinder").status == "too_close"
+
+
+def test_rangefinder_never_overrides_the_distance_sensor_verdict(reader, link):
+    """Issue 14, ArduSub SITL (seabed 50 m down, RNGFND1_MAX 30 m): DISTANCE_SENSOR 45 m (beyond its 30 m: invalid) and
+    RANGEFINDER 45.2 m (no range: taken as valid) arrived turn by turn; the height flipped None / 45.2 every message and
+    the altitude guard held and resumed the sub 915 times in 400 s. One source of truth: the height stays unknown."""
+    seen = set()
+    for _ in range(20):
+        receive(reader, link, distance_sensor(4500, max_cm=3000))
+        seen.add(altitude())
+        receive(reader, link, AUTOPILOT.rangefinder(45.2, 0.0))
+        seen.add(altitude())
+    assert seen == {None}
+
+
+def test_rangefinder_alone_is_read_when_no_distance_sensor_comes(reader, link):
+    receive(reader, link, AUTOPILOT.rangefinder(7.5, 0.0))
+    assert altitude() == pytest.approx(7.5)
 
 
 def test_sensors_not_looking_down_and_other_systems_are_ignored(reader, link):

@@ -1,0 +1,147 @@
+"""A person's intervention: a mode change the executive did not ask for, mid-mission, pauses the mission, hands off.
+
+Once the executive has put the vehicle in a mode of its own choosing in this run (the mode the
+current leg needs), any later change of the heartbeat's mode to a mode it did not ask for (within
+``asked_within_s``) is someone else's: a ground station's HOLD (QGroundControl's Pause on a rover),
+an RC mode switch, the autopilot's own failsafe. The mission goes PAUSED in the tick the heartbeat
+shows it, with the reason (``HOLD set by the ground station``) in the log, the status and, through
+the ground-station reporter, a STATUSTEXT; the leg is kept and nothing is commanded while paused
+(:attr:`MissionState.hold_while_paused` false). It resumes on ``ctl resume``, a ground station's
+MISSION_START or DO_PAUSE_CONTINUE, or when the vehicle is put back in the mode the leg was in
+(the operator switching back): the tree then starts the leg again, in its own mode.
+
+Not an intervention: a mode the autopilot leaves for its follow-on (ArduSub SURFACE -> ALT_HOLD), a
+change while the RC take-over switch is high (the ``rc_takeover`` failsafe's business), and one the
+autopilot's own failsafe announces ("EKF failsafe": our failsafe for the same condition holds and
+resumes the leg, asking again for its mode while the firmware's latch refuses it).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import deque
+
+from executive import blackboard
+from executive.clock import Clock
+from executive.io.mavlink.commander import Commander
+from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.model import RcConfig
+from executive.state import RcSwitches, SwitchPosition
+from executive.vehicles import VehicleProfile
+
+log = logging.getLogger(__name__)
+
+#: An RC channel that jumps this far between two reports was a switch thrown (a stick moves in smaller steps at 5-10 Hz).
+SWITCH_JUMP_US = 300
+#: A STATUSTEXT or a switch this recent explains a mode change.
+EXPLAINS_WITHIN_S = 2.0
+
+
+def rc_takeover(rc: RcConfig, channels: tuple[int, ...], switches: RcSwitches | None) -> str | None:
+    """Why the RC says a person has the vehicle (the take-over channel high, or switch C in MANUAL), if it does."""
+    if rc.source == "mavlink":
+        value = channels[rc.takeover_channel - 1] if len(channels) >= rc.takeover_channel else 0
+        return f"RC channel {rc.takeover_channel} high ({value} µs): a person has the vehicle" if value > rc.takeover_above_us else None
+    return "RC switch C in MANUAL: a person has the vehicle" if switches is not None and switches.swc == SwitchPosition.UP else None
+
+
+class InterventionWatch:
+    """A reader service: call :meth:`service` once per tick, after the RC reader and before the tree ticks."""
+
+    def __init__(
+        self, clock: Clock, commander: Commander, mission_state: MissionState, profile: VehicleProfile, rc: RcConfig, *, asked_within_s: float = 10.0
+    ) -> None:
+        self._clock = clock
+        self._commander = commander
+        self.mission_state = mission_state
+        self.profile = profile
+        self.rc = rc
+        self.asked_within_s = asked_within_s
+        self._bb = blackboard.reader(
+            "intervention watch", ["/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected"]
+        )
+        self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by"])
+        self._shown: str | None = None  # the mode the heartbeat showed at the last tick
+        #: The mode the executive put the vehicle in (the current leg's); None until it has in this run.
+        self.expected: str | None = None
+        self._paused_here = False  # this watch paused the mission (a person has the vehicle)
+        self._texts: deque[tuple[float, str]] = deque(maxlen=8)
+        self._last_text: tuple[int, str] | None = None
+        self._channels: tuple[int, ...] = ()
+        self._switch_at = float("-inf")
+        self._seen_rc = False  # an RC transmitter was seen: its loss can explain a mode change
+        mission_state.listeners.append(self._on_transition)
+
+    def service(self) -> None:
+        now = self._clock.now()
+        self._note_texts(now)
+        self._note_switches(now)
+        mode: str | None = self._bb.get("/vehicle/mode")
+        if mode is None or not self._bb.get("/link/up"):
+            return
+        previous, self._shown = self._shown, mode
+        if mode != previous and previous is not None and previous != "INITIALISING":
+            self._out.set("/vehicle/mode_set_by", "us" if self._ours(mode, previous, now) else "others")
+        status = self.mission_state.status
+        if status is MissionStatus.PAUSED and self._paused_here:
+            if mode == self.expected:
+                self._paused_here = False
+                log.warning("intervention: the vehicle is back in %s -> resume", mode)
+                self.mission_state.resume(f"{mode} set again")
+            return
+        if status is not MissionStatus.RUNNING or mode == previous:
+            return
+        if self._ours(mode, previous, now):
+            self.expected = mode
+            return
+        if self.expected is None or rc_takeover(self.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches")) is not None:
+            return  # not yet mid-mission (nothing of ours to keep), or a take-over the rc_takeover failsafe answers
+        failsafe = self._failsafe_text(now)
+        if failsafe is not None:  # the autopilot's own failsafe: our failsafes answer the same condition, and resume the leg's mode
+            log.warning("intervention: %s set by the autopilot (%s): left to the failsafes, no pause", mode, failsafe)
+            return
+        reason = f"{mode} set by {self._who(now)}"
+        log.warning("intervention: %s (the leg was in %s) -> pause, hands off", reason, self.expected)
+        self._paused_here = True
+        self.mission_state.pause(reason, hold=False)
+
+    def _ours(self, mode: str, previous: str | None, now: float) -> bool:
+        asked = self._commander.modes_asked.get(mode)
+        follow_on = previous is not None and mode in (self.profile.follow_on_modes.get(previous), self._commander.follow_on_modes.get(previous))
+        return (asked is not None and now - asked <= self.asked_within_s) or follow_on
+
+    def _failsafe_text(self, now: float) -> str | None:
+        """The autopilot's failsafe notice just before the change ("EKF failsafe"), if it sent one; its RC failsafe if the transmitter is gone.
+
+        ArduRover reports every RC channel 0 only once its own RC failsafe has acted (FS_ACTION: HOLD, RTL...).
+        """
+        text = next((text for t, text in reversed(self._texts) if now - t <= EXPLAINS_WITHIN_S and "failsafe" in text.lower()), None)
+        if text is None and self._seen_rc and not self._bb.get("/rc/connected"):
+            return "RC failsafe: the transmitter is gone"
+        return text
+
+    def _who(self, now: float) -> str:
+        if now - self._switch_at <= EXPLAINS_WITHIN_S:
+            return "the RC"
+        return "the ground station"
+
+    def _note_texts(self, now: float) -> None:
+        text = self._bb.get("/vehicle/statustext")
+        if text is not None and text is not self._last_text:
+            self._last_text = text
+            self._texts.append((now, text[1]))
+
+    def _note_switches(self, now: float) -> None:
+        self._seen_rc = self._seen_rc or bool(self._bb.get("/rc/connected"))
+        channels: tuple[int, ...] = self._bb.get("/rc/channels")
+        if channels is self._channels:
+            return
+        if any(a and b and abs(a - b) >= SWITCH_JUMP_US for a, b in zip(channels, self._channels, strict=False)):
+            self._switch_at = now
+        self._channels = channels
+
+    def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
+        if after is MissionStatus.RUNNING and before is not MissionStatus.PAUSED:
+            self.expected = None  # a new run: nothing of ours yet
+        if after is not MissionStatus.PAUSED:
+            self._paused_here = False
