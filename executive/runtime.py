@@ -103,7 +103,8 @@ class Runtime:
     The tree is built when a mission starts (from READY, or again after it ended), so an operator
     can upload another mission and start it without restarting the executive. ``serve`` keeps
     the executive up between missions, waiting for operator requests, instead of returning when
-    the mission ends.
+    the mission ends. Each tick drains the readers, ticks the tree and services the writers
+    (:mod:`executive.services`); what they are is decided by :func:`executive.assembly.build_runtime`.
     """
 
     def __init__(
@@ -150,7 +151,7 @@ class Runtime:
         self.tree: py_trees.trees.BehaviourTree | None = None
         self.mission_state.upload(self.mission)
         self.progress = progress
-        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches", "/vehicle/position"])
+        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
         #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.
@@ -181,6 +182,10 @@ class Runtime:
                 self.reader.drain()
             if len(self.reader.autopilots_heard) > 1:
                 raise SeveralAutopilots(self.reader.autopilots_heard)
+        param = self.autopilot.capabilities.mode_switch_param
+        if param is not None:  # known by pre-flight: the mission's switches are checked against it before arming
+            self.autopilot.read_parameter(param)
+            self.commander.flush()
         return True
 
     def tick(self) -> Status:
@@ -336,6 +341,8 @@ class Runtime:
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
             return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
+        if status == Status.SUCCESS and (undone := self.mission_state.work_left()) is not None:
+            return self._end(self._abort(f"the tree ended, but {undone}"))  # never report success for work not done
         if status == Status.SUCCESS:
             self.mission_state.complete()
             return self._end(Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks))

@@ -41,6 +41,9 @@ class Capabilities:
     vehicles: frozenset[str]  # vehicle kinds (executive.vehicles) this firmware drives
     transition_anywhere: bool  # a VTOL transition is taken by command in any mode in flight
     takeoff_alt_amsl: bool  # NAV_TAKEOFF's altitude is above sea level (else above home)
+    first_item_seq: int  # the seq of the route's first waypoint on the autopilot: 1 after ArduPilot's home item 0, 0 on PX4
+    #: The parameter naming the RC channel whose position sets the mode by itself (ArduRover MODE_CH); None: no such channel.
+    mode_switch_param: str | None = None
 
 
 class AutopilotPort(Protocol):
@@ -96,6 +99,10 @@ class AutopilotPort(Protocol):
 
     def cancel(self, request: Request | None) -> bool:
         """Forget a request that no longer matters (its behaviour was interrupted); whether one was pending."""
+        ...
+
+    def read_parameter(self, name: str) -> None:
+        """Ask for a parameter's value; it arrives on ``/vehicle/params`` (never acked: ask again if it does not come)."""
         ...
 
     # -- setpoints (no ack; re-sent by the behaviour) ------------------------------------------

@@ -35,6 +35,7 @@ from executive.behaviours.guards import (
     PositionKnown,
     RangefinderReaches,
     RcAutoMode,
+    RcChannelHigh,
     RcFresh,
     RcNotLost,
     RcNotTakingOver,
@@ -43,6 +44,7 @@ from executive.behaviours.guards import (
     inside_geofence,
     rc_auto_mode,
 )
+from executive.behaviours.mode_switch import ModeSwitchClear
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
 from executive.behaviours.sampling import NothingToSample, Sample
 
@@ -75,10 +77,12 @@ __all__ = [
     "LinkAlive",
     "ModeIs",
     "ModeSwitch",
+    "ModeSwitchClear",
     "NothingToSample",
     "PositionKnown",
     "RangefinderReaches",
     "RcAutoMode",
+    "RcChannelHigh",
     "RcFresh",
     "RcNotLost",
     "RcNotTakingOver",
