@@ -43,6 +43,7 @@ from executive.behaviours.guards import (
     inside_geofence,
     rc_auto_mode,
 )
+from executive.behaviours.parameters import ParameterIs
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
 from executive.behaviours.sampling import NothingToSample, Sample
 
@@ -76,6 +77,7 @@ __all__ = [
     "ModeIs",
     "ModeSwitch",
     "NothingToSample",
+    "ParameterIs",
     "PositionKnown",
     "RangefinderReaches",
     "RcAutoMode",

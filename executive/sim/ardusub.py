@@ -223,6 +223,9 @@ class ArduSubSim(ArduPilotSim):
             _M.MAV_CMD_MISSION_START: self._cmd_mission_start,
         }
 
+    def parameters(self) -> dict[str, float]:
+        return {**super().parameters(), "RNGFND1_MIN": RANGEFINDER_MIN_M, "RNGFND1_MAX": self.rangefinder_max_m}
+
     def _mode_result(self, number: int) -> int:
         return _M.MAV_RESULT_ACCEPTED if self.set_mode(number) else _M.MAV_RESULT_FAILED
 

@@ -321,7 +321,24 @@ class ArduPilotSim(ABC):
             "SET_MODE": self._on_set_mode,
             **dict.fromkeys(MissionStore.MESSAGES, self.mission.handle),
             "OBSTACLE_DISTANCE": lambda msg: self.proximity.handle(msg, self.elapsed_s),
+            "PARAM_REQUEST_READ": self._on_param_request_read,
         }
+
+    def parameters(self) -> dict[str, float]:
+        """The firmware's parameters this simulation models (name -> value), answered to PARAM_REQUEST_READ."""
+        return {}
+
+    def _on_param_request_read(self, msg: MAVLinkMessage) -> None:
+        """PARAM_VALUE for a parameter asked by name (param_index -1) or by index; unknown ones get no answer, as ArduPilot's."""
+        params = self.parameters()
+        names = sorted(params)
+        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode(errors="replace")
+        name = name.rstrip("\x00")
+        if msg.param_index >= 0:
+            name = names[msg.param_index] if msg.param_index < len(names) else ""
+        if name not in params:
+            return
+        self._emit(self._mav.param_value_encode(name.encode(), params[name], _M.MAV_PARAM_TYPE_REAL32, len(names), names.index(name)))
 
     def _command_handlers(self) -> dict[int, Callable[[Command], int]]:
         return {
