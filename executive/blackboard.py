@@ -56,6 +56,12 @@ _KEYS: tuple[Key, ...] = (
     Key("/vehicle/mav_type", None, "mavlink reader", "HEARTBEAT type (MAV_TYPE)"),
     Key("/vehicle/armed", False, "mavlink reader", "the autopilot reports itself armed"),
     Key("/vehicle/mode", None, "mavlink reader", "flight mode name, e.g. GUIDED"),
+    Key(
+        "/vehicle/mode_set_by",
+        None,
+        "intervention watch",
+        "who set the mode: 'us' (we asked for it), 'others' (a person, a GCS, the autopilot); None = unknown (boot)",
+    ),
     Key("/vehicle/custom_mode", None, "mavlink reader", "flight mode number"),
     Key("/vehicle/system_status", None, "mavlink reader", "HEARTBEAT system_status (MAV_STATE)"),
     Key("/vehicle/position", None, "mavlink reader", "GlobalPosition (GLOBAL_POSITION_INT)"),

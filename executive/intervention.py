@@ -58,6 +58,7 @@ class InterventionWatch:
         self.rc = rc
         self.asked_within_s = asked_within_s
         self._bb = blackboard.reader("intervention watch", ["/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches"])
+        self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by"])
         self._shown: str | None = None  # the mode the heartbeat showed at the last tick
         #: The mode the executive put the vehicle in (the current leg's); None until it has in this run.
         self.expected: str | None = None
@@ -76,6 +77,8 @@ class InterventionWatch:
         if mode is None or not self._bb.get("/link/up"):
             return
         previous, self._shown = self._shown, mode
+        if mode != previous and previous is not None and previous != "INITIALISING":
+            self._out.set("/vehicle/mode_set_by", "us" if self._ours(mode, previous, now) else "others")
         status = self.mission_state.status
         if status is MissionStatus.PAUSED and self._paused_here:
             if mode == self.expected:
@@ -101,7 +104,7 @@ class InterventionWatch:
 
     def _ours(self, mode: str, previous: str | None, now: float) -> bool:
         asked = self._commander.modes_asked.get(mode)
-        follow_on = previous is not None and self.profile.follow_on_modes.get(previous) == mode
+        follow_on = previous is not None and mode in (self.profile.follow_on_modes.get(previous), self._commander.follow_on_modes.get(previous))
         return (asked is not None and now - asked <= self.asked_within_s) or follow_on
 
     def _failsafe_text(self, now: float) -> str | None:

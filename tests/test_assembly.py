@@ -88,6 +88,6 @@ def test_paced_services_run_between_ticks(square_mission, link, clock):
 def test_the_mavlink_link_and_the_estimators_are_services_in_order(square_mission, link, clock):
     runtime = build_runtime(square_mission, link, clock)
     names = [service_name(s) for s in runtime.readers]
-    assert names == ["mavlink reader", "HeadingFilter", "RcReader", "Heartbeat"]
+    assert names == ["mavlink reader", "HeadingFilter", "RcReader", "InterventionWatch", "Heartbeat"]
     names = [service_name(s) for s in runtime.writers]
     assert names == ["StreamRequester", "GroundStationControl", "RouteKeeper", "autopilot port", "commands", "mission transfers"]

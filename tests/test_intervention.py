@@ -62,6 +62,7 @@ def test_a_ground_station_hold_pauses_the_mission_in_that_tick_with_the_reason_a
     assert rig.state is MissionStatus.PAUSED
     assert rig.runtime.mission_state.reason == "HOLD set by the ground station"
     assert rig.runtime.status.snapshot()["reason"] == "HOLD set by the ground station"
+    assert py_trees.blackboard.Blackboard.get("/vehicle/mode_set_by") == "others"
     rig.tick()
     assert "mission PAUSED: HOLD set by the ground station" in rig.texts()
     rig.autopilot.mode = LOITER  # the person does something else: still theirs
@@ -76,6 +77,7 @@ def test_ctl_resume_puts_the_vehicle_back_in_the_legs_mode(rig: Rig) -> None:
     assert reply.ok and reply.state == "RUNNING"
     rig.tick(2)
     assert rig.modes_sent() == [GUIDED] and rig.autopilot.mode == GUIDED and rig.state is MissionStatus.RUNNING
+    assert py_trees.blackboard.Blackboard.get("/vehicle/mode_set_by") == "us"
     rig.tick(10)
     assert rig.state is MissionStatus.RUNNING  # the GUIDED it asked for is not an intervention
 

@@ -138,6 +138,7 @@ class Px4Port(MavlinkPort):
         VEHICLE_CMD_DO_REPOSITION): home's plus ``alt_m`` (NaN, keep the altitude, before home is known).
         """
         self._leaving_offboard()
+        self.commander.modes_asked["AUTO.LOITER"] = self.commander.clock.now()  # the mode it puts PX4 in: ours, not a person's
         home: HomePosition | None = self._bb.get("/vehicle/home")
         amsl = home.alt_m + alt_m if home is not None else math.nan
         flags = float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)
@@ -145,7 +146,8 @@ class Px4Port(MavlinkPort):
         return self._request(ticket, mavlink.MAV_CMD_DO_REPOSITION)
 
     def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:
-        self._leaving_offboard()  # NAV_TAKEOFF: AUTO.TAKEOFF, then AUTO.LOITER
+        self._leaving_offboard()  # NAV_TAKEOFF: AUTO.TAKEOFF, then AUTO.LOITER (a follow-on mode)
+        self.commander.modes_asked["AUTO.TAKEOFF"] = self.commander.clock.now()
         amsl = home.alt_m + alt_m if home is not None else math.nan
         return self._request(self.commander.takeoff(amsl), mavlink.MAV_CMD_NAV_TAKEOFF)
 

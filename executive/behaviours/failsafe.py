@@ -93,7 +93,7 @@ class Failsafe(TimedBehaviour):
     left the vehicle in (the runtime then leaves it there).
     """
 
-    reads = ("/vehicle/vtol_state", "/vehicle/armed", "/vehicle/mode", "/mission/leg_index", "/mission/leg_count")
+    reads = ("/vehicle/vtol_state", "/vehicle/armed", "/vehicle/mode", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count")
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
 
@@ -285,7 +285,8 @@ class Failsafe(TimedBehaviour):
         no failsafe of ours changes it; RC loss meanwhile is the autopilot's own RC failsafe's job.
         """
         mode = self.get("/vehicle/mode")
-        if mode in PROFILES[self.vehicle].pilot_modes and mode != self._mode_in_force:
+        set_by = self.get("/vehicle/mode_set_by")  # None: the boot mode, nobody's choice
+        if mode in PROFILES[self.vehicle].pilot_modes and set_by is not None and mode != self._mode_in_force:
             return f"the vehicle is in {mode}: a person drives it"
         return None
 

@@ -555,7 +555,7 @@ class HeadingSane(Guard):
 
     resume_after_s = 3.0
 
-    reads = ("/heading/ok", "/heading/reason")
+    reads = ("/heading/ok", "/heading/reason", "/heading/bias_deg")
 
     def __init__(self, name: str = "Heading sane?") -> None:
         super().__init__(name)
@@ -566,6 +566,9 @@ class HeadingSane(Guard):
             self.note = "not judged yet"
             return None
         if ok:
+            bias: float | None = self.get("/heading/bias_deg")
+            if bias is not None and abs(bias) >= 3.0:
+                self.note = f"compass bias {bias:+.1f}° compensated"
             return None
         return self.get("/heading/reason") or "the heading filter does not trust the compass"
 

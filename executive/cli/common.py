@@ -33,14 +33,14 @@ def load_or_report(path: str) -> Mission | None:
         return None
 
 
-def faults_or_report(paths: list[str], vehicle: str, clock: Clock) -> FaultInjector | None:
+def faults_or_report(paths: list[str], vehicle: str, clock: Clock, autopilot: str = "ardupilot") -> FaultInjector | None:
     """One fault injector playing every event/fault file in ``paths``, or ``None`` after printing every error."""
     from executive.sim.faults import FaultInjector, load_faults
 
     faults = []
     try:
         for path in paths:
-            faults += load_faults(path, vehicle=vehicle).faults
+            faults += load_faults(path, vehicle=vehicle, autopilot=autopilot).faults
     except MissionError as exc:
         print_errors(exc)
         return None

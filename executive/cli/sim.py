@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     clock = ScaledClock(args.speedup)
     faults = None
     if args.faults is not None:
-        faults = faults_or_report([args.faults], args.vehicle, clock)
+        faults = faults_or_report([args.faults], args.vehicle, clock, args.autopilot)
         if faults is None:
             return EXIT_BAD_INPUT
     signing_key = signing_key_arg(args.signing_key)

@@ -16,8 +16,10 @@ track snaked. This filter catches both, from what the MAVLink reader already wri
   bias sample far from the estimate is rejected, and when the mean of the last N samples is outside
   the gate the estimate re-initialises to it (the bias changed for good, e.g. when the motors started);
 - the verdict: /heading/ok is False while the compass is being rejected persistently (a share of
-  its readings over a window) or the bias exceeds a threshold (with hysteresis); True once the bias
-  was judged (enough straight driving) and neither holds; None before (a stationary vehicle cannot
+  its readings over a window: the 45° swings) or the bias exceeds a threshold too far off to trust
+  its correction (30°, with hysteresis); True once the bias was judged (enough straight driving) and
+  neither holds. A steady bias below the threshold (the seed's 20°) is measured and compensated:
+  taken off /heading/deg and reported (logged, /heading/bias_deg), the compass ok; None before (a stationary vehicle cannot
   judge its compass against its course) or when the attitude is stale.
 
 /heading/deg is the filter's heading with the bias taken off once judged (before, the compass's own
@@ -30,6 +32,7 @@ tick, right after the MAVLink reader drains.
 from __future__ import annotations
 
 import importlib
+import logging
 import math
 import threading
 from collections import deque
@@ -40,6 +43,8 @@ import numpy as np
 from executive import blackboard
 from executive.clock import Clock
 from executive.state import Attitude, GlobalPosition
+
+log = logging.getLogger(__name__)
 
 _HEADING, _RATE = 0, 1  # the state's components (and the row of H that measures each)
 
@@ -165,8 +170,11 @@ class HeadingFilterConfig:
     bias_change_gate: float = 16.0  # ... is this far out (chi-square; 4 sigma: tested at every sample, so stricter than the gate)
     bias_judged_after_s: float = 5.0  # straight driving needed before the bias is judged ...
     bias_judged_sigma_deg: float = 2.0  # ... and the estimate's uncertainty below this
-    bias_threshold_deg: float = 10.0  # |bias| above this: the compass is not ok
-    bias_clear_deg: float = 8.0  # ... until it is back below this
+    # A judged bias up to this is measured and compensated (the published heading has it taken off; the compass is ok):
+    # the seed's ~20° misalignment. Flagging it instead held a vehicle still, where the bias cannot be measured again.
+    bias_threshold_deg: float = 30.0  # |bias| above this: the compass is not ok (too far off to trust its correction)
+    bias_clear_deg: float = 28.0  # ... until it is back below this
+    bias_reported_deg: float = 3.0  # a compensated bias above this is reported (logged once, and again after each change)
     rejection_window_s: float = 5.0  # the compass's recent readings ...
     rejection_flag_share: float = 0.2  # ... of which this share rejected: not ok
     rejection_clear_share: float = 0.05  # ... until the share is back below this
@@ -202,6 +210,7 @@ class HeadingFilter:
         self._bias_straight_s = 0.0
         self._bias_window: deque[tuple[float, float]] = deque(maxlen=self.config.bias_reinit_window)  # recent (sample, variance)
         self._bias_flagged = False
+        self._bias_reported: float | None = None  # the compensated bias last logged
         #: Counters, for diagnostics and tests.
         self.compass_accepted = self.compass_rejected = self.course_accepted = self.course_rejected = 0
         self.bias_samples = self.bias_rejected = self.reinits = self.bias_reinits = 0
@@ -391,6 +400,15 @@ class HeadingFilter:
                 window.clear()
 
     # -- the verdict ---------------------------------------------------------------------------
+    def _report_bias(self) -> None:
+        """Log a compensated bias once measured, and again when it has changed by the report threshold."""
+        cfg = self.config
+        if self._bias_flagged or abs(self._bias) < cfg.bias_reported_deg:
+            return
+        if self._bias_reported is None or abs(wrap180(self._bias - self._bias_reported)) >= cfg.bias_reported_deg:
+            self._bias_reported = self._bias
+            log.warning("compass bias %+.1f° measured against the course over ground: compensated", self._bias)
+
     def _publish(self, now: float) -> None:
         cfg = self.config
         latest = self._verdicts[-1][0] if self._verdicts else now  # verdicts are stamped with measurement time (the autopilot's clock)
@@ -405,6 +423,7 @@ class HeadingFilter:
         if judged:
             limit = cfg.bias_clear_deg if self._bias_flagged else cfg.bias_threshold_deg
             self._bias_flagged = abs(self._bias) > limit
+            self._report_bias()
         stale = self._attitude is None or now - self._attitude.time > cfg.stale_after_s
         ok: bool | None = None
         if not stale:

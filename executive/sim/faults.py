@@ -28,6 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from executive import geo
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.modes import PX4_MODES
 from executive.mission.errors import MissionError, Path
 from executive.mission.loader import load_model
 from executive.sim.autopilot import ArduPilotSim
@@ -41,6 +42,7 @@ _M = mavlink
 MAX_TIME_S = 1e6
 RC_FAILSAFE_TIMEOUT_S = 1.5  # ArduRover's FS_TIMEOUT default: RC lost this long before its failsafe acts
 GLITCH_POS_VARIANCE = 1.0  # a GPS the EKF rejects: its position test ratio is over 1
+MODE_NAME = r"^[A-Z][A-Z0-9_]*(\.[A-Z][A-Z0-9_]*)?$"  # ArduPilot's MANUAL, PX4's AUTO.LOITER
 
 
 class _Fault(BaseModel):
@@ -104,7 +106,7 @@ class RcTakeover(_Fault):
     kind: Literal["rc_takeover"]
     channel: int = Field(6, ge=1, le=16)
     pwm: int = Field(1900, ge=800, le=2200)
-    mode: str | None = Field(None, pattern=r"^[A-Z][A-Z0-9_]*$", description="mode the pilot switches to, e.g. MANUAL")
+    mode: str | None = Field(None, pattern=MODE_NAME, description="mode the pilot switches to, e.g. MANUAL (PX4: AUTO.LOITER)")
     disarm: bool = False
 
 
@@ -119,7 +121,7 @@ class RcLoss(_Fault):
     """The RC receiver loses the transmitter: RC_CHANNELS all zero, RSSI 0. With ``failsafe_mode``, ArduRover's RC failsafe acts."""
 
     kind: Literal["rc_loss"]
-    failsafe_mode: str | None = Field(None, pattern=r"^[A-Z][A-Z0-9_]*$", description="FS_ACTION: the mode an armed vehicle enters (e.g. HOLD, RTL)")
+    failsafe_mode: str | None = Field(None, pattern=MODE_NAME, description="FS_ACTION: the mode an armed vehicle enters (e.g. HOLD, RTL)")
 
 
 class BatterySag(_Fault):
@@ -155,20 +157,23 @@ class FaultFileError(MissionError):
     """A fault file was refused; carries every error found, in file order."""
 
 
-def load_faults(path: str | os.PathLike[str], vehicle: str | None = None) -> FaultPlan:
+def load_faults(path: str | os.PathLike[str], vehicle: str | None = None, autopilot: str = "ardupilot") -> FaultPlan:
     """Read and validate a fault file; raises :class:`FaultFileError` listing every problem.
 
-    With ``vehicle`` (``rover``, ``boat``...), mode names are checked against that vehicle's firmware.
+    With ``vehicle`` (``rover``, ``boat``...), mode names are checked against that vehicle's firmware;
+    with ``autopilot="px4"``, against PX4's modes (AUTO.LOITER, OFFBOARD...).
     """
     try:
-        return load_model(path, FaultPlan, lambda plan: _mode_errors(plan, vehicle), what="fault list")
+        return load_model(path, FaultPlan, lambda plan: _mode_errors(plan, vehicle, autopilot), what="fault list")
     except MissionError as exc:
         raise FaultFileError(exc.errors) from None
 
 
-def _mode_errors(plan: FaultPlan, vehicle: str | None) -> list[tuple[Path, str]]:
+def _mode_errors(plan: FaultPlan, vehicle: str | None, autopilot: str = "ardupilot") -> list[tuple[Path, str]]:
     """Modes the vehicle's firmware lacks (any vehicle's firmware, when the vehicle is not known)."""
-    if vehicle in PROFILES:
+    if autopilot == "px4":
+        known, which = list(PX4_MODES), "PX4 mode"
+    elif vehicle in PROFILES:
         known, which = [m for m in PROFILES[vehicle].modes if m != "INITIALISING"], f"{vehicle} mode"
     else:
         known, which = sorted({m for p in PROFILES.values() for m in p.modes} - {"INITIALISING"}), "mode"

@@ -210,6 +210,10 @@ class MissionStore:
     def _ack(self, msg: MAVLinkMessage, result: int) -> None:
         self._emit(self._mav.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(), result, _MISSION))
 
+    def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
+        """An uploaded item as this firmware stores it, or the MAV_MISSION_RESULT refusing it."""
+        return to_stored(msg)
+
     def _request(self) -> None:
         self._last_request_at = self._owner.clock.now()
         self._emit(self._mav.mission_request_encode(*self._uploader, self._request_i, _MISSION))
@@ -247,7 +251,7 @@ class MissionStore:
         if (msg.get_srcSystem(), msg.get_srcComponent()) != self._uploader:
             self._ack(msg, _M.MAV_MISSION_DENIED)
             return
-        stored = to_stored(msg)
+        stored = self._to_stored(msg)
         if isinstance(stored, StoredCommand) and msg.seq <= self.count:
             self._commands[msg.seq : msg.seq + 1] = [stored]
         else:

@@ -9,9 +9,9 @@ MAVLink (issue 12) and as its source reads:
   from boot, on the ground too.
 - Commands go from the MAVLink receiver to the commander (src/modules/mavlink/mavlink_receiver.cpp,
   handle_message_command_both): the receiver acks only its own few (message intervals, autopilot
-  version), the commander (src/modules/commander/Commander.cpp, handle_command / answer_command)
-  acks the rest on its next loop, here the next :meth:`update`. MAV_CMD_DO_SET_MODE is acked twice:
-  ACCEPTED at once, then the commander's result (ACCEPTED, or TEMPORARILY_REJECTED after a
+  version, REQUEST_MESSAGE), the commander (src/modules/commander/Commander.cpp, handle_command /
+  answer_command) acks the rest on its next loop, here the next :meth:`update`. MAV_CMD_DO_SET_MODE
+  is acked twice: the receiver passes it on yet acks it ACCEPTED at once, then the commander's result (ACCEPTED, or TEMPORARILY_REJECTED after a
   STATUSTEXT "Switching to <mode> is currently not available", Commander::printRejectMode). A
   SET_MODE message is a DO_SET_MODE for the commander: its ack carries command 176.
 - Arming is refused (TEMPORARILY_REJECTED, "Arming denied: Resolve system health failures first")
@@ -42,9 +42,12 @@ MAVLink (issue 12) and as its source reads:
   411, TIME_ESTIMATE_TO_TARGET 380), and OPEN_DRONE_ID_LOCATION; STATUSTEXTs over 50 bytes go in
   chunks sharing an ``id`` (``chunk_seq`` 0, 1...).
 
-Not simulated: RC (so the manual modes, POSCTL included, cannot be selected), velocity and
-acceleration setpoints (they keep OFFBOARD alive; the vehicle holds), events (EVENT, 410), the
-return to OFFBOARD when the stream comes back during the failsafe.
+Not simulated, or simplified: RC (so the manual modes, POSCTL included, cannot be selected), velocity
+and acceleration setpoints (they keep OFFBOARD alive; the vehicle holds), events (EVENT, 410), the
+return to OFFBOARD when the stream comes back during the failsafe, parameters; RTL flies straight to
+home at RTL_RETURN_ALT (no climb first, no descent stage); in fixed-wing flight every point is
+circled at NAV_LOITER_RAD and a waypoint counts as reached on that circle; the failsafe texts are
+ours (PX4 reports them as events); unknown mission items are passed over.
 """
 
 from __future__ import annotations
@@ -62,7 +65,7 @@ from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import PX4_MODES
 from executive.sim.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
 from executive.sim.autopilot import DEFAULT_HOME, ArduPilotSim, Command, Home, _e7, _valid_latlon
-from executive.sim.mission_store import MissionState, MissionStore
+from executive.sim.mission_store import MissionState, MissionStore, StoredCommand
 from executive.sim.vehicle import ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.vehicles import VehicleProfile
 
@@ -126,7 +129,9 @@ TIME_ESTIMATE_TO_TARGET = (
     tuple(("int32_t", f) for f in ("safe_return", "land", "mission_next_item", "mission_end", "commanded_action")),
 )  # fmt: skip
 
-#: Messages sent unasked, with their interval (s), about as PX4's "normal" MAVLink mode streams them.
+#: Messages sent unasked, with their interval (s), as PX4's "normal" MAVLink mode streams them (mavlink_main.cpp,
+#: configure_streams: ESTIMATOR_STATUS 0.5 Hz, EXTENDED_SYS_STATE 1 Hz, GLOBAL_POSITION_INT 5 Hz, HOME_POSITION 0.5 Hz...);
+#: ATTITUDE at 4 Hz, not 15, to spare the simulation.
 PX4_INTERVALS: Mapping[int, float] = MappingProxyType({
     _M.MAVLINK_MSG_ID_HEARTBEAT: 1.0, _M.MAVLINK_MSG_ID_SYS_STATUS: 1.0, _M.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 1.0,
     _M.MAVLINK_MSG_ID_ESTIMATOR_STATUS: 0.5, _M.MAVLINK_MSG_ID_ATTITUDE: 0.25, _M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: 0.2,
@@ -140,6 +145,18 @@ PX4_INTERVALS: Mapping[int, float] = MappingProxyType({
 LINK_LOSS_TEXTS: Mapping[int, tuple[str, str]] = MappingProxyType({
     _M.MAV_TYPE_GCS: ("Connection to ground station lost", "GCS connection regained"),
     _M.MAV_TYPE_ONBOARD_CONTROLLER: ("Connection to mission computer lost", "Onboard controller regained"),
+})  # fmt: skip
+
+#: Mission items the simulated PX4 takes (others: MAV_MISSION_UNSUPPORTED), those with a position, and their frames.
+PX4_LOCATION_COMMANDS = frozenset({
+    _M.MAV_CMD_NAV_WAYPOINT, _M.MAV_CMD_NAV_LOITER_UNLIM, _M.MAV_CMD_NAV_LOITER_TIME, _M.MAV_CMD_NAV_TAKEOFF,
+    _M.MAV_CMD_NAV_LAND, _M.MAV_CMD_NAV_VTOL_TAKEOFF, _M.MAV_CMD_NAV_VTOL_LAND,
+})  # fmt: skip
+PX4_MISSION_COMMANDS = PX4_LOCATION_COMMANDS | {
+    _M.MAV_CMD_NAV_RETURN_TO_LAUNCH, _M.MAV_CMD_DO_VTOL_TRANSITION, _M.MAV_CMD_DO_CHANGE_SPEED, _M.MAV_CMD_DO_JUMP,
+}  # fmt: skip
+PX4_MISSION_FRAMES = frozenset({
+    _M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT, _M.MAV_FRAME_GLOBAL_RELATIVE_ALT, _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
 })  # fmt: skip
 
 _TYPES = {"uint8_t": "B", "int8_t": "b", "uint16_t": "H", "int16_t": "h", "uint32_t": "I", "int32_t": "i", "float": "f"}
@@ -169,10 +186,26 @@ def crc_extra(name: str, fields: Sequence[tuple[str, str]]) -> int:
 
 
 class Px4MissionStore(MissionStore):
-    """PX4's side of the mission protocol: MISSION_REQUEST_INT, no home slot, no STATUSTEXT on upload or completion."""
+    """PX4's side of the mission protocol: MISSION_REQUEST_INT, no home slot, no STATUSTEXT on upload or completion.
+
+    It stores the VTOL items ArduPilot's store lacks (take-off, landing, transitions) with their
+    parameters as sent (NaN included: PX4 keeps a NaN yaw as "unchanged").
+    """
 
     HOME_SLOT = False
     AUTO_MODE = "AUTO.MISSION"
+
+    def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
+        if msg.command not in PX4_MISSION_COMMANDS:
+            return _M.MAV_MISSION_UNSUPPORTED
+        if msg.command not in PX4_LOCATION_COMMANDS:
+            return StoredCommand(msg.command, (msg.param1, msg.param2, msg.param3, msg.param4), 0, 0, 0, _M.MAV_FRAME_MISSION)
+        if msg.frame not in PX4_MISSION_FRAMES:
+            return _M.MAV_MISSION_UNSUPPORTED_FRAME
+        if abs(msg.x) > 90 * 10**7 or abs(msg.y) > 180 * 10**7 or not math.isfinite(msg.z):
+            return _M.MAV_MISSION_INVALID
+        frame = _M.MAV_FRAME_GLOBAL if msg.frame in (_M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT) else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT
+        return StoredCommand(msg.command, (msg.param1, msg.param2, msg.param3, msg.param4), msg.x, msg.y, round(msg.z * 100), frame)
 
     def _request(self) -> None:
         self._last_request_at = self._owner.clock.now()
@@ -526,7 +559,8 @@ class Px4Sim(ArduPilotSim):
             return
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
         if msg.command == _M.MAV_CMD_DO_SET_MODE:
-            # the receiver's own ACCEPTED, then the commander's real result (seen on PX4 main, issue 12)
+            # mavlink_receiver.cpp handle_message_command_both publishes DO_SET_MODE to the commander *and* keeps
+            # send_ack (ACCEPTED): the receiver's ACCEPTED now, the commander's real result on its next loop
             self._emit(self._mav.command_ack_encode(msg.command, _M.MAV_RESULT_ACCEPTED, 0, 0, *sender))
         self._pending.append((self._command_of(msg), sender))
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import logging
+import re
 import subprocess
 import sys
 from collections.abc import Callable, Iterator
@@ -267,3 +268,16 @@ def test_the_policy_of_the_mission_file_is_the_one_played(run_scenario) -> None:
     became_true = record.first(scenario.fact, after=100)
     assert (became_true, "RTL") in record.modes
     assert outcome.status is MissionStatus.ABORTED and outcome.reason == "Link alive?: no heartbeat from the autopilot"
+
+
+def test_the_seeds_compass_bias_is_compensated_the_mission_completes_and_its_swings_still_hold(run_scenario) -> None:
+    """missions/faults/compass_bias.yaml: 20° off from boot (measured, compensated, reported: the mission completes), and 45° swings
+    when the motors start (held with the filter's reason, then resumed)."""
+    scenario = Scenario("heading_insane", "compass_bias.yaml", lambda bb: bb["/heading/ok"] is False, "HOLD", "resume")
+    outcome, record, _, _ = run_scenario(scenario)
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    texts = [text for _, text in record.warnings]
+    assert any(re.fullmatch(r"compass bias \+(1[7-9]|2[0-3])\.\d° measured against the course over ground: compensated", t) for t in texts), texts
+    swings = [t for t in texts if t.startswith("failsafe heading_insane: compass rejected in ")]
+    assert swings and swings[0].endswith("-> hold (HOLD), resume when it recovers (within 30 s)")  # the filter's reason
+    assert any(t.startswith("failsafe heading_insane: recovered after ") for t in texts)

@@ -224,7 +224,7 @@ def test_an_abort_during_a_hold_commands_its_own_reaction_at_once(rig) -> None:
 
 def test_nothing_is_commanded_while_a_person_has_the_vehicle_and_the_reaction_comes_when_they_let_go(rig) -> None:
     r = rig("rover")
-    r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__mode="MANUAL")
+    r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__mode="MANUAL", vehicle__mode_set_by="others")
     r.tick()
     r.vehicle.set(link__up=False, vehicle__ekf=EKF_LOST)
     assert r.tick(20) == [R] * 20 and r.sent() == []  # the pilot drives: not fought
@@ -239,7 +239,7 @@ def test_no_failsafe_changes_the_mode_while_a_person_drives_in_a_pilot_mode(rig,
     """A pilot mode (set by a ground station, the RC or us at the operator's request), no take-over switch: RC loss is the autopilot's job."""
     caplog.set_level(logging.WARNING, logger="executive")
     r = rig("rover")
-    r.vehicle.set(vehicle__mode=mode)
+    r.vehicle.set(vehicle__mode=mode, vehicle__mode_set_by="others")
     r.tick()
     r.vehicle.set(rc__connected=False, rc__channels=(0,) * 8)  # the operator's transmitter drops out
     assert r.tick(10) == [R] * 10 and r.sent() == []
@@ -397,3 +397,10 @@ def test_a_mode_still_refused_at_the_recovery_s_time_limit_ends_the_mission(rig)
     r.refuse.add("GUIDED")
     statuses = r.tick(400)
     assert statuses[-1] == F and 280 <= len(statuses) <= 310  # 30 s (limits.recovery_timeout_s) from the EKF loss
+
+
+def test_the_boot_mode_is_nobodys_the_failsafe_reacts(rig) -> None:
+    """MANUAL as the autopilot booted (no one chose it): not a person driving."""
+    r = rig("rover")
+    r.vehicle.set(vehicle__mode="MANUAL", vehicle__mode_set_by=None, link__up=False)
+    assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]

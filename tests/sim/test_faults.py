@@ -520,3 +520,20 @@ def test_rc_input_is_validated(tmp_path):
     with pytest.raises(MissionError) as refused:
         load_faults(path)
     assert any("channels" in str(e) and ":3:" in str(e) for e in refused.value.errors)
+
+
+def test_px4_mode_names_are_checked_against_px4_and_steer_a_simulated_px4(tmp_path: Path) -> None:
+    bad = write(tmp_path, "version: 1\nfaults:\n  - {kind: rc_takeover, at_s: 4, mode: QLAND}\n")
+    with pytest.raises(FaultFileError, match="'QLAND': not a PX4 mode"):
+        load_faults(bad, "vtol", autopilot="px4")
+    path = write(tmp_path, "version: 1\nfaults:\n  - {kind: rc_takeover, at_s: 4, mode: AUTO.LAND}\n")
+    assert "not a vtol mode" in errors_of(path, "vtol")[0]  # ArduPlane has no such mode
+    clock = ManualClock()
+    ap = make_autopilot("vtol", clock, HOME, autopilot="px4")
+    injector = FaultInjector(load_faults(path, "vtol", autopilot="px4"), clock)
+    injector.attach(ap)
+    for _ in range(50):  # 5 s: the estimator has a position at 3 s, the pilot switches at 4 s
+        clock.advance(0.1)
+        injector.update(ap)
+        ap.update()
+    assert ap.mode == "AUTO.LAND"

@@ -490,3 +490,32 @@ def test_a_setpoint_with_any_non_finite_value_is_dropped_whole(px4: MakePx4) -> 
         gcs.send(gcs.mav.set_position_target_local_ned_encode(0, 1, 1, m.MAV_FRAME_LOCAL_NED, velocity_only, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0))
         gcs.run(0.2)
     assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+
+
+def test_a_vtol_mission_takes_off_transitions_flies_and_lands(px4: MakePx4) -> None:
+    gcs = px4()
+    far = gcs.north(600.0)
+    items = [
+        (m.MAV_CMD_NAV_VTOL_TAKEOFF, 0.0, 0.0, 25.0),  # here
+        (m.MAV_CMD_DO_VTOL_TRANSITION, 0.0, 0.0, 0.0),  # param1 set below: FW
+        (m.MAV_CMD_NAV_WAYPOINT, *far, 25.0),
+        (m.MAV_CMD_DO_VTOL_TRANSITION, 0.0, 0.0, 0.0),  # MC
+        (m.MAV_CMD_NAV_LAND, *far, 0.0),
+    ]
+    params = {1: FW, 3: MC}
+    sent = gcs.send(gcs.mav.mission_count_encode(1, 1, len(items), m.MAV_MISSION_TYPE_MISSION))
+    while sent and sent[-1].get_type() == "MISSION_REQUEST_INT":
+        seq = sent[-1].seq
+        command, lat, lon, alt = items[seq]
+        x, y = round(lat * 1e7), round(lon * 1e7)
+        frame = m.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+        sent = gcs.send(gcs.mav.mission_item_int_encode(1, 1, seq, frame, command, 0, 1, params.get(seq, 0), 0, 0, math.nan, x, y, alt, 0))
+    assert sent[-1].get_type() == "MISSION_ACK" and sent[-1].type == m.MAV_MISSION_ACCEPTED
+    gcs.run(MISSION_CHECK_S)
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    assert gcs.px4_mode(MISSION) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(150.0, step=0.2)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [0, 1, 2, 3, 4]
+    assert {TO_FW, FW, TO_MC} <= {msg.vtol_state for msg in gcs.of_type(out, "EXTENDED_SYS_STATE")}
+    assert not gcs.ap.armed and gcs.ap.vehicle.on_ground and gcs.ap.vehicle.distance_to(*far) < 15.0
+    assert gcs.last("MISSION_CURRENT").mission_state == m.MISSION_STATE_COMPLETE

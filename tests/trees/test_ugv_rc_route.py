@@ -88,6 +88,7 @@ class Rig:
         self.home: tuple[float, float] | None = START
         self.lat, self.lon = START
         self.mode, self.armed, self.ekf = "MANUAL", False, EKF_READY
+        self.mode_set_by: str | None = None  # the boot mode: nobody's; "us" once a DO_SET_MODE put it in its mode
         self.link_up = self.rc_alive = self.mission_answers = True
         self.refuse: set[str] = set()  # "arm", or mode names refused with FAILED
         self.step_m = 2.0
@@ -158,7 +159,7 @@ class Rig:
             self._rc_time = now
             self.vehicle.set(rc__channels=tuple(self.channels))
         self.vehicle.set(
-            link__up=self.link_up, vehicle__mode=self.mode, vehicle__armed=self.armed, vehicle__ekf=self.ekf,
+            link__up=self.link_up, vehicle__mode=self.mode, vehicle__mode_set_by=self.mode_set_by, vehicle__armed=self.armed, vehicle__ekf=self.ekf,
             vehicle__position=GlobalPosition(self.lat, self.lon, 0.0, 0.0, 0.0, 0.0, None, now - self.position_age_s), rc__last_update=self._rc_time,
         )  # fmt: skip
 
@@ -189,7 +190,7 @@ class Rig:
             else:
                 if self.mode == "AUTO":
                     self.store.stop()
-                self.mode = mode
+                self.mode, self.mode_set_by = mode, "us"
                 if mode == "AUTO":
                     self.store.start_or_resume()
             self.commander.on_ack(ack(msg.command, _M.MAV_RESULT_FAILED if refused else _M.MAV_RESULT_ACCEPTED))
@@ -688,6 +689,7 @@ def test_no_failsafe_takes_the_vehicle_from_the_operator_driving_in_manual(rig: 
     record(rig, ahead(10.0))
     rig.take()
     assert rig.mode == "MANUAL"
+    rig.mode_set_by = "others"  # MANUAL from the operator (the RC, or switch C up: asked for by us, a person's mode all the same)
     if trouble == "rc stale":
         rig.rc_alive = False
     else:
@@ -701,6 +703,7 @@ def test_no_failsafe_takes_the_vehicle_from_the_operator_driving_in_manual(rig: 
 def test_switch_moves_wait_out_stale_rc_and_count_when_it_is_back(rig: Rig) -> None:
     record(rig, ahead(10.0))
     rig.take()
+    rig.mode_set_by = "us"  # switch C up: MANUAL asked for at the operator's request
     rig.rc_alive = False
     rig.run(12)
     assert rig.take() == []  # in MANUAL: a person drives, nothing commanded

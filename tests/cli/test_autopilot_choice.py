@@ -1,0 +1,74 @@
+"""``autopilot:`` in a mission and ``run --autopilot``: what the chosen firmware cannot fly is refused with the reason, before anything starts."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from executive.cli import main
+
+SUB_ON = """version: 1
+name: sub
+vehicle: sub
+autopilot: {autopilot}
+waypoints:
+  - {{lat: 47.0, lon: 8.0, depth_m: 2}}
+"""
+
+
+def test_validate_refuses_a_sub_on_px4_naming_the_field(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "sub.yaml"
+    path.write_text(SUB_ON.format(autopilot="px4"), encoding="utf-8")
+    assert main(["validate", str(path)]) == 2
+    assert capsys.readouterr().err == f"{path}:4:12: autopilot: px4 drives rover, vtol here, not a sub\n"
+
+
+def test_validate_refuses_the_rc_route_tree_on_px4(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "route.yaml"
+    path.write_text("version: 1\nname: r\nvehicle: rover\nautopilot: px4\ntree: ugv_rc_route\nrc_route: {}\nwaypoints: []\n", encoding="utf-8")
+    assert main(["validate", str(path)]) == 2
+    assert "autopilot: tree ugv_rc_route needs ArduPilot" in capsys.readouterr().err
+
+
+def test_validate_takes_a_vtol_on_px4(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    text = (Path(__file__).parents[2] / "missions" / "vtol_transit.yaml").read_text(encoding="utf-8")
+    path = tmp_path / "vtol.yaml"
+    path.write_text(text.replace("vehicle: vtol\n", "vehicle: vtol\nautopilot: px4\n"), encoding="utf-8")
+    assert main(["validate", str(path)]) == 0
+
+
+def test_run_with_autopilot_px4_refuses_a_sub_before_starting_a_vehicle(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "sub.yaml"
+    path.write_text(SUB_ON.format(autopilot="ardupilot"), encoding="utf-8")
+    assert main(["run", str(path), "--autopilot", "px4", "--socket", "none"]) == 2
+    err = capsys.readouterr().err
+    assert "--autopilot px4: px4 drives rover, vtol here, not a sub" in err
+    assert "simulated" not in err  # no vehicle was started
+
+
+def test_run_with_autopilot_px4_flies_the_simulated_px4_and_ctrl_c_leaves_it_in_auto_loiter() -> None:
+    """No --mavlink: the built-in simulator runs PX4 (HEARTBEAT autopilot 12, type 22); the tree's GUIDED is OFFBOARD there."""
+    root = Path(__file__).parents[2]
+    command = [sys.executable, "-m", "executive", "run", "missions/vtol_transit.yaml", "--autopilot", "px4", "--speedup", "20", "--socket", "none"]
+    proc = subprocess.Popen([*command, "-v"], cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    modes: list[str] = []
+    deadline = time.monotonic() + 60
+    assert proc.stdout is not None
+    while time.monotonic() < deadline and "AUTO.TAKEOFF" not in modes:
+        line = proc.stdout.readline()
+        if not line:
+            break
+        mode = json.loads(line).get("mode")
+        if mode and (not modes or modes[-1] != mode):
+            modes.append(mode)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert modes[:3] == ["AUTO.LOITER", "OFFBOARD", "AUTO.TAKEOFF"], err
+    assert "simulated vtol (px4)" in err and "(MAV_TYPE 22)" in err
+    assert "vehicle in AUTO.LOITER" in err
