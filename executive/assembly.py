@@ -25,12 +25,13 @@ from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.mission_protocol import MissionTransfer
+from executive.io.mavlink.parameters import ParameterWatch
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.route_keeper import RouteKeeper
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.io.rc import RcReader
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission
+from executive.mission.model import Mission, rc_switch_channels
 from executive.operator import Operator
 from executive.runtime import Runtime
 from executive.services import PacedService, RunObserver, Service, Step
@@ -161,12 +162,12 @@ def build_runtime(
     ap = _autopilot_link(mission, link, clock, state, operator, system_id, (target_system, target_component), autopilot)
     wiring = Wiring(mission, clock, system_id, state, status, operator, ap, simulated_vehicle)
     wiring.readers.append(Step("mavlink reader", ap.reader.drain))
-    wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper]
+    wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper, ParameterWatch(ap.port, clock)]
     for plug in plugs:
         plug(wiring)
     # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
     intervention = InterventionWatch(clock, ap.commander, state, PROFILES[mission.vehicle], mission.rc)
-    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock), intervention, ap.heartbeat]
+    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), intervention, ap.heartbeat]
     wiring.writers += [
         Step("autopilot port", ap.port.service),
         Step("commands", ap.commander.flush),

@@ -69,6 +69,8 @@ _KEYS: tuple[Key, ...] = (
     Key("/vehicle/ekf", None, "mavlink reader", "EkfStatus (EKF_STATUS_REPORT)"),
     Key("/vehicle/battery", None, "mavlink reader", "Battery (SYS_STATUS)"),
     Key("/vehicle/statustext", None, "mavlink reader", "(severity, text) of the last STATUSTEXT"),
+    Key("/vehicle/params", None, "mavlink reader", "parameters the autopilot sent (PARAM_VALUE): name -> value; None until one came"),
+    Key("/rc/chancount", None, "mavlink reader", "RC_CHANNELS chancount: channels the receiver has (every field present is read whatever it says)"),
     Key("/vehicle/mission_home", None, "mission transfer", "home as item 0 of the last mission read back (MissionItem); None = not read"),
     Key("/vehicle/mission_items", None, "mission transfer", "the mission items 1..n the vehicle holds (tuple of MissionItem); None = unknown"),
     Key("/vehicle/mission_current", None, "mission transfer", "MissionCurrent (MISSION_CURRENT): the item the vehicle is on"),

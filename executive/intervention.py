@@ -57,7 +57,9 @@ class InterventionWatch:
         self.profile = profile
         self.rc = rc
         self.asked_within_s = asked_within_s
-        self._bb = blackboard.reader("intervention watch", ["/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches"])
+        self._bb = blackboard.reader(
+            "intervention watch", ["/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected"]
+        )
         self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by"])
         self._shown: str | None = None  # the mode the heartbeat showed at the last tick
         #: The mode the executive put the vehicle in (the current leg's); None until it has in this run.
@@ -67,6 +69,7 @@ class InterventionWatch:
         self._last_text: tuple[int, str] | None = None
         self._channels: tuple[int, ...] = ()
         self._switch_at = float("-inf")
+        self._seen_rc = False  # an RC transmitter was seen: its loss can explain a mode change
         mission_state.listeners.append(self._on_transition)
 
     def service(self) -> None:
@@ -108,8 +111,14 @@ class InterventionWatch:
         return (asked is not None and now - asked <= self.asked_within_s) or follow_on
 
     def _failsafe_text(self, now: float) -> str | None:
-        """The autopilot's failsafe notice just before the change ("EKF failsafe"), if it sent one."""
-        return next((text for t, text in reversed(self._texts) if now - t <= EXPLAINS_WITHIN_S and "failsafe" in text.lower()), None)
+        """The autopilot's failsafe notice just before the change ("EKF failsafe"), if it sent one; its RC failsafe if the transmitter is gone.
+
+        ArduRover reports every RC channel 0 only once its own RC failsafe has acted (FS_ACTION: HOLD, RTL...).
+        """
+        text = next((text for t, text in reversed(self._texts) if now - t <= EXPLAINS_WITHIN_S and "failsafe" in text.lower()), None)
+        if text is None and self._seen_rc and not self._bb.get("/rc/connected"):
+            return "RC failsafe: the transmitter is gone"
+        return text
 
     def _who(self, now: float) -> str:
         if now - self._switch_at <= EXPLAINS_WITHIN_S:
@@ -123,6 +132,7 @@ class InterventionWatch:
             self._texts.append((now, text[1]))
 
     def _note_switches(self, now: float) -> None:
+        self._seen_rc = self._seen_rc or bool(self._bb.get("/rc/connected"))
         channels: tuple[int, ...] = self._bb.get("/rc/channels")
         if channels is self._channels:
             return

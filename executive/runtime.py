@@ -181,6 +181,10 @@ class Runtime:
                 self.reader.drain()
             if len(self.reader.autopilots_heard) > 1:
                 raise SeveralAutopilots(self.reader.autopilots_heard)
+        param = self.autopilot.capabilities.mode_switch_param
+        if param is not None:  # known by pre-flight: the mission's switches are checked against it before arming
+            self.autopilot.read_parameter(param)
+            self.commander.flush()
         return True
 
     def tick(self) -> Status:
@@ -336,6 +340,8 @@ class Runtime:
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
             return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
+        if status == Status.SUCCESS and (undone := self.mission_state.work_left()) is not None:
+            return self._end(self._abort(f"the tree ended, but {undone}"))  # never report success for work not done
         if status == Status.SUCCESS:
             self.mission_state.complete()
             return self._end(Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks))

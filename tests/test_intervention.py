@@ -128,3 +128,14 @@ def test_a_pause_asked_by_the_operator_still_holds_the_vehicle(rig: Rig) -> None
     assert rig.runtime.operator.request("resume", source="ctl").ok
     rig.tick(3)
     assert rig.modes_sent() == [GUIDED] and rig.state is MissionStatus.RUNNING
+
+
+def test_the_autopilots_rc_failsafe_does_not_pause_the_mission(rig: Rig, vehicle, caplog) -> None:
+    """ArduRover reports every RC channel 0 once its own RC failsafe has put the vehicle in FS_ACTION's mode: not a person."""
+    vehicle.set(rc__connected=True)
+    rig.tick()
+    vehicle.set(rc__connected=False)
+    rig.autopilot.mode = HOLD
+    rig.tick()
+    assert rig.state is MissionStatus.RUNNING
+    assert "HOLD set by the autopilot (RC failsafe: the transmitter is gone): left to the failsafes, no pause" in caplog.text

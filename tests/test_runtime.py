@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import py_trees
 import pytest
@@ -11,6 +12,7 @@ from py_trees.common import Status
 from executive.assembly import build_runtime
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission
 from executive.runtime import BehaviourCrashed, Runtime, explain_failure
 from executive.testing import ObedientAutopilot
 
@@ -148,3 +150,13 @@ def test_hands_off_when_a_person_has_the_vehicle(square_mission, link, clock, ve
     assert outcome.status is MissionStatus.ABORTED
     assert autopilot.mode == "MANUAL"
     assert not [m for m in link.sent if m.get_type() == "COMMAND_LONG" and m.command == mavlink.MAV_CMD_DO_SET_MODE]
+
+
+def test_a_tree_that_ends_with_a_sample_point_unsampled_does_not_complete(link, clock):
+    """No fake success: a tree that returns SUCCESS with a sample not taken (a refused sample skipped) ends ABORTED, saying which."""
+    mission = load_mission(Path(__file__).parents[1] / "missions" / "asv_sampling.yaml")
+    runtime = build_runtime(mission, link, clock, root=py_trees.behaviours.Success("done"), safe_timeout_s=0.5, simulated_vehicle=True)
+    ObedientAutopilot(link, "boat").beat()
+    outcome = runtime.run()
+    assert outcome.status is MissionStatus.ABORTED
+    assert outcome.reason.startswith("the tree ended, but no sample was recorded at leg ")

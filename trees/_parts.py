@@ -17,7 +17,9 @@ from executive.behaviours import (
     Guard,
     HeadingSane,
     LinkAlive,
+    ModeSwitchClear,
     PositionKnown,
+    RcChannelHigh,
     RcNotLost,
     RcNotTakingOver,
     UnlessPaused,
@@ -25,7 +27,7 @@ from executive.behaviours import (
     inside_geofence,
 )
 from executive.behaviours.failsafe import condition_of
-from executive.mission.model import FailsafePolicy, Mission, failsafe_policy
+from executive.mission.model import FailsafePolicy, Mission, failsafe_policy, rc_switch_channels
 from executive.vehicles import PROFILES
 
 ARM_RETRY_S = 2.0
@@ -67,15 +69,27 @@ def within_reach(mission: Mission, name: str, check_name: str | None = None) -> 
     )
 
 
+def mode_switch_clear(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
+    """The check that the autopilot's own mode switch is on none of the mission's RC switches (none with RC from CAN)."""
+    switches = rc_switch_channels(mission)
+    return [ModeSwitchClear(switches)] if switches else []
+
+
 def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """Wait for a usable EKF, then arm (auto_arm) or wait for the operator to arm."""
-    limits = mission.limits
-    arming = (
-        WaitUntil(Arm(), limits.ekf_wait_s, name="Arm", retry_s=ARM_RETRY_S)
-        if mission.auto_arm
-        else WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm")
-    )
-    return py_trees.composites.Sequence("Pre-flight", memory=True, children=[wait_for_ekf(mission), arming])
+    """A usable EKF; the autopilot's mode switch clear of the mission's; then arm (auto_arm; the RC arm switch high) or wait for the operator to."""
+    limits, rc = mission.limits, mission.rc
+    if mission.auto_arm:
+        arming: py_trees.behaviour.Behaviour = WaitUntil(Arm(), limits.ekf_wait_s, name="Arm", retry_s=ARM_RETRY_S)
+    elif rc.arm_channel is not None:  # the seed's ASV: channel 5 high = armed
+        arm = WaitUntil(Arm(), limits.recovery_timeout_s, name="Arm", retry_s=ARM_RETRY_S)
+        switch = py_trees.composites.Sequence(
+            f"RC channel {rc.arm_channel} high: arm", memory=False, children=[RcChannelHigh(rc.arm_channel, rc.takeover_above_us), arm]
+        )
+        either = py_trees.composites.Selector("Armed, or arm on the RC switch", memory=False, children=[Armed(), switch])
+        arming = WaitUntil(either, limits.recovery_timeout_s, name=f"Wait for the operator to arm (or RC channel {rc.arm_channel} high)")
+    else:
+        arming = WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm")
+    return py_trees.composites.Sequence("Pre-flight", memory=True, children=[wait_for_ekf(mission), *mode_switch_clear(mission), arming])
 
 
 def standard_guards(mission: Mission) -> list[Guard]:

@@ -9,6 +9,11 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.state import GlobalPosition, HomePosition
 from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 
+#: The RC channel that sets the mode by itself, per firmware (0 disables it): ArduRover MODE_CH (Rover/Parameters.cpp,
+#: default MODE_CHANNEL 8 in Rover/config.h), ArduPlane FLTMODE_CH (ArduPlane/Parameters.cpp, default 8). ArduSub has
+#: none: its modes come from joystick buttons. RC_Channels::flight_mode_channel() takes no channel for 0 or less.
+MODE_SWITCH_PARAMS = {"rover": "MODE_CH", "boat": "MODE_CH", "vtol": "FLTMODE_CH"}
+
 
 class ArduPilotPort(MavlinkPort):
     """ArduPilot: modes named per vehicle firmware, NAV_TAKEOFF above home, VTOL transitions by mode outside AUTO."""
@@ -25,6 +30,7 @@ class ArduPilotPort(MavlinkPort):
             vehicles=AUTOPILOT_VEHICLES["ardupilot"],
             transition_anywhere=False,
             takeoff_alt_amsl=False,
+            mode_switch_param=MODE_SWITCH_PARAMS.get(profile.kind),
         )
 
     def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:

@@ -80,6 +80,9 @@ class MavlinkPort:
     def cancel(self, request: Request | None) -> bool:
         return request is not None and self.commander.cancel(request.ticket)
 
+    def read_parameter(self, name: str) -> None:
+        self.commander.request_parameter(name)
+
     # -- setpoints -----------------------------------------------------------------------------
     def go_to(self, target: Waypoint) -> None:
         if target.control_mode == "altitude" and target.altitude_m is not None:

@@ -41,6 +41,8 @@ class Capabilities:
     vehicles: frozenset[str]  # vehicle kinds (executive.vehicles) this firmware drives
     transition_anywhere: bool  # a VTOL transition is taken by command in any mode in flight
     takeoff_alt_amsl: bool  # NAV_TAKEOFF's altitude is above sea level (else above home)
+    #: The parameter naming the RC channel whose position sets the mode by itself (ArduRover MODE_CH); None: no such channel.
+    mode_switch_param: str | None = None
 
 
 class AutopilotPort(Protocol):
@@ -96,6 +98,10 @@ class AutopilotPort(Protocol):
 
     def cancel(self, request: Request | None) -> bool:
         """Forget a request that no longer matters (its behaviour was interrupted); whether one was pending."""
+        ...
+
+    def read_parameter(self, name: str) -> None:
+        """Ask for a parameter's value; it arrives on ``/vehicle/params`` (never acked: ask again if it does not come)."""
         ...
 
     # -- setpoints (no ack; re-sent by the behaviour) ------------------------------------------

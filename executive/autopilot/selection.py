@@ -125,6 +125,9 @@ class Autopilot:
     def cancel(self, request: Request | None) -> bool:
         return self.backend.cancel(request)
 
+    def read_parameter(self, name: str) -> None:
+        self.backend.read_parameter(name)
+
     def go_to(self, target: Waypoint) -> None:
         self.backend.go_to(target)
 

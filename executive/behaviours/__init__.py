@@ -35,6 +35,7 @@ from executive.behaviours.guards import (
     PositionKnown,
     RangefinderReaches,
     RcAutoMode,
+    RcChannelHigh,
     RcFresh,
     RcNotLost,
     RcNotTakingOver,
@@ -43,6 +44,7 @@ from executive.behaviours.guards import (
     inside_geofence,
     rc_auto_mode,
 )
+from executive.behaviours.mode_switch import ModeSwitchClear
 from executive.behaviours.parameters import ParameterIs
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
 from executive.behaviours.sampling import NothingToSample, Sample
@@ -76,11 +78,13 @@ __all__ = [
     "LinkAlive",
     "ModeIs",
     "ModeSwitch",
+    "ModeSwitchClear",
     "NothingToSample",
     "ParameterIs",
     "PositionKnown",
     "RangefinderReaches",
     "RcAutoMode",
+    "RcChannelHigh",
     "RcFresh",
     "RcNotLost",
     "RcNotTakingOver",

@@ -224,6 +224,22 @@ class RcNotTakingOver(Guard):
         return _takeover(self.get("/rc/channels"), self.channel, self.above_us)
 
 
+class RcChannelHigh(Guard):
+    """An RC channel is high (above ``above_us``): the ASV's arm switch (channel 5 high = armed)."""
+
+    reads = ("/rc/channels",)
+
+    def __init__(self, channel: int, above_us: int, name: str | None = None) -> None:
+        super().__init__(name or f"RC channel {channel} high?")
+        self.channel = channel
+        self.above_us = above_us
+
+    def check(self) -> str | None:
+        channels: tuple[int, ...] = self.get("/rc/channels")
+        value = channels[self.channel - 1] if len(channels) >= self.channel else 0
+        return None if value > self.above_us else f"RC channel {self.channel} low ({value} µs)"
+
+
 def _takeover(channels: tuple[int, ...], channel: int, above_us: int) -> str | None:
     value = channels[channel - 1] if len(channels) >= channel else 0
     return f"RC channel {channel} high ({value} µs): manual take-over" if value > above_us else None

@@ -17,10 +17,15 @@ moves, because the base keeps repeating the last frame after an RC signal loss.
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Mapping
+
 from executive import blackboard
 from executive.clock import Clock
 from executive.mission.model import RcConfig
 from executive.state import RcSwitches, SwitchPosition
+
+log = logging.getLogger(__name__)
 
 SWITCH_UP_BELOW_US = 1300
 SWITCH_DOWN_ABOVE_US = 1700
@@ -66,10 +71,13 @@ def switches_from_channels(channels: tuple[int, ...], rc: RcConfig, time: float)
 class RcReader:
     """Keeps /rc/fresh, /rc/stale_reason and (MAVLink source) /rc/switches; call :meth:`service` every tick after the readers drain."""
 
-    def __init__(self, rc: RcConfig, clock: Clock) -> None:
+    def __init__(self, rc: RcConfig, clock: Clock, channels: Mapping[int, str] | None = None) -> None:
+        """``channels``: the RC channels the mission reads (channel -> what it is), checked against the receiver's channel count."""
         self.rc = rc
         self._clock = clock
-        self._in = blackboard.reader("rc reader in", ["/rc/channels", "/rc/last_update"])
+        self.channels = dict(channels or {})
+        self._warned_for: int | None = None
+        self._in = blackboard.reader("rc reader in", ["/rc/channels", "/rc/last_update", "/rc/chancount"])
         self._out = blackboard.writer("rc reader", ["/rc/fresh", "/rc/stale_reason", "/rc/switches"])
         self._seen: tuple[float | None, tuple[int, ...]] | None = None
 
@@ -79,6 +87,15 @@ class RcReader:
         if self.rc.source == "mavlink" and (last, channels) != self._seen:  # written only when a report changes it
             self._seen = (last, channels)
             self._out.set("/rc/switches", None if last is None else switches_from_channels(channels, self.rc, last))
+        chancount: int | None = self._in.get("/rc/chancount")
+        if chancount is not None and chancount != self._warned_for:
+            self._warned_for = chancount
+            beyond = [f"{ch} ({what})" for ch, what in self.channels.items() if ch > chancount]
+            if beyond:
+                log.warning(
+                    "RC: the autopilot reports %d channels (chancount) and the mission reads %s beyond them: their values are read as sent",
+                    chancount, ", ".join(beyond),
+                )  # fmt: skip
         reason = self._stale_reason(channels, last)
         if reason != self._out.get("/rc/stale_reason"):
             self._out.set("/rc/stale_reason", reason)

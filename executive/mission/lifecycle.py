@@ -244,6 +244,15 @@ class MissionState:
         for listener in self.route_listeners:
             listener(route, reason)
 
+    def work_left(self) -> str | None:
+        """What of the mission's work is not done (a sample point not sampled), if any: then it is not COMPLETED."""
+        if self.mission is None:
+            return None
+        unsampled = [i + 1 for i, wp in enumerate(self.mission.waypoints) if wp.sample and not self.sampled(i)]
+        if unsampled:
+            return f"no sample was recorded at leg {', '.join(map(str, unsampled))}"
+        return None
+
     # -- samples -----------------------------------------------------------------------------
     def sampled(self, leg_index: int) -> bool:
         """A sample of this leg is already recorded in this run: do not take it again."""

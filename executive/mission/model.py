@@ -42,6 +42,7 @@ the course over ground, which a sub or a vtol does not follow); geofence_breach 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Annotated, Literal, get_args
 
@@ -131,6 +132,9 @@ class RcConfig(BaseModel):
     source: Literal["mavlink", "can"] = Field("mavlink", description="RC from the autopilot's RC_CHANNELS or from the CAN bus (AgileX 0x241)")
     takeover_channel: int = Field(6, ge=1, le=18, description="RC channel whose high position means manual take-over (mavlink)")
     takeover_above_us: int = Field(1700, ge=800, le=2200, description="PWM above which the take-over channel is high")
+    arm_channel: int | None = Field(
+        None, ge=1, le=18, description="RC channel whose high position arms the vehicle in pre-flight (mavlink; goto_sample: 5, the ASV seed's)"
+    )
     fresh_timeout_s: float = Field(1.0, gt=0.0, le=60.0, description="an RC report older than this (or a frozen CAN counter) is stale")
     switch_channels: SwitchChannels = Field(default_factory=SwitchChannels)
 
@@ -322,6 +326,9 @@ class SimulatorOptions(BaseModel):
     model: Literal["rover", "boat", "bunker", "sub", "vtol"] | None = Field(None, description="simulated vehicle (default: the vehicle kind)")
     events: str | None = Field(None, min_length=1, description="event file (faults, operator inputs) for the simulator, relative to the mission")
     ekf_ready_after_s: float = Field(40.0, ge=0.0, le=600.0, description="how long the simulated EKF takes to use GPS after boot")
+    params: dict[str, float] = Field(
+        default_factory=dict, description="firmware parameters set differently from their defaults (MODE_CH: 0 frees channel 8)"
+    )
     q_guided_mode: int = Field(
         0, ge=0, le=1, description="vtol: ArduPlane's Q_GUIDED_MODE (1: GUIDED targets end in a hover; near ones are flown as a multicopter)"
     )
@@ -378,6 +385,19 @@ class Mission(BaseModel):
             return data  # the error is reported as it is
         return {**data, "limits": VEHICLE_LIMITS[data["vehicle"]] | limits}
 
+    @model_validator(mode="before")
+    @classmethod
+    def _tree_rc(cls, data: object) -> object:
+        """The ASV seed's RC: channel 5 high arms the vehicle (goto_sample, where the file says nothing else)."""
+        if not isinstance(data, dict) or data.get("tree") != "goto_sample":
+            return data
+        rc = data.get("rc", {})
+        if not isinstance(rc, dict) or "arm_channel" in rc or rc.get("source", "mavlink") != "mavlink":
+            return data
+        return {**data, "rc": {**rc, "arm_channel": 5}}
+
+
+_PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,15}")
 
 #: Tree -> the vehicle kinds it can drive and the options section it reads.
 TREE_RULES: dict[str, tuple[frozenset[str], str | None]] = {
@@ -387,6 +407,24 @@ TREE_RULES: dict[str, tuple[frozenset[str], str | None]] = {
     "vtol_transit": (frozenset({"vtol"}), "vtol"),
     "ugv_rc_route": (frozenset({"rover"}), "rc_route"),
 }
+
+
+def rc_switch_channels(mission: Mission) -> dict[int, str]:
+    """The RC channels whose positions this mission reads from the autopilot (``rc.source: mavlink``), each with what it is.
+
+    Empty with RC from CAN: then the autopilot's own RC channels are not the mission's switches.
+    """
+    rc = mission.rc
+    if rc.source != "mavlink":
+        return {}
+    if mission.tree == "ugv_rc_route":  # switch C is the person's: the take-over channel is not read
+        c = rc.switch_channels
+        found = {c.knob: "knob VRA", c.swd: "switch D", c.swc: "switch C", c.swb: "switch B", c.swa: "switch A"}
+    else:
+        found = {rc.takeover_channel: "the take-over switch"}
+    if rc.arm_channel is not None:
+        found.setdefault(rc.arm_channel, "the arm switch")
+    return dict(sorted(found.items()))
 
 
 #: Trees that need what only ArduPilot does, and why.
@@ -451,6 +489,14 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
         errors += _vtol_errors(mission)
     if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":
         errors.append((("simulator", "q_guided_mode"), "only the simulated vtol (ArduPlane) has Q_GUIDED_MODE"))
+    if mission.simulator is not None:
+        errors += [
+            (("simulator", "params", name), "not a parameter name (capitals, digits and _, at most 16)")
+            for name in mission.simulator.params
+            if not _PARAM_NAME.fullmatch(name)
+        ]
+    if mission.rc.arm_channel is not None and mission.rc.source != "mavlink":
+        errors.append((("rc", "arm_channel"), "an arm switch is read from the autopilot's RC channels (rc.source: mavlink)"))
     if mission.autopilot is not None:
         errors += [(("autopilot",), why) for why in autopilot_errors(mission, mission.autopilot)]
     if mission.geofence is not None:
@@ -489,6 +535,14 @@ def _failsafe_errors(mission: Mission) -> list[tuple[Path, str]]:
             errors.append(((*here, "reaction"), f"{reaction}: not for a {mission.vehicle} ({_NO_REACTION[reaction]})"))
         elif reaction == "disarm" and mission.tree == "ugv_rc_route":
             errors.append(((*here, "reaction"), "disarm: not in tree ugv_rc_route (the operator arms and disarms with switch D)"))
+        if condition == "geofence_breach" and policy[condition].recovery == "resume" and reaction != "rtl":
+            # a recovery that cannot happen from where the reaction leaves the vehicle: held outside, it stays outside
+            errors.append(
+                (
+                    (*here, "recovery"),
+                    f"resume after {reaction}: a vehicle held outside the fence never comes back in; use reaction rtl, or recovery abort",
+                )
+            )
         if rule.timeout_s is not None and policy[condition].recovery == "abort":
             errors.append(((*here, "timeout_s"), "recovery abort ends the mission at once: a time limit is only for resume"))
     return errors

@@ -38,8 +38,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from enum import Enum
+from typing import ClassVar
 
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
@@ -90,6 +91,7 @@ class QuadPlaneSim(ArduPilotSim):
 
     FIRMWARE = "ArduPlane"
     READY_TEXT = "Ready to FLY"
+    PARAMS: ClassVar[Mapping[str, float]] = {"FLTMODE_CH": 8}  # ArduPlane/Parameters.cpp, FLIGHT_MODE_CHANNEL 8
     INITIAL_MODE = "MANUAL"
     MANUAL_INPUT_MODES = frozenset(PLANE_MODES) - {"INITIALISING"}  # STICK_MIXING enabled
     STABILIZE_MODES = frozenset(PLANE_MODES) - {"MANUAL", "INITIALISING"}

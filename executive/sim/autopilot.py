@@ -133,6 +133,7 @@ class ArduPilotSim(ABC):
     #: ekf_check runs at 10 Hz and latches after EKF_CHECK_ITERATIONS_MAX (10) bad checks in a row; it clears 10 good ones later.
     EKF_CHECK_ITERATIONS_MAX: ClassVar[int] = 10
     MISSION_STORE: ClassVar[type[MissionStore]] = MissionStore  # the firmware's side of the mission protocol
+    PARAMS: ClassVar[Mapping[str, float]] = {}  # parameters answered to PARAM_REQUEST_READ, with the firmware's defaults
 
     def __init__(
         self,
@@ -144,8 +145,11 @@ class ArduPilotSim(ABC):
         component_id: int = AUTOPILOT_COMPONENT,
         ekf_ready_after_s: float = 40.0,
         boot_s: float = 1.0,
+        params: Mapping[str, float] | None = None,
     ) -> None:
+        """``params``: parameters set differently from the firmware's defaults (as SITL's --defaults file)."""
         self.profile = profile
+        self.params = {**self.PARAMS, **(params or {})}
         self.clock = clock
         self.system_id = system_id
         self.component_id = component_id
@@ -458,6 +462,15 @@ class ArduPilotSim(ABC):
         handler = self._commands.get(cmd.command)
         self._ack_first(msg, cmd.command, lambda: handler(cmd) if handler else _M.MAV_RESULT_UNSUPPORTED)
 
+    def _on_param_request_read(self, msg: MAVLinkMessage) -> None:
+        """PARAM_VALUE for a parameter by name (or by index, param_index >= 0); nothing for one the firmware does not have (GCS_Param.cpp)."""
+        names = sorted(self.params)
+        name = msg.param_id.rstrip("\x00") if isinstance(msg.param_id, str) else msg.param_id.decode("ascii", "replace").rstrip("\x00")
+        if msg.param_index >= 0:
+            name = names[msg.param_index] if msg.param_index < len(names) else ""
+        if name in self.params:
+            self._emit(self._mav.param_value_encode(name.encode(), self.params[name], _M.MAV_PARAM_TYPE_INT8, len(names), names.index(name)))
+
     def _on_set_mode(self, msg: MAVLinkMessage) -> None:
         # ArduPilot acks the SET_MODE message with a COMMAND_ACK whose command is the message id (11)
         self._ack_first(msg, _M.MAVLINK_MSG_ID_SET_MODE, lambda: self._set_mode_common(msg.base_mode, msg.custom_mode))
@@ -710,6 +723,7 @@ class ArduRoverSim(ArduPilotSim):
 
     FIRMWARE = "ArduRover"
     READY_TEXT = "Ready to drive"
+    PARAMS: ClassVar[Mapping[str, float]] = {"MODE_CH": 8}  # Rover/Parameters.cpp, MODE_CHANNEL 8 in Rover/config.h
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
     PILOT_DRIVEN_MODES: ClassVar[frozenset[str]] = frozenset({"MANUAL", "ACRO", "STEERING"})
     STICK_DEADZONE_US: ClassVar[int] = 30  # RC_DZ
@@ -878,7 +892,12 @@ class ArduRoverSim(ArduPilotSim):
         if item.params[0] > 0 or self.mission.current_seq is None:  # a hold time: always a stop
             return None
         after = self.mission.next_nav_after(self.mission.current_seq)
-        return (after.lat, after.lon) if after is not None else None
+        if after is None:
+            return None
+        assert isinstance(self.vehicle, SurfaceVehicle)
+        if self.vehicle.pivots_at(item.lat, item.lon, (after.lat, after.lon)):
+            return None  # a skid-steered vehicle stops and pivots there
+        return after.lat, after.lon
 
     def _desired_location(self) -> tuple[float, float] | None:
         return self._destination

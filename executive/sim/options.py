@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from executive.mission.model import Mission, SimulatorOptions
 from executive.sim.autopilot import DEFAULT_HOME, Home
 
@@ -12,12 +14,15 @@ def simulated_home(mission: Mission) -> Home:
     return (start.lat, start.lon, getattr(start, "heading_deg", 0.0)) if start else DEFAULT_HOME
 
 
-def firmware_options(mission: Mission) -> dict[str, float]:
-    """The simulated firmware's options a mission sets (``q_guided_mode`` for the vtol's ArduPlane; the seabed and rangefinder for ArduSub)."""
+def firmware_options(mission: Mission) -> dict[str, Any]:
+    """The simulated firmware's options a mission sets: ``q_guided_mode`` (ArduPlane), the seabed and rangefinder (ArduSub), parameters."""
     options = mission.simulator or SimulatorOptions()
     model = options.model or mission.vehicle
+    found: dict[str, Any] = {}
     if model == "vtol":
-        return {"q_guided_mode": options.q_guided_mode}
-    if model == "sub":
-        return {"seabed_depth_m": options.seabed_depth_m, "rangefinder_max_m": options.rangefinder_max_m}
-    return {}
+        found = {"q_guided_mode": options.q_guided_mode}
+    elif model == "sub":
+        found = {"seabed_depth_m": options.seabed_depth_m, "rangefinder_max_m": options.rangefinder_max_m}
+    if options.params:
+        found["params"] = dict(options.params)
+    return found

@@ -79,6 +79,9 @@ class Limits:
     turn_radius_m: float = 0.0
     #: WP_RADIUS (libraries/AR_WPNav/AR_WPNav.cpp, 2 m by default): how far from a waypoint the apex of a corner through it may be.
     wp_radius_m: float = 2.0
+    #: WP_PIVOT_ANGLE for a vehicle that pivots (skid steering): a corner sharper than this is a stop and a pivot, not a
+    #: corner driven through (AR_WPNav::set_desired_location: _pivot_at_next_wp, AR_PivotTurn::would_activate). None: no pivots.
+    pivot_angle_deg: float | None = None
 
     @property
     def turn_speed_min_m_s(self) -> float:
@@ -217,6 +220,14 @@ class SurfaceVehicle(LocalFrame):
         self._target_speed = min(speed_m_s if speed_m_s and speed_m_s > 0 else self.limits.cruise_m_s, self.limits.max_m_s)
         self._arrived = False
 
+    def pivots_at(self, lat: float, lon: float, then: tuple[float, float]) -> bool:
+        """Whether the corner at (lat, lon), from where the vehicle is toward ``then``, is sharper than the pivot angle."""
+        if self.limits.pivot_angle_deg is None:
+            return False
+        (tn, te), (nn, ne) = self._ne(lat, lon), self._ne(*then)
+        turn = abs(_wrap_pi(math.atan2(ne - te, nn - tn) - math.atan2(te - self._e, tn - self._n)))
+        return math.degrees(turn) > self.limits.pivot_angle_deg
+
     def change_speed(self, speed_m_s: float) -> None:
         """Drive on to the same target at another speed (capped at the maximum)."""
         self._target_speed = min(speed_m_s, self.limits.max_m_s)
@@ -320,7 +331,7 @@ class Tracks:
     slip_factor: float = 1.3
 
 
-BUNKER_LIMITS = Limits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0)
+BUNKER_LIMITS = Limits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0, pivot_angle_deg=60.0)
 BUNKER_TRACKS = Tracks()
 
 

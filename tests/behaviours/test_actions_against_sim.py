@@ -36,7 +36,7 @@ from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONEN
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.mission.lifecycle import MissionState
-from executive.mission.model import Mission
+from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Mission
 from executive.sim import make_autopilot
 from executive.sim.aircraft import QUADPLANE_LIMITS
 from executive.sim.arduplane import LOITER_RADIUS_M
@@ -98,7 +98,9 @@ class Bench:
         self.reader.on_autopilot = self.port.adopt
         self.streams = StreamRequester(self.commander, rates_for(kind))
         self.reader.on_reconnect = self.streams.restart
-        mission = Mission.model_validate({"version": 1, "name": "bench", "vehicle": kind, "waypoints": waypoints})
+        # a vtol flies its legs as a plane: the mission rules refuse a radius under its loiter circle
+        limits = {"acceptance_radius_m": VTOL_MIN_ACCEPTANCE_RADIUS_M} if kind == "vtol" else {}
+        mission = Mission.model_validate({"version": 1, "name": "bench", "vehicle": kind, "limits": limits, "waypoints": waypoints})
         self.mission_state = MissionState()
         self.mission_state.upload(mission)
         self.mission_state.start()

@@ -211,6 +211,8 @@ def test_route_edits_while_driving_reach_the_status_the_autopilot_and_the_vehicl
     assert "route on the autopilot: 3 waypoints, read back (ctl: waypoint 3/3 added at" in err
     with sqlite3.connect(journal) as db:
         ended = {leg: (lat, lon) for leg, lat, lon in db.execute("SELECT leg, lat, lon FROM legs")}
-    # where legs 2 and 3 ended (the journal notes the position when the next leg starts): at the edited waypoints
-    assert geo.distance(*ended[2], *new_wp2) < 2.0 and geo.distance(*ended[2], *WP2) > 3.0
+    # where legs 2 and 3 ended (the journal notes the position when the next leg starts): at the edited waypoints. Leg 2 is
+    # driven through toward waypoint 3 (a 90° turn: left within 2 x 1.5 m / sin 45° = 4.2 m of it, past the old waypoint 5 m
+    # before it on the way; heading for the old one it would have ended ~8 m short of the new), the last one ends in a stop
+    assert geo.distance(*ended[2], *new_wp2) < 4.3
     assert geo.distance(*ended[3], *wp3) < 2.0

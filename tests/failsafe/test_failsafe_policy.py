@@ -112,6 +112,9 @@ ALLOWED = "link_loss, rc_takeover, disarmed, rc_loss, ekf_loss, gps_glitch, head
          "7:24: failsafe.ekf_loss.reaction: disarm: not for a vtol (disarming a vtol would drop it)"),
         ("rover", "failsafe:\n  battery_low: {timeout_s: 30}\n",
          "6:28: failsafe.battery_low.timeout_s: recovery abort ends the mission at once: a time limit is only for resume"),
+        ("rover", "failsafe:\n  geofence_breach: {recovery: resume}\n",  # held outside, the vehicle never comes back in
+         "6:31: failsafe.geofence_breach.recovery: resume after hold: a vehicle held outside the fence never comes back in; "
+         "use reaction rtl, or recovery abort"),
         ("rover", "failsafe:\n  link_los: {reaction: hold}\n", f"6:3: failsafe.link_los: unknown field (allowed: {ALLOWED})"),
         ("rover", "failsafe:\n  link_loss: {reaction: land}\n",
          "6:25: failsafe.link_loss.reaction: 'land': Input should be 'hold', 'loiter', 'rtl', 'surface', 'disarm' or 'wait'"),

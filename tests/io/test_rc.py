@@ -142,3 +142,18 @@ def test_the_runtime_judges_rc_after_draining_the_link(square_mission, link, clo
     runtime.tick()
     assert bb("/rc/fresh") is True
     assert bb("/rc/switches") == RcSwitches(MIDDLE, MIDDLE, MIDDLE, DOWN, -50, clock.now())
+
+
+def test_a_mission_channel_past_the_receivers_count_is_warned_about_once(clock, rc_report, caplog):
+    """Issue 13: with chancount 8 the knob on channel 9 was silently not read; it is read now, with a warning."""
+    chancount = blackboard.writer("test chancount", ["/rc/chancount"])
+    reader = RcReader(RcConfig(), clock, {5: "switch A", 8: "switch D", 9: "knob VRA"})
+    chancount.set("/rc/chancount", 8)
+    rc_report((1500, 1500, 1000, 1500, 1100, 1500, 1500, 1900, 1750))
+    reader.service()
+    reader.service()
+    assert bb("/rc/switches").knob == 50
+    warnings = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
+    assert warnings == [
+        "RC: the autopilot reports 8 channels (chancount) and the mission reads 9 (knob VRA) beyond them: their values are read as sent"
+    ]

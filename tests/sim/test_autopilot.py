@@ -277,6 +277,26 @@ def test_battery_drains_faster_when_driving(make_gcs: MakeGcs) -> None:
     assert gcs.ap.consumed_mah > 2 * idle_mah
 
 
+@pytest.mark.parametrize(("kind", "param"), [("rover", "MODE_CH"), ("boat", "MODE_CH"), ("vtol", "FLTMODE_CH")])
+def test_the_mode_switch_channel_is_answered_as_the_firmware_does(make_gcs: MakeGcs, kind: str, param: str) -> None:
+    """ArduRover MODE_CH and ArduPlane FLTMODE_CH are channel 8 by default; an unknown parameter gets no answer."""
+    gcs = make_gcs(kind)
+    (value,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, param.encode(), -1))
+    assert (value.param_id, value.param_value, value.param_type) == (param, 8.0, m.MAV_PARAM_TYPE_INT8)
+    (by_index,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, b"", 0))
+    assert by_index.param_id == param
+    assert gcs.send(gcs.mav.param_request_read_encode(1, 1, b"NO_SUCH_PARAM", -1)) == []
+    assert gcs.send(gcs.mav.param_request_read_encode(2, 1, param.encode(), -1)) == []  # another vehicle's
+
+
+def test_a_parameter_set_for_the_simulator_is_answered() -> None:
+    from executive.clock import ManualClock
+    from executive.sim.autopilot import make_autopilot
+
+    ap = make_autopilot("rover", ManualClock(), params={"MODE_CH": 0})
+    assert ap.params == {"MODE_CH": 0}
+
+
 def test_the_ekf_failsafe_latches_holds_and_refuses_position_modes_until_a_second_after_the_ekf_recovers(make_gcs: MakeGcs) -> None:
     """Rover/ekf_check.cpp at 10 Hz: 10 bad checks latch failsafe.ekf (HOLD, "EKF failsafe"); Mode::enter refuses
     position modes while it is latched; 10 good checks clear it ("EKF failsafe cleared")."""

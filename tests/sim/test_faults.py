@@ -344,15 +344,21 @@ def test_rc_loss_failsafe_acts_after_fs_timeout_on_an_armed_vehicle_only(armed: 
     assert ap.mode == "GUIDED"  # once per loss
 
 
-def test_losing_the_ekf_position_refuses_position_modes_while_it_lasts() -> None:
+def test_losing_the_ekf_position_refuses_position_modes_until_the_firmware_latch_clears() -> None:
+    # Rover/ekf_check.cpp at 10 Hz: 10 bad checks latch failsafe.ekf, 10 good ones count down to clear it, and
+    # Mode::enter (Rover/mode.cpp) refuses a position mode meanwhile: about 1 s after the EKF is good again
     clock = ManualClock()
     ap = armed_rover(clock, "HOLD")
-    injector = FaultInjector(plan({"kind": "ekf_degradation", "at_s": 1.0, "for_s": 1.0, "lose_position": True}), clock)
-    run(injector, ap, 1.5)
-    assert not ap.position_ok
-    assert not ap.set_mode(ap.profile.modes["LOITER"])
+    injector = FaultInjector(plan({"kind": "ekf_degradation", "at_s": 1.0, "for_s": 2.0, "lose_position": True}), clock)
     run(injector, ap, 2.5)
-    assert ap.position_ok
+    assert not ap.position_ok and ap.failsafe_ekf
+    assert not ap.set_mode(ap.profile.modes["LOITER"])
+    out = run(injector, ap, 3.5)  # the EKF is good again for 0.5 s: still latched
+    assert ap.position_ok and ap.failsafe_ekf
+    assert not ap.set_mode(ap.profile.modes["LOITER"])
+    out += run(injector, ap, 4.5)
+    assert not ap.failsafe_ekf
+    assert "EKF failsafe cleared" in [msg.text for msg in out if msg.get_type() == "STATUSTEXT"]
     assert ap.set_mode(ap.profile.modes["LOITER"])
 
 

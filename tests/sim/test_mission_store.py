@@ -268,3 +268,22 @@ def test_a_speed_change_in_auto_keeps_the_corner_driven_through(make_gcs: MakeGc
         nearest = min(nearest, (math.dist((north, east), (30.0, 0.0)), gcs.ap.vehicle.speed_m_s))
     distance, speed = nearest
     assert distance <= 2.0 and speed >= 1.0  # through the first corner at the new speed, not stopped there
+
+
+def test_a_skid_steered_vehicle_stops_to_pivot_at_a_sharp_corner_and_drives_through_a_gentle_one(make_gcs: MakeGcs) -> None:
+    # AR_WPNav: no next destination when a pivot would activate there (the turn is sharper than WP_PIVOT_ANGLE, 60°)
+    gcs = make_gcs("bunker", ekf_ready=True)
+    lat0, lon0 = gcs.ap.start
+    dlat, dlon = 1.0 / M_PER_DEG_LAT, 1.0 / (M_PER_DEG_LAT * math.cos(math.radians(lat0)))
+    gentle = (20.0, 0.0), (30.0, 5.0)  # north 20 m, then 27° right
+    sharp = (30.0, 5.0), (30.0, 25.0)  # then 63° further right: east
+    points = [gentle[0], gentle[1], sharp[1]]
+    items = [item(gcs, 0, lat0, lon0), *(item(gcs, seq, lat0 + n * dlat, lon0 + e * dlon) for seq, (n, e) in enumerate(points, start=1))]
+    track = _drive_auto(gcs, items, 90.0)
+
+    def slowest_near(corner: tuple[float, float]) -> float:
+        return min(v for n, e, v in track if math.dist((n, e), corner) <= 1.0)
+
+    assert slowest_near(gentle[0]) >= 0.5  # driven through (cruise 1 m/s)
+    assert slowest_near(sharp[0]) <= 0.2  # braked to a stop point there (the next leg starts on arrival, within 0.3 m)
+    assert min(math.dist((n, e), sharp[0]) for n, e, _ in track) <= 0.3

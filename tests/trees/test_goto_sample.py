@@ -205,6 +205,17 @@ def test_without_auto_arm_the_operator_readies_the_boat_and_arming_requests_the_
     assert run.state.leg_index == 0 and run.boat.setpoints == 1
 
 
+def test_rc_channel_5_high_arms_the_boat(clock, link):
+    """Issue 13: the ASV seed's RC rule, channel 5 high = armed, was missing: the operator's arm switch arms the boat."""
+    run = Run(make_mission(auto_arm=False), clock, link)
+    run.boat.mode = "LOITER"  # the operator readies the boat...
+    assert run.tick(10) == [R] * 10
+    assert run.boat.commands == []  # channel 5 low: nothing armed
+    run.boat.rc = (1500,) * 4 + (1900, 1000)  # ...and puts the arm switch (channel 5) up
+    assert run.tick(3) == [R] * 3
+    assert run.boat.commands == [ARM, mode("GUIDED")]  # armed by the executive, then the go-to accepted
+
+
 @pytest.mark.parametrize(
     ("auto_arm", "at", "between_ticks", "ticks", "commands", "reason"),
     [

@@ -201,6 +201,10 @@ class Commander:
             )
         )  # fmt: skip
 
+    def request_parameter(self, name: str) -> None:
+        """Queue a PARAM_REQUEST_READ by name; the PARAM_VALUE answer goes to ``/vehicle/params`` (no ack: ask again if none comes)."""
+        self._outbox.append(self._encoder.param_request_read_encode(self.target_system, self.target_component, name.encode(), -1))
+
     def cancel(self, ticket: int | None) -> bool:
         """Forget a request that no longer matters (its behaviour was interrupted); returns whether one was pending.
 

@@ -150,6 +150,7 @@ class MavlinkReader:
             "DISTANCE_SENSOR": self._on_distance_sensor,
             "PARAM_VALUE": self._on_param_value,
             "RANGEFINDER": self._on_rangefinder,
+            "PARAM_VALUE": self._on_param_value,
         }
         if mission is not None:  # the mission protocol's replies go to the transfer, as COMMAND_ACK goes to the commander
             self._handlers |= {
@@ -314,15 +315,22 @@ class MavlinkReader:
         )
 
     def _on_rc_channels(self, msg: MAVLinkMessage, now: float) -> None:
-        count = min(msg.chancount, 18)
-        channels = _RC_CHANNELS(msg)[:count]
+        # every field, whatever chancount says: ArduPilot acts on an RC override of a channel past it (chancount 8, chan9_raw 1500)
+        channels = _RC_CHANNELS(msg)
         if not all(_PWM_MIN_US <= c <= _PWM_MAX_US or c == 0 for c in channels):
             channels = tuple(c if _PWM_MIN_US <= c <= _PWM_MAX_US else 0 for c in channels)
         self._bb.set("/rc/channels", channels)
         self._bb.set("/rc/rssi", None if msg.rssi == 255 else msg.rssi)
+        if self._bb.get("/rc/chancount") != msg.chancount:
+            self._bb.set("/rc/chancount", msg.chancount)
         if self._rc_source:  # with RC on CAN, only a new 0x241 counter says the receiver is alive
             self._bb.set("/rc/last_update", now)
         self._bb.set("/rc/connected", any(channels))
+
+    def _on_param_value(self, msg: MAVLinkMessage, now: float) -> None:
+        name = msg.param_id.rstrip("\x00") if isinstance(msg.param_id, str) else msg.param_id.decode("ascii", "replace").rstrip("\x00")
+        if name and _finite(msg.param_value):
+            self._bb.set("/vehicle/params", {**(self._bb.get("/vehicle/params") or {}), name: msg.param_value})
 
     def _on_command_ack(self, msg: MAVLinkMessage, now: float) -> None:
         self._commander.on_ack(msg)

@@ -135,10 +135,23 @@ def test_battery_unknowns_are_none(reader, link):
 def test_rc_channels(reader, link, clock):
     channels = [1500] * 5 + [1900] + [1000] * 12
     receive(reader, link, heartbeat(), AUTOPILOT.rc_channels(0, 8, *channels, 200))
-    assert bb("/rc/channels") == (1500, 1500, 1500, 1500, 1500, 1900, 1000, 1000)
-    assert (bb("/rc/rssi"), bb("/rc/connected"), bb("/rc/last_update")) == (200, True, clock.now())
+    assert bb("/rc/channels") == (1500, 1500, 1500, 1500, 1500, 1900, *[1000] * 12)  # every field, whatever chancount says
+    assert (bb("/rc/rssi"), bb("/rc/connected"), bb("/rc/last_update"), bb("/rc/chancount")) == (200, True, clock.now(), 8)
     receive(reader, link, AUTOPILOT.rc_channels(0, 8, *([0] * 18), 255))
     assert (bb("/rc/rssi"), bb("/rc/connected")) == (None, False)
+
+
+def test_a_channel_past_chancount_is_read(reader, link):
+    """Issue 13: ArduPilot reported chancount 8 and acted on chan9_raw 1500 (an RC override of the knob); the reader dropped it."""
+    receive(reader, link, heartbeat(), AUTOPILOT.rc_channels(0, 8, *[1500] * 8, 1800, *[65535] * 9, 255))
+    assert bb("/rc/channels")[8] == 1800
+    assert bb("/rc/channels")[9:] == (0,) * 9  # UINT16_MAX: no such channel
+
+
+def test_param_value_is_kept_by_name(reader, link):
+    receive(reader, link, heartbeat(), AUTOPILOT.param_value(b"MODE_CH", 8.0, mavlink.MAV_PARAM_TYPE_INT8, 1, 0))
+    receive(reader, link, AUTOPILOT.param_value(b"FS_ACTION", 2.0, mavlink.MAV_PARAM_TYPE_INT8, 1, 0))
+    assert bb("/vehicle/params") == {"MODE_CH": 8.0, "FS_ACTION": 2.0}
 
 
 def test_command_ack_reaches_the_commander(reader, link, commander):
