@@ -78,7 +78,6 @@ _KEYS: tuple[Key, ...] = (
     Key("/vehicle/home", None, "mavlink reader", "HomePosition (HOME_POSITION)"),
     Key("/vehicle/ground_speed_m_s", None, "mavlink reader", "ground speed (VFR_HUD)"),
     Key("/vehicle/altitude_above_bottom_m", None, "mavlink reader", "height above seabed/ground, m (downward rangefinder); None = no valid reading"),
-    Key("/vehicle/parameters", None, "mavlink reader", "the autopilot's parameters read so far (PARAM_VALUE): name -> value; None = none yet"),
     Key("/vehicle/rangefinder", None, "mavlink reader", "Rangefinder: the downward DISTANCE_SENSOR's reading, range and verdict; None = none yet"),
     Key("/vehicle/heading_deg", None, "mavlink reader", "heading the autopilot believes, degrees (VFR_HUD)"),
     Key("/vehicle/gps", None, "mavlink reader", "GpsFix (GPS_RAW_INT)"),

@@ -95,9 +95,6 @@ class MavlinkPort:
     def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:
         self.commander.local_setpoint(north_m, east_m, down_m)
 
-    def read_parameter(self, name: str) -> None:
-        self.commander.request_parameter(name)
-
     def hold_depth(self, lat: float, lon: float, *, depth_m: float | None = None, altitude_m: float | None = None) -> None:
         self.commander.depth_target(lat, lon, depth_m=depth_m, altitude_m=altitude_m)
 

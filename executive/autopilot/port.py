@@ -113,10 +113,6 @@ class AutopilotPort(Protocol):
         """Head for a point of the local NED frame in the guided mode."""
         ...
 
-    def read_parameter(self, name: str) -> None:
-        """Ask the autopilot for a parameter's value; it comes back in ``/vehicle/parameters`` (no ack: ask again if it does not)."""
-        ...
-
     def hold_depth(self, lat: float, lon: float, *, depth_m: float | None = None, altitude_m: float | None = None) -> None:
         """A sub's depth (below the surface) or height above the seabed at a point."""
         ...

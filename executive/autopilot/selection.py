@@ -134,9 +134,6 @@ class Autopilot:
     def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:
         self.backend.go_to_local(north_m, east_m, down_m)
 
-    def read_parameter(self, name: str) -> None:
-        self.backend.read_parameter(name)
-
     def hold_depth(self, lat: float, lon: float, *, depth_m: float | None = None, altitude_m: float | None = None) -> None:
         self.backend.hold_depth(lat, lon, depth_m=depth_m, altitude_m=altitude_m)
 

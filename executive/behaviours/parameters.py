@@ -14,12 +14,12 @@ class ParameterIs(TimedBehaviour):
     """SUCCESS once the autopilot reports parameter ``name`` with one of ``allowed``; FAILURE naming it, its value, the value needed and ``why``.
 
     The value is asked for (PARAM_REQUEST_READ) every ``ask_every_s`` until a PARAM_VALUE brings it
-    (``/vehicle/parameters``); none within ``timeout_s`` is a FAILURE too. Nothing else is sent.
+    (``/vehicle/params``); none within ``timeout_s`` is a FAILURE too. Nothing else is sent.
     ``autopilot``: the firmware the parameter belongs to ("ardupilot"); on another one it passes
     with a note (its own rules apply there).
     """
 
-    reads = ("/vehicle/parameters",)
+    reads = ("/vehicle/params",)
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
 
@@ -45,7 +45,7 @@ class ParameterIs(TimedBehaviour):
         if self.autopilot.capabilities.autopilot != self.firmware:
             self.feedback_message = f"{self.parameter}: not an {self.firmware} parameter ({self.autopilot.capabilities.autopilot})"
             return Status.SUCCESS
-        value = (self.get("/vehicle/parameters") or {}).get(self.parameter)
+        value = (self.get("/vehicle/params") or {}).get(self.parameter)
         if value is not None:
             if value in self.allowed:
                 self.feedback_message = f"{self.parameter} {value:g}"

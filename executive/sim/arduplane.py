@@ -91,7 +91,8 @@ class QuadPlaneSim(ArduPilotSim):
 
     FIRMWARE = "ArduPlane"
     READY_TEXT = "Ready to FLY"
-    PARAMS: ClassVar[Mapping[str, float]] = {"FLTMODE_CH": 8}  # ArduPlane/Parameters.cpp, FLIGHT_MODE_CHANNEL 8
+    #: ArduPlane/Parameters.cpp, FLIGHT_MODE_CHANNEL 8; WP_LOITER_RAD; Q_GUIDED_MODE (its option: the mission's simulator section)
+    PARAMS: ClassVar[Mapping[str, float]] = {"FLTMODE_CH": 8, "WP_LOITER_RAD": LOITER_RADIUS_M, "Q_GUIDED_MODE": 0}
     INITIAL_MODE = "MANUAL"
     MANUAL_INPUT_MODES = frozenset(PLANE_MODES) - {"INITIALISING"}  # STICK_MIXING enabled
     STABILIZE_MODES = frozenset(PLANE_MODES) - {"MANUAL", "INITIALISING"}
@@ -111,7 +112,6 @@ class QuadPlaneSim(ArduPilotSim):
         limits: AircraftLimits = QUADPLANE_LIMITS,
         **options: float,
     ) -> None:
-        self.q_guided_mode = q_guided_mode
         self._limits = limits
         self.transition = Transition.DONE
         self._transition_started = False  # "Transition airspeed wait" said
@@ -126,6 +126,7 @@ class QuadPlaneSim(ArduPilotSim):
         self._touchdown_at: float | None = None
         self._auto_vtol = False  # auto_state.vtol_mode, set by DO_VTOL_TRANSITION in AUTO
         super().__init__(dataclasses.replace(profile, mav_type=_M.MAV_TYPE_FIXED_WING), clock, home, **options)
+        self.params["Q_GUIDED_MODE"] = q_guided_mode
 
     def _make_vehicle(self, home: Home) -> VehicleModel:
         return QuadPlaneModel(home[0], home[1], home[2], self._limits)
@@ -279,6 +280,15 @@ class QuadPlaneSim(ArduPilotSim):
             v.hover_at(*v.target, v.target_alt_m)
 
     @property
+    def q_guided_mode(self) -> int:
+        """Q_GUIDED_MODE, as the parameter reads (PARAM_VALUE)."""
+        return int(self.params["Q_GUIDED_MODE"])
+
+    @q_guided_mode.setter
+    def q_guided_mode(self, value: int) -> None:
+        self.params["Q_GUIDED_MODE"] = value
+
+    @property
     def _approach_m(self) -> float:
         return max(self._guided_radius, VTOL_APPROACH_M)
 
@@ -330,9 +340,6 @@ class QuadPlaneSim(ArduPilotSim):
             _M.MAV_CMD_NAV_LOITER_UNLIM: lambda cmd: self._mode_accepted(modes["LOITER"]),
             _M.MAV_CMD_NAV_RETURN_TO_LAUNCH: lambda cmd: self._mode_accepted(modes["RTL"]),
         }
-
-    def parameters(self) -> dict[str, float]:
-        return {**super().parameters(), "Q_GUIDED_MODE": float(self.q_guided_mode), "WP_LOITER_RAD": LOITER_RADIUS_M}
 
     def _mode_accepted(self, number: int) -> int:
         self.set_mode(number)  # ArduPlane acks these ACCEPTED whether the mode changed or not

@@ -101,6 +101,7 @@ class ArduSubSim(ArduPilotSim):
         self._destination: tuple[float, float] | None = None  # GUIDED's horizontal target
         self._guided_speed: float | None = None
         super().__init__(profile, clock, home, **options)
+        self.params.update(RNGFND1_MIN=RANGEFINDER_MIN_M, RNGFND1_MAX=rangefinder_max_m)  # answered to PARAM_REQUEST_READ
 
     def _make_vehicle(self, home: Home) -> VehicleModel:
         return UnderwaterVehicle(home[0], home[1], home[2], self._limits, self._seabed)
@@ -222,9 +223,6 @@ class ArduSubSim(ArduPilotSim):
             _M.MAV_CMD_NAV_LOITER_UNLIM: lambda cmd: self._mode_result(modes["POSHOLD"]),
             _M.MAV_CMD_MISSION_START: self._cmd_mission_start,
         }
-
-    def parameters(self) -> dict[str, float]:
-        return {**super().parameters(), "RNGFND1_MIN": RANGEFINDER_MIN_M, "RNGFND1_MAX": self.rangefinder_max_m}
 
     def _mode_result(self, number: int) -> int:
         return _M.MAV_RESULT_ACCEPTED if self.set_mode(number) else _M.MAV_RESULT_FAILED

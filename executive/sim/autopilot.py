@@ -328,22 +328,6 @@ class ArduPilotSim(ABC):
             "PARAM_REQUEST_READ": self._on_param_request_read,
         }
 
-    def parameters(self) -> dict[str, float]:
-        """The firmware's parameters this simulation models (name -> value), answered to PARAM_REQUEST_READ."""
-        return {}
-
-    def _on_param_request_read(self, msg: MAVLinkMessage) -> None:
-        """PARAM_VALUE for a parameter asked by name (param_index -1) or by index; unknown ones get no answer, as ArduPilot's."""
-        params = self.parameters()
-        names = sorted(params)
-        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode(errors="replace")
-        name = name.rstrip("\x00")
-        if msg.param_index >= 0:
-            name = names[msg.param_index] if msg.param_index < len(names) else ""
-        if name not in params:
-            return
-        self._emit(self._mav.param_value_encode(name.encode(), params[name], _M.MAV_PARAM_TYPE_REAL32, len(names), names.index(name)))
-
     def _command_handlers(self) -> dict[int, Callable[[Command], int]]:
         return {
             _M.MAV_CMD_DO_SET_MODE: lambda cmd: self._set_mode_common(int(cmd.params[0]), int(cmd.params[1])),

@@ -5,8 +5,6 @@ from __future__ import annotations
 from py_trees.common import Status
 
 from executive.behaviours import ParameterIs
-from executive.io.mavlink.reader import MavlinkReader
-from executive.testing import AUTOPILOT
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 
@@ -21,12 +19,12 @@ def test_asks_until_the_value_comes_then_accepts_it(harness, vehicle):
     assert h.tick(0.5) == R and requests(h.link) == ["Q_GUIDED_MODE"]
     assert h.tick(0.5) == R and requests(h.link) == []
     assert h.tick(0.5) == R and requests(h.link) == ["Q_GUIDED_MODE"]  # no answer: asked again a second later
-    vehicle.set(vehicle__parameters={"Q_GUIDED_MODE": 1.0})
+    vehicle.set(vehicle__params={"Q_GUIDED_MODE": 1.0})
     assert h.tick() == S and node.feedback_message == "Q_GUIDED_MODE 1"
 
 
 def test_a_wrong_value_is_refused_naming_the_parameter_the_value_it_needs_and_why(harness, vehicle):
-    vehicle.set(vehicle__parameters={"Q_GUIDED_MODE": 0.0})
+    vehicle.set(vehicle__params={"Q_GUIDED_MODE": 0.0})
     node = ParameterIs("Q_GUIDED_MODE", (1.0,), "a hover point needs it")
     h = harness(node)
     assert h.tick() == F and node.feedback_message == "Q_GUIDED_MODE is 0: set it to 1: a hover point needs it"
@@ -38,14 +36,3 @@ def test_no_answer_is_a_failure_after_its_time_limit(harness):
     h = harness(node)
     assert [h.tick(1.0) for _ in range(5)] == [R, R, R, R, F]  # started at the first tick: over 3 s at the fifth
     assert node.feedback_message == "Q_GUIDED_MODE not reported by the autopilot within 3 s (it needs a hover point)"
-
-
-def test_the_reader_keeps_every_parameter_value(link, clock, commander):
-    import py_trees
-
-    reader = MavlinkReader(link, clock, commander)
-    link.incoming.append(AUTOPILOT.heartbeat(1, 3, 0, 0, 3))
-    link.incoming.append(AUTOPILOT.param_value(b"Q_GUIDED_MODE", 1.0, 9, 1000, 5))
-    link.incoming.append(AUTOPILOT.param_value(b"RNGFND1_MAX", 30.0, 9, 1000, 6))
-    reader.drain()
-    assert py_trees.blackboard.Blackboard.get("/vehicle/parameters") == {"Q_GUIDED_MODE": 1.0, "RNGFND1_MAX": 30.0}

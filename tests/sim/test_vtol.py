@@ -240,4 +240,5 @@ def test_q_guided_mode_is_read_as_a_parameter(make_gcs: MakeGcs) -> None:
     gcs.ap.q_guided_mode = 1
     (value,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, b"Q_GUIDED_MODE", -1))
     assert (value.get_type(), value.param_id, value.param_value) == ("PARAM_VALUE", "Q_GUIDED_MODE", 1.0)
+    assert make_gcs("vtol", q_guided_mode=1).ap.params["Q_GUIDED_MODE"] == 1  # the mission's simulator option
     assert gcs.send(gcs.mav.param_request_read_encode(1, 1, b"NO_SUCH_PARAM", -1)) == []  # ArduPilot does not answer

@@ -101,7 +101,7 @@ class ScriptedQuadPlane(ScriptedAutopilot):
             "vehicle__position": GlobalPosition(lat, lon, self.alt, 0.0, 0.0, 0.0, 0.0, 0.0),
             "vehicle__vtol_state": self.vtol,
             "vehicle__landed_state": self.landed,
-            "vehicle__parameters": self.parameters_read,
+            "vehicle__params": self.parameters_read,
         }
 
     def on_message(self, msg: Any) -> None:

@@ -188,10 +188,6 @@ class Commander:
             )
         )  # fmt: skip
 
-    def request_parameter(self, name: str) -> None:
-        """Queue a PARAM_REQUEST_READ by name; the PARAM_VALUE comes back to the reader (/vehicle/parameters). No ack."""
-        self._outbox.append(self._encoder.param_request_read_encode(self.target_system, self.target_component, name.encode(), -1))
-
     def local_setpoint(self, north_m: float, east_m: float, down_m: float) -> None:
         """Queue a position target in the local NED frame (MAV_FRAME_LOCAL_NED: from the EKF origin, z down). Never acknowledged."""
         self._outbox.append(

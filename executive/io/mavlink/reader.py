@@ -148,7 +148,6 @@ class MavlinkReader:
             "SERVO_OUTPUT_RAW": self._on_servo_output,
             "EXTENDED_SYS_STATE": self._on_extended_sys_state,
             "DISTANCE_SENSOR": self._on_distance_sensor,
-            "PARAM_VALUE": self._on_param_value,
             "RANGEFINDER": self._on_rangefinder,
             "PARAM_VALUE": self._on_param_value,
         }
@@ -394,14 +393,6 @@ class MavlinkReader:
         landed = mavlink.enums["MAV_LANDED_STATE"].get(msg.landed_state)
         self._bb.set("/vehicle/vtol_state", vtol.name.removeprefix("MAV_VTOL_STATE_") if vtol else None)
         self._bb.set("/vehicle/landed_state", landed.name.removeprefix("MAV_LANDED_STATE_") if landed else None)
-
-    def _on_param_value(self, msg: MAVLinkMessage, now: float) -> None:
-        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode(errors="replace")
-        if not _finite(msg.param_value):
-            return
-        params = dict(self._bb.get("/vehicle/parameters") or {})  # a new dict: a reader of the old one sees it unchanged
-        params[name.rstrip("\x00")] = float(msg.param_value)
-        self._bb.set("/vehicle/parameters", params)
 
     def _on_distance_sensor(self, msg: MAVLinkMessage, now: float) -> None:
         """The downward rangefinder: the one source of the height above the bottom (and of its validity).
