@@ -28,7 +28,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission
 from executive.runtime import Outcome, Runtime
-from executive.sim.faults import FaultInjector, RcInput
+from executive.sim.faults import FaultInjector, RcInput, RcLoss
 from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
 from executive.testing import EKF_READY, Lockstep, ack, port_for
@@ -836,3 +836,19 @@ def test_scenario_the_operator_records_a_route_on_the_simulated_bunker_and_auto_
     assert runtime.mission_state.leg_index == 4
     assert sim.autopilot.mode == "HOLD"
     assert sim.autopilot.elapsed_s < 180.0
+
+
+def test_scenario_rc_gaps_while_the_operator_drives_in_manual_take_nothing_from_them(lockstep) -> None:
+    """The defect (ugv_rc_route.yaml at 20x): a short RC gap fired the RC-loss failsafe, which put the vehicle in HOLD while the
+    operator drove it in MANUAL; all 4 route points were recorded at home and the run ended COMPLETED. Two 0.6 s gaps while
+    the operator drives: the vehicle stays in MANUAL, the route is four places, and it is driven."""
+    mission = load_mission(ROOT / "missions/ugv_rc_route.yaml")
+    gaps = [RcLoss(kind="rc_loss", at_s=20.5, for_s=0.6), RcLoss(kind="rc_loss", at_s=30.5, for_s=0.6)]
+    sim = lockstep(mission, model="bunker", mission_dir=ROOT / "missions", events=gaps)
+    modes: list[tuple[float, str]] = []
+    sim.observers.append(lambda s: modes.append((s.autopilot.elapsed_s, s.autopilot.mode)))
+    outcome = sim.run_to_end(limit_s=600)
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    assert {mode for t, mode in modes if 14.5 <= t < 48.5} == {"MANUAL"}  # armed in MANUAL at 14 s, AUTO at 49 s: never held
+    recorded = [(wp.lat, wp.lon) for wp in sim.runtime.mission_state.route.waypoints]
+    assert len(recorded) == 4 and min(geo.distance(*a, *b) for a, b in itertools.pairwise(recorded)) > 5.0
