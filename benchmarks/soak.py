@@ -18,6 +18,7 @@ from __future__ import annotations
 import gc
 import json
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -154,7 +155,13 @@ def measure_process(legs: int, speedup: float = 50.0, leg_m: float = 200.0, faul
         "faults_injected": injected,
         "failsafes": text.count("failsafe ") - text.count("recovered after"),
         "recoveries": text.count("recovered after"),
+        "capped_to": ([float(x) for x in re.findall(r"speed-up capped at (\S+)x", text)] or [speedup])[-1],
     }
+
+
+def _capped(p: dict[str, float]) -> str:
+    """How far the executive capped the speed-up on this machine, if it did."""
+    return f" (capped to {p['capped_to']:g}x: the machine could not follow)" if p["capped_to"] < 50.0 else ""
 
 
 def run(legs: int = 200, sample_every: int = SAMPLE_EVERY, process_legs: int = 30) -> list[Row]:
@@ -204,7 +211,7 @@ def run(legs: int = 200, sample_every: int = SAMPLE_EVERY, process_legs: int = 3
             f"<= {MAX_RSS_GROWTH_MB} MB",
             p["completed"] and process_growth <= MAX_RSS_GROWTH_MB,
             f"{p['rss_first_mb']:.2f} -> {p['rss_last_mb']:.2f} MB (VmRSS, {p['samples']} samples); {process_legs} legs, "
-            f"{p['vehicle_h']:.1f} h of vehicle time at 50x in {p['wall_s']:.0f} s, journal and {p['tlog_mb']:.0f} MB tlog written; "
+            f"{p['vehicle_h']:.1f} h of vehicle time at 50x{_capped(p)} in {p['wall_s']:.0f} s, journal and {p['tlog_mb']:.0f} MB tlog written; "
             f"{p['faults_injected']} faults injected (link loss, EKF loss by turns): {p['failsafes']} failsafes, {p['recoveries']} resumed; "
             f"completed: {p['completed']}",
             p,

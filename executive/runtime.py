@@ -103,7 +103,8 @@ class Runtime:
     The tree is built when a mission starts (from READY, or again after it ended), so an operator
     can upload another mission and start it without restarting the executive. ``serve`` keeps
     the executive up between missions, waiting for operator requests, instead of returning when
-    the mission ends.
+    the mission ends. Each tick drains the readers, ticks the tree and services the writers
+    (:mod:`executive.services`); what they are is decided by :func:`executive.assembly.build_runtime`.
     """
 
     def __init__(
@@ -150,7 +151,7 @@ class Runtime:
         self.tree: py_trees.trees.BehaviourTree | None = None
         self.mission_state.upload(self.mission)
         self.progress = progress
-        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches", "/vehicle/position"])
+        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
         #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.

@@ -90,4 +90,4 @@ def test_the_mavlink_link_and_the_estimators_are_services_in_order(square_missio
     names = [service_name(s) for s in runtime.readers]
     assert names == ["mavlink reader", "HeadingFilter", "RcReader", "InterventionWatch", "Heartbeat"]
     names = [service_name(s) for s in runtime.writers]
-    assert names == ["StreamRequester", "GroundStationControl", "RouteKeeper", "autopilot port", "commands", "mission transfers"]
+    assert names == ["StreamRequester", "GroundStationControl", "RouteKeeper", "ParameterWatch", "autopilot port", "commands", "mission transfers"]

@@ -30,6 +30,7 @@ class ArduPilotPort(MavlinkPort):
             vehicles=AUTOPILOT_VEHICLES["ardupilot"],
             transition_anywhere=False,
             takeoff_alt_amsl=False,
+            first_item_seq=1,
             mode_switch_param=MODE_SWITCH_PARAMS.get(profile.kind),
         )
 

@@ -99,6 +99,7 @@ class Px4Port(MavlinkPort):
             vehicles=AUTOPILOT_VEHICLES["px4"],
             transition_anywhere=True,
             takeoff_alt_amsl=True,
+            first_item_seq=0,  # PX4's mission has no home slot: src/modules/mavlink/mavlink_mission.cpp stores item 0 as the first item
         )
         self.stream = OffboardStream(commander)
         self._bb = blackboard.reader("px4 port", ["/link/mission_transfer", "/vehicle/home"])
@@ -138,7 +139,7 @@ class Px4Port(MavlinkPort):
         VEHICLE_CMD_DO_REPOSITION): home's plus ``alt_m`` (NaN, keep the altitude, before home is known).
         """
         self._leaving_offboard()
-        self.commander.modes_asked["AUTO.LOITER"] = self.commander.clock.now()  # the mode it puts PX4 in: ours, not a person's
+        self.commander.note_mode_asked("AUTO.LOITER")  # the mode it puts PX4 in: ours, not a person's
         home: HomePosition | None = self._bb.get("/vehicle/home")
         amsl = home.alt_m + alt_m if home is not None else math.nan
         flags = float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)
@@ -147,7 +148,7 @@ class Px4Port(MavlinkPort):
 
     def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:
         self._leaving_offboard()  # NAV_TAKEOFF: AUTO.TAKEOFF, then AUTO.LOITER (a follow-on mode)
-        self.commander.modes_asked["AUTO.TAKEOFF"] = self.commander.clock.now()
+        self.commander.note_mode_asked("AUTO.TAKEOFF")
         amsl = home.alt_m + alt_m if home is not None else math.nan
         return self._request(self.commander.takeoff(amsl), mavlink.MAV_CMD_NAV_TAKEOFF)
 

@@ -66,6 +66,8 @@ class Autopilot:
         self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4 if name == "px4" else heartbeat_autopilot, mav_type)
         self._commander.double_acked = DOUBLE_ACKED[name]
         self._commander.follow_on_modes = FOLLOW_ON_MODES[name]
+        if self._transfer is not None:
+            self._transfer.home_slot = name != "px4"
         if name != self.backend.name:
             self.backend = BACK_ENDS[name](self._commander, self._transfer, self._profile)
             log.info("autopilot back end: %s", name)

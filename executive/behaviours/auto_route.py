@@ -206,14 +206,15 @@ class DriveRouteInAuto(TimedBehaviour):
         """Move the leg index up to what the autopilot reported."""
         assert self._driving_since is not None and self._run_started is not None
         done = 0
+        first = self.autopilot.capabilities.first_item_seq  # the first waypoint's item: 1 after ArduPilot's home, 0 on PX4
         current: MissionCurrent | None = self.get("/vehicle/mission_current")
         if current is not None and current.time > self._driving_since:
             if current.state == MISSION_STATE_COMPLETE:
                 done = n
-            elif current.seq >= 1:
-                done = current.seq - 1
+            elif current.seq >= first:
+                done = current.seq - first
         reached: MissionItemReached | None = self.get("/vehicle/mission_reached")
         if reached is not None and reached.time >= self._run_started:
-            done = max(done, reached.highest)
+            done = max(done, reached.highest + 1 - first)
         while self.mission_state.leg_index < min(done, n):
             self.mission_state.advance_leg()

@@ -9,13 +9,16 @@ Path = tuple[str | int, ...]
 
 
 def format_path(path: Path) -> str:
-    """``("waypoints", 2, "lat")`` -> ``waypoints[2].lat``; the empty path is ``(mission)``."""
+    """``("waypoints", 2, "lat")`` -> ``waypoints[2].lat``; the empty path is ``(mission)``.
+
+    A mapping key YAML does not read as text (``null: 1``, ``1.5: 1``) is shown as Python prints it.
+    """
     out = ""
     for part in path:
-        if isinstance(part, int):
+        if isinstance(part, int) and not isinstance(part, bool):
             out += f"[{part}]"
         else:
-            out += f".{part}" if out else part
+            out += f".{part}" if out else str(part)
     return out or "(mission)"
 
 

@@ -429,7 +429,7 @@ def rc_switch_channels(mission: Mission) -> dict[int, str]:
 
 #: Trees that need what only ArduPilot does, and why.
 ARDUPILOT_ONLY_TREES: dict[str, str] = {
-    "ugv_rc_route": "its route is driven by the autopilot's own mission, uploaded the ArduPilot way (home at item 0; PX4 flies item 0)",
+    "ugv_rc_route": "its operator drives it with ArduRover's modes and switches (arming only in MANUAL, switch C to AUTO)",
 }
 
 

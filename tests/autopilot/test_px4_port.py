@@ -17,7 +17,7 @@ from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import rates_for
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, autopilot_errors
-from executive.state import GlobalPosition, HomePosition, MissionCurrent, MissionTransferStatus, TransferOperation, TransferState
+from executive.state import GlobalPosition, HomePosition, MissionCurrent, MissionItemReached, MissionTransferStatus, TransferOperation, TransferState
 from executive.testing import AUTOPILOT, Harness, Peer
 
 _M = mavlink
@@ -371,3 +371,25 @@ def test_a_sub_or_an_rc_route_on_px4_is_refused_with_the_reason() -> None:
     sub = Mission.model_validate({"version": 1, "name": "s", "vehicle": "sub", "waypoints": [{"lat": 1.0, "lon": 1.0}]})
     assert autopilot_errors(sub, "px4") == ["px4 drives rover, vtol here, not a sub"]
     assert autopilot_errors(sub, "ardupilot") == []
+
+
+def test_on_px4_the_route_s_item_k_is_its_leg_k(px4, vehicle, clock, link, commander):
+    """No home slot: MISSION_CURRENT seq 1 means leg 1 done; MISSION_ITEM_REACHED seq 1, two legs done."""
+    mission = Mission.model_validate(
+        {
+            "version": 1,
+            "name": "r",
+            "vehicle": "rover",
+            "waypoints": [{"lat": 47.3978, "lon": 8.5456}, {"lat": 47.3979, "lon": 8.5457}, {"lat": 47.398, "lon": 8.5458}],
+        }
+    )
+    state = MissionState()
+    state.upload(mission)
+    state.start()
+    h = Harness(DriveRouteInAuto(60.0), clock, link, commander, state, px4)
+    vehicle.set(vehicle__mode="AUTO.MISSION", vehicle__armed=True, vehicle__mission_items=route_items(mission.waypoints))
+    assert h.tick() == R
+    vehicle.set(vehicle__mission_current=MissionCurrent(1, 3, 2, True, clock.now() + 0.05))  # heard after the drive began
+    assert (h.tick(), state.leg_index) == (R, 1)
+    vehicle.set(vehicle__mission_reached=MissionItemReached(1, clock.now(), 1))
+    assert (h.tick(), state.leg_index) == (R, 2)

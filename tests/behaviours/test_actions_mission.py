@@ -423,7 +423,8 @@ class TestVtolTransition:
         node = VtolTransition(to)
         h = harness(node)
         assert h.tick() == R
-        (sent,) = h.link.take()
+        (sent,) = h.link.take("COMMAND_LONG")  # in OFFBOARD the setpoint stream goes on beside it
+        assert len(h.link.take("SET_POSITION_TARGET_GLOBAL_INT")) == 1
         assert command(sent) == ("COMMAND_LONG", M.MAV_CMD_DO_VTOL_TRANSITION, state, 0.0, 0.0, 0.0)
         h.ack(M.MAV_CMD_DO_VTOL_TRANSITION)
         vehicle.set(vehicle__vtol_state=to)

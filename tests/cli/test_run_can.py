@@ -49,8 +49,9 @@ def test_the_drive_bridge_talks_to_the_base_and_the_bus_is_recorded(tmp_path):
     commands = [f for f in frames if f.arbitration_id == 0x111]
     moving = [f for f in commands if any(f.data[:4])]
     assert moving, "the bridge forwarded the autopilot's skid-steer outputs while driving"
-    span = commands[-1].timestamp - commands[0].timestamp
-    assert len(commands) / span > 50 * 10 * 0.6  # 50 Hz of vehicle time at 10x (with slack for a busy machine)
+    selects = [f for f in frames if f.arbitration_id == 0x421]
+    assert len(selects) == len(commands)  # each command goes with its control-mode select
+    # the 50 Hz of vehicle time is proven in lock-step (test_can_closed_loop): here the wall clock would judge the machine's load
 
 
 def test_bad_can_arguments_are_refused(tmp_path, capsys):

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 import trees
 from executive.mission import loader
-from executive.mission.errors import FieldError, MissionError
+from executive.mission.errors import FieldError, MissionError, format_path
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission
 
@@ -146,6 +146,20 @@ def test_anchors_and_merges_within_the_limits_load(minimal_yaml: str) -> None:
 
 def test_a_key_yaml_reads_as_a_bool_is_named_as_written(minimal_yaml: str) -> None:
     assert errors_of(minimal_yaml + "off: 1\n") == ["m.yaml:7:1: off: expected a string key, got bool false (YAML 1.1 reads off as a boolean)"]
+
+
+def test_a_path_through_keys_that_are_not_text_is_named() -> None:
+    paths = [(None,), (1.5, "x"), ("rc", True), ("waypoints", 0, None)]
+    assert [format_path(path) for path in paths] == ["None", "1.5.x", "rc.True", "waypoints[0].None"]
+
+
+def test_a_null_key_beside_a_refused_value_is_reported_with_it() -> None:
+    # the rules between fields ran without both values and asked whether their message named the null key's path
+    text = "version: 1\nname: square\nvehicle: rover\ntree: waypoints\nwaypoints: [.nan]\nnull: .nan\n"
+    assert errors_of(text) == [
+        "m.yaml:5:13: waypoints[0]: expected a mapping, got number nan",
+        "m.yaml:6:1: null: expected a string key, got null",
+    ]
 
 
 def test_nesting_too_deep_through_aliases(minimal_yaml: str) -> None:

@@ -110,10 +110,13 @@ class Commander:
         if chosen is None:
             raise KeyError("no mode given")
         main, sub = self.modes.encode(chosen)
-        name = self.modes.canonical(chosen) if isinstance(chosen, str) else self.modes.decode(int(main))
+        self.note_mode_asked(self.modes.canonical(chosen) if isinstance(chosen, str) else self.modes.decode(int(main)))
+        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub), delay_s=delay_s)
+
+    def note_mode_asked(self, name: str) -> None:
+        """A mode our request puts the vehicle in (asked by name, or the effect of a command): not a person's change."""
         self.modes_asked[name] = self._clock.now()
         self.last_mode_asked = name
-        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub), delay_s=delay_s)
 
     def arm(self, *, force: bool = False) -> int:
         return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0, FORCE_ARM_MAGIC if force else 0.0))
@@ -134,6 +137,7 @@ class Commander:
     def reposition(self, lat: float, lon: float, alt_m: float = 0.0) -> int:
         """Go to a point (switching to GUIDED where the firmware does); acked, unlike a setpoint."""
         flags = float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)
+        self.note_mode_asked(self.profile.guided_mode)  # the firmware switches to GUIDED itself: a mode we asked for
         return self.command_int(
             mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, (-1, flags, 0, float("nan"), lat, lon, alt_m)
         )

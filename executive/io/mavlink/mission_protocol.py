@@ -200,7 +200,9 @@ class MissionTransfer:
         self._awaiting = ""  # the reply we wait for, to say what never came
         self._deadline = math.inf
         self._timeouts = 0  # in a row, without a word from the vehicle
-        self._upload: tuple[MissionItem, ...] = ()  # home first
+        #: Item 0 is home (ArduPilot); PX4 flies item 0 as the first item (its mission has no home slot). The autopilot port sets it.
+        self.home_slot = True
+        self._upload: tuple[MissionItem, ...] = ()  # home first, with a home slot
         self._verify_upload = verify
         self._final_item_sent = False
         self._last_item_seq = 0
@@ -219,9 +221,12 @@ class MissionTransfer:
         None (a placeholder). With ``verify`` (default: the instance's), the mission is read back
         and compared item by item before the upload counts as DONE. Returns the ticket.
         """
-        lat, lon, alt = (*home, 0.0)[:3] if home else (0.0, 0.0, 0.0)
-        home_item = MissionItem(0, _M.MAV_FRAME_GLOBAL, _M.MAV_CMD_NAV_WAYPOINT, 0, 1, 0.0, 0.0, 0.0, 0.0, lat, lon, alt)
-        self._upload = (home_item, *(replace(item, seq=seq) for seq, item in enumerate(items, start=1)))
+        if self.home_slot:
+            lat, lon, alt = (*home, 0.0)[:3] if home else (0.0, 0.0, 0.0)
+            home_item = MissionItem(0, _M.MAV_FRAME_GLOBAL, _M.MAV_CMD_NAV_WAYPOINT, 0, 1, 0.0, 0.0, 0.0, 0.0, lat, lon, alt)
+            self._upload = (home_item, *(replace(item, seq=seq) for seq, item in enumerate(items, start=1)))
+        else:  # no home slot: the items from 0 (``home`` is the autopilot's own business)
+            self._upload = tuple(replace(item, seq=seq) for seq, item in enumerate(items))
         self._verify_upload = self.verify if verify is None else verify
         self._final_item_sent = False
         ticket = self._start(TransferOperation.UPLOAD, len(self._upload))
@@ -416,21 +421,29 @@ class MissionTransfer:
 
     def _uploaded(self, now: float) -> None:
         if not self._verify_upload:
-            self._hold(self.home, self._upload[1:])
+            self._hold(self.home if self.home_slot else None, self._upload[self._first :])
             self._finish(now, _M.MAV_MISSION_ACCEPTED)
             return
         self._publish(now, verifying=True, progress=0)
         self._request_list()
 
     def _downloaded(self, now: float) -> None:
-        home, items = (self._received[0] if self._received else None), tuple(self._received[1:])
+        if self.home_slot:
+            home, items = (self._received[0] if self._received else None), tuple(self._received[1:])
+        else:
+            home, items = None, tuple(self._received)
         self._hold(home, items)
         if self._status is not None and self._status.verifying:
-            mismatch = first_mismatch(self._upload[1:], items)
+            mismatch = first_mismatch(self._upload[self._first :], items)
             if mismatch is not None:
                 self._fail(f"read-back mismatch: {mismatch}", now)
                 return
         self._finish(now, None)
+
+    @property
+    def _first(self) -> int:
+        """The seq of the first mission item: 1 after a home slot, else 0."""
+        return 1 if self.home_slot else 0
 
     def _hold(self, home: MissionItem | None, items: tuple[MissionItem, ...]) -> None:
         """What the vehicle holds, as far as we know; another mission's reports of items reached say nothing about this one."""

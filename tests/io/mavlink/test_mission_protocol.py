@@ -402,3 +402,19 @@ def test_targets_follow_the_adopted_autopilot(link, clock, commander, transfer) 
     transfer.flush()
     [sent] = link.take()
     assert (sent.target_system, sent.target_component) == (7, 1)
+
+
+def test_px4_has_no_home_slot_the_route_goes_from_item_0_and_is_read_back_whole(x: Exchange) -> None:
+    """PX4 flies item 0 as the first item (src/modules/mavlink/mavlink_mission.cpp); it asks with MISSION_REQUEST_INT."""
+    x.transfer.home_slot = False
+    x.transfer.upload(ITEMS, HOME)
+    assert x.tick() == [("MISSION_COUNT", 2)]
+    assert x.tick(request_int(0)) == [("MISSION_ITEM_INT", 0)]
+    assert x.tick(request_int(1)) == [("MISSION_ITEM_INT", 1)]
+    assert x.tick(ack()) == [("MISSION_REQUEST_LIST",)]
+    assert x.tick(count(2)) == [("MISSION_REQUEST_INT", 0)]
+    first, second = (replace(item, seq=seq) for seq, item in enumerate(ITEMS))
+    assert x.tick(held(first)) == [("MISSION_REQUEST_INT", 1)]
+    assert x.tick(held(second)) == [("MISSION_ACK", m.MAV_MISSION_ACCEPTED)]
+    assert x.status.state is TransferState.DONE
+    assert [i.seq for i in bb("/vehicle/mission_items")] == [0, 1] and bb("/vehicle/mission_home") is None
