@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -50,7 +51,9 @@ def test_the_drive_bridge_talks_to_the_base_and_the_bus_is_recorded(tmp_path):
     moving = [f for f in commands if any(f.data[:4])]
     assert moving, "the bridge forwarded the autopilot's skid-steer outputs while driving"
     span = commands[-1].timestamp - commands[0].timestamp
-    assert len(commands) / span > 50 * 10 * 0.6  # 50 Hz of vehicle time at 10x (with slack for a busy machine)
+    # 50 Hz of vehicle time at 10x, or at the least speed-up the executive capped itself to on a busy machine (the log is in wall time)
+    speedup = min([10.0, *(float(x) for x in re.findall(r"speed-up capped at (\S+)x", proc.stderr))])
+    assert len(commands) / span > 50 * speedup * 0.6
 
 
 def test_bad_can_arguments_are_refused(tmp_path, capsys):
