@@ -114,7 +114,9 @@ def recurring_faults(first_s: float, every_s: float, until_s: float, for_s: floa
 def measure_process(legs: int, speedup: float = 50.0, leg_m: float = 200.0, faults_every_s: float = 240.0) -> dict[str, float]:
     """Run ``executive run`` on a ``legs``-leg mission with recurring faults; VmRSS (kB) sampled along the route."""
     mission = rover_mission(serpentine(legs, leg_m, row_m=20.0), name="soak", leg_timeout_s=LEG_TIMEOUT_S, battery_min_pct=None)
-    faults = recurring_faults(120.0, faults_every_s, legs * 90.0)  # legs take ~90 s
+    leg_s = leg_m * 0.45  # 200 m legs take ~90 s
+    scale = leg_m / 200.0  # shorter legs, the faults as often per leg
+    faults = recurring_faults(120.0 * scale, faults_every_s * scale, legs * leg_s)
     with tempfile.TemporaryDirectory(prefix="executive-soak-") as tmp:
         path, faults_path, log_path = Path(tmp) / "soak.yaml", Path(tmp) / "faults.yaml", Path(tmp) / "run.log"
         path.write_text(yaml.safe_dump(mission.model_dump(mode="json", exclude_defaults=True), sort_keys=False), encoding="utf-8")
@@ -164,14 +166,16 @@ def _capped(p: dict[str, float]) -> str:
     return f" (capped to {p['capped_to']:g}x: the machine could not follow)" if p["capped_to"] < 50.0 else ""
 
 
-def run(legs: int = 200, sample_every: int = SAMPLE_EVERY, process_legs: int = 30) -> list[Row]:
-    p = measure_process(process_legs)
+def run(legs: int = 200, sample_every: int = SAMPLE_EVERY, process_legs: int = 30, leg_m: float = 200.0) -> list[Row]:
+    """``legs`` legs of ``leg_m`` in process, ``process_legs`` of them over UDP; growth from the first quarter to the last."""
+    p = measure_process(process_legs, leg_m=leg_m)
     process_growth = p["rss_last_mb"] - p["rss_first_mb"]
-    m = measure(legs, sample_every=sample_every)
+    m = measure(legs, leg_m=leg_m, sample_every=sample_every)
     tick_growth = m["tick_last_us"] / m["tick_first_us"]
     block_growth = m["blocks_last"] - m["blocks_first"]
     rss_growth = m["rss_last_mb"] - m["rss_first_mb"]
-    where = f"{legs} legs, {m['vehicle_h']:.1f} h of vehicle time in {m['wall_s']:.0f} s, {m['ticks']} ticks, completed: {m['completed']}"
+    where = f"{legs} legs of {leg_m:g} m, {m['vehicle_h']:.1f} h of vehicle time in {m['wall_s']:.0f} s, {m['ticks']} ticks"
+    where += f", completed: {m['completed']}"
     return [
         Row(
             "soak",

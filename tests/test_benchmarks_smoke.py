@@ -35,7 +35,7 @@ def test_can_decode() -> None:
 
 
 def test_soak() -> None:
-    _check(soak.run(legs=2, sample_every=20, process_legs=3), 4)
+    _check(soak.run(legs=2, sample_every=20, process_legs=3, leg_m=20.0), 4)
 
 
 def test_reaction() -> None:

@@ -3,6 +3,7 @@
 ::
 
     Mission: while PAUSED, hold in QLOITER (flying as a plane: LOITER); otherwise run:
+    ├── Firmware check (once, with a hover point): Q_GUIDED_MODE is 1? (else refused, naming it and why)
     ├── Pre-flight: wait for the EKF, arm (or wait for the operator to)
     ├── Guarded flight or hold (reactive selector)
     │   ├── Guarded flight: link alive? EKF ok? armed? RC not taking over? -> Flight:
@@ -25,9 +26,12 @@ How ArduPlane (a QuadPlane) is flown here, and why:
   within the mission's acceptance radius (at least 70 m for a vtol, checked when the mission is
   loaded). Only with Q_GUIDED_MODE=1 does ArduPlane fly a GUIDED point on its lift motors, and only
   within WP_LOITER_RAD of the aircraft: the hover point needs both (its 50 m rule is checked too).
-- DO_VTOL_TRANSITION works in AUTO only: to FW the aircraft is repositioned ahead (GUIDED flies
-  wing-borne), to MC it is put in QLOITER; each transition counts only once EXTENDED_SYS_STATE
-  says so, and fails after vtol.transition_timeout_s.
+- DO_VTOL_TRANSITION works in AUTO only (QuadPlane::handle_do_vtol_transition: "VTOL transition
+  only in AUTO"): to FW the aircraft is repositioned 600 m ahead (GUIDED flies wing-borne; with
+  Q_GUIDED_MODE 1 the last ~140 m of a GUIDED target are a VTOL approach, so a nearer point never
+  shows FW), to MC it is put in QLOITER; each transition counts only once EXTENDED_SYS_STATE says
+  so, and fails after vtol.transition_timeout_s. With Q_GUIDED_MODE 1 each wing-borne leg ends in
+  that approach (it is reached within the acceptance radius, on the lift motors).
 - A plane cannot stop on a point: braking on the lift motors from cruise speed takes ~80 m. QRTL
   is ArduPlane's way back over home on the lift motors; it ends in the same descent as QLAND.
 - The landing is not guarded: disarming is how it ends, and QRTL/QLAND are what ArduPlane's own
@@ -44,13 +48,17 @@ import py_trees
 from py_trees.common import OneShotPolicy
 
 from executive import frames
-from executive.behaviours import ForEachLeg, GoTo, GoToLocal, Land, SetMode, TakeOff, VtolTransition
+from executive.behaviours import ForEachLeg, GoTo, GoToLocal, Land, ParameterIs, SetMode, TakeOff, VtolTransition
 from executive.mission.model import Mission, VtolOptions
 from executive.vehicles import PROFILES
 from trees._parts import guarded, mission_root, preflight, standard_guards
 
 #: How close to the hover point (3-D) counts as there: a multicopter stops on a point.
 HOVER_ACCEPTANCE_M = 2.0
+#: How far ahead the transition to FW is aimed. With Q_GUIDED_MODE 1 ArduPlane flies the last ~140 m of a GUIDED
+#: target as a VTOL approach (issue 14, SITL: "VTOL Position1 d=143.4" after a reposition 300 m ahead, FW never
+#: reported); the transition (to airspeed, then Q_TRANSITION_MS) must be done before that: 600 m leaves room for both.
+TRANSITION_AHEAD_M = 600.0
 
 
 def once(name: str, *steps: py_trees.behaviour.Behaviour) -> py_trees.behaviour.Behaviour:
@@ -74,7 +82,8 @@ def flight(mission: Mission, options: VtolOptions) -> py_trees.behaviour.Behavio
         point = frames.Enu(options.hover_enu.east_m, options.hover_enu.north_m, options.hover_enu.up_m)
         steps.append(once("Hover point", GoToLocal(point, HOVER_ACCEPTANCE_M, limits.leg_timeout_s, method="reposition")))
     leg = GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, method="reposition")
-    wing_borne: list[py_trees.behaviour.Behaviour] = [VtolTransition("FW", options.transition_timeout_s), ForEachLeg(leg)]
+    to_fw = VtolTransition("FW", options.transition_timeout_s, ahead_m=TRANSITION_AHEAD_M)
+    wing_borne: list[py_trees.behaviour.Behaviour] = [to_fw, ForEachLeg(leg)]
     if options.land == "home":
         wing_borne.append(GoToLocal(home_enu(options), limits.acceptance_radius_m, limits.leg_timeout_s, name="Back to home", method="reposition"))
     steps += [once("Wing-borne", *wing_borne), VtolTransition("MC", options.transition_timeout_s)]
@@ -88,8 +97,21 @@ def land(mission: Mission, options: VtolOptions) -> py_trees.behaviour.Behaviour
     return Land("QLAND", name="Land here (QLAND)", confirm_timeout_s=mission.limits.leg_timeout_s)
 
 
+def firmware_check(options: VtolOptions) -> py_trees.behaviour.Behaviour | None:
+    """What the mission needs of ArduPlane's parameters, checked before anything moves: a hover point needs Q_GUIDED_MODE 1."""
+    if options.hover_enu is None:
+        return None
+    why = (
+        "the hover point (vtol.hover_enu) is flown on the lift motors only with Q_GUIDED_MODE 1; "
+        "with 0 ArduPlane flies to it as a plane and circles it at WP_LOITER_RAD (QuadPlane::guided_mode_enabled)"
+    )
+    once_checked = ParameterIs("Q_GUIDED_MODE", (1.0,), why)
+    return py_trees.decorators.OneShot("Firmware check (once)", once_checked, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
+
+
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     """The tree for a ``tree: vtol_transit`` mission."""
     options = mission.vtol or VtolOptions()
     work = guarded(flight(mission, options), standard_guards(mission), mission, name="Guarded flight")
-    return mission_root(mission, preflight(mission), work, land(mission, options))
+    check = firmware_check(options)
+    return mission_root(mission, *([check] if check else []), preflight(mission), work, land(mission, options))

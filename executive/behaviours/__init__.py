@@ -45,6 +45,7 @@ from executive.behaviours.guards import (
     rc_auto_mode,
 )
 from executive.behaviours.mode_switch import ModeSwitchClear
+from executive.behaviours.parameters import ParameterIs
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
 from executive.behaviours.sampling import NothingToSample, Sample
 
@@ -79,6 +80,7 @@ __all__ = [
     "ModeSwitch",
     "ModeSwitchClear",
     "NothingToSample",
+    "ParameterIs",
     "PositionKnown",
     "RangefinderReaches",
     "RcAutoMode",

@@ -18,9 +18,11 @@ What follows ArduPlane's source (4.x, a standard "SLT" QuadPlane with default pa
   once the land detector is sure (4 s), then disarm.
 - GUIDED targets: DO_REPOSITION (in GUIDED, or with the change-mode flag; FAILED otherwise) sets
   the guided waypoint and ends any VTOL hover: the aircraft transitions and circles the point at
-  WP_LOITER_RAD (60 m, or param3) as a plane. With Q_GUIDED_MODE=1 it switches to VTOL and hovers
-  there once it reaches the circle, or at once when it is inside the circle (L1 counts that as on
-  the circle): a target that near is flown on the lift motors. SET_POSITION_TARGET_GLOBAL_INT
+  WP_LOITER_RAD (60 m, or param3) as a plane. With Q_GUIDED_MODE=1 (QuadPlane::guided_mode_enabled,
+  Plane::update_loiter_update_nav -> QuadPlane::guided_start) it flies the last ~140 m as a VTOL
+  approach (QPOS_POSITION1, "VTOL Position1 d=...") and hovers there: a target that near is flown on
+  the lift motors, and a wing-borne leg ends on them (a reposition 300 m ahead from a hover never
+  shows FW: the transition is not done when the approach begins). SET_POSITION_TARGET_GLOBAL_INT
   changes only the altitude of the guided target in ArduPlane (its lat/lon are not used);
   SET_POSITION_TARGET_LOCAL_NED, only an altitude change in MAV_FRAME_LOCAL_OFFSET_NED (not
   simulated: the message is ignored here). Entering GUIDED targets the current position.
@@ -67,6 +69,9 @@ PILOT_FW_MODES = frozenset({"MANUAL", "STABILIZE", "TRAINING", "ACRO", "FBWA", "
 MOTORS_OFF_MODES = frozenset({"MANUAL", "ACRO", "TRAINING"})
 TRANSITION_MS = 5000  # Q_TRANSITION_MS
 LOITER_RADIUS_M = 60.0  # WP_LOITER_RAD
+#: With Q_GUIDED_MODE=1 a wing-borne GUIDED approach becomes a VTOL one (QPOS_POSITION1) this far from the point:
+#: ArduPlane 4.7 SITL, quadplane.parm, a DO_REPOSITION 300 m ahead: "VTOL Position1 d=143.4" (issue 14).
+VTOL_APPROACH_M = 140.0
 RTL_ALT_M = 100.0  # ALT_HOLD_RTL
 QRTL_ALT_M = 15.0  # Q_RTL_ALT
 AIRSPEED_MIN_M_S = 9.0  # AIRSPEED_MIN (ARSPD_FBW_MIN)
@@ -86,7 +91,8 @@ class QuadPlaneSim(ArduPilotSim):
 
     FIRMWARE = "ArduPlane"
     READY_TEXT = "Ready to FLY"
-    PARAMS: ClassVar[Mapping[str, float]] = {"FLTMODE_CH": 8}  # ArduPlane/Parameters.cpp, FLIGHT_MODE_CHANNEL 8
+    #: ArduPlane/Parameters.cpp, FLIGHT_MODE_CHANNEL 8; WP_LOITER_RAD; Q_GUIDED_MODE (its option: the mission's simulator section)
+    PARAMS: ClassVar[Mapping[str, float]] = {"FLTMODE_CH": 8, "WP_LOITER_RAD": LOITER_RADIUS_M, "Q_GUIDED_MODE": 0}
     INITIAL_MODE = "MANUAL"
     MANUAL_INPUT_MODES = frozenset(PLANE_MODES) - {"INITIALISING"}  # STICK_MIXING enabled
     STABILIZE_MODES = frozenset(PLANE_MODES) - {"MANUAL", "INITIALISING"}
@@ -106,7 +112,6 @@ class QuadPlaneSim(ArduPilotSim):
         limits: AircraftLimits = QUADPLANE_LIMITS,
         **options: float,
     ) -> None:
-        self.q_guided_mode = q_guided_mode
         self._limits = limits
         self.transition = Transition.DONE
         self._transition_started = False  # "Transition airspeed wait" said
@@ -121,6 +126,7 @@ class QuadPlaneSim(ArduPilotSim):
         self._touchdown_at: float | None = None
         self._auto_vtol = False  # auto_state.vtol_mode, set by DO_VTOL_TRANSITION in AUTO
         super().__init__(dataclasses.replace(profile, mav_type=_M.MAV_TYPE_FIXED_WING), clock, home, **options)
+        self.params["Q_GUIDED_MODE"] = q_guided_mode
 
     def _make_vehicle(self, home: Home) -> VehicleModel:
         return QuadPlaneModel(home[0], home[1], home[2], self._limits)
@@ -267,10 +273,24 @@ class QuadPlaneSim(ArduPilotSim):
         v = self.vehicle
         if self._guided_takeoff and v.alt_m >= v.target_alt_m - 0.1:
             self._guided_takeoff = False  # reached: the VTOL position controller holds there
-        elif not self._guided_vtol and self.q_guided_mode and self.flying and (v.arrived or v.distance_to(*v.target) < self._guided_radius):
-            # Q_GUIDED_MODE: at the loiter circle (inside it is "on" it for L1), switch to a VTOL hover over the point
+        elif not self._guided_vtol and self.q_guided_mode and self.flying and (v.arrived or v.distance_to(*v.target) < self._approach_m):
+            # Q_GUIDED_MODE: the VTOL approach (QPOS_POSITION1) to a hover over the point
             self._guided_vtol = True
+            self._text(_M.MAV_SEVERITY_INFO, f"VTOL Position1 d={v.distance_to(*v.target):.1f}")
             v.hover_at(*v.target, v.target_alt_m)
+
+    @property
+    def q_guided_mode(self) -> int:
+        """Q_GUIDED_MODE, as the parameter reads (PARAM_VALUE)."""
+        return int(self.params["Q_GUIDED_MODE"])
+
+    @q_guided_mode.setter
+    def q_guided_mode(self, value: int) -> None:
+        self.params["Q_GUIDED_MODE"] = value
+
+    @property
+    def _approach_m(self) -> float:
+        return max(self._guided_radius, VTOL_APPROACH_M)
 
     def _update_qrtl(self) -> None:
         v = self.vehicle

@@ -101,6 +101,7 @@ class ArduSubSim(ArduPilotSim):
         self._destination: tuple[float, float] | None = None  # GUIDED's horizontal target
         self._guided_speed: float | None = None
         super().__init__(profile, clock, home, **options)
+        self.params.update(RNGFND1_MIN=RANGEFINDER_MIN_M, RNGFND1_MAX=rangefinder_max_m)  # answered to PARAM_REQUEST_READ
 
     def _make_vehicle(self, home: Home) -> VehicleModel:
         return UnderwaterVehicle(home[0], home[1], home[2], self._limits, self._seabed)

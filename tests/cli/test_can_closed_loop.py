@@ -115,6 +115,13 @@ def test_the_vehicle_reaches_its_waypoint_because_the_bridge_forwards_the_output
     assert {tick.system.control_mode for tick in watch.ticks if tick.system} == {"RC", "CAN"}  # RC until the bridge's first 0x421
 
 
+def test_the_base_gets_50_motion_commands_per_second_of_vehicle_time(rc_loss_run: Run) -> None:
+    _, sim, watch = rc_loss_run
+    assert sim.base is not None
+    expected = 50 * (watch.ticks[-1].t - watch.ticks[0].t)  # from the runtime's first tick to its last, between ticks too
+    assert abs(sim.base.received[0x111] - expected) <= 5  # a tick's worth at either end
+
+
 def test_during_the_rc_loss_the_base_repeats_its_last_frame_and_reports_nothing(rc_loss_run: Run) -> None:
     lost = [tick for tick in rc_loss_run.watch.ticks if 4.1 < tick.t < 6.9]
     assert lost and {(tick.system.control_mode, tick.system.faults) for tick in lost} == {("CAN", ())}

@@ -27,6 +27,29 @@ def executive(*args: str, **popen) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stderr=subprocess.PIPE, text=True, **popen)
 
 
+def simulator(*args: str) -> tuple[subprocess.Popen, str]:
+    """``executive sim`` in another process on a port it chose (never one a concurrent or left-over run talks to); and the URL to connect to."""
+    sim = executive("sim", "--mavlink", "udpin:127.0.0.1:0", *args, stdout=subprocess.PIPE)
+    assert sim.stdout is not None
+    banner = sim.stdout.readline()
+    assert "(connect to " in banner, f"the simulator did not start: {banner!r}"
+    return sim, banner.split("(connect to ", 1)[1].split(")", 1)[0]
+
+
+def stop(*procs: subprocess.Popen | None) -> None:
+    """SIGTERM each process still running and wait for it: a run that timed out must not outlive its test."""
+    for proc in procs:
+        if proc is not None and proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+    for proc in procs:
+        if proc is not None:
+            try:
+                proc.communicate(timeout=20)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.communicate()
+
+
 def test_the_readme_mission_completes_in_the_simulator():
     """README's first command: the rover square completes at speed-up 20 (every example mission: tests/testing/test_lockstep.py)."""
     proc = executive("run", str(ROOT / "missions/rover_square.yaml"), "--speedup", "20", "--socket", "none", stdout=subprocess.DEVNULL)
@@ -92,15 +115,15 @@ def test_runs_against_a_simulator_in_another_process(tmp_path):
         "version: 1\nname: short\nvehicle: rover\nauto_arm: true\n"
         "waypoints:\n  - {lat: -35.3632150, lon: 149.1652300}\n"  # 5 m north of the simulator's home
     )
-    sim = executive("sim", "--vehicle", "rover", "--mavlink", "udpin:127.0.0.1:14591", "--home", "-35.363261,149.165230", "--ekf-ready-after", "0.5")
+    sim, url = simulator("--vehicle", "rover", "--home", "-35.363261,149.165230", "--ekf-ready-after", "0.5")
+    run = None
     try:
-        run = executive("run", str(mission), "--mavlink", "udpout:127.0.0.1:14591", "--connect-timeout", "10")
+        run = executive("run", str(mission), "--mavlink", url, "--connect-timeout", "10", "--socket", "none")
         _, err = run.communicate(timeout=60)
         assert run.returncode == 0, err
         assert "COMPLETED" in err
     finally:
-        sim.send_signal(signal.SIGTERM)
-        sim.communicate(timeout=10)
+        stop(run, sim)
 
 
 def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp_path):
@@ -110,15 +133,13 @@ def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp
         "version: 1\nname: north\nvehicle: rover\nauto_arm: true\n"
         "waypoints:\n  - {lat: -35.3629906, lon: 149.1652300}\n"  # 30 m north of the simulator's home: 15 s and more of driving
     )
-    port = "14593"
-    home = "-35.363261,149.165230"
-    sim = executive("sim", "--vehicle", "rover", "--mavlink", f"udpin:127.0.0.1:{port}", "--home", home, "--ekf-ready-after", "0.5", "--speedup", "8")
+    sim, url = simulator("--vehicle", "rover", "--home", "-35.363261,149.165230", "--ekf-ready-after", "0.5", "--speedup", "8")
+    run = None
     try:
-        run = executive("run", str(mission), "--mavlink", f"udpout:127.0.0.1:{port}", "--speedup", "8", "--socket", "none", "--connect-timeout", "40")
+        run = executive("run", str(mission), "--mavlink", url, "--speedup", "8", "--socket", "none", "--connect-timeout", "40")
         _, err = run.communicate(timeout=60)
     finally:
-        sim.send_signal(signal.SIGTERM)
-        sim.communicate(timeout=10)
+        stop(run, sim)
     assert run.returncode == 0, err
     assert "the vehicle's time runs 8x real time" in err
     ticks = int(err.rsplit("(", 1)[1].split(" ticks")[0])

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 import subprocess
 import sys
 from pathlib import Path
@@ -50,10 +49,9 @@ def test_the_drive_bridge_talks_to_the_base_and_the_bus_is_recorded(tmp_path):
     commands = [f for f in frames if f.arbitration_id == 0x111]
     moving = [f for f in commands if any(f.data[:4])]
     assert moving, "the bridge forwarded the autopilot's skid-steer outputs while driving"
-    span = commands[-1].timestamp - commands[0].timestamp
-    # 50 Hz of vehicle time at 10x, or at the least speed-up the executive capped itself to on a busy machine (the log is in wall time)
-    speedup = min([10.0, *(float(x) for x in re.findall(r"speed-up capped at (\S+)x", proc.stderr))])
-    assert len(commands) / span > 50 * speedup * 0.6
+    selects = [f for f in frames if f.arbitration_id == 0x421]
+    assert len(selects) == len(commands)  # each command goes with its control-mode select
+    # the 50 Hz of vehicle time is proven in lock-step (test_can_closed_loop): here the wall clock would judge the machine's load
 
 
 def test_bad_can_arguments_are_refused(tmp_path, capsys):

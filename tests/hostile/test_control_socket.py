@@ -158,7 +158,7 @@ GARBAGE = st.one_of(st.binary(max_size=300), st.sampled_from([line for line, _ i
 )
 
 
-@settings(derandomize=True, deadline=None, max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(derandomize=True, deadline=None, max_examples=30, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(garbage=st.lists(GARBAGE, max_size=6), split=st.integers(1, 4096))
 def test_any_garbage_then_a_well_formed_request(server: Server, garbage: list[bytes], split: int) -> None:
     """One reply per line, in order, whatever the lines hold and however they are cut; the well-formed request at the end is answered."""

@@ -28,7 +28,7 @@ from executive.io.mavlink.mission_protocol import MissionTransfer, waypoint_item
 from executive.io.mavlink.reader import MavlinkReader
 from executive.vehicles import PROFILES
 
-FUZZ = settings(derandomize=True, deadline=None, max_examples=120, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+FUZZ = settings(derandomize=True, deadline=None, max_examples=60, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 AUTOPILOT = (1, 1)
 READER_KEYS = [k for k in blackboard.KEYS if k.startswith(("/link/", "/vehicle/", "/rc/"))]
 VEHICLE_KEYS = [

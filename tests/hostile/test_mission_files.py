@@ -39,7 +39,7 @@ FAULT_SEEDS = [p.read_bytes() for p in sorted((ROOT / "missions" / "faults").glo
 PLAN_SEEDS = sorted((ROOT / "tests" / "data" / "plans").glob("*"))
 WAYPOINT = "{lat: 47.397742, lon: 8.545594}"
 LINE_BREAK = re.compile("\r\n|[\r\n\x85\u2028\u2029]")  # what YAML counts as the end of a line
-FUZZ = settings(derandomize=True, deadline=None, max_examples=150, suppress_health_check=[HealthCheck.too_slow])
+FUZZ = settings(derandomize=True, deadline=None, max_examples=80, suppress_health_check=[HealthCheck.too_slow])
 
 
 def _waypoint(extra: str) -> bytes:

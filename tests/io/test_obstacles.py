@@ -100,7 +100,7 @@ _json = st.recursive(
 )
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=100, deadline=None)
 @given(_json)
 def test_random_json_is_a_scan_or_a_scan_error(obj):
     try:

@@ -269,7 +269,7 @@ def assert_missions_equal(back: Mission, mission: Mission, *, fence: bool) -> No
         assert back.geofence == mission.geofence
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(missions())
 def test_random_missions_round_trip_through_a_plan(mission):
     exported = export_plan(mission)
@@ -281,7 +281,7 @@ def test_random_missions_round_trip_through_a_plan(mission):
     assert_missions_equal(back, mission, fence=True)
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(missions())
 def test_random_missions_round_trip_through_a_waypoints_file(mission):
     exported = export_waypoints(mission)

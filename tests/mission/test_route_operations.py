@@ -160,7 +160,7 @@ def scaled_routes(draw: st.DrawFn) -> tuple[Route, float]:
 
 
 @given(scaled_routes(), st.floats(-360.0, 360.0))
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=80, deadline=None)
 def test_distances_between_waypoints_scale_by_s_to_a_tenth_of_a_percent(route_and_scale: tuple[Route, float], angle: float) -> None:
     route, scale = route_and_scale
     scaled = scale_rotate(route, scale, angle)

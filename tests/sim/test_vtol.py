@@ -11,7 +11,7 @@ from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import mavlink as m
 from executive.sim import SimServer
 from executive.sim.aircraft import QUADPLANE_LIMITS
-from executive.sim.arduplane import AIRSPEED_MIN_M_S, LOITER_RADIUS_M, TRANSITION_MS
+from executive.sim.arduplane import AIRSPEED_MIN_M_S, LOITER_RADIUS_M, TRANSITION_MS, VTOL_APPROACH_M
 from executive.vehicles import profile_for_mav_type
 
 if TYPE_CHECKING:
@@ -218,3 +218,27 @@ def test_a_vtol_over_udp_takes_off(client_for: Callable[[str], Client]) -> None:
         client.wait("EXTENDED_SYS_STATE", lambda msg: (msg.vtol_state, msg.landed_state) == (MC, TAKEOFF))
         client.wait("EXTENDED_SYS_STATE", lambda msg: (msg.vtol_state, msg.landed_state) == (MC, IN_AIR))
         assert client.wait("GLOBAL_POSITION_INT").relative_alt > 4500
+
+
+def test_with_q_guided_mode_a_wing_borne_guided_target_ends_in_a_vtol_approach_140_m_out(make_gcs: MakeGcs) -> None:
+    """ArduPlane 4.7 SITL (issue 14): after a DO_REPOSITION ahead, "VTOL Position1 d=143.4": the last ~140 m are flown on the lift
+    motors. A target 600 m ahead (the executive's transition) shows FW first; the approach then ends in a hover over the point."""
+    gcs = airborne(make_gcs, 30.0)
+    gcs.ap.q_guided_mode = 1
+    target = gcs.north(600.0)
+    assert gcs.reposition(*target, 30.0).result == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(120.0, step=0.5)
+    seen = [vtol for vtol, _ in states(out)]
+    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, FW, MC]
+    approach = next(t for t in gcs.texts(out) if t.startswith("VTOL Position1 d="))
+    assert float(approach.removeprefix("VTOL Position1 d=")) == pytest.approx(VTOL_APPROACH_M, abs=15.0)
+    assert gcs.ap.vehicle.distance_to(*target) < 0.5
+
+
+def test_q_guided_mode_is_read_as_a_parameter(make_gcs: MakeGcs) -> None:
+    gcs = ready(make_gcs)
+    gcs.ap.q_guided_mode = 1
+    (value,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, b"Q_GUIDED_MODE", -1))
+    assert (value.get_type(), value.param_id, value.param_value) == ("PARAM_VALUE", "Q_GUIDED_MODE", 1.0)
+    assert make_gcs("vtol", q_guided_mode=1).ap.params["Q_GUIDED_MODE"] == 1  # the mission's simulator option
+    assert gcs.send(gcs.mav.param_request_read_encode(1, 1, b"NO_SUCH_PARAM", -1)) == []  # ArduPilot does not answer

@@ -84,6 +84,8 @@ class ScriptedQuadPlane(ScriptedAutopilot):
         self.stuck_in: str | None = None  # a vtol_state it never leaves once in it
         self.report_takeoff = False  # landed_state stays TAKEOFF after the climb
         self.keeps_armed = False  # never disarms after landing
+        self.parameters: dict[str, float] = {"Q_GUIDED_MODE": 1.0}  # answered to PARAM_REQUEST_READ
+        self.parameters_read: dict[str, float] | None = None
         super().__init__(harness)  # MANUAL, disarmed; refuse: command kinds answered FAILED: "takeoff", "QLOITER", ...
         self.target: tuple[float, float, float] | None = None  # type: ignore[assignment]  # north, east, alt from home
 
@@ -99,7 +101,13 @@ class ScriptedQuadPlane(ScriptedAutopilot):
             "vehicle__position": GlobalPosition(lat, lon, self.alt, 0.0, 0.0, 0.0, 0.0, 0.0),
             "vehicle__vtol_state": self.vtol,
             "vehicle__landed_state": self.landed,
+            "vehicle__params": self.parameters_read,
         }
+
+    def on_message(self, msg: Any) -> None:
+        if msg.get_type() == "PARAM_REQUEST_READ" and msg.param_id in self.parameters:
+            self.commands.append(("param", msg.param_id))
+            self.parameters_read = {**(self.parameters_read or {}), msg.param_id: self.parameters[msg.param_id]}
 
     def _set_vtol(self, state: str) -> None:
         if self.stuck_in != self.vtol:
@@ -237,7 +245,18 @@ def off_m(plane: ScriptedQuadPlane, north: float, east: float) -> float:
 
 TAKEOFF = [("arm", 1.0), ("mode", "GUIDED"), ("takeoff", 30.0)]
 HOVER_TO = ("reposition", 20, 30, 30.0)  # ENU E30 N20 U30 is NED N20 E30 D-30: 20 m north, 30 m east, 30 m up
+PARAM = ("param", "Q_GUIDED_MODE")  # a hover point needs Q_GUIDED_MODE 1: read before anything moves
+TO_FW = ("reposition", 620, 30, 30.0)  # the transition's: 600 m ahead of the hover point (beyond Q_GUIDED_MODE's ~140 m approach)
 LEGS = [("reposition", *WP1, 40.0), ("reposition", *WP2, 40.0)]
+
+
+def test_a_hover_point_with_q_guided_mode_0_is_refused_before_anything_moves(make_transit: MakeTransit) -> None:
+    """Issue 14, Q_GUIDED_MODE 0 on ArduPlane SITL: GUIDED flew to the hover point as a plane and circled it (timed out at 68 m)."""
+    transit = make_transit(vtol_mission(hover=HOVER))
+    transit.plane.parameters["Q_GUIDED_MODE"] = 0.0
+    statuses = transit.run(100)
+    assert statuses[-1] == F and transit.plane.commands == [PARAM]  # nothing else was sent: not armed, no mode
+    assert "Q_GUIDED_MODE is 0: set it to 1: the hover point (vtol.hover_enu) is flown on the lift motors only with Q_GUIDED_MODE 1" in transit.why
 
 
 @pytest.mark.parametrize(
@@ -246,10 +265,11 @@ LEGS = [("reposition", *WP1, 40.0), ("reposition", *WP2, 40.0)]
         (
             "home",
             HOVER,
-            [*TAKEOFF, HOVER_TO, ("reposition", 320, 30, 30.0), *LEGS, ("reposition", 0, 0, 30.0), ("mode", "QLOITER"), ("mode", "QRTL")],
+            [PARAM, *TAKEOFF, HOVER_TO, TO_FW, *LEGS, ("reposition", 0, 0, 30.0), ("mode", "QLOITER"), ("mode", "QRTL")],
         ),
-        ("last", HOVER, [*TAKEOFF, HOVER_TO, ("reposition", 320, 30, 30.0), *LEGS, ("mode", "QLOITER"), ("mode", "QLAND")]),
-        ("home", None, [*TAKEOFF, ("reposition", 300, 0, 30.0), *LEGS, ("reposition", 0, 0, 30.0), ("mode", "QLOITER"), ("mode", "QRTL")]),
+        ("last", HOVER, [PARAM, *TAKEOFF, HOVER_TO, TO_FW, *LEGS, ("mode", "QLOITER"), ("mode", "QLAND")]),
+        # no hover point: any Q_GUIDED_MODE will do, none is asked for
+        ("home", None, [*TAKEOFF, ("reposition", 600, 0, 30.0), *LEGS, ("reposition", 0, 0, 30.0), ("mode", "QLOITER"), ("mode", "QRTL")]),
     ],
     ids=["land-home", "land-last", "no-hover-point"],
 )
@@ -276,11 +296,11 @@ def test_the_hover_point_is_flown_as_a_multicopter_and_reached_before_the_transi
         track.append(
             (math.dist((transit.plane.n, transit.plane.e, transit.plane.alt), (20.0, 30.0, 30.0)), transit.plane.vtol, len(transit.plane.commands))
         )
-        return len(transit.plane.commands) > 4
+        return len(transit.plane.commands) > 5
 
     assert transit.plane.run(200, note)[-1] == R
-    assert transit.plane.commands[4] == ("reposition", 320, 30, 30.0)  # the transition's: 300 m ahead of the hover point
-    before_transition = [(d, vtol) for d, vtol, n in track if n == 4]
+    assert transit.plane.commands[5] == TO_FW
+    before_transition = [(d, vtol) for d, vtol, n in track if n == 5]
     assert {vtol for _, vtol in before_transition} == {"MC"}
     assert before_transition[-1][0] <= 2.0  # there, as a multicopter, when the transition was asked for
 
@@ -319,12 +339,12 @@ def test_a_refused_take_off_fails_the_mission_with_the_reason(make_transit: Make
 def test_the_transition_to_fw_counts_only_when_extended_sys_state_says_fw_and_fails_after_its_timeout(make_transit: MakeTransit) -> None:
     transit = make_transit(vtol_mission())
     transit.plane.stuck_in = "TRANSITION_TO_FW"  # flies on, but EXTENDED_SYS_STATE never says FW
-    transit.run_until_command(("reposition", 300, 0, 30.0))
+    transit.run_until_command(("reposition", 600, 0, 30.0))
     ticks_left = 30 * 10
     statuses = transit.run(ticks_left + 10)
     assert statuses[: ticks_left - 1] == [R] * (ticks_left - 1) and statuses[-1] == F
-    assert transit.why == "Transition to FW: still TRANSITION_TO_FW after 30 s (by reposition 300 m ahead)"
-    assert [c for c in transit.plane.commands if c[0] == "reposition"] == [("reposition", 300, 0, 30.0)]  # no leg was started
+    assert transit.why == "Transition to FW: still TRANSITION_TO_FW after 30 s (by reposition 600 m ahead)"
+    assert [c for c in transit.plane.commands if c[0] == "reposition"] == [("reposition", 600, 0, 30.0)]  # no leg was started
 
 
 @pytest.mark.parametrize(
@@ -519,14 +539,16 @@ def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_eac
     mission, recorder, end = flight.mission, flight.recorder, flight.end
     assert mission.home is not None and mission.vtol is not None and mission.vtol.hover_enu is not None
     assert str(flight.outcome.status) == "COMPLETED", flight.outcome.reason
-    assert recorder.vtol_states[recorder.vtol_states.index("MC") :] == ["MC", "TRANSITION_TO_FW", "FW", "MC"]
+    # Q_GUIDED_MODE 1 (as the mission asks): each wing-borne GUIDED target (two legs, then home) ends in a VTOL approach
+    # ~140 m out, as ArduPlane's does (issue 14); the next one transitions again
+    assert recorder.vtol_states[recorder.vtol_states.index("MC") :] == ["MC", "TRANSITION_TO_FW", "FW"] * 3 + ["MC"]
     hover = mission.vtol.hover_enu
     assert min(math.dist(global_to_local(*HOME, lat, lon), (hover.north_m, hover.east_m)) for _, lat, lon, _ in recorder.positions) < 2.0
     for i, wp in enumerate(mission.waypoints):
         closest = min(math.dist(global_to_local(wp.lat, wp.lon, lat, lon), (0, 0)) for _, lat, lon, _ in recorder.positions)
         assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
     assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 2.5
-    assert flight.vehicle_s < 180.0
+    assert flight.vehicle_s < 300.0
 
 
 def test_the_same_example_file_flies_on_the_simulated_px4_vtol() -> None:
@@ -548,6 +570,8 @@ def test_the_simulated_quadplane_loses_its_ekf_during_the_climb_and_the_climb_go
     # the climb starts ~7 s after boot (EKF ready at 5 s, arming, GUIDED) at ~2.5 m/s: at 10 s it is a few metres up
     flight = fly_the_example([{"kind": "ekf_degradation", "at_s": 10.0, "for_s": 6.0, "variance": 1.2, "lose_position": True}])
     assert str(flight.outcome.status) == "COMPLETED", flight.outcome.reason
-    assert flight.recorder.vtol_states[flight.recorder.vtol_states.index("MC") :] == ["MC", "TRANSITION_TO_FW", "FW", "MC"]
+    assert flight.recorder.vtol_states[flight.recorder.vtol_states.index("MC") :] == ["MC", "TRANSITION_TO_FW", "FW"] * 3 + [
+        "MC"
+    ]  # Q_GUIDED_MODE 1: each target ends in a VTOL approach
     assert max(alt for *_, alt in flight.recorder.positions) == pytest.approx(40.0, abs=1.0)  # the legs' height: the flight went on
     assert (flight.end["armed"], flight.end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and flight.end["off_home_m"] < 2.5

@@ -153,7 +153,7 @@ def test_frame_stats_tell_bad_from_other() -> None:
     assert (stats.frames, stats.bad, stats.other, stats.per_id[0x241]) == (4, 2, 1, 3)
 
 
-@settings(max_examples=3000, deadline=None)
+@settings(max_examples=500, deadline=None)
 @given(
     arbitration_id=st.one_of(st.sampled_from(sorted(KNOWN_IDS)), st.integers(0, 0x1FFFFFFF)),
     data=st.binary(min_size=0, max_size=64),
