@@ -1,6 +1,6 @@
-"""`executive ctl route ...`: the requests it sends, and end to end against `executive run` on the simulator.
+"""`executive ctl route ...`: the requests it sends, and what the runtime makes of them on the lock-step simulator.
 
-End to end, the route is edited while the rover drives its long leg: the reply, the status and the
+The route is edited (the operator requests ctl sends) while the rover drives its long leg: the reply, the status and the
 route on the autopilot (uploaded and read back: ``route show`` compares the mission state's route
 with what the read-back found) follow the edit, the rover drives to the edited waypoint (the
 journal records where each leg ended) and the mission completes.
@@ -9,11 +9,9 @@ journal records where each leg ended) and the mission completes.
 from __future__ import annotations
 
 import json
+import logging
 import sqlite3
-import subprocess
-import sys
 import threading
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -22,10 +20,14 @@ from typing import Any
 import pytest
 
 from executive import geo
+from executive.assembly import journal_recorder
 from executive.cli import main
-from executive.io.control import ControlServer, request
+from executive.clock import Clock
+from executive.io.control import ControlServer
+from executive.journal import Journal
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission_text
 
-ROOT = Path(__file__).parents[2]
 HOME = (-35.363261, 149.165230)
 WP1 = geo.destination(*HOME, 0.0, 30.0)
 WP2 = geo.destination(*WP1, 90.0, 120.0)  # a long leg: time to edit the route while the rover drives it
@@ -140,75 +142,72 @@ def test_a_refused_edit_exits_1_with_the_reason(tmp_path, capsys) -> None:
 # -- end to end ----------------------------------------------------------------------------------
 
 
-def ctl(sock: Path, *args: str) -> dict[str, Any]:
-    proc = subprocess.run(
-        [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "--json", *args], cwd=ROOT, capture_output=True, text=True, timeout=30
-    )
-    return json.loads(proc.stdout)
+def test_route_edits_while_driving_reach_the_status_the_autopilot_and_the_vehicle(tmp_path, lockstep, caplog) -> None:
+    caplog.set_level(logging.INFO)
+    journal = tmp_path / "journal.db"
+    journals: list[Journal] = []
 
+    def journal_plug(clock: Clock) -> dict[str, Any]:
+        journals.append(Journal(journal, clock))
+        return {"plugs": [journal_recorder(journals[0])]}
 
-def wait_for(sock: Path, op: str, predicate, timeout_s: float = 30.0, **args: Any) -> dict[str, Any]:
-    """Poll the executive (in-process client: fast) until ``predicate(reply)``."""
-    deadline = time.monotonic() + timeout_s
-    reply: dict[str, Any] = {}
-    while time.monotonic() < deadline:
-        if sock.exists():
-            reply = request(str(sock), op, **args)
-            if reply.get("ok") and predicate(reply):
-                return reply
-        time.sleep(0.02)
-    pytest.fail(f"the executive never got there; last reply: {reply}")
+    sim = lockstep(load_mission_text(MISSION, "route.yaml"), options_for_clock=journal_plug)
 
+    def ctl(op: str, **args: Any) -> dict[str, Any]:
+        return sim.runtime.operator.request(op, source="ctl", **args).to_dict()
 
-def test_route_edits_while_driving_reach_the_status_the_autopilot_and_the_vehicle(tmp_path) -> None:
-    mission, sock, journal, log = tmp_path / "route.yaml", tmp_path / "ctl.sock", tmp_path / "journal.db", tmp_path / "executive.log"
-    mission.write_text(MISSION)
-    args = ["run", str(mission), "--speedup", "10", "--socket", str(sock), "--journal", str(journal), "-v"]
-    with log.open("w") as stderr:
-        run = subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=stderr)
-    try:
-        status = wait_for(sock, "status", lambda r: r["status"]["leg"] == 2 and r["status"]["mode"] == "GUIDED")["status"]
-        assert geo.distance(status["lat"], status["lon"], *WP2) > 60.0  # far from the end of the leg: time to edit it
+    def wait_for(op: str, predicate, **args: Any) -> dict[str, Any]:
+        """Run the simulation (at most 60 s of vehicle time) until ``predicate(reply)``."""
+        replies = [ctl(op, **args)]
 
-        moved = ctl(sock, "route", "offset", "5", "90")
-        assert (moved["ok"], moved["state"], moved["reason"]) == (True, "RUNNING", "ctl: 2 waypoints offset 5 m toward 090.0°")
-        new_wp1, new_wp2 = (tuple(wp[:2]) for wp in moved["route"]["waypoints"])
-        for old, new in ((WP1, new_wp1), (WP2, new_wp2)):
-            distance, bearing = geo.distance_bearing(*old, *new)
-            assert distance == pytest.approx(5.0, abs=1e-3) and bearing == pytest.approx(90.0, abs=0.01)
-        # the status shows the new target: its distance is the vehicle's to the moved waypoint, ~5 m more than to the old one
-        status = request(str(sock), "status")["status"]
-        to_new, to_old = geo.distance(status["lat"], status["lon"], *new_wp2), geo.distance(status["lat"], status["lon"], *WP2)
-        assert status["distance_m"] == pytest.approx(to_new, abs=0.05) and to_new - to_old > 4.0
-        # on the autopilot: uploaded, read back, and what was read back is the route
-        shown = wait_for(sock, "route", lambda r: r["route"]["upload"]["state"] == "DONE", operation="show")["route"]
-        assert shown["on_autopilot"] is True
-        assert (shown["upload"]["edit"], shown["upload"]["detail"]) == ("ctl: 2 waypoints offset 5 m toward 090.0°", "2 waypoints, read back")
+        def reached() -> bool:
+            replies.append(ctl(op, **args))
+            return replies[-1].get("ok") and predicate(replies[-1])
 
-        wp3 = geo.destination(*new_wp2, 180.0, 20.0)
-        added = ctl(sock, "route", "add", "--lat", f"{wp3[0]:.9f}", "--lon", f"{wp3[1]:.9f}")
-        assert added["ok"] and added["reason"].startswith("ctl: waypoint 3/3 added at")
-        assert request(str(sock), "status")["status"]["legs"] == 3
-        shown = wait_for(sock, "route", lambda r: r["route"]["upload"]["state"] == "DONE", operation="show")["route"]
-        assert shown["on_autopilot"] is True and shown["upload"]["detail"] == "3 waypoints, read back"
-        assert ctl(sock, "route", "remove", "7") == {
-            "ok": False,
-            "reason": "route remove: no waypoint 7 to remove: the route has 3",
-            "state": "RUNNING",
-        }
-        homed = ctl(sock, "route", "set-home")
-        assert homed["ok"] and homed["reason"].startswith("ctl: home set to") and homed["reason"].endswith("(the vehicle's position)")
-        shown = wait_for(sock, "route", lambda r: r["route"]["upload"]["state"] != "UPLOADING", operation="show")["route"]
-        assert shown["upload"]["detail"] == "3 waypoints, already held; home set"  # DO_SET_HOME accepted; the waypoints did not change
-        assert geo.distance(*shown["home"], *HOME) > 10.0
+        if not (replies[0].get("ok") and predicate(replies[0])):
+            assert sim.run(limit_s=60, until=reached) is None, f"the mission ended first; last reply: {replies[-1]}"
+        return replies[-1]
 
-        assert run.wait(timeout=120) == 0  # COMPLETED
-    finally:
-        run.kill()
-        run.wait(timeout=10)
-    err = log.read_text()
-    assert "route on the autopilot: 2 waypoints, read back (ctl: 2 waypoints offset 5 m toward 090.0°)" in err
-    assert "route on the autopilot: 3 waypoints, read back (ctl: waypoint 3/3 added at" in err
+    status = wait_for("status", lambda r: r["status"]["leg"] == 2 and r["status"]["mode"] == "GUIDED")["status"]
+    assert geo.distance(status["lat"], status["lon"], *WP2) > 60.0  # far from the end of the leg: time to edit it
+
+    moved = ctl("route", operation="offset", distance_m=5.0, bearing_deg=90.0)
+    assert (moved["ok"], moved["state"], moved["reason"]) == (True, "RUNNING", "ctl: 2 waypoints offset 5 m toward 090.0°")
+    new_wp1, new_wp2 = (tuple(wp[:2]) for wp in moved["route"]["waypoints"])
+    for old, new in ((WP1, new_wp1), (WP2, new_wp2)):
+        distance, bearing = geo.distance_bearing(*old, *new)
+        assert distance == pytest.approx(5.0, abs=1e-3) and bearing == pytest.approx(90.0, abs=0.01)
+    # the status shows the new target: its distance is the vehicle's to the moved waypoint, ~5 m more than to the old one
+    status = ctl("status")["status"]
+    to_new, to_old = geo.distance(status["lat"], status["lon"], *new_wp2), geo.distance(status["lat"], status["lon"], *WP2)
+    assert status["distance_m"] == pytest.approx(to_new, abs=0.05) and to_new - to_old > 4.0
+    # on the autopilot: uploaded, read back, and what was read back is the route
+    shown = wait_for("route", lambda r: r["route"]["upload"]["state"] == "DONE", operation="show")["route"]
+    assert shown["on_autopilot"] is True
+    assert (shown["upload"]["edit"], shown["upload"]["detail"]) == ("ctl: 2 waypoints offset 5 m toward 090.0°", "2 waypoints, read back")
+
+    wp3 = geo.destination(*new_wp2, 180.0, 20.0)
+    added = ctl("route", operation="add", after="end", lat=round(wp3[0], 9), lon=round(wp3[1], 9))
+    assert added["ok"] and added["reason"].startswith("ctl: waypoint 3/3 added at")
+    assert ctl("status")["status"]["legs"] == 3
+    shown = wait_for("route", lambda r: r["route"]["upload"]["state"] == "DONE", operation="show")["route"]
+    assert shown["on_autopilot"] is True and shown["upload"]["detail"] == "3 waypoints, read back"
+    assert ctl("route", operation="remove", waypoint=7) == {
+        "ok": False,
+        "reason": "route remove: no waypoint 7 to remove: the route has 3",
+        "state": "RUNNING",
+    }
+    homed = ctl("route", operation="set_home")
+    assert homed["ok"] and homed["reason"].startswith("ctl: home set to") and homed["reason"].endswith("(the vehicle's position)")
+    shown = wait_for("route", lambda r: r["route"]["upload"]["state"] != "UPLOADING", operation="show")["route"]
+    assert shown["upload"]["detail"] == "3 waypoints, already held; home set"  # DO_SET_HOME accepted; the waypoints did not change
+    assert geo.distance(*shown["home"], *HOME) > 10.0
+
+    outcome = sim.run(limit_s=300)
+    assert outcome is not None and outcome.status is MissionStatus.COMPLETED
+    journals[0].close()
+    assert "route on the autopilot: 2 waypoints, read back (ctl: 2 waypoints offset 5 m toward 090.0°)" in caplog.text
+    assert "route on the autopilot: 3 waypoints, read back (ctl: waypoint 3/3 added at" in caplog.text
     with sqlite3.connect(journal) as db:
         ended = {leg: (lat, lon) for leg, lat, lon in db.execute("SELECT leg, lat, lon FROM legs")}
     # where legs 2 and 3 ended (the journal notes the position when the next leg starts): at the edited waypoints. Leg 2 is
