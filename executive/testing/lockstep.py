@@ -28,6 +28,7 @@ from executive.sim.options import firmware_options, simulated_home
 if TYPE_CHECKING:
     import can
 
+    from executive.journal import ResumePoint
     from executive.sim.agilex_base import SimulatedBase
     from executive.sim.faults import Fault, FaultInjector
 
@@ -260,19 +261,22 @@ class Lockstep:
         if self.runtime.reader.autopilot is None and not self.runtime.connect(limit_s):
             raise VehicleTimeLimit(f"no heartbeat from the simulated autopilot within {limit_s:g} s")
 
-    def run(self, limit_s: float = 600.0, *, until: Callable[[], bool] | None = None, serve: bool = False) -> Outcome | None:
+    def run(
+        self, limit_s: float = 600.0, *, until: Callable[[], bool] | None = None, serve: bool = False, resume: ResumePoint | None = None
+    ) -> Outcome | None:
         """Connect, start the mission (the first time) and run the runtime's own loop until the mission ends.
 
         Returns its :class:`Outcome`; or None as soon as ``until()`` is true after a step (call
         :meth:`run` again to go on). VehicleTimeLimit when ``limit_s`` more seconds of vehicle time
-        pass first. ``serve``: the runtime's ``--wait`` loop (ends only when stopped).
+        pass first. ``serve``: the runtime's ``--wait`` loop (ends only when stopped). ``resume``:
+        a journal's unfinished run to continue (as ``executive run --resume``).
         """
         self.clock.deadline = self.clock.now() + limit_s
         self._stop_when = until
         try:
             self.connect(limit_s)
             start, self._started = not self._started, True
-            return self.runtime.run(start=start and not serve, serve=serve)
+            return self.runtime.run(start=start and not serve, serve=serve, resume=resume)
         except _Stopped:
             return None
         finally:

@@ -9,10 +9,18 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
+from executive.assembly import journal_recorder, snapshot_recorder
 from executive.cli import main
+from executive.cli.run import _resume_text
+from executive.clock import Clock
+from executive.journal import Journal
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission
+from executive.snapshots import SnapshotRecorder
 
 ROOT = Path(__file__).parents[2]
 MISSION = ROOT / "missions" / "asv_sampling.yaml"
@@ -62,12 +70,20 @@ def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, c
     assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors
 
 
-def test_resume_without_an_unfinished_run_starts_from_the_first_waypoint(tmp_path):
-    db = tmp_path / "journal.db"
-    proc = run("--journal", str(db), "--resume")
-    _, err = proc.communicate(timeout=90)
-    assert proc.returncode == 0, err
-    assert "nothing to resume" in err
+def test_resume_without_an_unfinished_run_starts_from_the_first_waypoint(tmp_path, lockstep):
+    mission = load_mission(MISSION)
+    journals: list[Journal] = []
+
+    def journal_plug(clock: Clock) -> dict[str, Any]:
+        journals.append(Journal(tmp_path / "journal.db", clock))
+        return {"plugs": [journal_recorder(journals[0])]}
+
+    sim = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug)
+    resume = journals[0].resume_point(mission)
+    assert "nothing to resume" in _resume_text(resume)  # what `run --resume` says before it starts
+    outcome = sim.run_to_end(limit_s=3600)
+    journals[0].close()
+    assert outcome.status is MissionStatus.COMPLETED
 
 
 def test_resume_needs_a_journal(capsys):
@@ -83,38 +99,38 @@ def test_report_of_a_missing_or_broken_journal_is_bad_input(tmp_path, capsys):
     assert f"{broken}:1:1: (journal):" in capsys.readouterr().err
 
 
-def test_replay_shows_the_recorded_tree(tmp_path, capsys):
+def test_replay_shows_the_recorded_tree(tmp_path, capsys, lockstep):
     snapshots = tmp_path / "run.snap"
-    proc = subprocess.run(
-        [sys.executable, "-m", "executive", "run", str(ROOT / "missions/rover_square.yaml"), "--speedup", "50", "--socket", "none",
-         "--snapshots", str(snapshots)],
-        cwd=ROOT, capture_output=True, text=True, timeout=90,
-    )  # fmt: skip
-    assert proc.returncode == 0, proc.stderr
+    recorder = SnapshotRecorder(snapshots)
+    sim = lockstep(load_mission(ROOT / "missions/rover_square.yaml"), plugs=[snapshot_recorder(recorder)])
+    assert sim.run_to_end(limit_s=600).status is MissionStatus.COMPLETED
+    recorder.close()
     assert main(["replay", str(snapshots), "--tick", "500"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("tick 500 at")
     assert "Go to waypoint -- leg" in out  # the leg being driven at that tick, with its distance
 
 
-def test_a_route_edited_before_a_crash_is_the_route_resumed(tmp_path, capsys):
-    db, sock = tmp_path / "journal.db", tmp_path / "ctl.sock"
-    square = str(ROOT / "missions" / "rover_square.yaml")
-    command = [sys.executable, "-m", "executive", "run", square, "--speedup", "40", "--journal", str(db)]
-    first = subprocess.Popen([*command, "--socket", str(sock)], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert first.stdout is not None
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and json.loads(first.stdout.readline())["leg"] < 2:  # heading for waypoint 2 of 4
-        pass
-    assert main(["ctl", "--socket", str(sock), "route", "remove", "3"]) == 0  # on the disk before the reply
-    capsys.readouterr()
-    first.send_signal(signal.SIGKILL)
-    first.communicate(timeout=10)
+def test_a_route_edited_before_a_crash_is_the_route_resumed(tmp_path, capsys, lockstep):
+    db = tmp_path / "journal.db"
+    square = load_mission(ROOT / "missions" / "rover_square.yaml")
+    journals: list[Journal] = []
 
-    second = subprocess.Popen([*command, "--socket", "none", "--resume"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    _, err = second.communicate(timeout=90)
-    assert second.returncode == 0, err
-    assert "resuming run 1 at waypoint 2 with 0 sample(s) already taken, on its route as last edited (3 waypoints)" in err
+    def journal_plug(clock: Clock) -> dict[str, Any]:
+        journals.append(Journal(db, clock))
+        return {"plugs": [journal_recorder(journals[-1])]}
+
+    first = lockstep(square, options_for_clock=journal_plug)
+    assert first.run(limit_s=600, until=lambda: first.runtime.mission_state.leg_index >= 1) is None  # heading for waypoint 2 of 4
+    assert first.runtime.operator.request("route", source="ctl", operation="remove", waypoint=3).ok  # on the disk before the reply
+    # the crash: the first run is never ticked again and never ends
+
+    second = lockstep(square, options_for_clock=journal_plug)
+    resume = journals[1].resume_point(square)
+    assert _resume_text(resume) == "resuming run 1 at waypoint 2 with 0 sample(s) already taken, on its route as last edited (3 waypoints)"
+    outcome = second.run(limit_s=600, resume=resume)
+    assert outcome is not None and outcome.status is MissionStatus.COMPLETED
+    journals[1].close()
     crashed, resumed = report(db, 1, capsys), report(db, 2, capsys)
     assert [r["waypoints"] for r in crashed["routes"]] == [3]
     assert [r["waypoints"] for r in resumed["routes"]] == [3]  # restored, and recorded again for the next crash

@@ -498,13 +498,16 @@ def test_a_mode_number_that_does_not_exist_is_named_by_number(rig: Rig) -> None:
     assert (bb("/vehicle/mode"), bb("/vehicle/custom_mode")) == (f"MODE({2**32 - 1})", 2**32 - 1)
 
 
-def test_chancount_over_18_gives_18_channels_and_unused_channels_are_no_signal(rig: Rig) -> None:
-    """chancount 255 means no more than the 18 channels the message has; UINT16_MAX (unused) and nonsense PWM are 0 (no signal)."""
+def test_every_channel_field_is_read_whatever_chancount_says_and_unused_channels_are_no_signal(rig: Rig) -> None:
+    """chancount 255 or 8: the 18 channels the message has (ArduPilot acts on channel 9 with chancount 8, issue 13);
+    UINT16_MAX (unused) and nonsense PWM are 0 (no signal)."""
     channels = [1500, 65535, 1900, 40000, 499, 2501] + [1000] * 12
     rig.tick(heartbeat() + pack(mavlink.MAVLink_rc_channels_message(0, 255, *channels, 254), seq=1))
     assert bb("/rc/channels") == (1500, 0, 1900, 0, 0, 0) + (1000,) * 12
-    rig.tick(pack(mavlink.MAVLink_rc_channels_message(0, 8, *([65535] * 18), 255), seq=2))
-    assert (bb("/rc/channels"), bb("/rc/connected"), bb("/rc/rssi")) == ((0,) * 8, False, None)
+    rig.tick(pack(mavlink.MAVLink_rc_channels_message(0, 8, *([65535] * 8), 1500, *([65535] * 9), 254), seq=2))
+    assert bb("/rc/channels") == (0,) * 8 + (1500,) + (0,) * 9
+    rig.tick(pack(mavlink.MAVLink_rc_channels_message(0, 8, *([65535] * 18), 255), seq=3))
+    assert (bb("/rc/channels"), bb("/rc/connected"), bb("/rc/rssi")) == ((0,) * 18, False, None)
 
 
 @pytest.mark.parametrize(
