@@ -18,7 +18,6 @@ from __future__ import annotations
 import gc
 import json
 import os
-import re
 import resource
 import subprocess
 import sys
@@ -33,6 +32,7 @@ from benchmarks.common import Row, SimLoop, median, rover_mission, serpentine
 from benchmarks.startup import ROOT, _status_kb
 from executive.io.heading import wait_for_filterpy
 from executive.mission.lifecycle import MissionStatus
+from executive.pacing import caps_logged
 
 #: The last quarter's tick may cost this much more than the first's: "no growth", with noise.
 MAX_GROWTH = 1.2
@@ -157,7 +157,7 @@ def measure_process(legs: int, speedup: float = 50.0, leg_m: float = 200.0, faul
         "faults_injected": injected,
         "failsafes": text.count("failsafe ") - text.count("recovered after"),
         "recoveries": text.count("recovered after"),
-        "capped_to": ([float(x) for x in re.findall(r"speed-up capped at (\S+)x", text)] or [speedup])[-1],
+        "capped_to": (caps_logged(text) or [speedup])[-1],
     }
 
 

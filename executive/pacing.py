@@ -11,6 +11,7 @@ governor slows the simulated world down to what the executive can follow).
 from __future__ import annotations
 
 import logging
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -23,6 +24,11 @@ log = logging.getLogger(__name__)
 #: a tick and the simulator's step it answers cost about 1 ms of CPU together on a 2-core machine, so above this the
 #: loop cannot follow even when nothing else runs (benchmarks: ``python -m benchmarks --only tick sim``).
 MAX_TICKS_PER_WALL_S = 2000.0
+
+
+def caps_logged(text: str) -> list[float]:
+    """The speed-ups a run's log says the governor capped to, in order (for tools reading ``executive run``'s stderr)."""
+    return [float(x) for x in re.findall(r"speed-up capped at (\S+)x", text)]
 
 
 @dataclass(frozen=True)
@@ -166,7 +172,7 @@ class SpeedGovernor:
         self._clock.set_speedup(capped)
         self.caps.append(capped)
         log.warning(
-            "speed-up capped at %.0fx (was %.0fx, asked %gx): the executive kept %.1f of its %g ticks per second; "
+            "speed-up capped at %.1fx (was %.0fx, asked %gx): the executive kept %.1f of its %g ticks per second; "
             "the simulated vehicle is slowed with it",
             capped,
             current,

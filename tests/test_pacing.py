@@ -11,7 +11,7 @@ from py_trees.common import Status
 from executive.assembly import Wiring, build_runtime
 from executive.cli import main
 from executive.clock import ManualClock, ScaledClock
-from executive.pacing import Behind, SpeedGovernor, TickPacer
+from executive.pacing import Behind, SpeedGovernor, TickPacer, caps_logged
 from executive.services import Step
 from executive.status import StatusSource
 
@@ -90,7 +90,8 @@ def test_the_listeners_hear_of_each_window_behind_with_how_many_in_a_row():
     assert all(b.achieved_hz < 9.0 for b in heard)
 
 
-def test_the_governor_caps_the_speedup_after_two_windows_behind_and_never_raises_it():
+def test_the_governor_caps_the_speedup_after_two_windows_behind_and_never_raises_it(caplog):
+    caplog.set_level(logging.WARNING, logger="executive.pacing")
     clock = ScaledClock(100.0)
     governor = SpeedGovernor(clock)
     governor(Behind(5.0, 10.0, 10, 10, in_a_row=1))
@@ -105,6 +106,7 @@ def test_the_governor_caps_the_speedup_after_two_windows_behind_and_never_raises
     governor(Behind(0.1, 10.0, 0, 0, in_a_row=5))
     assert clock.speedup >= 1.0  # never slower than real time
     assert len(governor.caps) == 4
+    assert caps_logged(caplog.text) == [round(c, 1) for c in governor.caps]  # what tools read back from the log
 
 
 def test_a_speedup_the_executive_cannot_follow_is_refused(minimal_mission, capsys):
