@@ -29,7 +29,7 @@ from executive.sim.faults import FaultInjector, FaultPlan
 from executive.state import SwitchPosition
 
 if TYPE_CHECKING:
-    from conftest import Gcs
+    from sim_support import Gcs
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 _channels = itertools.count()

@@ -11,7 +11,7 @@ from executive.io.mavlink.dialect import mavlink as m
 from executive.sim.autopilot import EKF_FLAGS_READY
 
 if TYPE_CHECKING:
-    from conftest import Gcs
+    from sim_support import Gcs
 
 MakeGcs = Callable[..., "Gcs"]
 PREARM_AHRS = "PreArm: AHRS: not using configured AHRS type"

@@ -14,7 +14,7 @@ from executive.sim.bunker import BunkerSim
 from executive.sim.vehicle import BUNKER_LIMITS, SkidSteerVehicle, skid_steer_mix
 
 if TYPE_CHECKING:
-    from conftest import Client, Gcs
+    from sim_support import Client, Gcs
 
 MakeGcs = Callable[..., "Gcs"]
 

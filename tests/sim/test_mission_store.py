@@ -12,7 +12,7 @@ from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.io.mavlink.dialect import mavlink as m
 
 if TYPE_CHECKING:
-    from conftest import Gcs
+    from sim_support import Gcs
 
 MakeGcs = Callable[..., "Gcs"]
 M_PER_DEG_LAT = 111_319.49

@@ -11,7 +11,7 @@ from executive.io.mavlink.dialect import mavlink as m
 from executive.sim.proximity import TIMEOUT_S, face_of
 
 if TYPE_CHECKING:
-    from conftest import Gcs
+    from sim_support import Gcs
 
 MakeGcs = Callable[..., "Gcs"]
 

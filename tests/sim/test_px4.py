@@ -7,7 +7,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import pytest
-from conftest import HOME, Gcs
+from sim_support import HOME, Gcs
 
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import MAVLinkMessage
@@ -28,7 +28,7 @@ from executive.sim.px4 import (
 )
 
 if TYPE_CHECKING:
-    from conftest import Client
+    from sim_support import Client
 
 MC, FW, TO_FW, TO_MC = m.MAV_VTOL_STATE_MC, m.MAV_VTOL_STATE_FW, m.MAV_VTOL_STATE_TRANSITION_TO_FW, m.MAV_VTOL_STATE_TRANSITION_TO_MC
 CUSTOM = m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED

@@ -18,7 +18,7 @@ from executive.io.mavlink.dialect import mavlink as m
 from executive.sim import SimServer
 
 if TYPE_CHECKING:
-    from conftest import Client
+    from sim_support import Client
 
 HOME = (47.397742, 8.545594, 90.0)
 

@@ -14,7 +14,7 @@ from executive.sim.underwater import SUB_LIMITS, Seabed, UnderwaterVehicle
 from executive.vehicles import profile_for_mav_type
 
 if TYPE_CHECKING:
-    from conftest import Client, Gcs
+    from sim_support import Client, Gcs
 
 MakeGcs = Callable[..., "Gcs"]
 TERRAIN_POS_VEL = 0x0DC0  # position and velocity used, acceleration/yaw ignored

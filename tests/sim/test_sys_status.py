@@ -6,7 +6,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import pytest
-from conftest import EKF_READY_S, HOME, Gcs
+from sim_support import EKF_READY_S, HOME, Gcs
 
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import MAVLinkMessage

@@ -15,7 +15,7 @@ from executive.sim.arduplane import AIRSPEED_MIN_M_S, LOITER_RADIUS_M, TRANSITIO
 from executive.vehicles import profile_for_mav_type
 
 if TYPE_CHECKING:
-    from conftest import Client, Gcs
+    from sim_support import Client, Gcs
 
 MakeGcs = Callable[..., "Gcs"]
 MC, FW, TO_FW, TO_MC = m.MAV_VTOL_STATE_MC, m.MAV_VTOL_STATE_FW, m.MAV_VTOL_STATE_TRANSITION_TO_FW, m.MAV_VTOL_STATE_TRANSITION_TO_MC
