@@ -26,7 +26,7 @@ from py_trees.common import Status
 
 from executive import blackboard
 from executive.autopilot import AutopilotPort, Request
-from executive.behaviours.actions import _refusal, _retrying
+from executive.behaviours.actions import _refusal
 from executive.behaviours.auto_route import AUTO
 from executive.behaviours.base import ExecutiveBehaviour
 from executive.clock import Clock
@@ -181,13 +181,7 @@ class ModeSwitch(SwitchWatcher):
             self._asking = _Asking(mode, self.autopilot.set_mode(mode), now)
             self.report(f"{said}: asked" + (" again" if self._refused_at > float("-inf") else ""))
             return
-        status, statustext = self.get(blackboard.command_key("DO_SET_MODE")), self.get("/vehicle/statustext")
-        retrying = _retrying(status, self._asking.ticket, statustext)
-        if retrying is not None:  # the port asks again by itself (PX4's AUTO.MISSION): the wait counts from this refusal
-            self._asking = _Asking(self._asking.what, self._asking.ticket, status.time)
-            self.feedback_message = f"{said}: {retrying}"
-            return
-        refusal = _refusal(status, self._asking.ticket, statustext)
+        refusal = _refusal(self.get(blackboard.command_key("DO_SET_MODE")), self._asking.ticket, self.get("/vehicle/statustext"))
         waited = now - self._asking.at
         if refusal is None and waited <= self.confirm_timeout_s:
             self.feedback_message = f"{said}: asked, mode is {shown}"
