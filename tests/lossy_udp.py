@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import random
-import select
 import socket
-import threading
 import time
 from dataclasses import dataclass, field
-from types import TracebackType
+
+from udp_relay import UdpRelay
 
 
 def mavlink_msgid(datagram: bytes) -> int | None:
@@ -30,7 +29,7 @@ class Direction:
     dropped_ids: list[int | None] = field(default_factory=list)  # MAVLink message ids of the dropped datagrams
 
 
-class LossyUdpProxy:
+class LossyUdpProxy(UdpRelay):
     """Relays datagrams between a client and a UDP server on loopback, losing ``drop`` of them and swapping ``reorder``.
 
     The client sends to :attr:`port`; the proxy forwards to ``server_port`` from a socket of its
@@ -40,6 +39,8 @@ class LossyUdpProxy:
     ``hold_s`` if none comes. The relay thread stops at :meth:`stop` or after ``lifetime_s``,
     whichever comes first, so a forgotten proxy cannot outlive its test by much.
     """
+
+    poll_s = 0.005
 
     def __init__(
         self,
@@ -54,65 +55,34 @@ class LossyUdpProxy:
     ) -> None:
         if not 0.0 <= drop + reorder <= 1.0:
             raise ValueError(f"drop + reorder must be within [0, 1], got {drop} + {reorder}")
-        self.drop, self.reorder, self.hold_s, self.lifetime_s = drop, reorder, hold_s, lifetime_s
+        super().__init__(lifetime_s=lifetime_s, host=host)
+        self.drop, self.reorder, self.hold_s = drop, reorder, hold_s
         self._server = (host, server_port)
         self._client: tuple[str, int] | None = None
-        self._client_side = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._client_side.bind((host, 0))
-        self._server_side = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._server_side.bind((host, 0))
+        self._client_side = self.bind()
+        self._server_side = self.bind()
         self.up, self.down = Direction(), Direction()  # client -> server, server -> client
         self._random = {"up": random.Random(seed), "down": random.Random(seed + 1)}
         self._held: dict[str, tuple[bytes, float]] = {}
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
 
     @property
     def port(self) -> int:
         """Where the client sends."""
         return self._client_side.getsockname()[1]
 
-    def start(self) -> LossyUdpProxy:
-        if self._thread is None:
-            self._thread = threading.Thread(target=self._run, name="lossy-udp", daemon=True)
-            self._thread.start()
-        return self
+    def on_datagram(self, sock: socket.socket, data: bytes, sender: tuple[str, int]) -> None:
+        if sock is self._client_side:
+            self._client = sender
+            self._relay("up", data)
+        elif self._client is not None:
+            self._relay("down", data)
 
-    def stop(self) -> None:
-        """Stop relaying and close the sockets (idempotent)."""
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-            self._thread = None
-        self._client_side.close()
-        self._server_side.close()
-
-    def __enter__(self) -> LossyUdpProxy:
-        return self.start()
-
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
-        self.stop()
-
-    def _run(self) -> None:
-        deadline = time.monotonic() + self.lifetime_s
-        sockets = [self._client_side, self._server_side]
-        while not self._stop.is_set() and time.monotonic() < deadline:
-            readable, _, _ = select.select(sockets, [], [], 0.005)
-            for sock in readable:
-                try:
-                    data, sender = sock.recvfrom(65535)
-                except OSError:
-                    continue
-                if sock is self._client_side:
-                    self._client = sender
-                    self._relay("up", data)
-                elif self._client is not None:
-                    self._relay("down", data)
-            now = time.monotonic()
-            for way, (data, since) in list(self._held.items()):
-                if now - since >= self.hold_s:
-                    del self._held[way]
-                    self._send(way, data)
+    def on_idle(self) -> None:
+        now = time.monotonic()
+        for way, (data, since) in list(self._held.items()):
+            if now - since >= self.hold_s:
+                del self._held[way]
+                self._send(way, data)
 
     def _relay(self, way: str, data: bytes) -> None:
         stats = self.up if way == "up" else self.down

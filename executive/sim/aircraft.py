@@ -102,6 +102,12 @@ class QuadPlaneModel(LocalFrame):
     def velocity_ned(self) -> tuple[float, float, float]:
         return self._vn, self._ve, self._vd
 
+    def throttle(self) -> float:
+        """The throttle it flies on, 0..1: half on the lift motors, more with speed on the wing."""
+        if self.regime is Regime.MULTICOPTER:
+            return 0.5
+        return min(1.0, 0.3 + 0.5 * self.speed_m_s / self.limits.cruise_m_s)
+
     @property
     def speed_m_s(self) -> float:
         """Airspeed (no wind: the horizontal ground speed)."""

@@ -180,11 +180,7 @@ class QuadPlaneSim(ArduPilotSim):
         return present, RATE_ATTITUDE  # the stabilised modes, Q modes included
 
     def _throttle(self) -> float:
-        if not self.armed or not self.flying:
-            return 0.0
-        if self.vehicle.regime is Regime.MULTICOPTER:
-            return 0.5
-        return min(1.0, 0.3 + 0.5 * self.vehicle.speed_m_s / self._limits.cruise_m_s)
+        return 0.0 if not self.armed or not self.flying else self.vehicle.throttle()
 
     def _servo_outputs(self) -> Sequence[int]:
         """SERVO1-4 aileron, elevator, throttle, rudder; SERVO5-8 the four lift motors."""

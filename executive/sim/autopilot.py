@@ -249,9 +249,10 @@ class ArduPilotSim(ABC):
                 if self._ekf_fail_count >= self.EKF_CHECK_ITERATIONS_MAX:
                     self._ekf_fail_count = self.EKF_CHECK_ITERATIONS_MAX
                     self.failsafe_ekf = True
-                    if self.mode in self.POSITION_MODES:  # failsafe_ekf_event: FS_EKF_ACTION 1, hold
+                    # failsafe_ekf_event: in a mode that needs no position it returns before acting or announcing
+                    if self.mode in self.POSITION_MODES:  # FS_EKF_ACTION 1, hold
                         self._force_mode(self.EKF_FAILSAFE_MODE)
-                    self._text(_M.MAV_SEVERITY_CRITICAL, "EKF failsafe")
+                        self._text(_M.MAV_SEVERITY_CRITICAL, "EKF failsafe")
         elif self._ekf_fail_count > 0:
             self._ekf_fail_count -= 1
             if self._ekf_fail_count == 0:

@@ -819,11 +819,7 @@ class Px4VtolSim(Px4Sim):
         return self._vtol
 
     def _throttle(self) -> float:
-        if not self.armed or self._landed:
-            return 0.0
-        if self.vehicle.regime is Regime.MULTICOPTER:
-            return 0.5
-        return min(1.0, 0.3 + 0.5 * self.vehicle.speed_m_s / self._limits.cruise_m_s)
+        return 0.0 if not self.armed or self._landed else self.vehicle.throttle()
 
     def _servo_outputs(self) -> Sequence[int]:
         """MAIN1-4 the lift motors, MAIN5 the pusher."""

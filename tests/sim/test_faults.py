@@ -350,8 +350,10 @@ def test_losing_the_ekf_position_refuses_position_modes_until_the_firmware_latch
     clock = ManualClock()
     ap = armed_rover(clock, "HOLD")
     injector = FaultInjector(plan({"kind": "ekf_degradation", "at_s": 1.0, "for_s": 2.0, "lose_position": True}), clock)
-    run(injector, ap, 2.5)
+    out = run(injector, ap, 2.5)
     assert not ap.position_ok and ap.failsafe_ekf
+    # in HOLD, a mode that needs no position: latched, not announced (failsafe_ekf_event returns first)
+    assert "EKF failsafe" not in [msg.text for msg in out if msg.get_type() == "STATUSTEXT"]
     assert not ap.set_mode(ap.profile.modes["LOITER"])
     out = run(injector, ap, 3.5)  # the EKF is good again for 0.5 s: still latched
     assert ap.position_ok and ap.failsafe_ekf
