@@ -31,7 +31,9 @@ What follows ArduPlane's source (4.x, a standard "SLT" QuadPlane with default pa
   Plane::update_loiter_update_nav -> QuadPlane::guided_start) it flies the last ~140 m as a VTOL
   approach (QPOS_POSITION1, "VTOL Position1 d=...") and hovers there: a target that near is flown on
   the lift motors, and a wing-borne leg ends on them (a reposition 300 m ahead from a hover never
-  shows FW: the transition is not done when the approach begins). SET_POSITION_TARGET_GLOBAL_INT
+  shows FW: the transition is not done when the approach begins). The approach reports
+  TRANSITION_TO_MC until POSITION2 (within 5 m of the point, "VTOL position2 started"), then MC
+  (SLT_Transition::get_mav_vtol_state): SITL's 1 -> 2 -> 3. SET_POSITION_TARGET_GLOBAL_INT
   changes only the altitude of the guided target in ArduPlane (its lat/lon are not used);
   SET_POSITION_TARGET_LOCAL_NED, only an altitude change in MAV_FRAME_LOCAL_OFFSET_NED (not
   simulated: the message is ignored here). Entering GUIDED targets the current position.
@@ -81,6 +83,8 @@ LOITER_RADIUS_M = 60.0  # WP_LOITER_RAD
 #: With Q_GUIDED_MODE=1 a wing-borne GUIDED approach becomes a VTOL one (QPOS_POSITION1) this far from the point:
 #: ArduPlane 4.7 SITL, quadplane.parm, a DO_REPOSITION 300 m ahead: "VTOL Position1 d=143.4" (issue 14).
 VTOL_APPROACH_M = 140.0
+#: QuadPlane::vtol_position_controller: POSITION1 ends (POSITION2, the hold over the point) within 5 m of it.
+POSITION2_M = 5.0
 RTL_ALT_M = 100.0  # ALT_HOLD_RTL
 QRTL_ALT_M = 15.0  # Q_RTL_ALT
 #: Tools/autotest/default_params/quadplane.parm (the SITL of issue 14): AIRSPEED_MIN, Q_ASSIST_SPEED, AIRSPEED_CRUISE, LIM_ROLL_CD
@@ -140,6 +144,7 @@ class QuadPlaneSim(ArduPilotSim):
         self._transition_started = False  # transition_start_ms set: "Transition airspeed wait" said, or assisting
         self._timer_start = 0.0
         self._guided_vtol = False  # auto_state.vtol_loiter: GUIDED hovers on the lift motors
+        self._position1 = False  # poscontrol QPOS_POSITION1: the VTOL approach, before POSITION2 holds over the point
         self._guided_takeoff = False
         self._guided_radius = LOITER_RADIUS_M
         self._guided_ccw = False
@@ -169,8 +174,8 @@ class QuadPlaneSim(ArduPilotSim):
     @property
     def vtol_state(self) -> int:
         """EXTENDED_SYS_STATE vtol_state (MAV_VTOL_STATE)."""
-        if self.in_vtol_mode:
-            return _M.MAV_VTOL_STATE_TRANSITION_TO_MC if self._airbrake else _M.MAV_VTOL_STATE_MC
+        if self.in_vtol_mode:  # SLT_Transition::get_mav_vtol_state(): QPOS_AIRBRAKE and QPOS_POSITION1 are TRANSITION_TO_MC
+            return _M.MAV_VTOL_STATE_TRANSITION_TO_MC if self._airbrake or self._position1 else _M.MAV_VTOL_STATE_MC
         if self.transition is Transition.DONE:
             return _M.MAV_VTOL_STATE_FW
         return _M.MAV_VTOL_STATE_TRANSITION_TO_FW
@@ -221,7 +226,7 @@ class QuadPlaneSim(ArduPilotSim):
         v = self.vehicle
         if mode in self.NOT_SIMULATED:
             return False
-        self._guided_vtol = self._guided_takeoff = self._airbrake = self._returning = False
+        self._guided_vtol = self._guided_takeoff = self._airbrake = self._returning = self._position1 = False
         if mode in ("QSTABILIZE", "QHOVER", "QLOITER"):
             v.hover()
         elif mode == "QLAND":
@@ -248,7 +253,7 @@ class QuadPlaneSim(ArduPilotSim):
 
     def _set_guided_wp(self, lat: float, lon: float, alt_m: float) -> None:
         """Plane::set_guided_WP(): a new guided waypoint starts in fixed-wing flight (no VTOL hover)."""
-        self._guided_vtol = self._guided_takeoff = False
+        self._guided_vtol = self._guided_takeoff = self._position1 = False
         self.vehicle.orbit(lat, lon, alt_m, self._guided_radius, self._guided_ccw)
 
     def _start_landing(self) -> None:
@@ -302,9 +307,12 @@ class QuadPlaneSim(ArduPilotSim):
             self._guided_takeoff = False  # reached: the VTOL position controller holds there
         elif not self._guided_vtol and self.q_guided_mode and self.flying and (v.arrived or v.distance_to(*v.target) < self._approach_m):
             # Q_GUIDED_MODE: the VTOL approach (QPOS_POSITION1) to a hover over the point
-            self._guided_vtol = True
+            self._guided_vtol = self._position1 = True
             self._text(_M.MAV_SEVERITY_INFO, f"VTOL Position1 d={v.distance_to(*v.target):.1f}")
             v.hover_at(*v.target, v.target_alt_m)
+        elif self._position1 and v.distance_to(*v.target) < POSITION2_M:
+            self._position1 = False  # QuadPlane::vtol_position_controller: POSITION1 -> POSITION2 within 5 m of the point
+            self._text(_M.MAV_SEVERITY_INFO, f"VTOL position2 started v={v.speed_m_s:.1f} d={v.distance_to(*v.target):.1f}")
 
     @property
     def q_guided_mode(self) -> int:

@@ -156,7 +156,7 @@ def test_with_q_guided_mode_a_reposition_300_m_ahead_from_a_hover_never_shows_fi
     out = gcs.run(90.0, step=0.5)
     seen = [vtol for vtol, _ in states(out)]
     assert FW not in seen
-    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, MC]
+    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, TO_MC, MC]  # SITL's 1 -> 2 -> 3
     texts = gcs.texts(gcs.log[log_from:])
     reached = next(i for i, t in enumerate(texts) if t.startswith("Transition airspeed reached 18."))
     approach = next(i for i, t in enumerate(texts) if t.startswith("VTOL Position1 d="))
@@ -198,13 +198,15 @@ def test_with_q_guided_mode_a_near_target_is_flown_as_a_multicopter_a_far_one_as
     near = gcs.east(40.0)  # inside WP_LOITER_RAD: L1 is "on the circle" at once, the lift motors fly it
     assert gcs.reposition(*near, 25.0).result == m.MAV_RESULT_ACCEPTED
     out = gcs.run(20.0, step=0.5)
-    assert set(states(out)) == {(MC, IN_AIR)}
+    seen = [vtol for vtol, _ in states(out)]
+    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_MC, MC]  # POSITION1 until within 5 m, then POSITION2
+    assert {landed for _, landed in states(out)} == {IN_AIR}
     assert gcs.ap.vehicle.distance_to(*near) < 0.5 and gcs.ap.vehicle.alt_m == pytest.approx(25.0, abs=0.5)
     far = gcs.north(400.0)
     assert gcs.reposition(*far, 25.0).result == m.MAV_RESULT_ACCEPTED
     out = gcs.run(90.0, step=0.5)
     seen = [vtol for vtol, _ in states(out)]
-    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, FW, MC]  # a plane to the circle, then a hover
+    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, FW, TO_MC, MC]  # a plane, then a hover
     assert gcs.ap.vehicle.distance_to(*far) < 0.5 and gcs.ap.vehicle.speed_m_s == pytest.approx(0.0, abs=0.05)
 
 
@@ -258,7 +260,8 @@ def test_with_q_guided_mode_a_wing_borne_guided_target_ends_in_a_vtol_approach_1
     assert gcs.reposition(*target, 30.0).result == m.MAV_RESULT_ACCEPTED
     out = gcs.run(120.0, step=0.5)
     seen = [vtol for vtol, _ in states(out)]
-    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, FW, MC]
+    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, FW, TO_MC, MC]
+    assert any(t.startswith("VTOL position2 started") for t in gcs.texts(out))
     approach = next(t for t in gcs.texts(out) if t.startswith("VTOL Position1 d="))
     assert float(approach.removeprefix("VTOL Position1 d=")) == pytest.approx(VTOL_APPROACH_M, abs=15.0)
     assert gcs.ap.vehicle.distance_to(*target) < 0.5

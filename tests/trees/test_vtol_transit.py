@@ -510,11 +510,23 @@ class Recorder:
         pass
 
 
-#: The example's vtol states from the hover on, with Q_GUIDED_MODE 1 (as the mission asks). The transition (aimed 600 m
-#: ahead) is wing-borne ~195 m on, within the acceptance radius of the first waypoint (300 m north); the second waypoint
-#: and home each end in ArduPlane's VTOL approach ~140 m out (issue 14), and the next target, given there while still
-#: faster than Q_ASSIST_SPEED, takes only Q_TRANSITION_MS to be wing-borne again.
-TRANSIT_VTOL_STATES = ["MC", "TRANSITION_TO_FW", "FW", "MC", "TRANSITION_TO_FW", "FW", "MC"]
+#: The example's vtol states from the take-off on, with Q_GUIDED_MODE 1 (as the mission asks). Every GUIDED VTOL approach
+#: (QPOS_POSITION1) reports TRANSITION_TO_MC until POSITION2 holds within 5 m of the point (the hover point too). The
+#: transition (aimed 600 m ahead) is wing-borne ~195 m on, within the acceptance radius of the first waypoint (300 m
+#: north); the second waypoint and home each end in ArduPlane's VTOL approach ~140 m out (issue 14), and the next target,
+#: given there while still faster than Q_ASSIST_SPEED, takes only Q_TRANSITION_MS to be wing-borne again; QLOITER ends it.
+TRANSIT_VTOL_STATES = [
+    "MC",
+    "TRANSITION_TO_MC",
+    "MC",
+    "TRANSITION_TO_FW",
+    "FW",
+    "TRANSITION_TO_MC",
+    "TRANSITION_TO_FW",
+    "FW",
+    "TRANSITION_TO_MC",
+    "MC",
+]
 
 
 @dataclass
