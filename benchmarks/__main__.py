@@ -9,6 +9,7 @@ import platform
 import sys
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
 
 from benchmarks import can_decode, efficiency, ingest, reaction, simspeed, soak, startup, tick
 from benchmarks.common import Row
@@ -16,11 +17,13 @@ from benchmarks.common import Row
 #: name -> the benchmark (each returns its rows); in the order they run.
 BENCHMARKS: dict[str, Callable[[], list[Row]]] = {
     "tick": tick.run,
+    "tick-px4": partial(tick.run, autopilot="px4"),  # issue 12: the rows hold for both back ends
     "ingest": ingest.run,
     "can": can_decode.run,
     "reaction": reaction.run,
     "sim": simspeed.run,
     "startup": startup.run,
+    "startup-px4": partial(startup.run, autopilot="px4"),
     "soak": soak.run,
     "efficiency": efficiency.run,
 }

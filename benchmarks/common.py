@@ -14,6 +14,7 @@ from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONEN
 from executive.io.mavlink.link import MemoryLink
 from executive.mission.model import Mission
 from executive.sim import ArduPilotSim, make_autopilot
+from executive.vehicles import AutopilotName
 
 #: Where the benchmark missions start (ArduPilot SITL's home field).
 HOME = (-35.363261, 149.165230, 0.0)
@@ -66,11 +67,19 @@ def serpentine(count: int, leg_m: float, row_m: float = 100.0) -> list[tuple[flo
     return points
 
 
-def rover_mission(points: Sequence[tuple[float, float]], *, name: str = "bench", ekf_ready_after_s: float = 40.0, **limits: float) -> Mission:
-    """A ``waypoints`` rover mission through ``points``."""
+def rover_mission(
+    points: Sequence[tuple[float, float]],
+    *,
+    name: str = "bench",
+    ekf_ready_after_s: float = 40.0,
+    autopilot: AutopilotName = "ardupilot",
+    **limits: float,
+) -> Mission:
+    """A ``waypoints`` rover mission through ``points``, on ``autopilot`` (the built-in simulator runs that firmware)."""
     return Mission.model_validate(
         {
             "version": 1,
+            "autopilot": autopilot,
             "name": name,
             "vehicle": "rover",
             "tree": "waypoints",
@@ -152,7 +161,7 @@ def _filler(mav: mavlink.MAVLink, name: str, boot_ms: int, t_us: int) -> MAVLink
 
 
 class SimLoop:
-    """The runtime and the built-in simulated rover in one loop on a manual clock, joined by in-memory links.
+    """The runtime and the built-in simulated rover (on the mission's autopilot) in one loop on a manual clock, joined by in-memory links.
 
     Each :meth:`step` moves the vehicle one tick period, packs what it sends (its telemetry and a
     companion port's other streams, :data:`FILLER_RATES`) into bytes as on the wire, parses them
@@ -164,7 +173,9 @@ class SimLoop:
         self.clock = ManualClock(0.0)
         self.link = MemoryLink()
         self.period_s = 1.0 / rate_hz
-        self.ap: ArduPilotSim = make_autopilot("rover", self.clock, HOME, ekf_ready_after_s=ekf_ready_after_s)
+        self.ap: ArduPilotSim = make_autopilot(
+            "rover", self.clock, HOME, autopilot=mission.autopilot or "ardupilot", ekf_ready_after_s=ekf_ready_after_s
+        )
         self._wire = _Wire()
         self._ap_mav = mavlink.MAVLink(self._wire, srcSystem=1, srcComponent=AUTOPILOT_COMPONENT)
         self._exec_mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)

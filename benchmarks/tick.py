@@ -16,6 +16,7 @@ import numpy as np
 from benchmarks.common import Row, SimLoop, median, percentile, rover_mission, serpentine
 from executive.io.heading import HeadingFilter, wait_for_filterpy
 from executive.mission.lifecycle import MissionStatus
+from executive.vehicles import AutopilotName
 
 #: The full tick may cost this much more than the bare tree tick plus the bare filterpy calls.
 MAX_RATIO = 1.5
@@ -64,14 +65,14 @@ def _record_filter_calls(heading_filter: HeadingFilter, calls: list[tuple[float,
     kalman.update = recorded_update  # type: ignore[method-assign]
 
 
-def measure(waypoints: int, ticks: int, warmup_ticks: int = 50) -> dict[str, float]:
-    """Median and p99 (µs) of the full tick and of the tree tick inside it, driving a ``waypoints`` mission of 50 m legs.
+def measure(waypoints: int, ticks: int, warmup_ticks: int = 50, autopilot: AutopilotName = "ardupilot") -> dict[str, float]:
+    """Median and p99 (µs) of the full tick and of the tree tick inside it, driving a ``waypoints`` mission of 50 m legs on ``autopilot``.
 
     The legs are long enough that even the shortest mission is still on its route at the end: every
     size is measured in the same phase (a leg being driven, and now and then the next one starting).
     """
     wait_for_filterpy()  # the heading filter at work in every size (it loads in the background, ~0.7 s into a run)
-    loop = SimLoop(rover_mission(serpentine(waypoints, 50.0, row_m=500.0)))
+    loop = SimLoop(rover_mission(serpentine(waypoints, 50.0, row_m=500.0), autopilot=autopilot))
     rt = loop.runtime
     loop.connect()
     rt.mission_state.start()
@@ -97,7 +98,8 @@ def measure(waypoints: int, ticks: int, warmup_ticks: int = 50) -> dict[str, flo
 
     heading_filter.service = timed_heading_service  # type: ignore[method-assign]
     # pre-flight (EKF, arming), then the route: the steady state of a mission is a leg being driven
-    loop.run_until(lambda: rt.mission_state.leg_index >= 1 and rt._bb.get("/vehicle/mode") == "GUIDED", 120.0)
+    guided = rt.autopilot.capabilities.guided_mode  # GUIDED; OFFBOARD on PX4
+    loop.run_until(lambda: rt.mission_state.leg_index >= 1 and rt._bb.get("/vehicle/mode") == guided, 120.0)
     for _ in range(warmup_ticks):
         loop.step()
         rt.tick()
@@ -142,16 +144,17 @@ def measure(waypoints: int, ticks: int, warmup_ticks: int = 50) -> dict[str, flo
     }
 
 
-def run(ticks: int = 1500, sizes: Sequence[int] = (10, 100, 1000), warmup_ticks: int = 50) -> list[Row]:
-    """One row per mission length (full tick vs tree tick), and the growth from the shortest to the longest."""
+def run(ticks: int = 1500, sizes: Sequence[int] = (10, 100, 1000), warmup_ticks: int = 50, autopilot: AutopilotName = "ardupilot") -> list[Row]:
+    """One row per mission length (full tick vs tree tick), and the growth from the shortest to the longest, on ``autopilot``'s back end."""
     rows = []
-    results = {n: measure(n, ticks, warmup_ticks) for n in sizes}
+    results = {n: measure(n, ticks, warmup_ticks, autopilot) for n in sizes}
+    on = "" if autopilot == "ardupilot" else f", {autopilot}"  # ArduPilot's rows keep their names
     for n, r in results.items():
         ratio = r["ratio"]
         rows.append(
             Row(
                 "tick",
-                f"full tick, {n} waypoints",
+                f"full tick, {n} waypoints{on}",
                 round(r["full_median_us"], 1),
                 "µs median",
                 f"<= {MAX_RATIO:g}x (bare tree tick + bare filterpy)",
@@ -168,7 +171,7 @@ def run(ticks: int = 1500, sizes: Sequence[int] = (10, 100, 1000), warmup_ticks:
     rows.append(
         Row(
             "tick",
-            f"growth {sizes[0]} -> {sizes[-1]} waypoints",
+            f"growth {sizes[0]} -> {sizes[-1]} waypoints{on}",
             round(growth, 2),
             "x",
             f"<= {MAX_GROWTH:g}x (flat)",

@@ -203,6 +203,7 @@ class CommandState(StrEnum):
     QUEUED = "QUEUED"
     SENT = "SENT"
     IN_PROGRESS = "IN_PROGRESS"  # MAV_RESULT_IN_PROGRESS: the autopilot is working on it
+    RETRYING = "RETRYING"  # refused for now (its result says why): asked again, per the request's RefusalRetry
     ACCEPTED = "ACCEPTED"
     REJECTED = "REJECTED"  # any other MAV_RESULT
     TIMED_OUT = "TIMED_OUT"  # no ack after every retry

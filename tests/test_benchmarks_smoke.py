@@ -22,8 +22,11 @@ def _check(rows: list[Row], count: int) -> None:
     assert bench.table(rows).count("\n") == count + 1
 
 
-def test_tick() -> None:
-    _check(tick.run(ticks=10, sizes=(2, 3), warmup_ticks=1), 3)
+@pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
+def test_tick(autopilot: str) -> None:
+    rows = tick.run(ticks=10, sizes=(2, 3), warmup_ticks=1, autopilot=autopilot)  # type: ignore[arg-type]
+    _check(rows, 3)
+    assert all(row.name.endswith(", px4") == (autopilot == "px4") for row in rows)
 
 
 def test_ingest() -> None:
@@ -46,8 +49,9 @@ def test_simulator_speed() -> None:
     _check(simspeed.run(speedups=(20.0,), length_m=20.0, runs=1, ekf_ready_after_s=1.0), 1)
 
 
-def test_startup_and_memory() -> None:
-    _check(startup.run(runs=1, sample_s=0.2), 2)
+@pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
+def test_startup_and_memory(autopilot: str) -> None:
+    _check(startup.run(runs=1, sample_s=0.2, autopilot=autopilot), 2)  # type: ignore[arg-type]
 
 
 def test_efficiency() -> None:

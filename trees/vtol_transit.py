@@ -57,7 +57,10 @@ from trees._parts import guarded, mission_root, preflight, standard_guards
 HOVER_ACCEPTANCE_M = 2.0
 #: How far ahead the transition to FW is aimed. With Q_GUIDED_MODE 1 ArduPlane flies the last ~140 m of a GUIDED
 #: target as a VTOL approach (issue 14, SITL: "VTOL Position1 d=143.4" after a reposition 300 m ahead, FW never
-#: reported); the transition (to airspeed, then Q_TRANSITION_MS) must be done before that: 600 m leaves room for both.
+#: reported); the transition must be done before that. SLT_Transition::update() (ArduPlane/quadplane.cpp) holds the
+#: lift motors until the airspeed is above both AIRSPEED_MIN and Q_ASSIST_SPEED (18 m/s in quadplane.parm), then
+#: blends them out over Q_TRANSITION_MS (5 s): at 2 m/s/s to a 25 m/s cruise that is ~81 m + ~112 m from a hover.
+#: 600 m leaves ~190 m + 140 m with room to spare for a slower airframe or a head wind.
 TRANSITION_AHEAD_M = 600.0
 
 

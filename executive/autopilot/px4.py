@@ -14,7 +14,10 @@
   never stopping the stream, which is PX4's offboard failsafe.
 - NAV_TAKEOFF param7 is an altitude above sea level (home's plus the height; NaN: PX4's default).
 - AUTO.MISSION is refused while PX4 checks a mission it was just given: it is asked
-  :data:`MISSION_CHECK_S` after the upload's MISSION_ACK at the earliest.
+  :data:`MISSION_CHECK_S` after the upload's MISSION_ACK at the earliest, and, refused
+  TEMPORARILY_REJECTED ("Switching to Mission is currently not available": the commander's answer
+  when the mode's checks fail, src/modules/commander/Commander.cpp handle_command DO_SET_MODE),
+  asked again per :data:`ROUTE_START_RETRY` before the refusal stands.
 - VTOL transitions go as MAV_CMD_DO_VTOL_TRANSITION, which PX4 takes in flight in any mode.
 """
 
@@ -26,7 +29,7 @@ from collections.abc import Callable
 from executive import blackboard
 from executive.autopilot.mavlink_port import MavlinkPort
 from executive.autopilot.port import Capabilities, Request
-from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.commander import Commander, RefusalRetry
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.mission.model import Waypoint
@@ -40,6 +43,8 @@ STREAM_PERIOD_S = 0.1
 STREAM_LEAD_S = 0.5
 #: AUTO.MISSION is asked this long after the upload's MISSION_ACK at the earliest (PX4 checks the new mission meanwhile).
 MISSION_CHECK_S = 1.2
+#: A refused AUTO.MISSION is asked again every second for up to 10 s (vehicle time) before the refusal stands.
+ROUTE_START_RETRY = RefusalRetry(every_s=1.0, for_s=10.0)
 
 
 class OffboardStream:
@@ -109,7 +114,7 @@ class Px4Port(MavlinkPort):
 
     def set_mode(self, mode: str) -> Request:
         name = self.mode_name(mode)
-        delay = 0.0
+        delay, retry = 0.0, None
         if name == OFFBOARD:
             self.stream.wanted = True
             now = self.commander.clock.now()
@@ -120,8 +125,8 @@ class Px4Port(MavlinkPort):
         else:
             self.stream.wanted = False  # the stream goes on until the heartbeat shows we left OFFBOARD
             if name == self.capabilities.route_mode:
-                delay = self._mission_check_wait()
-        return self._request(self.commander.set_mode(mode, delay_s=delay), mavlink.MAV_CMD_DO_SET_MODE, name)
+                delay, retry = self._mission_check_wait(), ROUTE_START_RETRY
+        return self._request(self.commander.set_mode(mode, delay_s=delay, retry=retry), mavlink.MAV_CMD_DO_SET_MODE, name)
 
     def _mission_check_wait(self) -> float:
         status: MissionTransferStatus | None = self._bb.get("/link/mission_transfer")

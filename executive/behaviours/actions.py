@@ -35,12 +35,23 @@ def _refusal(status: CommandStatus | None, request: Request | None, statustext: 
     return None
 
 
+def _retrying(status: CommandStatus | None, request: Request | None, statustext: tuple[int, str] | None) -> str | None:
+    """The refusal the autopilot port answers by asking again (PX4's AUTO.MISSION while it checks a new mission); None if not."""
+    if status is None or request is None or status.ticket != request.ticket or status.state is not CommandState.RETRYING:
+        return None
+    return f"refused: {status.result_name}" + (f" ({statustext[1]})" if statustext else "") + "; asked again"
+
+
 def _accepted(status: CommandStatus | None, request: Request | None) -> bool:
     return status is not None and request is not None and status.ticket == request.ticket and status.state is CommandState.ACCEPTED
 
 
 class CommandAction(TimedBehaviour):
-    """Request a command once; SUCCESS when the vehicle state confirms it, FAILURE when refused or unconfirmed."""
+    """Request a command once; SUCCESS when the vehicle state confirms it, FAILURE when refused or unconfirmed.
+
+    A refusal the autopilot port asks again by itself (RETRYING) is waited out: the confirmation
+    timeout counts from the last refusal, and the port's own bound ends it with the refusal.
+    """
 
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
@@ -51,6 +62,7 @@ class CommandAction(TimedBehaviour):
         super().__init__(name)
         self.confirm_timeout_s = confirm_timeout_s
         self._ticket: Request | None = None
+        self._refused_at = float("-inf")  # the last refusal the port answered by asking again
 
     def request(self) -> Request:
         """Ask the autopilot for the command; returns its request."""
@@ -67,6 +79,7 @@ class CommandAction(TimedBehaviour):
     def initialise(self) -> None:
         super().initialise()
         self._ticket = None  # a new run: the ack of the previous one (ChangeSpeed's confirmation) says nothing about it
+        self._refused_at = float("-inf")
         if not self.confirmed():
             self._ticket = self.request()
 
@@ -78,12 +91,18 @@ class CommandAction(TimedBehaviour):
         if self.confirmed():
             self.feedback_message = "confirmed"
             return Status.SUCCESS
-        refusal = _refusal(self.get(blackboard.command_key(self.command_name)), self._ticket, self.get("/vehicle/statustext"))
+        status, statustext = self.get(blackboard.command_key(self.command_name)), self.get("/vehicle/statustext")
+        refusal = _refusal(status, self._ticket, statustext)
         if refusal is not None:
             self.feedback_message = refusal
             return Status.FAILURE
+        retrying = _retrying(status, self._ticket, statustext)
+        if retrying is not None:
+            self._refused_at = status.time
+            self.feedback_message = retrying
+            return Status.RUNNING
         seen = self.progress()
-        if self.elapsed > self.confirm_timeout_s:
+        if self.clock.now() - max(self.started, self._refused_at) > self.confirm_timeout_s:
             self.feedback_message = f"not confirmed after {self.confirm_timeout_s:g} s" + (f": {seen}" if seen else "")
             return Status.FAILURE
         self.feedback_message = seen or "waiting for the autopilot"

@@ -5,9 +5,18 @@ What follows ArduPlane's source (4.x, a standard "SLT" QuadPlane with default pa
 - HEARTBEAT type is MAV_TYPE_FIXED_WING (Q_MAV_TYPE=0 means "fixed wing").
 - The flight mode decides the regime. Q modes (QSTABILIZE, QHOVER, QLOITER, QLAND, QRTL) and a
   GUIDED take-off or VTOL hover fly as a multicopter (vtol_state MC). Any other mode flies the
-  wing: in the air, out of a Q mode, that starts a transition (TRANSITION_TO_FW: the lift motors
-  hold the height while the aircraft speeds up to AIRSPEED_MIN, then Q_TRANSITION_MS = 5 s more),
-  then FW. On the ground a fixed-wing mode reports FW at once (no transition is needed there).
+  wing: in the air, out of a Q mode, that starts a transition (TRANSITION_TO_FW), then FW. On the
+  ground a fixed-wing mode reports FW at once (no transition is needed there). The transition is
+  SLT_Transition::update() (ArduPlane/quadplane.cpp): the lift motors hold the height
+  (TRANSITION_AIRSPEED_WAIT) until the airspeed is above AIRSPEED_MIN *and* the lift motors are no
+  longer assisting (QuadPlane::should_assist: airspeed below Q_ASSIST_SPEED means assist), so the
+  threshold is max(AIRSPEED_MIN, Q_ASSIST_SPEED) ("Transition airspeed reached 18.2" on SITL with
+  quadplane.parm: AIRSPEED_MIN 13, Q_ASSIST_SPEED 18); then TRANSITION_TIMER blends the lift
+  throttle down over Q_TRANSITION_MS (5000 ms) from that moment, "Transition done". Entered while
+  assisting, "Transition airspeed wait" is not said (should_assist already set the start time);
+  airspeed falling below Q_ASSIST_SPEED starts it over ("Transition started airspeed ...").
+  The aircraft flies with quadplane.parm's AIRSPEED_CRUISE (25 m/s) and LIM_ROLL_CD (65 deg): from a
+  hover, at 2 m/s/s, ~81 m to 18 m/s, then ~112 m of Q_TRANSITION_MS: FW ~190 m and ~14 s on.
 - MAV_CMD_DO_VTOL_TRANSITION is accepted in AUTO only ("VTOL transition only in AUTO"); elsewhere
   the transition is made by changing mode.
 - MAV_CMD_NAV_TAKEOFF (param7 = height above the current position) is accepted in GUIDED, armed,
@@ -67,14 +76,20 @@ Q_MODES = frozenset({"QSTABILIZE", "QHOVER", "QLOITER", "QLAND", "QRTL", "QACRO"
 PILOT_FW_MODES = frozenset({"MANUAL", "STABILIZE", "TRAINING", "ACRO", "FBWA", "FBWB", "CRUISE"})
 #: Modes that stop the lift motors at once (QuadPlane::update: transition forced complete).
 MOTORS_OFF_MODES = frozenset({"MANUAL", "ACRO", "TRAINING"})
-TRANSITION_MS = 5000  # Q_TRANSITION_MS
+TRANSITION_MS = 5000  # Q_TRANSITION_MS (ArduPlane/quadplane.cpp default)
 LOITER_RADIUS_M = 60.0  # WP_LOITER_RAD
 #: With Q_GUIDED_MODE=1 a wing-borne GUIDED approach becomes a VTOL one (QPOS_POSITION1) this far from the point:
 #: ArduPlane 4.7 SITL, quadplane.parm, a DO_REPOSITION 300 m ahead: "VTOL Position1 d=143.4" (issue 14).
 VTOL_APPROACH_M = 140.0
 RTL_ALT_M = 100.0  # ALT_HOLD_RTL
 QRTL_ALT_M = 15.0  # Q_RTL_ALT
-AIRSPEED_MIN_M_S = 9.0  # AIRSPEED_MIN (ARSPD_FBW_MIN)
+#: Tools/autotest/default_params/quadplane.parm (the SITL of issue 14): AIRSPEED_MIN, Q_ASSIST_SPEED, AIRSPEED_CRUISE, LIM_ROLL_CD
+AIRSPEED_MIN_M_S = 13.0
+ASSIST_SPEED_M_S = 18.0
+AIRSPEED_CRUISE_M_S = 25.0
+ROLL_LIMIT_DEG = 65.0
+#: The QuadPlane of quadplane.parm: our aircraft (QUADPLANE_LIMITS) at its cruise airspeed and bank limit.
+QUADPLANE_PARM_LIMITS = dataclasses.replace(QUADPLANE_LIMITS, cruise_m_s=AIRSPEED_CRUISE_M_S, bank_deg=ROLL_LIMIT_DEG)
 LAND_DETECT_S = 4.0  # land_detector(4000)
 
 
@@ -92,7 +107,15 @@ class QuadPlaneSim(ArduPilotSim):
     FIRMWARE = "ArduPlane"
     READY_TEXT = "Ready to FLY"
     #: ArduPlane/Parameters.cpp, FLIGHT_MODE_CHANNEL 8; WP_LOITER_RAD; Q_GUIDED_MODE (its option: the mission's simulator section)
-    PARAMS: ClassVar[Mapping[str, float]] = {"FLTMODE_CH": 8, "WP_LOITER_RAD": LOITER_RADIUS_M, "Q_GUIDED_MODE": 0}
+    PARAMS: ClassVar[Mapping[str, float]] = {
+        "FLTMODE_CH": 8,
+        "WP_LOITER_RAD": LOITER_RADIUS_M,
+        "Q_GUIDED_MODE": 0,
+        "AIRSPEED_MIN": AIRSPEED_MIN_M_S,
+        "Q_ASSIST_SPEED": ASSIST_SPEED_M_S,
+        "AIRSPEED_CRUISE": AIRSPEED_CRUISE_M_S,
+        "Q_TRANSITION_MS": TRANSITION_MS,
+    }
     INITIAL_MODE = "MANUAL"
     MANUAL_INPUT_MODES = frozenset(PLANE_MODES) - {"INITIALISING"}  # STICK_MIXING enabled
     STABILIZE_MODES = frozenset(PLANE_MODES) - {"MANUAL", "INITIALISING"}
@@ -109,12 +132,12 @@ class QuadPlaneSim(ArduPilotSim):
         home: Home = DEFAULT_HOME,
         *,
         q_guided_mode: int = 0,
-        limits: AircraftLimits = QUADPLANE_LIMITS,
+        limits: AircraftLimits = QUADPLANE_PARM_LIMITS,
         **options: float,
     ) -> None:
         self._limits = limits
         self.transition = Transition.DONE
-        self._transition_started = False  # "Transition airspeed wait" said
+        self._transition_started = False  # transition_start_ms set: "Transition airspeed wait" said, or assisting
         self._timer_start = 0.0
         self._guided_vtol = False  # auto_state.vtol_loiter: GUIDED hovers on the lift motors
         self._guided_takeoff = False
@@ -254,15 +277,23 @@ class QuadPlaneSim(ArduPilotSim):
         if self.mode in MOTORS_OFF_MODES or not self.flying:
             self.transition = Transition.DONE if self.mode in MOTORS_OFF_MODES else self.transition
             return
+        speed = self.vehicle.speed_m_s
+        assist = self.params["Q_ASSIST_SPEED"]
+        assisting = assist > 0 and speed < assist  # QuadPlane::should_assist, by Q_ASSIST_SPEED
+        if assisting:
+            if self.transition is not Transition.AIRSPEED_WAIT:
+                self._text(_M.MAV_SEVERITY_INFO, f"Transition started airspeed {speed:.1f}")
+            self.transition, self._transition_started = Transition.AIRSPEED_WAIT, True
         if self.transition is Transition.AIRSPEED_WAIT:
             if not self._transition_started:
                 self._transition_started = True
                 self._text(_M.MAV_SEVERITY_INFO, "Transition airspeed wait")
-            if self.vehicle.speed_m_s > AIRSPEED_MIN_M_S:
-                self.transition, self._timer_start = Transition.TIMER, self.elapsed_s
-                self._text(_M.MAV_SEVERITY_INFO, f"Transition airspeed reached {self.vehicle.speed_m_s:.1f}")
-        elif self.transition is Transition.TIMER and self.elapsed_s - self._timer_start > TRANSITION_MS / 1000:
-            self.transition = Transition.DONE
+            self._timer_start = self.elapsed_s  # transition_low_airspeed_ms: the timer runs from the last wait
+            if speed > self.params["AIRSPEED_MIN"] and not assisting:
+                self.transition = Transition.TIMER
+                self._text(_M.MAV_SEVERITY_INFO, f"Transition airspeed reached {speed:.1f}")
+        elif self.transition is Transition.TIMER and self.elapsed_s - self._timer_start > self.params["Q_TRANSITION_MS"] / 1000:
+            self.transition, self._transition_started = Transition.DONE, False
             self._text(_M.MAV_SEVERITY_INFO, "Transition done")
 
     def _update_guided(self) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -275,6 +276,72 @@ def test_the_route_is_started_a_second_after_the_upload_was_acked(px4, clock, li
             break
         clock.advance(0.1)
     assert sent_at is not None and 1.2 <= sent_at - acked_at < 1.3  # asked at once, PX4 refuses it while it checks the mission
+
+
+MISSION_REFUSED = "Switching to Mission is currently not available"
+
+
+def _route_start(px4, harness, vehicle, clock):
+    """SetMode("AUTO") on PX4 just after an upload was acked: AUTO.MISSION, asked 1.2 s later (then again per ROUTE_START_RETRY)."""
+    vehicle.set(vehicle__mode="AUTO.LOITER", vehicle__armed=True)
+    done = MissionTransferStatus(1, TransferOperation.UPLOAD, TransferState.DONE, 3, 3, "", 0, 0, False, clock.now())
+    blackboard.writer("t", ["/link/mission_transfer"]).set("/link/mission_transfer", done)
+    node = SetMode("AUTO")
+    return node, harness(node)
+
+
+def _refuse(h, vehicle) -> None:
+    h.commander.on_ack(px4_ack(_M.MAV_CMD_DO_SET_MODE, _M.MAV_RESULT_ACCEPTED))  # the MAVLink receiver: received
+    vehicle.set(vehicle__statustext=(2, MISSION_REFUSED))
+    h.commander.on_ack(px4_ack(_M.MAV_CMD_DO_SET_MODE, _M.MAV_RESULT_TEMPORARILY_REJECTED))  # the commander: still checking it
+
+
+def test_a_refused_route_start_is_asked_again_every_second_and_the_third_ask_takes(px4, harness, vehicle, link, clock):
+    node, h = _route_start(px4, harness, vehicle, clock)
+    asks: list[float] = []
+    said: list[str] = []
+    for _ in range(60):  # 6 s at 10 Hz
+        assert h.tick() == R
+        said.append(node.feedback_message)
+        if sent_modes(link) == [(4, 4)]:  # AUTO.MISSION: main 4, sub 4
+            asks.append(clock.now())
+            if len(asks) < 3:
+                _refuse(h, vehicle)
+            else:
+                h.commander.on_ack(px4_ack(_M.MAV_CMD_DO_SET_MODE, _M.MAV_RESULT_ACCEPTED))
+                h.commander.on_ack(px4_ack(_M.MAV_CMD_DO_SET_MODE, _M.MAV_RESULT_ACCEPTED))
+                vehicle.set(vehicle__mode="AUTO.MISSION")
+                break
+    assert len(asks) == 3
+    assert said.count(f"refused: TEMPORARILY_REJECTED ({MISSION_REFUSED}); asked again") == 2 * 11  # each refusal said until the next ask: 11 ticks
+    assert all(1.0 <= b - a <= 1.1 + 1e-9 for a, b in itertools.pairwise(asks))  # a second after each refusal (the tick it falls due)
+    assert h.tick() == S
+
+
+def test_a_route_start_refused_for_10_s_fails_with_the_refusal(px4, harness, vehicle, link, clock):
+    node, h = _route_start(px4, harness, vehicle, clock)
+    asks: list[float] = []
+    statuses = []
+    for _ in range(150):  # 15 s at 10 Hz
+        statuses.append(h.tick())
+        if statuses[-1] != R:
+            break
+        if sent_modes(link):
+            asks.append(clock.now())
+            _refuse(h, vehicle)
+    assert statuses[-1] == F and R in statuses and len(statuses) > 100  # held on to while PX4 checks, then let go
+    assert asks[-1] - asks[0] <= 10.0 and len(asks) == 10  # asked every second, for 10 s from the first ask
+    assert node.feedback_message == f"refused: TEMPORARILY_REJECTED ({MISSION_REFUSED})"
+
+
+def test_on_ardupilot_a_refused_auto_is_not_asked_again(autopilot, harness, vehicle, link):
+    vehicle.set(vehicle__mode="HOLD")
+    h = harness(SetMode("AUTO"))
+    assert h.tick() == R
+    assert len(link.take("COMMAND_LONG")) == 1
+    h.commander.on_ack(AUTOPILOT.command_ack(_M.MAV_CMD_DO_SET_MODE, _M.MAV_RESULT_TEMPORARILY_REJECTED, 0, 0, 1, 191))
+    assert h.tick() == F
+    assert h.commander.idle  # nothing left to ask again: the refusal was the answer
 
 
 def test_a_finished_px4_mission_ends_the_drive(px4, vehicle, clock, link, commander):

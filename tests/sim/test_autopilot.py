@@ -283,8 +283,8 @@ def test_the_mode_switch_channel_is_answered_as_the_firmware_does(make_gcs: Make
     gcs = make_gcs(kind)
     (value,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, param.encode(), -1))
     assert (value.param_id, value.param_value, value.param_type) == (param, 8.0, m.MAV_PARAM_TYPE_INT8)
-    (by_index,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, b"", 0))
-    assert by_index.param_id == param
+    (by_index,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, b"", value.param_index))
+    assert (by_index.param_id, by_index.param_index) == (param, value.param_index)
     assert gcs.send(gcs.mav.param_request_read_encode(1, 1, b"NO_SUCH_PARAM", -1)) == []
     assert gcs.send(gcs.mav.param_request_read_encode(2, 1, param.encode(), -1)) == []  # another vehicle's
 

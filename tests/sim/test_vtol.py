@@ -11,7 +11,7 @@ from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import mavlink as m
 from executive.sim import SimServer
 from executive.sim.aircraft import QUADPLANE_LIMITS
-from executive.sim.arduplane import AIRSPEED_MIN_M_S, LOITER_RADIUS_M, TRANSITION_MS, VTOL_APPROACH_M
+from executive.sim.arduplane import AIRSPEED_MIN_M_S, ASSIST_SPEED_M_S, LOITER_RADIUS_M, TRANSITION_MS, VTOL_APPROACH_M
 from executive.vehicles import profile_for_mav_type
 
 if TYPE_CHECKING:
@@ -51,7 +51,7 @@ def states(messages: list) -> list[tuple[int, int]]:
 def in_fixed_wing_flight(make_gcs: MakeGcs) -> Gcs:
     gcs = airborne(make_gcs, 30.0)
     assert gcs.reposition(*gcs.north(600.0), 30.0).result == m.MAV_RESULT_ACCEPTED
-    gcs.run(15.0, step=0.5)
+    gcs.run(20.0, step=0.5)
     assert gcs.ap.vtol_state == FW
     return gcs
 
@@ -116,24 +116,53 @@ def test_do_vtol_transition_is_refused_outside_auto(make_gcs: MakeGcs) -> None:
         assert gcs.ap.landed_state == IN_AIR
 
 
-def test_transition_to_fixed_wing_takes_the_airspeed_wait_and_the_transition_time(make_gcs: MakeGcs) -> None:
+def test_transition_to_fixed_wing_waits_for_the_assist_speed_then_the_transition_time(make_gcs: MakeGcs) -> None:
+    """SLT_Transition::update(): the timer starts above AIRSPEED_MIN only once the lift motors stop assisting (Q_ASSIST_SPEED 18 in
+    quadplane.parm: "Transition airspeed reached 18.2" on SITL), then Q_TRANSITION_MS; from a hover that is ~190 m."""
     gcs = airborne(make_gcs, 30.0)
     target = gcs.north(600.0)
     gcs.set_mode("QLOITER")
     assert gcs.reposition(*target, 30.0).result == m.MAV_RESULT_FAILED  # outside GUIDED without the change-mode flag
+    log_from = len(gcs.log)
     assert gcs.reposition(*target, 30.0, m.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE).result == m.MAV_RESULT_ACCEPTED
-    start = gcs.ap.elapsed_s
+    start, origin = gcs.ap.elapsed_s, (gcs.ap.vehicle.lat, gcs.ap.vehicle.lon)
     seen: list[tuple[float, int, float]] = []
     while gcs.ap.vtol_state != FW:
-        assert gcs.ap.elapsed_s - start < 20.0, "no transition"
+        assert gcs.ap.elapsed_s - start < 30.0, "no transition"
         out = gcs.run(0.5)
         seen += [(gcs.ap.elapsed_s - start, msg.vtol_state, gcs.ap.vehicle.speed_m_s) for msg in gcs.of_type(out, "EXTENDED_SYS_STATE")]
     assert {state for _, state, _ in seen[:-1]} == {TO_FW}
-    reached = next(t for t, _, speed in seen if speed > AIRSPEED_MIN_M_S)
+    assert not [t for t, state, speed in seen if state == TO_FW and speed > ASSIST_SPEED_M_S + 1.0 and t > 20.0]
+    above_min = next(t for t, _, speed in seen if speed > AIRSPEED_MIN_M_S)
+    reached = next(t for t, _, speed in seen if speed > ASSIST_SPEED_M_S)
+    assert reached > above_min + 2.0  # above AIRSPEED_MIN but still assisted: no timer yet
     assert gcs.ap.elapsed_s - start >= reached + TRANSITION_MS / 1000  # FW only once the transition time has run too
-    texts = gcs.texts(gcs.log)
-    assert texts[-3] == "Transition airspeed wait" and texts[-2].startswith("Transition airspeed reached 9.") and texts[-1] == "Transition done"
+    assert gcs.ap.elapsed_s - start == pytest.approx(14.0, abs=1.0)
+    assert gcs.ap.vehicle.distance_to(*origin) == pytest.approx(195.0, abs=15.0)  # ~193 m, seen at 0.5 s steps (25 m/s)
+    texts = gcs.texts(gcs.log[log_from:])
+    assert "Transition airspeed wait" not in texts  # entered while assisting: should_assist set the start time already
+    assert texts[-2].startswith("Transition airspeed reached 18.") and texts[-1] == "Transition done"
     assert gcs.ap.landed_state == IN_AIR
+
+
+def test_with_q_guided_mode_a_reposition_300_m_ahead_from_a_hover_never_shows_fixed_wing(make_gcs: MakeGcs) -> None:
+    """Issue 14, ArduPlane SITL with quadplane.parm: "Transition airspeed reached 18.2", then "VTOL Position1 d=143.4",
+    the transition (~190 m from a hover) is not done when the VTOL approach begins ~140 m out: FW (4) is never reported."""
+    gcs = airborne(make_gcs, 30.0)
+    gcs.ap.q_guided_mode = 1
+    target = gcs.north(300.0)
+    log_from = len(gcs.log)
+    assert gcs.reposition(*target, 30.0).result == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(90.0, step=0.5)
+    seen = [vtol for vtol, _ in states(out)]
+    assert FW not in seen
+    assert [s for i, s in enumerate(seen) if i == 0 or seen[i - 1] != s] == [TO_FW, MC]
+    texts = gcs.texts(gcs.log[log_from:])
+    reached = next(i for i, t in enumerate(texts) if t.startswith("Transition airspeed reached 18."))
+    approach = next(i for i, t in enumerate(texts) if t.startswith("VTOL Position1 d="))
+    assert reached < approach and "Transition done" not in texts
+    assert float(texts[approach].removeprefix("VTOL Position1 d=")) == pytest.approx(VTOL_APPROACH_M, abs=15.0)
+    assert gcs.ap.vehicle.distance_to(*target) < 0.5
 
 
 def test_a_plane_cannot_hover_it_circles_the_guided_point(make_gcs: MakeGcs) -> None:

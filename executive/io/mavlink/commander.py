@@ -31,6 +31,17 @@ FORCE_ARM_MAGIC = 2989.0
 FORCE_DISARM_MAGIC = 21196.0
 
 
+@dataclass(frozen=True, slots=True)
+class RefusalRetry:
+    """Ask again, every ``every_s``, a request refused TEMPORARILY_REJECTED, until ``for_s`` after it was first due; then the refusal stands.
+
+    Meanwhile its ``/command/<name>`` shows RETRYING with the refusal's result: one ticket, one final answer.
+    """
+
+    every_s: float
+    for_s: float
+
+
 @dataclass
 class _InFlight:
     status: CommandStatus
@@ -39,6 +50,9 @@ class _InFlight:
     due: float | None  # when to (re)send; None = waiting for an ack until ``deadline``
     deadline: float
     provisional_seen: bool = False  # a double-acked command's first ACCEPTED came: the next ack decides
+    retry: RefusalRetry | None = None
+    retry_until: float = 0.0  # no new ask after this (vehicle time)
+    refusals: int = 0  # sends answered by a refusal and asked again (not lost sends: they do not count toward the retries)
 
 
 def result_name(result: int | None) -> str:
@@ -96,22 +110,22 @@ class Commander:
         return self._clock
 
     # -- requests (from behaviours; never block) ---------------------------------------------
-    def command_long(self, command: int, params: Sequence[float] = (), *, delay_s: float = 0.0) -> int:
-        """Queue a COMMAND_LONG (sent ``delay_s`` from now); returns the ticket to look for in ``/command/<name>``."""
-        return self._request(command, params, frame=None, delay_s=delay_s)
+    def command_long(self, command: int, params: Sequence[float] = (), *, delay_s: float = 0.0, retry: RefusalRetry | None = None) -> int:
+        """Queue a COMMAND_LONG (sent ``delay_s`` from now; asked again per ``retry`` if refused for now); its ticket in ``/command/<name>``."""
+        return self._request(command, params, frame=None, delay_s=delay_s, retry=retry)
 
     def command_int(self, command: int, frame: int, params: Sequence[float] = ()) -> int:
         """Queue a COMMAND_INT; ``params`` are param1-4, x, y (degrees: scaled here), z."""
         return self._request(command, params, frame=frame)
 
-    def set_mode(self, mode: str | int | None = None, *, number: int | None = None, delay_s: float = 0.0) -> int:
+    def set_mode(self, mode: str | int | None = None, *, number: int | None = None, delay_s: float = 0.0, retry: RefusalRetry | None = None) -> int:
         """Ask for a flight mode by name or number (sent ``delay_s`` from now); given both, the name wins. KeyError if unknown."""
         chosen = mode if mode is not None else number
         if chosen is None:
             raise KeyError("no mode given")
         main, sub = self.modes.encode(chosen)
         self.note_mode_asked(self.modes.canonical(chosen) if isinstance(chosen, str) else self.modes.decode(int(main)))
-        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub), delay_s=delay_s)
+        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub), delay_s=delay_s, retry=retry)
 
     def note_mode_asked(self, name: str) -> None:
         """A mode our request puts the vehicle in (asked by name, or the effect of a command): not a person's change."""
@@ -234,6 +248,11 @@ class Commander:
             entry.due = None
             self._publish(entry, CommandState.IN_PROGRESS, msg.result, now)
             return
+        retry = entry.retry
+        if msg.result == mavlink.MAV_RESULT_TEMPORARILY_REJECTED and retry is not None and now + retry.every_s <= entry.retry_until:
+            entry.due, entry.refusals = now + retry.every_s, entry.refusals + 1
+            self._publish(entry, CommandState.RETRYING, msg.result, now)
+            return
         state = CommandState.ACCEPTED if msg.result == mavlink.MAV_RESULT_ACCEPTED else CommandState.REJECTED
         self._publish(entry, state, msg.result, now)
         del self._in_flight[msg.command]
@@ -248,7 +267,7 @@ class Commander:
         self._outbox.clear()
         for command, entry in list(self._in_flight.items()):
             if entry.due is None and entry.deadline <= now:
-                if entry.status.attempts > self._retries:
+                if entry.status.attempts - entry.refusals > self._retries:
                     self._publish(entry, CommandState.TIMED_OUT, None, now)
                     del self._in_flight[command]
                     continue
@@ -268,7 +287,7 @@ class Commander:
         return not self._outbox and not self._in_flight
 
     # -- internals ---------------------------------------------------------------------------
-    def _request(self, command: int, params: Sequence[float], frame: int | None, delay_s: float = 0.0) -> int:
+    def _request(self, command: int, params: Sequence[float], frame: int | None, delay_s: float = 0.0, retry: RefusalRetry | None = None) -> int:
         if len(params) > 7:
             raise ValueError(f"a command has at most 7 parameters, got {len(params)}")
         now = self._clock.now()
@@ -276,7 +295,9 @@ class Commander:
         status = CommandStatus(ticket, command, command_name(command), CommandState.QUEUED, None, 0, now)
         padded = (*(float(p) for p in params), *([0.0] * (7 - len(params))))
         # A newer request of the same kind supersedes the one in flight: its ack could not be told apart.
-        entry = _InFlight(status, padded, frame, due=now + delay_s, deadline=now + delay_s + self._ack_timeout_s)
+        entry = _InFlight(status, padded, frame, due=now + delay_s, deadline=now + delay_s + self._ack_timeout_s, retry=retry)
+        if retry is not None:
+            entry.retry_until = now + delay_s + retry.for_s
         self._in_flight[command] = entry
         self._publish(entry, CommandState.QUEUED, None, now)
         return ticket
@@ -284,7 +305,7 @@ class Commander:
     def _encode(self, command: int, entry: _InFlight) -> MAVLinkMessage:
         p = entry.params
         if entry.frame is None:
-            confirmation = entry.status.attempts  # 0 on the first send, +1 on each retry
+            confirmation = entry.status.attempts - entry.refusals  # 0 on the first send (and on a new ask after a refusal), +1 on each retry
             return self._encoder.command_long_encode(self.target_system, self.target_component, command, confirmation, *p)
         return self._encoder.command_int_encode(
             self.target_system, self.target_component, entry.frame, command, 0, 0,

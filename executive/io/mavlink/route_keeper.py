@@ -36,7 +36,7 @@ from executive.state import CommandState, CommandStatus, HomePosition
 log = logging.getLogger(__name__)
 
 _SET_HOME_KEY = blackboard.command_key("DO_SET_HOME")
-_PENDING = (CommandState.QUEUED, CommandState.SENT, CommandState.IN_PROGRESS)
+_PENDING = (CommandState.QUEUED, CommandState.SENT, CommandState.IN_PROGRESS, CommandState.RETRYING)
 
 
 class RouteUploadState(StrEnum):
