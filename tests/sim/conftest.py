@@ -5,10 +5,10 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 
 import pytest
-from sim_support import EKF_READY_S, HOME, Client, Gcs
 
 from executive.clock import ManualClock
 from executive.sim import make_autopilot
+from sim_support import EKF_READY_S, HOME, Client, Gcs
 
 
 @pytest.fixture

@@ -7,7 +7,6 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import pytest
-from sim_support import HOME, Gcs
 
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import MAVLinkMessage
@@ -26,6 +25,7 @@ from executive.sim.px4 import (
     TRANSITION_AIRSPEED_M_S,
     Px4Sim,
 )
+from sim_support import HOME, Gcs
 
 if TYPE_CHECKING:
     from sim_support import Client

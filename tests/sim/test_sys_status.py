@@ -6,13 +6,13 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import pytest
-from sim_support import EKF_READY_S, HOME, Gcs
 
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.io.mavlink.dialect import mavlink as m
 from executive.sim import make_autopilot
 from executive.sim.faults import EkfDegradation, FaultInjector
+from sim_support import EKF_READY_S, HOME, Gcs
 
 if TYPE_CHECKING:
     MakeGcs = Callable[..., Gcs]
