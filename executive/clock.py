@@ -58,6 +58,31 @@ class ScaledClock:
             time.sleep(delay)
 
 
+class TickClock:
+    """The time of the tick being run: every behaviour of one tick sees one time.
+
+    On a clock that runs by itself (:class:`ScaledClock`) two reads in one tick differ; a guard
+    judged by the tree and again by its failsafe in the same tick could then give two verdicts
+    (fails, then holds a moment later) and the failsafe would find nothing to wait for.
+    """
+
+    def __init__(self, clock: Clock) -> None:
+        self._clock = clock
+        self._t = clock.now()
+
+    def latch(self) -> float:
+        """Start a tick: from now until the next latch, :meth:`now` is this time."""
+        self._t = self._clock.now()
+        return self._t
+
+    def now(self) -> float:
+        return self._t
+
+    def sleep_until(self, t: float) -> None:
+        self._clock.sleep_until(t)
+        self.latch()
+
+
 class ManualClock:
     """A clock that moves only when told to: for tick-by-tick tests."""
 

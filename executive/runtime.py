@@ -17,6 +17,7 @@ from py_trees.common import Status
 import trees
 from executive import blackboard
 from executive.behaviours.failsafe import failsafe_mode
+from executive.clock import TickClock
 from executive.intervention import rc_takeover
 from executive.io.instruments import open_sampler
 from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
@@ -156,6 +157,8 @@ class Runtime:
         self.ticks = 0
         #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.
         self.pacer = TickPacer(self.clock, self.period_s)
+        #: What the tree reads: the clock, latched at the start of each tick.
+        self.tree_clock = TickClock(self.clock)
         self._stop_reason: str | None = None
 
     # -- phases ------------------------------------------------------------------------------
@@ -198,6 +201,7 @@ class Runtime:
         status = Status.INVALID
         if self.tree is not None and self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
             try:
+                self.tree_clock.latch()
                 self.tree.tick()
             except Exception as exc:
                 node = _crashed_behaviour(exc.__traceback__)
@@ -376,4 +380,4 @@ class Runtime:
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)
-        self.tree.setup(clock=self.clock, autopilot=self.autopilot, mission_state=self.mission_state, sampler=self.sampler)
+        self.tree.setup(clock=self.tree_clock, autopilot=self.autopilot, mission_state=self.mission_state, sampler=self.sampler)

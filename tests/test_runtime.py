@@ -54,6 +54,30 @@ def test_a_tick_drains_then_ticks_then_sends(square_mission, link, clock):
     assert [m.param2 for m in link.take("COMMAND_LONG") if m.command == mavlink.MAV_CMD_DO_SET_MODE] == [HOLD]
 
 
+def test_every_behaviour_of_a_tick_sees_the_time_the_tick_started(square_mission, link, clock):
+    """A guard judged by the tree and again by its failsafe in one tick must see one time, even when time runs during the tick."""
+    seen = []
+
+    class SlowReader(py_trees.behaviour.Behaviour):
+        def setup(self, **services) -> None:
+            self.tree_clock = services["clock"]
+
+        def update(self) -> Status:
+            seen.append(self.tree_clock.now())
+            clock.advance(0.05)  # the clock the runtime runs on moves on while the tick runs (a ScaledClock does)
+            return Status.SUCCESS
+
+    root = py_trees.composites.Sequence("Mission", memory=False, children=[SlowReader("first"), SlowReader("second")])
+    runtime = make_runtime(square_mission, link, clock, root=root)
+    ObedientAutopilot(link).beat()
+    runtime.mission_state.start()
+    started = clock.now()
+    runtime.tick()
+    assert seen == [started, started]
+    runtime.tick()
+    assert seen[2:] == [started + 0.1, started + 0.1]
+
+
 def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mission, link, clock):
     root = py_trees.composites.Sequence("Mission", memory=True, children=[py_trees.behaviours.Success("ok"), Explodes("Divide")])
     runtime = make_runtime(square_mission, link, clock, root=root)
