@@ -13,8 +13,9 @@ class Progress:
     """Writes the status every ``period_s`` of clock time (2 Hz by default).
 
     On a terminal it is one line rewritten in place; elsewhere (a log file, a pipe, a service
-    journal) one JSON object per line, with the clock time, for tools. ``quiet`` keeps the JSON
-    lines to changes of state, leg or mode (and one every ``quiet_period_s``).
+    journal) one JSON object per line, with the clock time, for tools: every ``period_s`` and at
+    once on a change of state, leg, mode or armed, so a tool sees even a mode held for less than a
+    period. ``quiet`` keeps the JSON lines to those changes (and one every ``quiet_period_s``).
     """
 
     def __init__(self, stream: TextIO, clock: Clock, *, period_s: float = 0.5, quiet: bool = False, quiet_period_s: float = 10.0) -> None:
@@ -37,7 +38,7 @@ class Progress:
         status = self._source.snapshot()
         key = (status["state"], status["leg"], status["mode"], status["armed"])
         changed = key != self._last_key
-        if not (force or now >= self._next or (changed and self._quiet)):
+        if not (force or now >= self._next or (changed and not self._tty)):
             return
         self._next = now + self._period_s
         self._last_key = key
