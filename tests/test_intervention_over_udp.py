@@ -19,29 +19,12 @@ from executive.io.control import request
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
-from executive.mission.model import Mission
 from executive.sim import SimServer
 from executive.sim.autopilot import ArduPilotSim
 from executive.sim.faults import EkfDegradation, FaultInjector
+from tests_support import LINE_EKF_READY_S, LINE_HOME, line_mission
 
-HOME = (-35.363261, 149.165230)
-LINE = [{"lat": HOME[0] + 0.0002248 * n, "lon": HOME[1]} for n in range(1, 5)]  # every 25 m north
-EKF_READY_S = 2.0
-
-
-def line_mission() -> Mission:
-    return Mission.model_validate(
-        {
-            "version": 1,
-            "name": "intervention line",
-            "vehicle": "rover",
-            "auto_arm": True,
-            "home": {"lat": HOME[0], "lon": HOME[1], "heading_deg": 0.0},
-            "limits": {"acceptance_radius_m": 1.5, "leg_timeout_s": 60, "link_timeout_s": 3, "recovery_timeout_s": 30},
-            "simulator": {"ekf_ready_after_s": EKF_READY_S},
-            "waypoints": LINE,
-        }
-    )
+HOME, EKF_READY_S = LINE_HOME, LINE_EKF_READY_S
 
 
 class GroundStation(FaultInjector):
@@ -81,7 +64,7 @@ def run(tmp_path: Path, station: GroundStation, clock: ScaledClock, operator: Ca
     with SimServer("rover", clock=clock, home=(*HOME, 0.0), faults=station, ekf_ready_after_s=EKF_READY_S) as sim:
         link = PymavlinkLink(sim.url_for_client)
         try:
-            runtime = build_runtime(line_mission(), link, clock, plugs=[control_socket(sock)])
+            runtime = build_runtime(line_mission("intervention line"), link, clock, plugs=[control_socket(sock)])
             send = link.send
 
             def spy(msg: MAVLinkMessage) -> None:

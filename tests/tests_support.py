@@ -1,4 +1,4 @@
-"""Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket."""
+"""Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket, a line mission."""
 
 from __future__ import annotations
 
@@ -10,6 +10,26 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.model import Mission
 from executive.pacing import SpeedGovernor
 from executive.runtime import Outcome, Runtime
+
+#: Home of the line missions: ArduPilot SITL's default location.
+LINE_HOME = (-35.363261, 149.165230)
+#: EKF ready 2 s after boot in the line missions' simulator.
+LINE_EKF_READY_S = 2.0
+
+
+def line_mission(name: str, **changes: Any) -> Mission:
+    """A rover driving 4 waypoints 25 m apart due north of :data:`LINE_HOME` (radius 1.5 m, leg 60 s, link 3 s, recovery 30 s)."""
+    fields: dict[str, Any] = {
+        "version": 1,
+        "name": name,
+        "vehicle": "rover",
+        "auto_arm": True,
+        "home": {"lat": LINE_HOME[0], "lon": LINE_HOME[1], "heading_deg": 0.0},
+        "limits": {"acceptance_radius_m": 1.5, "leg_timeout_s": 60, "link_timeout_s": 3, "recovery_timeout_s": 30},
+        "simulator": {"ekf_ready_after_s": LINE_EKF_READY_S},
+        "waypoints": [{"lat": LINE_HOME[0] + 0.0002248 * n, "lon": LINE_HOME[1]} for n in range(1, 5)],
+    }
+    return Mission.model_validate(fields | changes)
 
 
 def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> tuple[Runtime, Outcome]:

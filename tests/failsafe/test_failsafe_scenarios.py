@@ -44,28 +44,20 @@ from executive.mission.model import Mission
 from executive.runtime import Runtime
 from executive.sim.faults import load_faults
 from executive.state import EkfFlags
+from tests_support import LINE_EKF_READY_S, LINE_HOME, line_mission
 
 ROOT = Path(__file__).parents[2]
 FAULTS = ROOT / "missions" / "faults"
 SHIFT_S = 38.0  # the fault files' EKF is ready at 40 s, this mission's at 2 s
-HOME = (-35.363261, 149.165230)
-LINE = [{"lat": HOME[0] + 0.0002248 * n, "lon": HOME[1]} for n in range(1, 5)]  # every 25 m north
+HOME = LINE_HOME
 FENCE_M = 110.0
 BB_KEYS = ["/link/up", "/vehicle/ekf", "/rc/channels", "/rc/connected", "/heading/ok", "/vehicle/battery", "/vehicle/position", "/mission/leg_index"]
 
 
-def line_mission(**changes: Any) -> Mission:
-    fields: dict[str, Any] = {
-        "version": 1,
-        "name": "failsafe line",
-        "vehicle": "rover",
-        "auto_arm": True,
-        "home": {"lat": HOME[0], "lon": HOME[1], "heading_deg": 0.0},
-        "limits": {"acceptance_radius_m": 1.5, "leg_timeout_s": 60, "link_timeout_s": 3, "recovery_timeout_s": 30},
-        "simulator": {"ekf_ready_after_s": 40.0 - SHIFT_S},
-        "waypoints": LINE,
-    }
-    return Mission.model_validate(fields | changes)
+def failsafe_line(**changes: Any) -> Mission:
+    """The line mission, its EKF ready 38 s before the fault files' (their times are shifted by SHIFT_S)."""
+    assert LINE_EKF_READY_S == 40.0 - SHIFT_S
+    return line_mission("failsafe line", **changes)
 
 
 Fact = Callable[[dict[str, Any]], bool]
@@ -147,7 +139,7 @@ def run_scenario(tmp_path: Path, lockstep) -> Iterator[Callable[[Scenario], tupl
     handlers: list[logging.Handler] = []
 
     def run(scenario: Scenario) -> tuple[Any, Record, dict[str, Any], str]:
-        mission = line_mission(**scenario.changes)
+        mission = failsafe_line(**scenario.changes)
         record = Record()
         journals: list[Journal] = []
 
@@ -228,7 +220,7 @@ def test_a_fault_gets_its_failsafe_within_one_tick_and_its_recovery(run_scenario
 def test_a_failsafe_abort_exits_1_and_the_report_has_the_event(tmp_path: Path) -> None:
     """``executive run --faults --journal`` as a process: battery_low, exit 1, the vehicle in RTL, the event in ``executive report --json``."""
     mission = tmp_path / "line.yaml"
-    mission.write_text(yaml.safe_dump(line_mission().model_dump(mode="json", exclude_none=True)))
+    mission.write_text(yaml.safe_dump(failsafe_line().model_dump(mode="json", exclude_none=True)))
     faults = tmp_path / "battery_low.yaml"
     plan = {"version": 1, "faults": [f.model_dump(mode="json", exclude_none=True) for f in shifted_faults("battery_low.yaml")]}
     faults.write_text(yaml.safe_dump(plan))
