@@ -200,6 +200,17 @@ def _obstacle_socket(spec: str | None, stack: contextlib.ExitStack) -> socket.so
     return sock
 
 
+def _signing_hint(link: PymavlinkLink) -> str:
+    """Why no heartbeat was heard when signing is the reason: every packet failed the signature check."""
+    unsigned, other_key, accepted = link.signature_failures
+    if accepted or not (unsigned or other_key):
+        return ""
+    return (
+        f": every packet from the autopilot was unsigned or signed with another key ({unsigned} unsigned, {other_key} signed with another "
+        "key): check --signing-key against the autopilot's key"
+    )
+
+
 def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
@@ -339,7 +350,7 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_NO_VEHICLE
         if not connected:
             which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
-            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s", file=sys.stderr)
+            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)
             return EXIT_NO_VEHICLE
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
