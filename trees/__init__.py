@@ -1,11 +1,11 @@
 """Tree builders, one module per mission kind; a mission file names its module in ``tree:``.
 
-Each module exposes ``build(mission: Mission) -> py_trees.behaviour.Behaviour``.
+Each module exposes ``build(mission: Mission) -> py_trees.behaviour.Behaviour``. A mission may
+also name a plugin's tree or ``module:function`` on the Python path (:mod:`executive.plugins`).
 """
 
 from __future__ import annotations
 
-import importlib
 import pkgutil
 from typing import TYPE_CHECKING, Literal
 
@@ -41,7 +41,7 @@ def subtrees() -> list[tuple[str, Literal["decorator", "subtree"], Callable[...,
 
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """The root behaviour of the tree the mission selects."""
-    if mission.tree not in available():
-        raise ValueError(f"unknown tree {mission.tree!r}; available: {', '.join(available())}")
-    return importlib.import_module(f"trees.{mission.tree}").build(mission)
+    """The root behaviour of the tree the mission selects (built in, a plugin's, or ``module:function``)."""
+    from executive.plugins import resolve_tree  # it lists this package's trees
+
+    return resolve_tree(mission.tree)(mission)
