@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "arm", "disarm", "mode", "command")
+REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode", "command")
 #: The commands a person may give the vehicle, and the blackboard keys of their acks.
 VEHICLE_REQUESTS = ("arm", "disarm", "mode")
 _COMMAND_KEYS = {name: blackboard.command_key(name) for name in ("COMPONENT_ARM_DISARM", "DO_SET_MODE")}
@@ -52,6 +52,7 @@ class Reply:
     state: str
     status: dict[str, Any] | None = None
     route: dict[str, Any] | None = None
+    tree: dict[str, Any] | None = None
     command: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
@@ -66,7 +67,8 @@ class Operator:
     at the vehicle's position needs one the EKF vouches for, no older than ``max_position_age_s``
     (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
     (its samples could not be real), if it cannot. ``autopilot`` takes a person's arm, disarm and
-    mode (None: refused).
+    mode (None: refused). ``tree`` supplies the running tree for ``tree`` requests
+    (:meth:`executive.waiting.TreeWatch.view`).
     """
 
     def __init__(
@@ -78,6 +80,7 @@ class Operator:
         max_position_age_s: float = 2.0,
         refuse: Callable[[Mission], str | None] | None = None,
         autopilot: AutopilotPort | None = None,
+        tree: Callable[[], dict[str, Any] | None] | None = None,
     ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
@@ -86,6 +89,7 @@ class Operator:
         self.max_position_age_s = max_position_age_s
         self._refuse = refuse
         self.autopilot = autopilot
+        self._tree = tree
         keys = ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload", *_COMMAND_KEYS.values()]
         self._bb = blackboard.reader("operator", keys)
 
@@ -95,6 +99,8 @@ class Operator:
         try:
             if op == "status":
                 return self._reply(True, state.reason, with_status=True)
+            if op == "tree":
+                return self._tree_reply()
             if op == "start":
                 state.start()
             elif op == "pause":
@@ -118,6 +124,13 @@ class Operator:
         except Refused as refused:
             return self._reply(False, str(refused))
         return self._reply(True, state.reason)
+
+    def _tree_reply(self) -> Reply:
+        """The tree at its latest tick, with the status (what it waits for); refused before any mission has run."""
+        tree = self._tree() if self._tree is not None else None
+        if tree is None:
+            return self._reply(False, f"no mission has run yet ({self.mission_state.status})")
+        return self._reply(True, self.mission_state.reason, with_status=True, tree=tree)
 
     def _upload(self, filename: str, text: object) -> Reply:
         if not isinstance(text, str):
@@ -221,7 +234,13 @@ class Operator:
         }
 
     def _reply(
-        self, ok: bool, reason: str, with_status: bool = False, route: dict[str, Any] | None = None, command: dict[str, Any] | None = None
+        self,
+        ok: bool,
+        reason: str,
+        with_status: bool = False,
+        route: dict[str, Any] | None = None,
+        tree: dict[str, Any] | None = None,
+        command: dict[str, Any] | None = None,
     ) -> Reply:
         status = self._status() if with_status and self._status else None
-        return Reply(ok, reason, str(self.mission_state.status), status, route, command)
+        return Reply(ok, reason, str(self.mission_state.status), status, route, tree, command)
