@@ -25,6 +25,8 @@ from dataclasses import dataclass, field
 from typing import Any
 from xml.parsers import expat
 
+import yaml
+
 from executive.mission.errors import FieldError, MissionError
 
 #: The catalogue's parameter types -> the port types BehaviorTree.CPP writes (``BT::demangle`` of the C++ type).
@@ -353,3 +355,34 @@ def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any]:
         children = [to_yaml(child, types) for child in node.slots.get(slot.name, ())]
         data[slot.name] = children if slot.many else children[0]
     return data
+
+
+# -- files --------------------------------------------------------------------------------------
+
+
+def export_tree(mission_file: str, tree_id: str, catalogue: Any) -> str:
+    """The ``tree:`` of a (valid) mission file, written in the file as a mapping, as a BehaviorTree.CPP v4 document.
+
+    ValueError when the tree is a name (built in Python, not written in the file).
+    """
+    with open(mission_file, encoding="utf-8") as stream:
+        tree = (yaml.safe_load(stream) or {}).get("tree", "waypoints")
+    if not isinstance(tree, Mapping):
+        raise ValueError(f"tree {tree!r} is built in Python: only a tree written in the mission file (tree: a mapping) is exported as XML")
+    types = node_types(catalogue)
+    return write_xml(from_yaml(tree, types), types, tree_id)
+
+
+def import_tree(path: str, catalogue: Any) -> dict[str, Any]:
+    """The main tree of a BehaviorTree.CPP v4 file as a mission's YAML ``tree:``; MissionError naming every problem with its line."""
+    try:
+        with open(path, "rb") as stream:
+            data = stream.read(MAX_BYTES + 1)
+    except OSError as exc:
+        raise MissionError([FieldError(path, 1, 1, "(file)", exc.strerror or str(exc))]) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise MissionError([FieldError(path, 1, 1, "(file)", f"not UTF-8 text: byte 0x{data[exc.start]:02x} at offset {exc.start}")]) from None
+    types = node_types(catalogue)
+    return to_yaml(read_xml(text, path, types), types)
