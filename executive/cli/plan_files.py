@@ -11,8 +11,8 @@ import argparse
 import os
 import sys
 from collections.abc import Callable
-from typing import Any
 from pathlib import Path
+from typing import Any
 
 import yaml
 
