@@ -24,7 +24,7 @@ from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
 from executive.state import EkfStatus, GlobalPosition
 
-REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route")
+REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree")
 
 
 @dataclass(frozen=True)
@@ -36,6 +36,7 @@ class Reply:
     state: str
     status: dict[str, Any] | None = None
     route: dict[str, Any] | None = None
+    tree: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {k: v for k, v in asdict(self).items() if v is not None}
@@ -48,7 +49,8 @@ class Operator:
     vehicle this executive drives (an uploaded mission for another kind is refused). A route edit
     at the vehicle's position needs one the EKF vouches for, no older than ``max_position_age_s``
     (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
-    (its samples could not be real), if it cannot.
+    (its samples could not be real), if it cannot. ``tree`` supplies the running tree for ``tree``
+    requests (:meth:`executive.waiting.TreeWatch.view`).
     """
 
     def __init__(
@@ -59,6 +61,7 @@ class Operator:
         clock: Clock | None = None,
         max_position_age_s: float = 2.0,
         refuse: Callable[[Mission], str | None] | None = None,
+        tree: Callable[[], dict[str, Any] | None] | None = None,
     ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
@@ -66,6 +69,7 @@ class Operator:
         self._clock = clock
         self.max_position_age_s = max_position_age_s
         self._refuse = refuse
+        self._tree = tree
         self._bb = blackboard.reader("operator", ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload"])
 
     def request(self, op: str, source: str = "operator", **args: Any) -> Reply:
@@ -74,6 +78,8 @@ class Operator:
         try:
             if op == "status":
                 return self._reply(True, state.reason, with_status=True)
+            if op == "tree":
+                return self._tree_reply()
             if op == "start":
                 state.start()
             elif op == "pause":
@@ -93,6 +99,13 @@ class Operator:
         except Refused as refused:
             return self._reply(False, str(refused))
         return self._reply(True, state.reason)
+
+    def _tree_reply(self) -> Reply:
+        """The tree at its latest tick, with the status (what it waits for); refused before any mission has run."""
+        tree = self._tree() if self._tree is not None else None
+        if tree is None:
+            return self._reply(False, f"no mission has run yet ({self.mission_state.status})")
+        return self._reply(True, self.mission_state.reason, with_status=True, tree=tree)
 
     def _upload(self, filename: str, text: object) -> Reply:
         if not isinstance(text, str):
@@ -157,6 +170,8 @@ class Operator:
             "upload": upload_view,
         }
 
-    def _reply(self, ok: bool, reason: str, with_status: bool = False, route: dict[str, Any] | None = None) -> Reply:
+    def _reply(
+        self, ok: bool, reason: str, with_status: bool = False, route: dict[str, Any] | None = None, tree: dict[str, Any] | None = None
+    ) -> Reply:
         status = self._status() if with_status and self._status else None
-        return Reply(ok, reason, str(self.mission_state.status), status, route)
+        return Reply(ok, reason, str(self.mission_state.status), status, route, tree)

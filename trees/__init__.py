@@ -7,9 +7,11 @@ also name a plugin's tree or ``module:function`` on the Python path (:mod:`execu
 from __future__ import annotations
 
 import pkgutil
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     import py_trees
 
     from executive.mission.model import Mission
@@ -18,6 +20,24 @@ if TYPE_CHECKING:
 def available() -> list[str]:
     """Names of the tree modules a mission may select."""
     return sorted(m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_"))
+
+
+def subtrees() -> list[tuple[str, Literal["decorator", "subtree"], Callable[..., py_trees.behaviour.Behaviour]]]:
+    """The parts of the built-in trees a tree composed in a mission file may use: (name, kind, function taking the mission).
+
+    ``use: preflight``; ``failsafe_guarded`` decorates the work it guards.
+    """
+    from trees import _parts, waypoints
+
+    return [
+        ("preflight", "subtree", _parts.preflight),
+        ("wait_for_ekf", "subtree", _parts.wait_for_ekf),
+        ("within_reach", "subtree", _parts.within_reach),
+        ("checked", "subtree", _parts.checked),
+        ("mission_root", "subtree", _parts.mission_root),
+        ("guided_leg", "subtree", waypoints.leg),
+        ("failsafe_guarded", "decorator", _parts.guarded),
+    ]
 
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
