@@ -282,7 +282,9 @@ def _read_node(element: _Element, types: Mapping[str, NodeType], error: Callable
         return node
     rest = iter(children)
     for slot in spec.slots:
-        node.slots[slot.name] = [next(rest) for _ in range(len(children) - singles if slot.many else 1)]
+        taken = [next(rest) for _ in range(len(children) - singles if slot.many else 1)]
+        if taken or slot.required:
+            node.slots[slot.name] = taken
     return node
 
 
@@ -323,12 +325,14 @@ def _number(text: str, kind: str) -> int | float:
 
 # -- the mission file's YAML tree ---------------------------------------------------------------
 
-#: How a node is written in a mission's ``tree:`` (executive.mission.tree): its type, a built-in subtree, its name.
+#: How a node is written in a mission's ``tree:`` (:mod:`executive.composition`): its type, a built-in subtree, its name.
 TYPE_KEY, USE_KEY, NAME_KEY = "node", "use", "name"
 
 
-def from_yaml(data: Mapping[str, Any], types: Mapping[str, NodeType]) -> Node:
-    """A (validated) YAML tree node as a :class:`Node`."""
+def from_yaml(data: Mapping[str, Any] | str, types: Mapping[str, NodeType]) -> Node:
+    """A (validated) YAML tree node as a :class:`Node`: a mapping with ``node:`` or ``use:``, or a bare name."""
+    if isinstance(data, str):
+        return Node(data)
     type_id = data[USE_KEY] if USE_KEY in data else data[TYPE_KEY]
     spec = types[type_id]
     slots = {s.name: s for s in spec.slots}
@@ -344,16 +348,19 @@ def from_yaml(data: Mapping[str, Any], types: Mapping[str, NodeType]) -> Node:
     return node
 
 
-def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any]:
-    """A :class:`Node` as a YAML tree node (type first, then name, parameters, children)."""
+def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any] | str:
+    """A :class:`Node` as a YAML tree node: type first, then name, parameters, children; a bare name without any."""
     spec = types[node.type]
+    if node.name is None and not node.params and not any(node.slots.values()):
+        return node.type
     data: dict[str, Any] = {USE_KEY if spec.kind == "subtree" else TYPE_KEY: node.type}
     if node.name is not None:
         data[NAME_KEY] = node.name
     data |= node.params
     for slot in spec.slots:
-        children = [to_yaml(child, types) for child in node.slots.get(slot.name, ())]
-        data[slot.name] = children if slot.many else children[0]
+        if slot.name in node.slots:
+            children = [to_yaml(child, types) for child in node.slots[slot.name]]
+            data[slot.name] = children if slot.many else children[0]
     return data
 
 

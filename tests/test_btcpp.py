@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import pytest
+import yaml
 
 from executive.btcpp import NodeType, Port, Slot, from_yaml, read_xml, to_yaml, write_xml
+from executive.cli import main
 from executive.mission.errors import MissionError
 
 TYPES = {
@@ -25,11 +28,11 @@ TREE = {
     "node": "sequence",
     "name": "Run",
     "children": [
-        {"use": "preflight"},
+        "preflight",
         {
             "node": "failsafe_guarded",
             "work": {"node": "timeout", "timeout_s": 30.5, "child": {"node": "set_mode", "mode": "GUIDED", "limit": {"min": 1.0, "max": 2.5}}},
-            "guards": [{"node": "ekf_ok", "name": "EKF ok?", "variance_threshold": 0.5}, {"node": "ekf_ok"}],
+            "guards": [{"node": "ekf_ok", "name": "EKF ok?", "variance_threshold": 0.5}, "ekf_ok"],
         },
         {"node": "sequence", "memory": False, "children": [{"node": "set_mode", "mode": "HOLD", "limit": None}]},
     ],
@@ -108,3 +111,55 @@ def test_what_is_not_a_btcpp_4_tree_is_refused(text: str, error: str) -> None:
     with pytest.raises(MissionError) as caught:
         read_xml(text, "t.xml", TYPES)
     assert [str(e) for e in caught.value.errors] == [error]
+
+
+GROOT_FILE = """<?xml version="1.0" encoding="UTF-8"?>
+<root BTCPP_format="4" main_tree_to_execute="Patrol">
+  <BehaviorTree ID="Patrol">
+    <sequence name="Run" _uid="1">
+      <Action ID="preflight"/>
+      <failsafe_guarded>
+        <for_each_leg>
+          <use_leg/>
+        </for_each_leg>
+        <link_alive/>
+        <armed hold_after_s="2"/>
+      </failsafe_guarded>
+      <set_mode mode="HOLD" name="Hold at the end"/>
+    </sequence>
+  </BehaviorTree>
+  <TreeNodesModel/>
+</root>
+"""
+
+
+def test_import_reads_a_groot2_file_into_a_tree_section(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    xml = tmp_path / "patrol.xml"
+    xml.write_text(GROOT_FILE.replace("use_leg", "guided_leg"), encoding="utf-8")
+    assert main(["import", str(xml), "-o", str(tmp_path / "tree.yaml")]) == 0, capsys.readouterr().err
+    assert yaml.safe_load((tmp_path / "tree.yaml").read_text(encoding="utf-8")) == {
+        "tree": {
+            "node": "sequence",
+            "name": "Run",
+            "children": [
+                "preflight",
+                {
+                    "node": "failsafe_guarded",
+                    "work": {"node": "for_each_leg", "child": "guided_leg"},
+                    "guards": ["link_alive", {"node": "armed", "hold_after_s": 2.0}],
+                },
+                {"node": "set_mode", "name": "Hold at the end", "mode": "HOLD"},
+            ],
+        }
+    }
+
+
+def test_import_names_unknown_node_types_with_their_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    xml = tmp_path / "patrol.xml"
+    xml.write_text(GROOT_FILE, encoding="utf-8")
+    assert main(["import", str(xml), "-o", str(tmp_path / "tree.yaml")]) == 2
+    assert capsys.readouterr().err == (
+        f"{xml}:8:11: Patrol/sequence/failsafe_guarded/for_each_leg/use_leg: "
+        "unknown node type 'use_leg' (not in the catalogue: executive behaviours lists it)\n"
+    )
+    assert not (tmp_path / "tree.yaml").exists()

@@ -15,6 +15,7 @@ import pytest
 
 from executive import blackboard, plugins
 from executive.behaviours.base import ExecutiveBehaviour
+from executive.catalogue import Catalogue
 from executive.cli import main
 from executive.mission.lifecycle import MissionStatus
 from executive.testing import Lockstep
@@ -151,6 +152,13 @@ def test_an_installed_package_adds_a_tree_and_a_behaviour(ranger: Path) -> None:
     assert [cls.__name__ for cls in plugins.load_behaviours()] == ["EnoughSatellites"]
     assert plugins.resolve_tree("ranger") is sys.modules["rangerplugin.trees"].build
     assert plugins.problems() == []
+    spec = Catalogue.build(plugins.load_behaviours()).get("enough_satellites")  # the node catalogue has it, as it has ours
+    assert (
+        spec is not None
+        and spec.kind == "guard"
+        and spec.params[0] == spec.param("minimum")
+        and (spec.params[0].type, spec.params[0].default) == ("int", 6)
+    )
 
 
 def test_validate_and_show_use_the_plugin_tree_and_its_guard(ranger: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -218,6 +226,12 @@ def test_from_the_command_line_a_plugin_on_the_path_is_validated_and_shown(range
     assert validate.returncode == 0 and "tree ranger" in validate.stdout, validate.stderr
     show = subprocess.run([sys.executable, "-m", "executive", "show", path], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
     assert show.returncode == 0 and "Enough satellites?" in show.stdout, show.stderr
+    listed = subprocess.run(
+        [sys.executable, "-m", "executive", "behaviours", "enough_satellites"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60
+    )
+    assert listed.returncode == 0 and listed.stdout.startswith("enough_satellites (guard): The GPS sees at least ``minimum`` satellites."), (
+        listed.stderr
+    )
 
 
 class Plain(ExecutiveBehaviour):
