@@ -6,6 +6,10 @@ why. The reply carries the resulting state so a client never has to ask twice.
 ``route`` requests edit the route (``{"op": "route", "operation": "offset", "distance_m": 5,
 "bearing_deg": 90}``; the operations and their arguments are :func:`executive.mission.route.apply`'s)
 or show it (``"operation": "show"``); their reply carries the route and what the autopilot holds.
+
+``upload`` while PAUSED replaces the mission (hot reload, :mod:`executive.mission.reload`): the
+same leg (or ``"leg": N``, 1-based), the samples already taken kept; the reply carries the new
+route. Refused with the reason, nothing changed, when the mission is not compatible.
 """
 
 from __future__ import annotations
@@ -17,9 +21,10 @@ from typing import Any
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.mission_protocol import route_not_on_autopilot
+from executive.mission import reload
 from executive.mission import route as routes
 from executive.mission.errors import MissionError
-from executive.mission.lifecycle import MissionState, Refused
+from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
 from executive.state import EkfStatus, GlobalPosition
@@ -48,7 +53,8 @@ class Operator:
     vehicle this executive drives (an uploaded mission for another kind is refused). A route edit
     at the vehicle's position needs one the EKF vouches for, no older than ``max_position_age_s``
     (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
-    (its samples could not be real), if it cannot.
+    (its samples could not be real), if it cannot. ``autopilot`` names the autopilot driven (a
+    replacement for another is refused).
     """
 
     def __init__(
@@ -59,6 +65,7 @@ class Operator:
         clock: Clock | None = None,
         max_position_age_s: float = 2.0,
         refuse: Callable[[Mission], str | None] | None = None,
+        autopilot: Callable[[], str | None] | None = None,
     ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
@@ -66,6 +73,7 @@ class Operator:
         self._clock = clock
         self.max_position_age_s = max_position_age_s
         self._refuse = refuse
+        self._autopilot = autopilot
         self._bb = blackboard.reader("operator", ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload"])
 
     def request(self, op: str, source: str = "operator", **args: Any) -> Reply:
@@ -85,7 +93,7 @@ class Operator:
             elif op == "delete":
                 state.delete()
             elif op == "upload":
-                return self._upload(str(args.get("filename", "<upload>")), args.get("text"))
+                return self._upload(str(args.get("filename", "<upload>")), args.get("text"), args.get("leg"), source)
             elif op == "route":
                 return self._route(args, source)
             else:
@@ -94,9 +102,11 @@ class Operator:
             return self._reply(False, str(refused))
         return self._reply(True, state.reason)
 
-    def _upload(self, filename: str, text: object) -> Reply:
+    def _upload(self, filename: str, text: object, leg: object, source: str) -> Reply:
         if not isinstance(text, str):
             return self._reply(False, "upload needs the mission file's text")
+        if leg is not None and (isinstance(leg, bool) or not isinstance(leg, int) or leg < 1):
+            return self._reply(False, f"leg: {leg!r} is not a waypoint number (1, 2, ...)")
         try:
             mission: Mission = load_mission_text(text, filename)
         except MissionError as exc:
@@ -110,8 +120,28 @@ class Operator:
             here = self._here()
         except routes.RouteError:
             here = None  # not known well enough: the tree checks the distances when the mission starts
+        if self.mission_state.status is MissionStatus.PAUSED:
+            return self._replace(filename, mission, leg, here, source)
+        if leg is not None:
+            return self._reply(False, f"leg: a leg is chosen only when replacing a PAUSED mission (the mission is {self.mission_state.status})")
+        if self.mission_state.status is MissionStatus.RUNNING:
+            return self._reply(False, "cannot upload while RUNNING: pause it first (ctl pause), then upload to replace the mission")
         self.mission_state.upload(mission, vehicle_at=here)
         return self._reply(True, self.mission_state.reason)
+
+    def _replace(self, filename: str, mission: Mission, leg: int | None, here: tuple[float, float] | None, source: str) -> Reply:
+        """Hot reload: the paused mission replaced by ``mission`` at the same leg (or ``leg``), or refused with nothing changed."""
+        state = self.mission_state
+        assert state.mission is not None
+        old = state.mission
+        autopilot = self._autopilot() if self._autopilot is not None else None
+        try:
+            plan = reload.plan(old, state.leg_index, state.samples, mission, autopilot=autopilot, leg=leg)
+        except reload.Incompatible as exc:
+            return self._reply(False, f"{filename}: cannot replace {old.name!r}: {exc}")
+        reason = f"{plan.describe(old)} ({source}: {filename}); paused until resumed"
+        state.replace(plan.mission, plan.leg_index, plan.samples, reason, vehicle_at=here)
+        return self._reply(True, reason, route=self._route_view())
 
     def _route(self, args: dict[str, Any], source: str) -> Reply:
         """Edit the route (refused with the reason, changing nothing), or show it."""

@@ -201,7 +201,9 @@ def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
     edited = f", on its route as last edited ({len(resume.route)} waypoints)" if resume.route is not None else ""
-    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} with {len(resume.samples)} sample(s) already taken{edited}"
+    replaced = f", on mission {resume.mission.name!r} that replaced it" if resume.mission is not None else ""
+    taken = f"with {len(resume.samples)} sample(s) already taken"
+    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} {taken}{replaced}{edited}"
 
 
 def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
@@ -309,6 +311,8 @@ def main(args: argparse.Namespace) -> int:
         if journal is not None and args.resume:
             resume = journal.resume_point(mission)
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
+            if resume is not None and resume.mission is not None:  # replaced while paused (ctl upload): the run goes on with that one
+                mission = resume.mission
         runtime = build_runtime(
             mission,
             link,
