@@ -38,7 +38,7 @@ def state(square_mission: Mission) -> MissionState:
 
 @pytest.fixture
 def operator(state: MissionState) -> Operator:
-    return Operator(state, "rover", autopilot=lambda: "ardupilot")
+    return Operator(state, "rover", autopilot_name=lambda: "ardupilot")
 
 
 def unchanged(state: MissionState, mission: Mission) -> bool:

@@ -14,11 +14,12 @@ from typing import TYPE_CHECKING
 
 from executive.assembly import Plug, build_runtime, can_base, control_socket, ground_stations, journal_recorder, obstacle_camera, snapshot_recorder
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
-from executive.cli.common import faults_or_report, load_or_report, mavlink_id, setup_logging, signing_key_arg
+from executive.cli.common import faults_or_report, load_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.link import PymavlinkLink
 from executive.journal import Journal, JournalLogHandler, ResumePoint
+from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
 from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
@@ -71,7 +72,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
     p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
     p.add_argument("--obstacles", metavar="URL", help="a camera's obstacle distances (JSON over UDP, udpin:HOST:PORT), sent on as OBSTACLE_DISTANCE")
-    p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-v info, -vv debug)")
+    p.add_argument(
+        "-v", "--verbose", action="count", default=0, help="more log output (default: warnings and the operator's events; -v all info, -vv debug)"
+    )
     p.set_defaults(func=main)
 
 
@@ -120,12 +123,12 @@ def _vehicle_link(
 
 
 @contextlib.contextmanager
-def _gcs_link(url: str | None) -> Iterator[PymavlinkLink | None]:
-    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer)."""
+def _gcs_link(url: str | None, system_id: int) -> Iterator[PymavlinkLink | None]:
+    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer of system ``system_id``)."""
     if url is None:
         yield None
         return
-    link = PymavlinkLink(url)
+    link = PymavlinkLink(url, system_id=system_id)
     try:
         yield link
     finally:
@@ -195,6 +198,17 @@ def _obstacle_socket(spec: str | None, stack: contextlib.ExitStack) -> socket.so
         raise NoVehicle(f"--obstacles: cannot listen on {spec}: {exc}") from exc
     stack.callback(sock.close)
     return sock
+
+
+def _signing_hint(link: PymavlinkLink) -> str:
+    """Why no heartbeat was heard when signing is the reason: every packet failed the signature check."""
+    unsigned, other_key, accepted = link.signature_failures
+    if accepted or not (unsigned or other_key):
+        return ""
+    return (
+        f": every packet from the autopilot was unsigned or signed with another key ({unsigned} unsigned, {other_key} signed with another "
+        "key): check --signing-key against the autopilot's key"
+    )
 
 
 def _resume_text(resume: ResumePoint | None) -> str:
@@ -304,7 +318,7 @@ def main(args: argparse.Namespace) -> int:
     with contextlib.ExitStack() as stack:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
-        gcs_link = stack.enter_context(_gcs_link(args.gcs))
+        gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
         journal, snapshots = _recorders(args, clock, stack)
         can_bus = _can_bus(args, stack)
         resume = None
@@ -313,6 +327,9 @@ def main(args: argparse.Namespace) -> int:
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
             if resume is not None and resume.mission is not None:  # replaced while paused (ctl upload): the run goes on with that one
                 mission = resume.mission
+        progress = Progress(sys.stdout, clock)
+        attach_live_line(progress)  # a log record clears the live line first
+        stack.callback(attach_live_line, None)
         runtime = build_runtime(
             mission,
             link,
@@ -322,7 +339,7 @@ def main(args: argparse.Namespace) -> int:
             system_id=args.sysid,
             target_system=args.target_system,
             target_component=args.target_component,
-            progress=Progress(sys.stdout, clock),
+            progress=progress,
             autopilot=args.autopilot or mission.autopilot,
             simulated_vehicle=not args.mavlink,
         )
@@ -337,7 +354,7 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_NO_VEHICLE
         if not connected:
             which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
-            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s", file=sys.stderr)
+            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)
             return EXIT_NO_VEHICLE
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
@@ -345,7 +362,8 @@ def main(args: argparse.Namespace) -> int:
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)
-    print(f"executive: mission {mission.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
+    ran = runtime.mission_state.mission or mission  # the one that replaced it, if an operator did (ctl upload while paused)
+    print(f"executive: mission {ran.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
     if runtime.mission_state.samples:
         count = len(runtime.mission_state.samples)
         print(f"executive: {count} sample{'' if count == 1 else 's'} recorded", file=sys.stderr)
