@@ -22,7 +22,7 @@ from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
-from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
+from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor, keeping_time
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -358,7 +358,8 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_NO_VEHICLE
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
-            outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
+            with keeping_time(runtime.pacer.late_after_s / clock.speedup):
+                outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import signal
 import socket
@@ -51,28 +50,26 @@ def ctl(sock: Path, *args: str) -> dict:
     return json.loads(proc.stdout)
 
 
-def wait_status(sock: Path, predicate, timeout_s: float = 30.0) -> dict:
+def wait_status(sock: Path, predicate, timeout_s: float = 60.0) -> dict:
+    """The first status (asked over the control socket in this process: a `ctl` process per poll would load the machine) meeting ``predicate``.
+
+    ``timeout_s`` of wall time only bounds a hung run; what the test waits for is judged on the status, in vehicle time (``t``).
+    """
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
-        if sock.exists():
-            reply = ctl(sock, "status")
-            if reply.get("ok") and predicate(reply["status"]):
-                return reply["status"]
-        time.sleep(0.05)
-    pytest.fail("the executive never reached the expected status")
-
-
-def poll_status(sock: Path, predicate, timeout_s: float = 60.0) -> dict:
-    """:func:`wait_status` through the socket from this process (a ``ctl`` process per poll is slow on a busy machine)."""
-    deadline = time.monotonic() + timeout_s  # a guard against a hang only: what is judged is in vehicle time (the journal's)
-    while time.monotonic() < deadline:
-        if sock.exists():
-            with contextlib.suppress(OSError):
-                reply = request(str(sock), "status")
-                if reply.get("ok") and predicate(reply["status"]):
-                    return reply["status"]
+        try:
+            reply = request(str(sock), "status")
+        except OSError:  # not listening yet
+            reply = {}
+        if reply.get("ok") and predicate(reply["status"]):
+            return reply["status"]
         time.sleep(0.02)
     pytest.fail("the executive never reached the expected status")
+
+
+def after(sock: Path, status: dict, seconds: float) -> dict:
+    """The status ``seconds`` of vehicle time after ``status``."""
+    return wait_status(sock, lambda s: s["t"] >= status["t"] + seconds)
 
 
 def test_pause_holds_resume_keeps_the_leg_abort_makes_safe(mission, tmp_path):
@@ -82,11 +79,8 @@ def test_pause_holds_resume_keeps_the_leg_abort_makes_safe(mission, tmp_path):
         wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
         paused = ctl(sock, "pause")
         assert (paused["ok"], paused["state"]) == (True, "PAUSED")
-        wait_status(sock, lambda s: s["mode"] == "HOLD")
-        time.sleep(0.3)  # 3 s of vehicle time: the rover has braked to a stop
-        held = request(str(sock), "status")["status"]
-        time.sleep(0.3)  # and a held rover does not move
-        later = request(str(sock), "status")["status"]
+        held = after(sock, wait_status(sock, lambda s: s["mode"] == "HOLD"), 3.0)  # the rover has braked to a stop
+        later = after(sock, held, 3.0)  # and a held rover does not move
         assert (later["lat"], later["lon"], later["leg"]) == (held["lat"], held["lon"], 2)
         refused = ctl(sock, "pause")
         assert refused["ok"] is False and "cannot pause while PAUSED" in refused["reason"]
@@ -148,9 +142,8 @@ def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path):
         assert (status["state"], status["reason"]) == ("PAUSED", "ctl: mode HOLD by a person: hands off")
         disarmed = ctl(sock, "disarm")  # mid-mission: allowed
         assert (disarmed["ok"], disarmed["state"], disarmed["command"]["state"]) == (True, "PAUSED", "ACCEPTED")
-        time.sleep(0.5)  # 5 s of vehicle time: nothing arms it again or takes it out of HOLD
-        status = wait_status(sock, lambda s: not s["armed"])
-        assert (status["state"], status["mode"]) == ("PAUSED", "HOLD")
+        status = after(sock, wait_status(sock, lambda s: not s["armed"]), 5.0)  # nothing arms it again or takes it out of HOLD
+        assert (status["state"], status["mode"], status["armed"]) == ("PAUSED", "HOLD", False)
         unknown = ctl_text(sock, "mode", "WARP")
         assert unknown.returncode == 1 and "mode WARP: not a mode of this vehicle's autopilot" in unknown.stderr
         assert ctl(sock, "abort")["state"] == "ABORTED"
@@ -202,9 +195,9 @@ def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the
     north.write_text(MISSION.replace("name: two-legs", "name: two-legs-north") + "  - {lat: -35.3627208, lon: 149.1665504, name: north}\n")
     run = run_executive(mission, sock, "--journal", str(db), speedup=20)
     try:
-        poll_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
+        wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
         assert ctl(sock, "pause")["state"] == "PAUSED"
-        poll_status(sock, lambda s: s["mode"] == "HOLD")
+        wait_status(sock, lambda s: s["mode"] == "HOLD")
         upload = subprocess.run(
             [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "upload", str(north)], cwd=ROOT, capture_output=True, text=True
         )
@@ -212,15 +205,13 @@ def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the
         first, *route = upload.stdout.splitlines()
         assert first.startswith("PAUSED: mission replaced: 'two-legs' -> 'two-legs-north', at leg 2/3 (the waypoint of old leg 2)")
         assert route[0].startswith("3 waypoints; on the autopilot:") and route[2].startswith(">   2  -35.3629906, 149.1665504")
-        status = poll_status(sock, lambda s: s["state"] == "PAUSED" and s["legs"] == 3)
+        status = wait_status(sock, lambda s: s["state"] == "PAUSED" and s["legs"] == 3)
         assert status["reason"].startswith("mission replaced:") and status["mode"] == "HOLD"  # still held: a person resumes it
-        for _ in range(500):  # uploaded and read back while paused, before the resume
-            shown = request(str(sock), "route", operation="show")["route"]
-            if shown["upload"]["state"] != "UPLOADING":
-                break
-            time.sleep(0.02)
-        assert (shown["upload"]["state"], shown["on_autopilot"], len(shown["waypoints"])) == ("DONE", True, 3)
-        assert poll_status(sock, lambda s: True)["mode"] == "HOLD"
+        later = after(sock, status, 5.0)  # 5 s of vehicle time later: still paused and held, the new route on the autopilot
+        assert (later["state"], later["mode"]) == ("PAUSED", "HOLD")
+        assert geo.distance(later["lat"], later["lon"], status["lat"], status["lon"]) < 0.2  # it has not moved
+        shown = request(str(sock), "route", operation="show")["route"]
+        assert (shown["upload"]["state"], shown["on_autopilot"], len(shown["waypoints"])) == ("DONE", True, 3)  # uploaded, read back
         assert ctl(sock, "resume")["state"] == "RUNNING"
         _, err = run.communicate(timeout=120)
         assert run.returncode == 0, err
