@@ -39,6 +39,8 @@ SEND_TIMEOUT_S = 10.0
 #: How long a button's request waits for the tick thread's answer (wall time).
 REQUEST_TIMEOUT_S = 5.0
 MAX_CLIENTS = 16
+#: The kernel's send buffer per client (else it grows to megabytes for a browser that stopped reading).
+SEND_BUFFER_BYTES = 64 << 10
 TOKEN_HEADER = "X-Executive-Token"
 STATIC_FILES = {"index.html": "text/html", "live.js": "text/javascript", "live.css": "text/css"}
 
@@ -168,8 +170,12 @@ Ask = Callable[[str, Callable[[dict[str, Any]], object]], None]
 class WebServer:
     """The live view's server on ``address``: :meth:`bind` (OSError at once if the address cannot be had), :meth:`start`, :meth:`close`."""
 
-    def __init__(self, address: WebAddress, *, token: str | None = None, frames_per_s: float = FRAMES_PER_S) -> None:
+    def __init__(
+        self, address: WebAddress, *, token: str | None = None, frames_per_s: float = FRAMES_PER_S, send_buffer_bytes: int = SEND_BUFFER_BYTES
+    ) -> None:
         self.address = address
+        #: The kernel's send buffer for each client: what a browser that stops reading can hold up.
+        self.send_buffer_bytes = send_buffer_bytes
         #: Live frames offered to each client per second of wall time, at most.
         self.frames_per_s = frames_per_s
         #: Required by requests (None: none needed, only this machine can reach the server).
@@ -195,6 +201,7 @@ class WebServer:
         sock = socket.socket(family, socket.SOCK_STREAM)
         try:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, self.send_buffer_bytes)  # inherited by each accepted connection
             sock.bind((self.address.host, self.address.port))
             sock.listen(16)
         except OSError:
@@ -204,7 +211,7 @@ class WebServer:
         self._socket = sock
         self.port = sock.getsockname()[1]
 
-    def start(self, source: Source, ask: Ask | None = None) -> None:
+    def start(self, source: Source | None, ask: Ask | None = None) -> None:
         """Serve ``source`` from a daemon thread (binding first if :meth:`bind` was not called); ``ask`` passes requests to the operator."""
         if self._socket is None:
             self.bind()
@@ -221,14 +228,20 @@ class WebServer:
                 self._socket.close()
                 self._socket = None
             return
-        if self._runner is not None:
-            with contextlib.suppress(Exception):
-                asyncio.run_coroutine_threadsafe(self._runner.cleanup(), self._loop).result(2.0)
+        with contextlib.suppress(Exception):
+            asyncio.run_coroutine_threadsafe(self._shutdown(), self._loop).result(2.0)
         self._loop.call_soon_threadsafe(self._loop.stop)
         self._thread.join(2.0)
         self._thread = self._socket = None
 
     # -- the server's thread --------------------------------------------------------------------
+    async def _shutdown(self) -> None:
+        if self._runner is not None:
+            await self._runner.cleanup()
+        for task in asyncio.all_tasks():
+            if task is not asyncio.current_task():
+                task.cancel()
+
     def _serve(self, started: threading.Event) -> None:
         asyncio.set_event_loop(self._loop)
         try:
@@ -249,10 +262,10 @@ class WebServer:
         app.router.add_get("/static/{name}", self._static)
         app.router.add_get("/ws", self._feed)
         app.router.add_post("/api/request", self._request)
-        self._runner = web.AppRunner(app, access_log=None, handle_signals=False)
+        self._runner = web.AppRunner(app, access_log=None, handle_signals=False, shutdown_timeout=0.5)
         await self._runner.setup()
         assert self._socket is not None
-        await web.SockSite(self._runner, self._socket, shutdown_timeout=0.5).start()
+        await web.SockSite(self._runner, self._socket).start()
 
     async def _broadcast(self) -> None:
         """Live: offer each client the latest frame, ``frames_per_s`` times a second while there are clients."""

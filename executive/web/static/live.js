@@ -2,9 +2,11 @@
 "use strict";
 
 const SVG = "http://www.w3.org/2000/svg";
+const CHAR = 6.8;  // px a character of the node names takes, about
 const $ = (id) => document.getElementById(id);
 const KINDS = { Sequence: "\u2192", Selector: "?", Parallel: "\u21c9" };
 const NAMES = { R: "RUNNING", S: "SUCCESS", F: "FAILURE", "-": "INVALID" };
+const BB_FIRST = ["/mission/", "/vehicle/", "/link/", "/command/", "/heading/", "/rc/", "/runtime/"];  // then the rest, by name
 
 const view = {
   kind: null, tree: null, nodes: [], depth: [], elements: [], edges: [],
@@ -33,11 +35,11 @@ function buildTree(tree) {
     view.depth[n.id] = n.parent === null ? 0 : view.depth[n.parent] + 1;
     if (n.parent !== null) children[n.parent].push(n.id);
   }
-  const width = n => Math.min(240, Math.max(96, 34 + 7 * n.name.length));
+  const width = n => Math.min(220, Math.max(80, (KINDS[n.type] ? 46 : 34) + CHAR * n.name.length));
   const colWidth = [];
   for (const n of view.nodes) colWidth[view.depth[n.id]] = Math.max(colWidth[view.depth[n.id]] || 0, width(n));
   const colX = [10];
-  for (let d = 1; d < colWidth.length; d++) colX[d] = colX[d - 1] + colWidth[d - 1] + 28;
+  for (let d = 1; d < colWidth.length; d++) colX[d] = colX[d - 1] + colWidth[d - 1] + 22;
   const H = 36, GAP = 6, pos = [];
   let row = 0;
   const place = (id) => {
@@ -61,13 +63,22 @@ function buildTree(tree) {
     el("circle", { class: "dot", cx: 10, cy: 12, r: 4 }, g);
     const kind = KINDS[n.type];
     const name = el("text", { class: "name", x: kind ? 32 : 20, y: 16 }, g);
-    name.textContent = clip(n.name, Math.floor((w - 30) / 7));
+    name.textContent = clip(n.name, Math.floor((w - (kind ? 40 : 28)) / CHAR));
     if (kind) { const k = el("text", { class: "kind", x: 18, y: 16 }, g); k.textContent = kind; }
     const fb = el("text", { class: "fb", x: 20, y: 31 }, g);
     view.elements[n.id] = { g, fb, title, width: w };
   }
-  svg.setAttribute("width", Math.max(...view.nodes.map(n => colX[view.depth[n.id]] + colWidth[view.depth[n.id]])) + 20);
-  svg.setAttribute("height", row * (H + GAP) + 20);
+  view.treeSize = [Math.max(...view.nodes.map(n => colX[view.depth[n.id]] + colWidth[view.depth[n.id]])) + 10, row * (H + GAP) + 14];
+  svg.setAttribute("viewBox", `0 0 ${view.treeSize[0]} ${view.treeSize[1]}`);
+  fitTree();
+}
+
+// the whole tree in its pane's width (scaled down, never up; a tall tree scrolls)
+function fitTree() {
+  if (!view.treeSize) return;
+  const [w, h] = view.treeSize, scale = Math.min(1, ($("tree").parentElement.clientWidth - 4) / w);
+  $("tree").setAttribute("width", w * scale);
+  $("tree").setAttribute("height", h * scale);
 }
 
 function showStatuses(s, f) {
@@ -109,7 +120,8 @@ function showBlackboard(changed) {
   const filter = $("filter").value.trim().toLowerCase();
   const body = document.querySelector("#bb tbody");
   const rows = [];
-  for (const key of Object.keys(view.blackboard).sort()) {
+  const rank = key => { const i = BB_FIRST.findIndex(p => key.startsWith(p)); return i < 0 ? BB_FIRST.length : i; };
+  for (const key of Object.keys(view.blackboard).sort((a, b) => rank(a) - rank(b) || (a < b ? -1 : 1))) {
     if (filter && !key.toLowerCase().includes(filter)) continue;
     const tr = document.createElement("tr");
     if (changed && !first && key in changed) tr.className = "changed";
@@ -249,6 +261,7 @@ function start() {
     button.addEventListener("click", () => request(button.dataset.op, false));
   }
   $("filter").addEventListener("input", () => showBlackboard(null));
+  window.addEventListener("resize", fitTree);
   $("slider").addEventListener("input", (event) => askTick(Number(event.target.value)));
   connect();
 }
