@@ -9,12 +9,14 @@ Namespaces:
 - ``/heading``: the heading sanity filter's verdict (heading filter).
 - ``/obstacles``: a camera's obstacle distances (obstacle receiver) and their forwarding to the autopilot (obstacle forwarder).
 - ``/runtime``: the loop itself: late and skipped ticks, the rate it achieves (tick pacer).
-- ``/mission``: the mission lifecycle and progress (mission state code only).
+- ``/mission``: the mission lifecycle and progress (mission state code), and what the running tree waits for (tree watch).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
 - ``/sampler``: the sample-taking instrument (sampler).
 - ``/command``: the latest command of each MAV_CMD kind and its ack (commander).
+- ``/plugin/<name>``: keys a plugin's behaviours declare (:func:`declare`) and write; nothing of ours writes there.
 
-Behaviours only read. Every key exists from :func:`reset` on, holding its default, so a guard
+Our behaviours only read; a plugin's behaviour may write the keys of its own ``/plugin/<name>/``
+namespace it declares. Every key exists from :func:`reset` on, holding its default, so a guard
 never trips over a missing key.
 """
 
@@ -124,6 +126,12 @@ _KEYS: tuple[Key, ...] = (
     Key("/mission/next_target", None, "mission state", "the Waypoint of the leg after the current one; None on the last leg"),
     Key("/mission/reason", "", "mission state", "why the last request was refused or the mission ended"),
     Key("/mission/samples", (), "mission state", "Samples recorded in this run, oldest first"),
+    Key(
+        "/mission/waiting",
+        None,
+        "tree watch",
+        "Waiting: the tree's deepest running node, its feedback, since when (executive.waiting); None = no tree runs",
+    ),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
 )
@@ -167,6 +175,29 @@ def document_command(name: str) -> str:
         KEYS[key] = _command_doc(name)
         PyTreesBoard.set(key, None)
     return key
+
+
+#: Where plugins' own keys live: ``/plugin/<plugin name>/<key>``.
+PLUGIN_NAMESPACE = "/plugin/"
+
+
+def declare(key: Key) -> str:
+    """Document a plugin's own key (``/plugin/<plugin name>/<key>``), set to its default; returns its name.
+
+    Declaring the same key again the same way is harmless; another default or doc for a documented
+    key, or a key outside ``/plugin/``, is a ValueError: the executive's own keys are written by its
+    IO readers and mission state only.
+    """
+    parts = key.name.split("/")
+    if not key.name.startswith(PLUGIN_NAMESPACE) or len(parts) < 4 or not all(parts[2:]):
+        raise ValueError(f"blackboard key {key.name!r}: a plugin declares keys under {PLUGIN_NAMESPACE}<plugin name>/<key>")
+    known = KEYS.get(key.name)
+    if known is not None and known != key:
+        raise ValueError(f"blackboard key {key.name!r} is already declared differently (by {known.writer})")
+    if known is None:
+        KEYS[key.name] = key
+        PyTreesBoard.set(key.name, key.default)
+    return key.name
 
 
 def reset(*, activity_stream: bool = False) -> None:

@@ -16,6 +16,8 @@ class Progress:
     journal) one JSON object per line, with the clock time, for tools: every ``period_s`` and at
     once on a change of state, leg, mode or armed, so a tool sees even a mode held for less than a
     period. ``quiet`` keeps the JSON lines to those changes (and one every ``quiet_period_s``).
+    The log clears the terminal's line before a record and draws it again after (:meth:`clear`,
+    :meth:`redraw`), so a warning never lands on its end.
     """
 
     def __init__(self, stream: TextIO, clock: Clock, *, period_s: float = 0.5, quiet: bool = False, quiet_period_s: float = 10.0) -> None:
@@ -24,9 +26,10 @@ class Progress:
         self._tty = stream.isatty()
         self._quiet = quiet and not self._tty
         self._period_s = quiet_period_s if self._quiet else period_s
-        self._source = StatusSource("progress")
+        self._source = StatusSource("progress", clock)
         self._next = float("-inf")
         self._last_key: tuple[object, ...] = ()
+        self._shown: str | None = None  # the line on the terminal now, if one is
 
     def line(self) -> str:
         """The current status line."""
@@ -43,13 +46,27 @@ class Progress:
         self._next = now + self._period_s
         self._last_key = key
         if self._tty:
-            self._stream.write(f"\r\x1b[K[{now:8.1f} s] {status_line(status)}")
+            self._shown = f"[{now:8.1f} s] {status_line(status)}"
+            self._stream.write(f"\r\x1b[K{self._shown}")
         else:
             self._stream.write(json.dumps({"t": round(now, 2), **status}) + "\n")
         self._stream.flush()
+
+    def clear(self) -> None:
+        """Erase the terminal's line (before a log record is written)."""
+        if self._shown is not None:
+            self._stream.write("\r\x1b[K")
+            self._stream.flush()
+
+    def redraw(self) -> None:
+        """Draw the terminal's line again, as it was (after a log record)."""
+        if self._shown is not None:
+            self._stream.write(self._shown)
+            self._stream.flush()
 
     def close(self) -> None:
         """End the in-place line so later output starts on its own line."""
         if self._tty:
             self._stream.write("\n")
             self._stream.flush()
+        self._shown = None

@@ -51,7 +51,7 @@ def wait_for_ekf(mission: Mission) -> py_trees.behaviour.Behaviour:
     return WaitUntil(EkfOk(), mission.limits.ekf_wait_s)
 
 
-def within_reach(mission: Mission, name: str, check_name: str | None = None) -> py_trees.behaviour.Behaviour:
+def within_reach(mission: Mission, name: str = "Within reach", check_name: str | None = None) -> py_trees.behaviour.Behaviour:
     """The EKF's position, then every waypoint within ``limits.max_goal_distance_m`` of it (else FAILURE naming the waypoint).
 
     Put before anything that moves the vehicle or changes its mode: a mission out of reach is

@@ -17,8 +17,8 @@ from executive.behaviours.actions import (
     VtolTransition,
 )
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
-from executive.behaviours.failsafe import Failsafe
-from executive.behaviours.flow import ForEachLeg, UnlessPaused, WaitForGuards, WaitUntil
+from executive.behaviours.failsafe import Failsafe, FailsafeNote
+from executive.behaviours.flow import ForEachLeg, Timeout, UnlessPaused, WaitForGuards, WaitUntil
 from executive.behaviours.guards import (
     AllWaypointsWithin,
     AltitudeWithin,
@@ -65,6 +65,7 @@ __all__ = [
     "DriveRouteInAuto",
     "EkfOk",
     "Failsafe",
+    "FailsafeNote",
     "ForEachLeg",
     "GoTo",
     "GoToLocal",
@@ -95,6 +96,7 @@ __all__ = [
     "Surface",
     "TakeOff",
     "TargetWithin",
+    "Timeout",
     "UnlessPaused",
     "VtolTransition",
     "WaitForGuards",

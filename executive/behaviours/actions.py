@@ -56,6 +56,7 @@ class CommandAction(TimedBehaviour):
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     command_name = ""  # MAV_CMD name without prefix
+    catalogued = False  # a base: its subclasses are the actions
 
     def __init__(self, name: str, confirm_timeout_s: float = 5.0) -> None:
         self.reads = (*self.reads, blackboard.command_key(self.command_name), "/vehicle/statustext")
@@ -121,6 +122,7 @@ class SetMode(CommandAction):
 
     reads = ("/vehicle/mode", "/link/last_heartbeat")
     command_name = "DO_SET_MODE"
+    param_docs = {"confirm_by_ack": "its own ACCEPTED ack confirms it too, until the next heartbeat (moving a tick after the ack)"}
 
     def __init__(self, mode: str, name: str | None = None, confirm_timeout_s: float = 5.0, confirm_by_ack: bool = False) -> None:
         super().__init__(name or f"Set {mode.upper()}", confirm_timeout_s)
@@ -212,6 +214,12 @@ class GoTo(TimedBehaviour):
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
+    from_mission = {"acceptance_radius_m": "limits.acceptance_radius_m", "leg_timeout_s": "limits.leg_timeout_s"}
+    param_docs = {
+        "look_ahead": "a waypoint that needs no stop is driven through toward the next (setpoint only)",
+        "lead_s": "look-ahead: the time the next target takes to act (telemetry's age, a tick, the link)",
+        "braking_m_s2": "look-ahead: the braking the autopilot's stop point is assumed to use",
+    }
 
     def __init__(
         self,
@@ -341,6 +349,9 @@ class HoldFor(SetMode):
     FAILURE (as SetMode); so is the vehicle leaving the mode during the hold (someone else has it).
     """
 
+    param_units = {"seconds": "s"}
+    param_docs = {"seconds": "how long the mode is held, from the heartbeat showing it"}
+
     def __init__(self, seconds: float, mode: str = "LOITER", name: str | None = None, confirm_timeout_s: float = 5.0) -> None:
         super().__init__(mode, name or f"Hold {mode.upper()} {seconds:g} s", confirm_timeout_s)
         self.seconds = seconds
@@ -377,6 +388,7 @@ class ChangeSpeed(CommandAction):
 
     reads = ("/mission/target",)
     command_name = "DO_CHANGE_SPEED"
+    param_docs = {"airspeed": "an airspeed (a plane in wing-borne flight), else a ground speed"}
 
     def __init__(self, name: str = "Change speed", airspeed: bool = False, confirm_timeout_s: float = 5.0) -> None:
         super().__init__(name, confirm_timeout_s)
@@ -414,6 +426,8 @@ class _VerticalSetpoint(TimedBehaviour):
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     what = ""
+    catalogued = False
+    param_docs = {"tolerance_m": "reached within this of the target"}
 
     def __init__(self, name: str, tolerance_m: float, timeout_s: float, resend_s: float) -> None:
         super().__init__(name)
@@ -539,6 +553,11 @@ class Surface(CommandAction):
 
     reads = ("/vehicle/position", "/vehicle/mode")
     command_name = "DO_SET_MODE"
+    param_docs = {
+        "surface_m": "at the surface within this depth",
+        "climb_m_s": "the climb rate (ArduSub's PILOT_SPEED_UP), for the time allowed",
+        "margin_s": "time allowed over the climb's",
+    }
 
     def __init__(self, name: str = "Surface", surface_m: float = 0.5, climb_m_s: float = 0.5, margin_s: float = 30.0) -> None:
         super().__init__(name, margin_s)
@@ -583,6 +602,8 @@ class TakeOff(CommandAction):
 
     reads = ("/vehicle/landed_state", "/vehicle/position", "/vehicle/home", blackboard.command_key("DO_REPOSITION"))
     command_name = "NAV_TAKEOFF"
+    from_mission = {"alt_m": "vtol.takeoff_alt_m"}
+    param_docs = {"alt_m": "the height above home to climb to", "reached_fraction": "reached at this fraction of alt_m (and IN_AIR)"}
 
     def __init__(self, alt_m: float, name: str | None = None, confirm_timeout_s: float = 60.0, reached_fraction: float = 0.95) -> None:
         super().__init__(name or f"Take off to {alt_m:g} m", confirm_timeout_s)
@@ -620,6 +641,7 @@ class Land(CommandAction):
 
     reads = ("/vehicle/landed_state", "/vehicle/armed", "/vehicle/position")
     command_name = "DO_SET_MODE"
+    param_docs = {"mode": "the landing mode (QLAND, QRTL; PX4: AUTO.LAND)"}
 
     def __init__(self, mode: str = "QLAND", name: str = "Land", confirm_timeout_s: float = 120.0) -> None:
         super().__init__(name, confirm_timeout_s)
@@ -661,6 +683,12 @@ class VtolTransition(TimedBehaviour):
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
+    from_mission = {"timeout_s": "vtol.transition_timeout_s"}
+    param_docs = {
+        "to": "FW (wing-borne) or MC (multicopter)",
+        "mc_mode": "ArduPilot: the mode that makes it a multicopter",
+        "ahead_m": "ArduPilot, to FW: how far ahead the reposition is aimed",
+    }
 
     def __init__(self, to: VtolState, timeout_s: float = 30.0, name: str | None = None, mc_mode: str = "QLOITER", ahead_m: float = 300.0) -> None:
         if to not in ("FW", "MC"):
@@ -733,6 +761,8 @@ class GoToLocal(TimedBehaviour):
     reads = ("/vehicle/position", "/vehicle/home", "/vehicle/statustext", blackboard.command_key("DO_REPOSITION"))
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
+    from_mission = {"acceptance_radius_m": "limits.acceptance_radius_m", "timeout_s": "limits.leg_timeout_s"}
+    param_docs = {"target": "the point, metres {east, north, up} from home (ROS's ENU)"}
 
     def __init__(
         self,

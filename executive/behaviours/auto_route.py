@@ -122,6 +122,7 @@ class DriveRouteInAuto(TimedBehaviour):
 
     reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/mission_items", "/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/position")
     needs = ("clock", "mission_state", "autopilot")
+    from_mission = {"operator_timeout_s": "rc_route.operator_timeout_s", "leg_timeout_s": "limits.leg_timeout_s"}
     mission_state: MissionState
     autopilot: AutopilotPort
 

@@ -1,7 +1,27 @@
-"""What every executive behaviour shares: read-only blackboard access and injected services.
+"""What every executive behaviour shares, ours and plugins': declared blackboard keys and injected services.
 
 Services (the clock, the autopilot port, the mission state) are handed to ``tree.setup(**services)``,
-which passes them to every behaviour's ``setup``; a behaviour takes what it needs.
+which passes them to every behaviour's ``setup``; a behaviour takes what it ``needs``.
+
+A plugin's behaviour (a guard, an action, a decorator of its own) subclasses
+:class:`ExecutiveBehaviour` (or :class:`~executive.behaviours.guards.Guard`,
+:class:`~executive.behaviours.actions.CommandAction`, :class:`TimedBehaviour`) and says, as class
+attributes, which documented keys it ``reads``, which new keys of its own it ``declares``
+(under ``/plugin/<plugin name>/``) and which of those it ``writes``::
+
+    class CountTicks(ExecutiveBehaviour):
+        declares = (blackboard.Key("/plugin/mypkg/ticks", 0, "CountTicks", "ticks seen"),)
+        reads = ("/vehicle/armed",)
+        writes = ("/plugin/mypkg/ticks",)
+        needs = ("clock",)
+
+        def update(self) -> py_trees.common.Status:
+            self.set("/plugin/mypkg/ticks", self.get("/plugin/mypkg/ticks") + 1)
+            return py_trees.common.Status.SUCCESS
+
+The vehicle's state, the link and the mission are written by the executive's readers only: a
+behaviour never writes them (it asks the autopilot port for a command, whose ack comes back on
+the blackboard). Keys are checked when the behaviour is made: an undocumented key is a KeyError.
 """
 
 from __future__ import annotations
@@ -20,8 +40,17 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
 
     #: Blackboard keys this behaviour reads.
     reads: tuple[str, ...] = ()
+    #: New keys (a plugin's own, under ``/plugin/<plugin name>/``) documented when the class is defined.
+    declares: tuple[blackboard.Key, ...] = ()
+    #: Keys this behaviour writes: only keys under ``/plugin/`` (it may read them too).
+    writes: tuple[str, ...] = ()
     #: Names of the services ``setup`` must receive (``clock``, ``autopilot``, ``mission_state``).
     needs: tuple[str, ...] = ()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        for key in cls.__dict__.get("declares", ()):
+            blackboard.declare(key)
 
     def __init__(self, name: str) -> None:
         super().__init__(name)
@@ -31,6 +60,12 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
             if key not in blackboard.KEYS:
                 raise KeyError(f"{type(self).__name__} reads undocumented blackboard key {key!r}")
             self.bb.register_key(key=key, access=Access.READ)
+        for key in self.writes:
+            if not key.startswith(blackboard.PLUGIN_NAMESPACE):
+                raise KeyError(f"{type(self).__name__} writes {key!r}: behaviours write only keys under {blackboard.PLUGIN_NAMESPACE} they declare")
+            if key not in blackboard.KEYS:
+                raise KeyError(f"{type(self).__name__} writes undeclared blackboard key {key!r} (declare it in `declares`)")
+            self.bb.register_key(key=key, access=Access.WRITE)
 
     def setup(self, **services: Any) -> None:
         missing = [n for n in self.needs if services.get(n) is None]
@@ -40,8 +75,12 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
             setattr(self, name, services[name])
 
     def get(self, key: str) -> Any:
-        """The value of a blackboard key this behaviour reads."""
+        """The value of a blackboard key this behaviour reads (or writes)."""
         return self.bb.get(key)
+
+    def set(self, key: str, value: Any) -> None:
+        """Write a key this behaviour ``writes``."""
+        self.bb.set(key, value)
 
 
 class TimedBehaviour(ExecutiveBehaviour):

@@ -44,7 +44,7 @@ from executive.behaviours.guards import (
     RcNotLost,
     RcNotTakingOver,
 )
-from executive.mission.model import REACTION_MODES, FailsafePolicy
+from executive.mission.model import REACTION_MODES, FailsafeCondition, FailsafePolicy
 from executive.vehicles import PROFILES
 
 log = logging.getLogger(__name__)
@@ -96,6 +96,7 @@ class Failsafe(TimedBehaviour):
     reads = ("/vehicle/vtol_state", "/vehicle/armed", "/vehicle/mode", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count")
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
+    catalogued = False  # made with the mission's policy by failsafe_guarded and checked
 
     def __init__(
         self, guards: Sequence[Guard], policy: Mapping[str, FailsafePolicy], vehicle: str, fallback: FailsafePolicy, name: str = "Wait for guards"
@@ -316,7 +317,14 @@ class FailsafeNote(py_trees.behaviour.Behaviour):
     With ``guard``, its reason goes in the text: ``failsafe ekf_loss: <reason> -> <text>``.
     """
 
-    def __init__(self, condition: str, text: str, guard: Guard | None = None, name: str | None = None) -> None:
+    node_refs = ("guard",)
+    param_docs = {
+        "condition": "the failsafe condition journalled (ekf_loss, rc_loss...)",
+        "text": "what is done about it",
+        "guard": "the name of a guard of the tree whose reason goes in the text",
+    }
+
+    def __init__(self, condition: FailsafeCondition, text: str, guard: Guard | None = None, name: str | None = None) -> None:
         super().__init__(name or f"Journal: {condition}")
         self.condition, self.text, self.guard = condition, text, guard
 

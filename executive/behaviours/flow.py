@@ -65,6 +65,38 @@ class WaitUntil(py_trees.decorators.Decorator):
         return Status.RUNNING
 
 
+class Timeout(py_trees.decorators.Decorator):
+    """The child's status, but FAILURE (the child stopped) once it has been RUNNING ``timeout_s`` of vehicle time.
+
+    py_trees' own Timeout reads the wall clock; this one the injected clock, as every behaviour here.
+    """
+
+    def __init__(self, child: py_trees.behaviour.Behaviour, timeout_s: float, name: str | None = None) -> None:
+        super().__init__(name=name or f"{child.name} (within {timeout_s:g} s)", child=child)
+        self.timeout_s = timeout_s
+        self.clock: Clock | None = None
+
+    def setup(self, **services: object) -> None:
+        clock = services.get("clock")
+        if clock is None:
+            raise RuntimeError(f"{self.name}: setup() needs clock")
+        self.clock = clock  # type: ignore[assignment]
+
+    def initialise(self) -> None:
+        assert self.clock is not None
+        self.started = self.clock.now()
+
+    def update(self) -> Status:
+        assert self.clock is not None
+        status = self.decorated.status
+        if status == Status.RUNNING and self.clock.now() - self.started > self.timeout_s:
+            self.decorated.stop(Status.INVALID)
+            self.feedback_message = f"timed out after {self.timeout_s:g} s: {self.decorated.feedback_message}"
+            return Status.FAILURE
+        self.feedback_message = self.decorated.feedback_message
+        return status
+
+
 def hold_mode_for(vtol_state: str | None, hold_mode: str | None, fixed_wing_hold_mode: str | None) -> str | None:
     """The mode to hold in: ``fixed_wing_hold_mode`` (if any) for a VTOL flying as a plane, which cannot hover, else ``hold_mode``."""
     return fixed_wing_hold_mode if fixed_wing_hold_mode and vtol_state == "FW" else hold_mode
@@ -82,6 +114,7 @@ class WaitForGuards(TimedBehaviour):
     reads = ("/vehicle/vtol_state",)
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
+    catalogued = False  # the failsafe (Failsafe, failsafe_guarded) does this with the mission's policy
 
     def __init__(
         self,
@@ -185,6 +218,8 @@ class UnlessPaused(py_trees.decorators.Decorator):
     starts again from its first child and carries on with the same leg: back to GUIDED, same target.
     A VTOL in fixed-wing flight is held in ``fixed_wing_hold_mode`` instead, when given.
     """
+
+    from_mission = {"hold_mode": "vehicle.safe_mode", "fixed_wing_hold_mode": "vehicle.fixed_wing_hold_mode"}
 
     def __init__(
         self, child: py_trees.behaviour.Behaviour, hold_mode: str, name: str = "Unless paused", fixed_wing_hold_mode: str | None = None

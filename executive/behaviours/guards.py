@@ -32,6 +32,8 @@ _EPSILON_S = 1e-6  # ten ticks of 0.1 s add up to a hair under 1 s
 class Guard(ExecutiveBehaviour):
     """A condition on the blackboard; subclasses implement :meth:`check`."""
 
+    catalogued = False  # a base: its subclasses are the guards
+
     #: When this guard fails a person has the vehicle: the executive keeps its hands off.
     pilot_in_control = False
 
@@ -214,6 +216,7 @@ class RcNotTakingOver(Guard):
 
     reads = ("/rc/channels",)
     pilot_in_control = True
+    from_mission = {"channel": "rc.takeover_channel", "above_us": "rc.takeover_above_us"}
 
     def __init__(self, channel: int, above_us: int, name: str = "RC not taking over?") -> None:
         super().__init__(name)
@@ -228,6 +231,7 @@ class RcChannelHigh(Guard):
     """An RC channel is high (above ``above_us``): the ASV's arm switch (channel 5 high = armed)."""
 
     reads = ("/rc/channels",)
+    from_mission = {"channel": "rc.arm_channel", "above_us": "rc.takeover_above_us"}
 
     def __init__(self, channel: int, above_us: int, name: str | None = None) -> None:
         super().__init__(name or f"RC channel {channel} high?")
@@ -261,6 +265,7 @@ class RcAutoMode(Guard):
     reads = ("/rc/channels", "/rc/switches")
     resume_after_s = 1.0
     pilot_in_control = True
+    from_mission = {"source": "rc.source", "takeover_channel": "rc.takeover_channel", "takeover_above_us": "rc.takeover_above_us"}
 
     def __init__(
         self, source: Literal["mavlink", "can"] = "mavlink", takeover_channel: int = 6, takeover_above_us: int = 1700, name: str = "RC in auto?"
@@ -317,6 +322,7 @@ class RcNotLost(Guard):
 
     reads = ("/rc/connected", "/rc/fresh", "/rc/stale_reason")
     resume_after_s = 2.0
+    from_mission = {"source": "rc.source"}
 
     def __init__(self, source: Literal["mavlink", "can"] = "mavlink", name: str = "RC not lost?") -> None:
         super().__init__(name)
@@ -345,6 +351,7 @@ class TargetWithin(Guard):
     """
 
     reads = ("/mission/target", "/vehicle/position")
+    from_mission = {"max_distance_m": "limits.max_goal_distance_m"}
 
     def __init__(self, max_distance_m: float, name: str | None = None) -> None:
         super().__init__(name or f"Target within {max_distance_m:g} m?")
@@ -387,6 +394,7 @@ class AllWaypointsWithin(Guard):
     """
 
     reads = ("/vehicle/position",)
+    from_mission = {"waypoints": "waypoints", "max_distance_m": "limits.max_goal_distance_m"}
 
     def __init__(self, waypoints: Sequence[_HasLatLon], max_distance_m: float, name: str | None = None) -> None:
         super().__init__(name or f"All waypoints within {max_distance_m:g} m?")
@@ -427,6 +435,8 @@ class RangefinderReaches(Guard):
     """
 
     reads = ("/vehicle/rangefinder",)
+    from_mission = {"waypoints": "waypoints"}
+    param_docs = {"margin_m": "how far inside the rangefinder's range each altitude leg's height must be"}
 
     def __init__(self, waypoints: Sequence[Waypoint], margin_m: float = 1.0, name: str = "Rangefinder reaches the altitude legs?") -> None:
         super().__init__(name)
@@ -470,6 +480,13 @@ class SpeedWithin(Guard):
     reads = ("/vehicle/position", "/vehicle/ground_speed_m_s")
     hold_after_s = 2.0
     resume_after_s = 2.0
+    from_mission = {"limit": "limits.speed_m_s"}
+    param_units = {"limit": "m/s"}
+    param_docs = {
+        "limit": "allowed speeds {min, max}: only max is enforced",
+        "tolerance_m_s": "overshoot allowed over max, at least",
+        "tolerance_fraction": "overshoot allowed over max, as a fraction of it, at least",
+    }
 
     def __init__(self, limit: Range, tolerance_m_s: float = 0.3, tolerance_fraction: float = 0.1, name: str | None = None) -> None:
         super().__init__(name or f"Speed within {limit.max:g} m/s?")
@@ -500,6 +517,8 @@ class DepthWithin(Guard):
     resume_after_s = 2.0
 
     reads = ("/vehicle/position",)
+    from_mission = {"limit": "limits.depth_m"}
+    param_units = {"limit": "m"}
 
     def __init__(self, limit: Range, tolerance_m: float = 0.5, name: str | None = None) -> None:
         super().__init__(name or f"Depth within [{limit.min:g}, {limit.max:g}] m?")
@@ -533,6 +552,9 @@ class AltitudeWithin(Guard):
     reads = ("/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder", "/mission/target")
     hold_after_s = 2.0
     resume_after_s = 2.0
+    from_mission = {"limit": "limits.altitude_m"}
+    param_units = {"limit": "m"}
+    param_docs = {"altitude_legs_only": "judged only on legs with control_mode altitude (others pass with a note)"}
 
     def __init__(self, limit: Range, tolerance_m: float = 0.5, name: str | None = None, altitude_legs_only: bool = False) -> None:
         default = f"Altitude within [{limit.min:g}, {limit.max:g}] m{' on altitude legs' if altitude_legs_only else ''}?"
@@ -601,6 +623,8 @@ class BatteryAbove(Guard):
     reads = ("/vehicle/battery",)
     hold_after_s = 2.0
     resume_after_s = 5.0
+    from_mission = {"floor_pct": "limits.battery_min_pct", "floor_v": "limits.battery_min_v"}
+    param_docs = {"floor_pct": "remaining battery below this fails (null: not checked)", "floor_v": "voltage below this fails (null: not checked)"}
 
     def __init__(self, floor_pct: float | None, floor_v: float | None = None, name: str = "Battery above floor?") -> None:
         super().__init__(name)
@@ -640,6 +664,8 @@ class InsideGeofence(Guard):
 
     reads = ("/vehicle/position", "/vehicle/home")
     resume_after_s = 2.0
+    from_mission = {"fence": "geofence", "mission_home": "home"}
+    param_docs = {"fence": "the mission's geofence: section", "mission_home": "the mission's home, until the autopilot reports one"}
 
     def __init__(self, fence: Geofence, mission_home: tuple[float, float] | None = None, name: str = "Inside geofence?") -> None:
         super().__init__(name)

@@ -24,6 +24,8 @@ class ModeSwitchClear(Guard):
 
     reads = ("/vehicle/params",)
     needs = ("autopilot",)
+    from_mission = {"switches": "rc.switch_channels"}
+    param_docs = {"switches": "the mission's RC switch channels"}
     autopilot: AutopilotPort
 
     def __init__(self, switches: Mapping[int, str], name: str = "Mode switch clear?") -> None:

@@ -21,6 +21,14 @@ class ParameterIs(TimedBehaviour):
 
     reads = ("/vehicle/params",)
     needs = ("clock", "autopilot")
+    param_docs = {
+        "name": "the parameter's name (Q_GUIDED_MODE): the node's name is label",
+        "allowed": "the values that pass",
+        "why": "what needs it, said in the failure",
+        "autopilot": "the firmware the parameter belongs to (on another one it passes)",
+        "ask_every_s": "how often the value is asked for until it comes",
+        "label": "the node's name (name is the parameter's)",
+    }
     autopilot: AutopilotPort
 
     def __init__(

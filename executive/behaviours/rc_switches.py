@@ -113,6 +113,7 @@ class ModeSwitch(SwitchWatcher):
     clock: Clock
     autopilot: AutopilotPort
     mission_state: MissionState
+    from_mission = {"aux_mode": "rc_route.aux_mode"}
 
     def __init__(
         self,

@@ -31,6 +31,7 @@ class Sample(TimedBehaviour):
     needs = ("clock", "mission_state", "sampler")
     mission_state: MissionState
     sampler: Sampler
+    param_docs = {"timeout_s": "FAILURE when no sample by then (null: the sampler's own duration bounds it)"}
 
     def __init__(self, name: str = "Sample", timeout_s: float | None = None) -> None:
         super().__init__(name)

@@ -27,7 +27,7 @@ class NoVehicle(Exception):
 #: Command -> the module of this package that registers it (``register(subparsers)`` setting ``func``).
 COMMANDS = {
     "validate": "validate", "show": "show", "run": "run", "sim": "sim", "schema": "schema", "ctl": "ctl", "report": "report",
-    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files",
+    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files", "behaviours": "behaviours",
 }  # fmt: skip
 
 

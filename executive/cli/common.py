@@ -1,9 +1,8 @@
-"""Helpers shared by subcommands: loading a mission the CLI way, logging set-up."""
+"""Helpers shared by subcommands: loading a mission the CLI way, its signing key, MAVLink ids."""
 
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 from typing import TYPE_CHECKING
 
@@ -55,12 +54,6 @@ def signing_key_arg(path: str | None) -> bytes | None:
         return load_signing_key(path)
     except (OSError, ValueError) as exc:
         raise BadInput(f"--signing-key: {exc}") from exc
-
-
-def setup_logging(verbose: int = 0) -> None:
-    """Log to stderr: warnings by default, info with -v, debug with -vv."""
-    level = (logging.WARNING, logging.INFO, logging.DEBUG)[min(verbose, 2)]
-    logging.basicConfig(level=level, format="executive: %(levelname)s: %(name)s: %(message)s", stream=sys.stderr, force=True)
 
 
 def mavlink_id(text: str) -> int:

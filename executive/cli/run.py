@@ -24,14 +24,15 @@ from executive.assembly import (
     snapshot_recorder,
 )
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
-from executive.cli.common import faults_or_report, load_or_report, mavlink_id, setup_logging, signing_key_arg
+from executive.cli.common import faults_or_report, load_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.link import PymavlinkLink
 from executive.journal import Journal, JournalLogHandler, ResumePoint
+from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
-from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
+from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor, keeping_time
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -88,7 +89,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="the live view in a browser on PORT (127.0.0.1 unless HOST is given; beyond it the buttons need the token printed at start-up)",
     )
     p.add_argument("--web-token-file", metavar="FILE", help="the live view's token (its first line, >= 16 characters), instead of a new one")
-    p.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-v info, -vv debug)")
+    p.add_argument(
+        "-v", "--verbose", action="count", default=0, help="more log output (default: warnings and the operator's events; -v all info, -vv debug)"
+    )
     p.set_defaults(func=main)
 
 
@@ -137,12 +140,12 @@ def _vehicle_link(
 
 
 @contextlib.contextmanager
-def _gcs_link(url: str | None) -> Iterator[PymavlinkLink | None]:
-    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer)."""
+def _gcs_link(url: str | None, system_id: int) -> Iterator[PymavlinkLink | None]:
+    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer of system ``system_id``)."""
     if url is None:
         yield None
         return
-    link = PymavlinkLink(url)
+    link = PymavlinkLink(url, system_id=system_id)
     try:
         yield link
     finally:
@@ -231,6 +234,17 @@ def _web_server(args: argparse.Namespace, stack: contextlib.ExitStack) -> WebSer
     stack.callback(server.close)
     print(f"executive: {told}", file=sys.stderr, flush=True)
     return server
+
+
+def _signing_hint(link: PymavlinkLink) -> str:
+    """Why no heartbeat was heard when signing is the reason: every packet failed the signature check."""
+    unsigned, other_key, accepted = link.signature_failures
+    if accepted or not (unsigned or other_key):
+        return ""
+    return (
+        f": every packet from the autopilot was unsigned or signed with another key ({unsigned} unsigned, {other_key} signed with another "
+        "key): check --signing-key against the autopilot's key"
+    )
 
 
 def _resume_text(resume: ResumePoint | None) -> str:
@@ -342,13 +356,16 @@ def main(args: argparse.Namespace) -> int:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         web = _web_server(args, stack)
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
-        gcs_link = stack.enter_context(_gcs_link(args.gcs))
+        gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
         journal, snapshots = _recorders(args, clock, stack)
         can_bus = _can_bus(args, stack)
         resume = None
         if journal is not None and args.resume:
             resume = journal.resume_point(mission)
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
+        progress = Progress(sys.stdout, clock)
+        attach_live_line(progress)  # a log record clears the live line first
+        stack.callback(attach_live_line, None)
         runtime = build_runtime(
             mission,
             link,
@@ -358,7 +375,7 @@ def main(args: argparse.Namespace) -> int:
             system_id=args.sysid,
             target_system=args.target_system,
             target_component=args.target_component,
-            progress=Progress(sys.stdout, clock),
+            progress=progress,
             autopilot=args.autopilot or mission.autopilot,
             simulated_vehicle=not args.mavlink,
         )
@@ -373,11 +390,12 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_NO_VEHICLE
         if not connected:
             which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
-            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s", file=sys.stderr)
+            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)
             return EXIT_NO_VEHICLE
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
-            outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
+            with keeping_time(runtime.pacer.late_after_s / clock.speedup):
+                outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)

@@ -1,4 +1,8 @@
-"""``executive validate MISSION...``: check mission files without running them; a directory stands for its ``*.yaml`` files."""
+"""``executive validate MISSION...``: check mission files without running them; a directory stands for its ``*.yaml`` files.
+
+The installed plugins (trees and behaviours) are checked too: one that cannot be loaded is named
+with its error (at the ``tree:`` line of a mission that uses it), and the exit is 2.
+"""
 
 from __future__ import annotations
 
@@ -10,6 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+from executive import plugins
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.mission.errors import FieldError, MissionError
 from executive.mission.loader import load_mission
@@ -44,6 +49,12 @@ def run(args: argparse.Namespace) -> int:
                 print(empty, file=sys.stderr)
         for path in files:
             _validate(path, args.json, results)
+    said = " ".join(e["message"] for r in results for e in r.get("errors", ()))
+    for broken in plugins.problems():
+        if broken.plugin not in said:  # not already named at a mission's tree: line
+            results.append({"plugin": broken.plugin, "ok": False, "error": str(broken)})
+            if not args.json:
+                print(f"executive: validate: {broken}", file=sys.stderr)
     if args.json:
         print(json.dumps(results, indent=2))
     return EXIT_OK if all(r["ok"] for r in results) else EXIT_BAD_INPUT

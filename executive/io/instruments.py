@@ -15,11 +15,9 @@ absent, never invented.
 
 from __future__ import annotations
 
-import importlib
-from importlib.metadata import entry_points
-
 from pydantic import BaseModel, ValidationError
 
+from executive import plugins
 from executive.clock import Clock
 from executive.io.sampler import InstrumentError, InstrumentSampler
 from executive.mission.errors import Path
@@ -31,19 +29,18 @@ BUILT_IN = {"simulated": "executive.io.sampler:SimulatedSampler", "serial": "exe
 
 def known() -> list[str]:
     """Every instrument type: the built-in ones and those plugins add."""
-    return sorted({*BUILT_IN, *(ep.name for ep in entry_points(group=GROUP))})
+    return sorted({*BUILT_IN, *plugins.named(GROUP)})
 
 
 def backend(kind: str) -> type[InstrumentSampler]:
     """The sampler class of an instrument type; InstrumentError when there is none."""
-    if kind in BUILT_IN:
-        module, _, name = BUILT_IN[kind].partition(":")
-        found = getattr(importlib.import_module(module), name)
-    else:
-        points = [ep for ep in entry_points(group=GROUP) if ep.name == kind]
-        if not points:
-            raise InstrumentError(f"unknown instrument type {kind!r} (known: {', '.join(known())})")
-        found = points[0].load()
+    points = plugins.named(GROUP)
+    if kind not in BUILT_IN and kind not in points:
+        raise InstrumentError(f"unknown instrument type {kind!r} (known: {', '.join(known())})")
+    try:
+        found = plugins.load_object(BUILT_IN[kind], "") if kind in BUILT_IN else plugins.load(points[kind])
+    except plugins.PluginError as exc:
+        raise InstrumentError(str(exc)) from exc
     if not (isinstance(found, type) and issubclass(found, InstrumentSampler)):
         raise InstrumentError(f"instrument type {kind!r}: {found!r} is not an InstrumentSampler")
     return found

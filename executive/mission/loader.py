@@ -17,7 +17,7 @@ from typing import Any, Literal, NoReturn, TypeVar, get_args, get_origin
 import yaml
 from pydantic import BaseModel, ValidationError
 
-import trees
+from executive import plugins
 from executive.mission.errors import FieldError, MissionError, Path, format_path
 from executive.mission.model import Mission, cross_field_errors
 
@@ -161,8 +161,10 @@ def load_mission_text(text: str, filename: str) -> Mission:
 
 def _mission_checks(mission: Mission) -> list[tuple[Path, str]]:
     errors = cross_field_errors(mission)
-    if mission.tree not in (available := trees.available()):
-        errors.append((("tree",), f"unknown tree {mission.tree!r} (available: {', '.join(available) or 'none'})"))
+    try:
+        plugins.resolve_tree(mission.tree)
+    except (plugins.UnknownTree, plugins.PluginError) as exc:
+        errors.append((("tree",), str(exc)))
     return errors
 
 

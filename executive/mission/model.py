@@ -57,6 +57,8 @@ ControlMode = Literal["depth", "altitude"]
 
 _STRICT = ConfigDict(strict=True, extra="forbid", frozen=True, allow_inf_nan=False)
 
+#: ``tree:``: a name (built in, or a plugin's), or ``module.path:function`` (``module.path`` alone: its ``build``).
+TREE_NAME = r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*(:[A-Za-z_][A-Za-z0-9_]*)?$"
 #: A vtol flies its legs as a plane and circles each point at WP_LOITER_RAD (60 m): a leg counts as reached from farther out.
 VTOL_MIN_ACCEPTANCE_RADIUS_M = 70.0
 #: ArduPlane (Q_GUIDED_MODE=1) flies a GUIDED target on its lift motors only within WP_LOITER_RAD of the aircraft: 60 m less a margin.
@@ -360,7 +362,12 @@ class Mission(BaseModel):
     autopilot: AutopilotName | None = Field(
         None, description="the autopilot firmware (default: the one the HEARTBEAT names); px4 starts a simulated PX4 without --mavlink"
     )
-    tree: str = Field("waypoints", pattern=r"^[a-z][a-z0-9_]*$", description="module of trees/ that builds the tree")
+    tree: str = Field(
+        "waypoints",
+        pattern=TREE_NAME,
+        description="the tree: a built-in one (a module of trees/), a plugin's (entry point group executive.trees), "
+        "or module:function of a module on the Python path (module alone: its build)",
+    )
     description: str | None = Field(None, max_length=4096)
     auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
     home: Home | None = None

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from executive import blackboard, frames
-from executive.snapshots import STATUS_CODES, preorder, show_value, tree_nodes
+from executive.snapshots import describe, show_value, status_codes
 
 if TYPE_CHECKING:
     from executive.mission.lifecycle import MissionState
@@ -160,8 +160,8 @@ class LiveFeed:
 
     # -- the runtime's interfaces --------------------------------------------------------------
     def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
-        self._nodes = list(preorder(root))
-        self._tree = new_tree(tree_nodes(self._nodes))
+        self._nodes, nodes = describe(root)
+        self._tree = new_tree(nodes)
 
     def ticked(self, tick: int, now: float) -> None:
         pass  # a frame is made after every tick, the tree's or not (publish)
@@ -245,7 +245,7 @@ class LiveFeed:
             tick=self._ticks,
             t=self._now(),
             tree=self._tree,
-            statuses=tuple(STATUS_CODES.get(n.status, "-") for n in self._nodes),
+            statuses=tuple(status_codes(self._nodes)),
             feedback=tuple(n.feedback_message or "" for n in self._nodes),
             blackboard=values,
             status=self._status.snapshot(),

@@ -18,6 +18,7 @@ from executive.web.feed import Frame, Plan, TrackView, new_tree
 
 _LAT_LON = re.compile(r"\blat=(-?[0-9.]+(?:e-?[0-9]+)?), lon=(-?[0-9.]+(?:e-?[0-9]+)?)")
 _BATTERY = re.compile(r"\bremaining_pct=(-?[0-9]+)")
+_FIELD = re.compile(r"""(\w+)=('(?:[^'\\]|\\.)*'|"(?:[^"\\]|\\.)*"|[^,)]+)""")
 
 
 def _lat_lon(text: str | None) -> tuple[float, float] | None:
@@ -33,8 +34,18 @@ def _literal(text: str | None) -> Any:
         return None
 
 
-def status_of(values: dict[str, str]) -> dict[str, Any]:
-    """The status bar's fields, read from a recorded blackboard."""
+def _waiting(text: str | None, t: float) -> dict[str, Any] | None:
+    """``/mission/waiting`` as recorded (a ``Waiting(...)`` repr) as the live status has it: node, path, feedback, since, for_s."""
+    if not text or not text.startswith("Waiting("):
+        return None
+    fields = {name: _literal(value) for name, value in _FIELD.findall(text)}
+    since = fields.get("since")
+    for_s = round(t - since, 1) if isinstance(since, int | float) else None
+    return {"node": fields.get("node"), "path": fields.get("path"), "feedback": fields.get("feedback") or "", "since": since, "for_s": for_s}
+
+
+def status_of(values: dict[str, str], t: float) -> dict[str, Any]:
+    """The status bar's fields, read from a recorded blackboard at clock time ``t``."""
     leg, legs = _literal(values.get("/mission/leg_index")) or 0, _literal(values.get("/mission/leg_count")) or 0
     battery = _BATTERY.search(values.get("/vehicle/battery") or "")
     return {
@@ -48,6 +59,7 @@ def status_of(values: dict[str, str]) -> dict[str, Any]:
         "battery_pct": int(battery[1]) if battery else None,
         "battery_v": None,
         "yaw_deg": None,
+        "waiting": _waiting(values.get("/mission/waiting"), t),
     }
 
 
@@ -104,7 +116,7 @@ class ReplaySource:
             statuses=tuple(state.status.get(i, "-") for i in range(count)),
             feedback=tuple(state.feedback.get(i, "") for i in range(count)),
             blackboard=dict(state.blackboard),
-            status=status_of(state.blackboard),
+            status=status_of(state.blackboard, state.t),
             plan=plan,
             track=TrackView(0, self._track, seen),
             here=self._track[seen - 1] if seen else None,

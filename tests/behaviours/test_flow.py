@@ -5,7 +5,7 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, LinkAlive, RcNotTakingOver, UnlessPaused, WaitForGuards, WaitUntil
+from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, LinkAlive, RcNotTakingOver, Timeout, UnlessPaused, WaitForGuards, WaitUntil
 from executive.io.mavlink.dialect import mavlink
 
 
@@ -169,3 +169,19 @@ def test_a_hold_asked_while_paused_is_not_retried_after_resume(harness, mission_
     for _ in range(60):
         h.tick()
     assert h.link.take("COMMAND_LONG") == []
+
+
+def test_timeout_fails_a_child_still_running_after_its_vehicle_time_and_stops_it(harness, vehicle):
+    child = WaitUntil(LinkAlive(), limit_s=600.0)
+    h = harness(Timeout(child, timeout_s=1.0))
+    assert [h.tick(0.25) for _ in range(5)] == [Status.RUNNING] * 5  # 0 .. 1.0 s after it started
+    assert h.tick(0.25) == Status.FAILURE
+    assert child.status == Status.INVALID and h.root.feedback_message.startswith("timed out after 1 s: waiting")
+    assert h.root.name == "Wait until Link alive? (within 1 s)"
+
+
+def test_timeout_passes_on_the_child_s_result_in_time(harness, vehicle):
+    h = harness(Timeout(WaitUntil(LinkAlive(), limit_s=600.0), timeout_s=1.0, name="Link within 1 s"))
+    assert h.tick() == Status.RUNNING
+    vehicle.set(link__up=True)
+    assert h.tick() == Status.SUCCESS

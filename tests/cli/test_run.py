@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -180,6 +181,21 @@ def test_tlog_and_signing_end_to_end(tmp_path):
         senders.add((msg.get_srcSystem(), msg.get_srcComponent(), msg.get_type() == "HEARTBEAT"))
     assert {(1, 1, True), (1, 191, True)} <= senders  # the autopilot's heartbeats and ours
     assert total > 100 and signed == total
+
+
+@pytest.mark.parametrize(("autopilot_key", "failing"), [(b"A" * 32, "signed with another key"), (None, "unsigned")])
+def test_a_wrong_signing_key_is_named_as_the_reason_no_heartbeat_was_heard(tmp_path, capsys, autopilot_key, failing):
+    ours = tmp_path / "key"
+    ours.write_text("our passphrase\n")
+    with SimServer("rover", clock=ScaledClock(), signing_key=autopilot_key) as sim:
+        argv = ["run", str(ROOT / "missions/rover_square.yaml"), "--mavlink", sim.url_for_client, "--signing-key", str(ours)]
+        assert main([*argv, "--connect-timeout", "1.5", "--socket", "none"]) == 3
+    err = capsys.readouterr().err
+    assert "no heartbeat from an autopilot within 1.5 s: every packet from the autopilot was unsigned or signed with another key" in err
+    counts = re.search(r"\((\d+) unsigned, (\d+) signed with another key\)", err)
+    assert counts is not None, err
+    counted = {"unsigned": int(counts[1]), "signed with another key": int(counts[2])}
+    assert counted.pop(failing) > 0 and list(counted.values()) == [0]
 
 
 def test_an_unreadable_signing_key_is_bad_input(tmp_path, capsys):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 from pydantic import BaseModel, ConfigDict
 
+from executive import plugins
 from executive.clock import ManualClock
 from executive.io import instruments
 from executive.io.sampler import InstrumentError, InstrumentSampler, SimulatedSampler
@@ -51,7 +52,7 @@ class EntryPoint:
 
 @pytest.fixture
 def sonde_plugin(monkeypatch):
-    monkeypatch.setattr(instruments, "entry_points", lambda group: [EntryPoint()] if group == instruments.GROUP else [])
+    monkeypatch.setattr(plugins, "entry_points", lambda group: [EntryPoint()] if group == instruments.GROUP else [])
 
 
 @pytest.fixture(autouse=True)

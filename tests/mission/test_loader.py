@@ -116,18 +116,19 @@ def test_model_validator_message_has_no_pydantic_prefix(minimal_yaml: str) -> No
 
 def test_unknown_tree_lists_the_available_ones(minimal_yaml: str, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(trees, "available", lambda: ["patrol", "survey"])
-    assert errors_of(minimal_yaml) == ["m.yaml:4:7: tree: unknown tree 'waypoints' (available: patrol, survey)"]
+    assert errors_of(minimal_yaml) == ["m.yaml:4:7: tree: unknown tree 'waypoints' (available: patrol, survey; or module:function)"]
 
 
 def test_a_defaulted_unknown_tree_is_located_at_the_mission(minimal_yaml: str, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(trees, "available", lambda: [])
-    assert errors_of(minimal_yaml.replace("tree: waypoints\n", "")) == ["m.yaml:1:1: tree: unknown tree 'waypoints' (available: none)"]
+    unknown = "m.yaml:1:1: tree: unknown tree 'waypoints' (available: none; or module:function)"
+    assert errors_of(minimal_yaml.replace("tree: waypoints\n", "")) == [unknown]
 
 
 def test_cross_field_and_tree_errors_are_reported_together(minimal_yaml: str) -> None:
     text = minimal_yaml.replace("tree: waypoints", "tree: nope").replace(WAYPOINT, "{lat: 47.0, lon: 8.0, speed_m_s: 9.0, depth_m: 3.0}")
     assert errors_of(text) == [
-        "m.yaml:4:7: tree: unknown tree 'nope' (available: waypoints)",
+        "m.yaml:4:7: tree: unknown tree 'nope' (available: waypoints; or module:function)",
         "m.yaml:6:38: waypoints[0].speed_m_s: 9.0 m/s is outside limits.speed_m_s [0.1, 5.0]",
         "m.yaml:6:52: waypoints[0].depth_m: only a sub has depth_m (vehicle is rover)",
     ]

@@ -65,6 +65,9 @@ def test_a_frame_shows_that_tick_the_track_so_far_and_the_targets(recorded):
     assert middle.tick == 200 and 0 < middle.track.length < end.track.length
     assert middle.here == middle.track.points[middle.track.length - 1]
     assert middle.status["mode"] == "GUIDED" and middle.status["armed"] and middle.status["link_up"]
+    waiting = middle.status["waiting"]  # as the run published it (executive.waiting; the recorded text is cut at 160 characters)
+    assert (waiting["node"], waiting["path"]) == ("Go to waypoint", "Mission/Run/Guarded route or hold/Guarded route/For each leg/Leg/Go to waypoint")
+    assert waiting["feedback"].startswith("leg 2/4: ")
     seen = Seen()
     first, back = end.message(seen), middle.message(seen)
     assert first["track"]["restart"] and back["track"]["restart"]  # going back sends the shorter track whole

@@ -126,6 +126,14 @@ class PymavlinkLink:
         signing = self._conn.mav.signing
         return signing.reject_count if signing.secret_key is not None else 0
 
+    @property
+    def signature_failures(self) -> tuple[int, int, int]:
+        """While signing is on: packets dropped unsigned, dropped signed with another key, and accepted well signed."""
+        signing = self._conn.mav.signing
+        if signing.secret_key is None:
+            return 0, 0, 0
+        return signing.reject_count - signing.badsig_count, signing.badsig_count, signing.goodsig_count
+
     def recv(self) -> MAVLinkMessage | None:
         msg = self._conn.recv_msg()
         if msg is not None and self._tlog is not None and msg.get_type() != "BAD_DATA":

@@ -9,7 +9,7 @@ const NAMES = { R: "RUNNING", S: "SUCCESS", F: "FAILURE", "-": "INVALID" };
 const BB_FIRST = ["/mission/", "/vehicle/", "/link/", "/command/", "/heading/", "/rc/", "/runtime/"];  // then the rest, by name
 
 const view = {
-  kind: null, tree: null, nodes: [], depth: [], elements: [], edges: [],
+  kind: null, tree: null, nodes: [], depth: [], paths: [], elements: [], edges: [],
   blackboard: {}, track: [], plan: null, here: null, token: null, tokenNeeded: false,
 };
 
@@ -31,8 +31,10 @@ function buildTree(tree) {
   view.elements = []; view.edges = []; view.depth = [];
   if (!tree) return;
   const children = view.nodes.map(() => []);
+  view.paths = [];
   for (const n of view.nodes) {
     view.depth[n.id] = n.parent === null ? 0 : view.depth[n.parent] + 1;
+    view.paths[n.id] = n.parent === null ? n.name : `${view.paths[n.parent]}/${n.name}`;
     if (n.parent !== null) children[n.parent].push(n.id);
   }
   const width = n => Math.min(220, Math.max(80, (KINDS[n.type] ? 46 : 34) + CHAR * n.name.length));
@@ -82,7 +84,6 @@ function fitTree() {
 }
 
 function showStatuses(s, f) {
-  let waiting = null;
   for (const n of view.nodes) {
     const e = view.elements[n.id];
     if (!e) continue;
@@ -91,10 +92,18 @@ function showStatuses(s, f) {
     e.fb.textContent = clip(note, Math.floor((e.width - 26) / 6));
     e.title.textContent = `${n.name} (${n.type}): ${NAMES[status]}${note ? " \u2014 " + note : ""}`;
     if (view.edges[n.id]) view.edges[n.id].classList.toggle("running", status === "R");
-    if (status === "R" && (waiting === null || view.depth[n.id] > view.depth[waiting])) waiting = n.id;
   }
-  const w = waiting === null ? "" : `waiting: ${view.nodes[waiting].name}${f[waiting] ? " \u2014 " + f[waiting] : ""}`;
-  $("waiting").textContent = w;
+}
+
+// what the mission waits for: the executive's own verdict (executive.waiting: the deepest running node, or the child it retries)
+function showWaiting(waiting) {
+  let text = "";
+  for (const n of view.nodes) view.elements[n.id].g.classList.toggle("waiting", !!waiting && view.paths[n.id] === waiting.path);
+  if (waiting) {
+    const seconds = waiting.for_s === null || waiting.for_s === undefined ? "" : ` (${Math.round(waiting.for_s)} s)`;
+    text = `waiting: ${waiting.node}${seconds}${waiting.feedback ? ": " + waiting.feedback : ""}`;
+  }
+  $("waiting").textContent = text;
 }
 
 // -- the status bar
@@ -181,6 +190,7 @@ function onFrame(msg) {
   if ("tree" in msg && (!view.tree || !msg.tree || msg.tree.id !== view.tree.id)) buildTree(msg.tree);
   showStatuses(msg.s, msg.f);
   showStatus(msg.status, msg.t, msg.tick);
+  showWaiting(msg.status && msg.status.state === "RUNNING" ? msg.status.waiting : null);
   showBlackboard(msg.bb);
   view.plan = msg.plan;
   if (msg.track) view.track = msg.track.restart ? msg.track.points : view.track.concat(msg.track.points);

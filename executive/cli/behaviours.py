@@ -1,0 +1,59 @@
+"""``executive behaviours [--json] [NAME...]``: the node catalogue (guards, actions, decorators, composites, subtrees) and their parameters."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from executive.catalogue import KINDS, NodeSpec, ParamSpec, catalogue
+from executive.cli import EXIT_BAD_INPUT, EXIT_OK
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``behaviours`` subcommand."""
+    parser = subparsers.add_parser(
+        "behaviours",
+        help="list the nodes a tree can be made of, with their parameters",
+        description="List every guard, action, decorator, composite and built-in subtree (ours and installed plugins').",
+    )
+    parser.add_argument("names", nargs="*", metavar="NAME", help="only these nodes")
+    parser.add_argument("--kind", choices=KINDS, help="only nodes of this kind")
+    parser.add_argument("--json", action="store_true", help="a JSON list of nodes on stdout")
+    parser.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the catalogue (or the nodes named); exit 2 naming a node that does not exist."""
+    found = catalogue()
+    unknown = [n for n in args.names if found.get(n) is None]
+    if unknown:
+        print(f"executive: behaviours: no node {', '.join(map(repr, unknown))} (executive behaviours lists them)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    specs = [s for s in found.nodes(args.kind) if not args.names or s.name in args.names]
+    if args.json:
+        json.dump([s.to_json() for s in specs], sys.stdout, indent=2, ensure_ascii=False)
+        sys.stdout.write("\n")
+        return EXIT_OK
+    sys.stdout.write("".join(describe(s) for s in specs))
+    return EXIT_OK
+
+
+def describe(spec: NodeSpec) -> str:
+    """A node as text: ``name (kind): doc``, then a line per parameter."""
+    lines = [f"{spec.name} ({spec.kind}): {spec.doc}"]
+    lines += [f"    {_param(p)}" for p in spec.params]
+    return "\n".join(lines) + "\n"
+
+
+def _param(p: ParamSpec) -> str:
+    kind = f"one of {'|'.join(p.choices)}" if p.choices else p.type
+    kind += " or null" if p.nullable and p.type != "node name" else ""
+    unit = f" [{p.unit}]" if p.unit else ""
+    if p.required:
+        default = "required"
+    elif p.from_mission is not None:
+        default = f"default: the mission's {p.from_mission}"
+    else:
+        default = f"default: {json.dumps(p.default, ensure_ascii=False)}"
+    return f"{p.name}: {kind}{unit}, {default}: {p.doc}"

@@ -1,0 +1,89 @@
+"""The log for a person: UTC timestamps, what an operator follows shown by default, and the live status line kept apart.
+
+Each record reads ``2026-05-01T10:12:03.250Z executive WARNING intervention: ...``: the
+timestamp is the computer's UTC wall clock (the live status line's ``[  12.3 s]`` is vehicle
+time). By default the operator's events are shown at INFO - the mission's state changes and
+pauses, legs done, samples, route edits, the autopilot found and its messages, the vehicle made
+safe - and every other module's only from WARNING; ``-v`` shows every INFO, ``-vv`` DEBUG.
+
+A record never lands on the end of the live status line: the line is cleared before the record
+is written and drawn again after it (:class:`LiveLineHandler`).
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+import time
+from typing import Protocol, TextIO
+
+#: The loggers of what an operator follows, shown at INFO without -v.
+OPERATOR_LOGGERS = (
+    "executive.mission.lifecycle",  # state changes (pauses, resumes, aborts), legs done, samples, route edits
+    "executive.runtime",  # the vehicle made safe
+    "executive.io.mavlink.reader",  # the autopilot found, the link up, the autopilot's own messages
+    "executive.io.mavlink.route_keeper",  # the route held by the autopilot
+    "executive.behaviours.rc_switches",  # what an RC switch did
+)
+
+
+class LiveLine(Protocol):
+    """A line rewritten in place on a terminal (the status line)."""
+
+    def clear(self) -> None:
+        """Erase the line, leaving the cursor at its start."""
+
+    def redraw(self) -> None:
+        """Draw the line again."""
+
+
+class UtcFormatter(logging.Formatter):
+    """``2026-05-01T10:12:03.250Z executive LEVEL name: message``, in UTC."""
+
+    converter = time.gmtime
+
+    def __init__(self) -> None:
+        super().__init__("%(asctime)s.%(msecs)03dZ executive %(levelname)s %(name)s: %(message)s", datefmt="%Y-%m-%dT%H:%M:%S")
+
+    def format(self, record: logging.LogRecord) -> str:
+        record = logging.makeLogRecord(record.__dict__)
+        record.name = record.name.removeprefix("executive.")
+        return super().format(record)
+
+
+class LiveLineHandler(logging.StreamHandler):  # type: ignore[type-arg]
+    """Writes records to ``stream``, clearing the live line (when there is one) before and drawing it again after."""
+
+    def __init__(self, stream: TextIO) -> None:
+        super().__init__(stream)
+        self.live: LiveLine | None = None
+
+    def emit(self, record: logging.LogRecord) -> None:
+        live = self.live
+        if live is not None:
+            live.clear()
+        super().emit(record)
+        if live is not None:
+            live.redraw()
+
+
+def setup_logging(verbose: int = 0, stream: TextIO | None = None) -> LiveLineHandler:
+    """Log to ``stream`` (stderr): the operator's events and every warning by default, all INFO with -v, DEBUG with -vv."""
+    handler = LiveLineHandler(stream or sys.stderr)
+    handler.setFormatter(UtcFormatter())
+    root = logging.getLogger()
+    for old in list(root.handlers):
+        root.removeHandler(old)
+        old.close()
+    root.addHandler(handler)
+    root.setLevel((logging.WARNING, logging.INFO, logging.DEBUG)[min(verbose, 2)])
+    for name in OPERATOR_LOGGERS:
+        logging.getLogger(name).setLevel(logging.DEBUG if verbose >= 2 else logging.INFO)
+    return handler
+
+
+def attach_live_line(live: LiveLine | None) -> None:
+    """Keep the log's records off ``live`` (None: no live line any more)."""
+    for handler in logging.getLogger().handlers:
+        if isinstance(handler, LiveLineHandler):
+            handler.live = live

@@ -1,0 +1,39 @@
+"""``executive behaviours [--json] [--kind K] [NAME...]``: the node catalogue on the command line."""
+
+from __future__ import annotations
+
+import json
+
+from executive.catalogue import catalogue
+from executive.cli import main
+
+
+def test_json_lists_the_whole_catalogue(capsys):
+    assert main(["behaviours", "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)
+    assert [n["name"] for n in listed] == catalogue().names()
+    go_to = next(n for n in listed if n["name"] == "go_to")
+    radius = next(p for p in go_to["params"] if p["name"] == "acceptance_radius_m")
+    assert radius == {
+        "name": "acceptance_radius_m", "type": "float", "unit": "m", "required": False,
+        "doc": "the target counts as reached within this distance", "from_mission": "limits.acceptance_radius_m",
+    }  # fmt: skip
+
+
+def test_text_names_each_parameter_with_type_unit_and_default(capsys):
+    assert main(["behaviours", "set_mode", "timeout"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("set_mode (action): Put the autopilot in a flight mode (by name); confirmed by the heartbeat.\n")
+    assert "    mode: str, required: flight mode name" in out
+    assert "    confirm_timeout_s: float [s], default: 5.0: " in out
+    assert "timeout (decorator): " in out and "    timeout_s: float [s], required: " in out
+
+
+def test_kind_filters(capsys):
+    assert main(["behaviours", "--kind", "composite", "--json"]) == 0
+    assert [n["name"] for n in json.loads(capsys.readouterr().out)] == ["parallel", "selector", "sequence"]
+
+
+def test_an_unknown_node_is_bad_input(capsys):
+    assert main(["behaviours", "go_to", "fly_away"]) == 2
+    assert "no node 'fly_away'" in capsys.readouterr().err
