@@ -37,6 +37,7 @@ from executive.runtime import Runtime
 from executive.services import PacedService, RunObserver, Service, Step
 from executive.status import StatusSource
 from executive.vehicles import PROFILES
+from executive.waiting import TreeWatch
 
 if TYPE_CHECKING:
     import can
@@ -155,13 +156,21 @@ def build_runtime(
     """
     blackboard.reset()
     state = MissionState()
-    status = StatusSource("runtime status")
+    status = StatusSource("runtime status", clock)
+    tree_watch = TreeWatch()
     operator = Operator(
-        state, mission.vehicle, status=status.snapshot, clock=clock, refuse=lambda m: instrument_refusal(m, simulator=simulated_vehicle)
+        state,
+        mission.vehicle,
+        status=status.snapshot,
+        clock=clock,
+        refuse=lambda m: instrument_refusal(m, simulator=simulated_vehicle),
+        tree=tree_watch.view,
     )
     ap = _autopilot_link(mission, link, clock, state, operator, system_id, (target_system, target_component), autopilot)
+    operator.autopilot = ap.port  # a person's arm, disarm and mode
     wiring = Wiring(mission, clock, system_id, state, status, operator, ap, simulated_vehicle)
     wiring.readers.append(Step("mavlink reader", ap.reader.drain))
+    wiring.observers.append(tree_watch)  # first: the recorders see what the tree waits for at the tick they record
     wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper, ParameterWatch(ap.port, clock)]
     for plug in plugs:
         plug(wiring)
@@ -230,12 +239,17 @@ def obstacle_camera(sock: socket.socket) -> Plug:
 
 
 def ground_stations(link: Link, allowed_systems: Iterable[int] = (255,)) -> Plug:
-    """Ground stations on their own endpoint ``link``: their commands answered (from ``allowed_systems`` only), the mission reported to them."""
+    """Ground stations on their own endpoint ``link``: their commands answered (from ``allowed_systems`` only), the mission reported to them.
+
+    Our HEARTBEAT goes there too at 1 Hz (an onboard controller, component 191, no autopilot): a ground station lists the executive
+    as a component of the vehicle only once it hears one.
+    """
 
     def plug(w: Wiring) -> None:
         gcs = w.autopilot.ground_station
         gcs.links.append(link)
         gcs.allowed_systems = frozenset(allowed_systems)
+        w.writers.append(Heartbeat(link, w.clock, system_id=w.system_id))
 
         def listen() -> None:
             while (msg := link.recv()) is not None:

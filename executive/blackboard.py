@@ -9,7 +9,7 @@ Namespaces:
 - ``/heading``: the heading sanity filter's verdict (heading filter).
 - ``/obstacles``: a camera's obstacle distances (obstacle receiver) and their forwarding to the autopilot (obstacle forwarder).
 - ``/runtime``: the loop itself: late and skipped ticks, the rate it achieves (tick pacer).
-- ``/mission``: the mission lifecycle and progress (mission state code only).
+- ``/mission``: the mission lifecycle and progress (mission state code), and what the running tree waits for (tree watch).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
 - ``/sampler``: the sample-taking instrument (sampler).
 - ``/command``: the latest command of each MAV_CMD kind and its ack (commander).
@@ -126,6 +126,12 @@ _KEYS: tuple[Key, ...] = (
     Key("/mission/next_target", None, "mission state", "the Waypoint of the leg after the current one; None on the last leg"),
     Key("/mission/reason", "", "mission state", "why the last request was refused or the mission ended"),
     Key("/mission/samples", (), "mission state", "Samples recorded in this run, oldest first"),
+    Key(
+        "/mission/waiting",
+        None,
+        "tree watch",
+        "Waiting: the tree's deepest running node, its feedback, since when (executive.waiting); None = no tree runs",
+    ),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
 )

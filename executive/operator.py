@@ -6,25 +6,41 @@ why. The reply carries the resulting state so a client never has to ask twice.
 ``route`` requests edit the route (``{"op": "route", "operation": "offset", "distance_m": 5,
 "bearing_deg": 90}``; the operations and their arguments are :func:`executive.mission.route.apply`'s)
 or show it (``"operation": "show"``); their reply carries the route and what the autopilot holds.
+
+``arm``, ``disarm`` (``"force": true`` skips the autopilot's checks) and ``mode`` (``"mode": "HOLD"``)
+command the vehicle for a person, and a person always wins: the command is sent whatever the
+mission's state, and a running mission is first paused hands off (``disarm`` or a mode change
+mid-mission: the tree would otherwise undo it); ``arm`` never pauses (a mission may be waiting for
+it). The reply carries the command's ticket; ``command`` (``"ticket"``, ``"name"``) says what the
+autopilot answered.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.mission_protocol import route_not_on_autopilot
 from executive.mission import route as routes
 from executive.mission.errors import MissionError
-from executive.mission.lifecycle import MissionState, Refused
+from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
-from executive.state import EkfStatus, GlobalPosition
+from executive.state import CommandStatus, EkfStatus, GlobalPosition
 
-REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route")
+if TYPE_CHECKING:
+    from executive.autopilot.port import AutopilotPort
+
+log = logging.getLogger(__name__)
+
+REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode", "command")
+#: The commands a person may give the vehicle, and the blackboard keys of their acks.
+VEHICLE_REQUESTS = ("arm", "disarm", "mode")
+_COMMAND_KEYS = {name: blackboard.command_key(name) for name in ("COMPONENT_ARM_DISARM", "DO_SET_MODE")}
 
 
 @dataclass(frozen=True)
@@ -36,6 +52,8 @@ class Reply:
     state: str
     status: dict[str, Any] | None = None
     route: dict[str, Any] | None = None
+    tree: dict[str, Any] | None = None
+    command: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {k: v for k, v in asdict(self).items() if v is not None}
@@ -48,7 +66,9 @@ class Operator:
     vehicle this executive drives (an uploaded mission for another kind is refused). A route edit
     at the vehicle's position needs one the EKF vouches for, no older than ``max_position_age_s``
     (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
-    (its samples could not be real), if it cannot.
+    (its samples could not be real), if it cannot. ``autopilot`` takes a person's arm, disarm and
+    mode (None: refused). ``tree`` supplies the running tree for ``tree`` requests
+    (:meth:`executive.waiting.TreeWatch.view`).
     """
 
     def __init__(
@@ -59,6 +79,8 @@ class Operator:
         clock: Clock | None = None,
         max_position_age_s: float = 2.0,
         refuse: Callable[[Mission], str | None] | None = None,
+        autopilot: AutopilotPort | None = None,
+        tree: Callable[[], dict[str, Any] | None] | None = None,
     ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
@@ -66,7 +88,10 @@ class Operator:
         self._clock = clock
         self.max_position_age_s = max_position_age_s
         self._refuse = refuse
-        self._bb = blackboard.reader("operator", ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload"])
+        self.autopilot = autopilot
+        self._tree = tree
+        keys = ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload", *_COMMAND_KEYS.values()]
+        self._bb = blackboard.reader("operator", keys)
 
     def request(self, op: str, source: str = "operator", **args: Any) -> Reply:
         """Apply one request; ``source`` (ctl, gcs, rc) is recorded in the reasons."""
@@ -74,6 +99,8 @@ class Operator:
         try:
             if op == "status":
                 return self._reply(True, state.reason, with_status=True)
+            if op == "tree":
+                return self._tree_reply()
             if op == "start":
                 state.start()
             elif op == "pause":
@@ -88,11 +115,22 @@ class Operator:
                 return self._upload(str(args.get("filename", "<upload>")), args.get("text"))
             elif op == "route":
                 return self._route(args, source)
+            elif op in VEHICLE_REQUESTS:
+                return self._command_vehicle(op, args, source)
+            elif op == "command":
+                return self._command_outcome(args)
             else:
                 return self._reply(False, f"unknown request {op!r} (known: {', '.join(REQUESTS)})")
         except Refused as refused:
             return self._reply(False, str(refused))
         return self._reply(True, state.reason)
+
+    def _tree_reply(self) -> Reply:
+        """The tree at its latest tick, with the status (what it waits for); refused before any mission has run."""
+        tree = self._tree() if self._tree is not None else None
+        if tree is None:
+            return self._reply(False, f"no mission has run yet ({self.mission_state.status})")
+        return self._reply(True, self.mission_state.reason, with_status=True, tree=tree)
 
     def _upload(self, filename: str, text: object) -> Reply:
         if not isinstance(text, str):
@@ -130,6 +168,44 @@ class Operator:
             return self._reply(False, f"route {operation}: {exc}")
         return self._reply(True, f"{source}: {done}", route=self._route_view())
 
+    def _command_vehicle(self, op: str, args: dict[str, Any], source: str) -> Reply:
+        """A person's arm, disarm or mode: sent whatever the state; a running mission paused hands off first, unless arming."""
+        if self.autopilot is None:
+            return self._reply(False, f"{op}: no autopilot to command")
+        force = args.get("force") is True
+        if op == "mode":
+            mode = args.get("mode")
+            if not isinstance(mode, str) or not mode:
+                return self._reply(False, "mode needs the mode's name")
+            try:
+                request = self.autopilot.set_mode(mode.upper())
+            except KeyError:
+                return self._reply(False, f"mode {mode}: not a mode of this vehicle's autopilot")
+            what = f"mode {request.how or mode.upper()}"
+        else:
+            request = self.autopilot.arm(force=force) if op == "arm" else self.autopilot.disarm(force=force)
+            what = f"{'force ' if force else ''}{op}"
+        said = f"{source}: {what}"
+        if op != "arm" and self.mission_state.status is MissionStatus.RUNNING:
+            self.mission_state.pause(f"{said} by a person: hands off", hold=False)
+            said += f"; mission paused at leg {self.mission_state.leg_index + 1}, hands off until resumed"
+        log.warning("%s, sent to the autopilot", said)
+        return self._reply(True, f"{said}, sent to the autopilot", command={"ticket": request.ticket, "name": request.command, "what": what})
+
+    def _command_outcome(self, args: dict[str, Any]) -> Reply:
+        """What became of a command given by ``ticket`` and ``name`` (a MAV_CMD name): its state and the autopilot's result."""
+        key = _COMMAND_KEYS.get(str(args.get("name")))
+        ticket = args.get("ticket")
+        if key is None or not isinstance(ticket, int):
+            return self._reply(False, f"command needs a ticket and one of {', '.join(_COMMAND_KEYS)}")
+        status: CommandStatus | None = self._bb.get(key)
+        if status is None or status.ticket < ticket:
+            return self._reply(False, f"no command {ticket} of {args['name']}")
+        if status.ticket > ticket:  # a newer one of its kind (the tree's, or another person's) took its place
+            return self._reply(True, "superseded", command={"ticket": ticket, "state": "SUPERSEDED", "final": True})
+        outcome = {"ticket": ticket, "state": str(status.state), "result": status.result_name, "final": status.state.done}
+        return self._reply(True, f"{status.state}: {status.result_name}", command=outcome)
+
     def _here(self) -> tuple[float, float]:
         """The vehicle's position, if it is known well enough to put a waypoint or the home there."""
         position: GlobalPosition | None = self._bb.get("/vehicle/position")
@@ -157,6 +233,14 @@ class Operator:
             "upload": upload_view,
         }
 
-    def _reply(self, ok: bool, reason: str, with_status: bool = False, route: dict[str, Any] | None = None) -> Reply:
+    def _reply(
+        self,
+        ok: bool,
+        reason: str,
+        with_status: bool = False,
+        route: dict[str, Any] | None = None,
+        tree: dict[str, Any] | None = None,
+        command: dict[str, Any] | None = None,
+    ) -> Reply:
         status = self._status() if with_status and self._status else None
-        return Reply(ok, reason, str(self.mission_state.status), status, route)
+        return Reply(ok, reason, str(self.mission_state.status), status, route, tree, command)

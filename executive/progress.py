@@ -26,7 +26,7 @@ class Progress:
         self._tty = stream.isatty()
         self._quiet = quiet and not self._tty
         self._period_s = quiet_period_s if self._quiet else period_s
-        self._source = StatusSource("progress")
+        self._source = StatusSource("progress", clock)
         self._next = float("-inf")
         self._last_key: tuple[object, ...] = ()
         self._shown: str | None = None  # the line on the terminal now, if one is

@@ -241,7 +241,7 @@ class Runtime:
             while True:
                 if self._stop_reason is not None:
                     if self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
-                        return self._abort(f"stopped: {self._stop_reason}")
+                        return self._end(self._abort(f"stopped: {self._stop_reason}"))  # the journal records it ABORTED
                     self.make_safe()
                     return outcome
                 self.pacer.tick_started()

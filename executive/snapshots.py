@@ -36,6 +36,18 @@ def _preorder(node: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour
         yield from _preorder(child)
 
 
+def describe(root: py_trees.behaviour.Behaviour) -> tuple[list[py_trees.behaviour.Behaviour], list[dict[str, Any]]]:
+    """The nodes of a tree in pre-order, and their description (id, name, type, parent id) as a snapshot file holds it."""
+    nodes = list(_preorder(root))
+    ids = {id(node): i for i, node in enumerate(nodes)}
+    return nodes, [{"id": i, "name": n.name, "type": type(n).__name__, "parent": ids.get(id(n.parent))} for i, n in enumerate(nodes)]
+
+
+def status_codes(nodes: list[py_trees.behaviour.Behaviour]) -> list[str]:
+    """Each node's status as a snapshot code: S, F, R, or - (not ticked)."""
+    return [STATUS_CODES.get(n.status, "-") for n in nodes]
+
+
 class SnapshotRecorder:
     """Writes one line per tick of ``tree`` to ``path``; call :meth:`record` after each tick."""
 
@@ -53,9 +65,7 @@ class SnapshotRecorder:
 
     def attach(self, root: py_trees.behaviour.Behaviour) -> None:
         """Start recording a (new) tree: describes it and forces a keyframe."""
-        self._nodes = list(_preorder(root))
-        ids = {id(node): i for i, node in enumerate(self._nodes)}
-        nodes = [{"id": i, "name": n.name, "type": type(n).__name__, "parent": ids.get(id(n.parent))} for i, n in enumerate(self._nodes)]
+        self._nodes, nodes = describe(root)
         self._tree_line = json.dumps({"tree": nodes})
         self._write(self._tree_line)
         self._status, self._feedback, self._values = [], [], {}
@@ -65,7 +75,7 @@ class SnapshotRecorder:
         """Write what changed during tick ``tick`` (clock time ``t``)."""
         keyframe = self._since_keyframe >= self.keyframe_every
         self._since_keyframe = 0 if keyframe else self._since_keyframe + 1
-        status = [STATUS_CODES.get(n.status, "-") for n in self._nodes]
+        status = status_codes(self._nodes)
         feedback = [n.feedback_message or "" for n in self._nodes]
         values = {key: _show(blackboard.value(key)) for key in blackboard.KEYS}
         line: dict[str, Any] = {"tick": tick, "t": round(t, 3)}
@@ -112,6 +122,16 @@ class TickState:
     blackboard: dict[str, str] = field(default_factory=dict)
     changed: set[str] = field(default_factory=set)
 
+    def tree_dict(self) -> dict[str, Any]:
+        """The tree part as JSON (the control socket's ``tree`` reply): tick, t, nodes, status and feedback by node id."""
+        return {"tick": self.tick, "t": self.t, "nodes": self.nodes, "status": self.status, "feedback": self.feedback}
+
+    @classmethod
+    def from_tree_dict(cls, data: dict[str, Any]) -> TickState:
+        """Back from :meth:`tree_dict` (JSON made the node ids strings)."""
+        status = {int(i): s for i, s in data["status"].items()}
+        return cls(data["tick"], data["t"], data["nodes"], status, {int(i): m for i, m in data["feedback"].items()})
+
 
 def _lines(path: Path) -> Iterator[dict[str, Any]]:
     for part in (path.with_name(path.name + ".1"), path):
@@ -157,6 +177,14 @@ SYMBOLS = {"S": "✓", "F": "✕", "R": "*", "-": "-"}
 
 def render(state: TickState, *, all_keys: bool = False) -> Iterable[str]:
     """The tree at that tick, like ``py_trees.display.unicode_tree`` with statuses, then the blackboard."""
+    yield from render_tree(state)
+    yield "blackboard" + (":" if all_keys else " (changed at this tick):")
+    for key in sorted(state.blackboard if all_keys else state.changed):
+        yield f"  {key}: {state.blackboard[key]}"
+
+
+def render_tree(state: TickState) -> Iterable[str]:
+    """The tree at that tick: one line per node, indented, with its status symbol and feedback."""
     yield f"tick {state.tick} at {state.t:.1f} s"
     depth: dict[int, int] = {}
     for node in state.nodes:
@@ -164,6 +192,3 @@ def render(state: TickState, *, all_keys: bool = False) -> Iterable[str]:
         status = state.status.get(node["id"], "-")
         note = state.feedback.get(node["id"], "")
         yield f"{'    ' * depth[node['id']]}{SYMBOLS[status]} {node['name']}" + (f" -- {note}" if note else "")
-    yield "blackboard" + (":" if all_keys else " (changed at this tick):")
-    for key in sorted(state.blackboard if all_keys else state.changed):
-        yield f"  {key}: {state.blackboard[key]}"

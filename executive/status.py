@@ -12,24 +12,28 @@ from typing import Any
 import py_trees
 
 from executive import blackboard, geo
+from executive.clock import Clock
+from executive.waiting import waiting_text
 
 KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
-    "/runtime/late_ticks",
+    "/runtime/late_ticks", "/mission/waiting",
 )  # fmt: skip
 
 
 class StatusSource:
-    """Reads the status keys (a read-only blackboard client)."""
+    """Reads the status keys (a read-only blackboard client); with ``clock``, says for how long the tree has been waiting."""
 
-    def __init__(self, name: str = "status") -> None:
+    def __init__(self, name: str = "status", clock: Clock | None = None) -> None:
         self._bb: py_trees.blackboard.Client = blackboard.reader(name, KEYS)
+        self._clock = clock
 
     def snapshot(self) -> dict[str, Any]:
         """Plain values, ready for JSON: None where not known yet."""
         bb = self._bb
         position, attitude, battery, target = (bb.get(k) for k in ("/vehicle/position", "/vehicle/attitude", "/vehicle/battery", "/mission/target"))
+        waiting = bb.get("/mission/waiting")
         index, count = bb.get("/mission/leg_index"), bb.get("/mission/leg_count")
         distance = bearing = None
         if target is not None and position is not None:
@@ -54,14 +58,16 @@ class StatusSource:
             "battery_v": None if battery is None else battery.voltage_v,
             "battery_pct": None if battery is None else battery.remaining_pct,
             "late_ticks": bb.get("/runtime/late_ticks"),
+            "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
         }
 
 
 def status_line(status: dict[str, Any]) -> str:
-    """``RUNNING   leg 2/4    12.3 m at 090°  GUIDED armed  batt 87%``"""
+    """``RUNNING   leg 2/4    12.3 m at 090°  GUIDED armed  batt 87%  waiting: Go to waypoint (14 s): leg 2/4: 12.3 m at 090°``"""
     to_go = "" if status["distance_m"] is None else f"  {status['distance_m']:7.1f} m at {status['bearing_deg']:03.0f}°"
     battery = "" if status["battery_pct"] is None else f"  batt {status['battery_pct']}%"
     samples = f"  samples {status['samples']}" if status["samples"] else ""
     armed = "armed" if status["armed"] else "disarmed"
     why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
-    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}{why}"
+    waiting = f"  {waiting_text(status['waiting'])}" if status.get("waiting") and status["state"] == "RUNNING" else ""
+    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}{why}{waiting}"

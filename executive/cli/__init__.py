@@ -57,6 +57,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except NoVehicle as exc:
         print(f"executive: {args.command}: {exc}", file=sys.stderr)
         return EXIT_NO_VEHICLE
+    except Exception as exc:
+        plugins = sys.modules.get("executive.plugins")  # loaded if it raised: not imported here, ctl starts fast
+        if plugins is None or not isinstance(exc, plugins.PluginError):
+            raise
+        print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
+        return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

@@ -2,7 +2,10 @@
 
 ``executive ctl [--socket PATH] [--json] REQUEST [ARGS]``; ``route`` takes an operation and its
 arguments (``executive ctl route OPERATION --help``). Waypoint numbers are 1-based, as the status
-line counts them.
+line counts them. ``tree`` prints the running tree with each node's status and feedback (``--watch``:
+again every ``--interval`` seconds until Ctrl-C or the executive stops). ``arm``, ``disarm`` and
+``mode MODE`` command the vehicle for a person and wait (bounded) for the autopilot's answer;
+mid-mission, ``disarm`` and ``mode`` pause the mission hands off.
 """
 
 from __future__ import annotations
@@ -10,14 +13,18 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK
 from executive.io.control import default_socket_path, request
+from executive.snapshots import TickState, render_tree
 from executive.status import status_line
 
-REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route")
+REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode")
+#: How long (wall clock) to wait for the autopilot's answer to arm, disarm or mode.
+ANSWER_WAIT_S = 10.0
 _PLAIN = {
     "status": "the mission's state and the vehicle's",
     "start": "start the loaded mission",
@@ -29,7 +36,7 @@ _PLAIN = {
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("ctl", help="control a running executive: status, start, pause, resume, abort, delete, upload MISSION, route OPERATION")
+    p = sub.add_parser("ctl", help="control a running executive: status, tree, start, pause, resume, abort, delete, upload, route, arm, disarm, mode")
     p.add_argument("--socket", metavar="PATH", default=default_socket_path(), help="the executive's control socket (default %(default)s)")
     p.add_argument("--json", action="store_true", help="print the reply as JSON")
     # the same options after the request too: SUPPRESS keeps what was given before it
@@ -42,8 +49,28 @@ def register(sub: argparse._SubParsersAction) -> None:
     upload = requests.add_parser("upload", parents=[common], help="load a mission file (while not running)")
     upload.add_argument("mission", help="the mission file")
     _register_route(requests.add_parser("route", parents=[common], help="show or edit the route", description=_ROUTE_HELP), common)
+    tree_help = "the running tree: each node's status (* running, ✓ succeeded, ✕ failed, - not ticked) and feedback"
+    tree = requests.add_parser("tree", parents=[common], help=tree_help, description=tree_help + "; the status line says what it waits for")
+    tree.add_argument("--watch", action="store_true", help="print it again every --interval seconds, until Ctrl-C or the executive stops")
+    tree.add_argument("--interval", type=_interval, default=1.0, metavar="S", help="seconds between two prints with --watch (default 1)")
+    for name, text in _VEHICLE.items():
+        command = requests.add_parser(name, parents=[common], help=text, description=f"{text}. {_PERSON_WINS}")
+        if name == "mode":
+            command.add_argument("mode", help="the mode's name as the autopilot shows it (HOLD, LOITER, MANUAL, RTL...)")
+        else:
+            command.add_argument("--force", action="store_true", help="skip the autopilot's checks (ArduPilot's 2989/21196 magic)")
     p.set_defaults(func=main)
 
+
+_VEHICLE = {
+    "arm": "arm the vehicle",
+    "disarm": "disarm the vehicle (mid-mission: the mission pauses, hands off)",
+    "mode": "put the vehicle in a mode (mid-mission: the mission pauses, hands off)",
+}
+_PERSON_WINS = (
+    "A person always wins: the command is sent whatever the mission's state; a running mission pauses rather than undoing it "
+    "(`ctl resume` hands the vehicle back to it). Waits for the autopilot's answer."
+)
 
 _ROUTE_HELP = """Show or edit the route of the loaded mission (while READY, RUNNING or PAUSED). After an edit the
 executive uploads the route to the autopilot and reads it back. Waypoint numbers are 1-based."""
@@ -87,6 +114,16 @@ def _centre_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--centre", type=float, nargs=2, metavar=("LAT", "LON"), help="about this point instead (to undo an edit exactly)")
 
 
+def _interval(value: str) -> float:
+    try:
+        seconds = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{value!r} is not a number of seconds") from None
+    if not 0.05 <= seconds <= 3600:
+        raise argparse.ArgumentTypeError(f"{value} s: must be 0.05-3600")
+    return seconds
+
+
 def _number(value: str) -> int:
     if not value.isdigit() or int(value) < 1:
         raise argparse.ArgumentTypeError(f"{value!r} is not a waypoint number (1, 2, ...)")
@@ -111,6 +148,8 @@ def _route_request(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def main(args: argparse.Namespace) -> int:
+    if args.request == "tree" and args.watch:
+        return _watch_tree(args)
     extra: dict[str, Any] = {}
     if args.request == "upload":
         try:
@@ -124,8 +163,12 @@ def main(args: argparse.Namespace) -> int:
         except ValueError as exc:
             print(f"executive: ctl: route {args.operation}: {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT
+    elif args.request in _VEHICLE:
+        extra = {"mode": args.mode} if args.request == "mode" else {"force": args.force}
     try:
         reply = request(args.socket, args.request, **extra)
+        if reply.get("ok") and "command" in reply:
+            return _report_answer(args, reply)
     except OSError as exc:
         print(f"executive: ctl: no executive answers on {args.socket}: {exc}", file=sys.stderr)
         return EXIT_NO_VEHICLE
@@ -134,6 +177,8 @@ def main(args: argparse.Namespace) -> int:
         print(json.dumps(reply))
     elif not reply.get("ok"):
         print(f"executive: ctl: {what} refused ({reply.get('state', '?')}): {reply.get('reason')}", file=sys.stderr)
+    elif "tree" in reply:
+        print(tree_text(reply))
     elif "status" in reply:
         print(status_line(reply["status"]))
     else:
@@ -141,6 +186,65 @@ def main(args: argparse.Namespace) -> int:
         if "route" in reply:
             print(route_lines(reply["route"]))
     return EXIT_OK if reply.get("ok") else EXIT_FAILED
+
+
+def _report_answer(args: argparse.Namespace, reply: dict[str, Any]) -> int:
+    """A person's command was sent: say so, wait (bounded) for the autopilot's answer and say it; 0 only when it accepted."""
+    command = reply["command"]
+    if not args.json:
+        print(f"{reply['state']}: {reply['reason']}")
+    deadline = time.monotonic() + ANSWER_WAIT_S
+    outcome: dict[str, Any] = {"state": "QUEUED"}
+    while time.monotonic() < deadline:
+        answer = request(args.socket, "command", ticket=command["ticket"], name=command["name"])
+        outcome = answer.get("command") or {"state": "UNKNOWN", "result": answer.get("reason"), "final": True}
+        if outcome.get("final"):
+            break
+        time.sleep(0.1)
+    accepted = outcome["state"] == "ACCEPTED"
+    if args.json:
+        print(json.dumps({**reply, "command": {**command, **outcome}}))
+    elif accepted:
+        print(f"{command['what']}: ACCEPTED by the autopilot")
+    else:
+        said = {"REJECTED": f"refused by the autopilot ({outcome.get('result')})", "TIMED_OUT": "no answer from the autopilot"}
+        why = said.get(outcome["state"], f"{outcome['state'].lower()} ({outcome.get('result', 'no answer yet')})")
+        print(f"executive: ctl: {command['what']}: {why}", file=sys.stderr)
+    return EXIT_OK if accepted else EXIT_FAILED
+
+
+def tree_text(reply: dict[str, Any]) -> str:
+    """A ``tree`` reply for a person: the status line (what the tree waits for), then the tree at its latest tick."""
+    lines = [status_line(reply["status"]), *render_tree(TickState.from_tree_dict(reply["tree"]))]
+    if not reply["tree"]["live"]:
+        lines[1] += f" (the last tick of the run, which ended {reply['state']})"
+    return "\n".join(lines)
+
+
+def _watch_tree(args: argparse.Namespace) -> int:
+    """``ctl tree --watch``: the tree again every ``--interval`` s (in place on a terminal) until Ctrl-C or the executive stops."""
+    clear = "\x1b[H\x1b[2J" if sys.stdout.isatty() and not args.json else ""
+    shown = 0
+    try:
+        while True:
+            try:
+                reply = request(args.socket, "tree")
+            except OSError as exc:
+                if not shown:
+                    print(f"executive: ctl: no executive answers on {args.socket}: {exc}", file=sys.stderr)
+                    return EXIT_NO_VEHICLE
+                print(f"executive: ctl: the executive on {args.socket} has stopped", file=sys.stderr)
+                return EXIT_OK
+            if args.json:
+                print(json.dumps(reply), flush=True)
+            elif reply.get("ok"):
+                print(f"{clear}{tree_text(reply)}\n", flush=True)
+            else:
+                print(f"{clear}{reply['state']}: {reply['reason']}\n", flush=True)
+            shown += 1
+            time.sleep(args.interval)
+    except KeyboardInterrupt:
+        return EXIT_OK  # the way to stop watching
 
 
 def route_lines(route: dict[str, Any]) -> str:

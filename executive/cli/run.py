@@ -22,7 +22,7 @@ from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
-from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
+from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor, keeping_time
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -123,12 +123,12 @@ def _vehicle_link(
 
 
 @contextlib.contextmanager
-def _gcs_link(url: str | None) -> Iterator[PymavlinkLink | None]:
-    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer)."""
+def _gcs_link(url: str | None, system_id: int) -> Iterator[PymavlinkLink | None]:
+    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer of system ``system_id``)."""
     if url is None:
         yield None
         return
-    link = PymavlinkLink(url)
+    link = PymavlinkLink(url, system_id=system_id)
     try:
         yield link
     finally:
@@ -316,7 +316,7 @@ def main(args: argparse.Namespace) -> int:
     with contextlib.ExitStack() as stack:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
-        gcs_link = stack.enter_context(_gcs_link(args.gcs))
+        gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
         journal, snapshots = _recorders(args, clock, stack)
         can_bus = _can_bus(args, stack)
         resume = None
@@ -354,7 +354,8 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_NO_VEHICLE
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
-            outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
+            with keeping_time(runtime.pacer.late_after_s / clock.speedup):
+                outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)

@@ -101,10 +101,50 @@ def test_a_ground_station_pause_from_another_process_is_obeyed_and_acked(mission
         assert wait_status(sock, lambda s: s["mode"] == "HOLD")["state"] == "PAUSED"
         report = gcs.recv_match(type="NAMED_VALUE_FLOAT", condition="NAMED_VALUE_FLOAT.name=='MSN_STATE'", blocking=True, timeout=10)
         assert report is not None and report.value == 3.0  # PAUSED
+        # the executive is seen as a component of the vehicle: its own HEARTBEAT at 1 Hz, an onboard controller
+        beat = gcs.recv_match(type="HEARTBEAT", blocking=True, timeout=5)
+        assert beat is not None and (beat.get_srcSystem(), beat.get_srcComponent()) == (1, 191)
+        assert (beat.type, beat.autopilot) == (mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID)
     finally:
         gcs.close()
         run.kill()
         run.communicate(timeout=10)
+
+
+def ctl_text(sock: Path, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "executive", "ctl", "--socket", str(sock), *args], cwd=ROOT, capture_output=True, text=True)
+
+
+def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path):
+    mission = tmp_path / "operator_arms.yaml"
+    mission.write_text(MISSION.replace("auto_arm: true", "auto_arm: false"))  # the mission waits for a person to arm
+    sock = tmp_path / "ctl.sock"
+    run = run_executive(mission, sock)
+    try:
+        wait_status(sock, lambda s: s["state"] == "RUNNING" and not s["armed"])
+        armed = ctl_text(sock, "arm")
+        assert armed.returncode == 0, armed.stderr
+        assert armed.stdout.splitlines() == ["RUNNING: ctl: arm, sent to the autopilot", "arm: ACCEPTED by the autopilot"]
+        wait_status(sock, lambda s: s["armed"] and s["mode"] == "GUIDED")
+        held = ctl_text(sock, "mode", "HOLD")
+        assert held.returncode == 0, held.stderr
+        assert held.stdout.splitlines()[-1] == "mode HOLD: ACCEPTED by the autopilot"
+        status = wait_status(sock, lambda s: s["mode"] == "HOLD")
+        assert (status["state"], status["reason"]) == ("PAUSED", "ctl: mode HOLD by a person: hands off")
+        disarmed = ctl(sock, "disarm")  # mid-mission: allowed
+        assert (disarmed["ok"], disarmed["state"], disarmed["command"]["state"]) == (True, "PAUSED", "ACCEPTED")
+        time.sleep(0.5)  # 5 s of vehicle time: nothing arms it again or takes it out of HOLD
+        status = wait_status(sock, lambda s: not s["armed"])
+        assert (status["state"], status["mode"]) == ("PAUSED", "HOLD")
+        unknown = ctl_text(sock, "mode", "WARP")
+        assert unknown.returncode == 1 and "mode WARP: not a mode of this vehicle's autopilot" in unknown.stderr
+        assert ctl(sock, "abort")["state"] == "ABORTED"
+        _, err = run.communicate(timeout=30)
+        assert "WARNING operator: ctl: mode HOLD; mission paused at leg 1, hands off until resumed, sent to the autopilot" in err
+        assert "WARNING operator: ctl: disarm, sent to the autopilot" in err
+    finally:
+        run.kill()
+        run.communicate()
 
 
 def test_wait_mode_serves_mission_after_mission(tmp_path):

@@ -101,7 +101,7 @@ def test_export_says_what_the_format_cannot_carry_where_the_mission_has_it(tmp_p
 
 def test_export_needs_a_format_and_a_valid_mission(tmp_path, capsys, minimal_mission):
     assert main(["export", str(minimal_mission)]) == 2
-    assert "--format plan|waypoints is needed" in capsys.readouterr().err
+    assert "--format plan|waypoints|btcpp is needed" in capsys.readouterr().err
     bad = tmp_path / "bad.yaml"
     bad.write_text("version: 1\nname: x\nvehicle: rover\nwaypoints:\n  - {lat: 95.0, lon: 8.5}\n")
     assert main(["export", str(bad), "--format", "plan"]) == 2
