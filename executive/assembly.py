@@ -48,6 +48,7 @@ if TYPE_CHECKING:
     from executive.journal import Journal
     from executive.progress import Progress
     from executive.snapshots import SnapshotRecorder
+    from executive.web.server import WebServer
 
 
 @dataclass
@@ -344,5 +345,22 @@ def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
 
     def plug(w: Wiring) -> None:
         w.observers.append(_SnapshotRuns(recorder))
+
+    return plug
+
+
+def live_view(server: WebServer) -> Plug:
+    """The live view in a browser on ``server``: a frame handed over after each tick it asks for one, its buttons' requests to the operator."""
+
+    def plug(w: Wiring) -> None:
+        from executive.web.feed import LiveFeed
+        from executive.web.server import LiveSource
+
+        feed = LiveFeed(w.mission_state, w.status, w.operator, w.clock.now)
+        w.readers.append(Step("live view requests", feed.answer))
+        w.writers.append(Step("live view", feed.publish))
+        w.observers.append(feed)
+        server.start(LiveSource(feed), ask=feed.ask)
+        w.closers.append(server.close)
 
     return plug
