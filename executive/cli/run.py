@@ -251,7 +251,9 @@ def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
     edited = f", on its route as last edited ({len(resume.route)} waypoints)" if resume.route is not None else ""
-    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} with {len(resume.samples)} sample(s) already taken{edited}"
+    replaced = f", on mission {resume.mission.name!r} that replaced it" if resume.mission is not None else ""
+    taken = f"with {len(resume.samples)} sample(s) already taken"
+    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} {taken}{replaced}{edited}"
 
 
 def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
@@ -363,6 +365,8 @@ def main(args: argparse.Namespace) -> int:
         if journal is not None and args.resume:
             resume = journal.resume_point(mission)
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
+            if resume is not None and resume.mission is not None:  # replaced while paused (ctl upload): the run goes on with that one
+                mission = resume.mission
         progress = Progress(sys.stdout, clock)
         attach_live_line(progress)  # a log record clears the live line first
         stack.callback(attach_live_line, None)
@@ -399,7 +403,8 @@ def main(args: argparse.Namespace) -> int:
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)
-    print(f"executive: mission {mission.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
+    ran = runtime.mission_state.mission or mission  # the one that replaced it, if an operator did (ctl upload while paused)
+    print(f"executive: mission {ran.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
     if runtime.mission_state.samples:
         count = len(runtime.mission_state.samples)
         print(f"executive: {count} sample{'' if count == 1 else 's'} recorded", file=sys.stderr)
