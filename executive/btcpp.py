@@ -22,12 +22,15 @@ import math
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from xml.parsers import expat
 
 import yaml
 
 from executive.mission.errors import FieldError, MissionError
+
+if TYPE_CHECKING:
+    from executive.mission.model import Mission
 
 #: The catalogue's parameter types -> the port types BehaviorTree.CPP writes (``BT::demangle`` of the C++ type).
 PORT_TYPES = {
@@ -367,17 +370,23 @@ def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any] | str:
 # -- files --------------------------------------------------------------------------------------
 
 
-def export_tree(mission_file: str, tree_id: str, catalogue: Any) -> str:
-    """The ``tree:`` of a (valid) mission file, written in the file as a mapping, as a BehaviorTree.CPP v4 document.
+def export_tree(mission_file: str, mission: Mission, catalogue: Any) -> tuple[str, list[tuple[str, str]]]:
+    """The tree of a (valid) mission file as a BehaviorTree.CPP v4 document, and what could not be described exactly (node path, why).
 
-    ValueError when the tree is a name (built in Python, not written in the file).
+    A tree written in the file (``tree:`` a mapping) is written as it is; a named tree (built in
+    Python) as the nodes it builds (:mod:`executive.recompose`).
     """
     with open(mission_file, encoding="utf-8") as stream:
         tree = (yaml.safe_load(stream) or {}).get("tree", "waypoints")
-    if not isinstance(tree, Mapping):
-        raise ValueError(f"tree {tree!r} is built in Python: only a tree written in the mission file (tree: a mapping) is exported as XML")
     types = node_types(catalogue)
-    return write_xml(from_yaml(tree, types), types, tree_id)
+    if isinstance(tree, Mapping):
+        return write_xml(from_yaml(tree, types), types, mission.name), []
+    import trees
+    from executive.recompose import Recomposer
+
+    recomposer = Recomposer(types, catalogue, mission)
+    root = recomposer.node(trees.build(mission))
+    return write_xml(root, {**types, **recomposer.unknown}, mission.name), recomposer.warnings
 
 
 def import_tree(path: str, catalogue: Any) -> dict[str, Any]:

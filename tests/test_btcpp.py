@@ -8,9 +8,11 @@ from pathlib import Path
 import pytest
 import yaml
 
+import trees
 from executive.btcpp import NodeType, Port, Slot, from_yaml, read_xml, to_yaml, write_xml
 from executive.cli import main
 from executive.mission.errors import MissionError
+from executive.mission.loader import load_mission
 
 TYPES = {
     t.id: t
@@ -163,3 +165,22 @@ def test_import_names_unknown_node_types_with_their_line(tmp_path: Path, capsys:
         "unknown node type 'use_leg' (not in the catalogue: executive behaviours lists it)\n"
     )
     assert not (tmp_path / "tree.yaml").exists()
+
+
+MISSIONS = Path(__file__).parents[1] / "missions"
+
+
+@pytest.mark.parametrize("name", ["rover_square", "asv_sampling", "auv_survey", "vtol_transit", "ugv_rc_route"])
+def test_a_built_in_tree_is_exported_as_catalogue_nodes_that_import_back(name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    xml = tmp_path / "tree.xml"
+    assert main(["export", str(MISSIONS / f"{name}.yaml"), "-o", str(xml)]) == 0
+    warnings = capsys.readouterr().err.splitlines()
+    mission = load_mission(MISSIONS / f"{name}.yaml")
+    built = [n.name for n in trees.build(mission).iterate()]
+    doc = ET.parse(xml).getroot()
+    model = {m.attrib["ID"] for m in doc.find("TreeNodesModel") or ()}
+    exported = list(doc.find("BehaviorTree").iter())[1:]
+    assert {e.tag for e in exported} <= model  # every node type is described, no node is foreign to the catalogue
+    assert "Failsafe" not in model and len(exported) < len(built)  # the failsafes folded back into failsafe_guarded / checked
+    assert main(["import", str(xml), "-o", str(tmp_path / "tree.yaml")]) == 0, capsys.readouterr().err
+    assert all("SpeedWithin" in w and "tolerance_" in w for w in warnings), warnings  # its tolerances are not kept: said, not hidden

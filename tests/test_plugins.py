@@ -15,7 +15,7 @@ import pytest
 
 from executive import blackboard, plugins
 from executive.behaviours.base import ExecutiveBehaviour
-from executive.catalogue import Catalogue
+from executive.catalogue import Catalogue, catalogue
 from executive.cli import main
 from executive.mission.lifecycle import MissionStatus
 from executive.testing import Lockstep
@@ -110,7 +110,9 @@ def site(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
     path.mkdir()
     monkeypatch.syspath_prepend(str(path))
     before = set(sys.modules)
+    catalogue.cache_clear()  # made once a process: with the plugins of this test, then without them again
     yield path
+    catalogue.cache_clear()
     for name in set(sys.modules) - before:
         if name.split(".")[0] in ("rangerplugin", "brokenplugin"):
             del sys.modules[name]
@@ -217,6 +219,8 @@ def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Pa
     ]
     assert main(["validate", mission_file(tmp_path, "waypoints")]) == 2  # a mission that does not use it: still said, once
     assert len(capsys.readouterr().err.splitlines()) == 2
+    assert main(["behaviours"]) == 2  # any command that needs the plugins says it, no traceback
+    assert capsys.readouterr().err.startswith("executive: behaviours: plugin 'thing' (executive.behaviours = brokenplugin.things:VALUE")
 
 
 def test_from_the_command_line_a_plugin_on_the_path_is_validated_and_shown(ranger: Path, tmp_path: Path) -> None:

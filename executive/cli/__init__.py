@@ -59,7 +59,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except NoVehicle as exc:
         print(f"executive: {args.command}: {exc}", file=sys.stderr)
         return EXIT_NO_VEHICLE
-    except Exception:  # a bug: its traceback, and an exit a service manager tells from a mission that ended badly (1)
+    except Exception as exc:
+        plugins = sys.modules.get("executive.plugins")  # loaded if it raised: not imported here, ctl starts fast
+        if plugins is not None and isinstance(exc, plugins.PluginError):
+            print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
+            return EXIT_BAD_INPUT
+        # a bug: its traceback, and an exit a service manager tells from a mission that ended badly (1)
         traceback.print_exc()
         print(f"executive: {args.command}: crashed (a bug, traceback above): exit {EXIT_CRASHED}", file=sys.stderr)
         return EXIT_CRASHED

@@ -33,7 +33,7 @@ from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
-from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
+from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor, keeping_time
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -379,7 +379,8 @@ def main(args: argparse.Namespace) -> int:
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
             # with --wait, an unfinished run in the journal goes on at once (a restart after a crash); a new one waits for `ctl start`
-            outcome = runtime.run(start=not args.wait or resume is not None, serve=args.wait, resume=resume)
+            with keeping_time(runtime.pacer.late_after_s / clock.speedup):
+                outcome = runtime.run(start=not args.wait or resume is not None, serve=args.wait, resume=resume)
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import gc
 import logging
 import math
 import random
 import re
+import sys
 from collections.abc import Callable
 
 import py_trees
@@ -13,7 +15,7 @@ import pytest
 
 from executive import blackboard
 from executive.clock import ManualClock
-from executive.io.heading import HeadingFilter, circular_mean, wrap180
+from executive.io.heading import HeadingFilter, circular_mean, import_long_lived, wrap180
 from executive.state import Attitude, GlobalPosition
 
 TICK_S = 0.1  # the runtime's 10 Hz; ATTITUDE every tick, GLOBAL_POSITION_INT every other one (5 Hz)
@@ -341,3 +343,27 @@ def test_the_rejection_window_runs_on_the_autopilots_clock_whatever_the_executiv
         heading.service()
     assert 0 < len(heading._verdicts) <= 60  # a 5 s window of 10 Hz readings, not everything and not nothing
     assert py_trees.blackboard.Blackboard.get("/heading/ok") is False
+
+
+def test_filterpy_is_imported_without_the_collectors_passes_and_frozen_out_of_later_ones(tmp_path, monkeypatch):
+    # a module that notes, as it is imported, whether the collector could run
+    (tmp_path / "long_lived_probe.py").write_text("import gc\nCOLLECTING = gc.isenabled()\nTABLE = [[i] for i in range(1000)]\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    frozen = gc.get_freeze_count()
+    import_long_lived("long_lived_probe")
+    probe = sys.modules.pop("long_lived_probe")
+    assert probe.COLLECTING is False
+    assert gc.isenabled()  # collecting again after it
+    assert gc.get_freeze_count() >= frozen + len(probe.TABLE)  # its objects among the frozen
+
+
+def test_the_collector_stays_off_after_the_import_when_it_was_off(tmp_path, monkeypatch):
+    (tmp_path / "long_lived_probe2.py").write_text("X = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    gc.disable()
+    try:
+        import_long_lived("long_lived_probe2")
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+        sys.modules.pop("long_lived_probe2", None)
