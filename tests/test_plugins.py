@@ -135,9 +135,13 @@ def ranger(site: Path) -> Path:
 
 @pytest.fixture
 def broken(site: Path) -> Path:
-    """A plugin whose tree module fails to import, and whose behaviour entry point names no class."""
+    """A plugin whose tree module fails to import, and whose behaviour and instrument entry points name no class."""
     modules = {"brokenplugin/__init__.py": "", "brokenplugin/trees.py": "import not_installed_anywhere\n", "brokenplugin/things.py": "VALUE = 3\n"}
-    points = {"executive.trees": {"broken": "brokenplugin.trees:build"}, "executive.behaviours": {"thing": "brokenplugin.things:VALUE"}}
+    points = {
+        "executive.trees": {"broken": "brokenplugin.trees:build"},
+        "executive.behaviours": {"thing": "brokenplugin.things:VALUE"},
+        "executive.instruments": {"sonde": "brokenplugin.things:VALUE"},
+    }
     write_distribution(site, "brokenplugin", modules, points)
     importlib.invalidate_caches()
     return site
@@ -204,7 +208,7 @@ def test_a_tree_that_cannot_be_loaded_is_named_at_the_tree_line(ranger: Path, tm
         assert err.startswith(f"{path}:4:7: tree: plugin '{tree}': ") and why in err, err
     path = mission_file(tmp_path, "'a:b:c'")
     assert main(["validate", path]) == 2
-    assert "tree: 'a:b:c': String should match pattern" in capsys.readouterr().err
+    assert "tree: 'a:b:c': not a tree name" in capsys.readouterr().err
 
 
 def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -216,9 +220,11 @@ def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Pa
         "ModuleNotFoundError: No module named 'not_installed_anywhere'",
         "executive: validate: plugin 'thing' (executive.behaviours = brokenplugin.things:VALUE, from brokenplugin 1.0): "
         "3 is not a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)",
+        "executive: validate: plugin 'sonde' (executive.instruments = brokenplugin.things:VALUE, from brokenplugin 1.0): "
+        "3 is not an instrument (subclass executive.io.sampler.InstrumentSampler)",
     ]
     assert main(["validate", mission_file(tmp_path, "waypoints")]) == 2  # a mission that does not use it: still said, once
-    assert len(capsys.readouterr().err.splitlines()) == 2
+    assert len(capsys.readouterr().err.splitlines()) == 3
     assert main(["behaviours"]) == 2  # any command that needs the plugins says it, no traceback
     assert capsys.readouterr().err.startswith("executive: behaviours: plugin 'thing' (executive.behaviours = brokenplugin.things:VALUE")
 

@@ -19,6 +19,7 @@ from executive.assembly import (
     control_socket,
     ground_stations,
     journal_recorder,
+    live_view,
     obstacle_camera,
     service_manager,
     snapshot_recorder,
@@ -44,6 +45,7 @@ if TYPE_CHECKING:
     import can
 
     from executive.sim.faults import FaultInjector
+    from executive.web.server import WebServer
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -83,6 +85,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
     p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
     p.add_argument("--obstacles", metavar="URL", help="a camera's obstacle distances (JSON over UDP, udpin:HOST:PORT), sent on as OBSTACLE_DISTANCE")
+    p.add_argument(
+        "--web",
+        metavar="[HOST:]PORT",
+        help="the live view in a browser on PORT (127.0.0.1 unless HOST is given; beyond it the buttons need the token printed at start-up)",
+    )
+    p.add_argument("--web-token-file", metavar="FILE", help="the live view's token (its first line, >= 16 characters), instead of a new one")
     p.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (default: warnings and the operator's events; -v all info, -vv debug)"
     )
@@ -220,6 +228,25 @@ def _service_manager(stack: contextlib.ExitStack) -> Watchdog | None:
     return Watchdog(notifier, ScaledClock(), watchdog_period_s())
 
 
+def _web_server(args: argparse.Namespace, stack: contextlib.ExitStack) -> WebServer | None:
+    """The live view's server of --web, bound (BadInput: a bad address or token file; NoVehicle: the port cannot be had), closed with ``stack``."""
+    if args.web is None:
+        if args.web_token_file:
+            raise BadInput("--web-token-file needs --web [HOST:]PORT")
+        return None
+    from executive.web.server import WebAddressError, open_server
+
+    try:
+        server, told = open_server(args.web, args.web_token_file)
+    except WebAddressError as exc:
+        raise BadInput(f"--web: {exc}") from exc
+    except OSError as exc:
+        raise NoVehicle(f"--web: cannot listen on {args.web}: {exc}") from exc
+    stack.callback(server.close)
+    print(f"executive: {told}", file=sys.stderr, flush=True)
+    return server
+
+
 def _signing_hint(link: PymavlinkLink) -> str:
     """Why no heartbeat was heard when signing is the reason: every packet failed the signature check."""
     unsigned, other_key, accepted = link.signature_failures
@@ -235,7 +262,9 @@ def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
     edited = f", on its route as last edited ({len(resume.route)} waypoints)" if resume.route is not None else ""
-    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} with {len(resume.samples)} sample(s) already taken{edited}"
+    replaced = f", on mission {resume.mission.name!r} that replaced it" if resume.mission is not None else ""
+    taken = f"with {len(resume.samples)} sample(s) already taken"
+    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} {taken}{replaced}{edited}"
 
 
 def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
@@ -255,6 +284,7 @@ def _plugs(
     can_bus: can.BusABC | None,
     obstacle_socket: socket.socket | None,
     gcs_link: PymavlinkLink | None,
+    web: WebServer | None = None,
 ) -> list[Plug]:
     """The optional parts of this run, as the command line asks for them."""
     plugs = []
@@ -270,6 +300,8 @@ def _plugs(
         plugs.append(can_base(can_bus))
     if obstacle_socket is not None:
         plugs.append(obstacle_camera(obstacle_socket))
+    if web is not None:
+        plugs.append(live_view(web))
     return plugs
 
 
@@ -335,6 +367,7 @@ def main(args: argparse.Namespace) -> int:
             raise BadInput(f"--obstacles: {exc}") from exc
     with contextlib.ExitStack() as stack:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
+        web = _web_server(args, stack)
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
         gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
         journal, snapshots = _recorders(args, clock, stack)
@@ -343,11 +376,13 @@ def main(args: argparse.Namespace) -> int:
         if journal is not None and args.resume:
             resume = journal.resume_point(mission)
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
+            if resume is not None and resume.mission is not None:  # replaced while paused (ctl upload): the run goes on with that one
+                mission = resume.mission
         watchdog = _service_manager(stack)
         progress = Progress(sys.stdout, clock, quiet=watchdog is not None)  # under systemd: status lines on changes, into the journal
         attach_live_line(progress)  # a log record clears the live line first
         stack.callback(attach_live_line, None)
-        plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link)
+        plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, web)
         runtime = build_runtime(
             mission,
             link,
@@ -386,7 +421,8 @@ def main(args: argparse.Namespace) -> int:
                 signal.signal(sig, handler)
             if watchdog is not None:
                 watchdog.stopping(f"mission {runtime.mission_state.status}: {runtime.mission_state.reason}")
-    print(f"executive: mission {mission.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
+    ran = runtime.mission_state.mission or mission  # the one that replaced it, if an operator did (ctl upload while paused)
+    print(f"executive: mission {ran.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
     if runtime.mission_state.samples:
         count = len(runtime.mission_state.samples)
         print(f"executive: {count} sample{'' if count == 1 else 's'} recorded", file=sys.stderr)

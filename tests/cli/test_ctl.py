@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from executive import geo
 from executive.cli import main
 from executive.io.control import request
 from executive.io.mavlink.dialect import mavlink, mavutil
@@ -186,3 +187,43 @@ def test_ctl_without_an_executive_exits_3(tmp_path, capsys):
 def test_ctl_upload_needs_a_readable_file(tmp_path, capsys):
     assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload"]) == 2
     assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload", str(tmp_path / "missing.yaml")]) == 2
+
+
+def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the_new_route(mission, tmp_path, capsys):
+    db, sock = tmp_path / "journal.db", tmp_path / "ctl.sock"
+    north = tmp_path / "north.yaml"  # the leg east kept, then 30 m north of its end
+    north.write_text(MISSION.replace("name: two-legs", "name: two-legs-north") + "  - {lat: -35.3627208, lon: 149.1665504, name: north}\n")
+    run = run_executive(mission, sock, "--journal", str(db), speedup=20)
+    try:
+        wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
+        assert ctl(sock, "pause")["state"] == "PAUSED"
+        wait_status(sock, lambda s: s["mode"] == "HOLD")
+        upload = subprocess.run(
+            [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "upload", str(north)], cwd=ROOT, capture_output=True, text=True
+        )
+        assert upload.returncode == 0, upload.stderr
+        first, *route = upload.stdout.splitlines()
+        assert first.startswith("PAUSED: mission replaced: 'two-legs' -> 'two-legs-north', at leg 2/3 (the waypoint of old leg 2)")
+        assert route[0].startswith("3 waypoints; on the autopilot:") and route[2].startswith(">   2  -35.3629906, 149.1665504")
+        status = wait_status(sock, lambda s: s["state"] == "PAUSED" and s["legs"] == 3)
+        assert status["reason"].startswith("mission replaced:") and status["mode"] == "HOLD"  # still held: a person resumes it
+        later = after(sock, status, 5.0)  # 5 s of vehicle time later: still paused and held, the new route on the autopilot
+        assert (later["state"], later["mode"]) == ("PAUSED", "HOLD")
+        assert geo.distance(later["lat"], later["lon"], status["lat"], status["lon"]) < 0.2  # it has not moved
+        shown = request(str(sock), "route", operation="show")["route"]
+        assert (shown["upload"]["state"], shown["on_autopilot"], len(shown["waypoints"])) == ("DONE", True, 3)  # uploaded, read back
+        assert ctl(sock, "resume")["state"] == "RUNNING"
+        _, err = run.communicate(timeout=120)
+        assert run.returncode == 0, err
+        assert "mission 'two-legs-north' COMPLETED" in err
+    finally:
+        run.kill()
+    assert main(["report", str(db), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert (report["mission"], report["outcome"], report["resumed_from"]) == ("two-legs-north", "COMPLETED", 1)
+    assert [leg["leg"] for leg in report["legs"]] == [1, 2, 3]  # heading for the east end, the new point north, then done
+    resumed = next(t["t"] for t in report["transitions"] if t["after"] == "RUNNING")
+    turned, done = report["legs"][1:]
+    assert geo.distance(turned["lat"], turned["lon"], -35.3629906, 149.1665504) < 5.0  # turned north at the east end (driven through)
+    assert geo.distance(done["lat"], done["lon"], -35.3627208, 149.1665504) < 3.0  # and reached the new point (as last reported)
+    assert done["t"] - resumed < 120.0  # vehicle time: the rest of the east leg and 30 m north
