@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import py_trees
@@ -170,3 +171,13 @@ def test_the_schema_completes_a_composed_tree_and_refuses_what_the_loader_refuse
     assert {"$ref": "#/$defs/TreeNode_ekf_ok"} in schema["$defs"]["TreeGuard"]["anyOf"]
     assert {"$ref": "#/$defs/TreeNode_go_to"} not in schema["$defs"]["TreeGuard"]["anyOf"]
     assert Sample  # the sample action is in the catalogue the schema was made from
+
+
+def test_the_readme_s_example_loads_and_its_errors_are_the_readme_s() -> None:
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    section = readme.split("### A tree written in the mission file")[1]
+    example, shown = section.split("```yaml\n")[1].split("```")[0], "m.yaml" + section.split("```\nm.yaml")[1].split("```")[0]
+    head = HEAD.removesuffix("tree:\n")
+    assert isinstance(load(example, head).tree, dict)
+    bad = example.replace("use: preflight ", "use: pre_flight").replace("rc_not_taking_over]", "{node: set_mode, mode: HOLD}]")
+    assert errors_of(bad.replace("timeout_s: 90,", "timeout_s: 90s,"), head) == shown.splitlines()

@@ -187,6 +187,8 @@ def test_ctl_without_an_executive_exits_3(tmp_path, capsys):
 def test_ctl_upload_needs_a_readable_file(tmp_path, capsys):
     assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload"]) == 2
     assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload", str(tmp_path / "missing.yaml")]) == 2
+    assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload", str(tmp_path / "missing.yaml"), "--leg", "0"]) == 2
+    assert "'0' is not a waypoint number (1, 2, ...)" in capsys.readouterr().err
 
 
 def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the_new_route(mission, tmp_path, capsys):

@@ -16,7 +16,12 @@ from pathlib import Path
 
 import pytest
 
+from executive.assembly import snapshot_recorder
 from executive.io.control import request
+from executive.snapshots import SnapshotRecorder, replay
+from executive.web.replay import ReplaySource
+from executive.web.server import WebAddress, WebServer
+from tests_support import line_mission
 
 ROOT = Path(__file__).parents[2]
 CHROMIUM = "/usr/bin/chromium"
@@ -30,7 +35,7 @@ simulator: {ekf_ready_after_s: 2}
 waypoints:
   - {lat: -35.3631711, lon: 149.1652300}  # 10 m north
   - {lat: -35.3631711, lon: 149.1653401}  # then 10 m east
-  - {lat: -35.3625416, lon: 149.1653401}  # then 70 m north: time for a person to press Pause
+  - {lat: -35.3620919, lon: 149.1657805}  # then 120 m north, 40 m east: time for a person to press Pause
 """
 
 
@@ -70,9 +75,9 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
             names = page.locator("#tree text.name").all_text_contents()
             assert {"Mission", "Pre-flight", "EKF ok?", "Link alive?", "For each leg", "Go to waypoint"} <= set(names)
             assert page.locator('#tree g.node[data-status="S"]', has_text="Pre-flight").count() == 1
-            page.wait_for_function("document.getElementById('leg').textContent === '3/3'", timeout=10_000)
+            on_last_leg = "$('leg').textContent === '3/3' && $('waiting').textContent.startsWith('waiting: Go to waypoint')"
+            page.wait_for_function(on_last_leg.replace("$(", "document.getElementById("), timeout=10_000)
             assert page.locator("#state").inner_text() == "RUNNING"
-            assert "waiting: Go to waypoint" in page.locator("#waiting").text_content()
             assert page.locator("#plan polyline.track").count() == 1 and page.locator("#plan circle.wp").count() == 3
             mode = page.locator("#bb tr", has=page.locator("td", has_text=re.compile(r"^/vehicle/mode$")))
             assert mode.locator("td").all_inner_texts() == ["/vehicle/mode", "'GUIDED'"]
@@ -89,3 +94,34 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
     finally:
         proc.terminate()
         proc.wait(timeout=30)
+
+
+def test_the_replay_page_moves_through_a_recording_with_its_slider(tmp_path, lockstep):
+    path = tmp_path / "run.snap"
+    recorder = SnapshotRecorder(path)
+    lockstep(line_mission("replayed"), plugs=[snapshot_recorder(recorder)]).run_to_end(300.0)
+    recorder.close()
+    source = ReplaySource(str(path))
+    server = WebServer(WebAddress("127.0.0.1", 0))
+    server.start(source)
+    try:
+        with browser() as playwright:
+            chromium = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+            page = chromium.new_page(viewport={"width": 1400, "height": 820})
+            page.goto(server.url)
+            last = source.recording.last
+            page.wait_for_function(f"document.getElementById('tickinfo').textContent.startsWith('tick {last} ')", timeout=10_000)
+            assert page.locator("#controls").is_hidden()  # nothing to command in a recording
+            page.locator("#slider").fill("150")
+            page.wait_for_function("document.getElementById('tickinfo').textContent.startsWith('tick 150 ')", timeout=10_000)
+            then = replay(path, 150)
+            statuses = {node["name"]: then.status.get(node["id"], "-") for node in then.nodes}
+            going = page.locator("#tree g.node", has_text="Go to waypoint")
+            assert going.get_attribute("data-status") == statuses["Go to waypoint"] == "R"
+            assert page.locator("#tree g.node", has_text="Pre-flight").get_attribute("data-status") == "S"
+            leg = int(then.blackboard["/mission/leg_index"]) + 1
+            assert page.locator("#state").inner_text() == "RUNNING" and page.locator("#leg").inner_text() == f"{leg}/4"
+            assert page.locator("#plan polyline.track").count() == 1
+            chromium.close()
+    finally:
+        server.close()
