@@ -352,9 +352,9 @@ def from_yaml(data: Mapping[str, Any] | str, types: Mapping[str, NodeType]) -> N
 
 
 def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any] | str:
-    """A :class:`Node` as a YAML tree node: type first, then name, parameters, children; a bare name without any."""
+    """A :class:`Node` as a YAML tree node: type first, then name, parameters, children; a node (not a subtree) without any: its bare name."""
     spec = types[node.type]
-    if node.name is None and not node.params and not any(node.slots.values()):
+    if spec.kind != "subtree" and node.name is None and not node.params and not any(node.slots.values()):
         return node.type
     data: dict[str, Any] = {USE_KEY if spec.kind == "subtree" else TYPE_KEY: node.type}
     if node.name is not None:
