@@ -59,8 +59,10 @@ def test_the_readme_mission_completes_in_the_simulator():
     assert "COMPLETED: every waypoint reached" in err
 
 
-def test_ctrl_c_leaves_the_vehicle_in_its_safe_mode():
-    proc = executive("run", str(ROOT / "missions/rover_square.yaml"), "--speedup", "20", "-v", stdout=subprocess.PIPE)
+def test_ctrl_c_leaves_the_vehicle_in_its_safe_mode(tmp_path):
+    square = tmp_path / "square.yaml"  # README's square with the EKF ready after 2 s (not 40): the test is about leg 2
+    square.write_text((ROOT / "missions/rover_square.yaml").read_text() + "simulator: {ekf_ready_after_s: 2}\n")
+    proc = executive("run", str(square), "--speedup", "20", "-v", stdout=subprocess.PIPE)
     lines = []
     deadline = time.monotonic() + 30
     assert proc.stdout is not None
@@ -151,7 +153,7 @@ def test_tlog_and_signing_end_to_end(tmp_path):
     mission = tmp_path / "short.yaml"
     mission.write_text(
         "version: 1\nname: short\nvehicle: rover\nauto_arm: true\nhome: {lat: -35.363261, lon: 149.165230}\n"
-        "waypoints:\n  - {lat: -35.3631710, lon: 149.1652300}\n"  # 10 m north
+        "simulator: {ekf_ready_after_s: 2}\nwaypoints:\n  - {lat: -35.3631710, lon: 149.1652300}\n"  # 10 m north
     )
     proc = executive("run", str(mission), "--speedup", "50", "--tlog", str(tlog), "--signing-key", str(key))
     _, err = proc.communicate(timeout=60)
