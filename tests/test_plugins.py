@@ -237,7 +237,6 @@ def test_from_the_command_line_a_plugin_on_the_path_is_validated_and_shown(range
     assert validate.returncode == 0 and "tree ranger" in validate.stdout, validate.stderr
     show = subprocess.run([sys.executable, "-m", "executive", "show", path], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
     assert show.returncode == 0 and "Enough satellites?" in show.stdout, show.stderr
-    )
 
 
 class Plain(ExecutiveBehaviour):
