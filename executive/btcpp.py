@@ -12,9 +12,12 @@ Written as BehaviorTree.CPP's own writer does (``src/xml_parsing.cpp``: ``writeT
   ``<input_port name= type= default=>`` elements whose text is the description, then an optional
   ``<description>`` (the XSD's ``treeNodesModelNodeType``).
 
-Our catalogue maps onto it: guards are Conditions, actions and built-in subtrees (their content is
-Python, not XML) Actions, decorators Decorators, composites Controls; a parameter is an input port.
-A BehaviorTree.CPP blackboard reference (``{key}``) has no meaning here and is refused on import.
+Our catalogue (:mod:`executive.catalogue`) maps onto it by the children a node takes, as
+BehaviorTree.CPP checks them: none, a Condition (a guard) or an Action (built-in subtrees too: their
+content is Python, not XML); one, a Decorator; more, a Control, its child slots in order
+(``failsafe_guarded``: the work, then the guards). A value parameter is an input port; the
+mission's YAML tree form is :mod:`executive.composition`'s. A BehaviorTree.CPP blackboard reference
+(``{key}``) has no meaning here and is refused on import.
 """
 
 from __future__ import annotations
