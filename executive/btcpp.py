@@ -31,6 +31,7 @@ from xml.parsers import expat
 
 import yaml
 
+from executive.composition import NODE, USE
 from executive.mission.errors import FieldError, MissionError
 
 if TYPE_CHECKING:
@@ -333,7 +334,7 @@ def _number(text: str, kind: str) -> int | float:
 # -- the mission file's YAML tree ---------------------------------------------------------------
 
 #: How a node is written in a mission's ``tree:`` (:mod:`executive.composition`): its type, a built-in subtree, its name.
-TYPE_KEY, USE_KEY, NAME_KEY = "node", "use", "name"
+TYPE_KEY, USE_KEY, NAME_KEY = NODE, USE, "name"
 
 
 def from_yaml(data: Mapping[str, Any] | str, types: Mapping[str, NodeType]) -> Node:
