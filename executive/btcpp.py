@@ -44,6 +44,19 @@ PORT_TYPES = {
 }  # fmt: skip
 #: Compound values as BehaviorTree.CPP writes vectors: the items joined by ``;`` (``convertFromString<std::vector<double>>``, basic_types.h).
 FIELDS = {"range": ("min", "max"), "enu": ("east", "north", "up")}
+#: BehaviorTree.CPP's built-in nodes Groot2 offers that are ours under another name: (our node, fixed parameters, port -> parameter).
+#: Sequence and Fallback resume the RUNNING child and start over after a result, as py_trees' composites with memory; the
+#: reactive ones tick every child again each tick (sequence_node.h, fallback_node.h, reactive_sequence.h, reactive_fallback.h).
+#: RetryUntilSuccessful gives up after num_attempts failures, Repeat ends after num_cycles successes (retry_node.h, repeat_node.h).
+BUILT_IN_NODES: dict[str, tuple[str, dict[str, Any], dict[str, str]]] = {
+    "Sequence": ("sequence", {"memory": True}, {}),
+    "ReactiveSequence": ("sequence", {"memory": False}, {}),
+    "Fallback": ("selector", {"memory": True}, {}),
+    "ReactiveFallback": ("selector", {"memory": False}, {}),
+    "Inverter": ("inverter", {}, {}),
+    "RetryUntilSuccessful": ("retry", {}, {"num_attempts": "failures"}),
+    "Repeat": ("repeat", {}, {"num_cycles": "successes"}),
+}
 MAIN_TREE = "MainTree"
 MAX_BYTES = 1 << 20
 
@@ -262,21 +275,23 @@ def _read_node(element: _Element, types: Mapping[str, NodeType], error: Callable
     explicit = element.tag in ("Action", "Condition", "Control", "Decorator")
     type_id = element.attributes.get("ID", "") if explicit else element.tag
     here = f"{path}/{type_id or element.tag}"
+    type_id, fixed, renamed = BUILT_IN_NODES.get(type_id, (type_id, {}, {})) if type_id not in types else (type_id, {}, {})
     spec = types.get(type_id)
     if spec is None:
         error(element, here, f"unknown node type {type_id!r} (not in the catalogue: executive behaviours lists it)")
         return Node(type_id)
     node = Node(type_id, name=element.attributes.get("name"))
     ports = {p.name: p for p in spec.ports}
+    node.params = {k: v for k, v in fixed.items() if v != ports[k].default}
     for key, raw in element.attributes.items():
         if key in ("name", "ID") or key.startswith("_"):  # _uid, _fullpath: Groot2's bookkeeping
             continue
-        port = ports.get(key)
+        port = ports.get(renamed.get(key, key))
         if port is None:
             error(element, f"{here}.{key}", f"unknown port (ports of {type_id}: {', '.join(ports) or 'none'})")
             continue
         try:
-            node.params[key] = port_value(raw, port)
+            node.params[port.name] = port_value(raw, port)
         except ValueError as exc:
             error(element, f"{here}.{key}", f"{raw!r}: {exc}")
     children = [_read_node(child, types, error, here) for child in element.children]
