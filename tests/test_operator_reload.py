@@ -111,7 +111,8 @@ def test_a_leg_is_only_for_a_replacement_and_running_missions_are_paused_first(s
     operator = Operator(state, "rover")
     text = mission_text(square_mission)
     assert operator.request("upload", filename="m.yaml", text=text, leg=2).reason.startswith("leg: a leg is chosen only when replacing a PAUSED")
-    assert operator.request("upload", filename="m.yaml", text=text, leg=0).reason == "leg: 0 is not a waypoint number (1, 2, ...)"
+    for bad in (0, -1, True, "2", 2.0):  # over the control socket, a leg is any JSON value
+        assert operator.request("upload", filename="m.yaml", text=text, leg=bad).reason == f"leg: {bad!r} is not a waypoint number (1, 2, ...)"
     state.start()
     reply = operator.request("upload", filename="m.yaml", text=text)
     assert reply.reason == "cannot upload while RUNNING: pause it first (ctl pause), then upload to replace the mission"

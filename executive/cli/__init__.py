@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import traceback
 from collections.abc import Sequence
 
 from executive import __version__
@@ -14,6 +15,7 @@ EXIT_OK = 0  # success / mission COMPLETED
 EXIT_FAILED = 1  # mission aborted or failed at run time
 EXIT_BAD_INPUT = 2  # usage error, invalid mission file
 EXIT_NO_VEHICLE = 3  # could not reach the vehicle
+EXIT_CRASHED = 70  # a bug: an exception nothing expected (sysexits' EX_SOFTWARE); a service restarts on it, not on 1
 
 
 class BadInput(Exception):
@@ -27,7 +29,7 @@ class NoVehicle(Exception):
 #: Command -> the module of this package that registers it (``register(subparsers)`` setting ``func``).
 COMMANDS = {
     "validate": "validate", "show": "show", "run": "run", "sim": "sim", "schema": "schema", "ctl": "ctl", "report": "report",
-    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files", "behaviours": "behaviours",
+    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files", "service": "service", "behaviours": "behaviours",
 }  # fmt: skip
 
 
@@ -59,10 +61,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_NO_VEHICLE
     except Exception as exc:
         plugins = sys.modules.get("executive.plugins")  # loaded if it raised: not imported here, ctl starts fast
-        if plugins is None or not isinstance(exc, plugins.PluginError):
-            raise
-        print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
-        return EXIT_BAD_INPUT
+        if plugins is not None and isinstance(exc, plugins.PluginError):
+            print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
+            return EXIT_BAD_INPUT
+        # a bug: its traceback, and an exit a service manager tells from a mission that ended badly (1)
+        traceback.print_exc()
+        print(f"executive: {args.command}: crashed (a bug, traceback above): exit {EXIT_CRASHED}", file=sys.stderr)
+        return EXIT_CRASHED
 
 
 if __name__ == "__main__":

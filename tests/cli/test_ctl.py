@@ -50,7 +50,7 @@ def ctl(sock: Path, *args: str) -> dict:
     return json.loads(proc.stdout)
 
 
-def wait_status(sock: Path, predicate, timeout_s: float = 60.0) -> dict:
+def wait_status(sock: Path, predicate, timeout_s: float = 300.0) -> dict:
     """The first status (asked over the control socket in this process: a `ctl` process per poll would load the machine) meeting ``predicate``.
 
     ``timeout_s`` of wall time only bounds a hung run; what the test waits for is judged on the status, in vehicle time (``t``).
@@ -187,6 +187,8 @@ def test_ctl_without_an_executive_exits_3(tmp_path, capsys):
 def test_ctl_upload_needs_a_readable_file(tmp_path, capsys):
     assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload"]) == 2
     assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload", str(tmp_path / "missing.yaml")]) == 2
+    assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload", str(tmp_path / "missing.yaml"), "--leg", "0"]) == 2
+    assert "'0' is not a waypoint number (1, 2, ...)" in capsys.readouterr().err
 
 
 def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the_new_route(mission, tmp_path, capsys):

@@ -14,12 +14,15 @@ from typing import Any
 import py_trees
 import pytest
 
-from executive.assembly import Wiring
+from executive.assembly import Wiring, journal_recorder, snapshot_recorder
+from executive.clock import Clock, ManualClock
+from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import behaviour_path
 from executive.sim.faults import Fault, LinkLoss, RcTakeover
+from executive.snapshots import SnapshotRecorder, render, replay
 from executive.testing import Lockstep
 
 MISSIONS = Path(__file__).parents[2] / "missions"
@@ -49,9 +52,17 @@ class Trace:
         pass
 
 
-def run(mission: Mission, events: Sequence[Fault]) -> tuple[Trace, MissionStatus, str]:
+def run(mission: Mission, events: Sequence[Fault], keep: Path | None = None) -> tuple[Trace, MissionStatus, str]:
+    """The mission to its end on the simulated boat, traced; with ``keep``, journalled and snapshotted there too."""
     trace = Trace()
-    with Lockstep(mission, mission_dir=MISSIONS, events=events, plugs=[trace.plug]) as ls:
+
+    def plugs(clock: Clock) -> dict[str, Any]:
+        if keep is None:
+            return {"plugs": [trace.plug]}
+        recorder = SnapshotRecorder(keep / "snapshots.jsonl")
+        return {"plugs": [trace.plug, journal_recorder(Journal(keep / "journal.db", clock)), snapshot_recorder(recorder)]}
+
+    with Lockstep(mission, mission_dir=MISSIONS, events=events, options_for_clock=plugs) as ls:
         carry = ls.uplink.carry
 
         def recorded(messages: Any) -> Any:
@@ -81,11 +92,12 @@ SCENARIOS = {
 
 
 @pytest.mark.parametrize("scenario", SCENARIOS)
-def test_the_yaml_tree_and_the_python_builder_tick_and_command_alike(composed: Mission, scenario: str) -> None:
+def test_the_yaml_tree_and_the_python_builder_tick_and_command_alike(composed: Mission, scenario: str, tmp_path: Path) -> None:
     events, expected = SCENARIOS[scenario]
     named = composed.model_copy(update={"tree": "goto_sample"})
-    yaml_trace, yaml_status, yaml_reason = run(composed, events)
-    python_trace, python_status, python_reason = run(named, events)
+    (tmp_path / "yaml").mkdir(), (tmp_path / "python").mkdir()
+    yaml_trace, yaml_status, yaml_reason = run(composed, events, tmp_path / "yaml")
+    python_trace, python_status, python_reason = run(named, events, tmp_path / "python")
     assert (yaml_status, python_status) == (expected, expected)
     assert yaml_reason == python_reason
     assert yaml_trace.shape == python_trace.shape
@@ -95,6 +107,14 @@ def test_the_yaml_tree_and_the_python_builder_tick_and_command_alike(composed: M
     assert yaml_trace.sent == python_trace.sent
     kinds = {kind for _, kind, _ in yaml_trace.sent}
     assert {"COMMAND_LONG", "SET_POSITION_TARGET_GLOBAL_INT"} <= kinds  # modes, arming and the path itself were compared
+    # the journal and the snapshots (executive report, executive replay) see the same run
+    snapshots = [(tmp_path / tree / "snapshots.jsonl").read_text() for tree in ("yaml", "python")]
+    assert snapshots[0] == snapshots[1] and snapshots[0].count("\n") > 500  # every tick's statuses, feedback and blackboard
+    same = ("outcome", "reason", "transitions", "legs", "samples", "events", "routes")
+    reports = [{k: v for k, v in Journal(tmp_path / tree / "journal.db", ManualClock()).report().items() if k in same} for tree in ("yaml", "python")]
+    assert reports[0] == reports[1] and reports[0]["outcome"] == expected.value
+    shown = "\n".join(render(replay(tmp_path / "yaml" / "snapshots.jsonl", 500)))  # executive replay, mid-run
+    assert "Wait in MANUAL" in shown and "Guarded path or hold" in shown
 
 
 def test_the_example_s_tree_is_the_python_builder_s_node_for_node(composed: Mission) -> None:
