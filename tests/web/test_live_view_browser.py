@@ -57,9 +57,11 @@ def announced_url(proc: subprocess.Popen) -> str:
 
 
 def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission(tmp_path):
-    mission, sock = tmp_path / "live.yaml", tmp_path / "ctl.sock"
+    mission, sock, token = tmp_path / "live.yaml", tmp_path / "ctl.sock", tmp_path / "token"
     mission.write_text(MISSION)
-    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "10", "--socket", str(sock), "--web", "127.0.0.1:0"]
+    token.write_text("a-token-of-twenty-chars\n")  # its buttons need it, as beyond the loopback interface; the page takes it from its address
+    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "20", "--socket", str(sock), "--web", "127.0.0.1:0"]
+    command += ["--web-token-file", str(token)]
     proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
         url = announced_url(proc)
@@ -68,7 +70,7 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
             page = chromium.new_page(viewport={"width": 1400, "height": 820})
             errors: list[str] = []
             page.on("pageerror", lambda error: errors.append(str(error)))
-            page.goto(url)
+            page.goto(f"{url}?token=a-token-of-twenty-chars")
             # the tree's nodes by name, and their statuses as they tick: the leg being driven is RUNNING, pre-flight is done
             going = page.locator('#tree g.node[data-status="R"]', has_text="Go to waypoint")
             going.wait_for(timeout=10_000)
