@@ -21,6 +21,7 @@ from executive.assembly import build_runtime
 from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
+from executive.pacing import keeping_time
 from executive.sim import SimServer
 
 MIN_SPEEDUP = 50.0
@@ -67,7 +68,8 @@ def run_once(speedup: float, length_m: float, ekf_ready_after_s: float, timeout_
             watchdog = threading.Timer(timeout_s, runtime.request_stop, ("benchmark time limit",))
             watchdog.start()
             try:
-                outcome = runtime.run()
+                with keeping_time(runtime.pacer.late_after_s / speedup):  # as executive run does
+                    outcome = runtime.run()
             finally:
                 watchdog.cancel()
             vehicle_s = clock.now()

@@ -6,25 +6,46 @@ why. The reply carries the resulting state so a client never has to ask twice.
 ``route`` requests edit the route (``{"op": "route", "operation": "offset", "distance_m": 5,
 "bearing_deg": 90}``; the operations and their arguments are :func:`executive.mission.route.apply`'s)
 or show it (``"operation": "show"``); their reply carries the route and what the autopilot holds.
+
+``upload`` while PAUSED replaces the mission (hot reload, :mod:`executive.mission.reload`): the
+same leg (or ``"leg": N``, 1-based), the samples already taken kept; the reply carries the new
+route. Refused with the reason, nothing changed, when the mission is not compatible.
+
+``arm``, ``disarm`` (``"force": true`` skips the autopilot's checks) and ``mode`` (``"mode": "HOLD"``)
+command the vehicle for a person, and a person always wins: the command is sent whatever the
+mission's state, and a running mission is first paused hands off (``disarm`` or a mode change
+mid-mission: the tree would otherwise undo it); ``arm`` never pauses (a mission may be waiting for
+it). The reply carries the command's ticket; ``command`` (``"ticket"``, ``"name"``) says what the
+autopilot answered.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.mission_protocol import route_not_on_autopilot
+from executive.mission import reload
 from executive.mission import route as routes
 from executive.mission.errors import MissionError
-from executive.mission.lifecycle import MissionState, Refused
+from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
-from executive.state import EkfStatus, GlobalPosition
+from executive.state import CommandStatus, EkfStatus, GlobalPosition
 
-REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree")
+if TYPE_CHECKING:
+    from executive.autopilot.port import AutopilotPort
+
+log = logging.getLogger(__name__)
+
+REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode", "command")
+#: The commands a person may give the vehicle, and the blackboard keys of their acks.
+VEHICLE_REQUESTS = ("arm", "disarm", "mode")
+_COMMAND_KEYS = {name: blackboard.command_key(name) for name in ("COMPONENT_ARM_DISARM", "DO_SET_MODE")}
 
 
 @dataclass(frozen=True)
@@ -37,6 +58,7 @@ class Reply:
     status: dict[str, Any] | None = None
     route: dict[str, Any] | None = None
     tree: dict[str, Any] | None = None
+    command: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {k: v for k, v in asdict(self).items() if v is not None}
@@ -49,8 +71,10 @@ class Operator:
     vehicle this executive drives (an uploaded mission for another kind is refused). A route edit
     at the vehicle's position needs one the EKF vouches for, no older than ``max_position_age_s``
     (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
-    (its samples could not be real), if it cannot. ``tree`` supplies the running tree for ``tree``
-    requests (:meth:`executive.waiting.TreeWatch.view`).
+    (its samples could not be real), if it cannot. ``autopilot`` takes a person's arm, disarm and
+    mode (None: refused). ``tree`` supplies the running tree for ``tree`` requests
+    (:meth:`executive.waiting.TreeWatch.view`). ``autopilot_name`` names the firmware driven (a
+    replacement mission for another is refused).
     """
 
     def __init__(
@@ -61,7 +85,9 @@ class Operator:
         clock: Clock | None = None,
         max_position_age_s: float = 2.0,
         refuse: Callable[[Mission], str | None] | None = None,
+        autopilot: AutopilotPort | None = None,
         tree: Callable[[], dict[str, Any] | None] | None = None,
+        autopilot_name: Callable[[], str | None] | None = None,
     ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
@@ -69,8 +95,11 @@ class Operator:
         self._clock = clock
         self.max_position_age_s = max_position_age_s
         self._refuse = refuse
+        self.autopilot = autopilot
         self._tree = tree
-        self._bb = blackboard.reader("operator", ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload"])
+        self._autopilot_name = autopilot_name
+        keys = ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload", *_COMMAND_KEYS.values()]
+        self._bb = blackboard.reader("operator", keys)
 
     def request(self, op: str, source: str = "operator", **args: Any) -> Reply:
         """Apply one request; ``source`` (ctl, gcs, rc) is recorded in the reasons."""
@@ -91,9 +120,13 @@ class Operator:
             elif op == "delete":
                 state.delete()
             elif op == "upload":
-                return self._upload(str(args.get("filename", "<upload>")), args.get("text"))
+                return self._upload(str(args.get("filename", "<upload>")), args.get("text"), args.get("leg"), source)
             elif op == "route":
                 return self._route(args, source)
+            elif op in VEHICLE_REQUESTS:
+                return self._command_vehicle(op, args, source)
+            elif op == "command":
+                return self._command_outcome(args)
             else:
                 return self._reply(False, f"unknown request {op!r} (known: {', '.join(REQUESTS)})")
         except Refused as refused:
@@ -107,9 +140,11 @@ class Operator:
             return self._reply(False, f"no mission has run yet ({self.mission_state.status})")
         return self._reply(True, self.mission_state.reason, with_status=True, tree=tree)
 
-    def _upload(self, filename: str, text: object) -> Reply:
+    def _upload(self, filename: str, text: object, leg: object, source: str) -> Reply:
         if not isinstance(text, str):
             return self._reply(False, "upload needs the mission file's text")
+        if leg is not None and (isinstance(leg, bool) or not isinstance(leg, int) or leg < 1):
+            return self._reply(False, f"leg: {leg!r} is not a waypoint number (1, 2, ...)")
         try:
             mission: Mission = load_mission_text(text, filename)
         except MissionError as exc:
@@ -123,8 +158,28 @@ class Operator:
             here = self._here()
         except routes.RouteError:
             here = None  # not known well enough: the tree checks the distances when the mission starts
+        if self.mission_state.status is MissionStatus.PAUSED:
+            return self._replace(filename, mission, leg, here, source)
+        if leg is not None:
+            return self._reply(False, f"leg: a leg is chosen only when replacing a PAUSED mission (the mission is {self.mission_state.status})")
+        if self.mission_state.status is MissionStatus.RUNNING:
+            return self._reply(False, "cannot upload while RUNNING: pause it first (ctl pause), then upload to replace the mission")
         self.mission_state.upload(mission, vehicle_at=here)
         return self._reply(True, self.mission_state.reason)
+
+    def _replace(self, filename: str, mission: Mission, leg: int | None, here: tuple[float, float] | None, source: str) -> Reply:
+        """Hot reload: the paused mission replaced by ``mission`` at the same leg (or ``leg``), or refused with nothing changed."""
+        state = self.mission_state
+        assert state.mission is not None
+        old = state.mission
+        autopilot = self._autopilot_name() if self._autopilot_name is not None else None
+        try:
+            plan = reload.plan(old, state.leg_index, state.samples, mission, autopilot=autopilot, leg=leg)
+        except reload.Incompatible as exc:
+            return self._reply(False, f"{filename}: cannot replace {old.name!r}: {exc}")
+        reason = f"{plan.describe(old)} ({source}: {filename}); paused until resumed"
+        state.replace(plan.mission, plan.leg_index, plan.samples, reason, vehicle_at=here)
+        return self._reply(True, reason, route=self._route_view())
 
     def _route(self, args: dict[str, Any], source: str) -> Reply:
         """Edit the route (refused with the reason, changing nothing), or show it."""
@@ -142,6 +197,44 @@ class Operator:
         except (routes.RouteError, Refused) as exc:
             return self._reply(False, f"route {operation}: {exc}")
         return self._reply(True, f"{source}: {done}", route=self._route_view())
+
+    def _command_vehicle(self, op: str, args: dict[str, Any], source: str) -> Reply:
+        """A person's arm, disarm or mode: sent whatever the state; a running mission paused hands off first, unless arming."""
+        if self.autopilot is None:
+            return self._reply(False, f"{op}: no autopilot to command")
+        force = args.get("force") is True
+        if op == "mode":
+            mode = args.get("mode")
+            if not isinstance(mode, str) or not mode:
+                return self._reply(False, "mode needs the mode's name")
+            try:
+                request = self.autopilot.set_mode(mode.upper())
+            except KeyError:
+                return self._reply(False, f"mode {mode}: not a mode of this vehicle's autopilot")
+            what = f"mode {request.how or mode.upper()}"
+        else:
+            request = self.autopilot.arm(force=force) if op == "arm" else self.autopilot.disarm(force=force)
+            what = f"{'force ' if force else ''}{op}"
+        said = f"{source}: {what}"
+        if op != "arm" and self.mission_state.status is MissionStatus.RUNNING:
+            self.mission_state.pause(f"{said} by a person: hands off", hold=False)
+            said += f"; mission paused at leg {self.mission_state.leg_index + 1}, hands off until resumed"
+        log.warning("%s, sent to the autopilot", said)
+        return self._reply(True, f"{said}, sent to the autopilot", command={"ticket": request.ticket, "name": request.command, "what": what})
+
+    def _command_outcome(self, args: dict[str, Any]) -> Reply:
+        """What became of a command given by ``ticket`` and ``name`` (a MAV_CMD name): its state and the autopilot's result."""
+        key = _COMMAND_KEYS.get(str(args.get("name")))
+        ticket = args.get("ticket")
+        if key is None or not isinstance(ticket, int):
+            return self._reply(False, f"command needs a ticket and one of {', '.join(_COMMAND_KEYS)}")
+        status: CommandStatus | None = self._bb.get(key)
+        if status is None or status.ticket < ticket:
+            return self._reply(False, f"no command {ticket} of {args['name']}")
+        if status.ticket > ticket:  # a newer one of its kind (the tree's, or another person's) took its place
+            return self._reply(True, "superseded", command={"ticket": ticket, "state": "SUPERSEDED", "final": True})
+        outcome = {"ticket": ticket, "state": str(status.state), "result": status.result_name, "final": status.state.done}
+        return self._reply(True, f"{status.state}: {status.result_name}", command=outcome)
 
     def _here(self) -> tuple[float, float]:
         """The vehicle's position, if it is known well enough to put a waypoint or the home there."""
@@ -171,7 +264,13 @@ class Operator:
         }
 
     def _reply(
-        self, ok: bool, reason: str, with_status: bool = False, route: dict[str, Any] | None = None, tree: dict[str, Any] | None = None
+        self,
+        ok: bool,
+        reason: str,
+        with_status: bool = False,
+        route: dict[str, Any] | None = None,
+        tree: dict[str, Any] | None = None,
+        command: dict[str, Any] | None = None,
     ) -> Reply:
         status = self._status() if with_status and self._status else None
-        return Reply(ok, reason, str(self.mission_state.status), status, route, tree)
+        return Reply(ok, reason, str(self.mission_state.status), status, route, tree, command)

@@ -6,13 +6,20 @@ are *skipped* (never run in a burst). Every ``window_s`` of clock time the achie
 compared with the rate asked for: below ``1 - rate_margin`` of it the loop is *behind*: a warning
 (at most one every ``warn_every_s``), and each listener is told (the built-in simulator's speed
 governor slows the simulated world down to what the executive can follow).
+
+Two process-wide settings let the loop wake on time while other threads share the interpreter
+(the built-in simulator's, the one importing filterpy): :func:`keeping_time`, which ``executive run``
+runs its loop in.
 """
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import logging
 import re
-from collections.abc import Callable
+import sys
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from executive import blackboard
@@ -24,6 +31,34 @@ log = logging.getLogger(__name__)
 #: a tick and the simulator's step it answers cost about 1 ms of CPU together on a 2-core machine, so above this the
 #: loop cannot follow even when nothing else runs (benchmarks: ``python -m benchmarks --only tick sim``).
 MAX_TICKS_PER_WALL_S = 2000.0
+
+
+#: The shortest GIL switch interval :func:`keeping_time` sets (CPython's default is 5 ms): below it the
+#: hand-overs between two busy threads cost more than the promptness is worth.
+MIN_SWITCH_INTERVAL_S = 0.0001
+
+
+@contextlib.contextmanager
+def keeping_time(late_after_wall_s: float) -> Iterator[float]:
+    """While the loop runs: other threads hand it the interpreter promptly, and the collector leaves start-up's objects alone.
+
+    A loop woken for its tick needs the GIL; while another thread runs Python (the built-in simulator's step,
+    filterpy's import in the background), CPython asks that thread to let go only after ``sys.getswitchinterval()``,
+    5 ms by default: twice the 2.5 ms a tick may be late at ``--speedup 20`` (half of 100 ms of vehicle time, 20 times
+    faster). The interval is cut to a tenth of the loop's lateness margin (``late_after_wall_s``, wall seconds), never
+    lengthened, and restored after. A full pass of the collector over start-up's objects (modules, the mission, the
+    tree) held the interpreter 20-50 ms: they are collected once here and frozen out of later passes. Yields the
+    switch interval set.
+    """
+    before = sys.getswitchinterval()
+    interval = min(before, max(MIN_SWITCH_INTERVAL_S, late_after_wall_s / 10.0))
+    gc.collect()
+    gc.freeze()
+    sys.setswitchinterval(interval)
+    try:
+        yield interval
+    finally:
+        sys.setswitchinterval(before)
 
 
 def caps_logged(text: str) -> list[float]:

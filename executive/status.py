@@ -30,7 +30,7 @@ class StatusSource:
         self._clock = clock
 
     def snapshot(self) -> dict[str, Any]:
-        """Plain values, ready for JSON: None where not known yet."""
+        """Plain values, ready for JSON: None where not known yet; ``t``: the clock's time (the vehicle's), with a clock."""
         bb = self._bb
         position, attitude, battery, target = (bb.get(k) for k in ("/vehicle/position", "/vehicle/attitude", "/vehicle/battery", "/mission/target"))
         waiting = bb.get("/mission/waiting")
@@ -39,6 +39,7 @@ class StatusSource:
         if target is not None and position is not None:
             distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
         return {
+            "t": None if self._clock is None else round(self._clock.now(), 2),
             "state": bb.get("/mission/state"),
             "reason": bb.get("/mission/reason"),
             "leg": min(index + 1, count),

@@ -139,3 +139,59 @@ def test_the_autopilots_rc_failsafe_does_not_pause_the_mission(rig: Rig, vehicle
     rig.tick()
     assert rig.state is MissionStatus.RUNNING
     assert "HOLD set by the autopilot (RC failsafe: the transmitter is gone): left to the failsafes, no pause" in caplog.text
+
+
+# -- a person's commands through the operator path (ctl arm, disarm, mode) ---------------------------
+
+
+def outcome(rig: Rig, reply) -> dict:
+    return rig.runtime.operator.request("command", ticket=reply.command["ticket"], name=reply.command["name"]).command
+
+
+def test_an_operators_mode_is_obeyed_and_the_mission_pauses_rather_than_undoing_it(rig: Rig) -> None:
+    reply = rig.runtime.operator.request("mode", source="ctl", mode="hold")
+    assert reply.ok and reply.state == "PAUSED" and reply.command["what"] == "mode HOLD"
+    assert reply.reason == "ctl: mode HOLD; mission paused at leg 1, hands off until resumed, sent to the autopilot"
+    assert rig.runtime.mission_state.reason == "ctl: mode HOLD by a person: hands off"
+    rig.tick(2)
+    assert rig.modes_sent() == [HOLD] and rig.autopilot.mode == HOLD
+    assert outcome(rig, reply) == {"ticket": reply.command["ticket"], "state": "ACCEPTED", "result": "ACCEPTED", "final": True}
+    rig.tick(50)
+    assert rig.modes_sent() == [] and rig.state is MissionStatus.PAUSED  # never taken back to GUIDED
+    assert rig.runtime.operator.request("resume", source="ctl").ok
+    rig.tick(2)
+    assert rig.modes_sent() == [GUIDED] and rig.state is MissionStatus.RUNNING
+
+
+def test_an_operators_disarm_mid_mission_is_obeyed_and_reported_and_the_mission_pauses(rig: Rig) -> None:
+    reply = rig.runtime.operator.request("disarm", source="ctl", force=True)
+    assert reply.ok and reply.state == "PAUSED"
+    assert reply.command == {"ticket": reply.command["ticket"], "name": "COMPONENT_ARM_DISARM", "what": "force disarm"}
+    rig.tick(2)
+    assert ("arm", 0.0) in rig.autopilot.commands and not rig.autopilot.armed
+    assert outcome(rig, reply)["state"] == "ACCEPTED"
+    rig.tick(50)
+    assert rig.modes_sent() == [] and not rig.autopilot.armed and rig.state is MissionStatus.PAUSED
+    assert rig.texts() == ["mission PAUSED: ctl: force disarm by a person: han"]  # the ground station is told (50 characters)
+
+
+def test_an_operators_arm_does_not_pause_the_mission(rig: Rig) -> None:
+    rig.autopilot.armed = False
+    reply = rig.runtime.operator.request("arm", source="ctl")
+    assert reply.ok and reply.state == "RUNNING"
+    rig.tick(2)
+    assert rig.autopilot.armed and outcome(rig, reply)["state"] == "ACCEPTED"
+
+
+def test_a_refused_command_is_reported_as_the_autopilot_answered(rig: Rig) -> None:
+    rig.autopilot.refuse = {"arm"}
+    reply = rig.runtime.operator.request("disarm", source="ctl")
+    rig.tick(2)
+    assert outcome(rig, reply) == {"ticket": reply.command["ticket"], "state": "REJECTED", "result": "FAILED", "final": True}
+
+
+def test_an_unknown_mode_is_refused_and_nothing_is_sent_or_paused(rig: Rig) -> None:
+    reply = rig.runtime.operator.request("mode", source="ctl", mode="WARP")
+    assert (reply.ok, reply.reason, reply.state) == (False, "mode WARP: not a mode of this vehicle's autopilot", "RUNNING")
+    rig.tick(2)
+    assert rig.modes_sent() == [] and rig.state is MissionStatus.RUNNING

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import gc
 import logging
+import sys
 
 import py_trees
 import pytest
@@ -11,7 +13,7 @@ from py_trees.common import Status
 from executive.assembly import Wiring, build_runtime
 from executive.cli import main
 from executive.clock import ManualClock, ScaledClock
-from executive.pacing import Behind, SpeedGovernor, TickPacer, caps_logged
+from executive.pacing import MIN_SWITCH_INTERVAL_S, Behind, SpeedGovernor, TickPacer, caps_logged, keeping_time
 from executive.services import Step
 from executive.status import StatusSource
 
@@ -116,3 +118,32 @@ def test_a_speedup_the_executive_cannot_follow_is_refused(minimal_mission, capsy
     assert "(--speedup 200 at --rate 10)" in err
     assert main(["run", str(minimal_mission), "--speedup", "200", "--rate", "20", "--socket", "none"]) == 2
     assert "(--speedup 100 at --rate 20)" in capsys.readouterr().err
+
+
+@pytest.fixture
+def switch_interval():
+    before = sys.getswitchinterval()
+    yield before
+    sys.setswitchinterval(before)
+
+
+def test_while_the_loop_runs_other_threads_hand_it_the_interpreter_within_a_tenth_of_its_margin(switch_interval):
+    # 10 Hz at --speedup 20: a tick may start 50 ms of vehicle time late, 2.5 ms of wall time; CPython's default 5 ms is twice that
+    margin_wall_s = TickPacer(ManualClock(), 0.1).late_after_s / 20.0
+    with keeping_time(margin_wall_s) as interval:
+        assert interval == pytest.approx(0.00025)
+        assert sys.getswitchinterval() == pytest.approx(0.00025)
+    assert sys.getswitchinterval() == switch_interval  # restored after the run
+
+
+def test_the_interval_is_never_lengthened_nor_cut_below_its_floor(switch_interval):
+    with keeping_time(1.0) as interval:  # real time on a slow loop: a margin far above the default
+        assert interval == switch_interval
+    with keeping_time(0.0001):
+        assert sys.getswitchinterval() == pytest.approx(MIN_SWITCH_INTERVAL_S)
+
+
+def test_start_ups_objects_are_frozen_out_of_the_collectors_passes(switch_interval):
+    kept = [[i] for i in range(1000)]
+    with keeping_time(0.0025):
+        assert gc.get_freeze_count() >= len(kept)

@@ -15,6 +15,7 @@ import pytest
 
 from executive import blackboard, plugins
 from executive.behaviours.base import ExecutiveBehaviour
+from executive.catalogue import Catalogue, catalogue
 from executive.cli import main
 from executive.mission.lifecycle import MissionStatus
 from executive.testing import Lockstep
@@ -109,7 +110,9 @@ def site(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
     path.mkdir()
     monkeypatch.syspath_prepend(str(path))
     before = set(sys.modules)
+    catalogue.cache_clear()  # made once a process: with the plugins of this test, then without them again
     yield path
+    catalogue.cache_clear()
     for name in set(sys.modules) - before:
         if name.split(".")[0] in ("rangerplugin", "brokenplugin"):
             del sys.modules[name]
@@ -132,9 +135,13 @@ def ranger(site: Path) -> Path:
 
 @pytest.fixture
 def broken(site: Path) -> Path:
-    """A plugin whose tree module fails to import, and whose behaviour entry point names no class."""
+    """A plugin whose tree module fails to import, and whose behaviour and instrument entry points name no class."""
     modules = {"brokenplugin/__init__.py": "", "brokenplugin/trees.py": "import not_installed_anywhere\n", "brokenplugin/things.py": "VALUE = 3\n"}
-    points = {"executive.trees": {"broken": "brokenplugin.trees:build"}, "executive.behaviours": {"thing": "brokenplugin.things:VALUE"}}
+    points = {
+        "executive.trees": {"broken": "brokenplugin.trees:build"},
+        "executive.behaviours": {"thing": "brokenplugin.things:VALUE"},
+        "executive.instruments": {"sonde": "brokenplugin.things:VALUE"},
+    }
     write_distribution(site, "brokenplugin", modules, points)
     importlib.invalidate_caches()
     return site
@@ -151,6 +158,13 @@ def test_an_installed_package_adds_a_tree_and_a_behaviour(ranger: Path) -> None:
     assert [cls.__name__ for cls in plugins.load_behaviours()] == ["EnoughSatellites"]
     assert plugins.resolve_tree("ranger") is sys.modules["rangerplugin.trees"].build
     assert plugins.problems() == []
+    spec = Catalogue.build(plugins.load_behaviours()).get("enough_satellites")  # the node catalogue has it, as it has ours
+    assert (
+        spec is not None
+        and spec.kind == "guard"
+        and spec.params[0] == spec.param("minimum")
+        and (spec.params[0].type, spec.params[0].default) == ("int", 6)
+    )
 
 
 def test_validate_and_show_use_the_plugin_tree_and_its_guard(ranger: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -194,7 +208,7 @@ def test_a_tree_that_cannot_be_loaded_is_named_at_the_tree_line(ranger: Path, tm
         assert err.startswith(f"{path}:4:7: tree: plugin '{tree}': ") and why in err, err
     path = mission_file(tmp_path, "'a:b:c'")
     assert main(["validate", path]) == 2
-    assert "tree: 'a:b:c': String should match pattern" in capsys.readouterr().err
+    assert "tree: 'a:b:c': not a tree name" in capsys.readouterr().err
 
 
 def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -206,9 +220,13 @@ def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Pa
         "ModuleNotFoundError: No module named 'not_installed_anywhere'",
         "executive: validate: plugin 'thing' (executive.behaviours = brokenplugin.things:VALUE, from brokenplugin 1.0): "
         "3 is not a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)",
+        "executive: validate: plugin 'sonde' (executive.instruments = brokenplugin.things:VALUE, from brokenplugin 1.0): "
+        "3 is not an instrument (subclass executive.io.sampler.InstrumentSampler)",
     ]
     assert main(["validate", mission_file(tmp_path, "waypoints")]) == 2  # a mission that does not use it: still said, once
-    assert len(capsys.readouterr().err.splitlines()) == 2
+    assert len(capsys.readouterr().err.splitlines()) == 3
+    assert main(["behaviours"]) == 2  # any command that needs the plugins says it, no traceback
+    assert capsys.readouterr().err.startswith("executive: behaviours: plugin 'thing' (executive.behaviours = brokenplugin.things:VALUE")
 
 
 def test_from_the_command_line_a_plugin_on_the_path_is_validated_and_shown(ranger: Path, tmp_path: Path) -> None:
@@ -218,6 +236,12 @@ def test_from_the_command_line_a_plugin_on_the_path_is_validated_and_shown(range
     assert validate.returncode == 0 and "tree ranger" in validate.stdout, validate.stderr
     show = subprocess.run([sys.executable, "-m", "executive", "show", path], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
     assert show.returncode == 0 and "Enough satellites?" in show.stdout, show.stderr
+    listed = subprocess.run(
+        [sys.executable, "-m", "executive", "behaviours", "enough_satellites"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60
+    )
+    assert listed.returncode == 0 and listed.stdout.startswith("enough_satellites (guard): The GPS sees at least ``minimum`` satellites."), (
+        listed.stderr
+    )
 
 
 class Plain(ExecutiveBehaviour):

@@ -65,6 +65,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:  # a run catches Ctrl-C itself once it commands the vehicle; before that, nothing to undo
         print(f"executive: {args.command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Exception as exc:
+        plugins = sys.modules.get("executive.plugins")  # loaded if it raised: not imported here, ctl starts fast
+        if plugins is None or not isinstance(exc, plugins.PluginError):
+            raise
+        print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
+        return EXIT_BAD_INPUT
     try:
         sys.stdout.flush()  # here, not at exit, where a reader that went away would cost a traceback
     except BrokenPipeError:

@@ -3,7 +3,9 @@
 ``executive ctl [--socket PATH] [--json] REQUEST [ARGS]``; ``route`` takes an operation and its
 arguments (``executive ctl route OPERATION --help``). Waypoint numbers are 1-based, as the status
 line counts them. ``tree`` prints the running tree with each node's status and feedback (``--watch``:
-again every ``--interval`` seconds until Ctrl-C or the executive stops).
+again every ``--interval`` seconds until Ctrl-C or the executive stops). ``arm``, ``disarm`` and
+``mode MODE`` command the vehicle for a person and wait (bounded) for the autopilot's answer;
+mid-mission, ``disarm`` and ``mode`` pause the mission hands off.
 """
 
 from __future__ import annotations
@@ -20,7 +22,9 @@ from executive.io.control import default_socket_path, request
 from executive.snapshots import TickState, render_tree
 from executive.status import status_line
 
-REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree")
+REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode")
+#: How long (wall clock) to wait for the autopilot's answer to arm, disarm or mode.
+ANSWER_WAIT_S = 10.0
 _PLAIN = {
     "status": "the mission's state and the vehicle's",
     "start": "start the loaded mission",
@@ -32,7 +36,7 @@ _PLAIN = {
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("ctl", help="control a running executive: status, tree, start, pause, resume, abort, delete, upload MISSION, route OPERATION")
+    p = sub.add_parser("ctl", help="control a running executive: status, tree, start, pause, resume, abort, delete, upload, route, arm, disarm, mode")
     p.add_argument("--socket", metavar="PATH", default=default_socket_path(), help="the executive's control socket (default %(default)s)")
     p.add_argument("--json", action="store_true", help="print the reply as JSON")
     # the same options after the request too: SUPPRESS keeps what was given before it
@@ -42,15 +46,39 @@ def register(sub: argparse._SubParsersAction) -> None:
     requests = p.add_subparsers(dest="request", required=True, metavar="REQUEST")
     for name, text in _PLAIN.items():
         requests.add_parser(name, parents=[common], help=text, description=text)
-    upload = requests.add_parser("upload", parents=[common], help="load a mission file (while not running)")
+    upload = requests.add_parser("upload", parents=[common], help="load a mission file; while PAUSED, replace the mission", description=_UPLOAD_HELP)
     upload.add_argument("mission", help="the mission file")
+    leg = "while PAUSED: continue from waypoint N of the new mission (default: the one the vehicle heads for)"
+    upload.add_argument("--leg", type=_number, metavar="N", help=leg)
     _register_route(requests.add_parser("route", parents=[common], help="show or edit the route", description=_ROUTE_HELP), common)
     tree_help = "the running tree: each node's status (* running, ✓ succeeded, ✕ failed, - not ticked) and feedback"
     tree = requests.add_parser("tree", parents=[common], help=tree_help, description=tree_help + "; the status line says what it waits for")
     tree.add_argument("--watch", action="store_true", help="print it again every --interval seconds, until Ctrl-C or the executive stops")
     tree.add_argument("--interval", type=_interval, default=1.0, metavar="S", help="seconds between two prints with --watch (default 1)")
+    for name, text in _VEHICLE.items():
+        command = requests.add_parser(name, parents=[common], help=text, description=f"{text}. {_PERSON_WINS}")
+        if name == "mode":
+            command.add_argument("mode", help="the mode's name as the autopilot shows it (HOLD, LOITER, MANUAL, RTL...)")
+        else:
+            command.add_argument("--force", action="store_true", help="skip the autopilot's checks (ArduPilot's 2989/21196 magic)")
     p.set_defaults(func=main)
 
+
+_UPLOAD_HELP = """Load a mission file READY (while IDLE, READY, COMPLETED or ABORTED). While PAUSED, replace the
+mission (route, limits, tree): same vehicle, autopilot and rc; it continues from the waypoint the
+vehicle was heading for (or --leg N) with the samples already taken, and stays PAUSED until
+`ctl resume`. The new route goes to the autopilot at once (uploaded and read back). An incompatible
+mission is refused with the reason, and nothing changes."""
+
+_VEHICLE = {
+    "arm": "arm the vehicle",
+    "disarm": "disarm the vehicle (mid-mission: the mission pauses, hands off)",
+    "mode": "put the vehicle in a mode (mid-mission: the mission pauses, hands off)",
+}
+_PERSON_WINS = (
+    "A person always wins: the command is sent whatever the mission's state; a running mission pauses rather than undoing it "
+    "(`ctl resume` hands the vehicle back to it). Waits for the autopilot's answer."
+)
 
 _ROUTE_HELP = """Show or edit the route of the loaded mission (while READY, RUNNING or PAUSED). After an edit the
 executive uploads the route to the autopilot and reads it back. Waypoint numbers are 1-based."""
@@ -134,6 +162,8 @@ def main(args: argparse.Namespace) -> int:
     if args.request == "upload":
         try:
             extra = {"filename": args.mission, "text": Path(args.mission).read_text(encoding="utf-8")}
+            if args.leg is not None:
+                extra["leg"] = args.leg
         except (OSError, UnicodeDecodeError) as exc:
             print(f"{args.mission}:1:1: (file): {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT
@@ -143,8 +173,12 @@ def main(args: argparse.Namespace) -> int:
         except ValueError as exc:
             print(f"executive: ctl: route {args.operation}: {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT
+    elif args.request in _VEHICLE:
+        extra = {"mode": args.mode} if args.request == "mode" else {"force": args.force}
     try:
         reply = request(args.socket, args.request, **extra)
+        if reply.get("ok") and "command" in reply:
+            return _report_answer(args, reply)
     except OSError as exc:
         print(f"executive: ctl: no executive answers on {args.socket}: {exc}", file=sys.stderr)
         return EXIT_NO_VEHICLE
@@ -162,6 +196,31 @@ def main(args: argparse.Namespace) -> int:
         if "route" in reply:
             print(route_lines(reply["route"]))
     return EXIT_OK if reply.get("ok") else EXIT_FAILED
+
+
+def _report_answer(args: argparse.Namespace, reply: dict[str, Any]) -> int:
+    """A person's command was sent: say so, wait (bounded) for the autopilot's answer and say it; 0 only when it accepted."""
+    command = reply["command"]
+    if not args.json:
+        print(f"{reply['state']}: {reply['reason']}")
+    deadline = time.monotonic() + ANSWER_WAIT_S
+    outcome: dict[str, Any] = {"state": "QUEUED"}
+    while time.monotonic() < deadline:
+        answer = request(args.socket, "command", ticket=command["ticket"], name=command["name"])
+        outcome = answer.get("command") or {"state": "UNKNOWN", "result": answer.get("reason"), "final": True}
+        if outcome.get("final"):
+            break
+        time.sleep(0.1)
+    accepted = outcome["state"] == "ACCEPTED"
+    if args.json:
+        print(json.dumps({**reply, "command": {**command, **outcome}}))
+    elif accepted:
+        print(f"{command['what']}: ACCEPTED by the autopilot")
+    else:
+        said = {"REJECTED": f"refused by the autopilot ({outcome.get('result')})", "TIMED_OUT": "no answer from the autopilot"}
+        why = said.get(outcome["state"], f"{outcome['state'].lower()} ({outcome.get('result', 'no answer yet')})")
+        print(f"executive: ctl: {command['what']}: {why}", file=sys.stderr)
+    return EXIT_OK if accepted else EXIT_FAILED
 
 
 def tree_text(reply: dict[str, Any]) -> str:

@@ -1,7 +1,8 @@
-"""``executive import FILE -o MISSION.yaml`` and ``executive export MISSION --format plan|waypoints``: ground-station mission files.
+"""``executive import FILE -o MISSION.yaml`` and ``executive export MISSION --format plan|waypoints|btcpp``: other tools' files.
 
 Both subcommands live here (``register`` adds the two): QGroundControl ``.plan`` and Mission Planner
-``.waypoints`` files in and out, through :mod:`executive.mission.plan_files`.
+``.waypoints`` files in and out, through :mod:`executive.mission.plan_files`; a mission's tree as
+BehaviorTree.CPP v4 XML (Groot2) in and out, through :mod:`executive.btcpp`.
 """
 
 from __future__ import annotations
@@ -11,13 +12,16 @@ import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import yaml
 
+from executive import btcpp
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report, print_errors
 from executive.mission.errors import MissionError, format_path
 from executive.mission.errors import Path as MissionPath
+from executive.mission.loader import load_mission_text
 from executive.mission.plan_files import WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
 
 KINDS = ("rover", "boat", "sub", "vtol")
@@ -28,30 +32,36 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     imp = subparsers.add_parser(
         "import",
         help="make a mission file from a QGroundControl .plan or Mission Planner .waypoints file",
-        description="Make a mission file from a QGroundControl .plan or a Mission Planner QGC WPL 110 (.waypoints) file. What a mission "
-        "file cannot hold is reported on stderr, located, and listed at the top of the mission; errors go to stderr as "
-        "FILE:LINE:COL: FIELD: message (exit 2).",
+        description="Make a mission file from a QGroundControl .plan or a Mission Planner QGC WPL 110 (.waypoints) file, or a mission's "
+        "tree from a BehaviorTree.CPP v4 XML file (Groot2). What a mission file cannot hold is reported on stderr, located, and listed "
+        "at the top of the mission; errors go to stderr as FILE:LINE:COL: FIELD: message (exit 2).",
     )
-    imp.add_argument("file", metavar="FILE", help="FILE.plan or FILE.waypoints")
+    imp.add_argument("file", metavar="FILE", help="FILE.plan, FILE.waypoints, or FILE.xml (a BehaviorTree.CPP v4 / Groot2 tree)")
     imp.add_argument("-o", "--output", metavar="MISSION.yaml", help="write the mission here (default: stdout)")
     imp.add_argument("--vehicle", choices=KINDS, help="the vehicle kind (needed for .waypoints; a .plan's vehicleType otherwise)")
     imp.add_argument("--name", help="the mission's name (default: the file's name)")
     imp.add_argument("--auto-arm", action="store_true", help="arm the vehicle in pre-flight (auto_arm: true)")
+    imp.add_argument(
+        "--mission", metavar="MISSION.yaml", help="FILE.xml: the mission whose tree it replaces (default: write the tree: section alone)"
+    )
     imp.set_defaults(func=run_import)
     exp = subparsers.add_parser(
         "export",
-        help="write a mission as a QGroundControl .plan or Mission Planner .waypoints file",
-        description="Write a mission's route, home and geofence as a QGroundControl .plan or a Mission Planner QGC WPL 110 file. "
-        "What the format cannot carry is reported on stderr.",
+        help="write a mission as a QGroundControl .plan or Mission Planner .waypoints file, or its tree as BehaviorTree.CPP XML",
+        description="Write a mission's route, home and geofence as a QGroundControl .plan or a Mission Planner QGC WPL 110 file "
+        "(what the format cannot carry is reported on stderr), or its tree (written in the file) as BehaviorTree.CPP v4 XML with "
+        "the node catalogue as its TreeNodesModel, for Groot2.",
     )
     exp.add_argument("mission", metavar="MISSION", help="mission file (YAML)")
-    exp.add_argument("--format", choices=("plan", "waypoints"), help="output format (default: from the -o file's suffix)")
+    exp.add_argument("--format", choices=("plan", "waypoints", "btcpp"), help="output format (default: from the -o file's suffix)")
     exp.add_argument("-o", "--output", metavar="FILE", help="write here (default: stdout)")
     exp.set_defaults(func=run_export)
 
 
 def run_import(args: argparse.Namespace) -> int:
     """Import, report what was not imported, write the mission; 2 on bad input."""
+    if args.file.lower().endswith(".xml"):
+        return _import_btcpp(args)
     try:
         imported = import_file(args.file, vehicle=args.vehicle, name=args.name, auto_arm=args.auto_arm)
     except MissionError as exc:
@@ -70,11 +80,16 @@ def run_export(args: argparse.Namespace) -> int:
     """Export a mission; 2 if it is invalid or the format cannot be told."""
     fmt = args.format or _format_from_suffix(args.output)
     if fmt is None:
-        print("executive: export: --format plan|waypoints is needed (or an -o file ending in .plan or .waypoints)", file=sys.stderr)
+        print("executive: export: --format plan|waypoints|btcpp is needed (or an -o file ending in .plan, .waypoints or .xml)", file=sys.stderr)
         return EXIT_BAD_INPUT
     mission = load_or_report(args.mission)
     if mission is None:
         return EXIT_BAD_INPUT
+    if fmt == "btcpp":
+        text, warnings = btcpp.export_tree(args.mission, mission, _catalogue())
+        for where, why in warnings:
+            print(f"{args.mission}: tree {mission.tree}: {where}: {why} (warning)", file=sys.stderr)
+        return EXIT_OK if _write(args.output, text, "export") else EXIT_BAD_INPUT
     exported = export_plan(mission) if fmt == "plan" else export_waypoints(mission)
     _report(args.mission, exported)
     return EXIT_OK if _write(args.output, exported.text, "export") else EXIT_BAD_INPUT
@@ -84,7 +99,35 @@ def _format_from_suffix(output: str | None) -> str | None:
     if output is None:
         return None
     suffix = os.path.splitext(output)[1].lower()
-    return "plan" if suffix == ".plan" else "waypoints" if suffix in WPL_SUFFIXES else None
+    return {".plan": "plan", ".xml": "btcpp"}.get(suffix) or ("waypoints" if suffix in WPL_SUFFIXES else None)
+
+
+def _catalogue() -> Any:
+    """The node catalogue (imported only for a tree: it imports every behaviour)."""
+    from executive.catalogue import catalogue
+
+    return catalogue()
+
+
+def _import_btcpp(args: argparse.Namespace) -> int:
+    """A BehaviorTree.CPP file's tree as a mission's ``tree:``, alone or in place of ``--mission``'s; 2 on bad input."""
+    try:
+        tree = btcpp.import_tree(args.file, _catalogue())
+    except MissionError as exc:
+        print_errors(exc)
+        return EXIT_BAD_INPUT
+    if args.mission is None:
+        return EXIT_OK if _write(args.output, yaml.safe_dump({"tree": tree}, sort_keys=False, allow_unicode=True), "import") else EXIT_BAD_INPUT
+    if load_or_report(args.mission) is None:
+        return EXIT_BAD_INPUT
+    data = yaml.safe_load(Path(args.mission).read_text(encoding="utf-8")) | {"tree": tree}
+    text = yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+    try:
+        load_mission_text(text, args.output or "(stdout)")
+    except MissionError as exc:
+        print_errors(exc)
+        return EXIT_BAD_INPUT
+    return EXIT_OK if _write(args.output, text, "import") else EXIT_BAD_INPUT
 
 
 def _report(mission_file: str, exported: Exported) -> None:

@@ -12,7 +12,17 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from executive.assembly import Plug, build_runtime, can_base, control_socket, ground_stations, journal_recorder, obstacle_camera, snapshot_recorder
+from executive.assembly import (
+    Plug,
+    build_runtime,
+    can_base,
+    control_socket,
+    ground_stations,
+    journal_recorder,
+    live_view,
+    obstacle_camera,
+    snapshot_recorder,
+)
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
 from executive.cli.common import faults_or_report, load_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
@@ -23,7 +33,7 @@ from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
-from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor
+from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor, keeping_time
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -34,6 +44,7 @@ if TYPE_CHECKING:
     import can
 
     from executive.sim.faults import FaultInjector
+    from executive.web.server import WebServer
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -78,6 +89,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
     p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
     p.add_argument("--obstacles", metavar="URL", help="a camera's obstacle distances (JSON over UDP, udpin:HOST:PORT), sent on as OBSTACLE_DISTANCE")
+    p.add_argument(
+        "--web",
+        metavar="[HOST:]PORT",
+        help="the live view in a browser on PORT (127.0.0.1 unless HOST is given; beyond it the buttons need the token printed at start-up)",
+    )
+    p.add_argument("--web-token-file", metavar="FILE", help="the live view's token (its first line, >= 16 characters), instead of a new one")
     p.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (default: warnings and the operator's events; -v all info, -vv debug)"
     )
@@ -137,12 +154,12 @@ def _open_link(option: str, url: str, **options: Any) -> PymavlinkLink:
 
 
 @contextlib.contextmanager
-def _gcs_link(url: str | None) -> Iterator[PymavlinkLink | None]:
-    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer)."""
+def _gcs_link(url: str | None, system_id: int) -> Iterator[PymavlinkLink | None]:
+    """The ground stations' own endpoint, if asked for (we speak there as the onboard computer of system ``system_id``)."""
     if url is None:
         yield None
         return
-    link = _open_link("--gcs", url)
+    link = _open_link("--gcs", url, system_id=system_id)
     try:
         yield link
     finally:
@@ -227,6 +244,25 @@ def _obstacle_socket(spec: str | None, stack: contextlib.ExitStack) -> socket.so
     return sock
 
 
+def _web_server(args: argparse.Namespace, stack: contextlib.ExitStack) -> WebServer | None:
+    """The live view's server of --web, bound (BadInput: a bad address or token file; NoVehicle: the port cannot be had), closed with ``stack``."""
+    if args.web is None:
+        if args.web_token_file:
+            raise BadInput("--web-token-file needs --web [HOST:]PORT")
+        return None
+    from executive.web.server import WebAddressError, open_server
+
+    try:
+        server, told = open_server(args.web, args.web_token_file)
+    except WebAddressError as exc:
+        raise BadInput(f"--web: {exc}") from exc
+    except OSError as exc:
+        raise NoVehicle(f"--web: cannot listen on {args.web}: {exc}") from exc
+    stack.callback(server.close)
+    print(f"executive: {told}", file=sys.stderr, flush=True)
+    return server
+
+
 def _signing_hint(link: PymavlinkLink) -> str:
     """Why no heartbeat was heard when signing is the reason: every packet failed the signature check."""
     unsigned, other_key, accepted = link.signature_failures
@@ -242,7 +278,9 @@ def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
     edited = f", on its route as last edited ({len(resume.route)} waypoints)" if resume.route is not None else ""
-    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} with {len(resume.samples)} sample(s) already taken{edited}"
+    replaced = f", on mission {resume.mission.name!r} that replaced it" if resume.mission is not None else ""
+    taken = f"with {len(resume.samples)} sample(s) already taken"
+    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} {taken}{replaced}{edited}"
 
 
 def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
@@ -263,6 +301,7 @@ def _plugs(
     obstacle_socket: socket.socket | None,
     gcs_link: PymavlinkLink | None,
     socket_path: str | None,
+    web: WebServer | None = None,
 ) -> list[Plug]:
     """The optional parts of this run, as the command line asks for them."""
     plugs = []
@@ -278,6 +317,8 @@ def _plugs(
         plugs.append(can_base(can_bus))
     if obstacle_socket is not None:
         plugs.append(obstacle_camera(obstacle_socket))
+    if web is not None:
+        plugs.append(live_view(web))
     return plugs
 
 
@@ -350,14 +391,17 @@ def main(args: argparse.Namespace) -> int:
             raise BadInput(f"--obstacles: {exc}") from exc
     with contextlib.ExitStack() as stack:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
+        web = _web_server(args, stack)
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
-        gcs_link = stack.enter_context(_gcs_link(args.gcs))
+        gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
         journal, snapshots = _recorders(args, clock, stack)
         can_bus = _can_bus(args, stack)
         resume = None
         if journal is not None and args.resume:
             resume = journal.resume_point(mission)
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
+            if resume is not None and resume.mission is not None:  # replaced while paused (ctl upload): the run goes on with that one
+                mission = resume.mission
         progress = Progress(sys.stdout, clock)
         attach_live_line(progress)  # a log record clears the live line first
         stack.callback(attach_live_line, None)
@@ -365,7 +409,7 @@ def main(args: argparse.Namespace) -> int:
             mission,
             link,
             clock,
-            plugs=_plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path),
+            plugs=_plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path, web),
             rate_hz=args.rate,
             system_id=args.sysid,
             target_system=args.target_system,
@@ -393,11 +437,13 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_NO_VEHICLE
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
-            outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
+            with keeping_time(runtime.pacer.late_after_s / clock.speedup):
+                outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)
-    print(f"executive: mission {mission.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
+    ran = runtime.mission_state.mission or mission  # the one that replaced it, if an operator did (ctl upload while paused)
+    print(f"executive: mission {ran.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
     if runtime.mission_state.samples:
         count = len(runtime.mission_state.samples)
         print(f"executive: {count} sample{'' if count == 1 else 's'} recorded", file=sys.stderr)

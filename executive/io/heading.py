@@ -31,6 +31,7 @@ tick, right after the MAVLink reader drains.
 
 from __future__ import annotations
 
+import gc
 import importlib
 import logging
 import math
@@ -115,11 +116,27 @@ _H = (np.array([[1.0, 0.0]]), np.array([[0.0, 1.0]]))
 _filterpy_ready = threading.Event()
 
 
+def import_long_lived(name: str) -> None:
+    """Import a module whose objects live as long as the process, without the collector's passes, then freeze them out of later ones.
+
+    filterpy's import makes ~40k objects: while it ran in the background the collector's full passes over them held
+    the interpreter 40-50 ms each, under a running loop's ticks.
+    """
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        importlib.import_module(name)
+    finally:
+        gc.freeze()
+        if collecting:
+            gc.enable()
+
+
 def load_filterpy() -> None:
     """Import filterpy (and scipy) once, in a thread of its own; :class:`HeadingFilter` judges nothing until it is in."""
 
     def load() -> None:
-        importlib.import_module("filterpy.kalman")
+        import_long_lived("filterpy.kalman")
         _filterpy_ready.set()
 
     if not _filterpy_ready.is_set() and not any(t.name == "load filterpy" for t in threading.enumerate()):

@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import json
-import random
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
 import pytest
 
+from executive import blackboard
 from executive.assembly import journal_recorder, snapshot_recorder
 from executive.cli import main
 from executive.cli.run import _resume_text
@@ -21,13 +20,14 @@ from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.snapshots import SnapshotRecorder
+from executive.state import SamplerState
 
 ROOT = Path(__file__).parents[2]
 MISSION = ROOT / "missions" / "asv_sampling.yaml"
 
 
-def run(*args: str) -> subprocess.Popen:
-    command = [sys.executable, "-m", "executive", "run", str(MISSION), "--speedup", "40", "--socket", "none", *args]
+def run(mission: Path, *args: str) -> subprocess.Popen:
+    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "40", "--socket", "none", *args]
     return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -36,29 +36,28 @@ def report(db: Path, run_id: int, capsys) -> dict:
     return json.loads(capsys.readouterr().out)
 
 
-@pytest.mark.parametrize("seed", [1, 2])
-def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, capsys, seed):
-    db, snapshots = tmp_path / "journal.db", tmp_path / "run.snap"
-    first = run("--journal", str(db), "--snapshots", str(snapshots))
+def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, capsys):
+    """From the command line: a real SIGKILL after the first sample, then ``run --resume`` (each crash moment: the lock-step test below)."""
+    db, snapshots, mission = tmp_path / "journal.db", tmp_path / "run.snap", tmp_path / "asv.yaml"
+    # the ASV mission with an EKF ready after 2 s (not 40) and no EKF dropout: the crash is what this test is about
+    mission.write_text(MISSION.read_text().replace("simulator:\n  events: events/asv_ekf_dropout.yaml\n", "simulator: {ekf_ready_after_s: 2}\n"))
+    first = run(mission, "--journal", str(db), "--snapshots", str(snapshots))
     assert first.stdout is not None
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:  # wait for the first sample, then kill at a random moment within the next 20 s of vehicle time
-        status = json.loads(first.stdout.readline())
-        if status["samples"] == 1:
+    for line in first.stdout:  # killed as soon as the first sample is on the disk: the run must not reach its end first
+        if json.loads(line)["samples"] == 1:
             break
     else:
         pytest.fail("no sample was taken")
-    time.sleep(random.Random(seed).uniform(0.0, 0.5))
     first.send_signal(signal.SIGKILL)
-    first.communicate(timeout=10)
+    first.communicate(timeout=30)
     assert first.returncode == -signal.SIGKILL
 
     crashed = report(db, 1, capsys)
     assert crashed["outcome"] is None  # it never ended
     assert len(crashed["samples"]) in (1, 2)
 
-    second = run("--journal", str(db), "--resume")
-    _, err = second.communicate(timeout=90)
+    second = run(mission, "--journal", str(db), "--resume")
+    _, err = second.communicate(timeout=120)
     assert second.returncode == 0, err
     assert "resuming run 1 at waypoint" in err
     assert "2 samples recorded" in err
@@ -67,6 +66,52 @@ def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, c
     assert (resumed["resumed_from"], resumed["outcome"]) == (1, "COMPLETED")
     waypoints = [s["waypoint"] for s in crashed["samples"]] + [s["waypoint"] for s in resumed["samples"]]
     assert sorted(waypoints) == [2, 4]  # each sample point exactly once, across the crash
+    assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors
+
+
+@pytest.mark.parametrize(
+    ("samples_before", "after_s"),
+    [(0, 3.0), (1, 0.0), (1, 20.0)],
+    ids=["during the first sample", "at the first sample", "20 s after it"],
+)
+def test_a_crash_at_any_moment_then_resume_records_every_sample_once(tmp_path, capsys, lockstep, samples_before, after_s):
+    """The run stops dead (never ticked again, its journal never closed) ``after_s`` of vehicle time after its
+    ``samples_before``-th sample (0: after the sonde started its first reads); a second run resumes from the journal."""
+    db, mission = tmp_path / "journal.db", load_mission(MISSION)
+    journals: list[Journal] = []
+
+    def journal_plug(clock: Clock) -> dict[str, Any]:
+        journals.append(Journal(db, clock))
+        return {"plugs": [journal_recorder(journals[-1])]}
+
+    first = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug)
+    state = first.runtime.mission_state
+    moment: list[float] = []
+
+    def crash_now() -> bool:
+        sampler = blackboard.value("/sampler/status")
+        sampling = sampler is not None and sampler.state is SamplerState.SAMPLING
+        reached = len(state.samples) >= samples_before and (samples_before > 0 or sampling)
+        if reached and not moment:
+            moment.append(first.clock.now())
+        return bool(moment) and first.clock.now() >= moment[0] + after_s
+
+    assert first.run(limit_s=600, until=crash_now) is None
+    crashed = report(db, 1, capsys)
+    assert crashed["outcome"] is None and len(crashed["samples"]) == samples_before
+
+    second = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug)
+    resume = journals[1].resume_point(mission)
+    assert resume is not None and resume.run == 1
+    assert _resume_text(resume).startswith(f"resuming run 1 at waypoint {resume.leg_index + 1} with {samples_before} sample(s) already taken")
+    outcome = second.run(limit_s=600, resume=resume)
+    assert outcome is not None and outcome.status is MissionStatus.COMPLETED
+    journals[1].close()
+
+    resumed = report(db, 2, capsys)
+    assert (resumed["resumed_from"], resumed["outcome"]) == (1, "COMPLETED")
+    legs = [s["leg_index"] for s in crashed["samples"]] + [s["leg_index"] for s in resumed["samples"]]
+    assert sorted(legs) == [1, 3]  # each sample point exactly once, across the crash
     assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors
 
 

@@ -109,26 +109,9 @@ def test_an_obstacles_port_in_use_exits_3_before_the_vehicle_is_started(capsys):
     assert "simulated" not in err
 
 
-def test_runs_against_a_simulator_in_another_process(tmp_path):
-    """The executive and the vehicle in two processes, joined by UDP, both at real time."""
-    mission = tmp_path / "short.yaml"
-    mission.write_text(
-        "version: 1\nname: short\nvehicle: rover\nauto_arm: true\n"
-        "waypoints:\n  - {lat: -35.3632150, lon: 149.1652300}\n"  # 5 m north of the simulator's home
-    )
-    sim, url = simulator("--vehicle", "rover", "--home", "-35.363261,149.165230", "--ekf-ready-after", "0.5")
-    run = None
-    try:
-        run = executive("run", str(mission), "--mavlink", url, "--connect-timeout", "10", "--socket", "none")
-        _, err = run.communicate(timeout=60)
-        assert run.returncode == 0, err
-        assert "COMPLETED" in err
-    finally:
-        stop(run, sim)
-
-
 def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp_path):
-    """A simulator in another process at 8x (as a SITL at --speedup 8): told so, the executive ticks ~10 times a vehicle second, not a wall one."""
+    """The executive and the vehicle in two processes joined by UDP: a simulator at 8x (as a SITL at --speedup 8); told so,
+    the executive ticks ~10 times a vehicle second, not a wall one (on the wall clock against a vehicle: tests/cli/test_target_system.py)."""
     mission = tmp_path / "north.yaml"
     mission.write_text(
         "version: 1\nname: north\nvehicle: rover\nauto_arm: true\n"
@@ -142,6 +125,7 @@ def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp
     finally:
         stop(run, sim)
     assert run.returncode == 0, err
+    assert "COMPLETED" in err
     assert "the vehicle's time runs 8x real time" in err
     ticks = int(err.rsplit("(", 1)[1].split(" ticks")[0])
     # ~20 s of vehicle time: 200 ticks at 10 Hz of vehicle time (fewer on a busy machine: late ticks are not caught up);

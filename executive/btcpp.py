@@ -1,0 +1,404 @@
+"""BehaviorTree.CPP v4 XML (the format Groot2 opens and edits) to and from a mission's YAML tree.
+
+Written as BehaviorTree.CPP's own writer does (``src/xml_parsing.cpp``: ``writeTreeNodesModelXML``,
+``addNodeModelToXML``, ``addTreeToXML``; its XSD, ``writeTreeXSD``):
+
+- ``<root BTCPP_format="4" main_tree_to_execute="ID">`` holding ``<BehaviorTree ID="...">`` with
+  exactly one child, then one ``<TreeNodesModel>``;
+- a node in the compact form: the element is its registration ID (``<ekf_ok name="EKF ok?"/>``),
+  its ports are attributes, ``name`` is the instance name;
+- ``<TreeNodesModel>`` has one element per node type, tagged by its kind (``Action``,
+  ``Condition``, ``Control``, ``Decorator``), with ``ID``, and ``<input_port name= type= default=>``
+  elements whose text is the description, then an optional ``<description>``.
+
+Our catalogue maps onto it: guards are Conditions, actions and built-in subtrees (their content is
+Python, not XML) Actions, decorators Decorators, composites Controls; a parameter is an input port.
+A BehaviorTree.CPP blackboard reference (``{key}``) has no meaning here and is refused on import.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+from xml.parsers import expat
+
+import yaml
+
+from executive.mission.errors import FieldError, MissionError
+
+if TYPE_CHECKING:
+    from executive.mission.model import Mission
+
+#: The catalogue's parameter types -> the port types BehaviorTree.CPP writes (``BT::demangle`` of the C++ type).
+PORT_TYPES = {
+    "bool": "bool", "int": "int", "float": "double", "str": "std::string", "one of": "std::string", "node name": "std::string",
+    "numbers": "std::vector<double>", "range": "std::vector<double>", "enu": "std::vector<double>",
+}  # fmt: skip
+#: Compound values as BehaviorTree.CPP writes vectors: the items joined by ``;`` (``convertFromString``, basic_types.cpp).
+FIELDS = {"range": ("min", "max"), "enu": ("east", "north", "up")}
+MAIN_TREE = "MainTree"
+MAX_BYTES = 1 << 20
+
+
+@dataclass(frozen=True)
+class Port:
+    """A node type's parameter that is a value (not a child) as a port."""
+
+    name: str
+    type: str  # the catalogue's type (bool, int, float, str, one of, node name, numbers, range, enu)
+    default: Any = None
+    required: bool = False
+    doc: str = ""
+    unit: str = ""
+    choices: tuple[str, ...] = ()
+    nullable: bool = False
+    from_mission: str | None = None
+
+
+@dataclass(frozen=True)
+class Slot:
+    """A node type's parameter that holds children: one node (``many`` False) or a list."""
+
+    name: str
+    many: bool
+    required: bool = True
+
+
+@dataclass(frozen=True)
+class NodeType:
+    """A node type of the catalogue as BehaviorTree.CPP models it."""
+
+    id: str
+    kind: str  # guard | action | decorator | composite | subtree
+    doc: str = ""
+    ports: tuple[Port, ...] = ()
+    slots: tuple[Slot, ...] = ()
+
+    @property
+    def model_tag(self) -> str:
+        """Its NodeType in BehaviorTree.CPP (``toStr(NodeType)``): by the children it takes, as BehaviorTree.CPP checks them.
+
+        No children: Condition (a guard) or Action; one child: Decorator; more (or a list): Control.
+        """
+        if not self.slots:
+            return "Condition" if self.kind == "guard" else "Action"
+        return "Decorator" if len(self.slots) == 1 and not self.slots[0].many else "Control"
+
+
+def node_types(catalogue: Any) -> dict[str, NodeType]:
+    """Every node of the catalogue (:class:`executive.catalogue.Catalogue`) as a BehaviorTree.CPP node type, by ID."""
+    types: dict[str, NodeType] = {}
+    for spec in catalogue.nodes():
+        slots = tuple(Slot(p.name, p.type in ("nodes", "guards"), p.required) for p in spec.params if p.is_child)
+        if sum(slot.many for slot in slots) > 1:
+            continue  # two lists of children cannot be told apart in one list of XML children
+        ports = tuple(
+            Port(p.name, p.type, p.default, p.required, p.doc, p.unit, tuple(p.choices), p.nullable, p.from_mission)
+            for p in spec.params
+            if not p.is_child and p.type in PORT_TYPES and p.name != "name"
+        )
+        types[spec.name] = NodeType(spec.name, spec.kind, spec.doc, ports, slots)
+    return types
+
+
+@dataclass
+class Node:
+    """One node of a tree, neutral between YAML and XML: its type, instance name, value parameters and children by slot."""
+
+    type: str
+    name: str | None = None
+    params: dict[str, Any] = field(default_factory=dict)
+    slots: dict[str, list[Node]] = field(default_factory=dict)
+
+
+# -- writing ------------------------------------------------------------------------------------
+
+
+def port_text(value: Any, kind: str) -> str:
+    """A parameter's value as a port's string (what BehaviorTree.CPP's ``convertFromString`` reads back)."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if kind in FIELDS and isinstance(value, Mapping):
+        return ";".join(port_text(value[f], "float") for f in FIELDS[kind] if f in value)
+    if isinstance(value, list | tuple):
+        return ";".join(port_text(v, "float") for v in value)
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def write_xml(root: Node, types: Mapping[str, NodeType], tree_id: str = MAIN_TREE) -> str:
+    """The tree as a BehaviorTree.CPP v4 document, with a TreeNodesModel of every node type in ``types``."""
+    doc = ET.Element("root", {"BTCPP_format": "4", "main_tree_to_execute": tree_id})
+    tree = ET.SubElement(doc, "BehaviorTree", {"ID": tree_id})
+    _write_node(tree, root, types)
+    model = ET.SubElement(doc, "TreeNodesModel")
+    for spec in sorted(types.values(), key=lambda t: t.id):
+        element = ET.SubElement(model, spec.model_tag, {"ID": spec.id})
+        for port in spec.ports:
+            attributes = {"name": port.name, "type": PORT_TYPES[port.type]}
+            if not port.required and port.from_mission is None and (port.default is not None or port.nullable):
+                attributes["default"] = port_text(port.default, port.type)
+            ET.SubElement(element, "input_port", attributes).text = _port_doc(port)
+        ET.SubElement(element, "description").text = spec.doc + _slots_doc(spec)
+    ET.indent(doc, space="  ")
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(doc, encoding="unicode") + "\n"
+
+
+def _port_doc(port: Port) -> str:
+    unit = f" [{port.unit}]" if port.unit else ""
+    choices = f" (one of: {', '.join(port.choices)})" if port.choices else ""
+    fields = f" ({';'.join(FIELDS[port.type])})" if port.type in FIELDS else ""
+    source = f" (default: the mission's {port.from_mission})" if port.from_mission else ""
+    return f"{port.doc}{unit}{choices}{fields}{source}"
+
+
+def _slots_doc(spec: NodeType) -> str:
+    if len(spec.slots) < 2:
+        return ""
+    return " Children, in order: " + ", ".join(f"{s.name} ({'any number' if s.many else 'one'})" for s in spec.slots) + "."
+
+
+def _write_node(parent: ET.Element, node: Node, types: Mapping[str, NodeType]) -> None:
+    spec = types.get(node.type)
+    kinds = {p.name: p.type for p in spec.ports} if spec is not None else {}
+    attributes = {"name": node.name} if node.name is not None else {}
+    attributes |= {k: port_text(v, kinds.get(k, "")) for k, v in node.params.items()}
+    element = ET.SubElement(parent, node.type, attributes)
+    order = [s.name for s in spec.slots] if spec is not None else list(node.slots)
+    for slot in order:
+        for child in node.slots.get(slot, ()):
+            _write_node(element, child, types)
+
+
+# -- reading ------------------------------------------------------------------------------------
+
+
+@dataclass
+class _Element:
+    """An XML element with where it starts (1-based line and column)."""
+
+    tag: str
+    attributes: dict[str, str]
+    line: int
+    column: int
+    children: list[_Element] = field(default_factory=list)
+
+
+def _parse(text: str, filename: str) -> _Element:
+    """The document's root element, each element with its line; MissionError for what is not well-formed XML.
+
+    expat reports positions (ElementTree does not); a DTD (and with it any entity) is refused.
+    """
+    stack: list[_Element] = []
+    found: list[_Element] = []
+    parser = expat.ParserCreate()
+
+    def start(tag: str, attributes: dict[str, str]) -> None:
+        element = _Element(tag, attributes, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
+        (stack[-1].children if stack else found).append(element)
+        stack.append(element)
+
+    def end(tag: str) -> None:
+        stack.pop()
+
+    def doctype(*_: object) -> None:
+        raise MissionError([FieldError(filename, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1, "(file)", "a DTD is not allowed")])
+
+    parser.StartElementHandler, parser.EndElementHandler, parser.StartDoctypeDeclHandler = start, end, doctype
+    try:
+        parser.Parse(text, True)
+    except expat.ExpatError as exc:
+        where = FieldError(filename, exc.lineno, exc.offset + 1, "(file)", f"not well-formed XML: {expat.ErrorString(exc.code)}")
+        raise MissionError([where]) from None
+    return found[0]
+
+
+def read_xml(text: str, filename: str, types: Mapping[str, NodeType]) -> Node:
+    """The main tree of a BehaviorTree.CPP v4 document as a :class:`Node`; MissionError naming every problem with its line.
+
+    Nodes are read in the compact form (``<ekf_ok/>``) and in the explicit one (``<Condition ID="ekf_ok"/>``);
+    the TreeNodesModel is not needed (our catalogue is the model) and is skipped.
+    """
+    if len(text.encode("utf-8", "surrogatepass")) > MAX_BYTES:
+        raise MissionError([FieldError(filename, 1, 1, "(file)", f"larger than {MAX_BYTES // (1024 * 1024)} MiB")])
+    root = _parse(text, filename)
+    errors: list[FieldError] = []
+
+    def error(element: _Element, where: str, why: str) -> None:
+        errors.append(FieldError(filename, element.line, element.column, where, why))
+
+    if root.tag != "root":
+        error(root, root.tag, 'the document\'s element must be <root BTCPP_format="4">')
+        raise MissionError(errors)
+    if root.attributes.get("BTCPP_format") != "4":
+        error(root, "root.BTCPP_format", f"{root.attributes.get('BTCPP_format')!r}: only BehaviorTree.CPP format 4 is read")
+    trees = {e.attributes.get("ID", f"BehaviorTree_{i}"): e for i, e in enumerate(c for c in root.children if c.tag == "BehaviorTree")}
+    main = root.attributes.get("main_tree_to_execute", next(iter(trees), MAIN_TREE))
+    if main not in trees:
+        error(root, "root.main_tree_to_execute", f"no <BehaviorTree ID={main!r}> in the file" if trees else "no <BehaviorTree> in the file")
+        raise MissionError(errors)
+    tree = trees[main]
+    if len(tree.children) != 1:
+        error(tree, f"BehaviorTree[{main}]", f"must have exactly one child node, has {len(tree.children)}")
+        raise MissionError(errors)
+    node = _read_node(tree.children[0], types, error, main)
+    if errors:
+        raise MissionError(errors)
+    return node
+
+
+def _read_node(element: _Element, types: Mapping[str, NodeType], error: Callable[[_Element, str, str], None], path: str) -> Node:
+    explicit = element.tag in ("Action", "Condition", "Control", "Decorator")
+    type_id = element.attributes.get("ID", "") if explicit else element.tag
+    here = f"{path}/{type_id or element.tag}"
+    spec = types.get(type_id)
+    if spec is None:
+        error(element, here, f"unknown node type {type_id!r} (not in the catalogue: executive behaviours lists it)")
+        return Node(type_id)
+    node = Node(type_id, name=element.attributes.get("name"))
+    ports = {p.name: p for p in spec.ports}
+    for key, raw in element.attributes.items():
+        if key in ("name", "ID") or key.startswith("_"):  # _uid, _fullpath: Groot2's bookkeeping
+            continue
+        port = ports.get(key)
+        if port is None:
+            error(element, f"{here}.{key}", f"unknown port (ports of {type_id}: {', '.join(ports) or 'none'})")
+            continue
+        try:
+            node.params[key] = port_value(raw, port)
+        except ValueError as exc:
+            error(element, f"{here}.{key}", f"{raw!r}: {exc}")
+    children = [_read_node(child, types, error, here) for child in element.children]
+    singles = sum(not s.many for s in spec.slots)
+    many = next((s for s in spec.slots if s.many), None)
+    least = singles + (1 if many is not None and many.required else 0)
+    if len(children) < least or (many is None and len(children) > singles):
+        wanted = f"exactly {singles}" if many is None else f"at least {least}"
+        names = ", ".join(s.name for s in spec.slots) or "none"
+        error(element, here, f"{type_id} takes {wanted} child node{'' if wanted.endswith(' 1') else 's'} ({names}), has {len(children)}")
+        return node
+    rest = iter(children)
+    for slot in spec.slots:
+        taken = [next(rest) for _ in range(len(children) - singles if slot.many else 1)]
+        if taken or slot.required:
+            node.slots[slot.name] = taken
+    return node
+
+
+def port_value(raw: str, port: Port) -> Any:
+    """A port's string as the parameter's value (ValueError saying why it is not one)."""
+    text = raw.strip()
+    if text.startswith("{") and text.endswith("}"):
+        raise ValueError("a blackboard reference ({key}) is not supported here: give the value")
+    if port.nullable and text == "null":
+        return None
+    if port.type in FIELDS or port.type == "numbers":
+        numbers = [_number(part, "float") for part in text.split(";")] if text else []
+        if port.type == "numbers":
+            return numbers
+        if len(numbers) != len(FIELDS[port.type]):
+            raise ValueError(f"{len(FIELDS[port.type])} numbers separated by ';' ({';'.join(FIELDS[port.type])})")
+        return dict(zip(FIELDS[port.type], numbers, strict=True))
+    if port.type == "bool":
+        if text.lower() not in ("true", "false"):
+            raise ValueError("not true or false")
+        return text.lower() == "true"
+    if port.type in ("int", "float"):
+        return _number(text, port.type)
+    if port.choices and raw not in port.choices:
+        raise ValueError(f"not one of {', '.join(port.choices)}")
+    return raw
+
+
+def _number(text: str, kind: str) -> int | float:
+    try:
+        number = int(text) if kind == "int" else float(text)
+    except ValueError:
+        raise ValueError("not an integer" if kind == "int" else "not a number") from None
+    if not math.isfinite(number):
+        raise ValueError("not a finite number")
+    return number
+
+
+# -- the mission file's YAML tree ---------------------------------------------------------------
+
+#: How a node is written in a mission's ``tree:`` (:mod:`executive.composition`): its type, a built-in subtree, its name.
+TYPE_KEY, USE_KEY, NAME_KEY = "node", "use", "name"
+
+
+def from_yaml(data: Mapping[str, Any] | str, types: Mapping[str, NodeType]) -> Node:
+    """A (validated) YAML tree node as a :class:`Node`: a mapping with ``node:`` or ``use:``, or a bare name."""
+    if isinstance(data, str):
+        return Node(data)
+    type_id = data[USE_KEY] if USE_KEY in data else data[TYPE_KEY]
+    spec = types[type_id]
+    slots = {s.name: s for s in spec.slots}
+    node = Node(type_id, name=data.get(NAME_KEY))
+    for key, value in data.items():
+        if key in (TYPE_KEY, USE_KEY, NAME_KEY):
+            continue
+        if key in slots:
+            children = value if slots[key].many else [value]
+            node.slots[key] = [from_yaml(child, types) for child in children]
+        else:
+            node.params[key] = value
+    return node
+
+
+def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any] | str:
+    """A :class:`Node` as a YAML tree node: type first, then name, parameters, children; a bare name without any."""
+    spec = types[node.type]
+    if node.name is None and not node.params and not any(node.slots.values()):
+        return node.type
+    data: dict[str, Any] = {USE_KEY if spec.kind == "subtree" else TYPE_KEY: node.type}
+    if node.name is not None:
+        data[NAME_KEY] = node.name
+    data |= node.params
+    for slot in spec.slots:
+        if slot.name in node.slots:
+            children = [to_yaml(child, types) for child in node.slots[slot.name]]
+            data[slot.name] = children if slot.many else children[0]
+    return data
+
+
+# -- files --------------------------------------------------------------------------------------
+
+
+def export_tree(mission_file: str, mission: Mission, catalogue: Any) -> tuple[str, list[tuple[str, str]]]:
+    """The tree of a (valid) mission file as a BehaviorTree.CPP v4 document, and what could not be described exactly (node path, why).
+
+    A tree written in the file (``tree:`` a mapping) is written as it is; a named tree (built in
+    Python) as the nodes it builds (:mod:`executive.recompose`).
+    """
+    with open(mission_file, encoding="utf-8") as stream:
+        tree = (yaml.safe_load(stream) or {}).get("tree", "waypoints")
+    types = node_types(catalogue)
+    if isinstance(tree, Mapping):
+        return write_xml(from_yaml(tree, types), types, mission.name), []
+    import trees
+    from executive.recompose import Recomposer
+
+    recomposer = Recomposer(types, catalogue, mission)
+    root = recomposer.node(trees.build(mission))
+    return write_xml(root, {**types, **recomposer.unknown}, mission.name), recomposer.warnings
+
+
+def import_tree(path: str, catalogue: Any) -> dict[str, Any]:
+    """The main tree of a BehaviorTree.CPP v4 file as a mission's YAML ``tree:``; MissionError naming every problem with its line."""
+    try:
+        with open(path, "rb") as stream:
+            data = stream.read(MAX_BYTES + 1)
+    except OSError as exc:
+        raise MissionError([FieldError(path, 1, 1, "(file)", exc.strerror or str(exc))]) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise MissionError([FieldError(path, 1, 1, "(file)", f"not UTF-8 text: byte 0x{data[exc.start]:02x} at offset {exc.start}")]) from None
+    types = node_types(catalogue)
+    return to_yaml(read_xml(text, path, types), types)
