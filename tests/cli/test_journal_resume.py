@@ -110,8 +110,8 @@ def test_a_crash_at_any_moment_then_resume_records_every_sample_once(tmp_path, c
 
     resumed = report(db, 2, capsys)
     assert (resumed["resumed_from"], resumed["outcome"]) == (1, "COMPLETED")
-    legs = [s["leg_index"] for s in crashed["samples"]] + [s["leg_index"] for s in resumed["samples"]]
-    assert sorted(legs) == [1, 3]  # each sample point exactly once, across the crash
+    waypoints = [s["waypoint"] for s in crashed["samples"]] + [s["waypoint"] for s in resumed["samples"]]
+    assert sorted(waypoints) == [2, 4]  # each sample point exactly once, across the crash
     assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors
 
 
