@@ -45,6 +45,7 @@ if TYPE_CHECKING:
     import py_trees
 
     from executive.io.can.drive import DriveBridge
+    from executive.io.systemd import Watchdog
     from executive.journal import Journal
     from executive.progress import Progress
     from executive.snapshots import SnapshotRecorder
@@ -345,6 +346,22 @@ def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
 
     def plug(w: Wiring) -> None:
         w.observers.append(_SnapshotRuns(recorder))
+
+    return plug
+
+
+def service_manager(watchdog: Watchdog) -> Plug:
+    """Under systemd: ``watchdog`` fed from the tick loop (WATCHDOG=1), with the status line as the service's STATUS=."""
+
+    def plug(w: Wiring) -> None:
+        from executive.status import status_line
+
+        def status() -> tuple[object, str]:
+            now = w.status.snapshot()
+            return (now["state"], now["leg"], now["mode"], now["armed"]), status_line(now)
+
+        watchdog.status = status
+        w.writers.append(watchdog)
 
     return plug
 

@@ -7,9 +7,10 @@ Written as BehaviorTree.CPP's own writer does (``src/xml_parsing.cpp``: ``writeT
   exactly one child, then one ``<TreeNodesModel>``;
 - a node in the compact form: the element is its registration ID (``<ekf_ok name="EKF ok?"/>``),
   its ports are attributes, ``name`` is the instance name;
-- ``<TreeNodesModel>`` has one element per node type, tagged by its kind (``Action``,
-  ``Condition``, ``Control``, ``Decorator``), with ``ID``, and ``<input_port name= type= default=>``
-  elements whose text is the description, then an optional ``<description>``.
+- ``<TreeNodesModel>`` has one element per node type, tagged by its kind (``toStr(NodeType)``,
+  basic_types.cpp: ``Action``, ``Condition``, ``Control``, ``Decorator``), with ``ID``, and
+  ``<input_port name= type= default=>`` elements whose text is the description, then an optional
+  ``<description>`` (the XSD's ``treeNodesModelNodeType``).
 
 Our catalogue maps onto it: guards are Conditions, actions and built-in subtrees (their content is
 Python, not XML) Actions, decorators Decorators, composites Controls; a parameter is an input port.
@@ -37,7 +38,7 @@ PORT_TYPES = {
     "bool": "bool", "int": "int", "float": "double", "str": "std::string", "one of": "std::string", "node name": "std::string",
     "numbers": "std::vector<double>", "range": "std::vector<double>", "enu": "std::vector<double>",
 }  # fmt: skip
-#: Compound values as BehaviorTree.CPP writes vectors: the items joined by ``;`` (``convertFromString``, basic_types.cpp).
+#: Compound values as BehaviorTree.CPP writes vectors: the items joined by ``;`` (``convertFromString<std::vector<double>>``, basic_types.h).
 FIELDS = {"range": ("min", "max"), "enu": ("east", "north", "up")}
 MAIN_TREE = "MainTree"
 MAX_BYTES = 1 << 20
@@ -305,10 +306,10 @@ def port_value(raw: str, port: Port) -> Any:
         if len(numbers) != len(FIELDS[port.type]):
             raise ValueError(f"{len(FIELDS[port.type])} numbers separated by ';' ({';'.join(FIELDS[port.type])})")
         return dict(zip(FIELDS[port.type], numbers, strict=True))
-    if port.type == "bool":
-        if text.lower() not in ("true", "false"):
+    if port.type == "bool":  # what BehaviorTree.CPP's convertFromString<bool> takes (basic_types.h)
+        if text not in ("true", "false", "TRUE", "FALSE", "1", "0"):
             raise ValueError("not true or false")
-        return text.lower() == "true"
+        return text in ("true", "TRUE", "1")
     if port.type in ("int", "float"):
         return _number(text, port.type)
     if port.choices and raw not in port.choices:
@@ -352,9 +353,9 @@ def from_yaml(data: Mapping[str, Any] | str, types: Mapping[str, NodeType]) -> N
 
 
 def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any] | str:
-    """A :class:`Node` as a YAML tree node: type first, then name, parameters, children; a bare name without any."""
+    """A :class:`Node` as a YAML tree node: type first, then name, parameters, children; a node (not a subtree) without any: its bare name."""
     spec = types[node.type]
-    if node.name is None and not node.params and not any(node.slots.values()):
+    if spec.kind != "subtree" and node.name is None and not node.params and not any(node.slots.values()):
         return node.type
     data: dict[str, Any] = {USE_KEY if spec.kind == "subtree" else TYPE_KEY: node.type}
     if node.name is not None:

@@ -16,7 +16,9 @@ A parameter left out takes its default, or the mission's value the catalogue nam
 (``hold_after_s``, ``resume_after_s``) and ``awaiting_recovery`` too. A ``node name`` parameter
 (``failsafe_note``'s ``guard``) names a guard that comes before it in the tree: the nearest one of
 that name. The tree is built exactly as a Python builder would build it: the same classes, so
-``show``, ``replay``, the journal and the snapshots see a tree like any other.
+``show``, ``replay``, the journal and the snapshots see a tree like any other. A root other than
+``mission_root`` or ``unless_paused`` is put under ``mission_root``: the runtime ticks the tree
+while the mission is PAUSED, and only they stop the work and hold the vehicle then.
 """
 
 from __future__ import annotations
@@ -37,6 +39,8 @@ from executive.mission.model import Mission, Range
 from executive.vehicles import PROFILES
 
 NODE, USE = "node", "use"
+#: Roots that hold the vehicle while the mission is PAUSED; any other root is put under ``mission_root`` (a person always wins).
+PAUSE_AWARE = frozenset({"mission_root", "unless_paused"})
 #: Parameters that name a flight mode: checked against the vehicle's modes.
 MODE_PARAMS = frozenset({"mode", "hold_mode", "fixed_wing_hold_mode", "mc_mode", "aux_mode"})
 
@@ -94,7 +98,12 @@ def build(mission: Mission, nodes: Catalogue | None = None) -> py_trees.behaviou
     plan = checker.node(mission.tree, ("tree",), None)
     if checker.errors or plan is None:
         raise CompositionError(checker.errors)
-    return _Builder(mission).make(plan)
+    root = _Builder(mission).make(plan)
+    if plan.spec.name in PAUSE_AWARE:
+        return root
+    from trees._parts import mission_root
+
+    return mission_root(mission, root)
 
 
 def _sample_errors(mission: Mission, plan: _Plan | None) -> list[tuple[Path, str]]:
@@ -331,6 +340,10 @@ def _call(spec: NodeSpec, kwargs: dict[str, Any], mission: Mission) -> py_trees.
 def _kind(param: ParamSpec) -> str:
     if param.type in _EXPECTED:
         return _EXPECTED[param.type]
+    if param.type in ("node", "guard"):
+        return f"a {param.type}"
+    if param.type in ("nodes", "guards"):
+        return f"a list of {param.type}"
     if param.type == "one of":
         return f"one of {', '.join(param.choices)}"
     return param.type

@@ -16,6 +16,7 @@ from executive.cli import main
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission_text
 from executive.mission.schema import mission_json_schema
+from executive.testing import Harness
 
 HEAD = "version: 1\nname: m\nvehicle: rover\nauto_arm: true\nwaypoints: [{lat: 47.397742, lon: 8.545594}]\ntree:\n"  # the tree on line 7
 
@@ -181,3 +182,20 @@ def test_the_readme_s_example_loads_and_its_errors_are_the_readme_s() -> None:
     assert isinstance(load(example, head).tree, dict)
     bad = example.replace("use: preflight ", "use: pre_flight").replace("rc_not_taking_over]", "{node: set_mode, mode: HOLD}]")
     assert errors_of(bad.replace("timeout_s: 90,", "timeout_s: 90s,"), head) == shown.splitlines()
+
+
+def test_a_root_that_would_not_hold_the_vehicle_while_paused_is_put_under_mission_root() -> None:
+    mission = load("  {node: sequence, children: [{node: set_mode, mode: GUIDED}, {node: wait_until, limit_s: 60, child: position_known}]}\n")
+    h = Harness.build(mission)  # the mission's own tree, the mission started
+    root = h.root
+    assert (root.name, [c.name for c in root.children[0].children]) == ("Mission", ["Sequence"])
+    h.tick()
+    assert h.asked() == [("mode", "GUIDED")]
+    h.mission_state.pause("a person asked")
+    h.tick()
+    assert h.asked() == [("mode", "HOLD")]  # the rover held, the work stopped
+    assert root.children[0].status == Status.INVALID
+
+
+def test_a_missing_child_is_named_with_what_it_takes() -> None:
+    assert errors_of("  {node: timeout, timeout_s: 5}\n") == ["m.yaml:7:3: tree.child: required parameter of timeout is missing (a node)"]

@@ -6,6 +6,7 @@ import argparse
 import importlib
 import os
 import sys
+import traceback
 from collections.abc import Sequence
 
 from executive import __version__
@@ -16,6 +17,7 @@ EXIT_FAILED = 1  # mission aborted or failed at run time
 EXIT_BAD_INPUT = 2  # usage error, invalid mission file
 EXIT_NO_VEHICLE = 3  # could not reach the vehicle
 EXIT_INTERRUPTED = 130  # Ctrl-C before anything was commanded (128 + SIGINT, as a shell reports it)
+EXIT_CRASHED = 70  # a bug: an exception nothing expected (sysexits' EX_SOFTWARE); a service restarts on it, not on 1
 
 
 class BadInput(Exception):
@@ -29,7 +31,7 @@ class NoVehicle(Exception):
 #: Command -> the module of this package that registers it (``register(subparsers)`` setting ``func``).
 COMMANDS = {
     "validate": "validate", "show": "show", "run": "run", "sim": "sim", "schema": "schema", "ctl": "ctl", "report": "report",
-    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files", "behaviours": "behaviours",
+    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files", "service": "service", "behaviours": "behaviours",
 }  # fmt: skip
 
 
@@ -67,10 +69,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERRUPTED
     except Exception as exc:
         plugins = sys.modules.get("executive.plugins")  # loaded if it raised: not imported here, ctl starts fast
-        if plugins is None or not isinstance(exc, plugins.PluginError):
-            raise
-        print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
-        return EXIT_BAD_INPUT
+        if plugins is not None and isinstance(exc, plugins.PluginError):
+            print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
+            return EXIT_BAD_INPUT
+        # a bug: its traceback, and an exit a service manager tells from a mission that ended badly (1)
+        traceback.print_exc()
+        print(f"executive: {args.command}: crashed (a bug, traceback above): exit {EXIT_CRASHED}", file=sys.stderr)
+        return EXIT_CRASHED
     try:
         sys.stdout.flush()  # here, not at exit, where a reader that went away would cost a traceback
     except BrokenPipeError:

@@ -21,6 +21,7 @@ from executive.assembly import (
     journal_recorder,
     live_view,
     obstacle_camera,
+    service_manager,
     snapshot_recorder,
 )
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
@@ -29,6 +30,7 @@ from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.endpoint import BadEndpoint, Unreachable, check_endpoint
 from executive.io.mavlink.link import PymavlinkLink
+from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionStatus
@@ -244,6 +246,15 @@ def _obstacle_socket(spec: str | None, stack: contextlib.ExitStack) -> socket.so
     return sock
 
 
+def _service_manager(stack: contextlib.ExitStack) -> Watchdog | None:
+    """Under systemd (``Type=notify``): the watchdog and status service, fed on the wall clock whatever the speed-up; else None."""
+    notifier = Notifier.from_environment()
+    if notifier is None:
+        return None
+    stack.callback(notifier.close)
+    return Watchdog(notifier, ScaledClock(), watchdog_period_s())
+
+
 def _web_server(args: argparse.Namespace, stack: contextlib.ExitStack) -> WebServer | None:
     """The live view's server of --web, bound (BadInput: a bad address or token file; NoVehicle: the port cannot be had), closed with ``stack``."""
     if args.web is None:
@@ -402,14 +413,16 @@ def main(args: argparse.Namespace) -> int:
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
             if resume is not None and resume.mission is not None:  # replaced while paused (ctl upload): the run goes on with that one
                 mission = resume.mission
-        progress = Progress(sys.stdout, clock)
+        watchdog = _service_manager(stack)
+        progress = Progress(sys.stdout, clock, quiet=watchdog is not None)  # under systemd: status lines on changes, into the journal
         attach_live_line(progress)  # a log record clears the live line first
         stack.callback(attach_live_line, None)
+        plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path, web)
         runtime = build_runtime(
             mission,
             link,
             clock,
-            plugs=_plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path, web),
+            plugs=plugs if watchdog is None else [*plugs, service_manager(watchdog)],
             rate_hz=args.rate,
             system_id=args.sysid,
             target_system=args.target_system,
@@ -435,13 +448,18 @@ def main(args: argparse.Namespace) -> int:
             which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
             print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)
             return EXIT_NO_VEHICLE
+        if watchdog is not None:
+            watchdog.ready(f"autopilot {'/'.join(map(str, runtime.reader.autopilot or ()))} heard on {link.url}; mission {mission.name!r}")
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
+            # with --wait, an unfinished run in the journal goes on at once (a restart after a crash); a new one waits for `ctl start`
             with keeping_time(runtime.pacer.late_after_s / clock.speedup):
-                outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
+                outcome = runtime.run(start=not args.wait or resume is not None, serve=args.wait, resume=resume)
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)
+            if watchdog is not None:
+                watchdog.stopping(f"mission {runtime.mission_state.status}: {runtime.mission_state.reason}")
     ran = runtime.mission_state.mission or mission  # the one that replaced it, if an operator did (ctl upload while paused)
     print(f"executive: mission {ran.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
     if runtime.mission_state.samples:

@@ -50,7 +50,7 @@ def ctl(sock: Path, *args: str) -> dict:
     return json.loads(proc.stdout)
 
 
-def wait_status(sock: Path, predicate, timeout_s: float = 60.0) -> dict:
+def wait_status(sock: Path, predicate, timeout_s: float = 300.0) -> dict:
     """The first status (asked over the control socket in this process: a `ctl` process per poll would load the machine) meeting ``predicate``.
 
     ``timeout_s`` of wall time only bounds a hung run; what the test waits for is judged on the status, in vehicle time (``t``).

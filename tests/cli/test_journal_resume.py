@@ -57,7 +57,7 @@ def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, c
     assert len(crashed["samples"]) in (1, 2)
 
     second = run(mission, "--journal", str(db), "--resume")
-    _, err = second.communicate(timeout=120)
+    _, err = second.communicate(timeout=300)
     assert second.returncode == 0, err
     assert "resuming run 1 at waypoint" in err
     assert "2 samples recorded" in err

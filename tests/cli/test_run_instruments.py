@@ -82,7 +82,7 @@ def test_samples_from_a_serial_ctd_are_recorded_with_the_instrument(tmp_path, ct
     text = mission.read_text()
     mission.write_text(text[: text.index("waypoints:\n")] + NEAR_SAMPLE_POINTS)  # what it shows needs no more of the lake...
     run = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "20", "--socket", "none", "--journal", str(db)]
-    proc = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "2 samples recorded" in proc.stderr
     report = subprocess.run([sys.executable, "-m", "executive", "report", str(db)], cwd=ROOT, capture_output=True, text=True, timeout=30)

@@ -11,8 +11,10 @@ home is set too (MAV_CMD_DO_SET_HOME, acked; the commander retries it). The outc
 
 A mission replaced while paused (hot reload, ``ctl upload``) is taken to the autopilot the same
 way, at once: the operator sees it uploaded and read back (``ctl route show``) before resuming,
-and a mission upload does not move a vehicle held in its safe mode. Its home is not an edit (as
-for a mission uploaded READY): the autopilot keeps its own.
+and a mission upload does not move a vehicle held in its safe mode (ArduPilot's mission is stopped
+outside AUTO: AP_Mission::stop, "subsequent calls to update() will have no effect until the mission
+is started or resumed", libraries/AP_Mission/AP_Mission.cpp). Its home is not an edit (as for a
+mission uploaded READY): the autopilot keeps its own.
 
 The ugv_rc_route tree also uploads on its own (the route it starts with, and whenever the autopilot
 is found holding something else). There is one MissionTransfer, and neither supersedes a transfer
