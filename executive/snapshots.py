@@ -249,6 +249,7 @@ class Recording:
         self.trees: list[list[dict[str, Any]]] = []
         self._entries: list[_Entry] = []
         for part in _parts(self.path):
+            _check_kind(part)
             with part.open("rb") as f:
                 offset = 0
                 for number, raw in enumerate(f, 1):
@@ -306,7 +307,7 @@ def _parse(raw: bytes, part: Path, number: int) -> dict[str, Any]:
     try:
         return json.loads(raw)
     except UnicodeDecodeError as exc:
-        raise ValueError(f"{part}:{number}:{exc.start + 1}: (snapshot): not a snapshot file (not UTF-8 text)") from exc
+        raise NotSnapshots(f"{part}:{number}:1: (snapshot): not UTF-8 text, so not a snapshot file: {exc.reason}") from exc
     except json.JSONDecodeError as exc:
         raise ValueError(f"{part}:{number}:{exc.colno}: (snapshot): {exc.msg}") from exc
 
