@@ -216,3 +216,42 @@ def test_the_ugv_tree_exports_and_imports_back_as_a_tree_section(tmp_path: Path,
     assert main(["import", str(tmp_path / "tree.xml"), "-o", str(tmp_path / "tree.yaml")]) == 0, capsys.readouterr().err
     tree = yaml.safe_load((tmp_path / "tree.yaml").read_text(encoding="utf-8"))["tree"]
     assert tree["node"] == "unless_paused" and "- route_edit_switch" in (tmp_path / "tree.yaml").read_text(encoding="utf-8")
+
+
+def test_behaviortree_cpp_built_in_nodes_groot2_offers_are_read_as_ours(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    xml = tmp_path / "builtins.xml"
+    xml.write_text(
+        """<root BTCPP_format="4"><BehaviorTree ID="T">
+  <Sequence>
+    <ReactiveSequence name="Guarded"><link_alive/><Fallback><armed/><Inverter><armed/></Inverter></Fallback></ReactiveSequence>
+    <RetryUntilSuccessful num_attempts="3"><arm/></RetryUntilSuccessful>
+    <Repeat num_cycles="2"><disarm/></Repeat>
+    <ReactiveFallback><armed/><disarm/></ReactiveFallback>
+    <SequenceWithMemory><arm/></SequenceWithMemory>
+  </Sequence>
+</BehaviorTree></root>""",
+        encoding="utf-8",
+    )
+    assert main(["import", str(xml)]) == 2  # SequenceWithMemory does not start over after a failure: nothing of ours does that
+    assert (
+        capsys.readouterr().err
+        == f"{xml}:7:5: T/Sequence/SequenceWithMemory: unknown node type 'SequenceWithMemory' (not in the catalogue: executive behaviours lists it)\n"
+    )
+    xml.write_text(xml.read_text(encoding="utf-8").replace("    <SequenceWithMemory><arm/></SequenceWithMemory>\n", ""), encoding="utf-8")
+    assert main(["import", str(xml)]) == 0
+    assert yaml.safe_load(capsys.readouterr().out) == {
+        "tree": {
+            "node": "sequence",  # memory: true, the default
+            "children": [
+                {
+                    "node": "sequence",
+                    "name": "Guarded",
+                    "memory": False,
+                    "children": ["link_alive", {"node": "selector", "memory": True, "children": ["armed", {"node": "inverter", "child": "armed"}]}],
+                },
+                {"node": "retry", "failures": 3, "child": "arm"},
+                {"node": "repeat", "successes": 2, "child": "disarm"},
+                {"node": "selector", "children": ["armed", "disarm"]},  # memory: false, the default
+            ],
+        }
+    }

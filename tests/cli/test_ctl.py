@@ -228,7 +228,8 @@ def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the
     assert main(["report", str(db), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert (report["mission"], report["outcome"], report["resumed_from"]) == ("two-legs-north", "COMPLETED", 1)
-    assert [leg["leg"] for leg in report["legs"]] == [1, 2, 3]  # heading for the east end, the new point north, then done
+    legs = [(leg["waypoint"], leg["waypoints"]) for leg in report["legs"]]
+    assert legs == [(2, 3), (3, 3), (None, 3)]  # heading for the east end, the new point north, then done
     resumed = next(t["t"] for t in report["transitions"] if t["after"] == "RUNNING")
     turned, done = report["legs"][1:]
     assert geo.distance(turned["lat"], turned["lon"], -35.3629906, 149.1665504) < 5.0  # turned north at the east end (driven through)
