@@ -164,7 +164,12 @@ class Journal:
         )
 
     def report(self, run: int | None = None) -> dict[str, Any]:
-        """Everything about one run (the last by default), as plain data."""
+        """Everything about one run (the last by default), as plain data.
+
+        Waypoints are numbered from 1, as the status line and ``ctl`` number them: each leg row
+        and route edit says the ``waypoint`` the vehicle headed for then (None once past the last)
+        of the route's ``waypoints`` then; each sample the ``waypoint`` it was taken at.
+        """
         if run is None:
             row = self._db.execute("SELECT MAX(id) FROM runs").fetchone()
             run = row[0] if row else None
@@ -174,16 +179,35 @@ class Journal:
         head = self._db.execute(f"SELECT {', '.join(columns)} FROM runs WHERE id = ?", (run,)).fetchone()
         if head is None:
             raise LookupError(f"{self.path}: no run {run}")
+        (mission_json,) = self._db.execute("SELECT mission_json FROM runs WHERE id = ?", (run,)).fetchone()
+        edits = [
+            {"t": r["t"], "leg": r["leg"], "waypoints": len(json.loads(r["waypoints"])), "reason": r["reason"]}
+            for r in self._rows("SELECT t, leg, waypoints, reason FROM routes WHERE run = ? ORDER BY rowid", run)
+        ]
+        planned = len(json.loads(mission_json).get("waypoints", []))
+
+        def route_size(t: float) -> int:
+            """The number of waypoints of the route driven at ``t``: the mission's, or its last edit's before then."""
+            return next((edit["waypoints"] for edit in reversed(edits) if edit["t"] <= t), planned)
+
+        def heading_for(leg: int, t: float, size: int | None = None) -> dict[str, Any]:
+            size = route_size(t) if size is None else size
+            return {"waypoint": leg + 1 if leg < size else None, "waypoints": size}
+
+        samples = []
+        for sample in self.samples(run):
+            fields = asdict(sample)
+            samples.append({"waypoint": fields.pop("leg_index") + 1, **fields})
         return {
             **dict(zip(columns, head, strict=True)),
             "transitions": self._rows("SELECT t, before, after, reason FROM transitions WHERE run = ? ORDER BY rowid", run),
-            "legs": self._rows("SELECT t, leg, lat, lon FROM legs WHERE run = ? ORDER BY rowid", run),
-            "samples": [asdict(s) for s in self.samples(run)],
-            "events": self._rows("SELECT t, kind, text FROM events WHERE run = ? ORDER BY rowid", run),
-            "routes": [
-                {"t": r["t"], "leg": r["leg"], "waypoints": len(json.loads(r["waypoints"])), "reason": r["reason"]}
-                for r in self._rows("SELECT t, leg, waypoints, reason FROM routes WHERE run = ? ORDER BY rowid", run)
+            "legs": [
+                {"t": r["t"], **heading_for(r["leg"], r["t"]), "lat": r["lat"], "lon": r["lon"]}
+                for r in self._rows("SELECT t, leg, lat, lon FROM legs WHERE run = ? ORDER BY rowid", run)
             ],
+            "samples": samples,
+            "events": self._rows("SELECT t, kind, text FROM events WHERE run = ? ORDER BY rowid", run),
+            "routes": [{"t": e["t"], **heading_for(e["leg"], e["t"], e["waypoints"]), "reason": e["reason"]} for e in edits],
         }
 
     def runs(self) -> list[int]:

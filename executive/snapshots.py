@@ -135,15 +135,52 @@ class TickState:
         return cls(data["tick"], data["t"], data["nodes"], status, {int(i): m for i, m in data["feedback"].items()})
 
 
+SQLITE_HEADER = b"SQLite format 3\x00"
+
+
+class NotSnapshots(ValueError):
+    """A file that is not a snapshot file (a journal, something else): says what it is and what reads it."""
+
+
+def _check_kind(part: Path) -> None:
+    """NotSnapshots unless ``part`` starts as a snapshot file does: with its ``tree`` line."""
+    with part.open("rb") as f:
+        head = f.read(64)
+    if head.startswith(SQLITE_HEADER):
+        raise NotSnapshots(
+            f"{part}:1:1: (snapshot): this is a journal (SQLite), not a snapshot file: `executive report {part}` shows what its runs did; "
+            "`executive run --snapshots FILE` records the ticks that `executive replay` shows"
+        )
+    if head and not head.startswith(b'{"tree"'):
+        raise NotSnapshots(f"{part}:1:1: (snapshot): not a snapshot file (one is written by `executive run --snapshots FILE`)")
+
+
 def _lines(path: Path) -> Iterator[dict[str, Any]]:
     for part in (path.with_name(path.name + ".1"), path):
         if part.exists():
+            _check_kind(part)
             with part.open(encoding="utf-8") as f:
                 for number, line in enumerate(f, 1):
                     try:
                         yield json.loads(line)
                     except json.JSONDecodeError as exc:
                         raise ValueError(f"{part}:{number}:{exc.colno}: (snapshot): {exc.msg}") from exc
+                    except UnicodeDecodeError as exc:
+                        raise NotSnapshots(f"{part}:{number}:1: (snapshot): not UTF-8 text, so not a snapshot file: {exc.reason}") from exc
+
+
+def recorded_ticks(path: str | Path) -> list[tuple[int, int]]:
+    """The ticks a recording holds, as (first, last) runs of consecutive ticks."""
+    spans: list[tuple[int, int]] = []
+    for line in _lines(Path(path)):
+        if "tick" not in line:
+            continue
+        tick = line["tick"]
+        if spans and spans[-1][1] + 1 == tick:
+            spans[-1] = (spans[-1][0], tick)
+        elif not spans or tick > spans[-1][1]:
+            spans.append((tick, tick))
+    return spans
 
 
 def _parts(path: Path) -> list[Path]:
@@ -183,7 +220,9 @@ def replay(path: str | Path, tick: int | None = None) -> TickState:
             break
         state = _apply(state, nodes, line)
     if state is None or (tick is not None and state.tick != tick):
-        raise LookupError(f"{path}: tick {tick} is not in the recording")
+        spans = recorded_ticks(path)
+        held = ", ".join(f"{first}-{last}" if last > first else str(first) for first, last in spans) or "none: no tick was recorded"
+        raise LookupError(f"{path}: tick {tick} is not in the recording; it holds ticks {held}")
     return state
 
 
@@ -210,6 +249,7 @@ class Recording:
         self.trees: list[list[dict[str, Any]]] = []
         self._entries: list[_Entry] = []
         for part in _parts(self.path):
+            _check_kind(part)
             with part.open("rb") as f:
                 offset = 0
                 for number, raw in enumerate(f, 1):
@@ -267,7 +307,7 @@ def _parse(raw: bytes, part: Path, number: int) -> dict[str, Any]:
     try:
         return json.loads(raw)
     except UnicodeDecodeError as exc:
-        raise ValueError(f"{part}:{number}:{exc.start + 1}: (snapshot): not a snapshot file (not UTF-8 text)") from exc
+        raise NotSnapshots(f"{part}:{number}:1: (snapshot): not UTF-8 text, so not a snapshot file: {exc.reason}") from exc
     except json.JSONDecodeError as exc:
         raise ValueError(f"{part}:{number}:{exc.colno}: (snapshot): {exc.msg}") from exc
 

@@ -185,10 +185,10 @@ def test_a_crash_after_a_reload_resumes_on_the_new_mission_at_its_leg(tmp_path: 
     assert (replaced["outcome"], replaced["reason"]) == ("REPLACED", reload_event[0])
     assert (continued["mission"], continued["resumed_from"], continued["outcome"]) == ("boat-east", 1, None)
     assert [e["text"] for e in continued["events"] if e["kind"] == "mission"] == reload_event
-    assert [s["leg_index"] for s in continued["samples"]] == [0]  # carried, renumbered
-    assert [leg["leg"] for leg in continued["legs"]] == [1]
+    assert [s["waypoint"] for s in continued["samples"]] == [1]  # carried, renumbered
+    assert [leg["waypoint"] for leg in continued["legs"]] == [2]
     assert (resumed["mission"], resumed["resumed_from"], resumed["outcome"]) == ("boat-east", 2, "COMPLETED")
-    assert [s["leg_index"] for s in resumed["samples"]] == [2]  # the new point only: waypoint 2 never sampled again
+    assert [s["waypoint"] for s in resumed["samples"]] == [3]  # the new point only: waypoint 2 never sampled again
     assert journals[1].resume_point(boat) is None  # finished
     for journal in journals:
         journal.close()

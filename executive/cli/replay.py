@@ -53,22 +53,17 @@ def _serve(args: argparse.Namespace) -> int:
 def main(args: argparse.Namespace) -> int:
     from executive.snapshots import render, replay
 
-    if args.web is not None:
-        try:
-            return _serve(args)
-        except FileNotFoundError:
-            print(f"{args.snapshots}:1:1: (file): no such snapshot file", file=sys.stderr)
-            return EXIT_BAD_INPUT
-        except (LookupError, ValueError) as exc:
-            print(f"executive: replay: {exc}", file=sys.stderr)
-            return EXIT_BAD_INPUT
-
     try:
+        if args.web is not None:
+            return _serve(args)
         state = replay(args.snapshots, args.tick)
     except FileNotFoundError:
         print(f"{args.snapshots}:1:1: (file): no such snapshot file", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (LookupError, ValueError) as exc:
+    except ValueError as exc:  # not a snapshot file, or a broken line: located
+        print(exc, file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except LookupError as exc:  # no such tick: the ticks there are
         print(f"executive: replay: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print("\n".join(render(state, all_keys=args.all_keys)))

@@ -10,7 +10,7 @@ import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from executive.assembly import (
     Plug,
@@ -24,10 +24,11 @@ from executive.assembly import (
     service_manager,
     snapshot_recorder,
 )
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
 from executive.cli.common import faults_or_report, load_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
+from executive.io.mavlink.endpoint import BadEndpoint, Unreachable, check_endpoint
 from executive.io.mavlink.link import PymavlinkLink
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
@@ -75,7 +76,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--faults", metavar="FILE", help="simulator only: YAML list of faults to inject into the simulated vehicle")
     p.add_argument("--tlog", metavar="FILE", help="record the whole MAVLink link in FILE (.tlog, for Mission Planner and pymavlink)")
     p.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key (32 bytes, 64 hex digits or a passphrase)")
-    p.add_argument("--socket", metavar="PATH", default=default_socket_path(), help="control socket for `executive ctl` (default %(default)s)")
+    p.add_argument(
+        "--socket",
+        metavar="PATH",
+        help=f"control socket for `executive ctl` (default {default_socket_path()}; when another executive serves that one, a socket of "
+        "its own, named at start-up); 'none': no control socket",
+    )
     p.add_argument("--wait", action="store_true", help="load the mission READY, wait for `ctl start`, and keep serving after it ends")
     p.add_argument("--gcs", metavar="URL", help="a MAVLink endpoint for ground stations (e.g. udpin:0.0.0.0:14551)")
     p.add_argument("--gcs-sysid", type=int, action="append", metavar="N", help="system id allowed to command us (repeatable; default 255)")
@@ -104,7 +110,7 @@ def _vehicle_link(
     """A link to the vehicle named by --mavlink, or to a simulated one started here."""
     options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog}
     if args.mavlink:
-        link = PymavlinkLink(args.mavlink, **options)
+        link = _open_link("--mavlink", args.mavlink, **options)
         try:
             yield link
         finally:
@@ -141,26 +147,47 @@ def _vehicle_link(
             base_bus.shutdown()
 
 
+def _open_link(option: str, url: str, **options: Any) -> PymavlinkLink:
+    """The link of ``option`` (its URL checked already); NoVehicle when it cannot be opened."""
+    try:
+        return PymavlinkLink(url, **options)
+    except Unreachable as exc:
+        raise NoVehicle(f"{option} {exc}") from exc
+
+
 @contextlib.contextmanager
 def _gcs_link(url: str | None, system_id: int) -> Iterator[PymavlinkLink | None]:
     """The ground stations' own endpoint, if asked for (we speak there as the onboard computer of system ``system_id``)."""
     if url is None:
         yield None
         return
-    link = PymavlinkLink(url, system_id=system_id)
+    link = _open_link("--gcs", url, system_id=system_id)
     try:
         yield link
     finally:
         link.close()
 
 
-def _usable_socket(path: str) -> str | None:
-    """``path`` unless another executive serves it (then no control socket, with a warning)."""
-    if path.lower() == "none":
-        return None
+def _control_socket_path(asked: str | None) -> str | None:
+    """The control socket to serve: ``--socket`` (BadInput when another executive serves it), else the default, else one of our own.
+
+    A second executive on the default path would leave ``executive ctl`` reaching the first: it
+    takes a path with its process id instead, and says so.
+    """
+    if asked is not None:
+        if asked.lower() == "none":
+            return None
+        if os.path.exists(asked) and socket_alive(asked):
+            raise BadInput(f"--socket {asked}: another executive is listening there (stop it, or choose another path)")
+        return asked
+    path = default_socket_path()
     if os.path.exists(path) and socket_alive(path):
-        print(f"executive: run: {path}: another executive is listening there; running without a control socket", file=sys.stderr)
-        return None
+        own = default_socket_path(os.getpid())
+        print(
+            f"executive: run: another executive serves {path}; this one listens on {own} (executive ctl --socket {own} ...)",
+            file=sys.stderr,
+        )
+        return own
     return path
 
 
@@ -284,13 +311,14 @@ def _plugs(
     can_bus: can.BusABC | None,
     obstacle_socket: socket.socket | None,
     gcs_link: PymavlinkLink | None,
+    socket_path: str | None,
     web: WebServer | None = None,
 ) -> list[Plug]:
     """The optional parts of this run, as the command line asks for them."""
     plugs = []
     if gcs_link is not None:
         plugs.append(ground_stations(gcs_link, args.gcs_sysid or (255,)))
-    if (socket_path := _usable_socket(args.socket)) is not None:
+    if socket_path is not None:
         plugs.append(control_socket(socket_path))
     if journal is not None:
         plugs.append(journal_recorder(journal))
@@ -356,6 +384,13 @@ def main(args: argparse.Namespace) -> int:
         faults = faults_or_report(event_files, mission.vehicle, clock)
         if faults is None:
             return EXIT_BAD_INPUT
+    for option, url in (("--mavlink", args.mavlink), ("--gcs", args.gcs)):
+        if url is not None:
+            try:
+                check_endpoint(url)
+            except BadEndpoint as exc:
+                raise BadInput(f"{option} {exc}") from exc
+    socket_path = _control_socket_path(args.socket)
     signing_key = signing_key_arg(args.signing_key)
     _check_instrument(mission, simulator=not args.mavlink)
     if args.obstacles is not None:
@@ -382,7 +417,7 @@ def main(args: argparse.Namespace) -> int:
         progress = Progress(sys.stdout, clock, quiet=watchdog is not None)  # under systemd: status lines on changes, into the journal
         attach_live_line(progress)  # a log record clears the live line first
         stack.callback(attach_live_line, None)
-        plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, web)
+        plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path, web)
         runtime = build_runtime(
             mission,
             link,
@@ -405,6 +440,10 @@ def main(args: argparse.Namespace) -> int:
         except SeveralAutopilots as exc:
             print(f"executive: run: {exc}", file=sys.stderr)
             return EXIT_NO_VEHICLE
+        except KeyboardInterrupt:
+            where = args.mavlink or "the simulated vehicle"
+            print(f"executive: run: interrupted while waiting for the autopilot's first heartbeat on {where}: nothing was commanded", file=sys.stderr)
+            return EXIT_INTERRUPTED
         if not connected:
             which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
             print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)

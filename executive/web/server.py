@@ -158,9 +158,11 @@ class _Client:
                 continue
             try:
                 await asyncio.wait_for(self.ws.send_str(json.dumps(frame.message(self.seen))), SEND_TIMEOUT_S)
-            except (TimeoutError, ConnectionError, RuntimeError):
-                log.info("live view: a client that took no frame for %g s was dropped", SEND_TIMEOUT_S)
+            except TimeoutError:
+                log.info("live view: a browser that took no frame for %g s was dropped", SEND_TIMEOUT_S)
                 await self.ws.close()
+                return
+            except (ConnectionError, RuntimeError):  # it went away
                 return
 
 
@@ -187,6 +189,7 @@ class WebServer:
         self._thread: threading.Thread | None = None
         self._socket: socket.socket | None = None
         self._runner: web.AppRunner | None = None
+        self._failed: Exception | None = None
         self.port = address.port
         #: Frames dropped for clients that could not keep up (the latest was sent instead).
         self.superseded = 0
@@ -220,19 +223,22 @@ class WebServer:
         self._thread = threading.Thread(target=self._serve, args=(started,), name="live view", daemon=True)
         self._thread.start()
         started.wait(10.0)
+        if self._failed is not None:
+            self.close()
+            raise OSError(f"the live view's server did not start: {self._failed}") from self._failed
 
     def close(self) -> None:
         """Stop serving (bounded: a stuck client does not hold the executive up)."""
-        if self._thread is None:
-            if self._socket is not None:
-                self._socket.close()
-                self._socket = None
-            return
-        with contextlib.suppress(Exception):
-            asyncio.run_coroutine_threadsafe(self._shutdown(), self._loop).result(2.0)
-        self._loop.call_soon_threadsafe(self._loop.stop)
-        self._thread.join(2.0)
-        self._thread = self._socket = None
+        if self._thread is not None:
+            with contextlib.suppress(Exception):  # the loop may have ended already
+                asyncio.run_coroutine_threadsafe(self._shutdown(), self._loop).result(2.0)
+            with contextlib.suppress(RuntimeError):
+                self._loop.call_soon_threadsafe(self._loop.stop)
+            self._thread.join(2.0)
+            self._thread = None
+        if self._socket is not None:
+            self._socket.close()  # (the server has closed it already, unless it never started)
+            self._socket = None
 
     # -- the server's thread --------------------------------------------------------------------
     async def _shutdown(self) -> None:
@@ -246,6 +252,10 @@ class WebServer:
         asyncio.set_event_loop(self._loop)
         try:
             self._loop.run_until_complete(self._setup())
+        except Exception as exc:
+            self._failed = exc
+            self._loop.close()
+            return
         finally:
             started.set()
         self._loop.create_task(self._broadcast())

@@ -64,8 +64,8 @@ def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, c
 
     resumed = report(db, 2, capsys)
     assert (resumed["resumed_from"], resumed["outcome"]) == (1, "COMPLETED")
-    legs = [s["leg_index"] for s in crashed["samples"]] + [s["leg_index"] for s in resumed["samples"]]
-    assert sorted(legs) == [1, 3]  # each sample point exactly once, across the crash
+    waypoints = [s["waypoint"] for s in crashed["samples"]] + [s["waypoint"] for s in resumed["samples"]]
+    assert sorted(waypoints) == [2, 4]  # each sample point exactly once, across the crash
     assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors
 
 
@@ -110,8 +110,8 @@ def test_a_crash_at_any_moment_then_resume_records_every_sample_once(tmp_path, c
 
     resumed = report(db, 2, capsys)
     assert (resumed["resumed_from"], resumed["outcome"]) == (1, "COMPLETED")
-    legs = [s["leg_index"] for s in crashed["samples"]] + [s["leg_index"] for s in resumed["samples"]]
-    assert sorted(legs) == [1, 3]  # each sample point exactly once, across the crash
+    waypoints = [s["waypoint"] for s in crashed["samples"]] + [s["waypoint"] for s in resumed["samples"]]
+    assert sorted(waypoints) == [2, 4]  # each sample point exactly once, across the crash
     assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors
 
 
@@ -180,4 +180,4 @@ def test_a_route_edited_before_a_crash_is_the_route_resumed(tmp_path, capsys, lo
     assert [r["waypoints"] for r in crashed["routes"]] == [3]
     assert [r["waypoints"] for r in resumed["routes"]] == [3]  # restored, and recorded again for the next crash
     assert resumed["outcome"] == "COMPLETED"
-    assert [leg["leg"] for leg in resumed["legs"]] == [1, 2, 3]  # waypoints 2 and 3 of the edited route, then done (4 waypoints: 4)
+    assert [(leg["waypoint"], leg["waypoints"]) for leg in resumed["legs"]] == [(2, 3), (3, 3), (None, 3)]  # 2 and 3 of the edited route, done

@@ -57,9 +57,11 @@ def announced_url(proc: subprocess.Popen) -> str:
 
 
 def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission(tmp_path):
-    mission, sock = tmp_path / "live.yaml", tmp_path / "ctl.sock"
+    mission, sock, token = tmp_path / "live.yaml", tmp_path / "ctl.sock", tmp_path / "token"
     mission.write_text(MISSION)
-    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "10", "--socket", str(sock), "--web", "127.0.0.1:0"]
+    token.write_text("a-token-of-twenty-chars\n")  # its buttons need it, as beyond the loopback interface; the page takes it from its address
+    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "20", "--socket", str(sock), "--web", "127.0.0.1:0"]
+    command += ["--web-token-file", str(token)]
     proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
         url = announced_url(proc)
@@ -68,22 +70,22 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
             page = chromium.new_page(viewport={"width": 1400, "height": 820})
             errors: list[str] = []
             page.on("pageerror", lambda error: errors.append(str(error)))
-            page.goto(url)
+            page.goto(f"{url}?token=a-token-of-twenty-chars")
             # the tree's nodes by name, and their statuses as they tick: the leg being driven is RUNNING, pre-flight is done
             going = page.locator('#tree g.node[data-status="R"]', has_text="Go to waypoint")
-            going.wait_for(timeout=10_000)
+            going.wait_for(timeout=20_000)
             names = page.locator("#tree text.name").all_text_contents()
             assert {"Mission", "Pre-flight", "EKF ok?", "Link alive?", "For each leg", "Go to waypoint"} <= set(names)
             assert page.locator('#tree g.node[data-status="S"]', has_text="Pre-flight").count() == 1
             on_last_leg = "$('leg').textContent === '3/3' && $('waiting').textContent.startsWith('waiting: Go to waypoint')"
-            page.wait_for_function(on_last_leg.replace("$(", "document.getElementById("), timeout=10_000)
+            page.wait_for_function(on_last_leg.replace("$(", "document.getElementById("), timeout=20_000)
             assert page.locator("#state").inner_text() == "RUNNING"
             assert page.locator("#plan polyline.track").count() == 1 and page.locator("#plan circle.wp").count() == 3
             mode = page.locator("#bb tr", has=page.locator("td", has_text=re.compile(r"^/vehicle/mode$")))
             assert mode.locator("td").all_inner_texts() == ["/vehicle/mode", "'GUIDED'"]
             page.screenshot(path=tmp_path / "live-view.png")
             page.get_by_role("button", name="Pause").click()
-            page.wait_for_function("document.getElementById('state').textContent === 'PAUSED'", timeout=10_000)
+            page.wait_for_function("document.getElementById('state').textContent === 'PAUSED'", timeout=20_000)
             assert "pause: done" in page.locator("#reply").inner_text()
             chromium.close()
         status = request(str(sock), "status")
@@ -110,10 +112,10 @@ def test_the_replay_page_moves_through_a_recording_with_its_slider(tmp_path, loc
             page = chromium.new_page(viewport={"width": 1400, "height": 820})
             page.goto(server.url)
             last = source.recording.last
-            page.wait_for_function(f"document.getElementById('tickinfo').textContent.startsWith('tick {last} ')", timeout=10_000)
+            page.wait_for_function(f"document.getElementById('tickinfo').textContent.startsWith('tick {last} ')", timeout=20_000)
             assert page.locator("#controls").is_hidden()  # nothing to command in a recording
             page.locator("#slider").fill("150")
-            page.wait_for_function("document.getElementById('tickinfo').textContent.startsWith('tick 150 ')", timeout=10_000)
+            page.wait_for_function("document.getElementById('tickinfo').textContent.startsWith('tick 150 ')", timeout=20_000)
             then = replay(path, 150)
             statuses = {node["name"]: then.status.get(node["id"], "-") for node in then.nodes}
             going = page.locator("#tree g.node", has_text="Go to waypoint")

@@ -106,3 +106,10 @@ def test_replay_web_errors(tmp_path, capsys):
     assert "no tick recorded" in capsys.readouterr().err
     assert main(["replay", str(empty), "--web", "localhost:port"]) == 2
     assert "not a number" in capsys.readouterr().err
+
+
+def test_replay_web_names_a_journal_as_replay_does(tmp_path, capsys):
+    journal = tmp_path / "run.db"
+    journal.write_bytes(b"SQLite format 3\x00" + bytes(100))
+    assert main(["replay", str(journal), "--web", "0"]) == 2
+    assert f"{journal}:1:1: (snapshot): this is a journal (SQLite), not a snapshot file" in capsys.readouterr().err

@@ -63,6 +63,19 @@ def test_start_up_names_the_token_file_but_not_its_token(tmp_path):
     assert server.token is None and told == f"live view on http://127.0.0.1:{server.port}/"
 
 
+def test_beyond_loopback_a_new_token_is_made_and_printed():
+    server, told = open_server("0.0.0.0:0", None)  # bound for a moment, nothing sent
+    server.close()
+    assert server.token is not None and len(server.token) >= 16
+    assert (
+        told
+        == f"live view on http://0.0.0.0:{server.port}/ (its buttons need the token {server.token}: open http://0.0.0.0:{server.port}/?token={server.token})"
+    )
+    again, _ = open_server("0.0.0.0:0", None)
+    again.close()
+    assert again.token != server.token
+
+
 @pytest.fixture
 def server() -> Iterator[tuple[WebServer, list[str]]]:
     """A server needing TOKEN whose requests are answered at once (as the operator does on the tick thread)."""
