@@ -8,6 +8,7 @@ from typing import Any
 from py_trees.common import Status
 
 from executive.geo import destination, distance_bearing
+from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
 from executive.state import GlobalPosition
@@ -31,8 +32,18 @@ class ScriptedAutopilot:
     :meth:`on_setpoint`, :meth:`enter_mode`, :meth:`move` and :meth:`facts`.
     """
 
-    def __init__(self, harness: Harness | None, start: tuple[float, float] = (0.0, 0.0), *, step_m: float = 8.0, mode: str = "MANUAL") -> None:
+    def __init__(
+        self,
+        harness: Harness | None,
+        start: tuple[float, float] = (0.0, 0.0),
+        *,
+        step_m: float = 8.0,
+        mode: str = "MANUAL",
+        commander: Commander | None = None,
+    ) -> None:
         self.h = harness  # type: ignore[assignment]  # None only for a subclass that talks over a link (ObedientAutopilot)
+        #: The executive's commander (the harness's unless given): its mode table decodes what it sent, as it meant it.
+        self.commander = commander if commander is not None or harness is None else harness.commander
         self.lat, self.lon = start
         self.alt = 0.0
         self.step_m = step_m
@@ -61,12 +72,14 @@ class ScriptedAutopilot:
     @property
     def modes(self) -> ModeTable:
         """The firmware's mode numbers (the executive's own table: what it sent is decoded as it meant it)."""
-        return self.h.commander.modes
+        assert self.commander is not None, "a scripted autopilot without a harness needs commander="
+        return self.commander.modes
 
     @property
     def guided_mode(self) -> str:
         """The mode that follows position targets."""
-        return self.h.commander.profile.guided_mode
+        assert self.commander is not None, "a scripted autopilot without a harness needs commander="
+        return self.commander.profile.guided_mode
 
     def acknowledge(self, command: int, result: int) -> None:
         """Send the COMMAND_ACK of ``command``."""

@@ -16,7 +16,6 @@ from executive.assembly import build_runtime
 from executive.clock import ManualClock
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.modes import ModeTable
 from executive.io.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission
@@ -70,20 +69,11 @@ class Boat(ScriptedAutopilot):
     """
 
     def __init__(self, at: tuple[float, float], commander: Commander) -> None:
-        self.commander = commander
         self.ekf, self.rc, self.link_up = EKF_READY, RC_AUTO, True
         self.short_m = 0.0
         self.setpoints = 0
         self._vehicle = Vehicle()
-        super().__init__(None, at, step_m=2.0)
-
-    @property
-    def modes(self) -> ModeTable:
-        return self.commander.modes
-
-    @property
-    def guided_mode(self) -> str:
-        return self.commander.profile.guided_mode
+        super().__init__(None, at, step_m=2.0, commander=commander)
 
     def facts(self) -> dict[str, object]:
         return {**super().facts(), "link__up": self.link_up, "vehicle__ekf": self.ekf, "rc__channels": self.rc}

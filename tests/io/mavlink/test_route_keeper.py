@@ -14,7 +14,6 @@ from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer, TransferState
-from executive.io.mavlink.modes import ModeTable
 from executive.io.mavlink.route_keeper import RouteKeeper, RouteUpload, RouteUploadState
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Home, Mission
@@ -37,7 +36,7 @@ class Autopilot(ScriptedAutopilot):
     """ArduPilot's mission store behind a link: what the executive sends in a tick is answered at the next one, as over a real link."""
 
     def __init__(self, clock: ManualClock, link, commander: Commander, transfer: MissionTransfer, vehicle) -> None:
-        self.clock, self.link, self.commander, self.transfer = clock, link, commander, transfer
+        self.clock, self.link, self.transfer = clock, link, transfer
         self.system_id = self.component_id = 1
         self.home: tuple[float, float] | None = AUTOPILOT_HOME[:2]
         self.answers = True  # False: the mission protocol goes unanswered (a link that lost it)
@@ -46,16 +45,8 @@ class Autopilot(ScriptedAutopilot):
         self.store = MissionStore(self, self._replies.append, lambda severity, text: None)
         self.sent: list[MAVLinkMessage] = []  # everything the executive sent
         self.homes_set: list[tuple[float, float, float]] = []
-        super().__init__(None, AUTOPILOT_HOME[:2], mode="GUIDED")
+        super().__init__(None, AUTOPILOT_HOME[:2], mode="GUIDED", commander=commander)
         vehicle.set(vehicle__home=HomePosition(*AUTOPILOT_HOME, clock.now()))
-
-    @property
-    def modes(self) -> ModeTable:
-        return self.commander.modes
-
-    @property
-    def guided_mode(self) -> str:
-        return self.commander.profile.guided_mode
 
     def publish(self) -> None:
         """Nothing: the tests write the vehicle's facts themselves."""
