@@ -163,6 +163,11 @@ class MavlinkReader:
             }
 
     @property
+    def kinds_read(self) -> frozenset[str]:
+        """The message kinds whose fields it reads; of any other it needs the header alone (and ``time_boot_ms``): a link may skim them."""
+        return frozenset(self._handlers) | {"COMMAND_LONG"}  # a ground station's COMMAND_LONG goes to on_command
+
+    @property
     def autopilot(self) -> tuple[int, int] | None:
         """(system id, component id) of the autopilot, once its HEARTBEAT was seen."""
         return self._autopilot
