@@ -38,11 +38,11 @@ class Progress:
     def update(self, force: bool = False) -> None:
         """Write the status if it is due (or ``force``)."""
         now = self._clock.now()
-        status = self._source.snapshot()
-        key = (status["state"], status["leg"], status["mode"], status["armed"])
+        key = self._source.headline()  # every tick: the whole status (a geodesic to the target) only when it is written
         changed = key != self._last_key
         if not (force or now >= self._next or (changed and not self._tty)):
             return
+        status = self._source.snapshot()
         self._next = now + self._period_s
         self._last_key = key
         if self._tty:

@@ -31,3 +31,23 @@ def test_json_lines_come_every_half_second_and_at_once_on_a_mode_change() -> Non
     progress.update()  # due: half a second after the last line
     lines = [json.loads(line) for line in out.getvalue().splitlines()]
     assert [(line["t"], line["mode"]) for line in lines] == [(0.0, "AUTO.LOITER"), (0.1, "OFFBOARD"), (0.2, "AUTO.TAKEOFF"), (0.7, "AUTO.TAKEOFF")]
+
+
+def test_each_change_of_state_leg_or_armed_also_brings_a_line_at_once() -> None:
+    clock, out = ManualClock(), io.StringIO()
+    progress = Progress(out, clock)
+    writer = blackboard.writer("test", ["/mission/state", "/mission/leg_index", "/mission/leg_count", "/vehicle/armed"])
+    writer.set("/mission/leg_count", 4)
+    progress.update()
+    for key, value in (("/vehicle/armed", True), ("/mission/state", "RUNNING"), ("/mission/leg_index", 1)):
+        clock.advance(0.1)
+        writer.set(key, value)
+        progress.update()
+    clock.advance(0.1)
+    progress.update()  # nothing changed, not due
+    lines = [json.loads(line) for line in out.getvalue().splitlines()]
+    assert [(line["t"], line["armed"], line["state"], line["leg"]) for line in lines][1:] == [
+        (0.1, True, lines[0]["state"], lines[0]["leg"]),
+        (0.2, True, "RUNNING", lines[0]["leg"]),
+        (0.3, True, "RUNNING", 2),
+    ]
