@@ -14,6 +14,7 @@ from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONEN
 from executive.io.mavlink.link import MemoryLink
 from executive.mission.model import Mission
 from executive.sim import ArduPilotSim, make_autopilot
+from executive.testing.lockstep import Wire
 from executive.vehicles import AutopilotName
 
 #: Where the benchmark missions start (ArduPilot SITL's home field).
@@ -92,16 +93,6 @@ def rover_mission(
     )
 
 
-class _Wire:
-    """Collects what a MAVLink encoder writes (``MAVLink(file=...)``)."""
-
-    def __init__(self) -> None:
-        self.data = bytearray()
-
-    def write(self, buf: bytes) -> None:
-        self.data += buf
-
-
 #: Messages a real ArduPilot streams on a companion-computer port besides those the executive asks for (SRx_* at 4-10 Hz),
 #: with their rate in Hz: the reader receives them, counts them and ignores them.
 FILLER_RATES: dict[str, float] = {
@@ -165,8 +156,10 @@ class SimLoop:
 
     Each :meth:`step` moves the vehicle one tick period, packs what it sends (its telemetry and a
     companion port's other streams, :data:`FILLER_RATES`) into bytes as on the wire, parses them
-    back and queues them on the runtime's :class:`MemoryLink`; what the runtime sent at its last
-    tick reaches the vehicle first. Nothing here is inside a timed region: callers time ``runtime.tick``.
+    back and queues them on the runtime's :class:`MemoryLink` (the lock-step simulation's
+    :class:`~executive.testing.Wire`); what the runtime sent at its last tick reaches the vehicle
+    first. Unlike :class:`~executive.testing.Lockstep` the caller ticks the runtime: nothing here
+    is inside a timed region, callers time ``runtime.tick``.
     """
 
     def __init__(self, mission: Mission, *, rate_hz: float = 10.0, filler: bool = True, ekf_ready_after_s: float = 2.0) -> None:
@@ -176,40 +169,27 @@ class SimLoop:
         self.ap: ArduPilotSim = make_autopilot(
             "rover", self.clock, HOME, autopilot=mission.autopilot or "ardupilot", ekf_ready_after_s=ekf_ready_after_s
         )
-        self._wire = _Wire()
-        self._ap_mav = mavlink.MAVLink(self._wire, srcSystem=1, srcComponent=AUTOPILOT_COMPONENT)
-        self._exec_mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)
-        self._parser = mavlink.MAVLink(None)
-        self._parser.robust_parsing = True
+        self.uplink = Wire(1, EXECUTIVE_COMPONENT)
+        self.downlink = Wire(1, AUTOPILOT_COMPONENT, as_bytes=True)
         self.filler = filler
         self._filler_due = dict.fromkeys(FILLER_RATES, 0.0)
-        self.recording: bytearray | None = None
         self.messages = 0
         self.runtime = build_runtime(mission, self.link, self.clock, rate_hz=rate_hz)
 
     def step(self) -> int:
         """Deliver what the runtime sent, move the vehicle one period, queue what it sent back; returns how many it sent."""
-        for msg in self.link.sent:
-            msg.pack(self._exec_mav)
-            self._send(self.ap.handle(msg))
-        self.link.sent.clear()
+        sent, self.link.sent = self.link.sent, []
+        out: list[MAVLinkMessage] = []
+        for msg in self.uplink.carry(sent):
+            out += self.ap.handle(msg)
         self.clock.advance(self.period_s)
-        out = self.ap.update()
+        out += self.ap.update()
         if self.filler:
             out += self._filler_messages()
-        self._send(out)
-        data = bytes(self._wire.data)
-        self._wire.data.clear()
-        if self.recording is not None:
-            self.recording += data
-        received = self._parser.parse_buffer(data) or []
+        received = self.downlink.carry(out)
         self.link.incoming.extend(received)
         self.messages += len(received)
         return len(received)
-
-    def _send(self, messages: list[MAVLinkMessage]) -> None:
-        for msg in messages:
-            self._ap_mav.send(msg)
 
     def _filler_messages(self) -> list[MAVLinkMessage]:
         now = self.clock.now()

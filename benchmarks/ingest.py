@@ -50,14 +50,13 @@ def record_stream(seconds: float) -> list[bytes]:
     """What the simulated rover sends while the executive drives it (pre-flight, then legs): one datagram per message, as the simulator sends them."""
     loop = SimLoop(rover_mission(serpentine(100, 10.0)))
     datagrams: list[bytes] = []
-    send = loop._ap_mav.send
+    send = loop.downlink.encoder.send
 
     def send_and_record(msg: mavlink.MAVLink_message) -> None:
-        start = len(loop._wire.data)
         send(msg)
-        datagrams.append(bytes(loop._wire.data[start:]))
+        datagrams.append(bytes(msg.get_msgbuf()))  # the bytes just packed onto the wire
 
-    loop._ap_mav.send = send_and_record  # type: ignore[method-assign]
+    loop.downlink.encoder.send = send_and_record  # type: ignore[method-assign]
     loop.connect()
     loop.runtime.mission_state.start()
     while loop.clock.now() < seconds:

@@ -32,6 +32,7 @@ from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.io.rc import RcReader
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, rc_switch_channels
+from executive.mission.reload import REPLACED
 from executive.operator import Operator
 from executive.runtime import Runtime
 from executive.services import PacedService, RunObserver, Service, Step
@@ -44,9 +45,11 @@ if TYPE_CHECKING:
     import py_trees
 
     from executive.io.can.drive import DriveBridge
+    from executive.io.systemd import Watchdog
     from executive.journal import Journal
     from executive.progress import Progress
     from executive.snapshots import SnapshotRecorder
+    from executive.web.server import WebServer
 
 
 @dataclass
@@ -167,6 +170,7 @@ def build_runtime(
         clock=clock,
         refuse=lambda m: instrument_refusal(m, simulator=simulated_vehicle),
         tree=tree_watch.view,
+        autopilot_name=lambda: ap.port.backend.name,  # asked only once the link below is made
     )
     ap = _autopilot_link(mission, link, clock, state, operator, system_id, (target_system, target_component), autopilot)
     operator.autopilot = ap.port  # a person's arm, disarm and mode
@@ -281,21 +285,37 @@ def control_socket(path: str) -> Plug:
 
 
 class _JournalRuns:
-    """The journal's part in a run: the run begun and ended, each leg recorded (with where the vehicle was) as it changes."""
+    """The journal's part in a run: the run begun and ended, each leg recorded (with where the vehicle was) as it changes.
+
+    A run ended as REPLACED (hot reload) is continued by the next, the new mission's: it begins
+    with the event, the samples kept (renumbered to its legs) and its leg, so that ``--resume``
+    after a crash finds them there.
+    """
 
     def __init__(self, journal: Journal, state: MissionState) -> None:
         self._journal = journal
         self._state = state
         self._bb = blackboard.reader("journal", ["/vehicle/position"])
+        self._replaced: tuple[int, str] | None = None  # the run a replacement ended, and why
 
     def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
-        self._journal.begin_run(mission, resumed_from=resumed_from)
+        replaced, self._replaced = self._replaced, None
+        if replaced is None:
+            self._journal.begin_run(mission, resumed_from=resumed_from)
+            return
+        self._journal.begin_run(mission, resumed_from=replaced[0])
+        self._journal.event("mission", replaced[1])
+        self._journal.carry_samples(self._state.samples)
+        self.ticked(0, 0.0)
 
     def ticked(self, tick: int, now: float) -> None:
         position = self._bb.get("/vehicle/position")
         self._journal.observe_leg(self._state, *((position.lat, position.lon) if position else (None, None)))
 
     def end(self, status: str, reason: str) -> None:
+        if status == REPLACED and self._journal.run is not None:
+            self._journal.event("mission", reason)
+            self._replaced = (self._journal.run, reason)
         self._journal.end_run(status, reason)
 
 
@@ -328,5 +348,38 @@ def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
 
     def plug(w: Wiring) -> None:
         w.observers.append(_SnapshotRuns(recorder))
+
+    return plug
+
+
+def service_manager(watchdog: Watchdog) -> Plug:
+    """Under systemd: ``watchdog`` fed from the tick loop (WATCHDOG=1), with the status line as the service's STATUS=."""
+
+    def plug(w: Wiring) -> None:
+        from executive.status import status_line
+
+        def status() -> tuple[object, str]:
+            now = w.status.snapshot()
+            return (now["state"], now["leg"], now["mode"], now["armed"]), status_line(now)
+
+        watchdog.status = status
+        w.writers.append(watchdog)
+
+    return plug
+
+
+def live_view(server: WebServer) -> Plug:
+    """The live view in a browser on ``server``: a frame handed over after each tick it asks for one, its buttons' requests to the operator."""
+
+    def plug(w: Wiring) -> None:
+        from executive.web.feed import LiveFeed
+        from executive.web.server import LiveSource
+
+        feed = LiveFeed(w.mission_state, w.status, w.operator, w.clock.now)
+        w.readers.append(Step("live view requests", feed.answer))
+        w.writers.append(Step("live view", feed.publish))
+        w.observers.append(feed)
+        server.start(LiveSource(feed), ask=feed.ask)
+        w.closers.append(server.close)
 
     return plug

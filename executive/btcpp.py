@@ -7,13 +7,17 @@ Written as BehaviorTree.CPP's own writer does (``src/xml_parsing.cpp``: ``writeT
   exactly one child, then one ``<TreeNodesModel>``;
 - a node in the compact form: the element is its registration ID (``<ekf_ok name="EKF ok?"/>``),
   its ports are attributes, ``name`` is the instance name;
-- ``<TreeNodesModel>`` has one element per node type, tagged by its kind (``Action``,
-  ``Condition``, ``Control``, ``Decorator``), with ``ID``, and ``<input_port name= type= default=>``
-  elements whose text is the description, then an optional ``<description>``.
+- ``<TreeNodesModel>`` has one element per node type, tagged by its kind (``toStr(NodeType)``,
+  basic_types.cpp: ``Action``, ``Condition``, ``Control``, ``Decorator``), with ``ID``, and
+  ``<input_port name= type= default=>`` elements whose text is the description, then an optional
+  ``<description>`` (the XSD's ``treeNodesModelNodeType``).
 
-Our catalogue maps onto it: guards are Conditions, actions and built-in subtrees (their content is
-Python, not XML) Actions, decorators Decorators, composites Controls; a parameter is an input port.
-A BehaviorTree.CPP blackboard reference (``{key}``) has no meaning here and is refused on import.
+Our catalogue (:mod:`executive.catalogue`) maps onto it by the children a node takes, as
+BehaviorTree.CPP checks them: none, a Condition (a guard) or an Action (built-in subtrees too: their
+content is Python, not XML); one, a Decorator; more, a Control, its child slots in order
+(``failsafe_guarded``: the work, then the guards). A value parameter is an input port; the
+mission's YAML tree form is :mod:`executive.composition`'s. A BehaviorTree.CPP blackboard reference
+(``{key}``) has no meaning here and is refused on import.
 """
 
 from __future__ import annotations
@@ -22,20 +26,37 @@ import math
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from xml.parsers import expat
 
 import yaml
 
+from executive.composition import NODE, USE
 from executive.mission.errors import FieldError, MissionError
+
+if TYPE_CHECKING:
+    from executive.mission.model import Mission
 
 #: The catalogue's parameter types -> the port types BehaviorTree.CPP writes (``BT::demangle`` of the C++ type).
 PORT_TYPES = {
     "bool": "bool", "int": "int", "float": "double", "str": "std::string", "one of": "std::string", "node name": "std::string",
     "numbers": "std::vector<double>", "range": "std::vector<double>", "enu": "std::vector<double>",
 }  # fmt: skip
-#: Compound values as BehaviorTree.CPP writes vectors: the items joined by ``;`` (``convertFromString``, basic_types.cpp).
+#: Compound values as BehaviorTree.CPP writes vectors: the items joined by ``;`` (``convertFromString<std::vector<double>>``, basic_types.h).
 FIELDS = {"range": ("min", "max"), "enu": ("east", "north", "up")}
+#: BehaviorTree.CPP's built-in nodes Groot2 offers that are ours under another name: (our node, fixed parameters, port -> parameter).
+#: Sequence and Fallback resume the RUNNING child and start over after a result, as py_trees' composites with memory; the
+#: reactive ones tick every child again each tick (sequence_node.h, fallback_node.h, reactive_sequence.h, reactive_fallback.h).
+#: RetryUntilSuccessful gives up after num_attempts failures, Repeat ends after num_cycles successes (retry_node.h, repeat_node.h).
+BUILT_IN_NODES: dict[str, tuple[str, dict[str, Any], dict[str, str]]] = {
+    "Sequence": ("sequence", {"memory": True}, {}),
+    "ReactiveSequence": ("sequence", {"memory": False}, {}),
+    "Fallback": ("selector", {"memory": True}, {}),
+    "ReactiveFallback": ("selector", {"memory": False}, {}),
+    "Inverter": ("inverter", {}, {}),
+    "RetryUntilSuccessful": ("retry", {}, {"num_attempts": "failures"}),
+    "Repeat": ("repeat", {}, {"num_cycles": "successes"}),
+}
 MAIN_TREE = "MainTree"
 MAX_BYTES = 1 << 20
 
@@ -254,21 +275,23 @@ def _read_node(element: _Element, types: Mapping[str, NodeType], error: Callable
     explicit = element.tag in ("Action", "Condition", "Control", "Decorator")
     type_id = element.attributes.get("ID", "") if explicit else element.tag
     here = f"{path}/{type_id or element.tag}"
+    type_id, fixed, renamed = BUILT_IN_NODES.get(type_id, (type_id, {}, {})) if type_id not in types else (type_id, {}, {})
     spec = types.get(type_id)
     if spec is None:
         error(element, here, f"unknown node type {type_id!r} (not in the catalogue: executive behaviours lists it)")
         return Node(type_id)
     node = Node(type_id, name=element.attributes.get("name"))
     ports = {p.name: p for p in spec.ports}
+    node.params = {k: v for k, v in fixed.items() if v != ports[k].default}
     for key, raw in element.attributes.items():
         if key in ("name", "ID") or key.startswith("_"):  # _uid, _fullpath: Groot2's bookkeeping
             continue
-        port = ports.get(key)
+        port = ports.get(renamed.get(key, key))
         if port is None:
             error(element, f"{here}.{key}", f"unknown port (ports of {type_id}: {', '.join(ports) or 'none'})")
             continue
         try:
-            node.params[key] = port_value(raw, port)
+            node.params[port.name] = port_value(raw, port)
         except ValueError as exc:
             error(element, f"{here}.{key}", f"{raw!r}: {exc}")
     children = [_read_node(child, types, error, here) for child in element.children]
@@ -302,10 +325,10 @@ def port_value(raw: str, port: Port) -> Any:
         if len(numbers) != len(FIELDS[port.type]):
             raise ValueError(f"{len(FIELDS[port.type])} numbers separated by ';' ({';'.join(FIELDS[port.type])})")
         return dict(zip(FIELDS[port.type], numbers, strict=True))
-    if port.type == "bool":
-        if text.lower() not in ("true", "false"):
+    if port.type == "bool":  # what BehaviorTree.CPP's convertFromString<bool> takes (basic_types.h)
+        if text not in ("true", "false", "TRUE", "FALSE", "1", "0"):
             raise ValueError("not true or false")
-        return text.lower() == "true"
+        return text in ("true", "TRUE", "1")
     if port.type in ("int", "float"):
         return _number(text, port.type)
     if port.choices and raw not in port.choices:
@@ -326,7 +349,7 @@ def _number(text: str, kind: str) -> int | float:
 # -- the mission file's YAML tree ---------------------------------------------------------------
 
 #: How a node is written in a mission's ``tree:`` (:mod:`executive.composition`): its type, a built-in subtree, its name.
-TYPE_KEY, USE_KEY, NAME_KEY = "node", "use", "name"
+TYPE_KEY, USE_KEY, NAME_KEY = NODE, USE, "name"
 
 
 def from_yaml(data: Mapping[str, Any] | str, types: Mapping[str, NodeType]) -> Node:
@@ -349,9 +372,9 @@ def from_yaml(data: Mapping[str, Any] | str, types: Mapping[str, NodeType]) -> N
 
 
 def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any] | str:
-    """A :class:`Node` as a YAML tree node: type first, then name, parameters, children; a bare name without any."""
+    """A :class:`Node` as a YAML tree node: type first, then name, parameters, children; a node (not a subtree) without any: its bare name."""
     spec = types[node.type]
-    if node.name is None and not node.params and not any(node.slots.values()):
+    if spec.kind != "subtree" and node.name is None and not node.params and not any(node.slots.values()):
         return node.type
     data: dict[str, Any] = {USE_KEY if spec.kind == "subtree" else TYPE_KEY: node.type}
     if node.name is not None:
@@ -367,17 +390,23 @@ def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any] | str:
 # -- files --------------------------------------------------------------------------------------
 
 
-def export_tree(mission_file: str, tree_id: str, catalogue: Any) -> str:
-    """The ``tree:`` of a (valid) mission file, written in the file as a mapping, as a BehaviorTree.CPP v4 document.
+def export_tree(mission_file: str, mission: Mission, catalogue: Any) -> tuple[str, list[tuple[str, str]]]:
+    """The tree of a (valid) mission file as a BehaviorTree.CPP v4 document, and what could not be described exactly (node path, why).
 
-    ValueError when the tree is a name (built in Python, not written in the file).
+    A tree written in the file (``tree:`` a mapping) is written as it is; a named tree (built in
+    Python) as the nodes it builds (:mod:`executive.recompose`).
     """
     with open(mission_file, encoding="utf-8") as stream:
         tree = (yaml.safe_load(stream) or {}).get("tree", "waypoints")
-    if not isinstance(tree, Mapping):
-        raise ValueError(f"tree {tree!r} is built in Python: only a tree written in the mission file (tree: a mapping) is exported as XML")
     types = node_types(catalogue)
-    return write_xml(from_yaml(tree, types), types, tree_id)
+    if isinstance(tree, Mapping):
+        return write_xml(from_yaml(tree, types), types, mission.name), []
+    import trees
+    from executive.recompose import Recomposer
+
+    recomposer = Recomposer(types, catalogue, mission)
+    root = recomposer.node(trees.build(mission))
+    return write_xml(root, {**types, **recomposer.unknown}, mission.name), recomposer.warnings
 
 
 def import_tree(path: str, catalogue: Any) -> dict[str, Any]:

@@ -5,6 +5,11 @@ WAL mode with full sync, and every state change and sample is committed at once:
 executive has said it, it is on the disk. ``executive run --resume`` reads the last unfinished run
 of the same mission back: the leg to continue from, the samples already taken and the route as
 the operator last edited it (RC switches, ``ctl route``).
+
+A run is continued by another (``resumed_from``) after a crash, or when the operator replaced its
+mission while paused (hot reload: it ends as REPLACED, and the new mission's run begins with the
+samples kept, renumbered to its legs). ``--resume`` follows these to the last of them: given the
+mission file it started with, it continues on the mission that replaced it.
 """
 
 from __future__ import annotations
@@ -59,6 +64,7 @@ class ResumePoint:
     leg_index: int
     samples: tuple[Sample, ...]
     route: Route | None = None  # None: the mission file's own
+    mission: Mission | None = None  # the mission that replaced the one asked for (hot reload); None: that one
 
 
 def mission_hash(mission: Mission) -> str:
@@ -97,6 +103,11 @@ class Journal:
         state.sample_listeners.append(self._on_sample)
         state.route_listeners.append(self._on_route)
 
+    def carry_samples(self, samples: tuple[Sample, ...]) -> None:
+        """Record in this run the samples a run it continues had taken (a replaced mission's, renumbered to this one's legs)."""
+        for sample in samples:
+            self._on_sample(sample)
+
     def observe_leg(self, state: MissionState, lat: float | None, lon: float | None) -> None:
         """Called every tick: records the leg when it changes (with where the vehicle is)."""
         if self.run is None or state.status not in (MissionStatus.RUNNING, MissionStatus.PAUSED) or state.leg_index == self._leg:
@@ -117,12 +128,16 @@ class Journal:
 
     # -- reading -------------------------------------------------------------------------------
     def resume_point(self, mission: Mission) -> ResumePoint | None:
-        """The last run of this very mission that never ended (a crash, kill -9, power cut), if any."""
-        row = self._db.execute("SELECT id FROM runs WHERE mission_hash = ? ORDER BY id DESC LIMIT 1", (mission_hash(mission),)).fetchone()
+        """The last run of this very mission, or the last of the runs continuing it, if that one never ended (a crash, kill -9, power cut)."""
+        wanted = mission_hash(mission)
+        row = self._db.execute("SELECT id FROM runs WHERE mission_hash = ? ORDER BY id DESC LIMIT 1", (wanted,)).fetchone()
         if row is None:
             return None
         run = row[0]
-        if self._db.execute("SELECT ended FROM runs WHERE id = ?", (run,)).fetchone()[0] is not None:
+        while (child := self._db.execute("SELECT MAX(id) FROM runs WHERE resumed_from = ?", (run,)).fetchone()[0]) is not None:
+            run = child  # resumed after a crash, or the run of the mission that replaced it
+        ended, hashed, mission_json = self._db.execute("SELECT ended, mission_hash, mission_json FROM runs WHERE id = ?", (run,)).fetchone()
+        if ended is not None:
             return None
         # the latest word on the leg: a leg change, or a route edit (which may renumber the legs)
         latest = self._db.execute(
@@ -130,7 +145,8 @@ class Journal:
             "UNION ALL SELECT t, leg, 1 AS edit, rowid AS n FROM routes WHERE run = ?) ORDER BY t DESC, edit ASC, n DESC LIMIT 1",
             (run, run),
         ).fetchone()
-        return ResumePoint(run, latest[0] if latest else 0, self.samples(run), self.route(run))
+        replacement = None if hashed == wanted else Mission.model_validate_json(mission_json)
+        return ResumePoint(run, latest[0] if latest else 0, self.samples(run), self.route(run), replacement)
 
     def route(self, run: int) -> Route | None:
         """The run's route as last edited (None: never edited)."""
@@ -148,7 +164,12 @@ class Journal:
         )
 
     def report(self, run: int | None = None) -> dict[str, Any]:
-        """Everything about one run (the last by default), as plain data."""
+        """Everything about one run (the last by default), as plain data.
+
+        Waypoints are numbered from 1, as the status line and ``ctl`` number them: each leg row
+        and route edit says the ``waypoint`` the vehicle headed for then (None once past the last)
+        of the route's ``waypoints`` then; each sample the ``waypoint`` it was taken at.
+        """
         if run is None:
             row = self._db.execute("SELECT MAX(id) FROM runs").fetchone()
             run = row[0] if row else None
@@ -158,16 +179,35 @@ class Journal:
         head = self._db.execute(f"SELECT {', '.join(columns)} FROM runs WHERE id = ?", (run,)).fetchone()
         if head is None:
             raise LookupError(f"{self.path}: no run {run}")
+        (mission_json,) = self._db.execute("SELECT mission_json FROM runs WHERE id = ?", (run,)).fetchone()
+        edits = [
+            {"t": r["t"], "leg": r["leg"], "waypoints": len(json.loads(r["waypoints"])), "reason": r["reason"]}
+            for r in self._rows("SELECT t, leg, waypoints, reason FROM routes WHERE run = ? ORDER BY rowid", run)
+        ]
+        planned = len(json.loads(mission_json).get("waypoints", []))
+
+        def route_size(t: float) -> int:
+            """The number of waypoints of the route driven at ``t``: the mission's, or its last edit's before then."""
+            return next((edit["waypoints"] for edit in reversed(edits) if edit["t"] <= t), planned)
+
+        def heading_for(leg: int, t: float, size: int | None = None) -> dict[str, Any]:
+            size = route_size(t) if size is None else size
+            return {"waypoint": leg + 1 if leg < size else None, "waypoints": size}
+
+        samples = []
+        for sample in self.samples(run):
+            fields = asdict(sample)
+            samples.append({"waypoint": fields.pop("leg_index") + 1, **fields})
         return {
             **dict(zip(columns, head, strict=True)),
             "transitions": self._rows("SELECT t, before, after, reason FROM transitions WHERE run = ? ORDER BY rowid", run),
-            "legs": self._rows("SELECT t, leg, lat, lon FROM legs WHERE run = ? ORDER BY rowid", run),
-            "samples": [asdict(s) for s in self.samples(run)],
-            "events": self._rows("SELECT t, kind, text FROM events WHERE run = ? ORDER BY rowid", run),
-            "routes": [
-                {"t": r["t"], "leg": r["leg"], "waypoints": len(json.loads(r["waypoints"])), "reason": r["reason"]}
-                for r in self._rows("SELECT t, leg, waypoints, reason FROM routes WHERE run = ? ORDER BY rowid", run)
+            "legs": [
+                {"t": r["t"], **heading_for(r["leg"], r["t"]), "lat": r["lat"], "lon": r["lon"]}
+                for r in self._rows("SELECT t, leg, lat, lon FROM legs WHERE run = ? ORDER BY rowid", run)
             ],
+            "samples": samples,
+            "events": self._rows("SELECT t, kind, text FROM events WHERE run = ? ORDER BY rowid", run),
+            "routes": [{"t": e["t"], **heading_for(e["leg"], e["t"], e["waypoints"]), "reason": e["reason"]} for e in edits],
         }
 
     def runs(self) -> list[int]:

@@ -7,12 +7,15 @@ pauses, legs done, samples, route edits, the autopilot found and its messages, t
 safe - and every other module's only from WARNING; ``-v`` shows every INFO, ``-vv`` DEBUG.
 
 A record never lands on the end of the live status line: the line is cleared before the record
-is written and drawn again after it (:class:`LiveLineHandler`).
+is written and drawn again after it (:class:`LiveLineHandler`). Under systemd, with stderr going
+to the system journal (``$JOURNAL_STREAM``), each record carries its syslog priority instead of a
+timestamp (``<4>intervention: ...``; the journal stamps it): ``journalctl -p warning`` finds it.
 """
 
 from __future__ import annotations
 
 import logging
+import os
 import sys
 import time
 from typing import Protocol, TextIO
@@ -51,6 +54,28 @@ class UtcFormatter(logging.Formatter):
         return super().format(record)
 
 
+class JournalFormatter(logging.Formatter):
+    """``<4>intervention: ...``: the record's syslog priority (read by the journal, sd-daemon(3)), its module and message."""
+
+    PRIORITIES = ((logging.CRITICAL, 2), (logging.ERROR, 3), (logging.WARNING, 4), (logging.INFO, 6))
+
+    def format(self, record: logging.LogRecord) -> str:
+        priority = next((p for level, p in self.PRIORITIES if record.levelno >= level), 7)
+        text = f"{record.name.removeprefix('executive.')}: {record.getMessage()}"
+        if record.exc_info:
+            text += "\n" + self.formatException(record.exc_info)
+        return f"<{priority}>" + text.replace("\n", f"\n<{priority}>")
+
+
+def to_journal(stream: TextIO) -> bool:
+    """Whether ``stream`` is the systemd journal's (``$JOURNAL_STREAM`` is its device:inode, systemd.exec(5))."""
+    try:
+        info = os.fstat(stream.fileno())
+    except (OSError, ValueError, AttributeError):  # not a file (a test's StringIO)
+        return False
+    return os.environ.get("JOURNAL_STREAM") == f"{info.st_dev}:{info.st_ino}"
+
+
 class LiveLineHandler(logging.StreamHandler):  # type: ignore[type-arg]
     """Writes records to ``stream``, clearing the live line (when there is one) before and drawing it again after."""
 
@@ -69,8 +94,9 @@ class LiveLineHandler(logging.StreamHandler):  # type: ignore[type-arg]
 
 def setup_logging(verbose: int = 0, stream: TextIO | None = None) -> LiveLineHandler:
     """Log to ``stream`` (stderr): the operator's events and every warning by default, all INFO with -v, DEBUG with -vv."""
-    handler = LiveLineHandler(stream or sys.stderr)
-    handler.setFormatter(UtcFormatter())
+    stream = stream or sys.stderr
+    handler = LiveLineHandler(stream)
+    handler.setFormatter(JournalFormatter() if to_journal(stream) else UtcFormatter())
     root = logging.getLogger()
     for old in list(root.handlers):
         root.removeHandler(old)

@@ -7,6 +7,10 @@ why. The reply carries the resulting state so a client never has to ask twice.
 "bearing_deg": 90}``; the operations and their arguments are :func:`executive.mission.route.apply`'s)
 or show it (``"operation": "show"``); their reply carries the route and what the autopilot holds.
 
+``upload`` while PAUSED replaces the mission (hot reload, :mod:`executive.mission.reload`): the
+same leg (or ``"leg": N``, 1-based), the samples already taken kept; the reply carries the new
+route. Refused with the reason, nothing changed, when the mission is not compatible.
+
 ``arm``, ``disarm`` (``"force": true`` skips the autopilot's checks) and ``mode`` (``"mode": "HOLD"``)
 command the vehicle for a person, and a person always wins: the command is sent whatever the
 mission's state, and a running mission is first paused hands off (``disarm`` or a mode change
@@ -25,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.mission_protocol import route_not_on_autopilot
+from executive.mission import reload
 from executive.mission import route as routes
 from executive.mission.errors import MissionError
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
@@ -68,7 +73,8 @@ class Operator:
     (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
     (its samples could not be real), if it cannot. ``autopilot`` takes a person's arm, disarm and
     mode (None: refused). ``tree`` supplies the running tree for ``tree`` requests
-    (:meth:`executive.waiting.TreeWatch.view`).
+    (:meth:`executive.waiting.TreeWatch.view`). ``autopilot_name`` names the firmware driven (a
+    replacement mission for another is refused).
     """
 
     def __init__(
@@ -81,6 +87,7 @@ class Operator:
         refuse: Callable[[Mission], str | None] | None = None,
         autopilot: AutopilotPort | None = None,
         tree: Callable[[], dict[str, Any] | None] | None = None,
+        autopilot_name: Callable[[], str | None] | None = None,
     ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
@@ -90,6 +97,7 @@ class Operator:
         self._refuse = refuse
         self.autopilot = autopilot
         self._tree = tree
+        self._autopilot_name = autopilot_name
         keys = ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload", *_COMMAND_KEYS.values()]
         self._bb = blackboard.reader("operator", keys)
 
@@ -112,7 +120,7 @@ class Operator:
             elif op == "delete":
                 state.delete()
             elif op == "upload":
-                return self._upload(str(args.get("filename", "<upload>")), args.get("text"))
+                return self._upload(str(args.get("filename", "<upload>")), args.get("text"), args.get("leg"), source)
             elif op == "route":
                 return self._route(args, source)
             elif op in VEHICLE_REQUESTS:
@@ -132,9 +140,11 @@ class Operator:
             return self._reply(False, f"no mission has run yet ({self.mission_state.status})")
         return self._reply(True, self.mission_state.reason, with_status=True, tree=tree)
 
-    def _upload(self, filename: str, text: object) -> Reply:
+    def _upload(self, filename: str, text: object, leg: object, source: str) -> Reply:
         if not isinstance(text, str):
             return self._reply(False, "upload needs the mission file's text")
+        if leg is not None and (isinstance(leg, bool) or not isinstance(leg, int) or leg < 1):
+            return self._reply(False, f"leg: {leg!r} is not a waypoint number (1, 2, ...)")
         try:
             mission: Mission = load_mission_text(text, filename)
         except MissionError as exc:
@@ -148,8 +158,28 @@ class Operator:
             here = self._here()
         except routes.RouteError:
             here = None  # not known well enough: the tree checks the distances when the mission starts
+        if self.mission_state.status is MissionStatus.PAUSED:
+            return self._replace(filename, mission, leg, here, source)
+        if leg is not None:
+            return self._reply(False, f"leg: a leg is chosen only when replacing a PAUSED mission (the mission is {self.mission_state.status})")
+        if self.mission_state.status is MissionStatus.RUNNING:
+            return self._reply(False, "cannot upload while RUNNING: pause it first (ctl pause), then upload to replace the mission")
         self.mission_state.upload(mission, vehicle_at=here)
         return self._reply(True, self.mission_state.reason)
+
+    def _replace(self, filename: str, mission: Mission, leg: int | None, here: tuple[float, float] | None, source: str) -> Reply:
+        """Hot reload: the paused mission replaced by ``mission`` at the same leg (or ``leg``), or refused with nothing changed."""
+        state = self.mission_state
+        assert state.mission is not None
+        old = state.mission
+        autopilot = self._autopilot_name() if self._autopilot_name is not None else None
+        try:
+            plan = reload.plan(old, state.leg_index, state.samples, mission, autopilot=autopilot, leg=leg)
+        except reload.Incompatible as exc:
+            return self._reply(False, f"{filename}: cannot replace {old.name!r}: {exc}")
+        reason = f"{plan.describe(old)} ({source}: {filename}); paused until resumed"
+        state.replace(plan.mission, plan.leg_index, plan.samples, reason, vehicle_at=here)
+        return self._reply(True, reason, route=self._route_view())
 
     def _route(self, args: dict[str, Any], source: str) -> Reply:
         """Edit the route (refused with the reason, changing nothing), or show it."""

@@ -23,7 +23,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from importlib.metadata import EntryPoint, entry_points
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import trees
 
@@ -36,7 +36,8 @@ if TYPE_CHECKING:
 
 TREES = "executive.trees"
 BEHAVIOURS = "executive.behaviours"
-GROUPS = (TREES, BEHAVIOURS)
+INSTRUMENTS = "executive.instruments"  # executive.io.instruments
+T = TypeVar("T")
 
 
 class PluginError(Exception):
@@ -105,13 +106,24 @@ def _tree_plugin(point: EntryPoint) -> TreeBuilder:
     return _checked_tree(describe(point), load(point))
 
 
+def load_class(point: EntryPoint, base: type[T], what: str) -> type[T]:
+    """The class an entry point names, a subclass of ``base``; PluginError if it cannot be loaded or is not one (``what`` it must be)."""
+    found = load(point)
+    if not (isinstance(found, type) and issubclass(found, base)):
+        raise PluginError(describe(point), f"{found!r} is not {what}")
+    return found
+
+
 def _behaviour_plugin(point: EntryPoint) -> type[py_trees.behaviour.Behaviour]:
     import py_trees
 
-    found = load(point)
-    if not (isinstance(found, type) and issubclass(found, py_trees.behaviour.Behaviour)):
-        raise PluginError(describe(point), f"{found!r} is not a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)")
-    return found
+    return load_class(point, py_trees.behaviour.Behaviour, "a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)")
+
+
+def _instrument_plugin(point: EntryPoint) -> type:
+    from executive.io.sampler import InstrumentSampler
+
+    return load_class(point, InstrumentSampler, "an instrument (subclass executive.io.sampler.InstrumentSampler)")
 
 
 def resolve_tree(name: str) -> TreeBuilder:
@@ -140,9 +152,9 @@ def load_behaviours() -> list[type[py_trees.behaviour.Behaviour]]:
 
 
 def problems() -> list[PluginError]:
-    """Every installed tree and behaviour plugin that cannot be loaded or is not what its group needs (empty: all load)."""
+    """Every installed tree, behaviour and instrument plugin that cannot be loaded or is not what its group needs (empty: all load)."""
     errors: list[PluginError] = []
-    for group, check in ((TREES, _tree_plugin), (BEHAVIOURS, _behaviour_plugin)):
+    for group, check in ((TREES, _tree_plugin), (BEHAVIOURS, _behaviour_plugin), (INSTRUMENTS, _instrument_plugin)):
         for point in named(group).values():
             try:
                 check(point)

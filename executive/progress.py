@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+import logging
 from typing import TextIO
 
 from executive.clock import Clock
 from executive.status import StatusSource, status_line
+
+log = logging.getLogger(__name__)
 
 
 class Progress:
@@ -17,7 +20,8 @@ class Progress:
     once on a change of state, leg, mode or armed, so a tool sees even a mode held for less than a
     period. ``quiet`` keeps the JSON lines to those changes (and one every ``quiet_period_s``).
     The log clears the terminal's line before a record and draws it again after (:meth:`clear`,
-    :meth:`redraw`), so a warning never lands on its end.
+    :meth:`redraw`), so a warning never lands on its end. A reader that goes away (``run | head``)
+    ends the status output, never the mission.
     """
 
     def __init__(self, stream: TextIO, clock: Clock, *, period_s: float = 0.5, quiet: bool = False, quiet_period_s: float = 10.0) -> None:
@@ -30,6 +34,7 @@ class Progress:
         self._next = float("-inf")
         self._last_key: tuple[object, ...] = ()
         self._shown: str | None = None  # the line on the terminal now, if one is
+        self._closed = False  # the reader went away
 
     def line(self) -> str:
         """The current status line."""
@@ -47,26 +52,32 @@ class Progress:
         self._last_key = key
         if self._tty:
             self._shown = f"[{now:8.1f} s] {status_line(status)}"
-            self._stream.write(f"\r\x1b[K{self._shown}")
+            self._emit(f"\r\x1b[K{self._shown}")
         else:
-            self._stream.write(json.dumps({"t": round(now, 2), **status}) + "\n")
-        self._stream.flush()
+            self._emit(json.dumps({"t": round(now, 2), **status}) + "\n")
 
     def clear(self) -> None:
         """Erase the terminal's line (before a log record is written)."""
         if self._shown is not None:
-            self._stream.write("\r\x1b[K")
-            self._stream.flush()
+            self._emit("\r\x1b[K")
 
     def redraw(self) -> None:
         """Draw the terminal's line again, as it was (after a log record)."""
         if self._shown is not None:
-            self._stream.write(self._shown)
-            self._stream.flush()
+            self._emit(self._shown)
 
     def close(self) -> None:
         """End the in-place line so later output starts on its own line."""
         if self._tty:
-            self._stream.write("\n")
-            self._stream.flush()
+            self._emit("\n")
         self._shown = None
+
+    def _emit(self, text: str) -> None:
+        if self._closed:
+            return
+        try:
+            self._stream.write(text)
+            self._stream.flush()
+        except (BrokenPipeError, ConnectionResetError) as exc:
+            self._closed, self._shown = True, None
+            log.warning("the status output was closed (%s): the mission goes on without it; `executive ctl status` still answers", exc)

@@ -23,7 +23,8 @@ from executive.io.instruments import open_sampler
 from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionStatus
-from executive.mission.model import SamplingOptions
+from executive.mission.model import Mission, SamplingOptions
+from executive.mission.reload import REPLACED
 from executive.pacing import TickPacer
 from executive.progress import Progress
 from executive.services import PacedService, RunObserver, Service
@@ -102,7 +103,9 @@ class Runtime:
     """One executive attached to one vehicle: IO, the mission lifecycle, and the tree of the running mission.
 
     The tree is built when a mission starts (from READY, or again after it ended), so an operator
-    can upload another mission and start it without restarting the executive. ``serve`` keeps
+    can upload another mission and start it without restarting the executive; a mission replaced
+    while PAUSED (hot reload) gets its tree at once, first ticked when the operator resumes (until
+    then the vehicle is left as the pause left it). ``serve`` keeps
     the executive up between missions, waiting for operator requests, instead of returning when
     the mission ends. Each tick drains the readers, ticks the tree and services the writers
     (:mod:`executive.services`); what they are is decided by :func:`executive.assembly.build_runtime`.
@@ -133,6 +136,8 @@ class Runtime:
         self.mission_state = wiring.mission_state
         # first: the tree (and the journal's run) exist before any other listener hears of the start
         self.mission_state.listeners.insert(0, self._on_transition)
+        self.mission_state.replace_checks.append(self._check_tree)
+        self.mission_state.replace_listeners.insert(0, self._on_replace)
         self.status = wiring.status
         self.operator = wiring.operator
         #: Drained before the tree ticks, in order.
@@ -149,7 +154,10 @@ class Runtime:
         self.sampler: InstrumentSampler | None = None
         self._run_writers: list[Service] = []
         self._next_root = root
+        self._built: tuple[Mission, py_trees.behaviour.Behaviour] | None = None  # a replacement's tree, built when it was checked
         self.tree: py_trees.trees.BehaviourTree | None = None
+        #: A mission replaced while PAUSED: its tree waits for the resume (nothing commanded meanwhile).
+        self._tree_waits_for_resume = False
         self.mission_state.upload(self.mission)
         self.progress = progress
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches"])
@@ -199,7 +207,7 @@ class Runtime:
         for reader in self.readers:
             reader.service()
         status = Status.INVALID
-        if self.tree is not None and self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
+        if self.tree is not None and self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED) and not self._tree_waits_for_resume:
             try:
                 self.tree_clock.latch()
                 self.tree.tick()
@@ -361,14 +369,37 @@ class Runtime:
         return outcome
 
     def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
+        if after is not MissionStatus.PAUSED:
+            self._tree_waits_for_resume = False
         if after is MissionStatus.RUNNING and before is not MissionStatus.PAUSED:
             self._install_tree()
 
+    def _check_tree(self, mission: Mission) -> str | None:
+        """Before a replacement: the new mission's tree can be built (kept for :meth:`_on_replace`)."""
+        try:
+            self._built = (mission, trees.build(mission))
+        except Exception as exc:  # a tree builder's error must refuse the replacement, not take the executive down
+            return f"tree: cannot be built: {type(exc).__name__}: {exc}"
+        return None
+
+    def _on_replace(self, mission: Mission, reason: str) -> None:
+        """Hot reload: the old tree stopped, the run ended as REPLACED, the new mission's tree (and sampler) installed for the resume."""
+        if self.tree is not None:
+            self.tree.root.stop(Status.INVALID)  # a sample in progress is cancelled, not left open
+            for observer in self.observers:
+                observer.end(REPLACED, reason)
+        self.mission = mission
+        self.reader.link_timeout_s = mission.limits.link_timeout_s
+        self._install_tree()
+        self._tree_waits_for_resume = True
+
     def _install_tree(self) -> None:
-        """Build the tree (and its sampler) of the mission that is starting."""
+        """Build the tree (and its sampler) of the mission that is starting, or replacing a paused one."""
         mission = self.mission_state.mission
         assert mission is not None
-        root, self._next_root = self._next_root or trees.build(mission), None
+        built, self._built = self._built, None
+        prebuilt = built[1] if built is not None and built[0] is mission else None
+        root, self._next_root = self._next_root or prebuilt or trees.build(mission), None
         self._close_sampler()
         try:
             self.sampler = open_sampler(mission, self.clock, simulator=self.simulated_vehicle)

@@ -4,7 +4,7 @@ A *reader* is drained before the tree ticks (a link, a sensor, an estimator over
 an operator's input); a *writer* is serviced after it (streams, reports, commands to send). A
 *paced* service has a rate of its own above the tick's and is also serviced between ticks (the
 AgileX base's 50 Hz motion commands). A *run observer* hears of each mission run (the journal, the
-snapshot recorder). A new link is a new service handed to the runtime, never a branch in it.
+snapshot recorder, the live view). A new link is a new service handed to the runtime, never a branch in it.
 """
 
 from __future__ import annotations

@@ -10,9 +10,10 @@ twice ``max_bytes`` however long the run.
 
 from __future__ import annotations
 
+import bisect
 import json
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
@@ -25,7 +26,8 @@ STATUS_CODES = {py_trees.common.Status.SUCCESS: "S", py_trees.common.Status.FAIL
 MAX_VALUE_CHARS = 160
 
 
-def _show(value: Any) -> str:
+def show_value(value: Any) -> str:
+    """A blackboard value as short text (its repr, cut to MAX_VALUE_CHARS)."""
     text = repr(value)
     return text if len(text) <= MAX_VALUE_CHARS else text[: MAX_VALUE_CHARS - 3] + "..."
 
@@ -77,7 +79,7 @@ class SnapshotRecorder:
         self._since_keyframe = 0 if keyframe else self._since_keyframe + 1
         status = status_codes(self._nodes)
         feedback = [n.feedback_message or "" for n in self._nodes]
-        values = {key: _show(blackboard.value(key)) for key in blackboard.KEYS}
+        values = {key: show_value(blackboard.value(key)) for key in blackboard.KEYS}
         line: dict[str, Any] = {"tick": tick, "t": round(t, 3)}
         if keyframe:
             line["key"] = True
@@ -133,22 +135,80 @@ class TickState:
         return cls(data["tick"], data["t"], data["nodes"], status, {int(i): m for i, m in data["feedback"].items()})
 
 
+SQLITE_HEADER = b"SQLite format 3\x00"
+
+
+class NotSnapshots(ValueError):
+    """A file that is not a snapshot file (a journal, something else): says what it is and what reads it."""
+
+
+def _check_kind(part: Path) -> None:
+    """NotSnapshots unless ``part`` starts as a snapshot file does: with its ``tree`` line."""
+    with part.open("rb") as f:
+        head = f.read(64)
+    if head.startswith(SQLITE_HEADER):
+        raise NotSnapshots(
+            f"{part}:1:1: (snapshot): this is a journal (SQLite), not a snapshot file: `executive report {part}` shows what its runs did; "
+            "`executive run --snapshots FILE` records the ticks that `executive replay` shows"
+        )
+    if head and not head.startswith(b'{"tree"'):
+        raise NotSnapshots(f"{part}:1:1: (snapshot): not a snapshot file (one is written by `executive run --snapshots FILE`)")
+
+
 def _lines(path: Path) -> Iterator[dict[str, Any]]:
     for part in (path.with_name(path.name + ".1"), path):
         if part.exists():
+            _check_kind(part)
             with part.open(encoding="utf-8") as f:
                 for number, line in enumerate(f, 1):
                     try:
                         yield json.loads(line)
                     except json.JSONDecodeError as exc:
                         raise ValueError(f"{part}:{number}:{exc.colno}: (snapshot): {exc.msg}") from exc
+                    except UnicodeDecodeError as exc:
+                        raise NotSnapshots(f"{part}:{number}:1: (snapshot): not UTF-8 text, so not a snapshot file: {exc.reason}") from exc
+
+
+def recorded_ticks(path: str | Path) -> list[tuple[int, int]]:
+    """The ticks a recording holds, as (first, last) runs of consecutive ticks."""
+    spans: list[tuple[int, int]] = []
+    for line in _lines(Path(path)):
+        if "tick" not in line:
+            continue
+        tick = line["tick"]
+        if spans and spans[-1][1] + 1 == tick:
+            spans[-1] = (spans[-1][0], tick)
+        elif not spans or tick > spans[-1][1]:
+            spans.append((tick, tick))
+    return spans
+
+
+def _parts(path: Path) -> list[Path]:
+    """The files of a recording, oldest first (``FILE.1`` before ``FILE``); FileNotFoundError if there is none."""
+    parts = [part for part in (path.with_name(path.name + ".1"), path) if part.exists()]
+    if not parts:
+        raise FileNotFoundError(path)
+    return parts
+
+
+def _apply(state: TickState | None, nodes: list[dict[str, Any]], line: dict[str, Any]) -> TickState:
+    """The state after tick line ``line`` (a keyframe starts afresh)."""
+    previous = dict(state.blackboard) if state else {}
+    if state is None or line.get("key"):
+        state = TickState(line["tick"], line["t"], nodes)
+    state.tick, state.t = line["tick"], line["t"]
+    state.status.update({int(i): s for i, s in line.get("s", {}).items()})
+    state.feedback.update({int(i): m for i, m in line.get("f", {}).items()})
+    values = line.get("bb", {})
+    state.blackboard.update(values)
+    state.changed = {k for k, v in values.items() if previous.get(k) != v}  # a keyframe repeats what did not change
+    return state
 
 
 def replay(path: str | Path, tick: int | None = None) -> TickState:
     """The state at ``tick`` (the last recorded tick when None); LookupError if it was not recorded."""
     path = Path(path)
-    if not path.exists() and not path.with_name(path.name + ".1").exists():
-        raise FileNotFoundError(path)
+    _parts(path)
     state: TickState | None = None
     nodes: list[dict[str, Any]] = []
     for line in _lines(path):
@@ -158,18 +218,98 @@ def replay(path: str | Path, tick: int | None = None) -> TickState:
             continue
         if tick is not None and line["tick"] > tick:
             break
-        previous = dict(state.blackboard) if state else {}
-        if state is None or line.get("key"):
-            state = TickState(line["tick"], line["t"], nodes)
-        state.tick, state.t = line["tick"], line["t"]
-        state.status.update({int(i): s for i, s in line.get("s", {}).items()})
-        state.feedback.update({int(i): m for i, m in line.get("f", {}).items()})
-        values = line.get("bb", {})
-        state.blackboard.update(values)
-        state.changed = {k for k, v in values.items() if previous.get(k) != v}  # a keyframe repeats what did not change
+        state = _apply(state, nodes, line)
     if state is None or (tick is not None and state.tick != tick):
-        raise LookupError(f"{path}: tick {tick} is not in the recording")
+        spans = recorded_ticks(path)
+        held = ", ".join(f"{first}-{last}" if last > first else str(first) for first, last in spans) or "none: no tick was recorded"
+        raise LookupError(f"{path}: tick {tick} is not in the recording; it holds ticks {held}")
     return state
+
+
+@dataclass(frozen=True)
+class _Entry:
+    """Where a tick's line is: its file, its byte offset, the tree it belongs to, whether it is a keyframe."""
+
+    tick: int
+    part: Path
+    offset: int
+    tree: int
+    key: bool
+
+
+class Recording:
+    """A snapshot file indexed once, for the state at any recorded tick without reading it all again (``replay --web``'s slider).
+
+    ``watch`` is called with each tick line as the file is indexed (to gather what the whole run shows, a track).
+    """
+
+    def __init__(self, path: str | Path, watch: Callable[[dict[str, Any]], object] | None = None) -> None:
+        self.path = Path(path)
+        #: The trees recorded (a new one for each run), as their ``tree`` lines describe them.
+        self.trees: list[list[dict[str, Any]]] = []
+        self._entries: list[_Entry] = []
+        for part in _parts(self.path):
+            _check_kind(part)
+            with part.open("rb") as f:
+                offset = 0
+                for number, raw in enumerate(f, 1):
+                    line = _parse(raw, part, number)
+                    if "tree" in line:
+                        self.trees.append(line["tree"])
+                    elif self.trees:
+                        self._entries.append(_Entry(line["tick"], part, offset, len(self.trees) - 1, bool(line.get("key"))))
+                        if watch is not None:
+                            watch(line)
+                    offset += len(raw)
+        if not self._entries:
+            raise LookupError(f"{self.path}: no tick recorded")
+        self._ticks = [entry.tick for entry in self._entries]
+
+    @property
+    def first(self) -> int:
+        return self._ticks[0]
+
+    @property
+    def last(self) -> int:
+        return self._ticks[-1]
+
+    def nearest(self, tick: int) -> int:
+        """The recorded tick at or before ``tick`` (the first one before the recording starts)."""
+        return self._ticks[max(0, bisect.bisect_right(self._ticks, tick) - 1)]
+
+    def tree_of(self, tick: int) -> int:
+        """The index (in :attr:`trees`) of the tree ticking at recorded tick ``tick``."""
+        return self._entries[self._index(tick)].tree
+
+    def state_at(self, tick: int) -> TickState:
+        """The state at recorded tick ``tick``; LookupError (naming the range) if it was not recorded."""
+        i = self._index(tick)
+        k = i
+        while not self._entries[k].key:  # each file of a recording starts each tree with a keyframe
+            k -= 1
+        start = self._entries[k]
+        state: TickState | None = None
+        with start.part.open("rb") as f:
+            f.seek(start.offset)
+            for n in range(i - k + 1):
+                state = _apply(state, self.trees[start.tree], _parse(f.readline(), start.part, n))
+        assert state is not None
+        return state
+
+    def _index(self, tick: int) -> int:
+        i = bisect.bisect_left(self._ticks, tick)
+        if i == len(self._ticks) or self._ticks[i] != tick:
+            raise LookupError(f"{self.path}: tick {tick} is not in the recording (ticks {self.first} to {self.last})")
+        return i
+
+
+def _parse(raw: bytes, part: Path, number: int) -> dict[str, Any]:
+    try:
+        return json.loads(raw)
+    except UnicodeDecodeError as exc:
+        raise NotSnapshots(f"{part}:{number}:1: (snapshot): not UTF-8 text, so not a snapshot file: {exc.reason}") from exc
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{part}:{number}:{exc.colno}: (snapshot): {exc.msg}") from exc
 
 
 SYMBOLS = {"S": "✓", "F": "✕", "R": "*", "-": "-"}

@@ -35,7 +35,7 @@ class StatusSource:
         return bb.get("/mission/state"), _leg(bb), bb.get("/vehicle/mode"), bool(bb.get("/vehicle/armed"))
 
     def snapshot(self) -> dict[str, Any]:
-        """Plain values, ready for JSON: None where not known yet."""
+        """Plain values, ready for JSON: None where not known yet; ``t``: the clock's time (the vehicle's), with a clock."""
         bb = self._bb
         position, attitude, battery, target = (bb.get(k) for k in ("/vehicle/position", "/vehicle/attitude", "/vehicle/battery", "/mission/target"))
         waiting = bb.get("/mission/waiting")
@@ -43,6 +43,7 @@ class StatusSource:
         if target is not None and position is not None:
             distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
         return {
+            "t": None if self._clock is None else round(self._clock.now(), 2),
             "state": bb.get("/mission/state"),
             "reason": bb.get("/mission/reason"),
             "leg": _leg(bb),

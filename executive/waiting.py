@@ -152,6 +152,9 @@ class TreeWatch:
         self._nodes, self._description = describe(root)
         self._watch = WaitingWatch()
         self._live = True
+        # the new tree as it is until its first tick (a mission replaced while paused waits for the resume): never the old one's statuses
+        self._statuses = [n.status for n in self._nodes]
+        self._feedback = [n.feedback_message for n in self._nodes]
 
     def ticked(self, tick: int, now: float) -> None:
         # copied: once the run ends the tree is stopped (every status INVALID), and its last tick is what ``view`` shows

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -20,6 +22,16 @@ def filterpy_loaded() -> None:
 @pytest.fixture(autouse=True)
 def every_test_on_a_clean_blackboard(clean_blackboard: None) -> None:
     """The kit's ``clean_blackboard``, for every test."""
+
+
+@pytest.fixture(autouse=True)
+def logging_as_it_was() -> Iterator[None]:
+    """A command run in a test (``setup_logging``) points the root logger at that test's captured stderr, closed after it: put it back."""
+    root = logging.getLogger()
+    handlers, level = root.handlers[:], root.level
+    yield
+    root.handlers[:] = handlers
+    root.setLevel(level)
 
 
 @pytest.fixture

@@ -104,7 +104,7 @@ def test_plugins_classes_join_the_catalogue_with_the_same_description():
     spec = built.get("sea_state_below")
     assert spec is not None and spec.kind == "guard" and spec.doc == "The sea state is below ``max_level`` (a plugin's guard)."
     assert spec.param("max_level").default == 4 and spec.origin.endswith("SeaStateBelow")  # type: ignore[union-attr]
-    assert len(built.nodes()) == len(catalogue().nodes()) + 1
+    assert len(built.nodes()) == len(Catalogue.build().nodes()) + 1
 
 
 def test_a_name_taken_twice_is_refused_naming_both():

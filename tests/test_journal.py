@@ -47,7 +47,7 @@ def test_a_run_is_recorded_as_it_happens(journal, clock, square_mission):
     report = other.report()
     other.close()
     assert [(t["before"], t["after"]) for t in report["transitions"]] == [("READY", "RUNNING")]
-    assert [leg["leg"] for leg in report["legs"]] == [0, 1]
+    assert [(leg["waypoint"], leg["waypoints"]) for leg in report["legs"]] == [(1, 4), (2, 4)]  # numbered from 1, as the status
     assert report["samples"][0]["reads"][1] == {"sensor": "temperature", "value": 18.2, "unit": "°C", "time": 1.0}
     assert report["events"] == [{"t": clock.now(), "kind": "failsafe", "text": "EKF lost: holding"}]
     assert report["outcome"] is None and report["ended"] is None
@@ -93,9 +93,9 @@ def test_an_edited_route_is_recorded_and_resumed_as_edited(journal, clock, squar
     after_crash.close()
     assert point.route == Route((first, extra, last), 2, home)
     assert point.leg_index == 2  # the route edit is the latest word on the leg
-    assert [(r["leg"], r["waypoints"], r["reason"]) for r in report["routes"]] == [
-        (1, 3, "ctl route: remove 2 and 3, add one"),
-        (2, 3, "switch A: home here"),
+    assert [(r["waypoint"], r["waypoints"], r["reason"]) for r in report["routes"]] == [
+        (2, 3, "ctl route: remove 2 and 3, add one"),
+        (3, 3, "switch A: home here"),
     ]
     assert "route edits (2):" in render(report)
 

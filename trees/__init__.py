@@ -42,6 +42,10 @@ def subtrees() -> list[tuple[str, Literal["decorator", "subtree"], Callable[...,
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     """The root behaviour of the tree the mission selects (built in, a plugin's, or ``module:function``)."""
+    if not isinstance(mission.tree, str):
+        from executive import composition
+
+        return composition.build(mission)
     from executive.plugins import resolve_tree  # it lists this package's trees
 
     return resolve_tree(mission.tree)(mission)

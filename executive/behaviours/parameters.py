@@ -29,6 +29,8 @@ class ParameterIs(TimedBehaviour):
         "ask_every_s": "how often the value is asked for until it comes",
         "label": "the node's name (name is the parameter's)",
     }
+    #: Parameters kept under other attribute names (read back by executive.recompose); label is the node's name.
+    param_attributes = {"name": "parameter", "autopilot": "firmware", "label": "name"}
     autopilot: AutopilotPort
 
     def __init__(

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
+import traceback
 from collections.abc import Sequence
 
 from executive import __version__
@@ -14,6 +16,8 @@ EXIT_OK = 0  # success / mission COMPLETED
 EXIT_FAILED = 1  # mission aborted or failed at run time
 EXIT_BAD_INPUT = 2  # usage error, invalid mission file
 EXIT_NO_VEHICLE = 3  # could not reach the vehicle
+EXIT_INTERRUPTED = 130  # Ctrl-C before anything was commanded (128 + SIGINT, as a shell reports it)
+EXIT_CRASHED = 70  # a bug: an exception nothing expected (sysexits' EX_SOFTWARE); a service restarts on it, not on 1
 
 
 class BadInput(Exception):
@@ -27,7 +31,7 @@ class NoVehicle(Exception):
 #: Command -> the module of this package that registers it (``register(subparsers)`` setting ``func``).
 COMMANDS = {
     "validate": "validate", "show": "show", "run": "run", "sim": "sim", "schema": "schema", "ctl": "ctl", "report": "report",
-    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files", "behaviours": "behaviours",
+    "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files", "service": "service", "behaviours": "behaviours",
 }  # fmt: skip
 
 
@@ -50,13 +54,40 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse exits 2 on usage errors, 0 on --help
         return int(exc.code or 0)
     try:
-        return int(args.func(args))
+        code = int(args.func(args))
     except BadInput as exc:
         print(f"executive: {args.command}: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except NoVehicle as exc:
         print(f"executive: {args.command}: {exc}", file=sys.stderr)
         return EXIT_NO_VEHICLE
+    except BrokenPipeError:  # `executive report j.db | head`: the reader has what it wanted
+        _discard_stdout()
+        return EXIT_OK
+    except KeyboardInterrupt:  # a run catches Ctrl-C itself once it commands the vehicle; before that, nothing to undo
+        print(f"executive: {args.command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:
+        plugins = sys.modules.get("executive.plugins")  # loaded if it raised: not imported here, ctl starts fast
+        if plugins is not None and isinstance(exc, plugins.PluginError):
+            print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
+            return EXIT_BAD_INPUT
+        # a bug: its traceback, and an exit a service manager tells from a mission that ended badly (1)
+        traceback.print_exc()
+        print(f"executive: {args.command}: crashed (a bug, traceback above): exit {EXIT_CRASHED}", file=sys.stderr)
+        return EXIT_CRASHED
+    try:
+        sys.stdout.flush()  # here, not at exit, where a reader that went away would cost a traceback
+    except BrokenPipeError:
+        _discard_stdout()
+    return code
+
+
+def _discard_stdout() -> None:
+    """Point stdout at /dev/null, so that the interpreter's last flush at exit finds no closed pipe (and prints no traceback)."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
 
 
 if __name__ == "__main__":

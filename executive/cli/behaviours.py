@@ -24,8 +24,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the catalogue (or the nodes named); exit 2 naming a node that does not exist."""
-    found = catalogue()
+    """Print the catalogue (or the nodes named); exit 2 naming a node that does not exist, or a plugin that cannot be loaded."""
+    from executive.plugins import PluginError
+
+    try:
+        found = catalogue()
+    except PluginError as exc:
+        print(f"executive: behaviours: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     unknown = [n for n in args.names if found.get(n) is None]
     if unknown:
         print(f"executive: behaviours: no node {', '.join(map(repr, unknown))} (executive behaviours lists them)", file=sys.stderr)

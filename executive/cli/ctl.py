@@ -46,8 +46,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     requests = p.add_subparsers(dest="request", required=True, metavar="REQUEST")
     for name, text in _PLAIN.items():
         requests.add_parser(name, parents=[common], help=text, description=text)
-    upload = requests.add_parser("upload", parents=[common], help="load a mission file (while not running)")
+    upload = requests.add_parser("upload", parents=[common], help="load a mission file; while PAUSED, replace the mission", description=_UPLOAD_HELP)
     upload.add_argument("mission", help="the mission file")
+    leg = "while PAUSED: continue from waypoint N of the new mission (default: the one the vehicle heads for)"
+    upload.add_argument("--leg", type=_number, metavar="N", help=leg)
     _register_route(requests.add_parser("route", parents=[common], help="show or edit the route", description=_ROUTE_HELP), common)
     tree_help = "the running tree: each node's status (* running, ✓ succeeded, ✕ failed, - not ticked) and feedback"
     tree = requests.add_parser("tree", parents=[common], help=tree_help, description=tree_help + "; the status line says what it waits for")
@@ -61,6 +63,12 @@ def register(sub: argparse._SubParsersAction) -> None:
             command.add_argument("--force", action="store_true", help="skip the autopilot's checks (ArduPilot's 2989/21196 magic)")
     p.set_defaults(func=main)
 
+
+_UPLOAD_HELP = """Load a mission file READY (while IDLE, READY, COMPLETED or ABORTED). While PAUSED, replace the
+mission (route, limits, tree): same vehicle, autopilot and rc; it continues from the waypoint the
+vehicle was heading for (or --leg N) with the samples already taken, and stays PAUSED until
+`ctl resume`. The new route goes to the autopilot at once (uploaded and read back). An incompatible
+mission is refused with the reason, and nothing changes."""
 
 _VEHICLE = {
     "arm": "arm the vehicle",
@@ -154,6 +162,8 @@ def main(args: argparse.Namespace) -> int:
     if args.request == "upload":
         try:
             extra = {"filename": args.mission, "text": Path(args.mission).read_text(encoding="utf-8")}
+            if args.leg is not None:
+                extra["leg"] = args.leg
         except (OSError, UnicodeDecodeError) as exc:
             print(f"{args.mission}:1:1: (file): {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT

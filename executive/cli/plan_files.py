@@ -86,11 +86,9 @@ def run_export(args: argparse.Namespace) -> int:
     if mission is None:
         return EXIT_BAD_INPUT
     if fmt == "btcpp":
-        try:
-            text = btcpp.export_tree(args.mission, mission.name, _catalogue())
-        except ValueError as exc:
-            print(f"executive: export: {args.mission}: {exc}", file=sys.stderr)
-            return EXIT_BAD_INPUT
+        text, warnings = btcpp.export_tree(args.mission, mission, _catalogue())
+        for where, why in warnings:
+            print(f"{args.mission}: tree {mission.tree}: {where}: {why} (warning)", file=sys.stderr)
         return EXIT_OK if _write(args.output, text, "export") else EXIT_BAD_INPUT
     exported = export_plan(mission) if fmt == "plan" else export_waypoints(mission)
     _report(args.mission, exported)

@@ -1,4 +1,8 @@
-"""``executive report DB``: what a run did - state changes, legs, samples, events - from the journal."""
+"""``executive report DB``: what a run did - state changes, legs, samples, events - from the journal.
+
+Waypoints are numbered from 1 here and in ``--json`` (``waypoint``), as on the status line, in its
+JSON lines (``leg`` of ``legs``) and in ``executive ctl``: leg N is the way to waypoint N.
+"""
 
 from __future__ import annotations
 
@@ -25,6 +29,13 @@ def _when(wall: float | None) -> str:
     return "-" if wall is None else datetime.fromtimestamp(wall, UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
+def _heading(row: dict[str, Any]) -> str:
+    """``heading for waypoint 3 of 8``, or ``every waypoint reached (8 of 8)`` once past the last."""
+    if row["waypoint"] is None:
+        return f"every waypoint reached ({row['waypoints']} of {row['waypoints']})"
+    return f"heading for waypoint {row['waypoint']} of {row['waypoints']}"
+
+
 def render(report: dict[str, Any]) -> str:
     """The report for a person."""
     lines = [
@@ -34,7 +45,7 @@ def render(report: dict[str, Any]) -> str:
         "state changes:",
         *(f"  [{t['t']:9.1f} s] {t['before']} -> {t['after']}: {t['reason']}" for t in report["transitions"]),
         "legs:",
-        *(f"  [{leg['t']:9.1f} s] heading for waypoint {leg['leg'] + 1}" for leg in report["legs"]),
+        *(f"  [{leg['t']:9.1f} s] {_heading(leg)}" for leg in report["legs"]),
         f"samples ({len(report['samples'])}):",
     ]
     for sample in report["samples"]:
@@ -43,12 +54,12 @@ def render(report: dict[str, Any]) -> str:
             reads.setdefault(f"{read['sensor']} ({read['unit']})" if read["unit"] else read["sensor"], []).append(read["value"])
         summary = ", ".join(f"{name} {sum(v) / len(v):.2f}" for name, v in reads.items())
         lines.append(
-            f"  waypoint {sample['leg_index'] + 1} at {sample['lat']:.7f}, {sample['lon']:.7f}: {len(sample['reads'])} reads, mean {summary}"
+            f"  waypoint {sample['waypoint']} at {sample['lat']:.7f}, {sample['lon']:.7f}: {len(sample['reads'])} reads, mean {summary}"
             + (f" ({sample['instrument']})" if sample.get("instrument") else "")
         )
     if report.get("routes"):
         lines.append(f"route edits ({len(report['routes'])}):")
-        lines += [f"  [{r['t']:9.1f} s] {r['waypoints']} waypoints, heading for {r['leg'] + 1}: {r['reason']}" for r in report["routes"]]
+        lines += [f"  [{r['t']:9.1f} s] {r['waypoints']} waypoints, {_heading(r)}: {r['reason']}" for r in report["routes"]]
     lines.append(f"events ({len(report['events'])}):")
     lines += [f"  [{e['t']:9.1f} s] {e['kind']}: {e['text']}" for e in report["events"]]
     return "\n".join(lines)

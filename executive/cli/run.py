@@ -10,14 +10,27 @@ import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-from executive.assembly import Plug, build_runtime, can_base, control_socket, ground_stations, journal_recorder, obstacle_camera, snapshot_recorder
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
+from executive.assembly import (
+    Plug,
+    build_runtime,
+    can_base,
+    control_socket,
+    ground_stations,
+    journal_recorder,
+    live_view,
+    obstacle_camera,
+    service_manager,
+    snapshot_recorder,
+)
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
 from executive.cli.common import faults_or_report, load_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
+from executive.io.mavlink.endpoint import BadEndpoint, Unreachable, check_endpoint
 from executive.io.mavlink.link import PymavlinkLink
+from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionStatus
@@ -33,6 +46,7 @@ if TYPE_CHECKING:
     import can
 
     from executive.sim.faults import FaultInjector
+    from executive.web.server import WebServer
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -62,7 +76,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--faults", metavar="FILE", help="simulator only: YAML list of faults to inject into the simulated vehicle")
     p.add_argument("--tlog", metavar="FILE", help="record the whole MAVLink link in FILE (.tlog, for Mission Planner and pymavlink)")
     p.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key (32 bytes, 64 hex digits or a passphrase)")
-    p.add_argument("--socket", metavar="PATH", default=default_socket_path(), help="control socket for `executive ctl` (default %(default)s)")
+    p.add_argument(
+        "--socket",
+        metavar="PATH",
+        help=f"control socket for `executive ctl` (default {default_socket_path()}; when another executive serves that one, a socket of "
+        "its own, named at start-up); 'none': no control socket",
+    )
     p.add_argument("--wait", action="store_true", help="load the mission READY, wait for `ctl start`, and keep serving after it ends")
     p.add_argument("--gcs", metavar="URL", help="a MAVLink endpoint for ground stations (e.g. udpin:0.0.0.0:14551)")
     p.add_argument("--gcs-sysid", type=int, action="append", metavar="N", help="system id allowed to command us (repeatable; default 255)")
@@ -72,6 +91,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
     p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
     p.add_argument("--obstacles", metavar="URL", help="a camera's obstacle distances (JSON over UDP, udpin:HOST:PORT), sent on as OBSTACLE_DISTANCE")
+    p.add_argument(
+        "--web",
+        metavar="[HOST:]PORT",
+        help="the live view in a browser on PORT (127.0.0.1 unless HOST is given; beyond it the buttons need the token printed at start-up)",
+    )
+    p.add_argument("--web-token-file", metavar="FILE", help="the live view's token (its first line, >= 16 characters), instead of a new one")
     p.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (default: warnings and the operator's events; -v all info, -vv debug)"
     )
@@ -85,7 +110,7 @@ def _vehicle_link(
     """A link to the vehicle named by --mavlink, or to a simulated one started here."""
     options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog}
     if args.mavlink:
-        link = PymavlinkLink(args.mavlink, **options)
+        link = _open_link("--mavlink", args.mavlink, **options)
         try:
             yield link
         finally:
@@ -122,26 +147,47 @@ def _vehicle_link(
             base_bus.shutdown()
 
 
+def _open_link(option: str, url: str, **options: Any) -> PymavlinkLink:
+    """The link of ``option`` (its URL checked already); NoVehicle when it cannot be opened."""
+    try:
+        return PymavlinkLink(url, **options)
+    except Unreachable as exc:
+        raise NoVehicle(f"{option} {exc}") from exc
+
+
 @contextlib.contextmanager
 def _gcs_link(url: str | None, system_id: int) -> Iterator[PymavlinkLink | None]:
     """The ground stations' own endpoint, if asked for (we speak there as the onboard computer of system ``system_id``)."""
     if url is None:
         yield None
         return
-    link = PymavlinkLink(url, system_id=system_id)
+    link = _open_link("--gcs", url, system_id=system_id)
     try:
         yield link
     finally:
         link.close()
 
 
-def _usable_socket(path: str) -> str | None:
-    """``path`` unless another executive serves it (then no control socket, with a warning)."""
-    if path.lower() == "none":
-        return None
+def _control_socket_path(asked: str | None) -> str | None:
+    """The control socket to serve: ``--socket`` (BadInput when another executive serves it), else the default, else one of our own.
+
+    A second executive on the default path would leave ``executive ctl`` reaching the first: it
+    takes a path with its process id instead, and says so.
+    """
+    if asked is not None:
+        if asked.lower() == "none":
+            return None
+        if os.path.exists(asked) and socket_alive(asked):
+            raise BadInput(f"--socket {asked}: another executive is listening there (stop it, or choose another path)")
+        return asked
+    path = default_socket_path()
     if os.path.exists(path) and socket_alive(path):
-        print(f"executive: run: {path}: another executive is listening there; running without a control socket", file=sys.stderr)
-        return None
+        own = default_socket_path(os.getpid())
+        print(
+            f"executive: run: another executive serves {path}; this one listens on {own} (executive ctl --socket {own} ...)",
+            file=sys.stderr,
+        )
+        return own
     return path
 
 
@@ -200,6 +246,34 @@ def _obstacle_socket(spec: str | None, stack: contextlib.ExitStack) -> socket.so
     return sock
 
 
+def _service_manager(stack: contextlib.ExitStack) -> Watchdog | None:
+    """Under systemd (``Type=notify``): the watchdog and status service, fed on the wall clock whatever the speed-up; else None."""
+    notifier = Notifier.from_environment()
+    if notifier is None:
+        return None
+    stack.callback(notifier.close)
+    return Watchdog(notifier, ScaledClock(), watchdog_period_s())
+
+
+def _web_server(args: argparse.Namespace, stack: contextlib.ExitStack) -> WebServer | None:
+    """The live view's server of --web, bound (BadInput: a bad address or token file; NoVehicle: the port cannot be had), closed with ``stack``."""
+    if args.web is None:
+        if args.web_token_file:
+            raise BadInput("--web-token-file needs --web [HOST:]PORT")
+        return None
+    from executive.web.server import WebAddressError, open_server
+
+    try:
+        server, told = open_server(args.web, args.web_token_file)
+    except WebAddressError as exc:
+        raise BadInput(f"--web: {exc}") from exc
+    except OSError as exc:
+        raise NoVehicle(f"--web: cannot listen on {args.web}: {exc}") from exc
+    stack.callback(server.close)
+    print(f"executive: {told}", file=sys.stderr, flush=True)
+    return server
+
+
 def _signing_hint(link: PymavlinkLink) -> str:
     """Why no heartbeat was heard when signing is the reason: every packet failed the signature check."""
     unsigned, other_key, accepted = link.signature_failures
@@ -215,7 +289,9 @@ def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
     edited = f", on its route as last edited ({len(resume.route)} waypoints)" if resume.route is not None else ""
-    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} with {len(resume.samples)} sample(s) already taken{edited}"
+    replaced = f", on mission {resume.mission.name!r} that replaced it" if resume.mission is not None else ""
+    taken = f"with {len(resume.samples)} sample(s) already taken"
+    return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} {taken}{replaced}{edited}"
 
 
 def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
@@ -235,12 +311,14 @@ def _plugs(
     can_bus: can.BusABC | None,
     obstacle_socket: socket.socket | None,
     gcs_link: PymavlinkLink | None,
+    socket_path: str | None,
+    web: WebServer | None = None,
 ) -> list[Plug]:
     """The optional parts of this run, as the command line asks for them."""
     plugs = []
     if gcs_link is not None:
         plugs.append(ground_stations(gcs_link, args.gcs_sysid or (255,)))
-    if (socket_path := _usable_socket(args.socket)) is not None:
+    if socket_path is not None:
         plugs.append(control_socket(socket_path))
     if journal is not None:
         plugs.append(journal_recorder(journal))
@@ -250,6 +328,8 @@ def _plugs(
         plugs.append(can_base(can_bus))
     if obstacle_socket is not None:
         plugs.append(obstacle_camera(obstacle_socket))
+    if web is not None:
+        plugs.append(live_view(web))
     return plugs
 
 
@@ -304,6 +384,13 @@ def main(args: argparse.Namespace) -> int:
         faults = faults_or_report(event_files, mission.vehicle, clock)
         if faults is None:
             return EXIT_BAD_INPUT
+    for option, url in (("--mavlink", args.mavlink), ("--gcs", args.gcs)):
+        if url is not None:
+            try:
+                check_endpoint(url)
+            except BadEndpoint as exc:
+                raise BadInput(f"{option} {exc}") from exc
+    socket_path = _control_socket_path(args.socket)
     signing_key = signing_key_arg(args.signing_key)
     _check_instrument(mission, simulator=not args.mavlink)
     if args.obstacles is not None:
@@ -315,6 +402,7 @@ def main(args: argparse.Namespace) -> int:
             raise BadInput(f"--obstacles: {exc}") from exc
     with contextlib.ExitStack() as stack:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
+        web = _web_server(args, stack)
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
         gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
         journal, snapshots = _recorders(args, clock, stack)
@@ -323,14 +411,18 @@ def main(args: argparse.Namespace) -> int:
         if journal is not None and args.resume:
             resume = journal.resume_point(mission)
             print(f"executive: run: {_resume_text(resume)}", file=sys.stderr)
-        progress = Progress(sys.stdout, clock)
+            if resume is not None and resume.mission is not None:  # replaced while paused (ctl upload): the run goes on with that one
+                mission = resume.mission
+        watchdog = _service_manager(stack)
+        progress = Progress(sys.stdout, clock, quiet=watchdog is not None)  # under systemd: status lines on changes, into the journal
         attach_live_line(progress)  # a log record clears the live line first
         stack.callback(attach_live_line, None)
+        plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path, web)
         runtime = build_runtime(
             mission,
             link,
             clock,
-            plugs=_plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link),
+            plugs=plugs if watchdog is None else [*plugs, service_manager(watchdog)],
             rate_hz=args.rate,
             system_id=args.sysid,
             target_system=args.target_system,
@@ -348,18 +440,28 @@ def main(args: argparse.Namespace) -> int:
         except SeveralAutopilots as exc:
             print(f"executive: run: {exc}", file=sys.stderr)
             return EXIT_NO_VEHICLE
+        except KeyboardInterrupt:
+            where = args.mavlink or "the simulated vehicle"
+            print(f"executive: run: interrupted while waiting for the autopilot's first heartbeat on {where}: nothing was commanded", file=sys.stderr)
+            return EXIT_INTERRUPTED
         if not connected:
             which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
             print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)
             return EXIT_NO_VEHICLE
+        if watchdog is not None:
+            watchdog.ready(f"autopilot {'/'.join(map(str, runtime.reader.autopilot or ()))} heard on {link.url}; mission {mission.name!r}")
         stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
+            # with --wait, an unfinished run in the journal goes on at once (a restart after a crash); a new one waits for `ctl start`
             with keeping_time(runtime.pacer.late_after_s / clock.speedup):
-                outcome = runtime.run(start=not args.wait, serve=args.wait, resume=resume)
+                outcome = runtime.run(start=not args.wait or resume is not None, serve=args.wait, resume=resume)
         finally:
             for sig, handler in stop.items():
                 signal.signal(sig, handler)
-    print(f"executive: mission {mission.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
+            if watchdog is not None:
+                watchdog.stopping(f"mission {runtime.mission_state.status}: {runtime.mission_state.reason}")
+    ran = runtime.mission_state.mission or mission  # the one that replaced it, if an operator did (ctl upload while paused)
+    print(f"executive: mission {ran.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
     if runtime.mission_state.samples:
         count = len(runtime.mission_state.samples)
         print(f"executive: {count} sample{'' if count == 1 else 's'} recorded", file=sys.stderr)

@@ -21,7 +21,13 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 def run(args: argparse.Namespace) -> int:
     """Print the schema, or write it to ``--output``."""
-    text = mission_json_schema_text()
+    from executive.plugins import PluginError
+
+    try:
+        text = mission_json_schema_text()  # plugins' behaviours are in it
+    except PluginError as exc:
+        print(f"executive: schema: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if args.output is None:
         sys.stdout.write(text)
         return EXIT_OK

@@ -18,6 +18,7 @@ from executive import plugins
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.mission.errors import FieldError, MissionError
 from executive.mission.loader import load_mission
+from executive.mission.model import tree_name
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -68,6 +69,7 @@ def _validate(path: str, as_json: bool, results: list[dict[str, Any]]) -> None:
         if not as_json:
             print("\n".join(map(str, exc.errors)), file=sys.stderr)
         return
-    results.append({"file": path, "ok": True, "waypoints": len(mission.waypoints), "vehicle": mission.vehicle, "tree": mission.tree})
+    tree = tree_name(mission) or "(composed in the file)"
+    results.append({"file": path, "ok": True, "waypoints": len(mission.waypoints), "vehicle": mission.vehicle, "tree": tree})
     if not as_json:
-        print(f"{path}: ok ({len(mission.waypoints)} waypoints, vehicle {mission.vehicle}, tree {mission.tree})")
+        print(f"{path}: ok ({len(mission.waypoints)} waypoints, vehicle {mission.vehicle}, tree {tree})")

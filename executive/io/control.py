@@ -28,10 +28,13 @@ MAX_UNREAD_REPLY_BYTES = 1 << 20  # a client leaving more replies than this unre
 Handler = Callable[[dict[str, Any]], dict[str, Any]]
 
 
-def default_socket_path() -> str:
-    """``$XDG_RUNTIME_DIR/executive.sock``, else a per-user file in the temp directory."""
+def default_socket_path(pid: int | None = None) -> str:
+    """``$XDG_RUNTIME_DIR/executive.sock``, else a per-user file in the temp directory; with ``pid``, that process's own beside it."""
     runtime_dir = os.environ.get("XDG_RUNTIME_DIR")
-    return os.path.join(runtime_dir, "executive.sock") if runtime_dir else os.path.join(tempfile.gettempdir(), f"executive-{os.getuid()}.sock")
+    own = "" if pid is None else f"-{pid}"
+    if runtime_dir:
+        return os.path.join(runtime_dir, f"executive{own}.sock")
+    return os.path.join(tempfile.gettempdir(), f"executive-{os.getuid()}{own}.sock")
 
 
 class SocketInUse(OSError):

@@ -23,7 +23,7 @@ from executive.io.sampler import InstrumentError, InstrumentSampler
 from executive.mission.errors import Path
 from executive.mission.model import InstrumentConfig, Mission, SamplingOptions
 
-GROUP = "executive.instruments"
+GROUP = plugins.INSTRUMENTS
 BUILT_IN = {"simulated": "executive.io.sampler:SimulatedSampler", "serial": "executive.io.serial_sampler:SerialSampler"}
 
 
@@ -34,16 +34,16 @@ def known() -> list[str]:
 
 def backend(kind: str) -> type[InstrumentSampler]:
     """The sampler class of an instrument type; InstrumentError when there is none."""
+    if kind in BUILT_IN:
+        found: type[InstrumentSampler] = plugins.load_object(BUILT_IN[kind], "")
+        return found
     points = plugins.named(GROUP)
-    if kind not in BUILT_IN and kind not in points:
+    if kind not in points:
         raise InstrumentError(f"unknown instrument type {kind!r} (known: {', '.join(known())})")
     try:
-        found = plugins.load_object(BUILT_IN[kind], "") if kind in BUILT_IN else plugins.load(points[kind])
+        return plugins.load_class(points[kind], InstrumentSampler, "an instrument (subclass executive.io.sampler.InstrumentSampler)")
     except plugins.PluginError as exc:
         raise InstrumentError(str(exc)) from exc
-    if not (isinstance(found, type) and issubclass(found, InstrumentSampler)):
-        raise InstrumentError(f"instrument type {kind!r}: {found!r} is not an InstrumentSampler")
-    return found
 
 
 def options_of(config: InstrumentConfig) -> BaseModel:

@@ -1,7 +1,8 @@
 """The mission lifecycle and progress: the only writer of ``/mission``.
 
 States and requests follow the AUV mission manager: upload (IDLE/READY/COMPLETED -> READY, refused
-while RUNNING or PAUSED), start (READY -> RUNNING; COMPLETED -> RUNNING from the first waypoint),
+while RUNNING or PAUSED; while PAUSED a mission is *replaced* instead, see below), start (READY ->
+RUNNING; COMPLETED -> RUNNING from the first waypoint),
 pause (RUNNING -> PAUSED), resume (PAUSED -> RUNNING), delete (READY/PAUSED/COMPLETED -> IDLE; a
 running mission is paused first). We add ABORTED, where a failed or interrupted mission ends; it
 behaves like COMPLETED. A refused request raises :class:`Refused` and changes nothing.
@@ -23,6 +24,13 @@ it, and tells the route listeners. The operations that make new routes are in
 waypoint): SET_HOME changes it through ``set_route(..., home=...)``, and the route listeners (the
 route keeper) take it to the autopilot. An edit that would break the mission's rules (a waypoint
 outside the geofence, no waypoint left for a tree that needs one) is refused.
+
+While PAUSED the whole mission may be replaced (hot reload: :meth:`MissionState.replace`, planned
+by :mod:`executive.mission.reload`): the state stays PAUSED, at the leg and with the samples the
+plan gives. The replace checks are asked first (the runtime builds the new tree there: a tree that
+cannot be built refuses the replacement, nothing changed); then the replace listeners are told
+(the runtime swaps the tree, the journal continues the run on the new mission, the route keeper
+takes the new route to the autopilot).
 """
 
 from __future__ import annotations
@@ -67,6 +75,10 @@ Listener = Callable[[MissionStatus, MissionStatus, str], None]
 SampleListener = Callable[[Sample], None]
 #: Told of every change of the route: the new route and why (a journal keeps it).
 RouteListener = Callable[[Route, str], None]
+#: Told of a mission replaced while PAUSED: the new mission and why (the runtime's tree, the journal, the route keeper).
+ReplaceListener = Callable[[Mission, str], None]
+#: Asked before a replacement: why this mission cannot replace the paused one (None: it can).
+ReplaceCheck = Callable[[Mission], "str | None"]
 #: States in which the route may be changed.
 ROUTE_EDITABLE = frozenset({MissionStatus.READY, MissionStatus.RUNNING, MissionStatus.PAUSED})
 
@@ -100,6 +112,8 @@ class MissionState:
         self.listeners: list[Listener] = []
         self.sample_listeners: list[SampleListener] = []
         self.route_listeners: list[RouteListener] = []
+        self.replace_checks: list[ReplaceCheck] = []
+        self.replace_listeners: list[ReplaceListener] = []
         #: While PAUSED, the tree holds the vehicle in its safe mode; False when a person paused it by taking the vehicle: hands off.
         self.hold_while_paused = True
 
@@ -122,6 +136,36 @@ class MissionState:
         self.leg_index = 0
         self.samples = ()
         self._transition("upload", f"mission {mission.name!r} loaded, {len(mission.waypoints)} waypoints")
+
+    def replace(
+        self, mission: Mission, leg_index: int, samples: Iterable[Sample], reason: str, vehicle_at: tuple[float, float] | None = None
+    ) -> None:
+        """While PAUSED: make ``mission`` the mission, heading for ``leg_index``, with ``samples`` already taken; it stays PAUSED.
+
+        Refused (nothing changes) in another state, for a leg outside the new route, when the
+        mission breaks a rule or, with the vehicle's position, a waypoint is out of reach (as
+        :meth:`upload`), or when a replace check says why not. The listeners are told after.
+        """
+        if self.status is not MissionStatus.PAUSED:
+            raise Refused(f"cannot replace the mission while {self.status} (only while PAUSED)")
+        if not 0 <= leg_index < len(mission.waypoints):
+            raise Refused(f"leg {leg_index + 1} is outside a route of {len(mission.waypoints)} waypoints")
+        problems = [f"{format_path(path)}: {why}" for path, why in cross_field_errors(mission)]
+        if vehicle_at is not None:
+            problems += out_of_reach(mission, *vehicle_at)
+        problems += [why for check in self.replace_checks if (why := check(mission)) is not None]
+        if problems:
+            raise Refused(f"mission {mission.name!r} refused: " + "; ".join(problems))
+        self.mission = mission
+        self.leg_index = leg_index
+        self.samples = ()
+        self.restore_samples(samples)
+        self.reason = reason
+        self._bb.set("/mission/reason", reason)
+        self._publish()
+        log.info("%s", reason)
+        for listener in self.replace_listeners:
+            listener(mission, reason)
 
     def start(self) -> None:
         self._check("start")

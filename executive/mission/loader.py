@@ -161,6 +161,13 @@ def load_mission_text(text: str, filename: str) -> Mission:
 
 def _mission_checks(mission: Mission) -> list[tuple[Path, str]]:
     errors = cross_field_errors(mission)
+    if not isinstance(mission.tree, str):
+        from executive import composition  # it reads the node catalogue, which reads the behaviours, which read this package
+
+        try:
+            return errors + composition.errors(mission)
+        except plugins.PluginError as exc:
+            return [*errors, (("tree",), str(exc))]
     try:
         plugins.resolve_tree(mission.tree)
     except (plugins.UnknownTree, plugins.PluginError) as exc:

@@ -44,9 +44,9 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from typing import Annotated, Literal, get_args
+from typing import Annotated, Any, Literal, get_args
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, model_validator
 
 from executive.geofence import Geofence, open_ring, polygon_problems
 from executive.mission.errors import Path
@@ -59,6 +59,36 @@ _STRICT = ConfigDict(strict=True, extra="forbid", frozen=True, allow_inf_nan=Fal
 
 #: ``tree:``: a name (built in, or a plugin's), or ``module.path:function`` (``module.path`` alone: its ``build``).
 TREE_NAME = r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*(:[A-Za-z_][A-Za-z0-9_]*)?$"
+_TREE_NAME_RE = re.compile(TREE_NAME)
+
+
+def _tree_value(value: object) -> object:
+    """``tree:`` is a tree's name or a tree composed in the file (a mapping, checked by :mod:`executive.composition`)."""
+    if isinstance(value, str) and not _TREE_NAME_RE.match(value):
+        raise ValueError("not a tree name (a name, module.path or module.path:function) nor a composed tree (a mapping)")
+    if not isinstance(value, str | dict):
+        raise ValueError("expected a tree name, or a tree composed in the file (a mapping with node: or use:)")
+    return value
+
+
+#: ``tree:``'s JSON schema; ``executive.mission.schema`` puts the node catalogue's in place of the composed tree's.
+TREE_SCHEMA = {
+    "anyOf": [
+        {"type": "string", "pattern": TREE_NAME, "description": "a tree by name: built in, a plugin's, or module:function"},
+        {"type": "object", "description": "a tree composed in the file: node: or use:, with parameters (executive behaviours)"},
+    ],
+    "default": "waypoints",
+    "description": "the tree the mission runs",
+}
+#: ``tree:``: a name, or a mapping composing the node catalogue (:mod:`executive.composition`).
+TreeSpec = Annotated[str | dict[str, Any], BeforeValidator(_tree_value), WithJsonSchema(TREE_SCHEMA)]
+
+
+def tree_name(mission: Mission) -> str | None:
+    """The name of the mission's tree; None for a tree composed in the file."""
+    return mission.tree if isinstance(mission.tree, str) else None
+
+
 #: A vtol flies its legs as a plane and circles each point at WP_LOITER_RAD (60 m): a leg counts as reached from farther out.
 VTOL_MIN_ACCEPTANCE_RADIUS_M = 70.0
 #: ArduPlane (Q_GUIDED_MODE=1) flies a GUIDED target on its lift motors only within WP_LOITER_RAD of the aircraft: 60 m less a margin.
@@ -362,11 +392,10 @@ class Mission(BaseModel):
     autopilot: AutopilotName | None = Field(
         None, description="the autopilot firmware (default: the one the HEARTBEAT names); px4 starts a simulated PX4 without --mavlink"
     )
-    tree: str = Field(
+    tree: TreeSpec = Field(
         "waypoints",
-        pattern=TREE_NAME,
         description="the tree: a built-in one (a module of trees/), a plugin's (entry point group executive.trees), "
-        "or module:function of a module on the Python path (module alone: its build)",
+        "module:function of a module on the Python path (module alone: its build), or a tree composed in the file (a mapping)",
     )
     description: str | None = Field(None, max_length=4096)
     auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
@@ -446,8 +475,9 @@ def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
     kinds = AUTOPILOT_VEHICLES[autopilot]
     if mission.vehicle not in kinds:
         errors.append(f"{autopilot} drives {', '.join(sorted(kinds))} here, not a {mission.vehicle}")
-    if autopilot != "ardupilot" and mission.tree in ARDUPILOT_ONLY_TREES:
-        errors.append(f"tree {mission.tree} needs ArduPilot: {ARDUPILOT_ONLY_TREES[mission.tree]}")
+    name = tree_name(mission)
+    if autopilot != "ardupilot" and name in ARDUPILOT_ONLY_TREES:
+        errors.append(f"tree {name} needs ArduPilot: {ARDUPILOT_ONLY_TREES[name]}")
     return errors
 
 
@@ -455,10 +485,11 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
     """Rules between fields; each error is the path of the offending value and why."""
     errors: list[tuple[Path, str]] = []
     limits = mission.limits
-    kinds, section = TREE_RULES.get(mission.tree, (frozenset({mission.vehicle}), None))
+    name = tree_name(mission)
+    kinds, section = TREE_RULES.get(name or "", (frozenset({mission.vehicle}), None))
     if mission.vehicle not in kinds:
         errors.append((("tree",), f"tree {mission.tree} drives {', '.join(sorted(kinds))}, not a {mission.vehicle}"))
-    for other in ("sampling", "vtol", "rc_route"):
+    for other in ("sampling", "vtol", "rc_route") if name is not None else ():  # a composed tree's nodes read what they need
         if other != section and getattr(mission, other) is not None:
             errors.append(((other,), f"only used by tree {next(t for t, (_, s) in TREE_RULES.items() if s == other)} (tree is {mission.tree})"))
     aux_mode = mission.rc_route.aux_mode if mission.rc_route is not None else None
@@ -469,7 +500,7 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
         errors.append((("waypoints",), "at least one waypoint is needed"))
     if mission.tree == "goto_sample" and not any(wp.sample for wp in mission.waypoints):
         errors.append((("waypoints",), "goto_sample needs at least one waypoint with sample: true"))
-    if mission.tree != "goto_sample":
+    if mission.tree != "goto_sample" and name is not None:  # a composed tree: its sample node (executive.composition)
         errors += [(("waypoints", i, "sample"), "only goto_sample takes samples") for i, wp in enumerate(mission.waypoints) if wp.sample]
     for i, wp in enumerate(mission.waypoints):
         here: Path = ("waypoints", i)
@@ -518,7 +549,7 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
 
 def failsafe_policy(mission: Mission) -> dict[str, FailsafePolicy]:
     """Every condition's failsafe for this mission: its ``failsafe:`` entry, else the tree's default, else the vehicle kind's."""
-    defaults = VEHICLE_FAILSAFES[mission.vehicle] | TREE_FAILSAFES.get(mission.tree, {})
+    defaults = VEHICLE_FAILSAFES[mission.vehicle] | TREE_FAILSAFES.get(tree_name(mission) or "", {})
     policy = {}
     for condition in FAILSAFE_CONDITIONS:
         rule: FailsafeRule = getattr(mission.failsafe, condition) or FailsafeRule()

@@ -17,8 +17,15 @@ SHIPPED = Path(__file__).with_name("mission.schema.json")
 
 
 def mission_json_schema() -> dict[str, Any]:
-    """The JSON schema (draft 2020-12) of a mission file, generated from :class:`Mission`."""
-    return {**Mission.model_json_schema(), "$schema": DIALECT, "title": "executive mission file (version 1)"}
+    """The JSON schema (draft 2020-12) of a mission file, generated from :class:`Mission` and, for a composed ``tree:``, the node catalogue."""
+    from executive.composition import tree_json_schema
+
+    schema = Mission.model_json_schema()
+    composed, defs = tree_json_schema()
+    tree = schema["properties"]["tree"]
+    tree["anyOf"] = [option if option.get("type") != "object" else {**composed, "description": option["description"]} for option in tree["anyOf"]]
+    schema["$defs"] |= defs
+    return {**schema, "$schema": DIALECT, "title": "executive mission file (version 1)"}
 
 
 def mission_json_schema_text() -> str:

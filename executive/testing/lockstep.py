@@ -65,7 +65,8 @@ class Wire:
 
     def __init__(self, system_id: int, component_id: int, *, as_bytes: bool = False) -> None:
         self._buffer = bytearray()
-        self._mav = mavlink.MAVLink(self, srcSystem=system_id, srcComponent=component_id)
+        #: The sender's MAVLink encoder (its ``send`` may be wrapped to watch what goes onto the wire).
+        self.encoder = mavlink.MAVLink(self, srcSystem=system_id, srcComponent=component_id)
         self._parser = mavlink.MAVLink(None)
         self._parser.robust_parsing = True
         self.as_bytes = as_bytes
@@ -79,11 +80,11 @@ class Wire:
         """``messages`` as the other end receives them."""
         if not self.as_bytes:
             for msg in messages:
-                msg.pack(self._mav)
-                self._mav.seq = (self._mav.seq + 1) % 256
+                msg.pack(self.encoder)
+                self.encoder.seq = (self.encoder.seq + 1) % 256
             return list(messages)
         for msg in messages:
-            self._mav.send(msg)
+            self.encoder.send(msg)
         data = bytes(self._buffer)
         self._buffer.clear()
         if self.recording is not None:

@@ -58,7 +58,7 @@ def test_run_with_autopilot_px4_flies_the_simulated_px4_and_ctrl_c_leaves_it_in_
     command = [sys.executable, "-m", "executive", "run", "missions/vtol_transit.yaml", "--autopilot", "px4", "--speedup", "20", "--socket", "none"]
     proc = subprocess.Popen([*command, "-v"], cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     modes: list[str] = []
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 300
     assert proc.stdout is not None
     while time.monotonic() < deadline and "AUTO.TAKEOFF" not in modes:
         line = proc.stdout.readline()

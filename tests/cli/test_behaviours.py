@@ -37,3 +37,18 @@ def test_kind_filters(capsys):
 def test_an_unknown_node_is_bad_input(capsys):
     assert main(["behaviours", "go_to", "fly_away"]) == 2
     assert "no node 'fly_away'" in capsys.readouterr().err
+
+
+def test_a_plugin_that_cannot_be_loaded_is_named_with_exit_2(capsys, monkeypatch):
+    from executive.cli import behaviours
+    from executive.plugins import PluginError
+
+    def broken() -> None:
+        raise PluginError("'sea' (executive.behaviours = mypkg.sea:Sea, from mypkg 1.0)", ModuleNotFoundError("No module named 'mypkg.sea'"))
+
+    monkeypatch.setattr(behaviours, "catalogue", broken)
+    assert main(["behaviours"]) == 2
+    assert capsys.readouterr().err == (
+        "executive: behaviours: plugin 'sea' (executive.behaviours = mypkg.sea:Sea, from mypkg 1.0): "
+        "ModuleNotFoundError: No module named 'mypkg.sea'\n"
+    )

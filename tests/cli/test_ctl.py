@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from executive import geo
 from executive.cli import main
 from executive.io.control import request
 from executive.io.mavlink.dialect import mavlink, mavutil
@@ -49,15 +50,26 @@ def ctl(sock: Path, *args: str) -> dict:
     return json.loads(proc.stdout)
 
 
-def wait_status(sock: Path, predicate, timeout_s: float = 30.0) -> dict:
+def wait_status(sock: Path, predicate, timeout_s: float = 300.0) -> dict:
+    """The first status (asked over the control socket in this process: a `ctl` process per poll would load the machine) meeting ``predicate``.
+
+    ``timeout_s`` of wall time only bounds a hung run; what the test waits for is judged on the status, in vehicle time (``t``).
+    """
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
-        if sock.exists():
-            reply = ctl(sock, "status")
-            if reply.get("ok") and predicate(reply["status"]):
-                return reply["status"]
-        time.sleep(0.05)
+        try:
+            reply = request(str(sock), "status")
+        except OSError:  # not listening yet
+            reply = {}
+        if reply.get("ok") and predicate(reply["status"]):
+            return reply["status"]
+        time.sleep(0.02)
     pytest.fail("the executive never reached the expected status")
+
+
+def after(sock: Path, status: dict, seconds: float) -> dict:
+    """The status ``seconds`` of vehicle time after ``status``."""
+    return wait_status(sock, lambda s: s["t"] >= status["t"] + seconds)
 
 
 def test_pause_holds_resume_keeps_the_leg_abort_makes_safe(mission, tmp_path):
@@ -67,11 +79,8 @@ def test_pause_holds_resume_keeps_the_leg_abort_makes_safe(mission, tmp_path):
         wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
         paused = ctl(sock, "pause")
         assert (paused["ok"], paused["state"]) == (True, "PAUSED")
-        wait_status(sock, lambda s: s["mode"] == "HOLD")
-        time.sleep(0.3)  # 3 s of vehicle time: the rover has braked to a stop
-        held = request(str(sock), "status")["status"]
-        time.sleep(0.3)  # and a held rover does not move
-        later = request(str(sock), "status")["status"]
+        held = after(sock, wait_status(sock, lambda s: s["mode"] == "HOLD"), 3.0)  # the rover has braked to a stop
+        later = after(sock, held, 3.0)  # and a held rover does not move
         assert (later["lat"], later["lon"], later["leg"]) == (held["lat"], held["lon"], 2)
         refused = ctl(sock, "pause")
         assert refused["ok"] is False and "cannot pause while PAUSED" in refused["reason"]
@@ -133,9 +142,8 @@ def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path):
         assert (status["state"], status["reason"]) == ("PAUSED", "ctl: mode HOLD by a person: hands off")
         disarmed = ctl(sock, "disarm")  # mid-mission: allowed
         assert (disarmed["ok"], disarmed["state"], disarmed["command"]["state"]) == (True, "PAUSED", "ACCEPTED")
-        time.sleep(0.5)  # 5 s of vehicle time: nothing arms it again or takes it out of HOLD
-        status = wait_status(sock, lambda s: not s["armed"])
-        assert (status["state"], status["mode"]) == ("PAUSED", "HOLD")
+        status = after(sock, wait_status(sock, lambda s: not s["armed"]), 5.0)  # nothing arms it again or takes it out of HOLD
+        assert (status["state"], status["mode"], status["armed"]) == ("PAUSED", "HOLD", False)
         unknown = ctl_text(sock, "mode", "WARP")
         assert unknown.returncode == 1 and "mode WARP: not a mode of this vehicle's autopilot" in unknown.stderr
         assert ctl(sock, "abort")["state"] == "ABORTED"
@@ -179,3 +187,46 @@ def test_ctl_without_an_executive_exits_3(tmp_path, capsys):
 def test_ctl_upload_needs_a_readable_file(tmp_path, capsys):
     assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload"]) == 2
     assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload", str(tmp_path / "missing.yaml")]) == 2
+    assert main(["ctl", "--socket", str(tmp_path / "none.sock"), "upload", str(tmp_path / "missing.yaml"), "--leg", "0"]) == 2
+    assert "'0' is not a waypoint number (1, 2, ...)" in capsys.readouterr().err
+
+
+def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the_new_route(mission, tmp_path, capsys):
+    db, sock = tmp_path / "journal.db", tmp_path / "ctl.sock"
+    north = tmp_path / "north.yaml"  # the leg east kept, then 30 m north of its end
+    north.write_text(MISSION.replace("name: two-legs", "name: two-legs-north") + "  - {lat: -35.3627208, lon: 149.1665504, name: north}\n")
+    run = run_executive(mission, sock, "--journal", str(db), speedup=20)
+    try:
+        wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
+        assert ctl(sock, "pause")["state"] == "PAUSED"
+        wait_status(sock, lambda s: s["mode"] == "HOLD")
+        upload = subprocess.run(
+            [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "upload", str(north)], cwd=ROOT, capture_output=True, text=True
+        )
+        assert upload.returncode == 0, upload.stderr
+        first, *route = upload.stdout.splitlines()
+        assert first.startswith("PAUSED: mission replaced: 'two-legs' -> 'two-legs-north', at leg 2/3 (the waypoint of old leg 2)")
+        assert route[0].startswith("3 waypoints; on the autopilot:") and route[2].startswith(">   2  -35.3629906, 149.1665504")
+        status = wait_status(sock, lambda s: s["state"] == "PAUSED" and s["legs"] == 3)
+        assert status["reason"].startswith("mission replaced:") and status["mode"] == "HOLD"  # still held: a person resumes it
+        later = after(sock, status, 5.0)  # 5 s of vehicle time later: still paused and held, the new route on the autopilot
+        assert (later["state"], later["mode"]) == ("PAUSED", "HOLD")
+        assert geo.distance(later["lat"], later["lon"], status["lat"], status["lon"]) < 0.2  # it has not moved
+        shown = request(str(sock), "route", operation="show")["route"]
+        assert (shown["upload"]["state"], shown["on_autopilot"], len(shown["waypoints"])) == ("DONE", True, 3)  # uploaded, read back
+        assert ctl(sock, "resume")["state"] == "RUNNING"
+        _, err = run.communicate(timeout=120)
+        assert run.returncode == 0, err
+        assert "mission 'two-legs-north' COMPLETED" in err
+    finally:
+        run.kill()
+    assert main(["report", str(db), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert (report["mission"], report["outcome"], report["resumed_from"]) == ("two-legs-north", "COMPLETED", 1)
+    legs = [(leg["waypoint"], leg["waypoints"]) for leg in report["legs"]]
+    assert legs == [(2, 3), (3, 3), (None, 3)]  # heading for the east end, the new point north, then done
+    resumed = next(t["t"] for t in report["transitions"] if t["after"] == "RUNNING")
+    turned, done = report["legs"][1:]
+    assert geo.distance(turned["lat"], turned["lon"], -35.3629906, 149.1665504) < 5.0  # turned north at the east end (driven through)
+    assert geo.distance(done["lat"], done["lon"], -35.3627208, 149.1665504) < 3.0  # and reached the new point (as last reported)
+    assert done["t"] - resumed < 120.0  # vehicle time: the rest of the east leg and 30 m north

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from executive.cli import main
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission
 
 ROOT = Path(__file__).parents[2]
 PLANS = ROOT / "tests" / "data" / "plans"
@@ -29,7 +29,7 @@ def route(plan: dict[str, Any]) -> list[tuple[float, float, float, float | None]
     return out
 
 
-def test_a_plan_imported_validates_runs_to_completed_and_exports_back_equal(tmp_path, capsys):
+def test_a_plan_imported_validates_runs_to_completed_and_exports_back_equal(tmp_path, capsys, lockstep):
     mission = tmp_path / "block.yaml"
     assert main(["import", str(ROVER_BLOCK), "-o", str(mission), "--auto-arm"]) == 0
     err = capsys.readouterr().err
@@ -38,11 +38,8 @@ def test_a_plan_imported_validates_runs_to_completed_and_exports_back_equal(tmp_
     assert main(["validate", str(mission)]) == 0
     assert capsys.readouterr().out == f"{mission}: ok (3 waypoints, vehicle rover, tree waypoints)\n"
 
-    run = subprocess.run(
-        [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "50"], cwd=ROOT, capture_output=True, text=True, timeout=90
-    )
-    assert run.returncode == 0, run.stderr
-    assert "COMPLETED: every waypoint reached" in run.stderr
+    outcome = lockstep(load_mission(mission), mission_dir=mission.parent).run_to_end(limit_s=900)  # the simulator `run` starts
+    assert (outcome.status, outcome.reason) == (MissionStatus.COMPLETED, "every waypoint reached")
 
     exported = tmp_path / "block.plan"
     assert main(["export", str(mission), "-o", str(exported)]) == 0  # the format from the suffix

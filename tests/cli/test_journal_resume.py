@@ -26,8 +26,8 @@ ROOT = Path(__file__).parents[2]
 MISSION = ROOT / "missions" / "asv_sampling.yaml"
 
 
-def run(*args: str) -> subprocess.Popen:
-    command = [sys.executable, "-m", "executive", "run", str(MISSION), "--speedup", "40", "--socket", "none", *args]
+def run(mission: Path, *args: str) -> subprocess.Popen:
+    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "40", "--socket", "none", *args]
     return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -38,8 +38,10 @@ def report(db: Path, run_id: int, capsys) -> dict:
 
 def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, capsys):
     """From the command line: a real SIGKILL after the first sample, then ``run --resume`` (each crash moment: the lock-step test below)."""
-    db, snapshots = tmp_path / "journal.db", tmp_path / "run.snap"
-    first = run("--journal", str(db), "--snapshots", str(snapshots))
+    db, snapshots, mission = tmp_path / "journal.db", tmp_path / "run.snap", tmp_path / "asv.yaml"
+    # the ASV mission with an EKF ready after 2 s (not 40) and no EKF dropout: the crash is what this test is about
+    mission.write_text(MISSION.read_text().replace("simulator:\n  events: events/asv_ekf_dropout.yaml\n", "simulator: {ekf_ready_after_s: 2}\n"))
+    first = run(mission, "--journal", str(db), "--snapshots", str(snapshots))
     assert first.stdout is not None
     for line in first.stdout:  # killed as soon as the first sample is on the disk: the run must not reach its end first
         if json.loads(line)["samples"] == 1:
@@ -54,16 +56,16 @@ def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, c
     assert crashed["outcome"] is None  # it never ended
     assert len(crashed["samples"]) in (1, 2)
 
-    second = run("--journal", str(db), "--resume")
-    _, err = second.communicate(timeout=120)
+    second = run(mission, "--journal", str(db), "--resume")
+    _, err = second.communicate(timeout=300)
     assert second.returncode == 0, err
     assert "resuming run 1 at waypoint" in err
     assert "2 samples recorded" in err
 
     resumed = report(db, 2, capsys)
     assert (resumed["resumed_from"], resumed["outcome"]) == (1, "COMPLETED")
-    legs = [s["leg_index"] for s in crashed["samples"]] + [s["leg_index"] for s in resumed["samples"]]
-    assert sorted(legs) == [1, 3]  # each sample point exactly once, across the crash
+    waypoints = [s["waypoint"] for s in crashed["samples"]] + [s["waypoint"] for s in resumed["samples"]]
+    assert sorted(waypoints) == [2, 4]  # each sample point exactly once, across the crash
     assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors
 
 
@@ -108,8 +110,8 @@ def test_a_crash_at_any_moment_then_resume_records_every_sample_once(tmp_path, c
 
     resumed = report(db, 2, capsys)
     assert (resumed["resumed_from"], resumed["outcome"]) == (1, "COMPLETED")
-    legs = [s["leg_index"] for s in crashed["samples"]] + [s["leg_index"] for s in resumed["samples"]]
-    assert sorted(legs) == [1, 3]  # each sample point exactly once, across the crash
+    waypoints = [s["waypoint"] for s in crashed["samples"]] + [s["waypoint"] for s in resumed["samples"]]
+    assert sorted(waypoints) == [2, 4]  # each sample point exactly once, across the crash
     assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors
 
 
@@ -178,4 +180,4 @@ def test_a_route_edited_before_a_crash_is_the_route_resumed(tmp_path, capsys, lo
     assert [r["waypoints"] for r in crashed["routes"]] == [3]
     assert [r["waypoints"] for r in resumed["routes"]] == [3]  # restored, and recorded again for the next crash
     assert resumed["outcome"] == "COMPLETED"
-    assert [leg["leg"] for leg in resumed["legs"]] == [1, 2, 3]  # waypoints 2 and 3 of the edited route, then done (4 waypoints: 4)
+    assert [(leg["waypoint"], leg["waypoints"]) for leg in resumed["legs"]] == [(2, 3), (3, 3), (None, 3)]  # 2 and 3 of the edited route, done

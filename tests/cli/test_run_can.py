@@ -41,7 +41,7 @@ def test_the_drive_bridge_talks_to_the_base_and_the_bus_is_recorded(tmp_path):
         "--can-log",
         str(log),
     ]
-    proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=90)
+    proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     frames = list(can.LogReader(str(log)))
     ids = {f.arbitration_id for f in frames}

@@ -72,7 +72,7 @@ def test_two_executives_on_one_hub_each_drive_their_own_vehicle(two_vehicles, tm
         n: _executive(_mission(tmp_path / f"v{n}.yaml", f"vehicle-{n}", *homes[n][:2]), hub, "--target-system", str(n), "--sysid", str(n))
         for n in (1, 2)
     }
-    errors = {n: proc.communicate(timeout=90)[1] for n, proc in runs.items()}
+    errors = {n: proc.communicate(timeout=300)[1] for n, proc in runs.items()}
     for n in (1, 2):
         assert runs[n].returncode == 0, errors[n]
         assert "COMPLETED: every waypoint reached" in errors[n]

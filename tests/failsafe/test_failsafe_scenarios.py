@@ -241,7 +241,7 @@ def test_a_failsafe_abort_exits_1_and_the_report_has_the_event(tmp_path: Path) -
         "none",
         "-v",
     ]
-    proc = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=60)
+    proc = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 1, proc.stderr
     assert "ABORTED: Battery above floor?: battery" in proc.stderr
     assert "vehicle in RTL" in proc.stderr  # the runtime saw the heartbeat confirm it

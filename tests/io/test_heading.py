@@ -267,60 +267,28 @@ def test_driving_backwards_is_not_a_180_degree_bias(drive):
 # -- against the simulator ---------------------------------------------------------------------
 
 
-def test_the_simulators_compass_bias_is_compensated_and_its_swings_rejected_over_udp():
-    """compass_bias 20° from boot and a compass_glitch while driving a GUIDED leg, at 50x, over a real UDP link."""
-    from executive.clock import ScaledClock
-    from executive.geo import destination
-    from executive.io.mavlink.commander import Commander
-    from executive.io.mavlink.heartbeat import Heartbeat
-    from executive.io.mavlink.link import PymavlinkLink
-    from executive.io.mavlink.reader import MavlinkReader
-    from executive.io.mavlink.streams import StreamRequester, rates_for
-    from executive.sim import SimServer
-    from executive.sim.faults import CompassBias, CompassGlitch, FaultInjector
-    from executive.vehicles import PROFILES
+def test_the_simulators_compass_bias_is_compensated_and_its_swings_rejected(lockstep):
+    """compass_bias 20° from boot and a compass_glitch while the runtime drives a GUIDED leg 150 m north, packed and parsed as over a link."""
+    from executive.sim.faults import CompassBias, CompassGlitch
+    from tests_support import LINE_HOME, line_mission
 
-    clock = ScaledClock(50.0)
-    home = (-35.363261, 149.165230, 0.0)
-    faults = FaultInjector(
-        [CompassBias(kind="compass_bias", at_s=0.0, bias_deg=20.0), CompassGlitch(kind="compass_glitch", at_s=40.0, for_s=4.0)], clock
-    )
-    with SimServer("rover", clock=clock, home=home, ekf_ready_after_s=2.0, faults=faults) as sim:
-        link = PymavlinkLink(sim.url_for_client)
-        try:
-            commander = Commander(link, clock, PROFILES["rover"])
-            reader = MavlinkReader(link, clock, commander)
-            streams = StreamRequester(commander, rates_for("rover"))
-            reader.on_reconnect = streams.restart
-            heartbeat = Heartbeat(link, clock)
-            heading = HeadingFilter(clock)
-            target = destination(home[0], home[1], 0.0, 150.0)
-            seen: list[tuple[float, bool | None, float | None, bool]] = []  # (boot time, ok, bias, rejecting)
-            moving_at = math.inf
-            next_tick, last_goto = clock.now(), -math.inf
-            while clock.now() < 80.0:
-                reader.drain()
-                heading.service()  # where the runtime will call it: right after the reader drains
-                heartbeat.service()
-                mode, armed = bb("/vehicle/mode"), bb("/vehicle/armed")
-                if reader.autopilot is not None and commander.idle and clock.now() > 4.0:
-                    if mode != "GUIDED":
-                        commander.set_mode("GUIDED")
-                    elif not armed:
-                        commander.arm()
-                if armed and mode == "GUIDED" and clock.now() - last_goto > 2.0:
-                    commander.goto(*target)
-                    last_goto = clock.now()
-                streams.service()
-                commander.flush()
-                position = bb("/vehicle/position")
-                if position is not None and position.ground_speed_m_s > 0.5:
-                    moving_at = min(moving_at, faults.elapsed_s)
-                seen.append((faults.elapsed_s, bb("/heading/ok"), bb("/heading/bias_deg"), "compass rejected" in heading.reason))
-                next_tick += 0.1
-                clock.sleep_until(next_tick)
-        finally:
-            link.close()
+    home = LINE_HOME
+    mission = line_mission("compass", waypoints=[{"lat": home[0] + 150.0 / 111_000, "lon": home[1]}])
+    faults = [CompassBias(kind="compass_bias", at_s=0.0, bias_deg=20.0), CompassGlitch(kind="compass_glitch", at_s=40.0, for_s=4.0)]
+    sim = lockstep(mission, events=faults, as_bytes=True)
+    heading = next(service for service in sim.runtime.readers if isinstance(service, HeadingFilter))
+    seen: list[tuple[float, bool | None, float | None, bool]] = []  # (boot time, ok, bias, rejecting)
+    moving_at = math.inf
+
+    def watch(sim) -> None:
+        nonlocal moving_at
+        position = bb("/vehicle/position")
+        if position is not None and position.ground_speed_m_s > 0.5:
+            moving_at = min(moving_at, sim.faults.elapsed_s)
+        seen.append((sim.faults.elapsed_s, bb("/heading/ok"), bb("/heading/bias_deg"), "compass rejected" in heading.reason))
+
+    sim.observers.append(watch)
+    assert sim.run(limit_s=120.0, until=lambda: sim.clock.now() >= 80.0) is None  # still driving at 80 s
     position = bb("/vehicle/position")
     assert position is not None and position.lat > home[0] + 50.0 / 111_000  # it drove the leg
     judged = next((t for t, ok, _, _ in seen if ok is True), None)

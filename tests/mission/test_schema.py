@@ -121,7 +121,7 @@ def test_schema_accepts_a_good_mission(good: dict[str, Any]) -> None:
         (lambda m: m.pop("waypoints"), "$.waypoints: required"),
         (lambda m: m.update(version=2), "$.version: const"),
         (lambda m: m.update(vehicle="car"), "$.vehicle: enum"),
-        (lambda m: m.update(tree="Bad-Tree"), "$.tree: pattern"),
+        (lambda m: m.update(tree="Bad-Tree"), "$.tree: anyOf"),  # neither a name nor a composed tree
         (lambda m: m.update(home={"lat": 1.0, "lon": 2.0, "heading_deg": 360.0}), "$.home: anyOf"),
         (lambda m: m.update(limits={"link_timeout_s": 0.0}), "$.limits.link_timeout_s: exclusiveMinimum"),
     ],

@@ -57,7 +57,8 @@ def test_the_bunker_is_driven_over_its_can_base_and_plays_the_missions_event_fil
     assert sim.runtime.mission_state.route is not None and len(sim.runtime.mission_state.route.waypoints) >= 2  # recorded by RC switches
 
 
-#: The example missions whose tree has no scenario of its own (tests/trees/ runs asv_sampling, auv_survey, ugv_rc_route and vtol_transit).
+#: The example missions whose tree has no scenario of its own (tests/trees/ runs asv_sampling, asv_sampling_yaml_tree, auv_survey,
+#: ugv_rc_route and vtol_transit).
 WITHOUT_A_SCENARIO = ["boat_survey.yaml", "rover_square.yaml"]
 
 
@@ -65,6 +66,7 @@ def test_every_example_mission_is_run_by_a_scenario() -> None:
     assert {p.name for p in MISSIONS.glob("*.yaml")} == {
         *WITHOUT_A_SCENARIO,
         "asv_sampling.yaml",
+        "asv_sampling_yaml_tree.yaml",
         "auv_survey.yaml",
         "ugv_rc_route.yaml",
         "vtol_transit.yaml",

@@ -12,22 +12,20 @@ import pytest
 from py_trees.common import Status
 
 import trees
-from executive import blackboard
 from executive.assembly import build_runtime
 from executive.clock import ManualClock
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.modes import ArduPilotModes
+from executive.io.mavlink.modes import ModeTable
 from executive.io.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import Runtime, explain_failure
-from executive.state import EkfFlags, EkfStatus, GlobalPosition, SamplerState
+from executive.state import EkfFlags, EkfStatus, SamplerState
 from executive.state import Sample as SampleRecord
-from executive.testing import EKF_READY, ack, port_for
-from executive.vehicles import PROFILES, ROVER_MODES
+from executive.testing import EKF_READY, ScriptedAutopilot, Vehicle, ack, port_for
+from executive.vehicles import PROFILES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 ROOT = Path(__file__).parents[2]
@@ -64,50 +62,52 @@ def make_mission(**changes: Any) -> Mission:
     return Mission.model_validate(fields | changes)
 
 
-class Boat:
-    """A scripted ArduRover boat: takes mode and arm commands at once, jumps ``step_m`` a tick toward its GUIDED target.
+class Boat(ScriptedAutopilot):
+    """A scripted ArduRover boat behind the commander: mode and arm commands acked at once, ``step_m`` a tick toward its GUIDED target.
 
     It drives only armed, in GUIDED, and stops ``short_m`` before the target. What the test sets
     (mode, armed, ekf, rc, link_up, position) is what the autopilot reports on the next tick.
     """
 
-    def __init__(self, at: tuple[float, float]) -> None:
-        self.lat, self.lon = at
-        self.mode, self.armed, self.ekf, self.rc, self.link_up = "MANUAL", False, EKF_READY, RC_AUTO, True
-        self.target: tuple[float, float] | None = None
-        self.step_m, self.short_m = 2.0, 0.0
-        self.commands: list[tuple[str, Any]] = []
+    def __init__(self, at: tuple[float, float], commander: Commander) -> None:
+        self.commander = commander
+        self.ekf, self.rc, self.link_up = EKF_READY, RC_AUTO, True
+        self.short_m = 0.0
         self.setpoints = 0
-        self._modes = ArduPilotModes(ROVER_MODES)
-        self._bb = blackboard.writer("test boat", blackboard.keys_under("/link/", "/vehicle/", "/rc/"))
-        self.publish()
+        self._vehicle = Vehicle()
+        super().__init__(None, at, step_m=2.0)
+
+    @property
+    def modes(self) -> ModeTable:
+        return self.commander.modes
+
+    @property
+    def guided_mode(self) -> str:
+        return self.commander.profile.guided_mode
+
+    def facts(self) -> dict[str, object]:
+        return {**super().facts(), "link__up": self.link_up, "vehicle__ekf": self.ekf, "rc__channels": self.rc}
 
     def publish(self) -> None:
-        self._bb.set("/link/up", self.link_up)
-        self._bb.set("/vehicle/mode", self.mode)
-        self._bb.set("/vehicle/armed", self.armed)
-        self._bb.set("/vehicle/ekf", self.ekf)
-        self._bb.set("/rc/channels", self.rc)
-        self._bb.set("/vehicle/position", GlobalPosition(self.lat, self.lon, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+        self._vehicle.set(**self.facts())
 
-    def respond(self, sent: list[Any], commander: Commander) -> None:
+    def acknowledge(self, command: int, result: int) -> None:
+        self.commander.on_ack(ack(command, result))
+
+    def respond(self, sent: list[Any]) -> None:  # type: ignore[override]  # what the tree sent comes from the test's link
         for msg in sent:
-            if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-                self.mode = self._modes.decode(int(msg.param2))
-                self.commands.append(mode(self.mode))
-                commander.on_ack(ack(msg.command))
-            elif msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
-                self.armed = bool(msg.param1)
-                self.commands.append(("arm", msg.param1))
-                commander.on_ack(ack(msg.command))
-            elif msg.get_type() == "SET_POSITION_TARGET_GLOBAL_INT":
-                self.setpoints += 1
-                if self.mode == "GUIDED":
-                    self.target = (msg.lat_int / 1e7, msg.lon_int / 1e7)
+            self.answer(msg)
+        self.move()
+        self.publish()
+
+    def on_setpoint(self, msg: Any) -> None:
+        self.setpoints += 1
+        super().on_setpoint(msg)
+
+    def move(self) -> None:
         if self.target and self.mode == "GUIDED" and self.armed:
             d, b = distance_bearing(self.lat, self.lon, *self.target)
             self.lat, self.lon = destination(self.lat, self.lon, b, max(0.0, min(d - self.short_m, self.step_m)))
-        self.publish()
 
     def distance_to(self, point: tuple[float, float]) -> float:
         return distance_bearing(self.lat, self.lon, *point)[0]
@@ -130,7 +130,7 @@ class Run:
             runtime.mission_state.start()  # builds the tree and its sampler
             assert runtime.tree is not None and runtime.sampler is not None
             self.commander, self.state, self.sampler, self.tree = runtime.commander, runtime.mission_state, runtime.sampler, runtime.tree
-        self.boat = Boat(at)
+        self.boat = Boat(at, self.commander)
 
     @property
     def root(self) -> py_trees.behaviour.Behaviour:
@@ -149,7 +149,7 @@ class Run:
             self.tree.tick()
             self.sampler.service()
             self.commander.flush()
-            self.boat.respond(self.link.take(), self.commander)
+            self.boat.respond(self.link.take())
             statuses.append(self.root.status)
             if statuses[-1] != R:
                 break

@@ -3,7 +3,8 @@
 Mission Planner or QGroundControl can pause, continue and start the mission with COMMAND_LONG
 addressed to us (MAV_CMD_DO_PAUSE_CONTINUE, MAV_CMD_MISSION_START: continues a paused one), acked as ArduPilot acks
 commands; only allow-listed system ids are obeyed. The mission state, current leg and distance
-to the next waypoint are reported as STATUSTEXT on every change and NAMED_VALUE_FLOAT at 1 Hz.
+to the next waypoint are reported as STATUSTEXT on every change (a mission replaced while paused
+too) and NAMED_VALUE_FLOAT at 1 Hz.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from executive.clock import Clock
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import Link
 from executive.mission.lifecycle import MissionStatus
+from executive.mission.model import Mission
 from executive.operator import Operator
 from executive.status import StatusSource
 
@@ -49,6 +51,7 @@ class GroundStationControl:
         self._next = float("-inf")
         self._outbox: list[MAVLinkMessage] = []
         operator.mission_state.listeners.append(self._on_transition)
+        operator.mission_state.replace_listeners.append(self._on_replace)
 
     def on_command(self, msg: MAVLinkMessage, reply_to: Link) -> bool:
         """A COMMAND_LONG from someone other than the autopilot; returns whether it was ours to answer."""
@@ -94,6 +97,9 @@ class GroundStationControl:
 
     def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
         self._text(mavlink.MAV_SEVERITY_NOTICE, f"mission {after}: {reason}")
+
+    def _on_replace(self, mission: Mission, reason: str) -> None:
+        self._text(mavlink.MAV_SEVERITY_NOTICE, f"mission replaced: {mission.name}")  # the whole reason is in ctl status
 
     def _text(self, severity: int, text: str) -> None:
         self._outbox.append(self._encoder.statustext_encode(severity, text.encode()[:50]))

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import BinaryIO, Protocol
 
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
+from executive.io.mavlink.endpoint import unreachable
 from executive.io.mavlink.skim import Skimmer
 
 
@@ -81,6 +82,8 @@ class PymavlinkLink:
     ``udpout:127.0.0.1:14550``, ``udpin:0.0.0.0:14550``, ``tcp:127.0.0.1:5760``, ``/dev/ttyACM0``...
     A serial device may carry its baud rate after a comma: ``/dev/ttyAMA0,921600``. With a signing
     key everything sent is signed and unsigned (or badly signed) packets are dropped and counted.
+    One that cannot be opened raises :class:`~executive.io.mavlink.endpoint.Unreachable` (check
+    the string first with :func:`~executive.io.mavlink.endpoint.check_endpoint`).
     """
 
     def __init__(
@@ -94,14 +97,18 @@ class PymavlinkLink:
     ) -> None:
         device, _, baud = url.partition(",")
         self.url = url
-        self._conn = mavutil.mavlink_connection(
-            device,
-            baud=int(baud) if baud else 115200,
-            source_system=system_id,
-            source_component=component_id,
-            dialect="ardupilotmega",
-            autoreconnect=True,
-        )
+        try:
+            self._conn = mavutil.mavlink_connection(
+                device,
+                baud=int(baud) if baud else 115200,
+                source_system=system_id,
+                source_component=component_id,
+                dialect="ardupilotmega",
+                autoreconnect=True,
+                retries=0,  # one attempt: pymavlink's retries sleep 1 s each (printing "sleeping"), in the tick loop on a reconnect
+            )
+        except OSError as exc:  # nothing listening, no such device, the port taken (serial.SerialException is an OSError)
+            raise unreachable(url, exc) from exc
         if signing_key is not None:
             if len(signing_key) != 32:
                 raise ValueError("a MAVLink signing key is 32 bytes")

@@ -9,6 +9,13 @@ replaces the one being uploaded. When the edit moved the mission's home (SET_HOM
 home is set too (MAV_CMD_DO_SET_HOME, acked; the commander retries it). The outcome is
 ``/link/route_upload`` (a :class:`RouteUpload`) and a log line.
 
+A mission replaced while paused (hot reload, ``ctl upload``) is taken to the autopilot the same
+way, at once: the operator sees it uploaded and read back (``ctl route show``) before resuming,
+and a mission upload does not move a vehicle held in its safe mode (ArduPilot's mission is stopped
+outside AUTO: AP_Mission::stop, "subsequent calls to update() will have no effect until the mission
+is started or resumed", libraries/AP_Mission/AP_Mission.cpp). Its home is not an edit (as for a
+mission uploaded READY): the autopilot keeps its own.
+
 The ugv_rc_route tree also uploads on its own (the route it starts with, and whenever the autopilot
 is found holding something else). There is one MissionTransfer, and neither supersedes a transfer
 the other started: the keeper starts its upload from the route listener, within the tick of the
@@ -30,6 +37,7 @@ from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer, MissionTransferStatus, TransferState, route_items, route_not_on_autopilot
 from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.model import Mission
 from executive.mission.route import Route
 from executive.state import CommandState, CommandStatus, HomePosition
 
@@ -85,6 +93,7 @@ class RouteKeeper:
         self._home_ticket: int | None = None
         mission_state.route_listeners.append(self._on_route)
         mission_state.listeners.append(self._on_transition)
+        mission_state.replace_listeners.append(self._on_replace)
 
     @property
     def status(self) -> RouteUpload | None:
@@ -136,6 +145,12 @@ class RouteKeeper:
             self._home = route.home
             self._home_ticket = self._commander.set_home(route.home.lat, route.home.lon, self._home_altitude())
         self.service()
+
+    def _on_replace(self, mission: Mission, reason: str) -> None:
+        """A mission replaced while paused: its route goes to the autopilot now; its home is not an edit."""
+        route = self._mission_state.route
+        self._home = route.home
+        self._on_route(route, reason)
 
     def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
         if after is MissionStatus.READY:  # another mission: its home is not an edit

@@ -11,11 +11,11 @@ import can
 import py_trees
 import pytest
 
-from executive import blackboard
 from executive.clock import ManualClock, ScaledClock
 from executive.io.can.agilex import ControlModeSelect, MotionCommand, decode
 from executive.io.can.drive import DriveBridge, DriveConfig, motion_from_tracks, track_throttle
 from executive.io.can.state import DriveStatus
+from executive.testing import Vehicle
 
 _channels = itertools.count()
 
@@ -38,22 +38,9 @@ class RecordingBus(can.BusABC):
         return [decode(m) for _, m in self.sent if m.arbitration_id == 0x111]  # type: ignore[misc]
 
 
-class Autopilot:
-    """Writes what the MAVLink reader would: a new servo output tuple per SERVO_OUTPUT_RAW, and the armed flag."""
-
-    def __init__(self) -> None:
-        self.bb = blackboard.writer("test mavlink reader", ["/vehicle/servo_outputs", "/vehicle/armed"])
-
-    def outputs(self, left_us: int, right_us: int) -> None:
-        self.bb.set("/vehicle/servo_outputs", tuple([left_us, 0, right_us] + [0] * 13))
-
-    def armed(self, armed: bool = True) -> None:
-        self.bb.set("/vehicle/armed", armed)
-
-
-@pytest.fixture
-def autopilot() -> Autopilot:
-    return Autopilot()
+def servos(left_us: int, right_us: int) -> dict[str, object]:
+    """The servo output tuple the MAVLink reader writes per SERVO_OUTPUT_RAW: the tracks on SERVO1 and SERVO3."""
+    return {"vehicle__servo_outputs": tuple([left_us, 0, right_us] + [0] * 13)}
 
 
 @pytest.fixture
@@ -96,11 +83,11 @@ def test_configs_it_cannot_send_are_refused(bad: dict[str, float]) -> None:
         DriveConfig(**bad)
 
 
-def test_it_forwards_the_autopilot_outputs_with_exact_bytes(bus: RecordingBus, clock: ManualClock, autopilot: Autopilot) -> None:
+def test_it_forwards_the_autopilot_outputs_with_exact_bytes(bus: RecordingBus, clock: ManualClock, vehicle: Vehicle) -> None:
     bridge = DriveBridge(bus, clock)
     bridge.in_control = True
-    autopilot.armed()
-    autopilot.outputs(1800, 2100)  # left 0.5, right 1.0
+    vehicle.set(vehicle__armed=True)
+    vehicle.set(**servos(1800, 2100))  # left 0.5, right 1.0
     assert bridge.service()
     (t1, select), (t2, command) = bus.sent
     assert (t1, t2) == (100.0, 100.0)
@@ -109,7 +96,7 @@ def test_it_forwards_the_autopilot_outputs_with_exact_bytes(bus: RecordingBus, c
     assert py_trees.blackboard.Blackboard.get("/base/drive") == DriveStatus(0.75, 0.5, "", 100.0)
 
 
-def test_50_hz_on_the_injected_clock(bus: RecordingBus, clock: ManualClock, autopilot: Autopilot) -> None:
+def test_50_hz_on_the_injected_clock(bus: RecordingBus, clock: ManualClock, vehicle: Vehicle) -> None:
     bridge = DriveBridge(bus, clock)
     for _ in range(1000):  # called every millisecond for one second
         bridge.service()
@@ -146,31 +133,31 @@ def drive(bridge: DriveBridge, clock: ManualClock, seconds: float) -> None:
         clock.advance(0.02)
 
 
-def test_zero_when_not_in_control_disarmed_or_stale(bus: RecordingBus, clock: ManualClock, autopilot: Autopilot) -> None:
+def test_zero_when_not_in_control_disarmed_or_stale(bus: RecordingBus, clock: ManualClock, vehicle: Vehicle) -> None:
     bridge = DriveBridge(bus, clock, DriveConfig(servo_timeout_s=0.5))
-    autopilot.armed()
-    autopilot.outputs(2100, 2100)
+    vehicle.set(vehicle__armed=True)
+    vehicle.set(**servos(2100, 2100))
     bridge.service()
     assert bus.commands()[-1] == MotionCommand(0, 0)
     assert py_trees.blackboard.Blackboard.get("/base/drive").reason == "executive not in control"
 
     bridge.in_control = True
     clock.advance(0.02)
-    autopilot.outputs(2100, 2100)
+    vehicle.set(**servos(2100, 2100))
     bridge.service()
     assert bus.commands()[-1] == MotionCommand(1000, 0)
 
-    autopilot.armed(False)
+    vehicle.set(vehicle__armed=False)
     clock.advance(0.02)
     bridge.service()
     assert bus.commands()[-1] == MotionCommand(0, 0)
     assert py_trees.blackboard.Blackboard.get("/base/drive").reason == "disarmed"
 
-    autopilot.armed()
-    autopilot.outputs(2100, 2100)  # a report every 0.2 s (5 Hz) keeps it driving
+    vehicle.set(vehicle__armed=True)
+    vehicle.set(**servos(2100, 2100))  # a report every 0.2 s (5 Hz) keeps it driving
     for _ in range(5):
         drive(bridge, clock, 0.2)
-        autopilot.outputs(2100, 2100)
+        vehicle.set(**servos(2100, 2100))
     assert set(bus.commands()[-45:]) == {MotionCommand(1000, 0)}
 
     drive(bridge, clock, 0.5)  # the same report for 0.5 s: still within servo_timeout_s
@@ -180,14 +167,14 @@ def test_zero_when_not_in_control_disarmed_or_stale(bus: RecordingBus, clock: Ma
     assert py_trees.blackboard.Blackboard.get("/base/drive").reason == "servo outputs older than 0.5 s"
 
 
-def test_zero_without_servo_outputs_or_with_an_unused_output(bus: RecordingBus, clock: ManualClock, autopilot: Autopilot) -> None:
+def test_zero_without_servo_outputs_or_with_an_unused_output(bus: RecordingBus, clock: ManualClock, vehicle: Vehicle) -> None:
     bridge = DriveBridge(bus, clock)
     bridge.in_control = True
-    autopilot.armed()
+    vehicle.set(vehicle__armed=True)
     bridge.service()
     assert py_trees.blackboard.Blackboard.get("/base/drive") == DriveStatus(0.0, 0.0, "no servo outputs yet", 100.0)
     clock.advance(0.02)
-    autopilot.outputs(1700, 0)  # SERVO3 not configured
+    vehicle.set(**servos(1700, 0))  # SERVO3 not configured
     bridge.service()
     assert bus.commands()[-1] == MotionCommand(0, 0)
     assert py_trees.blackboard.Blackboard.get("/base/drive").reason == "no usable servo 3 output"
@@ -216,7 +203,7 @@ def virtual_pair() -> Iterator[tuple[can.BusABC, can.BusABC]]:
     base.shutdown()
 
 
-def test_a_bridge_thread_on_a_virtual_bus_sends_at_about_50_hz(virtual_pair, autopilot: Autopilot) -> None:
+def test_a_bridge_thread_on_a_virtual_bus_sends_at_about_50_hz(virtual_pair, vehicle: Vehicle) -> None:
     ours, base = virtual_pair
     clock = ScaledClock()
     bridge = DriveBridge(ours, clock)

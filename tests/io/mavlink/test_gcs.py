@@ -30,7 +30,7 @@ def acks(link):
 
 
 def test_mission_start_then_pause_and_continue(control, link):
-    state = control._operator.mission_state
+    state = control._operator.mission_state  # the operator's state, as ctl upload replaces it
     assert control.on_command(command(mavlink.MAV_CMD_MISSION_START), link)
     assert state.status is MissionStatus.RUNNING
     control.on_command(command(mavlink.MAV_CMD_DO_PAUSE_CONTINUE, 0), link)
@@ -77,3 +77,16 @@ def test_reports_named_values_at_1_hz_and_text_on_changes(control, link, clock):
     control.service()
     (text,) = link.take("STATUSTEXT")
     assert text.text == "mission RUNNING: started from the first waypoint"
+
+
+def test_a_mission_replaced_while_paused_is_told_in_a_text(link, clock, square_mission):
+    state = MissionState()
+    state.upload(square_mission)
+    control = GroundStationControl([link], clock, Operator(state, "rover"))
+    state.start()
+    state.pause("ctl: pause")
+    control.service()
+    link.take("STATUSTEXT")
+    state.replace(square_mission.model_copy(update={"name": "square-v2"}), 1, (), "mission replaced: 'square' -> 'square-v2', ...")
+    control.service()
+    assert [(m.severity, m.text) for m in link.take("STATUSTEXT")] == [(mavlink.MAV_SEVERITY_NOTICE, "mission replaced: square-v2")]

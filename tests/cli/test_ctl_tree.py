@@ -1,0 +1,92 @@
+"""From the terminal: `ctl tree` and `ctl status` say what a running mission waits for; SIGTERM ends it ABORTED in the journal."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from executive.cli import main
+from executive.io.control import request
+
+ROOT = Path(__file__).parents[2]
+MISSION = """\
+version: 1
+name: slow-ekf
+vehicle: rover
+auto_arm: true
+home: {lat: -35.363261, lon: 149.165230}
+simulator: {ekf_ready_after_s: 600}  # the mission waits on the EKF for the whole test
+limits: {ekf_wait_s: 900}
+waypoints:
+  - {lat: -35.3629906, lon: 149.1652300}
+"""
+
+
+def ctl(sock: Path, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "executive", "ctl", "--socket", str(sock), *args], cwd=ROOT, capture_output=True, text=True)
+
+
+def wait_for_ekf_wait(sock: Path, timeout_s: float = 30.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            waiting = request(str(sock), "status", timeout_s=2.0)["status"]["waiting"]
+        except OSError:
+            waiting = None  # not serving yet
+        if waiting is not None and waiting["node"] == "EKF ok?":
+            return
+        time.sleep(0.05)
+    pytest.fail("the mission never waited on the EKF")
+
+
+def test_ctl_tree_and_status_show_the_wait_and_sigterm_ends_the_run_aborted_in_the_journal(tmp_path, capsys):
+    mission, sock, db = tmp_path / "slow_ekf.yaml", tmp_path / "ctl.sock", tmp_path / "journal.db"
+    mission.write_text(MISSION)
+    args = ["run", str(mission), "--speedup", "2", "--socket", str(sock), "--journal", str(db)]
+    run = subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        wait_for_ekf_wait(sock)
+        tree = ctl(sock, "tree")
+        assert tree.returncode == 0, tree.stderr
+        lines = tree.stdout.splitlines()
+        assert lines[0].startswith("RUNNING ") and "waiting: EKF ok? (" in lines[0], lines[0]
+        assert any(line.startswith("            * Wait until EKF ok? -- waiting (") for line in lines), lines
+        assert any(line.startswith("                ✕ EKF ok? -- EKF has no position estimate") for line in lines), lines
+        assert "            - Arm" in lines  # not reached yet
+
+        status = ctl(sock, "status")
+        assert "waiting: EKF ok? (" in status.stdout and ": EKF has no position estimate" in status.stdout, status.stdout
+
+        watch = subprocess.Popen(
+            [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "tree", "--watch", "--interval", "0.1"],
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        assert watch.stdout is not None
+        prints = 0
+        while prints < 2:  # two prints of the tree, a tick or more apart
+            line = watch.stdout.readline()
+            assert line, watch.stderr.read() if watch.stderr else ""
+            prints += line.startswith("tick ")
+        watch.send_signal(signal.SIGINT)
+        _, err = watch.communicate(timeout=10)
+        assert (watch.returncode, err) == (0, "")  # Ctrl-C is how a watch ends
+
+        run.send_signal(signal.SIGTERM)
+        _, err = run.communicate(timeout=30)
+    finally:
+        if run.poll() is None:
+            run.kill()
+            run.communicate()
+    assert run.returncode == 1
+    assert "mission 'slow-ekf' ABORTED: stopped: SIGTERM" in err and "Traceback" not in err
+    assert main(["report", str(db)]) == 0
+    report = capsys.readouterr().out
+    assert ": ABORTED stopped: SIGTERM" in report.splitlines()[1] and "UNFINISHED" not in report

@@ -1,0 +1,139 @@
+"""``executive service install``: the systemd unit, and its ExecStart run for real under a fake service manager (NOTIFY_SOCKET, JOURNAL_STREAM)."""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from executive.cli import main
+
+ROOT = Path(__file__).parents[2]
+SHORT = """\
+version: 1
+name: short
+vehicle: rover
+auto_arm: true
+home: {lat: -35.363261, lon: 149.165230}
+simulator: {ekf_ready_after_s: 1}
+waypoints:
+  - {lat: -35.3631710, lon: 149.1652300}
+"""
+
+
+@pytest.fixture
+def mission(tmp_path: Path) -> Path:
+    path = tmp_path / "short mission.yaml"  # a space: ExecStart quotes it
+    path.write_text(SHORT)
+    return path
+
+
+def unit_of(capsys, *argv: str) -> dict[str, list[str]]:
+    """``service install --print``'s unit: each directive's values (comments left out)."""
+    assert main(["service", "install", *argv, "--print"]) == 0
+    unit: dict[str, list[str]] = {}
+    for line in capsys.readouterr().out.splitlines():
+        if "=" in line and not line.startswith("#"):
+            key, value = line.split("=", 1)
+            unit.setdefault(key, []).append(value)
+    return unit
+
+
+def exec_start(unit: dict[str, list[str]]) -> list[str]:
+    """ExecStart as systemd splits it (our quoting is a subset of the shell's; %% and $$ are systemd's escapes)."""
+    return shlex.split(unit["ExecStart"][0].replace("%%", "%").replace("$$", "$"))
+
+
+def test_the_unit_runs_the_mission_under_notify_with_a_watchdog_restart_and_resume(capsys, mission, tmp_path):
+    unit = unit_of(
+        capsys, str(mission), "--mavlink", "/dev/ttyACM0,921600", "--user", "pi", "--watchdog-sec", "10", "--run-options=--gcs udpin:0.0.0.0:14551"
+    )
+    command = exec_start(unit)
+    assert command[:5] == [sys.executable, "-m", "executive", "run", str(mission.resolve())]
+    options = " ".join(command[5:])
+    assert "--journal /var/lib/executive/short-mission.db --resume" in options
+    assert "--mavlink /dev/ttyACM0,921600" in options and options.endswith("--gcs udpin:0.0.0.0:14551")
+    expected = {
+        "Type": ["notify"], "NotifyAccess": ["main"], "WatchdogSec": ["10"], "Restart": ["on-failure"], "RestartPreventExitStatus": ["1 2"],
+        "User": ["pi"], "StandardError": ["journal"], "SyslogIdentifier": ["executive-short-mission"], "WantedBy": ["multi-user.target"],
+    }  # fmt: skip
+    assert {key: unit.get(key) for key in expected} == expected
+
+
+def test_install_writes_the_unit_it_prints(capsys, mission, tmp_path):
+    printed = unit_of(capsys, str(mission), "--name", "survey")
+    assert main(["service", "install", str(mission), "--name", "survey", "--unit-dir", str(tmp_path)]) == 0
+    written = (tmp_path / "executive-survey.service").read_text()
+    assert "systemctl daemon-reload && systemctl enable --now executive-survey" in capsys.readouterr().out
+    assert f"ExecStart={printed['ExecStart'][0]}\n" in written and oct((tmp_path / "executive-survey.service").stat().st_mode)[-3:] == "644"
+
+
+def test_a_bad_mission_or_run_option_writes_nothing(capsys, tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(SHORT.replace("lat: -35.3631710", "lat: -95.0"))
+    assert main(["service", "install", str(bad), "--unit-dir", str(tmp_path)]) == 2
+    assert f"{bad}:8:11: waypoints[0].lat:" in capsys.readouterr().err
+    good = tmp_path / "good.yaml"
+    good.write_text(SHORT)
+    assert main(["service", "install", str(good), "--unit-dir", str(tmp_path), "--run-options=--warp 9"]) == 2
+    assert "--run-options: not `executive run` options: --warp 9" in capsys.readouterr().err
+    assert list(tmp_path.glob("*.service")) == []
+
+
+def test_exec_start_under_a_fake_service_manager_notifies_ready_watchdog_status_stopping_and_logs_for_the_journal(capsys, mission, tmp_path):
+    """The unit's own command, run as systemd would: READY=1 once the autopilot answers, WATCHDOG=1 from the loop, STOPPING=1 at the end."""
+    journal = tmp_path / "run.db"
+    unit = unit_of(capsys, str(mission), "--journal", str(journal), f"--run-options=--speedup 20 --socket {tmp_path / 'ctl.sock'}")
+    manager = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+    manager.bind(str(tmp_path / "notify"))
+    manager.settimeout(0.2)
+    messages: list[tuple[float, str]] = []
+    read_end, write_end = os.pipe()  # stderr as the journal's stream: JOURNAL_STREAM names it
+    info = os.fstat(write_end)
+    env = {**os.environ, "NOTIFY_SOCKET": str(tmp_path / "notify"), "WATCHDOG_USEC": "200000", "JOURNAL_STREAM": f"{info.st_dev}:{info.st_ino}"}
+    proc = subprocess.Popen(exec_start(unit), cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=write_end)
+    os.close(write_end)
+
+    def listen() -> None:
+        while proc.poll() is None or (messages[-1:] and "STOPPING=1" not in messages[-1][1]):
+            try:
+                messages.append((time.monotonic(), manager.recv(4096).decode()))
+            except TimeoutError:
+                if proc.poll() is not None:
+                    return
+
+    listener = threading.Thread(target=listen, daemon=True)
+    listener.start()
+    with os.fdopen(read_end) as stderr:
+        err = stderr.read()
+    assert proc.wait(timeout=60) == 0, err
+    listener.join(timeout=5)
+    manager.close()
+    kinds = [text.split("=", 1)[0] for _, text in messages]
+    assert kinds[0] == "READY" and "autopilot 1/1 heard on udpout:127.0.0.1:" in messages[0][1]
+    assert kinds[-1] == "STOPPING" and messages[-1][1] == "STOPPING=1\nSTATUS=mission COMPLETED: every waypoint reached"
+    pings = [t for t, text in messages if text == "WATCHDOG=1"]
+    assert len(pings) >= 3, messages  # every 0.1 s of wall time while the loop ticks
+    assert any(text.startswith("STATUS=RUNNING") for _, text in messages)
+    # stderr in the journal: each record with its syslog priority, no timestamp of our own (the journal stamps it)
+    assert re.search(r"^<6>mission\.lifecycle: mission READY -> RUNNING", err, re.M), err
+    assert not re.search(r"^\d{4}-\d\d-\d\dT", err, re.M)
+    assert journal.exists()
+
+
+def test_a_crash_exits_70_with_its_traceback_so_the_service_restarts_on_it_and_not_on_an_ended_mission(capsys, monkeypatch, mission):
+    def broken(*_args, **_kwargs):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr("executive.cli.run.build_runtime", broken)
+    assert main(["run", str(mission), "--socket", "none"]) == 70
+    err = capsys.readouterr().err
+    assert "Traceback" in err and "RuntimeError: a bug" in err and "executive: run: crashed (a bug, traceback above): exit 70" in err

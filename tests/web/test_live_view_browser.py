@@ -1,0 +1,129 @@
+"""The live view in a real browser (headless Chromium, Debian's ``chromium``: .ci/run installs it) during a real run from the command line.
+
+``EXECUTIVE_LIVE_VIEW_PNG=docs/live-view.png`` keeps the screenshot README shows.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import re
+import shutil
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import pytest
+
+from executive.assembly import snapshot_recorder
+from executive.io.control import request
+from executive.snapshots import SnapshotRecorder, replay
+from executive.web.replay import ReplaySource
+from executive.web.server import WebAddress, WebServer
+from tests_support import line_mission
+
+ROOT = Path(__file__).parents[2]
+CHROMIUM = "/usr/bin/chromium"
+MISSION = """\
+version: 1
+name: live-view
+vehicle: rover
+auto_arm: true
+home: {lat: -35.363261, lon: 149.165230}
+simulator: {ekf_ready_after_s: 2}
+waypoints:
+  - {lat: -35.3631711, lon: 149.1652300}  # 10 m north
+  - {lat: -35.3631711, lon: 149.1653401}  # then 10 m east
+  - {lat: -35.3620919, lon: 149.1657805}  # then 120 m north, 40 m east: time for a person to press Pause
+"""
+
+
+def browser():
+    if not os.path.exists(CHROMIUM) and not os.environ.get("CI"):
+        pytest.skip(f"no {CHROMIUM} (apt-get install chromium; .ci/run does)")
+    sync_api = pytest.importorskip("playwright.sync_api") if not os.environ.get("CI") else __import__("playwright.sync_api").sync_api
+    return sync_api.sync_playwright()
+
+
+def announced_url(proc: subprocess.Popen) -> str:
+    """The live view's address, as the executive prints it at start-up (its stderr read on in a thread so it never fills)."""
+    lines: queue.Queue[str] = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(line) for line in proc.stderr], daemon=True).start()
+    while True:
+        line = lines.get(timeout=30)
+        if found := re.search(r"live view on (http://\S+/)", line):
+            return found[1]
+
+
+def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission(tmp_path):
+    mission, sock, token = tmp_path / "live.yaml", tmp_path / "ctl.sock", tmp_path / "token"
+    mission.write_text(MISSION)
+    token.write_text("a-token-of-twenty-chars\n")  # its buttons need it, as beyond the loopback interface; the page takes it from its address
+    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "20", "--socket", str(sock), "--web", "127.0.0.1:0"]
+    command += ["--web-token-file", str(token)]
+    proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        url = announced_url(proc)
+        with browser() as playwright:
+            chromium = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+            page = chromium.new_page(viewport={"width": 1400, "height": 820})
+            errors: list[str] = []
+            page.on("pageerror", lambda error: errors.append(str(error)))
+            page.goto(f"{url}?token=a-token-of-twenty-chars")
+            # the tree's nodes by name, and their statuses as they tick: the leg being driven is RUNNING, pre-flight is done
+            going = page.locator('#tree g.node[data-status="R"]', has_text="Go to waypoint")
+            going.wait_for(timeout=20_000)
+            names = page.locator("#tree text.name").all_text_contents()
+            assert {"Mission", "Pre-flight", "EKF ok?", "Link alive?", "For each leg", "Go to waypoint"} <= set(names)
+            assert page.locator('#tree g.node[data-status="S"]', has_text="Pre-flight").count() == 1
+            on_last_leg = "$('leg').textContent === '3/3' && $('waiting').textContent.startsWith('waiting: Go to waypoint')"
+            page.wait_for_function(on_last_leg.replace("$(", "document.getElementById("), timeout=20_000)
+            assert page.locator("#state").inner_text() == "RUNNING"
+            assert page.locator("#plan polyline.track").count() == 1 and page.locator("#plan circle.wp").count() == 3
+            mode = page.locator("#bb tr", has=page.locator("td", has_text=re.compile(r"^/vehicle/mode$")))
+            assert mode.locator("td").all_inner_texts() == ["/vehicle/mode", "'GUIDED'"]
+            page.screenshot(path=tmp_path / "live-view.png")
+            page.get_by_role("button", name="Pause").click()
+            page.wait_for_function("document.getElementById('state').textContent === 'PAUSED'", timeout=20_000)
+            assert "pause: done" in page.locator("#reply").inner_text()
+            chromium.close()
+        status = request(str(sock), "status")
+        assert (status["state"], status["status"]["reason"]) == ("PAUSED", "web: pause")
+        assert errors == []
+        if keep := os.environ.get("EXECUTIVE_LIVE_VIEW_PNG"):
+            shutil.copy(tmp_path / "live-view.png", ROOT / keep)
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
+
+
+def test_the_replay_page_moves_through_a_recording_with_its_slider(tmp_path, lockstep):
+    path = tmp_path / "run.snap"
+    recorder = SnapshotRecorder(path)
+    lockstep(line_mission("replayed"), plugs=[snapshot_recorder(recorder)]).run_to_end(300.0)
+    recorder.close()
+    source = ReplaySource(str(path))
+    server = WebServer(WebAddress("127.0.0.1", 0))
+    server.start(source)
+    try:
+        with browser() as playwright:
+            chromium = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+            page = chromium.new_page(viewport={"width": 1400, "height": 820})
+            page.goto(server.url)
+            last = source.recording.last
+            page.wait_for_function(f"document.getElementById('tickinfo').textContent.startsWith('tick {last} ')", timeout=20_000)
+            assert page.locator("#controls").is_hidden()  # nothing to command in a recording
+            page.locator("#slider").fill("150")
+            page.wait_for_function("document.getElementById('tickinfo').textContent.startsWith('tick 150 ')", timeout=20_000)
+            then = replay(path, 150)
+            statuses = {node["name"]: then.status.get(node["id"], "-") for node in then.nodes}
+            going = page.locator("#tree g.node", has_text="Go to waypoint")
+            assert going.get_attribute("data-status") == statuses["Go to waypoint"] == "R"
+            assert page.locator("#tree g.node", has_text="Pre-flight").get_attribute("data-status") == "S"
+            leg = int(then.blackboard["/mission/leg_index"]) + 1
+            assert page.locator("#state").inner_text() == "RUNNING" and page.locator("#leg").inner_text() == f"{leg}/4"
+            assert page.locator("#plan polyline.track").count() == 1
+            chromium.close()
+    finally:
+        server.close()
