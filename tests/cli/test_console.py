@@ -44,7 +44,7 @@ def test_on_a_terminal_each_log_record_starts_its_own_line_with_a_utc_timestamp(
     os.close(terminal)
     try:
         # a record written while the live line was showing: the operator's INFO (the autopilot's EKF messages, the state changes)
-        text = read_terminal(main_fd, lambda t: LIVE in t and RECORD.search(t, t.index(LIVE)) is not None, timeout_s=60)
+        text = read_terminal(main_fd, lambda t: LIVE in t and RECORD.search(t, t.index(LIVE)) is not None, timeout_s=300)
     finally:
         proc.send_signal(signal.SIGINT)
         text += read_terminal(main_fd, lambda _t: proc.poll() is not None, timeout_s=30)

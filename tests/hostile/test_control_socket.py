@@ -7,6 +7,7 @@ answered whatever came before it.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import json
 import socket
@@ -254,6 +255,24 @@ SERVER_WITHOUT_FILE_DESCRIPTORS = textwrap.dedent(
 )
 
 
+@contextlib.contextmanager
+def answering(path: str, hang_s: float = 30.0) -> Iterator[socket.socket]:
+    """A connection to ``path`` once the server has room in its backlog again (it drains it at its own pace: no wall-clock margin)."""
+    deadline = time.monotonic() + hang_s
+    while True:
+        sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        sock.settimeout(10.0)
+        try:
+            sock.connect(path)
+            break
+        except BlockingIOError:  # EAGAIN: the backlog is still full
+            sock.close()
+            assert time.monotonic() < deadline, "the server never accepted again"
+            time.sleep(0.05)
+    with sock:
+        yield sock
+
+
 def test_running_out_of_file_descriptors(tmp_path: Path) -> None:
     """A server with room for three connections and forty clients: accept fails (EMFILE) and it lives on, then answers."""
     path, stop = str(tmp_path / "s.sock"), tmp_path / "stop"
@@ -275,9 +294,7 @@ def test_running_out_of_file_descriptors(tmp_path: Path) -> None:
         time.sleep(0.5)
         for sock in clients:
             sock.close()
-        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
-            sock.settimeout(10.0)
-            sock.connect(path)
+        with answering(path) as sock:
             sock.sendall(GOOD)
             reply = b""
             while not reply.endswith(b"\n"):

@@ -117,7 +117,8 @@ class Client:
         self.conn = mavutil.mavlink_connection(url, source_system=GCS_SYSTEM, source_component=GCS_COMPONENT, dialect="ardupilotmega")
         self.received: list[MAVLinkMessage] = []
 
-    def wait(self, kind: str, condition: Callable[[MAVLinkMessage], bool] = lambda m: True, timeout: float = 3.0) -> MAVLinkMessage:
+    def wait(self, kind: str, condition: Callable[[MAVLinkMessage], bool] = lambda m: True, timeout: float = 30.0) -> MAVLinkMessage:
+        """The first ``kind`` message meeting ``condition``; ``timeout`` (wall seconds) only bounds a hung simulator."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             msg = self.conn.recv_msg()
@@ -129,7 +130,7 @@ class Client:
                 return msg
         raise AssertionError(f"no matching {kind} within {timeout} s")
 
-    def command(self, command: int, *params: float, timeout: float = 3.0) -> MAVLinkMessage:
+    def command(self, command: int, *params: float, timeout: float = 30.0) -> MAVLinkMessage:
         """Send a COMMAND_LONG to the vehicle and wait for its COMMAND_ACK."""
         padded = (list(params) + [0.0] * 7)[:7]
         self.conn.mav.command_long_send(1, 1, command, 0, *padded)

@@ -399,27 +399,27 @@ def test_link_loss_stops_heartbeats_for_its_duration_and_loses_what_is_sent_mean
         conn = mavutil.mavlink_connection(sim.url_for_client, source_system=GCS[0], source_component=GCS[1], dialect="ardupilotmega")
         try:
             conn.mav.heartbeat_send(m.MAV_TYPE_GCS, m.MAV_AUTOPILOT_INVALID, 0, 0, 0)  # udpin answers peers it has heard
-            heartbeats: list[tuple[float, int]] = []  # (vehicle time when received, custom mode)
+            # (vehicle time it was sent at: the stamp of the ATTITUDE before it in the stream, not when this thread got to it; custom mode)
+            heartbeats: list[tuple[float, int]] = []
             stamps: list[float] = []  # vehicle time each ATTITUDE was sent at, by its own stamp
             sent_during_loss = False
-            deadline = time.monotonic() + 3.0
+            deadline = time.monotonic() + 30.0  # a hang guard: 22 s of vehicle time is 0.44 s of wall time
             while sim.faults.elapsed_s < loss[1] + 6.0 and time.monotonic() < deadline:
-                if not sent_during_loss and sim.faults.elapsed_s >= loss[0] + 2.0:
+                if not sent_during_loss and loss[0] + 2.0 <= sim.faults.elapsed_s < loss[1] - 2.0:
                     conn.mav.command_long_send(1, 1, m.MAV_CMD_DO_SET_MODE, 0, m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, 0, 0, 0, 0, 0)
                     sent_during_loss = True
                 msg = conn.recv_msg()
                 if msg is None:
                     time.sleep(0.001)
                 elif msg.get_type() == "HEARTBEAT":
-                    heartbeats.append((sim.faults.elapsed_s, msg.custom_mode))
+                    heartbeats.append((stamps[-1] if stamps else 0.0, msg.custom_mode))
                 elif msg.get_type() == "ATTITUDE":
                     stamps.append(msg.time_boot_ms / 1000.0)
         finally:
             conn.close()
     received = [t for t, _ in heartbeats]
     assert any(t < loss[0] for t in received), received
-    # receipt lags sending by the socket's delay: 2 s of vehicle time (40 ms) of margin; the vehicle's own stamps need little
-    assert not [t for t in received if loss[0] + 2.0 < t < loss[1]], received
+    assert not [t for t in received if loss[0] + 0.2 < t < loss[1]], received  # by the vehicle's own stamps: a step or two of margin
     assert not [t for t in stamps if loss[0] + 0.1 < t < loss[1] - 0.1], stamps
     after = [mode for t, mode in heartbeats if t >= loss[1]]
     assert after, received

@@ -66,7 +66,7 @@ def test_garbage_on_the_link_is_survived(server: SimServer, client_for: Callable
     client.wait("HEARTBEAT", booted)
     for _ in range(20):  # as a commander does: retry until acknowledged
         try:
-            ack = client.command(m.MAV_CMD_DO_SET_MODE, m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, timeout=0.1)
+            ack = client.command(m.MAV_CMD_DO_SET_MODE, m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, timeout=0.5)
             break
         except AssertionError:
             continue

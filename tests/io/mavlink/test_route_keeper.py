@@ -14,13 +14,14 @@ from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer, TransferState
+from executive.io.mavlink.modes import ModeTable
 from executive.io.mavlink.route_keeper import RouteKeeper, RouteUpload, RouteUploadState
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Home, Mission
 from executive.mission.route import offset
 from executive.sim.mission_store import MissionStore
 from executive.state import HomePosition
-from executive.testing import ack, port_for
+from executive.testing import ScriptedAutopilot, ack, port_for
 
 _M = mavlink
 _EXECUTIVE = mavlink.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)
@@ -32,21 +33,47 @@ def wire(msg: MAVLinkMessage) -> MAVLinkMessage:
     return mavlink.MAVLink(None).decode(bytearray(msg.pack(_EXECUTIVE)))
 
 
-class Autopilot:
+class Autopilot(ScriptedAutopilot):
     """ArduPilot's mission store behind a link: what the executive sends in a tick is answered at the next one, as over a real link."""
 
     def __init__(self, clock: ManualClock, link, commander: Commander, transfer: MissionTransfer, vehicle) -> None:
-        self.clock, self.link, self.commander, self.transfer, self.vehicle = clock, link, commander, transfer, vehicle
+        self.clock, self.link, self.commander, self.transfer = clock, link, commander, transfer
         self.system_id = self.component_id = 1
         self.home: tuple[float, float] | None = AUTOPILOT_HOME[:2]
-        self.armed, self.mode = False, "GUIDED"
         self.answers = True  # False: the mission protocol goes unanswered (a link that lost it)
         self.home_result = _M.MAV_RESULT_ACCEPTED
         self._replies: list[MAVLinkMessage] = []  # sent at the next tick
         self.store = MissionStore(self, self._replies.append, lambda severity, text: None)
         self.sent: list[MAVLinkMessage] = []  # everything the executive sent
         self.homes_set: list[tuple[float, float, float]] = []
+        super().__init__(None, AUTOPILOT_HOME[:2], mode="GUIDED")
         vehicle.set(vehicle__home=HomePosition(*AUTOPILOT_HOME, clock.now()))
+
+    @property
+    def modes(self) -> ModeTable:
+        return self.commander.modes
+
+    @property
+    def guided_mode(self) -> str:
+        return self.commander.profile.guided_mode
+
+    def publish(self) -> None:
+        """Nothing: the tests write the vehicle's facts themselves."""
+
+    def acknowledge(self, command: int, result: int) -> None:
+        self._replies.append(ack(command, result))
+
+    def on_command(self, msg: MAVLinkMessage) -> int | None:
+        if msg.get_type() == "COMMAND_INT" and msg.command == _M.MAV_CMD_DO_SET_HOME:
+            if self.home_result == _M.MAV_RESULT_ACCEPTED:
+                self.homes_set.append((msg.x / 1e7, msg.y / 1e7, msg.z))
+                self.home = (msg.x / 1e7, msg.y / 1e7)
+            return self.home_result
+        return super().on_command(msg)
+
+    def on_message(self, msg: MAVLinkMessage) -> None:
+        if msg.get_type() in MissionStore.MESSAGES and self.answers:
+            self.store.handle(wire(msg))
 
     def deliver(self) -> None:
         """The replies of the last tick reach the executive (the reader's part)."""
@@ -66,13 +93,7 @@ class Autopilot:
         """What the executive sent this tick."""
         for msg in self.link.take():
             self.sent.append(msg)
-            if msg.get_type() == "COMMAND_INT" and msg.command == _M.MAV_CMD_DO_SET_HOME:
-                if self.home_result == _M.MAV_RESULT_ACCEPTED:
-                    self.homes_set.append((msg.x / 1e7, msg.y / 1e7, msg.z))
-                    self.home = (msg.x / 1e7, msg.y / 1e7)
-                self._replies.append(ack(msg.command, self.home_result))
-            elif msg.get_type() in MissionStore.MESSAGES and self.answers:
-                self.store.handle(wire(msg))
+            self.answer(msg)
         self.store.update()
 
     def count(self, kind: str) -> int:
