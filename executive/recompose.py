@@ -92,6 +92,11 @@ class Recomposer:
 
     def _children(self, node: Node, spec: NodeType, children: list[py_trees.behaviour.Behaviour], here: str) -> None:
         singles = sum(not s.many for s in spec.slots)
+        if len(children) < singles or (len(children) > singles and not any(s.many for s in spec.slots)):
+            self.warnings.append(
+                (here, f"{len(children)} children where {spec.id} takes {', '.join(s.name for s in spec.slots) or 'none'}: left out")
+            )
+            return
         rest = iter(children)
         for slot in spec.slots:
             taken = [self.node(child, here) for child in [next(rest) for _ in range(len(children) - singles if slot.many else 1)]]
@@ -106,7 +111,7 @@ class Recomposer:
         first = kids[0]
         if type(first) is py_trees.composites.Sequence and not first.memory and behaviour.name == f"{first.name} or hold" and first.children:
             *guards, work = first.children
-            node = Node("failsafe_guarded", name=None if first.name == "Guarded route" else first.name)
+            node = Node("failsafe_guarded", name=None if first.name == self.default_names.get("failsafe_guarded") else first.name)
             node.slots = {"work": [self.node(work, here)], "guards": [self.node(g, here) for g in guards]}
             return node
         if isinstance(first, Guard):
@@ -116,13 +121,16 @@ class Recomposer:
 
     def _unknown(self, behaviour: py_trees.behaviour.Behaviour, here: str) -> Node:
         cls = type(behaviour)
-        kind = "composite" if isinstance(behaviour, py_trees.composites.Composite) else "decorator" if behaviour.children else "action"
-        slots = () if kind == "action" else (Slot("children", True),)
+        if isinstance(behaviour, py_trees.decorators.Decorator):
+            kind, slots = "decorator", (Slot("child", False),)
+        elif isinstance(behaviour, py_trees.composites.Composite):
+            kind, slots = "composite", (Slot("children", True, required=False),)
+        else:
+            kind, slots = ("guard" if isinstance(behaviour, Guard) else "action"), ()
         self.unknown.setdefault(cls.__name__, NodeType(cls.__name__, kind, f"{cls.__module__}.{cls.__qualname__}: not in the catalogue", (), slots))
         self.warnings.append((here, f"{cls.__name__} is not in the catalogue: Groot2 shows it, import refuses it"))
         node = Node(cls.__name__, name=behaviour.name)
-        if behaviour.children:
-            node.slots["children"] = [self.node(child, here) for child in behaviour.children]
+        self._children(node, self.unknown[cls.__name__], list(behaviour.children), here)
         return node
 
 

@@ -255,3 +255,27 @@ def test_behaviortree_cpp_built_in_nodes_groot2_offers_are_read_as_ours(tmp_path
             ],
         }
     }
+
+
+def test_a_tree_with_nodes_the_catalogue_lacks_exports_them_said_and_import_refuses_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[1] / "examples" / "patrol"))  # the patrol example: a guard and an action of its own
+    mission = tmp_path / "patrol.yaml"
+    text = (Path(__file__).parents[1] / "examples" / "patrol" / "patrol.yaml").read_text(encoding="utf-8")
+    mission.write_text(text.replace("tree: waypoints ", "tree: patrol_tree:build "), encoding="utf-8")
+    assert main(["export", str(mission), "-o", str(tmp_path / "tree.xml")]) == 0
+    warnings = capsys.readouterr().err
+    for cls in ("BeaconOn", "EnoughSatellites", "WaitForGuards"):
+        assert f"{cls} is not in the catalogue: Groot2 shows it, import refuses it (warning)" in warnings
+    model = ET.parse(tmp_path / "tree.xml").getroot().find("TreeNodesModel")
+    assert model is not None and {m.attrib["ID"]: m.tag for m in model if m.attrib["ID"][0].isupper()} == {
+        "BeaconOn": "Action",
+        "EnoughSatellites": "Condition",
+        "WaitForGuards": "Action",
+    }
+    assert main(["import", str(tmp_path / "tree.xml")]) == 2
+    assert [line.split(": ", 2)[2] for line in capsys.readouterr().err.splitlines()] == [
+        f"unknown node type '{cls}' (not in the catalogue: executive behaviours lists it)"
+        for cls in ("BeaconOn", "EnoughSatellites", "WaitForGuards")
+    ]

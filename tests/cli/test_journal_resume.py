@@ -24,6 +24,8 @@ from executive.state import SamplerState
 
 ROOT = Path(__file__).parents[2]
 MISSION = ROOT / "missions" / "asv_sampling.yaml"
+#: The simulated EKF is ready after 2 s in the lock-step runs, not the firmware's 40: what they check comes once the vehicle moves.
+EKF_READY_S = 2.0
 
 
 def run(mission: Path, *args: str) -> subprocess.Popen:
@@ -84,7 +86,7 @@ def test_a_crash_at_any_moment_then_resume_records_every_sample_once(tmp_path, c
         journals.append(Journal(db, clock))
         return {"plugs": [journal_recorder(journals[-1])]}
 
-    first = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug)
+    first = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug, ekf_ready_after_s=EKF_READY_S)
     state = first.runtime.mission_state
     moment: list[float] = []
 
@@ -100,7 +102,7 @@ def test_a_crash_at_any_moment_then_resume_records_every_sample_once(tmp_path, c
     crashed = report(db, 1, capsys)
     assert crashed["outcome"] is None and len(crashed["samples"]) == samples_before
 
-    second = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug)
+    second = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug, ekf_ready_after_s=EKF_READY_S)
     resume = journals[1].resume_point(mission)
     assert resume is not None and resume.run == 1
     assert _resume_text(resume).startswith(f"resuming run 1 at waypoint {resume.leg_index + 1} with {samples_before} sample(s) already taken")
@@ -123,7 +125,7 @@ def test_resume_without_an_unfinished_run_starts_from_the_first_waypoint(tmp_pat
         journals.append(Journal(tmp_path / "journal.db", clock))
         return {"plugs": [journal_recorder(journals[0])]}
 
-    sim = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug)
+    sim = lockstep(mission, mission_dir=MISSION.parent, options_for_clock=journal_plug, ekf_ready_after_s=EKF_READY_S)
     resume = journals[0].resume_point(mission)
     assert "nothing to resume" in _resume_text(resume)  # what `run --resume` says before it starts
     outcome = sim.run_to_end(limit_s=3600)
@@ -165,12 +167,12 @@ def test_a_route_edited_before_a_crash_is_the_route_resumed(tmp_path, capsys, lo
         journals.append(Journal(db, clock))
         return {"plugs": [journal_recorder(journals[-1])]}
 
-    first = lockstep(square, options_for_clock=journal_plug)
+    first = lockstep(square, options_for_clock=journal_plug, ekf_ready_after_s=EKF_READY_S)
     assert first.run(limit_s=600, until=lambda: first.runtime.mission_state.leg_index >= 1) is None  # heading for waypoint 2 of 4
     assert first.runtime.operator.request("route", source="ctl", operation="remove", waypoint=3).ok  # on the disk before the reply
     # the crash: the first run is never ticked again and never ends
 
-    second = lockstep(square, options_for_clock=journal_plug)
+    second = lockstep(square, options_for_clock=journal_plug, ekf_ready_after_s=EKF_READY_S)
     resume = journals[1].resume_point(square)
     assert _resume_text(resume) == "resuming run 1 at waypoint 2 with 0 sample(s) already taken, on its route as last edited (3 waypoints)"
     outcome = second.run(limit_s=600, resume=resume)
