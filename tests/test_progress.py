@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 
 from executive import blackboard
 from executive.clock import ManualClock
@@ -51,3 +52,39 @@ def test_each_change_of_state_leg_or_armed_also_brings_a_line_at_once() -> None:
         (0.2, True, "RUNNING", lines[0]["leg"]),
         (0.3, True, "RUNNING", 2),
     ]
+
+
+class Terminal(io.StringIO):
+    """What a terminal receives, stdout and stderr alike."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_a_log_record_from_another_thread_is_written_apart_from_the_live_line() -> None:
+    import logging
+    import threading
+
+    from executive.logs import LiveLineHandler, UtcFormatter
+
+    clock, terminal = ManualClock(), Terminal()
+    progress = Progress(terminal, clock)
+    handler = LiveLineHandler(terminal)
+    handler.setFormatter(UtcFormatter())
+    handler.live = progress
+    logger = logging.getLogger("executive.test_progress")
+    logger.addHandler(handler)
+    try:
+        _set_mode("HOLD")
+        progress.update()
+        line = terminal.getvalue().removeprefix("\r\x1b[K")
+        assert line.startswith("[     0.0 s] ") and "HOLD" in line
+        worker = threading.Thread(target=logger.warning, args=("link lost",))
+        worker.start()
+        worker.join()
+    finally:
+        logger.removeHandler(handler)
+    after = terminal.getvalue().removeprefix("\r\x1b[K" + line)
+    # the line erased, the record from the line's start, the line drawn again
+    record = r"\r\x1b\[K\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z executive WARNING test_progress: link lost\n"
+    assert re.fullmatch(record + re.escape(line), after), repr(after)

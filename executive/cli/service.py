@@ -52,9 +52,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     install.add_argument("--wait", action="store_true", help="load the mission READY and wait for `ctl start` (an unfinished run resumes at once)")
     install.add_argument("--unit-dir", default=UNIT_DIR, metavar="DIR", help="where to write the unit (default %(default)s)")
     install.add_argument("--print", action="store_true", dest="print_only", help="print the unit instead of writing it")
-    install.add_argument(
-        "--run-options", type=shlex.split, default=[], metavar="'OPTIONS'", help="more `executive run` options, quoted: '--gcs udpin:0.0.0.0:14551'"
-    )
+    more = "more `executive run` options, after = and quoted: --run-options='--gcs udpin:0.0.0.0:14551'"
+    install.add_argument("--run-options", type=shlex.split, default=[], metavar="'OPTIONS'", help=more)
     p.set_defaults(func=main)
 
 
