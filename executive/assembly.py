@@ -23,7 +23,7 @@ from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
-from executive.io.mavlink.link import Link
+from executive.io.mavlink.link import Link, PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.parameters import ParameterWatch
 from executive.io.mavlink.reader import MavlinkReader
@@ -112,6 +112,8 @@ def _autopilot_link(
         target_system=target[0],
         target_component=target[1],
     )
+    if isinstance(link, PymavlinkLink):
+        link.skim(reader.kinds_read)  # what the reader does not read is counted from its header, never decoded
     streams = StreamRequester(commander, rates_for(mission.vehicle))
     reader.on_reconnect = streams.restart
     #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.

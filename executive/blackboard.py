@@ -69,6 +69,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/vehicle/position", None, "mavlink reader", "GlobalPosition (GLOBAL_POSITION_INT)"),
     Key("/vehicle/attitude", None, "mavlink reader", "Attitude (ATTITUDE)"),
     Key("/vehicle/ekf", None, "mavlink reader", "EkfStatus (EKF_STATUS_REPORT)"),
+    Key("/vehicle/ekf_failsafe", False, "mavlink reader", "the autopilot's own EKF failsafe acted ('EKF failsafe') and has not cleared"),
     Key("/vehicle/battery", None, "mavlink reader", "Battery (SYS_STATUS)"),
     Key("/vehicle/statustext", None, "mavlink reader", "(severity, text) of the last STATUSTEXT"),
     Key("/vehicle/params", None, "mavlink reader", "parameters the autopilot sent (PARAM_VALUE): name -> value; None until one came"),

@@ -18,6 +18,7 @@ import logging
 import os
 import sys
 import time
+from collections.abc import Callable
 from typing import Protocol, TextIO
 
 #: The loggers of what an operator follows, shown at INFO without -v.
@@ -33,11 +34,8 @@ OPERATOR_LOGGERS = (
 class LiveLine(Protocol):
     """A line rewritten in place on a terminal (the status line)."""
 
-    def clear(self) -> None:
-        """Erase the line, leaving the cursor at its start."""
-
-    def redraw(self) -> None:
-        """Draw the line again."""
+    def apart(self, write: Callable[[], object]) -> None:
+        """Call ``write`` with the line erased before and drawn again after (and nothing else written meanwhile)."""
 
 
 class UtcFormatter(logging.Formatter):
@@ -85,11 +83,10 @@ class LiveLineHandler(logging.StreamHandler):  # type: ignore[type-arg]
 
     def emit(self, record: logging.LogRecord) -> None:
         live = self.live
-        if live is not None:
-            live.clear()
-        super().emit(record)
-        if live is not None:
-            live.redraw()
+        if live is None:
+            super().emit(record)
+        else:
+            live.apart(lambda: super(LiveLineHandler, self).emit(record))
 
 
 def setup_logging(verbose: int = 0, stream: TextIO | None = None) -> LiveLineHandler:

@@ -47,8 +47,8 @@ def keeping_time(late_after_wall_s: float) -> Iterator[float]:
     5 ms by default: twice the 2.5 ms a tick may be late at ``--speedup 20`` (half of 100 ms of vehicle time, 20 times
     faster). The interval is cut to a tenth of the loop's lateness margin (``late_after_wall_s``, wall seconds), never
     lengthened, and restored after. A full pass of the collector over start-up's objects (modules, the mission, the
-    tree) held the interpreter 20-50 ms: they are collected once here and frozen out of later passes. Yields the
-    switch interval set.
+    tree) held the interpreter 20-50 ms: they are collected once here and frozen out of later passes, until the loop
+    ends (a process that goes on, a test session, can collect them again). Yields the switch interval set.
     """
     before = sys.getswitchinterval()
     interval = min(before, max(MIN_SWITCH_INTERVAL_S, late_after_wall_s / 10.0))
@@ -59,6 +59,7 @@ def keeping_time(late_after_wall_s: float) -> Iterator[float]:
         yield interval
     finally:
         sys.setswitchinterval(before)
+        gc.unfreeze()
 
 
 def caps_logged(text: str) -> list[float]:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import logging
+import threading
+from collections.abc import Callable
 from typing import TextIO
 
 from executive.clock import Clock
@@ -19,8 +21,8 @@ class Progress:
     journal) one JSON object per line, with the clock time, for tools: every ``period_s`` and at
     once on a change of state, leg, mode or armed, so a tool sees even a mode held for less than a
     period. ``quiet`` keeps the JSON lines to those changes (and one every ``quiet_period_s``).
-    The log clears the terminal's line before a record and draws it again after (:meth:`clear`,
-    :meth:`redraw`), so a warning never lands on its end. A reader that goes away (``run | head``)
+    The log writes its records :meth:`apart` from the terminal's line (erased before, drawn again
+    after, from any thread), so a warning never lands on its end. A reader that goes away (``run | head``)
     ends the status output, never the mission.
     """
 
@@ -35,6 +37,8 @@ class Progress:
         self._last_key: tuple[object, ...] = ()
         self._shown: str | None = None  # the line on the terminal now, if one is
         self._closed = False  # the reader went away
+        self._closed_by: OSError | None = None  # why, not logged yet
+        self._lock = threading.RLock()  # a log record from another thread waits for the line being written, and the other way round
 
     def line(self) -> str:
         """The current status line."""
@@ -43,18 +47,30 @@ class Progress:
     def update(self, force: bool = False) -> None:
         """Write the status if it is due (or ``force``)."""
         now = self._clock.now()
-        status = self._source.snapshot()
-        key = (status["state"], status["leg"], status["mode"], status["armed"])
+        key = self._source.headline()  # every tick: the whole status (a geodesic to the target) only when it is written
         changed = key != self._last_key
         if not (force or now >= self._next or (changed and not self._tty)):
             return
+        status = self._source.snapshot()
         self._next = now + self._period_s
         self._last_key = key
-        if self._tty:
-            self._shown = f"[{now:8.1f} s] {status_line(status)}"
-            self._emit(f"\r\x1b[K{self._shown}")
-        else:
-            self._emit(json.dumps({"t": round(now, 2), **status}) + "\n")
+        with self._lock:
+            if self._tty:
+                self._shown = f"[{now:8.1f} s] {status_line(status)}"
+                self._emit(f"\r\x1b[K{self._shown}")
+            else:
+                self._emit(json.dumps({"t": round(now, 2), **status}) + "\n")
+        self._say_if_closed()
+
+    def apart(self, write: Callable[[], object]) -> None:
+        """Call ``write`` (a log record to the terminal) with the line erased before and drawn again after; safe from any thread."""
+        with self._lock:
+            self.clear()
+            try:
+                write()
+            finally:
+                self.redraw()
+        self._say_if_closed()
 
     def clear(self) -> None:
         """Erase the terminal's line (before a log record is written)."""
@@ -68,9 +84,11 @@ class Progress:
 
     def close(self) -> None:
         """End the in-place line so later output starts on its own line."""
-        if self._tty:
-            self._emit("\n")
-        self._shown = None
+        with self._lock:
+            if self._tty:
+                self._emit("\n")
+            self._shown = None
+        self._say_if_closed()
 
     def _emit(self, text: str) -> None:
         if self._closed:
@@ -79,5 +97,10 @@ class Progress:
             self._stream.write(text)
             self._stream.flush()
         except (BrokenPipeError, ConnectionResetError) as exc:
-            self._closed, self._shown = True, None
+            self._closed, self._shown, self._closed_by = True, None, exc
+
+    def _say_if_closed(self) -> None:
+        """Log that the reader went away, once, outside the lock (a record takes the log handler's lock, then ours)."""
+        exc, self._closed_by = self._closed_by, None
+        if exc is not None:
             log.warning("the status output was closed (%s): the mission goes on without it; `executive ctl status` still answers", exc)

@@ -29,12 +29,16 @@ class StatusSource:
         self._bb: py_trees.blackboard.Client = blackboard.reader(name, KEYS)
         self._clock = clock
 
+    def headline(self) -> tuple[object, ...]:
+        """State, leg, mode and armed, as :meth:`snapshot` has them: cheap to read every tick (no distance worked out)."""
+        bb = self._bb
+        return bb.get("/mission/state"), _leg(bb), bb.get("/vehicle/mode"), bool(bb.get("/vehicle/armed"))
+
     def snapshot(self) -> dict[str, Any]:
         """Plain values, ready for JSON: None where not known yet; ``t``: the clock's time (the vehicle's), with a clock."""
         bb = self._bb
         position, attitude, battery, target = (bb.get(k) for k in ("/vehicle/position", "/vehicle/attitude", "/vehicle/battery", "/mission/target"))
         waiting = bb.get("/mission/waiting")
-        index, count = bb.get("/mission/leg_index"), bb.get("/mission/leg_count")
         distance = bearing = None
         if target is not None and position is not None:
             distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
@@ -42,8 +46,8 @@ class StatusSource:
             "t": None if self._clock is None else round(self._clock.now(), 2),
             "state": bb.get("/mission/state"),
             "reason": bb.get("/mission/reason"),
-            "leg": min(index + 1, count),
-            "legs": count,
+            "leg": _leg(bb),
+            "legs": bb.get("/mission/leg_count"),
             "distance_m": None if distance is None else round(distance, 2),
             "bearing_deg": None if bearing is None else round(bearing, 1),
             "samples": len(bb.get("/mission/samples")),
@@ -61,6 +65,10 @@ class StatusSource:
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
         }
+
+
+def _leg(bb: py_trees.blackboard.Client) -> int:
+    return min(bb.get("/mission/leg_index") + 1, bb.get("/mission/leg_count"))
 
 
 def status_line(status: dict[str, Any]) -> str:

@@ -143,7 +143,8 @@ def test_the_interval_is_never_lengthened_nor_cut_below_its_floor(switch_interva
         assert sys.getswitchinterval() == pytest.approx(MIN_SWITCH_INTERVAL_S)
 
 
-def test_start_ups_objects_are_frozen_out_of_the_collectors_passes(switch_interval):
+def test_start_ups_objects_are_frozen_out_of_the_collectors_passes_while_the_loop_runs(switch_interval):
     kept = [[i] for i in range(1000)]
     with keeping_time(0.0025):
         assert gc.get_freeze_count() >= len(kept)
+    assert gc.get_freeze_count() == 0  # collectable again after it

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 
 from executive import blackboard
 from executive.clock import ManualClock
@@ -31,3 +32,59 @@ def test_json_lines_come_every_half_second_and_at_once_on_a_mode_change() -> Non
     progress.update()  # due: half a second after the last line
     lines = [json.loads(line) for line in out.getvalue().splitlines()]
     assert [(line["t"], line["mode"]) for line in lines] == [(0.0, "AUTO.LOITER"), (0.1, "OFFBOARD"), (0.2, "AUTO.TAKEOFF"), (0.7, "AUTO.TAKEOFF")]
+
+
+def test_each_change_of_state_leg_or_armed_also_brings_a_line_at_once() -> None:
+    clock, out = ManualClock(), io.StringIO()
+    progress = Progress(out, clock)
+    writer = blackboard.writer("test", ["/mission/state", "/mission/leg_index", "/mission/leg_count", "/vehicle/armed"])
+    writer.set("/mission/leg_count", 4)
+    progress.update()
+    for key, value in (("/vehicle/armed", True), ("/mission/state", "RUNNING"), ("/mission/leg_index", 1)):
+        clock.advance(0.1)
+        writer.set(key, value)
+        progress.update()
+    clock.advance(0.1)
+    progress.update()  # nothing changed, not due
+    lines = [json.loads(line) for line in out.getvalue().splitlines()]
+    assert [(line["t"], line["armed"], line["state"], line["leg"]) for line in lines][1:] == [
+        (0.1, True, lines[0]["state"], lines[0]["leg"]),
+        (0.2, True, "RUNNING", lines[0]["leg"]),
+        (0.3, True, "RUNNING", 2),
+    ]
+
+
+class Terminal(io.StringIO):
+    """What a terminal receives, stdout and stderr alike."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_a_log_record_from_another_thread_is_written_apart_from_the_live_line() -> None:
+    import logging
+    import threading
+
+    from executive.logs import LiveLineHandler, UtcFormatter
+
+    clock, terminal = ManualClock(), Terminal()
+    progress = Progress(terminal, clock)
+    handler = LiveLineHandler(terminal)
+    handler.setFormatter(UtcFormatter())
+    handler.live = progress
+    logger = logging.getLogger("executive.test_progress")
+    logger.addHandler(handler)
+    try:
+        _set_mode("HOLD")
+        progress.update()
+        line = terminal.getvalue().removeprefix("\r\x1b[K")
+        assert line.startswith("[     0.0 s] ") and "HOLD" in line
+        worker = threading.Thread(target=logger.warning, args=("link lost",))
+        worker.start()
+        worker.join()
+    finally:
+        logger.removeHandler(handler)
+    after = terminal.getvalue().removeprefix("\r\x1b[K" + line)
+    # the line erased, the record from the line's start, the line drawn again
+    record = r"\r\x1b\[K\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z executive WARNING test_progress: link lost\n"
+    assert re.fullmatch(record + re.escape(line), after), repr(after)

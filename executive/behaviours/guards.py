@@ -122,16 +122,18 @@ class LinkAlive(Guard):
 
 
 class EkfOk(Guard):
-    """The EKF has a horizontal position (not constant-position mode) and its variances are sane.
+    """The EKF has a horizontal position (not constant-position mode) and its variances are sane, and the autopilot's own EKF failsafe is not on.
 
     Debounce: holds at once (the flags are the EKF's own filtered verdict, and a vehicle driving
     without a position must stop within the reaction budget: one tick); resumes after 3 s of a
-    sane EKF (several EKF_STATUS_REPORTs in a row).
+    sane EKF (several EKF_STATUS_REPORTs in a row). The autopilot's failsafe ("EKF failsafe" until
+    "EKF failsafe cleared") fails it too: its HOLD can come before the report that shows why (a
+    late or lost EKF_STATUS_REPORT), and meanwhile it refuses the position modes a leg asks for.
     """
 
     resume_after_s = 3.0
 
-    reads = ("/vehicle/ekf",)
+    reads = ("/vehicle/ekf", "/vehicle/ekf_failsafe")
 
     def __init__(self, name: str = "EKF ok?", variance_threshold: float = 0.8) -> None:
         super().__init__(name)
@@ -141,6 +143,8 @@ class EkfOk(Guard):
         ekf: EkfStatus | None = self.get("/vehicle/ekf")
         if ekf is None:
             return "no EKF status yet"
+        if self.get("/vehicle/ekf_failsafe"):
+            return "the autopilot's EKF failsafe is on"
         if not ekf.position_ok():
             return f"EKF has no position estimate (flags 0x{int(ekf.flags):x})"
         if not ekf.variances_ok(self.variance_threshold):

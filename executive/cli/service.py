@@ -49,12 +49,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     install.add_argument("--name", help="the unit is executive-NAME.service (default: the mission file's name)")
     install.add_argument("--user", help="run as this user (in group dialout for a serial autopilot); default root")
     install.add_argument("--watchdog-sec", type=_seconds, default=20.0, metavar="S", help="WatchdogSec (default 20; pinged every S/2)")
-    install.add_argument("--wait", action="store_true", help="load the mission READY and wait for `ctl start` (an unfinished run resumes at once)")
+    install.add_argument(
+        "--start-at-boot",
+        action="store_true",
+        help="start the mission as soon as the service starts, at every boot (default: load it READY and wait for `ctl start` or a "
+        "ground station's MISSION_START; an unfinished run resumes at once either way)",
+    )
     install.add_argument("--unit-dir", default=UNIT_DIR, metavar="DIR", help="where to write the unit (default %(default)s)")
     install.add_argument("--print", action="store_true", dest="print_only", help="print the unit instead of writing it")
-    install.add_argument(
-        "--run-options", type=shlex.split, default=[], metavar="'OPTIONS'", help="more `executive run` options, quoted: '--gcs udpin:0.0.0.0:14551'"
-    )
+    more = "more `executive run` options, after = and quoted: --run-options='--gcs udpin:0.0.0.0:14551'"
+    install.add_argument("--run-options", type=shlex.split, default=[], metavar="'OPTIONS'", help=more)
     p.set_defaults(func=main)
 
 
@@ -88,7 +92,7 @@ def unit_file(args: argparse.Namespace, mission: Path, unit: str, python: str = 
     run = [python, "-m", "executive", "run", str(mission), "--journal", journal, "--resume", "--socket", f"/run/{unit}/control.sock"]
     if args.mavlink:
         run += ["--mavlink", args.mavlink]
-    if args.wait:
+    if not args.start_at_boot:  # a reboot, or the last run's end, must not set the vehicle off on its own
         run.append("--wait")
     run += args.run_options
     half = args.watchdog_sec / 2

@@ -32,6 +32,8 @@ CASES = [
     (EkfOk, {"vehicle__ekf": ekf(READY | EkfFlags.CONST_POS_MODE)}, Status.FAILURE, "no position estimate"),
     (EkfOk, {"vehicle__ekf": ekf(READY, velocity=0.9, compass=0.9)}, Status.FAILURE, "variances over 0.8"),
     (EkfOk, {"vehicle__ekf": ekf(READY, compass=0.9)}, Status.SUCCESS, "ok"),  # one variance alone is not a failsafe
+    # the autopilot's own EKF failsafe acted (its HOLD may come before the report that shows why): the EKF is not ok
+    (EkfOk, {"vehicle__ekf": ekf(READY), "vehicle__ekf_failsafe": True}, Status.FAILURE, "the autopilot's EKF failsafe is on"),
     (Armed, {"vehicle__armed": True}, Status.SUCCESS, "ok"),
     (Armed, {"vehicle__armed": False}, Status.FAILURE, "disarmed"),
 ]

@@ -60,12 +60,18 @@ def test_the_unit_runs_the_mission_under_notify_with_a_watchdog_restart_and_resu
     assert command[:5] == [sys.executable, "-m", "executive", "run", str(mission.resolve())]
     options = " ".join(command[5:])
     assert "--journal /var/lib/executive/short-mission.db --resume" in options
+    assert "--wait" in command  # at boot the mission waits for a person's start; only an unfinished run goes on by itself
     assert "--mavlink /dev/ttyACM0,921600" in options and options.endswith("--gcs udpin:0.0.0.0:14551")
     expected = {
         "Type": ["notify"], "NotifyAccess": ["main"], "WatchdogSec": ["10"], "Restart": ["on-failure"], "RestartPreventExitStatus": ["1 2"],
         "User": ["pi"], "StandardError": ["journal"], "SyslogIdentifier": ["executive-short-mission"], "WantedBy": ["multi-user.target"],
     }  # fmt: skip
     assert {key: unit.get(key) for key in expected} == expected
+
+
+def test_start_at_boot_is_asked_for_not_the_default(capsys, mission):
+    assert "--wait" not in unit_of(capsys, str(mission), "--start-at-boot")["ExecStart"][0].split()
+    assert "--wait" in unit_of(capsys, str(mission))["ExecStart"][0].split()
 
 
 def test_install_writes_the_unit_it_prints(capsys, mission, tmp_path):
@@ -91,7 +97,7 @@ def test_a_bad_mission_or_run_option_writes_nothing(capsys, tmp_path):
 def test_exec_start_under_a_fake_service_manager_notifies_ready_watchdog_status_stopping_and_logs_for_the_journal(capsys, mission, tmp_path):
     """The unit's own command, run as systemd would: READY=1 once the autopilot answers, WATCHDOG=1 from the loop, STOPPING=1 at the end."""
     journal = tmp_path / "run.db"
-    unit = unit_of(capsys, str(mission), "--journal", str(journal), f"--run-options=--speedup 20 --socket {tmp_path / 'ctl.sock'}")
+    unit = unit_of(capsys, str(mission), "--journal", str(journal), "--start-at-boot", f"--run-options=--speedup 20 --socket {tmp_path / 'ctl.sock'}")
     manager = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
     manager.bind(str(tmp_path / "notify"))
     manager.settimeout(0.2)

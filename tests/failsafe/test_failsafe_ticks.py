@@ -125,6 +125,8 @@ REACTIONS = [
     pytest.param("rover", {}, {}, {"vehicle__ekf": EKF_LOST}, [("mode", "HOLD")], R, id="rover-ekf_loss-hold"),
     pytest.param("boat", {}, {}, {"vehicle__ekf": EKF_LOST}, [("mode", "HOLD")], R, id="boat-ekf_loss-hold-needs-no-position"),
     pytest.param("rover", {}, {}, {"vehicle__ekf": EKF_GLITCH}, [("mode", "HOLD")], R, id="rover-gps_glitch-hold"),
+    # the autopilot's own EKF failsafe (its HOLD and notice before a report shows the EKF bad): the work stops, it never asks GUIDED back
+    pytest.param("rover", {}, {}, {"vehicle__ekf_failsafe": True}, [("mode", "HOLD")], R, id="rover-autopilots-ekf_failsafe-hold"),
     pytest.param("boat", {}, {}, {"heading__ok": False}, [("mode", "HOLD")], R, id="boat-heading_insane-hold"),
     pytest.param("sub", {}, {}, {"heading__ok": False}, [], S, id="sub-heading-not-judged"),  # a sub's course says nothing of its heading
     pytest.param("rover", {}, {}, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [("mode", "RTL")], F, id="rover-battery_low-rtl-abort"),

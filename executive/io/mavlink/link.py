@@ -7,11 +7,13 @@ import os
 import struct
 import time
 from collections import deque
+from collections.abc import Collection
 from pathlib import Path
 from typing import BinaryIO, Protocol
 
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
 from executive.io.mavlink.endpoint import unreachable
+from executive.io.mavlink.skim import Skimmer
 
 
 class Link(Protocol):
@@ -126,6 +128,11 @@ class PymavlinkLink:
         """
         if msg.get_signed() or msg.get_type() == "HEARTBEAT":
             self._post_message(msg)
+
+    def skim(self, read: Collection[str]) -> None:
+        """Decode in full only the messages of these kinds; the others come out as :class:`~executive.io.mavlink.skim.UnreadMessage`."""
+        mav = self._conn.mav
+        mav.decode = Skimmer(mav, read)  # type: ignore[method-assign]
 
     @property
     def unsigned_dropped(self) -> int:

@@ -35,6 +35,7 @@ _NOT_AUTOPILOTS = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_ONBOARD_CONTROLLER, ma
 _STARTING = {mavlink.MAV_STATE_UNINIT, mavlink.MAV_STATE_BOOT, mavlink.MAV_STATE_CALIBRATING}
 
 #: Message types that carry the sender's boot clock (``time_boot_ms``): a reboot shows in any of them.
+_EKF_FAILSAFE_TEXTS = {"EKF failsafe": True, "EKF failsafe cleared": False}
 _BOOT_TIME_KINDS = frozenset(cls.msgname for cls in mavlink.mavlink_map.values() if "time_boot_ms" in cls.fieldnames)
 #: ESTIMATOR_STATUS is taken as stale (SYS_STATUS health bits stand in for it on PX4) after this long.
 _ESTIMATOR_STATUS_STALE_S = 3.0
@@ -163,6 +164,11 @@ class MavlinkReader:
             }
 
     @property
+    def kinds_read(self) -> frozenset[str]:
+        """The message kinds whose fields it reads; of any other it needs the header alone (and ``time_boot_ms``): a link may skim them."""
+        return frozenset(self._handlers) | {"COMMAND_LONG"}  # a ground station's COMMAND_LONG goes to on_command
+
+    @property
     def autopilot(self) -> tuple[int, int] | None:
         """(system id, component id) of the autopilot, once its HEARTBEAT was seen."""
         return self._autopilot
@@ -204,6 +210,7 @@ class MavlinkReader:
         self.health.on_packet(msg.get_seq())
         if kind in _BOOT_TIME_KINDS and self.health.on_boot_time(msg.time_boot_ms):
             log.warning("autopilot rebooted")
+            self._bb.set("/vehicle/ekf_failsafe", False)  # a booting autopilot has none latched
             self._reconnected()
         handler = self._handlers.get(kind)
         if handler is not None:
@@ -248,6 +255,7 @@ class MavlinkReader:
         if previous is not None and previous not in _STARTING and msg.system_status in _STARTING:
             self.health.reboots += 1
             log.warning("autopilot rebooted (heartbeat says it is starting up)")
+            self._bb.set("/vehicle/ekf_failsafe", False)
             self._reconnected()
         self._bb.set("/link/last_heartbeat", now)
         self._bb.set("/vehicle/mav_type", msg.type)
@@ -343,6 +351,10 @@ class MavlinkReader:
             text = joined
         log.log(logging.WARNING if msg.severity <= mavlink.MAV_SEVERITY_WARNING else logging.INFO, "autopilot: %s", text)
         self._bb.set("/vehicle/statustext", (msg.severity, text))
+        # Rover/ekf_check.cpp: failsafe_ekf_event says "EKF failsafe" once it has put a position mode in HOLD, and
+        # failsafe_ekf_off_event "EKF failsafe cleared"; meanwhile Mode::enter refuses every position mode (mode.cpp)
+        if text in _EKF_FAILSAFE_TEXTS:
+            self._bb.set("/vehicle/ekf_failsafe", _EKF_FAILSAFE_TEXTS[text])
 
     def _join_chunk(self, text_id: int, seq: int, text: str) -> str | None:
         """The whole text once its last chunk (shorter than the 50-byte field) came; a lost chunk shows as "..."."""

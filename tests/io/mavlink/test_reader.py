@@ -167,6 +167,18 @@ def test_statustext(reader, link):
     assert bb("/vehicle/statustext") == (3, "PreArm: AHRS: not using configured AHRS type")
 
 
+def test_the_autopilots_ekf_failsafe_is_on_from_its_notice_until_it_says_cleared(reader, link):
+    # Rover/ekf_check.cpp: failsafe_ekf_event "EKF failsafe", failsafe_ekf_off_event "EKF failsafe cleared"
+    receive(reader, link, heartbeat())
+    assert bb("/vehicle/ekf_failsafe") is False
+    receive(reader, link, AUTOPILOT.statustext(2, b"EKF failsafe"))
+    assert bb("/vehicle/ekf_failsafe") is True
+    receive(reader, link, AUTOPILOT.statustext(6, b"PreArm: AHRS: not using configured AHRS type"))
+    assert bb("/vehicle/ekf_failsafe") is True  # another text changes nothing
+    receive(reader, link, AUTOPILOT.statustext(2, b"EKF failsafe cleared"))
+    assert bb("/vehicle/ekf_failsafe") is False
+
+
 def test_garbage_bytes_are_counted_not_believed(reader, link):
     bad = mavlink.MAVLink_bad_data(b"\x01\x02\x03", "invalid MAVLink prefix")
     assert receive(reader, link, bad, heartbeat()) == 2
