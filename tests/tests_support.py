@@ -1,7 +1,9 @@
-"""Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket, a line mission."""
+"""Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket, a line mission,
+the time a thread waited for a CPU."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from executive.assembly import build_runtime
@@ -45,3 +47,13 @@ def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> 
         return runtime, runtime.run()
     finally:
         link.close()
+
+
+def runqueue_wait_s(native_id: int | None = None) -> float:
+    """Seconds the thread (this one, or the one with ``native_id``) has waited for a CPU while ready to run (Linux schedstat).
+
+    A wall-clock duration less this wait is what the thread took itself, running or blocked: what a
+    busy machine adds by not scheduling it is left out, so a bound on it needs no slack for the load.
+    """
+    path = Path("/proc/thread-self/schedstat") if native_id is None else Path(f"/proc/self/task/{native_id}/schedstat")
+    return int(path.read_text().split()[1]) / 1e9
