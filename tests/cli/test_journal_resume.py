@@ -29,7 +29,9 @@ EKF_READY_S = 2.0
 
 
 def run(mission: Path, *args: str) -> subprocess.Popen:
-    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "40", "--socket", "none", *args]
+    """``executive run`` at 10x: after the first sample the run has ~50 s of vehicle time left, 5 s of wall time (more when the
+    governor slows it) for this test to read that status line and kill it; at 40x, 1.2 s was too little beside two busy loops."""
+    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "10", "--socket", "none", *args]
     return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
