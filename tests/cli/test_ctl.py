@@ -135,7 +135,8 @@ def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path, caps
     sock = tmp_path / "ctl.sock"
     run = run_executive(mission, sock)
     try:
-        wait_status(sock, lambda s: s["state"] == "RUNNING" and not s["armed"])
+        # the tree waits for a person to arm once the EKF is usable: before that the autopilot refuses arming (PreArm: AHRS)
+        wait_status(sock, lambda s: not s["armed"] and "Wait for the operator to arm" in ((s["waiting"] or {}).get("path") or ""))
         code, out, err = ctl_text(capsys, sock, "arm")
         assert code == 0, err
         assert out.splitlines() == ["RUNNING: ctl: arm, sent to the autopilot", "arm: ACCEPTED by the autopilot"]
