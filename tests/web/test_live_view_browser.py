@@ -35,7 +35,7 @@ simulator: {ekf_ready_after_s: 2}
 waypoints:
   - {lat: -35.3631711, lon: 149.1652300}  # 10 m north
   - {lat: -35.3631711, lon: 149.1653401}  # then 10 m east
-  - {lat: -35.3620919, lon: 149.1657805}  # then 120 m north, 40 m east: time for a person to press Pause
+  - {lat: -35.3577752, lon: 149.1657805}  # then 600 m north, 40 m east: the run cannot end before the page is up and Pause is pressed
 """
 
 
