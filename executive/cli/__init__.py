@@ -7,7 +7,8 @@ import importlib
 import os
 import sys
 import traceback
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 from executive import __version__
 
@@ -26,6 +27,29 @@ class BadInput(Exception):
 
 class NoVehicle(Exception):
     """The vehicle (its link or bus) cannot be reached; ``main`` prints it and exits 3."""
+
+
+def number(
+    kind: type[int] | type[float] = float, *, above: float | None = None, at_least: float | None = None, at_most: float | None = None
+) -> Callable[[str], Any]:
+    """An argparse ``type=``: a number of ``kind`` within the bounds given, else a message saying which."""
+
+    def parse(text: str) -> Any:
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not {'an integer' if kind is int else 'a number'}: {text!r}") from None
+        if value != value or (above is not None and not value > above):  # NaN is no number of anything
+            raise argparse.ArgumentTypeError(f"must be > {above:g}, got {text}")
+        if at_least is not None and at_most is not None and not at_least <= value <= at_most:
+            raise argparse.ArgumentTypeError(f"must be {at_least:g}-{at_most:g}, got {text}")
+        if at_least is not None and not value >= at_least:
+            raise argparse.ArgumentTypeError(f"must be at least {at_least:g}, got {text}")
+        if at_most is not None and not value <= at_most:
+            raise argparse.ArgumentTypeError(f"must be at most {at_most:g}, got {text}")
+        return value
+
+    return parse
 
 
 #: Command -> the module of this package that registers it (``register(subparsers)`` setting ``func``).

@@ -25,7 +25,7 @@ from typing import Any
 
 import can
 
-from executive.cli import EXIT_BAD_INPUT, EXIT_NO_VEHICLE, EXIT_OK
+from executive.cli import EXIT_BAD_INPUT, EXIT_NO_VEHICLE, EXIT_OK, number
 from executive.io.can.agilex import RC_STATE_ID, FrameStats, RcState, decode, is_agilex
 from executive.io.can.bus import CanOpenError, CanSpecError, open_can
 
@@ -162,21 +162,11 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     decode_parser.set_defaults(func=run_decode)
     monitor = actions.add_parser("monitor", help="watch a live CAN bus")
     monitor.add_argument("bus", metavar="IFACE:CHANNEL", help="e.g. socketcan:can0, slcan:/dev/ttyACM0@115200, pcan:PCAN_USBBUS1, virtual:test")
-    monitor.add_argument("--duration", metavar="S", type=_duration, help="stop after S seconds (default: at Ctrl-C)")
+    monitor.add_argument("--duration", metavar="S", type=number(above=0), help="stop after S seconds (default: at Ctrl-C)")
     bitrate = "CAN bit rate (default: %(default)s; socketcan: ip link sets it)"
     monitor.add_argument("--bitrate", metavar="BIT/S", type=int, default=500_000, help=bitrate)
     monitor.add_argument("--json", action="store_true", help="one JSON object per frame, the summary last")
     monitor.set_defaults(func=run_monitor)
-
-
-def _duration(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
-    return value
 
 
 def _error(text: str) -> None:

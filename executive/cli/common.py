@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import argparse
 import sys
 from typing import TYPE_CHECKING
 
-from executive.cli import BadInput
+from executive.cli import BadInput, number
 from executive.clock import Clock
 from executive.io.mavlink.link import load_signing_key
 from executive.mission.errors import MissionError
@@ -56,12 +55,5 @@ def signing_key_arg(path: str | None) -> bytes | None:
         raise BadInput(f"--signing-key: {exc}") from exc
 
 
-def mavlink_id(text: str) -> int:
-    """A MAVLink system or component id: 1-255."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if not 1 <= value <= 255:
-        raise argparse.ArgumentTypeError(f"must be 1-255, got {value}")
-    return value
+#: A MAVLink system or component id: 1-255.
+mavlink_id = number(int, at_least=1, at_most=255)

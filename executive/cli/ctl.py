@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, number
 from executive.io.control import default_socket_path, request
 from executive.snapshots import TickState, render_tree
 from executive.status import status_line
@@ -54,7 +54,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     tree_help = "the running tree: each node's status (* running, ✓ succeeded, ✕ failed, - not ticked) and feedback"
     tree = requests.add_parser("tree", parents=[common], help=tree_help, description=tree_help + "; the status line says what it waits for")
     tree.add_argument("--watch", action="store_true", help="print it again every --interval seconds, until Ctrl-C or the executive stops")
-    tree.add_argument("--interval", type=_interval, default=1.0, metavar="S", help="seconds between two prints with --watch (default 1)")
+    tree.add_argument(
+        "--interval", type=number(at_least=0.05, at_most=3600), default=1.0, metavar="S", help="seconds between two prints with --watch (default 1)"
+    )
     for name, text in _VEHICLE.items():
         command = requests.add_parser(name, parents=[common], help=text, description=f"{text}. {_PERSON_WINS}")
         if name == "mode":
@@ -120,16 +122,6 @@ def _position_options(parser: argparse.ArgumentParser) -> None:
 
 def _centre_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--centre", type=float, nargs=2, metavar=("LAT", "LON"), help="about this point instead (to undo an edit exactly)")
-
-
-def _interval(value: str) -> float:
-    try:
-        seconds = float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{value!r} is not a number of seconds") from None
-    if not 0.05 <= seconds <= 3600:
-        raise argparse.ArgumentTypeError(f"{value} s: must be 0.05-3600")
-    return seconds
 
 
 def _number(value: str) -> int:
@@ -264,8 +256,8 @@ def route_lines(route: dict[str, Any]) -> str:
     if upload is not None and upload["state"] != "DONE":
         held += f" ({upload['state'].lower()}: {upload['detail']})"
     lines = [f"{len(route['waypoints'])} waypoints; on the autopilot: {held}"]
-    for number, (lat, lon, alt) in enumerate(route["waypoints"], start=1):
-        lines.append(f"{'>' if number == route['current'] else ' '} {number:3d}  {lat:.7f}, {lon:.7f}{f'  alt {alt:g} m' if alt else ''}")
+    for n, (lat, lon, alt) in enumerate(route["waypoints"], start=1):
+        lines.append(f"{'>' if n == route['current'] else ' '} {n:3d}  {lat:.7f}, {lon:.7f}{f'  alt {alt:g} m' if alt else ''}")
     if route["home"] is not None:
         lines.append(f"  home {route['home'][0]:.7f}, {route['home'][1]:.7f}")
     return "\n".join(lines)

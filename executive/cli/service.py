@@ -26,7 +26,7 @@ import sys
 from pathlib import Path
 
 from executive import __version__
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, BadInput
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, BadInput, number
 from executive.cli.common import load_or_report
 
 UNIT_DIR = "/etc/systemd/system"
@@ -48,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     install.add_argument("--journal", metavar="DB", help=f"the run's journal, for --resume (default {STATE_DIR}/NAME.db)")
     install.add_argument("--name", help="the unit is executive-NAME.service (default: the mission file's name)")
     install.add_argument("--user", help="run as this user (in group dialout for a serial autopilot); default root")
-    install.add_argument("--watchdog-sec", type=_seconds, default=20.0, metavar="S", help="WatchdogSec (default 20; pinged every S/2)")
+    install.add_argument("--watchdog-sec", type=number(at_least=2.0), default=20.0, metavar="S", help="WatchdogSec (default 20; pinged every S/2)")
     install.add_argument(
         "--start-at-boot",
         action="store_true",
@@ -60,16 +60,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     more = "more `executive run` options, after = and quoted: --run-options='--gcs udpin:0.0.0.0:14551'"
     install.add_argument("--run-options", type=shlex.split, default=[], metavar="'OPTIONS'", help=more)
     p.set_defaults(func=main)
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value >= 2.0:
-        raise argparse.ArgumentTypeError(f"must be at least 2 s, got {text}")
-    return value
 
 
 def exec_quote(arg: str) -> str:

@@ -10,7 +10,7 @@ import threading
 from types import FrameType
 from typing import TYPE_CHECKING
 
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, number
 from executive.cli.common import faults_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
 from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, FIRMWARES, Home, firmwares_for
@@ -32,16 +32,6 @@ def _home(text: str) -> Home:
     return values[0], values[1], values[2] if len(values) == 3 else 0.0
 
 
-def _seconds(text: str, *, positive: bool) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if value < 0 or (positive and value == 0):
-        raise argparse.ArgumentTypeError(f"must be {'> 0' if positive else '>= 0'}, got {text}")
-    return value
-
-
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = subparsers.add_parser(
         "sim",
@@ -57,7 +47,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--mavlink", metavar="URL", default="tcpin:127.0.0.1:5760", help=where)
     start = "start position and heading in degrees (default: ArduPilot SITL's CMAC)"
     parser.add_argument("--home", metavar="LAT,LON[,HEADING]", type=_home, default=DEFAULT_HOME, help=start)
-    positive, non_negative = (lambda s: _seconds(s, positive=True)), (lambda s: _seconds(s, positive=False))
+    positive, non_negative = number(above=0), number(at_least=0)
     parser.add_argument("--speedup", metavar="X", type=positive, default=1.0, help="simulated time runs X times faster")
     ekf = "simulated seconds before the EKF uses GPS and arming is possible (default: the firmware's, ArduPilot 40, PX4 3)"
     parser.add_argument("--ekf-ready-after", metavar="S", type=non_negative, help=ekf)
