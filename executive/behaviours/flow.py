@@ -14,7 +14,20 @@ from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, MissionStatus
 
 
-class WaitUntil(py_trees.decorators.Decorator):
+class ClockedDecorator(py_trees.decorators.Decorator):
+    """A decorator that times its child on the injected clock (``setup(clock=...)``), as every behaviour here."""
+
+    catalogued = False
+    clock: Clock | None = None
+
+    def setup(self, **services: object) -> None:
+        clock = services.get("clock")
+        if clock is None:
+            raise RuntimeError(f"{self.name}: setup() needs clock")
+        self.clock = clock  # type: ignore[assignment]
+
+
+class WaitUntil(ClockedDecorator):
     """RUNNING until the child succeeds (then SUCCESS); FAILURE if it has not within ``limit_s``.
 
     A failed child is ticked again ``retry_s`` later (a condition: every tick; an action such as
@@ -25,13 +38,6 @@ class WaitUntil(py_trees.decorators.Decorator):
         super().__init__(name=name or f"Wait until {child.name}", child=child)
         self.limit_s = limit_s
         self.retry_s = retry_s
-        self.clock: Clock | None = None
-
-    def setup(self, **services: object) -> None:
-        clock = services.get("clock")
-        if clock is None:
-            raise RuntimeError(f"{self.name}: setup() needs clock")
-        self.clock = clock  # type: ignore[assignment]
 
     def initialise(self) -> None:
         assert self.clock is not None
@@ -65,7 +71,7 @@ class WaitUntil(py_trees.decorators.Decorator):
         return Status.RUNNING
 
 
-class Timeout(py_trees.decorators.Decorator):
+class Timeout(ClockedDecorator):
     """The child's status, but FAILURE (the child stopped) once it has been RUNNING ``timeout_s`` of vehicle time.
 
     py_trees' own Timeout reads the wall clock; this one the injected clock, as every behaviour here.
@@ -74,13 +80,6 @@ class Timeout(py_trees.decorators.Decorator):
     def __init__(self, child: py_trees.behaviour.Behaviour, timeout_s: float, name: str | None = None) -> None:
         super().__init__(name=name or f"{child.name} (within {timeout_s:g} s)", child=child)
         self.timeout_s = timeout_s
-        self.clock: Clock | None = None
-
-    def setup(self, **services: object) -> None:
-        clock = services.get("clock")
-        if clock is None:
-            raise RuntimeError(f"{self.name}: setup() needs clock")
-        self.clock = clock  # type: ignore[assignment]
 
     def initialise(self) -> None:
         assert self.clock is not None
