@@ -344,15 +344,20 @@ def test_on_ardupilot_a_refused_auto_is_not_asked_again(autopilot, harness, vehi
     assert h.commander.idle  # nothing left to ask again: the refusal was the answer
 
 
-def test_a_finished_px4_mission_ends_the_drive(px4, vehicle, clock, link, commander):
-    mission = Mission.model_validate(
-        {"version": 1, "name": "r", "vehicle": "rover", "waypoints": [{"lat": 47.3978, "lon": 8.5456}, {"lat": 47.3979, "lon": 8.5457}]}
-    )
+def driving_in_auto(legs: int, px4, vehicle, clock, link, commander) -> tuple[Harness, MissionState]:
+    """A PX4 rover's route of ``legs`` waypoints started, uploaded, in AUTO.MISSION and armed, driven by DriveRouteInAuto."""
+    waypoints = [{"lat": 47.3978 + 0.0001 * n, "lon": 8.5456 + 0.0001 * n} for n in range(legs)]
+    mission = Mission.model_validate({"version": 1, "name": "r", "vehicle": "rover", "waypoints": waypoints})
     state = MissionState()
     state.upload(mission)
     state.start()
     h = Harness(DriveRouteInAuto(60.0), clock, link, commander, state, px4)
     vehicle.set(vehicle__mode="AUTO.MISSION", vehicle__armed=True, vehicle__mission_items=route_items(mission.waypoints))
+    return h, state
+
+
+def test_a_finished_px4_mission_ends_the_drive(px4, vehicle, clock, link, commander):
+    h, state = driving_in_auto(2, px4, vehicle, clock, link, commander)
     assert h.tick() == R
     vehicle.set(vehicle__mission_current=MissionCurrent(1, 2, 2, True, clock.now()))
     assert h.tick() == R
@@ -442,19 +447,7 @@ def test_a_sub_or_an_rc_route_on_px4_is_refused_with_the_reason() -> None:
 
 def test_on_px4_the_route_s_item_k_is_its_leg_k(px4, vehicle, clock, link, commander):
     """No home slot: MISSION_CURRENT seq 1 means leg 1 done; MISSION_ITEM_REACHED seq 1, two legs done."""
-    mission = Mission.model_validate(
-        {
-            "version": 1,
-            "name": "r",
-            "vehicle": "rover",
-            "waypoints": [{"lat": 47.3978, "lon": 8.5456}, {"lat": 47.3979, "lon": 8.5457}, {"lat": 47.398, "lon": 8.5458}],
-        }
-    )
-    state = MissionState()
-    state.upload(mission)
-    state.start()
-    h = Harness(DriveRouteInAuto(60.0), clock, link, commander, state, px4)
-    vehicle.set(vehicle__mode="AUTO.MISSION", vehicle__armed=True, vehicle__mission_items=route_items(mission.waypoints))
+    h, state = driving_in_auto(3, px4, vehicle, clock, link, commander)
     assert h.tick() == R
     vehicle.set(vehicle__mission_current=MissionCurrent(1, 3, 2, True, clock.now() + 0.05))  # heard after the drive began
     assert (h.tick(), state.leg_index) == (R, 1)
