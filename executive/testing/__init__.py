@@ -25,11 +25,16 @@ A whole mission (:class:`Lockstep`)
     stops at a moment of interest; ``at(t, action)`` and ``observers`` act and watch on the
     vehicle's clock.
 
+A CAN bus (:class:`VirtualCan`)
+    ``with VirtualCan() as (base, ours):`` two ends of a fresh in-memory bus (python-can's
+    ``virtual`` interface): what the base sends, the executive's end receives.
+
 Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``commander``,
 ``autopilot`` (the autopilot port over ``commander``), ``vehicle``, ``mission_state``, ``harness`` (``harness(root)``), ``lockstep``
-(``lockstep(mission, ...)``, closed after the test).
+(``lockstep(mission, ...)``, closed after the test), ``can_buses`` (a :class:`VirtualCan`, shut after the test).
 """
 
+from executive.testing.canbus import VirtualCan
 from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, describe, port_for
 from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
 from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
@@ -50,6 +55,7 @@ __all__ = [
     "ScriptedAutopilot",
     "Vehicle",
     "VehicleTimeLimit",
+    "VirtualCan",
     "Wire",
     "ack",
     "describe",

@@ -17,6 +17,7 @@ from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
+from executive.testing.canbus import VirtualCan
 from executive.testing.harness import START_S, Harness, Vehicle, port_for
 from executive.testing.links import FakeLink
 from executive.testing.lockstep import Lockstep
@@ -91,3 +92,10 @@ def lockstep() -> Iterator[Callable[..., Lockstep]]:
     yield make
     for sim in made:
         sim.close()
+
+
+@pytest.fixture
+def can_buses() -> Iterator[VirtualCan]:
+    """Two ends of a fresh CAN bus in memory, ``base, ours = can_buses``; shut after the test."""
+    with VirtualCan() as buses:
+        yield buses
