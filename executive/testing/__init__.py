@@ -25,13 +25,19 @@ A whole mission (:class:`Lockstep`)
     stops at a moment of interest; ``at(t, action)`` and ``observers`` act and watch on the
     vehicle's clock.
 
+A whole runtime, by hand (:class:`RuntimeOnLink`)
+    ``r = RuntimeOnLink(mission, root=..., beat=True)``: the runtime over a :class:`FakeLink`, an
+    :class:`ObedientAutopilot` answering; ``r.tick(n)`` on its manual clock, ``r.modes_sent()``,
+    ``r.texts()``, ``r.status``: for what lies around the tree (operator, intervention, plugs).
+
 A CAN bus (:class:`VirtualCan`)
     ``with VirtualCan() as (base, ours):`` two ends of a fresh in-memory bus (python-can's
     ``virtual`` interface): what the base sends, the executive's end receives.
 
 Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``commander``,
 ``autopilot`` (the autopilot port over ``commander``), ``vehicle``, ``mission_state``, ``harness`` (``harness(root)``), ``lockstep``
-(``lockstep(mission, ...)``, closed after the test), ``can_buses`` (a :class:`VirtualCan`, shut after the test).
+(``lockstep(mission, ...)``, closed after the test), ``runtime_on_link`` (``runtime_on_link(mission, ...)``),
+``can_buses`` (a :class:`VirtualCan`, shut after the test).
 """
 
 from executive.testing.canbus import VirtualCan
@@ -39,6 +45,7 @@ from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, desc
 from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
 from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
 from executive.testing.missions import mission_errors
+from executive.testing.on_link import RuntimeOnLink
 from executive.testing.scripted import ObedientAutopilot, ScriptedAutopilot
 
 __all__ = [
@@ -52,6 +59,7 @@ __all__ = [
     "LockstepClock",
     "ObedientAutopilot",
     "Peer",
+    "RuntimeOnLink",
     "ScriptedAutopilot",
     "Vehicle",
     "VehicleTimeLimit",

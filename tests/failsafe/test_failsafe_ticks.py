@@ -12,7 +12,6 @@ import pytest
 from py_trees.common import Status
 
 import trees
-from executive.assembly import build_runtime
 from executive.behaviours import Failsafe, SetMode
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import ManualClock
@@ -22,7 +21,7 @@ from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
-from executive.testing import EKF_READY, FakeLink, Harness, ObedientAutopilot, Vehicle
+from executive.testing import EKF_READY, FakeLink, Harness, Vehicle
 from executive.vehicles import PROFILES
 from trees._parts import guarded, mission_root, standard_guards
 
@@ -288,12 +287,11 @@ def test_a_disarm_reaction_brings_an_armed_guard_with_it() -> None:
     assert any(isinstance(g, Armed) for g in failsafe_guards(disarming, [LinkAlive(), RcFresh()]))
 
 
-def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(clock: ManualClock, vehicle: Vehicle) -> None:
+def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(runtime_on_link, vehicle: Vehicle) -> None:
     mission = make_mission()
-    link = FakeLink()
     root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
-    runtime = build_runtime(mission, link, clock, root=root, safe_timeout_s=2.0)
-    rover = ObedientAutopilot(link)
+    on_link = runtime_on_link(mission, root=root, safe_timeout_s=2.0)
+    runtime, rover = on_link.runtime, on_link.autopilot
     runtime.mission_state.start()
     original = runtime.tick
 
