@@ -25,7 +25,7 @@ class ScriptedAutopilot:
     After each tick, :meth:`respond` takes what the tree sent, answers each message (acks go to
     the commander, as the reader would pass them on), moves the vehicle one tick (:meth:`move`)
     and publishes its facts to the blackboard (:meth:`facts`). :attr:`commands` is what it was
-    told, readable: ``("mode", "GUIDED")``, ``("arm", 1.0)``, ``("DO_CHANGE_SPEED",)``; :attr:`targets`
+    told, readable: ``("mode", "GUIDED")``, ``("arm", 1.0)``, ``("DO_CHANGE_SPEED",)`` (:meth:`take` empties it); :attr:`targets`
     the GUIDED targets it followed, ``(lat, lon)``. A command kind
     (``"arm"``, a mode name, a command name such as ``"DO_CHANGE_SPEED"``) in :attr:`refuse` is
     answered :attr:`refusal`. Subclass it for another firmware: override :meth:`on_command`,
@@ -152,6 +152,11 @@ class ScriptedAutopilot:
             self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
 
     # -- driving the test ----------------------------------------------------------------------
+    def take(self) -> list[tuple[Any, ...]]:
+        """What it was told since the last take (:attr:`commands`, emptied)."""
+        taken, self.commands = self.commands, []
+        return taken
+
     def run(self, ticks: int, until: Callable[[], bool] | None = None, dt: float = 0.1) -> list[Status]:
         """Tick and respond up to ``ticks`` times, stopping when the tree is no longer RUNNING or ``until()``; the statuses."""
         statuses = []
