@@ -315,12 +315,17 @@ def loaded_or_located(load: Callable[[], Any], text: str, file: str) -> Any:
     return loaded
 
 
+def file_loaded_or_located(load: Callable[[Path], Any], path: Path, data: bytes) -> Any:
+    """:func:`loaded_or_located` of ``load(path)``, ``data`` written there first."""
+    path.write_bytes(data)
+    return loaded_or_located(lambda: load(path), data.decode("utf-8", "replace"), str(path))
+
+
 @FUZZ
 @given(data=mutated_bytes(MISSION_SEEDS))
 def test_mutated_mission_bytes_load_or_are_located(scratch: Path, data: bytes) -> None:
     """Random damage to a valid mission file: a Mission (every number finite) or located errors, never another exception."""
-    scratch.write_bytes(data)
-    loaded_or_located(lambda: load_mission(scratch), data.decode("utf-8", "replace"), str(scratch))
+    file_loaded_or_located(load_mission, scratch, data)
 
 
 @FUZZ
@@ -335,8 +340,7 @@ def test_mutated_mission_data_loads_or_is_located(text: str) -> None:
 @given(data=mutated_bytes(FAULT_SEEDS))
 def test_mutated_fault_file_bytes_load_or_are_located(scratch: Path, data: bytes) -> None:
     """Fault files go through the same loader: a FaultPlan (every number finite) or located errors."""
-    scratch.write_bytes(data)
-    loaded_or_located(lambda: load_faults(scratch), data.decode("utf-8", "replace"), str(scratch))
+    file_loaded_or_located(load_faults, scratch, data)
 
 
 @FUZZ
