@@ -16,6 +16,8 @@ A scripted autopilot (:class:`ScriptedAutopilot`)
     Behind a harness, it acks modes and arming at once, steps toward GUIDED targets each tick
     and publishes mode, armed and position; ``refuse`` makes it say no. Subclass it to script
     another firmware (``on_command``, ``on_setpoint``, ``enter_mode``, ``move``, ``facts``).
+    :class:`MissionAutopilot` holds a mission as ArduPilot does and drives it in AUTO (a harness
+    built with ``transfer=True``).
 
 A whole mission (:class:`Lockstep`)
     ``Lockstep(mission, events=["faults.yaml"]).run_to_end(limit_s=900)`` runs the runtime
@@ -46,7 +48,7 @@ from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
 from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
 from executive.testing.missions import mission_errors
 from executive.testing.on_link import RuntimeOnLink
-from executive.testing.scripted import ObedientAutopilot, ScriptedAutopilot
+from executive.testing.scripted import MissionAutopilot, ObedientAutopilot, ScriptedAutopilot
 
 __all__ = [
     "AUTOPILOT",
@@ -57,6 +59,7 @@ __all__ = [
     "Harness",
     "Lockstep",
     "LockstepClock",
+    "MissionAutopilot",
     "ObedientAutopilot",
     "Peer",
     "RuntimeOnLink",
