@@ -95,11 +95,7 @@ class Harness:
         **setup: Any,
     ) -> None:
         """``transfer``: the mission protocol's end (to keep a route on the autopilot); ``setup``: more for the behaviours' setup."""
-        self.root = root
-        self.clock = clock
-        self.link = link
-        self.commander = commander
-        self.transfer = transfer
+        self.root, self.clock, self.link, self.commander, self.transfer = root, clock, link, commander, transfer
         self.autopilot = autopilot or port_for(commander, transfer)
         self.mission_state = mission_state
         self.vehicle = Vehicle()
