@@ -35,7 +35,7 @@ def read_terminal(fd: int, until: callable, timeout_s: float) -> str:
 def test_on_a_terminal_each_log_record_starts_its_own_line_with_a_utc_timestamp(tmp_path):
     main_fd, terminal = pty.openpty()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "executive", "run", str(MINIMAL), "--speedup", "10", "--socket", str(tmp_path / "s.sock")],
+        [sys.executable, "-m", "executive", "run", str(MINIMAL), "--speedup", "40", "--socket", str(tmp_path / "s.sock")],
         cwd=ROOT,
         stdout=terminal,
         stderr=terminal,

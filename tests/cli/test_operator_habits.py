@@ -75,11 +75,11 @@ def test_an_endpoint_that_cannot_be_reached_says_so_and_exits_3(capsys):
     assert "--gcs udpin:192.0.2.1:14551: cannot listen on 192.0.2.1:14551: Cannot assign requested address" in capsys.readouterr().err
 
 
-def test_nothing_listening_on_a_tcp_endpoint_is_exit_3_without_a_traceback():
+def test_nothing_listening_on_a_tcp_endpoint_is_exit_3_without_a_traceback(capsys):
     port = free_port()
-    run = executive("run", SQUARE, "--mavlink", f"tcp:127.0.0.1:{port}", "--socket", "none")
-    out, err = run.communicate(timeout=30)
-    assert run.returncode == 3, err
+    code = main(["run", SQUARE, "--mavlink", f"tcp:127.0.0.1:{port}", "--socket", "none"])  # in this process: exit code and output checked
+    out, err = capsys.readouterr()
+    assert code == 3, err
     where = f"127.0.0.1:{port}"
     assert err.endswith(f"--mavlink tcp:{where}: cannot connect to {where}: Connection refused (is the autopilot, SITL or router listening there?)\n")
     assert "Traceback" not in err and "sleeping" not in out  # pymavlink's retries printed on stdout

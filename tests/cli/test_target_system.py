@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from executive.cli import main
 from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.sim import SimServer
@@ -45,8 +46,13 @@ class Received:
         return [m for m in self.messages if m[2] in (0, system)]
 
 
+def _run_args(mission: Path, hub: UdpHub, *args: str) -> list[str]:
+    """``executive run``'s arguments for ``mission`` on the hub's link."""
+    return ["run", str(mission), "--mavlink", f"udpout:127.0.0.1:{hub.port}", "--socket", "none", *args]
+
+
 def _executive(mission: Path, hub: UdpHub, *args: str) -> subprocess.Popen[str]:
-    command = [sys.executable, "-m", "executive", "run", str(mission), "--mavlink", f"udpout:127.0.0.1:{hub.port}", "--socket", "none", *args]
+    command = [sys.executable, "-m", "executive", *_run_args(mission, hub, *args)]
     return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
 
@@ -66,15 +72,21 @@ def two_vehicles():
         sim.stop()
 
 
-def test_two_executives_on_one_hub_each_drive_their_own_vehicle(two_vehicles, tmp_path):
+def test_two_executives_on_one_hub_each_drive_their_own_vehicle(two_vehicles, tmp_path, capsys):
+    """Vehicle 2's executive in a process of its own, vehicle 1's in this one (an interpreter's start less), at the same time."""
     sims, received, homes, hub = two_vehicles
-    runs = {
-        n: _executive(_mission(tmp_path / f"v{n}.yaml", f"vehicle-{n}", *homes[n][:2]), hub, "--target-system", str(n), "--sysid", str(n))
-        for n in (1, 2)
-    }
-    errors = {n: proc.communicate(timeout=300)[1] for n, proc in runs.items()}
+    missions = {n: _mission(tmp_path / f"v{n}.yaml", f"vehicle-{n}", *homes[n][:2]) for n in (1, 2)}
+    second = _executive(missions[2], hub, "--target-system", "2", "--sysid", "2")
+    try:
+        codes = {1: main(_run_args(missions[1], hub, "--target-system", "1", "--sysid", "1"))}
+        errors = {1: capsys.readouterr().err, 2: second.communicate(timeout=300)[1]}
+        codes[2] = second.returncode
+    finally:
+        if second.poll() is None:
+            second.kill()
+            second.communicate()
     for n in (1, 2):
-        assert runs[n].returncode == 0, errors[n]
+        assert codes[n] == 0, errors[n]
         assert "COMPLETED: every waypoint reached" in errors[n]
         mine = received[n].addressed_to(n)
         assert {kind for kind, _, _ in mine} >= {"COMMAND_LONG", "SET_POSITION_TARGET_GLOBAL_INT"}  # armed, set GUIDED, driven there
@@ -86,21 +98,18 @@ def test_two_executives_on_one_hub_each_drive_their_own_vehicle(two_vehicles, tm
             assert abs(vehicle.lat - (homes[n][0] + 0.00015)) < 3e-5, (n, vehicle.lat)
 
 
-def test_without_a_target_system_two_autopilots_refuse_the_start(two_vehicles, tmp_path):
+def test_without_a_target_system_two_autopilots_refuse_the_start(two_vehicles, tmp_path, capsys):
     _, received, homes, hub = two_vehicles
-    proc = _executive(_mission(tmp_path / "v.yaml", "which", *homes[1][:2]), hub, "--connect-timeout", "10")
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 3, err
+    assert main(_run_args(_mission(tmp_path / "v.yaml", "which", *homes[1][:2]), hub, "--connect-timeout", "10")) == 3
+    err = capsys.readouterr().err
     assert "2 autopilots on the link: system 1 (MAV_TYPE 10), system 2 (MAV_TYPE 10)" in err
     assert "--target-system" in err
     for n in (1, 2):  # nothing but heartbeats was sent: no command reached either vehicle
         assert received[n].messages == []
 
 
-def test_a_target_system_that_is_not_there_is_no_vehicle(two_vehicles, tmp_path):
+def test_a_target_system_that_is_not_there_is_no_vehicle(two_vehicles, tmp_path, capsys):
     _, received, homes, hub = two_vehicles
-    proc = _executive(_mission(tmp_path / "v.yaml", "absent", *homes[1][:2]), hub, "--target-system", "7", "--connect-timeout", "2")
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 3, err
-    assert "no heartbeat from autopilot 7/1 within 2 s" in err
+    assert main(_run_args(_mission(tmp_path / "v.yaml", "absent", *homes[1][:2]), hub, "--target-system", "7", "--connect-timeout", "2")) == 3
+    assert "no heartbeat from autopilot 7/1 within 2 s" in capsys.readouterr().err
     assert received[1].messages == [] and received[2].messages == []
