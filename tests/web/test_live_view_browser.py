@@ -12,16 +12,21 @@ import shutil
 import subprocess
 import sys
 import threading
+from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from executive.assembly import snapshot_recorder
-from executive.io.control import request
+from executive.io import control
 from executive.snapshots import SnapshotRecorder, replay
 from executive.web.replay import ReplaySource
 from executive.web.server import WebAddress, WebServer
 from tests_support import line_mission, mission_text
+
+if TYPE_CHECKING:
+    from playwright.sync_api import Browser
 
 ROOT = Path(__file__).parents[2]
 CHROMIUM = "/usr/bin/chromium"
@@ -33,11 +38,16 @@ MISSION = mission_text(
 )
 
 
-def browser():
+@pytest.fixture(scope="module")
+def chromium() -> Iterator[Browser]:
+    """One headless Chromium for the module's pages (a start costs ~2 s of CPU)."""
     if not os.path.exists(CHROMIUM) and not os.environ.get("CI"):
         pytest.skip(f"no {CHROMIUM} (apt-get install chromium; .ci/run does)")
     sync_api = pytest.importorskip("playwright.sync_api") if not os.environ.get("CI") else __import__("playwright.sync_api").sync_api
-    return sync_api.sync_playwright()
+    with sync_api.sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        yield browser
+        browser.close()
 
 
 def announced_url(proc: subprocess.Popen) -> str:
@@ -50,7 +60,7 @@ def announced_url(proc: subprocess.Popen) -> str:
             return found[1]
 
 
-def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission(tmp_path):
+def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission(tmp_path, request):
     mission, sock, token = tmp_path / "live.yaml", tmp_path / "ctl.sock", tmp_path / "token"
     mission.write_text(MISSION)
     token.write_text("a-token-of-twenty-chars\n")  # its buttons need it, as beyond the loopback interface; the page takes it from its address
@@ -58,10 +68,9 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
     command += ["--web-token-file", str(token)]
     proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
+        chromium = request.getfixturevalue("chromium")  # started while the executive starts
         url = announced_url(proc)
-        with browser() as playwright:
-            chromium = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-            page = chromium.new_page(viewport={"width": 1400, "height": 820})
+        with chromium.new_page(viewport={"width": 1400, "height": 820}) as page:
             errors: list[str] = []
             page.on("pageerror", lambda error: errors.append(str(error)))
             page.goto(f"{url}?token=a-token-of-twenty-chars")
@@ -81,8 +90,7 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
             page.get_by_role("button", name="Pause").click()
             page.wait_for_function("document.getElementById('state').textContent === 'PAUSED'", timeout=20_000)
             assert "pause: done" in page.locator("#reply").inner_text()
-            chromium.close()
-        status = request(str(sock), "status")
+        status = control.request(str(sock), "status")
         assert (status["state"], status["status"]["reason"]) == ("PAUSED", "web: pause")
         assert errors == []
         if keep := os.environ.get("EXECUTIVE_LIVE_VIEW_PNG"):
@@ -92,7 +100,7 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
         proc.wait(timeout=30)
 
 
-def test_the_replay_page_moves_through_a_recording_with_its_slider(tmp_path, lockstep):
+def test_the_replay_page_moves_through_a_recording_with_its_slider(tmp_path, lockstep, chromium):
     path = tmp_path / "run.snap"
     recorder = SnapshotRecorder(path)
     lockstep(line_mission("replayed"), plugs=[snapshot_recorder(recorder)]).run_to_end(300.0)
@@ -101,9 +109,7 @@ def test_the_replay_page_moves_through_a_recording_with_its_slider(tmp_path, loc
     server = WebServer(WebAddress("127.0.0.1", 0))
     server.start(source)
     try:
-        with browser() as playwright:
-            chromium = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-            page = chromium.new_page(viewport={"width": 1400, "height": 820})
+        with chromium.new_page(viewport={"width": 1400, "height": 820}) as page:
             page.goto(server.url)
             last = source.recording.last
             page.wait_for_function(f"document.getElementById('tickinfo').textContent.startsWith('tick {last} ')", timeout=20_000)
@@ -118,6 +124,5 @@ def test_the_replay_page_moves_through_a_recording_with_its_slider(tmp_path, loc
             leg = int(then.blackboard["/mission/leg_index"]) + 1
             assert page.locator("#state").inner_text() == "RUNNING" and page.locator("#leg").inner_text() == f"{leg}/4"
             assert page.locator("#plan polyline.track").count() == 1
-            chromium.close()
     finally:
         server.close()
