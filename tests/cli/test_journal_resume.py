@@ -164,7 +164,7 @@ def test_report_of_a_missing_or_broken_journal_is_bad_input(tmp_path, capsys):
 def test_replay_shows_the_recorded_tree(tmp_path, capsys, lockstep):
     snapshots = tmp_path / "run.snap"
     recorder = SnapshotRecorder(snapshots)
-    sim = lockstep(load_mission(ROOT / "missions/rover_square.yaml"), plugs=[snapshot_recorder(recorder)])
+    sim = lockstep(load_mission(ROOT / "missions/rover_square.yaml"), plugs=[snapshot_recorder(recorder)], ekf_ready_after_s=EKF_READY_S)
     assert sim.run_to_end(limit_s=600).status is MissionStatus.COMPLETED
     recorder.close()
     assert main(["replay", str(snapshots), "--tick", "500"]) == 0
