@@ -1,6 +1,7 @@
 """Each failsafe in the simulator: the fault file of missions/faults/ injected into a running mission, in the lock-step simulation.
 
-The mission drives a straight 100 m line north in four legs. The fault files are timed for
+The mission drives a straight 60 m line north in four legs (25 m, 25 m, then 5 m and 5 m: what comes after the faulty
+second leg only has to be driven to the end). The fault files are timed for
 missions/rover_square.yaml (EKF ready at 40 s); here the EKF is ready at 2 s, so every fault comes
 38 s earlier: on the second leg. Each scenario checks that the policy's reaction leaves in the tick
 its guard fails (the condition true on the blackboard for the guard's hold time: most hold at once) or the next, that
@@ -54,9 +55,10 @@ BB_KEYS = ["/link/up", "/vehicle/ekf", "/rc/channels", "/rc/connected", "/headin
 
 
 def failsafe_line(**changes: Any) -> Mission:
-    """The line mission, its EKF ready 38 s before the fault files' (their times are shifted by SHIFT_S)."""
+    """The line mission, its EKF ready 38 s before the fault files' (their times are shifted by SHIFT_S), its last two legs 5 m."""
     assert LINE_EKF_READY_S == 40.0 - SHIFT_S
-    return line_mission("failsafe line", **changes)
+    waypoints = [{"lat": HOME[0] + 0.0002248 * north_m / 25.0, "lon": HOME[1]} for north_m in (25.0, 50.0, 55.0, 60.0)]
+    return line_mission("failsafe line", waypoints=waypoints, **changes)
 
 
 Fact = Callable[[dict[str, Any]], bool]
