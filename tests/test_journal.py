@@ -9,7 +9,7 @@ import pytest
 from executive.cli.report import render
 from executive.journal import Journal, mission_hash
 from executive.mission.lifecycle import MissionState
-from executive.mission.model import Home, Waypoint
+from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.route import Route
 from executive.state import Sample, SampleRead
 
@@ -25,17 +25,23 @@ def sample(leg: int) -> Sample:
     return Sample(leg, 47.0, 8.0, (SampleRead("ph", 7.5, "", 1.0), SampleRead("temperature", 18.2, "°C", 1.0)), 1.0, 11.0)
 
 
+def started(journal: Journal, mission: Mission) -> tuple[MissionState, int]:
+    """A mission state the journal records, ``mission`` uploaded, its run begun and started; and the run's id."""
+    state = MissionState()
+    journal.attach(state)
+    state.upload(mission)
+    run = journal.begin_run(mission)
+    state.start()
+    return state, run
+
+
 def reopen(journal, clock) -> Journal:
     """A second connection, as a new process after a crash would have."""
     return Journal(journal.path, clock)
 
 
 def test_a_run_is_recorded_as_it_happens(journal, clock, square_mission):
-    state = MissionState()
-    journal.attach(state)
-    state.upload(square_mission)
-    journal.begin_run(square_mission)
-    state.start()
+    state, _ = started(journal, square_mission)
     journal.observe_leg(state, 47.0, 8.0)
     state.record_sample(sample(0))
     state.advance_leg()
@@ -54,11 +60,7 @@ def test_a_run_is_recorded_as_it_happens(journal, clock, square_mission):
 
 
 def test_an_unfinished_run_resumes_at_its_last_leg_with_its_samples(journal, clock, square_mission):
-    state = MissionState()
-    journal.attach(state)
-    state.upload(square_mission)
-    run = journal.begin_run(square_mission)
-    state.start()
+    state, run = started(journal, square_mission)
     state.record_sample(sample(0))
     state.advance_leg()
     state.advance_leg()
@@ -73,11 +75,7 @@ def test_an_unfinished_run_resumes_at_its_last_leg_with_its_samples(journal, clo
 
 
 def test_an_edited_route_is_recorded_and_resumed_as_edited(journal, clock, square_mission):
-    state = MissionState()
-    journal.attach(state)
-    state.upload(square_mission)
-    run = journal.begin_run(square_mission)
-    state.start()
+    state, run = started(journal, square_mission)
     state.advance_leg()
     journal.observe_leg(state, None, None)  # heading for waypoint 2 of 4
     clock.advance(3.0)
@@ -101,11 +99,7 @@ def test_an_edited_route_is_recorded_and_resumed_as_edited(journal, clock, squar
 
 
 def test_a_leg_change_after_an_edit_is_where_it_resumes(journal, clock, square_mission):
-    state = MissionState()
-    journal.attach(state)
-    state.upload(square_mission)
-    journal.begin_run(square_mission)
-    state.start()
+    state, _ = started(journal, square_mission)
     state.set_route(square_mission.waypoints[:2], "switch A: remove")
     state.advance_leg()
     journal.observe_leg(state, None, None)  # same clock time as the edit: recorded after it
@@ -125,11 +119,7 @@ def test_a_finished_run_or_another_mission_is_not_resumed(journal, clock, square
 
 
 def test_a_sample_is_never_recorded_twice_for_a_leg(journal, square_mission):
-    state = MissionState()
-    journal.attach(state)
-    state.upload(square_mission)
-    journal.begin_run(square_mission)
-    state.start()
+    state, _ = started(journal, square_mission)
     state.record_sample(sample(0))
     with pytest.raises(sqlite3.IntegrityError):
         journal._on_sample(sample(0))

@@ -34,6 +34,14 @@ def line_mission(name: str, **changes: Any) -> Mission:
     return Mission.model_validate(fields | changes)
 
 
+def mission_text(name: str, *waypoints: str, simulator: str = "{ekf_ready_after_s: 2}", limits: str | None = None) -> str:
+    """A rover mission file's text at :data:`LINE_HOME`, armed by the executive: ``simulator`` and ``limits`` as flow mappings,
+    each waypoint a line of its own (``"{lat: -35.36, lon: 149.16}  # a comment"``)."""
+    lines = ["version: 1", f"name: {name}", "vehicle: rover", "auto_arm: true", f"home: {{lat: {LINE_HOME[0]}, lon: {LINE_HOME[1]:.6f}}}"]
+    lines += [f"simulator: {simulator}", *([f"limits: {limits}"] if limits else []), "waypoints:", *(f"  - {w}" for w in waypoints)]
+    return "\n".join(lines) + "\n"
+
+
 def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> tuple[Runtime, Outcome]:
     """A runtime on a real link to ``url`` (a simulator), connected and run to the mission's end; the link closed after.
 

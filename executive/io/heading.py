@@ -33,11 +33,16 @@ from __future__ import annotations
 
 import gc
 import importlib
+import importlib.util
 import logging
 import math
+import sys
 import threading
+import types
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -55,14 +60,12 @@ class HeadingKalman:
 
     The state stays in filterpy's arrays, changed in place (building arrays each step cost more than
     the filter's own arithmetic); the caller reads plain floats and wraps the heading itself (filterpy
-    has no angle hook). filterpy brings scipy (~0.7 s to import): :func:`load_filterpy` runs in the
-    background so the first tick does not wait.
+    has no angle hook). Its import still takes numpy and scipy.linalg (~0.5 s of CPU): :func:`load_filterpy`
+    runs in the background so the first tick does not wait.
     """
 
     def __init__(self) -> None:
-        from filterpy.kalman import KalmanFilter
-
-        kf = self._kf = KalmanFilter(dim_x=2, dim_z=1)
+        kf = self._kf = kalman_filter_class()(dim_x=2, dim_z=1)
         kf.inv = _inverse_1x1  # filterpy's hook for the innovation's inverse: S is 1x1 here
         self._z = np.zeros((1, 1))
         self._r = np.zeros((1, 1))
@@ -116,27 +119,84 @@ _H = (np.array([[1.0, 0.0]]), np.array([[0.0, 1.0]]))
 _filterpy_ready = threading.Event()
 
 
-def import_long_lived(name: str) -> None:
+def import_long_lived(name: str | Callable[[], object]) -> None:
     """Import a module whose objects live as long as the process, without the collector's passes, then freeze them out of later ones.
 
-    filterpy's import makes ~40k objects: while it ran in the background the collector's full passes over them held
+    ``name`` is the module's, or a function that loads it.
+
+    filterpy's import made ~40k objects: while it ran in the background the collector's full passes over them held
     the interpreter 40-50 ms each, under a running loop's ticks.
     """
     collecting = gc.isenabled()
     gc.disable()
     try:
-        importlib.import_module(name)
+        if callable(name):
+            name()
+        else:
+            importlib.import_module(name)
     finally:
         gc.freeze()
         if collecting:
             gc.enable()
 
 
+KALMAN_FILTER_MODULE = "filterpy.kalman.kalman_filter"
+
+
+class _LogpdfOnFirstUse(types.ModuleType):
+    """Stands in for ``filterpy.stats`` while filterpy's Kalman filter module loads: its ``logpdf`` imports the real one when first called."""
+
+    @staticmethod
+    def logpdf(*args: object, **kwargs: object) -> object:
+        return importlib.import_module("filterpy.stats").logpdf(*args, **kwargs)
+
+
+def _load_kalman_filter_module() -> None:
+    """Load filterpy's ``kalman_filter`` module (and ``filterpy.common``, which it uses) without the rest of filterpy.
+
+    ``import filterpy`` (2.0) imports every part of the package (EKF, UKF, IMM, H-infinity, Monte
+    Carlo...) and, through ``filterpy.stats``, scipy.stats: 1.5 s of CPU on a desktop core, several
+    seconds on a companion computer, at every start, for one class that needs numpy. The module
+    takes only ``logpdf`` from ``filterpy.stats`` (for ``KalmanFilter.log_likelihood``, which the
+    heading filter never reads). So it loads from its file under a bare ``filterpy`` package (the
+    real folder, without its ``__init__``) and a ``filterpy.stats`` whose ``logpdf`` imports the real
+    one on first use. Both stand-ins leave ``sys.modules`` afterwards: a later ``import filterpy``
+    (a user's plugin) runs the real package, which reuses this very ``kalman_filter`` module.
+    """
+    package_spec = importlib.util.find_spec("filterpy")  # a top-level name: found, not imported
+    if package_spec is None or not package_spec.submodule_search_locations:
+        raise ImportError("no module named 'filterpy'", name="filterpy")
+    folder = Path(next(iter(package_spec.submodule_search_locations)))
+    spec = importlib.util.spec_from_file_location(KALMAN_FILTER_MODULE, folder / "kalman" / "kalman_filter.py")
+    if spec is None or spec.loader is None:
+        raise ImportError(f"no module named {KALMAN_FILTER_MODULE!r}", name=KALMAN_FILTER_MODULE)
+    bare = types.ModuleType("filterpy")
+    bare.__path__ = [str(folder)]
+    stand_ins = {"filterpy": bare, "filterpy.stats": _LogpdfOnFirstUse("filterpy.stats")}
+    stand_ins = {name: module for name, module in stand_ins.items() if name not in sys.modules}
+    sys.modules.update(stand_ins)
+    try:
+        kalman_filter = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(kalman_filter)
+    finally:
+        for name, stand_in in stand_ins.items():
+            if sys.modules.get(name) is stand_in:
+                del sys.modules[name]
+    sys.modules[KALMAN_FILTER_MODULE] = kalman_filter
+
+
+def kalman_filter_class() -> type:
+    """filterpy's ``KalmanFilter`` (loaded as :func:`_load_kalman_filter_module` says, once)."""
+    if KALMAN_FILTER_MODULE not in sys.modules:
+        _load_kalman_filter_module()
+    return sys.modules[KALMAN_FILTER_MODULE].KalmanFilter
+
+
 def load_filterpy() -> None:
-    """Import filterpy (and scipy) once, in a thread of its own; :class:`HeadingFilter` judges nothing until it is in."""
+    """Import filterpy's Kalman filter once, in a thread of its own; :class:`HeadingFilter` judges nothing until it is in."""
 
     def load() -> None:
-        import_long_lived("filterpy.kalman")
+        import_long_lived(_load_kalman_filter_module)
         _filterpy_ready.set()
 
     if not _filterpy_ready.is_set() and not any(t.name == "load filterpy" for t in threading.enumerate()):

@@ -16,6 +16,8 @@ A scripted autopilot (:class:`ScriptedAutopilot`)
     Behind a harness, it acks modes and arming at once, steps toward GUIDED targets each tick
     and publishes mode, armed and position; ``refuse`` makes it say no. Subclass it to script
     another firmware (``on_command``, ``on_setpoint``, ``enter_mode``, ``move``, ``facts``).
+    :class:`MissionAutopilot` holds a mission as ArduPilot does and drives it in AUTO (a harness
+    built with ``transfer=True``).
 
 A whole mission (:class:`Lockstep`)
     ``Lockstep(mission, events=["faults.yaml"]).run_to_end(limit_s=900)`` runs the runtime
@@ -25,16 +27,28 @@ A whole mission (:class:`Lockstep`)
     stops at a moment of interest; ``at(t, action)`` and ``observers`` act and watch on the
     vehicle's clock.
 
+A whole runtime, by hand (:class:`RuntimeOnLink`)
+    ``r = RuntimeOnLink(mission, root=..., beat=True)``: the runtime over a :class:`FakeLink`, an
+    :class:`ObedientAutopilot` answering; ``r.tick(n)`` on its manual clock, ``r.modes_sent()``,
+    ``r.texts()``, ``r.status``: for what lies around the tree (operator, intervention, plugs).
+
+A CAN bus (:class:`VirtualCan`)
+    ``with VirtualCan() as (base, ours):`` two ends of a fresh in-memory bus (python-can's
+    ``virtual`` interface): what the base sends, the executive's end receives.
+
 Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``commander``,
 ``autopilot`` (the autopilot port over ``commander``), ``vehicle``, ``mission_state``, ``harness`` (``harness(root)``), ``lockstep``
-(``lockstep(mission, ...)``, closed after the test).
+(``lockstep(mission, ...)``, closed after the test), ``runtime_on_link`` (``runtime_on_link(mission, ...)``),
+``can_buses`` (a :class:`VirtualCan`, shut after the test).
 """
 
+from executive.testing.canbus import VirtualCan
 from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, describe, port_for
 from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
 from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
 from executive.testing.missions import mission_errors
-from executive.testing.scripted import ObedientAutopilot, ScriptedAutopilot
+from executive.testing.on_link import RuntimeOnLink
+from executive.testing.scripted import MissionAutopilot, ObedientAutopilot, ScriptedAutopilot
 
 __all__ = [
     "AUTOPILOT",
@@ -45,11 +59,14 @@ __all__ = [
     "Harness",
     "Lockstep",
     "LockstepClock",
+    "MissionAutopilot",
     "ObedientAutopilot",
     "Peer",
+    "RuntimeOnLink",
     "ScriptedAutopilot",
     "Vehicle",
     "VehicleTimeLimit",
+    "VirtualCan",
     "Wire",
     "ack",
     "describe",

@@ -75,10 +75,11 @@ class Harness:
     """A tree ticked by hand: the clock advances ``dt`` before each tick; the commands it asked for are flushed to :attr:`link` after.
 
     The tree is set up as the runtime sets it up (``clock``, ``autopilot``, ``mission_state``): the
-    autopilot port over ``commander`` (:attr:`autopilot`; ArduPilot unless given, or ``autopilot.adopt``).
-    Script the inputs with :attr:`vehicle` (or any :class:`Vehicle`) between ticks, answer with
-    :meth:`ack`, and assert on :meth:`asked` (or ``link.take()``) and on :meth:`status` /
-    :meth:`feedback` of a node named by its path.
+    autopilot port over ``commander`` and ``transfer`` (:attr:`autopilot`; ArduPilot unless given, or
+    ``autopilot.adopt``). Script the inputs with :attr:`vehicle` (or any :class:`Vehicle`) between ticks,
+    answer with :meth:`ack`, and assert on :meth:`asked` (or ``link.take()``) and on :meth:`status` /
+    :meth:`feedback` of a node named by its path. Each tick runs as the runtime's: the clock, the
+    :attr:`readers`, the tree, the :attr:`writers`, then the commands (and the mission transfer's) are sent.
     """
 
     def __init__(
@@ -89,16 +90,19 @@ class Harness:
         commander: Commander,
         mission_state: MissionState,
         autopilot: Autopilot | None = None,
+        *,
+        transfer: MissionTransfer | None = None,
         **setup: Any,
     ) -> None:
-        """``setup`` adds keyword arguments for the behaviours' ``setup`` (``sampler=``...)."""
-        self.root = root
-        self.clock = clock
-        self.link = link
-        self.commander = commander
-        self.autopilot = autopilot or port_for(commander)
+        """``transfer``: the mission protocol's end (to keep a route on the autopilot); ``setup``: more for the behaviours' setup."""
+        self.root, self.clock, self.link, self.commander, self.transfer = root, clock, link, commander, transfer
+        self.autopilot = autopilot or port_for(commander, transfer)
         self.mission_state = mission_state
         self.vehicle = Vehicle()
+        #: Called each tick after the clock moves, before the tree: the IO readers' part (an RcReader's ``service``, a vehicle's facts).
+        self.readers: list[Callable[[], object]] = []
+        #: Called each tick after the tree, before the commands are sent: what the runtime services then (a RouteKeeper's ``service``).
+        self.writers: list[Callable[[], object]] = []
         self.tree = py_trees.trees.BehaviourTree(root)
         self.tree.setup(clock=clock, autopilot=self.autopilot, mission_state=mission_state, **setup)
 
@@ -110,9 +114,12 @@ class Harness:
         *,
         clock: ManualClock | None = None,
         start: bool = True,
+        transfer: bool = False,
         **setup: Any,
     ) -> Harness:
         """A harness for ``mission``: its own tree (``trees.build``) unless ``root`` is given, the mission uploaded and started.
+
+        ``transfer``: with a :class:`MissionTransfer` on the link (:attr:`transfer`), for a tree that keeps a route on the autopilot.
 
         The blackboard is reset first (every documented key at its default), so build it before scripting inputs.
         """
@@ -126,15 +133,22 @@ class Harness:
         if start:
             state.start()
         commander = Commander(link, clock, PROFILES[mission.vehicle])
-        return cls(root if root is not None else trees.build(mission), clock, link, commander, state, **setup)
+        missions = MissionTransfer(link, clock) if transfer else None
+        return cls(root if root is not None else trees.build(mission), clock, link, commander, state, transfer=missions, **setup)
 
     # -- ticking --------------------------------------------------------------------------
     def tick(self, dt: float = 0.1) -> Status:
-        """Advance the clock ``dt`` seconds, tick the tree once, send what it asked for; returns the root's status."""
+        """Advance the clock ``dt`` seconds, run the readers, tick the tree once, run the writers, send what was asked; returns the root's status."""
         self.clock.advance(dt)
+        for read in self.readers:
+            read()
         self.tree.tick()
+        for write in self.writers:
+            write()
         self.autopilot.service()  # as the runtime: the back end's own traffic (PX4's offboard stream), then the commands
         self.commander.flush()
+        if self.transfer is not None:
+            self.transfer.flush()
         return self.root.status
 
     def tick_until(self, done: Callable[[], bool], *, max_ticks: int = 1000, dt: float = 0.1, between: Callable[[], object] | None = None) -> int:

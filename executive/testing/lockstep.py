@@ -7,7 +7,6 @@ CPU allows, and a busy machine changes nothing but how long it takes.
 
 from __future__ import annotations
 
-import itertools
 import json
 import socket
 from collections.abc import Callable, Iterable, Sequence
@@ -24,6 +23,7 @@ from executive.runtime import Outcome
 from executive.sim import ArduPilotSim, make_autopilot
 from executive.sim.autopilot import Home
 from executive.sim.options import firmware_options, simulated_home
+from executive.testing.canbus import VirtualCan
 
 if TYPE_CHECKING:
     import can
@@ -31,8 +31,6 @@ if TYPE_CHECKING:
     from executive.journal import ResumePoint
     from executive.sim.agilex_base import SimulatedBase
     from executive.sim.faults import Fault, FaultInjector
-
-_channels = itertools.count()
 
 
 class VehicleTimeLimit(AssertionError):
@@ -147,7 +145,7 @@ class Lockstep:
         self.link = MemoryLink()
         self.base: SimulatedBase | None = None
         self.can_bus: can.BusABC | None = None
-        self._buses: list[can.BusABC] = []
+        self._can: VirtualCan | None = None
         if can:
             self.can_bus = self._open_can()
         self._camera: socket.socket | None = None
@@ -188,23 +186,19 @@ class Lockstep:
         return FaultInjector(faults, self.clock) if faults else None
 
     def _open_can(self) -> can.BusABC:
-        import can as python_can
-
         from executive.sim.agilex_base import SimulatedBase
 
-        channel = f"executive-lockstep-{next(_channels)}"
-        ours, base_end = (python_can.Bus(interface="virtual", channel=channel, receive_own_messages=False) for _ in range(2))
-        self._buses = [ours, base_end]
-        self.base = SimulatedBase(base_end, self.clock, self.autopilot, faults=self.faults)
-        return ours
+        self._can = VirtualCan("executive-lockstep")
+        self.base = SimulatedBase(self._can.base, self.clock, self.autopilot, faults=self.faults)
+        return self._can.ours
 
     def close(self) -> None:
         """Shut the CAN buses and sockets (idempotent)."""
-        for bus in self._buses:
-            bus.shutdown()
+        if self._can is not None:
+            self._can.shutdown()
         for sock in self._sockets:
             sock.close()
-        self._buses, self._sockets = [], []
+        self._sockets = []
         self.runtime.close()
 
     def __enter__(self) -> Lockstep:

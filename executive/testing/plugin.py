@@ -17,9 +17,11 @@ from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
+from executive.testing.canbus import VirtualCan
 from executive.testing.harness import START_S, Harness, Vehicle, port_for
 from executive.testing.links import FakeLink
 from executive.testing.lockstep import Lockstep
+from executive.testing.on_link import RuntimeOnLink
 from executive.vehicles import PROFILES
 
 
@@ -91,3 +93,24 @@ def lockstep() -> Iterator[Callable[..., Lockstep]]:
     yield make
     for sim in made:
         sim.close()
+
+
+@pytest.fixture
+def runtime_on_link(clean_blackboard: None, clock: ManualClock, link: FakeLink) -> Iterator[Callable[..., RuntimeOnLink]]:
+    """``runtime_on_link(mission, **options)`` -> a :class:`RuntimeOnLink` on the fixtures' clock and link, closed after the test."""
+    made: list[RuntimeOnLink] = []
+
+    def make(mission: Mission, **options: Any) -> RuntimeOnLink:
+        made.append(RuntimeOnLink(mission, clock=clock, link=link, **options))
+        return made[-1]
+
+    yield make
+    for runtime in made:
+        runtime.close()
+
+
+@pytest.fixture
+def can_buses() -> Iterator[VirtualCan]:
+    """Two ends of a fresh CAN bus in memory, ``base, ours = can_buses``; shut after the test."""
+    with VirtualCan() as buses:
+        yield buses

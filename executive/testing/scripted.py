@@ -9,7 +9,7 @@ from py_trees.common import Status
 
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
 from executive.state import GlobalPosition
 from executive.testing.harness import Harness
@@ -25,7 +25,7 @@ class ScriptedAutopilot:
     After each tick, :meth:`respond` takes what the tree sent, answers each message (acks go to
     the commander, as the reader would pass them on), moves the vehicle one tick (:meth:`move`)
     and publishes its facts to the blackboard (:meth:`facts`). :attr:`commands` is what it was
-    told, readable: ``("mode", "GUIDED")``, ``("arm", 1.0)``, ``("DO_CHANGE_SPEED",)``; :attr:`targets`
+    told, readable: ``("mode", "GUIDED")``, ``("arm", 1.0)``, ``("DO_CHANGE_SPEED",)`` (:meth:`take` empties it); :attr:`targets`
     the GUIDED targets it followed, ``(lat, lon)``. A command kind
     (``"arm"``, a mode name, a command name such as ``"DO_CHANGE_SPEED"``) in :attr:`refuse` is
     answered :attr:`refusal`. Subclass it for another firmware: override :meth:`on_command`,
@@ -152,6 +152,11 @@ class ScriptedAutopilot:
             self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
 
     # -- driving the test ----------------------------------------------------------------------
+    def take(self) -> list[tuple[Any, ...]]:
+        """What it was told since the last take (:attr:`commands`, emptied)."""
+        taken, self.commands = self.commands, []
+        return taken
+
     def run(self, ticks: int, until: Callable[[], bool] | None = None, dt: float = 0.1) -> list[Status]:
         """Tick and respond up to ``ticks`` times, stopping when the tree is no longer RUNNING or ``until()``; the statuses."""
         statuses = []
@@ -161,6 +166,86 @@ class ScriptedAutopilot:
             if statuses[-1] != Status.RUNNING or (until is not None and until()):
                 break
         return statuses
+
+
+class MissionAutopilot(ScriptedAutopilot):
+    """A scripted autopilot that holds a mission as ArduPilot does, behind a harness with a mission transfer (``Harness.build(..., transfer=True)``).
+
+    :attr:`store` is the simulator's own :class:`~executive.sim.mission_store.MissionStore` (home at item
+    0, uploads driven by MISSION_REQUEST, items read back as stored). The mission messages the
+    executive sends go to it (none while :attr:`answers_missions` is off: a link that loses them);
+    its replies wait in :attr:`replies` until :meth:`deliver` hands them over as the MAVLink reader
+    would (a COMMAND_ACK put there reaches the commander then). AUTO is refused without a mission
+    and runs the store's; armed in AUTO, :meth:`move` steps toward the current item and, within
+    ``step_m`` of it, reports it reached, as ArduRover does. ``home`` is where item 0 reads back.
+    """
+
+    system_id = component_id = 1
+
+    def __init__(self, harness: Harness, start: tuple[float, float] = (0.0, 0.0), *, home: tuple[float, float] | None = None, **options: Any) -> None:
+        from executive.sim.mission_store import MissionStore
+
+        assert harness.transfer is not None, "a mission autopilot needs a harness with a mission transfer (Harness.build(..., transfer=True))"
+        self.transfer = harness.transfer
+        self.clock = harness.clock
+        self.home: tuple[float, float] | None = home or start
+        self.answers_missions = True
+        self.replies: list[MAVLinkMessage] = []
+        self.store = MissionStore(self, self.replies.append, self.statustext)
+        self._wire = _M.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)
+        super().__init__(harness, start, **options)
+
+    def statustext(self, severity: int, text: str) -> None:
+        """A STATUSTEXT of the autopilot's (the store's notices): on the blackboard, as the reader writes it."""
+        self.h.vehicle.set(vehicle__statustext=(severity, text))
+
+    def on_message(self, msg: MAVLinkMessage) -> None:
+        """Mission messages to the store, as it receives them: packed with the executive's header, decoded."""
+        if msg.get_type() in self.store.MESSAGES and self.answers_missions:
+            self.store.handle(_M.MAVLink(None).decode(bytearray(msg.pack(self._wire))))
+
+    def enter_mode(self, mode: str) -> bool:
+        """AUTO needs a mission (and starts or resumes it); leaving AUTO stops it."""
+        if mode == self.store.AUTO_MODE and not self.store.present:
+            return False
+        if self.mode == self.store.AUTO_MODE:
+            self.store.stop()
+        super().enter_mode(mode)
+        if mode == self.store.AUTO_MODE:
+            self.store.start_or_resume()
+        return True
+
+    def move(self) -> None:
+        """In AUTO, armed: a step toward the current item, reached within ``step_m``; MISSION_CURRENT then. Else as guided."""
+        if self.mode != self.store.AUTO_MODE:
+            super().move()
+            return
+        item = self.store.current
+        if item is not None and self.armed:
+            d, b = distance_bearing(self.lat, self.lon, item.lat, item.lon)
+            self.lat, self.lon = destination(self.lat, self.lon, b, min(d, self.step_m))
+            if d <= self.step_m:
+                self.store.advance()
+        self.replies.append(self.store.current_message())
+
+    def deliver(self) -> None:
+        """The replies so far reach the executive: mission messages to the transfer, acks to the commander."""
+        t = self.transfer
+        handlers = {
+            "MISSION_REQUEST": t.on_request, "MISSION_REQUEST_INT": t.on_request, "MISSION_ACK": t.on_ack, "MISSION_COUNT": t.on_count,
+            "MISSION_ITEM_INT": t.on_item, "MISSION_CURRENT": t.on_current, "MISSION_ITEM_REACHED": t.on_reached,
+        }  # fmt: skip
+        replies = list(self.replies)
+        self.replies.clear()  # in place: the store appends to this list
+        for msg in replies:
+            if msg.get_type() == "COMMAND_ACK":
+                self.commander.on_ack(msg)
+            else:
+                handlers[msg.get_type()](msg, self.clock.now())
+
+    def held(self) -> list[tuple[float, float]]:
+        """The waypoints it holds (items 1..n), as stored (1e-7 degree)."""
+        return [(self.store.command(seq).lat, self.store.command(seq).lon) for seq in range(1, self.store.count)]
 
 
 class ObedientAutopilot(ScriptedAutopilot):

@@ -10,14 +10,12 @@ from py_trees.common import Status
 
 from executive import blackboard
 from executive.behaviours import NothingToSample, RcNotTakingOver, Sample
-from executive.clock import ManualClock
-from executive.io.mavlink.commander import Commander
 from executive.io.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
 from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
 from executive.state import Sample as SampleRecord
-from executive.testing import port_for
+from executive.testing import Harness, port_for
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 OPTIONS = SamplingOptions(duration_s=2.0, rate_hz=1.0, sensors=["ph", "temperature"])
@@ -51,22 +49,6 @@ class FakeSampler:
         self._bb.set("/sampler/status", SamplerStatus(ticket, state, reads, reason, t))
 
 
-class SamplingHarness:
-    """Like the shared Harness, with a sampler: serviced after each tick, before the commands are flushed (as the runtime does)."""
-
-    def __init__(self, root, clock: ManualClock, link, commander: Commander, mission_state: MissionState, sampler) -> None:
-        self.root, self.clock, self.link, self.commander, self.sampler = root, clock, link, commander, sampler
-        self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup(clock=clock, autopilot=port_for(commander), mission_state=mission_state, sampler=sampler)
-
-    def tick(self, dt: float = 0.5) -> Status:
-        self.clock.advance(dt)
-        self.tree.tick()
-        self.sampler.service()
-        self.commander.flush()
-        return self.root.status
-
-
 @pytest.fixture
 def running(mission_state, vehicle):
     mission_state.start()
@@ -75,9 +57,14 @@ def running(mission_state, vehicle):
 
 
 @pytest.fixture
-def make(clock, link, commander, mission_state):
-    def build(root, sampler=None) -> SamplingHarness:
-        return SamplingHarness(root, clock, link, commander, mission_state, sampler or SimulatedSampler(clock, OPTIONS, seed=1))
+def make(harness, clock):
+    """``make(root, sampler)``: the kit's harness with a sampler, serviced after the tree before the commands are flushed (as the runtime does)."""
+
+    def build(root, sampler=None) -> Harness:
+        sampler = sampler or SimulatedSampler(clock, OPTIONS, seed=1)
+        h = harness(root, sampler=sampler)
+        h.writers.append(sampler.service)
+        return h
 
     return build
 
@@ -89,7 +76,7 @@ def status() -> SamplerStatus | None:
 def test_samples_and_records_the_sample(make, running, vehicle):
     node = Sample()
     h = make(node)
-    statuses = [h.tick() for _ in range(6)]  # started at 100.5; reads at 101.5 and 102.5, done at 102.5, seen at 103.0
+    statuses = [h.tick(0.5) for _ in range(6)]  # started at 100.5; reads at 101.5 and 102.5, done at 102.5, seen at 103.0
     assert statuses == [R, R, R, R, R, S]
     assert h.link.take() == []  # the sampler is not the autopilot
     (recorded,) = running.samples
@@ -104,17 +91,17 @@ def test_feedback_while_sampling(make, running):
     node = Sample()
     h = make(node)
     for _ in range(3):
-        h.tick()
+        h.tick(0.5)
     assert node.feedback_message == "leg 1/4: sampling (1 s, 0 reads)"  # the first reads are taken after this tick
-    h.tick()
+    h.tick(0.5)
     assert node.feedback_message == "leg 1/4: sampling (2 s, 2 reads)"
 
 
 def test_the_position_recorded_is_the_last_seen_while_sampling(make, running, vehicle):
     h = make(Sample())
-    h.tick()
+    h.tick(0.5)
     vehicle.set(vehicle__position=at(47.5, 8.5))
-    while h.tick() == R:
+    while h.tick(0.5) == R:
         pass
     assert (running.samples[0].lat, running.samples[0].lon) == (47.5, 8.5)
 
@@ -122,7 +109,7 @@ def test_the_position_recorded_is_the_last_seen_while_sampling(make, running, ve
 def test_no_position_at_all_records_nan(make, running, vehicle):
     vehicle.set(vehicle__position=None)
     h = make(Sample())
-    while h.tick() == R:
+    while h.tick(0.5) == R:
         pass
     assert math.isnan(running.samples[0].lat) and math.isnan(running.samples[0].lon)
 
@@ -132,7 +119,7 @@ def test_a_leg_already_sampled_is_skipped_without_sampling(make, running):
     sampler = FakeSampler()
     node = Sample()
     h = make(node, sampler)
-    assert h.tick() == S
+    assert h.tick(0.5) == S
     assert sampler.calls == [] and len(running.samples) == 1
     assert node.feedback_message == "leg 1: already sampled"
 
@@ -141,9 +128,9 @@ def test_sampler_failure_fails_and_records_nothing(make, running):
     sampler = FakeSampler()
     node = Sample()
     h = make(node, sampler)
-    assert h.tick() == R
+    assert h.tick(0.5) == R
     sampler.publish(1, SamplerState.FAILED, reason="pump jammed")
-    assert h.tick() == F
+    assert h.tick(0.5) == F
     assert node.feedback_message == "leg 1/4: sampler failed: pump jammed"
     assert running.samples == () and sampler.calls == ["start 0"]  # a finished request is not cancelled
 
@@ -153,11 +140,11 @@ def test_only_its_own_ticket_counts(make, running):
     sampler.tickets = 6  # an earlier request's DONE is still on the blackboard
     sampler.publish(6, SamplerState.DONE, (SampleRead("ph", 8.0, "pH", 1.0),))
     h = make(Sample(), sampler)
-    assert h.tick() == R
+    assert h.tick(0.5) == R
     sampler.publish(7, SamplerState.SAMPLING)
-    assert h.tick() == R
+    assert h.tick(0.5) == R
     sampler.publish(7, SamplerState.DONE, (SampleRead("ph", 8.2, "pH", 101.0),), t=101.0)
-    assert h.tick() == S
+    assert h.tick(0.5) == S
     assert [r.value for r in running.samples[0].reads] == [8.2] and running.samples[0].finished == 101.0
 
 
@@ -165,24 +152,24 @@ def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, run
     node = Sample()
     guarded = py_trees.composites.Sequence("Guarded", memory=False, children=[RcNotTakingOver(6, 1700), node])
     h = make(guarded)
-    assert [h.tick(), h.tick(), h.tick()] == [R, R, R]
+    assert [h.tick(0.5), h.tick(0.5), h.tick(0.5)] == [R, R, R]
     first_ticket = status().ticket
     vehicle.set(rc__channels=RC_HIGH)
-    assert h.tick() == F
+    assert h.tick(0.5) == F
     assert (status().ticket, status().state, status().reason) == (first_ticket, SamplerState.FAILED, "cancelled")
     assert node.status == Status.INVALID and running.samples == ()
     vehicle.set(rc__channels=RC_LOW)
-    assert [h.tick() for _ in range(2)] == [F, F]  # the switch back for 1 s (two ticks of 0.5 s) before the work goes on
-    statuses = [h.tick() for _ in range(6)]
+    assert [h.tick(0.5) for _ in range(2)] == [F, F]  # the switch back for 1 s (two ticks of 0.5 s) before the work goes on
+    statuses = [h.tick(0.5) for _ in range(6)]
     assert statuses == [R, R, R, R, R, S]
     assert status().ticket == first_ticket + 1 and len(running.samples) == 1
-    assert h.tick() == S and len(running.samples) == 1  # ticked again: already sampled, not repeated
+    assert h.tick(0.5) == S and len(running.samples) == 1  # ticked again: already sampled, not repeated
 
 
 def test_no_active_leg_fails(make, mission_state):
     sampler = FakeSampler()
     node = Sample()
-    assert make(node, sampler).tick() == F
+    assert make(node, sampler).tick(0.5) == F
     assert node.feedback_message == "no active leg" and sampler.calls == []
 
 

@@ -17,19 +17,14 @@ from executive import geo
 from executive.cli import main
 from executive.io.control import request
 from executive.io.mavlink.dialect import mavlink, mavutil
+from tests_support import mission_text
 
 ROOT = Path(__file__).parents[2]
-MISSION = """\
-version: 1
-name: two-legs
-vehicle: rover
-auto_arm: true
-home: {lat: -35.363261, lon: 149.165230}
-simulator: {ekf_ready_after_s: 2}
-waypoints:
-  - {lat: -35.3629906, lon: 149.1652300}
-  - {lat: -35.3629906, lon: 149.1665504}  # 120 m east: time for an operator to act on this leg
-"""
+MISSION = mission_text(
+    "two-legs",
+    "{lat: -35.3629906, lon: 149.1652300}",
+    "{lat: -35.3629906, lon: 149.1665504}  # 120 m east: time for an operator to act on this leg",
+)
 
 
 @pytest.fixture

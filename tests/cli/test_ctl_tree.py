@@ -12,19 +12,15 @@ import pytest
 
 from executive.cli import main
 from executive.io.control import request
+from tests_support import mission_text
 
 ROOT = Path(__file__).parents[2]
-MISSION = """\
-version: 1
-name: slow-ekf
-vehicle: rover
-auto_arm: true
-home: {lat: -35.363261, lon: 149.165230}
-simulator: {ekf_ready_after_s: 600}  # the mission waits on the EKF for the whole test
-limits: {ekf_wait_s: 900}
-waypoints:
-  - {lat: -35.3629906, lon: 149.1652300}
-"""
+MISSION = mission_text(
+    "slow-ekf",
+    "{lat: -35.3629906, lon: 149.1652300}",
+    simulator="{ekf_ready_after_s: 600}  # the mission waits on the EKF for the whole test",
+    limits="{ekf_wait_s: 900}",
+)
 
 
 def ctl(sock: Path, *args: str) -> subprocess.CompletedProcess:

@@ -9,18 +9,10 @@ from pathlib import Path
 import can
 
 from executive.cli import main
+from tests_support import mission_text
 
 ROOT = Path(__file__).parents[2]
-MISSION = """\
-version: 1
-name: short
-vehicle: rover
-auto_arm: true
-home: {lat: -35.363261, lon: 149.165230}
-simulator: {model: bunker, ekf_ready_after_s: 2}
-waypoints:
-  - {lat: -35.3631710, lon: 149.1652300}
-"""
+MISSION = mission_text("short", "{lat: -35.3631710, lon: 149.1652300}", simulator="{model: bunker, ekf_ready_after_s: 2}")
 
 
 def test_the_drive_bridge_talks_to_the_base_and_the_bus_is_recorded(tmp_path):

@@ -15,18 +15,10 @@ from pathlib import Path
 import pytest
 
 from executive.cli import main
+from tests_support import mission_text
 
 ROOT = Path(__file__).parents[2]
-SHORT = """\
-version: 1
-name: short
-vehicle: rover
-auto_arm: true
-home: {lat: -35.363261, lon: 149.165230}
-simulator: {ekf_ready_after_s: 1}
-waypoints:
-  - {lat: -35.3631710, lon: 149.1652300}
-"""
+SHORT = mission_text("short", "{lat: -35.3631710, lon: 149.1652300}", simulator="{ekf_ready_after_s: 1}")
 
 
 @pytest.fixture

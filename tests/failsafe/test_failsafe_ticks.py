@@ -12,17 +12,16 @@ import pytest
 from py_trees.common import Status
 
 import trees
-from executive.assembly import build_runtime
 from executive.behaviours import Failsafe, SetMode
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import ManualClock
 from executive.geo import destination
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
+from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
-from executive.testing import EKF_READY, FakeLink, Harness, ObedientAutopilot, Vehicle
+from executive.testing import EKF_READY, FakeLink, Harness, ScriptedAutopilot, Vehicle
 from executive.vehicles import PROFILES
 from trees._parts import guarded, mission_root, standard_guards
 
@@ -51,58 +50,58 @@ def position(north_m: float = 0.0) -> GlobalPosition:
     return GlobalPosition(lat, lon, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-class Rig:
-    """``guarded(work, standard guards, mission)`` for one vehicle kind, ticked by hand; the vehicle healthy until a test breaks it."""
+class Obeying(ScriptedAutopilot):
+    """The autopilot behind the guarded tree: it acks each command at once (a mode in :attr:`refuse` FAILED; nothing with ``acks`` off).
 
-    def __init__(self, mission: Mission, clock: ManualClock, vehicle: Vehicle, work: py_trees.behaviour.Behaviour | None = None) -> None:
-        self.mission, self.clock, self.vehicle = mission, clock, vehicle
-        self.link = FakeLink()
-        self.commander = Commander(self.link, clock, PROFILES[mission.vehicle])
-        self.state = MissionState()
-        self.state.upload(mission)
-        self.state.start()
-        self.work = work or py_trees.behaviours.Running("Work")
-        self.root = guarded(self.work, standard_guards(mission), mission)
-        self.h = Harness(self.root, clock, self.link, self.commander, self.state)
-        self.failsafe = next(n for n in self.root.iterate() if isinstance(n, Failsafe))
-        self.acks, self._sent = True, []
-        self.refuse: set[str] = set()  # modes the autopilot refuses (FAILED)
-        vehicle.set(
-            link__up=True, vehicle__armed=True, vehicle__mode="GUIDED", vehicle__ekf=EKF_READY, rc__channels=RC_OK, rc__connected=True,
-            vehicle__battery=Battery(12.4, 2.0, 80, 0.0), vehicle__position=position(), heading__ok=True,
-        )  # fmt: skip
+    It publishes nothing: the vehicle's facts are the test's to write (healthy until a test breaks them).
+    """
+
+    def __init__(self, h: Harness) -> None:
+        super().__init__(h)
+        self.acks = True
+
+    def publish(self) -> None:
+        """Nothing: the test writes the vehicle's facts."""
+
+    def on_command(self, msg: MAVLinkMessage) -> int | None:
+        result = super().on_command(msg)
+        return result if self.acks else None
 
     def tick(self, n: int = 1) -> list[Status]:
-        """Up to ``n`` ticks, stopping at the first that is not RUNNING; the autopilot accepts every command (unless ``acks`` is off)."""
-        statuses = []
-        for _ in range(n):
-            statuses.append(self.h.tick())
-            sent = self.link.take("COMMAND_LONG")
-            self._sent += sent
-            for msg in sent if self.acks else ():
-                refused = msg.command == mavlink.MAV_CMD_DO_SET_MODE and self.commander.modes.decode(int(msg.param2)) in self.refuse
-                self.h.ack(msg.command, mavlink.MAV_RESULT_FAILED if refused else mavlink.MAV_RESULT_ACCEPTED)
-            if statuses[-1] != R:
-                break
-        return statuses
+        """Up to ``n`` ticks, stopping at the first that is not RUNNING, each answered."""
+        return self.run(n)
 
     def sent(self) -> list[tuple[str, Any]]:
-        """What left on the link since the last call: ("mode", name) or ("arm", 1.0 / 0.0)."""
-        out: list[tuple[str, Any]] = []
-        sent, self._sent = self._sent, []
-        for msg in sent:
-            if msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-                out.append(("mode", self.commander.modes.decode(int(msg.param2))))
-            elif msg.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
-                out.append(("arm", msg.param1))
-        return out
+        """What it was asked since the last call: ("mode", name) or ("arm", 1.0 / 0.0)."""
+        return [c for c in self.take() if c[0] in ("mode", "arm")]
+
+
+def failsafe(r: Obeying) -> Failsafe:
+    return next(n for n in r.h.root.iterate() if isinstance(n, Failsafe))
+
+
+def work(r: Obeying) -> py_trees.behaviour.Behaviour:
+    """The guarded work (the guarded route's last child)."""
+    return r.h.root.children[0].children[-1]
 
 
 @pytest.fixture
-def rig(clock: ManualClock, vehicle: Vehicle) -> Callable[..., Rig]:
-    def make(vehicle_kind: str = "rover", work: py_trees.behaviour.Behaviour | None = None, **changes: Any) -> Rig:
-        r = Rig(make_mission(vehicle_kind, **changes), clock, vehicle, work)
-        assert r.tick() == [R] and r.work.status == R and r.sent() == []  # healthy: the work runs, nothing is asked
+def rig(clock: ManualClock) -> Callable[..., Obeying]:
+    """``rig(kind, work, **changes)``: ``guarded(work, standard guards, mission)`` for one vehicle kind, on a Harness, obeyed."""
+
+    def make(vehicle_kind: str = "rover", work_: py_trees.behaviour.Behaviour | None = None, **changes: Any) -> Obeying:
+        mission = make_mission(vehicle_kind, **changes)
+        state = MissionState()
+        state.upload(mission)
+        state.start()
+        root = guarded(work_ or py_trees.behaviours.Running("Work"), standard_guards(mission), mission)
+        link = FakeLink()
+        r = Obeying(Harness(root, clock, link, Commander(link, clock, PROFILES[mission.vehicle]), state))
+        r.h.vehicle.set(
+            link__up=True, vehicle__armed=True, vehicle__mode="GUIDED", vehicle__ekf=EKF_READY, rc__channels=RC_OK, rc__connected=True,
+            vehicle__battery=Battery(12.4, 2.0, 80, 0.0), vehicle__position=position(), heading__ok=True,
+        )  # fmt: skip
+        assert r.tick() == [R] and work(r).status == R and r.sent() == []  # healthy: the work runs, nothing is asked
         return r
 
     return make
@@ -147,29 +146,29 @@ REACTIONS = [
 def test_the_reaction_leaves_in_the_tick_the_guard_fails(rig, kind, changes, before, breaks, commands, status) -> None:
     """The condition bad for its guard's hold time (0 s: the tick it becomes true); ``status`` S: no failsafe at all, the work goes on."""
     r = rig(kind, **changes)
-    r.vehicle.set(**before)
+    r.h.vehicle.set(**before)
     assert r.tick() == [R] and r.sent() == []
-    r.vehicle.set(**breaks)
-    hold_s = max((g.hold_after_s for g in r.failsafe.guards if g.check() is not None), default=0.0)
+    r.h.vehicle.set(**breaks)
+    hold_s = max((g.hold_after_s for g in failsafe(r).guards if g.check() is not None), default=0.0)
     for _ in range(round(hold_s / 0.1)):  # a shorter bad spell is noise: the work goes on, nothing is sent
-        assert r.tick() == [R] and r.work.status == R and r.sent() == []
+        assert r.tick() == [R] and work(r).status == R and r.sent() == []
     assert r.tick() == [R if status == S else status]
     assert r.sent() == commands  # flushed at the end of that very tick: zero ticks of delay
-    assert r.work.status == (R if status == S else Status.INVALID)  # the work stopped while the failsafe acts
+    assert work(r).status == (R if status == S else Status.INVALID)  # the work stopped while the failsafe acts
     if status == F:
-        assert failsafe_mode(r.root) == commands[0][1]  # where the runtime leaves the vehicle
+        assert failsafe_mode(r.h.root) == commands[0][1]  # where the runtime leaves the vehicle
 
 
 def test_resume_cancels_the_reaction_and_logs_cause_and_recovery(rig, caplog) -> None:
     caplog.set_level(logging.WARNING, logger="executive")
     r = rig("rover")
     r.acks = False  # the autopilot does not answer: the commander would retry the hold every 1.5 s...
-    r.vehicle.set(vehicle__ekf=EKF_LOST)
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
     assert r.tick(10) == [R] * 10 and r.sent() == [("mode", "HOLD")]
-    r.vehicle.set(vehicle__ekf=EKF_READY)
-    assert r.tick(30) == [R] * 30 and r.work.status != R  # ...the guard recovers: the EKF must stay sane for 3 s
+    r.h.vehicle.set(vehicle__ekf=EKF_READY)
+    assert r.tick(30) == [R] * 30 and work(r).status != R  # ...the guard recovers: the EKF must stay sane for 3 s
     assert set(r.sent()) == {("mode", "HOLD")}  # (meanwhile the unanswered hold is retried: still held)
-    assert r.tick() == [R] and r.work.status == R  # then the work resumes, in that tick
+    assert r.tick() == [R] and work(r).status == R  # then the work resumes, in that tick
     assert r.tick(30) == [R] * 30 and r.sent() == []  # and the hold is not retried over it
     assert r.commander.idle
     assert [rec.getMessage() for rec in caplog.records] == [
@@ -181,58 +180,58 @@ def test_resume_cancels_the_reaction_and_logs_cause_and_recovery(rig, caplog) ->
 
 def test_a_condition_that_lasts_past_its_own_time_limit_aborts(rig, caplog) -> None:
     r = rig("rover", failsafe={"gps_glitch": {"timeout_s": 5.0}})
-    r.vehicle.set(link__up=False)
+    r.h.vehicle.set(link__up=False)
     assert r.tick(20) == [R] * 20  # 2 s of link loss (limit 30 s)
-    r.vehicle.set(vehicle__ekf=EKF_GLITCH)
+    r.h.vehicle.set(vehicle__ekf=EKF_GLITCH)
     statuses = r.tick(100)
     assert statuses == [R] * 51 + [F]  # over the glitch's own 5 s
-    assert r.failsafe.feedback_message == (
+    assert failsafe(r).feedback_message == (
         "not recovered after 5 s: Link alive? no heartbeat from the autopilot; GPS not glitching? the EKF flags a GPS glitch (GPS_GLITCHING)"
     )
-    assert failsafe_mode(r.root) == "HOLD"
+    assert failsafe_mode(r.h.root) == "HOLD"
     assert caplog.records[-1].getMessage() == "failsafe gps_glitch: not recovered within 5 s -> abort the mission"
 
 
 def test_while_holding_the_feedback_counts_toward_the_nearest_limit(rig) -> None:
     r = rig("rover")
-    r.vehicle.set(link__up=False)
+    r.h.vehicle.set(link__up=False)
     r.tick(31)
-    assert r.failsafe.feedback_message == "holding (3/30 s): Link alive? no heartbeat from the autopilot"
+    assert failsafe(r).feedback_message == "holding (3/30 s): Link alive? no heartbeat from the autopilot"
 
 
 def test_a_stronger_condition_replaces_the_reaction_in_force_and_a_weaker_one_does_not(rig, caplog) -> None:
     caplog.set_level(logging.WARNING, logger="executive")
     r = rig("sub")
-    r.vehicle.set(link__up=False)
+    r.h.vehicle.set(link__up=False)
     assert r.tick() == [R] and r.sent() == [("mode", "SURFACE")]
-    r.vehicle.set(vehicle__ekf=EKF_LOST)  # hold (POSHOLD) would stop the surfacing
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)  # hold (POSHOLD) would stop the surfacing
     assert r.tick(5) == [R] * 5 and r.sent() == []
     assert caplog.records[-1].getMessage() == (
         "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> hold (POSHOLD) not commanded: surface (SURFACE) for link_loss in force, "
         "resume when it recovers (within 30 s)"
     )
-    r.vehicle.set(vehicle__battery=Battery(11.0, 2.0, 15, 1.0))  # surface, abort: already surfacing (low for 2 s: a sag is not low)
+    r.h.vehicle.set(vehicle__battery=Battery(11.0, 2.0, 15, 1.0))  # surface, abort: already surfacing (low for 2 s: a sag is not low)
     assert r.tick(25) == [R] * 20 + [F] and r.sent() == []
-    assert failsafe_mode(r.root) == "SURFACE"
+    assert failsafe_mode(r.h.root) == "SURFACE"
 
 
 def test_an_abort_during_a_hold_commands_its_own_reaction_at_once(rig) -> None:
     r = rig("rover")
-    r.vehicle.set(link__up=False)
+    r.h.vehicle.set(link__up=False)
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
-    r.vehicle.set(link__up=True, vehicle__battery=Battery(11.0, 2.0, 15, 1.0))
+    r.h.vehicle.set(link__up=True, vehicle__battery=Battery(11.0, 2.0, 15, 1.0))
     assert r.tick(25) == [R] * 20 + [F] and r.sent() == [("mode", "RTL")]  # the battery low for 2 s
 
 
 def test_nothing_is_commanded_while_a_person_has_the_vehicle_and_the_reaction_comes_when_they_let_go(rig) -> None:
     r = rig("rover")
-    r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__mode="MANUAL", vehicle__mode_set_by="others")
+    r.h.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__mode="MANUAL", vehicle__mode_set_by="others")
     r.tick()
-    r.vehicle.set(link__up=False, vehicle__ekf=EKF_LOST)
+    r.h.vehicle.set(link__up=False, vehicle__ekf=EKF_LOST)
     assert r.tick(20) == [R] * 20 and r.sent() == []  # the pilot drives: not fought
-    r.vehicle.set(rc__channels=RC_OK)  # the switch goes back, the link is still down, the vehicle still in MANUAL: a person drives it
+    r.h.vehicle.set(rc__channels=RC_OK)  # the switch goes back, the link is still down, the vehicle still in MANUAL: a person drives it
     assert r.tick(20) == [R] * 20 and r.sent() == []
-    r.vehicle.set(vehicle__mode="GUIDED")  # out of the person's mode (and the switch back for over 1 s): the reaction at once
+    r.h.vehicle.set(vehicle__mode="GUIDED")  # out of the person's mode (and the switch back for over 1 s): the reaction at once
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
 
 
@@ -241,38 +240,38 @@ def test_no_failsafe_changes_the_mode_while_a_person_drives_in_a_pilot_mode(rig,
     """A pilot mode (set by a ground station, the RC or us at the operator's request), no take-over switch: RC loss is the autopilot's job."""
     caplog.set_level(logging.WARNING, logger="executive")
     r = rig("rover")
-    r.vehicle.set(vehicle__mode=mode, vehicle__mode_set_by="others")
+    r.h.vehicle.set(vehicle__mode=mode, vehicle__mode_set_by="others")
     r.tick()
-    r.vehicle.set(rc__connected=False, rc__channels=(0,) * 8)  # the operator's transmitter drops out
+    r.h.vehicle.set(rc__connected=False, rc__channels=(0,) * 8)  # the operator's transmitter drops out
     assert r.tick(10) == [R] * 10 and r.sent() == []
     said = f"failsafe rc_loss: RC transmitter gone (every channel 0) -> wait: hands off (the vehicle is in {mode}: a person drives it; "
     assert said in caplog.text
     assert "RC loss is the autopilot's own RC failsafe's job" in caplog.text
-    r.vehicle.set(rc__connected=True, rc__channels=RC_OK)  # back: the work goes on, nothing was commanded
+    r.h.vehicle.set(rc__connected=True, rc__channels=RC_OK)  # back: the work goes on, nothing was commanded
     assert r.tick() == [R] and r.sent() == []
 
 
 def test_a_person_with_the_vehicle_is_not_fought_by_an_abort_either(rig) -> None:
     r = rig("rover")
-    r.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__battery=Battery(11.0, 2.0, 15, 1.0))
+    r.h.vehicle.set(rc__channels=RC_TAKEOVER, vehicle__battery=Battery(11.0, 2.0, 15, 1.0))
     assert r.tick(25) == [R] * 20 + [F] and r.sent() == []  # the battery low for 2 s
-    assert failsafe_mode(r.root) is None  # the runtime then sees the take-over switch and keeps its hands off too
+    assert failsafe_mode(r.h.root) is None  # the runtime then sees the take-over switch and keeps its hands off too
 
 
 def test_disarm_puts_the_vehicle_in_manual_disarmed_then_re_arms_it_and_the_work_resumes(rig, caplog) -> None:
     caplog.set_level(logging.WARNING, logger="executive")
     r = rig("boat", failsafe={"ekf_loss": {"reaction": "disarm"}})
-    r.vehicle.set(vehicle__ekf=EKF_LOST)
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
     assert r.tick() == [R] and r.sent() == [("mode", "MANUAL"), ("arm", 0.0)]  # both in the tick the EKF fails
-    r.vehicle.set(vehicle__mode="MANUAL", vehicle__armed=False)
+    r.h.vehicle.set(vehicle__mode="MANUAL", vehicle__armed=False)
     assert r.tick(30) == [R] * 30 and r.sent() == []  # its own disarm is not a person's: no hands-off, no time-out of "disarmed"
-    r.vehicle.set(vehicle__ekf=EKF_READY)
+    r.h.vehicle.set(vehicle__ekf=EKF_READY)
     assert r.tick(30) == [R] * 30 and r.sent() == []  # the EKF sane for 3 s before it counts as recovered
     assert r.tick() == [R] and r.sent() == [("arm", 1.0)]
     assert r.tick(18) == [R] * 18 and r.sent() == []  # the autopilot has not armed yet: asked again 2 s later
     assert r.tick(3) == [R] * 3 and r.sent() == [("arm", 1.0)]
-    r.vehicle.set(vehicle__armed=True)
-    assert r.tick() == [R] and r.work.status == R
+    r.h.vehicle.set(vehicle__armed=True)
+    assert r.tick() == [R] and work(r).status == R
     assert [m.getMessage() for m in caplog.records] == [
         "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> disarm in MANUAL, resume when it recovers (within 30 s)",
         "failsafe ekf_loss: recovered -> re-arm, then resume",
@@ -288,12 +287,11 @@ def test_a_disarm_reaction_brings_an_armed_guard_with_it() -> None:
     assert any(isinstance(g, Armed) for g in failsafe_guards(disarming, [LinkAlive(), RcFresh()]))
 
 
-def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(clock: ManualClock, vehicle: Vehicle) -> None:
+def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(runtime_on_link, vehicle: Vehicle) -> None:
     mission = make_mission()
-    link = FakeLink()
     root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
-    runtime = build_runtime(mission, link, clock, root=root, safe_timeout_s=2.0)
-    rover = ObedientAutopilot(link)
+    on_link = runtime_on_link(mission, root=root, safe_timeout_s=2.0)
+    runtime, rover = on_link.runtime, on_link.autopilot
     runtime.mission_state.start()
     original = runtime.tick
 
@@ -374,28 +372,28 @@ def test_a_mode_refused_after_a_recovery_is_asked_again_until_the_recovery_s_tim
     """The defect (ArduRover SITL, GPS off 8 s): the EKF healthy again, GUIDED refused while the firmware's own EKF failsafe
     stayed latched (~1 s), and the mission aborted at once: 'leg 3/4 failed: Set GUIDED: refused: FAILED'."""
     caplog.set_level(logging.WARNING, logger="executive")
-    r = rig("rover", work=leg_in_guided())
-    r.vehicle.set(vehicle__ekf=EKF_LOST)
+    r = rig("rover", work_=leg_in_guided())
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
-    r.vehicle.set(vehicle__mode="HOLD")
+    r.h.vehicle.set(vehicle__mode="HOLD")
     r.tick(20)
     r.refuse.add("GUIDED")  # the firmware's EKF failsafe is still latched
-    r.vehicle.set(vehicle__ekf=EKF_READY)
+    r.h.vehicle.set(vehicle__ekf=EKF_READY)
     assert r.tick(60) == [R] * 60  # the guard counts as recovered after 3 s of a healthy EKF, then GUIDED is asked for 3 s
     asked = r.sent()
     assert asked.count(("mode", "GUIDED")) >= 5 and set(asked) == {("mode", "GUIDED")}
     assert "failsafe ekf_loss: recovered, but Set GUIDED: refused: FAILED -> asked again until the recovery's time limit" in caplog.text
     r.refuse.clear()  # "EKF failsafe cleared"
     assert r.tick(2) == [R] * 2 and r.sent() == [("mode", "GUIDED")]
-    r.vehicle.set(vehicle__mode="GUIDED")
-    assert r.tick(5) == [R] * 5 and r.work.children[1].status == R  # the leg drives again
+    r.h.vehicle.set(vehicle__mode="GUIDED")
+    assert r.tick(5) == [R] * 5 and r.h.node("Leg/Drive").status == R  # the leg drives again
 
 
 def test_a_mode_still_refused_at_the_recovery_s_time_limit_ends_the_mission(rig) -> None:
-    r = rig("rover", work=leg_in_guided())
-    r.vehicle.set(vehicle__ekf=EKF_LOST)
+    r = rig("rover", work_=leg_in_guided())
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
     r.tick()
-    r.vehicle.set(vehicle__mode="HOLD", vehicle__ekf=EKF_READY)
+    r.h.vehicle.set(vehicle__mode="HOLD", vehicle__ekf=EKF_READY)
     r.refuse.add("GUIDED")
     statuses = r.tick(400)
     assert statuses[-1] == F and 280 <= len(statuses) <= 310  # 30 s (limits.recovery_timeout_s) from the EKF loss
@@ -404,5 +402,5 @@ def test_a_mode_still_refused_at_the_recovery_s_time_limit_ends_the_mission(rig)
 def test_the_boot_mode_is_nobodys_the_failsafe_reacts(rig) -> None:
     """MANUAL as the autopilot booted (no one chose it): not a person driving."""
     r = rig("rover")
-    r.vehicle.set(vehicle__mode="MANUAL", vehicle__mode_set_by=None, link__up=False)
+    r.h.vehicle.set(vehicle__mode="MANUAL", vehicle__mode_set_by=None, link__up=False)
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]

@@ -7,7 +7,6 @@ not have, nor a stick, knob or state outside the protocol's range.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Iterator
 from typing import Any
@@ -23,10 +22,10 @@ from executive.clock import ManualClock
 from executive.io.can.agilex import CONTROL_MODES, FAULT_BITS, KNOWN_IDS, STICK_MAX, STICK_MIN, VEHICLE_STATES, RcState
 from executive.io.can.reader import CanReader
 from executive.state import SwitchPosition
+from executive.testing import VirtualCan
 
 FUZZ = settings(derandomize=True, deadline=None, max_examples=100, suppress_health_check=[HealthCheck.too_slow])
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
-_channels = itertools.count()
 
 
 def bb(key: str) -> Any:
@@ -65,16 +64,14 @@ ANY = st.builds(
 FRAMES = st.lists(st.one_of(AGILEX, AGILEX, ANY), max_size=25)
 
 
-class Rig:
-    """Two ends of a fresh virtual bus and a CAN reader (RC on) on one of them, ticked by hand."""
+class ReaderOnBus(VirtualCan):
+    """A CAN reader (RC on) on our end of a fresh in-memory bus, on a clean blackboard, ticked by hand; the base's end sends."""
 
     def __init__(self) -> None:
+        super().__init__("hostile-can")
         blackboard.reset()
-        channel = f"hostile-can-{next(_channels)}"
-        self.base = can.Bus(interface="virtual", channel=channel)
-        self.bus = can.Bus(interface="virtual", channel=channel)
         self.clock = ManualClock(start=100.0)
-        self.reader = CanReader(self.bus, self.clock, rc=True)
+        self.reader = CanReader(self.ours, self.clock, rc=True)
 
     def tick(self, frames: list[can.Message]) -> int:
         for frame in frames:
@@ -82,16 +79,11 @@ class Rig:
         self.clock.advance(0.1)
         return self.reader.drain()
 
-    def close(self) -> None:
-        self.base.shutdown()
-        self.bus.shutdown()
-
 
 @pytest.fixture
-def rig() -> Iterator[Rig]:
-    r = Rig()
-    yield r
-    r.close()
+def reader_on_bus() -> Iterator[ReaderOnBus]:
+    with ReaderOnBus() as r:
+        yield r
 
 
 def assert_sane() -> None:
@@ -118,8 +110,7 @@ def assert_sane() -> None:
 @given(ticks=st.lists(FRAMES, min_size=1, max_size=5))
 def test_random_frames_never_raise_nor_become_out_of_range_facts(ticks: list[list[can.Message]]) -> None:
     """Any mixture of AgileX frames with random payloads and frames of any kind at all; every frame counted."""
-    rig = Rig()
-    try:
+    with ReaderOnBus() as rig:
         sent = 0
         for frames in ticks:
             assert rig.tick(frames) == len(frames)
@@ -127,16 +118,13 @@ def test_random_frames_never_raise_nor_become_out_of_range_facts(ticks: list[lis
             assert_sane()
         assert rig.reader.stats.frames == sent
         assert bb("/base/frames") == sent or sent == 0
-    finally:
-        rig.close()
 
 
 @FUZZ
 @given(data=st.binary(min_size=8, max_size=8), junk=st.lists(ANY, max_size=5))
 def test_an_out_of_range_rc_frame_never_moves_a_switch(data: bytes, junk: list[can.Message]) -> None:
     """A valid 0x241 sets the switches; any 0x241 whose content is out of range (and any junk) leaves them as they were."""
-    rig = Rig()
-    try:
+    with ReaderOnBus() as rig:
         rig.tick([RcState(UP, MIDDLE, DOWN, DOWN, 10, -10, 20, -20, 50, 1).encode()])
         before = (bb("/rc/switches"), bb("/rc/sticks"))
         frame = RcState.from_data(data)
@@ -145,8 +133,6 @@ def test_an_out_of_range_rc_frame_never_moves_a_switch(data: bytes, junk: list[c
         assert_sane()
         if not frame.valid and all(RcState.from_data(bytes(m.data)) is None or m.arbitration_id != 0x241 or m.is_extended_id for m in junk):
             assert (bb("/rc/switches"), bb("/rc/sticks")) == before
-    finally:
-        rig.close()
 
 
 class FlakyBus(can.BusABC):
@@ -178,9 +164,8 @@ FAILURES = st.sampled_from([can.CanOperationError("bus off"), OSError(100, "Netw
 @given(frames=st.lists(AGILEX, min_size=1, max_size=20), failures=st.dictionaries(st.integers(1, 25), FAILURES, max_size=5))
 def test_a_failing_bus_loses_no_frame(frames: list[can.Message], failures: dict[int, Exception]) -> None:
     """recv raising now and then: counted as bus errors, never raised; every frame still arrives on a later tick."""
-    rig = Rig()
-    try:
-        rig.reader = CanReader(FlakyBus(rig.bus, failures), rig.clock, rc=True)
+    with ReaderOnBus() as rig:
+        rig.reader = CanReader(FlakyBus(rig.ours, failures), rig.clock, rc=True)
         for frame in frames:
             rig.base.send(frame)
         received = 0
@@ -190,12 +175,11 @@ def test_a_failing_bus_loses_no_frame(frames: list[can.Message], failures: dict[
             assert_sane()
         assert (received, rig.reader.stats.frames, rig.reader.bus_errors) == (len(frames), len(frames), bb("/base/bus_errors"))
         assert rig.reader.bus_errors <= len(failures)
-    finally:
-        rig.close()
 
 
-def test_a_storm_of_frames_is_read_over_several_ticks(rig: Rig) -> None:
+def test_a_storm_of_frames_is_read_over_several_ticks(reader_on_bus: ReaderOnBus) -> None:
     """More frames in one tick than a drain takes: the rest are read on the next tick, none is lost."""
+    rig = reader_on_bus
     frames = [RcState(UP, MIDDLE, DOWN, UP, 0, 0, 0, 0, 0, i % 256).encode() for i in range(10_050)]
     assert rig.tick(frames) == 10_000
     assert rig.tick([]) == 50

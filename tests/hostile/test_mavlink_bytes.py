@@ -82,8 +82,8 @@ class NoisyLink:
         pass
 
 
-class Rig:
-    """A reader (with a mission transfer) over a noisy line, ticked by hand."""
+class ReaderOnNoisyLine:
+    """The MAVLink reader (with a commander and a mission transfer) over a :class:`NoisyLink`, on a clean blackboard, ticked by hand."""
 
     def __init__(self) -> None:
         blackboard.reset()
@@ -236,34 +236,34 @@ SEGMENT = st.one_of(
 
 
 @pytest.fixture
-def rig() -> Rig:
-    return Rig()
+def on_line() -> ReaderOnNoisyLine:
+    return ReaderOnNoisyLine()
 
 
 @FUZZ
 @given(segments=st.lists(SEGMENT, max_size=25), chunks=st.lists(st.integers(1, 300), min_size=1, max_size=6))
 def test_line_noise_never_raises_nor_becomes_a_fact(segments: list[bytes], chunks: list[int]) -> None:
     """Random bytes, random-payload packets with good CRCs, truncated and corrupted packets, read in random chunks."""
-    rig = Rig()
-    rig.tick(heartbeat())
+    on_line = ReaderOnNoisyLine()
+    on_line.tick(heartbeat())
     data = b"".join(segments)
     for chunk in chunks:
-        rig.tick(data[:chunk], chunk=chunk)
+        on_line.tick(data[:chunk], chunk=chunk)
         data = data[chunk:]
         assert_sane()
-    rig.tick(data)
-    rig.flush()
+    on_line.tick(data)
+    on_line.flush()
     assert_sane()
-    assert rig.reader.autopilot == AUTOPILOT
+    assert on_line.reader.autopilot == AUTOPILOT
 
 
 @FUZZ
 @given(noise=st.binary(max_size=400), mode=st.integers(0, 30))
 def test_the_reader_resynchronises_after_any_noise(noise: bytes, mode: int) -> None:
     """After any noise, 300 quiet bytes (more than the longest packet a false header can promise) and the next heartbeat is heard."""
-    rig = Rig()
-    rig.tick(heartbeat() + noise + b"\x00" * 300 + heartbeat(mode))
-    rig.flush()
+    on_line = ReaderOnNoisyLine()
+    on_line.tick(heartbeat() + noise + b"\x00" * 300 + heartbeat(mode))
+    on_line.flush()
     assert bb("/vehicle/custom_mode") == mode
 
 
@@ -271,9 +271,9 @@ def test_the_reader_resynchronises_after_any_noise(noise: bytes, mode: int) -> N
 @given(noise=st.lists(st.binary(max_size=30).map(lambda b: b.replace(b"\xfd", b"").replace(b"\xfe", b"")), min_size=1, max_size=10))
 def test_noise_without_a_magic_byte_costs_no_packet(noise: list[bytes]) -> None:
     """Noise between packets that never looks like a packet start loses nothing: every packet is counted, the last one wins."""
-    rig = Rig()
-    rig.tick(b"".join(n + heartbeat(mode) for mode, n in enumerate(noise)))
-    rig.flush()
+    on_line = ReaderOnNoisyLine()
+    on_line.tick(b"".join(n + heartbeat(mode) for mode, n in enumerate(noise)))
+    on_line.flush()
     assert (bb("/link/messages"), bb("/vehicle/custom_mode")) == (len(noise), len(noise) - 1)
     assert (bb("/link/bad_data") > 0) == any(noise) and bb("/link/bad_data") <= sum(map(len, noise))  # a run of noise is one BAD_DATA or more
 
@@ -293,17 +293,17 @@ def signed_heartbeat(custom_mode: int, timestamp: int) -> bytes:
 @given(segments=st.lists(SEGMENT, max_size=20))
 def test_with_signing_only_signed_packets_become_facts(segments: list[bytes]) -> None:
     """Signing on: noise, unsigned heartbeats and frames claiming a signature never change a fact; the next signed packet does."""
-    rig = Rig()
-    rig.link.line.setup_signing(KEY, sign_outgoing=True, allow_unsigned_callback=lambda _mav, _msg_id: False)
-    now = rig.link.line.mav.signing.timestamp
-    rig.tick(signed_heartbeat(4, now + 1))
-    assert (rig.reader.autopilot, bb("/vehicle/custom_mode")) == (AUTOPILOT, 4)
+    on_line = ReaderOnNoisyLine()
+    on_line.link.line.setup_signing(KEY, sign_outgoing=True, allow_unsigned_callback=lambda _mav, _msg_id: False)
+    now = on_line.link.line.mav.signing.timestamp
+    on_line.tick(signed_heartbeat(4, now + 1))
+    assert (on_line.reader.autopilot, bb("/vehicle/custom_mode")) == (AUTOPILOT, 4)
     before = facts(VEHICLE_KEYS)
-    rig.tick(b"".join(segments) + heartbeat(15))
-    rig.flush()
+    on_line.tick(b"".join(segments) + heartbeat(15))
+    on_line.flush()
     assert facts(VEHICLE_KEYS) == before
-    rig.tick(b"\x00" * 300 + signed_heartbeat(10, now + 2))
-    rig.flush()
+    on_line.tick(b"\x00" * 300 + signed_heartbeat(10, now + 2))
+    on_line.flush()
     assert bb("/vehicle/custom_mode") == 10
 
 
@@ -311,10 +311,10 @@ def test_with_signing_only_signed_packets_become_facts(segments: list[bytes]) ->
 @given(messages=st.lists(st.sampled_from(HANDLED[:-1]).flatmap(absurd), min_size=1, max_size=8))
 def test_absurd_values_from_the_autopilot_never_become_facts(messages: list[Any]) -> None:
     """Every field of every message the reader handles at any value its type allows (NaN, infinities, extremes)."""
-    rig = Rig()
-    rig.tick(heartbeat())
+    on_line = ReaderOnNoisyLine()
+    on_line.tick(heartbeat())
     for seq, msg in enumerate(messages, start=1):
-        rig.tick(pack(msg, seq=seq))
+        on_line.tick(pack(msg, seq=seq))
         assert_sane()
 
 
@@ -326,12 +326,12 @@ def test_absurd_values_from_the_autopilot_never_become_facts(messages: list[Any]
 )
 def test_other_systems_never_change_vehicle_facts(messages: list[tuple[Any, tuple[int, int]]]) -> None:
     """Once the autopilot is known, nothing another system or component says changes /vehicle, /rc or who the autopilot is."""
-    rig = Rig()
-    rig.tick(heartbeat(custom_mode=4))
-    before, reconnects = facts(VEHICLE_KEYS), rig.reconnects
+    on_line = ReaderOnNoisyLine()
+    on_line.tick(heartbeat(custom_mode=4))
+    before, reconnects = facts(VEHICLE_KEYS), on_line.reconnects
     for msg, (system, component) in messages:
-        rig.tick(pack(msg, system, component))
-    assert (facts(VEHICLE_KEYS), rig.reconnects, rig.reader.autopilot) == (before, reconnects, AUTOPILOT)
+        on_line.tick(pack(msg, system, component))
+    assert (facts(VEHICLE_KEYS), on_line.reconnects, on_line.reader.autopilot) == (before, reconnects, AUTOPILOT)
 
 
 MISSION_REPLIES = ["MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK", "MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_CURRENT"]
@@ -354,24 +354,24 @@ def mission_reply(draw: st.DrawFn) -> Any:
 @given(operation=st.sampled_from(["upload", "download", "clear", "set_current"]), replies=st.lists(mission_reply(), min_size=1, max_size=12))
 def test_absurd_mission_replies_during_a_transfer_never_raise(operation: str, replies: list[Any]) -> None:
     """Uploads, downloads, clears and set-currents answered with anything at all: the reader and the transfer never raise."""
-    rig = Rig()
-    rig.tick(heartbeat())
+    on_line = ReaderOnNoisyLine()
+    on_line.tick(heartbeat())
     start = {
-        "upload": lambda: rig.mission.upload(waypoint_items([(47.0, 8.0), (47.001, 8.0), (47.001, 8.001)])),
-        "download": rig.mission.download,
-        "clear": rig.mission.clear,
-        "set_current": lambda: rig.mission.set_current(2),
+        "upload": lambda: on_line.mission.upload(waypoint_items([(47.0, 8.0), (47.001, 8.0), (47.001, 8.001)])),
+        "download": on_line.mission.download,
+        "clear": on_line.mission.clear,
+        "set_current": lambda: on_line.mission.set_current(2),
     }
     start[operation]()
     for seq, msg in enumerate(replies, start=1):
-        rig.mission.flush()
-        rig.tick(pack(msg, seq=seq))
+        on_line.mission.flush()
+        on_line.tick(pack(msg, seq=seq))
         assert_sane()
-    rig.clock.advance(60.0)
+    on_line.clock.advance(60.0)
     for _ in range(10):  # and its retries run out
-        rig.mission.flush()
-        rig.tick()
-    assert rig.mission.status is not None
+        on_line.mission.flush()
+        on_line.tick()
+    assert on_line.mission.status is not None
 
 
 E7 = 10_000_000
@@ -410,17 +410,17 @@ def _statustext(text: bytes) -> Any:
         pytest.param(_home(-353632610, 1491652300), "/vehicle/home", (-35.363261, 149.16523), id="home"),
     ],
 )
-def test_coordinates(rig: Rig, msg: Any, key: str, expected: tuple[float, float] | None) -> None:
+def test_coordinates(on_line: ReaderOnNoisyLine, msg: Any, key: str, expected: tuple[float, float] | None) -> None:
     """Coordinates at the extremes of the globe are facts; past them, at int32 extremes, or 0/0 (unset) they are not."""
-    rig.tick(heartbeat() + pack(msg, seq=1))
+    on_line.tick(heartbeat() + pack(msg, seq=1))
     value = bb(key)
     assert (None if value is None else (value.lat, value.lon)) == expected
 
 
 @pytest.mark.parametrize("hdg", [36000, 40000, 65534])
-def test_a_heading_over_359_99_degrees_is_unknown(rig: Rig, hdg: int) -> None:
+def test_a_heading_over_359_99_degrees_is_unknown(on_line: ReaderOnNoisyLine, hdg: int) -> None:
     """GLOBAL_POSITION_INT.hdg is 0..35999 cdeg (65535 = unknown): anything else is no heading at all."""
-    rig.tick(heartbeat() + pack(_global_position(47 * E7, 8 * E7, hdg), seq=1))
+    on_line.tick(heartbeat() + pack(_global_position(47 * E7, 8 * E7, hdg), seq=1))
     assert bb("/vehicle/position").heading_deg is None
 
 
@@ -438,23 +438,23 @@ def test_a_heading_over_359_99_degrees_is_unknown(rig: Rig, hdg: int) -> None:
     ],
     ids=["roll nan", "pitch inf", "yaw -inf", "yawspeed nan", "roll 3.4e38", "pitch -100 rad", "yaw 1e30", "yawspeed 3.4e38"],
 )
-def test_an_impossible_attitude_is_dropped(rig: Rig, attitude: Any) -> None:
+def test_an_impossible_attitude_is_dropped(on_line: ReaderOnNoisyLine, attitude: Any) -> None:
     """The last good attitude stays; a non-finite or impossible one never replaces it."""
-    rig.tick(heartbeat() + pack(_attitude(0.1, 0.2, 0.3), seq=1))
+    on_line.tick(heartbeat() + pack(_attitude(0.1, 0.2, 0.3), seq=1))
     good = bb("/vehicle/attitude")
-    rig.tick(pack(attitude, seq=2))
+    on_line.tick(pack(attitude, seq=2))
     assert bb("/vehicle/attitude") == good
 
 
-def test_a_yaw_given_in_0_to_2pi_is_kept(rig: Rig) -> None:
+def test_a_yaw_given_in_0_to_2pi_is_kept(on_line: ReaderOnNoisyLine) -> None:
     """Some autopilots send yaw in [0, 2pi) rather than (-pi, pi]: still an attitude."""
-    rig.tick(heartbeat() + pack(_attitude(yaw=4.0), seq=1))
+    on_line.tick(heartbeat() + pack(_attitude(yaw=4.0), seq=1))
     assert bb("/vehicle/attitude").yaw_deg == pytest.approx(math.degrees(4.0))
 
 
-def test_a_yaw_a_hair_below_zero_is_within_0_to_360(rig: Rig) -> None:
+def test_a_yaw_a_hair_below_zero_is_within_0_to_360(on_line: ReaderOnNoisyLine) -> None:
     """-1e-30 rad % 360 is 360.0 in floating point: the yaw must still be in [0, 360)."""
-    rig.tick(heartbeat() + pack(_attitude(yaw=-1e-30), seq=1))
+    on_line.tick(heartbeat() + pack(_attitude(yaw=-1e-30), seq=1))
     assert 0.0 <= bb("/vehicle/attitude").yaw_deg < 360.0
 
 
@@ -467,11 +467,11 @@ def test_a_yaw_a_hair_below_zero_is_within_0_to_360(rig: Rig) -> None:
     ],
     ids=["nan", "inf", "negative variance"],
 )
-def test_an_impossible_ekf_report_is_dropped(rig: Rig, report: Any) -> None:
+def test_an_impossible_ekf_report_is_dropped(on_line: ReaderOnNoisyLine, report: Any) -> None:
     """Variances are finite and not negative: a report saying otherwise leaves the last good one."""
-    rig.tick(heartbeat() + pack(mavlink.MAVLink_ekf_status_report_message(831, 0.1, 0.1, 0.1, 0.1, 0.1, 0), seq=1))
+    on_line.tick(heartbeat() + pack(mavlink.MAVLink_ekf_status_report_message(831, 0.1, 0.1, 0.1, 0.1, 0.1, 0), seq=1))
     good = bb("/vehicle/ekf")
-    rig.tick(pack(report, seq=2))
+    on_line.tick(pack(report, seq=2))
     assert bb("/vehicle/ekf") == good
 
 
@@ -486,27 +486,27 @@ def test_an_impossible_ekf_report_is_dropped(rig: Rig, report: Any) -> None:
     ],
     ids=["normal", "unknown", "negative remaining", "remaining over 100", "charging, 101 percent"],
 )
-def test_battery_remaining_outside_0_to_100_is_unknown(rig: Rig, status: Any, expected: tuple[Any, ...]) -> None:
+def test_battery_remaining_outside_0_to_100_is_unknown(on_line: ReaderOnNoisyLine, status: Any, expected: tuple[Any, ...]) -> None:
     """SYS_STATUS.battery_remaining is 0..100 or -1 (unknown): anything else is unknown, not a charge."""
-    rig.tick(heartbeat() + pack(status, seq=1))
+    on_line.tick(heartbeat() + pack(status, seq=1))
     battery = bb("/vehicle/battery")
     assert (battery.voltage_v, battery.current_a, battery.remaining_pct) == expected
 
 
-def test_a_mode_number_that_does_not_exist_is_named_by_number(rig: Rig) -> None:
-    rig.tick(heartbeat(custom_mode=2**32 - 1))
+def test_a_mode_number_that_does_not_exist_is_named_by_number(on_line: ReaderOnNoisyLine) -> None:
+    on_line.tick(heartbeat(custom_mode=2**32 - 1))
     assert (bb("/vehicle/mode"), bb("/vehicle/custom_mode")) == (f"MODE({2**32 - 1})", 2**32 - 1)
 
 
-def test_every_channel_field_is_read_whatever_chancount_says_and_unused_channels_are_no_signal(rig: Rig) -> None:
+def test_every_channel_field_is_read_whatever_chancount_says_and_unused_channels_are_no_signal(on_line: ReaderOnNoisyLine) -> None:
     """chancount 255 or 8: the 18 channels the message has (ArduPilot acts on channel 9 with chancount 8, issue 13);
     UINT16_MAX (unused) and nonsense PWM are 0 (no signal)."""
     channels = [1500, 65535, 1900, 40000, 499, 2501] + [1000] * 12
-    rig.tick(heartbeat() + pack(mavlink.MAVLink_rc_channels_message(0, 255, *channels, 254), seq=1))
+    on_line.tick(heartbeat() + pack(mavlink.MAVLink_rc_channels_message(0, 255, *channels, 254), seq=1))
     assert bb("/rc/channels") == (1500, 0, 1900, 0, 0, 0) + (1000,) * 12
-    rig.tick(pack(mavlink.MAVLink_rc_channels_message(0, 8, *([65535] * 8), 1500, *([65535] * 9), 254), seq=2))
+    on_line.tick(pack(mavlink.MAVLink_rc_channels_message(0, 8, *([65535] * 8), 1500, *([65535] * 9), 254), seq=2))
     assert bb("/rc/channels") == (0,) * 8 + (1500,) + (0,) * 9
-    rig.tick(pack(mavlink.MAVLink_rc_channels_message(0, 8, *([65535] * 18), 255), seq=3))
+    on_line.tick(pack(mavlink.MAVLink_rc_channels_message(0, 8, *([65535] * 18), 255), seq=3))
     assert (bb("/rc/channels"), bb("/rc/connected"), bb("/rc/rssi")) == ((0,) * 18, False, None)
 
 
@@ -520,21 +520,21 @@ def test_every_channel_field_is_read_whatever_chancount_says_and_unused_channels
     ],
     ids=["invalid utf-8", "50 bytes, no terminator", "nul inside", "truncated sequence"],
 )
-def test_statustext_is_text_whatever_the_bytes(rig: Rig, text: bytes, expected: str) -> None:
-    rig.tick(heartbeat() + pack(_statustext(text), seq=1))
+def test_statustext_is_text_whatever_the_bytes(on_line: ReaderOnNoisyLine, text: bytes, expected: str) -> None:
+    on_line.tick(heartbeat() + pack(_statustext(text), seq=1))
     assert bb("/vehicle/statustext") == (mavlink.MAV_SEVERITY_WARNING, expected)
 
 
-def test_a_gps_fix_type_that_does_not_exist_is_no_fix(rig: Rig) -> None:
+def test_a_gps_fix_type_that_does_not_exist_is_no_fix(on_line: ReaderOnNoisyLine) -> None:
     """GPS_RAW_INT.fix_type 200 is not a 3D fix (nor any fix): the report is dropped."""
-    rig.tick(heartbeat() + pack(mavlink.MAVLink_gps_raw_int_message(0, 3, 0, 0, 0, 120, 65535, 0, 0, 11), seq=1))
+    on_line.tick(heartbeat() + pack(mavlink.MAVLink_gps_raw_int_message(0, 3, 0, 0, 0, 120, 65535, 0, 0, 11), seq=1))
     good = bb("/vehicle/gps")
-    rig.tick(pack(mavlink.MAVLink_gps_raw_int_message(0, 200, 0, 0, 0, 120, 65535, 0, 0, 11), seq=2))
+    on_line.tick(pack(mavlink.MAVLink_gps_raw_int_message(0, 200, 0, 0, 0, 120, 65535, 0, 0, 11), seq=2))
     assert bb("/vehicle/gps") == good
 
 
 @pytest.mark.parametrize("heading", [-1, 361, 32767, -32768])
-def test_a_vfr_hud_heading_outside_0_to_360_is_dropped(rig: Rig, heading: int) -> None:
-    rig.tick(heartbeat() + pack(mavlink.MAVLink_vfr_hud_message(0.0, 2.0, 90, 50, 0.0, 0.0), seq=1))
-    rig.tick(pack(mavlink.MAVLink_vfr_hud_message(0.0, 2.0, heading, 50, 0.0, 0.0), seq=2))
+def test_a_vfr_hud_heading_outside_0_to_360_is_dropped(on_line: ReaderOnNoisyLine, heading: int) -> None:
+    on_line.tick(heartbeat() + pack(mavlink.MAVLink_vfr_hud_message(0.0, 2.0, 90, 50, 0.0, 0.0), seq=1))
+    on_line.tick(pack(mavlink.MAVLink_vfr_hud_message(0.0, 2.0, heading, 50, 0.0, 0.0), seq=2))
     assert bb("/vehicle/heading_deg") == 90.0

@@ -311,29 +311,35 @@ def scratch(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return tmp_path_factory.mktemp("hostile") / "file.yaml"
 
 
+def loaded_or_located(load: Callable[[], Any], text: str, file: str) -> Any:
+    """What ``load()`` gives, every number of it finite; or None, every error it raised located in ``text`` of ``file``."""
+    try:
+        loaded = load()
+    except MissionError as exc:
+        assert_located(exc, text, file)
+        return None
+    assert_finite(loaded.model_dump())
+    return loaded
+
+
+def file_loaded_or_located(load: Callable[[Path], Any], path: Path, data: bytes) -> Any:
+    """:func:`loaded_or_located` of ``load(path)``, ``data`` written there first."""
+    path.write_bytes(data)
+    return loaded_or_located(lambda: load(path), data.decode("utf-8", "replace"), str(path))
+
+
 @FUZZ
 @given(data=mutated_bytes(MISSION_SEEDS))
 def test_mutated_mission_bytes_load_or_are_located(scratch: Path, data: bytes) -> None:
     """Random damage to a valid mission file: a Mission (every number finite) or located errors, never another exception."""
-    scratch.write_bytes(data)
-    try:
-        mission = load_mission(scratch)
-    except MissionError as exc:
-        assert_located(exc, data.decode("utf-8", "replace"), str(scratch))
-    else:
-        assert_finite(mission.model_dump())
+    file_loaded_or_located(load_mission, scratch, data)
 
 
 @FUZZ
 @given(text=mutated_yaml(MISSION_SEEDS))
 def test_mutated_mission_data_loads_or_is_located(text: str) -> None:
     """Wrong types and special values anywhere in a valid mission: a Mission that re-validates, or located errors."""
-    try:
-        mission = load_mission_text(text, "m.yaml")
-    except MissionError as exc:
-        assert_located(exc, text, "m.yaml")
-    else:
-        assert_finite(mission.model_dump())
+    if (mission := loaded_or_located(lambda: load_mission_text(text, "m.yaml"), text, "m.yaml")) is not None:
         assert Mission.model_validate(mission.model_dump()) == mission
 
 
@@ -341,13 +347,7 @@ def test_mutated_mission_data_loads_or_is_located(text: str) -> None:
 @given(data=mutated_bytes(FAULT_SEEDS))
 def test_mutated_fault_file_bytes_load_or_are_located(scratch: Path, data: bytes) -> None:
     """Fault files go through the same loader: a FaultPlan (every number finite) or located errors."""
-    scratch.write_bytes(data)
-    try:
-        plan = load_faults(scratch)
-    except MissionError as exc:
-        assert_located(exc, data.decode("utf-8", "replace"), str(scratch))
-    else:
-        assert_finite(plan.model_dump())
+    file_loaded_or_located(load_faults, scratch, data)
 
 
 @FUZZ
@@ -355,12 +355,7 @@ def test_mutated_fault_file_bytes_load_or_are_located(scratch: Path, data: bytes
 def test_mutated_fault_data_loads_or_is_located(scratch: Path, text: str) -> None:
     """Wrong types and special values anywhere in a valid fault file: a FaultPlan that re-validates, or located errors."""
     scratch.write_bytes(text.encode("utf-8", "surrogatepass"))
-    try:
-        plan = load_faults(scratch, vehicle="rover")
-    except MissionError as exc:
-        assert_located(exc, text, str(scratch))
-    else:
-        assert_finite(plan.model_dump())
+    if (plan := loaded_or_located(lambda: load_faults(scratch, vehicle="rover"), text, str(scratch))) is not None:
         assert FaultPlan.model_validate(plan.model_dump()) == plan
 
 

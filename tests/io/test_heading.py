@@ -7,8 +7,10 @@ import logging
 import math
 import random
 import re
+import subprocess
 import sys
 from collections.abc import Callable
+from pathlib import Path
 
 import py_trees
 import pytest
@@ -17,6 +19,8 @@ from executive import blackboard
 from executive.clock import ManualClock
 from executive.io.heading import HeadingFilter, circular_mean, import_long_lived, wrap180
 from executive.state import Attitude, GlobalPosition
+
+ROOT = Path(__file__).resolve().parents[2]
 
 TICK_S = 0.1  # the runtime's 10 Hz; ATTITUDE every tick, GLOBAL_POSITION_INT every other one (5 Hz)
 
@@ -335,3 +339,29 @@ def test_the_collector_stays_off_after_the_import_when_it_was_off(tmp_path, monk
     finally:
         gc.enable()
         sys.modules.pop("long_lived_probe2", None)
+
+
+def test_the_kalman_filter_loads_without_the_rest_of_filterpy_and_filterpy_still_imports_whole_afterwards():
+    """scipy.stats (1 s of CPU at every start) stays out; a later ``import filterpy`` is the real package, with the same class."""
+    code = """
+import sys
+from executive.io.heading import kalman_filter_class
+K = kalman_filter_class()
+print(sorted(m for m in ("scipy.stats", "filterpy", "filterpy.stats", "filterpy.kalman") if m in sys.modules))
+import numpy as np
+import filterpy
+from filterpy.kalman import KalmanFilter, UnscentedKalmanFilter
+kf = K(dim_x=2, dim_z=1)
+kf.H = np.array([[1.0, 0.0]])
+kf.predict()
+kf.update(np.array([[1.0]]))
+print(KalmanFilter is K, filterpy.stats.logpdf is not None, round(float(kf.log_likelihood), 6), UnscentedKalmanFilter.__name__)
+"""
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True, timeout=60).stdout
+    loaded, after = out.splitlines()
+    assert loaded == "[]"
+    identical, has_stats, log_likelihood, ukf = after.split()
+    assert (identical, has_stats, ukf) == ("True", "True", "UnscentedKalmanFilter")
+    innovation_var = 3.0  # P = 2 after one predict from filterpy's defaults (P = Q = I), plus R = 1
+    expected = -0.5 * math.log(2 * math.pi * innovation_var) - 1.0 / (2 * innovation_var)
+    assert float(log_likelihood) == pytest.approx(expected, abs=1e-6)  # the real filterpy.stats.logpdf at work

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from executive.assembly import build_runtime, service_manager
+from executive.assembly import service_manager
 from executive.clock import ManualClock
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
-from executive.testing import FakeLink, ObedientAutopilot
+from executive.testing import RuntimeOnLink
 
 
 @pytest.fixture
@@ -51,53 +51,51 @@ def test_a_manager_gone_costs_nothing(tmp_path: Path) -> None:
     assert notifier.notify(WATCHDOG=1) is False and notifier.dropped == 1
 
 
-class Rig:
-    """A runtime on a manual clock with the watchdog plugged in, its autopilot answering; the manager's socket read by the test."""
-
-    def __init__(self, mission, manager: socket.socket) -> None:
-        self.clock = ManualClock()
-        link = FakeLink()
-        self.notifier = Notifier(manager.getsockname())
-        self.watchdog = Watchdog(self.notifier, self.clock, period_s=1.0)
-        self.runtime = build_runtime(mission, link, self.clock, plugs=[service_manager(self.watchdog)])
-        self.autopilot = ObedientAutopilot(link, mode="HOLD", armed=False)
-        self.manager = manager
-
-    def tick(self, n: int = 1) -> None:
-        for _ in range(n):
-            self.clock.advance(0.1)
-            self.runtime.tick()
+@pytest.fixture
+def clock() -> ManualClock:
+    """The notifications' times count from 0."""
+    return ManualClock()
 
 
-def test_watchdog_pings_come_from_the_tick_loop_and_stop_when_it_is_stuck(square_mission, manager) -> None:
-    rig = Rig(square_mission, manager)
-    rig.watchdog.ready("autopilot 1/1 heard")
+@pytest.fixture
+def watchdog(manager: socket.socket, clock: ManualClock) -> Watchdog:
+    """The watchdog on the manager's socket, a ping a second."""
+    return Watchdog(Notifier(manager.getsockname()), clock, period_s=1.0)
+
+
+@pytest.fixture
+def watched(square_mission, watchdog: Watchdog, runtime_on_link) -> RuntimeOnLink:
+    """A runtime with the watchdog plugged in, its autopilot answering (HOLD, disarmed); the manager's socket read by the test."""
+    return runtime_on_link(square_mission, mode="HOLD", armed=False, plugs=[service_manager(watchdog)])
+
+
+def test_watchdog_pings_come_from_the_tick_loop_and_stop_when_it_is_stuck(watched: RuntimeOnLink, watchdog: Watchdog, manager) -> None:
+    watchdog.ready("autopilot 1/1 heard")
     ready = received(manager)
     assert ready[:2] == [{"READY": "1", "STATUS": "autopilot 1/1 heard"}, {"WATCHDOG": "1"}]  # the watchdog starts now
     pings_at = [0.0]
     for _ in range(50):  # 5 s of ticks: a ping every second (half of a 2 s WatchdogSec), at most a tick late
-        rig.tick()
-        pings_at += [rig.clock.now() for m in received(manager) if m.get("WATCHDOG") == "1"]
+        watched.tick()
+        pings_at += [watched.clock.now() for m in received(manager) if m.get("WATCHDOG") == "1"]
     gaps = [b - a for a, b in itertools.pairwise(pings_at)]
     assert len(gaps) == 4 and all(1.0 - 1e-9 <= gap <= 1.1 + 1e-9 for gap in gaps), pings_at
-    rig.clock.advance(30.0)  # a tick stuck for 30 s: the loop services nothing, so nothing is sent
+    watched.clock.advance(30.0)  # a tick stuck for 30 s: the loop services nothing, so nothing is sent
     assert received(manager) == []
-    rig.tick()  # the loop comes back (too late under systemd: it was killed at 2 s): pings again at once
+    watched.tick()  # the loop comes back (too late under systemd: it was killed at 2 s): pings again at once
     assert any(m.get("WATCHDOG") == "1" for m in received(manager))
 
 
-def test_status_follows_the_mission_and_stopping_ends_it(square_mission, manager) -> None:
-    rig = Rig(square_mission, manager)
-    rig.tick(3)  # the autopilot's heartbeat: its mode known
+def test_status_follows_the_mission_and_stopping_ends_it(watched: RuntimeOnLink, watchdog: Watchdog, manager) -> None:
+    watched.tick(3)  # the autopilot's heartbeat: its mode known
     assert [m["STATUS"] for m in received(manager) if "STATUS" in m][-1] == "READY     leg 1/4  HOLD disarmed"
-    rig.tick(10)
+    watched.tick(10)
     assert [m for m in received(manager) if "STATUS" in m] == []  # nothing changed, under 5 s
-    rig.runtime.mission_state.start()
-    rig.tick()
+    watched.runtime.mission_state.start()
+    watched.tick()
     assert [m["STATUS"].split()[0] for m in received(manager) if "STATUS" in m] == ["RUNNING"]  # a change: at once
-    rig.tick(49)  # waiting for the EKF: nothing changes
+    watched.tick(49)  # waiting for the EKF: nothing changes
     assert [m for m in received(manager) if "STATUS" in m] == []
-    rig.tick(2)
+    watched.tick(2)
     assert len([m for m in received(manager) if "STATUS" in m]) == 1  # at least every 5 s
-    rig.watchdog.stopping("mission ABORTED: stopped: SIGTERM")
+    watchdog.stopping("mission ABORTED: stopped: SIGTERM")
     assert received(manager) == [{"STOPPING": "1", "STATUS": "mission ABORTED: stopped: SIGTERM"}]

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-import can
 import pytest
 
 from executive.clock import ManualClock
@@ -27,25 +25,24 @@ from executive.sim import SimServer
 from executive.sim.agilex_base import SimulatedBase
 from executive.sim.faults import FaultInjector, FaultPlan
 from executive.state import SwitchPosition
+from executive.testing import VirtualCan
 
 if TYPE_CHECKING:
     from sim_support import Gcs
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
-_channels = itertools.count()
 Command = tuple[float, float] | Callable[[], tuple[float, float]]
 
 
-class Rig:
-    """A simulated base on a virtual channel, the executive's end of it, and the autopilot stepped as the server steps it (100 Hz)."""
+class BaseOnBus:
+    """A simulated base on the far end of ``buses``, our end of it (:attr:`bus`), the autopilot stepped as the server steps it (100 Hz)."""
 
-    def __init__(self, gcs: Gcs, faults: FaultInjector | None = None) -> None:
+    def __init__(self, gcs: Gcs, buses: VirtualCan, faults: FaultInjector | None = None) -> None:
         self.gcs, self.ap, self.clock, self.faults = gcs, gcs.ap, gcs.clock, faults
-        channel = f"test-agilex-base-{next(_channels)}"
-        self.base_bus, self.bus = can.Bus(interface="virtual", channel=channel), can.Bus(interface="virtual", channel=channel)
+        self.bus = buses.ours
         if faults is not None:
             faults.attach(self.ap)  # fault times count from here
-        self.base = SimulatedBase(self.base_bus, self.clock, self.ap, faults=faults)
+        self.base = SimulatedBase(buses.base, self.clock, self.ap, faults=faults)
         self.frames: list[tuple[float, Any]] = []  # (time, decoded frame), everything the base sent
 
     def run(self, seconds: float, *, select: bool = False, command: Command | None = None) -> list[tuple[float, Any]]:
@@ -65,32 +62,25 @@ class Rig:
                 self.bus.send(MotionCommand.from_si(*(command() if callable(command) else command)).encode())
         return self.frames[start:]
 
-    def shutdown(self) -> None:
-        self.base_bus.shutdown()
-        self.bus.shutdown()
-
 
 def of(frames: list[tuple[float, Any]], kind: type) -> list[Any]:
     return [f for _, f in frames if isinstance(f, kind)]
 
 
 @pytest.fixture
-def rig(make_gcs: Callable[..., Gcs]) -> Iterator[Callable[..., Rig]]:
-    rigs: list[Rig] = []
+def base_on_bus(make_gcs: Callable[..., Gcs], can_buses: VirtualCan) -> Callable[..., BaseOnBus]:
+    """``base_on_bus(faults)``: a Bunker's autopilot (EKF ready) and its base on :func:`can_buses`, with those faults."""
 
-    def make(faults: list[dict[str, Any]] | None = None, ekf_ready: bool = True) -> Rig:
+    def make(faults: list[dict[str, Any]] | None = None, ekf_ready: bool = True) -> BaseOnBus:
         gcs = make_gcs("bunker", ekf_ready=ekf_ready)
         injector = FaultInjector(FaultPlan.model_validate({"version": 1, "faults": faults}), gcs.clock) if faults else None
-        rigs.append(Rig(gcs, injector))
-        return rigs[-1]
+        return BaseOnBus(gcs, can_buses, injector)
 
-    yield make
-    for r in rigs:
-        r.shutdown()
+    return make
 
 
-def test_frame_rates_and_the_rolling_counter(rig: Callable[..., Rig]) -> None:
-    r = rig()
+def test_frame_rates_and_the_rolling_counter(base_on_bus: Callable[..., BaseOnBus]) -> None:
+    r = base_on_bus()
     frames = r.run(1.0)
     rc, system = of(frames, RcState), of(frames, SystemState)
     assert (len(rc), len(system), len(of(frames, MotionState)), len(of(frames, Odometry))) == (50, 10, 50, 50)
@@ -103,8 +93,8 @@ def test_frame_rates_and_the_rolling_counter(rig: Callable[..., Rig]) -> None:
     assert [f.counter for f in of(r.frames, RcState)][254:258] == [254, 255, 0, 1]
 
 
-def test_the_thesis_frame_byte_for_byte(rig: Callable[..., Rig]) -> None:
-    r = rig()
+def test_the_thesis_frame_byte_for_byte(base_on_bus: Callable[..., BaseOnBus]) -> None:
+    r = base_on_bus()
     r.ap.rc_channels[3] = 1100  # left stick 80 % left
     r.ap.rc_channels[4:9] = [1000, 1500, 1000, 1000, 1500]  # SWA up, SWB middle, SWC up, SWD up, VRA centred
     r.run(2.54)  # frames 0..126
@@ -112,8 +102,8 @@ def test_the_thesis_frame_byte_for_byte(rig: Callable[..., Rig]) -> None:
     assert bytes(frame.encode().data) == bytes.fromhex("A6 00 00 B0 00 00 00 7E")
 
 
-def test_switches_sticks_and_knob_follow_the_transmitter(rig: Callable[..., Rig]) -> None:
-    r = rig()
+def test_switches_sticks_and_knob_follow_the_transmitter(base_on_bus: Callable[..., BaseOnBus]) -> None:
+    r = base_on_bus()
     r.ap.rc_channels[0:4] = [2000, 1250, 1500, 1900]  # right L/R, right U/D, left U/D (throttle), left L/R
     r.ap.rc_channels[4:9] = [2000, 2000, 1500, 1600, 1250]  # SWD at 1600 us: a two-way switch is up until 1700
     frame = of(r.run(0.02), RcState)[-1]
@@ -121,8 +111,8 @@ def test_switches_sticks_and_knob_follow_the_transmitter(rig: Callable[..., Rig]
     assert (frame.right_lr, frame.right_ud, frame.left_ud, frame.left_lr, frame.knob) == (100, -50, 0, 80, -50)
 
 
-def test_rc_loss_repeats_the_last_frame_with_a_frozen_counter_and_no_fault_in_can_mode(rig: Callable[..., Rig]) -> None:
-    r = rig([{"kind": "rc_loss", "at_s": 1.0, "for_s": 1.0}, {"kind": "rc_input", "at_s": 1.5, "channels": {7: 2000, 3: 2000}}])
+def test_rc_loss_repeats_the_last_frame_with_a_frozen_counter_and_no_fault_in_can_mode(base_on_bus: Callable[..., BaseOnBus]) -> None:
+    r = base_on_bus([{"kind": "rc_loss", "at_s": 1.0, "for_s": 1.0}, {"kind": "rc_input", "at_s": 1.5, "channels": {7: 2000, 3: 2000}}])
     before = r.run(1.0, select=True)
     frozen = of(before, RcState)[-1]
     during = r.run(1.0, select=True)
@@ -132,15 +122,15 @@ def test_rc_loss_repeats_the_last_frame_with_a_frozen_counter_and_no_fault_in_ca
     assert after[0].counter == (frozen.counter + 1) % 256 and (after[0].swc, after[0].left_ud) == (DOWN, 100)
 
 
-def test_in_rc_mode_the_base_reports_the_rc_loss(rig: Callable[..., Rig]) -> None:
-    r = rig([{"kind": "rc_loss", "at_s": 0.0, "for_s": 1.0}, {"kind": "battery_sag", "at_s": 0.0, "drop_v": 2.0}])
+def test_in_rc_mode_the_base_reports_the_rc_loss(base_on_bus: Callable[..., BaseOnBus]) -> None:
+    r = base_on_bus([{"kind": "rc_loss", "at_s": 0.0, "for_s": 1.0}, {"kind": "battery_sag", "at_s": 0.0, "drop_v": 2.0}])
     system = of(r.run(1.0), SystemState)
     assert {(f.control_mode, f.fault_code) for f in system} == {(CONTROL_MODE_RC, 0x0004)}
     assert system[-1].battery_v == pytest.approx(r.ap.battery_v - 2.0, abs=0.06)
 
 
-def test_motion_commands_drive_the_tracks_only_in_can_mode(rig: Callable[..., Rig]) -> None:
-    r = rig()  # disarmed: the autopilot's outputs are neutral
+def test_motion_commands_drive_the_tracks_only_in_can_mode(base_on_bus: Callable[..., BaseOnBus]) -> None:
+    r = base_on_bus()  # disarmed: the autopilot's outputs are neutral
     assert r.ap.armed is False
     frames = r.run(1.0, command=(0.5, 0.3))  # no 0x421: RC mode ignores them
     assert r.ap.vehicle.north_east_m == (0.0, 0.0) and r.base.drive_command is None
@@ -156,9 +146,9 @@ def test_motion_commands_drive_the_tracks_only_in_can_mode(rig: Callable[..., Ri
     assert r.ap.track_pwm == (1500, 1500)  # the autopilot has no part in it
 
 
-def test_in_can_mode_the_autopilot_outputs_alone_move_nothing(rig: Callable[..., Rig]) -> None:
+def test_in_can_mode_the_autopilot_outputs_alone_move_nothing(base_on_bus: Callable[..., BaseOnBus]) -> None:
     """Armed in GUIDED with a target: the autopilot drives its outputs, but the tracks obey the base, told to stand still ..."""
-    r = rig()
+    r = base_on_bus()
     r.run(0.1, select=True, command=(0.0, 0.0))
     assert r.gcs.arm() == m.MAV_RESULT_ACCEPTED and r.gcs.set_mode("GUIDED") == m.MAV_RESULT_ACCEPTED
     target = r.gcs.north(10.0)
@@ -176,8 +166,8 @@ def test_in_can_mode_the_autopilot_outputs_alone_move_nothing(rig: Callable[...,
     assert r.ap.vehicle.distance_to(*target) < 1.0
 
 
-def test_the_base_stops_500_ms_after_the_last_command(rig: Callable[..., Rig]) -> None:
-    r = rig()
+def test_the_base_stops_500_ms_after_the_last_command(base_on_bus: Callable[..., BaseOnBus]) -> None:
+    r = base_on_bus()
     r.run(2.0, select=True, command=(0.5, 0.0))
     r.run(0.45, select=True)
     assert r.base.drive_command == (0.5, 0.0) and r.ap.vehicle.speed_m_s == pytest.approx(0.5)
@@ -189,18 +179,17 @@ def test_the_base_stops_500_ms_after_the_last_command(rig: Callable[..., Rig]) -
     assert r.base.control_mode == CONTROL_MODE_RC and r.base.drive_command is None and r.ap.vehicle.base_command is None
 
 
-def test_the_sim_server_services_a_base_for_the_bunker_only() -> None:
+def test_the_sim_server_services_a_base_for_the_bunker_only(can_buses: VirtualCan) -> None:
     clock = ManualClock()
-    channel = f"test-agilex-base-{next(_channels)}"
-    with can.Bus(interface="virtual", channel=channel) as base_bus, can.Bus(interface="virtual", channel=channel) as bus:
-        with pytest.raises(ValueError, match="needs the bunker"):
-            SimServer("rover", clock=clock, can_bus=base_bus)
-        server = SimServer("bunker", clock=clock, can_bus=base_bus)
-        try:
-            for _ in range(10):
-                clock.advance(0.01)
-                server.step()
-            ids = [msg.arbitration_id for msg in iter(lambda: bus.recv(0.0), None)]
-        finally:
-            server.stop()
+    base_bus, bus = can_buses
+    with pytest.raises(ValueError, match="needs the bunker"):
+        SimServer("rover", clock=clock, can_bus=base_bus)
+    server = SimServer("bunker", clock=clock, can_bus=base_bus)
+    try:
+        for _ in range(10):
+            clock.advance(0.01)
+            server.step()
+        ids = [msg.arbitration_id for msg in iter(lambda: bus.recv(0.0), None)]
+    finally:
+        server.stop()
     assert server.base is not None and ids.count(0x241) == 5 and ids.count(0x211) == 1

@@ -9,6 +9,7 @@ MISSION_CURRENT and MISSION_ITEM_REACHED as ArduRover does.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from pathlib import Path
 
 import py_trees
@@ -18,21 +19,16 @@ from py_trees.common import Status
 import trees
 from executive import geo
 from executive.behaviours.auto_route import MISSION_STATE_COMPLETE
-from executive.clock import ManualClock
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
-from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemReached, MissionTransfer
-from executive.io.mavlink.modes import ArduPilotModes
+from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemReached
 from executive.io.rc import RcReader
 from executive.mission.errors import MissionError
-from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission, load_mission_text
-from executive.mission.model import Mission
+from executive.mission.model import Mission, RcConfig
 from executive.runtime import Outcome, Runtime
 from executive.sim.faults import FaultInjector, RcInput, RcLoss
-from executive.sim.mission_store import MissionStore
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
-from executive.testing import EKF_READY, Lockstep, ack, port_for
-from executive.vehicles import ROVER_MODES
+from executive.testing import EKF_READY, Harness, Lockstep, MissionAutopilot
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 PWM = {UP: 1000, MIDDLE: 1500, DOWN: 2000}
@@ -40,7 +36,6 @@ EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1,
 START = (-35.363261, 149.165230)
 ROOT = Path(__file__).parents[2]
 _M = mavlink
-_EXECUTIVE = mavlink.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)
 
 
 def mission_with(**changes: object) -> Mission:
@@ -65,42 +60,25 @@ def flat(points) -> list[float]:
     return [x for point in points for x in point]
 
 
-def wire(msg: MAVLinkMessage) -> MAVLinkMessage:
-    """As the vehicle receives it: packed by the executive (system 1, component 191), decoded."""
-    return mavlink.MAVLink(None).decode(bytearray(msg.pack(_EXECUTIVE)))
+REFUSALS = {"mode": (4, "Flight mode change failed"), "arm": (2, "PreArm: AHRS: not using configured AHRS type")}
 
 
-class Rig:
-    """The tree of ``mission`` ticked by hand (10 Hz) against a scripted ArduRover; IO as the runtime does it."""
+class ScriptedRover(MissionAutopilot):
+    """ArduRover behind the tree (10 Hz), answering at once: a whole upload and read-back within a tick; a refusal says why in a
+    STATUSTEXT; its facts and the operator's RC channels read at the start of each tick, as the runtime's readers do."""
 
-    def __init__(self, mission: Mission, clock: ManualClock, link, commander, vehicle) -> None:
-        self.mission, self.clock, self.link, self.commander, self.vehicle = mission, clock, link, commander, vehicle
-        self.transfer = MissionTransfer(link, clock)
-        self.rc_reader = RcReader(mission.rc, clock)
-        self.state = MissionState()
-        self.state.upload(mission)
-        self.state.start()
-        self.root = trees.build(mission)
-        self.tree = py_trees.trees.BehaviourTree(self.root)
-        self.tree.setup(clock=clock, autopilot=port_for(commander, self.transfer), mission_state=self.state)
-        # the scripted rover (and the mission store's owner)
-        self.system_id = self.component_id = 1
-        self.home: tuple[float, float] | None = START
-        self.lat, self.lon = START
-        self.mode, self.armed, self.ekf = "MANUAL", False, EKF_READY
+    def __init__(self, h: Harness, rc: RcConfig) -> None:
         self.mode_set_by: str | None = None  # the boot mode: nobody's; "us" once a DO_SET_MODE put it in its mode
-        self.link_up = self.rc_alive = self.mission_answers = True
-        self.refuse: set[str] = set()  # "arm", or mode names refused with FAILED
-        self.step_m = 2.0
+        self.link_up = self.rc_alive = True
+        self.ekf = EKF_READY
         self.position_age_s = 0.0  # how old the position reports are
-        self.store = MissionStore(self, self._emit, lambda severity, text: self.vehicle.set(vehicle__statustext=(severity, text)))
-        self._replies: list[MAVLinkMessage] = []
-        self.commands: list[tuple[object, ...]] = []
         self.channels = [1500] * 16
-        switches = mission.rc.switch_channels
+        switches = rc.switch_channels
         self._channel = {"swa": switches.swa, "swb": switches.swb, "swc": switches.swc, "swd": switches.swd, "knob": switches.knob}
+        self._rc_time = h.clock.now()
+        super().__init__(h, START, step_m=2.0, mode="MANUAL")
         self.rc(swa=UP, swb=UP, swc=UP, swd=UP, knob=0)
-        self._rc_time = clock.now()
+        h.readers += [self.publish, RcReader(rc, h.clock).service]
 
     # -- the operator ----------------------------------------------------------------------------
     def rc(self, **positions: SwitchPosition | int | None) -> None:
@@ -111,24 +89,9 @@ class Rig:
 
     # -- ticking ---------------------------------------------------------------------------------
     def tick(self) -> Status:
-        self.clock.advance(0.1)
-        self._publish()
-        self.rc_reader.service()
-        self.tree.tick()
-        self.commander.flush()
-        self.transfer.flush()
-        self._respond()
-        return self.root.status
+        return self.run(1)[0]
 
-    def run(self, ticks: int) -> list[Status]:
-        statuses = []
-        for _ in range(ticks):
-            statuses.append(self.tick())
-            if statuses[-1] != Status.RUNNING:
-                break
-        return statuses
-
-    def run_until(self, done, limit: int = 600) -> int:
+    def run_until(self, done: Callable[[], bool], limit: int = 600) -> int:
         """Ticks until ``done()``; fails the test if it never is."""
         for n in range(1, limit + 1):
             assert self.tick() == Status.RUNNING
@@ -136,120 +99,76 @@ class Rig:
                 return n
         raise AssertionError(f"not done after {limit} ticks")
 
-    def take(self) -> list[tuple[object, ...]]:
-        """The commands the rover received since the last take."""
-        taken, self.commands = self.commands, []
-        return taken
-
-    def feedback(self, name: str) -> str:
-        return next(node.feedback_message for node in self.root.iterate() if node.name == name)
-
-    def waypoints(self) -> list[tuple[float, float]]:
-        """The route in the mission state."""
-        return [(wp.lat, wp.lon) for wp in self.state.route.waypoints]
-
-    def held(self) -> list[tuple[float, float]]:
-        """The route in the rover's mission store (items 1..n)."""
-        return [(self.store.command(seq).lat, self.store.command(seq).lon) for seq in range(1, self.store.count)]
-
     # -- the scripted rover ----------------------------------------------------------------------
-    def _publish(self) -> None:
-        now = self.clock.now()
+    def publish(self) -> None:
         if self.rc_alive:
-            self._rc_time = now
-            self.vehicle.set(rc__channels=tuple(self.channels))
-        self.vehicle.set(
-            link__up=self.link_up, vehicle__mode=self.mode, vehicle__mode_set_by=self.mode_set_by, vehicle__armed=self.armed, vehicle__ekf=self.ekf,
-            vehicle__position=GlobalPosition(self.lat, self.lon, 0.0, 0.0, 0.0, 0.0, None, now - self.position_age_s), rc__last_update=self._rc_time,
-        )  # fmt: skip
+            self._rc_time = self.clock.now()
+            self.h.vehicle.set(rc__channels=tuple(self.channels))
+        super().publish()
 
-    def _emit(self, msg: MAVLinkMessage) -> None:
-        self._replies.append(msg)
+    def facts(self) -> dict[str, object]:
+        now = self.clock.now()
+        return {
+            "link__up": self.link_up, "vehicle__mode": self.mode, "vehicle__mode_set_by": self.mode_set_by, "vehicle__armed": self.armed,
+            "vehicle__ekf": self.ekf, "vehicle__position": GlobalPosition(self.lat, self.lon, 0.0, 0.0, 0.0, 0.0, None, now - self.position_age_s),
+            "rc__last_update": self._rc_time,
+        }  # fmt: skip
 
-    def _respond(self) -> None:
+    def on_command(self, msg: MAVLinkMessage) -> int | None:
+        result = super().on_command(msg)
+        if result != _M.MAV_RESULT_ACCEPTED and self.commands[-1][0] in REFUSALS:
+            self.statustext(*REFUSALS[self.commands[-1][0]])
+        return result
+
+    def enter_mode(self, mode: str) -> bool:
+        entered = super().enter_mode(mode)
+        if entered:
+            self.mode_set_by = "us"
+        return entered
+
+    def on_message(self, msg: MAVLinkMessage) -> None:
+        kind = msg.get_type()
+        if kind == "MISSION_COUNT":
+            self.commands.append(("upload", msg.count - 1))  # waypoints after home
+        elif kind == "MISSION_REQUEST_LIST":
+            self.commands.append(("read back",))
+        super().on_message(msg)
+
+    def respond(self) -> None:
         for _ in range(50):  # the rover answers at once: a whole upload and read-back within one tick
-            sent = self.link.take()
+            sent = self.h.link.take()
             if not sent:
                 break
             for msg in sent:
-                self._receive(msg)
-            self._deliver()
+                self.answer(msg)
+            self.deliver()
             self.transfer.flush()
             self.commander.flush()
-        self._drive_auto()
-        self._deliver()
+        self.move()
+        self.deliver()
 
-    def _receive(self, msg: MAVLinkMessage) -> None:
-        kind = msg.get_type()
-        if kind == "COMMAND_LONG" and msg.command == _M.MAV_CMD_DO_SET_MODE:
-            mode = ArduPilotModes(ROVER_MODES).decode(int(msg.param2))
-            self.commands.append(("mode", mode))
-            refused = mode in self.refuse or (mode == "AUTO" and not self.store.present)
-            if refused:
-                self.vehicle.set(vehicle__statustext=(4, "Flight mode change failed"))
-            else:
-                if self.mode == "AUTO":
-                    self.store.stop()
-                self.mode, self.mode_set_by = mode, "us"
-                if mode == "AUTO":
-                    self.store.start_or_resume()
-            self.commander.on_ack(ack(msg.command, _M.MAV_RESULT_FAILED if refused else _M.MAV_RESULT_ACCEPTED))
-        elif kind == "COMMAND_LONG" and msg.command == _M.MAV_CMD_COMPONENT_ARM_DISARM:
-            self.commands.append(("arm", msg.param1))
-            refused = msg.param1 == 1.0 and "arm" in self.refuse
-            if refused:
-                self.vehicle.set(vehicle__statustext=(2, "PreArm: AHRS: not using configured AHRS type"))
-            else:
-                self.armed = msg.param1 == 1.0
-            self.commander.on_ack(ack(msg.command, _M.MAV_RESULT_FAILED if refused else _M.MAV_RESULT_ACCEPTED))
-        elif kind in MissionStore.MESSAGES:
-            if kind == "MISSION_COUNT":
-                self.commands.append(("upload", msg.count - 1))  # waypoints after home
-            elif kind == "MISSION_REQUEST_LIST":
-                self.commands.append(("read back",))
-            if self.mission_answers:
-                self.store.handle(wire(msg))
 
-    def _deliver(self) -> None:
-        """The rover's mission replies, as the MAVLink reader hands them to the transfer."""
-        handlers = {
-            "MISSION_REQUEST": self.transfer.on_request, "MISSION_REQUEST_INT": self.transfer.on_request,
-            "MISSION_ACK": self.transfer.on_ack, "MISSION_COUNT": self.transfer.on_count, "MISSION_ITEM_INT": self.transfer.on_item,
-            "MISSION_CURRENT": self.transfer.on_current, "MISSION_ITEM_REACHED": self.transfer.on_reached,
-        }  # fmt: skip
-        replies, self._replies = self._replies, []
-        for msg in replies:
-            handlers[msg.get_type()](msg, self.clock.now())
-
-    def _drive_auto(self) -> None:
-        """AUTO: a step toward the current item; within 0.3 m it is reached and the next one is current."""
-        if self.mode != "AUTO":
-            return
-        item = self.store.current
-        if item is not None and self.armed:
-            d, b = geo.distance_bearing(self.lat, self.lon, item.lat, item.lon)
-            self.lat, self.lon = geo.destination(self.lat, self.lon, b, min(d, self.step_m))
-            if d <= self.step_m:
-                self.store.advance()
-        self._emit(self.store.current_message())
+def waypoints(r: ScriptedRover) -> list[tuple[float, float]]:
+    """The route in the mission state."""
+    return [(wp.lat, wp.lon) for wp in r.h.mission_state.route.waypoints]
 
 
 @pytest.fixture
-def rig_for(clock, link, commander, vehicle):
-    """``rig_for(mission)``: a :class:`Rig` running the mission's tree."""
-    return lambda mission: Rig(mission, clock, link, commander, vehicle)
+def rover_for(clock) -> Callable[[Mission], ScriptedRover]:
+    """``rover_for(mission)``: the mission's tree on a :class:`Harness`, a :class:`ScriptedRover` answering."""
+    return lambda mission: ScriptedRover(Harness.build(mission, clock=clock, transfer=True), mission.rc)
 
 
 @pytest.fixture
-def rig(rig_for) -> Rig:
+def rover(rover_for) -> ScriptedRover:
     """An empty route, the rover in MANUAL and disarmed; ticked once: the empty route is on the rover."""
-    r = rig_for(mission_with())
+    r = rover_for(mission_with())
     assert r.tick() == Status.RUNNING
     assert r.take() == [("upload", 0), ("read back",)]  # the mission's route (none) replaces whatever the rover held
     return r
 
 
-def record(r: Rig, *points: tuple[float, float]) -> None:
+def record(r: ScriptedRover, *points: tuple[float, float]) -> None:
     """Drive to each point and flip switch A down and up there, the knob in the middle."""
     r.rc(knob=0)
     for point in points:
@@ -263,38 +182,38 @@ def record(r: Rig, *points: tuple[float, float]) -> None:
 # -- the whole story, tick by tick ---------------------------------------------------------------
 
 
-def test_the_operator_arms_records_a_route_and_auto_drives_it_to_the_end(rig: Rig) -> None:
-    rig.rc(swd=DOWN)
-    assert rig.tick() == Status.RUNNING
-    assert rig.take() == [("arm", 1.0)] and rig.armed
-    assert rig.feedback("Switch D: arm") == "switch D DOWN: asked to be armed"
-    rig.tick()
-    assert rig.feedback("Switch D: arm") == "switch D DOWN: armed"  # the heartbeat shows it
+def test_the_operator_arms_records_a_route_and_auto_drives_it_to_the_end(rover: ScriptedRover) -> None:
+    rover.rc(swd=DOWN)
+    assert rover.tick() == Status.RUNNING
+    assert rover.take() == [("arm", 1.0)] and rover.armed
+    assert rover.h.feedback("Switch D: arm") == "switch D DOWN: asked to be armed"
+    rover.tick()
+    assert rover.h.feedback("Switch D: arm") == "switch D DOWN: armed"  # the heartbeat shows it
     points = [ahead(10.0), ahead(20.0), ahead(20.0, 10.0)]
     for n, point in enumerate(points, start=1):
-        rig.lat, rig.lon = point
-        rig.rc(swa=DOWN)
-        assert rig.tick() == Status.RUNNING
-        assert rig.take() == [("upload", n), ("read back",)]
-        assert rig.feedback("Switch A: edit the route") == f"switch A DOWN, knob +0: waypoint {n} added at {point[0]:.7f}, {point[1]:.7f}"
-        assert rig.waypoints() == points[:n]
-        assert flat(rig.held()) == pytest.approx(flat(points[:n]), abs=1e-7)
-        rig.rc(swa=UP)
-        assert rig.tick() == Status.RUNNING
-        assert rig.take() == []
-    assert rig.feedback("Keep the route on the autopilot") == "the autopilot holds the route: 3 waypoints, read back"
-    assert rig.feedback("Drive the route in AUTO").startswith("waiting for the operator (")
-    assert rig.feedback("Drive the route in AUTO").endswith("switch C to the middle (AUTO) drives the route; the mode is MANUAL")
-    rig.rc(swc=MIDDLE)
-    assert rig.tick() == Status.RUNNING
-    assert rig.take() == [("mode", "AUTO")]
+        rover.lat, rover.lon = point
+        rover.rc(swa=DOWN)
+        assert rover.tick() == Status.RUNNING
+        assert rover.take() == [("upload", n), ("read back",)]
+        assert rover.h.feedback("Switch A: edit the route") == f"switch A DOWN, knob +0: waypoint {n} added at {point[0]:.7f}, {point[1]:.7f}"
+        assert waypoints(rover) == points[:n]
+        assert flat(rover.held()) == pytest.approx(flat(points[:n]), abs=1e-7)
+        rover.rc(swa=UP)
+        assert rover.tick() == Status.RUNNING
+        assert rover.take() == []
+    assert rover.h.feedback("Keep the route on the autopilot") == "the autopilot holds the route: 3 waypoints, read back"
+    assert rover.h.feedback("Drive the route in AUTO").startswith("waiting for the operator (")
+    assert rover.h.feedback("Drive the route in AUTO").endswith("switch C to the middle (AUTO) drives the route; the mode is MANUAL")
+    rover.rc(swc=MIDDLE)
+    assert rover.tick() == Status.RUNNING
+    assert rover.take() == [("mode", "AUTO")]
     legs = []
-    while (status := rig.tick()) == Status.RUNNING:
-        legs.append(rig.state.leg_index)
+    while (status := rover.tick()) == Status.RUNNING:
+        legs.append(rover.h.mission_state.leg_index)
     assert status == Status.SUCCESS
     assert sorted(set(legs)) == [0, 1, 2, 3]  # the leg index followed the rover through every waypoint
-    assert rig.take() == [("mode", "HOLD")]  # held at the end; nothing else was asked on the way
-    assert (rig.lat, rig.lon) == pytest.approx(points[-1], abs=1e-7)  # at the last waypoint, as the rover stored it
+    assert rover.take() == [("mode", "HOLD")]  # held at the end; nothing else was asked on the way
+    assert (rover.lat, rover.lon) == pytest.approx(points[-1], abs=1e-7)  # at the last waypoint, as the rover stored it
 
 
 # -- switch C: the mode --------------------------------------------------------------------------
@@ -311,8 +230,8 @@ def test_the_operator_arms_records_a_route_and_auto_drives_it_to_the_end(rig: Ri
         ("HOLD", "MANUAL", 0, UP, MIDDLE, [], "switch C MIDDLE: AUTO not asked: no route recorded"),
     ],
 )
-def test_switch_c_sets_the_mode_when_it_moves(rig_for, aux, mode, route, before, after, commands, feedback) -> None:
-    r = rig_for(mission_with(rc_route={"aux_mode": aux}, waypoints=[{"lat": ahead(5.0)[0], "lon": START[1]}] * route))
+def test_switch_c_sets_the_mode_when_it_moves(rover_for, aux, mode, route, before, after, commands, feedback) -> None:
+    r = rover_for(mission_with(rc_route={"aux_mode": aux}, waypoints=[{"lat": ahead(5.0)[0], "lon": START[1]}] * route))
     r.mode = mode
     r.rc(swc=before)
     assert r.run(3) == [Status.RUNNING] * 3
@@ -320,21 +239,21 @@ def test_switch_c_sets_the_mode_when_it_moves(rig_for, aux, mode, route, before,
     r.rc(swc=after)
     assert r.run(2) == [Status.RUNNING] * 2
     assert r.take() == commands
-    assert r.feedback("Switch C: mode") == feedback
+    assert r.h.feedback("Switch C: mode") == feedback
 
 
-def test_switch_c_does_not_fight_a_ground_station(rig: Rig) -> None:
-    rig.rc(swc=DOWN)
-    rig.tick()
-    assert rig.take() == [("mode", "HOLD")]
-    rig.mode = "GUIDED"  # a ground station takes the vehicle (the runtime pauses the mission: see tests/test_intervention.py)
-    assert rig.run(20) == [Status.RUNNING] * 20
-    assert rig.take() == []
+def test_switch_c_does_not_fight_a_ground_station(rover: ScriptedRover) -> None:
+    rover.rc(swc=DOWN)
+    rover.tick()
+    assert rover.take() == [("mode", "HOLD")]
+    rover.mode = "GUIDED"  # a ground station takes the vehicle (the runtime pauses the mission: see tests/test_intervention.py)
+    assert rover.run(20) == [Status.RUNNING] * 20
+    assert rover.take() == []
 
 
-def test_a_switch_already_in_auto_at_the_start_drives_the_route_without_a_flick(rig_for) -> None:
+def test_a_switch_already_in_auto_at_the_start_drives_the_route_without_a_flick(rover_for) -> None:
     """The defect: the tree waited for switch C to change; with it already in AUTO the mission timed out."""
-    r = rig_for(mission_with(waypoints=[{"lat": ahead(5.0)[0], "lon": START[1]}, {"lat": ahead(10.0)[0], "lon": START[1]}]))
+    r = rover_for(mission_with(waypoints=[{"lat": ahead(5.0)[0], "lon": START[1]}, {"lat": ahead(10.0)[0], "lon": START[1]}]))
     r.armed = True
     r.rc(swc=MIDDLE)
     statuses = r.run(100)
@@ -342,56 +261,56 @@ def test_a_switch_already_in_auto_at_the_start_drives_the_route_without_a_flick(
     assert r.take() == [("upload", 2), ("read back",), ("mode", "AUTO"), ("mode", "HOLD")]
 
 
-def test_after_a_failsafe_hold_the_vehicle_is_put_back_in_the_switchs_mode(rig: Rig) -> None:
+def test_after_a_failsafe_hold_the_vehicle_is_put_back_in_the_switchs_mode(rover: ScriptedRover) -> None:
     """The defect: 'resume leg 1/4' was logged but the mode stayed HOLD, switch C still in AUTO."""
-    rig.armed, rig.step_m = True, 0.05
-    record(rig, ahead(10.0), ahead(20.0))
-    rig.rc(swc=MIDDLE)
-    rig.run(3)
-    assert rig.mode == "AUTO"
-    rig.take()
-    rig.rc_alive = False  # the receiver's report freezes
-    rig.run(12)
-    assert rig.take() == [("mode", "HOLD")] and rig.mode == "HOLD"
-    rig.rc_alive = True
-    rig.run_until(lambda: rig.mode == "AUTO", limit=40)  # once the guard counts as recovered (its hysteresis)
-    assert rig.take() == [("mode", "AUTO")]
+    rover.armed, rover.step_m = True, 0.05
+    record(rover, ahead(10.0), ahead(20.0))
+    rover.rc(swc=MIDDLE)
+    rover.run(3)
+    assert rover.mode == "AUTO"
+    rover.take()
+    rover.rc_alive = False  # the receiver's report freezes
+    rover.run(12)
+    assert rover.take() == [("mode", "HOLD")] and rover.mode == "HOLD"
+    rover.rc_alive = True
+    rover.run_until(lambda: rover.mode == "AUTO", limit=40)  # once the guard counts as recovered (its hysteresis)
+    assert rover.take() == [("mode", "AUTO")]
 
 
-def test_auto_waits_for_the_route_upload_then_is_asked(rig: Rig) -> None:
-    rig.mission_answers = False  # the rover does not answer the mission protocol for now
-    record(rig, ahead(10.0))
-    rig.rc(swc=MIDDLE)
-    rig.tick()
-    assert rig.take() == [("upload", 1)]  # the count, unanswered; no AUTO
-    assert rig.feedback("Switch C: mode").startswith("switch C MIDDLE: AUTO waits for the route upload: the autopilot's mission differs")
-    assert rig.feedback("Keep the route on the autopilot") == "uploading the route: sending 0/2 items"
-    rig.mission_answers = True
-    n = rig.run_until(lambda: rig.mode == "AUTO", limit=30)
-    assert rig.take() == [("upload", 1), ("read back",), ("mode", "AUTO")]  # the count resent after 1.5 s, then all went through
+def test_auto_waits_for_the_route_upload_then_is_asked(rover: ScriptedRover) -> None:
+    rover.answers_missions = False  # the rover does not answer the mission protocol for now
+    record(rover, ahead(10.0))
+    rover.rc(swc=MIDDLE)
+    rover.tick()
+    assert rover.take() == [("upload", 1)]  # the count, unanswered; no AUTO
+    assert rover.h.feedback("Switch C: mode").startswith("switch C MIDDLE: AUTO waits for the route upload: the autopilot's mission differs")
+    assert rover.h.feedback("Keep the route on the autopilot") == "uploading the route: sending 0/2 items"
+    rover.answers_missions = True
+    n = rover.run_until(lambda: rover.mode == "AUTO", limit=30)
+    assert rover.take() == [("upload", 1), ("read back",), ("mode", "AUTO")]  # the count resent after 1.5 s, then all went through
     assert 14 <= n <= 17
-    assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO: asked"
-    rig.tick()
-    assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO"  # the heartbeat shows it
+    assert rover.h.feedback("Switch C: mode") == "switch C MIDDLE: AUTO: asked"
+    rover.tick()
+    assert rover.h.feedback("Switch C: mode") == "switch C MIDDLE: AUTO"  # the heartbeat shows it
 
 
-def test_a_mode_refused_by_the_autopilot_is_reported_and_the_mission_goes_on(rig: Rig) -> None:
-    record(rig, ahead(10.0))
-    rig.take()
-    rig.refuse.add("AUTO")
-    rig.rc(swc=MIDDLE)
-    assert rig.run(10) == [Status.RUNNING] * 10
-    assert rig.take() == [("mode", "AUTO")]
-    assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO refused: FAILED (Flight mode change failed); asking again in 2 s"
-    assert rig.run(220) == [Status.RUNNING] * 220
-    assert rig.take() == [("mode", "AUTO")] * 9  # every 2 s, for 20 s from the flick (a firmware failsafe may be latched), then no more
-    assert rig.feedback("Switch C: mode") == "switch C MIDDLE: AUTO refused: FAILED (Flight mode change failed)"
-    rig.refuse.clear()
-    rig.rc(swc=UP)
-    rig.tick()
-    rig.rc(swc=MIDDLE)  # the operator tries again
-    rig.tick()
-    assert rig.take() == [("mode", "AUTO")] and rig.mode == "AUTO"
+def test_a_mode_refused_by_the_autopilot_is_reported_and_the_mission_goes_on(rover: ScriptedRover) -> None:
+    record(rover, ahead(10.0))
+    rover.take()
+    rover.refuse.add("AUTO")
+    rover.rc(swc=MIDDLE)
+    assert rover.run(10) == [Status.RUNNING] * 10
+    assert rover.take() == [("mode", "AUTO")]
+    assert rover.h.feedback("Switch C: mode") == "switch C MIDDLE: AUTO refused: FAILED (Flight mode change failed); asking again in 2 s"
+    assert rover.run(220) == [Status.RUNNING] * 220
+    assert rover.take() == [("mode", "AUTO")] * 9  # every 2 s, for 20 s from the flick (a firmware failsafe may be latched), then no more
+    assert rover.h.feedback("Switch C: mode") == "switch C MIDDLE: AUTO refused: FAILED (Flight mode change failed)"
+    rover.refuse.clear()
+    rover.rc(swc=UP)
+    rover.tick()
+    rover.rc(swc=MIDDLE)  # the operator tries again
+    rover.tick()
+    assert rover.take() == [("mode", "AUTO")] and rover.mode == "AUTO"
 
 
 # -- switch D: arming ----------------------------------------------------------------------------
@@ -410,8 +329,8 @@ def test_a_mode_refused_by_the_autopilot_is_reported_and_the_mission_goes_on(rig
         ("MANUAL", False, UP, MIDDLE, [], "switch D MIDDLE: a two-position switch has no middle: ignored"),
     ],
 )
-def test_switch_d_arms_only_in_manual_and_disarms(rig_for, mode, armed, before, after, commands, feedback) -> None:
-    r = rig_for(mission_with())
+def test_switch_d_arms_only_in_manual_and_disarms(rover_for, mode, armed, before, after, commands, feedback) -> None:
+    r = rover_for(mission_with())
     r.mode, r.armed = mode, armed
     r.rc(swd=before, swc={"MANUAL": UP, "HOLD": DOWN, "AUTO": MIDDLE}[mode])  # switch C where the mode is (AUTO: no route, not asked)
     r.tick()
@@ -419,15 +338,15 @@ def test_switch_d_arms_only_in_manual_and_disarms(rig_for, mode, armed, before, 
     r.rc(swd=after)
     assert r.run(2) == [Status.RUNNING] * 2
     assert r.take() == commands
-    assert r.feedback("Switch D: arm") == feedback
+    assert r.h.feedback("Switch D: arm") == feedback
 
 
-def test_an_arm_refused_by_the_autopilot_says_why_and_is_not_retried(rig: Rig) -> None:
-    rig.refuse.add("arm")
-    rig.rc(swd=DOWN)
-    assert rig.run(60) == [Status.RUNNING] * 60
-    assert rig.take() == [("arm", 1.0)]
-    assert rig.feedback("Switch D: arm") == "switch D DOWN: not armed: refused: FAILED (PreArm: AHRS: not using configured AHRS type)"
+def test_an_arm_refused_by_the_autopilot_says_why_and_is_not_retried(rover: ScriptedRover) -> None:
+    rover.refuse.add("arm")
+    rover.rc(swd=DOWN)
+    assert rover.run(60) == [Status.RUNNING] * 60
+    assert rover.take() == [("arm", 1.0)]
+    assert rover.h.feedback("Switch D: arm") == "switch D DOWN: not armed: refused: FAILED (PreArm: AHRS: not using configured AHRS type)"
 
 
 # -- switch A and the knob: route edits ----------------------------------------------------------
@@ -447,10 +366,10 @@ ROUTE = [ahead(10.0), ahead(20.0), ahead(30.0)]
         (100, "waypoint 2/3 removed", [ROUTE[0], ROUTE[2]], 1),
     ],
 )
-def test_switch_a_edits_the_route_by_the_knob_and_the_edit_is_uploaded(rig_for, knob, edit, route_after, leg_after) -> None:
-    r = rig_for(mission_with(waypoints=[{"lat": lat, "lon": lon} for lat, lon in ROUTE]))
+def test_switch_a_edits_the_route_by_the_knob_and_the_edit_is_uploaded(rover_for, knob, edit, route_after, leg_after) -> None:
+    r = rover_for(mission_with(waypoints=[{"lat": lat, "lon": lon} for lat, lon in ROUTE]))
     r.tick()
-    r.state.advance_leg()  # waypoint 1 is behind: heading for waypoint 2
+    r.h.mission_state.advance_leg()  # waypoint 1 is behind: heading for waypoint 2
     r.lat, r.lon = here = ahead(15.0, 5.0)
     r.rc(knob=knob)
     r.tick()
@@ -459,10 +378,10 @@ def test_switch_a_edits_the_route_by_the_knob_and_the_edit_is_uploaded(rig_for, 
     assert r.tick() == Status.RUNNING
     expected = [here if p == "here" else p for p in route_after]
     assert r.take() == [("upload", len(expected)), ("read back",)]
-    assert r.waypoints() == expected
+    assert waypoints(r) == expected
     assert flat(r.held()) == pytest.approx(flat(expected), abs=1e-7)
-    assert r.state.leg_index == leg_after
-    assert r.feedback("Switch A: edit the route") == f"switch A DOWN, knob {knob:+d}: " + edit.format(here=f"{here[0]:.7f}, {here[1]:.7f}")
+    assert r.h.mission_state.leg_index == leg_after
+    assert r.h.feedback("Switch A: edit the route") == f"switch A DOWN, knob {knob:+d}: " + edit.format(here=f"{here[0]:.7f}, {here[1]:.7f}")
 
 
 @pytest.mark.parametrize(
@@ -474,69 +393,69 @@ def test_switch_a_edits_the_route_by_the_knob_and_the_edit_is_uploaded(rig_for, 
         ("no knob", None, "switch A DOWN: no knob VRA position: nothing done"),
     ],
 )
-def test_a_route_edit_that_cannot_be_done_changes_nothing_and_says_why(rig: Rig, trouble, knob, feedback) -> None:
-    record(rig, ahead(5.0))
+def test_a_route_edit_that_cannot_be_done_changes_nothing_and_says_why(rover: ScriptedRover, trouble, knob, feedback) -> None:
+    record(rover, ahead(5.0))
     if trouble == "empty":
-        rig.rc(knob=-100, swa=DOWN)
-        rig.tick()
-        rig.rc(swa=UP)
-        rig.tick()
-    rig.take()
-    before = rig.waypoints()
-    rig.rc(knob=knob)
+        rover.rc(knob=-100, swa=DOWN)
+        rover.tick()
+        rover.rc(swa=UP)
+        rover.tick()
+    rover.take()
+    before = waypoints(rover)
+    rover.rc(knob=knob)
     if trouble == "ekf":
-        rig.ekf = EKF_LOST
+        rover.ekf = EKF_LOST
     if trouble == "old position":
-        rig.position_age_s = 1.6  # GLOBAL_POSITION_INT stopped coming 1.6 s ago
-    rig.tick()
-    rig.rc(swa=DOWN)
-    rig.tick()
-    assert rig.take() == []
-    assert rig.waypoints() == before
-    assert rig.feedback("Switch A: edit the route") == feedback
+        rover.position_age_s = 1.6  # GLOBAL_POSITION_INT stopped coming 1.6 s ago
+    rover.tick()
+    rover.rc(swa=DOWN)
+    rover.tick()
+    assert rover.take() == []
+    assert waypoints(rover) == before
+    assert rover.h.feedback("Switch A: edit the route") == feedback
 
 
-def test_one_edit_per_flip_of_switch_a(rig: Rig) -> None:
-    rig.rc(swa=DOWN)
-    assert rig.run(30) == [Status.RUNNING] * 30  # held down: one waypoint
-    rig.rc(swa=UP)
-    assert rig.run(5) == [Status.RUNNING] * 5  # up: nothing
-    assert rig.waypoints() == [START]
-    rig.rc(swa=DOWN)
-    rig.tick()
-    assert rig.waypoints() == [START, START]
-    assert rig.take() == [("upload", 1), ("read back",), ("upload", 2), ("read back",)]
+def test_one_edit_per_flip_of_switch_a(rover: ScriptedRover) -> None:
+    rover.rc(swa=DOWN)
+    assert rover.run(30) == [Status.RUNNING] * 30  # held down: one waypoint
+    rover.rc(swa=UP)
+    assert rover.run(5) == [Status.RUNNING] * 5  # up: nothing
+    assert waypoints(rover) == [START]
+    rover.rc(swa=DOWN)
+    rover.tick()
+    assert waypoints(rover) == [START, START]
+    assert rover.take() == [("upload", 1), ("read back",), ("upload", 2), ("read back",)]
 
 
-def test_switch_a_does_nothing_while_switch_b_is_down(rig: Rig) -> None:
-    rig.rc(swb=DOWN)
-    rig.tick()
-    rig.rc(swa=DOWN)
-    rig.tick()
-    assert rig.feedback("Switch A: edit the route") == "switch A DOWN: ignored while switch B is down"
-    rig.rc(swb=UP)
-    assert rig.run(5) == [Status.RUNNING] * 5  # switch B up again: still the same flip, still nothing
-    assert rig.waypoints() == [] and rig.take() == []
-    rig.rc(swa=UP)
-    rig.tick()
-    rig.rc(swa=DOWN)
-    rig.tick()
-    assert rig.waypoints() == [START]
+def test_switch_a_does_nothing_while_switch_b_is_down(rover: ScriptedRover) -> None:
+    rover.rc(swb=DOWN)
+    rover.tick()
+    rover.rc(swa=DOWN)
+    rover.tick()
+    assert rover.h.feedback("Switch A: edit the route") == "switch A DOWN: ignored while switch B is down"
+    rover.rc(swb=UP)
+    assert rover.run(5) == [Status.RUNNING] * 5  # switch B up again: still the same flip, still nothing
+    assert waypoints(rover) == [] and rover.take() == []
+    rover.rc(swa=UP)
+    rover.tick()
+    rover.rc(swa=DOWN)
+    rover.tick()
+    assert waypoints(rover) == [START]
 
 
-def test_a_failed_upload_is_tried_again_later_and_auto_waits_for_it(rig: Rig) -> None:
-    rig.mission_answers = False
-    record(rig, ahead(10.0))
-    n = rig.run_until(lambda: "upload failed" in rig.feedback("Keep the route on the autopilot"), limit=100)
+def test_a_failed_upload_is_tried_again_later_and_auto_waits_for_it(rover: ScriptedRover) -> None:
+    rover.answers_missions = False
+    record(rover, ahead(10.0))
+    n = rover.run_until(lambda: "upload failed" in rover.h.feedback("Keep the route on the autopilot"), limit=100)
     assert 90 <= n <= 97  # the count and 5 resends 1.5 s apart (checked at 10 Hz), then the transfer gives up
-    assert rig.take() == [("upload", 1)] * 6
-    assert rig.feedback("Keep the route on the autopilot") == "upload failed (no MISSION_REQUEST for item 0 after 5 retries); trying again in 5 s"
-    rig.mission_answers = True
-    rig.rc(swc=MIDDLE)
-    assert rig.run(49) == [Status.RUNNING] * 49
-    assert rig.take() == []  # no upload and no AUTO for 5 s
-    rig.run_until(lambda: rig.mode == "AUTO", limit=3)
-    assert rig.take() == [("upload", 1), ("read back",), ("mode", "AUTO")]
+    assert rover.take() == [("upload", 1)] * 6
+    assert rover.h.feedback("Keep the route on the autopilot") == "upload failed (no MISSION_REQUEST for item 0 after 5 retries); trying again in 5 s"
+    rover.answers_missions = True
+    rover.rc(swc=MIDDLE)
+    assert rover.run(49) == [Status.RUNNING] * 49
+    assert rover.take() == []  # no upload and no AUTO for 5 s
+    rover.run_until(lambda: rover.mode == "AUTO", limit=3)
+    assert rover.take() == [("upload", 1), ("read back",), ("mode", "AUTO")]
 
 
 # -- driving the route ---------------------------------------------------------------------------
@@ -551,174 +470,174 @@ def test_a_failed_upload_is_tried_again_later_and_auto_waits_for_it(rig: Rig) ->
         ("disarmed", "the vehicle is disarmed (it arms in MANUAL only: switch C up, switch D down)"),
     ],
 )
-def test_the_operator_not_driving_the_route_in_time_fails_the_mission(rig: Rig, left_undone: str, why: str) -> None:
-    rig.mission_answers = left_undone != "no upload"
+def test_the_operator_not_driving_the_route_in_time_fails_the_mission(rover: ScriptedRover, left_undone: str, why: str) -> None:
+    rover.answers_missions = left_undone != "no upload"
     if left_undone != "no route":
-        record(rig, ahead(10.0))  # 0.2 s of the 30 s are gone
+        record(rover, ahead(10.0))  # 0.2 s of the 30 s are gone
     else:
-        rig.run(2)
+        rover.run(2)
     if left_undone == "disarmed":
-        rig.mode = "AUTO"
-    statuses = rig.run(400)
+        rover.mode = "AUTO"
+    statuses = rover.run(400)
     assert statuses == [Status.RUNNING] * 298 + [Status.FAILURE]
-    assert rig.feedback("Drive the route in AUTO") == f"the operator did not drive the route within 30 s: {why}"
+    assert rover.h.feedback("Drive the route in AUTO") == f"the operator did not drive the route within 30 s: {why}"
 
 
-def test_leaving_auto_keeps_the_leg_restarts_the_wait_and_auto_resumes_there(rig: Rig) -> None:
-    rig.armed = True
-    record(rig, ahead(10.0), ahead(20.0), ahead(30.0))
-    rig.rc(swc=MIDDLE)
-    rig.run_until(lambda: rig.state.leg_index == 1)
-    rig.rc(swc=UP)  # the operator takes the vehicle back for a while
-    rig.tick()
-    assert rig.mode == "MANUAL" and rig.state.leg_index == 1
-    assert rig.run(290) == [Status.RUNNING] * 290  # 29 s: the wait restarted when the drive stopped
-    rig.rc(swc=MIDDLE)
-    rig.run_until(lambda: rig.state.leg_index == 2)
-    assert rig.store.current_seq == 3
-    assert rig.run(100)[-1] == Status.SUCCESS
+def test_leaving_auto_keeps_the_leg_restarts_the_wait_and_auto_resumes_there(rover: ScriptedRover) -> None:
+    rover.armed = True
+    record(rover, ahead(10.0), ahead(20.0), ahead(30.0))
+    rover.rc(swc=MIDDLE)
+    rover.run_until(lambda: rover.h.mission_state.leg_index == 1)
+    rover.rc(swc=UP)  # the operator takes the vehicle back for a while
+    rover.tick()
+    assert rover.mode == "MANUAL" and rover.h.mission_state.leg_index == 1
+    assert rover.run(290) == [Status.RUNNING] * 290  # 29 s: the wait restarted when the drive stopped
+    rover.rc(swc=MIDDLE)
+    rover.run_until(lambda: rover.h.mission_state.leg_index == 2)
+    assert rover.store.current_seq == 3
+    assert rover.run(100)[-1] == Status.SUCCESS
 
 
-def test_a_reached_report_from_before_the_run_does_not_count(rig: Rig, vehicle) -> None:
-    rig.armed = True
-    record(rig, ahead(10.0), ahead(20.0))
+def test_a_reached_report_from_before_the_run_does_not_count(rover: ScriptedRover, vehicle) -> None:
+    rover.armed = True
+    record(rover, ahead(10.0), ahead(20.0))
     vehicle.set(vehicle__mission_reached=MissionItemReached(2, 0.0, 2))  # left over from an earlier run
-    rig.tick()
-    rig.rc(swc=MIDDLE)
-    rig.step_m = 0.5
-    rig.run(3)
-    assert rig.state.leg_index == 0
-    assert rig.feedback("Drive the route in AUTO").startswith("waypoint 1/2: ")
+    rover.tick()
+    rover.rc(swc=MIDDLE)
+    rover.step_m = 0.5
+    rover.run(3)
+    assert rover.h.mission_state.leg_index == 0
+    assert rover.h.feedback("Drive the route in AUTO").startswith("waypoint 1/2: ")
 
 
-def auto_asked(rig: Rig) -> None:
+def auto_asked(rover: ScriptedRover) -> None:
     """Two waypoints recorded ahead, the rover back at the start, armed, standing still in AUTO (step 0)."""
-    rig.armed, rig.step_m = True, 0.0
-    record(rig, ahead(10.0), ahead(20.0))
-    rig.lat, rig.lon = START
-    rig.rc(swc=MIDDLE)
-    rig.tick()
-    assert rig.mode == "AUTO"  # the rover is in AUTO; the executive sees it in the next tick
+    rover.armed, rover.step_m = True, 0.0
+    record(rover, ahead(10.0), ahead(20.0))
+    rover.lat, rover.lon = START
+    rover.rc(swc=MIDDLE)
+    rover.tick()
+    assert rover.mode == "AUTO"  # the rover is in AUTO; the executive sees it in the next tick
 
 
-def test_an_item_reached_before_the_heartbeat_shows_auto_is_not_lost(rig: Rig, vehicle) -> None:
+def test_an_item_reached_before_the_heartbeat_shows_auto_is_not_lost(rover: ScriptedRover, vehicle) -> None:
     """The defect: a MISSION_ITEM_REACHED drained in the tick the switch to AUTO shows was ignored (the drive 'started' after it)."""
-    auto_asked(rig)
-    vehicle.set(vehicle__mission_reached=MissionItemReached(1, rig.clock.now() + 0.05, 1))  # arrives between two ticks
-    rig.tick()
-    assert rig.state.leg_index == 1
+    auto_asked(rover)
+    vehicle.set(vehicle__mission_reached=MissionItemReached(1, rover.clock.now() + 0.05, 1))  # arrives between two ticks
+    rover.tick()
+    assert rover.h.mission_state.leg_index == 1
 
 
-def test_mission_current_complete_ends_the_drive(rig: Rig, vehicle) -> None:
+def test_mission_current_complete_ends_the_drive(rover: ScriptedRover, vehicle) -> None:
     """The defect: MISSION_CURRENT mission_state 5 (the autopilot ran its mission to the end) was ignored."""
-    auto_asked(rig)
-    rig.tick()
-    vehicle.set(vehicle__mission_current=MissionCurrent(2, 2, MISSION_STATE_COMPLETE, True, rig.clock.now() + 0.05))
-    rig.tick()
-    assert rig.state.leg_index == 2
-    assert rig.run(3)[-1] == Status.SUCCESS  # held at the end
-    assert rig.feedback("Drive the route in AUTO") == "route done: 2/2 waypoints reached"
+    auto_asked(rover)
+    rover.tick()
+    vehicle.set(vehicle__mission_current=MissionCurrent(2, 2, MISSION_STATE_COMPLETE, True, rover.clock.now() + 0.05))
+    rover.tick()
+    assert rover.h.mission_state.leg_index == 2
+    assert rover.run(3)[-1] == Status.SUCCESS  # held at the end
+    assert rover.h.feedback("Drive the route in AUTO") == "route done: 2/2 waypoints reached"
 
 
-def test_a_drive_in_auto_that_makes_no_progress_fails_within_the_leg_timeout(rig_for) -> None:
+def test_a_drive_in_auto_that_makes_no_progress_fails_within_the_leg_timeout(rover_for) -> None:
     """The defect: one run sat RUNNING at 0.0 m for 1,440 s; AUTO had no progress bound."""
-    r = rig_for(mission_with(limits={"recovery_timeout_s": 10.0, "ekf_wait_s": 20.0, "leg_timeout_s": 5.0}))
+    r = rover_for(mission_with(limits={"recovery_timeout_s": 10.0, "ekf_wait_s": 20.0, "leg_timeout_s": 5.0}))
     r.tick()
     auto_asked(r)
     statuses = r.run(100)
     assert statuses == [Status.RUNNING] * 51 + [Status.FAILURE]
-    assert r.feedback("Drive the route in AUTO") == "no progress in AUTO: waypoint 1/2 not reached within 5 s: 10.0 m at 000°"
+    assert r.h.feedback("Drive the route in AUTO") == "no progress in AUTO: waypoint 1/2 not reached within 5 s: 10.0 m at 000°"
 
 
-def test_a_route_of_one_place_recorded_by_a_vehicle_that_never_moved_does_not_complete(rig: Rig) -> None:
+def test_a_route_of_one_place_recorded_by_a_vehicle_that_never_moved_does_not_complete(rover: ScriptedRover) -> None:
     """The defect: the operator's vehicle was held, all 4 route points were recorded at home, and the run ended COMPLETED."""
-    rig.armed = True
-    record(rig, START, START, START, START)
-    rig.rc(swc=MIDDLE)
-    statuses = rig.run(20)
+    rover.armed = True
+    record(rover, START, START, START, START)
+    rover.rc(swc=MIDDLE)
+    statuses = rover.run(20)
     assert statuses[-1] == Status.FAILURE
-    assert rig.feedback("Drive the route in AUTO") == (
+    assert rover.h.feedback("Drive the route in AUTO") == (
         "the route's 4 waypoints are all one place (the vehicle never moved while they were recorded): nothing was driven"
     )
 
 
-def test_removing_the_current_waypoint_while_driving_sends_the_rover_to_the_next(rig: Rig) -> None:
-    rig.armed, rig.step_m = True, 0.5
-    record(rig, ahead(10.0), ahead(20.0), ahead(30.0))
-    rig.rc(swc=MIDDLE)
-    rig.run_until(lambda: rig.state.leg_index == 1)
-    rig.take()
-    rig.rc(knob=80, swa=DOWN)
-    rig.tick()
-    assert rig.take() == [("upload", 2), ("read back",)]
-    assert rig.waypoints() == [ahead(10.0), ahead(30.0)] and rig.state.leg_index == 1
-    assert rig.run(100)[-1] == Status.SUCCESS  # the mission ends there
-    assert (rig.lat, rig.lon) == pytest.approx(ahead(30.0), abs=1e-6)
+def test_removing_the_current_waypoint_while_driving_sends_the_rover_to_the_next(rover: ScriptedRover) -> None:
+    rover.armed, rover.step_m = True, 0.5
+    record(rover, ahead(10.0), ahead(20.0), ahead(30.0))
+    rover.rc(swc=MIDDLE)
+    rover.run_until(lambda: rover.h.mission_state.leg_index == 1)
+    rover.take()
+    rover.rc(knob=80, swa=DOWN)
+    rover.tick()
+    assert rover.take() == [("upload", 2), ("read back",)]
+    assert waypoints(rover) == [ahead(10.0), ahead(30.0)] and rover.h.mission_state.leg_index == 1
+    assert rover.run(100)[-1] == Status.SUCCESS  # the mission ends there
+    assert (rover.lat, rover.lon) == pytest.approx(ahead(30.0), abs=1e-6)
 
 
 # -- guards, pre-flight, pause -------------------------------------------------------------------
 
 
 @pytest.mark.parametrize("trouble", ["rc stale", "link lost"])
-def test_a_failed_guard_holds_the_vehicle_and_ends_the_mission_if_it_does_not_recover(rig: Rig, trouble: str) -> None:
-    rig.armed, rig.step_m = True, 0.001
-    record(rig, ahead(10.0))
-    rig.lat, rig.lon = START  # 10 m to go
-    rig.rc(swc=MIDDLE)
-    rig.run(3)
-    assert rig.mode == "AUTO"
-    rig.take()
+def test_a_failed_guard_holds_the_vehicle_and_ends_the_mission_if_it_does_not_recover(rover: ScriptedRover, trouble: str) -> None:
+    rover.armed, rover.step_m = True, 0.001
+    record(rover, ahead(10.0))
+    rover.lat, rover.lon = START  # 10 m to go
+    rover.rc(swc=MIDDLE)
+    rover.run(3)
+    assert rover.mode == "AUTO"
+    rover.take()
     if trouble == "rc stale":
-        rig.rc_alive = False  # the receiver's report freezes (CAN: the base repeats the last frame)
-        assert rig.run(10) == [Status.RUNNING] * 10  # fresh for rc.fresh_timeout_s (1 s)
-        assert rig.take() == []
+        rover.rc_alive = False  # the receiver's report freezes (CAN: the base repeats the last frame)
+        assert rover.run(10) == [Status.RUNNING] * 10  # fresh for rc.fresh_timeout_s (1 s)
+        assert rover.take() == []
     else:
-        rig.link_up = False
-    rig.rc(swc=UP)  # unseen while RC is stale
-    rig.tick()
-    assert rig.take() == [("mode", "HOLD")]
-    assert rig.feedback("Wait for guards").startswith("holding (0/10 s): ")
-    statuses = rig.run(200)
+        rover.link_up = False
+    rover.rc(swc=UP)  # unseen while RC is stale
+    rover.tick()
+    assert rover.take() == [("mode", "HOLD")]
+    assert rover.h.feedback("Wait for guards").startswith("holding (0/10 s): ")
+    statuses = rover.run(200)
     assert statuses == [Status.RUNNING] * 100 + [Status.FAILURE]
-    assert rig.take() == []
+    assert rover.take() == []
 
 
 @pytest.mark.parametrize("trouble", ["rc stale", "link lost"])
-def test_no_failsafe_takes_the_vehicle_from_the_operator_driving_in_manual(rig: Rig, trouble: str) -> None:
+def test_no_failsafe_takes_the_vehicle_from_the_operator_driving_in_manual(rover: ScriptedRover, trouble: str) -> None:
     """The defect: a 0.2 s RC gap at 20x put the vehicle in HOLD while the operator drove it in MANUAL (switch C up)."""
-    record(rig, ahead(10.0))
-    rig.take()
-    assert rig.mode == "MANUAL"
-    rig.mode_set_by = "others"  # MANUAL from the operator (the RC, or switch C up: asked for by us, a person's mode all the same)
+    record(rover, ahead(10.0))
+    rover.take()
+    assert rover.mode == "MANUAL"
+    rover.mode_set_by = "others"  # MANUAL from the operator (the RC, or switch C up: asked for by us, a person's mode all the same)
     if trouble == "rc stale":
-        rig.rc_alive = False
+        rover.rc_alive = False
     else:
-        rig.link_up = False
-    assert rig.run(30) == [Status.RUNNING] * 30
-    assert rig.take() == [] and rig.mode == "MANUAL"  # the autopilot's own RC failsafe answers an RC loss
-    rig.rc_alive = rig.link_up = True
-    assert rig.run(5) == [Status.RUNNING] * 5 and rig.take() == []
+        rover.link_up = False
+    assert rover.run(30) == [Status.RUNNING] * 30
+    assert rover.take() == [] and rover.mode == "MANUAL"  # the autopilot's own RC failsafe answers an RC loss
+    rover.rc_alive = rover.link_up = True
+    assert rover.run(5) == [Status.RUNNING] * 5 and rover.take() == []
 
 
-def test_switch_moves_wait_out_stale_rc_and_count_when_it_is_back(rig: Rig) -> None:
-    record(rig, ahead(10.0))
-    rig.take()
-    rig.mode_set_by = "us"  # switch C up: MANUAL asked for at the operator's request
-    rig.rc_alive = False
-    rig.run(12)
-    assert rig.take() == []  # in MANUAL: a person drives, nothing commanded
-    assert rig.feedback("Wait for guards") == "holding (0/10 s): RC fresh? no RC report within 1 s"
-    rig.rc(swc=MIDDLE)
-    assert rig.run(20) == [Status.RUNNING] * 20
-    assert rig.take() == []
-    rig.rc_alive = True
-    assert rig.run(20) == [Status.RUNNING] * 20 and rig.take() == []  # the reports fresh for RcFresh's 2 s first
-    rig.tick()
-    assert rig.take() == [("mode", "AUTO")]  # the operator's latest wish, once it can be read
+def test_switch_moves_wait_out_stale_rc_and_count_when_it_is_back(rover: ScriptedRover) -> None:
+    record(rover, ahead(10.0))
+    rover.take()
+    rover.mode_set_by = "us"  # switch C up: MANUAL asked for at the operator's request
+    rover.rc_alive = False
+    rover.run(12)
+    assert rover.take() == []  # in MANUAL: a person drives, nothing commanded
+    assert rover.h.feedback("Wait for guards") == "holding (0/10 s): RC fresh? no RC report within 1 s"
+    rover.rc(swc=MIDDLE)
+    assert rover.run(20) == [Status.RUNNING] * 20
+    assert rover.take() == []
+    rover.rc_alive = True
+    assert rover.run(20) == [Status.RUNNING] * 20 and rover.take() == []  # the reports fresh for RcFresh's 2 s first
+    rover.tick()
+    assert rover.take() == [("mode", "AUTO")]  # the operator's latest wish, once it can be read
 
 
-def test_the_switches_wait_for_the_ekf_and_the_mission_fails_without_one(rig_for) -> None:
-    r = rig_for(mission_with())
+def test_the_switches_wait_for_the_ekf_and_the_mission_fails_without_one(rover_for) -> None:
+    r = rover_for(mission_with())
     r.ekf = EKF_LOST
     r.rc(swd=DOWN)
     statuses = r.run(300)
@@ -726,20 +645,20 @@ def test_the_switches_wait_for_the_ekf_and_the_mission_fails_without_one(rig_for
     assert r.take() == []  # no upload, no arming
 
 
-def test_pause_holds_and_resume_puts_back_the_switchs_mode_and_redoes_nothing_else(rig: Rig) -> None:
-    record(rig, ahead(10.0))
-    rig.rc(swc=DOWN)
-    rig.tick()
-    rig.rc(swc=UP)
-    rig.tick()
-    rig.take()
-    rig.state.pause("operator: pause")
-    assert rig.run(10) == [Status.RUNNING] * 10
-    assert rig.take() == [("mode", "HOLD")]
-    rig.state.resume()
-    assert rig.run(10) == [Status.RUNNING] * 10
-    assert rig.take() == [("mode", "MANUAL")]  # switch C is still up: MANUAL again; the route is still on the rover: no upload
-    assert rig.waypoints() == [ahead(10.0)]
+def test_pause_holds_and_resume_puts_back_the_switchs_mode_and_redoes_nothing_else(rover: ScriptedRover) -> None:
+    record(rover, ahead(10.0))
+    rover.rc(swc=DOWN)
+    rover.tick()
+    rover.rc(swc=UP)
+    rover.tick()
+    rover.take()
+    rover.h.mission_state.pause("operator: pause")
+    assert rover.run(10) == [Status.RUNNING] * 10
+    assert rover.take() == [("mode", "HOLD")]
+    rover.h.mission_state.resume()
+    assert rover.run(10) == [Status.RUNNING] * 10
+    assert rover.take() == [("mode", "MANUAL")]  # switch C is still up: MANUAL again; the route is still on the rover: no upload
+    assert waypoints(rover) == [ahead(10.0)]
 
 
 # -- the mission file ----------------------------------------------------------------------------

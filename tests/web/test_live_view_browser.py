@@ -21,22 +21,16 @@ from executive.io.control import request
 from executive.snapshots import SnapshotRecorder, replay
 from executive.web.replay import ReplaySource
 from executive.web.server import WebAddress, WebServer
-from tests_support import line_mission
+from tests_support import line_mission, mission_text
 
 ROOT = Path(__file__).parents[2]
 CHROMIUM = "/usr/bin/chromium"
-MISSION = """\
-version: 1
-name: live-view
-vehicle: rover
-auto_arm: true
-home: {lat: -35.363261, lon: 149.165230}
-simulator: {ekf_ready_after_s: 2}
-waypoints:
-  - {lat: -35.3631711, lon: 149.1652300}  # 10 m north
-  - {lat: -35.3631711, lon: 149.1653401}  # then 10 m east
-  - {lat: -35.3577752, lon: 149.1657805}  # then 600 m north, 40 m east: the run cannot end before the page is up and Pause is pressed
-"""
+MISSION = mission_text(
+    "live-view",
+    "{lat: -35.3631711, lon: 149.1652300}  # 10 m north",
+    "{lat: -35.3631711, lon: 149.1653401}  # then 10 m east",
+    "{lat: -35.3577752, lon: 149.1657805}  # then 600 m north, 40 m east: the run cannot end before the page is up and Pause is pressed",
+)
 
 
 def browser():

@@ -7,17 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from executive.io.can.agilex import (
-    KNOWN_IDS,
-    ControlModeSelect,
-    FrameStats,
-    MotionCommand,
-    MotionState,
-    Odometry,
-    RcState,
-    SystemState,
-    decode,
-)
+from executive.io.can.agilex import KNOWN_IDS, ControlModeSelect, FrameStats, MotionCommand, MotionState, Odometry, RcState, SystemState, decode
 from executive.state import SwitchPosition
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
-from collections.abc import Iterator
-
 import can
 import py_trees
 import pytest
@@ -18,29 +15,18 @@ from executive.mission.model import RcConfig
 from executive.state import RcSwitches, SwitchPosition
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
-_channels = itertools.count()
 
 
 def bb(key: str) -> object:
     return py_trees.blackboard.Blackboard.get(key)
 
 
-@pytest.fixture
-def buses() -> Iterator[tuple[can.BusABC, can.BusABC]]:
-    """(base, executive): two ends of a fresh virtual bus."""
-    channel = f"test-can-reader-{next(_channels)}"
-    base, executive = can.Bus(interface="virtual", channel=channel), can.Bus(interface="virtual", channel=channel)
-    yield base, executive
-    base.shutdown()
-    executive.shutdown()
-
-
 def rc_frame(counter: int, swc: SwitchPosition = MIDDLE, left_lr: int = 0) -> can.Message:
     return RcState(UP, UP, swc, DOWN, 0, 0, left_lr, 0, 0, counter).encode()
 
 
-def test_switches_sticks_and_the_base_reach_the_blackboard(buses, clock: ManualClock) -> None:
-    base, executive = buses
+def test_switches_sticks_and_the_base_reach_the_blackboard(can_buses, clock: ManualClock) -> None:
+    base, executive = can_buses
     reader = CanReader(executive, clock)
     base.send(can.Message(arbitration_id=0x241, data=bytes.fromhex("A60000B00000007E"), is_extended_id=False))  # the SPEC's frame
     base.send(SystemState(0, 1, 486, 0x0000, 7).encode())
@@ -56,8 +42,8 @@ def test_switches_sticks_and_the_base_reach_the_blackboard(buses, clock: ManualC
     assert (bb("/base/up"), bb("/base/last_update"), bb("/base/frames"), bb("/base/bad_frames")) == (True, 100.0, 4, 0)
 
 
-def test_switches_are_rewritten_only_when_they_move(buses, clock: ManualClock) -> None:
-    base, executive = buses
+def test_switches_are_rewritten_only_when_they_move(can_buses, clock: ManualClock) -> None:
+    base, executive = can_buses
     reader = CanReader(executive, clock)
     base.send(rc_frame(1))
     reader.drain()
@@ -85,8 +71,8 @@ def drive_rc(reader: CanReader, rc: RcReader, base: can.BusABC, clock: ManualClo
     return fresh
 
 
-def test_a_frozen_counter_makes_rc_stale_within_the_fresh_timeout(buses, clock: ManualClock) -> None:
-    base, executive = buses
+def test_a_frozen_counter_makes_rc_stale_within_the_fresh_timeout(can_buses, clock: ManualClock) -> None:
+    base, executive = can_buses
     reader, rc = CanReader(executive, clock), RcReader(RcConfig(source="can", fresh_timeout_s=0.5), clock)
     assert drive_rc(reader, rc, base, clock, [0xFE, 0xFF, 0x00, 0x01]) == [True] * 4  # the counter wraps: still moving
     frozen_since = clock.now()
@@ -100,8 +86,8 @@ def test_a_frozen_counter_makes_rc_stale_within_the_fresh_timeout(buses, clock: 
     assert drive_rc(reader, rc, base, clock, [0x02]) == [True]  # the counter moves again
 
 
-def test_no_frame_at_all_makes_rc_stale_too(buses, clock: ManualClock) -> None:
-    base, executive = buses
+def test_no_frame_at_all_makes_rc_stale_too(can_buses, clock: ManualClock) -> None:
+    base, executive = can_buses
     reader, rc = CanReader(executive, clock, base_timeout_s=0.3), RcReader(RcConfig(source="can", fresh_timeout_s=0.5), clock)
     assert drive_rc(reader, rc, base, clock, [1, 2, 3]) == [True] * 3
     for _ in range(14):  # 280 ms without a frame
@@ -121,8 +107,8 @@ def test_no_frame_at_all_makes_rc_stale_too(buses, clock: ManualClock) -> None:
     assert (bb("/rc/fresh"), bb("/rc/stale_reason")) == (False, "no RC report within 0.5 s")  # 520 ms
 
 
-def test_a_counting_frame_does_not_count_while_the_base_reports_rc_signal_loss(buses, clock: ManualClock) -> None:
-    base, executive = buses
+def test_a_counting_frame_does_not_count_while_the_base_reports_rc_signal_loss(can_buses, clock: ManualClock) -> None:
+    base, executive = can_buses
     reader = CanReader(executive, clock)
     base.send(rc_frame(1))
     reader.drain()
@@ -140,8 +126,8 @@ def test_a_counting_frame_does_not_count_while_the_base_reports_rc_signal_loss(b
     assert bb("/base/faults") == ()
 
 
-def test_bad_and_foreign_frames_are_counted_and_never_used(buses, clock: ManualClock) -> None:
-    base, executive = buses
+def test_bad_and_foreign_frames_are_counted_and_never_used(can_buses, clock: ManualClock) -> None:
+    base, executive = can_buses
     reader = CanReader(executive, clock)
     base.send(can.Message(arbitration_id=0x241, data=b"\xa6\x00", is_extended_id=False))  # too short
     base.send(can.Message(arbitration_id=0x241, data=bytes.fromhex("000000000000007E"), is_extended_id=False))  # no switch positions
@@ -153,8 +139,8 @@ def test_bad_and_foreign_frames_are_counted_and_never_used(buses, clock: ManualC
     assert (bb("/rc/switches"), bb("/rc/last_update"), bb("/base/system"), bb("/base/up")) == (None, None, None, False)
 
 
-def test_without_rc_it_leaves_the_rc_keys_alone(buses, clock: ManualClock) -> None:
-    base, executive = buses
+def test_without_rc_it_leaves_the_rc_keys_alone(can_buses, clock: ManualClock) -> None:
+    base, executive = can_buses
     reader = CanReader(executive, clock, rc=False)
     base.send(rc_frame(1))
     reader.drain()

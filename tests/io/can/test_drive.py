@@ -18,8 +18,6 @@ from executive.io.can.state import DriveStatus
 from executive.testing import Vehicle
 from tests_support import runqueue_wait_s
 
-_channels = itertools.count()
-
 
 class RecordingBus(can.BusABC):
     """Keeps what is sent, with the clock time it was sent at."""
@@ -195,17 +193,8 @@ def test_send_errors_are_counted_not_raised(clock: ManualClock) -> None:
     assert bridge.sent == 0
 
 
-@pytest.fixture
-def virtual_pair() -> Iterator[tuple[can.BusABC, can.BusABC]]:
-    channel = f"test-drive-{next(_channels)}"
-    ours, base = can.Bus(interface="virtual", channel=channel), can.Bus(interface="virtual", channel=channel)
-    yield ours, base
-    ours.shutdown()
-    base.shutdown()
-
-
-def test_a_bridge_thread_on_a_virtual_bus_sends_at_about_50_hz(virtual_pair, vehicle: Vehicle) -> None:
-    ours, base = virtual_pair
+def test_a_bridge_thread_on_a_virtual_bus_sends_at_about_50_hz(can_buses, vehicle: Vehicle) -> None:
+    base, ours = can_buses
     clock = ScaledClock()
     bridge = DriveBridge(ours, clock)
     stop = threading.Event()

@@ -1,0 +1,69 @@
+"""A whole runtime ticked by hand over an in-memory link, an obedient autopilot at the other end."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from executive.assembly import build_runtime
+from executive.clock import ManualClock
+from executive.io.mavlink.dialect import mavlink
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.model import Mission
+from executive.testing.harness import START_S
+from executive.testing.links import FakeLink
+from executive.testing.scripted import ObedientAutopilot
+
+
+class RuntimeOnLink:
+    """The runtime of ``mission`` (its readers, tree, operator, plugs) on a :class:`FakeLink`, ticked by hand on a manual clock.
+
+    ``r = RuntimeOnLink(mission, root=my_tree, safe_timeout_s=1.0)``: keyword arguments go to
+    :func:`~executive.assembly.build_runtime` (``plugs=``...). :attr:`autopilot`, an
+    :class:`ObedientAutopilot` of the mission's vehicle in ``mode`` (``armed``), answers each command
+    and heartbeat as it is sent; with ``beat`` its heartbeat also arrives before every tick. Facts a
+    heartbeat does not carry (EKF, position) are the test's to write. :meth:`tick` advances the clock
+    and ticks; :meth:`modes_sent` and :meth:`texts` are what the executive sent since the last call.
+    """
+
+    def __init__(
+        self,
+        mission: Mission,
+        *,
+        clock: ManualClock | None = None,
+        link: FakeLink | None = None,
+        mode: str = "GUIDED",
+        armed: bool = True,
+        beat: bool = False,
+        **runtime_options: Any,
+    ) -> None:
+        self.clock = clock if clock is not None else ManualClock(START_S)
+        self.link = link if link is not None else FakeLink()
+        self.runtime = build_runtime(mission, self.link, self.clock, **runtime_options)
+        self.autopilot = ObedientAutopilot(self.link, mission.vehicle, mode=mode, armed=armed)
+        self.beat = beat
+
+    def tick(self, n: int = 1, dt: float = 0.1) -> None:
+        """``n`` ticks of the runtime, the clock ``dt`` seconds on before each (the autopilot's heartbeat first, with ``beat``)."""
+        for _ in range(n):
+            self.clock.advance(dt)
+            if self.beat:
+                self.autopilot.beat()
+            self.runtime.tick()
+
+    def modes_sent(self) -> list[str]:
+        """The modes the executive asked for since the last call (taken off the link with the other COMMAND_LONGs)."""
+        modes = self.runtime.commander.modes
+        return [modes.decode(int(m.param2)) for m in self.link.take("COMMAND_LONG") if m.command == mavlink.MAV_CMD_DO_SET_MODE]
+
+    def texts(self) -> list[str]:
+        """The STATUSTEXTs the executive sent since the last call."""
+        return [m.text for m in self.link.take("STATUSTEXT")]
+
+    @property
+    def status(self) -> MissionStatus:
+        """The mission's status now."""
+        return self.runtime.mission_state.status
+
+    def close(self) -> None:
+        """Release what the runtime holds (control socket, instruments)."""
+        self.runtime.close()
