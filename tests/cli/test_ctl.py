@@ -39,11 +39,11 @@ def run_executive(mission: Path, sock: Path, *extra: str, speedup: float = 10.0)
     return subprocess.Popen(args, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
 
-def ctl(sock: Path, *args: str) -> dict:
-    proc = subprocess.run(
-        [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "--json", *args], cwd=ROOT, capture_output=True, text=True
-    )
-    return json.loads(proc.stdout)
+def ctl(capsys, sock: Path, *args: str) -> dict:
+    """``executive ctl --json`` in this process (an interpreter's start per command would load a busy machine; `ctl` as a process of
+    its own: the upload of a replaced mission below), its reply."""
+    main(["ctl", "--socket", str(sock), "--json", *args])
+    return json.loads(capsys.readouterr().out)
 
 
 def wait_status(sock: Path, predicate, timeout_s: float = 300.0) -> dict:
@@ -68,30 +68,8 @@ def after(sock: Path, status: dict, seconds: float) -> dict:
     return wait_status(sock, lambda s: s["t"] >= status["t"] + seconds)
 
 
-def test_pause_holds_resume_keeps_the_leg_abort_makes_safe(mission, tmp_path):
-    sock = tmp_path / "ctl.sock"
-    run = run_executive(mission, sock)
-    try:
-        wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
-        paused = ctl(sock, "pause")
-        assert (paused["ok"], paused["state"]) == (True, "PAUSED")
-        held = after(sock, wait_status(sock, lambda s: s["mode"] == "HOLD"), 3.0)  # the rover has braked to a stop
-        later = after(sock, held, 3.0)  # and a held rover does not move
-        assert (later["lat"], later["lon"], later["leg"]) == (held["lat"], held["lon"], 2)
-        refused = ctl(sock, "pause")
-        assert refused["ok"] is False and "cannot pause while PAUSED" in refused["reason"]
-        assert ctl(sock, "resume")["state"] == "RUNNING"
-        resumed = wait_status(sock, lambda s: s["mode"] == "GUIDED")
-        assert resumed["leg"] == 2
-        assert ctl(sock, "abort")["state"] == "ABORTED"
-        _, err = run.communicate(timeout=30)
-        assert run.returncode == 1
-        assert "vehicle in HOLD" in err and "ABORTED: ctl: abort" in err
-    finally:
-        run.kill()
-
-
-def test_a_ground_station_pause_from_another_process_is_obeyed_and_acked(mission, tmp_path):
+def test_pause_holds_resume_keeps_the_leg_a_ground_stations_pause_is_obeyed_and_acked_abort_makes_safe(mission, tmp_path, capsys):
+    """One run: paused and resumed with `ctl`, paused again by a ground station in another process, aborted with `ctl`."""
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
@@ -99,7 +77,19 @@ def test_a_ground_station_pause_from_another_process_is_obeyed_and_acked(mission
     run = run_executive(mission, sock, "--gcs", f"udpin:127.0.0.1:{port}")
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255, source_component=190, dialect="ardupilotmega")
     try:
-        wait_status(sock, lambda s: s["state"] == "RUNNING" and s["mode"] == "GUIDED")
+        wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
+        paused = ctl(capsys, sock, "pause")
+        assert (paused["ok"], paused["state"]) == (True, "PAUSED")
+        held = after(sock, wait_status(sock, lambda s: s["mode"] == "HOLD"), 3.0)  # the rover has braked to a stop
+        later = after(sock, held, 3.0)  # and a held rover does not move
+        assert (later["lat"], later["lon"], later["leg"]) == (held["lat"], held["lon"], 2)
+        refused = ctl(capsys, sock, "pause")
+        assert refused["ok"] is False and "cannot pause while PAUSED" in refused["reason"]
+        assert ctl(capsys, sock, "resume")["state"] == "RUNNING"
+        resumed = wait_status(sock, lambda s: s["mode"] == "GUIDED")
+        assert resumed["leg"] == 2
+
+        # a ground station's pause, from another process over MAVLink
         gcs.mav.command_long_send(1, 191, mavlink.MAV_CMD_DO_PAUSE_CONTINUE, 0, 0, 0, 0, 0, 0, 0, 0)
         ack = gcs.recv_match(type="COMMAND_ACK", blocking=True, timeout=10)
         assert ack is not None and (ack.command, ack.result) == (mavlink.MAV_CMD_DO_PAUSE_CONTINUE, mavlink.MAV_RESULT_ACCEPTED)
@@ -110,10 +100,15 @@ def test_a_ground_station_pause_from_another_process_is_obeyed_and_acked(mission
         beat = gcs.recv_match(type="HEARTBEAT", blocking=True, timeout=5)
         assert beat is not None and (beat.get_srcSystem(), beat.get_srcComponent()) == (1, 191)
         assert (beat.type, beat.autopilot) == (mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_AUTOPILOT_INVALID)
+
+        assert ctl(capsys, sock, "abort")["state"] == "ABORTED"
+        _, err = run.communicate(timeout=30)
+        assert run.returncode == 1
+        assert "vehicle in HOLD" in err and "ABORTED: ctl: abort" in err
     finally:
         gcs.close()
         run.kill()
-        run.communicate(timeout=10)
+        run.communicate()
 
 
 def ctl_text(capsys, sock: Path, *args: str) -> tuple[int, str, str]:
@@ -141,13 +136,13 @@ def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path, caps
         assert out.splitlines()[-1] == "mode HOLD: ACCEPTED by the autopilot"
         status = wait_status(sock, lambda s: s["mode"] == "HOLD")
         assert (status["state"], status["reason"]) == ("PAUSED", "ctl: mode HOLD by a person: hands off")
-        disarmed = ctl(sock, "disarm")  # mid-mission: allowed
+        disarmed = ctl(capsys, sock, "disarm")  # mid-mission: allowed
         assert (disarmed["ok"], disarmed["state"], disarmed["command"]["state"]) == (True, "PAUSED", "ACCEPTED")
         status = after(sock, wait_status(sock, lambda s: not s["armed"]), 5.0)  # nothing arms it again or takes it out of HOLD
         assert (status["state"], status["mode"], status["armed"]) == ("PAUSED", "HOLD", False)
         code, _, err = ctl_text(capsys, sock, "mode", "WARP")
         assert code == 1 and "mode WARP: not a mode of this vehicle's autopilot" in err
-        assert ctl(sock, "abort")["state"] == "ABORTED"
+        assert ctl(capsys, sock, "abort")["state"] == "ABORTED"
         _, err = run.communicate(timeout=30)
         assert re.search(r"WARNING operator: ctl: mode HOLD; mission paused at leg [12], hands off until resumed, sent to the autopilot", err)
         assert "WARNING operator: ctl: disarm, sent to the autopilot" in err
@@ -156,22 +151,22 @@ def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path, caps
         run.communicate()
 
 
-def test_wait_mode_serves_mission_after_mission(tmp_path):
+def test_wait_mode_serves_mission_after_mission(tmp_path, capsys):
     mission = tmp_path / "short.yaml"
     mission.write_text(MISSION.split("  - {lat: -35.3629906, lon: 149.1665504}")[0])  # the first leg only
     sock = tmp_path / "ctl.sock"
     run = run_executive(mission, sock, "--wait", speedup=25)
     try:
         assert wait_status(sock, lambda s: True)["state"] == "READY"
-        assert ctl(sock, "start")["state"] == "RUNNING"
+        assert ctl(capsys, sock, "start")["state"] == "RUNNING"
         wait_status(sock, lambda s: s["state"] == "COMPLETED")
-        uploaded = ctl(sock, "upload", str(mission))
+        uploaded = ctl(capsys, sock, "upload", str(mission))
         assert (uploaded["ok"], uploaded["state"]) == (True, "READY")
         bad = tmp_path / "bad.yaml"
         bad.write_text(MISSION.replace("lat: -35.3629906", "lat: -95.0", 1))
-        refused = ctl(sock, "upload", str(bad))
+        refused = ctl(capsys, sock, "upload", str(bad))
         assert refused["ok"] is False and f"{bad}:8:" in refused["reason"]
-        assert ctl(sock, "start")["state"] == "RUNNING"
+        assert ctl(capsys, sock, "start")["state"] == "RUNNING"
         wait_status(sock, lambda s: s["state"] == "COMPLETED")
         run.send_signal(signal.SIGTERM)
         _, err = run.communicate(timeout=30)
@@ -199,7 +194,7 @@ def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the
     run = run_executive(mission, sock, "--journal", str(db), speedup=20)
     try:
         wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
-        assert ctl(sock, "pause")["state"] == "PAUSED"
+        assert ctl(capsys, sock, "pause")["state"] == "PAUSED"
         wait_status(sock, lambda s: s["mode"] == "HOLD")
         upload = subprocess.run(
             [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "upload", str(north)], cwd=ROOT, capture_output=True, text=True
@@ -215,7 +210,7 @@ def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the
         assert geo.distance(later["lat"], later["lon"], status["lat"], status["lon"]) < 0.2  # it has not moved
         shown = request(str(sock), "route", operation="show")["route"]
         assert (shown["upload"]["state"], shown["on_autopilot"], len(shown["waypoints"])) == ("DONE", True, 3)  # uploaded, read back
-        assert ctl(sock, "resume")["state"] == "RUNNING"
+        assert ctl(capsys, sock, "resume")["state"] == "RUNNING"
         _, err = run.communicate(timeout=120)
         assert run.returncode == 0, err
         assert "mission 'two-legs-north' COMPLETED" in err

@@ -23,8 +23,11 @@ MISSION = mission_text(
 )
 
 
-def ctl(sock: Path, *args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "executive", "ctl", "--socket", str(sock), *args], cwd=ROOT, capture_output=True, text=True)
+def ctl(capsys, sock: Path, *args: str) -> tuple[int, str, str]:
+    """``executive ctl`` in this process (`ctl tree --watch`, ended by Ctrl-C, runs as a process of its own below): exit code, stdout, stderr."""
+    code = main(["ctl", "--socket", str(sock), *args])
+    out, err = capsys.readouterr()
+    return code, out, err
 
 
 def wait_for_ekf_wait(sock: Path, timeout_s: float = 30.0) -> None:
@@ -47,16 +50,16 @@ def test_ctl_tree_and_status_show_the_wait_and_sigterm_ends_the_run_aborted_in_t
     run = subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     try:
         wait_for_ekf_wait(sock)
-        tree = ctl(sock, "tree")
-        assert tree.returncode == 0, tree.stderr
-        lines = tree.stdout.splitlines()
+        code, out, err = ctl(capsys, sock, "tree")
+        assert code == 0, err
+        lines = out.splitlines()
         assert lines[0].startswith("RUNNING ") and "waiting: EKF ok? (" in lines[0], lines[0]
         assert any(line.startswith("            * Wait until EKF ok? -- waiting (") for line in lines), lines
         assert any(line.startswith("                ✕ EKF ok? -- EKF has no position estimate") for line in lines), lines
         assert "            - Arm" in lines  # not reached yet
 
-        status = ctl(sock, "status")
-        assert "waiting: EKF ok? (" in status.stdout and ": EKF has no position estimate" in status.stdout, status.stdout
+        _, status, _ = ctl(capsys, sock, "status")
+        assert "waiting: EKF ok? (" in status and ": EKF has no position estimate" in status, status
 
         watch = subprocess.Popen(
             [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "tree", "--watch", "--interval", "0.1"],

@@ -32,29 +32,6 @@ def executive(*args: str, **popen) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stderr=subprocess.PIPE, text=True, **popen)
 
 
-def simulator(*args: str) -> tuple[subprocess.Popen, str]:
-    """``executive sim`` in another process on a port it chose (never one a concurrent or left-over run talks to); and the URL to connect to."""
-    sim = executive("sim", "--mavlink", "udpin:127.0.0.1:0", *args, stdout=subprocess.PIPE)
-    assert sim.stdout is not None
-    banner = sim.stdout.readline()
-    assert "(connect to " in banner, f"the simulator did not start: {banner!r}"
-    return sim, banner.split("(connect to ", 1)[1].split(")", 1)[0]
-
-
-def stop(*procs: subprocess.Popen | None) -> None:
-    """SIGTERM each process still running and wait for it: a run that timed out must not outlive its test."""
-    for proc in procs:
-        if proc is not None and proc.poll() is None:
-            proc.send_signal(signal.SIGTERM)
-    for proc in procs:
-        if proc is not None:
-            try:
-                proc.communicate(timeout=20)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.communicate()
-
-
 def test_the_readme_mission_completes_in_the_simulator():
     """README's first command: the rover square completes at speed-up 20 (every example mission: tests/testing/test_lockstep.py)."""
     proc = executive("run", str(ROOT / "missions/rover_square.yaml"), "--speedup", "20", "--socket", "none", stdout=subprocess.DEVNULL)
@@ -115,22 +92,20 @@ def test_an_obstacles_port_in_use_exits_3_before_the_vehicle_is_started(capsys):
     assert "simulated" not in err
 
 
-def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp_path):
-    """The executive and the vehicle in two processes joined by UDP: a simulator at 8x (as a SITL at --speedup 8); told so,
-    the executive ticks ~10 times a vehicle second, not a wall one (on the wall clock against a vehicle: tests/cli/test_target_system.py)."""
+def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp_path, capsys):
+    """The executive and the vehicle on two clocks joined by UDP: a simulator at 8x (as a SITL at --speedup 8); told so, the
+    executive ticks ~10 times a vehicle second, not a wall one (on the wall clock against a vehicle: tests/cli/test_target_system.py).
+    Both in this process: a process of its own would add an interpreter's start to what this checks (`executive sim` in
+    another process: tests/sim/test_ground_station.py)."""
     mission = tmp_path / "north.yaml"
     mission.write_text(
         "version: 1\nname: north\nvehicle: rover\nauto_arm: true\n"
         "waypoints:\n  - {lat: -35.3629906, lon: 149.1652300}\n"  # 30 m north of the simulator's home: 15 s and more of driving
     )
-    sim, url = simulator("--vehicle", "rover", "--home", "-35.363261,149.165230", "--ekf-ready-after", "0.5", "--speedup", "8")
-    run = None
-    try:
-        run = executive("run", str(mission), "--mavlink", url, "--speedup", "8", "--socket", "none", "--connect-timeout", "40")
-        _, err = run.communicate(timeout=300)
-    finally:
-        stop(run, sim)
-    assert run.returncode == 0, err
+    with SimServer("rover", clock=ScaledClock(8.0), home=(-35.363261, 149.165230, 0.0), ekf_ready_after_s=0.5) as sim:
+        code = main(["run", str(mission), "--mavlink", sim.url_for_client, "--speedup", "8", "--socket", "none", "--connect-timeout", "40"])
+    err = capsys.readouterr().err
+    assert code == 0, err
     assert "COMPLETED" in err
     assert "the vehicle's time runs 8x real time" in err
     ticks = int(err.rsplit("(", 1)[1].split(" ticks")[0])
@@ -150,7 +125,7 @@ def test_in_process_run_against_a_sim_server(square_mission):
     assert os.environ.get("MAVLINK20") == "1"
 
 
-def test_tlog_and_signing_end_to_end(tmp_path):
+def test_tlog_and_signing_end_to_end(tmp_path, capsys):
     """A signed run on the built-in simulator, recorded: the tlog replays both sides, every packet signed."""
     key, tlog = tmp_path / "key", tmp_path / "run.tlog"
     key.write_text("field team passphrase\n")
@@ -159,9 +134,9 @@ def test_tlog_and_signing_end_to_end(tmp_path):
         "version: 1\nname: short\nvehicle: rover\nauto_arm: true\nhome: {lat: -35.363261, lon: 149.165230}\n"
         "simulator: {ekf_ready_after_s: 2}\nwaypoints:\n  - {lat: -35.3631710, lon: 149.1652300}\n"  # 10 m north
     )
-    proc = executive("run", str(mission), "--speedup", "50", "--tlog", str(tlog), "--signing-key", str(key))
-    _, err = proc.communicate(timeout=300)
-    assert proc.returncode == 0, err
+    assert main(["run", str(mission), "--speedup", "50", "--tlog", str(tlog), "--signing-key", str(key), "--socket", "none"]) == 0, (
+        capsys.readouterr().err
+    )
     replay = mavutil.mavlink_connection(str(tlog), dialect="ardupilotmega")
     replay.setup_signing(load_signing_key(key), sign_outgoing=False)  # to check each signature
     senders, signed, total = set(), 0, 0
@@ -209,7 +184,7 @@ def test_a_mission_completes_over_a_lossy_link(square_mission):
     assert runtime.reader.health.lost > 0  # the reader saw the gaps
 
 
-def test_the_mission_chooses_its_simulator_and_plays_its_event_file(tmp_path):
+def test_the_mission_chooses_its_simulator_and_plays_its_event_file(tmp_path, capsys):
     # the loss 30 s after boot, on a 60 m leg: the executive has connected by then even when a busy machine
     # slows its start (at 3 s, 0.15 s of wall time, it was lost before the executive ever heard the vehicle)
     (tmp_path / "events.yaml").write_text("version: 1\nfaults:\n  - {kind: link_loss, at_s: 30, for_s: 5}\n")
@@ -219,8 +194,8 @@ def test_the_mission_chooses_its_simulator_and_plays_its_event_file(tmp_path):
         "simulator: {model: bunker, events: events.yaml, ekf_ready_after_s: 2}\n"
         "waypoints:\n  - {lat: -35.3627210, lon: 149.1652300}\n"  # 60 m north
     )
-    proc = executive("run", str(mission), "--speedup", "20", "-v")
-    _, err = proc.communicate(timeout=300)
-    assert proc.returncode == 0, err
+    code = main(["run", str(mission), "--speedup", "20", "--socket", "none", "-v"])
+    err = capsys.readouterr().err
+    assert code == 0, err
     assert "simulated bunker" in err
     assert "link lost" in err and "link up" in err  # the event file's link loss was played and recovered from

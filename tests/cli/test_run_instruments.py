@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import subprocess
-import sys
 import threading
 import tty
 from pathlib import Path
@@ -76,17 +74,18 @@ def ctd():
     os.close(slave)
 
 
-def test_samples_from_a_serial_ctd_are_recorded_with_the_instrument(tmp_path, ctd):
+def test_samples_from_a_serial_ctd_are_recorded_with_the_instrument(tmp_path, ctd, capsys):
     db = tmp_path / "journal.db"
     mission = asv(tmp_path, f"{{type: serial, port: {ctd}}}")
     text = mission.read_text()
     mission.write_text(text[: text.index("waypoints:\n")] + NEAR_SAMPLE_POINTS)  # what it shows needs no more of the lake...
-    run = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "20", "--socket", "none", "--journal", str(db)]
-    proc = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    assert "2 samples recorded" in proc.stderr
-    report = subprocess.run([sys.executable, "-m", "executive", "report", str(db)], cwd=ROOT, capture_output=True, text=True, timeout=30)
-    samples = [line for line in report.stdout.splitlines() if line.startswith("  waypoint")]
-    assert len(samples) == 2, report.stdout
+    code = main(["run", str(mission), "--speedup", "20", "--socket", "none", "--journal", str(db)])  # in this process: nothing needs another
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "2 samples recorded" in err
+    assert main(["report", str(db)]) == 0
+    report = capsys.readouterr().out
+    samples = [line for line in report.splitlines() if line.startswith("  waypoint")]
+    assert len(samples) == 2, report
     for line in samples:
         assert line.endswith(f"mean temperature (degC) 17.25, conductivity (mS/cm) 44.50, ph (pH) 8.10, dissolved_oxygen (mg/L) 7.75 (serial:{ctd})")

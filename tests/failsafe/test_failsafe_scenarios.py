@@ -13,8 +13,6 @@ from __future__ import annotations
 import json
 import logging
 import re
-import subprocess
-import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +33,7 @@ from executive.behaviours import (
     RcNotLost,
     RcNotTakingOver,
 )
+from executive.cli import main
 from executive.clock import Clock
 from executive.geofence import Geofence
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
@@ -217,37 +216,23 @@ def test_a_fault_gets_its_failsafe_within_one_tick_and_its_recovery(run_scenario
         assert report["outcome"] == "ABORTED"
 
 
-def test_a_failsafe_abort_exits_1_and_the_report_has_the_event(tmp_path: Path) -> None:
-    """``executive run --faults --journal`` as a process: battery_low, exit 1, the vehicle in RTL, the event in ``executive report --json``."""
+def test_a_failsafe_abort_exits_1_and_the_report_has_the_event(tmp_path: Path, capsys) -> None:
+    """``executive run --faults --journal`` from the command line (in this process: its exit code and output are what is checked):
+    battery_low, exit 1, the vehicle in RTL, the event in ``executive report --json``."""
     mission = tmp_path / "line.yaml"
     mission.write_text(yaml.safe_dump(failsafe_line().model_dump(mode="json", exclude_none=True)))
     faults = tmp_path / "battery_low.yaml"
     plan = {"version": 1, "faults": [f.model_dump(mode="json", exclude_none=True) for f in shifted_faults("battery_low.yaml")]}
     faults.write_text(yaml.safe_dump(plan))
     db = tmp_path / "journal.db"
-    run = [
-        sys.executable,
-        "-m",
-        "executive",
-        "run",
-        str(mission),
-        "--faults",
-        str(faults),
-        "--speedup",
-        "10",  # the safe mode is confirmed within 5 s of vehicle time: at 50x, 0.1 s of wall time, too little beside busy processes
-        "--journal",
-        str(db),
-        "--socket",
-        "none",
-        "-v",
-    ]
-    proc = subprocess.run(run, cwd=ROOT, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 1, proc.stderr
-    assert "ABORTED: Battery above floor?: battery" in proc.stderr
-    assert "vehicle in RTL" in proc.stderr  # the runtime saw the heartbeat confirm it
-    report = subprocess.run([sys.executable, "-m", "executive", "report", str(db), "--json"], cwd=ROOT, capture_output=True, text=True, timeout=30)
-    assert report.returncode == 0, report.stderr
-    events = [e for e in json.loads(report.stdout)["events"] if e["kind"] == "failsafe"]
+    # at 10x: the safe mode is confirmed within 5 s of vehicle time; at 50x, 0.1 s of wall time, too little beside busy processes
+    code = main(["run", str(mission), "--faults", str(faults), "--speedup", "10", "--journal", str(db), "--socket", "none", "-v"])
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert "ABORTED: Battery above floor?: battery" in err
+    assert "vehicle in RTL" in err  # the runtime saw the heartbeat confirm it
+    assert main(["report", str(db), "--json"]) == 0
+    events = [e for e in json.loads(capsys.readouterr().out)["events"] if e["kind"] == "failsafe"]
     assert [e["text"].split(":")[0] for e in events] == ["failsafe battery_low"]
     assert events[0]["text"].endswith("-> rtl (RTL), abort the mission")
 
