@@ -3,7 +3,7 @@ the time a thread waited for a CPU."""
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
 from typing import Any
 
 from executive.assembly import build_runtime
@@ -63,5 +63,9 @@ def runqueue_wait_s(native_id: int | None = None) -> float:
     A wall-clock duration less this wait is what the thread took itself, running or blocked: what a
     busy machine adds by not scheduling it is left out, so a bound on it needs no slack for the load.
     """
-    path = Path("/proc/thread-self/schedstat") if native_id is None else Path(f"/proc/self/task/{native_id}/schedstat")
-    return int(path.read_text().split()[1]) / 1e9
+    path = "/proc/thread-self/schedstat" if native_id is None else f"/proc/self/task/{native_id}/schedstat"
+    fd = os.open(path, os.O_RDONLY)  # not Path.read_text: a hostile test reads it 17 000 times (38 -> 8 us a read)
+    try:
+        return int(os.read(fd, 256).split()[1]) / 1e9
+    finally:
+        os.close(fd)

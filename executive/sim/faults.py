@@ -204,6 +204,8 @@ class FaultInjector:
 
     def __init__(self, faults: FaultPlan | Iterable[Fault], clock: Clock) -> None:
         self.faults: tuple[Fault, ...] = tuple(faults.faults if isinstance(faults, FaultPlan) else faults)
+        self._spans = tuple((f, f.at_s, f.end_s) for f in self.faults)
+        self._active: tuple[float, tuple[Fault, ...]] = (math.nan, ())  # the faults in force at one time: asked for many times a step
         self.clock = clock
         self._t0 = clock.now()
         self._started: set[int] = set()  # indices of faults whose start effects were applied
@@ -230,7 +232,9 @@ class FaultInjector:
     def active(self, t: float | None = None) -> list[Fault]:
         """The faults in force ``t`` seconds after boot (default: now)."""
         t = self.elapsed_s if t is None else t
-        return [f for f in self.faults if f.active_at(t)]
+        if t != self._active[0]:
+            self._active = (t, tuple(f for f, start, end in self._spans if start <= t < end))  # Fault.active_at, without a property a fault
+        return list(self._active[1])
 
     @property
     def receiving(self) -> bool:
@@ -258,16 +262,16 @@ class FaultInjector:
     def update(self, autopilot: ArduPilotSim) -> None:
         """Apply what starts or ends now to ``autopilot``, and steer it by the compass it has now."""
         t = self.elapsed_s
-        for i, fault in enumerate(self.faults):
-            if i not in self._started and t >= fault.at_s:
+        for i, (fault, start, end) in enumerate(self._spans):
+            if i not in self._started and t >= start:
                 self._started.add(i)
                 log.info("fault injection: %s starts", describe(fault))
                 self._start(i, fault, autopilot)
-            if i in self._started and i not in self._ended and t >= fault.end_s:
+            if t >= end and i in self._started and i not in self._ended:
                 self._ended.add(i)
                 log.info("fault injection: %s ends", describe(fault))
                 self._end(i, fault, autopilot)
-            if isinstance(fault, RcLoss) and fault.active_at(t) and t >= fault.at_s + RC_FAILSAFE_TIMEOUT_S and i not in self._failsafe_done:
+            if isinstance(fault, RcLoss) and start <= t < end and t >= start + RC_FAILSAFE_TIMEOUT_S and i not in self._failsafe_done:
                 self._failsafe_done.add(i)
                 self._rc_failsafe(fault, autopilot)
         if self._loses_position:
