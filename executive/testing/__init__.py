@@ -25,7 +25,8 @@ A whole mission (:class:`Lockstep`)
     its CAN base, sub, vtol), with fault and operator-event files, on one clock stepped only
     when the runtime waits: deterministic, and as fast as the CPU allows. ``run(until=...)``
     stops at a moment of interest; ``at(t, action)`` and ``observers`` act and watch on the
-    vehicle's clock.
+    vehicle's clock. ``Lockstep(mission, overload=Overload(seed=7))`` runs it as an overloaded
+    machine would, as deterministically: late and skipped ticks, a world stepped coarsely.
 
 A whole runtime, by hand (:class:`RuntimeOnLink`)
     ``r = RuntimeOnLink(mission, root=..., beat=True)``: the runtime over a :class:`FakeLink`, an
@@ -45,7 +46,7 @@ Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``comman
 from executive.testing.canbus import VirtualCan
 from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, describe, port_for
 from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
-from executive.testing.lockstep import Lockstep, LockstepClock, VehicleTimeLimit, Wire
+from executive.testing.lockstep import Lockstep, LockstepClock, Overload, VehicleTimeLimit, Wire
 from executive.testing.missions import mission_errors
 from executive.testing.on_link import RuntimeOnLink
 from executive.testing.scripted import MissionAutopilot, ObedientAutopilot, ScriptedAutopilot
@@ -61,6 +62,7 @@ __all__ = [
     "LockstepClock",
     "MissionAutopilot",
     "ObedientAutopilot",
+    "Overload",
     "Peer",
     "RuntimeOnLink",
     "ScriptedAutopilot",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import py_trees
@@ -10,7 +11,7 @@ import pytest
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.sim.faults import LinkLoss
-from executive.testing import Lockstep, VehicleTimeLimit
+from executive.testing import Lockstep, Overload, VehicleTimeLimit
 
 MISSIONS = Path(__file__).parents[2] / "missions"
 
@@ -26,6 +27,24 @@ def test_the_same_mission_twice_is_the_same_run_tick_for_tick(lockstep, as_bytes
         runs.append((outcome, sim.clock.now(), v.lat, v.lon, sim.autopilot.mode))
     assert runs[0][0].status is MissionStatus.COMPLETED
     assert runs[0] == runs[1]
+
+
+def test_an_overloaded_run_is_late_and_skips_ticks_as_the_pacer_counts_them_and_one_seed_is_one_run(lockstep) -> None:
+    mission = load_mission(MISSIONS / "rover_square.yaml")
+    runs = []
+    for seed in (3, 3, 4):
+        sim = lockstep(mission, ekf_ready_after_s=2.0, overload=Overload(seed=seed))
+        stepped: list[float] = []
+        sim.observers.append(lambda s, stepped=stepped: stepped.append(s.clock.now()))
+        outcome = sim.run_to_end(limit_s=300)
+        pacer = sim.runtime.pacer
+        assert outcome.status is MissionStatus.COMPLETED
+        assert pacer.late > pacer.ticks / 5 and pacer.skipped > 0 and pacer.worst_late_s > 0.5
+        steps = [b - a for a, b in itertools.pairwise(stepped)]
+        assert max(steps) > 0.3  # the world stepped coarsely, not once a tick
+        runs.append((outcome, sim.clock.now(), pacer.summary(), sim.autopilot.vehicle.lat, sim.autopilot.vehicle.lon))
+    assert runs[0] == runs[1]
+    assert runs[0] != runs[2]
 
 
 def test_a_link_loss_from_a_fault_object_cuts_both_ways_on_the_vehicle_clock(lockstep) -> None:

@@ -63,6 +63,7 @@ def run(mission: Mission, events: Sequence[Fault], keep: Path | None = None) -> 
         return {"plugs": [trace.plug, journal_recorder(Journal(keep / "journal.db", clock)), snapshot_recorder(recorder)]}
 
     with Lockstep(mission, mission_dir=MISSIONS, events=events, options_for_clock=plugs) as ls:
+        ls.uplink.packed = True
         carry = ls.uplink.carry
 
         def recorded(messages: Any) -> Any:
