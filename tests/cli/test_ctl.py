@@ -74,7 +74,7 @@ def test_pause_holds_resume_keeps_the_leg_a_ground_stations_pause_is_obeyed_and_
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     sock = tmp_path / "ctl.sock"
-    run = run_executive(mission, sock, "--gcs", f"udpin:127.0.0.1:{port}")
+    run = run_executive(mission, sock, "--gcs", f"udpin:127.0.0.1:{port}", speedup=20)  # as the replaced mission below
     gcs = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=255, source_component=190, dialect="ardupilotmega")
     try:
         wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
