@@ -92,11 +92,12 @@ def test_no_frame_is_made_unless_the_web_side_asks(lockstep):
 
 def test_a_browser_that_never_reads_costs_the_loop_nothing(lockstep):
     """Ticks and vehicle time of a whole mission are the same with a stalled client as with none, and frames were dropped for it meanwhile."""
-    quiet = lockstep(line_mission("web"))
+    two_legs = line_mission("web").waypoints[:2]  # the first two of the line: a whole mission, half the vehicle time
+    quiet = lockstep(line_mission("web", waypoints=two_legs))
     baseline = quiet.run_to_end(300.0)
     server = WebServer(WebAddress("127.0.0.1", 0), frames_per_s=500.0, send_buffer_bytes=4096)
     server.bind()
-    sim = lockstep(line_mission("web"), plugs=[live_view(server)])
+    sim = lockstep(line_mission("web", waypoints=two_legs), plugs=[live_view(server)])
     stalled = stalled_client(server.port)
 
     def between_ticks(_sim) -> None:  # the server's thread runs between steps, as it would between real ticks, until it has stalled
