@@ -140,3 +140,14 @@ def test_a_loiter_of_our_own_delivered_late_mid_leg_is_undone_and_the_survey_com
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert "LOITER" in modes and modes[-1] == "GUIDED"  # it went to LOITER mid-leg and was taken back to GUIDED
     assert leg_6[0] < 100.0 < leg_6[-1] < leg_6[0] + 40.0  # leg 6 (60 m) barely longer than its ~30 s
+
+
+def test_a_loiter_set_by_a_ground_station_mid_leg_is_a_person_s_and_guided_is_not_asked_for_again(lockstep):
+    mission = load_mission(MISSIONS / "boat_survey.yaml")
+    sim = lockstep(mission, ekf_ready_after_s=2.0)
+    sim.at(100.0, lambda s: s.autopilot.set_mode(s.autopilot.profile.modes["LOITER"]))  # not asked for by the executive
+    modes: set[str] = set()
+    sim.observers.append(lambda s: modes.add(s.autopilot.mode) if s.clock.now() > 100.0 else None)
+    assert sim.run(limit_s=300, until=lambda: sim.clock.now() > 130.0) is None
+    assert sim.status is MissionStatus.PAUSED and "ground station" in sim.runtime.mission_state.reason
+    assert modes == {"LOITER"}  # the leg checks GUIDED every tick, but a person's mode wins
