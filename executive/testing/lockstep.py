@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from executive.assembly import build_runtime, can_base, obstacle_camera
 from executive.clock import ManualClock
+from executive.io.heading import wait_for_filterpy
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.link import MemoryLink
 from executive.mission.lifecycle import MissionStatus
@@ -166,7 +167,8 @@ class Lockstep:
     sent; what the autopilot sends arrives at the runtime's next tick (one tick of latency, as over
     a fast link), each with its header; ``as_bytes`` packs and parses them as a real link does (see :class:`Wire`).
     ``overload`` (:class:`Overload`) runs the mission as an overloaded machine would: late and
-    skipped ticks, the world stepped coarsely, still deterministic (one seed, one run).
+    skipped ticks, the world stepped coarsely, still deterministic (one seed, one run). The same
+    mission and options give the same run, tick for tick, in any process.
     """
 
     def __init__(
@@ -191,6 +193,10 @@ class Lockstep:
         **runtime_options: Any,
     ) -> None:
         sim = mission.simulator or SimulatorOptions()
+        # the heading filter judges nothing until filterpy, loading in a thread, is in: a moment of wall
+        # time, which would put its first verdict on a different tick in every process
+        if not wait_for_filterpy():
+            raise RuntimeError("filterpy did not load within 30 s: the heading filter cannot run")
         self.mission = mission
         self.clock = LockstepClock(self._step_to, start_s, max_step_s=1.0 / rate_hz, overload=overload)
         self.autopilot: ArduPilotSim = make_autopilot(

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import itertools
+import threading
+import time
 from pathlib import Path
 
 import py_trees
 import pytest
 
+from executive.io import heading
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.sim.faults import LinkLoss
@@ -27,6 +30,15 @@ def test_the_same_mission_twice_is_the_same_run_tick_for_tick(lockstep, as_bytes
         runs.append((outcome, sim.clock.now(), v.lat, v.lon, sim.autopilot.mode))
     assert runs[0][0].status is MissionStatus.COMPLETED
     assert runs[0] == runs[1]
+
+
+def test_a_run_starts_once_the_heading_filter_can_judge_so_its_first_verdict_is_on_the_same_tick_in_every_process(lockstep, monkeypatch) -> None:
+    # filterpy loads in a thread and is ready at a moment of wall time: as in a fresh process, not yet here, and slow
+    monkeypatch.setattr(heading, "_filterpy_ready", threading.Event())
+    monkeypatch.setattr(heading, "_load_kalman_filter_module", lambda: time.sleep(0.3))
+    sim = lockstep(load_mission(MISSIONS / "rover_square.yaml"), ekf_ready_after_s=2.0)
+    assert heading._filterpy_ready.is_set()
+    assert sim.clock.now() == 0.0
 
 
 def test_an_overloaded_run_is_late_and_skips_ticks_as_the_pacer_counts_them_and_one_seed_is_one_run(lockstep) -> None:

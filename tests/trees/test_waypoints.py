@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from py_trees.common import Status
 
 import trees
 from executive.geo import destination
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission
 from executive.state import EkfFlags, EkfStatus
 from executive.testing import EKF_READY, ScriptedAutopilot
 
+MISSIONS = Path(__file__).parents[2] / "missions"
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 
 
@@ -117,3 +122,21 @@ def test_pause_holds_the_vehicle_and_resume_continues_the_same_leg(mission_run, 
     assert mission_state.leg_index == 2
     assert mission_run.run(300)[-1] == Status.SUCCESS
     assert mission_state.leg_index == 4
+
+
+def test_a_loiter_of_our_own_delivered_late_mid_leg_is_undone_and_the_survey_completes(lockstep):
+    """An overloaded companion computer: a mode it asked for (a link-loss failsafe's LOITER) reaches the boat late,
+    in the middle of a leg. ArduRover drops GUIDED targets silently in LOITER: before GUIDED was checked every tick,
+    the leg sat out its 90 s timeout 30 m short of the waypoint (the shape of the stressed run's abort: "leg 6/8
+    failed: Go to waypoint: leg 6/8: timed out after 90 s, 3.7 m short")."""
+    mission = load_mission(MISSIONS / "boat_survey.yaml")
+    sim = lockstep(mission, ekf_ready_after_s=2.0)
+    leg_6: list[float] = []
+    sim.observers.append(lambda s: leg_6.append(s.clock.now()) if s.runtime.mission_state.leg_index == 5 else None)
+    sim.at(100.0, lambda s: s.runtime.commander.set_mode("LOITER"))  # leg 6 runs from ~84 s to ~113 s of vehicle time
+    modes: list[str] = []
+    sim.observers.append(lambda s: modes.append(s.autopilot.mode) if s.runtime.mission_state.leg_index == 5 else None)
+    outcome = sim.run_to_end(limit_s=400)
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert "LOITER" in modes and modes[-1] == "GUIDED"  # it went to LOITER mid-leg and was taken back to GUIDED
+    assert leg_6[0] < 100.0 < leg_6[-1] < leg_6[0] + 40.0  # leg 6 (60 m) barely longer than its ~30 s
