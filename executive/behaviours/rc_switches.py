@@ -200,8 +200,11 @@ class ModeSwitch(SwitchWatcher):
 class ArmSwitch(SwitchWatcher):
     """Switch D arms (down) and disarms (up); arming only in MANUAL (else refused here, with the reason).
 
-    Nothing is asked when the vehicle already is as the switch says. Confirmed by the heartbeat;
-    refused (pre-arm checks), unanswered or not shown within ``confirm_timeout_s``: said in the feedback.
+    Nothing is asked when the vehicle already is as the switch says. Switch D down while switch C is
+    up but the heartbeat does not show MANUAL yet (the operator flicked both at once, or the tick that
+    saw them both came late) arms once it does, if within ``confirm_timeout_s`` and switch C is still
+    up. Confirmed by the heartbeat; refused (pre-arm checks), unanswered or not shown within
+    ``confirm_timeout_s``: said in the feedback.
     """
 
     reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/statustext", blackboard.command_key("COMPONENT_ARM_DISARM"))
@@ -213,9 +216,10 @@ class ArmSwitch(SwitchWatcher):
         super().__init__("swd", name)
         self.confirm_timeout_s = confirm_timeout_s
         self._asking: _Asking | None = None
+        self._manual_awaited_since: float | None = None  # switch D down with switch C up: arming once MANUAL shows
 
     def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
-        self._asking = None
+        self._asking = self._manual_awaited_since = None
         said = f"{self.label} {position}"
         if position is MIDDLE:
             self.report(f"{said}: a two-position switch has no middle: ignored")
@@ -227,12 +231,22 @@ class ArmSwitch(SwitchWatcher):
             return
         mode = self.get("/vehicle/mode")
         if arm and mode != self.autopilot.mode_name(ARMABLE_MODE):
+            if switches.swc is UP:
+                self._manual_awaited_since = self.clock.now()
+                self.report(f"{said}: arming once the mode is {ARMABLE_MODE} (switch C up; the mode is {mode})")
+                return
             self.report(f"{said}: arming refused: the mode is {mode}; ArduRover arms only in {ARMABLE_MODE} (switch C up)")
             return
+        self._ask(arm)
+
+    def _ask(self, arm: bool) -> None:
+        what = "armed" if arm else "disarmed"
         self._asking = _Asking(what, self.autopilot.arm() if arm else self.autopilot.disarm(), self.clock.now())
-        self.report(f"{said}: asked to be {what}")
+        self.report(f"{self.label} {self.position}: asked to be {what}")
 
     def follow(self) -> None:
+        if self._manual_awaited_since is not None:
+            self._await_manual(self._manual_awaited_since)
         if self._asking is None:
             return
         said, what = f"{self.label} {self.position}", self._asking.what
@@ -245,6 +259,20 @@ class ArmSwitch(SwitchWatcher):
             return
         self.report(f"{said}: not {what}: {refusal or f'not shown after {self.confirm_timeout_s:g} s'}")
         self._asking = None
+
+    def _await_manual(self, since: float) -> None:
+        mode = self.get("/vehicle/mode")
+        switches: RcSwitches | None = self.get("/rc/switches")
+        said = f"{self.label} {self.position}"
+        if switches is None or switches.swc is not UP:
+            self._manual_awaited_since = None
+            self.report(f"{said}: arming refused: switch C left MANUAL before the mode showed it (the mode is {mode})")
+        elif mode == self.autopilot.mode_name(ARMABLE_MODE):
+            self._manual_awaited_since = None
+            self._ask(arm=True)
+        elif self.clock.now() - since > self.confirm_timeout_s:
+            self._manual_awaited_since = None
+            self.report(f"{said}: arming refused: the mode is {mode}, not {ARMABLE_MODE} after {self.confirm_timeout_s:g} s (switch C up)")
 
 
 class RouteEditSwitch(SwitchWatcher):

@@ -341,6 +341,44 @@ def test_switch_d_arms_only_in_manual_and_disarms(rover_for, mode, armed, before
     assert r.h.feedback("Switch D: arm") == feedback
 
 
+def test_switch_d_down_with_switch_c_just_put_up_arms_once_the_heartbeat_shows_manual(rover_for) -> None:
+    """Both flicked at once (or seen in one late tick): the arm waits for MANUAL instead of being refused."""
+    r = rover_for(mission_with())
+    r.mode, r.armed = "HOLD", False
+    r.rc(swd=UP, swc=DOWN)
+    r.tick()
+    r.take()
+    r.rc(swc=UP, swd=DOWN)
+    r.tick()
+    assert r.take() == [("mode", "MANUAL")]
+    assert r.h.feedback("Switch D: arm") == "switch D DOWN: arming once the mode is MANUAL (switch C up; the mode is HOLD)"
+    assert r.run(2) == [Status.RUNNING] * 2
+    assert r.take() == [("arm", 1.0)]
+    assert r.armed and r.h.feedback("Switch D: arm") == "switch D DOWN: armed"
+
+
+@pytest.mark.parametrize(
+    ("then", "feedback"),
+    [
+        ({}, "switch D DOWN: arming refused: the mode is HOLD, not MANUAL after 5 s (switch C up)"),
+        ({"swc": MIDDLE}, "switch D DOWN: arming refused: switch C left MANUAL before the mode showed it (the mode is HOLD)"),
+    ],
+)
+def test_switch_d_down_waiting_for_manual_is_refused_when_it_never_shows_or_switch_c_moves_on(rover_for, then, feedback) -> None:
+    r = rover_for(mission_with())
+    r.mode, r.armed = "HOLD", False
+    r.refuse.add("MANUAL")
+    r.rc(swd=UP, swc=DOWN)
+    r.tick()
+    r.rc(swc=UP, swd=DOWN)
+    r.tick()
+    if then:
+        r.rc(**then)
+    r.run(60)
+    assert ("arm", 1.0) not in r.take() and not r.armed
+    assert r.h.feedback("Switch D: arm") == feedback
+
+
 def test_an_arm_refused_by_the_autopilot_says_why_and_is_not_retried(rover: ScriptedRover) -> None:
     rover.refuse.add("arm")
     rover.rc(swd=DOWN)
