@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import os
+import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,6 +22,13 @@ from executive.mission.model import Mission
 # workers and every subprocess inherit the environment.
 os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 sys.dont_write_bytecode = False
+
+# A suite started in the background (`pytest ... &` in a script, nohup, a CI step) inherits SIGINT ignored, as
+# does every executive it starts: Ctrl-C's tests (`ctl tree --watch`, an interrupted first-heartbeat wait)
+# then failed, 2 of 2154 in every such run. A terminal's Ctrl-C reaches a process whose SIGINT is the default:
+# a handler here (reset to the default in every process started from it) makes that so.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
