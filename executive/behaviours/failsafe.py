@@ -168,7 +168,7 @@ class Failsafe(TimedBehaviour):
             return self._rearm(now) if self._own_disarm else self._retry_refused_mode(now) or self._nothing_to_wait_for()
         self._rearm_from = None
         why = "; ".join(f"{g.name} {reason}" for g, reason in failing.items())
-        person = next((g for g in failing if g.pilot_in_control and self.policy_of(g).reaction == "wait"), None)
+        person = next((g for g in failing if g.pilot_in_control), None)  # whatever a policy says (the loader refuses any but wait)
         driving = self._person_drives()
         hands_off = person is not None or driving is not None
         aborting = [_Reaction(g, self.policy_of(g)) for g in failing if self.policy_of(g).recovery == "abort"]

@@ -125,6 +125,27 @@ def test_a_policy_the_vehicle_cannot_follow_is_refused_where_it_is_written(vehic
     assert errors_of(body, vehicle, "waypoints") == [f"m.yaml:{error}"]
 
 
+@pytest.mark.parametrize("reaction", ["hold", "loiter", "rtl", "disarm"])
+@pytest.mark.parametrize("condition", ["rc_takeover", "disarmed"])
+def test_a_persons_precedence_is_not_a_policy(condition: str, reaction: str) -> None:
+    """A take-over or a disarm is a person's act (or the autopilot's own failsafe's): the only reaction is hands off, refused at load."""
+    column = len(f"  {condition}: {{reaction: ") + 1  # where the reaction is written
+    why = {
+        "rc_takeover": "a person who takes over always wins: the executive keeps its hands off (reaction wait), "
+        "it never commands against the take-over switch",
+        "disarmed": "a vehicle disarmed mid-mission was disarmed by a person (or by the autopilot's own failsafe), who always wins: "
+        "the executive keeps its hands off (reaction wait)",
+    }[condition]
+    body = f"failsafe:\n  {condition}: {{reaction: {reaction}}}\n"
+    assert errors_of(body) == [f"m.yaml:6:{column}: failsafe.{condition}.reaction: {reaction}: {why}"]
+
+
+@pytest.mark.parametrize("condition", ["rc_takeover", "disarmed"])
+def test_waiting_hands_off_is_a_persons_only_reaction_and_its_recovery_is_the_missions(condition: str) -> None:
+    mission = load(f"failsafe:\n  {condition}: {{reaction: wait, recovery: abort}}\n")
+    assert failsafe_policy(mission)[condition] == FailsafePolicy(condition, "wait", "abort", mission.limits.recovery_timeout_s)
+
+
 def test_disarm_is_refused_on_the_rc_route_tree() -> None:
     body = "failsafe:\n  link_loss: {reaction: disarm}\n"
     text = HEAD.format(vehicle="rover", tree="ugv_rc_route") + body + "waypoints: []\n"

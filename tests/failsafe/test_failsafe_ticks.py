@@ -19,7 +19,7 @@ from executive.geo import destination
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission
+from executive.mission.model import FailsafePolicy, Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
 from executive.testing import EKF_READY, FakeLink, Harness, ScriptedAutopilot, Vehicle
 from executive.vehicles import PROFILES
@@ -136,8 +136,6 @@ REACTIONS = [
     pytest.param("rover", FENCE, {}, {"vehicle__position": position(60.0)}, [("mode", "HOLD")], F, id="rover-geofence_breach-hold-abort"),
     pytest.param("boat", FENCE, {}, {"vehicle__position": position(60.0)}, [("mode", "RTL")], F, id="boat-geofence_breach-rtl-abort"),
     pytest.param("rover", {"failsafe": {"link_loss": {"reaction": "loiter"}}}, {}, {"link__up": False}, [("mode", "LOITER")], R, id="mission-policy"),
-    pytest.param("rover", {"failsafe": {"rc_takeover": {"reaction": "hold"}}}, {}, {"rc__channels": RC_TAKEOVER}, [("mode", "HOLD")], R,
-                 id="mission-policy-hold-on-take-over"),
     pytest.param("rover", {"limits": {"battery_min_pct": None}}, {}, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [], S, id="no-battery-floor"),
 ]  # fmt: skip
 
@@ -157,6 +155,22 @@ def test_the_reaction_leaves_in_the_tick_the_guard_fails(rig, kind, changes, bef
     assert work(r).status == (R if status == S else Status.INVALID)  # the work stopped while the failsafe acts
     if status == F:
         assert failsafe_mode(r.h.root) == commands[0][1]  # where the runtime leaves the vehicle
+
+
+@pytest.mark.parametrize(
+    ("condition", "reaction", "breaks"),
+    [("rc_takeover", "hold", {"rc__channels": RC_TAKEOVER}), ("disarmed", "rtl", {"vehicle__armed": False})],
+)
+def test_a_persons_act_is_not_fought_even_under_a_policy_the_loader_refuses(rig, condition, reaction, breaks, caplog) -> None:
+    """A person's precedence is not a policy: the loader refuses any reaction but wait (test_failsafe_policy); a tree given one anyway
+    (built in code) keeps its hands off too."""
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover", failsafe={"disarmed": {"reaction": "wait"}} if condition == "disarmed" else {})
+    fs = failsafe(r)
+    fs.policy[condition] = FailsafePolicy(condition, reaction, "resume", 30.0)
+    r.h.vehicle.set(**breaks)
+    assert r.tick(20) == [R] * 20 and r.sent() == []
+    assert f"failsafe {condition}: " in caplog.text and "-> wait: hands off (" in caplog.text
 
 
 def test_resume_cancels_the_reaction_and_logs_cause_and_recovery(rig, caplog) -> None:
