@@ -121,7 +121,7 @@ class MissionState:
         #: While PAUSED, the tree holds the vehicle in its safe mode; False when a person paused it by taking the vehicle: hands off.
         self.hold_while_paused = True
 
-    def announce(self, text: str, *, warning: bool = True) -> None:
+    def announce(self, text: str, warning: bool = True) -> None:
         """Tell the announce listeners (the ground station) what a person must hear now; short: a STATUSTEXT holds 50 characters."""
         for listener in self.announce_listeners:
             listener(text, warning)
