@@ -260,3 +260,20 @@ def test_the_seeds_compass_bias_is_compensated_the_mission_completes_and_its_swi
     swings = [t for t in texts if t.startswith("failsafe heading_insane: compass rejected in ")]
     assert swings and swings[0].endswith("-> hold (HOLD), resume when it recovers (within 30 s)")  # the filter's reason
     assert any(t.startswith("failsafe heading_insane: recovered after ") for t in texts)
+
+
+def test_a_reaction_the_simulated_firmware_cannot_take_now_is_replaced_by_the_next_at_once(run_scenario) -> None:
+    """``ekf_loss: {reaction: rtl}`` on the simulated ArduRover, its position estimate lost at once: RTL needs one (Rover/mode.cpp
+    Mode::enter; the simulator refuses it as the firmware does), so HOLD is asked in that tick instead, never RTL, and confirmed."""
+    changes = {"failsafe": {"ekf_loss": {"reaction": "rtl"}}}
+    scenario = Scenario("ekf_loss", "ekf_loss.yaml", _ekf_lost, "HOLD", "resume", changes, fault_changes={"lose_position": True})
+    outcome, record, _, _ = run_scenario(scenario)
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    became_true = record.first(scenario.fact, after=100)
+    modes = [(t - became_true, m) for t, m in record.modes if t >= became_true]
+    assert modes[0] == (0, "HOLD") and "RTL" not in [m for _, m in modes]
+    texts = [text for _, text in record.warnings if text.startswith("failsafe ekf_loss: ")]
+    print("\n" + "\n".join(texts))
+    assert texts[1].startswith("failsafe ekf_loss: RTL cannot be entered: the EKF has no position estimate (flags ")
+    assert texts[1].endswith(" -> HOLD instead")
+    assert "refused" not in " ".join(texts)  # HOLD accepted and seen at the first ask
