@@ -8,7 +8,17 @@ none (a speed or depth limit) holds the vehicle and resumes, within ``limits.rec
 the guards are ticked every tick before the work, so the tick in which a condition becomes true on
 the blackboard (the readers write it before the tree ticks) is the tick in which the route fails
 and the failsafe runs; it asks the autopilot for the reaction there and then, and the runtime
-sends it when that tick ends. Nothing in between waits or retries later: zero ticks of delay.
+sends it when that tick ends: zero ticks of delay.
+
+A reaction is done only when the autopilot has accepted it (its COMMAND_ACK, on the blackboard)
+and the heartbeat shows the vehicle in the mode (or disarmed) asked for. Until then the feedback
+says what it waits for (``asking HOLD: refused (FAILED) x2``), and it is asked again every
+:data:`~executive.behaviours.reacting.ASK_AGAIN_S` of vehicle time. After three failed asks (refused; accepted
+but not seen; unanswered while heartbeats arrive), or at once when the firmware's source says the
+vehicle cannot enter it in its present state (a position mode without a position estimate), the
+next reaction the firmware allows is asked instead (:mod:`executive.autopilot.fallbacks`). Each
+such step is a warning and an announcement to the ground station (a STATUSTEXT): see
+:mod:`executive.behaviours.reacting`.
 
 While it runs, every guard is judged each tick (not only the first that failed), so a condition
 that becomes true during another one's reaction gets its own. A person who has the vehicle (a
@@ -23,11 +33,13 @@ from __future__ import annotations
 import logging
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import py_trees
 from py_trees.common import Status
 
-from executive.autopilot import AutopilotPort, Request
+from executive.autopilot import AutopilotPort
+from executive.autopilot.fallbacks import DISARM
 from executive.behaviours.actions import SetMode
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import (
@@ -44,6 +56,8 @@ from executive.behaviours.guards import (
     RcNotLost,
     RcNotTakingOver,
 )
+from executive.behaviours.reacting import READS, Reacting
+from executive.mission.lifecycle import MissionState
 from executive.mission.model import REACTION_MODES, FailsafeCondition, FailsafePolicy
 from executive.vehicles import PROFILES
 
@@ -93,9 +107,11 @@ class Failsafe(TimedBehaviour):
     left the vehicle in (the runtime then leaves it there).
     """
 
-    reads = ("/vehicle/vtol_state", "/vehicle/armed", "/vehicle/mode", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count")
+    reads = ("/vehicle/vtol_state", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count", *READS)
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
+    #: Where its steps are announced to a person (the ground station's STATUSTEXT); from ``setup(mission_state=...)`` when given.
+    mission_state: MissionState | None = None
     catalogued = False  # made with the mission's policy by failsafe_guarded and checked
 
     def __init__(
@@ -116,11 +132,14 @@ class Failsafe(TimedBehaviour):
         self._leg = 0
         self._reset()
 
+    def setup(self, **services: Any) -> None:
+        super().setup(**services)
+        self.mission_state = services.get("mission_state")
+
     def _reset(self) -> None:
         self._since: dict[Guard, float] = {}
         self._in_force: _Reaction | None = None
-        self._mode_in_force: str | None = None
-        self._tickets: list[Request] = []
+        self._reacting = Reacting(self, self.vehicle, announce=self._announce, on_disarm=self._disarming)
         self._rearm_from: float | None = None
         self._rearm_at = float("-inf")
 
@@ -141,15 +160,15 @@ class Failsafe(TimedBehaviour):
         if self.left_in is not None or new_status == Status.FAILURE:
             return  # ended the mission: the reaction must reach the vehicle
         # interrupted: by the guards recovering (the work resumes) or by a pause; a reaction still being retried must not undo either
-        for ticket in self._tickets:
-            self.autopilot.cancel(ticket)
+        self._reacting.cancel()
         if self._since and all(g.status == Status.SUCCESS for g in self.guards):
             causes = ", ".join(self._name(g) for g in self._since)
             self._resume_until = max(since + self.policy_of(g).timeout_s for g, since in self._since.items())
             self._resume_causes, self._retry_said = causes, False
-            log.warning(
-                "failsafe %s: recovered after %.1f s -> resume leg %d/%d", causes, self.elapsed, self._leg + 1, self.get("/mission/leg_count")
-            )
+            leg = f"{self._leg + 1}/{self.get('/mission/leg_count')}"
+            log.warning("failsafe %s: recovered after %.1f s -> resume leg %s", causes, self.elapsed, leg)
+            if self.mission_state is not None:
+                self.mission_state.announce(f"failsafe {causes} recovered: leg {leg}", warning=False)
         self._since = {}
 
     def update(self) -> Status:
@@ -168,22 +187,31 @@ class Failsafe(TimedBehaviour):
             return self._rearm(now) if self._own_disarm else self._retry_refused_mode(now) or self._nothing_to_wait_for()
         self._rearm_from = None
         why = "; ".join(f"{g.name} {reason}" for g, reason in failing.items())
-        person = next((g for g in failing if g.pilot_in_control and self.policy_of(g).reaction == "wait"), None)
+        person = next((g for g in failing if g.pilot_in_control), None)  # whatever a policy says (the loader refuses any but wait)
         driving = self._person_drives()
         hands_off = person is not None or driving is not None
         aborting = [_Reaction(g, self.policy_of(g)) for g in failing if self.policy_of(g).recovery == "abort"]
         if aborting:
             cause = max(aborting, key=lambda r: r.rank)
+            if not hands_off:
+                self._in_force = cause
+            self._log(cause, failing[cause.guard], person, "abort the mission", driving)  # the cause first, then each step of its reaction
             mode = None if hands_off else self._react(cause)
-            self._log(cause, failing[cause.guard], person, "abort the mission", driving)
             self.left_in = mode or self._mode_in_force
             self.feedback_message = "" if cause.guard.status == Status.FAILURE else f"{cause.guard.name} {failing[cause.guard]}"
             return Status.FAILURE
-        if not hands_off:
-            self._react_to_strongest(failing, new)
+        chosen = None if hands_off else self._strongest(failing, new)
+        if chosen is not None:
+            self._in_force = chosen
         for g in new:
             reaction = _Reaction(g, self.policy_of(g))
             self._log(reaction, failing[g], person, f"resume when it recovers (within {reaction.policy.timeout_s:g} s)", driving)
+        if hands_off:
+            self._reacting.stand_back()
+        else:
+            if chosen is not None:
+                self._react(chosen)
+            self._reacting.follow_up(now)
         late = [g for g in failing if now - self._since[g] > self.policy_of(g).timeout_s]
         if late:
             limit = self.policy_of(late[0]).timeout_s
@@ -192,41 +220,59 @@ class Failsafe(TimedBehaviour):
             self.feedback_message = f"not recovered after {limit:g} s: {why}"
             return Status.FAILURE
         waited, limit = max(((now - self._since[g], self.policy_of(g).timeout_s) for g in failing), key=lambda x: x[0] / x[1])
-        self.feedback_message = f"holding ({waited:.0f}/{limit:g} s): {why}"
+        self.feedback_message = f"{self._state(hands_off)} ({waited:.0f}/{limit:g} s): {why}"
         return Status.RUNNING
+
+    def _state(self, hands_off: bool) -> str:
+        """What the vehicle is left in, or what the reaction still waits for."""
+        state = None if hands_off else self._reacting.state()
+        return state or "hands off"
 
     # -- reactions ---------------------------------------------------------------------------
 
-    def _react_to_strongest(self, failing: Iterable[Guard], new: list[Guard]) -> None:
-        """Command the strongest reaction among the failing conditions, unless one as strong is in force (a new one: stronger or equal)."""
+    def _strongest(self, failing: Iterable[Guard], new: list[Guard]) -> _Reaction | None:
+        """The strongest reaction among the failing conditions, to command now, unless one as strong is in force (a new one: stronger or equal)."""
         candidates = [_Reaction(g, self.policy_of(g)) for g in failing if self.policy_of(g).reaction != "wait"]
         if not candidates:
-            return
+            return None
         strongest = max(candidates, key=lambda r: (r.rank, r.guard in new))
         in_force = self._in_force.rank if self._in_force is not None else -1
         if strongest.rank > in_force or (strongest.guard in new and strongest.rank == in_force):
-            self._react(strongest)
+            return strongest
+        return None
 
     def _react(self, reaction: _Reaction) -> str | None:
-        """Ask for ``reaction`` (unless its mode is in force already); the mode it puts the vehicle in, if any."""
+        """Ask for ``reaction`` (unless it, or a reaction after it, is asked already); the mode it leaves the vehicle in, if any."""
         self._in_force = reaction
         what = reaction.policy.reaction
         if what == "wait":
             return None
+        mode = self._mode_of(what)
+        first = DISARM if what == "disarm" else mode
+        if self._reacting.covers(first):  # asked already (or refused, and the next one asked)
+            return self._mode_in_force
+        if what == "disarm":  # the manual mode first: re-armed later, the vehicle does not drive off
+            try:
+                self._reacting.track(self.autopilot.set_mode(mode), mode)
+            except KeyError:
+                log.error("failsafe %s: the autopilot has no mode %s", self._name(reaction.guard), mode)
+        self._reacting.start(first, self._name(reaction.guard))
+        return self._mode_in_force
+
+    @property
+    def _mode_in_force(self) -> str | None:
+        return self._reacting.mode_in_force
+
+    def _disarming(self) -> None:
+        self._own_disarm = True
+
+    def _announce(self, text: str, warning: bool) -> None:
+        if self.mission_state is not None:
+            self.mission_state.announce(text, warning)
+
+    def _mode_of(self, what: str) -> str:
         modes = REACTION_MODES[what][self.vehicle]
-        mode = modes[1] if self.get("/vehicle/vtol_state") == "FW" else modes[0]
-        if mode == self._mode_in_force and what != "disarm":
-            return mode
-        try:
-            self._tickets.append(self.autopilot.set_mode(mode))
-        except KeyError:
-            log.error("failsafe %s: the autopilot has no mode %s", self._name(reaction.guard), mode)
-            return None
-        if what == "disarm":
-            self._tickets.append(self.autopilot.disarm())
-            self._own_disarm = True
-        self._mode_in_force = mode
-        return mode
+        return modes[1] if self.get("/vehicle/vtol_state") == "FW" else modes[0]
 
     def _rearm(self, now: float) -> Status:
         """Every condition cleared, the vehicle disarmed by this failsafe: arm it again (retried), then the work resumes."""
@@ -241,7 +287,7 @@ class Failsafe(TimedBehaviour):
             return Status.FAILURE
         if now - self._rearm_at >= REARM_RETRY_S:
             self._rearm_at = now
-            self._tickets.append(self.autopilot.arm())
+            self._reacting.track(self.autopilot.arm())
         self.feedback_message = f"re-arming ({now - self._rearm_from:.0f}/{limit:g} s)"
         return Status.RUNNING
 
@@ -293,22 +339,23 @@ class Failsafe(TimedBehaviour):
 
     def _log(self, reaction: _Reaction, reason: str, person: Guard | None, recovery: str, driving: str | None = None) -> None:
         """``failsafe <condition>: <reason> -> <reaction>, <recovery>``: a warning, so an event in the journal."""
-        what = reaction.policy.reaction
+        what, condition = reaction.policy.reaction, self._name(reaction.guard)
+        short = done = "wait: hands off"  # short: for a STATUSTEXT (50 characters)
         if person is not None:
             done = f"wait: hands off ({person.name.rstrip('?')} fails: a person has the vehicle)"
         elif driving is not None:
-            job = "; RC loss is the autopilot's own RC failsafe's job" if self._name(reaction.guard) == "rc_loss" else ""
+            job = "; RC loss is the autopilot's own RC failsafe's job" if condition == "rc_loss" else ""
             done = f"wait: hands off ({driving}{job})"
-        elif what == "wait":
-            done = "wait: hands off"
-        else:
-            modes = REACTION_MODES[what][self.vehicle]
-            mode = modes[1] if self.get("/vehicle/vtol_state") == "FW" else modes[0]
-            done = f"disarm in {mode}" if what == "disarm" else f"{what} ({mode})"
+        elif what != "wait":
+            mode = self._mode_of(what)
+            short = done = f"disarm in {mode}" if what == "disarm" else f"{what} ({mode})"
             stronger = self._in_force
             if stronger is not None and stronger.rank > reaction.rank:
                 done += f" not commanded: {stronger.policy.reaction} ({self._mode_in_force}) for {self._name(stronger.guard)} in force"
-        log.warning("failsafe %s: %s -> %s, %s", self._name(reaction.guard), reason, done, recovery)
+                short = f"{stronger.policy.reaction} kept"
+        log.warning("failsafe %s: %s -> %s, %s", condition, reason, done, recovery)
+        if self.mission_state is not None:
+            self.mission_state.announce(f"failsafe {condition} -> {short}" + (", abort" if recovery == "abort the mission" else ""))
 
 
 class FailsafeNote(py_trees.behaviour.Behaviour):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
+from typing import Any
 
 import py_trees
 from py_trees.common import Access, Status
@@ -10,6 +11,7 @@ from py_trees.common import Access, Status
 from executive.autopilot import AutopilotPort, Request
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
+from executive.behaviours.reacting import READS, Announce, Reacting
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, MissionStatus
 
@@ -108,9 +110,12 @@ class WaitForGuards(TimedBehaviour):
     itself failed, and so does this: there is nothing to wait for. On entry it asks for
     ``hold_mode`` unless a failing guard says a person has the vehicle; a VTOL in fixed-wing
     flight (``/vehicle/vtol_state`` FW) is held in ``fixed_wing_hold_mode`` instead, when given.
+    The hold is asked again until the autopilot accepts it and the heartbeat shows it
+    (:class:`~executive.behaviours.reacting.Reacting`, without its next reactions: the mission's
+    ``Failsafe`` has those); the feedback says what it waits for (``asking HOLD: refused (FAILED) x2``).
     """
 
-    reads = ("/vehicle/vtol_state",)
+    reads = ("/vehicle/vtol_state", *READS)
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     catalogued = False  # the failsafe (Failsafe, failsafe_guarded) does this with the mission's policy
@@ -128,19 +133,21 @@ class WaitForGuards(TimedBehaviour):
         self.limit_s = limit_s
         self.hold_mode = hold_mode
         self.fixed_wing_hold_mode = fixed_wing_hold_mode
-        self._ticket: Request | None = None
+        self._announce: Announce | None = None
+        self._reacting = Reacting(self, None, escalate=False)
+
+    def setup(self, **services: Any) -> None:
+        super().setup(**services)
+        mission_state: MissionState | None = services.get("mission_state")
+        self._announce = mission_state.announce if mission_state is not None else None
 
     def initialise(self) -> None:
         super().initialise()
-        failing = [g for g in self.guards if g.status == Status.FAILURE]
-        mode = hold_mode_for(self.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode)
-        self._ticket = None
-        if mode and failing and not any(g.pilot_in_control for g in failing):
-            self._ticket = self.autopilot.set_mode(mode)
+        self._reacting = Reacting(self, None, escalate=False, announce=self._announce)
 
     def terminate(self, new_status: Status) -> None:
         # The guards recovered (or the mission ended): a hold still being retried must not reach the vehicle now.
-        self.autopilot.cancel(self._ticket)
+        self._reacting.cancel()
 
     def update(self) -> Status:
         failing = [g for g in self.guards if g.status == Status.FAILURE]
@@ -151,7 +158,16 @@ class WaitForGuards(TimedBehaviour):
         if self.elapsed > self.limit_s:
             self.feedback_message = f"not recovered after {self.limit_s:g} s: {why}"
             return Status.FAILURE
-        self.feedback_message = f"holding ({self.elapsed:.0f}/{self.limit_s:g} s): {why}"
+        mode = hold_mode_for(self.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode)
+        if any(g.pilot_in_control for g in failing):
+            self._reacting.stand_back()
+            state = "hands off"
+        else:
+            if mode and self._reacting.asking is None:  # at once, or when the person who had the vehicle lets go
+                self._reacting.start(mode, failing[0].name.rstrip("?"))
+            self._reacting.follow_up(self.clock.now())
+            state = self._reacting.state() or "waiting"
+        self.feedback_message = f"{state} ({self.elapsed:.0f}/{self.limit_s:g} s): {why}"
         return Status.RUNNING
 
 

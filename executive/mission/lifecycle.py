@@ -77,6 +77,9 @@ SampleListener = Callable[[Sample], None]
 RouteListener = Callable[[Route, str], None]
 #: Told of a mission replaced while PAUSED: the new mission and why (the runtime's tree, the journal, the route keeper).
 ReplaceListener = Callable[[Mission, str], None]
+#: Told of what a person must hear as the mission runs (a failsafe's reaction refused, another asked instead): the text, and
+#: whether it is a warning (else a notice). The ground station sends it as a STATUSTEXT.
+AnnounceListener = Callable[[str, bool], None]
 #: Asked before a replacement: why this mission cannot replace the paused one (None: it can).
 ReplaceCheck = Callable[[Mission], "str | None"]
 #: States in which the route may be changed.
@@ -114,8 +117,14 @@ class MissionState:
         self.route_listeners: list[RouteListener] = []
         self.replace_checks: list[ReplaceCheck] = []
         self.replace_listeners: list[ReplaceListener] = []
+        self.announce_listeners: list[AnnounceListener] = []
         #: While PAUSED, the tree holds the vehicle in its safe mode; False when a person paused it by taking the vehicle: hands off.
         self.hold_while_paused = True
+
+    def announce(self, text: str, warning: bool = True) -> None:
+        """Tell the announce listeners (the ground station) what a person must hear now; short: a STATUSTEXT holds 50 characters."""
+        for listener in self.announce_listeners:
+            listener(text, warning)
 
     # -- requests ----------------------------------------------------------------------------
     def upload(self, mission: Mission, vehicle_at: tuple[float, float] | None = None) -> None:

@@ -26,6 +26,10 @@ battery_low       rtl, abort      rtl, abort      surface, abort     rtl, abort
 geofence_breach   hold, abort     rtl, abort      surface, abort     rtl, abort
 ================  ==============  ==============  =================  ============================
 
+rc_takeover and disarmed are a person's acts (or the autopilot's own failsafe's): a person always wins, so
+their reaction is ``wait`` (hands off) and nothing else; any other is refused at load
+(:data:`PERSON_CONDITIONS`). Their recovery is the mission's to choose.
+
 Seed rules, the defaults of their trees: ``goto_sample`` (the ASV) ekf_loss disarm, resume (MANUAL,
 disarmed until the EKF recovers, then re-armed) and rc_takeover wait, abort (the RC leaving auto
 ends the go-to); ``auv_survey`` link_loss hold, resume (the survey holds in POSHOLD).
@@ -243,6 +247,13 @@ REACTION_MODES: dict[str, dict[str, tuple[str, str]]] = {
     "disarm": {"rover": ("MANUAL", "MANUAL"), "boat": ("MANUAL", "MANUAL"), "sub": ("MANUAL", "MANUAL")},
 }
 _NO_REACTION = {"rtl": "a sub has no RTL: use surface", "surface": "only a sub can surface", "disarm": "disarming a vtol would drop it"}
+#: Conditions that are a person's act: a person always wins, so their only reaction is ``wait`` (hands off); why, for the loader's error.
+PERSON_CONDITIONS: dict[str, str] = {
+    "rc_takeover": "a person who takes over always wins: the executive keeps its hands off (reaction wait), "
+    "it never commands against the take-over switch",
+    "disarmed": "a vehicle disarmed mid-mission was disarmed by a person (or by the autopilot's own failsafe), who always wins: "
+    "the executive keeps its hands off (reaction wait)",
+}
 
 _R, _W, _A = "resume", "wait", "abort"
 _COMMON = {"rc_takeover": (_W, _R), "disarmed": (_W, _R), "ekf_loss": ("hold", _R), "gps_glitch": ("hold", _R), "heading_insane": ("hold", _R)}
@@ -560,7 +571,7 @@ def failsafe_policy(mission: Mission) -> dict[str, FailsafePolicy]:
 
 
 def _failsafe_errors(mission: Mission) -> list[tuple[Path, str]]:
-    """Each reaction exists for the vehicle; a time limit only where the mission resumes."""
+    """A person's act is never reacted to; each reaction exists for the vehicle; a time limit only where the mission resumes."""
     errors: list[tuple[Path, str]] = []
     policy = failsafe_policy(mission)
     for condition in FAILSAFE_CONDITIONS:
@@ -569,7 +580,9 @@ def _failsafe_errors(mission: Mission) -> list[tuple[Path, str]]:
             continue
         here: Path = ("failsafe", condition)
         reaction = policy[condition].reaction
-        if reaction != "wait" and mission.vehicle not in REACTION_MODES[reaction]:
+        if reaction != "wait" and condition in PERSON_CONDITIONS:
+            errors.append(((*here, "reaction"), f"{reaction}: {PERSON_CONDITIONS[condition]}"))
+        elif reaction != "wait" and mission.vehicle not in REACTION_MODES[reaction]:
             errors.append(((*here, "reaction"), f"{reaction}: not for a {mission.vehicle} ({_NO_REACTION[reaction]})"))
         elif reaction == "disarm" and mission.tree == "ugv_rc_route":
             errors.append(((*here, "reaction"), "disarm: not in tree ugv_rc_route (the operator arms and disarms with switch D)"))

@@ -124,7 +124,10 @@ class QuadPlaneSim(ArduPilotSim):
     MANUAL_INPUT_MODES = frozenset(PLANE_MODES) - {"INITIALISING"}  # STICK_MIXING enabled
     STABILIZE_MODES = frozenset(PLANE_MODES) - {"MANUAL", "INITIALISING"}
     AUTOPILOT_MODES = frozenset({"AUTO", "RTL", "LOITER", "THERMAL", "AVOID_ADSB", "GUIDED", "CIRCLE", "TAKEOFF", "QRTL", "LOITER_ALT_QLAND"})
-    POSITION_MODES = frozenset({"AUTO", "RTL", "LOITER", "GUIDED", "CIRCLE", "QLOITER", "QLAND", "QRTL"})
+    # No mode change is refused for want of a position estimate: Plane::set_mode (ArduPlane/system.cpp) and Mode::enter
+    # (ArduPlane/mode.cpp) check none (refusals come from a fence recovery, FLTMODE_GCSBLOCK, Q_ENABLE 0); a QuadPlane's own
+    # failsafes put it in QLAND whatever its position (ArduPlane/events.cpp).
+    POSITION_MODES: frozenset[str] = frozenset()
     NOT_SIMULATED = frozenset({"AUTO", "AUTOTUNE", "TAKEOFF", "AVOID_ADSB", "THERMAL", "QACRO", "QAUTOTUNE", "LOITER_ALT_QLAND", "INITIALISING"})
 
     vehicle: QuadPlaneModel

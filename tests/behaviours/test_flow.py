@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import py_trees
 from py_trees.common import Status
 
@@ -185,3 +187,25 @@ def test_timeout_passes_on_the_child_s_result_in_time(harness, vehicle):
     assert h.tick() == Status.RUNNING
     vehicle.set(link__up=True)
     assert h.tick() == Status.SUCCESS
+
+
+def test_wait_for_guards_asks_its_hold_again_until_accepted_and_seen_never_anything_else(harness, vehicle):
+    """A refused hold is asked again every 1.5 s (vehicle time), the feedback says so; accepted and seen, it is done."""
+    vehicle.set(link__up=True, vehicle__armed=True, vehicle__mode="GUIDED")
+    h, wait = guarded(harness, py_trees.behaviours.Running("leg"))
+    assert h.tick() == Status.RUNNING
+    vehicle.set(link__up=False)  # Link alive? fails (the heartbeats stop, the acks still come: a downlink that drops heartbeats)
+    asks, states = [], []
+    for tick in range(50):
+        h.tick()
+        for msg in h.link.take("COMMAND_LONG"):
+            asks.append((tick, msg.command, msg.param2))
+            h.ack(msg.command, mavlink.MAV_RESULT_FAILED if tick < 40 else mavlink.MAV_RESULT_ACCEPTED)
+            if tick >= 40:
+                vehicle.set(vehicle__mode="HOLD")
+        state = re.sub(r" \(\d+/10 s\): Link alive\? no heartbeat from the autopilot$", "", wait.feedback_message)
+        if not states or states[-1] != state:
+            states.append(state)
+    assert asks == [(t, mavlink.MAV_CMD_DO_SET_MODE, 4) for t in (0, 15, 30, 45)]  # HOLD, and only HOLD: no next reaction here
+    assert states == ["asking HOLD", "asking HOLD: refused (FAILED)", "asking HOLD: refused (FAILED) x2", "asking HOLD: refused (FAILED) x3",
+                      "in HOLD"]  # fmt: skip

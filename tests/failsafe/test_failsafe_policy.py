@@ -125,6 +125,27 @@ def test_a_policy_the_vehicle_cannot_follow_is_refused_where_it_is_written(vehic
     assert errors_of(body, vehicle, "waypoints") == [f"m.yaml:{error}"]
 
 
+@pytest.mark.parametrize("reaction", ["hold", "loiter", "rtl", "disarm"])
+@pytest.mark.parametrize("condition", ["rc_takeover", "disarmed"])
+def test_a_persons_precedence_is_not_a_policy(condition: str, reaction: str) -> None:
+    """A take-over or a disarm is a person's act (or the autopilot's own failsafe's): the only reaction is hands off, refused at load."""
+    column = len(f"  {condition}: {{reaction: ") + 1  # where the reaction is written
+    why = {
+        "rc_takeover": "a person who takes over always wins: the executive keeps its hands off (reaction wait), "
+        "it never commands against the take-over switch",
+        "disarmed": "a vehicle disarmed mid-mission was disarmed by a person (or by the autopilot's own failsafe), who always wins: "
+        "the executive keeps its hands off (reaction wait)",
+    }[condition]
+    body = f"failsafe:\n  {condition}: {{reaction: {reaction}}}\n"
+    assert errors_of(body) == [f"m.yaml:6:{column}: failsafe.{condition}.reaction: {reaction}: {why}"]
+
+
+@pytest.mark.parametrize("condition", ["rc_takeover", "disarmed"])
+def test_waiting_hands_off_is_a_persons_only_reaction_and_its_recovery_is_the_missions(condition: str) -> None:
+    mission = load(f"failsafe:\n  {condition}: {{reaction: wait, recovery: abort}}\n")
+    assert failsafe_policy(mission)[condition] == FailsafePolicy(condition, "wait", "abort", mission.limits.recovery_timeout_s)
+
+
 def test_disarm_is_refused_on_the_rc_route_tree() -> None:
     body = "failsafe:\n  link_loss: {reaction: disarm}\n"
     text = HEAD.format(vehicle="rover", tree="ugv_rc_route") + body + "waypoints: []\n"
@@ -133,3 +154,31 @@ def test_disarm_is_refused_on_the_rc_route_tree() -> None:
     assert [str(e) for e in refused.value.errors] == [
         "m.yaml:6:25: failsafe.link_loss.reaction: disarm: not in tree ugv_rc_route (the operator arms and disarms with switch D)"
     ]
+
+
+def test_the_readmes_table_of_next_reactions_is_the_code_s() -> None:
+    """README's failsafe table (firmware, reaction, needs, next) is executive/autopilot/fallbacks.py's FALLBACKS, row for row."""
+    from pathlib import Path
+
+    from executive.autopilot.fallbacks import DISARM, FALLBACKS
+    from executive.io.mavlink.modes import PX4_EQUIVALENTS
+
+    labels = {
+        ("ardupilot", "rover"): "ArduRover (rover, boat)", ("ardupilot", "boat"): "ArduRover (rover, boat)", ("ardupilot", "sub"): "ArduSub",
+        ("ardupilot", "vtol"): "ArduPlane QuadPlane (vtol)", ("px4", "rover"): "PX4 rover", ("px4", "vtol"): "PX4 VTOL",
+    }  # fmt: skip
+
+    def shown(firmware: str, step: str) -> str:
+        return "disarm" if step == DISARM else PX4_EQUIVALENTS.get(step, step) if firmware == "px4" else step
+
+    code = {
+        (labels[firmware, kind], shown(firmware, step), "position" if rule.needs_position else "-", shown(firmware, rule.then))
+        for (firmware, kind), table in FALLBACKS.items()
+        for step, rule in table.items()
+        if rule.then is not None
+    }
+    readme = (Path(__file__).parents[2] / "README.md").read_text(encoding="utf-8")
+    section = readme[readme.index("### Failsafes (`failsafe:`)") : readme.index("### When a person intervenes")]
+    rows = re.findall(r"^\| ((?:Ardu|PX4)[^|]*) \| ([^|]+) \| ([^|]+) \| ([^|]+) \|", section, re.MULTILINE)
+    assert {tuple(cell.strip() for cell in row) for row in rows} == code
+    assert len(rows) == len(code)  # one row each

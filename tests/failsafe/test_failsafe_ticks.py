@@ -4,6 +4,7 @@ hold time: most hold at once), then the recovery (the condition good again for t
 from __future__ import annotations
 
 import logging
+import re
 from collections.abc import Callable
 from typing import Any
 
@@ -18,8 +19,9 @@ from executive.clock import ManualClock
 from executive.geo import destination
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.io.mavlink.modes import PX4_MODES
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission
+from executive.mission.model import FailsafePolicy, Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
 from executive.testing import EKF_READY, FakeLink, Harness, ScriptedAutopilot, Vehicle
 from executive.vehicles import PROFILES
@@ -53,18 +55,25 @@ def position(north_m: float = 0.0) -> GlobalPosition:
 class Obeying(ScriptedAutopilot):
     """The autopilot behind the guarded tree: it acks each command at once (a mode in :attr:`refuse` FAILED; nothing with ``acks`` off).
 
-    It publishes nothing: the vehicle's facts are the test's to write (healthy until a test breaks them).
+    It publishes nothing but what it accepts: the mode it enters and its arming, as its heartbeat would (not with ``shows`` off: a
+    vehicle that acks and stays as it was); the other facts are the test's to write (healthy until a test breaks them).
     """
 
     def __init__(self, h: Harness) -> None:
         super().__init__(h)
         self.acks = True
+        self.shows = True
 
     def publish(self) -> None:
-        """Nothing: the test writes the vehicle's facts."""
+        """Nothing: the test writes the vehicle's facts (the heartbeat's, as accepted, in :meth:`on_command`)."""
 
     def on_command(self, msg: MAVLinkMessage) -> int | None:
         result = super().on_command(msg)
+        if result == mavlink.MAV_RESULT_ACCEPTED and self.acks and self.shows:
+            if msg.command == mavlink.MAV_CMD_DO_SET_MODE:
+                self.h.vehicle.set(vehicle__mode=self.mode)
+            elif msg.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
+                self.h.vehicle.set(vehicle__armed=self.armed)
         return result if self.acks else None
 
     def tick(self, n: int = 1) -> list[Status]:
@@ -136,8 +145,6 @@ REACTIONS = [
     pytest.param("rover", FENCE, {}, {"vehicle__position": position(60.0)}, [("mode", "HOLD")], F, id="rover-geofence_breach-hold-abort"),
     pytest.param("boat", FENCE, {}, {"vehicle__position": position(60.0)}, [("mode", "RTL")], F, id="boat-geofence_breach-rtl-abort"),
     pytest.param("rover", {"failsafe": {"link_loss": {"reaction": "loiter"}}}, {}, {"link__up": False}, [("mode", "LOITER")], R, id="mission-policy"),
-    pytest.param("rover", {"failsafe": {"rc_takeover": {"reaction": "hold"}}}, {}, {"rc__channels": RC_TAKEOVER}, [("mode", "HOLD")], R,
-                 id="mission-policy-hold-on-take-over"),
     pytest.param("rover", {"limits": {"battery_min_pct": None}}, {}, {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, [], S, id="no-battery-floor"),
 ]  # fmt: skip
 
@@ -159,10 +166,26 @@ def test_the_reaction_leaves_in_the_tick_the_guard_fails(rig, kind, changes, bef
         assert failsafe_mode(r.h.root) == commands[0][1]  # where the runtime leaves the vehicle
 
 
+@pytest.mark.parametrize(
+    ("condition", "reaction", "breaks"),
+    [("rc_takeover", "hold", {"rc__channels": RC_TAKEOVER}), ("disarmed", "rtl", {"vehicle__armed": False})],
+)
+def test_a_persons_act_is_not_fought_even_under_a_policy_the_loader_refuses(rig, condition, reaction, breaks, caplog) -> None:
+    """A person's precedence is not a policy: the loader refuses any reaction but wait (test_failsafe_policy); a tree given one anyway
+    (built in code) keeps its hands off too."""
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover", failsafe={"disarmed": {"reaction": "wait"}} if condition == "disarmed" else {})
+    fs = failsafe(r)
+    fs.policy[condition] = FailsafePolicy(condition, reaction, "resume", 30.0)
+    r.h.vehicle.set(**breaks)
+    assert r.tick(20) == [R] * 20 and r.sent() == []
+    assert f"failsafe {condition}: " in caplog.text and "-> wait: hands off (" in caplog.text
+
+
 def test_resume_cancels_the_reaction_and_logs_cause_and_recovery(rig, caplog) -> None:
     caplog.set_level(logging.WARNING, logger="executive")
     r = rig("rover")
-    r.acks = False  # the autopilot does not answer: the commander would retry the hold every 1.5 s...
+    r.acks = False  # the autopilot does not answer: the failsafe asks the hold again every 1.5 s...
     r.h.vehicle.set(vehicle__ekf=EKF_LOST)
     assert r.tick(10) == [R] * 10 and r.sent() == [("mode", "HOLD")]
     r.h.vehicle.set(vehicle__ekf=EKF_READY)
@@ -173,6 +196,7 @@ def test_resume_cancels_the_reaction_and_logs_cause_and_recovery(rig, caplog) ->
     assert r.commander.idle
     assert [rec.getMessage() for rec in caplog.records] == [
         "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> hold (HOLD), resume when it recovers (within 30 s)",
+        "failsafe ekf_loss: HOLD no answer -> asked again every 1.5 s",
         "failsafe ekf_loss: recovered after 4.0 s -> resume leg 1/1",
     ]
     assert {rec.name for rec in caplog.records} == {"executive.behaviours.failsafe"}  # the journal's event kind: "failsafe"
@@ -196,7 +220,7 @@ def test_while_holding_the_feedback_counts_toward_the_nearest_limit(rig) -> None
     r = rig("rover")
     r.h.vehicle.set(link__up=False)
     r.tick(31)
-    assert failsafe(r).feedback_message == "holding (3/30 s): Link alive? no heartbeat from the autopilot"
+    assert failsafe(r).feedback_message == "in HOLD (3/30 s): Link alive? no heartbeat from the autopilot"  # accepted, and seen
 
 
 def test_a_stronger_condition_replaces_the_reaction_in_force_and_a_weaker_one_does_not(rig, caplog) -> None:
@@ -261,6 +285,7 @@ def test_a_person_with_the_vehicle_is_not_fought_by_an_abort_either(rig) -> None
 def test_disarm_puts_the_vehicle_in_manual_disarmed_then_re_arms_it_and_the_work_resumes(rig, caplog) -> None:
     caplog.set_level(logging.WARNING, logger="executive")
     r = rig("boat", failsafe={"ekf_loss": {"reaction": "disarm"}})
+    r.shows = False  # the test writes what the heartbeat shows
     r.h.vehicle.set(vehicle__ekf=EKF_LOST)
     assert r.tick() == [R] and r.sent() == [("mode", "MANUAL"), ("arm", 0.0)]  # both in the tick the EKF fails
     r.h.vehicle.set(vehicle__mode="MANUAL", vehicle__armed=False)
@@ -404,3 +429,253 @@ def test_the_boot_mode_is_nobodys_the_failsafe_reacts(rig) -> None:
     r = rig("rover")
     r.h.vehicle.set(vehicle__mode="MANUAL", vehicle__mode_set_by=None, link__up=False)
     assert r.tick() == [R] and r.sent() == [("mode", "HOLD")]
+
+
+# -- every reaction verified: asked until the autopilot accepts it and the heartbeat shows it, else the next one the firmware allows --
+
+
+def play(r: Obeying, ticks: int) -> tuple[list[tuple[float, tuple[str, Any]]], list[str]]:
+    """``ticks`` ticks: what was asked and when (seconds from the first tick), and the reaction's states the feedback went through."""
+    start, asked, states = r.h.clock.now() + 0.1, [], []
+    for _ in range(ticks):
+        if r.tick() != [R]:
+            break
+        asked += [(round(r.h.clock.now() - start, 1), c) for c in r.sent()]
+        state = re.sub(r" \(\d+/\d+ s\): .*$", "", failsafe(r).feedback_message)
+        if not states or states[-1] != state:
+            states.append(state)
+    return asked, states
+
+
+def announced(r: Obeying) -> list[str]:
+    """The STATUSTEXTs the ground station will send (the mission state's announcements), gathered from now on."""
+    texts: list[str] = []
+    r.h.mission_state.announce_listeners.append(lambda text, warning: texts.append(text))
+    return texts
+
+
+def test_a_refused_reaction_is_asked_again_every_1_5_s_then_the_next_the_firmware_allows(rig, caplog) -> None:
+    """ArduRover refuses HOLD (a scripted refusal: the firmware's HOLD needs nothing): asked 3 times, 1.5 s apart, then a disarm."""
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover")
+    texts = announced(r)
+    r.refuse.add("HOLD")
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
+    asked, states = play(r, 60)
+    assert asked == [(0.0, ("mode", "HOLD")), (1.5, ("mode", "HOLD")), (3.0, ("mode", "HOLD")), (4.5, ("arm", 0.0))]
+    assert states == [
+        "asking HOLD",
+        "asking HOLD: refused (FAILED)",
+        "asking HOLD: refused (FAILED) x2",
+        "asking HOLD: refused (FAILED) x3",
+        "asking disarm instead of HOLD",
+        "disarmed",
+    ]
+    assert [m.getMessage() for m in caplog.records] == [
+        "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> hold (HOLD), resume when it recovers (within 30 s)",
+        "failsafe ekf_loss: HOLD refused (FAILED) -> asked again every 1.5 s",
+        "failsafe ekf_loss: HOLD refused (FAILED) x3 after 3 asks -> disarm instead "
+        "(ArduRover HOLD needs no position (Rover/mode.h); a disarm stops the motors (Rover/AP_Arming_Rover.cpp))",
+        "failsafe ekf_loss: the vehicle disarmed (accepted and seen; 1 ask, 0.1 s)",
+    ]
+    assert texts == [
+        "failsafe ekf_loss -> hold (HOLD)",
+        "ekf_loss: HOLD refused (FAILED)",
+        "ekf_loss: HOLD refused (FAILED) x3 -> disarm",
+        "ekf_loss: disarmed, confirmed",
+    ]
+    assert all(len(t) <= 50 for t in texts)  # a STATUSTEXT's room
+    r.h.vehicle.set(vehicle__ekf=EKF_READY)  # recovered (3 s sane): re-armed, then the work resumes
+    assert r.tick(40) == [R] * 40 and work(r).status == R and r.sent() == [("arm", 1.0)]
+
+
+def test_a_reaction_never_answered_is_asked_again_and_the_next_one_after_three_asks(rig) -> None:
+    """Heartbeats arrive (the link is up) but no ack ever comes: 3 unanswered asks are 3 failed asks."""
+    r = rig("rover")
+    r.acks = False
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
+    asked, states = play(r, 80)
+    assert asked == [(0.0, ("mode", "HOLD")), (1.5, ("mode", "HOLD")), (3.0, ("mode", "HOLD"))] + [(t, ("arm", 0.0)) for t in (4.5, 6.0, 7.5)]
+    assert states == [
+        "asking HOLD",
+        "asking HOLD: no answer",
+        "asking HOLD: no answer x2",
+        "asking disarm instead of HOLD",  # the third "no answer" is judged in the tick the next reaction is asked
+        "asking disarm instead of HOLD: no answer",
+        "asking disarm instead of HOLD: no answer x2",  # nothing after a disarm: asked again until the failsafe's time is up
+    ]
+
+
+def test_with_the_link_down_an_unanswered_reaction_is_asked_again_until_the_failsafes_time_and_never_replaced(rig) -> None:
+    """No heartbeat, no ack: nothing says the vehicle cannot enter HOLD (it may hear us: a downlink loss), so HOLD it stays."""
+    r = rig("rover")
+    r.acks = False
+    r.h.vehicle.set(link__up=False)
+    first_tick = r.h.clock.now() + 0.1
+    asked, states = play(r, 400)
+    assert {c for _, c in asked} == {("mode", "HOLD")} and [t for t, _ in asked] == [1.5 * n for n in range(21)]  # the last in the abort's tick
+    assert states[:3] == ["asking HOLD", "asking HOLD: no answer", "asking HOLD: no answer x2"] and states[-1] == "asking HOLD: no answer x20"
+    assert failsafe(r).feedback_message == "not recovered after 30 s: Link alive? no heartbeat from the autopilot"
+    assert failsafe(r).status == F and round(r.h.clock.now() - first_tick, 1) == 30.1 and failsafe_mode(r.h.root) == "HOLD"
+
+
+def test_a_reaction_accepted_but_never_seen_is_asked_again_then_the_next_one(rig) -> None:
+    """The autopilot acks ACCEPTED and its heartbeat stays in GUIDED: not done."""
+    r = rig("rover")
+    r.shows = False
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
+    asked, states = play(r, 70)
+    assert asked[:4] == [(0.0, ("mode", "HOLD")), (1.5, ("mode", "HOLD")), (3.0, ("mode", "HOLD")), (4.5, ("arm", 0.0))]
+    assert states[:6] == [
+        "asking HOLD",
+        "asking HOLD: accepted, the vehicle still in GUIDED",
+        "asking HOLD: accepted, the vehicle still in GUIDED x2",
+        "asking disarm instead of HOLD",
+        "asking disarm instead of HOLD: accepted, the vehicle still armed",
+    ]
+
+
+def test_a_reaction_accepted_late_is_done_when_its_ack_and_the_heartbeat_come(rig, caplog) -> None:
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover")
+    texts = announced(r)
+    r.acks = False
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
+    asked, states = play(r, 20)  # 2 s: asked at 0 and 1.5 s, no answer
+    r.h.ack(mavlink.MAV_CMD_DO_SET_MODE)  # the answer comes at last...
+    asked2, states2 = play(r, 5)
+    assert states2 == ["asking HOLD: no answer"]  # ...and the heartbeat still shows GUIDED: not done
+    r.h.vehicle.set(vehicle__mode="HOLD")
+    asked3, states3 = play(r, 20)
+    assert asked == [(0.0, ("mode", "HOLD")), (1.5, ("mode", "HOLD"))] and asked2 == asked3 == []  # never asked again once accepted
+    assert states == ["asking HOLD", "asking HOLD: no answer"] and states3 == ["in HOLD"]
+    assert caplog.records[-1].getMessage() == "failsafe ekf_loss: the vehicle in HOLD (accepted and seen; 2 asks, 2.5 s)"
+    assert texts[-1] == "ekf_loss: in HOLD, confirmed"
+
+
+def test_the_first_reaction_the_firmware_allows_in_the_vehicles_state_is_asked_at_once(rig, caplog) -> None:
+    """ArduRover refuses RTL without a position estimate (Rover/mode.cpp Mode::enter): with the EKF lost, HOLD at once, never RTL."""
+    caplog.set_level(logging.WARNING, logger="executive")
+    r = rig("rover", failsafe={"ekf_loss": {"reaction": "rtl"}})
+    r.h.vehicle.set(vehicle__ekf=EKF_LOST)
+    asked, states = play(r, 10)
+    assert asked == [(0.0, ("mode", "HOLD"))] and states == ["asking HOLD instead of RTL", "in HOLD"]
+    assert caplog.records[1].getMessage() == (
+        "failsafe ekf_loss: RTL cannot be entered: the EKF has no position estimate (flags 0x81) (ArduRover RTL needs a position "
+        "estimate and home (Rover/mode.cpp Mode::enter, Rover/mode_rtl.cpp)) -> HOLD instead"
+    )
+
+
+@pytest.mark.parametrize(
+    ("kind", "breaks", "refused", "expected"),
+    [
+        # ArduSub: POSHOLD needs a position (ArduSub/mode.cpp Sub::set_mode): ALT_HOLD at once, as its own terrain failsafe does
+        ("sub", {"vehicle__ekf": EKF_LOST}, set(), [(0.0, ("mode", "ALT_HOLD"))]),
+        # a sub refused SURFACE x3: a disarm (ArduSub/failsafe.cpp failsafe_gcs_check does the same)
+        ("sub", {"link__up": True, "vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}, {"SURFACE"}, None),
+        # ArduPlane QuadPlane refused QLOITER x3: QLAND (ArduPlane/events.cpp, its own failsafe's landing); never a disarm
+        ("vtol", {"vehicle__ekf": EKF_LOST}, {"QLOITER"}, [(0.0, ("mode", "QLOITER")), (1.5, ("mode", "QLOITER")), (3.0, ("mode", "QLOITER")),
+                                                          (4.5, ("mode", "QLAND"))]),
+        # ... and as a plane, LOITER refused x3: CIRCLE (no position needed: ArduPlane/mode_circle.cpp)
+        ("vtol-fw", {"vehicle__ekf": EKF_LOST}, {"LOITER"}, [(0.0, ("mode", "LOITER")), (1.5, ("mode", "LOITER")), (3.0, ("mode", "LOITER")),
+                                                            (4.5, ("mode", "CIRCLE"))]),
+    ],
+)  # fmt: skip
+def test_the_next_reaction_is_the_firmwares(rig, kind: str, breaks: dict[str, Any], refused: set[str], expected: Any) -> None:
+    r = rig(kind.removesuffix("-fw"))
+    if kind.endswith("-fw"):
+        r.h.vehicle.set(vehicle__vtol_state="FW")
+        r.tick()
+    r.refuse |= refused
+    r.h.vehicle.set(**breaks)
+    statuses = r.tick(60)
+    asked = r.sent()
+    if expected is None:  # battery_low: surface, abort: the failsafe ends at once (the runtime then keeps asking SURFACE)
+        assert statuses == [R] * 20 + [F] and asked == [("mode", "SURFACE")] and failsafe_mode(r.h.root) == "SURFACE"
+        return
+    assert [c for c in asked if c[0] == "mode"] == [c for _, c in expected]
+    assert not [c for c in asked if c[0] == "arm"]
+
+
+def test_on_px4_a_rovers_refused_hold_is_followed_by_a_disarm(rig) -> None:
+    """PX4's AUTO.LOITER needs a global position (commander/ModeUtil/mode_requirements.cpp); a rover may always be disarmed (Commander.cpp)."""
+    r = rig("rover")
+    r.h.autopilot.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_GROUND_ROVER)
+    r.h.vehicle.set(vehicle__mode="OFFBOARD")
+    px4_modes = {number: name for name, number in PX4_MODES.items()}
+    on_command = r.on_command
+
+    def answer(msg: MAVLinkMessage) -> int | None:  # PX4 puts the main mode in param2, the sub mode in param3
+        if msg.command != mavlink.MAV_CMD_DO_SET_MODE:
+            return on_command(msg)
+        mode = px4_modes[(int(msg.param2) << 16) | (int(msg.param3) << 24)]
+        r.commands.append(("mode", mode))
+        return mavlink.MAV_RESULT_TEMPORARILY_REJECTED  # "Switching to Hold is currently not available" (Commander.cpp)
+
+    r.on_command = answer  # type: ignore[method-assign]
+    r.h.vehicle.set(rc__connected=False)  # rc_loss: hold
+    asked, states = play(r, 60)
+    assert asked == [(0.0, ("mode", "AUTO.LOITER")), (1.5, ("mode", "AUTO.LOITER")), (3.0, ("mode", "AUTO.LOITER")), (4.5, ("arm", 0.0))]
+    assert states == [
+        "asking AUTO.LOITER",
+        "asking AUTO.LOITER: refused (TEMPORARILY_REJECTED)",
+        "asking AUTO.LOITER: refused (TEMPORARILY_REJECTED) x2",
+        "asking AUTO.LOITER: refused (TEMPORARILY_REJECTED) x3",
+        "asking disarm instead of AUTO.LOITER",
+        "disarmed",
+    ]
+
+
+def test_each_step_reaches_the_operator_statustext_status_json_and_line(runtime_on_link, vehicle: Vehicle) -> None:
+    """A whole runtime, the autopilot refusing HOLD: the ground station's STATUSTEXTs, ``ctl status``'s JSON and the status line say
+    what the reaction waits for, then what replaced it."""
+    from executive.status import StatusSource, status_line
+
+    mission = make_mission()
+    root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
+    on_link = runtime_on_link(mission, root=root, beat=True)
+    on_link.autopilot.refuse.add("HOLD")
+    on_link.runtime.mission_state.start()
+    status = StatusSource("test", on_link.clock)
+    seen: list[tuple[str, str]] = []  # the JSON's waiting feedback (its reaction) and the status line, as the reaction changes
+    for tick in range(80):
+        vehicle.set(vehicle__ekf=EKF_READY if tick < 5 else EKF_LOST, rc__channels=RC_OK, vehicle__position=position())
+        vehicle.set(vehicle__battery=Battery(12.4, 2.0, 80, 0.0))
+        on_link.tick()
+        now = status.snapshot()
+        if now["waiting"] is not None and now["waiting"]["node"] == "Wait for guards":
+            reaction = re.sub(r" \(\d+/\d+ s\): .*$", "", now["waiting"]["feedback"])
+            if not seen or seen[-1][0] != reaction:
+                seen.append((reaction, status_line(now)))
+    for reaction, line in seen:
+        print(f"{reaction!r:60} | {line}")
+    assert [reaction for reaction, _ in seen] == [
+        "asking HOLD",
+        "asking HOLD: refused (FAILED)",
+        "asking HOLD: refused (FAILED) x2",
+        "asking HOLD: refused (FAILED) x3",
+        "asking disarm instead of HOLD",
+        "disarmed",
+    ]
+    for reaction, line in seen:  # the line: the node, its time, then the feedback (cut at 60 characters)
+        assert re.search(r"waiting: Wait for guards \(\d+ s\): " + re.escape(reaction), line), line
+    assert [text for text in on_link.texts() if not text.startswith("mission ")] == [
+        "failsafe ekf_loss -> hold (HOLD)",
+        "ekf_loss: HOLD refused (FAILED)",
+        "ekf_loss: HOLD refused (FAILED) x3 -> disarm",
+        "ekf_loss: disarmed, confirmed",
+    ]
+
+
+def test_a_reaction_still_asked_is_dropped_while_a_person_has_the_vehicle_and_asked_again_when_they_let_go(rig) -> None:
+    r = rig("rover")
+    r.acks = False
+    r.h.vehicle.set(link__up=False)
+    asked, _ = play(r, 5)
+    assert asked == [(0.0, ("mode", "HOLD"))]
+    r.h.vehicle.set(rc__channels=RC_TAKEOVER)  # the pilot throws the take-over switch: the unanswered HOLD is not sent again
+    asked, states = play(r, 50)
+    assert asked == [] and states == ["hands off"] and r.commander.idle
+    r.h.vehicle.set(rc__channels=RC_OK)  # let go (the switch back for RcNotTakingOver's 1 s): HOLD asked again at once
+    asked, states = play(r, 12)
+    assert asked == [(1.0, ("mode", "HOLD"))] and states == ["hands off", "asking HOLD"]

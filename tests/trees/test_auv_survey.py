@@ -326,20 +326,21 @@ def _seabed_rises(survey: Survey, altitude_m: float) -> None:
 
 
 GUARD_CASES = [
-    # (leg, what goes wrong, put it right, does the executive hold the vehicle?)
-    pytest.param(0, lambda s: _depth(s, 101.0), lambda s: _depth(s, 5.0), True, id="deeper-than-100-m"),
-    pytest.param(0, lambda s: setattr(s.sub, "speed_over_m_s", 1.5), lambda s: setattr(s.sub, "speed_over_m_s", 0.0), True, id="too-fast"),
-    pytest.param(1, lambda s: _seabed_rises(s, 1.0), lambda s: _seabed_rises(s, 20.0), True, id="altitude-leg-1-m-above-the-seabed"),
-    pytest.param(1, lambda s: setattr(s.sub, "sonar", False), lambda s: setattr(s.sub, "sonar", True), True, id="altitude-leg-no-sonar"),
-    pytest.param(0, lambda s: _seabed_rises(s, 1.0), lambda s: _seabed_rises(s, 25.0), False, id="depth-leg-1-m-above-the-seabed-not-judged"),
-    pytest.param(0, lambda s: s.vehicle.set(vehicle__ekf=EKF_LOST), lambda s: s.vehicle.set(vehicle__ekf=EKF_READY), True, id="ekf-lost"),
-    pytest.param(0, lambda s: s.vehicle.set(link__up=False), lambda s: s.vehicle.set(link__up=True), True, id="link-lost"),
+    # (leg, what goes wrong, put it right, the mode the executive holds the vehicle in, if it does)
+    pytest.param(0, lambda s: _depth(s, 101.0), lambda s: _depth(s, 5.0), "POSHOLD", id="deeper-than-100-m"),
+    pytest.param(0, lambda s: setattr(s.sub, "speed_over_m_s", 1.5), lambda s: setattr(s.sub, "speed_over_m_s", 0.0), "POSHOLD", id="too-fast"),
+    pytest.param(1, lambda s: _seabed_rises(s, 1.0), lambda s: _seabed_rises(s, 20.0), "POSHOLD", id="altitude-leg-1-m-above-the-seabed"),
+    pytest.param(1, lambda s: setattr(s.sub, "sonar", False), lambda s: setattr(s.sub, "sonar", True), "POSHOLD", id="altitude-leg-no-sonar"),
+    pytest.param(0, lambda s: _seabed_rises(s, 1.0), lambda s: _seabed_rises(s, 25.0), None, id="depth-leg-1-m-above-the-seabed-not-judged"),
+    pytest.param(0, lambda s: s.vehicle.set(vehicle__ekf=EKF_LOST), lambda s: s.vehicle.set(vehicle__ekf=EKF_READY), "ALT_HOLD", id="ekf-lost"),
+    # ^ ArduSub refuses POSHOLD without a position (ArduSub/mode.cpp Sub::set_mode): ALT_HOLD at once, as its own terrain failsafe does
+    pytest.param(0, lambda s: s.vehicle.set(link__up=False), lambda s: s.vehicle.set(link__up=True), "POSHOLD", id="link-lost"),
 ]  # fmt: skip
 
 
-@pytest.mark.parametrize(("leg", "break_it", "mend_it", "holds"), GUARD_CASES)
+@pytest.mark.parametrize(("leg", "break_it", "mend_it", "held_in"), GUARD_CASES)
 def test_a_failed_guard_holds_the_sub_until_it_recovers_then_the_same_leg_goes_on(
-    make_survey: MakeSurvey, leg: int, break_it: Callable[[Survey], None], mend_it: Callable[[Survey], None], holds: bool
+    make_survey: MakeSurvey, leg: int, break_it: Callable[[Survey], None], mend_it: Callable[[Survey], None], held_in: str | None
 ) -> None:
     survey = make_survey(sub_mission(*SURVEY))
     wp = SURVEY[leg]
@@ -348,14 +349,15 @@ def test_a_failed_guard_holds_the_sub_until_it_recovers_then_the_same_leg_goes_o
     before = len(survey.sub.commands)
     # stuck (a current, a thruster): what goes wrong lasts past the guard's hold time, and the leg does not end meanwhile
     step, dz = survey.sub.step_m, survey.sub.dz_m
+    holds = held_in is not None
     if holds:
         survey.sub.step_m = survey.sub.dz_m = 0.0
     break_it(survey)
     survey.sub.publish()
     if holds:
         assert survey.run(30) == [Status.RUNNING] * 30  # (a guard may wait up to 2 s of a bad reading before it holds)
-        held = survey.sub.commands.index(("mode", "POSHOLD"), before)
-        assert [c for c in survey.sub.commands[before:] if c[0] == "mode"] == [("mode", "POSHOLD")]
+        held = survey.sub.commands.index(("mode", held_in), before)
+        assert [c for c in survey.sub.commands[before:] if c[0] == "mode"] == [("mode", held_in)]
         assert survey.sub.commands[held + 1 :] == []  # asked once, then waited
         assert survey.state.leg_index == leg
     else:  # not judged on this leg: the leg goes on to its end

@@ -634,9 +634,11 @@ def test_a_failed_guard_holds_the_vehicle_and_ends_the_mission_if_it_does_not_re
     rover.rc(swc=UP)  # unseen while RC is stale
     rover.tick()
     assert rover.take() == [("mode", "HOLD")]
-    assert rover.h.feedback("Wait for guards").startswith("holding (0/10 s): ")
+    assert rover.h.feedback("Wait for guards").startswith("asking HOLD (0/10 s): ")  # until accepted and seen...
+    rover.tick()
+    assert rover.h.feedback("Wait for guards").startswith("in HOLD (0/10 s): ")  # ...then it is done: never asked again
     statuses = rover.run(200)
-    assert statuses == [Status.RUNNING] * 100 + [Status.FAILURE]
+    assert statuses == [Status.RUNNING] * 99 + [Status.FAILURE]
     assert rover.take() == []
 
 
@@ -664,7 +666,7 @@ def test_switch_moves_wait_out_stale_rc_and_count_when_it_is_back(rover: Scripte
     rover.rc_alive = False
     rover.run(12)
     assert rover.take() == []  # in MANUAL: a person drives, nothing commanded
-    assert rover.h.feedback("Wait for guards") == "holding (0/10 s): RC fresh? no RC report within 1 s"
+    assert rover.h.feedback("Wait for guards") == "hands off (0/10 s): RC fresh? no RC report within 1 s"
     rover.rc(swc=MIDDLE)
     assert rover.run(20) == [Status.RUNNING] * 20
     assert rover.take() == []

@@ -4,7 +4,8 @@ Mission Planner or QGroundControl can pause, continue and start the mission with
 addressed to us (MAV_CMD_DO_PAUSE_CONTINUE, MAV_CMD_MISSION_START: continues a paused one), acked as ArduPilot acks
 commands; only allow-listed system ids are obeyed. The mission state, current leg and distance
 to the next waypoint are reported as STATUSTEXT on every change (a mission replaced while paused
-too) and NAMED_VALUE_FLOAT at 1 Hz.
+too) and NAMED_VALUE_FLOAT at 1 Hz; so is what the mission announces (a failsafe's reaction, refused,
+replaced by the next one the firmware allows, confirmed).
 """
 
 from __future__ import annotations
@@ -52,6 +53,7 @@ class GroundStationControl:
         self._outbox: list[MAVLinkMessage] = []
         operator.mission_state.listeners.append(self._on_transition)
         operator.mission_state.replace_listeners.append(self._on_replace)
+        operator.mission_state.announce_listeners.append(self._on_announce)
 
     def on_command(self, msg: MAVLinkMessage, reply_to: Link) -> bool:
         """A COMMAND_LONG from someone other than the autopilot; returns whether it was ours to answer."""
@@ -100,6 +102,9 @@ class GroundStationControl:
 
     def _on_replace(self, mission: Mission, reason: str) -> None:
         self._text(mavlink.MAV_SEVERITY_NOTICE, f"mission replaced: {mission.name}")  # the whole reason is in ctl status
+
+    def _on_announce(self, text: str, warning: bool) -> None:
+        self._text(mavlink.MAV_SEVERITY_WARNING if warning else mavlink.MAV_SEVERITY_NOTICE, text)
 
     def _text(self, severity: int, text: str) -> None:
         self._outbox.append(self._encoder.statustext_encode(severity, text.encode()[:50]))
