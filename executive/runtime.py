@@ -27,6 +27,7 @@ from executive.mission.model import Mission, SamplingOptions
 from executive.mission.reload import REPLACED
 from executive.pacing import TickPacer
 from executive.progress import Progress
+from executive.reach import ReachGate, Refusal
 from executive.services import PacedService, RunObserver, Service
 from executive.vehicles import PROFILES
 
@@ -158,6 +159,9 @@ class Runtime:
         self.tree: py_trees.trees.BehaviourTree | None = None
         #: A mission replaced while PAUSED: its tree waits for the resume (nothing commanded meanwhile).
         self._tree_waits_for_resume = False
+        #: The distance rule, judged before a mission's tree first ticks, whatever the tree (a user's may leave it out).
+        self.reach = ReachGate(self.clock)
+        self._refused: str | None = None  # the distance rule refused the starting mission: it ends, nothing commanded
         self.mission_state.upload(self.mission)
         self.progress = progress
         self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches"])
@@ -208,21 +212,28 @@ class Runtime:
             reader.service()
         status = Status.INVALID
         if self.tree is not None and self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED) and not self._tree_waits_for_resume:
-            try:
-                self.tree_clock.latch()
-                self.tree.tick()
-            except Exception as exc:
-                node = _crashed_behaviour(exc.__traceback__)
-                raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
-            status = self.tree.root.status
-            for observer in self.observers:
-                observer.ticked(self.ticks, self.clock.now())
+            verdict = self.reach.judge(self.mission_state)
+            if isinstance(verdict, Refusal):
+                self._refused = verdict.reason
+            elif verdict is None:  # else held back until the vehicle's position is known: the tree does not tick, nothing is commanded
+                status = self._tick_tree(self.tree)
         for writer in self._run_writers:
             writer.service()
         for writer in self.writers:
             writer.service()
         self.ticks += 1
         return status
+
+    def _tick_tree(self, tree: py_trees.trees.BehaviourTree) -> Status:
+        try:
+            self.tree_clock.latch()
+            tree.tick()
+        except Exception as exc:
+            node = _crashed_behaviour(exc.__traceback__)
+            raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
+        for observer in self.observers:
+            observer.ticked(self.ticks, self.clock.now())
+        return tree.root.status
 
     def request_stop(self, reason: str) -> None:
         """Ask the loop to stop at the next tick (safe from a signal handler)."""
@@ -332,6 +343,14 @@ class Runtime:
             return f"the vehicle is in {mode}: a person drives it"
         return None
 
+    def _refuse(self, why: str) -> Outcome:
+        """The distance rule refused the starting mission: it ends ABORTED, and as nothing was commanded nothing is undone."""
+        self._refused = None
+        reason = f"refused before anything was commanded: {why}"
+        log.warning("mission %r %s", self.mission_state.mission.name if self.mission_state.mission else "", reason)
+        self.mission_state.abort(reason)
+        return Outcome(MissionStatus.ABORTED, reason, self.ticks)
+
     def _abort(self, reason: str) -> Outcome:
         log.warning("mission aborted: %s", reason)
         self.make_safe()
@@ -350,6 +369,8 @@ class Runtime:
             self.progress.update()
         if not active:
             return None
+        if self._refused is not None:
+            return self._end(self._refuse(self._refused))
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
             return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
@@ -408,6 +429,7 @@ class Runtime:
             self.sampler = UnavailableSampler(self.clock, mission.sampling or SamplingOptions(), str(exc))
         self._run_writers = [self.sampler] if self.sampler is not None else []
         self.tree = py_trees.trees.BehaviourTree(root)
+        self.reach.close()  # the tree waits for the distance rule
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)

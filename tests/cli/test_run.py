@@ -205,3 +205,23 @@ def test_the_mission_chooses_its_simulator_and_plays_its_event_file(tmp_path, ca
     assert code == 0, err
     assert "simulated bunker" in err
     assert "link lost" in err and "link up" in err  # the event file's link loss was played and recovered from
+
+
+def test_a_waypoint_out_of_reach_is_refused_at_start_exit_1_with_nothing_sent(tmp_path, capsys):
+    """Issue 28: a `waypoints` mission with a waypoint 10 km off armed, set GUIDED and drove off. Now refused before the tree runs:
+    the log, the status (JSON lines) and the last line say why, exit 1 (README: aborted at run time), the vehicle untouched."""
+    far = tmp_path / "far.yaml"  # no home: the simulated rover boots at the first waypoint
+    far.write_text(
+        "version: 1\nname: far\nvehicle: rover\nauto_arm: true\nsimulator: {ekf_ready_after_s: 2}\nwaypoints:\n"
+        "  - {lat: -35.3629906, lon: 149.1652300}\n  - {lat: -35.2730000, lon: 149.1652300, name: town}\n"
+    )
+    assert main(["run", str(far), "--speedup", "10", "--socket", "none"]) == 1
+    out, err = capsys.readouterr()
+    why = (
+        "refused before anything was commanded: Within reach: waypoints[1] (town): 9984 m from the vehicle, over limits.max_goal_distance_m (5000 m)"
+    )
+    assert f"WARNING runtime: mission 'far' {why}" in err
+    assert re.search(rf"executive: mission 'far' ABORTED: {re.escape(why)} \(\d+ ticks\)\n$", err), err
+    last = json.loads(out.splitlines()[-1])
+    assert (last["state"], last["reason"], last["armed"], last["mode"]) == ("ABORTED", why, False, "MANUAL")
+    assert "vehicle in HOLD" not in err and "commanding" not in err
