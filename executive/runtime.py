@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import logging
 import types
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import py_trees
@@ -61,11 +61,13 @@ SURVEY_S = 3.0
 
 @dataclass(frozen=True)
 class Outcome:
-    """How a run ended."""
+    """How a run ended: ``mission`` names the mission that ran (None: none did), ``samples`` how many it recorded."""
 
     status: MissionStatus
     reason: str
     ticks: int
+    mission: str | None = None
+    samples: int = 0
 
 
 def behaviour_path(node: py_trees.behaviour.Behaviour) -> str:
@@ -172,6 +174,9 @@ class Runtime:
         #: What the tree reads: the clock, latched at the start of each tick.
         self.tree_clock = TickClock(self.clock)
         self._stop_reason: str | None = None
+        #: How the last mission that ran ended (None: none has): what ``run`` returns when stopped between missions.
+        self.last_outcome: Outcome | None = None
+        self._running: Mission | None = None  # the mission whose tree was installed last (a deleted one keeps its name here)
 
     # -- phases ------------------------------------------------------------------------------
     def connect(self, timeout_s: float, survey_s: float = SURVEY_S) -> bool:
@@ -254,7 +259,6 @@ class Runtime:
                     reason = "the route as last edited, from the journal"
                     self.mission_state.set_route(route.waypoints, reason, leg_index=route.current, home=route.home)
                 self.mission_state.continue_from(resume.leg_index, resume.samples)
-        outcome = Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
         self.pacer.restart()
         try:
             while True:
@@ -262,13 +266,12 @@ class Runtime:
                     if self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
                         return self._end(self._abort(f"stopped: {self._stop_reason}"))  # the journal records it ABORTED
                     self.make_safe()
-                    return outcome
+                    # between missions: the last one that ran, with its own outcome (not the one loaded since, never started)
+                    return self.last_outcome or Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
                 self.pacer.tick_started()
                 ended = self._tick_once()
-                if ended is not None:
-                    outcome = ended
-                    if not serve:
-                        return outcome
+                if ended is not None and not serve:
+                    return ended
                 self._wait_until(self.pacer.next_due())
         finally:
             if self.pacer.late or self.pacer.skipped:
@@ -384,7 +387,11 @@ class Runtime:
         return None
 
     def _end(self, outcome: Outcome) -> Outcome:
+        """The running mission's end: the observers told; the outcome names the mission and its samples, and is kept as the last."""
         self.tree = None
+        ran = self._running
+        outcome = replace(outcome, mission=ran.name if ran else None, samples=len(self.mission_state.samples))
+        self.last_outcome = outcome
         for observer in self.observers:
             observer.end(str(outcome.status), outcome.reason)
         return outcome
@@ -416,7 +423,7 @@ class Runtime:
 
     def _install_tree(self) -> None:
         """Build the tree (and its sampler) of the mission that is starting, or replacing a paused one."""
-        mission = self.mission_state.mission
+        mission = self._running = self.mission_state.mission
         assert mission is not None
         built, self._built = self._built, None
         prebuilt = built[1] if built is not None and built[0] is mission else None

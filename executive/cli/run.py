@@ -33,11 +33,11 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
-from executive.mission.lifecycle import MissionStatus
+from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
 from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor, keeping_time
 from executive.progress import Progress
-from executive.runtime import SURVEY_S, SeveralAutopilots
+from executive.runtime import SURVEY_S, Outcome, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
@@ -460,9 +460,26 @@ def main(args: argparse.Namespace) -> int:
                 signal.signal(sig, handler)
             if watchdog is not None:
                 watchdog.stopping(f"mission {runtime.mission_state.status}: {runtime.mission_state.reason}")
-    ran = runtime.mission_state.mission or mission  # the one that replaced it, if an operator did (ctl upload while paused)
-    print(f"executive: mission {ran.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
-    if runtime.mission_state.samples:
-        count = len(runtime.mission_state.samples)
-        print(f"executive: {count} sample{'' if count == 1 else 's'} recorded", file=sys.stderr)
-    return EXIT_OK if outcome.status is MissionStatus.COMPLETED else EXIT_FAILED
+    for line in last_words(outcome, runtime.mission_state):
+        print(f"executive: {line}", file=sys.stderr)
+    return exit_code(outcome)
+
+
+def exit_code(outcome: Outcome) -> int:
+    """0 when the mission that ran COMPLETED, or none ran (``--wait``, stopped before any start); 1 when it ended otherwise."""
+    return EXIT_OK if outcome.mission is None or outcome.status is MissionStatus.COMPLETED else EXIT_FAILED
+
+
+def last_words(outcome: Outcome, state: MissionState) -> list[str]:
+    """The run's last lines: a mission left loaded and never started, if one was; then the mission that ran, with its own outcome.
+
+    With ``--wait`` the last mission that ran may not be the one loaded when the process stops (an
+    upload after it ended): each is named for what it is. The last line is always the outcome's.
+    """
+    loaded = f"mission {state.mission.name!r} READY: loaded, never started" if state.status is MissionStatus.READY and state.mission else None
+    if outcome.mission is None:
+        return [f"{loaded or f'no mission loaded ({state.status})'}; no mission ran ({outcome.ticks} ticks)"]
+    lines = [loaded] if loaded else []
+    if outcome.samples:
+        lines.append(f"{outcome.samples} sample{'' if outcome.samples == 1 else 's'} recorded by mission {outcome.mission!r}")
+    return [*lines, f"mission {outcome.mission!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)"]
