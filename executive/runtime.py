@@ -166,7 +166,7 @@ class Runtime:
         self._refused: str | None = None  # the distance rule refused the starting mission: it ends, nothing commanded
         self.mission_state.upload(self.mission)
         self.progress = progress
-        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches"])
+        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/vehicle/mode_set_by", "/link/up", "/rc/channels", "/rc/switches"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
         #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.
@@ -335,16 +335,28 @@ class Runtime:
         """Why a person has the vehicle, if one has: then hands off.
 
         The RC take-over switch high, switch C in MANUAL, or a mode in which a person drives (MANUAL,
-        ACRO...) other than ``ours`` (the mode a failsafe of ours left it in): set by the RC, a ground
-        station, or by us at the operator's request (handed over).
+        ACRO...) other than ``ours`` (the mode a failsafe of ours left it in) that someone chose while
+        we watched (``/vehicle/mode_set_by``): the RC or a ground station, or we at a person's request
+        (``ctl mode``, the UGV's switch C). The mode the vehicle was in when we found it (its boot mode)
+        is nobody's choice: a pilot mode there is no person driving, and the safe mode is commanded
+        (said so, as README's "When a person intervenes" has it).
         """
         takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
         if takeover is not None:
             return takeover
         mode = self._bb.get("/vehicle/mode")
-        if mode in self.profile.pilot_modes and mode != ours:
-            return f"the vehicle is in {mode}: a person drives it"
-        return None
+        if mode not in self.profile.pilot_modes or mode == ours:
+            return None
+        set_by = self._bb.get("/vehicle/mode_set_by")
+        if set_by is None:
+            log.info(
+                "commanding %s: the vehicle is in %s, the mode it was in when the executive found it "
+                "(its boot mode, or one set before; nobody changed it while the executive watched)",
+                ours, mode,
+            )  # fmt: skip
+            return None
+        who = "through the executive at a person's request" if set_by == "us" else "by the RC or a ground station"
+        return f"the vehicle is in {mode}, set {who} while the executive watched: a person drives it"
 
     def _refuse(self, why: str) -> Outcome:
         """The distance rule refused the starting mission: it ends ABORTED, and as nothing was commanded nothing is undone."""

@@ -8,7 +8,7 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -401,6 +401,8 @@ def main(args: argparse.Namespace) -> int:
         except ObstacleSpecError as exc:
             raise BadInput(f"--obstacles: {exc}") from exc
     with contextlib.ExitStack() as stack:
+        stop = StopSignals()
+        stack.callback(stop.release)  # the last thing undone: a Ctrl-C anywhere in the shutdown finds our handler
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         web = _web_server(args, stack)
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
@@ -450,19 +452,58 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_NO_VEHICLE
         if watchdog is not None:
             watchdog.ready(f"autopilot {'/'.join(map(str, runtime.reader.autopilot or ()))} heard on {link.url}; mission {mission.name!r}")
-        stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
+        stop.install(runtime.request_stop)
         try:
             # with --wait, an unfinished run in the journal goes on at once (a restart after a crash); a new one waits for `ctl start`
             with keeping_time(runtime.pacer.late_after_s / clock.speedup):
                 outcome = runtime.run(start=not args.wait or resume is not None, serve=args.wait, resume=resume)
         finally:
-            for sig, handler in stop.items():
-                signal.signal(sig, handler)
             if watchdog is not None:
                 watchdog.stopping(f"mission {runtime.mission_state.status}: {runtime.mission_state.reason}")
     for line in last_words(outcome, runtime.mission_state):
         print(f"executive: {line}", file=sys.stderr)
     return exit_code(outcome)
+
+
+class StopSignals:
+    """SIGINT and SIGTERM ask the runtime to stop: the mission aborted, the vehicle made safe, the exit code the outcome's.
+
+    A repeated one while it stops changes nothing: it is noted on stderr, the vehicle is made safe
+    all the same. Once one has come, Python's own handler never comes back: it would turn a late
+    Ctrl-C into a KeyboardInterrupt somewhere in the shutdown and exit 130 (issue 28: two SIGINTs
+    10-50 ms apart exited 130, 1, 130, 130 for runs that all ended ABORTED, exit 1). The last
+    moments (the last lines, the interpreter's exit, which puts SIG_DFL back for a Python handler:
+    killed by SIGINT) ignore them.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.received: list[str] = []
+        self._stop: Callable[[str], None] | None = None
+        self._previous: dict[int, Any] = {}
+
+    def install(self, stop: Callable[[str], None]) -> None:
+        """From now on a signal calls ``stop(name)`` (once; the next ones are noted)."""
+        self._stop = stop
+        for sig in self.SIGNALS:
+            self._previous.setdefault(sig, signal.signal(sig, self._on_signal))
+
+    def release(self) -> None:
+        """Put the previous handlers back, unless a signal came: then the process is ending, and they are ignored from now on."""
+        for sig, handler in self._previous.items():
+            signal.signal(sig, signal.SIG_IGN if self.received else handler)
+        self._previous = {}
+
+    def _on_signal(self, signum: int, _frame: object) -> None:
+        name = signal.Signals(signum).name
+        self.received.append(name)
+        if len(self.received) == 1 and self._stop is not None:
+            self._stop(name)
+            return
+        # os.write: a signal handler may run in the middle of a write to sys.stderr (a log record), which must not be re-entered
+        note = f"executive: run: {name} again: already stopping (the vehicle is made safe all the same; the exit code stays the mission's)\n"
+        os.write(2, note.encode())
 
 
 def exit_code(outcome: Outcome) -> int:

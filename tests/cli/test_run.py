@@ -225,3 +225,33 @@ def test_a_waypoint_out_of_reach_is_refused_at_start_exit_1_with_nothing_sent(tm
     last = json.loads(out.splitlines()[-1])
     assert (last["state"], last["reason"], last["armed"], last["mode"]) == ("ABORTED", why, False, "MANUAL")
     assert "vehicle in HOLD" not in err and "commanding" not in err
+
+
+def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
+    """Issue 28: two SIGINTs 10-50 ms apart turned exit 1 (ABORTED, vehicle made safe) into 130 most times: the second landed after
+    the handler was put back and raised KeyboardInterrupt in the shutdown. Here the vehicle goes silent as the operator presses
+    Ctrl-C: making it safe waits out its 5 s for the HOLD, the second Ctrl-C comes meanwhile (sent once the first was acted on)."""
+    square = tmp_path / "square.yaml"
+    square.write_text((ROOT / "missions/rover_square.yaml").read_text() + "simulator: {ekf_ready_after_s: 2}\n")
+    sim = SimServer("rover", clock=ScaledClock(), home=(-35.363261, 149.165230, 0.0)).start()
+    try:
+        proc = executive("run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--socket", "none", stdout=subprocess.PIPE)
+        assert proc.stdout is not None and proc.stderr is not None
+        for line in proc.stdout:
+            if json.loads(line)["state"] == "RUNNING":
+                break
+    finally:
+        sim.stop()
+    proc.send_signal(signal.SIGINT)
+    said = []
+    for line in proc.stderr:
+        said.append(line)
+        if "mission aborted: stopped: SIGINT" in line:  # the loop took the first: now it waits for the vehicle's HOLD
+            proc.send_signal(signal.SIGINT)
+            break
+    _, err = proc.communicate(timeout=60)
+    err = "".join(said) + err
+    assert proc.returncode == 1, err
+    assert "executive: run: SIGINT again: already stopping (the vehicle is made safe all the same; the exit code stays the mission's)" in err
+    assert "could not confirm HOLD within 5 s" in err
+    assert re.search(r"executive: mission 'rover-square' ABORTED: stopped: SIGINT \(\d+ ticks\)\n$", err), err
