@@ -230,7 +230,8 @@ def test_a_waypoint_out_of_reach_is_refused_at_start_exit_1_with_nothing_sent(tm
 def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
     """Issue 28: two SIGINTs 10-50 ms apart turned exit 1 (ABORTED, vehicle made safe) into 130 most times: the second landed after
     the handler was put back and raised KeyboardInterrupt in the shutdown. Here the vehicle goes silent as the operator presses
-    Ctrl-C: making it safe waits out its 5 s for the HOLD, the second Ctrl-C comes meanwhile (sent once the first was acted on)."""
+    Ctrl-C: making it safe waits out its 5 s for the HOLD, the second Ctrl-C comes meanwhile (sent once the first was acted on),
+    and a third as the run ends ABORTED (where the handler used to be put back)."""
     square = tmp_path / "square.yaml"
     square.write_text((ROOT / "missions/rover_square.yaml").read_text() + "simulator: {ekf_ready_after_s: 2}\n")
     sim = SimServer("rover", clock=ScaledClock(), home=(-35.363261, 149.165230, 0.0)).start()
@@ -247,6 +248,8 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
     for line in proc.stderr:
         said.append(line)
         if "mission aborted: stopped: SIGINT" in line:  # the loop took the first: now it waits for the vehicle's HOLD
+            proc.send_signal(signal.SIGINT)
+        if "mission RUNNING -> ABORTED" in line:  # the run is over: the shutdown begins
             proc.send_signal(signal.SIGINT)
             break
     _, err = proc.communicate(timeout=60)
