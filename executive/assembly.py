@@ -340,7 +340,7 @@ class _SnapshotRuns:
         self._recorder.record(tick, now)
 
     def end(self, status: str, reason: str) -> None:
-        pass  # the file goes on with the next run's tree
+        self._recorder.record_end()  # the last tick as the run ended; the file goes on with the next run's tree
 
 
 def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:

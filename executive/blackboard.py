@@ -131,7 +131,8 @@ _KEYS: tuple[Key, ...] = (
         "/mission/waiting",
         None,
         "tree watch",
-        "Waiting: the tree's deepest running node, its feedback, since when (executive.waiting); None = no tree runs",
+        "Waiting: the tree's deepest running node, its feedback, since when (executive.waiting); before the tree's first tick, "
+        "the distance rule waiting for a position (reach gate, executive.reach); None = no tree runs",
     ),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),

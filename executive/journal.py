@@ -120,8 +120,10 @@ class Journal:
             self._insert("events", run=self.run, t=self._clock.now(), wall=time.time(), kind=kind, text=text)
 
     def end_run(self, outcome: str, reason: str) -> None:
+        """The run is over: its outcome recorded; what happens until the next run begins (another mission uploaded...) is none of its business."""
         if self.run is not None:
             self._db.execute("UPDATE runs SET ended = ?, outcome = ?, reason = ? WHERE id = ?", (time.time(), outcome, reason, self.run))
+        self.run = None
 
     def close(self) -> None:
         self._db.close()

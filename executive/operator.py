@@ -110,7 +110,7 @@ class Operator:
             if op == "tree":
                 return self._tree_reply()
             if op == "start":
-                state.start()
+                state.start(vehicle_at=self._here_if_known())
             elif op == "pause":
                 state.pause(f"{source}: pause")
             elif op == "resume":
@@ -154,10 +154,7 @@ class Operator:
         why = self._refuse(mission) if self._refuse is not None else None
         if why is not None:
             return self._reply(False, f"{filename}: {why}")
-        try:
-            here = self._here()
-        except routes.RouteError:
-            here = None  # not known well enough: the tree checks the distances when the mission starts
+        here = self._here_if_known()
         if self.mission_state.status is MissionStatus.PAUSED:
             return self._replace(filename, mission, leg, here, source)
         if leg is not None:
@@ -247,6 +244,13 @@ class Operator:
         if self._clock is not None and (age := self._clock.now() - position.time) > self.max_position_age_s:
             raise routes.RouteError(f"the last position is {age:.1f} s old")
         return position.lat, position.lon
+
+    def _here_if_known(self) -> tuple[float, float] | None:
+        """The vehicle's position if the EKF vouches for it; None otherwise (the runtime checks the distances before the tree first ticks)."""
+        try:
+            return self._here()
+        except routes.RouteError:
+            return None
 
     def _route_view(self) -> dict[str, Any]:
         """The route as JSON: waypoints (lat, lon, alt_m), the one heading for (1-based; legs + 1 when done), home, and the autopilot's copy."""

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import logging
 import types
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import py_trees
@@ -27,6 +27,7 @@ from executive.mission.model import Mission, SamplingOptions
 from executive.mission.reload import REPLACED
 from executive.pacing import TickPacer
 from executive.progress import Progress
+from executive.reach import ReachGate, Refusal
 from executive.services import PacedService, RunObserver, Service
 from executive.vehicles import PROFILES
 
@@ -60,11 +61,13 @@ SURVEY_S = 3.0
 
 @dataclass(frozen=True)
 class Outcome:
-    """How a run ended."""
+    """How a run ended: ``mission`` names the mission that ran (None: none did), ``samples`` how many it recorded."""
 
     status: MissionStatus
     reason: str
     ticks: int
+    mission: str | None = None
+    samples: int = 0
 
 
 def behaviour_path(node: py_trees.behaviour.Behaviour) -> str:
@@ -158,9 +161,12 @@ class Runtime:
         self.tree: py_trees.trees.BehaviourTree | None = None
         #: A mission replaced while PAUSED: its tree waits for the resume (nothing commanded meanwhile).
         self._tree_waits_for_resume = False
+        #: The distance rule, judged before a mission's tree first ticks, whatever the tree (a user's may leave it out).
+        self.reach = ReachGate(self.clock)
+        self._refused: str | None = None  # the distance rule refused the starting mission: it ends, nothing commanded
         self.mission_state.upload(self.mission)
         self.progress = progress
-        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/link/up", "/rc/channels", "/rc/switches"])
+        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/vehicle/mode_set_by", "/link/up", "/rc/channels", "/rc/switches"])
         self.safe_timeout_s = safe_timeout_s
         self.ticks = 0
         #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.
@@ -168,6 +174,9 @@ class Runtime:
         #: What the tree reads: the clock, latched at the start of each tick.
         self.tree_clock = TickClock(self.clock)
         self._stop_reason: str | None = None
+        #: How the last mission that ran ended (None: none has): what ``run`` returns when stopped between missions.
+        self.last_outcome: Outcome | None = None
+        self._running: Mission | None = None  # the mission whose tree was installed last (a deleted one keeps its name here)
 
     # -- phases ------------------------------------------------------------------------------
     def connect(self, timeout_s: float, survey_s: float = SURVEY_S) -> bool:
@@ -208,21 +217,28 @@ class Runtime:
             reader.service()
         status = Status.INVALID
         if self.tree is not None and self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED) and not self._tree_waits_for_resume:
-            try:
-                self.tree_clock.latch()
-                self.tree.tick()
-            except Exception as exc:
-                node = _crashed_behaviour(exc.__traceback__)
-                raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
-            status = self.tree.root.status
-            for observer in self.observers:
-                observer.ticked(self.ticks, self.clock.now())
+            verdict = self.reach.judge(self.mission_state)
+            if isinstance(verdict, Refusal):
+                self._refused = verdict.reason
+            elif verdict is None:  # else held back until the vehicle's position is known: the tree does not tick, nothing is commanded
+                status = self._tick_tree(self.tree)
         for writer in self._run_writers:
             writer.service()
         for writer in self.writers:
             writer.service()
         self.ticks += 1
         return status
+
+    def _tick_tree(self, tree: py_trees.trees.BehaviourTree) -> Status:
+        try:
+            self.tree_clock.latch()
+            tree.tick()
+        except Exception as exc:
+            node = _crashed_behaviour(exc.__traceback__)
+            raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
+        for observer in self.observers:
+            observer.ticked(self.ticks, self.clock.now())
+        return tree.root.status
 
     def request_stop(self, reason: str) -> None:
         """Ask the loop to stop at the next tick (safe from a signal handler)."""
@@ -243,7 +259,6 @@ class Runtime:
                     reason = "the route as last edited, from the journal"
                     self.mission_state.set_route(route.waypoints, reason, leg_index=route.current, home=route.home)
                 self.mission_state.continue_from(resume.leg_index, resume.samples)
-        outcome = Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
         self.pacer.restart()
         try:
             while True:
@@ -251,13 +266,12 @@ class Runtime:
                     if self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
                         return self._end(self._abort(f"stopped: {self._stop_reason}"))  # the journal records it ABORTED
                     self.make_safe()
-                    return outcome
+                    # between missions: the last one that ran, with its own outcome (not the one loaded since, never started)
+                    return self.last_outcome or Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
                 self.pacer.tick_started()
                 ended = self._tick_once()
-                if ended is not None:
-                    outcome = ended
-                    if not serve:
-                        return outcome
+                if ended is not None and not serve:
+                    return ended
                 self._wait_until(self.pacer.next_due())
         finally:
             if self.pacer.late or self.pacer.skipped:
@@ -321,16 +335,36 @@ class Runtime:
         """Why a person has the vehicle, if one has: then hands off.
 
         The RC take-over switch high, switch C in MANUAL, or a mode in which a person drives (MANUAL,
-        ACRO...) other than ``ours`` (the mode a failsafe of ours left it in): set by the RC, a ground
-        station, or by us at the operator's request (handed over).
+        ACRO...) other than ``ours`` (the mode a failsafe of ours left it in) that someone chose while
+        we watched (``/vehicle/mode_set_by``): the RC or a ground station, or we at a person's request
+        (``ctl mode``, the UGV's switch C). The mode the vehicle was in when we found it (its boot mode)
+        is nobody's choice: a pilot mode there is no person driving, and the safe mode is commanded
+        (said so, as README's "When a person intervenes" has it).
         """
         takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
         if takeover is not None:
             return takeover
         mode = self._bb.get("/vehicle/mode")
-        if mode in self.profile.pilot_modes and mode != ours:
-            return f"the vehicle is in {mode}: a person drives it"
-        return None
+        if mode not in self.profile.pilot_modes or mode == ours:
+            return None
+        set_by = self._bb.get("/vehicle/mode_set_by")
+        if set_by is None:
+            log.info(
+                "commanding %s: the vehicle is in %s, the mode it was in when the executive found it "
+                "(its boot mode, or one set before; nobody changed it while the executive watched)",
+                ours, mode,
+            )  # fmt: skip
+            return None
+        who = "through the executive at a person's request" if set_by == "us" else "by the RC or a ground station"
+        return f"the vehicle is in {mode}, set {who} while the executive watched: a person drives it"
+
+    def _refuse(self, why: str) -> Outcome:
+        """The distance rule refused the starting mission: it ends ABORTED, and as nothing was commanded nothing is undone."""
+        self._refused = None
+        reason = f"refused before anything was commanded: {why}"
+        log.warning("mission %r %s", self.mission_state.mission.name if self.mission_state.mission else "", reason)
+        self.mission_state.abort(reason)
+        return Outcome(MissionStatus.ABORTED, reason, self.ticks)
 
     def _abort(self, reason: str) -> Outcome:
         log.warning("mission aborted: %s", reason)
@@ -350,6 +384,8 @@ class Runtime:
             self.progress.update()
         if not active:
             return None
+        if self._refused is not None:
+            return self._end(self._refuse(self._refused))
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
             return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
@@ -363,7 +399,11 @@ class Runtime:
         return None
 
     def _end(self, outcome: Outcome) -> Outcome:
+        """The running mission's end: the observers told; the outcome names the mission and its samples, and is kept as the last."""
         self.tree = None
+        ran = self._running
+        outcome = replace(outcome, mission=ran.name if ran else None, samples=len(self.mission_state.samples))
+        self.last_outcome = outcome
         for observer in self.observers:
             observer.end(str(outcome.status), outcome.reason)
         return outcome
@@ -395,7 +435,7 @@ class Runtime:
 
     def _install_tree(self) -> None:
         """Build the tree (and its sampler) of the mission that is starting, or replacing a paused one."""
-        mission = self.mission_state.mission
+        mission = self._running = self.mission_state.mission
         assert mission is not None
         built, self._built = self._built, None
         prebuilt = built[1] if built is not None and built[0] is mission else None
@@ -408,6 +448,7 @@ class Runtime:
             self.sampler = UnavailableSampler(self.clock, mission.sampling or SamplingOptions(), str(exc))
         self._run_writers = [self.sampler] if self.sampler is not None else []
         self.tree = py_trees.trees.BehaviourTree(root)
+        self.reach.close()  # the tree waits for the distance rule
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)

@@ -3,7 +3,10 @@
 A snapshot file is JSON lines. A ``tree`` line describes the nodes (pre-order: id, name, type,
 parent). Each tick line holds only what changed since the tick before: node statuses (``s``),
 feedback messages (``f``) and blackboard values (``bb``, as short text). Every ``keyframe_every``
-ticks a keyframe holds everything, so a file can start anywhere. When a file grows past
+ticks a keyframe holds everything, so a file can start anywhere. A run's end adds a line for its
+last tick (``"end": true``): the blackboard as the end left it (COMPLETED, ABORTED and why, decided
+after the tree's last tick), the statuses as that tick left them; a replay of that tick shows both.
+When a file grows past
 ``max_bytes`` it is rotated to ``FILE.1`` (the one before is dropped): the disk use stays below
 twice ``max_bytes`` however long the run.
 """
@@ -64,6 +67,7 @@ class SnapshotRecorder:
         self._feedback: list[str] = []
         self._values: dict[str, str] = {}
         self._since_keyframe = 0
+        self._last: tuple[int, float] | None = None  # the last tick recorded of this tree, and its time
 
     def attach(self, root: py_trees.behaviour.Behaviour) -> None:
         """Start recording a (new) tree: describes it and forces a keyframe."""
@@ -72,6 +76,7 @@ class SnapshotRecorder:
         self._write(self._tree_line)
         self._status, self._feedback, self._values = [], [], {}
         self._since_keyframe = self.keyframe_every
+        self._last = None
 
     def record(self, tick: int, t: float) -> None:
         """Write what changed during tick ``tick`` (clock time ``t``)."""
@@ -93,6 +98,21 @@ class SnapshotRecorder:
         if keys:
             line["bb"] = keys
         self._status, self._feedback, self._values = status, feedback, values
+        self._last = (tick, t)
+        self._write(json.dumps(line, ensure_ascii=False))
+
+    def record_end(self) -> None:
+        """The run has ended: its last tick again, with the blackboard as the end left it (the statuses as the tick left them)."""
+        if self._last is None:
+            return  # no tick of this tree was recorded (a mission refused before its tree ran)
+        tick, t = self._last
+        values = {key: show_value(blackboard.value(key)) for key in blackboard.KEYS}
+        line: dict[str, Any] = {"tick": tick, "t": t, "end": True}
+        keys = {k: v for k, v in values.items() if self._values.get(k) != v}
+        if keys:
+            line["bb"] = keys
+        self._values = values
+        self._last = None
         self._write(json.dumps(line, ensure_ascii=False))
 
     def close(self) -> None:
@@ -194,6 +214,7 @@ def _parts(path: Path) -> list[Path]:
 def _apply(state: TickState | None, nodes: list[dict[str, Any]], line: dict[str, Any]) -> TickState:
     """The state after tick line ``line`` (a keyframe starts afresh)."""
     previous = dict(state.blackboard) if state else {}
+    same_tick = state is not None and line.get("end") and state.tick == line["tick"]  # the run's end, after its last tick
     if state is None or line.get("key"):
         state = TickState(line["tick"], line["t"], nodes)
     state.tick, state.t = line["tick"], line["t"]
@@ -201,7 +222,8 @@ def _apply(state: TickState | None, nodes: list[dict[str, Any]], line: dict[str,
     state.feedback.update({int(i): m for i, m in line.get("f", {}).items()})
     values = line.get("bb", {})
     state.blackboard.update(values)
-    state.changed = {k for k, v in values.items() if previous.get(k) != v}  # a keyframe repeats what did not change
+    changed = {k for k, v in values.items() if previous.get(k) != v}  # a keyframe repeats what did not change
+    state.changed = state.changed | changed if same_tick else changed
     return state
 
 
@@ -297,8 +319,9 @@ class Recording:
         return state
 
     def _index(self, tick: int) -> int:
-        i = bisect.bisect_left(self._ticks, tick)
-        if i == len(self._ticks) or self._ticks[i] != tick:
+        """The entry of recorded tick ``tick``: its last line (a run's end follows its last tick's line, with the same tick)."""
+        i = bisect.bisect_right(self._ticks, tick) - 1
+        if i < 0 or self._ticks[i] != tick:
             raise LookupError(f"{self.path}: tick {tick} is not in the recording (ticks {self.first} to {self.last})")
         return i
 

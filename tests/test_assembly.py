@@ -7,6 +7,7 @@ from py_trees.common import Status
 
 from executive.assembly import Wiring, build_runtime
 from executive.services import Step, service_name
+from executive.testing import ObedientAutopilot
 
 
 class Paced:
@@ -61,6 +62,8 @@ def test_a_plug_adds_services_run_around_the_tree(square_mission, link, clock):
     runtime.tick()
     assert events == ["read", "write"]  # no mission running: no tree, the services still run
     events.clear()
+    first = square_mission.waypoints[0]
+    ObedientAutopilot(link, start=(first.lat, first.lon)).beat()  # where the vehicle is: no tree runs before it is known
     runtime.run()
     assert events[:5] == ["begin probe resumed_from=None", "read", "tree", "ticked 1", "write"]
     assert events[5:] == ["end COMPLETED"]  # the mission ended at its first tick, nothing waited between ticks

@@ -7,8 +7,11 @@ socket: tests/cli/test_ctl.py). Messages are packed and parsed as over a link (`
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from typing import Any
+
+import pytest
 
 from executive import blackboard
 from executive.clock import Clock
@@ -131,3 +134,51 @@ def test_the_firmwares_ekf_failsafe_latch_is_waited_out_and_the_mission_complete
     assert all(t[1] == "RUNNING" for t in record.ticks if t[1] != "COMPLETED")  # its HOLD paused nothing
     held = next(t for t, m in record.modes_sent if m == "HOLD")
     assert any(m == "GUIDED" for t, m in record.modes_sent if t > held)  # the leg again, in its own mode
+
+
+# -- who chose the mode the vehicle is left in (issue 28) --------------------------------------------------------------------------
+
+BOOT_MODE = (
+    "commanding HOLD: the vehicle is in MANUAL, the mode it was in when the executive found it "
+    "(its boot mode, or one set before; nobody changed it while the executive watched)"
+)
+
+
+def _said(caplog: pytest.LogCaptureFixture) -> list[str]:
+    return [r.getMessage() for r in caplog.records if r.name == "executive.runtime"]
+
+
+def test_ctrl_c_while_waiting_for_the_ekf_after_boot_holds_the_vehicle_the_boot_mode_is_nobodys(lockstep, caplog) -> None:
+    """Ctrl-C right after boot, the EKF not ready: the vehicle was in MANUAL because it booted so, not because a person drives it."""
+    caplog.set_level(logging.INFO, logger="executive")
+    sim = lockstep(line_mission("boot mode"), ekf_ready_after_s=40.0)
+    sim.at(5.0, lambda s: s.runtime.request_stop("SIGINT"))
+    outcome = sim.run_to_end(limit_s=60)
+    assert (outcome.status, outcome.reason) == (MissionStatus.ABORTED, "stopped: SIGINT")
+    assert sim.autopilot.mode == "HOLD"
+    said = _said(caplog)
+    assert BOOT_MODE in said and "vehicle in HOLD" in said
+    assert not any("a person drives it" in text for text in said), said
+
+
+def test_the_operators_silence_is_not_a_person_driving(lockstep, caplog) -> None:
+    """Nobody arms the vehicle: the wait gives up, the mission aborts, and the vehicle is held in HOLD (it was in its boot MANUAL)."""
+    caplog.set_level(logging.INFO, logger="executive")
+    mission = line_mission("nobody arms", auto_arm=False, limits={"acceptance_radius_m": 1.5, "recovery_timeout_s": 5.0})
+    outcome = lockstep(mission).run_to_end(limit_s=120)
+    assert outcome.status is MissionStatus.ABORTED and "Wait for the operator to arm" in outcome.reason, outcome.reason
+    said = _said(caplog)
+    assert BOOT_MODE in said and "vehicle in HOLD" in said
+    assert not any("a person drives it" in text for text in said), said
+
+
+def test_a_mode_a_ground_station_set_while_we_watched_is_a_persons_and_kept(lockstep, caplog) -> None:
+    caplog.set_level(logging.INFO, logger="executive")
+    sim = lockstep(line_mission("driver"), injector=lambda _, clock: GroundStation(clock, {12.0: "MANUAL"}))
+    sim.at(20.0, lambda s: s.runtime.request_stop("SIGINT"))
+    outcome = sim.run_to_end(limit_s=60)
+    assert outcome.status is MissionStatus.ABORTED
+    assert sim.autopilot.mode == "MANUAL"
+    assert "not commanding HOLD: the vehicle is in MANUAL, set by the RC or a ground station while the executive watched: a person drives it" in (
+        _said(caplog)
+    )

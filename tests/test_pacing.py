@@ -16,6 +16,7 @@ from executive.clock import ManualClock, ScaledClock
 from executive.pacing import MIN_SWITCH_INTERVAL_S, Behind, SpeedGovernor, TickPacer, caps_logged, keeping_time
 from executive.services import Step
 from executive.status import StatusSource
+from executive.testing import ObedientAutopilot
 
 
 def slow_ticks(cost_s: float):
@@ -25,6 +26,12 @@ def slow_ticks(cost_s: float):
         w.readers.append(Step("slow", lambda: w.clock.advance(cost_s)))  # type: ignore[attr-defined]
 
     return plug
+
+
+def at_the_square(mission, link) -> None:
+    """The autopilot's heartbeat and position, at the first waypoint (no tree runs before the vehicle's position is known)."""
+    first = mission.waypoints[0]
+    ObedientAutopilot(link, start=(first.lat, first.lon)).beat()
 
 
 class TicksThenSucceeds(py_trees.behaviour.Behaviour):
@@ -39,6 +46,7 @@ class TicksThenSucceeds(py_trees.behaviour.Behaviour):
 
 def test_a_loop_on_time_has_no_late_tick(square_mission, link, clock):
     runtime = build_runtime(square_mission, link, clock, root=TicksThenSucceeds(120))
+    at_the_square(square_mission, link)
     runtime.run()
     assert (runtime.pacer.ticks, runtime.pacer.late, runtime.pacer.skipped) == (120, 0, 0)
     assert StatusSource().snapshot()["late_ticks"] == 0
@@ -48,6 +56,7 @@ def test_slow_ticks_are_counted_reported_and_warned_about_once_a_minute(square_m
     caplog.set_level(logging.WARNING, logger="executive")
     # each tick costs 0.25 s of clock time at 10 Hz: every tick after the first starts 0.15 s late or more, and ticks are skipped
     runtime = build_runtime(square_mission, link, clock, plugs=[slow_ticks(0.25)], root=TicksThenSucceeds(400))
+    at_the_square(square_mission, link)
     start = clock.now()
     runtime.run()
     elapsed = clock.now() - start

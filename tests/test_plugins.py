@@ -20,7 +20,7 @@ from executive.cli import main
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.testing import Lockstep
-from tests_support import line_mission
+from tests_support import acting, line_mission, run_recording, with_far_waypoint
 
 ROOT = Path(__file__).parents[1]
 
@@ -187,6 +187,18 @@ def test_a_plugin_tree_runs_to_the_end_with_its_guard_judging_every_tick(ranger:
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert blackboard.value("/plugin/ranger/legs") == 4  # the plugin's own key, written by its own action once a leg
     assert py_trees.common.Status.SUCCESS in seen
+
+
+def test_a_plugin_tree_cannot_leave_out_the_distance_rule(ranger: Path) -> None:
+    """The ranger tree checks no distance of its own: the runtime refuses a waypoint 10 km away before the tree arms or sets anything."""
+    mission, boots_at = with_far_waypoint(line_mission("ranger", tree="ranger"), 10_000.0)
+    outcome, sim, received = run_recording(mission, boots_at)
+    assert outcome.status is MissionStatus.ABORTED
+    assert outcome.reason == (
+        "refused before anything was commanded: Within reach: waypoints[4] (far): 10000 m from the vehicle, over limits.max_goal_distance_m (5000 m)"
+    )
+    assert acting(received) == [] and not sim.autopilot.armed
+    assert blackboard.value("/plugin/ranger/legs") == 0  # its tree never ran
 
 
 def test_a_module_on_the_path_is_a_tree_as_module_colon_function(ranger: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -28,6 +28,12 @@ def make_runtime(square_mission, link, clock, root=None) -> Runtime:
     return build_runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
 
 
+def autopilot_at(mission, link, vehicle: str = "rover") -> ObedientAutopilot:
+    """The obedient autopilot at the mission's first waypoint: its position comes with its heartbeat (no tree runs before it is known)."""
+    first = mission.waypoints[0]
+    return ObedientAutopilot(link, vehicle, start=(first.lat, first.lon))
+
+
 def test_connect_waits_for_an_autopilot_heartbeat(square_mission, link, clock):
     runtime = make_runtime(square_mission, link, clock)
     assert runtime.connect(timeout_s=1.0) is False
@@ -47,7 +53,7 @@ def test_a_tick_drains_then_ticks_then_sends(square_mission, link, clock):
             return Status.RUNNING
 
     runtime = make_runtime(square_mission, link, clock, root=Probe("probe"))
-    ObedientAutopilot(link).beat()
+    autopilot_at(square_mission, link).beat()
     runtime.mission_state.start()
     runtime.tick()
     assert seen == ["GUIDED"]
@@ -69,7 +75,7 @@ def test_every_behaviour_of_a_tick_sees_the_time_the_tick_started(square_mission
 
     root = py_trees.composites.Sequence("Mission", memory=False, children=[SlowReader("first"), SlowReader("second")])
     runtime = make_runtime(square_mission, link, clock, root=root)
-    ObedientAutopilot(link).beat()
+    autopilot_at(square_mission, link).beat()
     runtime.mission_state.start()
     started = clock.now()
     runtime.tick()
@@ -81,7 +87,7 @@ def test_every_behaviour_of_a_tick_sees_the_time_the_tick_started(square_mission
 def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mission, link, clock):
     root = py_trees.composites.Sequence("Mission", memory=True, children=[py_trees.behaviours.Success("ok"), Explodes("Divide")])
     runtime = make_runtime(square_mission, link, clock, root=root)
-    autopilot = ObedientAutopilot(link)
+    autopilot = autopilot_at(square_mission, link)
     autopilot.beat()
     assert runtime.connect(1.0)
     runtime.mission_state.start()
@@ -115,6 +121,7 @@ def test_make_safe_gives_up_when_the_vehicle_does_not_answer(square_mission, lin
 
 def test_success_completes_the_mission(square_mission, link, clock):
     runtime = make_runtime(square_mission, link, clock, root=py_trees.behaviours.Success("done"))
+    autopilot_at(square_mission, link).beat()
     outcome = runtime.run()
     assert outcome.status is MissionStatus.COMPLETED and outcome.ticks == 1
 
@@ -127,7 +134,9 @@ def test_ticks_at_the_fixed_rate(square_mission, link, clock):
             times.append(clock.now())
             return Status.SUCCESS if len(times) == 5 else Status.RUNNING
 
-    make_runtime(square_mission, link, clock, root=Stamp("stamp")).run()
+    runtime = make_runtime(square_mission, link, clock, root=Stamp("stamp"))
+    autopilot_at(square_mission, link).beat()
+    runtime.run()
     assert [round(b - a, 6) for a, b in itertools.pairwise(times)] == [0.1] * 4
 
 
@@ -155,7 +164,7 @@ def test_an_operator_abort_ends_the_run_with_the_vehicle_safe(square_mission, li
             return Status.RUNNING
 
     runtime = make_runtime(square_mission, link, clock, root=AbortOnThirdTick("busy"))
-    autopilot = ObedientAutopilot(link)
+    autopilot = autopilot_at(square_mission, link)
     autopilot.beat()
     outcome = runtime.run()
     assert (outcome.status, outcome.reason, outcome.ticks) == (MissionStatus.ABORTED, "operator: abort", 3)
@@ -180,7 +189,7 @@ def test_a_tree_that_ends_with_a_sample_point_unsampled_does_not_complete(link, 
     """No fake success: a tree that returns SUCCESS with a sample not taken (a refused sample skipped) ends ABORTED, saying which."""
     mission = load_mission(Path(__file__).parents[1] / "missions" / "asv_sampling.yaml")
     runtime = build_runtime(mission, link, clock, root=py_trees.behaviours.Success("done"), safe_timeout_s=0.5, simulated_vehicle=True)
-    ObedientAutopilot(link, "boat").beat()
+    autopilot_at(mission, link, "boat").beat()
     outcome = runtime.run()
     assert outcome.status is MissionStatus.ABORTED
     assert outcome.reason.startswith("the tree ended, but no sample was recorded at leg ")

@@ -1,5 +1,5 @@
 """Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket, a line mission,
-the time a thread waited for a CPU."""
+a mission out of reach run to its refusal, the time a thread waited for a CPU."""
 
 from __future__ import annotations
 
@@ -8,10 +8,13 @@ from typing import Any
 
 from executive.assembly import build_runtime
 from executive.clock import ScaledClock
+from executive.geo import destination
+from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.link import PymavlinkLink
-from executive.mission.model import Mission
+from executive.mission.model import Mission, Waypoint
 from executive.pacing import SpeedGovernor
 from executive.runtime import Outcome, Runtime
+from executive.testing import Lockstep
 
 #: Home of the line missions: ArduPilot SITL's default location.
 LINE_HOME = (-35.363261, 149.165230)
@@ -55,6 +58,52 @@ def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> 
         return runtime, runtime.run()
     finally:
         link.close()
+
+
+#: What the executive may say to an autopilot before any tree runs: who it is, what to stream, which parameter it needs, and
+#: its reports to ground stations (the mission's state).
+HARMLESS = {"HEARTBEAT", "REQUEST_DATA_STREAM", "PARAM_REQUEST_READ", "STATUSTEXT", "NAMED_VALUE_FLOAT"}
+HARMLESS_COMMANDS = {mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, mavlink.MAV_CMD_REQUEST_MESSAGE}
+
+
+def with_far_waypoint(mission: Mission, metres: float, **changes: object) -> tuple[Mission, tuple[float, float, float]]:
+    """``mission`` without its home (validate would refuse it), a waypoint ``metres`` north of its start appended; and where its vehicle boots."""
+    start = mission.home or mission.waypoints[0]
+    lat, lon = destination(start.lat, start.lon, 0.0, metres)
+    far = Waypoint(lat=lat, lon=lon, name="far")
+    edited = mission.model_copy(update={"home": None, "waypoints": [*mission.waypoints, far], **changes})
+    return edited, (start.lat, start.lon, 0.0)
+
+
+def run_recording(mission: Mission, boots_at: tuple[float, float, float], **options: Any) -> tuple[Outcome, Lockstep, list[MAVLinkMessage]]:
+    """The mission on the lock-step simulator (vehicle booted at ``boots_at``) until it ends: how, the simulation, what its autopilot received.
+
+    ``options`` go to :class:`~executive.testing.Lockstep` (``mission_dir=`` for the mission's own event file...).
+    """
+    received: list[MAVLinkMessage] = []
+    with Lockstep(mission, home=boots_at, **options) as sim:
+        handle = sim.autopilot.handle
+
+        def record(msg: MAVLinkMessage) -> list[MAVLinkMessage]:
+            received.append(msg)
+            return handle(msg)
+
+        sim.autopilot.handle = record  # type: ignore[method-assign]
+        outcome = sim.run_to_end(limit_s=300)
+    return outcome, sim, received
+
+
+def acting(received: list[MAVLinkMessage]) -> list[str]:
+    """What of ``received`` would change the vehicle: a command, a mode, a target, a route."""
+    found = []
+    for msg in received:
+        kind = msg.get_type()
+        if kind in ("COMMAND_LONG", "COMMAND_INT"):
+            if msg.command not in HARMLESS_COMMANDS:
+                found.append(f"{kind} {msg.command}")
+        elif kind not in HARMLESS:
+            found.append(kind)
+    return found
 
 
 def runqueue_wait_s(native_id: int | None = None) -> float:

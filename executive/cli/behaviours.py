@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import json
 import sys
 
@@ -34,7 +35,8 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     unknown = [n for n in args.names if found.get(n) is None]
     if unknown:
-        print(f"executive: behaviours: no node {', '.join(map(repr, unknown))} (executive behaviours lists them)", file=sys.stderr)
+        said = ", ".join(f"no node {name!r}{_did_you_mean(name, found.names())}" for name in unknown)
+        print(f"executive: behaviours: {said}; executive behaviours lists them", file=sys.stderr)
         return EXIT_BAD_INPUT
     specs = [s for s in found.nodes(args.kind) if not args.names or s.name in args.names]
     if args.json:
@@ -43,6 +45,12 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_OK
     sys.stdout.write("".join(describe(s) for s in specs))
     return EXIT_OK
+
+
+def _did_you_mean(name: str, names: list[str]) -> str:
+    """`` (did you mean go_to?)`` for a name close to a node's, as ``validate`` says it of a tree's node; else nothing."""
+    close = difflib.get_close_matches(name, names, n=1)
+    return f" (did you mean {close[0]}?)" if close else ""
 
 
 def describe(spec: NodeSpec) -> str:

@@ -131,12 +131,32 @@ def _import_btcpp(args: argparse.Namespace) -> int:
 
 
 def _report(mission_file: str, exported: Exported) -> None:
-    """What the format could not carry, located in the mission file."""
+    """What the format could not carry, located in the mission file: said once for every waypoint it concerns (at the first)."""
     if not exported.warnings:
         return
     locate = _locator(mission_file)
-    for (line, column), path, why in sorted((locate(path), path, why) for path, why in exported.warnings):
-        print(f"{mission_file}:{line}:{column}: {format_path(path)}: {why} (warning)", file=sys.stderr)
+    alike: dict[tuple[MissionPath, str], list[MissionPath]] = {}  # the same loss in every waypoint: (its path, its index left out; why)
+    for path, why in exported.warnings:
+        index = next((i for i, p in enumerate(path) if isinstance(p, int)), None)
+        alike.setdefault(((*path[:index], "*", *path[index + 1 :]) if index is not None else path, why), []).append(path)
+    for (line, column), path, why, more in sorted((locate(paths[0]), paths[0], why, paths[1:]) for (_, why), paths in alike.items()):
+        also = f"; the same for {len(more)} more ({_indexed(more)})" if more else ""
+        print(f"{mission_file}:{line}:{column}: {format_path(path)}: {why}{also} (warning)", file=sys.stderr)
+
+
+def _indexed(paths: list[MissionPath]) -> str:
+    """``waypoints[1-7].name`` for paths alike but for one index (runs of consecutive indices as ranges)."""
+    index = next(i for i, p in enumerate(paths[0]) if isinstance(p, int))
+    numbers = sorted(int(p[index]) for p in paths)
+    runs: list[list[int]] = []
+    for n in numbers:
+        if runs and n == runs[-1][-1] + 1:
+            runs[-1].append(n)
+        else:
+            runs.append([n])
+    spans = ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 1 else str(r[0]) for r in runs)
+    head, tail = format_path(paths[0][:index]), format_path(paths[0][index + 1 :])
+    return f"{head}[{spans}]" + (f".{tail}" if tail else "")
 
 
 def _locator(mission_file: str) -> Callable[[MissionPath], tuple[int, int]]:

@@ -69,8 +69,9 @@ def main(args: argparse.Namespace) -> int:
     from executive.clock import ScaledClock
     from executive.journal import Journal
 
+    # a database has no line and column to point at: the file and why, as the other commands say of what is not a text file
     if not Path(args.journal).is_file():
-        print(f"{args.journal}:1:1: (file): no such journal", file=sys.stderr)
+        print(f"executive: report: {args.journal}: no such journal", file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
         journal = Journal(args.journal, ScaledClock())
@@ -78,8 +79,11 @@ def main(args: argparse.Namespace) -> int:
             report = journal.report(args.run)
         finally:
             journal.close()
-    except (sqlite3.DatabaseError, LookupError) as exc:
-        print(f"{args.journal}:1:1: (journal): {exc}", file=sys.stderr)
+    except sqlite3.DatabaseError as exc:
+        print(f"executive: report: {args.journal}: not a journal: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except LookupError as exc:  # its message names the journal
+        print(f"executive: report: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print(json.dumps(report, indent=2) if args.json else render(report))
     return EXIT_OK

@@ -8,7 +8,7 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -33,11 +33,11 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
-from executive.mission.lifecycle import MissionStatus
+from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
 from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor, keeping_time
 from executive.progress import Progress
-from executive.runtime import SURVEY_S, SeveralAutopilots
+from executive.runtime import SURVEY_S, Outcome, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
@@ -401,6 +401,8 @@ def main(args: argparse.Namespace) -> int:
         except ObstacleSpecError as exc:
             raise BadInput(f"--obstacles: {exc}") from exc
     with contextlib.ExitStack() as stack:
+        stop = StopSignals()
+        stack.callback(stop.release)  # the last thing undone: a Ctrl-C anywhere in the shutdown finds our handler
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         web = _web_server(args, stack)
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
@@ -450,19 +452,75 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_NO_VEHICLE
         if watchdog is not None:
             watchdog.ready(f"autopilot {'/'.join(map(str, runtime.reader.autopilot or ()))} heard on {link.url}; mission {mission.name!r}")
-        stop = {sig: signal.signal(sig, lambda s, _f: runtime.request_stop(signal.Signals(s).name)) for sig in (signal.SIGINT, signal.SIGTERM)}
+        stop.install(runtime.request_stop)
         try:
             # with --wait, an unfinished run in the journal goes on at once (a restart after a crash); a new one waits for `ctl start`
             with keeping_time(runtime.pacer.late_after_s / clock.speedup):
                 outcome = runtime.run(start=not args.wait or resume is not None, serve=args.wait, resume=resume)
         finally:
-            for sig, handler in stop.items():
-                signal.signal(sig, handler)
             if watchdog is not None:
                 watchdog.stopping(f"mission {runtime.mission_state.status}: {runtime.mission_state.reason}")
-    ran = runtime.mission_state.mission or mission  # the one that replaced it, if an operator did (ctl upload while paused)
-    print(f"executive: mission {ran.name!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)", file=sys.stderr)
-    if runtime.mission_state.samples:
-        count = len(runtime.mission_state.samples)
-        print(f"executive: {count} sample{'' if count == 1 else 's'} recorded", file=sys.stderr)
-    return EXIT_OK if outcome.status is MissionStatus.COMPLETED else EXIT_FAILED
+    for line in last_words(outcome, runtime.mission_state):
+        print(f"executive: {line}", file=sys.stderr)
+    return exit_code(outcome)
+
+
+class StopSignals:
+    """SIGINT and SIGTERM ask the runtime to stop: the mission aborted, the vehicle made safe, the exit code the outcome's.
+
+    A repeated one while it stops changes nothing: it is noted on stderr, the vehicle is made safe
+    all the same. Once one has come, Python's own handler never comes back: it would turn a late
+    Ctrl-C into a KeyboardInterrupt somewhere in the shutdown and exit 130 (issue 28: two SIGINTs
+    10-50 ms apart exited 130, 1, 130, 130 for runs that all ended ABORTED, exit 1). The last
+    moments (the last lines, the interpreter's exit, which puts SIG_DFL back for a Python handler:
+    killed by SIGINT) ignore them.
+    """
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.received: list[str] = []
+        self._stop: Callable[[str], None] | None = None
+        self._previous: dict[int, Any] = {}
+
+    def install(self, stop: Callable[[str], None]) -> None:
+        """From now on a signal calls ``stop(name)`` (once; the next ones are noted)."""
+        self._stop = stop
+        for sig in self.SIGNALS:
+            self._previous.setdefault(sig, signal.signal(sig, self._on_signal))
+
+    def release(self) -> None:
+        """Put the previous handlers back, unless a signal came: then the process is ending, and they are ignored from now on."""
+        for sig, handler in self._previous.items():
+            signal.signal(sig, signal.SIG_IGN if self.received else handler)
+        self._previous = {}
+
+    def _on_signal(self, signum: int, _frame: object) -> None:
+        name = signal.Signals(signum).name
+        self.received.append(name)
+        if len(self.received) == 1 and self._stop is not None:
+            self._stop(name)
+            return
+        # os.write: a signal handler may run in the middle of a write to sys.stderr (a log record), which must not be re-entered
+        note = f"executive: run: {name} again: already stopping (the vehicle is made safe all the same; the exit code stays the mission's)\n"
+        os.write(2, note.encode())
+
+
+def exit_code(outcome: Outcome) -> int:
+    """0 when the mission that ran COMPLETED, or none ran (``--wait``, stopped before any start); 1 when it ended otherwise."""
+    return EXIT_OK if outcome.mission is None or outcome.status is MissionStatus.COMPLETED else EXIT_FAILED
+
+
+def last_words(outcome: Outcome, state: MissionState) -> list[str]:
+    """The run's last lines: a mission left loaded and never started, if one was; then the mission that ran, with its own outcome.
+
+    With ``--wait`` the last mission that ran may not be the one loaded when the process stops (an
+    upload after it ended): each is named for what it is. The last line is always the outcome's.
+    """
+    loaded = f"mission {state.mission.name!r} READY: loaded, never started" if state.status is MissionStatus.READY and state.mission else None
+    if outcome.mission is None:
+        return [f"{loaded or f'no mission loaded ({state.status})'}; no mission ran ({outcome.ticks} ticks)"]
+    lines = [loaded] if loaded else []
+    if outcome.samples:
+        lines.append(f"{outcome.samples} sample{'' if outcome.samples == 1 else 's'} recorded by mission {outcome.mission!r}")
+    return [*lines, f"mission {outcome.mission!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)"]

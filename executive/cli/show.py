@@ -11,7 +11,7 @@ from pathlib import Path
 import py_trees
 
 import trees
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK
+from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report
 from executive.tree_drawing import dot_graph, unicode_tree
 
@@ -74,9 +74,10 @@ def main(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     try:
         out = render(trees.build(mission), fmt, mission.name)
-    except FileNotFoundError as exc:
-        print(f"executive: show: {exc}", file=sys.stderr)
-        return EXIT_FAILED
+    except FileNotFoundError as exc:  # a picture this machine cannot draw: a usage to change (exit 2), not a mission that failed (1)
+        asked = f"--format {fmt}" if args.format else f"-o {args.output} ({fmt}, from its suffix)"
+        print(f"executive: show: {asked}: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     if args.output:
         Path(args.output).write_bytes(out if isinstance(out, bytes) else out.encode())
     else:

@@ -86,11 +86,11 @@ ReplaceCheck = Callable[[Mission], "str | None"]
 ROUTE_EDITABLE = frozenset({MissionStatus.READY, MissionStatus.RUNNING, MissionStatus.PAUSED})
 
 
-def out_of_reach(mission: Mission, lat: float, lon: float) -> list[str]:
-    """The waypoints farther than ``limits.max_goal_distance_m`` from (lat, lon), each with its distance."""
+def out_of_reach(mission: Mission, lat: float, lon: float, *, first: int = 0) -> list[str]:
+    """The waypoints (from index ``first`` on) farther than ``limits.max_goal_distance_m`` from (lat, lon), each with its distance."""
     limit = mission.limits.max_goal_distance_m
     found = []
-    for i, wp in enumerate(mission.waypoints):
+    for i, wp in enumerate(mission.waypoints[first:], start=first):
         d = distance(lat, lon, wp.lat, wp.lon)
         if d > limit:
             named = f" ({wp.name})" if wp.name else ""
@@ -176,8 +176,16 @@ class MissionState:
         for listener in self.replace_listeners:
             listener(mission, reason)
 
-    def start(self) -> None:
+    def start(self, vehicle_at: tuple[float, float] | None = None) -> None:
+        """READY (or ended) -> RUNNING from the first waypoint; refused (nothing changes) when a waypoint is out of reach of ``vehicle_at``.
+
+        Without a position the runtime checks the distances before the tree first ticks (:mod:`executive.reach`).
+        """
         self._check("start")
+        assert self.mission is not None
+        far = out_of_reach(self.mission, *vehicle_at) if vehicle_at is not None else []
+        if far:
+            raise Refused(f"mission {self.mission.name!r} refused: " + "; ".join(far))
         self.leg_index = 0
         self.samples = ()
         self._transition("start", "started from the first waypoint")

@@ -8,6 +8,7 @@ that every pydantic and cross-field error points at the line and column of the o
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
 import re
@@ -383,7 +384,12 @@ def _message(error: dict[str, Any], node: yaml.Node | None, root: type[BaseModel
         return f"{_show(tag)}: expected one of {error['ctx']['expected_tags']}"
     if kind == "extra_forbidden":
         model = _model_at(root, error["loc"][:-1])
-        return f"unknown field (allowed: {', '.join(model.model_fields)})" if model else "unknown field"
+        if model is None:
+            return "unknown field"
+        field = error["loc"][-1]
+        close = difflib.get_close_matches(field, list(model.model_fields), n=1) if isinstance(field, str) else []
+        hint = f"did you mean {close[0]}? " if close else ""
+        return f"unknown field ({hint}allowed: {', '.join(model.model_fields)})"
     if kind in _EXPECTED:
         return f"expected {_EXPECTED[kind]}, got {_describe(value)}{_yaml11_hint(node, value)}"
     message = error["msg"].removeprefix("Value error, ")

@@ -52,6 +52,7 @@ from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, model_validator
 
+from executive.geo import distance
 from executive.geofence import Geofence, open_ring, polygon_problems
 from executive.mission.errors import Path
 from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES, AutopilotName
@@ -534,6 +535,12 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
             errors.append(((*here, "altitude_m"), "control_mode altitude needs altitude_m"))
         if wp.control_mode != "altitude" and wp.altitude_m is not None:
             errors.append(((*here, "altitude_m"), "altitude_m is only used with control_mode altitude"))
+    if mission.home is not None:  # the distance rule, as the vehicle will judge it at start (executive.reach) if it starts at home
+        limit = limits.max_goal_distance_m
+        for i, wp in enumerate(mission.waypoints):
+            if (d := distance(mission.home.lat, mission.home.lon, wp.lat, wp.lon)) > limit:
+                why = f"{d:.0f} m from home, over limits.max_goal_distance_m ({limit:g} m): refused at start with the vehicle at home"
+                errors.append((("waypoints", i), why))
     if mission.vehicle == "vtol":
         errors += _vtol_errors(mission)
     if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":

@@ -30,8 +30,10 @@ A whole mission (:class:`Lockstep`)
 
 A whole runtime, by hand (:class:`RuntimeOnLink`)
     ``r = RuntimeOnLink(mission, root=..., beat=True)``: the runtime over a :class:`FakeLink`, an
-    :class:`ObedientAutopilot` answering; ``r.tick(n)`` on its manual clock, ``r.modes_sent()``,
-    ``r.texts()``, ``r.status``: for what lies around the tree (operator, intervention, plugs).
+    :class:`ObedientAutopilot` answering, its position (the mission's home) with its heartbeat: the
+    runtime ticks no tree before it knows where the vehicle is (the distance rule, :mod:`executive.reach`);
+    ``r.tick(n)`` on its manual clock, ``r.modes_sent()``, ``r.texts()``, ``r.status``: for what
+    lies around the tree (operator, intervention, plugs).
 
 A CAN bus (:class:`VirtualCan`)
     ``with VirtualCan() as (base, ours):`` two ends of a fresh in-memory bus (python-can's

@@ -9,6 +9,7 @@ from executive.clock import ManualClock
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
+from executive.sim.options import simulated_home
 from executive.testing.harness import START_S
 from executive.testing.links import FakeLink
 from executive.testing.scripted import ObedientAutopilot
@@ -19,9 +20,10 @@ class RuntimeOnLink:
 
     ``r = RuntimeOnLink(mission, root=my_tree, safe_timeout_s=1.0)``: keyword arguments go to
     :func:`~executive.assembly.build_runtime` (``plugs=``...). :attr:`autopilot`, an
-    :class:`ObedientAutopilot` of the mission's vehicle in ``mode`` (``armed``), answers each command
-    and heartbeat as it is sent; with ``beat`` its heartbeat also arrives before every tick. Facts a
-    heartbeat does not carry (EKF, position) are the test's to write. :meth:`tick` advances the clock
+    :class:`ObedientAutopilot` of the mission's vehicle in ``mode`` (``armed``) where its simulated
+    vehicle would start (the mission's home, else its first waypoint), answers each command and
+    heartbeat as it is sent, its position with each heartbeat; with ``beat`` its heartbeat also
+    arrives before every tick. Other facts (the EKF) are the test's to write. :meth:`tick` advances the clock
     and ticks; :meth:`modes_sent` and :meth:`texts` are what the executive sent since the last call.
     """
 
@@ -39,7 +41,8 @@ class RuntimeOnLink:
         self.clock = clock if clock is not None else ManualClock(START_S)
         self.link = link if link is not None else FakeLink()
         self.runtime = build_runtime(mission, self.link, self.clock, **runtime_options)
-        self.autopilot = ObedientAutopilot(self.link, mission.vehicle, mode=mode, armed=armed)
+        start = simulated_home(mission)
+        self.autopilot = ObedientAutopilot(self.link, mission.vehicle, mode=mode, armed=armed, start=(start[0], start[1]))
         self.beat = beat
 
     def tick(self, n: int = 1, dt: float = 0.1) -> None:

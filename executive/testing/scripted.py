@@ -253,14 +253,18 @@ class ObedientAutopilot(ScriptedAutopilot):
 
     Each HEARTBEAT of the executive is answered with its own (type of ``vehicle``, :attr:`mode`,
     :attr:`armed`), each command with a COMMAND_ACK queued on the link, as the reader would receive
-    them; :meth:`beat` sends a heartbeat now. Facts the heartbeat does not carry (EKF, position)
-    are the test's to write.
+    them; :meth:`beat` sends a heartbeat now, and where the vehicle is (``start``, a
+    GLOBAL_POSITION_INT: the runtime runs no tree before it knows the position, see
+    :mod:`executive.reach`; none at the default 0, 0, which autopilots send for "no fix"). Other
+    facts (the EKF) are the test's to write.
     """
 
-    def __init__(self, link: Any, vehicle: str = "rover", *, mode: str = "GUIDED", armed: bool = True) -> None:
+    def __init__(
+        self, link: Any, vehicle: str = "rover", *, mode: str = "GUIDED", armed: bool = True, start: tuple[float, float] = (0.0, 0.0)
+    ) -> None:
         self.link, self.profile = link, PROFILES[vehicle]
         self._modes = ArduPilotModes(self.profile.modes)
-        super().__init__(None, mode=mode)
+        super().__init__(None, start, mode=mode)
         self.armed = armed
         self._send = link.send
         link.send = self._receive
@@ -290,3 +294,6 @@ class ObedientAutopilot(ScriptedAutopilot):
         """The autopilot's HEARTBEAT arrives."""
         base = _M.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (_M.MAV_MODE_FLAG_SAFETY_ARMED if self.armed else 0)
         self.link.incoming.append(AUTOPILOT.heartbeat(self.profile.mav_type, _M.MAV_AUTOPILOT_ARDUPILOTMEGA, base, self.profile.modes[self.mode], 4))
+        if (self.lat, self.lon) != (0.0, 0.0):
+            lat, lon = round(self.lat * 1e7), round(self.lon * 1e7)
+            self.link.incoming.append(AUTOPILOT.global_position_int(0, lat, lon, round(self.alt * 1000), round(self.alt * 1000), 0, 0, 0, 65535))

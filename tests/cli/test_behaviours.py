@@ -39,6 +39,15 @@ def test_an_unknown_node_is_bad_input(capsys):
     assert "no node 'fly_away'" in capsys.readouterr().err
 
 
+def test_a_misspelt_node_gets_the_suggestion_validate_gives(capsys):
+    """Issue 28: `validate` says "did you mean go_to?" of `goto`; `behaviours goto` did not."""
+    assert main(["behaviours", "goto", "fly_away"]) == 2
+    assert (
+        capsys.readouterr().err
+        == "executive: behaviours: no node 'goto' (did you mean go_to?), no node 'fly_away'; executive behaviours lists them\n"
+    )
+
+
 def test_a_plugin_that_cannot_be_loaded_is_named_with_exit_2(capsys, monkeypatch):
     from executive.cli import behaviours
     from executive.plugins import PluginError

@@ -168,9 +168,15 @@ def test_wait_mode_serves_mission_after_mission(tmp_path, capsys):
         assert refused["ok"] is False and f"{bad}:8:" in refused["reason"]
         assert ctl(capsys, sock, "start")["state"] == "RUNNING"
         wait_status(sock, lambda s: s["state"] == "COMPLETED")
+        yard = tmp_path / "yard.yaml"  # loaded, never started: the last line is the mission that ran (issue 28)
+        yard.write_text(mission.read_text().replace("name: two-legs", "name: yard-loop"))
+        assert ctl(capsys, sock, "upload", str(yard))["state"] == "READY"
         run.send_signal(signal.SIGTERM)
         _, err = run.communicate(timeout=30)
         assert run.returncode == 0, err
+        *_, loaded, last = err.splitlines()
+        assert loaded == "executive: mission 'yard-loop' READY: loaded, never started", err
+        assert re.fullmatch(r"executive: mission 'two-legs' COMPLETED: every waypoint reached \(\d+ ticks\)", last), err
     finally:
         run.kill()
 

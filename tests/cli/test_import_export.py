@@ -96,6 +96,16 @@ def test_export_says_what_the_format_cannot_carry_where_the_mission_has_it(tmp_p
     ]
 
 
+def test_what_a_plan_cannot_hold_is_said_once_for_every_waypoint_it_concerns(capsys):
+    """Issue 28: the project's own boat_survey.yaml exported as a .plan printed nine warnings, one per waypoint name and the heading."""
+    survey = str(ROOT / "missions" / "boat_survey.yaml")
+    assert main(["export", survey, "--format", "plan"]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"{survey}:10:57: home.heading_deg: not exported: a planned home has no heading (warning)",
+        f"{survey}:18:48: waypoints[0].name: not exported: a mission item has no name; the same for 7 more (waypoints[1-7].name) (warning)",
+    ]
+
+
 def test_export_needs_a_format_and_a_valid_mission(tmp_path, capsys, minimal_mission):
     assert main(["export", str(minimal_mission)]) == 2
     assert "--format plan|waypoints|btcpp is needed" in capsys.readouterr().err

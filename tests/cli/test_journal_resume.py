@@ -15,7 +15,7 @@ from executive import blackboard
 from executive.assembly import journal_recorder, snapshot_recorder
 from executive.cli import main
 from executive.cli.run import _resume_text
-from executive.clock import Clock
+from executive.clock import Clock, ManualClock
 from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
@@ -154,11 +154,17 @@ def test_resume_needs_a_journal(capsys):
 
 
 def test_report_of_a_missing_or_broken_journal_is_bad_input(tmp_path, capsys):
+    """A database has no line and column to point at (issue 28: `/tmp/nonexist.db:1:1: (file): no such journal`)."""
     assert main(["report", str(tmp_path / "none.db")]) == 2
+    assert capsys.readouterr().err == f"executive: report: {tmp_path / 'none.db'}: no such journal\n"
     broken = tmp_path / "broken.db"
     broken.write_bytes(b"this is not sqlite" * 100)
     assert main(["report", str(broken)]) == 2
-    assert f"{broken}:1:1: (journal):" in capsys.readouterr().err
+    assert capsys.readouterr().err == f"executive: report: {broken}: not a journal: file is not a database\n"
+    empty = tmp_path / "empty.db"
+    Journal(empty, ManualClock()).close()
+    assert main(["report", str(empty)]) == 2
+    assert capsys.readouterr().err == f"executive: report: {empty}: no run recorded\n"
 
 
 def test_replay_shows_the_recorded_tree(tmp_path, capsys, lockstep):
@@ -171,6 +177,10 @@ def test_replay_shows_the_recorded_tree(tmp_path, capsys, lockstep):
     out = capsys.readouterr().out
     assert out.startswith("tick 500 at")
     assert "Go to waypoint -- leg" in out  # the leg being driven at that tick, with its distance
+    assert main(["replay", str(snapshots)]) == 0  # the last tick: the run as it ended (issue 28: it showed RUNNING)
+    last = capsys.readouterr().out.splitlines()
+    assert last[1] == "✓ Mission" and "✓ Hold at the end" in "\n".join(last)
+    assert "  /mission/state: 'COMPLETED'" in last and "  /mission/reason: 'every waypoint reached'" in last
 
 
 def test_a_route_edited_before_a_crash_is_the_route_resumed(tmp_path, capsys, lockstep):

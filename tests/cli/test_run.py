@@ -205,3 +205,56 @@ def test_the_mission_chooses_its_simulator_and_plays_its_event_file(tmp_path, ca
     assert code == 0, err
     assert "simulated bunker" in err
     assert "link lost" in err and "link up" in err  # the event file's link loss was played and recovered from
+
+
+def test_a_waypoint_out_of_reach_is_refused_at_start_exit_1_with_nothing_sent(tmp_path, capsys):
+    """Issue 28: a `waypoints` mission with a waypoint 10 km off armed, set GUIDED and drove off. Now refused before the tree runs:
+    the log, the status (JSON lines) and the last line say why, exit 1 (README: aborted at run time), the vehicle untouched."""
+    far = tmp_path / "far.yaml"  # no home: the simulated rover boots at the first waypoint
+    far.write_text(
+        "version: 1\nname: far\nvehicle: rover\nauto_arm: true\nsimulator: {ekf_ready_after_s: 2}\nwaypoints:\n"
+        "  - {lat: -35.3629906, lon: 149.1652300}\n  - {lat: -35.2730000, lon: 149.1652300, name: town}\n"
+    )
+    assert main(["run", str(far), "--speedup", "10", "--socket", "none"]) == 1
+    out, err = capsys.readouterr()
+    why = (
+        "refused before anything was commanded: Within reach: waypoints[1] (town): 9984 m from the vehicle, over limits.max_goal_distance_m (5000 m)"
+    )
+    assert f"WARNING runtime: mission 'far' {why}" in err
+    assert re.search(rf"executive: mission 'far' ABORTED: {re.escape(why)} \(\d+ ticks\)\n$", err), err
+    last = json.loads(out.splitlines()[-1])
+    assert (last["state"], last["reason"], last["armed"], last["mode"]) == ("ABORTED", why, False, "MANUAL")
+    assert "vehicle in HOLD" not in err and "commanding" not in err
+
+
+def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
+    """Issue 28: two SIGINTs 10-50 ms apart turned exit 1 (ABORTED, vehicle made safe) into 130 most times: the second landed after
+    the handler was put back and raised KeyboardInterrupt in the shutdown. Here the vehicle goes silent as the operator presses
+    Ctrl-C: making it safe waits out its 5 s for the HOLD, the second Ctrl-C comes meanwhile (sent once the first was acted on),
+    and a third as the run ends ABORTED (where the handler used to be put back)."""
+    square = tmp_path / "square.yaml"
+    square.write_text((ROOT / "missions/rover_square.yaml").read_text() + "simulator: {ekf_ready_after_s: 2}\n")
+    sim = SimServer("rover", clock=ScaledClock(), home=(-35.363261, 149.165230, 0.0)).start()
+    try:
+        proc = executive("run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--socket", "none", stdout=subprocess.PIPE)
+        assert proc.stdout is not None and proc.stderr is not None
+        for line in proc.stdout:
+            if json.loads(line)["state"] == "RUNNING":
+                break
+    finally:
+        sim.stop()
+    proc.send_signal(signal.SIGINT)
+    said = []
+    for line in proc.stderr:
+        said.append(line)
+        if "mission aborted: stopped: SIGINT" in line:  # the loop took the first: now it waits for the vehicle's HOLD
+            proc.send_signal(signal.SIGINT)
+        if "mission RUNNING -> ABORTED" in line:  # the run is over: the shutdown begins
+            proc.send_signal(signal.SIGINT)
+            break
+    _, err = proc.communicate(timeout=60)
+    err = "".join(said) + err
+    assert proc.returncode == 1, err
+    assert "executive: run: SIGINT again: already stopping (the vehicle is made safe all the same; the exit code stays the mission's)" in err
+    assert "could not confirm HOLD within 5 s" in err
+    assert re.search(r"executive: mission 'rover-square' ABORTED: stopped: SIGINT \(\d+ ticks\)\n$", err), err

@@ -33,11 +33,15 @@ def test_dot_is_a_graph_with_every_node(capsys, tmp_path):
 
 
 def test_pictures_without_graphviz_say_how_to_install_it(capsys, tmp_path, monkeypatch):
+    """Exit 2, README's code for a usage this machine cannot serve (issue 28: it was 1, which says a mission aborted)."""
     monkeypatch.setenv("PATH", str(tmp_path))  # no 'dot' here
-    assert main(["show", SQUARE, "--format", "svg", "-o", str(tmp_path / "t.svg")]) == 1
+    assert main(["show", SQUARE, "--format", "svg", "-o", str(tmp_path / "t.svg")]) == 2
     err = capsys.readouterr().err
-    assert "Graphviz" in err and "apt-get install graphviz" in err
+    assert err.startswith("executive: show: --format svg: Graphviz's 'dot' program is needed for svg/png and was not found on PATH")
+    assert "apt-get install graphviz" in err
     assert not (tmp_path / "t.svg").exists()
+    assert main(["show", SQUARE, "-o", str(tmp_path / "x.svg")]) == 2  # the format from the file's suffix: said so
+    assert capsys.readouterr().err.startswith(f"executive: show: -o {tmp_path / 'x.svg'} (svg, from its suffix): Graphviz's 'dot' program")
 
 
 def test_pictures_with_graphviz_are_rendered(tmp_path, monkeypatch):

@@ -75,3 +75,24 @@ def test_json_exit_0_when_all_are_good(minimal_mission: Path, capsys: pytest.Cap
 def test_no_mission_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["validate"]) == 2
     assert "the following arguments are required: MISSION" in capsys.readouterr().err
+
+
+def test_a_waypoint_out_of_reach_of_home_is_refused_with_its_distance(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 28: 10 km from home passed `validate` and was driven toward; the rule (5 km, a sub's 1 km) holds against `home:`."""
+    far = tmp_path / "far.yaml"
+    far.write_text(
+        "version: 1\nname: far\nvehicle: rover\nhome: {lat: -35.363261, lon: 149.165230}\nwaypoints:\n"
+        "  - {lat: -35.3629906, lon: 149.1652300}\n  - {lat: -35.2730000, lon: 149.1652300, name: town}\n",
+        encoding="utf-8",
+    )
+    sub = tmp_path / "sub.yaml"
+    sub.write_text("version: 1\nname: deep\nvehicle: sub\nhome: {lat: 44.095, lon: 9.863}\nwaypoints:\n  - {lat: 44.1085, lon: 9.863}\n")
+    near = tmp_path / "near.yaml"  # no home: nothing to measure against until the vehicle's position (at upload, at start)
+    near.write_text(far.read_text().replace("home: {lat: -35.363261, lon: 149.165230}\n", ""), encoding="utf-8")
+    assert main(["validate", str(far), str(sub), str(near)]) == 2
+    out, err = capsys.readouterr()
+    assert err.splitlines() == [
+        f"{far}:7:5: waypoints[1]: 10014 m from home, over limits.max_goal_distance_m (5000 m): refused at start with the vehicle at home",
+        f"{sub}:6:5: waypoints[0]: 1500 m from home, over limits.max_goal_distance_m (1000 m): refused at start with the vehicle at home",
+    ]
+    assert out == f"{near}: ok (2 waypoints, vehicle rover, tree waypoints)\n"

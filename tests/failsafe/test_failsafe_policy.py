@@ -115,7 +115,7 @@ ALLOWED = "link_loss, rc_takeover, disarmed, rc_loss, ekf_loss, gps_glitch, head
         ("rover", "failsafe:\n  geofence_breach: {recovery: resume}\n",  # held outside, the vehicle never comes back in
          "6:31: failsafe.geofence_breach.recovery: resume after hold: a vehicle held outside the fence never comes back in; "
          "use reaction rtl, or recovery abort"),
-        ("rover", "failsafe:\n  link_los: {reaction: hold}\n", f"6:3: failsafe.link_los: unknown field (allowed: {ALLOWED})"),
+        ("rover", "failsafe:\n  link_los: {reaction: hold}\n", f"6:3: failsafe.link_los: unknown field (did you mean link_loss? allowed: {ALLOWED})"),
         ("rover", "failsafe:\n  link_loss: {reaction: land}\n",
          "6:25: failsafe.link_loss.reaction: 'land': Input should be 'hold', 'loiter', 'rtl', 'surface', 'disarm' or 'wait'"),
         ("rover", "failsafe:\n  link_loss: {timeout_s: 0}\n", "6:26: failsafe.link_loss.timeout_s: 0: Input should be greater than 0"),

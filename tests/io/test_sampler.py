@@ -12,6 +12,7 @@ from executive.geo import destination
 from executive.io.sampler import SENSOR_MODELS, SimulatedSampler
 from executive.mission.model import Mission, SamplingOptions
 from executive.state import GlobalPosition, SamplerState, SamplerStatus
+from executive.testing import ObedientAutopilot
 
 HERE = GlobalPosition(47.397742, 8.545594, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 SENSORS = ["temperature", "conductivity", "ph", "dissolved_oxygen"]
@@ -181,6 +182,7 @@ def test_the_runtime_services_the_sampler_of_a_sampling_mission(clock, link, squ
         }
     )
     runtime = build_runtime(mission, link, clock, root=Sample())
+    ObedientAutopilot(link, "boat", start=(HERE.lat, HERE.lon)).beat()  # where the vehicle is: no tree runs before it is known
     runtime.mission_state.start()  # the sampler comes with the mission's tree, when it starts
     assert isinstance(runtime.sampler, SimulatedSampler)
     statuses = []

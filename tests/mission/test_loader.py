@@ -56,9 +56,16 @@ def test_every_error_is_reported_in_file_order(minimal_yaml: str) -> None:
     assert errors_of(text) == [
         "m.yaml:7:10: waypoints[1].lat: 95.0: Input should be less than or equal to 90",
         "m.yaml:8:10: waypoints[1].lon: expected a number, got bool true (YAML 1.1 reads yes as a boolean)",
-        "m.yaml:9:5: waypoints[1].latt: unknown field (allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode, sample)",
+        "m.yaml:9:5: waypoints[1].latt: unknown field (did you mean lat? "
+        "allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode, sample)",
         "m.yaml:10:24: rc.takeover_channel: expected an integer, got number 6.0",
     ]
+
+
+def test_an_unknown_field_close_to_a_known_one_gets_a_suggestion(minimal_yaml: str) -> None:
+    """Issue 28: `limits.recovery_timeout` (the _s left out) got the allowed fields and no suggestion."""
+    (error,) = errors_of(minimal_yaml + "limits:\n  recovery_timeout: 30\n")
+    assert error.startswith("m.yaml:8:3: limits.recovery_timeout: unknown field (did you mean recovery_timeout_s? allowed: acceptance_radius_m, ")
 
 
 def test_a_duplicate_key_is_reported_with_the_errors_of_the_value_that_wins(minimal_yaml: str) -> None:

@@ -110,7 +110,12 @@ ROVER_MODES = "(known: MANUAL, ACRO, STEERING, HOLD, LOITER, FOLLOW, SIMPLE, DOC
         ("{kind: rc_takeover, at_s: 1, channel: 6.0}", "6.0", "channel", "expected an integer, got number 6.0"),
         ("{kind: rc_takeover, at_s: 1, disarm: 'yes'}", "'yes'", "disarm", "expected true or false, got string 'yes'"),
         ("{kind: rc_takeover, at_s: 1, mode: on}", "on}", "mode", "expected a string, got bool true (YAML 1.1 reads on as a boolean)"),
-        ("{kind: compass_bias, at_s: 1, bias_deg: 20, bias: 20}", "bias:", "bias", "unknown field (allowed: at_s, for_s, kind, bias_deg)"),
+        (
+            "{kind: compass_bias, at_s: 1, bias_deg: 20, bias: 20}",
+            "bias:",
+            "bias",
+            "unknown field (did you mean bias_deg? allowed: at_s, for_s, kind, bias_deg)",
+        ),
         ("{kind: battery_sag, at_s: 1}", "{", "", "a battery sag needs drop_v or drop_pct"),
         ("{kind: meteor, at_s: 1}", "meteor", "kind", f"'meteor': {KIND_TAGS}"),
         ("{kind: 5, at_s: 1}", "5", "kind", f"5: {KIND_TAGS}"),

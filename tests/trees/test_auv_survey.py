@@ -513,5 +513,6 @@ def test_on_the_simulator_a_sub_1_km_off_refuses_the_survey_without_arming_or_mo
     home = (*destination(mission.home.lat, mission.home.lon, 270.0, 1200.0), 0.0)
     outcome, legs, end = _run_on_the_simulator(mission, home)
     assert str(outcome.status) == "ABORTED"
-    assert outcome.reason.startswith("All waypoints within 1000 m?: waypoint 0 (start) is 120")
+    # the runtime's distance rule, before the tree's own (the same rule, repeated at its start) ever ticks
+    assert outcome.reason.startswith("refused before anything was commanded: Within reach: waypoints[0] (start): 1200 m from the vehicle")
     assert (legs, end["armed"]) == ([], False) and end["moved_m"] < 0.01

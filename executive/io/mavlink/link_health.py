@@ -41,6 +41,11 @@ class LinkHealth:
         return rebooted
 
     @property
+    def last_boot_ms(self) -> int | None:
+        """The autopilot's boot clock in the latest message that carried it (None before any)."""
+        return self._last_boot_ms
+
+    @property
     def loss_pct(self) -> float:
         total = self.received + self.lost
         return 100.0 * self.lost / total if total else 0.0

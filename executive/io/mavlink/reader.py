@@ -24,6 +24,7 @@ from executive.io.mavlink.link import Link
 from executive.io.mavlink.link_health import LinkHealth
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
+from executive.io.mavlink.vehicle_clock import VehicleClockWatch
 from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, Rangefinder
 
 log = logging.getLogger(__name__)
@@ -127,6 +128,8 @@ class MavlinkReader:
         self._estimator_status_at = float("-inf")
         self._chunks: dict[int, list[str]] = {}  # STATUSTEXT id -> the chunks so far
         self.health = LinkHealth()
+        #: The autopilot's clock against ours: a simulator at another speed-up is warned about.
+        self.clock_watch = VehicleClockWatch(clock)
         #: Called when the autopilot is first found, comes back after a link loss, or rebooted.
         self.on_reconnect: Callable[[], None] | None = None
         #: Called with the HEARTBEAT's (``autopilot``, ``type``) when the autopilot is first found: the port picks its back end.
@@ -184,6 +187,8 @@ class MavlinkReader:
                 break
             count += 1
             dispatch(msg, now)
+        if count and (boot_ms := self.health.last_boot_ms) is not None:
+            self.clock_watch.sample(boot_ms / 1000.0, now)
         self._update_link_health(now)
         return count
 

@@ -197,7 +197,7 @@ def test_a_refused_home_fails_the_edit_with_the_reason(keeping: Keeping) -> None
 
 def test_another_missions_home_is_not_an_edit(keeping: Keeping, square_mission: Mission) -> None:
     keeping.state.abort("test")
-    keeping.state.upload(square_mission.model_copy(update={"home": Home(lat=47.0, lon=8.0)}))
+    keeping.state.upload(square_mission.model_copy(update={"home": Home(lat=47.3975, lon=8.5450)}))
     keeping.state.start()
     keeping.tick(keeping.offset_edit)
     assert keeping.until(ended).state is RouteUploadState.DONE
