@@ -7,6 +7,7 @@ never blocking: pending connections are accepted, complete lines answered, the r
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import logging
 import math
@@ -61,13 +62,24 @@ class ControlServer:
                 raise SocketInUse(f"{path}: another executive is listening there")
             os.unlink(path)  # left behind by a crash
         self._server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        # Bound and listening under a name of its own, then linked into place: a client that finds the path
+        # can connect (bound but not yet listening, it was refused: seen under load). link() fails where
+        # the path exists, as bind() does, so two executives never share one.
+        staging = f"{path}.{os.getpid()}"
         old_umask = os.umask(0o177)
         try:
-            self._server.bind(path)
+            self._server.bind(staging)
         finally:
             os.umask(old_umask)
-        os.chmod(path, 0o600)
-        self._server.listen(8)
+        try:
+            os.chmod(staging, 0o600)
+            self._server.listen(8)
+            os.link(staging, path)
+        except FileExistsError:
+            self._server.close()
+            raise OSError(errno.EADDRINUSE, f"{path}: address already in use") from None
+        finally:
+            os.unlink(staging)
         self._server.setblocking(False)
         self._clients: dict[socket.socket, _Connection] = {}
         self.accept_errors = 0
