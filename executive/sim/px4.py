@@ -20,7 +20,10 @@ MAVLink (issue 12) and as its source reads:
   Armed and never taken off, it disarms itself after COM_DISARM_PRFLT (10 s); landed, after
   COM_DISARM_LAND (2 s) (Commander::handleAutoDisarm).
 - Estimator health is in ESTIMATOR_STATUS flags and SYS_STATUS health bits; there is no
-  EKF_STATUS_REPORT.
+  EKF_STATUS_REPORT. At rest on the ground the flags carry ESTIMATOR_CONST_POS_MODE (128) beside the
+  GNSS position: 0x3ff, as the real SITL showed before take-off (src/modules/ekf2/EKF/ekf_helper.cpp
+  get_ekf_soln_status sets it for ``vehicle_at_rest``, which src/modules/land_detector/LandDetector.cpp
+  publishes as landed and no movement for 1 s); in flight 0x37f.
 - OFFBOARD needs a recent setpoint (SET_POSITION_TARGET_LOCAL_NED / _GLOBAL_INT younger than
   COM_OF_LOSS_T = 1 s, HealthAndArmingChecks/checks/offboardCheck.cpp); a gap longer than that in
   OFFBOARD is the offboard failsafe (failsafe/failsafe.cpp checkModeFallback): without RC, POSCTL
@@ -108,10 +111,17 @@ RECEIVER_COMMANDS = frozenset({
     _M.MAV_CMD_REQUEST_MESSAGE,
 })  # fmt: skip
 
+#: The estimator with a GNSS position, moving (0x37f): ekf_helper.cpp get_ekf_soln_status; PRED_POS_HORIZ_REL is "an aiding
+#: source is fused" (isHorizontalAidingActive), PRED_POS_HORIZ_ABS "GNSS position fused".
 ESTIMATOR_OK = (
     _M.ESTIMATOR_ATTITUDE | _M.ESTIMATOR_VELOCITY_HORIZ | _M.ESTIMATOR_VELOCITY_VERT | _M.ESTIMATOR_POS_HORIZ_REL
-    | _M.ESTIMATOR_POS_HORIZ_ABS | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_PRED_POS_HORIZ_REL | _M.ESTIMATOR_PRED_POS_HORIZ_ABS
+    | _M.ESTIMATOR_POS_HORIZ_ABS | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_POS_VERT_AGL | _M.ESTIMATOR_PRED_POS_HORIZ_REL
+    | _M.ESTIMATOR_PRED_POS_HORIZ_ABS
 )  # fmt: skip
+#: The same at rest on the ground (0x3ff, as the real SITL reported before take-off): const_pos_mode is set for vehicle_at_rest too.
+ESTIMATOR_AT_REST = ESTIMATOR_OK | _M.ESTIMATOR_CONST_POS_MODE
+#: LandDetector::UpdateVehicleAtRest: at rest once no movement for this long (and landed).
+AT_REST_AFTER_S = 1.0
 ESTIMATOR_NO_POSITION = _M.ESTIMATOR_ATTITUDE | _M.ESTIMATOR_VELOCITY_VERT | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_CONST_POS_MODE
 # SYS_STATUS (src/modules/mavlink/streams/SYS_STATUS.hpp): each component's present/enabled/health from the health
 # report; the AHRS bit is the local position estimate; the pre-arm bit is only ever set in the health field.
@@ -259,6 +269,7 @@ class Px4Sim(ArduPilotSim):
         self._taken_off = False
         self._landed = True
         self._landed_at: float | None = None
+        self._moved_at = -math.inf  # the last time the land detector saw the vehicle move (or in the air)
         self._mission_item: tuple[int | None, object] | None = None
         self._event_sequence = 0
         # Commander::dataLinkCheck: HEARTBEAT type -> (last seen, lost), for a ground station and a mission computer
@@ -273,6 +284,11 @@ class Px4Sim(ArduPilotSim):
     def landed(self) -> bool:
         """The land detector: on the ground and not climbing away from it."""
         return self._landed
+
+    @property
+    def at_rest(self) -> bool:
+        """LandDetector.cpp: landed, and no movement for :data:`AT_REST_AFTER_S` (the estimator's ``vehicle_at_rest``)."""
+        return self._landed and self.elapsed_s - self._moved_at > AT_REST_AFTER_S
 
     @property
     def landed_state(self) -> int:
@@ -457,6 +473,8 @@ class Px4Sim(ArduPilotSim):
             self._taken_off = True
             self.home = self.home or (v.lat, v.lon)
         self._landed = landed
+        if not landed or abs(v.speed_m_s) > 0.05 or abs(v.velocity_ned[2]) > 0.05:
+            self._moved_at = self.elapsed_s
 
     def _auto_disarm(self) -> None:
         if not self._taken_off and self.elapsed_s - self._armed_at >= COM_DISARM_PRFLT:
@@ -734,7 +752,8 @@ class Px4Sim(ArduPilotSim):
 
     def _msg_estimator_status(self) -> MAVLinkMessage:
         if self.position_ok:
-            return self._mav.estimator_status_encode(self._us(), ESTIMATOR_OK, 0.05, 0.1, 0.1, 0.1, 0.0, 0.0, 0.5, 0.8)
+            flags = ESTIMATOR_AT_REST if self.at_rest else ESTIMATOR_OK
+            return self._mav.estimator_status_encode(self._us(), flags, 0.05, 0.1, 0.1, 0.1, 0.0, 0.0, 0.5, 0.8)
         return self._mav.estimator_status_encode(self._us(), ESTIMATOR_NO_POSITION, 0.0, 0.0, 0.1, 0.1, 0.0, 0.0, 0.0, 0.0)
 
     def _msg_extended_sys_state(self) -> MAVLinkMessage:

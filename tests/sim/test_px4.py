@@ -18,6 +18,7 @@ from executive.sim.px4 import (
     COM_DISARM_PRFLT,
     COM_FAIL_ACT_T,
     COM_OF_LOSS_T,
+    ESTIMATOR_AT_REST,
     ESTIMATOR_OK,
     HOME_AMSL_M,
     MIS_TAKEOFF_ALT,
@@ -159,8 +160,24 @@ def test_arming_is_refused_until_the_estimator_has_a_position(px4: MakePx4) -> N
     gcs.run(2.0)
     status = gcs.last("SYS_STATUS")
     assert status.onboard_control_sensors_health & m.MAV_SYS_STATUS_PREARM_CHECK
-    assert gcs.last("ESTIMATOR_STATUS").flags == ESTIMATOR_OK
+    assert gcs.last("ESTIMATOR_STATUS").flags == ESTIMATOR_AT_REST  # a GNSS position, and at rest on the ground
     assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+
+
+def test_the_estimator_flags_constant_position_mode_at_rest_on_the_ground_and_not_in_flight(px4: MakePx4) -> None:
+    """ekf_helper.cpp get_ekf_soln_status: CONST_POS_MODE for vehicle_at_rest (LandDetector: landed, still for 1 s), GNSS in use."""
+    gcs = px4()
+    assert gcs.last("ESTIMATOR_STATUS").flags == 0x3FF  # what the real SITL reported before take-off
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + 10.0) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(3.0)
+    flying = [msg.flags for msg in gcs.of_type(out, "ESTIMATOR_STATUS")][-1]
+    assert flying == ESTIMATOR_OK == 0x37F and not flying & m.ESTIMATOR_CONST_POS_MODE
+    gcs.run(10.0)
+    assert gcs.px4_mode(LAND) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(20.0)
+    assert "Landing detected" in gcs.texts(out)
+    assert gcs.of_type(out, "ESTIMATOR_STATUS")[-1].flags == 0x3FF  # landed and still again
 
 
 def test_no_ekf_status_report_but_estimator_status(px4: MakePx4) -> None:
