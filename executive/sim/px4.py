@@ -17,8 +17,9 @@ MAVLink (issue 12) and as its source reads:
 - Arming is refused (TEMPORARILY_REJECTED, "Arming denied: Resolve system health failures first")
   until the estimator has a position, ~3 s after boot on the SIH simulation; param2 21196 does not
   skip the checks for a command from outside (Commander::arm runs them when ``from_external``).
-  Armed and never taken off, it disarms itself after COM_DISARM_PRFLT (10 s); landed, after
-  COM_DISARM_LAND (2 s) (Commander::handleAutoDisarm).
+  Armed and never taken off, it disarms itself after COM_SPOOLUP_TIME + COM_DISARM_PRFLT (1 + 10 s),
+  "Disarmed by auto preflight disarming"; landed after a flight, after COM_DISARM_LAND (2 s), "Disarmed by
+  landing" (Commander::handleAutoDisarm; defaults in src/modules/commander/commander_params.c).
 - Estimator health is in ESTIMATOR_STATUS flags and SYS_STATUS health bits; there is no
   EKF_STATUS_REPORT. At rest on the ground the flags carry ESTIMATOR_CONST_POS_MODE (128) beside the
   GNSS position: 0x3ff, as the real SITL showed before take-off (src/modules/ekf2/EKF/ekf_helper.cpp
@@ -29,7 +30,12 @@ MAVLink (issue 12) and as its source reads:
   OFFBOARD is the offboard failsafe (failsafe/failsafe.cpp checkModeFallback): without RC, POSCTL
   (holding), then AUTO.LAND after COM_FAIL_ACT_T, then it disarms on the ground.
 - NAV_TAKEOFF param7 is an altitude AMSL (NaN: MIS_TAKEOFF_ALT above home): AUTO.TAKEOFF, then
-  AUTO.LOITER once there (Commander::checkForMissionUpdate). DO_REPOSITION needs the change-mode
+  AUTO.LOITER once there (Commander::checkForMissionUpdate). Finite param5/param6 are the take-off
+  point's latitude and longitude (navigator_main.cpp, VEHICLE_CMD_NAV_TAKEOFF; NaN: here): the
+  multicopter takes off only if the straight climb towards it asks for more than 0.3 m/s upwards
+  (flight_mode_manager FlightTaskAuto.cpp ``_want_takeoff``, FlightTask::_checkTakeoff): 0, 0, a point
+  thousands of kilometres off, is ACCEPTED, shows AUTO.TAKEOFF and never climbs (as the real SITL did)
+  until the pre-flight auto-disarm. DO_REPOSITION needs the change-mode
   flag (else UNSUPPORTED) and flies to the point in AUTO.LOITER.
 - Missions: the upload is driven with MISSION_REQUEST_INT and item 0 is the first item (no home
   slot); AUTO.MISSION is refused for ~1 s after the upload while PX4 checks it; a finished mission
@@ -80,7 +86,10 @@ ESTIMATOR_READY_S = 3.0  # the SIH estimator's position came 2-4 s after boot (i
 HOME_AMSL_M = 584.0  # the start point's altitude above sea level (ArduPilot SITL's CMAC field)
 COM_OF_LOSS_T = 1.0  # offboard signal lost after this long without a setpoint
 COM_FAIL_ACT_T = 5.0  # failsafe: hold this long before the action
-COM_DISARM_PRFLT = 10.0  # armed without taking off: disarm after this long
+COM_DISARM_PRFLT = 10.0  # armed without taking off: disarm this long after the spool-up
+COM_SPOOLUP_TIME = 1.0  # the motors' spool-up after arming (counted before COM_DISARM_PRFLT)
+MPC_XY_CRUISE = 5.0  # the multicopter's cruise speed along a straight path (m/s)
+WANT_TAKEOFF_M_S = 0.3  # FlightTaskAuto: a take-off needs an upward velocity setpoint over this
 COM_DISARM_LAND = 2.0  # landed: disarm after this long
 MIS_TAKEOFF_ALT = 2.5  # NAV_TAKEOFF with param7 NaN: this high above home
 NAV_LOITER_RAD = 80.0  # fixed-wing loiter radius
@@ -262,6 +271,7 @@ class Px4Sim(ArduPilotSim):
         self._goal_radius = NAV_LOITER_RAD
         self._landing = False
         self._takeoff_alt: float | None = None  # AUTO.TAKEOFF's height above home
+        self._takeoff_point: tuple[float, float] | None = None  # NAV_TAKEOFF's finite param5/param6; None: here
         self._offboard_at = -math.inf  # when the last setpoint came (elapsed s)
         self._offboard_goal: tuple[float, float, float] | None = None
         self._failsafe_at: float | None = None  # when the offboard failsafe began
@@ -374,7 +384,7 @@ class Px4Sim(ArduPilotSim):
             if self._takeoff_alt is None:
                 self._takeoff_alt = MIS_TAKEOFF_ALT
             self._goal = (v.lat, v.lon, max(self._takeoff_alt, v.alt_m))
-            if self.armed:
+            if self.armed and self._wants_takeoff():
                 self._steer()
         elif mode == "OFFBOARD":
             if self._offboard_goal is not None:
@@ -385,6 +395,20 @@ class Px4Sim(ArduPilotSim):
             self._mission_item = None
             self.mission.start_or_resume()
         return True
+
+    def _wants_takeoff(self) -> bool:
+        """FlightTaskAuto: on the ground, the straight path to the take-off point must climb faster than 0.3 m/s to lift off.
+
+        Along the path at MPC_XY_CRUISE the upward speed is its share of the climb in the 3-D distance: a point
+        thousands of kilometres off (0, 0 sent as "no position") gives none, and the vehicle stays on the ground.
+        The simulated climb goes straight up all the same (the path towards a near point is not modelled).
+        """
+        if self._takeoff_point is None or not self._landed:
+            return True
+        v, goal = self.vehicle, self._goal
+        assert goal is not None
+        climb, across = goal[2] - v.alt_m, v.distance_to(*self._takeoff_point)
+        return climb > 0 and MPC_XY_CRUISE * climb / math.hypot(climb, across) > WANT_TAKEOFF_M_S
 
     # -- where the vehicle goes ------------------------------------------------------------------
 
@@ -453,7 +477,7 @@ class Px4Sim(ArduPilotSim):
         self._update_airframe()
         self._update_offboard_failsafe()
         if self.mode == "AUTO.TAKEOFF" and self._goal is not None and v.alt_m >= self._goal[2] - 0.5 and not self._landed:
-            self._takeoff_alt, there = None, self._goal
+            self._takeoff_alt, self._takeoff_point, there = None, None, self._goal
             self._switch("AUTO.LOITER")  # the takeoff is done: loiter there (Commander::checkForMissionUpdate)
             self._fly_to(*there)
         elif self.mode == "AUTO.RTL" and not self._landing and self.home is not None:
@@ -477,7 +501,7 @@ class Px4Sim(ArduPilotSim):
             self._moved_at = self.elapsed_s
 
     def _auto_disarm(self) -> None:
-        if not self._taken_off and self.elapsed_s - self._armed_at >= COM_DISARM_PRFLT:
+        if not self._taken_off and self.elapsed_s - self._armed_at >= COM_SPOOLUP_TIME + COM_DISARM_PRFLT:
             self.disarm("auto preflight disarming")
         elif self._taken_off and self._landed and self._landed_at is not None and self.elapsed_s - self._landed_at >= COM_DISARM_LAND:
             self.disarm("landing")
@@ -682,9 +706,12 @@ class Px4Sim(ArduPilotSim):
             self._text(_M.MAV_SEVERITY_INFO, f"Disarmed by {reason}")
 
     def _cmd_takeoff(self, cmd: Command) -> int:
-        """NAV_TAKEOFF: param7 the altitude above sea level (NaN: MIS_TAKEOFF_ALT above home)."""
+        """NAV_TAKEOFF: param7 the altitude above sea level (NaN: MIS_TAKEOFF_ALT above home); param5/param6, both finite,
+        the take-off point (navigator_main.cpp), else here. Acked by the commander whether or not the vehicle will lift off."""
         amsl = cmd.params[6]
         self._takeoff_alt = MIS_TAKEOFF_ALT if math.isnan(amsl) else amsl - self.home_amsl_m
+        lat, lon = cmd.lat_lon
+        self._takeoff_point = (lat, lon) if math.isfinite(lat) and math.isfinite(lon) else None
         if self.mode == "AUTO.TAKEOFF":
             self._enter_mode("AUTO.TAKEOFF")
             return _M.MAV_RESULT_ACCEPTED

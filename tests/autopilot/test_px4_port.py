@@ -158,6 +158,8 @@ def test_takeoff_altitude_is_above_sea_level(px4, harness, vehicle, link):
     harness(TakeOff(30.0)).tick()
     (cmd,) = [m for m in link.take("COMMAND_LONG") if m.command == _M.MAV_CMD_NAV_TAKEOFF]
     assert cmd.param7 == pytest.approx(518.0)
+    # navigator_main.cpp VEHICLE_CMD_NAV_TAKEOFF: finite param5/param6 are the take-off point (0, 0 never climbed): NaN, here
+    assert (cmd.param1, cmd.param2, cmd.param3) == (0.0, 0.0, 0.0) and all(map(math.isnan, (cmd.param4, cmd.param5, cmd.param6)))
 
 
 def test_takeoff_before_home_is_known_asks_for_the_default_height(px4, harness, vehicle, link):

@@ -18,6 +18,7 @@ from executive.sim.px4 import (
     COM_DISARM_PRFLT,
     COM_FAIL_ACT_T,
     COM_OF_LOSS_T,
+    COM_SPOOLUP_TIME,
     ESTIMATOR_AT_REST,
     ESTIMATOR_OK,
     HOME_AMSL_M,
@@ -98,7 +99,7 @@ def px4() -> MakePx4:
 def airborne(px4: MakePx4, metres: float = 20.0) -> Px4Gcs:
     gcs = px4()
     assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
-    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + metres) == m.MAV_RESULT_ACCEPTED
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + metres) == m.MAV_RESULT_ACCEPTED
     gcs.run(metres / 2.0 + 6.0)
     assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(metres, abs=0.6)
     return gcs
@@ -187,11 +188,36 @@ def test_no_ekf_status_report_but_estimator_status(px4: MakePx4) -> None:
     assert gcs.of_type(gcs.log, "ESTIMATOR_STATUS")[0].flags & m.ESTIMATOR_CONST_POS_MODE  # before the position came
 
 
-def test_armed_and_not_taking_off_disarms_itself(px4: MakePx4) -> None:
+def test_armed_and_not_taking_off_disarms_itself_after_the_spool_up_and_com_disarm_prflt(px4: MakePx4) -> None:
+    """Commander::handleAutoDisarm: COM_SPOOLUP_TIME + COM_DISARM_PRFLT (1 + 10 s, commander_params.c) without a take-off."""
     gcs = px4()
     assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
-    out = gcs.run(COM_DISARM_PRFLT + 0.5)
+    gcs.run(COM_SPOOLUP_TIME + COM_DISARM_PRFLT - 0.3)
+    assert gcs.ap.armed
+    out = gcs.run(0.5)
     assert "Disarmed by auto preflight disarming" in gcs.texts(out) and not gcs.ap.armed
+
+
+def test_takeoff_to_latitude_0_longitude_0_is_accepted_and_never_climbs_then_it_disarms(px4: MakePx4) -> None:
+    """navigator_main.cpp: finite param5/param6 are the take-off point. 0, 0 is ACCEPTED, AUTO.TAKEOFF, no climb (the real
+    SITL's answer to the executive's old NAV_TAKEOFF), and COM_DISARM_PRFLT later "Disarmed by auto preflight disarming"."""
+    gcs = px4()
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, HOME_AMSL_M + 30.0) == m.MAV_RESULT_ACCEPTED
+    assert gcs.heartbeat().custom_mode == TAKEOFF
+    out = gcs.run(COM_SPOOLUP_TIME + COM_DISARM_PRFLT)
+    assert max(msg.relative_alt for msg in gcs.of_type(out, "GLOBAL_POSITION_INT")) < 100  # mm: never left the ground
+    assert "Disarmed by auto preflight disarming" in gcs.texts(out) and not gcs.ap.armed
+    assert gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_ON_GROUND
+
+
+def test_takeoff_with_the_point_nan_or_here_climbs(px4: MakePx4) -> None:
+    for lat, lon in ((math.nan, math.nan), HOME[:2]):
+        gcs = px4()
+        gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+        assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, lat, lon, HOME_AMSL_M + 10.0) == m.MAV_RESULT_ACCEPTED
+        gcs.run(10.0)
+        assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(10.0, abs=0.6)
 
 
 # -- take-off, reposition ------------------------------------------------------------------------
@@ -200,7 +226,7 @@ def test_armed_and_not_taking_off_disarms_itself(px4: MakePx4) -> None:
 def test_takeoff_altitude_is_above_sea_level_then_it_loiters(px4: MakePx4) -> None:
     gcs = px4()
     gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
-    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + 15.0) == m.MAV_RESULT_ACCEPTED
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + 15.0) == m.MAV_RESULT_ACCEPTED
     assert gcs.heartbeat().custom_mode == TAKEOFF
     gcs.run(12.0)
     assert gcs.heartbeat().custom_mode == LOITER
@@ -213,7 +239,7 @@ def test_takeoff_altitude_is_above_sea_level_then_it_loiters(px4: MakePx4) -> No
 def test_takeoff_without_an_altitude_climbs_to_the_default_height(px4: MakePx4) -> None:
     gcs = px4()
     gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
-    gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, math.nan)
+    gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, math.nan)
     gcs.run(8.0)
     assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(MIS_TAKEOFF_ALT, abs=0.6)
 
@@ -404,7 +430,7 @@ def test_rover_is_a_px4_ground_rover_that_cannot_take_off_or_transition(px4: Mak
     hb = gcs.heartbeat()
     assert (hb.autopilot, hb.type, hb.custom_mode) == (m.MAV_AUTOPILOT_PX4, m.MAV_TYPE_GROUND_ROVER, LOITER)
     assert gcs.last("EXTENDED_SYS_STATE").vtol_state == m.MAV_VTOL_STATE_UNDEFINED
-    replies = gcs.command(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + 5.0)
+    replies = gcs.command(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + 5.0)
     assert [msg.result for msg in gcs.of_type(replies, "COMMAND_ACK")] == [m.MAV_RESULT_TEMPORARILY_REJECTED]
     assert "Switching to Takeoff is currently not available" in gcs.texts(replies)
     assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, FW) == m.MAV_RESULT_UNSUPPORTED

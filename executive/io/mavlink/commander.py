@@ -162,9 +162,15 @@ class Commander:
         return self.command_long(mavlink.MAV_CMD_DO_VTOL_TRANSITION, (state,))
 
     def takeoff(self, alt_m: float, *, vtol: bool = False) -> int:
-        """Climb to ``alt_m`` above home (a VTOL climbs as a multicopter)."""
+        """Climb to ``alt_m`` (above home on ArduPilot, above sea level on PX4) where the vehicle is (a VTOL climbs as a multicopter).
+
+        Yaw, latitude and longitude go as NaN, "unchanged, here": PX4 takes finite param5/param6 as the take-off point
+        (navigator_main.cpp VEHICLE_CMD_NAV_TAKEOFF; 0, 0 is in the Gulf of Guinea and the vehicle never climbed);
+        ArduPlane reads param7 alone (GCS_MAVLink_Plane.cpp convert_MAV_CMD_NAV_TAKEOFF_to_COMMAND_INT).
+        """
         command = mavlink.MAV_CMD_NAV_VTOL_TAKEOFF if vtol else mavlink.MAV_CMD_NAV_TAKEOFF
-        return self.command_long(command, (0, 0, 0, 0, 0, 0, alt_m))
+        nan = float("nan")
+        return self.command_long(command, (0, 0, 0, nan, nan, nan, alt_m))
 
     def land(self, *, vtol: bool = False) -> int:
         """Land where the vehicle is."""
