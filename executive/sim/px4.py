@@ -25,6 +25,10 @@ MAVLink (issue 12) and as its source reads:
   GNSS position: 0x3ff, as the real SITL showed before take-off (src/modules/ekf2/EKF/ekf_helper.cpp
   get_ekf_soln_status sets it for ``vehicle_at_rest``, which src/modules/land_detector/LandDetector.cpp
   publishes as landed and no movement for 1 s); in flight 0x37f.
+- Disarmed (by landing, pre-flight, a command), it goes back to the last mode a user asked for that
+  does not prevent arming (Commander::disarm -> UserModeIntention::onDisarm; AUTO.RTL, AUTO.LAND and
+  AUTO.PRECLAND prevent it, ModeUtil/mode_requirements.cpp; the take-off's and the mission's end in
+  AUTO.LOITER count as asked): after a take-off and an RTL landing, AUTO.LOITER, as the real SITL showed.
 - OFFBOARD needs a recent setpoint (SET_POSITION_TARGET_LOCAL_NED / _GLOBAL_INT younger than
   COM_OF_LOSS_T = 1 s, HealthAndArmingChecks/checks/offboardCheck.cpp); a gap longer than that in
   OFFBOARD is the offboard failsafe (failsafe/failsafe.cpp checkModeFallback): without RC, POSCTL
@@ -113,6 +117,8 @@ NAV_STATE_NAMES: Mapping[str, str] = MappingProxyType({
 })  # fmt: skip
 #: Modes that need the pilot's sticks (mode requirement "manual control"): never available without RC.
 PILOT_MODES = frozenset({"MANUAL", "ALTCTL", "POSCTL", "STABILIZED", "ACRO", "RATTITUDE"})
+#: Modes with mode_req_prevent_arming (ModeUtil/mode_requirements.cpp): never the mode PX4 goes back to once disarmed.
+PREVENT_ARMING_MODES = frozenset({"AUTO.RTL", "AUTO.LAND", "AUTO.PRECLAND", "AUTO.FOLLOW_TARGET"})
 NOT_SIMULATED = frozenset({"AUTO.READY", "AUTO.FOLLOW_TARGET", "AUTO.PRECLAND"})
 #: Commands the MAVLink receiver answers itself, at once (mavlink_receiver.cpp).
 RECEIVER_COMMANDS = frozenset({
@@ -275,6 +281,7 @@ class Px4Sim(ArduPilotSim):
         self._offboard_at = -math.inf  # when the last setpoint came (elapsed s)
         self._offboard_goal: tuple[float, float, float] | None = None
         self._failsafe_at: float | None = None  # when the offboard failsafe began
+        self.mode_after_disarm = "AUTO.LOITER"  # UserModeIntention::_nav_state_after_disarming
         self._armed_at = 0.0
         self._taken_off = False
         self._landed = True
@@ -357,8 +364,14 @@ class Px4Sim(ArduPilotSim):
             self._text(_M.MAV_SEVERITY_CRITICAL, f"Switching to {NAV_STATE_NAMES.get(mode, mode)} is currently not available")
             return False
         self._failsafe_at = None  # a user's mode change ends the failsafe
+        self._user_intends(mode)
         self._switch(mode)
         return True
+
+    def _user_intends(self, mode: str) -> None:
+        """UserModeIntention::change: the user's mode, kept for after disarming unless it prevents arming."""
+        if mode not in PREVENT_ARMING_MODES:
+            self.mode_after_disarm = mode
 
     def set_mode(self, number: int) -> bool:
         name = self._mode_names.get(number)
@@ -478,6 +491,7 @@ class Px4Sim(ArduPilotSim):
         self._update_offboard_failsafe()
         if self.mode == "AUTO.TAKEOFF" and self._goal is not None and v.alt_m >= self._goal[2] - 0.5 and not self._landed:
             self._takeoff_alt, self._takeoff_point, there = None, None, self._goal
+            self._user_intends("AUTO.LOITER")
             self._switch("AUTO.LOITER")  # the takeoff is done: loiter there (Commander::checkForMissionUpdate)
             self._fly_to(*there)
         elif self.mode == "AUTO.RTL" and not self._landing and self.home is not None:
@@ -522,6 +536,7 @@ class Px4Sim(ArduPilotSim):
         item = self.mission.current
         if item is None:
             if self.mission.state is MissionState.COMPLETE and not self._landed and self._goal is not None:
+                self._user_intends("AUTO.LOITER")
                 self._switch("AUTO.LOITER")  # Commander::checkForMissionUpdate: a finished mission loiters
             return
         key = (self.mission.current_seq, item)
@@ -704,6 +719,11 @@ class Px4Sim(ArduPilotSim):
             self.armed = self.vehicle.powered = False
             self._landing, self._goal, self._failsafe_at = False, None, None
             self._text(_M.MAV_SEVERITY_INFO, f"Disarmed by {reason}")
+            if self.mode != self.mode_after_disarm:  # UserModeIntention::onDisarm: disarmed, no failsafe holds another mode
+                if self.mode == "AUTO.MISSION":
+                    self.mission.stop()
+                self.mode = self.mode_after_disarm  # nothing to fly on the ground, disarmed
+            self._emit(self._msg_heartbeat())
 
     def _cmd_takeoff(self, cmd: Command) -> int:
         """NAV_TAKEOFF: param7 the altitude above sea level (NaN: MIS_TAKEOFF_ALT above home); param5/param6, both finite,

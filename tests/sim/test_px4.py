@@ -406,6 +406,33 @@ def test_a_transit_flight_takeoff_transition_fly_back_transition_land(px4: MakeP
     assert not gcs.ap.armed and gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_ON_GROUND
 
 
+def test_after_an_rtl_landing_it_disarms_and_goes_back_to_auto_loiter(px4: MakePx4) -> None:
+    """Commander::handleAutoDisarm ("Disarmed by landing" after COM_DISARM_LAND), then UserModeIntention::onDisarm: the last
+    mode a user asked for that does not prevent arming (AUTO.RTL does), here the AUTO.LOITER the take-off ended in."""
+    gcs = airborne(px4)
+    assert gcs.result(m.MAV_CMD_NAV_RETURN_TO_LAUNCH) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(90.0)
+    texts = gcs.texts(out)
+    assert texts.index("Landing detected") < texts.index("Disarmed by landing")
+    beats = [(hb.custom_mode, bool(hb.base_mode & m.MAV_MODE_FLAG_SAFETY_ARMED)) for hb in gcs.of_type(out, "HEARTBEAT")]
+    rtl = PX4_MODES["AUTO.RTL"]
+    assert (rtl, True) in beats and beats[-1] == (LOITER, False)
+    assert beats[beats.index((LOITER, False)) - 1] == (rtl, True)  # disarmed and back in AUTO.LOITER in one heartbeat
+    assert gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_ON_GROUND
+
+
+def test_after_disarming_it_goes_back_to_the_last_mode_a_user_asked_for_that_allows_arming(px4: MakePx4) -> None:
+    """UserModeIntention::change keeps OFFBOARD (it does not prevent arming) and not AUTO.LAND (it does)."""
+    gcs = airborne(px4, 5.0)
+    goal = (*gcs.north(5.0), 5.0)
+    gcs.stream(1.0, goal)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.stream(1.0, goal)
+    assert gcs.px4_mode(LAND) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.run(30.0)
+    assert not gcs.ap.armed and gcs.last("HEARTBEAT").custom_mode == OFFBOARD
+
+
 def test_change_speed_sets_the_cruise_speed(px4: MakePx4) -> None:
     gcs = airborne(px4)
     assert gcs.result(m.MAV_CMD_DO_CHANGE_SPEED, 1, 3.0, -1) == m.MAV_RESULT_ACCEPTED
@@ -464,7 +491,9 @@ def test_rover_offboard_loss_stops_it_then_land_mode_disarms_it(px4: MakePx4) ->
     gcs.run(COM_OF_LOSS_T + 0.2)
     assert gcs.ap.mode == "POSCTL"
     out = gcs.run(COM_FAIL_ACT_T + 3.0)
-    assert gcs.last("HEARTBEAT").custom_mode == LAND and not gcs.ap.armed
+    beats = [(hb.custom_mode, bool(hb.base_mode & m.MAV_MODE_FLAG_SAFETY_ARMED)) for hb in gcs.of_type(out, "HEARTBEAT")]
+    assert (LAND, True) in beats and not gcs.ap.armed
+    assert beats[-1] == (OFFBOARD, False)  # disarmed, no failsafe: the user's mode again (UserModeIntention::onDisarm)
     assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
 
 

@@ -9,7 +9,7 @@ with ``confirmation + 1`` when no ack comes, and its fate is written to ``/comma
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from py_trees.common import Access
@@ -99,8 +99,6 @@ class Commander:
         self.modes_asked: dict[str, float] = {}
         #: The mode asked for last, if any.
         self.last_mode_asked: str | None = None
-        #: Mode -> the mode the firmware goes on to by itself (PX4: AUTO.TAKEOFF -> AUTO.LOITER); the autopilot port sets it.
-        self.follow_on_modes: Mapping[str, str] = {}
         #: Commands the autopilot acks twice, the first ACCEPTED saying only "received": PX4's MAVLink receiver
         #: acks DO_SET_MODE at once, its commander the real result after (issue 12). The first ACCEPTED is not final.
         self.double_acked: frozenset[int] = frozenset()
