@@ -172,6 +172,7 @@ class InterventionWatch:
             system_status=self._bb.get("/vehicle/system_status"),
             failsafe_text=self._failsafe_text(now),
             alt_rel_m=position.alt_rel_m if position is not None else None,
+            takeoff_height_m=self._commander.takeoff_height_m,
         )
 
     def _failsafe_text(self, now: float) -> str | None:

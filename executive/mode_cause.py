@@ -22,6 +22,9 @@ PX4_PREVENT_ARMING_MODES = frozenset({"AUTO.RTL", "AUTO.LAND", "AUTO.PRECLAND", 
 #: ArduSub's SURFACE is done above SURFACE_DEPTH (-10 cm, ArduSub/Parameters.cpp); GLOBAL_POSITION_INT's relative altitude
 #: is minus the depth. A little margin for the report's rounding and the waves.
 SUB_AT_SURFACE_M = -0.5
+#: PX4's take-off is done within NAV_MC_ALT_RAD (0.8 m, navigator/navigator_params.c) of its altitude
+#: (MissionBlock::is_mission_item_reached_or_completed); the rest: GLOBAL_POSITION_INT's age (5 Hz) at a slowing climb.
+PX4_TAKEOFF_DONE_WITHIN_M = 1.5
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,6 +48,7 @@ class ModeChange:
     system_status: int | None  # HEARTBEAT system_status (MAV_STATE) of the heartbeat that shows the change
     failsafe_text: str | None  # the autopilot's failsafe notice just before ("EKF failsafe"), or its RC failsafe
     alt_rel_m: float | None  # GLOBAL_POSITION_INT relative altitude (minus the depth under water)
+    takeoff_height_m: float | None = None  # the height above home our latest take-off climbs to (None: unknown)
 
 
 def autopilot_cause(firmware: AutopilotName, vehicle: str, change: ModeChange) -> AutopilotCause | None:
@@ -67,12 +71,19 @@ def _px4_cause(c: ModeChange) -> AutopilotCause | None:
     if c.system_status == mavlink.MAV_STATE_CRITICAL:
         # mavlink/streams/HEARTBEAT.hpp: armed with vehicle_status.failsafe set; a person's mode change ends the failsafe first
         return AutopilotCause("PX4's failsafe: HEARTBEAT system_status CRITICAL, commander/failsafe/failsafe.cpp", failsafe=True)
-    if c.previous == "AUTO.TAKEOFF" and c.mode in ("AUTO.LOITER", "AUTO.MISSION") and c.landed_state == "IN_AIR":
-        # EXTENDED_SYS_STATE.hpp says TAKEOFF while the take-off setpoint is current, IN_AIR once it is done
+    if c.previous == "AUTO.TAKEOFF" and c.mode in ("AUTO.LOITER", "AUTO.MISSION") and _at_takeoff_height(c):
+        # navigator/takeoff.cpp reports the take-off finished at its altitude; the commander then loiters (or flies the mission,
+        # COM_TAKEOFF_ACT 1). EXTENDED_SYS_STATE's TAKEOFF cannot tell: it turns IN_AIR with any other setpoint, a person's Hold too
         return AutopilotCause("the take-off is done, PX4 Commander::checkForMissionUpdate, navigator/takeoff.cpp")
     if c.previous == "AUTO.MISSION" and c.mode == "AUTO.LOITER" and c.mission_complete and c.landed_state != "ON_GROUND":
         return AutopilotCause("the mission is finished, PX4 Commander::checkForMissionUpdate")
     return None
+
+
+def _at_takeoff_height(c: ModeChange) -> bool:
+    if c.landed_state == "ON_GROUND" or c.alt_rel_m is None or c.takeoff_height_m is None:
+        return False
+    return c.alt_rel_m >= c.takeoff_height_m - PX4_TAKEOFF_DONE_WITHIN_M
 
 
 def _ardupilot_cause(vehicle: str, c: ModeChange) -> AutopilotCause | None:

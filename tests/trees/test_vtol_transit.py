@@ -575,6 +575,8 @@ def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_eac
         assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
     assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 2.5
     assert flight.vehicle_s < 300.0
+    # ArduPlane lands and disarms in QRTL with no mode change of its own (quadplane.cpp check_land_complete): nothing to judge
+    assert recorder.set_by[-1] == ("QRTL", "us") and "PAUSED" not in recorder.mission_states
 
 
 def test_the_same_example_file_flies_on_the_simulated_px4_vtol() -> None:

@@ -99,6 +99,8 @@ class Commander:
         self.modes_asked: dict[str, float] = {}
         #: The mode asked for last, if any.
         self.last_mode_asked: str | None = None
+        #: The height above home the latest take-off of ours climbs to (None: none asked, or the autopilot's default height).
+        self.takeoff_height_m: float | None = None
         #: Commands the autopilot acks twice, the first ACCEPTED saying only "received": PX4's MAVLink receiver
         #: acks DO_SET_MODE at once, its commander the real result after (issue 12). The first ACCEPTED is not final.
         self.double_acked: frozenset[int] = frozenset()
