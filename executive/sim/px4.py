@@ -99,6 +99,7 @@ MIS_TAKEOFF_ALT = 2.5  # NAV_TAKEOFF with param7 NaN: this high above home
 NAV_LOITER_RAD = 80.0  # fixed-wing loiter radius
 NAV_ACC_RAD = 10.0  # mission waypoint acceptance radius (multicopter)
 RTL_RETURN_ALT = 60.0  # RTL flies home at least this high
+ROVER_NAV_ACC_RAD = 0.5  # a rover's waypoint acceptance radius (ROMFS rc.rover_differential_defaults)
 TRANSITION_AIRSPEED_M_S = 9.7  # the real standard VTOL's front transition ended at ~9.7 m/s (issue 12)
 VT_B_TRANS_DUR = 4.0  # back transition: at most this long
 MISSION_CHECK_S = 1.0  # after an upload, AUTO.MISSION is refused this long (issue 12)
@@ -1015,9 +1016,13 @@ class Px4VtolSim(Px4Sim):
 class Px4RoverSim(Px4Sim):
     """PX4 on a rover (a :class:`SurfaceVehicle`): AUTO.LOITER stops, the other modes drive to their point and stop there.
 
-    Its land detector (src/modules/land_detector/RoverLandDetector.cpp) says landed when disarmed or in
-    AUTO.LAND, so arming is a "take-off" (no preflight auto-disarm) and AUTO.LAND stops it and, being
-    "landed", it disarms after COM_DISARM_LAND. It has no take-off mode and no transitions (UNSUPPORTED).
+    What PX4's rover modules do (src/modules/rover_differential, rover_ackermann, rover_mecanum; PX4 main
+    a70a558393): RoverDifferential::generateSetpoints drives in AUTO.MISSION, AUTO.LOITER and AUTO.RTL
+    (the auto mode), OFFBOARD and the manual modes, nothing in other modes. Its land detector
+    (src/modules/land_detector/RoverLandDetector.cpp) says landed when disarmed, in AUTO.LAND or DESCEND,
+    and in AUTO.RTL within NAV_ACC_RAD (0.5 m, ROMFS rc.rover_*_defaults) of the return point: so arming
+    is a "take-off" (no pre-flight auto-disarm), and AUTO.LAND, or arriving home in AUTO.RTL, is a landing
+    that disarms it after COM_DISARM_LAND. It has no take-off mode and no transitions (UNSUPPORTED).
     """
 
     MAV_TYPE = _M.MAV_TYPE_GROUND_ROVER
@@ -1045,6 +1050,9 @@ class Px4RoverSim(Px4Sim):
         return outputs
 
     def _detect_landed(self) -> bool:
+        """RoverLandDetector::_get_landed_state."""
+        if self.mode == "AUTO.RTL" and self.home is not None:
+            return self.vehicle.distance_to(*self.home) < ROVER_NAV_ACC_RAD
         return self.mode == "AUTO.LAND" or not self.armed
 
     def _hold_here(self) -> None:

@@ -497,6 +497,20 @@ def test_rover_offboard_loss_stops_it_then_land_mode_disarms_it(px4: MakePx4) ->
     assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
 
 
+def test_rover_rtl_drives_home_and_arriving_is_a_landing_it_disarms_after(px4: MakePx4) -> None:
+    """RoverLandDetector: in AUTO.RTL within NAV_ACC_RAD (0.5 m) of the return point it is landed; COM_DISARM_LAND later
+    "Disarmed by landing", then the user's AUTO.LOITER again (UserModeIntention::onDisarm)."""
+    gcs = px4(kind="rover")
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    assert reposition_to(gcs, *gcs.north(15.0)) == [m.MAV_RESULT_ACCEPTED]
+    gcs.run(20.0)
+    assert gcs.px4_mode(PX4_MODES["AUTO.RTL"]) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(25.0)
+    texts = gcs.texts(out)
+    assert texts.index("Landing detected") < texts.index("Disarmed by landing")
+    assert gcs.ap.vehicle.distance_to(*HOME[:2]) < 0.5 and not gcs.ap.armed and gcs.last("HEARTBEAT").custom_mode == LOITER
+
+
 def test_rover_mission_drives_every_waypoint_then_holds(px4: MakePx4) -> None:
     gcs = px4(kind="rover")
     gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
