@@ -22,9 +22,10 @@ MAVLink (issue 12) and as its source reads:
   landing" (Commander::handleAutoDisarm; defaults in src/modules/commander/commander_params.c).
 - Estimator health is in ESTIMATOR_STATUS flags and SYS_STATUS health bits; there is no
   EKF_STATUS_REPORT. At rest on the ground the flags carry ESTIMATOR_CONST_POS_MODE (128) beside the
-  GNSS position: 0x3ff, as the real SITL showed before take-off (src/modules/ekf2/EKF/ekf_helper.cpp
+  GNSS position: 0x3ff, as the real SITL showed before arming (src/modules/ekf2/EKF/ekf_helper.cpp
   get_ekf_soln_status sets it for ``vehicle_at_rest``, which src/modules/land_detector/LandDetector.cpp
-  publishes as landed and no movement for 1 s); in flight 0x37f.
+  publishes as landed and no IMU vibration for 1 s); armed, the spinning motors shake the IMU: 0x37f on
+  the ground (real SITL, 0.8 s after arming) and in flight, 0x3ff again 1 s after a landing's disarm.
 - Disarmed (by landing, pre-flight, a command), it goes back to the last mode a user asked for that
   does not prevent arming (Commander::disarm -> UserModeIntention::onDisarm; AUTO.RTL, AUTO.LAND and
   AUTO.PRECLAND prevent it, ModeUtil/mode_requirements.cpp; the take-off's and the mission's end in
@@ -305,7 +306,7 @@ class Px4Sim(ArduPilotSim):
 
     @property
     def at_rest(self) -> bool:
-        """LandDetector.cpp: landed, and no movement for :data:`AT_REST_AFTER_S` (the estimator's ``vehicle_at_rest``)."""
+        """LandDetector.cpp: landed, no movement (no vibration: disarmed) for :data:`AT_REST_AFTER_S` (the estimator's ``vehicle_at_rest``)."""
         return self._landed and self.elapsed_s - self._moved_at > AT_REST_AFTER_S
 
     @property
@@ -512,8 +513,8 @@ class Px4Sim(ArduPilotSim):
             self._taken_off = True
             self.home = self.home or (v.lat, v.lon)
         self._landed = landed
-        if not landed or abs(v.speed_m_s) > 0.05 or abs(v.velocity_ned[2]) > 0.05:
-            self._moved_at = self.elapsed_s
+        if not landed or self.armed or abs(v.speed_m_s) > 0.05 or abs(v.velocity_ned[2]) > 0.05:
+            self._moved_at = self.elapsed_s  # LandDetector::UpdateVehicleAtRest: the motors' vibration is movement too
 
     def _auto_disarm(self) -> None:
         if not self._taken_off and self.elapsed_s - self._armed_at >= COM_SPOOLUP_TIME + COM_DISARM_PRFLT:

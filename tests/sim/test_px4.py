@@ -168,8 +168,10 @@ def test_arming_is_refused_until_the_estimator_has_a_position(px4: MakePx4) -> N
 def test_the_estimator_flags_constant_position_mode_at_rest_on_the_ground_and_not_in_flight(px4: MakePx4) -> None:
     """ekf_helper.cpp get_ekf_soln_status: CONST_POS_MODE for vehicle_at_rest (LandDetector: landed, still for 1 s), GNSS in use."""
     gcs = px4()
-    assert gcs.last("ESTIMATOR_STATUS").flags == 0x3FF  # what the real SITL reported before take-off
+    assert gcs.last("ESTIMATOR_STATUS").flags == 0x3FF  # what the real SITL reported before arming
     assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(1.5)
+    assert gcs.of_type(out, "ESTIMATOR_STATUS")[-1].flags == 0x37F  # armed on the ground: the motors shake the IMU (real SITL)
     assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + 10.0) == m.MAV_RESULT_ACCEPTED
     out = gcs.run(3.0)
     flying = [msg.flags for msg in gcs.of_type(out, "ESTIMATOR_STATUS")][-1]
@@ -177,8 +179,8 @@ def test_the_estimator_flags_constant_position_mode_at_rest_on_the_ground_and_no
     gcs.run(10.0)
     assert gcs.px4_mode(LAND) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
     out = gcs.run(20.0)
-    assert "Landing detected" in gcs.texts(out)
-    assert gcs.of_type(out, "ESTIMATOR_STATUS")[-1].flags == 0x3FF  # landed and still again
+    assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
+    assert gcs.of_type(out, "ESTIMATOR_STATUS")[-1].flags == 0x3FF  # landed, disarmed and still again
 
 
 def test_no_ekf_status_report_but_estimator_status(px4: MakePx4) -> None:
