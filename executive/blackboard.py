@@ -62,7 +62,8 @@ _KEYS: tuple[Key, ...] = (
         "/vehicle/mode_set_by",
         None,
         "intervention watch",
-        "who set the mode: 'us' (we asked for it), 'others' (a person, a GCS, the autopilot); None = unknown (boot)",
+        "who set the mode: 'us' (we asked for it), 'autopilot' (its own transition, by cause: executive.mode_cause), 'others' (a person, "
+        "a GCS); None = unknown (boot)",
     ),
     Key("/vehicle/custom_mode", None, "mavlink reader", "flight mode number"),
     Key("/vehicle/system_status", None, "mavlink reader", "HEARTBEAT system_status (MAV_STATE)"),

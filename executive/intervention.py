@@ -10,24 +10,30 @@ the ground-station reporter, a STATUSTEXT; the leg is kept and nothing is comman
 MISSION_START or DO_PAUSE_CONTINUE, or when the vehicle is put back in the mode the leg was in
 (the operator switching back): the tree then starts the leg again, in its own mode.
 
-Not an intervention: a mode the autopilot leaves for its follow-on (ArduSub SURFACE -> ALT_HOLD), a
-change while the RC take-over switch is high (the ``rc_takeover`` failsafe's business), and one the
-autopilot's own failsafe announces ("EKF failsafe": our failsafe for the same condition holds and
-resumes the leg, asking again for its mode while the firmware's latch refuses it).
+Not an intervention: the autopilot's own transitions, judged by their cause
+(:mod:`executive.mode_cause`: PX4 loitering once the take-off or the mission is done, going back to
+the user's mode once disarmed, its failsafe; ArduSub's SURFACE done at the surface; a failsafe the
+autopilot announces, "EKF failsafe": our failsafe for the same condition holds and resumes the leg,
+asking again for its mode while the firmware's latch refuses it), and a change while the RC
+take-over switch is high (the ``rc_takeover`` failsafe's business). ``/vehicle/mode_set_by`` says
+whose each change was: ``us``, ``autopilot`` or ``others`` (a person).
 """
 
 from __future__ import annotations
 
 import logging
 from collections import deque
+from collections.abc import Callable
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import RcConfig
-from executive.state import RcSwitches, SwitchPosition
-from executive.vehicles import VehicleProfile
+from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause
+from executive.state import GlobalPosition, MissionCurrent, RcSwitches, SwitchPosition
+from executive.vehicles import AutopilotName, VehicleProfile
 
 log = logging.getLogger(__name__)
 
@@ -49,7 +55,15 @@ class InterventionWatch:
     """A reader service: call :meth:`service` once per tick, after the RC reader and before the tree ticks."""
 
     def __init__(
-        self, clock: Clock, commander: Commander, mission_state: MissionState, profile: VehicleProfile, rc: RcConfig, *, asked_within_s: float = 10.0
+        self,
+        clock: Clock,
+        commander: Commander,
+        mission_state: MissionState,
+        profile: VehicleProfile,
+        rc: RcConfig,
+        *,
+        asked_within_s: float = 10.0,
+        firmware: Callable[[], AutopilotName] = lambda: "ardupilot",
     ) -> None:
         self._clock = clock
         self._commander = commander
@@ -57,9 +71,14 @@ class InterventionWatch:
         self.profile = profile
         self.rc = rc
         self.asked_within_s = asked_within_s
+        self.firmware = firmware  # the autopilot back end's name, once the heartbeat told it
         self._bb = blackboard.reader(
-            "intervention watch", ["/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected"]
-        )
+            "intervention watch",
+            [
+                "/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected", "/vehicle/armed",
+                "/vehicle/landed_state", "/vehicle/mission_current", "/vehicle/system_status", "/vehicle/position",
+            ],
+        )  # fmt: skip
         self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by"])
         self._shown: str | None = None  # the mode the heartbeat showed at the last tick
         #: The mode the executive put the vehicle in (the current leg's); None until it has in this run.
@@ -70,18 +89,30 @@ class InterventionWatch:
         self._channels: tuple[int, ...] = ()
         self._switch_at = float("-inf")
         self._seen_rc = False  # an RC transmitter was seen: its loss can explain a mode change
+        self._armed = False  # the armed flag at the last tick
+        self._asks_seen: dict[str, float] = {}  # mode -> the time of our ask of it that the heartbeat has shown done
+        self._disarmed_at = float("-inf")
         mission_state.listeners.append(self._on_transition)
 
     def service(self) -> None:
         now = self._clock.now()
         self._note_texts(now)
         self._note_switches(now)
+        disarmed_just_now = self._note_arming(now)
         mode: str | None = self._bb.get("/vehicle/mode")
         if mode is None or not self._bb.get("/link/up"):
             return
         previous, self._shown = self._shown, mode
+        cause: AutopilotCause | None = None
+        set_by: str | None = None
+        ours = self._our_ask(mode, now)
         if mode != previous and previous is not None and previous != "INITIALISING":
-            self._out.set("/vehicle/mode_set_by", "us" if self._ours(mode, previous, now) else "others")
+            if ours:
+                set_by = "us"
+            else:
+                cause = autopilot_cause(self.firmware(), self.profile.kind, self._change(previous, mode, now, disarmed_just_now))
+                set_by = "others" if cause is None else "autopilot"
+            self._out.set("/vehicle/mode_set_by", set_by)
         status = self.mission_state.status
         if status is MissionStatus.PAUSED and self._paused_here:
             if mode == self.expected:
@@ -91,24 +122,58 @@ class InterventionWatch:
             return
         if status is not MissionStatus.RUNNING or mode == previous:
             return
-        if self._ours(mode, previous, now):
+        if set_by == "us":
             self.expected = mode
+            return
+        if cause is not None:  # the autopilot's own transition: its failsafe is answered by ours, which resume the leg's mode
+            if cause.failsafe:
+                log.warning("intervention: %s set by the autopilot (%s): left to the failsafes, no pause", mode, cause.why)
+            else:
+                log.warning("intervention: %s (from %s) set by the autopilot (%s): no pause", mode, previous, cause.why)
+            self.expected = mode if self.expected is not None else None
             return
         if self.expected is None or rc_takeover(self.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches")) is not None:
             return  # not yet mid-mission (nothing of ours to keep), or a take-over the rc_takeover failsafe answers
-        failsafe = self._failsafe_text(now)
-        if failsafe is not None:  # the autopilot's own failsafe: our failsafes answer the same condition, and resume the leg's mode
-            log.warning("intervention: %s set by the autopilot (%s): left to the failsafes, no pause", mode, failsafe)
-            return
         reason = f"{mode} set by {self._who(now)}"
         log.warning("intervention: %s (the leg was in %s) -> pause, hands off", reason, self.expected)
         self._paused_here = True
         self.mission_state.pause(reason, hold=False)
 
-    def _ours(self, mode: str, previous: str | None, now: float) -> bool:
+    def _our_ask(self, mode: str, now: float) -> bool:
+        """Whether the vehicle is in ``mode`` because we asked for it: an ask of ours (within ``asked_within_s``) not shown done before.
+
+        An ask is done once the heartbeat shows its mode (then, or when asked for the mode the vehicle is in already): a later
+        change to the same mode is not ours. The autopilot loitering after a take-off is not the pre-flight's LOITER, long done.
+        """
         asked = self._commander.modes_asked.get(mode)
-        follow_on = previous is not None and mode in (self.profile.follow_on_modes.get(previous), self._commander.follow_on_modes.get(previous))
-        return (asked is not None and now - asked <= self.asked_within_s) or follow_on
+        if asked is None or now - asked > self.asked_within_s or self._asks_seen.get(mode) == asked:
+            return False
+        self._asks_seen[mode] = asked
+        return True
+
+    def _note_arming(self, now: float) -> bool:
+        """Whether the vehicle disarmed at this tick or within :data:`EXPLAINS_WITHIN_S` (and is disarmed)."""
+        armed = bool(self._bb.get("/vehicle/armed"))
+        if self._armed and not armed:
+            self._disarmed_at = now
+        self._armed = armed
+        return not armed and now - self._disarmed_at <= EXPLAINS_WITHIN_S
+
+    def _change(self, previous: str, mode: str, now: float, disarmed_just_now: bool) -> ModeChange:
+        current: MissionCurrent | None = self._bb.get("/vehicle/mission_current")
+        position: GlobalPosition | None = self._bb.get("/vehicle/position")
+        return ModeChange(
+            previous=previous,
+            mode=mode,
+            armed=self._armed,
+            disarmed_just_now=disarmed_just_now,
+            landed_state=self._bb.get("/vehicle/landed_state"),
+            mission_complete=current is not None and current.state == mavlink.MISSION_STATE_COMPLETE,
+            system_status=self._bb.get("/vehicle/system_status"),
+            failsafe_text=self._failsafe_text(now),
+            alt_rel_m=position.alt_rel_m if position is not None else None,
+            takeoff_height_m=self._commander.takeoff_height_m,
+        )
 
     def _failsafe_text(self, now: float) -> str | None:
         """The autopilot's failsafe notice just before the change ("EKF failsafe"), if it sent one; its RC failsafe if the transmitter is gone.

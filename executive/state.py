@@ -69,11 +69,22 @@ class EkfStatus:
     compass_variance: float
     terrain_alt_variance: float
     time: float
+    #: PX4's ESTIMATOR_STATUS: CONST_POS_MODE is also set at rest on the ground (ekf2/EKF/ekf_helper.cpp get_ekf_soln_status:
+    #: ``fake_pos || valid_fake_pos || vehicle_at_rest``), so with an aiding source fused it is no loss of position.
+    const_pos_at_rest: bool = False
 
     def position_ok(self) -> bool:
-        """ArduRover's own test: a horizontal position estimate, not in constant-position mode."""
+        """A horizontal position estimate, not a constant-position one.
+
+        ArduPilot (ArduRover's own test): POS_HORIZ_ABS or _REL, and not CONST_POS_MODE. PX4: the same, except that
+        CONST_POS_MODE with PRED_POS_HORIZ_REL (PX4's isHorizontalAidingActive: GNSS, optical flow or vision fused;
+        fake_pos_control.cpp fakes a position only while none is) is the vehicle at rest, position known: 0x3ff on
+        the ground before take-off.
+        """
         has_position = bool(self.flags & (EkfFlags.POS_HORIZ_ABS | EkfFlags.POS_HORIZ_REL))
-        return has_position and not self.flags & EkfFlags.CONST_POS_MODE
+        if not self.flags & EkfFlags.CONST_POS_MODE:
+            return has_position
+        return has_position and self.const_pos_at_rest and bool(self.flags & EkfFlags.PRED_POS_HORIZ_REL)
 
     def variances_ok(self, threshold: float = 0.8) -> bool:
         """ArduPilot's EKF failsafe trips when two of compass/velocity/position variances exceed FS_EKF_THRESH."""

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Literal
 
@@ -44,8 +44,6 @@ class VehicleProfile:
     surface: bool  # moves on a surface: vertical position values are meaningless
     #: Modes in which a person drives (sticks steer and set the throttle): no failsafe of the executive changes them.
     pilot_modes: frozenset[str] = frozenset()
-    #: Modes the autopilot leaves on its own for another once done (mode -> the next): not a person's intervention.
-    follow_on_modes: MappingProxyType[str, str] = field(default_factory=lambda: MappingProxyType({}))
 
 
 #: ArduRover's pilot-driven modes (Rover/mode.h: MANUAL, ACRO, STEERING take the sticks' steering and throttle).
@@ -54,13 +52,11 @@ _ROVER_PILOT = frozenset({"MANUAL", "ACRO", "STEERING"})
 _SUB_PILOT = frozenset({"MANUAL", "STABILIZE", "ACRO", "ALT_HOLD"})
 #: ArduPlane's pilot-flown modes, wing-borne and on the lift motors.
 _PLANE_PILOT = frozenset({"MANUAL", "STABILIZE", "TRAINING", "ACRO", "FBWA", "FBWB", "CRUISE", "QSTABILIZE", "QHOVER", "QACRO"})
-#: ArduSub leaves SURFACE for ALT_HOLD once at the surface (ModeReason::SURFACE_COMPLETE, ArduSub/mode_surface.cpp).
-_SUB_FOLLOW_ON = MappingProxyType({"SURFACE": "ALT_HOLD"})
 
 PROFILES: MappingProxyType[str, VehicleProfile] = MappingProxyType({
     "rover": VehicleProfile("rover", mavlink.MAV_TYPE_GROUND_ROVER, ROVER_MODES, "HOLD", "GUIDED", "MANUAL", True, _ROVER_PILOT),
     "boat": VehicleProfile("boat", mavlink.MAV_TYPE_SURFACE_BOAT, ROVER_MODES, "LOITER", "GUIDED", "MANUAL", True, _ROVER_PILOT),
-    "sub": VehicleProfile("sub", mavlink.MAV_TYPE_SUBMARINE, SUB_MODES, "POSHOLD", "GUIDED", "MANUAL", False, _SUB_PILOT, _SUB_FOLLOW_ON),
+    "sub": VehicleProfile("sub", mavlink.MAV_TYPE_SUBMARINE, SUB_MODES, "POSHOLD", "GUIDED", "MANUAL", False, _SUB_PILOT),
     "vtol": VehicleProfile("vtol", mavlink.MAV_TYPE_VTOL_QUADROTOR, PLANE_MODES, "QLOITER", "GUIDED", "QSTABILIZE", False, _PLANE_PILOT),
 })  # fmt: skip
 

@@ -41,6 +41,13 @@ class ArduPilotPort(MavlinkPort):
             return self.reposition(position.lat, position.lon, alt_m)
         return super().take_off(alt_m, home=home, position=position, airborne=airborne)
 
+    def land(self, mode: str | None = None) -> Request:
+        # ArduPlane takes no landing command outside a mission (GCS_MAVLink_Plane.cpp handles neither NAV_LAND nor
+        # NAV_VTOL_LAND): a QuadPlane lands where it is in QLAND
+        if mode is None and self.profile.kind == "vtol":
+            return self.set_mode("QLAND")
+        return super().land(mode)
+
     def transition(
         self, to: VtolState, *, mode: str | None, position: GlobalPosition | None, heading_deg: float, mc_mode: str, ahead_m: float
     ) -> Request | None:

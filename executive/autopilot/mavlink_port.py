@@ -57,8 +57,7 @@ class MavlinkPort:
     def land(self, mode: str | None = None) -> Request:
         if mode is not None:
             return self.set_mode(mode)
-        vtol = self.profile.kind == "vtol"
-        return self._request(self.commander.land(vtol=vtol), mavlink.MAV_CMD_NAV_VTOL_LAND if vtol else mavlink.MAV_CMD_NAV_LAND)
+        return self._request(self.commander.land(), mavlink.MAV_CMD_NAV_LAND)
 
     def return_home(self) -> Request:
         return self.set_mode("RTL")

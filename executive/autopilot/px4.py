@@ -29,7 +29,7 @@ from collections.abc import Callable
 from executive import blackboard
 from executive.autopilot.mavlink_port import MavlinkPort
 from executive.autopilot.port import Capabilities, Request
-from executive.io.mavlink.commander import Commander, RefusalRetry
+from executive.io.mavlink.commander import FORCE_DISARM_MAGIC, Commander, RefusalRetry
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.mission.model import Waypoint
@@ -155,7 +155,20 @@ class Px4Port(MavlinkPort):
         self._leaving_offboard()  # NAV_TAKEOFF: AUTO.TAKEOFF, then AUTO.LOITER (a follow-on mode)
         self.commander.note_mode_asked("AUTO.TAKEOFF")
         amsl = home.alt_m + alt_m if home is not None else math.nan
+        self.commander.takeoff_height_m = alt_m if home is not None else None  # how the end of the climb is told (mode_cause)
         return self._request(self.commander.takeoff(amsl), mavlink.MAV_CMD_NAV_TAKEOFF)
+
+    def arm(self, *, force: bool = False) -> Request:
+        """Forced with MAVLink's 21196 (Commander.cpp: param2 21196), not ArduPilot's 2989."""
+        return self._request(self.commander.arm(force=force, force_magic=FORCE_DISARM_MAGIC), mavlink.MAV_CMD_COMPONENT_ARM_DISARM)
+
+    def land(self, mode: str | None = None) -> Request:
+        """NAV_LAND (Commander.cpp: AUTO.LAND, "Landing at current position"); PX4 answers no NAV_VTOL_LAND command."""
+        self._leaving_offboard()
+        if mode is not None:
+            return self.set_mode(mode)
+        self.commander.note_mode_asked("AUTO.LAND")
+        return self._request(self.commander.land(), mavlink.MAV_CMD_NAV_LAND)
 
     def go_to(self, target: Waypoint) -> None:
         self.stream.aim(lambda: MavlinkPort.go_to(self, target))

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 
 from executive.autopilot.ardupilot import ArduPilotPort
 from executive.autopilot.mavlink_port import MavlinkPort
@@ -23,12 +23,6 @@ BACK_ENDS: dict[str, type[MavlinkPort]] = {"ardupilot": ArduPilotPort, "px4": Px
 #: Commands each firmware acks twice (the first ACCEPTED only says "received"): PX4's MAVLink receiver and then its
 #: commander both answer DO_SET_MODE (issue 12; src/modules/commander/Commander.cpp handle_command answers on its own loop).
 DOUBLE_ACKED: dict[str, frozenset[int]] = {"ardupilot": frozenset(), "px4": frozenset({mavlink.MAV_CMD_DO_SET_MODE})}
-#: Modes each firmware leaves for another by itself (beyond the vehicle profile's): PX4 loiters once a take-off or a
-#: mission is done (Commander::checkForMissionUpdate / navigator), and lands at the end of a return.
-FOLLOW_ON_MODES: dict[str, Mapping[str, str]] = {
-    "ardupilot": {},
-    "px4": {"AUTO.TAKEOFF": "AUTO.LOITER", "AUTO.MISSION": "AUTO.LOITER", "AUTO.RTL": "AUTO.LAND"},
-}
 
 
 def autopilot_name(heartbeat_autopilot: int) -> AutopilotName:
@@ -54,7 +48,6 @@ class Autopilot:
         if forced == "px4":
             self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4, profile.mav_type)
             self._commander.double_acked = DOUBLE_ACKED["px4"]
-            self._commander.follow_on_modes = FOLLOW_ON_MODES["px4"]
         #: Called with the back end's name once it is known (the stream set-up differs per firmware).
         self.on_backend: Callable[[str], None] | None = None
 
@@ -65,7 +58,6 @@ class Autopilot:
             log.warning("the autopilot's heartbeat says %s; %s was forced", autopilot_name(heartbeat_autopilot), name)
         self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4 if name == "px4" else heartbeat_autopilot, mav_type)
         self._commander.double_acked = DOUBLE_ACKED[name]
-        self._commander.follow_on_modes = FOLLOW_ON_MODES[name]
         if self._transfer is not None:
             self._transfer.home_slot = name != "px4"
         if name != self.backend.name:

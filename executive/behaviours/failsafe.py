@@ -333,7 +333,7 @@ class Failsafe(TimedBehaviour):
         """
         mode = self.get("/vehicle/mode")
         set_by = self.get("/vehicle/mode_set_by")  # None: the boot mode, nobody's choice
-        if mode in PROFILES[self.vehicle].pilot_modes and set_by is not None and mode != self._mode_in_force:
+        if mode in PROFILES[self.vehicle].pilot_modes and set_by not in (None, "autopilot") and mode != self._mode_in_force:
             return f"the vehicle is in {mode}: a person drives it"
         return None
 

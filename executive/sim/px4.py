@@ -17,16 +17,30 @@ MAVLink (issue 12) and as its source reads:
 - Arming is refused (TEMPORARILY_REJECTED, "Arming denied: Resolve system health failures first")
   until the estimator has a position, ~3 s after boot on the SIH simulation; param2 21196 does not
   skip the checks for a command from outside (Commander::arm runs them when ``from_external``).
-  Armed and never taken off, it disarms itself after COM_DISARM_PRFLT (10 s); landed, after
-  COM_DISARM_LAND (2 s) (Commander::handleAutoDisarm).
+  Armed and never taken off, it disarms itself after COM_SPOOLUP_TIME + COM_DISARM_PRFLT (1 + 10 s),
+  "Disarmed by auto preflight disarming"; landed after a flight, after COM_DISARM_LAND (2 s), "Disarmed by
+  landing" (Commander::handleAutoDisarm; defaults in src/modules/commander/commander_params.c).
 - Estimator health is in ESTIMATOR_STATUS flags and SYS_STATUS health bits; there is no
-  EKF_STATUS_REPORT.
+  EKF_STATUS_REPORT. At rest on the ground the flags carry ESTIMATOR_CONST_POS_MODE (128) beside the
+  GNSS position: 0x3ff, as the real SITL showed before arming (src/modules/ekf2/EKF/ekf_helper.cpp
+  get_ekf_soln_status sets it for ``vehicle_at_rest``, which src/modules/land_detector/LandDetector.cpp
+  publishes as landed and no IMU vibration for 1 s); armed, the spinning motors shake the IMU: 0x37f on
+  the ground (real SITL, 0.8 s after arming) and in flight, 0x3ff again 1 s after a landing's disarm.
+- Disarmed (by landing, pre-flight, a command), it goes back to the last mode a user asked for that
+  does not prevent arming (Commander::disarm -> UserModeIntention::onDisarm; AUTO.RTL, AUTO.LAND and
+  AUTO.PRECLAND prevent it, ModeUtil/mode_requirements.cpp; the take-off's and the mission's end in
+  AUTO.LOITER count as asked): after a take-off and an RTL landing, AUTO.LOITER, as the real SITL showed.
 - OFFBOARD needs a recent setpoint (SET_POSITION_TARGET_LOCAL_NED / _GLOBAL_INT younger than
   COM_OF_LOSS_T = 1 s, HealthAndArmingChecks/checks/offboardCheck.cpp); a gap longer than that in
   OFFBOARD is the offboard failsafe (failsafe/failsafe.cpp checkModeFallback): without RC, POSCTL
   (holding), then AUTO.LAND after COM_FAIL_ACT_T, then it disarms on the ground.
 - NAV_TAKEOFF param7 is an altitude AMSL (NaN: MIS_TAKEOFF_ALT above home): AUTO.TAKEOFF, then
-  AUTO.LOITER once there (Commander::checkForMissionUpdate). DO_REPOSITION needs the change-mode
+  AUTO.LOITER once there (Commander::checkForMissionUpdate). Finite param5/param6 are the take-off
+  point's latitude and longitude (navigator_main.cpp, VEHICLE_CMD_NAV_TAKEOFF; NaN: here): the
+  multicopter takes off only if the straight climb towards it asks for more than 0.3 m/s upwards
+  (flight_mode_manager FlightTaskAuto.cpp ``_want_takeoff``, FlightTask::_checkTakeoff): 0, 0, a point
+  thousands of kilometres off, is ACCEPTED, shows AUTO.TAKEOFF and never climbs (as the real SITL did)
+  until the pre-flight auto-disarm. DO_REPOSITION needs the change-mode
   flag (else UNSUPPORTED) and flies to the point in AUTO.LOITER.
 - Missions: the upload is driven with MISSION_REQUEST_INT and item 0 is the first item (no home
   slot); AUTO.MISSION is refused for ~1 s after the upload while PX4 checks it; a finished mission
@@ -77,12 +91,16 @@ ESTIMATOR_READY_S = 3.0  # the SIH estimator's position came 2-4 s after boot (i
 HOME_AMSL_M = 584.0  # the start point's altitude above sea level (ArduPilot SITL's CMAC field)
 COM_OF_LOSS_T = 1.0  # offboard signal lost after this long without a setpoint
 COM_FAIL_ACT_T = 5.0  # failsafe: hold this long before the action
-COM_DISARM_PRFLT = 10.0  # armed without taking off: disarm after this long
+COM_DISARM_PRFLT = 10.0  # armed without taking off: disarm this long after the spool-up
+COM_SPOOLUP_TIME = 1.0  # the motors' spool-up after arming (counted before COM_DISARM_PRFLT)
+MPC_XY_CRUISE = 5.0  # the multicopter's cruise speed along a straight path (m/s)
+WANT_TAKEOFF_M_S = 0.3  # FlightTaskAuto: a take-off needs an upward velocity setpoint over this
 COM_DISARM_LAND = 2.0  # landed: disarm after this long
 MIS_TAKEOFF_ALT = 2.5  # NAV_TAKEOFF with param7 NaN: this high above home
 NAV_LOITER_RAD = 80.0  # fixed-wing loiter radius
 NAV_ACC_RAD = 10.0  # mission waypoint acceptance radius (multicopter)
 RTL_RETURN_ALT = 60.0  # RTL flies home at least this high
+ROVER_NAV_ACC_RAD = 0.5  # a rover's waypoint acceptance radius (ROMFS rc.rover_differential_defaults)
 TRANSITION_AIRSPEED_M_S = 9.7  # the real standard VTOL's front transition ended at ~9.7 m/s (issue 12)
 VT_B_TRANS_DUR = 4.0  # back transition: at most this long
 MISSION_CHECK_S = 1.0  # after an upload, AUTO.MISSION is refused this long (issue 12)
@@ -101,6 +119,8 @@ NAV_STATE_NAMES: Mapping[str, str] = MappingProxyType({
 })  # fmt: skip
 #: Modes that need the pilot's sticks (mode requirement "manual control"): never available without RC.
 PILOT_MODES = frozenset({"MANUAL", "ALTCTL", "POSCTL", "STABILIZED", "ACRO", "RATTITUDE"})
+#: Modes with mode_req_prevent_arming (ModeUtil/mode_requirements.cpp): never the mode PX4 goes back to once disarmed.
+PREVENT_ARMING_MODES = frozenset({"AUTO.RTL", "AUTO.LAND", "AUTO.PRECLAND", "AUTO.FOLLOW_TARGET"})
 NOT_SIMULATED = frozenset({"AUTO.READY", "AUTO.FOLLOW_TARGET", "AUTO.PRECLAND"})
 #: Commands the MAVLink receiver answers itself, at once (mavlink_receiver.cpp).
 RECEIVER_COMMANDS = frozenset({
@@ -108,10 +128,17 @@ RECEIVER_COMMANDS = frozenset({
     _M.MAV_CMD_REQUEST_MESSAGE,
 })  # fmt: skip
 
+#: The estimator with a GNSS position, moving (0x37f): ekf_helper.cpp get_ekf_soln_status; PRED_POS_HORIZ_REL is "an aiding
+#: source is fused" (isHorizontalAidingActive), PRED_POS_HORIZ_ABS "GNSS position fused".
 ESTIMATOR_OK = (
     _M.ESTIMATOR_ATTITUDE | _M.ESTIMATOR_VELOCITY_HORIZ | _M.ESTIMATOR_VELOCITY_VERT | _M.ESTIMATOR_POS_HORIZ_REL
-    | _M.ESTIMATOR_POS_HORIZ_ABS | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_PRED_POS_HORIZ_REL | _M.ESTIMATOR_PRED_POS_HORIZ_ABS
+    | _M.ESTIMATOR_POS_HORIZ_ABS | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_POS_VERT_AGL | _M.ESTIMATOR_PRED_POS_HORIZ_REL
+    | _M.ESTIMATOR_PRED_POS_HORIZ_ABS
 )  # fmt: skip
+#: The same at rest on the ground (0x3ff, as the real SITL reported before take-off): const_pos_mode is set for vehicle_at_rest too.
+ESTIMATOR_AT_REST = ESTIMATOR_OK | _M.ESTIMATOR_CONST_POS_MODE
+#: LandDetector::UpdateVehicleAtRest: at rest once no movement for this long (and landed).
+AT_REST_AFTER_S = 1.0
 ESTIMATOR_NO_POSITION = _M.ESTIMATOR_ATTITUDE | _M.ESTIMATOR_VELOCITY_VERT | _M.ESTIMATOR_POS_VERT_ABS | _M.ESTIMATOR_CONST_POS_MODE
 # SYS_STATUS (src/modules/mavlink/streams/SYS_STATUS.hpp): each component's present/enabled/health from the health
 # report; the AHRS bit is the local position estimate; the pre-arm bit is only ever set in the health field.
@@ -252,13 +279,16 @@ class Px4Sim(ArduPilotSim):
         self._goal_radius = NAV_LOITER_RAD
         self._landing = False
         self._takeoff_alt: float | None = None  # AUTO.TAKEOFF's height above home
+        self._takeoff_point: tuple[float, float] | None = None  # NAV_TAKEOFF's finite param5/param6; None: here
         self._offboard_at = -math.inf  # when the last setpoint came (elapsed s)
         self._offboard_goal: tuple[float, float, float] | None = None
         self._failsafe_at: float | None = None  # when the offboard failsafe began
+        self.mode_after_disarm = "AUTO.LOITER"  # UserModeIntention::_nav_state_after_disarming
         self._armed_at = 0.0
         self._taken_off = False
         self._landed = True
         self._landed_at: float | None = None
+        self._moved_at = -math.inf  # the last time the land detector saw the vehicle move (or in the air)
         self._mission_item: tuple[int | None, object] | None = None
         self._event_sequence = 0
         # Commander::dataLinkCheck: HEARTBEAT type -> (last seen, lost), for a ground station and a mission computer
@@ -273,6 +303,11 @@ class Px4Sim(ArduPilotSim):
     def landed(self) -> bool:
         """The land detector: on the ground and not climbing away from it."""
         return self._landed
+
+    @property
+    def at_rest(self) -> bool:
+        """LandDetector.cpp: landed, no movement (no vibration: disarmed) for :data:`AT_REST_AFTER_S` (the estimator's ``vehicle_at_rest``)."""
+        return self._landed and self.elapsed_s - self._moved_at > AT_REST_AFTER_S
 
     @property
     def landed_state(self) -> int:
@@ -331,8 +366,14 @@ class Px4Sim(ArduPilotSim):
             self._text(_M.MAV_SEVERITY_CRITICAL, f"Switching to {NAV_STATE_NAMES.get(mode, mode)} is currently not available")
             return False
         self._failsafe_at = None  # a user's mode change ends the failsafe
+        self._user_intends(mode)
         self._switch(mode)
         return True
+
+    def _user_intends(self, mode: str) -> None:
+        """UserModeIntention::change: the user's mode, kept for after disarming unless it prevents arming."""
+        if mode not in PREVENT_ARMING_MODES:
+            self.mode_after_disarm = mode
 
     def set_mode(self, number: int) -> bool:
         name = self._mode_names.get(number)
@@ -358,7 +399,7 @@ class Px4Sim(ArduPilotSim):
             if self._takeoff_alt is None:
                 self._takeoff_alt = MIS_TAKEOFF_ALT
             self._goal = (v.lat, v.lon, max(self._takeoff_alt, v.alt_m))
-            if self.armed:
+            if self.armed and self._wants_takeoff():
                 self._steer()
         elif mode == "OFFBOARD":
             if self._offboard_goal is not None:
@@ -369,6 +410,20 @@ class Px4Sim(ArduPilotSim):
             self._mission_item = None
             self.mission.start_or_resume()
         return True
+
+    def _wants_takeoff(self) -> bool:
+        """FlightTaskAuto: on the ground, the straight path to the take-off point must climb faster than 0.3 m/s to lift off.
+
+        Along the path at MPC_XY_CRUISE the upward speed is its share of the climb in the 3-D distance: a point
+        thousands of kilometres off (0, 0 sent as "no position") gives none, and the vehicle stays on the ground.
+        The simulated climb goes straight up all the same (the path towards a near point is not modelled).
+        """
+        if self._takeoff_point is None or not self._landed:
+            return True
+        v, goal = self.vehicle, self._goal
+        assert goal is not None
+        climb, across = goal[2] - v.alt_m, v.distance_to(*self._takeoff_point)
+        return climb > 0 and MPC_XY_CRUISE * climb / math.hypot(climb, across) > WANT_TAKEOFF_M_S
 
     # -- where the vehicle goes ------------------------------------------------------------------
 
@@ -437,7 +492,8 @@ class Px4Sim(ArduPilotSim):
         self._update_airframe()
         self._update_offboard_failsafe()
         if self.mode == "AUTO.TAKEOFF" and self._goal is not None and v.alt_m >= self._goal[2] - 0.5 and not self._landed:
-            self._takeoff_alt, there = None, self._goal
+            self._takeoff_alt, self._takeoff_point, there = None, None, self._goal
+            self._user_intends("AUTO.LOITER")
             self._switch("AUTO.LOITER")  # the takeoff is done: loiter there (Commander::checkForMissionUpdate)
             self._fly_to(*there)
         elif self.mode == "AUTO.RTL" and not self._landing and self.home is not None:
@@ -457,9 +513,11 @@ class Px4Sim(ArduPilotSim):
             self._taken_off = True
             self.home = self.home or (v.lat, v.lon)
         self._landed = landed
+        if not landed or self.armed or abs(v.speed_m_s) > 0.05 or abs(v.velocity_ned[2]) > 0.05:
+            self._moved_at = self.elapsed_s  # LandDetector::UpdateVehicleAtRest: the motors' vibration is movement too
 
     def _auto_disarm(self) -> None:
-        if not self._taken_off and self.elapsed_s - self._armed_at >= COM_DISARM_PRFLT:
+        if not self._taken_off and self.elapsed_s - self._armed_at >= COM_SPOOLUP_TIME + COM_DISARM_PRFLT:
             self.disarm("auto preflight disarming")
         elif self._taken_off and self._landed and self._landed_at is not None and self.elapsed_s - self._landed_at >= COM_DISARM_LAND:
             self.disarm("landing")
@@ -480,6 +538,7 @@ class Px4Sim(ArduPilotSim):
         item = self.mission.current
         if item is None:
             if self.mission.state is MissionState.COMPLETE and not self._landed and self._goal is not None:
+                self._user_intends("AUTO.LOITER")
                 self._switch("AUTO.LOITER")  # Commander::checkForMissionUpdate: a finished mission loiters
             return
         key = (self.mission.current_seq, item)
@@ -662,11 +721,19 @@ class Px4Sim(ArduPilotSim):
             self.armed = self.vehicle.powered = False
             self._landing, self._goal, self._failsafe_at = False, None, None
             self._text(_M.MAV_SEVERITY_INFO, f"Disarmed by {reason}")
+            if self.mode != self.mode_after_disarm:  # UserModeIntention::onDisarm: disarmed, no failsafe holds another mode
+                if self.mode == "AUTO.MISSION":
+                    self.mission.stop()
+                self.mode = self.mode_after_disarm  # nothing to fly on the ground, disarmed
+            self._emit(self._msg_heartbeat())
 
     def _cmd_takeoff(self, cmd: Command) -> int:
-        """NAV_TAKEOFF: param7 the altitude above sea level (NaN: MIS_TAKEOFF_ALT above home)."""
+        """NAV_TAKEOFF: param7 the altitude above sea level (NaN: MIS_TAKEOFF_ALT above home); param5/param6, both finite,
+        the take-off point (navigator_main.cpp), else here. Acked by the commander whether or not the vehicle will lift off."""
         amsl = cmd.params[6]
         self._takeoff_alt = MIS_TAKEOFF_ALT if math.isnan(amsl) else amsl - self.home_amsl_m
+        lat, lon = cmd.lat_lon
+        self._takeoff_point = (lat, lon) if math.isfinite(lat) and math.isfinite(lon) else None
         if self.mode == "AUTO.TAKEOFF":
             self._enter_mode("AUTO.TAKEOFF")
             return _M.MAV_RESULT_ACCEPTED
@@ -734,7 +801,8 @@ class Px4Sim(ArduPilotSim):
 
     def _msg_estimator_status(self) -> MAVLinkMessage:
         if self.position_ok:
-            return self._mav.estimator_status_encode(self._us(), ESTIMATOR_OK, 0.05, 0.1, 0.1, 0.1, 0.0, 0.0, 0.5, 0.8)
+            flags = ESTIMATOR_AT_REST if self.at_rest else ESTIMATOR_OK
+            return self._mav.estimator_status_encode(self._us(), flags, 0.05, 0.1, 0.1, 0.1, 0.0, 0.0, 0.5, 0.8)
         return self._mav.estimator_status_encode(self._us(), ESTIMATOR_NO_POSITION, 0.0, 0.0, 0.1, 0.1, 0.0, 0.0, 0.0, 0.0)
 
     def _msg_extended_sys_state(self) -> MAVLinkMessage:
@@ -949,9 +1017,13 @@ class Px4VtolSim(Px4Sim):
 class Px4RoverSim(Px4Sim):
     """PX4 on a rover (a :class:`SurfaceVehicle`): AUTO.LOITER stops, the other modes drive to their point and stop there.
 
-    Its land detector (src/modules/land_detector/RoverLandDetector.cpp) says landed when disarmed or in
-    AUTO.LAND, so arming is a "take-off" (no preflight auto-disarm) and AUTO.LAND stops it and, being
-    "landed", it disarms after COM_DISARM_LAND. It has no take-off mode and no transitions (UNSUPPORTED).
+    What PX4's rover modules do (src/modules/rover_differential, rover_ackermann, rover_mecanum; PX4 main
+    a70a558393): RoverDifferential::generateSetpoints drives in AUTO.MISSION, AUTO.LOITER and AUTO.RTL
+    (the auto mode), OFFBOARD and the manual modes, nothing in other modes. Its land detector
+    (src/modules/land_detector/RoverLandDetector.cpp) says landed when disarmed, in AUTO.LAND or DESCEND,
+    and in AUTO.RTL within NAV_ACC_RAD (0.5 m, ROMFS rc.rover_*_defaults) of the return point: so arming
+    is a "take-off" (no pre-flight auto-disarm), and AUTO.LAND, or arriving home in AUTO.RTL, is a landing
+    that disarms it after COM_DISARM_LAND. It has no take-off mode and no transitions (UNSUPPORTED).
     """
 
     MAV_TYPE = _M.MAV_TYPE_GROUND_ROVER
@@ -979,6 +1051,9 @@ class Px4RoverSim(Px4Sim):
         return outputs
 
     def _detect_landed(self) -> bool:
+        """RoverLandDetector::_get_landed_state."""
+        if self.mode == "AUTO.RTL" and self.home is not None:
+            return self.vehicle.distance_to(*self.home) < ROVER_NAV_ACC_RAD
         return self.mode == "AUTO.LAND" or not self.armed
 
     def _hold_here(self) -> None:

@@ -158,6 +158,8 @@ def test_takeoff_altitude_is_above_sea_level(px4, harness, vehicle, link):
     harness(TakeOff(30.0)).tick()
     (cmd,) = [m for m in link.take("COMMAND_LONG") if m.command == _M.MAV_CMD_NAV_TAKEOFF]
     assert cmd.param7 == pytest.approx(518.0)
+    # navigator_main.cpp VEHICLE_CMD_NAV_TAKEOFF: finite param5/param6 are the take-off point (0, 0 never climbed): NaN, here
+    assert (cmd.param1, cmd.param2, cmd.param3) == (0.0, 0.0, 0.0) and all(map(math.isnan, (cmd.param4, cmd.param5, cmd.param6)))
 
 
 def test_takeoff_before_home_is_known_asks_for_the_default_height(px4, harness, vehicle, link):
@@ -234,6 +236,28 @@ def test_the_ekf_guard_reads_estimator_status_on_px4(reader, link):
     assert guard_says(guard, link, reader, estimator(_M.ESTIMATOR_ATTITUDE | _M.ESTIMATOR_CONST_POS_MODE)).startswith("EKF has no position")
     assert guard_says(guard, link, reader, estimator(ESTIMATOR_GOOD)) is None
     assert guard_says(guard, link, reader, estimator(ESTIMATOR_GOOD, ratio=1.2)) == "EKF variances over 0.8"
+
+
+def test_constant_position_mode_at_rest_with_gnss_is_a_known_position_on_px4(reader, link):
+    """ekf_helper.cpp get_ekf_soln_status: CONST_POS_MODE = fake_pos || valid_fake_pos || vehicle_at_rest; the real SITL
+    reported 0x3ff at rest before take-off. With an aiding source fused (PRED_POS_HORIZ_REL) it is the vehicle at rest."""
+    guard = EkfOk()
+    assert guard_says(guard, link, reader, estimator(0x3FF)) is None
+    # no aiding fused: the constant position is a faked one (fake_pos_control.cpp runs only while none is)
+    no_aiding = 0x3FF & ~(_M.ESTIMATOR_PRED_POS_HORIZ_REL | _M.ESTIMATOR_PRED_POS_HORIZ_ABS)
+    assert guard_says(guard, link, reader, estimator(no_aiding)) == f"EKF has no position estimate (flags 0x{no_aiding:x})"
+    assert guard_says(guard, link, reader, estimator(0x3FF & ~(_M.ESTIMATOR_POS_HORIZ_ABS | _M.ESTIMATOR_POS_HORIZ_REL))).startswith(
+        "EKF has no position"
+    )
+
+
+def test_constant_position_mode_on_ardupilot_is_still_no_position(link, clock, commander):
+    """ArduRover's own test (ekf_position_ok): a position and not CONST_POS_MODE, whatever else is set."""
+    reader = MavlinkReader(link, clock, commander, link_timeout_s=3.0)
+    link.incoming.append(AUTOPILOT.heartbeat(_M.MAV_TYPE_GROUND_ROVER, _M.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, _M.MAV_STATE_STANDBY))
+    link.incoming.append(AUTOPILOT.ekf_status_report(0x3FF, 0.1, 0.1, 0.1, 0.1, 0.0))
+    reader.drain()
+    assert EkfOk().check() == "EKF has no position estimate (flags 0x3ff)"
 
 
 def test_estimator_gps_glitch_is_a_glitch_not_an_uninitialised_ekf(reader, link):

@@ -284,6 +284,8 @@ class TestTakeOff:
         assert h.tick() == R
         (sent,) = h.link.take()
         assert command(sent) == ("COMMAND_LONG", M.MAV_CMD_NAV_TAKEOFF, 0.0, 0.0, 0.0, 30.0)
+        # yaw and the point NaN: unchanged, here (ArduPlane reads only param7: GCS_MAVLink_Plane.cpp convert_MAV_CMD_NAV_TAKEOFF_to_COMMAND_INT)
+        assert all(map(math.isnan, (sent.param4, sent.param5, sent.param6)))
         h.ack(M.MAV_CMD_NAV_TAKEOFF)
         statuses = []
         for landed, alt in [("TAKEOFF", 10.0), ("TAKEOFF", 29.0), ("IN_AIR", 28.4), ("IN_AIR", 28.5)]:

@@ -18,6 +18,8 @@ from executive.sim.px4 import (
     COM_DISARM_PRFLT,
     COM_FAIL_ACT_T,
     COM_OF_LOSS_T,
+    COM_SPOOLUP_TIME,
+    ESTIMATOR_AT_REST,
     ESTIMATOR_OK,
     HOME_AMSL_M,
     MIS_TAKEOFF_ALT,
@@ -97,7 +99,7 @@ def px4() -> MakePx4:
 def airborne(px4: MakePx4, metres: float = 20.0) -> Px4Gcs:
     gcs = px4()
     assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
-    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + metres) == m.MAV_RESULT_ACCEPTED
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + metres) == m.MAV_RESULT_ACCEPTED
     gcs.run(metres / 2.0 + 6.0)
     assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(metres, abs=0.6)
     return gcs
@@ -159,8 +161,26 @@ def test_arming_is_refused_until_the_estimator_has_a_position(px4: MakePx4) -> N
     gcs.run(2.0)
     status = gcs.last("SYS_STATUS")
     assert status.onboard_control_sensors_health & m.MAV_SYS_STATUS_PREARM_CHECK
-    assert gcs.last("ESTIMATOR_STATUS").flags == ESTIMATOR_OK
+    assert gcs.last("ESTIMATOR_STATUS").flags == ESTIMATOR_AT_REST  # a GNSS position, and at rest on the ground
     assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+
+
+def test_the_estimator_flags_constant_position_mode_at_rest_on_the_ground_and_not_in_flight(px4: MakePx4) -> None:
+    """ekf_helper.cpp get_ekf_soln_status: CONST_POS_MODE for vehicle_at_rest (LandDetector: landed, still for 1 s), GNSS in use."""
+    gcs = px4()
+    assert gcs.last("ESTIMATOR_STATUS").flags == 0x3FF  # what the real SITL reported before arming
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(1.5)
+    assert gcs.of_type(out, "ESTIMATOR_STATUS")[-1].flags == 0x37F  # armed on the ground: the motors shake the IMU (real SITL)
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + 10.0) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(3.0)
+    flying = [msg.flags for msg in gcs.of_type(out, "ESTIMATOR_STATUS")][-1]
+    assert flying == ESTIMATOR_OK == 0x37F and not flying & m.ESTIMATOR_CONST_POS_MODE
+    gcs.run(10.0)
+    assert gcs.px4_mode(LAND) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(20.0)
+    assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
+    assert gcs.of_type(out, "ESTIMATOR_STATUS")[-1].flags == 0x3FF  # landed, disarmed and still again
 
 
 def test_no_ekf_status_report_but_estimator_status(px4: MakePx4) -> None:
@@ -170,11 +190,36 @@ def test_no_ekf_status_report_but_estimator_status(px4: MakePx4) -> None:
     assert gcs.of_type(gcs.log, "ESTIMATOR_STATUS")[0].flags & m.ESTIMATOR_CONST_POS_MODE  # before the position came
 
 
-def test_armed_and_not_taking_off_disarms_itself(px4: MakePx4) -> None:
+def test_armed_and_not_taking_off_disarms_itself_after_the_spool_up_and_com_disarm_prflt(px4: MakePx4) -> None:
+    """Commander::handleAutoDisarm: COM_SPOOLUP_TIME + COM_DISARM_PRFLT (1 + 10 s, commander_params.c) without a take-off."""
     gcs = px4()
     assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
-    out = gcs.run(COM_DISARM_PRFLT + 0.5)
+    gcs.run(COM_SPOOLUP_TIME + COM_DISARM_PRFLT - 0.3)
+    assert gcs.ap.armed
+    out = gcs.run(0.5)
     assert "Disarmed by auto preflight disarming" in gcs.texts(out) and not gcs.ap.armed
+
+
+def test_takeoff_to_latitude_0_longitude_0_is_accepted_and_never_climbs_then_it_disarms(px4: MakePx4) -> None:
+    """navigator_main.cpp: finite param5/param6 are the take-off point. 0, 0 is ACCEPTED, AUTO.TAKEOFF, no climb (the real
+    SITL's answer to the executive's old NAV_TAKEOFF), and COM_DISARM_PRFLT later "Disarmed by auto preflight disarming"."""
+    gcs = px4()
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, HOME_AMSL_M + 30.0) == m.MAV_RESULT_ACCEPTED
+    assert gcs.heartbeat().custom_mode == TAKEOFF
+    out = gcs.run(COM_SPOOLUP_TIME + COM_DISARM_PRFLT)
+    assert max(msg.relative_alt for msg in gcs.of_type(out, "GLOBAL_POSITION_INT")) < 100  # mm: never left the ground
+    assert "Disarmed by auto preflight disarming" in gcs.texts(out) and not gcs.ap.armed
+    assert gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_ON_GROUND
+
+
+def test_takeoff_with_the_point_nan_or_here_climbs(px4: MakePx4) -> None:
+    for lat, lon in ((math.nan, math.nan), HOME[:2]):
+        gcs = px4()
+        gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+        assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, lat, lon, HOME_AMSL_M + 10.0) == m.MAV_RESULT_ACCEPTED
+        gcs.run(10.0)
+        assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(10.0, abs=0.6)
 
 
 # -- take-off, reposition ------------------------------------------------------------------------
@@ -183,7 +228,7 @@ def test_armed_and_not_taking_off_disarms_itself(px4: MakePx4) -> None:
 def test_takeoff_altitude_is_above_sea_level_then_it_loiters(px4: MakePx4) -> None:
     gcs = px4()
     gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
-    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + 15.0) == m.MAV_RESULT_ACCEPTED
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + 15.0) == m.MAV_RESULT_ACCEPTED
     assert gcs.heartbeat().custom_mode == TAKEOFF
     gcs.run(12.0)
     assert gcs.heartbeat().custom_mode == LOITER
@@ -196,7 +241,7 @@ def test_takeoff_altitude_is_above_sea_level_then_it_loiters(px4: MakePx4) -> No
 def test_takeoff_without_an_altitude_climbs_to_the_default_height(px4: MakePx4) -> None:
     gcs = px4()
     gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
-    gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, math.nan)
+    gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, math.nan)
     gcs.run(8.0)
     assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(MIS_TAKEOFF_ALT, abs=0.6)
 
@@ -363,6 +408,33 @@ def test_a_transit_flight_takeoff_transition_fly_back_transition_land(px4: MakeP
     assert not gcs.ap.armed and gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_ON_GROUND
 
 
+def test_after_an_rtl_landing_it_disarms_and_goes_back_to_auto_loiter(px4: MakePx4) -> None:
+    """Commander::handleAutoDisarm ("Disarmed by landing" after COM_DISARM_LAND), then UserModeIntention::onDisarm: the last
+    mode a user asked for that does not prevent arming (AUTO.RTL does), here the AUTO.LOITER the take-off ended in."""
+    gcs = airborne(px4)
+    assert gcs.result(m.MAV_CMD_NAV_RETURN_TO_LAUNCH) == m.MAV_RESULT_ACCEPTED
+    out = gcs.run(90.0)
+    texts = gcs.texts(out)
+    assert texts.index("Landing detected") < texts.index("Disarmed by landing")
+    beats = [(hb.custom_mode, bool(hb.base_mode & m.MAV_MODE_FLAG_SAFETY_ARMED)) for hb in gcs.of_type(out, "HEARTBEAT")]
+    rtl = PX4_MODES["AUTO.RTL"]
+    assert (rtl, True) in beats and beats[-1] == (LOITER, False)
+    assert beats[beats.index((LOITER, False)) - 1] == (rtl, True)  # disarmed and back in AUTO.LOITER in one heartbeat
+    assert gcs.last("EXTENDED_SYS_STATE").landed_state == m.MAV_LANDED_STATE_ON_GROUND
+
+
+def test_after_disarming_it_goes_back_to_the_last_mode_a_user_asked_for_that_allows_arming(px4: MakePx4) -> None:
+    """UserModeIntention::change keeps OFFBOARD (it does not prevent arming) and not AUTO.LAND (it does)."""
+    gcs = airborne(px4, 5.0)
+    goal = (*gcs.north(5.0), 5.0)
+    gcs.stream(1.0, goal)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.stream(1.0, goal)
+    assert gcs.px4_mode(LAND) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.run(30.0)
+    assert not gcs.ap.armed and gcs.last("HEARTBEAT").custom_mode == OFFBOARD
+
+
 def test_change_speed_sets_the_cruise_speed(px4: MakePx4) -> None:
     gcs = airborne(px4)
     assert gcs.result(m.MAV_CMD_DO_CHANGE_SPEED, 1, 3.0, -1) == m.MAV_RESULT_ACCEPTED
@@ -387,7 +459,7 @@ def test_rover_is_a_px4_ground_rover_that_cannot_take_off_or_transition(px4: Mak
     hb = gcs.heartbeat()
     assert (hb.autopilot, hb.type, hb.custom_mode) == (m.MAV_AUTOPILOT_PX4, m.MAV_TYPE_GROUND_ROVER, LOITER)
     assert gcs.last("EXTENDED_SYS_STATE").vtol_state == m.MAV_VTOL_STATE_UNDEFINED
-    replies = gcs.command(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, 0, 0, HOME_AMSL_M + 5.0)
+    replies = gcs.command(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + 5.0)
     assert [msg.result for msg in gcs.of_type(replies, "COMMAND_ACK")] == [m.MAV_RESULT_TEMPORARILY_REJECTED]
     assert "Switching to Takeoff is currently not available" in gcs.texts(replies)
     assert gcs.result(m.MAV_CMD_DO_VTOL_TRANSITION, FW) == m.MAV_RESULT_UNSUPPORTED
@@ -421,8 +493,24 @@ def test_rover_offboard_loss_stops_it_then_land_mode_disarms_it(px4: MakePx4) ->
     gcs.run(COM_OF_LOSS_T + 0.2)
     assert gcs.ap.mode == "POSCTL"
     out = gcs.run(COM_FAIL_ACT_T + 3.0)
-    assert gcs.last("HEARTBEAT").custom_mode == LAND and not gcs.ap.armed
+    beats = [(hb.custom_mode, bool(hb.base_mode & m.MAV_MODE_FLAG_SAFETY_ARMED)) for hb in gcs.of_type(out, "HEARTBEAT")]
+    assert (LAND, True) in beats and not gcs.ap.armed
+    assert beats[-1] == (OFFBOARD, False)  # disarmed, no failsafe: the user's mode again (UserModeIntention::onDisarm)
     assert {"Landing detected", "Disarmed by landing"} <= set(gcs.texts(out))
+
+
+def test_rover_rtl_drives_home_and_arriving_is_a_landing_it_disarms_after(px4: MakePx4) -> None:
+    """RoverLandDetector: in AUTO.RTL within NAV_ACC_RAD (0.5 m) of the return point it is landed; COM_DISARM_LAND later
+    "Disarmed by landing", then the user's AUTO.LOITER again (UserModeIntention::onDisarm)."""
+    gcs = px4(kind="rover")
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    assert reposition_to(gcs, *gcs.north(15.0)) == [m.MAV_RESULT_ACCEPTED]
+    gcs.run(20.0)
+    assert gcs.px4_mode(PX4_MODES["AUTO.RTL"]) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    out = gcs.run(25.0)
+    texts = gcs.texts(out)
+    assert texts.index("Landing detected") < texts.index("Disarmed by landing")
+    assert gcs.ap.vehicle.distance_to(*HOME[:2]) < 0.5 and not gcs.ap.armed and gcs.last("HEARTBEAT").custom_mode == LOITER
 
 
 def test_rover_mission_drives_every_waypoint_then_holds(px4: MakePx4) -> None:

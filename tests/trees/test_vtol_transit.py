@@ -488,10 +488,13 @@ class Recorder:
     """Stands in for the status line: notes the vtol state and where the aircraft was at each tick."""
 
     def __init__(self) -> None:
-        self.bb = blackboard.reader("test recorder", ["/vehicle/vtol_state", "/vehicle/position", "/mission/leg_index", "/vehicle/mode"])
+        keys = ["/vehicle/vtol_state", "/vehicle/position", "/mission/leg_index", "/vehicle/mode", "/vehicle/mode_set_by", "/mission/state"]
+        self.bb = blackboard.reader("test recorder", keys)
         self.vtol_states: list[str] = []
         self.vtol_legs: list[tuple[int | None, str]] = []  # (leg index, vtol state) at each change of the vtol state
         self.modes: list[str] = []
+        self.set_by: list[tuple[str, str | None]] = []  # each mode change and whose the executive judged it
+        self.mission_states: set[str] = set()
         self.positions: list[tuple[int, float, float, float]] = []  # leg index, lat, lon, alt
 
     def update(self, force: bool = False) -> None:
@@ -502,6 +505,8 @@ class Recorder:
         mode = self.bb.get("/vehicle/mode")
         if mode is not None and (not self.modes or self.modes[-1] != mode):
             self.modes.append(mode)
+            self.set_by.append((mode, self.bb.get("/vehicle/mode_set_by")))
+        self.mission_states.add(self.bb.get("/mission/state"))
         position = self.bb.get("/vehicle/position")
         if position is not None:
             self.positions.append((self.bb.get("/mission/leg_index"), position.lat, position.lon, position.alt_rel_m))
@@ -570,6 +575,8 @@ def test_the_example_transit_on_the_simulated_quadplane_goes_mc_fw_mc_visits_eac
         assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
     assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 2.5
     assert flight.vehicle_s < 300.0
+    # ArduPlane lands and disarms in QRTL with no mode change of its own (quadplane.cpp check_land_complete): nothing to judge
+    assert recorder.set_by[-1] == ("QRTL", "us") and "PAUSED" not in recorder.mission_states
 
 
 def test_the_same_example_file_flies_on_the_simulated_px4_vtol() -> None:
@@ -585,6 +592,11 @@ def test_the_same_example_file_flies_on_the_simulated_px4_vtol() -> None:
         closest = min(math.dist(global_to_local(wp.lat, wp.lon, lat, lon), (0, 0)) for _, lat, lon, _ in recorder.positions)
         assert closest <= mission.limits.acceptance_radius_m, f"waypoint {i} ({wp.name}) not visited: {closest:.0f} m"
     assert (end["armed"], end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and end["off_home_m"] < 10.0
+    # issue 23: the hover point's DO_REPOSITION (AUTO.LOITER) is asked as the take-off ends; after the RTL landing PX4 disarms
+    # and goes back to AUTO.LOITER itself (Commander::disarm, UserModeIntention::onDisarm): the autopilot's, never a pause
+    assert recorder.set_by[2:4] == [("AUTO.TAKEOFF", "us"), ("AUTO.LOITER", "us")]
+    assert recorder.set_by[-2:] == [("AUTO.RTL", "us"), ("AUTO.LOITER", "autopilot")]
+    assert "PAUSED" not in recorder.mission_states
 
 
 def test_the_simulated_quadplane_loses_its_ekf_during_the_climb_and_the_climb_goes_on_once_it_is_back() -> None:

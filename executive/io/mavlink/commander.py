@@ -9,7 +9,7 @@ with ``confirmation + 1`` when no ack comes, and its fate is written to ``/comma
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from py_trees.common import Access
@@ -29,6 +29,7 @@ POSITION_VELOCITY_MASK = 0x0DC0
 #: param2 values that skip ArduPilot's checks: 2989 forces an arm, 21196 a disarm (MAVLink's 21196 for both is PX4's).
 FORCE_ARM_MAGIC = 2989.0
 FORCE_DISARM_MAGIC = 21196.0
+NAN = float("nan")
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,8 +100,8 @@ class Commander:
         self.modes_asked: dict[str, float] = {}
         #: The mode asked for last, if any.
         self.last_mode_asked: str | None = None
-        #: Mode -> the mode the firmware goes on to by itself (PX4: AUTO.TAKEOFF -> AUTO.LOITER); the autopilot port sets it.
-        self.follow_on_modes: Mapping[str, str] = {}
+        #: The height above home the latest take-off of ours climbs to (None: none asked, or the autopilot's default height).
+        self.takeoff_height_m: float | None = None
         #: Commands the autopilot acks twice, the first ACCEPTED saying only "received": PX4's MAVLink receiver
         #: acks DO_SET_MODE at once, its commander the real result after (issue 12). The first ACCEPTED is not final.
         self.double_acked: frozenset[int] = frozenset()
@@ -132,17 +133,23 @@ class Commander:
         self.modes_asked[name] = self._clock.now()
         self.last_mode_asked = name
 
-    def arm(self, *, force: bool = False) -> int:
-        return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0, FORCE_ARM_MAGIC if force else 0.0))
+    def arm(self, *, force: bool = False, force_magic: float = FORCE_ARM_MAGIC) -> int:
+        """Arm; forced with ``force_magic`` in param2 (ArduPilot's 2989; PX4 takes MAVLink's 21196)."""
+        return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1.0, force_magic if force else 0.0))
 
     def disarm(self, *, force: bool = False) -> int:
         return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0.0, FORCE_DISARM_MAGIC if force else 0.0))
 
     def set_home(self, lat: float | None = None, lon: float | None = None, alt_m: float = 0.0) -> int:
-        """Home at the vehicle's current position (no arguments) or at a point (altitude above sea level)."""
+        """Home at the vehicle's current position (no arguments) or at a point (altitude above sea level).
+
+        Roll and pitch 0 ("not set"), yaw NaN ("default heading", MAVLink common.xml): PX4 stores param4 as home's yaw
+        (Commander.cpp VEHICLE_CMD_DO_SET_HOME), so a 0 there would point home north; ArduPilot reads param1, x, y, z only
+        (GCS_Common.cpp handle_command_do_set_home).
+        """
         if lat is None or lon is None:
-            return self.command_long(mavlink.MAV_CMD_DO_SET_HOME, (1.0,))
-        return self.command_int(mavlink.MAV_CMD_DO_SET_HOME, mavlink.MAV_FRAME_GLOBAL, (0, 0, 0, 0, lat, lon, alt_m))
+            return self.command_long(mavlink.MAV_CMD_DO_SET_HOME, (1.0, 0.0, 0.0, NAN, NAN, NAN, NAN))
+        return self.command_int(mavlink.MAV_CMD_DO_SET_HOME, mavlink.MAV_FRAME_GLOBAL, (0, 0, 0, NAN, lat, lon, alt_m))
 
     def change_speed(self, speed_m_s: float, *, airspeed: bool = False) -> int:
         """Cruise speed for GUIDED/AUTO legs (ground speed unless ``airspeed``)."""
@@ -162,13 +169,21 @@ class Commander:
         return self.command_long(mavlink.MAV_CMD_DO_VTOL_TRANSITION, (state,))
 
     def takeoff(self, alt_m: float, *, vtol: bool = False) -> int:
-        """Climb to ``alt_m`` above home (a VTOL climbs as a multicopter)."""
-        command = mavlink.MAV_CMD_NAV_VTOL_TAKEOFF if vtol else mavlink.MAV_CMD_NAV_TAKEOFF
-        return self.command_long(command, (0, 0, 0, 0, 0, 0, alt_m))
+        """Climb to ``alt_m`` (above home on ArduPilot, above sea level on PX4) where the vehicle is (a VTOL climbs as a multicopter).
 
-    def land(self, *, vtol: bool = False) -> int:
-        """Land where the vehicle is."""
-        return self.command_long(mavlink.MAV_CMD_NAV_VTOL_LAND if vtol else mavlink.MAV_CMD_NAV_LAND, ())
+        Yaw, latitude and longitude go as NaN, "unchanged, here": PX4 takes finite param5/param6 as the take-off point
+        (navigator_main.cpp VEHICLE_CMD_NAV_TAKEOFF; 0, 0 is in the Gulf of Guinea and the vehicle never climbed);
+        ArduPlane reads param7 alone (GCS_MAVLink_Plane.cpp convert_MAV_CMD_NAV_TAKEOFF_to_COMMAND_INT).
+        """
+        command = mavlink.MAV_CMD_NAV_VTOL_TAKEOFF if vtol else mavlink.MAV_CMD_NAV_TAKEOFF
+        return self.command_long(command, (0, 0, 0, NAN, NAN, NAN, alt_m))
+
+    def land(self) -> int:
+        """MAV_CMD_NAV_LAND where the vehicle is: abort altitude 0 (the default), no precision landing, yaw, point and ground
+        altitude NaN ("unchanged, here"; ArduPilot turns a NaN latitude/longitude of a COMMAND_LONG into 0, GCS_Common.cpp
+        convert_COMMAND_LONG_loc_param). PX4 lands where it is whatever they say (Commander.cpp VEHICLE_CMD_NAV_LAND),
+        ArduSub surfaces (GCS_MAVLink_Sub.cpp handle_MAV_CMD_NAV_LAND)."""
+        return self.command_long(mavlink.MAV_CMD_NAV_LAND, (0, 0, 0, NAN, NAN, NAN, NAN))
 
     def goto(self, lat: float, lon: float, alt_m: float = 0.0) -> None:
         """Queue a GUIDED position target (ArduPilot ignores it, silently, outside GUIDED)."""

@@ -310,7 +310,7 @@ class MavlinkReader:
         if not _finite(*ratios) or min(ratios) < 0.0:
             return
         self._estimator_status_at = now
-        self._bb.set("/vehicle/ekf", EkfStatus(_estimator_flags(msg.flags), *ratios, now))
+        self._bb.set("/vehicle/ekf", EkfStatus(_estimator_flags(msg.flags), *ratios, now, const_pos_at_rest=True))
 
     def _on_sys_status(self, msg: MAVLinkMessage, now: float) -> None:
         if self._px4 and now - self._estimator_status_at > _ESTIMATOR_STATUS_STALE_S:

@@ -118,9 +118,9 @@ def test_commands_go_to_the_autopilot_that_was_found(commander, link):
         (lambda c: c.change_speed(18.0, airspeed=True), mavlink.MAV_CMD_DO_CHANGE_SPEED, (0.0, 18.0)),
         (lambda c: c.vtol_transition("fw"), mavlink.MAV_CMD_DO_VTOL_TRANSITION, (mavlink.MAV_VTOL_STATE_FW, 0.0)),
         (lambda c: c.vtol_transition("MC"), mavlink.MAV_CMD_DO_VTOL_TRANSITION, (mavlink.MAV_VTOL_STATE_MC, 0.0)),
-        (lambda c: c.land(vtol=True), mavlink.MAV_CMD_NAV_VTOL_LAND, (0.0, 0.0)),
+        (lambda c: c.land(), mavlink.MAV_CMD_NAV_LAND, (0.0, 0.0)),
     ],
-    ids=["set home here", "ground speed", "airspeed", "to FW", "to MC", "vtol land"],
+    ids=["set home here", "ground speed", "airspeed", "to FW", "to MC", "land"],
 )
 def test_command_helpers(commander, link, request_, command, params):
     request_(commander)

@@ -1,0 +1,80 @@
+"""What real PX4 said, recorded, read by the executive (issue 23): CI keeps our reading of the real firmware honest.
+
+The recordings (tests/data/px4/, cut from one run of missions/vtol_transit.yaml, unmodified, against
+PX4 main a70a558393 software-in-the-loop with SIH physics, standard VTOL, speed factor 1; the run
+COMPLETED) go through the MAVLink reader, the PX4 autopilot port and the intervention watch
+(tests/tlog_replay.py). Times are seconds from the first record of each file.
+"""
+
+from __future__ import annotations
+
+import pytest
+from tlog_replay import PX4, Replay, records
+
+from executive.behaviours import EkfOk
+from executive.io.mavlink.dialect import mavlink
+from executive.mission.lifecycle import MissionStatus
+
+
+def test_at_rest_before_arming_px4_reports_constant_position_mode_with_its_gnss_position_and_the_ekf_guard_passes() -> None:
+    """ekf_helper.cpp: CONST_POS_MODE for vehicle_at_rest: 0x3ff on the ground before arming, the real cause of issue 23's abort."""
+    replay = Replay().play(PX4 / "vtol_at_rest_and_arming.tlog", until_s=3.5)
+    ekf = replay.bb.get("/vehicle/ekf")
+    assert ekf is not None and int(ekf.flags) == 0x3FF and replay.values("/vehicle/armed") == [False]
+    assert EkfOk().check() is None
+
+
+def test_armed_on_the_ground_the_flag_goes_and_offboard_is_ours() -> None:
+    replay = Replay().play(PX4 / "vtol_at_rest_and_arming.tlog")
+    assert replay.values("/vehicle/armed") == [False, True]
+    assert int(replay.bb.get("/vehicle/ekf").flags) == 0x37F  # the motors shake the IMU: not at rest any more
+    assert replay.values("/vehicle/mode") == [None, "AUTO.LOITER", "OFFBOARD"]  # AUTO.LOITER from boot, on the ground too
+    assert replay.values("/vehicle/mode_set_by")[-1] == "us"
+    sent = [msg for _, msg in records(PX4 / "vtol_at_rest_and_arming.tlog") if msg.get_type() == "COMMAND_LONG"]
+    takeoff = next(msg for msg in sent if msg.command == mavlink.MAV_CMD_NAV_TAKEOFF)
+    assert takeoff.param5 != takeoff.param5 and takeoff.param6 != takeoff.param6  # NaN: here (0, 0 never climbed)
+    assert takeoff.param7 == pytest.approx(614.0, abs=1.0)  # home 584 m AMSL + 30 m
+
+
+def test_the_take_off_is_seen_climbing_then_in_the_air_at_its_height() -> None:
+    replay = Replay().play(PX4 / "vtol_takeoff.tlog")
+    assert "Takeoff detected\t" in [text for _, text in filter(None, replay.values("/vehicle/statustext"))]
+    assert replay.values("/vehicle/landed_state") == [None, "TAKEOFF", "IN_AIR"]
+    assert replay.values("/vehicle/mode") == [None, "OFFBOARD", "AUTO.TAKEOFF", "AUTO.LOITER"]
+    assert replay.when("/vehicle/landed_state", "IN_AIR") < replay.when("/vehicle/mode", "AUTO.LOITER")
+    assert replay.bb.get("/vehicle/position").alt_rel_m > 29.0
+    # the hover point's DO_REPOSITION went out as the take-off ended: its AUTO.LOITER is ours; never a person's
+    assert replay.values("/vehicle/mode_set_by")[-1] == "us" and replay.state.status is MissionStatus.RUNNING
+
+
+def test_without_our_reposition_the_loiter_after_the_take_off_is_the_autopilots_own() -> None:
+    """Commander::checkForMissionUpdate: AUTO.TAKEOFF done, AUTO.LOITER; the height of our take-off tells it from a person's Hold."""
+    replay = Replay(unasked=frozenset({mavlink.MAV_CMD_DO_REPOSITION})).play(PX4 / "vtol_takeoff.tlog")
+    assert replay.values("/vehicle/mode_set_by")[-1] == "autopilot" and replay.state.status is MissionStatus.RUNNING
+
+
+def test_the_transitions_show_in_extended_sys_state_both_ways() -> None:
+    replay = Replay().play(PX4 / "vtol_transitions.tlog")
+    assert replay.values("/vehicle/vtol_state") == [None, "TRANSITION_TO_FW", "FW", "TRANSITION_TO_MC", "MC"]
+    to_fw = replay.when("/vehicle/vtol_state", "FW") - replay.when("/vehicle/vtol_state", "TRANSITION_TO_FW")
+    assert 2.0 < to_fw < 4.0  # 3 s at ~9.7 m/s airspeed; back to MC in 1 s
+    acks = [(msg.command, msg.result) for _, msg in records(PX4 / "vtol_transitions.tlog") if msg.get_type() == "COMMAND_ACK"]
+    assert acks.count((mavlink.MAV_CMD_DO_VTOL_TRANSITION, mavlink.MAV_RESULT_ACCEPTED)) == 2
+    assert replay.values("/vehicle/mode")[-1] == "AUTO.RTL" and replay.values("/vehicle/mode_set_by")[-1] == "us"
+
+
+def test_after_the_rtl_landing_px4_disarms_and_its_own_auto_loiter_is_not_a_persons() -> None:
+    replay = Replay().play(PX4 / "vtol_landing.tlog")
+    texts = [text for _, text in filter(None, replay.values("/vehicle/statustext"))]
+    assert texts.index("Landing detected\t") < texts.index("Disarmed by landing\t")
+    assert replay.values("/vehicle/landed_state")[-2:] == ["LANDING", "ON_GROUND"]
+    assert replay.values("/vehicle/mode") == [None, "AUTO.LOITER", "AUTO.RTL", "AUTO.LOITER"]
+    assert replay.values("/vehicle/mode_set_by") == [None, "us", "autopilot"]
+    assert replay.last_when("/vehicle/armed", False) == replay.last_when("/vehicle/mode", "AUTO.LOITER")  # one heartbeat: disarmed, loitering
+    assert replay.state.status is MissionStatus.RUNNING
+
+
+def test_judged_by_ardupilots_rules_the_same_change_would_be_a_persons_and_pause() -> None:
+    """A control: ArduPilot has no such transition, so the watch that let it pass is the one that would pause otherwise."""
+    replay = Replay(judged_as="ardupilot").play(PX4 / "vtol_landing.tlog")
+    assert replay.values("/vehicle/mode_set_by")[-1] == "others" and replay.state.status is MissionStatus.PAUSED
