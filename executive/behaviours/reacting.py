@@ -27,7 +27,6 @@ from executive.autopilot import AutopilotPort, Request
 from executive.autopilot.fallbacks import DISARM, Fallback, chain, fallback
 from executive.clock import Clock
 from executive.state import CommandState, CommandStatus, EkfStatus
-from executive.vehicles import PROFILES
 
 log = logging.getLogger("executive.behaviours.failsafe")  # the journal's event kind: "failsafe"
 
@@ -41,7 +40,7 @@ ASK_AGAIN_S = 1.5
 ASKS_BEFORE_NEXT = 3
 #: The blackboard keys a behaviour that reacts reads.
 READS = (
-    "/vehicle/armed", "/vehicle/mode", "/vehicle/ekf", "/vehicle/ekf_failsafe", "/link/up",
+    "/vehicle/armed", "/vehicle/mode", "/vehicle/mode_set_by", "/vehicle/ekf", "/vehicle/ekf_failsafe", "/link/up",
     blackboard.command_key("DO_SET_MODE"), blackboard.command_key("COMPONENT_ARM_DISARM"),
 )  # fmt: skip
 #: Told of each step a person must hear: a short text (a STATUSTEXT holds 50 characters), and whether it is a warning.
@@ -73,6 +72,7 @@ class _Asking:
     judged: bool = True  # the latest ask's outcome is counted
     acked: bool = False  # the autopilot accepted one of its asks
     confirmed: bool = False
+    was_shown: bool = False  # the heartbeat showed the vehicle in it (since it was asked)
     failed: int = 0  # asks that failed (counted toward the next reaction)
     outcomes: Counter[str] = field(default_factory=Counter)
     last: str | None = None  # the latest outcome: "refused (FAILED)", "no answer", "accepted, the vehicle still in GUIDED"
@@ -206,12 +206,17 @@ class Reacting:
             self.host.autopilot.cancel(ticket)
 
     def seen(self, step: str) -> bool:
-        """The heartbeat shows the vehicle in ``step`` (or in the mode the firmware goes on to by itself from it: a sub at the surface)."""
+        """The heartbeat shows the vehicle in ``step``, or showed it and the autopilot went on from it by itself (a sub at the surface)."""
         if step == DISARM:
             return not self.host.get("/vehicle/armed")
         mode, shown = self.host.get("/vehicle/mode"), self._shown(step)
-        follow_on = PROFILES[self.vehicle].follow_on_modes.get(shown) if self.vehicle is not None else None
-        return mode == shown or (mode is not None and mode == follow_on)
+        asking = self.asking if self.asking is not None and self.asking.step == step else None
+        if mode == shown:
+            if asking is not None:
+                asking.was_shown = True
+            return True
+        # the autopilot went on from it by itself, by the firmware's own cause (executive.mode_cause: a sub at the surface)
+        return asking is not None and asking.was_shown and self.host.get("/vehicle/mode_set_by") == "autopilot"
 
     # -- internals ---------------------------------------------------------------------------
 
