@@ -98,6 +98,7 @@ class NothingToSample(Guard):
     """
 
     reads = ("/mission/target", "/mission/leg_index", "/mission/samples")
+    unknown_or_stale = "reads the mission's own state (its leg, its samples), never a reading of the vehicle's: nothing to be unknown or old"
 
     def __init__(self, name: str = "Nothing to sample here?") -> None:
         super().__init__(name)
