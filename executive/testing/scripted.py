@@ -296,6 +296,9 @@ class ObedientAutopilot(ScriptedAutopilot):
     def publish(self) -> None:
         """Nothing to write: the heartbeat carries the mode and arming."""
 
+    def report_health(self) -> None:
+        """Nothing written: over a link, what it reports is what it sends; other facts (battery, parameters) are the test's."""
+
     def acknowledge(self, command: int, result: int) -> None:
         self.link.incoming.append(AUTOPILOT.command_ack(command, result, 0, 0, 1, 191))
 
