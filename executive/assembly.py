@@ -12,13 +12,12 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from executive import blackboard
+from executive import admission, blackboard
 from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.clock import Clock
 from executive.intervention import InterventionWatch
 from executive.io.heading import HeadingFilter
-from executive.io.instruments import refusal as instrument_refusal
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.gcs import GroundStationControl
@@ -168,7 +167,8 @@ def build_runtime(
         mission.vehicle,
         status=status.snapshot,
         clock=clock,
-        refuse=lambda m: instrument_refusal(m, simulator=simulated_vehicle),
+        # what `executive run` refuses of a mission file, for every mission `ctl upload` brings (executive.admission)
+        refuse=lambda m: "; ".join(admission.refusals(m, autopilot=ap.port.backend.name, simulator=simulated_vehicle)) or None,
         tree=tree_watch.view,
         autopilot_name=lambda: ap.port.backend.name,  # asked only once the link below is made
     )

@@ -12,6 +12,9 @@ otherwise. A behaviour class may declare, as class attributes:
 - ``node_refs``: parameters naming another node of the tree (FailsafeNote's ``guard``);
 - ``catalogued = False``: a base class or an internal part, not offered.
 
+A guard's ``unknown_or_stale`` (what it does with no reading yet, and with a reading older than its
+limit: :mod:`executive.behaviours.guards`) is part of its entry.
+
 Use it as ``catalogue().get("go_to")``, ``catalogue().nodes(kind="guard")``; ``executive
 behaviours [--json]`` prints it. Plugins' behaviours (entry-point group ``executive.behaviours``,
 :mod:`executive.plugins` when installed) are part of it; :meth:`Catalogue.build` takes others.
@@ -175,6 +178,7 @@ class NodeSpec:
     origin: str = ""  # module.qualname of the class or function
     takes_mission: bool = False  # the factory's ``mission`` parameter gets the mission
     refs: tuple[str, ...] = ()  # parameters naming another node of the tree
+    unknown_or_stale: str = ""  # a guard: what it does with no reading yet, and with one older than its limit
 
     def param(self, name: str) -> ParamSpec | None:
         return next((p for p in self.params if p.name == name), None)
@@ -184,7 +188,10 @@ class NodeSpec:
         return tuple(p for p in self.params if p.is_child)
 
     def to_json(self) -> dict[str, Any]:
-        return {"name": self.name, "kind": self.kind, "doc": self.doc, "origin": self.origin, "params": [p.to_json() for p in self.params]}
+        out = {"name": self.name, "kind": self.kind, "doc": self.doc, "origin": self.origin, "params": [p.to_json() for p in self.params]}
+        if self.kind == "guard":
+            out["unknown_or_stale"] = self.unknown_or_stale
+        return out
 
 
 class Catalogue:
@@ -280,7 +287,14 @@ def describe_class(cls: type[py_trees.behaviour.Behaviour]) -> NodeSpec:
     if kind == "guard":
         params += tuple(_guard_param(cls, p, t, d) for p, (t, d) in GUARD_PARAMS.items() if all(q.name != p for q in params))
     return NodeSpec(
-        name, kind, first_line(cls.__doc__), params, cls, f"{cls.__module__}.{cls.__qualname__}", refs=tuple(getattr(cls, "node_refs", ()))
+        name,
+        kind,
+        first_line(cls.__doc__),
+        params,
+        cls,
+        f"{cls.__module__}.{cls.__qualname__}",
+        refs=tuple(getattr(cls, "node_refs", ())),
+        unknown_or_stale=getattr(cls, "unknown_or_stale", "") if kind == "guard" else "",
     )
 
 

@@ -44,7 +44,7 @@ CREATE TABLE IF NOT EXISTS legs (
 );
 CREATE TABLE IF NOT EXISTS samples (
     run INTEGER NOT NULL REFERENCES runs(id), leg INTEGER NOT NULL, lat REAL, lon REAL, started REAL, finished REAL, reads TEXT NOT NULL,
-    instrument TEXT NOT NULL DEFAULT '', UNIQUE (run, leg)
+    instrument TEXT NOT NULL DEFAULT '', missing TEXT NOT NULL DEFAULT '[]', partial INTEGER NOT NULL DEFAULT 0, UNIQUE (run, leg)
 );
 CREATE TABLE IF NOT EXISTS events (
     run INTEGER NOT NULL REFERENCES runs(id), t REAL NOT NULL, wall REAL NOT NULL, kind TEXT NOT NULL, text TEXT NOT NULL
@@ -54,6 +54,10 @@ CREATE TABLE IF NOT EXISTS routes (
     waypoints TEXT NOT NULL, reason TEXT NOT NULL
 );
 """
+
+
+#: Columns of ``samples`` a journal written by an older executive lacks: name -> declaration.
+_ADDED_SAMPLE_COLUMNS = {"instrument": "TEXT NOT NULL DEFAULT ''", "missing": "TEXT NOT NULL DEFAULT '[]'", "partial": "INTEGER NOT NULL DEFAULT 0"}
 
 
 @dataclass(frozen=True)
@@ -82,8 +86,10 @@ class Journal:
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=FULL")
         self._db.executescript(SCHEMA)
-        if "instrument" not in {row[1] for row in self._db.execute("PRAGMA table_info(samples)")}:  # a journal from before instruments
-            self._db.execute("ALTER TABLE samples ADD COLUMN instrument TEXT NOT NULL DEFAULT ''")
+        columns = {row[1] for row in self._db.execute("PRAGMA table_info(samples)")}
+        for column, declared in _ADDED_SAMPLE_COLUMNS.items():  # a journal from before them
+            if column not in columns:
+                self._db.execute(f"ALTER TABLE samples ADD COLUMN {column} {declared}")
         self.run: int | None = None
         self._leg: int | None = None
 
@@ -159,10 +165,23 @@ class Journal:
         return Route(tuple(Waypoint.model_validate(w) for w in json.loads(waypoints)), leg, Home.model_validate_json(home) if home else None)
 
     def samples(self, run: int) -> tuple[Sample, ...]:
-        rows = self._db.execute("SELECT leg, lat, lon, started, finished, reads, instrument FROM samples WHERE run = ? ORDER BY leg", (run,))
+        """The samples of ``run``, partial ones (a named sensor gave no reading) included, by leg."""
+        rows = self._db.execute(
+            "SELECT leg, lat, lon, started, finished, reads, instrument, missing, partial FROM samples WHERE run = ? ORDER BY leg", (run,)
+        )
         return tuple(
-            Sample(leg, lat, lon, tuple(SampleRead(**r) for r in json.loads(reads)), started, finished, instrument)
-            for leg, lat, lon, started, finished, reads, instrument in rows
+            Sample(
+                leg,
+                lat,
+                lon,
+                tuple(SampleRead(**r) for r in json.loads(reads)),
+                started,
+                finished,
+                instrument,
+                tuple(json.loads(missing)),
+                bool(partial),
+            )
+            for leg, lat, lon, started, finished, reads, instrument, missing, partial in rows
         )
 
     def report(self, run: int | None = None) -> dict[str, Any]:
@@ -223,8 +242,9 @@ class Journal:
     def _on_sample(self, sample: Sample) -> None:
         if self.run is not None:
             reads = json.dumps([asdict(r) for r in sample.reads])
-            row = {"run": self.run, "leg": sample.leg_index, "lat": sample.lat, "lon": sample.lon}
-            self._insert("samples", **row, started=sample.started, finished=sample.finished, reads=reads, instrument=sample.instrument)
+            row = {"run": self.run, "leg": sample.leg_index, "lat": sample.lat, "lon": sample.lon, "started": sample.started}
+            what = {"reads": reads, "instrument": sample.instrument, "missing": json.dumps(sample.missing), "partial": int(sample.partial)}
+            self._insert("samples", **row, finished=sample.finished, **what)
 
     def _on_route(self, route: Route, reason: str) -> None:
         if self.run is not None:

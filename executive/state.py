@@ -180,6 +180,7 @@ class SamplerState(StrEnum):
     IDLE = "IDLE"
     SAMPLING = "SAMPLING"
     DONE = "DONE"
+    PARTIAL = "PARTIAL"  # ended with readings, but not of every sensor named (sampling.require: all)
     FAILED = "FAILED"  # includes cancelled
 
 
@@ -193,11 +194,16 @@ class SamplerStatus:
     reason: str
     time: float
     instrument: str = ""  # which instrument reads ("simulated", "serial:/dev/ttyUSB0")
+    missing: tuple[str, ...] = ()  # sensors named that gave no reading in the sample (once it ended)
 
 
 @dataclass(frozen=True, slots=True)
 class Sample:
-    """A finished sample, as recorded: where, when, and every read."""
+    """A finished sample, as recorded: where, when, every read, and the sensors named that gave none.
+
+    ``partial``: it lacks a sensor and the mission requires them all (``sampling.require: all``):
+    recorded, but its sample point is not done (:meth:`complete` is False).
+    """
 
     leg_index: int
     lat: float
@@ -206,6 +212,13 @@ class Sample:
     started: float
     finished: float
     instrument: str = ""  # which instrument took it ("" in journals from before instruments were recorded)
+    missing: tuple[str, ...] = ()  # sensors the mission named that gave no reading
+    partial: bool = False
+
+    @property
+    def complete(self) -> bool:
+        """Its sample point is done."""
+        return not self.partial
 
 
 class CommandState(StrEnum):

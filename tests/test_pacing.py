@@ -124,9 +124,9 @@ def test_a_speedup_the_executive_cannot_follow_is_refused(minimal_mission, capsy
     assert main(["run", str(minimal_mission), "--speedup", "1000", "--socket", "none"]) == 2
     err = capsys.readouterr().err
     assert "--speedup 1000: the executive cannot follow it" in err
-    assert "(--speedup 200 at --rate 10)" in err
+    assert "(--speedup below 200 at --rate 10)" in err  # 200 itself is refused: README
     assert main(["run", str(minimal_mission), "--speedup", "200", "--rate", "20", "--socket", "none"]) == 2
-    assert "(--speedup 100 at --rate 20)" in capsys.readouterr().err
+    assert "(--speedup below 100 at --rate 20)" in capsys.readouterr().err
 
 
 @pytest.fixture

@@ -22,6 +22,7 @@ from executive.behaviours import (
     RcChannelHigh,
     RcNotLost,
     RcNotTakingOver,
+    ReadingsIn,
     UnlessPaused,
     WaitUntil,
     inside_geofence,
@@ -75,8 +76,19 @@ def mode_switch_clear(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
     return [ModeSwitchClear(switches)] if switches else []
 
 
+def readings_in(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
+    """The wait for what the pre-flight checks and the battery guard need (the mode-switch parameter, a battery report), if anything."""
+    switches, limits = rc_switch_channels(mission), mission.limits
+    if not switches and limits.battery_min_pct is None and limits.battery_min_v is None:
+        return []
+    return [ReadingsIn(switches, limits.battery_min_pct, limits.battery_min_v)]
+
+
 def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """A usable EKF; the autopilot's mode switch clear of the mission's; then arm (auto_arm; the RC arm switch high) or wait for the operator to."""
+    """A usable EKF, the readings its checks need (bounded), the autopilot's mode switch clear of the mission's; then arm or wait for it.
+
+    Arming: auto_arm arms; else the RC arm switch high arms, or the operator arms.
+    """
     limits, rc = mission.limits, mission.rc
     if mission.auto_arm:
         arming: py_trees.behaviour.Behaviour = WaitUntil(Arm(), limits.ekf_wait_s, name="Arm", retry_s=ARM_RETRY_S)
@@ -89,7 +101,8 @@ def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
         arming = WaitUntil(either, limits.recovery_timeout_s, name=f"Wait for the operator to arm (or RC channel {rc.arm_channel} high)")
     else:
         arming = WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm")
-    return py_trees.composites.Sequence("Pre-flight", memory=True, children=[wait_for_ekf(mission), *mode_switch_clear(mission), arming])
+    checks = [wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission)]
+    return py_trees.composites.Sequence("Pre-flight", memory=True, children=[*checks, arming])
 
 
 def standard_guards(mission: Mission) -> list[Guard]:

@@ -29,6 +29,8 @@ class EnoughSatellites(Guard):
     """The GPS sees at least ``minimum`` satellites (GPS_RAW_INT); no report yet is not enough."""
 
     reads = ("/vehicle/gps",)
+    #: Said by `executive behaviours`: every guard states what it does without a reading, and with an old one.
+    unknown_or_stale = "no GPS_RAW_INT yet, or no satellite count in it: fails; an old one: judged as it is (EKF ok? fails when the GPS goes)"
 
     def __init__(self, minimum: int = 8, name: str = "Enough satellites?") -> None:
         super().__init__(name)

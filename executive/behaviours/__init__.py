@@ -47,6 +47,7 @@ from executive.behaviours.guards import (
 from executive.behaviours.mode_switch import ModeSwitchClear
 from executive.behaviours.parameters import ParameterIs
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
+from executive.behaviours.readiness import ReadingsIn
 from executive.behaviours.sampling import NothingToSample, Sample
 
 __all__ = [
@@ -89,6 +90,7 @@ __all__ = [
     "RcFresh",
     "RcNotLost",
     "RcNotTakingOver",
+    "ReadingsIn",
     "RouteEditSwitch",
     "Sample",
     "SetMode",

@@ -1,8 +1,19 @@
 """Guard conditions: SUCCESS when the condition holds, FAILURE (with the reason) when not.
 
-Guards read the blackboard and nothing else; they never return RUNNING. A guard that passes
-without being able to judge (no battery report yet, heading not judged yet) says so in its
-feedback.
+Guards read the blackboard and nothing else; they never return RUNNING.
+
+Unknown and stale are not healthy. Every guard says (:attr:`Guard.unknown_or_stale`, shown by the
+catalogue and README's guard table) what it does with no reading yet and with a reading older than
+its limit. A reading is *stale* when the autopilot has been heard (its HEARTBEAT) for longer than
+the limit since it arrived, counted from when the link last came up if that is later
+(:meth:`Guard.stale`): the autopilot talks but no longer says it. While no heartbeat arrives at
+all, no reading can: the age stops growing and Link alive? (link_loss) stands for them all, so a
+link loss is one failsafe with its own reaction, not one per reading. Each limit is a few of the
+intervals the executive asks the autopilot for (:data:`executive.io.mavlink.streams.DEFAULT_RATES`,
+SET_MESSAGE_INTERVAL), and covers a firmware that refused them and streams at its own default
+(ArduRover and ArduPlane: 1 Hz per stream group, ``AP_MAV_DEFAULT_STREAM_RATE_*`` in
+libraries/GCS_MAVLink/GCS_MAVLink_Parameters.cpp). A guard that passes without being able to judge
+says so in its feedback, and its ``unknown_or_stale`` says why that is safe.
 
 Every guard is debounced in vehicle time (the injected clock), so that its failsafe never flaps:
 once it has passed, a condition must fail for ``hold_after_s`` before the guard fails (a shorter
@@ -28,6 +39,12 @@ from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition, HomePo
 
 _EPSILON_S = 1e-6  # ten ticks of 0.1 s add up to a hair under 1 s
 
+#: What a guard of the vehicle's position does without one, or with an old one (its ``unknown_or_stale``).
+_POSITION_RULE = (
+    "no position yet: fails; an old position: judged as it is: GLOBAL_POSITION_INT carries the EKF's estimate, and EKF ok? "
+    "fails when the EKF's reports stop or lose the position"
+)
+
 
 class Guard(ExecutiveBehaviour):
     """A condition on the blackboard; subclasses implement :meth:`check`."""
@@ -44,6 +61,9 @@ class Guard(ExecutiveBehaviour):
     hold_after_s: float = 0.0
     #: Vehicle seconds the condition must hold again, once the guard failed, before it passes.
     resume_after_s: float = 0.0
+
+    #: What the guard does with no reading yet, and with a reading older than its limit (the catalogue and README say it).
+    unknown_or_stale: str = ""
 
     def __init__(self, name: str) -> None:
         super().__init__(name)
@@ -65,6 +85,26 @@ class Guard(ExecutiveBehaviour):
     def check(self) -> str | None:
         """``None`` when the condition holds, else why it does not (the raw reading, not debounced)."""
         raise NotImplementedError
+
+    def stale(self, received_at: float | None, limit_s: float, what: str) -> str | None:
+        """Why ``what``, received at clock time ``received_at``, is too old to judge by; None when it is not (see the module's docstring).
+
+        Its age runs from its arrival (or from when the link last came up, if later) to the autopilot's
+        last HEARTBEAT (``/link/last_heartbeat``, ``/link/up_since``: a guard calling this reads both).
+        Nothing heard yet, or no arrival time: not judged here.
+        """
+        heard: float | None = self.get("/link/last_heartbeat")
+        if heard is None or received_at is None:
+            return None
+        up_since: float | None = self.get("/link/up_since")
+        age = heard - max(received_at, up_since if up_since is not None else received_at)
+        if age > limit_s + _EPSILON_S:
+            return f"{what} {age:.1f} s old while the autopilot is heard (limit {limit_s:g} s)"
+        return None
+
+    def awaits(self) -> str | None:
+        """The reading this guard cannot judge without and has not had yet (pre-flight waits for it), else None."""
+        return None
 
     def judge(self) -> str | None:
         """The debounced verdict: ``None`` when the guard passes, else why it fails (see the module's docstring).
@@ -111,6 +151,10 @@ class LinkAlive(Guard):
     """
 
     resume_after_s = 2.0
+    unknown_or_stale = (
+        "no heartbeat yet: fails; none for link_timeout_s (3 s: three of ArduPilot's 1 Hz heartbeats): fails. "
+        "It judges silence itself, and stands for every other reading while the link is lost"
+    )
 
     reads = ("/link/up",)
 
@@ -132,17 +176,29 @@ class EkfOk(Guard):
     """
 
     resume_after_s = 3.0
+    #: EKF_STATUS_REPORT (PX4: ESTIMATOR_STATUS) is asked at 2 Hz: 3 s is six reports missed, three at the firmware's 1 Hz default.
+    stale_after_s = 3.0
+    unknown_or_stale = (
+        "no EKF report yet: fails; a report older than 3 s while the autopilot is heard: fails (EKF_STATUS_REPORT or ESTIMATOR_STATUS "
+        "asked at 2 Hz, 1 Hz by the firmware's default: three missed at least)"
+    )
 
-    reads = ("/vehicle/ekf", "/vehicle/ekf_failsafe")
+    reads = ("/vehicle/ekf", "/vehicle/ekf_failsafe", "/link/last_heartbeat", "/link/up_since")
 
     def __init__(self, name: str = "EKF ok?", variance_threshold: float = 0.8) -> None:
         super().__init__(name)
         self.variance_threshold = variance_threshold
 
+    def awaits(self) -> str | None:
+        return "an EKF report (EKF_STATUS_REPORT)" if self.get("/vehicle/ekf") is None else None
+
     def check(self) -> str | None:
         ekf: EkfStatus | None = self.get("/vehicle/ekf")
         if ekf is None:
             return "no EKF status yet"
+        old = self.stale(ekf.time, self.stale_after_s, "the EKF report is")
+        if old is not None:
+            return old
         if self.get("/vehicle/ekf_failsafe"):
             return "the autopilot's EKF failsafe is on"
         if not ekf.position_ok():
@@ -153,24 +209,31 @@ class EkfOk(Guard):
 
 
 class GpsNotGlitching(Guard):
-    """The EKF does not flag a GPS glitch (EKF_STATUS_REPORT GPS_GLITCHING); no EKF report yet passes with a note.
+    """The EKF does not flag a GPS glitch (EKF_STATUS_REPORT GPS_GLITCHING); no EKF report, or a stale one, fails: it cannot tell.
 
     Debounce: holds at once (the EKF raises the flag only after rejecting GPS: filtered already);
     resumes after 3 s without the flag.
     """
 
     resume_after_s = 3.0
+    stale_after_s = EkfOk.stale_after_s  # the same report
+    unknown_or_stale = "as EKF ok? (the flag is in the same report): no EKF report yet, or one older than 3 s while the autopilot is heard: fails"
 
-    reads = ("/vehicle/ekf",)
+    reads = ("/vehicle/ekf", "/link/last_heartbeat", "/link/up_since")
 
     def __init__(self, name: str = "GPS not glitching?") -> None:
         super().__init__(name)
 
+    def awaits(self) -> str | None:
+        return "an EKF report (EKF_STATUS_REPORT)" if self.get("/vehicle/ekf") is None else None
+
     def check(self) -> str | None:
         ekf: EkfStatus | None = self.get("/vehicle/ekf")
         if ekf is None:
-            self.note = "no EKF status yet"
-            return None
+            return "no EKF status yet: a GPS glitch cannot be ruled out"
+        old = self.stale(ekf.time, self.stale_after_s, "the EKF report is")
+        if old is not None:
+            return old
         return "the EKF flags a GPS glitch (GPS_GLITCHING)" if ekf.flags & EkfFlags.GPS_GLITCHING else None
 
 
@@ -183,6 +246,7 @@ class Armed(Guard):
 
     reads = ("/vehicle/armed",)
     pilot_in_control = True
+    unknown_or_stale = "the HEARTBEAT's armed flag: before the first one, disarmed (fails); no heartbeat: Link alive? judges the silence"
 
     def __init__(self, name: str = "Armed?") -> None:
         super().__init__(name)
@@ -199,6 +263,7 @@ class ModeIs(Guard):
     """
 
     reads = ("/vehicle/mode",)
+    unknown_or_stale = "the HEARTBEAT's mode: before the first one, no mode (fails); no heartbeat: Link alive? judges the silence"
 
     def __init__(self, mode: str, name: str | None = None) -> None:
         super().__init__(name or f"Mode is {mode}?")
@@ -221,6 +286,10 @@ class RcNotTakingOver(Guard):
     reads = ("/rc/channels",)
     pilot_in_control = True
     from_mission = {"channel": "rc.takeover_channel", "above_us": "rc.takeover_above_us"}
+    unknown_or_stale = (
+        "no RC report, or a stale one: passes (a missing transmitter is not a person taking over; the autopilot's own RC failsafe "
+        "and mode switch still work): RC not lost? and RC fresh? (rc_loss) judge the silence"
+    )
 
     def __init__(self, channel: int, above_us: int, name: str = "RC not taking over?") -> None:
         super().__init__(name)
@@ -236,6 +305,7 @@ class RcChannelHigh(Guard):
 
     reads = ("/rc/channels",)
     from_mission = {"channel": "rc.arm_channel", "above_us": "rc.takeover_above_us"}
+    unknown_or_stale = "no RC report: the channel reads 0 (fails: not high); pre-flight waits on it, RC fresh? judges a stale one"
 
     def __init__(self, channel: int, above_us: int, name: str | None = None) -> None:
         super().__init__(name or f"RC channel {channel} high?")
@@ -269,6 +339,10 @@ class RcAutoMode(Guard):
     reads = ("/rc/channels", "/rc/switches")
     resume_after_s = 1.0
     pilot_in_control = True
+    unknown_or_stale = (
+        "mavlink: as RC not taking over? (no report or a stale one passes: not a take-over). can: no switch C position yet fails; "
+        "a stale one: RC not lost? (rc_loss) fails on it"
+    )
     from_mission = {"source": "rc.source", "takeover_channel": "rc.takeover_channel", "takeover_above_us": "rc.takeover_above_us"}
 
     def __init__(
@@ -302,6 +376,7 @@ class RcFresh(Guard):
     """
 
     resume_after_s = 2.0
+    unknown_or_stale = "no RC report yet: fails; none within rc.fresh_timeout_s (1 s: RC_CHANNELS asked at 5 Hz), or a frozen CAN counter: fails"
 
     reads = ("/rc/fresh", "/rc/stale_reason")
 
@@ -318,15 +393,23 @@ class RcNotLost(Guard):
     Debounce: fails at once (the autopilot reports every channel 0 only after its own RC failsafe
     timeout; the CAN reader judges staleness over time); passes after 2 s of the transmitter back.
 
-    ``source="mavlink"``: lost when the autopilot reports every channel 0 (/rc/connected false);
-    reports that stop coming are the link's business (a link loss is not an RC loss). ``source="can"``:
-    lost when the RC reader finds the reports stale (/rc/fresh: after a signal loss the base
-    repeats its last frame, the counter frozen).
+    ``source="mavlink"``: lost when the autopilot reports every channel 0 (/rc/connected false), or
+    when its RC_CHANNELS stop while the autopilot is heard (older than ``stale_after_s``); reports
+    that stop with the heartbeat are the link's business (a link loss is not an RC loss).
+    ``source="can"``: lost when the RC reader finds the reports stale (/rc/fresh: after a signal
+    loss the base repeats its last frame, the counter frozen).
     """
 
-    reads = ("/rc/connected", "/rc/fresh", "/rc/stale_reason")
+    reads = ("/rc/connected", "/rc/fresh", "/rc/stale_reason", "/rc/last_update", "/link/last_heartbeat", "/link/up_since")
     resume_after_s = 2.0
+    #: RC_CHANNELS is asked at 5 Hz: 3 s is fifteen missed, three at the firmware's 1 Hz default (SRn_RC_CHAN).
+    stale_after_s = 3.0
     from_mission = {"source": "rc.source"}
+    unknown_or_stale = (
+        "never seen: passes with a note (a vehicle may run without RC; the take-over switch then cannot be thrown). Seen, then "
+        "mavlink: every channel 0, or RC_CHANNELS older than 3 s while the autopilot is heard (asked at 5 Hz): fails; "
+        "can: no fresh frame within rc.fresh_timeout_s or a frozen counter: fails"
+    )
 
     def __init__(self, source: Literal["mavlink", "can"] = "mavlink", name: str = "RC not lost?") -> None:
         super().__init__(name)
@@ -336,7 +419,7 @@ class RcNotLost(Guard):
     def check(self) -> str | None:
         if self.get("/rc/connected" if self.source == "mavlink" else "/rc/fresh"):
             self._seen = True
-            return None
+            return self.stale(self.get("/rc/last_update"), self.stale_after_s, "the RC report is") if self.source == "mavlink" else None
         if not self._seen:
             self.note = "no RC seen yet"
             return None
@@ -356,6 +439,7 @@ class TargetWithin(Guard):
 
     reads = ("/mission/target", "/vehicle/position")
     from_mission = {"max_distance_m": "limits.max_goal_distance_m"}
+    unknown_or_stale = _POSITION_RULE
 
     def __init__(self, max_distance_m: float, name: str | None = None) -> None:
         super().__init__(name or f"Target within {max_distance_m:g} m?")
@@ -379,9 +463,13 @@ class PositionKnown(Guard):
     """
 
     reads = ("/vehicle/position",)
+    unknown_or_stale = _POSITION_RULE
 
     def __init__(self, name: str = "Position known?") -> None:
         super().__init__(name)
+
+    def awaits(self) -> str | None:
+        return "a position (GLOBAL_POSITION_INT)" if self.get("/vehicle/position") is None else None
 
     def check(self) -> str | None:
         return None if self.get("/vehicle/position") is not None else "no position"
@@ -399,6 +487,7 @@ class AllWaypointsWithin(Guard):
 
     reads = ("/vehicle/position",)
     from_mission = {"waypoints": "waypoints", "max_distance_m": "limits.max_goal_distance_m"}
+    unknown_or_stale = _POSITION_RULE
 
     def __init__(self, waypoints: Sequence[_HasLatLon], max_distance_m: float, name: str | None = None) -> None:
         super().__init__(name or f"All waypoints within {max_distance_m:g} m?")
@@ -440,6 +529,10 @@ class RangefinderReaches(Guard):
 
     reads = ("/vehicle/rangefinder",)
     from_mission = {"waypoints": "waypoints"}
+    unknown_or_stale = (
+        "no downward DISTANCE_SENSOR yet: fails (with an altitude leg); any age is fine: the range it checks is the sensor's "
+        "configuration (RNGFND1_MIN/MAX), which does not age"
+    )
     param_docs = {"margin_m": "how far inside the rangefinder's range each altitude leg's height must be"}
 
     def __init__(self, waypoints: Sequence[Waypoint], margin_m: float = 1.0, name: str = "Rangefinder reaches the altitude legs?") -> None:
@@ -478,10 +571,14 @@ class SpeedWithin(Guard):
     ``max(tolerance_m_s, tolerance_fraction * limit.max)`` (an autopilot overshoots a little while
     settling on a speed). ``limit.min`` is never enforced: a vehicle is slower while accelerating,
     turning, holding or at a waypoint. The speed is the EKF's (/vehicle/position, horizontal),
-    else VFR_HUD's (/vehicle/ground_speed_m_s); neither reported passes with a note.
+    else VFR_HUD's (/vehicle/ground_speed_m_s); neither reported fails.
     """
 
     reads = ("/vehicle/position", "/vehicle/ground_speed_m_s")
+    unknown_or_stale = (
+        "no speed yet (no GLOBAL_POSITION_INT, no VFR_HUD): fails; an old one: judged as it is (the EKF's estimate: EKF ok? fails "
+        "when its reports stop or lose the position)"
+    )
     hold_after_s = 2.0
     resume_after_s = 2.0
     from_mission = {"limit": "limits.speed_m_s"}
@@ -500,8 +597,7 @@ class SpeedWithin(Guard):
     def check(self) -> str | None:
         speed = _speed(self.get("/vehicle/position"), self.get("/vehicle/ground_speed_m_s"))
         if speed is None:
-            self.note = "speed not reported yet"
-            return None
+            return "speed not reported yet (no GLOBAL_POSITION_INT, no VFR_HUD)"
         if speed > self.allowed_m_s:
             return f"speed {speed:.1f} m/s over the limit {self.limit.max:g} m/s"
         return None
@@ -519,6 +615,7 @@ class DepthWithin(Guard):
 
     hold_after_s = 1.0
     resume_after_s = 2.0
+    unknown_or_stale = _POSITION_RULE
 
     reads = ("/vehicle/position",)
     from_mission = {"limit": "limits.depth_m"}
@@ -550,12 +647,26 @@ class AltitudeWithin(Guard):
     is at least that far: it passes with a note when that maximum is within the limit (the
     sub dives to its altitude from there), and fails when the maximum is over the limit's top.
     ``altitude_legs_only``: judged only while the current leg (/mission/target) has control_mode
-    ``altitude``; on other legs it passes with a note.
+    ``altitude``; on other legs it passes with a note. A reading older than ``stale_after_s`` while
+    the autopilot is heard fails too: the height it gave is no longer known.
     """
 
-    reads = ("/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder", "/mission/target")
+    reads = (
+        "/vehicle/altitude_above_bottom_m",
+        "/vehicle/rangefinder",
+        "/vehicle/altitude_last_update",
+        "/mission/target",
+        "/link/last_heartbeat",
+        "/link/up_since",
+    )
     hold_after_s = 2.0
     resume_after_s = 2.0
+    #: DISTANCE_SENSOR is asked at 5 Hz for a sub (ten missed); ArduSub streams it at 3 Hz by default (SRn_EXTRA3).
+    stale_after_s = 2.0
+    unknown_or_stale = (
+        "no valid rangefinder reading yet: fails (the seabed beyond the sonar's range is a reading: at least that far); one older "
+        "than 2 s while the autopilot is heard: fails (DISTANCE_SENSOR asked at 5 Hz)"
+    )
     from_mission = {"limit": "limits.altitude_m"}
     param_units = {"limit": "m"}
     param_docs = {"altitude_legs_only": "judged only on legs with control_mode altitude (others pass with a note)"}
@@ -573,6 +684,9 @@ class AltitudeWithin(Guard):
             if target is None or target.control_mode != "altitude":
                 self.note = "not an altitude leg"
                 return None
+        old = self.stale(self.get("/vehicle/altitude_last_update"), self.stale_after_s, "the rangefinder reading is")
+        if old is not None:
+            return old
         altitude: float | None = self.get("/vehicle/altitude_above_bottom_m")
         reading: Rangefinder | None = self.get("/vehicle/rangefinder")
         if altitude is None and reading is not None and reading.status == "too_far":
@@ -589,20 +703,36 @@ class AltitudeWithin(Guard):
 
 
 class HeadingSane(Guard):
-    """The heading filter trusts the compass (/heading/ok); not judged yet passes with a note.
+    """The heading filter trusts the compass (/heading/ok); not judged yet passes with a note, an attitude gone stale fails.
 
     Debounce: fails at once (the filter judges the compass over time already: a bias estimate, repeated
     rejections); passes after 3 s of trust.
+
+    The filter judges the compass against the course over ground, which needs straight driving: a
+    vehicle standing still, or just started, has not been judged. That passes, with a note: the
+    autopilot's own compass checks (pre-arm, the EKF's compass variance in EKF ok?) stand meanwhile.
+    The attitude the filter is fed (ATTITUDE) older than ``stale_after_s`` while the autopilot is
+    heard fails: the filter has nothing to judge by.
     """
 
     resume_after_s = 3.0
+    #: ATTITUDE is asked at 10 Hz (twenty missed); the filter itself drops an attitude this old (HeadingFilterConfig.stale_after_s).
+    stale_after_s = 2.0
+    unknown_or_stale = (
+        "not judged yet (no straight driving yet to compare the compass with the course): passes with a note, the autopilot's own "
+        "compass checks and EKF ok?'s compass variance stand meanwhile; an ATTITUDE older than 2 s while the autopilot is heard "
+        "(asked at 10 Hz): fails"
+    )
 
-    reads = ("/heading/ok", "/heading/reason", "/heading/bias_deg")
+    reads = ("/heading/ok", "/heading/reason", "/heading/bias_deg", "/heading/last_update", "/link/last_heartbeat", "/link/up_since")
 
     def __init__(self, name: str = "Heading sane?") -> None:
         super().__init__(name)
 
     def check(self) -> str | None:
+        old = self.stale(self.get("/heading/last_update"), self.stale_after_s, "the attitude (ATTITUDE) is")
+        if old is not None:
+            return old
         ok: bool | None = self.get("/heading/ok")
         if ok is None:
             self.note = "not judged yet"
@@ -621,12 +751,21 @@ class BatteryAbove(Guard):
     Debounce: fails after 2 s below (the voltage sags for a moment when the motors pull hard);
     passes after 5 s above (a sagging battery recovers while resting).
 
-    A value the autopilot does not report (no SYS_STATUS yet, 'unknown' fields) passes with a note.
+    A value a floor needs that the autopilot does not report fails: no SYS_STATUS yet, an 'unknown'
+    field (battery_remaining -1: ArduPilot knows the remaining capacity only with a current
+    monitor and BATT_CAPACITY), or a report older than ``stale_after_s`` while the autopilot is heard.
     """
 
-    reads = ("/vehicle/battery",)
+    reads = ("/vehicle/battery", "/link/last_heartbeat", "/link/up_since")
     hold_after_s = 2.0
     resume_after_s = 5.0
+    #: SYS_STATUS is asked at 1 Hz, ArduPilot's default too (SRn_EXT_STAT): 5 s is five reports missed.
+    stale_after_s = 5.0
+    unknown_or_stale = (
+        "no SYS_STATUS yet, or the field a floor needs unknown (battery_remaining -1, voltage 65535): fails (pre-flight waits for it, "
+        "then refuses; limits.battery_min_pct: null flies on voltage alone); a report older than 5 s while the autopilot is heard "
+        "(asked at 1 Hz): fails"
+    )
     from_mission = {"floor_pct": "limits.battery_min_pct", "floor_v": "limits.battery_min_v"}
     param_docs = {"floor_pct": "remaining battery below this fails (null: not checked)", "floor_v": "voltage below this fails (null: not checked)"}
 
@@ -635,23 +774,33 @@ class BatteryAbove(Guard):
         self.floor_pct = floor_pct
         self.floor_v = floor_v
 
+    def _unknown(self, battery: Battery) -> list[str]:
+        """What a floor needs that this report leaves unknown."""
+        fields = (("remaining % (battery_remaining)", self.floor_pct, battery.remaining_pct), ("voltage", self.floor_v, battery.voltage_v))
+        return [what for what, floor, value in fields if floor is not None and value is None]
+
+    def awaits(self) -> str | None:
+        battery: Battery | None = self.get("/vehicle/battery")
+        if battery is None:
+            return "a battery report (SYS_STATUS)"
+        unknown = self._unknown(battery)
+        return f"the battery's {' and '.join(unknown)} (SYS_STATUS reports it unknown)" if unknown else None
+
     def check(self) -> str | None:
         battery: Battery | None = self.get("/vehicle/battery")
         if battery is None:
-            self.note = "battery not reported yet"
-            return None
+            return "battery not reported yet (no SYS_STATUS)"
+        old = self.stale(battery.time, self.stale_after_s, "the battery report (SYS_STATUS) is")
+        if old is not None:
+            return old
         pct, volts = battery.remaining_pct, battery.voltage_v
         if self.floor_pct is not None and pct is not None and pct < self.floor_pct:
             return f"battery {pct}% below {self.floor_pct:g}%"
         if self.floor_v is not None and volts is not None and volts < self.floor_v:
             return f"battery {volts:.2f} V below {self.floor_v:g} V"
-        unknown = [
-            what
-            for what, floor, value in (("remaining", self.floor_pct, pct), ("voltage", self.floor_v, volts))
-            if floor is not None and value is None
-        ]
+        unknown = self._unknown(battery)
         if unknown:
-            self.note = f"battery {' and '.join(unknown)} unknown"
+            return f"battery {' and '.join(unknown)} unknown: the floor cannot be checked"
         return None
 
 
@@ -669,12 +818,16 @@ class InsideGeofence(Guard):
     reads = ("/vehicle/position", "/vehicle/home")
     resume_after_s = 2.0
     from_mission = {"fence": "geofence", "mission_home": "home"}
+    unknown_or_stale = _POSITION_RULE + "; no home (the autopilot's or the mission's) with a maximum distance: fails"
     param_docs = {"fence": "the mission's geofence: section", "mission_home": "the mission's home, until the autopilot reports one"}
 
     def __init__(self, fence: Geofence, mission_home: tuple[float, float] | None = None, name: str = "Inside geofence?") -> None:
         super().__init__(name)
         self.fence = fence
         self.mission_home = mission_home
+
+    def awaits(self) -> str | None:
+        return "a position (GLOBAL_POSITION_INT)" if self.get("/vehicle/position") is None else None
 
     def check(self) -> str | None:
         position: GlobalPosition | None = self.get("/vehicle/position")

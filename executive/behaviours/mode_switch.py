@@ -4,8 +4,9 @@ ArduRover changes mode by itself when its mode channel (MODE_CH, channel 8 by de
 mission switch on that channel (the UGV's arm switch D) would switch the vehicle to MANUAL with no
 command from the executive. The runtime asks for the parameter (PARAM_REQUEST_READ) when it finds
 the autopilot and until it answers (:class:`~executive.io.mavlink.parameters.ParameterWatch`); the
-answer is on ``/vehicle/params``. The check never waits: trees put it right before arming, after
-the EKF wait, by when the answer is in.
+answer is on ``/vehicle/params``. The check never waits and never passes on a value it has not
+read: pre-flight waits for the answer first (:class:`~executive.behaviours.readiness.ReadingsIn`,
+bounded), so an EKF ready at the first tick (a ``--resume``) does not get ahead of it.
 """
 
 from __future__ import annotations
@@ -19,10 +20,15 @@ from executive.behaviours.guards import Guard
 class ModeSwitchClear(Guard):
     """The autopilot's mode-switch channel is none of ``switches`` (channel -> what it is); FAILURE names the parameter.
 
-    Passes, with a note, when the autopilot has no such channel or has not told it yet.
+    Passes, with a note, when the firmware has no such channel (ArduSub, PX4); fails while the
+    autopilot has not told it (pre-flight waits for it before this check).
     """
 
     reads = ("/vehicle/params",)
+    unknown_or_stale = (
+        "MODE_CH (ArduRover) or FLTMODE_CH (ArduPlane) not read yet: fails (pre-flight waits for it, 10 s, then refuses); no age: "
+        "ArduPilot sends PARAM_VALUE to every link whenever a parameter is set (AP_Param::save), and the reader keeps the latest"
+    )
     needs = ("autopilot",)
     from_mission = {"switches": "rc.switch_channels"}
     param_docs = {"switches": "the mission's RC switch channels"}
@@ -32,6 +38,18 @@ class ModeSwitchClear(Guard):
         super().__init__(name)
         self.switches = dict(switches)
 
+    def awaits(self) -> str | None:
+        param = self.autopilot.capabilities.mode_switch_param
+        if param is None or not self.switches or param in (self.get("/vehicle/params") or {}):
+            return None
+        return f"{param} (PARAM_VALUE)"
+
+    def ask(self) -> None:
+        """Ask the autopilot for the parameter (PARAM_REQUEST_READ; its answer lands on /vehicle/params)."""
+        param = self.autopilot.capabilities.mode_switch_param
+        if param is not None:
+            self.autopilot.read_parameter(param)
+
     def check(self) -> str | None:
         param = self.autopilot.capabilities.mode_switch_param
         if param is None:
@@ -39,8 +57,7 @@ class ModeSwitchClear(Guard):
             return None
         value = (self.get("/vehicle/params") or {}).get(param)
         if value is None:
-            self.note = f"{param} not known (the autopilot has not told it)"
-            return None
+            return f"{param} not read yet (the autopilot has not answered PARAM_REQUEST_READ): the mission's switches cannot be checked"
         channel = round(value)
         if channel in self.switches:
             return (

@@ -19,12 +19,14 @@ class Sample(TimedBehaviour):
     """Take the current leg's sample: start the sampler, SUCCESS when it is DONE (the sample recorded).
 
     Needs ``clock``, ``mission_state`` and ``sampler`` from ``tree.setup``. The sample is recorded
-    through ``mission_state.record_sample`` with the reads, the start and end times and the last
-    position seen while sampling (NaN if none was). A leg already sampled in this run (the action
-    re-entered after a guard recovered, a resume, a restart that restored the samples) is SUCCESS
-    at once, without sampling again. FAILURE when the sampler fails, after ``timeout_s`` (None: the
-    sampler's own duration bounds it), or with no active leg. Interrupted (an RC take-over, a
-    cancel, a pause: the guards above stop it), it cancels the sampler; nothing is recorded.
+    through ``mission_state.record_sample`` with the reads, the start and end times, the last
+    position seen while sampling (NaN if none was) and the sensors named that gave no reading. A
+    leg already sampled in this run (the action re-entered after a guard recovered, a resume, a
+    restart that restored the samples) is SUCCESS at once, without sampling again. A partial sample
+    (a named sensor gave no reading; ``sampling.require: all``) is recorded as partial and is a
+    FAILURE: its sample point is not done. FAILURE too when the sampler fails, after ``timeout_s``
+    (None: the sampler's own duration bounds it), or with no active leg. Interrupted (an RC
+    take-over, a cancel, a pause: the guards above stop it), it cancels the sampler; nothing is recorded.
     """
 
     reads = ("/sampler/status", "/vehicle/position", "/mission/leg_count")
@@ -64,11 +66,17 @@ class Sample(TimedBehaviour):
             self._position = position
         status: SamplerStatus | None = self.get("/sampler/status")
         mine = status is not None and status.ticket == self._ticket
-        if mine and status is not None and status.state is SamplerState.DONE:
+        if mine and status is not None and status.state in (SamplerState.DONE, SamplerState.PARTIAL):
             self._finished = True
+            partial = status.state is SamplerState.PARTIAL
             lat, lon = (self._position.lat, self._position.lon) if self._position is not None else (math.nan, math.nan)
-            self.mission_state.record_sample(SampleRecord(self.leg_index, lat, lon, status.reads, self.started, status.time, status.instrument))
-            self.feedback_message = f"{leg}: sampled, {len(status.reads)} reads ({status.instrument})"
+            record = SampleRecord(self.leg_index, lat, lon, status.reads, self.started, status.time, status.instrument, status.missing, partial)
+            self.mission_state.record_sample(record)
+            if partial:
+                self.feedback_message = f"{leg}: partial sample, {len(status.reads)} reads: {status.reason}"
+                return Status.FAILURE
+            without = f"; none of {', '.join(status.missing)} (sampling.require: any)" if status.missing else ""
+            self.feedback_message = f"{leg}: sampled, {len(status.reads)} reads ({status.instrument}){without}"
             return Status.SUCCESS
         if mine and status is not None and status.state is SamplerState.FAILED:
             self._finished = True
@@ -98,6 +106,7 @@ class NothingToSample(Guard):
     """
 
     reads = ("/mission/target", "/mission/leg_index", "/mission/samples")
+    unknown_or_stale = "reads the mission's own state (its leg, its samples), never a reading of the vehicle's: nothing to be unknown or old"
 
     def __init__(self, name: str = "Nothing to sample here?") -> None:
         super().__init__(name)
@@ -112,7 +121,7 @@ class NothingToSample(Guard):
         if not target.sample:
             self.note = f"leg {leg + 1} is not a sample point"
             return None
-        if any(s.leg_index == leg for s in samples):
+        if any(s.leg_index == leg and s.complete for s in samples):
             self.note = f"leg {leg + 1} already sampled"
             return None
         return f"leg {leg + 1}: sample due"

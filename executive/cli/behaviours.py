@@ -56,6 +56,8 @@ def _did_you_mean(name: str, names: list[str]) -> str:
 def describe(spec: NodeSpec) -> str:
     """A node as text: ``name (kind): doc``, then a line per parameter."""
     lines = [f"{spec.name} ({spec.kind}): {spec.doc}"]
+    if spec.kind == "guard":
+        lines.append(f"    unknown or stale: {spec.unknown_or_stale or '(not stated by the guard)'}")
     lines += [f"    {_param(p)}" for p in spec.params]
     return "\n".join(lines) + "\n"
 

@@ -53,9 +53,11 @@ def render(report: dict[str, Any]) -> str:
         for read in sample["reads"]:
             reads.setdefault(f"{read['sensor']} ({read['unit']})" if read["unit"] else read["sensor"], []).append(read["value"])
         summary = ", ".join(f"{name} {sum(v) / len(v):.2f}" for name, v in reads.items())
+        missing = ", ".join(sample.get("missing") or ())
         lines.append(
             f"  waypoint {sample['waypoint']} at {sample['lat']:.7f}, {sample['lon']:.7f}: {len(sample['reads'])} reads, mean {summary}"
             + (f" ({sample['instrument']})" if sample.get("instrument") else "")
+            + (f": PARTIAL, no reading of {missing}" if sample.get("partial") else f"; no reading of {missing}" if missing else "")
         )
     if report.get("routes"):
         lines.append(f"route edits ({len(report['routes'])}):")

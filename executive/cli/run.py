@@ -9,7 +9,6 @@ import os
 import signal
 import sys
 from collections.abc import Callable, Iterator
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from executive.assembly import (
@@ -25,17 +24,18 @@ from executive.assembly import (
     snapshot_recorder,
 )
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
-from executive.cli.common import faults_or_report, load_or_report, mavlink_id, signing_key_arg
+from executive.cli.common import load_or_report, mavlink_id
+from executive.cli.run_checks import check_run
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
-from executive.io.mavlink.endpoint import BadEndpoint, Unreachable, check_endpoint
+from executive.io.mavlink.endpoint import Unreachable
 from executive.io.mavlink.link import PymavlinkLink
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission, SimulatorOptions, autopilot_errors
-from executive.pacing import MAX_TICKS_PER_WALL_S, SpeedGovernor, keeping_time
+from executive.mission.model import Mission, SimulatorOptions
+from executive.pacing import SpeedGovernor, keeping_time
 from executive.progress import Progress
 from executive.runtime import SURVEY_S, Outcome, SeveralAutopilots
 from executive.snapshots import SnapshotRecorder
@@ -294,16 +294,6 @@ def _resume_text(resume: ResumePoint | None) -> str:
     return f"resuming run {resume.run} at waypoint {resume.leg_index + 1} {taken}{replaced}{edited}"
 
 
-def _event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
-    """The mission's simulator event file (relative to the mission file) and --faults, in that order."""
-    files = []
-    if mission.simulator and mission.simulator.events:
-        files.append(str(Path(args.mission).parent / mission.simulator.events))
-    if args.faults:
-        files.append(args.faults)
-    return files
-
-
 def _plugs(
     args: argparse.Namespace,
     journal: Journal | None,
@@ -333,14 +323,11 @@ def _plugs(
     return plugs
 
 
-def _check_instrument(mission: Mission, *, simulator: bool) -> None:
-    """Before anything moves: the mission's samples can be real here (BadInput), and its instrument answers (NoVehicle)."""
-    from executive.io.instruments import open_sampler, refusal
+def _open_instrument(mission: Mission, *, simulator: bool) -> None:
+    """Before anything moves: the mission's instrument answers (NoVehicle); whether its samples can be real here is check_run's."""
+    from executive.io.instruments import open_sampler
     from executive.io.sampler import InstrumentError
 
-    why = refusal(mission, simulator=simulator)
-    if why is not None:
-        raise BadInput(why)
     try:
         sampler = open_sampler(mission, ScaledClock(), simulator=simulator)
     except InstrumentError as exc:
@@ -354,52 +341,18 @@ def main(args: argparse.Namespace) -> int:
     mission = load_or_report(args.mission)
     if mission is None:
         return EXIT_BAD_INPUT
-    if args.rate <= 0 or args.speedup <= 0:
-        print("executive: run: --rate and --speedup must be > 0", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if args.resume and not args.journal:
-        raise BadInput("--resume needs --journal DB")
-    if args.autopilot is not None and (refusals := autopilot_errors(mission, args.autopilot)):
-        raise BadInput(f"--autopilot {args.autopilot}: {'; '.join(refusals)}")
-    if args.mavlink and args.speedup != 1.0:
-        # a SITL at --speedup 5 drives 5 s in each wall second: ticking on the wall clock, the executive would react five times
-        # less often in the vehicle's time (issue 14: GUIDED 44.4 s at 1x, 49.2 s at 10x)
-        print(f"executive: run: the vehicle's time runs {args.speedup:g}x real time (a simulator's speed-up)", file=sys.stderr)
-    elif not args.mavlink and args.rate * args.speedup > MAX_TICKS_PER_WALL_S:
-        most = MAX_TICKS_PER_WALL_S / args.rate
-        print(
-            f"executive: run: --speedup {args.speedup:g}: the executive cannot follow it: {args.rate:g} ticks per second of vehicle time "
-            f"would be {args.rate * args.speedup:g} per second of wall time, and it keeps up with at most {MAX_TICKS_PER_WALL_S:g} "
-            f"(--speedup {most:g} at --rate {args.rate:g}); on a busy machine the speed-up is capped lower as it runs",
-            file=sys.stderr,
-        )
-        return EXIT_BAD_INPUT
+    checked = check_run(args, mission)  # what run refuses, before anything is opened (service install runs the same)
+    for note in checked.notes:
+        print(f"executive: run: {note}", file=sys.stderr)
     clock = ScaledClock(args.speedup)
     faults = None
-    if args.faults is not None and args.mavlink:
-        print("executive: run: --faults applies to the built-in simulator only; it cannot be used with --mavlink", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    event_files = [] if args.mavlink else _event_files(args, mission)
-    if event_files:
-        faults = faults_or_report(event_files, mission.vehicle, clock)
-        if faults is None:
-            return EXIT_BAD_INPUT
-    for option, url in (("--mavlink", args.mavlink), ("--gcs", args.gcs)):
-        if url is not None:
-            try:
-                check_endpoint(url)
-            except BadEndpoint as exc:
-                raise BadInput(f"{option} {exc}") from exc
-    socket_path = _control_socket_path(args.socket)
-    signing_key = signing_key_arg(args.signing_key)
-    _check_instrument(mission, simulator=not args.mavlink)
-    if args.obstacles is not None:
-        from executive.io.obstacles import ObstacleSpecError, parse_endpoint
+    if checked.faults:
+        from executive.sim.faults import FaultInjector
 
-        try:
-            parse_endpoint(args.obstacles)  # a usage error before anything is opened
-        except ObstacleSpecError as exc:
-            raise BadInput(f"--obstacles: {exc}") from exc
+        faults = FaultInjector(list(checked.faults), clock)
+    socket_path = _control_socket_path(args.socket)
+    signing_key = checked.signing_key
+    _open_instrument(mission, simulator=not args.mavlink)
     with contextlib.ExitStack() as stack:
         stop = StopSignals()
         stack.callback(stop.release)  # the last thing undone: a Ctrl-C anywhere in the shutdown finds our handler

@@ -76,15 +76,20 @@ def unit_name(mission: Path, name: str | None) -> str:
     return f"executive-{base}"
 
 
-def unit_file(args: argparse.Namespace, mission: Path, unit: str, python: str = sys.executable) -> str:
-    """The unit's text, each directive with why it is there."""
+def run_arguments(args: argparse.Namespace, mission: Path, unit: str) -> list[str]:
+    """The ``executive run`` arguments the unit starts the service with (after ``run``)."""
     journal = args.journal or f"{STATE_DIR}/{unit.removeprefix('executive-')}.db"
-    run = [python, "-m", "executive", "run", str(mission), "--journal", journal, "--resume", "--socket", f"/run/{unit}/control.sock"]
+    run = [str(mission), "--journal", journal, "--resume", "--socket", f"/run/{unit}/control.sock"]
     if args.mavlink:
         run += ["--mavlink", args.mavlink]
     if not args.start_at_boot:  # a reboot, or the last run's end, must not set the vehicle off on its own
         run.append("--wait")
-    run += args.run_options
+    return [*run, *args.run_options]
+
+
+def unit_file(args: argparse.Namespace, mission: Path, unit: str, python: str = sys.executable) -> str:
+    """The unit's text, each directive with why it is there."""
+    run = [python, "-m", "executive", "run", *run_arguments(args, mission, unit)]
     half = args.watchdog_sec / 2
     user = f"User={args.user}\nSupplementaryGroups=dialout\n" if args.user else ""
     vehicle = "" if args.mavlink else "# No --mavlink: the built-in simulated vehicle (a dry run of the service).\n"
@@ -135,13 +140,18 @@ def main(args: argparse.Namespace) -> int:
     if mission is None:
         return EXIT_BAD_INPUT
     from executive.cli import build_parser
+    from executive.cli.run_checks import check_run
 
-    try:  # checked now, not at the vehicle's next boot
-        build_parser("run").parse_args(["run", args.mission, *args.run_options])
-    except SystemExit as exc:
-        raise BadInput(f"--run-options: not `executive run` options: {shlex.join(args.run_options)}") from exc
     path = Path(args.mission).resolve()
     unit = unit_name(path, args.name)
+    try:  # the very command line the unit runs, checked now as `run` checks it, not at the vehicle's next boot
+        run_args = build_parser("run").parse_args(["run", *run_arguments(args, path, unit)])
+    except SystemExit as exc:
+        raise BadInput(f"--run-options: not `executive run` options: {shlex.join(args.run_options)}") from exc
+    try:
+        check_run(run_args, mission)  # exit 2 there would be RestartPreventExitStatus: a service that fails once and stays down
+    except BadInput as exc:
+        raise BadInput(f"`executive run` would refuse it (exit 2, never restarted): {exc}") from exc
     text = unit_file(args, path, unit)
     if args.print_only:
         sys.stdout.write(text)

@@ -260,13 +260,13 @@ class HeadingFilterConfig:
 
 
 class HeadingFilter:
-    """Writes /heading/deg, /heading/ok, /heading/bias_deg and /heading/reason; call :meth:`service` once per tick after the MAVLink reader drains."""
+    """Writes the /heading keys (deg, ok, bias_deg, reason, last_update); call :meth:`service` once per tick after the MAVLink reader drains."""
 
     def __init__(self, clock: Clock, config: HeadingFilterConfig | None = None) -> None:
         self.config = config or HeadingFilterConfig()
         self._clock = clock
         self._in = blackboard.reader("heading filter in", ["/vehicle/attitude", "/vehicle/position"])
-        self._out = blackboard.writer("heading filter", ["/heading/deg", "/heading/ok", "/heading/bias_deg", "/heading/reason"])
+        self._out = blackboard.writer("heading filter", blackboard.keys_under("/heading/"))
         self._kf: HeadingKalman = None  # type: ignore[assignment]  # made on the first tick after filterpy is loaded
         load_filterpy()
         self._t: float | None = None  # time of the filter's state; None = not initialised
@@ -509,3 +509,4 @@ class HeadingFilter:
         self._out.set("/heading/ok", ok)
         self._out.set("/heading/bias_deg", self._bias if judged else None)
         self._out.set("/heading/reason", self.reason if ok is False else "")
+        self._out.set("/heading/last_update", None if self._attitude is None else self._attitude.time)

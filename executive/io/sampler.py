@@ -69,8 +69,11 @@ class InstrumentSampler(ABC):
     the instrument gave since the last call (called every tick, sampling or not: readings outside
     a sample are dropped), :attr:`instrument` names it, :meth:`close` releases it. ``Options``
     validates the mission's ``sampling.instrument`` fields besides ``type``; ``simulated`` back ends
-    make readings up and run only with the built-in simulator. A sample is DONE after
-    ``sampling.duration_s`` with at least one reading, FAILED with none.
+    make readings up and run only with the built-in simulator. A sample ends after
+    ``sampling.duration_s``: DONE with a reading of every sensor ``sampling.sensors`` names (with
+    ``sampling.require: any``, of any one; the others are listed as missing), PARTIAL with readings
+    but a named sensor missing, FAILED with none. Readings of a sensor the mission does not name
+    are dropped, and logged once per sensor: a sample holds what the mission asked for.
     """
 
     Options: ClassVar[type[BaseModel]] = NoOptions
@@ -86,6 +89,8 @@ class InstrumentSampler(ABC):
         self._leg_index: int | None = None
         self._started = 0.0
         self._reads: list[SampleRead] = []
+        self._named = frozenset(sampling.sensors)
+        self._unnamed_logged: set[str] = set()
 
     @property
     @abstractmethod
@@ -132,20 +137,43 @@ class InstrumentSampler(ABC):
 
     def service(self) -> None:
         now = self._clock.now()
-        fresh = self._collect(now)
+        fresh = self._named_only(self._collect(now))
         if not self.sampling:
             return
         self._reads += fresh
         if now + _EPSILON_S >= self._started + self.options.duration_s:
-            if self._reads:
-                self._publish(SamplerState.DONE, "")
-            else:
-                self.fail(f"no reading from {self.instrument} in {self.options.duration_s:g} s")
+            self._end()
         elif fresh:
             self._publish(SamplerState.SAMPLING, "")
 
-    def _publish(self, state: SamplerState, reason: str) -> None:
-        self._status = SamplerStatus(self._tickets, state, tuple(self._reads), reason, self._clock.now(), self.instrument)
+    def _named_only(self, reads: list[SampleRead]) -> list[SampleRead]:
+        """The readings of sensors the mission names; another sensor's are dropped, said once per sensor."""
+        if all(r.sensor in self._named for r in reads):
+            return reads
+        for sensor in sorted({r.sensor for r in reads} - self._named - self._unnamed_logged):
+            self._unnamed_logged.add(sensor)
+            log.warning(
+                "sampler: %s gives readings of %r, which sampling.sensors does not name (%s): dropped",
+                self.instrument, sensor, ", ".join(self.options.sensors),
+            )  # fmt: skip
+        return [r for r in reads if r.sensor in self._named]
+
+    def _end(self) -> None:
+        """The sample's time is up: DONE, PARTIAL (a named sensor gave no reading) or FAILED (none did)."""
+        if not self._reads:
+            self.fail(f"no reading from {self.instrument} in {self.options.duration_s:g} s")
+            return
+        read = {r.sensor for r in self._reads}
+        missing = tuple(s for s in self.options.sensors if s not in read)
+        if missing and self.options.require == "all":
+            reason = f"no reading of {', '.join(missing)} from {self.instrument} in {self.options.duration_s:g} s (sampling.require: all)"
+            log.warning("sampler: leg %d: partial sample: %s", (self._leg_index or 0) + 1, reason)
+            self._publish(SamplerState.PARTIAL, reason, missing)
+            return
+        self._publish(SamplerState.DONE, "", missing)
+
+    def _publish(self, state: SamplerState, reason: str, missing: tuple[str, ...] = ()) -> None:
+        self._status = SamplerStatus(self._tickets, state, tuple(self._reads), reason, self._clock.now(), self.instrument, missing)
         self._bb.set("/sampler/status", self._status)
 
 

@@ -309,15 +309,21 @@ class MissionState:
         """What of the mission's work is not done (a sample point not sampled), if any: then it is not COMPLETED."""
         if self.mission is None:
             return None
-        unsampled = [i + 1 for i, wp in enumerate(self.mission.waypoints) if wp.sample and not self.sampled(i)]
-        if unsampled:
-            return f"no sample was recorded at leg {', '.join(map(str, unsampled))}"
-        return None
+        unsampled = [i for i, wp in enumerate(self.mission.waypoints) if wp.sample and not self.sampled(i)]
+        partial = [i for i in unsampled if any(s.leg_index == i for s in self.samples)]
+        missing = [i for i in unsampled if i not in partial]
+        said = []
+        if missing:
+            said.append(f"no sample was recorded at leg {', '.join(str(i + 1) for i in missing)}")
+        for i in partial:
+            lacked = sorted({sensor for s in self.samples if s.leg_index == i for sensor in s.missing})
+            said.append(f"the sample of leg {i + 1} is partial (no reading of {', '.join(lacked)})")
+        return "; ".join(said) or None
 
     # -- samples -----------------------------------------------------------------------------
     def sampled(self, leg_index: int) -> bool:
-        """A sample of this leg is already recorded in this run: do not take it again."""
-        return any(s.leg_index == leg_index for s in self.samples)
+        """A complete sample of this leg is already recorded in this run: do not take it again (a partial one does not count)."""
+        return any(s.leg_index == leg_index and s.complete for s in self.samples)
 
     def record_sample(self, sample: Sample) -> None:
         """Keep a finished sample: publish ``/mission/samples`` and tell the sample listeners.
@@ -333,7 +339,10 @@ class MissionState:
             raise Refused(f"leg {sample.leg_index + 1} is already sampled")
         self.samples = (*self.samples, sample)
         self._publish()
-        log.info("sample of leg %d recorded: %d reads", sample.leg_index + 1, len(sample.reads))
+        if sample.partial:
+            log.warning("partial sample of leg %d recorded: %d reads, none of %s", sample.leg_index + 1, len(sample.reads), ", ".join(sample.missing))
+        else:
+            log.info("sample of leg %d recorded: %d reads", sample.leg_index + 1, len(sample.reads))
         for listener in self.sample_listeners:
             listener(sample)
 

@@ -199,6 +199,11 @@ class SamplingOptions(BaseModel):
     instrument: InstrumentConfig | None = Field(
         None, description="what takes the samples (default: the simulated instrument, with the built-in simulator only)"
     )
+    require: Literal["all", "any"] = Field(
+        "all",
+        description="all: a sample is complete only with a reading of every sensor named; one missing any is recorded as partial and "
+        "its sample point is not done. any: a reading of any one of them completes it (the missing ones are recorded)",
+    )
 
 
 class EnuPoint(BaseModel):

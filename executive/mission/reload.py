@@ -108,7 +108,7 @@ def _same_leg(old: Mission, leg_index: int, new: Mission) -> tuple[int, str]:
 def _carry_samples(old: Mission, samples: Sequence[Sample], new: Mission) -> tuple[tuple[Sample, ...], tuple[int, ...]]:
     kept: list[Sample] = []
     left_out: list[int] = []
-    for sample in sorted(samples, key=lambda s: s.leg_index):
+    for sample in sorted((s for s in samples if s.complete), key=lambda s: s.leg_index):  # a partial one did not do its point
         taken = {s.leg_index for s in kept}
         found = None
         if sample.leg_index < len(old.waypoints):

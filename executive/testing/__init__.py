@@ -46,7 +46,7 @@ Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``comman
 """
 
 from executive.testing.canbus import VirtualCan
-from executive.testing.harness import EKF_READY, START_S, Harness, Vehicle, describe, port_for
+from executive.testing.harness import BATTERY_FULL, EKF_READY, START_S, Harness, Vehicle, describe, port_for
 from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
 from executive.testing.lockstep import Lockstep, LockstepClock, Overload, VehicleTimeLimit, Wire
 from executive.testing.missions import mission_errors
@@ -55,6 +55,7 @@ from executive.testing.scripted import MissionAutopilot, ObedientAutopilot, Scri
 
 __all__ = [
     "AUTOPILOT",
+    "BATTERY_FULL",
     "EKF_READY",
     "GCS",
     "START_S",

@@ -16,7 +16,7 @@ from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
-from executive.state import EkfFlags, EkfStatus
+from executive.state import Battery, EkfFlags, EkfStatus
 from executive.testing.links import FakeLink, ack
 from executive.vehicles import PROFILES
 
@@ -24,6 +24,17 @@ from executive.vehicles import PROFILES
 START_S = 100.0
 #: An EKF report as ArduPilot sends it once the EKF uses GPS (flags 0x33F, small variances): ``vehicle.set(vehicle__ekf=EKF_READY)``.
 EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
+#: A full battery as SYS_STATUS reports it (12.6 V, 100 %): what :meth:`Harness.build`'s vehicle reports until a test says otherwise.
+BATTERY_FULL = Battery(12.6, 1.0, 100, 0.0)
+
+
+def mode_switch_channel(mission: Mission | None) -> float:
+    """The autopilot's mode-switch channel as a simulated one reports it: the mission's ``simulator.params`` (MODE_CH, FLTMODE_CH), else 8.
+
+    8 is the firmware's default (ArduRover MODE_CHANNEL in Rover/config.h, ArduPlane FLIGHT_MODE_CHANNEL).
+    """
+    params = mission.simulator.params if mission is not None and mission.simulator is not None else {}
+    return next((float(params[p]) for p in ("MODE_CH", "FLTMODE_CH") if p in params), 8.0)
 
 
 class Vehicle:
@@ -121,7 +132,10 @@ class Harness:
 
         ``transfer``: with a :class:`MissionTransfer` on the link (:attr:`transfer`), for a tree that keeps a route on the autopilot.
 
-        The blackboard is reset first (every documented key at its default), so build it before scripting inputs.
+        The blackboard is reset first (every documented key at its default), so build it before scripting inputs. The vehicle
+        then reports what a healthy one has told by the time a mission starts and the guards need: a full battery
+        (:data:`BATTERY_FULL`) and its firmware's default mode-switch channel (``/vehicle/params``: MODE_CH 8 on ArduRover,
+        FLTMODE_CH 8 on ArduPlane); ``h.vehicle.set(vehicle__battery=None)`` (or ``vehicle__params=None``) for one that has not.
         """
         import trees
 
@@ -134,7 +148,11 @@ class Harness:
             state.start()
         commander = Commander(link, clock, PROFILES[mission.vehicle])
         missions = MissionTransfer(link, clock) if transfer else None
-        return cls(root if root is not None else trees.build(mission), clock, link, commander, state, transfer=missions, **setup)
+        harness = cls(root if root is not None else trees.build(mission), clock, link, commander, state, transfer=missions, **setup)
+        param = harness.autopilot.capabilities.mode_switch_param
+        params = {param: mode_switch_channel(mission)} if param else None
+        harness.vehicle.set(vehicle__battery=BATTERY_FULL, vehicle__params=params)
+        return harness
 
     # -- ticking --------------------------------------------------------------------------
     def tick(self, dt: float = 0.1) -> Status:

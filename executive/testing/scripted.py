@@ -7,12 +7,13 @@ from typing import Any
 
 from py_trees.common import Status
 
+from executive import blackboard
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
 from executive.state import GlobalPosition
-from executive.testing.harness import Harness
+from executive.testing.harness import BATTERY_FULL, Harness, Vehicle, mode_switch_channel
 from executive.testing.links import AUTOPILOT
 from executive.vehicles import PROFILES
 
@@ -55,6 +56,25 @@ class ScriptedAutopilot:
         self.refusal = _M.MAV_RESULT_FAILED
         self.received = 0
         self.publish()
+        self.report_health()
+
+    def report_health(self) -> None:
+        """What a healthy autopilot has told by now, where the test has not said otherwise (the key unset): a full battery
+        (:data:`~executive.testing.BATTERY_FULL`) and the firmware's mode-switch channel (MODE_CH or FLTMODE_CH: the mission's
+        ``simulator.params``, else 8), which the guards and pre-flight need. Once, when it is made: a test's ``vehicle.set`` wins."""
+        from executive.autopilot.ardupilot import MODE_SWITCH_PARAMS
+
+        profile = self.commander.profile if self.commander is not None else getattr(self, "profile", None)
+        param = MODE_SWITCH_PARAMS.get(profile.kind) if profile is not None else None
+        mission = self.h.mission_state.mission if self.h is not None else None
+        facts: dict[str, object] = {}
+        if blackboard.value("/vehicle/battery") is None:
+            facts["vehicle__battery"] = BATTERY_FULL
+        known = blackboard.value("/vehicle/params") or {}
+        if param is not None and param not in known:
+            facts["vehicle__params"] = {**known, param: mode_switch_channel(mission)}
+        if facts:
+            Vehicle().set(**facts)
 
     # -- what it tells the executive -----------------------------------------------------------
     def facts(self) -> dict[str, object]:
@@ -279,6 +299,9 @@ class ObedientAutopilot(ScriptedAutopilot):
 
     def publish(self) -> None:
         """Nothing to write: the heartbeat carries the mode and arming."""
+
+    def report_health(self) -> None:
+        """Nothing written: over a link, what it reports is what it sends; other facts (battery, parameters) are the test's."""
 
     def acknowledge(self, command: int, result: int) -> None:
         self.link.incoming.append(AUTOPILOT.command_ack(command, result, 0, 0, 1, 191))

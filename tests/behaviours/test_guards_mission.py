@@ -117,7 +117,7 @@ CASES = [
         "waypoint 1 (far) is 1001 m away, over 1000 m",
     ),
     (lambda: AllWaypointsWithin([], 1000.0), {"vehicle__position": position()}, Status.SUCCESS, "ok"),
-    (lambda: SpeedWithin(SPEED), {}, Status.SUCCESS, "speed not reported yet"),
+    (lambda: SpeedWithin(SPEED), {}, Status.FAILURE, "speed not reported yet (no GLOBAL_POSITION_INT, no VFR_HUD)"),  # unknown: not healthy
     (lambda: SpeedWithin(SPEED), {"vehicle__position": position(vn=2.0)}, Status.SUCCESS, "ok"),
     (lambda: SpeedWithin(SPEED), {"vehicle__position": position(vn=1.6, ve=1.6)}, Status.SUCCESS, "ok"),  # 2.26 m/s: inside the tolerance
     (lambda: SpeedWithin(SPEED), {"vehicle__position": position(vn=2.4)}, Status.FAILURE, "speed 2.4 m/s over the limit 2 m/s"),
@@ -170,13 +170,23 @@ CASES = [
         "compass rejected in 25% of its readings over 5 s",
     ),
     (lambda: HeadingSane(), {"heading__ok": False}, Status.FAILURE, "the heading filter does not trust the compass"),
-    (lambda: BatteryAbove(20.0, 10.5), {}, Status.SUCCESS, "battery not reported yet"),
+    (lambda: BatteryAbove(20.0, 10.5), {}, Status.FAILURE, "battery not reported yet (no SYS_STATUS)"),  # unknown: not healthy
     (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(12.0, 50)}, Status.SUCCESS, "ok"),
     (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(12.0, 20)}, Status.SUCCESS, "ok"),  # at the floor is not below it
     (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(12.0, 19)}, Status.FAILURE, "battery 19% below 20%"),
     (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(10.2, 50)}, Status.FAILURE, "battery 10.20 V below 10.5 V"),
-    (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(None, None)}, Status.SUCCESS, "battery remaining and voltage unknown"),
-    (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(12.0, None)}, Status.SUCCESS, "battery remaining unknown"),
+    (
+        lambda: BatteryAbove(20.0, 10.5),
+        {"vehicle__battery": battery(None, None)},
+        Status.FAILURE,
+        "battery remaining % (battery_remaining) and voltage unknown: the floor cannot be checked",
+    ),
+    (
+        lambda: BatteryAbove(20.0, 10.5),
+        {"vehicle__battery": battery(12.0, None)},
+        Status.FAILURE,
+        "battery remaining % (battery_remaining) unknown: the floor cannot be checked",
+    ),
     (lambda: BatteryAbove(20.0, 10.5), {"vehicle__battery": battery(None, 10)}, Status.FAILURE, "battery 10% below 20%"),
     (lambda: BatteryAbove(20.0), {"vehicle__battery": battery(None, 30)}, Status.SUCCESS, "ok"),  # voltage not checked: not missed
     (lambda: BatteryAbove(None, 10.5), {"vehicle__battery": battery(12.0, 1)}, Status.SUCCESS, "ok"),
@@ -230,11 +240,11 @@ def test_a_note_does_not_outlive_its_tick(harness, facts):
     node = BatteryAbove(20.0)
     h = harness(node)
     notes = []
-    for b in (None, battery(12.0, None), battery(12.0, 50), battery(12.0, 10)):
+    for b in (battery(12.0, 50), battery(12.0, 10), battery(12.0, 50)):
         facts(vehicle__battery=b)
         h.tick()
         notes.append(node.feedback_message)
-    assert notes == ["battery not reported yet", "battery remaining unknown", "ok", "battery 10% below 20% for 0.0/2 s: not yet"]  # debounced
+    assert notes == ["ok", "battery 10% below 20% for 0.0/2 s: not yet", "ok"]  # debounced
 
 
 def test_rc_guards_say_whether_a_person_has_the_vehicle():

@@ -3,6 +3,7 @@ hold time: most hold at once), then the recovery (the condition good again for t
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import re
 from collections.abc import Callable
@@ -639,8 +640,10 @@ def test_each_step_reaches_the_operator_statustext_status_json_and_line(runtime_
     status = StatusSource("test", on_link.clock)
     seen: list[tuple[str, str]] = []  # the JSON's waiting feedback (its reaction) and the status line, as the reaction changes
     for tick in range(80):
-        vehicle.set(vehicle__ekf=EKF_READY if tick < 5 else EKF_LOST, rc__channels=RC_OK, vehicle__position=position())
-        vehicle.set(vehicle__battery=Battery(12.4, 2.0, 80, 0.0))
+        now_s = on_link.clock.now()  # the reports arrive fresh each tick, as the reader stamps them
+        ekf = dataclasses.replace(EKF_READY if tick < 5 else EKF_LOST, time=now_s)
+        vehicle.set(vehicle__ekf=ekf, rc__channels=RC_OK, vehicle__position=position(), rc__last_update=now_s)
+        vehicle.set(vehicle__battery=Battery(12.4, 2.0, 80, now_s))
         on_link.tick()
         now = status.snapshot()
         if now["waiting"] is not None and now["waiting"]["node"] == "Wait for guards":

@@ -47,8 +47,8 @@ def status() -> SamplerStatus:
     return py_trees.blackboard.Blackboard.get("/sampler/status")
 
 
-def sampler(clock: ManualClock, ctd: Ctd, **options: object) -> SerialSampler:
-    sampling = SamplingOptions(duration_s=3.0, rate_hz=1.0, sensors=["temperature", "conductivity", "ph"])
+def sampler(clock: ManualClock, ctd: Ctd, sensors: tuple[str, ...] = ("temperature", "conductivity", "ph"), **options: object) -> SerialSampler:
+    sampling = SamplingOptions(duration_s=3.0, rate_hz=1.0, sensors=list(sensors))
     return SerialSampler(clock, sampling, SerialOptions.model_validate({"port": ctd.port, "baud": 9600, **options}))
 
 
@@ -79,7 +79,7 @@ def test_each_line_is_a_reading_of_the_columns_stamped_when_read(clock, ctd):
 
 
 def test_a_line_split_across_reads_and_lines_it_cannot_read(clock, ctd, caplog):
-    s = sampler(clock, ctd, columns=["depth", "temperature"], units={"depth": "m"})
+    s = sampler(clock, ctd, sensors=("depth", "temperature"), columns=["depth", "temperature"], units={"depth": "m"})
     s.start(0)
     ctd.write(b"12.5,1")
     serviced(s, clock, 0.5)
@@ -89,6 +89,35 @@ def test_a_line_split_across_reads_and_lines_it_cannot_read(clock, ctd, caplog):
                                                                      ("depth", 13.0, "m"), ("temperature", 18.5, "degC")]  # fmt: skip
     assert s.bad_lines == 2
     assert "line '12.5' not understood (1 values for 2 columns (depth, temperature))" in caplog.text
+    s.close()
+
+
+def test_a_sensor_the_mission_does_not_name_is_dropped_and_said_once(clock, ctd, caplog):
+    """Before: ``salinity=31.2`` (not in sampling.sensors) was recorded, and a line of it alone counted as the sample."""
+    s = sampler(clock, ctd)
+    s.start(0)
+    ctd.print("temperature=17.5 salinity=31.2 conductivity=44.1 ph=8.05", "salinity=31.3")
+    serviced(s, clock, 1.0)
+    ctd.print("salinity=31.4, temperature=17.6")
+    serviced(s, clock, 1.0)
+    assert [r.sensor for r in status().reads] == ["temperature", "conductivity", "ph", "temperature"]
+    assert caplog.text.count("'salinity'") == 1
+    assert (
+        f"serial:{ctd.port} gives readings of 'salinity', which sampling.sensors does not name (temperature, conductivity, ph): dropped"
+        in caplog.text
+    )
+    done = serviced(s, clock, 1.0)
+    assert (done.state, done.missing) == (SamplerState.DONE, ())
+    s.close()
+
+
+def test_a_column_that_never_reads_makes_the_sample_partial(clock, ctd):
+    s = sampler(clock, ctd)
+    s.start(0)
+    ctd.print("temperature=17.5 conductivity=44.1")
+    ended = serviced(s, clock, 3.0)
+    assert (ended.state, ended.missing) == (SamplerState.PARTIAL, ("ph",))
+    assert ended.reason == f"no reading of ph from serial:{ctd.port} in 3 s (sampling.require: all)"
     s.close()
 
 

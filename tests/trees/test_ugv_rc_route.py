@@ -43,6 +43,7 @@ def mission_with(**changes: object) -> Mission:
         "version": 1, "name": "rc-route", "vehicle": "rover", "tree": "ugv_rc_route",
         "limits": {"recovery_timeout_s": 10.0, "ekf_wait_s": 20.0},
         "rc_route": {"aux_mode": "HOLD", "operator_timeout_s": 30.0},
+        "simulator": {"params": {"MODE_CH": 0}},  # as ugv_rc_route.yaml: switch D is on ArduRover's default mode channel 8
         "waypoints": [],
     }  # fmt: skip
     doc.update(changes)

@@ -85,7 +85,7 @@ class ScriptedQuadPlane(ScriptedAutopilot):
         self.report_takeoff = False  # landed_state stays TAKEOFF after the climb
         self.keeps_armed = False  # never disarms after landing
         self.parameters: dict[str, float] = {"Q_GUIDED_MODE": 1.0}  # answered to PARAM_REQUEST_READ
-        self.parameters_read: dict[str, float] | None = None
+        self.parameters_read: dict[str, float] | None = {"FLTMODE_CH": 8.0}  # told when it was found (the runtime asks at once)
         super().__init__(harness)  # MANUAL, disarmed; refuse: command kinds answered FAILED: "takeoff", "QLOITER", ...
         self.target: tuple[float, float, float] | None = None  # type: ignore[assignment]  # north, east, alt from home
 

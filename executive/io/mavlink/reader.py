@@ -432,6 +432,7 @@ class MavlinkReader:
             status = "good"
         self._bb.set("/vehicle/rangefinder", Rangefinder(distance, low, high, status, now))
         self._bb.set("/vehicle/altitude_above_bottom_m", distance if status == "good" else None)
+        self._bb.set("/vehicle/altitude_last_update", now)
 
     def _on_rangefinder(self, msg: MAVLinkMessage, now: float) -> None:
         """RANGEFINDER carries no range and no status (GCS_Common.cpp send_rangefinder sends distance() whatever the
@@ -442,6 +443,7 @@ class MavlinkReader:
             return
         valid = _finite(msg.distance) and msg.distance >= 0.0
         self._bb.set("/vehicle/altitude_above_bottom_m", float(msg.distance) if valid else None)
+        self._bb.set("/vehicle/altitude_last_update", now)
 
     def _update_link_health(self, now: float) -> None:
         last = self._bb.get("/link/last_heartbeat")
@@ -449,6 +451,7 @@ class MavlinkReader:
         if up != self._bb.get("/link/up"):
             was_lost = last is not None and self._bb.get("/link/heartbeat_age_s") is not None
             self._bb.set("/link/up", up)
+            self._bb.set("/link/up_since", last if up else None)  # a reading's age counts from here (guards: stale while heard)
             if up:
                 log.info("link up")
                 if was_lost:
