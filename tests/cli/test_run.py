@@ -252,8 +252,10 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
         if "mission RUNNING -> ABORTED" in line:  # the run is over: the shutdown begins
             proc.send_signal(signal.SIGINT)
             break
-    _, err = proc.communicate(timeout=60)
-    err = "".join(said) + err
+    # the rest from the same file object: communicate() reads the pipe itself and would miss what iterating it read ahead
+    err = "".join(said) + proc.stderr.read()
+    proc.wait(timeout=60)
+    proc.stdout.read()
     assert proc.returncode == 1, err
     assert "executive: run: SIGINT again: already stopping (the vehicle is made safe all the same; the exit code stays the mission's)" in err
     assert "could not confirm HOLD within 5 s" in err
