@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from executive import blackboard
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, out_of_reach
-from executive.state import GlobalPosition
+from executive.state import EkfStatus, GlobalPosition
 from executive.waiting import Waiting
 
 log = logging.getLogger(__name__)
@@ -47,7 +47,7 @@ class ReachGate:
 
     def __init__(self, clock: Clock) -> None:
         self._clock = clock
-        self._bb = blackboard.reader("reach gate", ["/vehicle/position"])
+        self._bb = blackboard.reader("reach gate", ["/vehicle/position", "/vehicle/ekf"])
         self._waiting = blackboard.writer("reach gate", ["/mission/waiting"])
         self._closed_at: float | None = None
 
@@ -71,11 +71,15 @@ class ReachGate:
         if ahead >= len(mission.waypoints):
             return self._pass()
         position: GlobalPosition | None = self._bb.get("/vehicle/position")
-        if position is None:
+        ekf: EkfStatus | None = self._bb.get("/vehicle/ekf")
+        if position is None or ekf is None or not ekf.position_ok():
+            # ArduPilot sends GLOBAL_POSITION_INT whether or not it has a position (GCS_Common.cpp send_global_position_int:
+            # "we send stale data"); before a fix ArduPlane's DCM dead-reckons from 0, 0 on its airspeed (AP_AHRS_DCM.cpp
+            # drift_correction): a position the EKF does not vouch for is none (seen on real ArduPlane SITL: 14960 km away)
             waited = self._clock.now() - self._closed_at
             rule = f"every waypoint must be within {limits.max_goal_distance_m:g} m of the vehicle (limits.max_goal_distance_m)"
             if waited > limits.ekf_wait_s:
-                return Refusal(f"{NAME}: no position from the autopilot within {limits.ekf_wait_s:g} s (limits.ekf_wait_s): {rule}")
+                return Refusal(f"{NAME}: no position the EKF vouches for within {limits.ekf_wait_s:g} s (limits.ekf_wait_s): {rule}")
             if self._waiting.get("/mission/waiting") is None:  # until the tree's first tick says what it waits for
                 self._waiting.set("/mission/waiting", Waiting(NAME, NAME, f"no position yet: {rule}", self._closed_at))
             return self.WAIT

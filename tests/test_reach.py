@@ -88,12 +88,23 @@ def test_no_position_refuses_the_mission_after_the_ekf_wait_with_nothing_command
         outcome = sim.run_to_end(limit_s=60)
     assert outcome.status is MissionStatus.ABORTED
     assert outcome.reason == (
-        "refused before anything was commanded: Within reach: no position from the autopilot within 5 s (limits.ekf_wait_s): "
+        "refused before anything was commanded: Within reach: no position the EKF vouches for within 5 s (limits.ekf_wait_s): "
         "every waypoint must be within 5000 m of the vehicle (limits.max_goal_distance_m)"
     )
     assert acting(received) == []
     shown = [w for w in waiting if w]
     assert shown and shown[-1]["node"] == "Within reach" and shown[-1]["feedback"].startswith("no position yet: every waypoint")  # type: ignore[index]
+
+
+def test_a_position_the_ekf_does_not_vouch_for_is_waited_out_not_judged() -> None:
+    """Real ArduPlane SITL before its GPS fix: GLOBAL_POSITION_INT 25 m from 0, 0 (DCM dead-reckoning on airspeed noise) with the
+    EKF not initialised; the mission was refused as 14960 km out of reach. It waits for the EKF, then runs from home."""
+    mission = line_mission("before-the-fix")
+    with Lockstep(mission, home=(*LINE_HOME, 0.0)) as sim:
+        sim.autopilot.start = (0.0002246, -0.000037)  # what the aircraft reported before its EKF had an origin
+        sim.autopilot.ekf_ready_after_s = 8.0
+        outcome = sim.run_to_end(limit_s=600)
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
 
 
 def test_ctl_start_with_the_vehicle_out_of_reach_is_refused_and_the_mission_stays_ready(vehicle) -> None:
