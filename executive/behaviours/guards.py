@@ -784,7 +784,14 @@ class BatteryAbove(Guard):
         if battery is None:
             return "a battery report (SYS_STATUS)"
         unknown = self._unknown(battery)
-        return f"the battery's {' and '.join(unknown)} (SYS_STATUS reports it unknown)" if unknown else None
+        if not unknown:
+            return None
+        # ArduPilot's BATT_MONITOR defaults to none (AP_BattMonitor_Params.cpp): SYS_STATUS then says -1 (GCS_Common.cpp
+        # battery_remaining_pct); seen on real ArduPlane QuadPlane SITL, whose default parameters set no monitor
+        return (
+            f"the battery's {' and '.join(unknown)} (SYS_STATUS reports it unknown: set the autopilot's battery monitor, "
+            "ArduPilot BATT_MONITOR, or fly without this floor: limits.battery_min_pct: null)"
+        )
 
     def check(self) -> str | None:
         battery: Battery | None = self.get("/vehicle/battery")

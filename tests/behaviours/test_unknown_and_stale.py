@@ -215,7 +215,8 @@ def test_pre_flight_waits_for_the_mode_switch_channel_asking_for_it_then_arms(sq
         ({"vehicle__battery": None}, "never came within 10 s: a battery report (SYS_STATUS)"),
         (
             {"vehicle__battery": Battery(12.0, None, None, 0.0)},
-            "never came within 10 s: the battery's remaining % (battery_remaining) (SYS_STATUS reports it unknown)",
+            "never came within 10 s: the battery's remaining % (battery_remaining) (SYS_STATUS reports it unknown: set the autopilot's battery "
+            "monitor, ArduPilot BATT_MONITOR, or fly without this floor: limits.battery_min_pct: null)",
         ),
         ({"vehicle__params": None, "vehicle__battery": None}, "never came within 10 s: MODE_CH (PARAM_VALUE); a battery report (SYS_STATUS)"),
     ],
