@@ -104,7 +104,7 @@ def test_pause_holds_resume_keeps_the_leg_a_ground_stations_pause_is_obeyed_and_
         assert ctl(capsys, sock, "abort")["state"] == "ABORTED"
         _, err = run.communicate(timeout=30)
         assert run.returncode == 1
-        assert "vehicle in HOLD" in err and "ABORTED: ctl: abort" in err
+        assert "the vehicle made safe: HOLD (confirmed)" in err and "ABORTED: ctl: abort" in err
     finally:
         gcs.close()
         run.kill()
