@@ -359,8 +359,7 @@ class Runtime:
             self.heartbeat.service()
             if person := self._person_took_over(found_in, reacting.mode_in_force):
                 reacting.cancel()
-                log.warning("not commanding %s: %s", safe, person)
-                return self._made_safe(False, f"not commanding {safe}: {person}")
+                return self._made_safe(False, f"not commanding {safe}: {person}", logging.WARNING)
             time_up = self.clock.now() >= deadline - 1e-6  # as the reactions' 1.5 s: a sum of half periods lands a hair short
             reacting.follow_up(self.clock.now(), ask=not time_up)
             if reacting.done or reacting.exhausted or time_up:
@@ -371,10 +370,10 @@ class Runtime:
         self.mission_state.announce("could not make the vehicle safe")
         return self._made_safe(False, f"could not make the vehicle safe: {reacting.account()}")
 
-    def _made_safe(self, made: bool, report: str) -> bool:
-        """The make-safe's last word: logged, kept for the run's last lines, the ground station told."""
+    def _made_safe(self, made: bool, report: str, level: int | None = None) -> bool:
+        """The make-safe's last word: logged (INFO made safe, else ERROR, or ``level``), kept for the last lines, the ground station told."""
         self.safe_report = report
-        log.log(logging.INFO if made else logging.ERROR, "%s", report)
+        log.log(level if level is not None else logging.INFO if made else logging.ERROR, "%s", report)
         self.commander.flush()
         self.ground_station.service()
         return made

@@ -147,8 +147,9 @@ def test_the_last_lines_say_what_making_the_vehicle_safe_came_to(square_mission:
     ]
 
 
-def test_a_person_taking_the_vehicle_while_it_is_made_safe_is_left_alone(square_mission: Mission, runtime_on_link) -> None:
-    """HOLD refused; meanwhile a ground station puts the vehicle in MANUAL: no more asks, no disarm, said so."""
+def test_a_person_taking_the_vehicle_while_it_is_made_safe_is_left_alone(square_mission: Mission, runtime_on_link, caplog) -> None:
+    """HOLD refused; meanwhile a ground station puts the vehicle in MANUAL: no more asks, no disarm, said so (once, a warning)."""
+    caplog.set_level(logging.INFO, logger="executive")
     r, asked = refusing_hold(square_mission, runtime_on_link)
     beat = r.autopilot.beat
 
@@ -163,3 +164,4 @@ def test_a_person_taking_the_vehicle_while_it_is_made_safe_is_left_alone(square_
     assert r.runtime.safe_report == (
         "not commanding HOLD: the vehicle is in MANUAL, set by the RC or a ground station while the executive made it safe: a person drives it"
     )
+    assert said(caplog)[-2:] == ["make safe: HOLD refused (FAILED) -> asked again every 1.5 s", r.runtime.safe_report]
