@@ -141,7 +141,7 @@ def build_runtime(
     target_system: int | None = None,
     target_component: int = 1,
     rate_hz: float = 10.0,
-    safe_timeout_s: float = 5.0,
+    safe_timeout_s: float | None = None,
     root: py_trees.behaviour.Behaviour | None = None,
     progress: Progress | None = None,
     autopilot: AutopilotName | None = None,

@@ -9,7 +9,7 @@ from __future__ import annotations
 import logging
 import types
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 from py_trees.common import Status
@@ -17,6 +17,7 @@ from py_trees.common import Status
 import trees
 from executive import blackboard
 from executive.behaviours.failsafe import failsafe_mode
+from executive.behaviours.reacting import READS, Reacting
 from executive.clock import TickClock
 from executive.intervention import rc_takeover
 from executive.io.instruments import open_sampler
@@ -55,19 +56,26 @@ class SeveralAutopilots(RuntimeError):
         self.systems = dict(systems)
 
 
+#: The cause the make-safe's steps are logged and announced under: ``make safe: HOLD refused (FAILED)``.
+MAKE_SAFE = "make safe"
+
 #: After the first autopilot's heartbeat, how long (vehicle time) to listen for others when none was named.
 SURVEY_S = 3.0
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """How a run ended: ``mission`` names the mission that ran (None: none did), ``samples`` how many it recorded."""
+    """How a run ended: ``mission`` names the mission that ran (None: none did), ``samples`` how many it recorded.
+
+    ``safe``: what making the vehicle safe at its end came to (None: it was not made safe, as after a COMPLETED mission).
+    """
 
     status: MissionStatus
     reason: str
     ticks: int
     mission: str | None = None
     samples: int = 0
+    safe: str | None = None
 
 
 def behaviour_path(node: py_trees.behaviour.Behaviour) -> str:
@@ -119,7 +127,7 @@ class Runtime:
         wiring: Wiring,
         *,
         rate_hz: float = 10.0,
-        safe_timeout_s: float = 5.0,
+        safe_timeout_s: float | None = None,
         root: py_trees.behaviour.Behaviour | None = None,
         progress: Progress | None = None,
     ) -> None:
@@ -166,8 +174,12 @@ class Runtime:
         self._refused: str | None = None  # the distance rule refused the starting mission: it ends, nothing commanded
         self.mission_state.upload(self.mission)
         self.progress = progress
-        self._bb = blackboard.reader("runtime", ["/vehicle/mode", "/vehicle/mode_set_by", "/link/up", "/rc/channels", "/rc/switches"])
+        self._bb = blackboard.reader("runtime", {"/vehicle/mode", "/vehicle/mode_set_by", "/rc/channels", "/rc/switches", *READS})
+        self.ground_station = autopilot.ground_station
+        #: The bound on making the vehicle safe; None: as long as the firmware's chain of reactions takes (see :meth:`make_safe`).
         self.safe_timeout_s = safe_timeout_s
+        #: What the last make-safe came to (``the vehicle made safe: HOLD (confirmed)``); None until one is done.
+        self.safe_report: str | None = None
         self.ticks = 0
         #: The loop's schedule: late and skipped ticks, and a warning (and its listeners) when it misses its rate.
         self.pacer = TickPacer(self.clock, self.period_s)
@@ -267,7 +279,8 @@ class Runtime:
                         return self._end(self._abort(f"stopped: {self._stop_reason}"))  # the journal records it ABORTED
                     self.make_safe()
                     # between missions: the last one that ran, with its own outcome (not the one loaded since, never started)
-                    return self.last_outcome or Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
+                    ended = self.last_outcome or Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
+                    return replace(ended, safe=self.safe_report)
                 self.pacer.tick_started()
                 ended = self._tick_once()
                 if ended is not None and not serve:
@@ -301,8 +314,22 @@ class Runtime:
             self.sampler.close()
             self.sampler = None
 
+    def get(self, key: str) -> Any:
+        """A blackboard key the runtime reads (what its make-safe's :class:`~executive.behaviours.reacting.Reacting` reads)."""
+        return self._bb.get(key)
+
     def make_safe(self) -> bool:
-        """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) and wait (bounded) for the heartbeat to confirm it."""
+        """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) until it is seen in it; True once it is.
+
+        The failsafe reactions' rules (:mod:`executive.behaviours.reacting`): asked again every 1.5 s
+        of vehicle time until the autopilot accepts it and the heartbeat shows it; after 3 failed asks
+        the next reaction of the firmware's table (ArduRover: HOLD, then a disarm). Bounded: by
+        ``safe_timeout_s`` if given, else by the time the table's chain takes (3 asks 1.5 s apart for
+        each reaction: 9 s for a rover's HOLD then disarm), after which the outcome is known; a link
+        with no heartbeat asks the same reaction until then. Never against a person: a person's mode
+        (or the RC take-over switch), there at the start or chosen meanwhile, is left alone. What it
+        came to is :attr:`safe_report`, logged last (INFO when made safe, ERROR when not).
+        """
         safe = self.autopilot.capabilities.safe_mode
         if self.tree is not None:
             safe = failsafe_mode(self.tree.root) or safe  # an RTL or a surfacing the mission's failsafe asked for is not undone
@@ -313,23 +340,53 @@ class Runtime:
         person = self._person_has_the_vehicle(safe)
         if person:
             log.warning("not commanding %s: %s", safe, person)
+            self.safe_report = f"not commanding {safe}: {person}"
             return False
-        deadline = self.clock.now() + self.safe_timeout_s
-        requested = False
-        while self.clock.now() < deadline:
-            self.reader.drain()
-            self.heartbeat.service()
-            if self._bb.get("/link/up") and self._bb.get("/vehicle/mode") == self.autopilot.mode_name(safe):
-                log.info("vehicle in %s", safe)
-                return True
-            if not requested:
-                self.autopilot.set_mode(safe)
-                requested = True
+        reacting = Reacting(self, self.mission.vehicle, announce=self.mission_state.announce, bounded=True, logger=log, prefix="")
+        self.reader.drain()
+        self.heartbeat.service()
+        if self._bb.get("/link/up") and reacting.seen(safe):
+            return self._made_safe(True, f"the vehicle made safe: {self.autopilot.mode_name(safe)} (already in it)")
+        found_in = self._bb.get("/vehicle/mode")
+        reacting.start(safe, MAKE_SAFE)
+        deadline = self.clock.now() + (self.safe_timeout_s if self.safe_timeout_s is not None else reacting.time_to_exhaust(safe))
+        while True:
             self.autopilot.service()  # PX4: the offboard stream goes on until the heartbeat shows we left OFFBOARD
             self.commander.flush()
-            self.clock.sleep_until(self.clock.now() + self.period_s / 2)
-        log.error("could not confirm %s within %g s", safe, self.safe_timeout_s)
-        return False
+            self.ground_station.service()  # the steps' STATUSTEXTs
+            self.clock.sleep_until(min(deadline, self.clock.now() + self.period_s / 2))
+            self.reader.drain()
+            self.heartbeat.service()
+            if person := self._person_took_over(found_in, reacting.mode_in_force):
+                reacting.cancel()
+                return self._made_safe(False, f"not commanding {safe}: {person}", logging.WARNING)
+            time_up = self.clock.now() >= deadline - 1e-6  # as the reactions' 1.5 s: a sum of half periods lands a hair short
+            reacting.follow_up(self.clock.now(), ask=not time_up)
+            if reacting.done or reacting.exhausted or time_up:
+                break
+        if reacting.done:
+            return self._made_safe(True, f"the vehicle made safe: {reacting.account()}")
+        reacting.cancel()  # nothing asked goes on being retried after the make-safe gave up (with --wait the executive stays up)
+        self.mission_state.announce("could not make the vehicle safe")
+        return self._made_safe(False, f"could not make the vehicle safe: {reacting.account()}")
+
+    def _made_safe(self, made: bool, report: str, level: int | None = None) -> bool:
+        """The make-safe's last word: logged (INFO made safe, else ERROR, or ``level``), kept for the last lines, the ground station told."""
+        self.safe_report = report
+        log.log(level if level is not None else logging.INFO if made else logging.ERROR, "%s", report)
+        self.commander.flush()
+        self.ground_station.service()
+        return made
+
+    def _person_took_over(self, found_in: str | None, asked: str | None) -> str | None:
+        """Why a person has taken the vehicle while it is made safe: the RC take-over switch, or a mode in which a person drives set meanwhile."""
+        takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
+        if takeover is not None:
+            return takeover
+        mode = self._bb.get("/vehicle/mode")
+        if mode in self.profile.pilot_modes and mode not in (found_in, asked):
+            return f"the vehicle is in {mode}, set by the RC or a ground station while the executive made it safe: a person drives it"
+        return None
 
     def _person_has_the_vehicle(self, ours: str) -> str | None:
         """Why a person has the vehicle, if one has: then hands off.
@@ -402,7 +459,8 @@ class Runtime:
         """The running mission's end: the observers told; the outcome names the mission and its samples, and is kept as the last."""
         self.tree = None
         ran = self._running
-        outcome = replace(outcome, mission=ran.name if ran else None, samples=len(self.mission_state.samples))
+        outcome = replace(outcome, mission=ran.name if ran else None, samples=len(self.mission_state.samples), safe=self.safe_report)
+        self.safe_report = None  # said with this outcome: a later one (a mission completed) is not made safe by it
         self.last_outcome = outcome
         for observer in self.observers:
             observer.end(str(outcome.status), outcome.reason)

@@ -157,7 +157,7 @@ def test_ctrl_c_while_waiting_for_the_ekf_after_boot_holds_the_vehicle_the_boot_
     assert (outcome.status, outcome.reason) == (MissionStatus.ABORTED, "stopped: SIGINT")
     assert sim.autopilot.mode == "HOLD"
     said = _said(caplog)
-    assert BOOT_MODE in said and "vehicle in HOLD" in said
+    assert BOOT_MODE in said and "the vehicle made safe: HOLD (confirmed)" in said
     assert not any("a person drives it" in text for text in said), said
 
 
@@ -168,7 +168,7 @@ def test_the_operators_silence_is_not_a_person_driving(lockstep, caplog) -> None
     outcome = lockstep(mission).run_to_end(limit_s=120)
     assert outcome.status is MissionStatus.ABORTED and "Wait for the operator to arm" in outcome.reason, outcome.reason
     said = _said(caplog)
-    assert BOOT_MODE in said and "vehicle in HOLD" in said
+    assert BOOT_MODE in said and "the vehicle made safe: HOLD (confirmed)" in said
     assert not any("a person drives it" in text for text in said), said
 
 

@@ -94,6 +94,8 @@ class Reacting:
     firmware allows; without it the same reaction is asked again until the owner gives up.
     ``on_disarm`` is called when a disarm is asked (the owner re-arms the vehicle it disarmed).
     ``vehicle``: the vehicle kind (None: not known, no next reactions and no follow-on modes).
+    ``bounded``: the owner stops once :attr:`exhausted` (the last reaction is not asked a fourth time).
+    Its steps go to ``logger`` as ``<prefix><cause>: ...`` (a failsafe's: ``failsafe ekf_loss: ...``).
     """
 
     def __init__(
@@ -104,10 +106,15 @@ class Reacting:
         announce: Announce | None = None,
         escalate: bool = True,
         on_disarm: Callable[[], None] | None = None,
+        bounded: bool = False,
+        logger: logging.Logger = log,
+        prefix: str = "failsafe ",
     ) -> None:
         self.host, self.vehicle = host, vehicle
         self.announce, self.escalate, self.on_disarm = announce, escalate, on_disarm
+        self.log, self.prefix, self.bounded = logger, prefix, bounded
         self.asking: _Asking | None = None
+        self._passed: list[str] = []  # the reactions replaced by the next one, and why: ``HOLD refused (FAILED) x3``
         #: Every request made (cancelled when the owner stops, or a person takes the vehicle).
         self.tickets: list[Request] = []
         #: The mode asked for last: where the reaction leaves the vehicle.
@@ -119,6 +126,40 @@ class Reacting:
 
     def _fallback(self, step: str) -> Fallback:
         return fallback(self._firmware, self.vehicle or "", step)
+
+    @property
+    def done(self) -> bool:
+        """The reaction asked last is done: accepted, and the vehicle seen in it."""
+        return self.asking is not None and self.asking.confirmed
+
+    @property
+    def exhausted(self) -> bool:
+        """Nothing more to ask: nothing could be, or the last reaction the firmware allows failed :data:`ASKS_BEFORE_NEXT` asks."""
+        asking = self.asking
+        if asking is None:
+            return True
+        then = self._fallback(asking.step).then if self.escalate else None
+        return not asking.confirmed and then is None and asking.judged and asking.failed >= ASKS_BEFORE_NEXT
+
+    def time_to_exhaust(self, step: str) -> float:
+        """How long asking ``step`` and each reaction after it may take: :data:`ASKS_BEFORE_NEXT` asks :data:`ASK_AGAIN_S` apart each."""
+        steps = len(list(chain(self._firmware, self.vehicle or "", step))) if self.escalate else 1
+        return steps * ASKS_BEFORE_NEXT * ASK_AGAIN_S
+
+    def account(self) -> str:
+        """What each reaction asked came to: ``HOLD refused (FAILED) x3, disarmed (confirmed)``, ``HOLD not answered x6 (no heartbeat: ...)``."""
+        asking = self.asking
+        if asking is None:
+            return ", ".join(self._passed) or "nothing asked"
+        if asking.confirmed:
+            now = ("disarmed" if asking.step == DISARM else asking.shown) + " (confirmed)"
+        elif asking.last is None:
+            now = f"{asking.shown} asked, not answered yet"
+        else:
+            now = _outcome_text(asking)
+            if asking.last == "no answer" and not self.host.get("/link/up"):
+                now += " (no heartbeat: the link is down)"
+        return ", ".join([*self._passed, now])
 
     def covers(self, step: str) -> bool:
         """``step`` is asked already, or was and was replaced by the next one."""
@@ -142,16 +183,21 @@ class Reacting:
                 self._step(
                     cause, f"{shown} cannot be entered: {missing} ({rule.why}) -> {after} instead", f"{cause}: no position for {shown} -> {after}"
                 )
+                self._passed.append(f"{shown} cannot be entered ({missing})")
                 instead_of = shown
                 continue
             self.asking = _Asking(candidate, shown, cause, instead_of, now, path)
             if self._ask(self.asking):
                 return
+            self._passed.append(f"{shown}: the autopilot has no such mode")
             instead_of = shown  # the firmware has no such mode: the next one
         self.asking = None
 
-    def follow_up(self, now: float) -> None:
-        """The reaction asked for: done (accepted and seen), or judged, asked again, or replaced by the next one."""
+    def follow_up(self, now: float, *, ask: bool = True) -> None:
+        """The reaction asked for: done (accepted and seen), or judged, asked again, or replaced by the next one.
+
+        ``ask`` False: judged and confirmed only, nothing asked (the owner's time is up).
+        """
         asking = self.asking
         if asking is None or asking.confirmed or asking.request is None:
             return
@@ -167,7 +213,7 @@ class Reacting:
             outcome = self._outcome(asking, status if mine else None, now)
             if outcome is not None:
                 self._judge(asking, outcome)
-        if not asking.judged or now - asking.asked_at < ASK_AGAIN_S - 1e-6:
+        if not asking.judged or now - asking.asked_at < ASK_AGAIN_S - 1e-6 or not ask or (self.bounded and self.exhausted):
             return
         then = self._fallback(asking.step).then if self.escalate else None
         if asking.failed >= ASKS_BEFORE_NEXT and then is not None:
@@ -179,6 +225,7 @@ class Reacting:
                 f"{asking.cause}: {asking.shown} {_short(asking.last)}{times} -> {after}",
             )
             self.host.autopilot.cancel(asking.request)  # its ask still waiting for an ack is not sent again (the commander would)
+            self._passed.append(_outcome_text(asking))
             self.start(then, asking.cause, asking.shown, asking.path)
             return
         self._ask(asking)
@@ -232,7 +279,7 @@ class Reacting:
                 request = autopilot.set_mode(asking.step)
                 self.mode_in_force = asking.step
         except KeyError:
-            log.error("failsafe %s: the autopilot has no mode %s", asking.cause, asking.step)
+            self.log.error("%s%s: the autopilot has no mode %s", self.prefix, asking.cause, asking.step)
             return False
         self.tickets.append(request)
         asking.request, asking.asked_at, asking.asks, asking.judged = request, self.host.clock.now(), asking.asks + 1, False
@@ -273,7 +320,7 @@ class Reacting:
         if asking.failed or asking.instead_of or asking.last:
             self._step(asking.cause, text, f"{asking.cause}: {done}, confirmed", warning=False)
         else:
-            log.info("failsafe %s: %s", asking.cause, text)
+            self.log.info("%s%s: %s", self.prefix, asking.cause, text)
 
     def _shown(self, step: str) -> str:
         return "disarm" if step == DISARM else self.host.autopilot.mode_name(step)
@@ -289,9 +336,16 @@ class Reacting:
 
     def _step(self, cause: str, text: str, short: str, *, warning: bool = True) -> None:
         """A step of a reaction: a warning (the journal's event), and a short STATUSTEXT (``warning``: else a notice)."""
-        log.warning("failsafe %s: %s", cause, text)
+        self.log.warning("%s%s: %s", self.prefix, cause, text)
         if self.announce is not None:
             self.announce(short, warning)
+
+
+def _outcome_text(asking: _Asking) -> str:
+    """``HOLD refused (FAILED) x3``, ``disarm not answered x3``: a reaction's judged asks, for an account."""
+    last = "not answered" if asking.last == "no answer" else asking.last
+    count = asking.outcomes[asking.last] if asking.last is not None else 0
+    return f"{asking.shown} {last}" + (f" x{count}" if count > 1 else "")
 
 
 def _short(outcome: str | None) -> str:

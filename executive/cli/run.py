@@ -468,12 +468,15 @@ def last_words(outcome: Outcome, state: MissionState) -> list[str]:
     """The run's last lines: a mission left loaded and never started, if one was; then the mission that ran, with its own outcome.
 
     With ``--wait`` the last mission that ran may not be the one loaded when the process stops (an
-    upload after it ended): each is named for what it is. The last line is always the outcome's.
+    upload after it ended): each is named for what it is. Before it, what making the vehicle safe came to, when it was
+    (``the vehicle made safe: HOLD (confirmed)``, ``could not make the vehicle safe: ...``). The last line is always the outcome's.
     """
     loaded = f"mission {state.mission.name!r} READY: loaded, never started" if state.status is MissionStatus.READY and state.mission else None
+    safe = [outcome.safe] if outcome.safe else []
     if outcome.mission is None:
-        return [f"{loaded or f'no mission loaded ({state.status})'}; no mission ran ({outcome.ticks} ticks)"]
+        return [*safe, f"{loaded or f'no mission loaded ({state.status})'}; no mission ran ({outcome.ticks} ticks)"]
     lines = [loaded] if loaded else []
     if outcome.samples:
         lines.append(f"{outcome.samples} sample{'' if outcome.samples == 1 else 's'} recorded by mission {outcome.mission!r}")
+    lines += safe
     return [*lines, f"mission {outcome.mission!r} {outcome.status}: {outcome.reason} ({outcome.ticks} ticks)"]

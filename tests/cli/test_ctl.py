@@ -104,7 +104,7 @@ def test_pause_holds_resume_keeps_the_leg_a_ground_stations_pause_is_obeyed_and_
         assert ctl(capsys, sock, "abort")["state"] == "ABORTED"
         _, err = run.communicate(timeout=30)
         assert run.returncode == 1
-        assert "vehicle in HOLD" in err and "ABORTED: ctl: abort" in err
+        assert "executive: the vehicle made safe: HOLD (already in it)" in err and "ABORTED: ctl: abort" in err  # the pause held it
     finally:
         gcs.close()
         run.kill()
@@ -174,8 +174,9 @@ def test_wait_mode_serves_mission_after_mission(tmp_path, capsys):
         run.send_signal(signal.SIGTERM)
         _, err = run.communicate(timeout=30)
         assert run.returncode == 0, err
-        *_, loaded, last = err.splitlines()
+        *_, loaded, safe, last = err.splitlines()
         assert loaded == "executive: mission 'yard-loop' READY: loaded, never started", err
+        assert re.fullmatch(r"executive: the vehicle made safe: HOLD \((already in it|confirmed)\)", safe), err  # SIGTERM makes sure
         assert re.fullmatch(r"executive: mission 'two-legs' COMPLETED: every waypoint reached \(\d+ ticks\)", last), err
     finally:
         run.kill()

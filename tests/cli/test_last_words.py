@@ -51,6 +51,7 @@ def test_a_mission_loaded_after_the_one_that_ran_is_named_as_never_started(tmp_p
     assert exit_code(outcome) == EXIT_OK
     assert last_words(outcome, sim.runtime.mission_state) == [
         "mission 'yard-loop' READY: loaded, never started",
+        "the vehicle made safe: HOLD (already in it)",  # the mission ended in HOLD; Ctrl-C makes sure, and says so
         f"mission 'first-run' COMPLETED: every waypoint reached ({outcome.ticks} ticks)",
     ]
     journals[0].close()
@@ -66,5 +67,8 @@ def test_stopped_before_any_mission_ran_it_says_so_and_exits_0(lockstep) -> None
     outcome = sim.run(60, serve=True)
     assert outcome is not None and outcome.mission is None
     said = last_words(outcome, sim.runtime.mission_state)
-    assert said == [f"mission 'waiting' READY: loaded, never started; no mission ran ({outcome.ticks} ticks)"]
+    assert said == [
+        "the vehicle made safe: HOLD (confirmed)",  # its boot MANUAL is nobody's: Ctrl-C holds it, and says so
+        f"mission 'waiting' READY: loaded, never started; no mission ran ({outcome.ticks} ticks)",
+    ]
     assert exit_code(outcome) == EXIT_OK  # nothing aborted, nothing failed: 1 would say a mission did
