@@ -88,7 +88,7 @@ def test_no_position_refuses_the_mission_after_the_ekf_wait_with_nothing_command
         outcome = sim.run_to_end(limit_s=60)
     assert outcome.status is MissionStatus.ABORTED
     assert outcome.reason == (
-        "refused before anything was commanded: Within reach: no position the EKF vouches for within 5 s (limits.ekf_wait_s): "
+        "refused before anything was commanded: Within reach: no position (that the EKF vouches for) within 5 s (limits.ekf_wait_s): "
         "every waypoint must be within 5000 m of the vehicle (limits.max_goal_distance_m)"
     )
     assert acting(received) == []
