@@ -72,23 +72,24 @@ class ReachGate:
             return self._pass()
         position: GlobalPosition | None = self._bb.get("/vehicle/position")
         ekf: EkfStatus | None = self._bb.get("/vehicle/ekf")
-        if position is None or (ekf is not None and not ekf.position_ok()):
-            # ArduPilot sends GLOBAL_POSITION_INT whether or not it has a position (GCS_Common.cpp send_global_position_int:
-            # "we send stale data"); before a fix ArduPlane's DCM dead-reckons from 0, 0 on its airspeed (AP_AHRS_DCM.cpp
-            # drift_correction): a position the EKF's report disowns is none (seen on real ArduPlane SITL: 14960 km away).
-            # With no EKF report at all the position is judged as it is: the tree's EKF guard still holds every move.
+        far = [] if position is None else out_of_reach(mission, position.lat, position.lon, first=ahead)
+        # ArduPilot sends GLOBAL_POSITION_INT whether or not it has a position (GCS_Common.cpp send_global_position_int: "we
+        # send stale data"); before a fix ArduPlane's DCM dead-reckons from 0, 0 on its airspeed (AP_AHRS_DCM.cpp
+        # drift_correction): seen on real ArduPlane SITL, 14960 km from its waypoints. A refusal needs a position the EKF
+        # vouches for; one it disowns that puts the route out of reach is waited out (the tree's EKF guard holds every move).
+        disowned = ekf is not None and not ekf.position_ok()
+        if position is None or (far and disowned):
             waited = self._clock.now() - self._closed_at
             rule = f"every waypoint must be within {limits.max_goal_distance_m:g} m of the vehicle (limits.max_goal_distance_m)"
             if waited > limits.ekf_wait_s:
                 return Refusal(f"{NAME}: no position (that the EKF vouches for) within {limits.ekf_wait_s:g} s (limits.ekf_wait_s): {rule}")
-            why = (
-                "no position yet" if position is None or ekf is None else f"no position yet: EKF has no position estimate (flags {int(ekf.flags):#x})"
-            )
+            why = "no position yet"
+            if position is not None and ekf is not None:
+                why += f": EKF has no position estimate (flags {int(ekf.flags):#x})"
             shown: Waiting | None = self._waiting.get("/mission/waiting")
             if shown is None or shown.feedback != f"{why}: {rule}":  # no tree ticks yet: the gate says what the mission waits for
                 self._waiting.set("/mission/waiting", Waiting(NAME, NAME, f"{why}: {rule}", self._closed_at))
             return self.WAIT
-        far = out_of_reach(mission, position.lat, position.lon, first=ahead)
         if far:
             return Refusal(f"{NAME}: " + "; ".join(far))
         return self._pass()
