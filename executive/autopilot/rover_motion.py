@@ -23,6 +23,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from executive.autopilot.port import Capabilities
 
 GRAVITY_M_S2 = 9.80665
 #: AR_WPNAV_SNAP_MAX (libraries/AR_WPNav/AR_WPNav.cpp): the S-curves' snap, m/s^4.
@@ -51,11 +55,17 @@ FIRMWARE_DEFAULTS: Mapping[str, float] = {
     "PSC_POS_P": 0.2,  # AR_POSCON_POS_P
     "PSC_VEL_P": 1.0,  # AR_POSCON_VEL_P
 }
-#: The parameters GoTo's look-ahead reads from the vehicle at pre-flight.
+#: The parameters GoTo's look-ahead reads from the vehicle at pre-flight (ArduRover).
 LOOK_AHEAD_PARAMS: tuple[str, ...] = (
     "WP_SPEED", "WP_RADIUS", "WP_ACCEL", "WP_JERK", "WP_PIVOT_ANGLE", "ATC_ACCEL_MAX", "ATC_DECEL_MAX", "ATC_TURN_MAX_G",
-    "TURN_RADIUS", "PSC_POS_P",
+    "TURN_RADIUS",
 )  # fmt: skip
+#: The outputs that tell a skid-steered rover: ThrottleLeft (73) and ThrottleRight (74) assigned (AP_MotorsUGV::have_skid_steering;
+#: ArduRover's skid-steer frame puts them on SERVO1 and SERVO3). Other outputs are not read.
+SKID_STEERING_PARAMS: tuple[str, ...] = ("SERVO1_FUNCTION", "SERVO3_FUNCTION")
+SKID_STEERING_FUNCTIONS = frozenset({73.0, 74.0})
+#: Everything the look-ahead reads.
+MOTION_PARAMS: tuple[str, ...] = LOOK_AHEAD_PARAMS + SKID_STEERING_PARAMS
 
 
 def sqrt_controller(error: float, gain: float, limit: float, dt: float = 0.0) -> float:
@@ -197,6 +207,16 @@ class RoverMotion:
         """Where GUIDED's shaped target still has ``speed_m_s`` on its way to a stop point (the inverse of :meth:`approach_speed_m_s`)."""
         a = self.shaping_accel_m_s2
         return stopping_distance(speed_m_s, 0.5 * self.jerk_m_s3 / a, 0.5 * a)
+
+
+def vehicle_motion(capabilities: Capabilities, params: Mapping[str, float] | None) -> RoverMotion | None:
+    """The vehicle's driving as its parameters say (:data:`MOTION_PARAMS`; the firmware's default for any not read,
+    listed in ``defaulted``); None for an autopilot whose driving is not modelled (its capabilities name no parameters)."""
+    if not capabilities.motion_params:
+        return None
+    params = params or {}
+    skid = {params.get(name) for name in SKID_STEERING_PARAMS} == SKID_STEERING_FUNCTIONS
+    return RoverMotion.from_params(params, skid_steering=skid, wanted=LOOK_AHEAD_PARAMS)
 
 
 class ShapedTarget:
@@ -396,3 +416,113 @@ class SCurveLeg:
     def speed_max_m_s(self) -> float:
         """The highest speed the leg reaches."""
         return self.along(self.accel_end_s)[1] if self._segments else 0.0
+
+
+# -- corners: what AUTO cuts, and what a GUIDED target switched early would cut ------------------------------
+
+
+def _route_distance(point: tuple[float, float], corner: tuple[float, float], inbound: tuple[float, float], outbound: tuple[float, float]) -> float:
+    """Distance from ``point`` to the route through ``corner``: the inbound leg's line before it, the outbound's after it (unit vectors)."""
+    dn, de = point[0] - corner[0], point[1] - corner[1]
+    distances = []
+    for (un, ue), sign in ((inbound, -1.0), (outbound, 1.0)):
+        along = (dn * un + de * ue) * sign  # how far along this leg, away from the corner
+        if along <= 0.0:
+            distances.append(math.hypot(dn, de))
+        else:
+            distances.append(abs(dn * ue - de * un))
+    return min(distances)
+
+
+def _unit(bearing_rad: float) -> tuple[float, float]:
+    return math.cos(bearing_rad), math.sin(bearing_rad)
+
+
+def auto_corner_cut_m(motion: RoverMotion, inbound_m: float, outbound_m: float, turn_rad: float, speed_m_s: float | None = None) -> float | None:
+    """How far from the route AUTO's target goes through a fast waypoint between legs of these lengths.
+
+    As SCurve::advance_target_along_track: each leg an S-curve from rest to rest; the next one starts,
+    added to this one, once this one decelerates, will end before the next has finished speeding up, and
+    the mid point of the overlap lies within max(WP_RADIUS, TURN_RADIUS) of the waypoint, slower than
+    the legs' speed and within the lateral acceleration. None when the turn never blends (a stop there).
+    """
+    speed = speed_m_s if speed_m_s and speed_m_s > 0.0 else motion.speed_m_s
+    a, j = motion.path_accel_m_s2, motion.jerk_m_s3
+    inbound, outbound = (1.0, 0.0), _unit(turn_rad)
+    corner = (inbound_m, 0.0)
+    this = SCurveLeg((0.0, 0.0), corner, speed, a, j)
+    following = SCurveLeg(corner, (corner[0] + outbound[0] * outbound_m, outbound[1] * outbound_m), speed, a, j)
+    dt = 0.02
+    t = this.decel_start_s
+    while t < this.end_s:
+        overlap = this.end_s - t
+        if overlap <= following.accel_end_s:
+            half = overlap / 2.0
+            (p1, v1, a1), (p2, v2, a2) = this.state(t + half), following.state(half)
+            mid = (p1[0] + p2[0] - corner[0], p1[1] + p2[1])
+            fits = math.hypot(*mid) < motion.corner_radius_m and math.hypot(v1[0] + v2[0], v1[1] + v2[1]) < speed
+            if fits and math.hypot(a1[0] + a2[0], a1[1] + a2[1]) < motion.lat_accel_m_s2:
+                break
+        t += dt
+    else:
+        return None
+    worst, start = 0.0, t
+    while t <= this.end_s + following.end_s:
+        (p1, _, _), (p2, _, _) = this.state(t), following.state(t - start)
+        worst = max(worst, _route_distance((p1[0] + p2[0], p1[1] + p2[1]), corner, inbound, outbound))
+        if t - start >= this.end_s - start + 1.0:
+            break
+        t += dt
+    return worst
+
+
+def guided_switch_cut_m(
+    motion: RoverMotion, distance_m: float, speed_m_s: float, turn_rad: float, outbound_m: float, speed_max_m_s: float | None = None
+) -> float:
+    """How far from the route GUIDED's shaped target goes when the next waypoint replaces the corner ``distance_m`` ahead.
+
+    The target, under way toward the corner at ``speed_m_s`` and braking on the approach, is pulled
+    toward the next waypoint (:class:`ShapedTarget`): its velocity swings round within the shaping's
+    acceleration, keeping a share for turning; the path rounds the corner inside. The faster it comes,
+    the farther it carries on toward the corner before it turns: the less it cuts.
+    """
+    a = motion.shaping_accel_m_s2
+    target = ShapedTarget(speed_max_m_s if speed_max_m_s and speed_max_m_s > 0.0 else motion.speed_m_s, a, motion.jerk_m_s3)
+    inbound, outbound = (1.0, 0.0), _unit(turn_rad)
+    corner = (distance_m, 0.0)
+    decel = min(0.5 * a, speed_m_s * speed_m_s / (2.0 * max(distance_m, 1e-3)))  # on the approach's square-root curve
+    target.reset((0.0, 0.0), (speed_m_s, 0.0), (-decel, 0.0))
+    destination = (corner[0] + outbound[0] * outbound_m, outbound[1] * outbound_m)
+    bisector = (inbound[0] + outbound[0], inbound[1] + outbound[1])
+    worst, last, dt = 0.0, 0.0, 0.05
+    for _ in range(round(30.0 / dt)):
+        target.step(destination, dt)
+        (n, e), (vn, ve) = target.pos, target.vel
+        here = _route_distance((n, e), corner, inbound, outbound)
+        worst = max(worst, here)
+        round_it = (n - corner[0]) * bisector[0] + e * bisector[1] > 0.0 and vn * outbound[0] + ve * outbound[1] > 0.98 * math.hypot(vn, ve)
+        if round_it and here < last:
+            break  # round the corner, on the next leg's course, closing on its line: the worst is behind
+        last = here
+    return worst
+
+
+def guided_switch_distance_m(
+    motion: RoverMotion, outbound_m: float, turn_rad: float, allowed_cut_m: float, speed_m_s: float, speed_max_m_s: float | None = None,
+    longest_m: float = math.inf,
+) -> float:  # fmt: skip
+    """The farthest from a corner GUIDED can switch to the next waypoint, coming at ``speed_m_s``, and cut it by no more
+    than ``allowed_cut_m`` (at most ``longest_m``; 0 when even a switch at the corner would cut more)."""
+
+    def cut(d: float) -> float:
+        return guided_switch_cut_m(motion, d, speed_m_s, turn_rad, outbound_m, speed_max_m_s)
+
+    low, high = 0.0, min(longest_m, 4.0 * allowed_cut_m + 2.0 * speed_m_s * speed_m_s / motion.shaping_accel_m_s2)
+    if cut(high) <= allowed_cut_m:
+        return high
+    if cut(low) > allowed_cut_m:
+        return 0.0
+    for _ in range(10):
+        mid = (low + high) / 2.0
+        low, high = (mid, high) if cut(mid) <= allowed_cut_m else (low, mid)
+    return low

@@ -12,12 +12,14 @@ from ``tree.setup``; the current leg's waypoint comes from ``/mission/target``.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Literal
 
 from py_trees.common import Status
 
 from executive import blackboard, frames, geo
 from executive.autopilot import AutopilotPort, Request, VtolState
+from executive.autopilot.rover_motion import RoverMotion, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
 from executive.seabed import depth_for_altitude
@@ -175,10 +177,21 @@ class Disarm(Arm):
         return not self.get("/vehicle/armed")
 
 
-#: GoTo's look-ahead: the time the next target takes to act (telemetry's age, a tick, the link), s ...
-LOOK_AHEAD_LEAD_S = 0.5
-#: ... and the braking the autopilot's stop point is assumed to use, m/s/s (ArduRover's WP_ACCEL/ATC_ACCEL_MAX are 1-2).
-LOOK_AHEAD_BRAKING_M_S2 = 1.0
+#: GoTo's look-ahead predicts the path of the autopilot's shaped target, not the vehicle's: it keeps this share of AUTO's
+#: cut of the corner, the rest left for how the vehicle follows its target (on the simulated rover the vehicle cut up
+#: to 5 % more than the target did when the switch was timed to AUTO's cut exactly).
+CUT_SHARE = 0.85
+
+
+@dataclass(frozen=True, slots=True)
+class Corner:
+    """A waypoint GoTo drives through: the vehicle's driving, the turn, the next leg, its speed, and what AUTO would cut."""
+
+    motion: RoverMotion
+    turn_rad: float
+    outbound_m: float
+    speed_m_s: float
+    auto_cut_m: float
 
 
 class GoTo(TimedBehaviour):
@@ -200,25 +213,28 @@ class GoTo(TimedBehaviour):
 
     With ``look_ahead``, a waypoint that needs no stop (another follows, ``/mission/next_target``,
     and it is not a sample point) is driven through: SUCCESS, so the next leg's target goes out,
-    once the vehicle is within :meth:`pass_distance_m` of it. ArduRover takes a GUIDED position
+    as soon as :meth:`drive_through` says so. ArduRover takes a GUIDED position
     target as a stop point (AR_WPNav::set_desired_location_expect_fast_update, no next destination:
-    Rover/mode_guided.cpp) and starts braking for it, while its AUTO drives a waypoint with a next
-    one through (a "fast waypoint", Rover/mode_auto.cpp do_nav_wp); a target replaced before the
-    vehicle brakes keeps its speed (the shaped target carries its velocity over:
-    AR_PosControl::input_pos_target). The last leg and sample points stop within the acceptance radius.
+    Rover/mode_guided.cpp) and brakes for it on its shaped approach, while its AUTO drives a waypoint
+    with a next one through (a "fast waypoint", Rover/mode_auto.cpp do_nav_wp); a target replaced
+    under way keeps the shaped velocity, which swings round toward the new one
+    (AR_PosControl::input_pos_target). The switch is as early as cuts the corner no more than the
+    autopilot's own AUTO would, both worked out from the vehicle's parameters (read at pre-flight,
+    ``/vehicle/params``; :mod:`executive.autopilot.rover_motion`). Only for an autopilot whose driving
+    is modelled so (ArduRover: ``capabilities.motion_params``); elsewhere every waypoint is a stop.
+    A corner a skid-steered rover would pivot at (sharper than WP_PIVOT_ANGLE) is a stop, as in AUTO.
+    The last leg and sample points stop within the acceptance radius.
     """
 
     reads = (
         "/mission/target", "/mission/next_target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position",
-        "/vehicle/statustext", "/vehicle/rangefinder", blackboard.command_key("DO_REPOSITION"),
+        "/vehicle/statustext", "/vehicle/rangefinder", "/vehicle/params", blackboard.command_key("DO_REPOSITION"),
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     from_mission = {"acceptance_radius_m": "limits.acceptance_radius_m", "leg_timeout_s": "limits.leg_timeout_s"}
     param_docs = {
-        "look_ahead": "a waypoint that needs no stop is driven through toward the next (setpoint only)",
-        "lead_s": "look-ahead: the time the next target takes to act (telemetry's age, a tick, the link)",
-        "braking_m_s2": "look-ahead: the braking the autopilot's stop point is assumed to use",
+        "look_ahead": "a waypoint that needs no stop is driven through toward the next (setpoint only, ArduRover)",
     }
 
     def __init__(
@@ -229,8 +245,6 @@ class GoTo(TimedBehaviour):
         resend_s: float = 1.0,
         method: Literal["setpoint", "reposition"] = "setpoint",
         look_ahead: bool = False,
-        lead_s: float = LOOK_AHEAD_LEAD_S,
-        braking_m_s2: float = LOOK_AHEAD_BRAKING_M_S2,
     ) -> None:
         if method not in ("setpoint", "reposition"):
             raise ValueError(f"method must be setpoint or reposition, not {method!r}")
@@ -240,8 +254,6 @@ class GoTo(TimedBehaviour):
         self.resend_s = resend_s
         self.method = method
         self.look_ahead = look_ahead
-        self.lead_s = lead_s
-        self.braking_m_s2 = braking_m_s2
         self.distance_m: float | None = None
         self.bearing_deg: float | None = None
         self._ticket: Request | None = None
@@ -254,6 +266,8 @@ class GoTo(TimedBehaviour):
         self._ticket = None
         self._refusal: str | None = None
         self._seabed_depth: float | None = None  # an altitude leg's last depth target
+        self._leg_start: GlobalPosition | None = None  # where the vehicle was when the leg began
+        self._corner: tuple[tuple[object, ...], Corner | None] | None = None  # (what it was worked out for, the corner)
 
     def update(self) -> Status:
         target = self.get("/mission/target")
@@ -263,6 +277,8 @@ class GoTo(TimedBehaviour):
             self.feedback_message = "no active leg"
             return Status.FAILURE
         position: GlobalPosition | None = self.get("/vehicle/position")
+        if self._leg_start is None:
+            self._leg_start = position
         self._send(position)
         leg = f"leg {self.get('/mission/leg_index') + 1}/{self.get('/mission/leg_count')}"
         if position is not None:
@@ -270,9 +286,9 @@ class GoTo(TimedBehaviour):
             if self.distance_m <= self.acceptance_radius_m:
                 self.feedback_message = f"{leg}: reached ({self.distance_m:.1f} m)"
                 return Status.SUCCESS
-            through = self.pass_distance_m(position)
-            if through is not None and self.distance_m <= through:
-                self.feedback_message = f"{leg}: driven through ({self.distance_m:.1f} m, within {through:.1f} m)"
+            through = self.drive_through(position, self.distance_m)
+            if through is not None:
+                self.feedback_message = f"{leg}: driven through ({self.distance_m:.1f} m out; {through})"
                 return Status.SUCCESS
         if self.elapsed > self.leg_timeout_s:
             short = f", {self.distance_m:.1f} m short" if self.distance_m is not None else ""
@@ -285,26 +301,56 @@ class GoTo(TimedBehaviour):
             self.feedback_message = f"{leg}: {self.distance_m:.1f} m at {self.bearing_deg:03.0f}°"
         return Status.RUNNING
 
-    def pass_distance_m(self, position: GlobalPosition) -> float | None:
-        """How near the waypoint the next leg's target goes out; None when this leg ends in a stop.
+    def drive_through(self, position: GlobalPosition, distance_m: float) -> str | None:
+        """Whether the next leg's target goes out now, ``distance_m`` short of the waypoint (why, for the feedback); None: not yet,
+        or this leg ends in a stop.
 
-        Far enough ahead that the autopilot has not begun braking for the stop point yet: the distance
-        covered in ``lead_s`` (the telemetry's age, a tick, the link) plus the braking distance at
-        ``braking_m_s2``, at the present ground speed. Turn-dependent, as AR_WPNav bounds a fast
-        waypoint's corner (SCurve::advance_target_along_track keeps the turn's apex within
-        WP_RADIUS): for a turn of angle t, at most 2 x acceptance radius / sin(t / 2), so a sharp turn
-        is not cut wider than a gentle one. Never less than the acceptance radius.
+        The corner is worked out once (:meth:`corner`); then each tick the swing a switch now would make
+        is predicted from where the vehicle is and how fast it comes
+        (:func:`~executive.autopilot.rover_motion.guided_switch_cut_m`; the position moved on by its age),
+        and taken as soon as it cuts the corner by no more than AUTO would.
         """
+        corner = self.corner(position)
+        if corner is None:
+            return None
+        speed = position.ground_speed_m_s
+        ahead = max(0.0, distance_m - speed * max(0.0, self.clock.now() - position.time))
+        motion = corner.motion
+        if ahead > corner.auto_cut_m + speed * speed / motion.shaping_accel_m_s2 + motion.corner_radius_m:
+            return None  # too far out for any swing to stay within the cut: not worth predicting
+        cut = guided_switch_cut_m(motion, ahead, speed, corner.turn_rad, corner.outbound_m, corner.speed_m_s)
+        if cut > CUT_SHARE * corner.auto_cut_m:
+            return None
+        return f"the swing cuts the corner by {cut:.1f} m, AUTO by {corner.auto_cut_m:.1f} m"
+
+    def corner(self, position: GlobalPosition) -> Corner | None:
+        """The waypoint as a corner to drive through (its turn, the next leg, AUTO's cut); None when the leg ends in a stop."""
         following: Waypoint | None = self.get("/mission/next_target")
         if not self.look_ahead or self.method != "setpoint" or following is None or self.target is None or self.target.sample:
             return None
-        speed = position.ground_speed_m_s
-        ahead = speed * self.lead_s + speed * speed / (2.0 * self.braking_m_s2)
-        inbound = geo.distance_bearing(position.lat, position.lon, self.target.lat, self.target.lon)[1]
-        outbound = geo.distance_bearing(self.target.lat, self.target.lon, following.lat, following.lon)[1]
+        params = self.get("/vehicle/params")
+        start = self._leg_start or position
+        # by identity: the mission state hands out the same waypoints, the reader a new dict when a parameter comes
+        key = (id(self.target), id(following), id(params), start.lat, start.lon)
+        if self._corner is None or self._corner[0] != key:
+            motion = vehicle_motion(self.autopilot.capabilities, params)
+            self._corner = (key, self._work_out_corner(motion, start, following))
+        return self._corner[1]
+
+    def _work_out_corner(self, motion: RoverMotion | None, start: GlobalPosition, following: Waypoint) -> Corner | None:
+        assert self.target is not None
+        if motion is None:
+            return None
+        inbound_m, inbound = geo.distance_bearing(start.lat, start.lon, self.target.lat, self.target.lon)
+        outbound_m, outbound = geo.distance_bearing(self.target.lat, self.target.lon, following.lat, following.lon)
         turn = math.radians(abs((outbound - inbound + 180.0) % 360.0 - 180.0))
-        apex_bound = 2.0 * self.acceptance_radius_m / max(math.sin(turn / 2.0), 1e-6)
-        return max(self.acceptance_radius_m, min(ahead, apex_bound))
+        if motion.pivots and math.degrees(turn) > motion.pivot_angle_deg:
+            return None  # AR_WPNav: a corner it would pivot at is never a fast waypoint
+        speed = self.target.speed_m_s or motion.speed_m_s
+        auto_cut = auto_corner_cut_m(motion, inbound_m, outbound_m, turn, speed)
+        if auto_cut is None:
+            return None  # AUTO would stop there too
+        return Corner(motion, turn, outbound_m, speed, auto_cut)
 
     def _send(self, position: GlobalPosition | None) -> None:
         assert self.target is not None

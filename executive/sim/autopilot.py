@@ -137,6 +137,7 @@ class ArduPilotSim(ABC):
     EKF_CHECK_ITERATIONS_MAX: ClassVar[int] = 10
     MISSION_STORE: ClassVar[type[MissionStore]] = MissionStore  # the firmware's side of the mission protocol
     PARAMS: ClassVar[Mapping[str, float]] = {}  # parameters answered to PARAM_REQUEST_READ, with the firmware's defaults
+    INT_PARAMS: ClassVar[frozenset[str]] = frozenset({"MODE_CH", "FLTMODE_CH"})  # answered as integers (MAV_PARAM_TYPE_INT8), the rest REAL32
 
     def __init__(
         self,
@@ -457,7 +458,8 @@ class ArduPilotSim(ABC):
         if msg.param_index >= 0:
             name = names[msg.param_index] if msg.param_index < len(names) else ""
         if name in self.params:
-            self._emit(self._mav.param_value_encode(name.encode(), self.params[name], _M.MAV_PARAM_TYPE_INT8, len(names), names.index(name)))
+            kind = _M.MAV_PARAM_TYPE_INT8 if name in self.INT_PARAMS else _M.MAV_PARAM_TYPE_REAL32
+            self._emit(self._mav.param_value_encode(name.encode(), self.params[name], kind, len(names), names.index(name)))
 
     def _on_set_mode(self, msg: MAVLinkMessage) -> None:
         # ArduPilot acks the SET_MODE message with a COMMAND_ACK whose command is the message id (11)
@@ -732,8 +734,13 @@ class ArduRoverSim(ArduPilotSim):
     READY_TEXT = "Ready to drive"
     #: Answered to PARAM_REQUEST_READ: MODE_CH (Rover/Parameters.cpp, MODE_CHANNEL 8 in Rover/config.h), CRUISE_SPEED
     #: (Rover/config.h CRUISE_SPEED 2), and the navigation's parameters with the firmware's defaults.
-    PARAMS: ClassVar[Mapping[str, float]] = {"MODE_CH": 8, "CRUISE_SPEED": 2.0, "FRAME_CLASS": 1.0, **FIRMWARE_DEFAULTS}
-    INT_PARAMS: ClassVar[frozenset[str]] = frozenset({"MODE_CH", "FRAME_CLASS", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE"})
+    #: SERVO1_FUNCTION 26 (GroundSteering) and SERVO3_FUNCTION 70 (Throttle): ArduRover's default outputs (Rover/Parameters.cpp).
+    PARAMS: ClassVar[Mapping[str, float]] = {
+        "MODE_CH": 8, "CRUISE_SPEED": 2.0, "FRAME_CLASS": 1.0, "SERVO1_FUNCTION": 26.0, "SERVO3_FUNCTION": 70.0, **FIRMWARE_DEFAULTS,
+    }  # fmt: skip
+    INT_PARAMS: ClassVar[frozenset[str]] = frozenset({
+        "MODE_CH", "FRAME_CLASS", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE", "SERVO1_FUNCTION", "SERVO3_FUNCTION",
+    })  # fmt: skip
     SKID_STEERING: ClassVar[bool] = False  # SERVO1/3_FUNCTION ThrottleLeft/Right: pivot turns (Rover.cpp set_turn_params)
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
     PILOT_DRIVEN_MODES: ClassVar[frozenset[str]] = frozenset({"MANUAL", "ACRO", "STEERING"})

@@ -34,7 +34,10 @@ class BunkerSim(ArduRoverSim):
     vehicle: SkidSteerVehicle
     SKID_STEERING = True
     #: ArduRover's defaults, with WP_SPEED set for the Bunker's 1.5 m/s tracks (the firmware's 2 m/s is beyond them).
-    PARAMS: ClassVar[Mapping[str, float]] = {**ArduRoverSim.PARAMS, "WP_SPEED": 1.0, "CRUISE_SPEED": 1.0}
+    #: SERVO1_FUNCTION 73 and SERVO3_FUNCTION 74: the skid-steer frame's ThrottleLeft and ThrottleRight.
+    PARAMS: ClassVar[Mapping[str, float]] = {
+        **ArduRoverSim.PARAMS, "WP_SPEED": 1.0, "CRUISE_SPEED": 1.0, "SERVO1_FUNCTION": 73.0, "SERVO3_FUNCTION": 74.0,
+    }  # fmt: skip
 
     @property
     def base_limits(self) -> Limits:

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 from py_trees.common import Status
 
+from executive.autopilot.rover_motion import guided_switch_cut_m
 from executive.behaviours import Arm, Disarm, GoTo, SetMode
+from executive.behaviours.actions import CUT_SHARE
 from executive.geo import destination
 from executive.io.mavlink.dialect import mavlink
 from executive.state import GlobalPosition
@@ -220,56 +224,96 @@ class TestGoTo:
 
 
 class TestGoToLookAhead:
-    """Leg 2/4 of the square: heading north for the north-west corner, then east (a 90° turn)."""
+    """Leg 2/4 of the 20 m square: heading north for the north-west corner, then east (a 90° turn).
+
+    The vehicle reports SITL's rover parameters (WP_SPEED 5, WP_RADIUS 3) unless a test says otherwise.
+    """
+
+    SITL = {"WP_SPEED": 5.0, "WP_RADIUS": 3.0}
 
     @pytest.fixture
-    def corner(self, mission_state):
+    def corner(self, mission_state, vehicle):
+        vehicle.set(vehicle__params=dict(self.SITL))
         mission_state.start()
         mission_state.advance_leg()
         return mission_state.target
 
-    def approach(self, h, vehicle, corner, distances, speed=2.0):
-        """Tick once at each distance south of the corner, heading north at ``speed``; the statuses."""
+    def approach(self, h, vehicle, corner, distances, speed=2.5):
+        """Tick once at each distance south of the corner, heading north at ``speed`` (positions fresh), until the leg ends; the statuses."""
         statuses = []
         for distance in distances:
-            vehicle.set(vehicle__position=at(*destination(corner.lat, corner.lon, 180.0, distance), vn=speed))
+            vehicle.set(vehicle__position=at(*destination(corner.lat, corner.lon, 180.0, distance), t=h.clock.now(), vn=speed))
             statuses.append(h.tick())
+            if statuses[-1] == Status.SUCCESS:
+                break
         return statuses
 
-    def test_a_corner_is_driven_through_before_the_vehicle_brakes(self, harness, vehicle, corner):
-        # 2 m/s: 0.5 s of lead (1 m) + braking at 1 m/s/s (2 m) = 3 m; a 90° turn allows up to 2 x 1.5 / sin 45° = 4.2 m
+    def switch_distance(self, h, vehicle, corner, distances, speed=2.5):
+        """The distance at which the leg ended (SUCCESS), or None."""
+        statuses = self.approach(h, vehicle, corner, distances, speed)
+        return distances[statuses.index(Status.SUCCESS)] if Status.SUCCESS in statuses else None
+
+    def test_a_corner_is_driven_through_once_the_swing_cuts_it_no_more_than_auto(self, harness, vehicle, corner):
+        distances = (12.0, 10.0, 8.0, 7.0, 6.0, 5.0, 4.5, 4.0, 3.5, 3.0, 2.5, 2.0)
         node = GoTo(1.5, 60.0, look_ahead=True)
-        h = harness(node)
-        assert self.approach(h, vehicle, corner, (10.0, 5.0, 3.1, 2.9)) == [Status.RUNNING] * 3 + [Status.SUCCESS]
-        assert node.feedback_message == "leg 2/4: driven through (2.9 m, within 3.0 m)"
+        switch = self.switch_distance(harness(node), vehicle, corner, distances)
+        assert switch is not None and 3.0 <= switch <= 8.0  # well before the acceptance radius (1.5 m): no stop
+        geometry = node.corner(at(corner.lat, corner.lon))
+        assert (
+            geometry is not None and geometry.turn_rad == pytest.approx(math.pi / 2, abs=0.01) and geometry.outbound_m == pytest.approx(20.0, abs=0.1)
+        )
+        assert node.feedback_message.startswith(f"leg 2/4: driven through ({switch:.1f} m out; the swing cuts the corner by ")
+        assert node.feedback_message.endswith(f"AUTO by {geometry.auto_cut_m:.1f} m)")
+
+        def cut(d: float) -> float:  # the position is 0.1 s old at the tick (Harness.tick advances the clock first): 0.25 m on
+            return guided_switch_cut_m(geometry.motion, d - 2.5 * 0.1, 2.5, geometry.turn_rad, geometry.outbound_m, geometry.speed_m_s)
+
+        earlier = distances[distances.index(switch) - 1]
+        assert cut(switch) <= CUT_SHARE * geometry.auto_cut_m < cut(earlier)  # the first tick it fits
+
+    def test_the_vehicle_s_own_parameters_decide_and_the_firmware_s_defaults_stand_in(self, harness, vehicle, corner):
+        distances = tuple(x / 4.0 for x in range(48, 5, -1))  # 12 m to 1.5 m
+        sitl = self.switch_distance(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, distances, speed=1.8)
+        vehicle.set(vehicle__params={})  # the vehicle never told them: WP_SPEED 2, WP_RADIUS 2, so AUTO cuts only 0.5 m
+        defaults = self.switch_distance(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, distances, speed=1.8)
+        assert sitl is not None and defaults is not None and defaults < sitl
 
     def test_without_look_ahead_the_leg_ends_inside_the_acceptance_radius(self, harness, vehicle, corner):
         h = harness(GoTo(1.5, 60.0))
         assert self.approach(h, vehicle, corner, (5.0, 2.9, 1.6, 1.4)) == [Status.RUNNING] * 3 + [Status.SUCCESS]
 
-    def test_the_distance_grows_with_the_speed_and_a_vehicle_at_rest_stops(self, harness, vehicle, corner):
-        fast = GoTo(1.5, 60.0, look_ahead=True)
-        assert self.approach(harness(fast), vehicle, corner, (4.5, 4.1), speed=2.5) == [Status.RUNNING, Status.SUCCESS]  # capped at 4.2 m
-        slow = GoTo(1.5, 60.0, look_ahead=True)
-        assert self.approach(harness(slow), vehicle, corner, (2.0, 1.6, 1.4), speed=0.0) == [Status.RUNNING] * 2 + [Status.SUCCESS]
+    def test_a_vehicle_at_rest_stops(self, harness, vehicle, corner):
+        # coming at walking pace the swing heads straight for the next waypoint: it would cut more than AUTO, so the leg ends
+        # inside the acceptance radius
+        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (6.0, 3.0, 1.6, 1.4), speed=0.0) == [Status.RUNNING] * 3 + [
+            Status.SUCCESS
+        ]
 
-    def test_a_sharper_turn_is_passed_nearer(self, harness, vehicle, corner, mission_state):
-        # at 3 m/s the look-ahead is 1.5 + 4.5 = 6 m: straight on it applies; back south (180°) only 2 x 1.5 / sin 90° = 3 m
+    def test_an_autopilot_whose_driving_is_not_modelled_stops_at_every_waypoint(self, harness, vehicle, corner, autopilot):
+        autopilot.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_GROUND_ROVER)
+        assert autopilot.capabilities.motion_params == ()
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (8.0, 5.0, 3.0, 1.6, 1.4))
+        assert statuses == [Status.RUNNING] * 4 + [Status.SUCCESS]
+
+    def test_a_skid_steered_rover_stops_where_it_would_pivot(self, harness, vehicle, corner):
+        vehicle.set(vehicle__params={**self.SITL, "SERVO1_FUNCTION": 73.0, "SERVO3_FUNCTION": 74.0})  # ThrottleLeft, ThrottleRight
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (8.0, 5.0, 3.0, 1.6, 1.4))
+        assert statuses == [Status.RUNNING] * 4 + [Status.SUCCESS]  # 90° is more than WP_PIVOT_ANGLE (60°): a pivot, as in AUTO
+
+    def test_straight_on_is_driven_through_at_once(self, harness, vehicle, corner, mission_state):
         waypoints = list(mission_state.route.waypoints)
         straight = waypoints[2].model_copy(update={"lat": corner.lat + 0.0003, "lon": corner.lon})
         mission_state.set_route([waypoints[0], corner, straight, waypoints[3]], "test: straight on")
-        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (6.5, 5.9), speed=3.0) == [Status.RUNNING, Status.SUCCESS]
-        back = waypoints[2].model_copy(update={"lat": corner.lat - 0.0003, "lon": corner.lon})
-        mission_state.set_route([waypoints[0], corner, back, waypoints[3]], "test: back south")
-        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (5.9, 3.1, 2.9), speed=3.0)
-        assert statuses == [Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (30.0, 9.0), speed=2.5)
+        assert statuses == [Status.RUNNING, Status.SUCCESS]  # too far out to be worth predicting, then no cut at all
 
     def test_the_last_leg_stops(self, harness, vehicle, mission_state):
         mission_state.start()
         for _ in range(3):
             mission_state.advance_leg()
         last = mission_state.target
-        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, last, (2.9, 1.6, 1.4)) == [Status.RUNNING] * 2 + [Status.SUCCESS]
+        vehicle.set(vehicle__params=dict(self.SITL))
+        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, last, (6.0, 1.6, 1.4)) == [Status.RUNNING] * 2 + [Status.SUCCESS]
 
     def test_a_sample_point_stops(self, harness, vehicle, mission_state, square_mission):
         waypoints = list(square_mission.waypoints)
@@ -277,7 +321,8 @@ class TestGoToLookAhead:
         mission_state.upload(square_mission.model_copy(update={"tree": "goto_sample", "waypoints": waypoints}))
         mission_state.start()
         mission_state.advance_leg()
-        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, waypoints[1], (2.9, 1.6, 1.4))
+        vehicle.set(vehicle__params=dict(self.SITL))
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, waypoints[1], (6.0, 1.6, 1.4))
         assert statuses == [Status.RUNNING] * 2 + [Status.SUCCESS]
 
     def test_the_next_target_goes_out_on_the_tick_after(self, harness, vehicle, corner, mission_state):
@@ -287,7 +332,10 @@ class TestGoToLookAhead:
         h = harness(ForEachLeg(GoTo(1.5, 60.0, look_ahead=True)))
         self.approach(h, vehicle, corner, (10.0,))
         h.link.take()
-        self.approach(h, vehicle, corner, (2.9,))
+        for distance in (8.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.4):
+            self.approach(h, vehicle, corner, (distance,))
+            if mission_state.leg_index == 2:
+                break
         assert mission_state.leg_index == 2
         h.tick()
         (sent,) = h.link.take("SET_POSITION_TARGET_GLOBAL_INT")

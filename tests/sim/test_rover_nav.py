@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, sqrt_controller, stopping_distance
+from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, auto_corner_cut_m, sqrt_controller, stopping_distance
 from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.io.mavlink.dialect import mavlink as m
 from executive.sim.autopilot import SITL_PARAMS
@@ -120,6 +120,16 @@ def test_a_shaped_guided_target_speeds_up_at_1_and_brakes_at_half() -> None:
     assert 4.0 <= peak <= 4.5  # where the 1 m/s/s rise meets sqrt(distance left - 1): WP_SPEED 5 is never reached
     assert 0.5 <= peak / (t - peak_t) <= 0.65  # the approach's square-root curve is half the acceleration (1 m/s/s)
     assert 11.5 <= t <= 13.5
+
+
+def test_auto_s_corner_between_long_legs_reaches_out_to_wp_radius_and_no_farther() -> None:
+    # a fast waypoint's turn mid point lies within WP_RADIUS (3 m) of it: for 90 degrees, 3 sin 45 = 2.12 m off each leg
+    motion = RoverMotion.from_params(SITL_PARAMS["rover"])
+    cut = auto_corner_cut_m(motion, 30.0, 30.0, math.pi / 2)
+    assert cut is not None and 1.8 <= cut <= 3.0 * math.sin(math.pi / 4) + 0.02
+    short = auto_corner_cut_m(motion, 10.0, 10.0, math.pi / 2)
+    assert short is not None and short < cut  # short legs come slower: the turn fits sooner
+    assert auto_corner_cut_m(motion, 30.0, 30.0, 0.0) == 0.0  # straight on: driven through, no cut
 
 
 def test_the_parameters_give_the_firmware_s_derived_limits() -> None:
