@@ -48,11 +48,12 @@ Point = tuple[float, float]
 
 @dataclass(frozen=True)
 class Timing:
-    """One run: vehicle time from entering the driving mode to the last waypoint, and the track (lat, lon) meanwhile."""
+    """One run: vehicle time from entering the driving mode to the last waypoint, and the track meanwhile
+    ((seconds since the mode was entered, lat, lon))."""
 
     mode: str
     seconds: float
-    track: tuple[Point, ...] = field(default=(), repr=False)
+    track: tuple[tuple[float, float, float], ...] = field(default=(), repr=False)
 
 
 def with_sitl_parameters(mission: Mission) -> Mission:
@@ -80,14 +81,14 @@ def _segment_distance(p: tuple[float, float], a: tuple[float, float], b: tuple[f
     return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
 
 
-def corner_cuts(track: Sequence[Point], route: Sequence[Point]) -> list[float]:
+def corner_cuts(track: Sequence[tuple[float, ...]], route: Sequence[Point]) -> list[float]:
     """Per intermediate waypoint: the largest distance from the route of the track points near it (nearer it than half
-    of either leg through it), metres."""
+    of either leg through it), metres. Track points end in (lat, lon)."""
     if len(route) < 3:
         return []
     origin = route[0]
     local = [_to_local(origin, p) for p in route]
-    points = [_to_local(origin, p) for p in track]
+    points = [_to_local(origin, (p[-2], p[-1])) for p in track]
     cuts = []
     for k in range(1, len(local) - 1):
         before, corner, after = local[k - 1], local[k], local[k + 1]
@@ -125,14 +126,14 @@ class _Stopwatch:
         self.route = _Route(mission)
         self.entered: float | None = None
         self.seconds: float | None = None
-        self.track: list[Point] = []
+        self.track: list[tuple[float, float, float]] = []
 
     def observe(self, now: float, ap: ArduPilotSim) -> bool:
         """Look at the vehicle now; True once it is at the last waypoint."""
         if self.entered is None and ap.mode == self.mode and ap.armed:
             self.entered = now
         if self.entered is not None and self.seconds is None:
-            self.track.append((ap.vehicle.lat, ap.vehicle.lon))
+            self.track.append((now - self.entered, ap.vehicle.lat, ap.vehicle.lon))
             if self.route.done(ap):
                 self.seconds = now - self.entered
         return self.seconds is not None

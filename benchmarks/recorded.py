@@ -34,6 +34,8 @@ class Recording:
     mode: str
     entered_s: float
     track: tuple[Sample, ...]
+    #: Where the vehicle was, and its heading (degrees), when it entered the mode: where a simulation of the run starts.
+    start: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 def path_of(mission: str, mode: str) -> Path:
@@ -49,6 +51,7 @@ def read(path: str | os.PathLike[str], mode: str) -> Recording:
 
     conn = mavutil.mavlink_connection(os.fspath(path), dialect="ardupilotmega", robust_parsing=True)
     positions: list[tuple[float, float, float, float]] = []  # tlog time, boot s, lat, lon
+    headings: list[float] = []
     entered_at: float | None = None  # tlog time
     while True:
         msg = conn.recv_match(type=["HEARTBEAT", "GLOBAL_POSITION_INT"])
@@ -59,6 +62,7 @@ def read(path: str | os.PathLike[str], mode: str) -> Recording:
         stamp = float(getattr(msg, "_timestamp", 0.0))
         if msg.get_type() == "GLOBAL_POSITION_INT":
             positions.append((stamp, msg.time_boot_ms / 1000.0, msg.lat * 1e-7, msg.lon * 1e-7))
+            headings.append(msg.hdg / 100.0)
         elif entered_at is None and msg.type != 6:  # 6: a GCS
             kind = "boat" if msg.type == 11 else "rover"
             armed = bool(msg.base_mode & 128)
@@ -70,8 +74,10 @@ def read(path: str | os.PathLike[str], mode: str) -> Recording:
     # the mode's entry in boot time: the first position after the heartbeat that showed it, less the tlog time between
     after = next((p for p in positions if p[0] >= entered_at), positions[-1])
     entered_s = after[1] - (after[0] - entered_at)
-    track = tuple((boot - entered_s, lat, lon) for _, boot, lat, lon in positions if boot >= entered_s)
-    return Recording(Path(path), mode, entered_s, track)
+    first = next(i for i, p in enumerate(positions) if p[1] >= entered_s)
+    track = tuple((boot - entered_s, lat, lon) for _, boot, lat, lon in positions[first:])
+    start = (positions[first][2], positions[first][3], headings[first])
+    return Recording(Path(path), mode, entered_s, track, start)
 
 
 def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
@@ -131,7 +137,7 @@ def rows(missions: Sequence[str]) -> list[Row]:
             seconds = arrival_s(recording.track, waypoints, mission.limits.acceptance_radius_m)
             if seconds is None:
                 raise ValueError(f"{recording.path}: the vehicle never reached the last waypoint")
-            timings.append(Timing(mode, seconds, tuple((lat, lon) for t, lat, lon in recording.track if t <= seconds)))
+            timings.append(Timing(mode, seconds, tuple(sample for sample in recording.track if sample[0] <= seconds)))
         against = f"a recorded real ArduRover SITL AUTO run ({path_of(name, 'AUTO').name}; GUIDED recorded too)"
         row = ratio_row(name, timings[0], timings[1], route_of(mission), against, f"{mission.vehicle}, SITL frame {FRAMES[name]}")
         out.append(row)

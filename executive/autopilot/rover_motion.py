@@ -219,6 +219,45 @@ def vehicle_motion(capabilities: Capabilities, params: Mapping[str, float] | Non
     return RoverMotion.from_params(params, skid_steering=skid, wanted=LOOK_AHEAD_PARAMS)
 
 
+class TargetEstimate:
+    """Where ArduRover's GUIDED target is now, worked out as the firmware shapes it from the position targets sent.
+
+    The autopilot's position controller pulls an internal target toward each position target
+    (:class:`ShapedTarget`); the vehicle follows it. The executive sees only the vehicle, a moment old;
+    this runs the same shaping on its own clock, in metres north and east of ``origin`` (lat, lon), from
+    the vehicle's position and velocity when GUIDED's controller (re)starts (AR_PosControl::init).
+    """
+
+    STEP_S = 0.02  # the firmware's loop (SCHED_LOOP_RATE 50 Hz)
+
+    def __init__(self, motion: RoverMotion, speed_m_s: float, origin: tuple[float, float], now: float) -> None:
+        self._m_per_deg_lat = 111_319.49
+        self._m_per_deg_lon = self._m_per_deg_lat * math.cos(math.radians(origin[0]))
+        self.origin = origin
+        self.target = ShapedTarget(speed_m_s, motion.shaping_accel_m_s2, motion.jerk_m_s3)
+        self.time = now
+
+    def ne(self, lat: float, lon: float) -> tuple[float, float]:
+        return (lat - self.origin[0]) * self._m_per_deg_lat, (lon - self.origin[1]) * self._m_per_deg_lon
+
+    def start(self, position: tuple[float, float], velocity_ne: tuple[float, float], now: float) -> None:
+        """Start from the vehicle (lat, lon) at its velocity, at ``now``."""
+        self.target.reset(self.ne(*position), velocity_ne)
+        self.time = now
+
+    def advance(self, destination: tuple[float, float], now: float) -> None:
+        """Shape toward ``destination`` (lat, lon) up to ``now``."""
+        goal = self.ne(*destination)
+        while now - self.time >= self.STEP_S - 1e-9:
+            self.target.step(goal, self.STEP_S)
+            self.time += self.STEP_S
+
+    def off_by_m(self, position: tuple[float, float]) -> float:
+        """How far the estimate is from the vehicle (lat, lon)."""
+        n, e = self.ne(*position)
+        return math.hypot(self.target.pos[0] - n, self.target.pos[1] - e)
+
+
 class ShapedTarget:
     """GUIDED's target as AR_PosControl::input_pos_target shapes it toward the latest position target (north, east in m).
 
@@ -477,21 +516,23 @@ def auto_corner_cut_m(motion: RoverMotion, inbound_m: float, outbound_m: float, 
 
 
 def guided_switch_cut_m(
-    motion: RoverMotion, distance_m: float, speed_m_s: float, turn_rad: float, outbound_m: float, speed_max_m_s: float | None = None
-) -> float:
+    motion: RoverMotion, distance_m: float, speed_m_s: float, turn_rad: float, outbound_m: float, speed_max_m_s: float | None = None,
+    accel_m_s2: float | None = None,
+) -> float:  # fmt: skip
     """How far from the route GUIDED's shaped target goes when the next waypoint replaces the corner ``distance_m`` ahead.
 
-    The target, under way toward the corner at ``speed_m_s`` and braking on the approach, is pulled
-    toward the next waypoint (:class:`ShapedTarget`): its velocity swings round within the shaping's
-    acceleration, keeping a share for turning; the path rounds the corner inside. The faster it comes,
-    the farther it carries on toward the corner before it turns: the less it cuts.
+    The target, under way toward the corner at ``speed_m_s`` (changing at ``accel_m_s2``; by default braking on the
+    approach's square-root curve), is pulled toward the next waypoint (:class:`ShapedTarget`): its velocity swings
+    round within the shaping's acceleration, keeping a share for turning; the path rounds the corner inside. The
+    faster it comes, the farther it carries on toward the corner before it turns: the less it cuts.
     """
     a = motion.shaping_accel_m_s2
     target = ShapedTarget(speed_max_m_s if speed_max_m_s and speed_max_m_s > 0.0 else motion.speed_m_s, a, motion.jerk_m_s3)
     inbound, outbound = (1.0, 0.0), _unit(turn_rad)
     corner = (distance_m, 0.0)
-    decel = min(0.5 * a, speed_m_s * speed_m_s / (2.0 * max(distance_m, 1e-3)))  # on the approach's square-root curve
-    target.reset((0.0, 0.0), (speed_m_s, 0.0), (-decel, 0.0))
+    if accel_m_s2 is None:
+        accel_m_s2 = -min(0.5 * a, speed_m_s * speed_m_s / (2.0 * max(distance_m, 1e-3)))  # on the approach's square-root curve
+    target.reset((0.0, 0.0), (speed_m_s, 0.0), (accel_m_s2, 0.0))
     destination = (corner[0] + outbound[0] * outbound_m, outbound[1] * outbound_m)
     bisector = (inbound[0] + outbound[0], inbound[1] + outbound[1])
     worst, last, dt = 0.0, 0.0, 0.05

@@ -19,7 +19,7 @@ from py_trees.common import Status
 
 from executive import blackboard, frames, geo
 from executive.autopilot import AutopilotPort, Request, VtolState
-from executive.autopilot.rover_motion import RoverMotion, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
+from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
 from executive.seabed import depth_for_altitude
@@ -257,6 +257,9 @@ class GoTo(TimedBehaviour):
         self.distance_m: float | None = None
         self.bearing_deg: float | None = None
         self._ticket: Request | None = None
+        # the autopilot's shaped target, and the point it heads for: kept from one leg to the next (the firmware keeps it)
+        self._estimate: TargetEstimate | None = None
+        self._estimate_goal: tuple[float, float] | None = None
 
     def initialise(self) -> None:
         super().initialise()
@@ -279,6 +282,7 @@ class GoTo(TimedBehaviour):
         position: GlobalPosition | None = self.get("/vehicle/position")
         if self._leg_start is None:
             self._leg_start = position
+        self._follow_shaped_target(position)
         self._send(position)
         leg = f"leg {self.get('/mission/leg_index') + 1}/{self.get('/mission/leg_count')}"
         if position is not None:
@@ -306,22 +310,56 @@ class GoTo(TimedBehaviour):
         or this leg ends in a stop.
 
         The corner is worked out once (:meth:`corner`); then each tick the swing a switch now would make
-        is predicted from where the vehicle is and how fast it comes
-        (:func:`~executive.autopilot.rover_motion.guided_switch_cut_m`; the position moved on by its age),
-        and taken as soon as it cuts the corner by no more than AUTO would.
+        is predicted (:func:`~executive.autopilot.rover_motion.guided_switch_cut_m`) from the autopilot's
+        shaped target as the executive follows it (:meth:`_follow_shaped_target`), and taken as soon as it
+        cuts the corner by no more than :data:`CUT_SHARE` of AUTO's cut.
         """
         corner = self.corner(position)
         if corner is None:
             return None
-        speed = position.ground_speed_m_s
-        ahead = max(0.0, distance_m - speed * max(0.0, self.clock.now() - position.time))
-        motion = corner.motion
+        motion, estimate = corner.motion, self._estimate
+        accel: float | None = None
+        if estimate is not None:  # the autopilot's own target: where the swing starts
+            assert self.target is not None
+            (n, e), (vn, ve), (an, ae) = estimate.target.pos, estimate.target.vel, estimate.target.acc
+            cn, ce = estimate.ne(self.target.lat, self.target.lon)
+            ahead, speed = math.hypot(cn - n, ce - e), math.hypot(vn, ve)
+            accel = (an * vn + ae * ve) / speed if speed > 0.0 else 0.0
+        else:  # the vehicle, moved on by its position's age
+            speed = position.ground_speed_m_s
+            ahead = max(0.0, distance_m - speed * max(0.0, self.clock.now() - position.time))
         if ahead > corner.auto_cut_m + speed * speed / motion.shaping_accel_m_s2 + motion.corner_radius_m:
             return None  # too far out for any swing to stay within the cut: not worth predicting
-        cut = guided_switch_cut_m(motion, ahead, speed, corner.turn_rad, corner.outbound_m, corner.speed_m_s)
+        cut = guided_switch_cut_m(motion, ahead, speed, corner.turn_rad, corner.outbound_m, corner.speed_m_s, accel)
         if cut > CUT_SHARE * corner.auto_cut_m:
             return None
         return f"the swing cuts the corner by {cut:.1f} m, AUTO by {corner.auto_cut_m:.1f} m"
+
+    def _follow_shaped_target(self, position: GlobalPosition | None) -> None:
+        """Keep :class:`~executive.autopilot.rover_motion.TargetEstimate` of the autopilot's shaped target in step (the look-ahead's).
+
+        Started from the vehicle when there is none, when it was not kept up (the autopilot's controller
+        starts again from the vehicle after a pause, AR_PosControl::init) or when it strayed farther from
+        the vehicle than twice WP_RADIUS; shaped toward the target last sent, up to now.
+        """
+        if not self.look_ahead or self.method != "setpoint" or self.target is None or position is None:
+            return
+        motion = vehicle_motion(self.autopilot.capabilities, self.get("/vehicle/params"))
+        if motion is None:
+            self._estimate = None
+            return
+        now, here = self.clock.now(), (position.lat, position.lon)
+        estimate = self._estimate
+        stale = estimate is None or now - estimate.time > 0.5 or estimate.off_by_m(here) > max(2.0 * motion.radius_m, 5.0)
+        if stale or self._estimate_goal is None:
+            estimate = TargetEstimate(motion, self.target.speed_m_s or motion.speed_m_s, here, now)
+            age = max(0.0, now - position.time)
+            n, e = position.vn_m_s * age, position.ve_m_s * age
+            estimate.target.reset((n, e), (position.vn_m_s, position.ve_m_s))  # where the vehicle is by now
+            self._estimate, self._estimate_goal = estimate, (self.target.lat, self.target.lon)
+        assert estimate is not None and self._estimate_goal is not None
+        estimate.advance(self._estimate_goal, now)
+        self._estimate_goal = (self.target.lat, self.target.lon)  # from this tick on the autopilot heads for this leg's waypoint
 
     def corner(self, position: GlobalPosition) -> Corner | None:
         """The waypoint as a corner to drive through (its turn, the next leg, AUTO's cut); None when the leg ends in a stop."""

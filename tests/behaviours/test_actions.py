@@ -7,7 +7,8 @@ import math
 import pytest
 from py_trees.common import Status
 
-from executive.autopilot.rover_motion import guided_switch_cut_m
+from executive import geo
+from executive.autopilot.rover_motion import RoverMotion, TargetEstimate
 from executive.behaviours import Arm, Disarm, GoTo, SetMode
 from executive.behaviours.actions import CUT_SHARE
 from executive.geo import destination
@@ -248,46 +249,48 @@ class TestGoToLookAhead:
                 break
         return statuses
 
-    def switch_distance(self, h, vehicle, corner, distances, speed=2.5):
-        """The distance at which the leg ended (SUCCESS), or None."""
-        statuses = self.approach(h, vehicle, corner, distances, speed)
-        return distances[statuses.index(Status.SUCCESS)] if Status.SUCCESS in statuses else None
+    def driven(self, h, vehicle, corner, params, start_m=20.0, ticks=200):
+        """The vehicle driven as the autopilot drives it (following the shaped target toward the corner, from rest ``start_m``
+        south of it), a tick each 0.1 s, until the leg ends: (distance, status, node's feedback, (lat, lon)) each tick."""
+        motion = RoverMotion.from_params(params)
+        estimate = TargetEstimate(motion, motion.speed_m_s, destination(corner.lat, corner.lon, 180.0, start_m), h.clock.now())
+        estimate.start(estimate.origin, (0.0, 0.0), h.clock.now())
+        rows = []
+        for _ in range(ticks):
+            estimate.advance((corner.lat, corner.lon), h.clock.now())
+            (n, e), (vn, ve) = estimate.target.pos, estimate.target.vel
+            lat, lon = estimate.origin[0] + n / 111_319.49, estimate.origin[1] + e / (111_319.49 * math.cos(math.radians(estimate.origin[0])))
+            vehicle.set(vehicle__position=at(lat, lon, t=h.clock.now(), vn=vn, ve=ve))
+            status = h.tick()
+            rows.append((geo.distance(lat, lon, corner.lat, corner.lon), status, h.root.feedback_message, (lat, lon)))
+            if status == Status.SUCCESS:
+                break
+        return rows
 
     def test_a_corner_is_driven_through_once_the_swing_cuts_it_no_more_than_auto(self, harness, vehicle, corner):
-        distances = (12.0, 10.0, 8.0, 7.0, 6.0, 5.0, 4.5, 4.0, 3.5, 3.0, 2.5, 2.0)
         node = GoTo(1.5, 60.0, look_ahead=True)
-        switch = self.switch_distance(harness(node), vehicle, corner, distances)
-        assert switch is not None and 3.0 <= switch <= 8.0  # well before the acceptance radius (1.5 m): no stop
+        rows = self.driven(harness(node), vehicle, corner, self.SITL)
+        distance, status, feedback, here = rows[-1]
+        assert status == Status.SUCCESS and 3.0 <= distance <= 8.0  # well before the acceptance radius (1.5 m): no stop
         geometry = node.corner(at(corner.lat, corner.lon))
-        assert (
-            geometry is not None and geometry.turn_rad == pytest.approx(math.pi / 2, abs=0.01) and geometry.outbound_m == pytest.approx(20.0, abs=0.1)
-        )
-        assert node.feedback_message.startswith(f"leg 2/4: driven through ({switch:.1f} m out; the swing cuts the corner by ")
-        assert node.feedback_message.endswith(f"AUTO by {geometry.auto_cut_m:.1f} m)")
-
-        def cut(d: float) -> float:  # the position is 0.1 s old at the tick (Harness.tick advances the clock first): 0.25 m on
-            return guided_switch_cut_m(geometry.motion, d - 2.5 * 0.1, 2.5, geometry.turn_rad, geometry.outbound_m, geometry.speed_m_s)
-
-        earlier = distances[distances.index(switch) - 1]
-        assert cut(switch) <= CUT_SHARE * geometry.auto_cut_m < cut(earlier)  # the first tick it fits
+        assert geometry is not None and geometry.turn_rad == pytest.approx(math.pi / 2, abs=0.01)
+        assert geometry.outbound_m == pytest.approx(20.0, abs=0.1)
+        assert feedback.startswith(f"leg 2/4: driven through ({distance:.1f} m out; the swing cuts the corner by ")
+        assert feedback.endswith(f"AUTO by {geometry.auto_cut_m:.1f} m)")
+        cut = float(feedback.split("cuts the corner by ")[1].split(" m")[0])
+        assert cut <= CUT_SHARE * geometry.auto_cut_m + 0.05  # (rounded to 0.1 m in the message)
+        # the shaped target GoTo follows is the autopilot's: here, exactly where the vehicle was driven
+        assert node._estimate is not None and node._estimate.off_by_m(here) < 0.01
 
     def test_the_vehicle_s_own_parameters_decide_and_the_firmware_s_defaults_stand_in(self, harness, vehicle, corner):
-        distances = tuple(x / 4.0 for x in range(48, 5, -1))  # 12 m to 1.5 m
-        sitl = self.switch_distance(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, distances, speed=1.8)
+        sitl = self.driven(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, self.SITL)[-1][0]
         vehicle.set(vehicle__params={})  # the vehicle never told them: WP_SPEED 2, WP_RADIUS 2, so AUTO cuts only 0.5 m
-        defaults = self.switch_distance(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, distances, speed=1.8)
-        assert sitl is not None and defaults is not None and defaults < sitl
+        defaults = self.driven(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, {})[-1][0]
+        assert 1.5 < defaults < sitl
 
     def test_without_look_ahead_the_leg_ends_inside_the_acceptance_radius(self, harness, vehicle, corner):
         h = harness(GoTo(1.5, 60.0))
         assert self.approach(h, vehicle, corner, (5.0, 2.9, 1.6, 1.4)) == [Status.RUNNING] * 3 + [Status.SUCCESS]
-
-    def test_a_vehicle_at_rest_stops(self, harness, vehicle, corner):
-        # coming at walking pace the swing heads straight for the next waypoint: it would cut more than AUTO, so the leg ends
-        # inside the acceptance radius
-        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (6.0, 3.0, 1.6, 1.4), speed=0.0) == [Status.RUNNING] * 3 + [
-            Status.SUCCESS
-        ]
 
     def test_an_autopilot_whose_driving_is_not_modelled_stops_at_every_waypoint(self, harness, vehicle, corner, autopilot):
         autopilot.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_GROUND_ROVER)
@@ -300,12 +303,12 @@ class TestGoToLookAhead:
         statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (8.0, 5.0, 3.0, 1.6, 1.4))
         assert statuses == [Status.RUNNING] * 4 + [Status.SUCCESS]  # 90° is more than WP_PIVOT_ANGLE (60°): a pivot, as in AUTO
 
-    def test_straight_on_is_driven_through_at_once(self, harness, vehicle, corner, mission_state):
+    def test_straight_on_is_driven_through_as_soon_as_it_is_worth_predicting(self, harness, vehicle, corner, mission_state):
         waypoints = list(mission_state.route.waypoints)
         straight = waypoints[2].model_copy(update={"lat": corner.lat + 0.0003, "lon": corner.lon})
         mission_state.set_route([waypoints[0], corner, straight, waypoints[3]], "test: straight on")
-        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (30.0, 9.0), speed=2.5)
-        assert statuses == [Status.RUNNING, Status.SUCCESS]  # too far out to be worth predicting, then no cut at all
+        rows = self.driven(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, self.SITL)
+        assert rows[-1][1] == Status.SUCCESS and rows[-1][0] > 6.0  # no corner to cut
 
     def test_the_last_leg_stops(self, harness, vehicle, mission_state):
         mission_state.start()
