@@ -260,6 +260,7 @@ class GoTo(TimedBehaviour):
         # the autopilot's shaped target, and the point it heads for: kept from one leg to the next (the firmware keeps it)
         self._estimate: TargetEstimate | None = None
         self._estimate_goal: tuple[float, float] | None = None
+        self._motion_of: tuple[object, RoverMotion | None] | None = None  # (the parameters, the driving they give)
 
     def initialise(self) -> None:
         super().initialise()
@@ -270,6 +271,8 @@ class GoTo(TimedBehaviour):
         self._refusal: str | None = None
         self._seabed_depth: float | None = None  # an altitude leg's last depth target
         self._leg_start: GlobalPosition | None = None  # where the vehicle was when the leg began
+        self._predict_at = -math.inf  # the look-ahead's next prediction of the swing, and its last (time, cut)
+        self._last_prediction: tuple[float, float] | None = None
         self._corner: tuple[tuple[object, ...], Corner | None] | None = None  # (what it was worked out for, the corner)
 
     def update(self) -> Status:
@@ -330,10 +333,25 @@ class GoTo(TimedBehaviour):
             ahead = max(0.0, distance_m - speed * max(0.0, self.clock.now() - position.time))
         if ahead > corner.auto_cut_m + speed * speed / motion.shaping_accel_m_s2 + motion.corner_radius_m:
             return None  # too far out for any swing to stay within the cut: not worth predicting
-        cut = guided_switch_cut_m(motion, ahead, speed, corner.turn_rad, corner.outbound_m, corner.speed_m_s, accel)
-        if cut > CUT_SHARE * corner.auto_cut_m:
+        now, allowed = self.clock.now(), CUT_SHARE * corner.auto_cut_m
+        if now < self._predict_at:
             return None
-        return f"the swing cuts the corner by {cut:.1f} m, AUTO by {corner.auto_cut_m:.1f} m"
+        cut = guided_switch_cut_m(motion, ahead, speed, corner.turn_rad, corner.outbound_m, corner.speed_m_s, accel)
+        if cut <= allowed:
+            return f"the swing cuts the corner by {cut:.1f} m, AUTO by {corner.auto_cut_m:.1f} m"
+        self._predict_at = self._next_prediction(now, cut, allowed)
+        return None
+
+    def _next_prediction(self, now: float, cut: float, allowed: float) -> float:
+        """When to predict again: half-way to when the cut, closing in as it has since the last prediction, would fit
+        (each tick near it); every 0.3 s while it does not close in. A prediction costs ~0.3 ms: ticks stay cheap."""
+        last, self._last_prediction = self._last_prediction, (now, cut)
+        if last is None or now <= last[0]:
+            return now
+        closing = (last[1] - cut) / (now - last[0])  # m of cut lost per s
+        if closing <= 0.0:
+            return now + 0.3
+        return now + min(1.0, 0.5 * (cut - allowed) / closing)
 
     def _follow_shaped_target(self, position: GlobalPosition | None) -> None:
         """Keep :class:`~executive.autopilot.rover_motion.TargetEstimate` of the autopilot's shaped target in step (the look-ahead's).
@@ -344,7 +362,7 @@ class GoTo(TimedBehaviour):
         """
         if not self.look_ahead or self.method != "setpoint" or self.target is None or position is None:
             return
-        motion = vehicle_motion(self.autopilot.capabilities, self.get("/vehicle/params"))
+        motion = self._motion()
         if motion is None:
             self._estimate = None
             return
@@ -366,14 +384,20 @@ class GoTo(TimedBehaviour):
         following: Waypoint | None = self.get("/mission/next_target")
         if not self.look_ahead or self.method != "setpoint" or following is None or self.target is None or self.target.sample:
             return None
-        params = self.get("/vehicle/params")
         start = self._leg_start or position
-        # by identity: the mission state hands out the same waypoints, the reader a new dict when a parameter comes
-        key = (id(self.target), id(following), id(params), start.lat, start.lon)
+        motion = self._motion()
+        # by identity: the mission state hands out the same waypoints, _motion the same object until a parameter comes
+        key = (id(self.target), id(following), id(motion), start.lat, start.lon)
         if self._corner is None or self._corner[0] != key:
-            motion = vehicle_motion(self.autopilot.capabilities, params)
             self._corner = (key, self._work_out_corner(motion, start, following))
         return self._corner[1]
+
+    def _motion(self) -> RoverMotion | None:
+        """The vehicle's driving by its parameters (``/vehicle/params``): worked out again only when a parameter came."""
+        params = self.get("/vehicle/params")
+        if self._motion_of is None or self._motion_of[0] is not params:
+            self._motion_of = (params, vehicle_motion(self.autopilot.capabilities, params))
+        return self._motion_of[1]
 
     def _work_out_corner(self, motion: RoverMotion | None, start: GlobalPosition, following: Waypoint) -> Corner | None:
         assert self.target is not None
