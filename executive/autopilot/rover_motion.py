@@ -363,6 +363,7 @@ class SCurveLeg:
         snap_m_s4: float = SCURVE_SNAP_M_S4,
     ) -> None:  # fmt: skip
         self.origin, self.destination = origin, destination
+        self.speed_limit_m_s = speed_m_s  # the leg's speed limit (vel_max), whether it reaches it or not
         dn, de = destination[0] - origin[0], destination[1] - origin[1]
         self.length_m = math.hypot(dn, de)
         self.unit = (dn / self.length_m, de / self.length_m) if self.length_m > 0.0 else (0.0, 0.0)

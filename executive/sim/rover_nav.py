@@ -270,7 +270,7 @@ class RoverNavigator:
         pn, pe = p1[0] - un * this.length_m + p2[0], p1[1] - ue * this.length_m + p2[1]
         speed = math.hypot(v1[0] + v2[0], v1[1] + v2[1])
         accel = math.hypot(a1[0] + a2[0], a1[1] + a2[1])
-        speed_min = min(self.speed_max_m_s, self.speed_max_m_s)  # both legs' speed limit (get_speed_along_track)
+        speed_min = min(this.speed_limit_m_s, following.speed_limit_m_s)  # SCurve::get_speed_along_track: each leg's limit
         return math.hypot(pn, pe) < self.motion.corner_radius_m and speed < speed_min and accel < self.motion.lat_accel_m_s2
 
     def _position_control(self, vehicle: Driven, dt: float) -> tuple[float, float]:
