@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import platform
 import sys
 import time
@@ -33,10 +34,16 @@ def _value(row: Row) -> str:
     return f"{row.value:,.0f}" if abs(row.value) >= 1000 else f"{row.value:g}"
 
 
+def _load(row: Row) -> str:
+    return "" if row.load is None else f"{row.load[0]:.1f}-{row.load[1]:.1f}"
+
+
 def table(rows: Sequence[Row]) -> str:
-    """The rows as an aligned text table: figure, target, PASS/FAIL, details."""
-    header = ("benchmark", "figure", "target", "result", "detail")
-    lines = [(r.name, f"{_value(r)} {r.unit}", r.target, "" if r.passed is None else "PASS" if r.passed else "FAIL", r.detail) for r in rows]
+    """The rows as an aligned text table: figure, target, PASS/FAIL, the load average while it ran, details."""
+    header = ("benchmark", "figure", "target", "result", "load", "detail")
+    lines = [
+        (r.name, f"{_value(r)} {r.unit}", r.target, "" if r.passed is None else "PASS" if r.passed else "FAIL", _load(r), r.detail) for r in rows
+    ]
     widths = [max(len(h), *(len(line[i]) for line in lines)) for i, h in enumerate(header[:-1])]
     out = ["  ".join(h.ljust(w) for h, w in zip(header[:-1], widths, strict=True)) + "  " + header[-1]]
     out.append("  ".join("-" * w for w in widths) + "  " + "-" * 6)
@@ -55,8 +62,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     for name in args.only or BENCHMARKS:
         t0 = time.perf_counter()
         print(f"running {name} ...", file=sys.stderr, flush=True)
-        rows += BENCHMARKS[name]()
-        print(f"  {name}: {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+        before = os.getloadavg()[0]
+        produced = BENCHMARKS[name]()
+        after = os.getloadavg()[0]
+        for row in produced:
+            row.load = (before, after)  # the 1-minute load average as the benchmark began and ended
+        rows += produced
+        print(f"  {name}: {time.perf_counter() - t0:.1f} s, load average {before:.1f} -> {after:.1f}", file=sys.stderr, flush=True)
     print(table(rows))
     total = time.perf_counter() - started
     failed = sum(r.passed is False for r in rows)
@@ -67,6 +79,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             "machine": platform.machine(),
             "processor": platform.processor(),
             "system": platform.platform(),
+            "cpus": os.cpu_count(),
         }
         with open(args.json, "w", encoding="utf-8") as f:
             json.dump({"machine": machine, "seconds": round(total, 1), "rows": [r.to_dict() for r in rows]}, f, indent=2)

@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import math
 import statistics
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from executive.assembly import build_runtime
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
-from executive.io.mavlink.link import MemoryLink
+from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink, mavutil
+from executive.io.mavlink.link import Link, MemoryLink, PymavlinkLink
 from executive.mission.model import Mission
 from executive.sim import ArduPilotSim, make_autopilot
 from executive.testing.lockstep import Wire
@@ -34,6 +35,8 @@ class Row:
     passed: bool | None = None
     detail: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    #: The machine's 1-minute load average when the figure was taken (before, after): a figure taken on a busy machine shows it.
+    load: tuple[float, float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -151,6 +154,33 @@ def _filler(mav: mavlink.MAVLink, name: str, boot_ms: int, t_us: int) -> MAVLink
     raise ValueError(name)
 
 
+class MemoryPort(mavutil.mavudp):
+    """pymavlink's UDP connection (its ``recv_msg``, parser and bookkeeping) on datagrams in memory instead of a socket."""
+
+    def __init__(self) -> None:
+        mavutil.mavfile.__init__(self, None, "memory", source_system=1, source_component=EXECUTIVE_COMPONENT)
+        self.incoming: deque[bytes] = deque()
+        self.written: list[bytes] = []
+
+    def recv(self, n: int | None = None) -> bytes:
+        return self.incoming.popleft() if self.incoming else b""
+
+    def write(self, buf: bytes) -> None:
+        self.written.append(bytes(buf))
+
+    def close(self) -> None:
+        pass
+
+    def link(self) -> PymavlinkLink:
+        """The executive's :class:`PymavlinkLink`, built as usual but on this port."""
+        connect = mavutil.mavlink_connection
+        mavutil.mavlink_connection = lambda *args, **kwargs: self
+        try:
+            return PymavlinkLink("memory")
+        finally:
+            mavutil.mavlink_connection = connect
+
+
 class SimLoop:
     """The runtime and the built-in simulated rover (on the mission's autopilot) in one loop on a manual clock, joined by in-memory links.
 
@@ -162,9 +192,15 @@ class SimLoop:
     is inside a timed region, callers time ``runtime.tick``.
     """
 
-    def __init__(self, mission: Mission, *, rate_hz: float = 10.0, filler: bool = True, ekf_ready_after_s: float = 2.0) -> None:
+    def __init__(
+        self, mission: Mission, *, rate_hz: float = 10.0, filler: bool = True, ekf_ready_after_s: float = 2.0, byte_link: bool = False,
+        plugs_for: Callable[[ManualClock], list[Any]] | None = None,
+    ) -> None:  # fmt: skip
+        """``byte_link``: the runtime reads bytes through pymavlink (:class:`MemoryPort` under its :class:`PymavlinkLink`), as
+        from a real port; ``plugs_for(clock)``: the runtime's plugs (recorders)."""
         self.clock = ManualClock(0.0)
-        self.link = MemoryLink()
+        self.port: MemoryPort | None = MemoryPort() if byte_link else None
+        self.link: Link = MemoryLink() if self.port is None else self.port.link()
         self.period_s = 1.0 / rate_hz
         self.ap: ArduPilotSim = make_autopilot(
             "rover", self.clock, HOME, autopilot=mission.autopilot or "ardupilot", ekf_ready_after_s=ekf_ready_after_s
@@ -174,22 +210,50 @@ class SimLoop:
         self.filler = filler
         self._filler_due = dict.fromkeys(FILLER_RATES, 0.0)
         self.messages = 0
-        self.runtime = build_runtime(mission, self.link, self.clock, rate_hz=rate_hz)
+        self._wire_mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=AUTOPILOT_COMPONENT)
+        self._up_parser = mavlink.MAVLink(None)
+        self._up_parser.robust_parsing = True
+        self.runtime = build_runtime(mission, self.link, self.clock, rate_hz=rate_hz, plugs=plugs_for(self.clock) if plugs_for else ())
 
     def step(self) -> int:
         """Deliver what the runtime sent, move the vehicle one period, queue what it sent back; returns how many it sent."""
+        return len(self.step_bytes()) if self.port is not None else self._step_messages()
+
+    def _step_messages(self) -> int:
+        assert isinstance(self.link, MemoryLink)
         sent, self.link.sent = self.link.sent, []
         out: list[MAVLinkMessage] = []
         for msg in self.uplink.carry(sent):
             out += self.ap.handle(msg)
-        self.clock.advance(self.period_s)
-        out += self.ap.update()
-        if self.filler:
-            out += self._filler_messages()
+        out += self._vehicle_step()
         received = self.downlink.carry(out)
         self.link.incoming.extend(received)
         self.messages += len(received)
         return len(received)
+
+    def _vehicle_step(self) -> list[MAVLinkMessage]:
+        self.clock.advance(self.period_s)
+        out = self.ap.update()
+        if self.filler:
+            out += self._filler_messages()
+        return out
+
+    def step_bytes(self) -> list[bytes]:
+        """:meth:`step` over the byte link: returns the datagrams queued for the runtime (one message each, as the simulator sends)."""
+        assert self.port is not None
+        written, self.port.written = self.port.written, []
+        out: list[MAVLinkMessage] = []
+        for data in written:
+            for msg in self._up_parser.parse_buffer(data) or []:
+                out += self.ap.handle(msg)
+        out += self._vehicle_step()
+        datagrams = []
+        for msg in out:
+            msg.pack(self._wire_mav)
+            datagrams.append(bytes(msg.get_msgbuf()))
+        self.port.incoming.extend(datagrams)
+        self.messages += len(datagrams)
+        return datagrams
 
     def _filler_messages(self) -> list[MAVLinkMessage]:
         now = self.clock.now()

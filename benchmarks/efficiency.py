@@ -1,7 +1,9 @@
 """Mission efficiency: the executive's GUIDED legs against the autopilot's own AUTO on the same waypoints.
 
 In process, lock-step on a manual clock (deterministic): the example missions ``rover_square`` and
-``boat_survey`` on their simulated vehicle, from the mission's home.
+``boat_survey`` on their simulated vehicle, from the mission's home, with the parameters ArduPilot's
+SITL starts that frame with (:data:`executive.sim.autopilot.SITL_PARAMS`: WP_SPEED 5, WP_RADIUS 3), so
+the figures stand beside the real firmware's (:mod:`benchmarks.recorded`).
 
 - GUIDED: the executive runs the mission (its ``waypoints`` tree, its own tick loop, on
   :class:`executive.testing.Lockstep`); timed from the autopilot entering
@@ -9,21 +11,28 @@ In process, lock-step on a manual clock (deterministic): the example missions ``
 - AUTO: the same waypoints uploaded as a mission (NAV_WAYPOINTs, as a ground station would), the
   vehicle armed and put in AUTO; timed from entering AUTO to the same point.
 
-Both run at the vehicle's default speed (no waypoint sets one). The row is GUIDED time / AUTO time.
+The row is GUIDED time / AUTO time, and says what AUTO it compared against: the simulated
+ArduRover's (here), or a recorded run of the real firmware (:mod:`benchmarks.recorded`). Its detail
+gives, per corner (each intermediate waypoint), the largest distance of the vehicle from the route
+there in each mode: the look-ahead is meant to cut no corner more than AUTO does.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from benchmarks.common import Row
 from executive.clock import ManualClock
+from executive.geo import distance_bearing
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 from executive.mission.loader import load_mission
-from executive.mission.model import Mission
+from executive.mission.model import Mission, SimulatorOptions
 from executive.sim import ArduPilotSim, make_autopilot
-from executive.sim.options import simulated_home
+from executive.sim.autopilot import SITL_PARAMS
+from executive.sim.options import firmware_options, simulated_home
 from executive.testing import Lockstep
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
@@ -31,14 +40,62 @@ TARGET_RATIO = 1.10
 RATE_HZ = 10.0
 EKF_READY_S = 2.0
 LIMIT_S = 600.0
+#: What the simulated AUTO is: named in the row, so a figure is never taken for the real firmware's.
+AGAINST_SIMULATOR = "our simulated ArduRover's AUTO (SITL's parameters)"
+
+Point = tuple[float, float]
 
 
 @dataclass(frozen=True)
 class Timing:
-    """One run: vehicle time from entering the driving mode to the last waypoint."""
+    """One run: vehicle time from entering the driving mode to the last waypoint, and the track meanwhile
+    ((seconds since the mode was entered, lat, lon))."""
 
     mode: str
     seconds: float
+    track: tuple[tuple[float, float, float], ...] = field(default=(), repr=False)
+
+
+def with_sitl_parameters(mission: Mission) -> Mission:
+    """The mission with its simulated vehicle set as ArduPilot's SITL starts that frame (the mission's own parameters on top)."""
+    options = mission.simulator or SimulatorOptions()
+    params = {**SITL_PARAMS.get(options.model or mission.vehicle, {}), **options.params}
+    return mission.model_copy(update={"simulator": options.model_copy(update={"params": params})})
+
+
+def route_of(mission: Mission) -> list[Point]:
+    """The route as driven: the vehicle's start (the mission's home), then the waypoints."""
+    home = simulated_home(mission)
+    return [(home[0], home[1]), *((w.lat, w.lon) for w in mission.waypoints)]
+
+
+def _to_local(origin: Point, point: Point) -> tuple[float, float]:
+    distance, bearing = distance_bearing(origin[0], origin[1], point[0], point[1])
+    return distance * math.cos(math.radians(bearing)), distance * math.sin(math.radians(bearing))
+
+
+def _segment_distance(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length2))
+    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
+
+
+def corner_cuts(track: Sequence[tuple[float, ...]], route: Sequence[Point]) -> list[float]:
+    """Per intermediate waypoint: the largest distance from the route of the track points near it (nearer it than half
+    of either leg through it), metres. Track points end in (lat, lon)."""
+    if len(route) < 3:
+        return []
+    origin = route[0]
+    local = [_to_local(origin, p) for p in route]
+    points = [_to_local(origin, (p[-2], p[-1])) for p in track]
+    cuts = []
+    for k in range(1, len(local) - 1):
+        before, corner, after = local[k - 1], local[k], local[k + 1]
+        reach = min(math.dist(before, corner), math.dist(corner, after)) / 2.0
+        near = [p for p in points if math.dist(p, corner) <= reach]
+        cuts.append(max((min(_segment_distance(p, before, corner), _segment_distance(p, corner, after)) for p in near), default=math.nan))
+    return cuts
 
 
 class _Route:
@@ -61,7 +118,7 @@ class _Route:
 
 
 class _Stopwatch:
-    """Vehicle time from the autopilot first being armed in ``mode`` to the vehicle at the last waypoint."""
+    """Vehicle time from the autopilot first being armed in ``mode`` to the vehicle at the last waypoint; the track meanwhile."""
 
     def __init__(self, mission: Mission, mode: str) -> None:
         self.mission = mission
@@ -69,19 +126,22 @@ class _Stopwatch:
         self.route = _Route(mission)
         self.entered: float | None = None
         self.seconds: float | None = None
+        self.track: list[tuple[float, float, float]] = []
 
     def observe(self, now: float, ap: ArduPilotSim) -> bool:
         """Look at the vehicle now; True once it is at the last waypoint."""
         if self.entered is None and ap.mode == self.mode and ap.armed:
             self.entered = now
-        if self.entered is not None and self.seconds is None and self.route.done(ap):
-            self.seconds = now - self.entered
+        if self.entered is not None and self.seconds is None:
+            self.track.append((now - self.entered, ap.vehicle.lat, ap.vehicle.lon))
+            if self.route.done(ap):
+                self.seconds = now - self.entered
         return self.seconds is not None
 
     def timing(self) -> Timing:
         if self.seconds is None:
             raise RuntimeError(f"{self.mission.name}: {self.mode} did not reach the last waypoint within {LIMIT_S:g} s")
-        return Timing(self.mode, self.seconds)
+        return Timing(self.mode, self.seconds, tuple(self.track))
 
 
 def time_guided(mission: Mission, rate_hz: float = RATE_HZ) -> Timing:
@@ -95,7 +155,7 @@ def time_guided(mission: Mission, rate_hz: float = RATE_HZ) -> Timing:
 def time_auto(mission: Mission, period_s: float = 1.0 / RATE_HZ) -> Timing:
     """The autopilot drives the same waypoints as its own AUTO mission."""
     clock = ManualClock(0.0)
-    ap = make_autopilot(mission.vehicle, clock, simulated_home(mission), ekf_ready_after_s=EKF_READY_S)
+    ap = make_autopilot(mission.vehicle, clock, simulated_home(mission), ekf_ready_after_s=EKF_READY_S, **firmware_options(mission))
     mav = encoder(1, EXECUTIVE_COMPONENT)
 
     def send(msg: mavlink.MAVLink_message) -> list[mavlink.MAVLink_message]:
@@ -125,23 +185,40 @@ def time_auto(mission: Mission, period_s: float = 1.0 / RATE_HZ) -> Timing:
     return watch.timing()
 
 
-def ratio_row(name: str) -> Row:
-    """The row for one example mission: GUIDED / AUTO vehicle time to its last waypoint."""
-    mission = load_mission(MISSIONS / f"{name}.yaml")
-    guided, auto = time_guided(mission), time_auto(mission)
+def _cuts(cuts: Sequence[float]) -> str:
+    return "/".join(f"{c:.1f}" for c in cuts)
+
+
+def ratio_row(name: str, guided: Timing, auto: Timing, route: Sequence[Point], against: str, vehicle: str) -> Row:
+    """The row for one mission: GUIDED / AUTO time to its last waypoint, what AUTO it was, the corners cut in each."""
     ratio = guided.seconds / auto.seconds
+    guided_cuts, auto_cuts = corner_cuts(guided.track, route), corner_cuts(auto.track, route)
+    wider = sum(g > a + 0.05 for g, a in zip(guided_cuts, auto_cuts, strict=True))
     return Row(
         "efficiency",
-        f"GUIDED / AUTO time, {name} ({mission.vehicle})",
+        f"GUIDED / AUTO time, {name} ({vehicle}), against {against}",
         round(ratio, 3),
         "x",
         f"<= {TARGET_RATIO:.2f}x",
         ratio <= TARGET_RATIO,
-        f"GUIDED {guided.seconds:.1f} s, AUTO {auto.seconds:.1f} s (vehicle time, lock-step at {RATE_HZ:g} Hz)",
-        {"guided_s": round(guided.seconds, 2), "auto_s": round(auto.seconds, 2)},
-    )
+        f"GUIDED {guided.seconds:.1f} s, AUTO {auto.seconds:.1f} s; farthest from the route per corner (m): GUIDED {_cuts(guided_cuts)}, "
+        f"AUTO {_cuts(auto_cuts)}; {wider} corner(s) cut over 5 cm more than AUTO",
+        {
+            "guided_s": round(guided.seconds, 2), "auto_s": round(auto.seconds, 2), "against": against,
+            "guided_cuts_m": [round(c, 2) for c in guided_cuts], "auto_cuts_m": [round(c, 2) for c in auto_cuts],
+        },
+    )  # fmt: skip
+
+
+def simulated_row(name: str) -> Row:
+    """One example mission on our simulator, SITL's parameters, both modes."""
+    mission = with_sitl_parameters(load_mission(MISSIONS / f"{name}.yaml"))
+    guided, auto = time_guided(mission), time_auto(mission)
+    return ratio_row(name, guided, auto, route_of(mission), AGAINST_SIMULATOR, mission.vehicle)
 
 
 def run(missions: tuple[str, ...] = ("rover_square", "boat_survey")) -> list[Row]:
-    """One row per example mission."""
-    return [ratio_row(name) for name in missions]
+    """One row per example mission on our simulator; one more per mission recorded on the real firmware, if any."""
+    from benchmarks import recorded
+
+    return [simulated_row(name) for name in missions] + recorded.rows(missions)

@@ -21,6 +21,7 @@ from executive.behaviours.reacting import READS, Reacting
 from executive.clock import TickClock
 from executive.intervention import rc_takeover
 from executive.io.instruments import open_sampler
+from executive.io.mavlink.parameters import wanted_parameters
 from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionStatus
@@ -214,9 +215,12 @@ class Runtime:
                 self.reader.drain()
             if len(self.reader.autopilots_heard) > 1:
                 raise SeveralAutopilots(self.reader.autopilots_heard)
-        param = self.autopilot.capabilities.mode_switch_param
-        if param is not None:  # known by pre-flight: the mission's switches are checked against it before arming
+        # known by pre-flight: the mission's switches are checked against the mode channel before arming, and the
+        # look-ahead drives by the vehicle's own parameters (ParameterWatch asks again for any not answered)
+        wanted = wanted_parameters(self.autopilot)
+        for param in wanted:
             self.autopilot.read_parameter(param)
+        if wanted:
             self.commander.flush()
         return True
 

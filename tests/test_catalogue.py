@@ -59,8 +59,8 @@ def test_parameters_come_from_the_signature_with_units_defaults_and_mission_valu
     assert set_mode is not None and set_mode.param("mode").required  # type: ignore[union-attr]
     speed = catalogue().get("speed_within")
     assert speed is not None and (speed.param("limit").type, speed.param("limit").unit) == ("range", "m/s")  # type: ignore[union-attr]
-    braking = go_to.param("braking_m_s2")
-    assert braking is not None and braking.unit == "m/s²"
+    resend = go_to.param("resend_s")
+    assert resend is not None and (resend.unit, resend.default) == ("s", 1.0)
 
 
 def test_guards_take_their_debounce_with_their_own_figures_as_defaults():

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from executive.autopilot.mavlink_port import MavlinkPort, ahead_of
 from executive.autopilot.port import Capabilities, Request, VtolState
+from executive.autopilot.rover_motion import MOTION_PARAMS
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.state import GlobalPosition, HomePosition
@@ -32,6 +33,7 @@ class ArduPilotPort(MavlinkPort):
             takeoff_alt_amsl=False,
             first_item_seq=1,
             mode_switch_param=MODE_SWITCH_PARAMS.get(profile.kind),
+            motion_params=MOTION_PARAMS if profile.kind in ("rover", "boat") else (),
         )
 
     def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:

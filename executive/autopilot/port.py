@@ -44,6 +44,9 @@ class Capabilities:
     first_item_seq: int  # the seq of the route's first waypoint on the autopilot: 1 after ArduPilot's home item 0, 0 on PX4
     #: The parameter naming the RC channel whose position sets the mode by itself (ArduRover MODE_CH); None: no such channel.
     mode_switch_param: str | None = None
+    #: Parameters that say how the vehicle drives to a point, read at pre-flight for GoTo's look-ahead (ArduRover:
+    #: executive.autopilot.rover_motion.MOTION_PARAMS); empty: its driving is not modelled, every waypoint is a stop.
+    motion_params: tuple[str, ...] = ()
 
 
 class AutopilotPort(Protocol):

@@ -12,12 +12,14 @@ from ``tree.setup``; the current leg's waypoint comes from ``/mission/target``.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Literal
 
 from py_trees.common import Status
 
 from executive import blackboard, frames, geo
 from executive.autopilot import AutopilotPort, Request, VtolState
+from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
 from executive.seabed import depth_for_altitude
@@ -175,10 +177,21 @@ class Disarm(Arm):
         return not self.get("/vehicle/armed")
 
 
-#: GoTo's look-ahead: the time the next target takes to act (telemetry's age, a tick, the link), s ...
-LOOK_AHEAD_LEAD_S = 0.5
-#: ... and the braking the autopilot's stop point is assumed to use, m/s/s (ArduRover's WP_ACCEL/ATC_ACCEL_MAX are 1-2).
-LOOK_AHEAD_BRAKING_M_S2 = 1.0
+#: GoTo's look-ahead predicts the path of the autopilot's shaped target, not the vehicle's: it keeps this share of AUTO's
+#: cut of the corner, the rest left for how the vehicle follows its target (on the simulated rover the vehicle cut up
+#: to 5 % more than the target did when the switch was timed to AUTO's cut exactly).
+CUT_SHARE = 0.85
+
+
+@dataclass(frozen=True, slots=True)
+class Corner:
+    """A waypoint GoTo drives through: the vehicle's driving, the turn, the next leg, its speed, and what AUTO would cut."""
+
+    motion: RoverMotion
+    turn_rad: float
+    outbound_m: float
+    speed_m_s: float
+    auto_cut_m: float
 
 
 class GoTo(TimedBehaviour):
@@ -200,25 +213,28 @@ class GoTo(TimedBehaviour):
 
     With ``look_ahead``, a waypoint that needs no stop (another follows, ``/mission/next_target``,
     and it is not a sample point) is driven through: SUCCESS, so the next leg's target goes out,
-    once the vehicle is within :meth:`pass_distance_m` of it. ArduRover takes a GUIDED position
+    as soon as :meth:`drive_through` says so. ArduRover takes a GUIDED position
     target as a stop point (AR_WPNav::set_desired_location_expect_fast_update, no next destination:
-    Rover/mode_guided.cpp) and starts braking for it, while its AUTO drives a waypoint with a next
-    one through (a "fast waypoint", Rover/mode_auto.cpp do_nav_wp); a target replaced before the
-    vehicle brakes keeps its speed (the shaped target carries its velocity over:
-    AR_PosControl::input_pos_target). The last leg and sample points stop within the acceptance radius.
+    Rover/mode_guided.cpp) and brakes for it on its shaped approach, while its AUTO drives a waypoint
+    with a next one through (a "fast waypoint", Rover/mode_auto.cpp do_nav_wp); a target replaced
+    under way keeps the shaped velocity, which swings round toward the new one
+    (AR_PosControl::input_pos_target). The switch is as early as cuts the corner no more than the
+    autopilot's own AUTO would, both worked out from the vehicle's parameters (read at pre-flight,
+    ``/vehicle/params``; :mod:`executive.autopilot.rover_motion`). Only for an autopilot whose driving
+    is modelled so (ArduRover: ``capabilities.motion_params``); elsewhere every waypoint is a stop.
+    A corner a skid-steered rover would pivot at (sharper than WP_PIVOT_ANGLE) is a stop, as in AUTO.
+    The last leg and sample points stop within the acceptance radius.
     """
 
     reads = (
         "/mission/target", "/mission/next_target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position",
-        "/vehicle/statustext", "/vehicle/rangefinder", blackboard.command_key("DO_REPOSITION"),
+        "/vehicle/statustext", "/vehicle/rangefinder", "/vehicle/params", blackboard.command_key("DO_REPOSITION"),
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     from_mission = {"acceptance_radius_m": "limits.acceptance_radius_m", "leg_timeout_s": "limits.leg_timeout_s"}
     param_docs = {
-        "look_ahead": "a waypoint that needs no stop is driven through toward the next (setpoint only)",
-        "lead_s": "look-ahead: the time the next target takes to act (telemetry's age, a tick, the link)",
-        "braking_m_s2": "look-ahead: the braking the autopilot's stop point is assumed to use",
+        "look_ahead": "a waypoint that needs no stop is driven through toward the next (setpoint only, ArduRover)",
     }
 
     def __init__(
@@ -229,8 +245,6 @@ class GoTo(TimedBehaviour):
         resend_s: float = 1.0,
         method: Literal["setpoint", "reposition"] = "setpoint",
         look_ahead: bool = False,
-        lead_s: float = LOOK_AHEAD_LEAD_S,
-        braking_m_s2: float = LOOK_AHEAD_BRAKING_M_S2,
     ) -> None:
         if method not in ("setpoint", "reposition"):
             raise ValueError(f"method must be setpoint or reposition, not {method!r}")
@@ -240,11 +254,13 @@ class GoTo(TimedBehaviour):
         self.resend_s = resend_s
         self.method = method
         self.look_ahead = look_ahead
-        self.lead_s = lead_s
-        self.braking_m_s2 = braking_m_s2
         self.distance_m: float | None = None
         self.bearing_deg: float | None = None
         self._ticket: Request | None = None
+        # the autopilot's shaped target, and the point it heads for: kept from one leg to the next (the firmware keeps it)
+        self._estimate: TargetEstimate | None = None
+        self._estimate_goal: tuple[float, float] | None = None
+        self._motion_of: tuple[object, RoverMotion | None] | None = None  # (the parameters, the driving they give)
 
     def initialise(self) -> None:
         super().initialise()
@@ -254,6 +270,10 @@ class GoTo(TimedBehaviour):
         self._ticket = None
         self._refusal: str | None = None
         self._seabed_depth: float | None = None  # an altitude leg's last depth target
+        self._leg_start: GlobalPosition | None = None  # where the vehicle was when the leg began
+        self._predict_at = -math.inf  # the look-ahead's next prediction of the swing, and its last (time, cut)
+        self._last_prediction: tuple[float, float] | None = None
+        self._corner: tuple[tuple[object, ...], Corner | None] | None = None  # (what it was worked out for, the corner)
 
     def update(self) -> Status:
         target = self.get("/mission/target")
@@ -263,6 +283,9 @@ class GoTo(TimedBehaviour):
             self.feedback_message = "no active leg"
             return Status.FAILURE
         position: GlobalPosition | None = self.get("/vehicle/position")
+        if self._leg_start is None:
+            self._leg_start = position
+        self._follow_shaped_target(position)
         self._send(position)
         leg = f"leg {self.get('/mission/leg_index') + 1}/{self.get('/mission/leg_count')}"
         if position is not None:
@@ -270,9 +293,9 @@ class GoTo(TimedBehaviour):
             if self.distance_m <= self.acceptance_radius_m:
                 self.feedback_message = f"{leg}: reached ({self.distance_m:.1f} m)"
                 return Status.SUCCESS
-            through = self.pass_distance_m(position)
-            if through is not None and self.distance_m <= through:
-                self.feedback_message = f"{leg}: driven through ({self.distance_m:.1f} m, within {through:.1f} m)"
+            through = self.drive_through(position, self.distance_m)
+            if through is not None:
+                self.feedback_message = f"{leg}: driven through ({self.distance_m:.1f} m out; {through})"
                 return Status.SUCCESS
         if self.elapsed > self.leg_timeout_s:
             short = f", {self.distance_m:.1f} m short" if self.distance_m is not None else ""
@@ -285,26 +308,111 @@ class GoTo(TimedBehaviour):
             self.feedback_message = f"{leg}: {self.distance_m:.1f} m at {self.bearing_deg:03.0f}°"
         return Status.RUNNING
 
-    def pass_distance_m(self, position: GlobalPosition) -> float | None:
-        """How near the waypoint the next leg's target goes out; None when this leg ends in a stop.
+    def drive_through(self, position: GlobalPosition, distance_m: float) -> str | None:
+        """Whether the next leg's target goes out now, ``distance_m`` short of the waypoint (why, for the feedback); None: not yet,
+        or this leg ends in a stop.
 
-        Far enough ahead that the autopilot has not begun braking for the stop point yet: the distance
-        covered in ``lead_s`` (the telemetry's age, a tick, the link) plus the braking distance at
-        ``braking_m_s2``, at the present ground speed. Turn-dependent, as AR_WPNav bounds a fast
-        waypoint's corner (SCurve::advance_target_along_track keeps the turn's apex within
-        WP_RADIUS): for a turn of angle t, at most 2 x acceptance radius / sin(t / 2), so a sharp turn
-        is not cut wider than a gentle one. Never less than the acceptance radius.
+        The corner is worked out once (:meth:`corner`); then each tick the swing a switch now would make
+        is predicted (:func:`~executive.autopilot.rover_motion.guided_switch_cut_m`) from the autopilot's
+        shaped target as the executive follows it (:meth:`_follow_shaped_target`), and taken as soon as it
+        cuts the corner by no more than :data:`CUT_SHARE` of AUTO's cut.
         """
+        corner = self.corner(position)
+        if corner is None:
+            return None
+        motion, estimate = corner.motion, self._estimate
+        accel: float | None = None
+        if estimate is not None:  # the autopilot's own target: where the swing starts
+            assert self.target is not None
+            (n, e), (vn, ve), (an, ae) = estimate.target.pos, estimate.target.vel, estimate.target.acc
+            cn, ce = estimate.ne(self.target.lat, self.target.lon)
+            ahead, speed = math.hypot(cn - n, ce - e), math.hypot(vn, ve)
+            accel = (an * vn + ae * ve) / speed if speed > 0.0 else 0.0
+        else:  # the vehicle, moved on by its position's age
+            speed = position.ground_speed_m_s
+            ahead = max(0.0, distance_m - speed * max(0.0, self.clock.now() - position.time))
+        if ahead > corner.auto_cut_m + speed * speed / motion.shaping_accel_m_s2 + motion.corner_radius_m:
+            return None  # too far out for any swing to stay within the cut: not worth predicting
+        now, allowed = self.clock.now(), CUT_SHARE * corner.auto_cut_m
+        if now < self._predict_at:
+            return None
+        cut = guided_switch_cut_m(motion, ahead, speed, corner.turn_rad, corner.outbound_m, corner.speed_m_s, accel)
+        if cut <= allowed:
+            return f"the swing cuts the corner by {cut:.1f} m, AUTO by {corner.auto_cut_m:.1f} m"
+        self._predict_at = self._next_prediction(now, cut, allowed)
+        return None
+
+    def _next_prediction(self, now: float, cut: float, allowed: float) -> float:
+        """When to predict again: half-way to when the cut, closing in as it has since the last prediction, would fit
+        (each tick near it); every 0.3 s while it does not close in. A prediction costs ~0.3 ms: ticks stay cheap."""
+        last, self._last_prediction = self._last_prediction, (now, cut)
+        if last is None or now <= last[0]:
+            return now
+        closing = (last[1] - cut) / (now - last[0])  # m of cut lost per s
+        if closing <= 0.0:
+            return now + 0.3
+        return now + min(1.0, 0.5 * (cut - allowed) / closing)
+
+    def _follow_shaped_target(self, position: GlobalPosition | None) -> None:
+        """Keep :class:`~executive.autopilot.rover_motion.TargetEstimate` of the autopilot's shaped target in step (the look-ahead's).
+
+        Started from the vehicle when there is none, when it was not kept up (the autopilot's controller
+        starts again from the vehicle after a pause, AR_PosControl::init) or when it strayed farther from
+        the vehicle than twice WP_RADIUS; shaped toward the target last sent, up to now.
+        """
+        if not self.look_ahead or self.method != "setpoint" or self.target is None or position is None:
+            return
+        motion = self._motion()
+        if motion is None:
+            self._estimate = None
+            return
+        now, here = self.clock.now(), (position.lat, position.lon)
+        estimate = self._estimate
+        stale = estimate is None or now - estimate.time > 0.5 or estimate.off_by_m(here) > max(2.0 * motion.radius_m, 5.0)
+        if stale or self._estimate_goal is None:
+            estimate = TargetEstimate(motion, self.target.speed_m_s or motion.speed_m_s, here, now)
+            age = max(0.0, now - position.time)
+            n, e = position.vn_m_s * age, position.ve_m_s * age
+            estimate.target.reset((n, e), (position.vn_m_s, position.ve_m_s))  # where the vehicle is by now
+            self._estimate, self._estimate_goal = estimate, (self.target.lat, self.target.lon)
+        assert estimate is not None and self._estimate_goal is not None
+        estimate.advance(self._estimate_goal, now)
+        self._estimate_goal = (self.target.lat, self.target.lon)  # from this tick on the autopilot heads for this leg's waypoint
+
+    def corner(self, position: GlobalPosition) -> Corner | None:
+        """The waypoint as a corner to drive through (its turn, the next leg, AUTO's cut); None when the leg ends in a stop."""
         following: Waypoint | None = self.get("/mission/next_target")
         if not self.look_ahead or self.method != "setpoint" or following is None or self.target is None or self.target.sample:
             return None
-        speed = position.ground_speed_m_s
-        ahead = speed * self.lead_s + speed * speed / (2.0 * self.braking_m_s2)
-        inbound = geo.distance_bearing(position.lat, position.lon, self.target.lat, self.target.lon)[1]
-        outbound = geo.distance_bearing(self.target.lat, self.target.lon, following.lat, following.lon)[1]
+        start = self._leg_start or position
+        motion = self._motion()
+        # by identity: the mission state hands out the same waypoints, _motion the same object until a parameter comes
+        key = (id(self.target), id(following), id(motion), start.lat, start.lon)
+        if self._corner is None or self._corner[0] != key:
+            self._corner = (key, self._work_out_corner(motion, start, following))
+        return self._corner[1]
+
+    def _motion(self) -> RoverMotion | None:
+        """The vehicle's driving by its parameters (``/vehicle/params``): worked out again only when a parameter came."""
+        params = self.get("/vehicle/params")
+        if self._motion_of is None or self._motion_of[0] is not params:
+            self._motion_of = (params, vehicle_motion(self.autopilot.capabilities, params))
+        return self._motion_of[1]
+
+    def _work_out_corner(self, motion: RoverMotion | None, start: GlobalPosition, following: Waypoint) -> Corner | None:
+        assert self.target is not None
+        if motion is None:
+            return None
+        inbound_m, inbound = geo.distance_bearing(start.lat, start.lon, self.target.lat, self.target.lon)
+        outbound_m, outbound = geo.distance_bearing(self.target.lat, self.target.lon, following.lat, following.lon)
         turn = math.radians(abs((outbound - inbound + 180.0) % 360.0 - 180.0))
-        apex_bound = 2.0 * self.acceptance_radius_m / max(math.sin(turn / 2.0), 1e-6)
-        return max(self.acceptance_radius_m, min(ahead, apex_bound))
+        if motion.pivots and math.degrees(turn) > motion.pivot_angle_deg:
+            return None  # AR_WPNav: a corner it would pivot at is never a fast waypoint
+        speed = self.target.speed_m_s or motion.speed_m_s
+        auto_cut = auto_corner_cut_m(motion, inbound_m, outbound_m, turn, speed)
+        if auto_cut is None:
+            return None  # AUTO would stop there too
+        return Corner(motion, turn, outbound_m, speed, auto_cut)
 
     def _send(self, position: GlobalPosition | None) -> None:
         assert self.target is not None

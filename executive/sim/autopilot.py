@@ -13,6 +13,7 @@ real ArduRover did, quirks included: the firmware is the reference, not the MAVL
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import math
 from abc import ABC, abstractmethod
@@ -21,10 +22,12 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import ClassVar
 
+from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS, RoverMotion
 from executive.clock import Clock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.sim.mission_store import MissionStore, StoredCommand
 from executive.sim.proximity import Proximity
+from executive.sim.rover_nav import RoverNavigator
 from executive.sim.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.vehicles import PROFILES, VehicleProfile
 
@@ -134,6 +137,7 @@ class ArduPilotSim(ABC):
     EKF_CHECK_ITERATIONS_MAX: ClassVar[int] = 10
     MISSION_STORE: ClassVar[type[MissionStore]] = MissionStore  # the firmware's side of the mission protocol
     PARAMS: ClassVar[Mapping[str, float]] = {}  # parameters answered to PARAM_REQUEST_READ, with the firmware's defaults
+    INT_PARAMS: ClassVar[frozenset[str]] = frozenset({"MODE_CH", "FLTMODE_CH"})  # answered as integers (MAV_PARAM_TYPE_INT8), the rest REAL32
 
     def __init__(
         self,
@@ -454,7 +458,8 @@ class ArduPilotSim(ABC):
         if msg.param_index >= 0:
             name = names[msg.param_index] if msg.param_index < len(names) else ""
         if name in self.params:
-            self._emit(self._mav.param_value_encode(name.encode(), self.params[name], _M.MAV_PARAM_TYPE_INT8, len(names), names.index(name)))
+            kind = _M.MAV_PARAM_TYPE_INT8 if name in self.INT_PARAMS else _M.MAV_PARAM_TYPE_REAL32
+            self._emit(self._mav.param_value_encode(name.encode(), self.params[name], kind, len(names), names.index(name)))
 
     def _on_set_mode(self, msg: MAVLinkMessage) -> None:
         # ArduPilot acks the SET_MODE message with a COMMAND_ACK whose command is the message id (11)
@@ -696,6 +701,21 @@ class ArduPilotSim(ABC):
         return self._mav.autopilot_version_encode(capabilities, version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, 0)
 
 
+#: How the simulated ArduRover vehicles respond to the autopilot (their motors, hull and the throttle and steering
+#: controllers; not the firmware's parameters): the speed's lag and the least turning radius (SITL's rover and motorboat
+#: steer with a 1.8 m turning circle: libraries/SITL/SIM_Rover.h, SIM_Sailboat.cpp).
+ROVER_RESPONSE = {"speed_lag_s": 0.3, "min_turn_radius_m": 0.9}
+BOAT_RESPONSE = {"speed_lag_s": 0.5, "min_turn_radius_m": 0.9}
+
+#: The parameters ArduPilot's SITL starts each frame with (Tools/autotest/default_params/rover.parm, and for the
+#: motorboat frame motorboat.parm on top; Tools/autotest/pysim/vehicleinfo.py): how the real firmware drove in the
+#: recordings of tests/data/ardurover/. Give them as ``params`` to drive as SITL does.
+SITL_PARAMS: Mapping[str, Mapping[str, float]] = MappingProxyType({
+    "rover": MappingProxyType({"WP_SPEED": 5.0, "CRUISE_SPEED": 5.0, "WP_RADIUS": 3.0}),
+    "boat": MappingProxyType({"WP_SPEED": 5.0, "CRUISE_SPEED": 5.0, "WP_RADIUS": 3.0, "FRAME_CLASS": 2.0}),
+})  # fmt: skip
+
+
 class ArduRoverSim(ArduPilotSim):
     """ArduRover: a rover, or a boat (FRAME_CLASS=2), whose modes drive a :class:`SurfaceVehicle`.
 
@@ -704,11 +724,24 @@ class ArduRoverSim(ArduPilotSim):
     RTL drives home, then stops or loiters, staying in RTL as the firmware does. AUTO drives to each
     NAV_WAYPOINT of the mission in turn, then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
     refused without a mission ("No Mission. Can't set AUTO.").
+
+    GUIDED, AUTO and RTL drive as the firmware's navigation does (:class:`~executive.sim.rover_nav.RoverNavigator`:
+    GUIDED's shaped stop points, AUTO's S-curves and fast waypoints, pivots), by the parameters the
+    vehicle has (:attr:`params`: the firmware's defaults unless set; :data:`SITL_PARAMS` as SITL starts).
     """
 
     FIRMWARE = "ArduRover"
     READY_TEXT = "Ready to drive"
-    PARAMS: ClassVar[Mapping[str, float]] = {"MODE_CH": 8}  # Rover/Parameters.cpp, MODE_CHANNEL 8 in Rover/config.h
+    #: Answered to PARAM_REQUEST_READ: MODE_CH (Rover/Parameters.cpp, MODE_CHANNEL 8 in Rover/config.h), CRUISE_SPEED
+    #: (Rover/config.h CRUISE_SPEED 2), and the navigation's parameters with the firmware's defaults.
+    #: SERVO1_FUNCTION 26 (GroundSteering) and SERVO3_FUNCTION 70 (Throttle): ArduRover's default outputs (Rover/Parameters.cpp).
+    PARAMS: ClassVar[Mapping[str, float]] = {
+        "MODE_CH": 8, "CRUISE_SPEED": 2.0, "FRAME_CLASS": 1.0, "SERVO1_FUNCTION": 26.0, "SERVO3_FUNCTION": 70.0, **FIRMWARE_DEFAULTS,
+    }  # fmt: skip
+    INT_PARAMS: ClassVar[frozenset[str]] = frozenset({
+        "MODE_CH", "FRAME_CLASS", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE", "SERVO1_FUNCTION", "SERVO3_FUNCTION",
+    })  # fmt: skip
+    SKID_STEERING: ClassVar[bool] = False  # SERVO1/3_FUNCTION ThrottleLeft/Right: pivot turns (Rover.cpp set_turn_params)
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
     PILOT_DRIVEN_MODES: ClassVar[frozenset[str]] = frozenset({"MANUAL", "ACRO", "STEERING"})
     STICK_DEADZONE_US: ClassVar[int] = 30  # RC_DZ
@@ -723,7 +756,9 @@ class ArduRoverSim(ArduPilotSim):
     _destination: tuple[float, float] | None = None  # what the mode reports as its target
     _driving = False  # on the way to _destination
     _loitering = False  # holding _destination within the loiter radius
-    _guided_speed: float | None = None
+    _nav: RoverNavigator | None = None  # AR_WPNav, from the last mode entry that initialised it
+    limits: Limits
+    motion: RoverMotion
     _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
     _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
     _auto_hold_until = 0.0  # elapsed_s at which a waypoint's hold time ends
@@ -733,11 +768,35 @@ class ArduRoverSim(ArduPilotSim):
         return self.profile.mav_type == _M.MAV_TYPE_SURFACE_BOAT
 
     @property
-    def limits(self) -> Limits:
+    def base_limits(self) -> Limits:
+        """The vehicle's own limits, before the firmware's parameters."""
         return BOAT_LIMITS if self.is_boat else ROVER_LIMITS
 
+    @property
+    def response(self) -> Mapping[str, float]:
+        """How the vehicle responds to the autopilot's speed and turn demands (:data:`ROVER_RESPONSE`)."""
+        return BOAT_RESPONSE if self.is_boat else ROVER_RESPONSE
+
     def _make_vehicle(self, home: Home) -> VehicleModel:
-        return SurfaceVehicle(home[0], home[1], home[2], self.limits)
+        self.motion = RoverMotion.from_params(self.params, skid_steering=self.SKID_STEERING)
+        base = self.base_limits
+        # the firmware's parameters set the cruise speed, the acceleration and the braking of the modes that do not
+        # navigate (LOITER, a stop); a top speed below WP_SPEED would not be the vehicle the parameters were set for
+        self.limits = dataclasses.replace(
+            base, cruise_m_s=self.motion.speed_m_s, max_m_s=max(base.max_m_s, self.motion.speed_m_s),
+            accel_m_s2=self.motion.accel_max_m_s2, decel_m_s2=self.motion.decel_m_s2, **self.response,
+        )  # fmt: skip
+        return self._vehicle_model(home, self.limits)
+
+    def _vehicle_model(self, home: Home, limits: Limits) -> SurfaceVehicle:
+        return SurfaceVehicle(home[0], home[1], home[2], limits)
+
+    def _navigator(self, speed_m_s: float | None = None) -> RoverNavigator:
+        """A fresh AR_WPNav (a mode's entry calls wp_nav.init(): the default speed again), driving the vehicle."""
+        self._nav = RoverNavigator(self.motion, speed_m_s)
+        assert isinstance(self.vehicle, SurfaceVehicle)
+        self.vehicle.follow(self._nav)
+        return self._nav
 
     def _message_handlers(self) -> dict[str, Callable[[MAVLinkMessage], None]]:
         return {**super()._message_handlers(), "SET_POSITION_TARGET_GLOBAL_INT": self._on_position_target}
@@ -757,8 +816,12 @@ class ArduRoverSim(ArduPilotSim):
     # -- what the vehicle is doing ---------------------------------------------------------------
 
     def _stop(self) -> None:
+        """Mode::stop_vehicle: brake within ATC_DECEL_MAX, without turning."""
         self._destination, self._driving, self._loitering = None, False, False
-        self.vehicle.hold()
+        nav = self._nav if self._nav is not None else self._navigator()
+        nav.stop()
+        assert isinstance(self.vehicle, SurfaceVehicle)
+        self.vehicle.follow(nav)
 
     def _loiter(self) -> bool:
         """Hold where the vehicle can stop; needs a position estimate."""
@@ -768,21 +831,26 @@ class ArduRoverSim(ArduPilotSim):
         self.vehicle.hold()
         return True
 
-    def _drive(self, lat: float, lon: float, speed_m_s: float | None = None, then: tuple[float, float] | None = None) -> None:
-        """Drive to a point and stop there; with ``then`` (AUTO's next waypoint), through it (a "fast waypoint")."""
+    def _drive(self, lat: float, lon: float, then: tuple[float, float] | None = None, *, guided: bool = False) -> None:
+        """Drive to a point and stop there: GUIDED's shaped stop point (``guided``), or else (AUTO, RTL) an S-curve leg,
+        through the point toward ``then`` when given (AUTO's next waypoint: a "fast waypoint")."""
         self._destination, self._driving, self._loitering = (lat, lon), True, False
-        if then is None:
-            self.vehicle.drive_to(lat, lon, speed_m_s)
+        vehicle = self.vehicle
+        assert isinstance(vehicle, SurfaceVehicle)
+        nav = self._nav if self._nav is not None else self._navigator()
+        if guided:
+            nav.guided_to(vehicle.ne_of(lat, lon), vehicle)
         else:
-            assert isinstance(self.vehicle, SurfaceVehicle)
-            self.vehicle.drive_to(lat, lon, speed_m_s, then=then)
+            nav.auto_to(vehicle.ne_of(lat, lon), None if then is None else vehicle.ne_of(*then), vehicle)
+        vehicle.follow(nav)
 
     def _enter_mode(self, mode: str) -> bool:
         if mode == "AUTO":
             if not self.mission.present:
                 self._text(_M.MAV_SEVERITY_NOTICE, "No Mission. Can't set AUTO.")
                 return False
-            self._auto_waiting, self._auto_item, self._guided_speed = True, None, None
+            self._auto_waiting, self._auto_item = True, None
+            self._navigator()  # ModeAuto::_enter: wp_nav.init()
             if not (self.is_boat and self._loiter()):
                 self._stop()
             return True
@@ -794,10 +862,11 @@ class ArduRoverSim(ArduPilotSim):
             # SMART_RTL needs the path recorded since arming; here it drives straight home like RTL
             if self.home is None or (mode == "SMART_RTL" and not self.armed):
                 return False
+            self._navigator(self.params.get("RTL_SPEED", 0.0))  # ModeRTL::_enter: wp_nav.init(RTL_SPEED), 0: WP_SPEED
             self._drive(*self.home)
             return True
         if mode == "GUIDED":
-            self._guided_speed = None
+            self._navigator()  # ModeGuided::_enter: wp_nav.init()
             if not (self.is_boat and self._loiter()):
                 self._stop()
             return True
@@ -818,12 +887,19 @@ class ArduRoverSim(ArduPilotSim):
             else:
                 self._text(_M.MAV_SEVERITY_INFO, "Reached destination")
             if self.is_boat:
-                self._loiter()  # rovers stop where they are and keep reporting the destination
+                self._loiter()
+            elif self._nav is not None:
+                self._nav.stop()  # rovers stop where they are (Mode::stop_vehicle) and keep reporting the destination
         if self._loitering and self._destination is not None:
             if self.vehicle.target is None and self.vehicle.distance_to(*self._destination) > self.LOITER_RADIUS_M:
                 self.vehicle.drive_to(*self._destination)
             elif self.vehicle.arrived:
                 self.vehicle.hold()
+
+    def disarm(self) -> None:
+        super().disarm()
+        if self._nav is not None:
+            self._nav.settle()
 
     def _drive_by_sticks(self) -> None:
         """MANUAL and friends: the pilot's sticks drive (RCMAP defaults: steering channel 1, throttle channel 3)."""
@@ -868,21 +944,17 @@ class ArduRoverSim(ArduPilotSim):
         # the next item, a set-current, or an upload replaced it
         self._auto_item = (self.mission.current_seq, item)
         if item.command == _M.MAV_CMD_NAV_WAYPOINT:
-            self._drive(item.lat, item.lon, self._guided_speed, then=self._next_corner(item))
+            self._drive(item.lat, item.lon, then=self._next_corner(item))
         else:
             self.mission.advance()
 
     def _next_corner(self, item: StoredCommand) -> tuple[float, float] | None:
-        """Where AUTO goes after the waypoint ``item`` without stopping there, if it does not stop (ModeAuto::do_nav_wp)."""
+        """The navigation command after the waypoint ``item``, given to AR_WPNav with it unless the waypoint has a hold time
+        (ModeAuto::do_nav_wp); AR_WPNav itself stops there when it would pivot."""
         if item.params[0] > 0 or self.mission.current_seq is None:  # a hold time: always a stop
             return None
         after = self.mission.next_nav_after(self.mission.current_seq)
-        if after is None:
-            return None
-        assert isinstance(self.vehicle, SurfaceVehicle)
-        if self.vehicle.pivots_at(item.lat, item.lon, (after.lat, after.lon)):
-            return None  # a skid-steered vehicle stops and pivots there
-        return after.lat, after.lon
+        return None if after is None else (after.lat, after.lon)
 
     def _desired_location(self) -> tuple[float, float] | None:
         return self._destination
@@ -925,17 +997,14 @@ class ArduRoverSim(ArduPilotSim):
             self._text(_M.MAV_SEVERITY_INFO, "Ignoring SET_POSITION_TARGET_GLOBAL_INT; set ACC_IGNORE in mask")
             return
         if not msg.type_mask & POS_BITS:  # velocity, heading and turn-rate targets are not simulated
-            self._drive(lat, lon, self._guided_speed)
+            self._drive(lat, lon, guided=True)
 
     def _cmd_change_speed(self, cmd: Command) -> int:
         """ArduRover: only the autonomous modes take a desired speed (Mode::set_desired_speed), else FAILED."""
         speed = cmd.params[1]
         if self.mode not in ("GUIDED", "AUTO", "RTL", "SMART_RTL") or not 0.0 < speed <= self.vehicle.limits.max_m_s:
             return _M.MAV_RESULT_FAILED
-        self._guided_speed = speed
-        if self._driving:
-            assert isinstance(self.vehicle, SurfaceVehicle)
-            self.vehicle.change_speed(speed)  # the same target (a corner driven through stays one)
+        (self._nav if self._nav is not None else self._navigator()).set_speed(speed)  # AR_WPNav::set_speed_max
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_reposition(self, cmd: Command) -> int:
@@ -948,8 +1017,8 @@ class ArduRoverSim(ArduPilotSim):
         if self.mode != "GUIDED" and not self.set_mode(self.profile.modes["GUIDED"]):
             return _M.MAV_RESULT_FAILED
         if cmd.params[0] > 0:
-            self._guided_speed = cmd.params[0]
-        self._drive(lat, lon, self._guided_speed)
+            (self._nav if self._nav is not None else self._navigator()).set_speed(cmd.params[0])
+        self._drive(lat, lon, guided=True)
         return _M.MAV_RESULT_ACCEPTED
 
 

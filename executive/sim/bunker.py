@@ -11,10 +11,14 @@ commands, not these outputs.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import ClassVar
 
 from executive.sim.autopilot import BATTERY_EMPTY_V, BATTERY_FULL_V, BATTERY_MAH, BATTERY_SAG_V_PER_A, ArduRoverSim, Home
-from executive.sim.vehicle import BUNKER_LIMITS, Limits, SkidSteerVehicle, VehicleModel
+from executive.sim.vehicle import BUNKER_LIMITS, Limits, SkidSteerVehicle
+
+#: The Bunker's tracks respond quickly; it turns on the spot.
+BUNKER_RESPONSE = {"speed_lag_s": 0.2, "min_turn_radius_m": 0.0}
 
 PWM_TRIM, PWM_SPAN = 1500, 500  # SERVOn_TRIM, and SERVOn_MAX - SERVOn_TRIM (MIN 1000, MAX 2000)
 
@@ -28,13 +32,23 @@ class BunkerSim(ArduRoverSim):
     """ArduRover (MAV_TYPE_GROUND_ROVER) on a tracked, skid-steered base."""
 
     vehicle: SkidSteerVehicle
+    SKID_STEERING = True
+    #: ArduRover's defaults, with WP_SPEED set for the Bunker's 1.5 m/s tracks (the firmware's 2 m/s is beyond them).
+    #: SERVO1_FUNCTION 73 and SERVO3_FUNCTION 74: the skid-steer frame's ThrottleLeft and ThrottleRight.
+    PARAMS: ClassVar[Mapping[str, float]] = {
+        **ArduRoverSim.PARAMS, "WP_SPEED": 1.0, "CRUISE_SPEED": 1.0, "SERVO1_FUNCTION": 73.0, "SERVO3_FUNCTION": 74.0,
+    }  # fmt: skip
 
     @property
-    def limits(self) -> Limits:
+    def base_limits(self) -> Limits:
         return BUNKER_LIMITS
 
-    def _make_vehicle(self, home: Home) -> VehicleModel:
-        return SkidSteerVehicle(home[0], home[1], home[2], self.limits)
+    @property
+    def response(self) -> Mapping[str, float]:
+        return BUNKER_RESPONSE
+
+    def _vehicle_model(self, home: Home, limits: Limits) -> SkidSteerVehicle:
+        return SkidSteerVehicle(home[0], home[1], home[2], limits)
 
     @property
     def track_pwm(self) -> tuple[int, int]:

@@ -77,11 +77,11 @@ class Limits:
     #: least sqrt(0.5 * lateral acceleration * TURN_RADIUS) (the vehicle drives round, it does not stop to turn).
     #: 0: the vehicle pivots on the spot (skid steering: AR_WPNav::set_turn_params zeroes it when a pivot is possible).
     turn_radius_m: float = 0.0
-    #: WP_RADIUS (libraries/AR_WPNav/AR_WPNav.cpp, 2 m by default): how far from a waypoint the apex of a corner through it may be.
-    wp_radius_m: float = 2.0
-    #: WP_PIVOT_ANGLE for a vehicle that pivots (skid steering): a corner sharper than this is a stop and a pivot, not a
-    #: corner driven through (AR_WPNav::set_desired_location: _pivot_at_next_wp, AR_PivotTurn::would_activate). None: no pivots.
-    pivot_angle_deg: float | None = None
+    #: Driven by an autopilot's navigator (:meth:`SurfaceVehicle.follow`): how long the vehicle (its motors and the
+    #: autopilot's throttle controller) takes to reach about two thirds of a change of the speed asked, s (0: at once).
+    speed_lag_s: float = 0.0
+    #: ... and the least radius it can turn on at speed (an Ackermann vehicle's steering lock; 0: it can turn on the spot).
+    min_turn_radius_m: float = 0.0
 
     @property
     def turn_speed_min_m_s(self) -> float:
@@ -122,6 +122,22 @@ class LocalFrame:
         return self._lat0 + n / self._m_per_deg_lat, self._lon0 + e / self._m_per_deg_lon
 
 
+class Navigator(Protocol):
+    """An autopilot's navigation that drives the vehicle (ArduRover's: :class:`executive.sim.rover_nav.RoverNavigator`)."""
+
+    @property
+    def destination(self) -> tuple[float, float] | None:
+        """Where it is going (north, east in metres), if anywhere."""
+        ...
+
+    @property
+    def reached(self) -> bool: ...
+
+    def control(self, vehicle: SurfaceVehicle, dt: float) -> tuple[float, float]:
+        """The forward speed (m/s) and turn rate (rad/s, clockwise) asked after ``dt`` seconds."""
+        ...
+
+
 class SurfaceVehicle(LocalFrame):
     """A rover or a boat: position, heading and forward speed, with a drive-to-target controller.
 
@@ -129,13 +145,14 @@ class SurfaceVehicle(LocalFrame):
     the requested speed (acceleration limited), slows down on a profile it can always brake to, and
     stops within ``limits.arrive_m`` of the target. Without a target it brakes to a stop and stays there.
 
-    A target given with the point after it (``then``) is a corner driven through, as ArduRover's AUTO
-    drives a "fast waypoint" (AR_WPNav::set_desired_location with a next destination): the vehicle
-    does not stop there; it counts as arrived where it turns onto the next leg (:meth:`turn_in_m`),
-    and the caller gives it the next target then.
+    An autopilot with a navigation of its own (ArduRover's AUTO, GUIDED, RTL) drives it through
+    :meth:`follow` instead: its :class:`Navigator` asks the speed and turn rate each step.
     """
 
     SUBSTEP_S = 0.05
+    #: Driven by a navigator, steps as short as its firmware's loop (ArduRover: SCHED_LOOP_RATE 50 Hz, AP_Scheduler.cpp).
+    NAVIGATOR_STEP_S = 0.02
+    _substep_s = SUBSTEP_S
     HEADING_GAIN = 2.0  # turn rate (rad/s) asked per radian of heading error
     APPROACH_GAIN = 1.0  # speed (m/s) allowed per metre left, for the last metres
 
@@ -150,9 +167,9 @@ class SurfaceVehicle(LocalFrame):
         self._yaw_rate = 0.0
         self._target: tuple[float, float] | None = None  # north, east (m)
         self._target_speed = limits.cruise_m_s
-        self._then: tuple[float, float] | None = None  # north, east of the point after the target (driven through)
         self._arrived = False
         self._manual: tuple[float, float] | None = None  # (throttle, steering) from a pilot
+        self._navigator: Navigator | None = None
         toward = math.radians(limits.drift_toward_deg)
         self._drift = (limits.drift_m_s * math.cos(toward), limits.drift_m_s * math.sin(toward))
 
@@ -173,6 +190,11 @@ class SurfaceVehicle(LocalFrame):
         return math.degrees(self._yaw) % 360.0
 
     @property
+    def yaw_rad(self) -> float:
+        """Heading in radians, clockwise from north, in [-pi, pi)."""
+        return self._yaw
+
+    @property
     def speed_m_s(self) -> float:
         return self._speed
 
@@ -189,11 +211,16 @@ class SurfaceVehicle(LocalFrame):
     @property
     def target(self) -> tuple[float, float] | None:
         """The (lat, lon) being driven to, if any."""
+        if self._navigator is not None:
+            destination = self._navigator.destination
+            return None if destination is None else self._latlon(*destination)
         return None if self._target is None else self._latlon(*self._target)
 
     @property
     def arrived(self) -> bool:
-        """True once within ``limits.arrive_m`` of the target (until the next order)."""
+        """True once within ``limits.arrive_m`` of the target (until the next order); driven by a navigator, as it says."""
+        if self._navigator is not None:
+            return self._navigator.reached
         return self._arrived
 
     def distance_to(self, lat: float, lon: float) -> float:
@@ -212,52 +239,36 @@ class SurfaceVehicle(LocalFrame):
 
     # -- orders ------------------------------------------------------------------------------
 
-    def drive_to(self, lat: float, lon: float, speed_m_s: float | None = None, then: tuple[float, float] | None = None) -> None:
-        """Drive to a point at ``speed_m_s`` (default cruise, capped at the maximum) and stop there; with ``then``, through it toward ``then``."""
+    def follow(self, navigator: Navigator) -> None:
+        """Be driven by an autopilot's navigation (until another order): it asks the speed and turn rate every step."""
+        self._target = None
+        self._manual = None
+        self._arrived = False
+        self._navigator = navigator
+
+    def ne_of(self, lat: float, lon: float) -> tuple[float, float]:
+        """A point's metres north and east of the start point."""
+        return self._ne(lat, lon)
+
+    def drive_to(self, lat: float, lon: float, speed_m_s: float | None = None) -> None:
+        """Drive to a point at ``speed_m_s`` (default cruise, capped at the maximum) and stop there."""
+        self._navigator = None
         self._target = self._ne(lat, lon)
-        self._then = None if then is None else self._ne(*then)
         self._manual = None
         self._target_speed = min(speed_m_s if speed_m_s and speed_m_s > 0 else self.limits.cruise_m_s, self.limits.max_m_s)
         self._arrived = False
 
-    def pivots_at(self, lat: float, lon: float, then: tuple[float, float]) -> bool:
-        """Whether the corner at (lat, lon), from where the vehicle is toward ``then``, is sharper than the pivot angle."""
-        if self.limits.pivot_angle_deg is None:
-            return False
-        (tn, te), (nn, ne) = self._ne(lat, lon), self._ne(*then)
-        turn = abs(_wrap_pi(math.atan2(ne - te, nn - tn) - math.atan2(te - self._e, tn - self._n)))
-        return math.degrees(turn) > self.limits.pivot_angle_deg
-
-    def change_speed(self, speed_m_s: float) -> None:
-        """Drive on to the same target at another speed (capped at the maximum)."""
-        self._target_speed = min(speed_m_s, self.limits.max_m_s)
-
-    def turn_in_m(self) -> float:
-        """How far before a corner driven through the vehicle turns onto the next leg (0 without one).
-
-        AR_WPNav's SCurves start the next leg while this one decelerates (SCurve::advance_target_along_track,
-        libraries/AP_Math/SCurve.cpp): from where braking at the leg's acceleration would begin,
-        v^2 / (2 a), and only once the apex of the blended turn (for a turn of angle t, about half
-        that distance times sin(t / 2) from the waypoint) is within WP_RADIUS.
-        """
-        if self._target is None or self._then is None:
-            return 0.0
-        (tn, te), (nn, ne) = self._target, self._then
-        turn = abs(_wrap_pi(math.atan2(ne - te, nn - tn) - math.atan2(te - self._e, tn - self._n)))
-        braking = self._speed * self._speed / (2.0 * self.limits.accel_m_s2)
-        apex_bound = 2.0 * self.limits.wp_radius_m / max(math.sin(turn / 2.0), 1e-6)
-        return max(self.limits.arrive_m, min(braking, apex_bound))
-
     def hold(self) -> None:
         """Forget the target and brake to a stop."""
+        self._navigator = None
         self._target = None
-        self._then = None
         self._arrived = False
         self._manual = None
 
     def drive_manual(self, throttle: float, steering: float) -> None:
         """A pilot's sticks, each in [-1, 1]: forward speed and turn rate as fractions of the maximum."""
-        self._target = self._then = None
+        self._target = None
+        self._navigator = None
         self._manual = (_clamp(throttle, 1.0), _clamp(steering, 1.0))
 
     # -- physics -------------------------------------------------------------------------------
@@ -265,7 +276,7 @@ class SurfaceVehicle(LocalFrame):
     def step(self, dt: float) -> None:
         """Advance ``dt`` seconds, in sub-steps of at most ``SUBSTEP_S``."""
         while dt > 1e-9:
-            h = min(dt, self.SUBSTEP_S)
+            h = min(dt, self.SUBSTEP_S if self._navigator is None else self.NAVIGATOR_STEP_S)
             self._substep(h)
             dt -= h
 
@@ -273,6 +284,7 @@ class SurfaceVehicle(LocalFrame):
         if not self.powered:
             self._speed = self._yaw_rate = 0.0
             return
+        self._substep_s = h
         self._speed, self._yaw_rate = self._actuate(*self._control(), h)
         self._move(h)
 
@@ -284,7 +296,19 @@ class SurfaceVehicle(LocalFrame):
         self._e += ve * h
 
     def _actuate(self, want_speed: float, want_rate: float, h: float) -> tuple[float, float]:
-        """The speed and turn rate reached after ``h`` seconds of asking for these (acceleration limited)."""
+        """The speed and turn rate reached after ``h`` seconds of asking for these (acceleration limited).
+
+        Driven by a navigator, the autopilot has limited the acceleration already: the speed follows the demand
+        with the vehicle's lag, the turn rate within its least turning radius.
+        """
+        limits = self.limits
+        if self._navigator is not None:
+            speed = want_speed
+            if limits.speed_lag_s > 0.0:
+                speed = self._speed + (want_speed - self._speed) * (1.0 - math.exp(-h / limits.speed_lag_s))
+            if limits.min_turn_radius_m > 0.0:
+                want_rate = _clamp(want_rate, abs(speed) / limits.min_turn_radius_m)
+            return speed, want_rate
         change = want_speed - self._speed
         return self._speed + _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h), want_rate
 
@@ -293,13 +317,12 @@ class SurfaceVehicle(LocalFrame):
         if self._manual is not None:
             throttle, steering = self._manual
             return throttle * self.limits.max_m_s, steering * math.radians(self.limits.turn_rate_deg_s)
-        if self._target is None or (self._arrived and self._then is None):
+        if self._navigator is not None:
+            return self._navigator.control(self, self._substep_s)
+        if self._target is None or self._arrived:
             return 0.0, 0.0
         dn, de = self._target[0] - self._n, self._target[1] - self._e
         distance = math.hypot(dn, de)
-        if self._then is not None and (self._arrived or distance <= self.turn_in_m()):
-            self._arrived = True  # driven through: on as it goes until the caller gives the next leg
-            return self._speed, self._yaw_rate
         if distance <= self.limits.arrive_m:
             self._arrived = True
             return 0.0, 0.0
@@ -310,10 +333,9 @@ class SurfaceVehicle(LocalFrame):
             rate_max = min(rate_max, limits.lat_accel_m_s2 / abs(self._speed))  # ATC_TURN_MAX_G
         rate = _clamp(self.HEADING_GAIN * error, rate_max)
         # a braking profile with margin, then a linear approach: never overshoots the target (the shape of ArduPilot's
-        # sqrt_controller stopping a shaped target, libraries/AP_Math/control.cpp); a corner driven through is left before
-        # the linear part, where the braking has not begun or, for a sharp turn, has slowed the vehicle enough to turn
+        # sqrt_controller stopping a shaped target, libraries/AP_Math/control.cpp)
         brake = math.sqrt(2.0 * 0.8 * limits.decel_m_s2 * distance)
-        speed = min(self._target_speed, brake) if self._then is not None else min(self._target_speed, brake, self.APPROACH_GAIN * distance)
+        speed = min(self._target_speed, brake, self.APPROACH_GAIN * distance)
         # turn toward a target behind before driving to it (the forward part of the speed); a vehicle under way that
         # cannot pivot keeps the least turning speed through the turn (AR_PosControl::update,
         # libraries/APM_Control/AR_PosControl.cpp); one at rest turns first (as LOITER does, Rover/mode_loiter.cpp)
@@ -331,7 +353,7 @@ class Tracks:
     slip_factor: float = 1.3
 
 
-BUNKER_LIMITS = Limits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0, pivot_angle_deg=60.0)
+BUNKER_LIMITS = Limits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0)
 BUNKER_TRACKS = Tracks()
 
 

@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import math
+
 import pytest
 from py_trees.common import Status
 
+from executive import geo
+from executive.autopilot.rover_motion import RoverMotion, TargetEstimate
 from executive.behaviours import Arm, Disarm, GoTo, SetMode
+from executive.behaviours.actions import CUT_SHARE
 from executive.geo import destination
 from executive.io.mavlink.dialect import mavlink
 from executive.state import GlobalPosition
@@ -220,56 +225,98 @@ class TestGoTo:
 
 
 class TestGoToLookAhead:
-    """Leg 2/4 of the square: heading north for the north-west corner, then east (a 90° turn)."""
+    """Leg 2/4 of the 20 m square: heading north for the north-west corner, then east (a 90° turn).
+
+    The vehicle reports SITL's rover parameters (WP_SPEED 5, WP_RADIUS 3) unless a test says otherwise.
+    """
+
+    SITL = {"WP_SPEED": 5.0, "WP_RADIUS": 3.0}
 
     @pytest.fixture
-    def corner(self, mission_state):
+    def corner(self, mission_state, vehicle):
+        vehicle.set(vehicle__params=dict(self.SITL))
         mission_state.start()
         mission_state.advance_leg()
         return mission_state.target
 
-    def approach(self, h, vehicle, corner, distances, speed=2.0):
-        """Tick once at each distance south of the corner, heading north at ``speed``; the statuses."""
+    def approach(self, h, vehicle, corner, distances, speed=2.5):
+        """Tick once at each distance south of the corner, heading north at ``speed`` (positions fresh), until the leg ends; the statuses."""
         statuses = []
         for distance in distances:
-            vehicle.set(vehicle__position=at(*destination(corner.lat, corner.lon, 180.0, distance), vn=speed))
+            vehicle.set(vehicle__position=at(*destination(corner.lat, corner.lon, 180.0, distance), t=h.clock.now(), vn=speed))
             statuses.append(h.tick())
+            if statuses[-1] == Status.SUCCESS:
+                break
         return statuses
 
-    def test_a_corner_is_driven_through_before_the_vehicle_brakes(self, harness, vehicle, corner):
-        # 2 m/s: 0.5 s of lead (1 m) + braking at 1 m/s/s (2 m) = 3 m; a 90° turn allows up to 2 x 1.5 / sin 45° = 4.2 m
+    def driven(self, h, vehicle, corner, params, start_m=20.0, ticks=200):
+        """The vehicle driven as the autopilot drives it (following the shaped target toward the corner, from rest ``start_m``
+        south of it), a tick each 0.1 s, until the leg ends: (distance, status, node's feedback, (lat, lon)) each tick."""
+        motion = RoverMotion.from_params(params)
+        estimate = TargetEstimate(motion, motion.speed_m_s, destination(corner.lat, corner.lon, 180.0, start_m), h.clock.now())
+        estimate.start(estimate.origin, (0.0, 0.0), h.clock.now())
+        rows = []
+        for _ in range(ticks):
+            estimate.advance((corner.lat, corner.lon), h.clock.now())
+            (n, e), (vn, ve) = estimate.target.pos, estimate.target.vel
+            lat, lon = estimate.origin[0] + n / 111_319.49, estimate.origin[1] + e / (111_319.49 * math.cos(math.radians(estimate.origin[0])))
+            vehicle.set(vehicle__position=at(lat, lon, t=h.clock.now(), vn=vn, ve=ve))
+            status = h.tick()
+            rows.append((geo.distance(lat, lon, corner.lat, corner.lon), status, h.root.feedback_message, (lat, lon)))
+            if status == Status.SUCCESS:
+                break
+        return rows
+
+    def test_a_corner_is_driven_through_once_the_swing_cuts_it_no_more_than_auto(self, harness, vehicle, corner):
         node = GoTo(1.5, 60.0, look_ahead=True)
-        h = harness(node)
-        assert self.approach(h, vehicle, corner, (10.0, 5.0, 3.1, 2.9)) == [Status.RUNNING] * 3 + [Status.SUCCESS]
-        assert node.feedback_message == "leg 2/4: driven through (2.9 m, within 3.0 m)"
+        rows = self.driven(harness(node), vehicle, corner, self.SITL)
+        distance, status, feedback, here = rows[-1]
+        assert status == Status.SUCCESS and 3.0 <= distance <= 8.0  # well before the acceptance radius (1.5 m): no stop
+        geometry = node.corner(at(corner.lat, corner.lon))
+        assert geometry is not None and geometry.turn_rad == pytest.approx(math.pi / 2, abs=0.01)
+        assert geometry.outbound_m == pytest.approx(20.0, abs=0.1)
+        assert feedback.startswith(f"leg 2/4: driven through ({distance:.1f} m out; the swing cuts the corner by ")
+        assert feedback.endswith(f"AUTO by {geometry.auto_cut_m:.1f} m)")
+        cut = float(feedback.split("cuts the corner by ")[1].split(" m")[0])
+        assert cut <= CUT_SHARE * geometry.auto_cut_m + 0.05  # (rounded to 0.1 m in the message)
+        # the shaped target GoTo follows is the autopilot's: here, exactly where the vehicle was driven
+        assert node._estimate is not None and node._estimate.off_by_m(here) < 0.01
+
+    def test_the_vehicle_s_own_parameters_decide_and_the_firmware_s_defaults_stand_in(self, harness, vehicle, corner):
+        sitl = self.driven(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, self.SITL)[-1][0]
+        vehicle.set(vehicle__params={})  # the vehicle never told them: WP_SPEED 2, WP_RADIUS 2, so AUTO cuts only 0.5 m
+        defaults = self.driven(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, {})[-1][0]
+        assert 1.5 < defaults < sitl
 
     def test_without_look_ahead_the_leg_ends_inside_the_acceptance_radius(self, harness, vehicle, corner):
         h = harness(GoTo(1.5, 60.0))
         assert self.approach(h, vehicle, corner, (5.0, 2.9, 1.6, 1.4)) == [Status.RUNNING] * 3 + [Status.SUCCESS]
 
-    def test_the_distance_grows_with_the_speed_and_a_vehicle_at_rest_stops(self, harness, vehicle, corner):
-        fast = GoTo(1.5, 60.0, look_ahead=True)
-        assert self.approach(harness(fast), vehicle, corner, (4.5, 4.1), speed=2.5) == [Status.RUNNING, Status.SUCCESS]  # capped at 4.2 m
-        slow = GoTo(1.5, 60.0, look_ahead=True)
-        assert self.approach(harness(slow), vehicle, corner, (2.0, 1.6, 1.4), speed=0.0) == [Status.RUNNING] * 2 + [Status.SUCCESS]
+    def test_an_autopilot_whose_driving_is_not_modelled_stops_at_every_waypoint(self, harness, vehicle, corner, autopilot):
+        autopilot.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_GROUND_ROVER)
+        assert autopilot.capabilities.motion_params == ()
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (8.0, 5.0, 3.0, 1.6, 1.4))
+        assert statuses == [Status.RUNNING] * 4 + [Status.SUCCESS]
 
-    def test_a_sharper_turn_is_passed_nearer(self, harness, vehicle, corner, mission_state):
-        # at 3 m/s the look-ahead is 1.5 + 4.5 = 6 m: straight on it applies; back south (180°) only 2 x 1.5 / sin 90° = 3 m
+    def test_a_skid_steered_rover_stops_where_it_would_pivot(self, harness, vehicle, corner):
+        vehicle.set(vehicle__params={**self.SITL, "SERVO1_FUNCTION": 73.0, "SERVO3_FUNCTION": 74.0})  # ThrottleLeft, ThrottleRight
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (8.0, 5.0, 3.0, 1.6, 1.4))
+        assert statuses == [Status.RUNNING] * 4 + [Status.SUCCESS]  # 90° is more than WP_PIVOT_ANGLE (60°): a pivot, as in AUTO
+
+    def test_straight_on_is_driven_through_as_soon_as_it_is_worth_predicting(self, harness, vehicle, corner, mission_state):
         waypoints = list(mission_state.route.waypoints)
         straight = waypoints[2].model_copy(update={"lat": corner.lat + 0.0003, "lon": corner.lon})
         mission_state.set_route([waypoints[0], corner, straight, waypoints[3]], "test: straight on")
-        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (6.5, 5.9), speed=3.0) == [Status.RUNNING, Status.SUCCESS]
-        back = waypoints[2].model_copy(update={"lat": corner.lat - 0.0003, "lon": corner.lon})
-        mission_state.set_route([waypoints[0], corner, back, waypoints[3]], "test: back south")
-        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, (5.9, 3.1, 2.9), speed=3.0)
-        assert statuses == [Status.RUNNING, Status.RUNNING, Status.SUCCESS]
+        rows = self.driven(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, self.SITL)
+        assert rows[-1][1] == Status.SUCCESS and rows[-1][0] > 6.0  # no corner to cut
 
     def test_the_last_leg_stops(self, harness, vehicle, mission_state):
         mission_state.start()
         for _ in range(3):
             mission_state.advance_leg()
         last = mission_state.target
-        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, last, (2.9, 1.6, 1.4)) == [Status.RUNNING] * 2 + [Status.SUCCESS]
+        vehicle.set(vehicle__params=dict(self.SITL))
+        assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, last, (6.0, 1.6, 1.4)) == [Status.RUNNING] * 2 + [Status.SUCCESS]
 
     def test_a_sample_point_stops(self, harness, vehicle, mission_state, square_mission):
         waypoints = list(square_mission.waypoints)
@@ -277,7 +324,8 @@ class TestGoToLookAhead:
         mission_state.upload(square_mission.model_copy(update={"tree": "goto_sample", "waypoints": waypoints}))
         mission_state.start()
         mission_state.advance_leg()
-        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, waypoints[1], (2.9, 1.6, 1.4))
+        vehicle.set(vehicle__params=dict(self.SITL))
+        statuses = self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, waypoints[1], (6.0, 1.6, 1.4))
         assert statuses == [Status.RUNNING] * 2 + [Status.SUCCESS]
 
     def test_the_next_target_goes_out_on_the_tick_after(self, harness, vehicle, corner, mission_state):
@@ -287,7 +335,10 @@ class TestGoToLookAhead:
         h = harness(ForEachLeg(GoTo(1.5, 60.0, look_ahead=True)))
         self.approach(h, vehicle, corner, (10.0,))
         h.link.take()
-        self.approach(h, vehicle, corner, (2.9,))
+        for distance in (8.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.4):
+            self.approach(h, vehicle, corner, (distance,))
+            if mission_state.leg_index == 2:
+                break
         assert mission_state.leg_index == 2
         h.tick()
         (sent,) = h.link.take("SET_POSITION_TARGET_GLOBAL_INT")

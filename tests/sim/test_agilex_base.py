@@ -163,7 +163,8 @@ def test_in_can_mode_the_autopilot_outputs_alone_move_nothing(base_on_bus: Calla
         return command.linear_m_s, command.angular_rad_s
 
     r.run(20.0, select=True, command=bridge)
-    assert r.ap.vehicle.distance_to(*target) < 1.0
+    # the shaped target ran ahead while the base stood still; the autopilot stops once it is within WP_RADIUS of it
+    assert r.ap.vehicle.distance_to(*target) < r.ap.motion.radius_m
 
 
 def test_the_base_stops_500_ms_after_the_last_command(base_on_bus: Callable[..., BaseOnBus]) -> None:

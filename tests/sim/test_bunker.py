@@ -67,24 +67,26 @@ def test_straight_ahead_both_tracks_drive_forward_alike(make_gcs: MakeGcs) -> No
     gcs.run(1.0)
     left, right = tracks(gcs)
     assert left == right > 1500
-    gcs.run(4.0)
-    assert tracks(gcs) == (1833, 1833)  # cruise 1.0 m/s of a 1.5 m/s track
-    assert gcs.ap.vehicle.speed_m_s == pytest.approx(BUNKER_LIMITS.cruise_m_s)
+    gcs.run(6.0)
+    left, right = tracks(gcs)
+    assert left == right == pytest.approx(1833, abs=1)  # WP_SPEED 1.0 m/s of a 1.5 m/s track
+    assert gcs.ap.vehicle.speed_m_s == pytest.approx(gcs.ap.motion.speed_m_s, abs=0.01)
 
 
 @pytest.mark.parametrize(("east_m", "faster"), [(20.0, "left"), (-20.0, "right")], ids=["right-turn", "left-turn"])
 def test_turning_drives_the_outer_track_faster(make_gcs: MakeGcs, east_m: float, faster: str) -> None:
-    gcs = driving(make_gcs)  # heading north, the target abeam: it starts turning on the spot
+    # heading north, the target abeam: more than WP_PIVOT_ANGLE (60 degrees) off, so it pivots on the spot first
+    # (AR_PivotTurn), then drives with both tracks forward (ArduRover's GUIDED, Rover/mode_guided.cpp via AR_WPNav)
+    gcs = driving(make_gcs)
     gcs.goto(*gcs.east(east_m))
     gcs.run(0.5)
     left, right = tracks(gcs)
     outer, inner = (left, right) if faster == "left" else (right, left)
-    assert outer > 1500 > inner
-    gcs.run(1.0)
+    assert outer > 1500 > inner and abs(gcs.ap.vehicle.speed_m_s) < 0.01
+    gcs.run(3.5)
     left, right = tracks(gcs)
-    assert (left > right) == (faster == "left") and min(left, right) > 1500  # driving forward now, still turning
-    heading = gcs.ap.vehicle.heading_deg
-    assert 10.0 < heading < 90.0 if faster == "left" else 270.0 < heading < 350.0
+    assert min(left, right) > 1500  # driving forward now
+    assert gcs.ap.vehicle.heading_deg == pytest.approx(90.0 if faster == "left" else 270.0, abs=6.0)
 
 
 def test_stopping_gives_neutral_tracks(make_gcs: MakeGcs) -> None:

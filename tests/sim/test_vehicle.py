@@ -114,19 +114,3 @@ def test_a_rover_under_way_keeps_its_least_turning_speed_through_a_sharp_turn() 
     speeds = [speed for _, speed in drive(vehicle, 2.0)]
     assert min(speeds) >= ROVER_LIMITS.turn_speed_min_m_s - 0.01
     assert ROVER_LIMITS.turn_speed_min_m_s == pytest.approx(1.63, abs=0.01)
-
-
-def test_a_corner_driven_through_is_left_at_its_turn_in_distance_at_speed() -> None:
-    vehicle = powered()
-    corner = north_of(HOME[0], HOME[1], 30.0)
-    beyond = corner[0], corner[1] + 30.0 / (111_319.49 * 0.6764)  # then 30 m east
-    vehicle.drive_to(*corner, then=beyond)
-    for _ in range(600):  # 30 s
-        vehicle.step(0.05)
-        if vehicle.arrived:
-            break
-    assert vehicle.arrived
-    distance, speed = vehicle.distance_to(*corner), vehicle.speed_m_s
-    # braking from cruise at the leg's acceleration: 2^2 / (2 x 1) = 2 m (a 90° turn's apex bound, 5.7 m, allows it)
-    assert distance == pytest.approx(2.0, abs=0.25)
-    assert speed == pytest.approx(ROVER_LIMITS.cruise_m_s)

@@ -65,7 +65,7 @@ def test_frames_show_the_tree_the_status_and_the_plan_in_local_metres(lockstep):
     assert [round(n) for _, n in route] == [25, 50, 75, 100] and all(abs(e) < 0.01 for e, _ in route)
     assert last["plan"]["current"] == 2 and last["plan"]["home"] == (0.0, 0.0)
     east, north = last["here"]
-    assert 45 < north < 76 and abs(east) < 2.0
+    assert 40 < north < 76 and abs(east) < 2.0  # a waypoint straight on is driven through early (no corner to cut)
     points = [p for m in watch.messages for p in m.get("track", {}).get("points", [])]
     assert len(points) == len(set(points))  # each point sent once
     assert math.dist(points[-1], last["here"]) < TRACK_SPACING_M

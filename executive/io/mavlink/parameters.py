@@ -1,19 +1,32 @@
-"""The autopilot's parameters the pre-flight checks need, asked for until it answers (answers land on ``/vehicle/params``)."""
+"""The autopilot's parameters the pre-flight checks and the look-ahead need, asked for until it answers (answers land on ``/vehicle/params``)."""
 
 from __future__ import annotations
 
+import logging
 import math
 
 from executive import blackboard
 from executive.autopilot.port import AutopilotPort
+from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS
 from executive.clock import Clock
+
+log = logging.getLogger(__name__)
+
+
+def wanted_parameters(port: AutopilotPort) -> tuple[str, ...]:
+    """The parameters the executive reads from this autopilot: its mode-switch channel (ArduRover MODE_CH...) and those of
+    its driving (``capabilities.motion_params``)."""
+    capabilities = port.capabilities
+    switch = (capabilities.mode_switch_param,) if capabilities.mode_switch_param else ()
+    return switch + tuple(capabilities.motion_params)
 
 
 class ParameterWatch:
-    """Asks for the autopilot's mode-switch channel (ArduRover MODE_CH...) while the link is up and it has not answered.
+    """Asks for :func:`wanted_parameters` while the link is up and they have not all answered.
 
-    A writer service: at most one PARAM_REQUEST_READ every ``retry_s``, ``tries`` in all (an
-    autopilot that has no such parameter never answers: the pre-flight check then passes, noting it).
+    A writer service: every ``retry_s`` one PARAM_REQUEST_READ for each parameter not answered yet,
+    ``tries`` rounds in all. A parameter that never answers is said in the log once: the pre-flight's
+    mode-switch check then passes, noting it; the look-ahead takes the firmware's default for it.
     """
 
     def __init__(self, port: AutopilotPort, clock: Clock, *, retry_s: float = 1.0, tries: int = 10) -> None:
@@ -25,13 +38,28 @@ class ParameterWatch:
         self._asked_at = -math.inf
         self._bb = blackboard.reader("parameter watch", ["/vehicle/params", "/link/up"])
 
+    def missing(self) -> list[str]:
+        """The wanted parameters the autopilot has not answered (yet)."""
+        have = self._bb.get("/vehicle/params") or {}
+        return [name for name in wanted_parameters(self._port) if name not in have]
+
     def service(self) -> None:
-        param = self._port.capabilities.mode_switch_param
-        if param is None or self._asked >= self.tries or not self._bb.get("/link/up"):
+        if self._asked > self.tries or not self._bb.get("/link/up"):
             return
-        if param in (self._bb.get("/vehicle/params") or {}):
+        missing = self.missing()
+        if not missing:
             return
         now = self._clock.now()
-        if now - self._asked_at >= self.retry_s:
-            self._asked_at, self._asked = now, self._asked + 1
-            self._port.read_parameter(param)
+        if now - self._asked_at < self.retry_s:
+            return
+        if self._asked == self.tries:
+            self._asked += 1
+            defaults = ", ".join(f"{name} {FIRMWARE_DEFAULTS[name]:g}" for name in missing if name in FIRMWARE_DEFAULTS)
+            log.warning(
+                "the autopilot never answered %s (asked %d times): %s", ", ".join(missing), self.tries,
+                f"the look-ahead takes the firmware's defaults ({defaults})" if defaults else "taken as not set",
+            )  # fmt: skip
+            return
+        self._asked_at, self._asked = now, self._asked + 1
+        for name in missing:
+            self._port.read_parameter(name)
