@@ -409,12 +409,13 @@ class Runtime:
         if mode not in self.profile.pilot_modes or mode == ours:
             return None
         set_by = self._bb.get("/vehicle/mode_set_by")
-        if set_by is None:
-            log.info(
-                "commanding %s: the vehicle is in %s, the mode it was in when the executive found it "
-                "(its boot mode, or one set before; nobody changed it while the executive watched)",
-                ours, mode,
-            )  # fmt: skip
+        if set_by in (None, "autopilot"):  # as the failsafes judge it (behaviours/failsafe.py): nobody's choice
+            found = (
+                "the mode it was in when the executive found it (its boot mode, or one set before; nobody changed it while the executive watched)"
+                if set_by is None
+                else "set by the autopilot itself (its own transition, executive.mode_cause)"
+            )
+            log.info("commanding %s: the vehicle is in %s, %s", ours, mode, found)
             return None
         who = "through the executive at a person's request" if set_by == "us" else "by the RC or a ground station"
         return f"the vehicle is in {mode}, set {who} while the executive watched: a person drives it"

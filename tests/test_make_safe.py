@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 from typing import Any
 
+import py_trees
 import pytest
 
 from executive.cli.run import last_words
@@ -165,3 +166,19 @@ def test_a_person_taking_the_vehicle_while_it_is_made_safe_is_left_alone(square_
         "not commanding HOLD: the vehicle is in MANUAL, set by the RC or a ground station while the executive made it safe: a person drives it"
     )
     assert said(caplog)[-2:] == ["make safe: HOLD refused (FAILED) -> asked again every 1.5 s", r.runtime.safe_report]
+
+
+@pytest.mark.parametrize(("set_by", "commanded"), [("autopilot", True), ("others", False)])
+def test_a_pilot_mode_the_autopilot_chose_itself_is_nobodys_and_is_made_safe(square_mission: Mission, runtime_on_link, set_by, commanded) -> None:
+    """As the failsafes judge it: MANUAL set by the autopilot's own transition (executive.mode_cause) is no person driving;
+    MANUAL set by the RC or a ground station is, and is left alone."""
+    r = runtime_on_link(square_mission)
+    r.autopilot.mode = "MANUAL"
+    r.autopilot.beat()
+    r.runtime.reader.drain()
+    blackboard = py_trees.blackboard.Client(name="test")
+    blackboard.register_key("/vehicle/mode_set_by", access=py_trees.common.Access.WRITE)
+    blackboard.set("/vehicle/mode_set_by", set_by)
+    asked = asked_when(r)
+    r.runtime.make_safe()
+    assert (("mode", "HOLD") in [c for _, c in asked]) is commanded, (asked, r.runtime.safe_report)
