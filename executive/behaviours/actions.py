@@ -333,6 +333,9 @@ class GoTo(TimedBehaviour):
             ahead = max(0.0, distance_m - speed * max(0.0, self.clock.now() - position.time))
         if ahead > corner.auto_cut_m + speed * speed / motion.shaping_accel_m_s2 + motion.corner_radius_m:
             return None  # too far out for any swing to stay within the cut: not worth predicting
+        lag = max(0.5, 0.5 * speed)  # half a second of the target's speed
+        if estimate is not None and (estimate.off_by_m((position.lat, position.lon)) > lag or abs(position.ground_speed_m_s - speed) > lag):
+            return None  # the vehicle is not following the target as the estimate has it (held up, stopped short): no drive-through
         now, allowed = self.clock.now(), CUT_SHARE * corner.auto_cut_m
         if now < self._predict_at:
             return None
