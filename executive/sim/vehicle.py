@@ -152,6 +152,7 @@ class SurfaceVehicle(LocalFrame):
     SUBSTEP_S = 0.05
     #: Driven by a navigator, steps as short as its firmware's loop (ArduRover: SCHED_LOOP_RATE 50 Hz, AP_Scheduler.cpp).
     NAVIGATOR_STEP_S = 0.02
+    STANDSTILL_M_S = 0.005  # slower than this with no speed asked, a navigator-driven vehicle has stopped
     _substep_s = SUBSTEP_S
     HEADING_GAIN = 2.0  # turn rate (rad/s) asked per radian of heading error
     APPROACH_GAIN = 1.0  # speed (m/s) allowed per metre left, for the last metres
@@ -306,6 +307,8 @@ class SurfaceVehicle(LocalFrame):
             speed = want_speed
             if limits.speed_lag_s > 0.0:
                 speed = self._speed + (want_speed - self._speed) * (1.0 - math.exp(-h / limits.speed_lag_s))
+                if want_speed == 0.0 and abs(speed) < self.STANDSTILL_M_S:
+                    speed = 0.0  # the lag's tail would creep on for ever: a drive train asked for nothing stops
             if limits.min_turn_radius_m > 0.0:
                 want_rate = _clamp(want_rate, abs(speed) / limits.min_turn_radius_m)
             return speed, want_rate

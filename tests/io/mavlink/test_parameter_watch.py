@@ -24,7 +24,7 @@ def test_an_ardurover_is_asked_its_driving_parameters_until_each_answers(square_
     h = Harness.build(square_mission)
     assert wanted_parameters(h.autopilot) == ("MODE_CH", *MOTION_PARAMS)
     watch = ParameterWatch(h.autopilot, h.clock, retry_s=1.0, tries=3)
-    h.vehicle.set(link__up=True)
+    h.vehicle.set(link__up=True, vehicle__params=None)  # an autopilot that has answered nothing yet
     asked = run(watch, h, 1.0)
     assert sorted(asked) == sorted(["MODE_CH", *MOTION_PARAMS])  # all at once, one each
     h.vehicle.set(vehicle__params={"MODE_CH": 8.0, "WP_SPEED": 5.0, "WP_RADIUS": 3.0})
