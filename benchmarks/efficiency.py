@@ -2,7 +2,7 @@
 
 In process, lock-step on a manual clock (deterministic): the example missions ``rover_square`` and
 ``boat_survey`` on their simulated vehicle, from the mission's home, with the parameters ArduPilot's
-SITL starts that frame with (:data:`executive.sim.autopilot.SITL_PARAMS`: WP_SPEED 5, WP_RADIUS 3), so
+SITL starts that frame with (:data:`executive.sim.ardupilot.base.SITL_PARAMS`: WP_SPEED 5, WP_RADIUS 3), so
 the figures stand beside the real firmware's (:mod:`benchmarks.recorded`).
 
 - GUIDED: the executive runs the mission (its ``waypoints`` tree, its own tick loop, on
@@ -31,7 +31,7 @@ from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, SimulatorOptions
 from executive.sim import ArduPilotSim, make_autopilot
-from executive.sim.autopilot import SITL_PARAMS
+from executive.sim.ardupilot.base import SITL_PARAMS
 from executive.sim.options import firmware_options, simulated_home
 from executive.testing import Lockstep
 

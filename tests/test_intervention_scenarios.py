@@ -19,7 +19,7 @@ from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.operator import Reply
 from executive.runtime import Outcome
-from executive.sim.autopilot import ArduPilotSim
+from executive.sim.ardupilot.base import ArduPilotSim
 from executive.sim.faults import EkfDegradation, Fault, FaultInjector
 from executive.testing import Lockstep
 from tests_support import line_mission

@@ -22,7 +22,7 @@ from executive.clock import Clock
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.model import Mission
 from executive.mode_cause import ModeChange, autopilot_cause
-from executive.sim.autopilot import ArduPilotSim
+from executive.sim.ardupilot.base import ArduPilotSim
 from executive.sim.faults import Fault, FaultInjector, LinkLoss
 from executive.testing import Lockstep
 from trees._parts import guarded, mission_root, preflight, standard_guards

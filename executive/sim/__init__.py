@@ -1,8 +1,8 @@
 """The built-in simulated vehicles: ArduPilot or PX4 firmware behaviour over a real MAVLink link."""
 
-from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, FIRMWARES, ArduPilotSim, ArduRoverSim, Home, firmwares_for, make_autopilot
+from executive.sim.ardupilot.base import AUTOPILOTS, DEFAULT_HOME, FIRMWARES, ArduPilotSim, ArduRoverSim, Home, firmwares_for, make_autopilot
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.sim.server import SimServer
-from executive.sim.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 
 __all__ = [
     "AUTOPILOTS",

@@ -42,8 +42,8 @@ from executive.io.can.agilex import (
 )
 from executive.io.rc import knob_value, switch_position
 from executive.mission.model import SwitchChannels
-from executive.sim.autopilot import ArduPilotSim
-from executive.sim.bunker import BunkerSim
+from executive.sim.ardupilot.base import ArduPilotSim
+from executive.sim.ardupilot.bunker import BunkerSim
 from executive.sim.faults import BatterySag, FaultInjector, RcLoss
 from executive.state import SwitchPosition
 

@@ -31,7 +31,7 @@ from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import PX4_MODES
 from executive.mission.errors import MissionError, Path
 from executive.mission.loader import load_model
-from executive.sim.autopilot import ArduPilotSim
+from executive.sim.ardupilot.base import ArduPilotSim
 from executive.vehicles import PROFILES
 
 log = logging.getLogger(__name__)

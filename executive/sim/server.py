@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 from executive.clock import Clock, ScaledClock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, mavutil
-from executive.sim.autopilot import DEFAULT_HOME, ArduPilotSim, Home, make_autopilot
+from executive.sim.ardupilot.base import DEFAULT_HOME, ArduPilotSim, Home, make_autopilot
 
 if TYPE_CHECKING:
     import can

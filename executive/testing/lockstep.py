@@ -25,7 +25,7 @@ from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.runtime import Outcome
 from executive.sim import ArduPilotSim, make_autopilot
-from executive.sim.autopilot import Home
+from executive.sim.ardupilot.base import Home
 from executive.sim.options import firmware_options, simulated_home
 from executive.testing.canbus import VirtualCan
 

@@ -18,7 +18,7 @@ from executive.clock import ManualClock, ScaledClock
 from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavutil
 from executive.io.mavlink.dialect import mavlink as m
 from executive.sim import SimServer, make_autopilot
-from executive.sim.autopilot import ArduPilotSim
+from executive.sim.ardupilot.base import ArduPilotSim
 from executive.sim.faults import FaultFileError, FaultInjector, FaultPlan, GpsGlitch, LinkLoss, RcTakeover, load_faults
 
 ROOT = Path(__file__).parents[2]
@@ -505,7 +505,7 @@ def test_sim_injects_a_good_fault_file(capsys: pytest.CaptureFixture[str]) -> No
 
 def test_rc_input_moves_sticks_and_switches_then_puts_them_back(tmp_path):
     from executive.clock import ManualClock
-    from executive.sim.autopilot import make_autopilot
+    from executive.sim.ardupilot.base import make_autopilot
     from executive.sim.faults import FaultInjector, load_faults
 
     path = tmp_path / "operator.yaml"

@@ -77,10 +77,10 @@ from typing import ClassVar
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import PX4_MODES
-from executive.sim.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
-from executive.sim.autopilot import DEFAULT_HOME, ArduPilotSim, Command, Home, _e7, _valid_latlon
+from executive.sim.ardupilot.base import DEFAULT_HOME, ArduPilotSim, Command, Home, _e7, _valid_latlon
 from executive.sim.mission_store import MissionState, MissionStore, StoredCommand
-from executive.sim.vehicle import ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
+from executive.sim.physics.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
+from executive.sim.physics.vehicle import ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.vehicles import VehicleProfile
 
 _M = mavlink

@@ -14,7 +14,7 @@ from executive.io.mavlink.dialect import mavlink as m
 from executive.io.mavlink.modes import PX4_MODES
 from executive.sim import SimServer, make_autopilot
 from executive.sim.faults import EkfDegradation, FaultInjector, GpsGlitch
-from executive.sim.px4 import (
+from executive.sim.px4.base import (
     COM_DISARM_PRFLT,
     COM_FAIL_ACT_T,
     COM_OF_LOSS_T,

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from executive.sim.vehicle import LocalFrame, _clamp, _wrap_pi
+from executive.sim.physics.vehicle import LocalFrame, _clamp, _wrap_pi
 
 GRAVITY_M_S2 = 9.80665
 

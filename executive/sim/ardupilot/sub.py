@@ -1,4 +1,4 @@
-"""ArduSub as the simulated AUV's autopilot: its modes drive an :class:`~executive.sim.underwater.UnderwaterVehicle`.
+"""ArduSub as the simulated AUV's autopilot: its modes drive an :class:`~executive.sim.physics.underwater.UnderwaterVehicle`.
 
 What follows ArduSub's source (4.x): every mode may be armed; GUIDED, POSHOLD, AUTO and CIRCLE
 need a position estimate even disarmed ("Mode change failed: X requires position"); SURFACE climbs
@@ -30,7 +30,7 @@ from typing import ClassVar
 
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
-from executive.sim.autopilot import (
+from executive.sim.ardupilot.base import (
     ACC_BITS,
     DEFAULT_HOME,
     DEFAULT_INTERVALS,
@@ -44,8 +44,8 @@ from executive.sim.autopilot import (
     _e7,
     _valid_latlon,
 )
-from executive.sim.underwater import SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
-from executive.sim.vehicle import VehicleModel
+from executive.sim.physics.underwater import SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
+from executive.sim.physics.vehicle import VehicleModel
 from executive.vehicles import SUB_MODES, VehicleProfile
 
 _M = mavlink

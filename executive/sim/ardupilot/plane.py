@@ -1,4 +1,4 @@
-"""ArduPlane with QuadPlane lift motors as the simulated VTOL's autopilot; its modes fly a :class:`~executive.sim.aircraft.QuadPlaneModel`.
+"""ArduPlane with QuadPlane lift motors as the simulated VTOL's autopilot; its modes fly a :class:`~executive.sim.physics.aircraft.QuadPlaneModel`.
 
 What follows ArduPlane's source (4.x, a standard "SLT" QuadPlane with default parameters):
 
@@ -55,8 +55,7 @@ from typing import ClassVar
 
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
-from executive.sim.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
-from executive.sim.autopilot import (
+from executive.sim.ardupilot.base import (
     DEFAULT_HOME,
     GLOBAL_FRAMES,
     NAVIGATION,
@@ -68,7 +67,8 @@ from executive.sim.autopilot import (
     _e7,
     _valid_latlon,
 )
-from executive.sim.vehicle import VehicleModel
+from executive.sim.physics.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
+from executive.sim.physics.vehicle import VehicleModel
 from executive.vehicles import PLANE_MODES, VehicleProfile
 
 _M = mavlink

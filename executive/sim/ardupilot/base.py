@@ -25,10 +25,10 @@ from typing import ClassVar
 from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS, RoverMotion
 from executive.clock import Clock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.mission_store import MissionStore, StoredCommand
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.sim.proximity import Proximity
-from executive.sim.rover_nav import RoverNavigator
-from executive.sim.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.vehicles import PROFILES, VehicleProfile
 
 Home = tuple[float, float, float]  # latitude, longitude (degrees), heading (degrees)
@@ -725,7 +725,7 @@ class ArduRoverSim(ArduPilotSim):
     NAV_WAYPOINT of the mission in turn, then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
     refused without a mission ("No Mission. Can't set AUTO.").
 
-    GUIDED, AUTO and RTL drive as the firmware's navigation does (:class:`~executive.sim.rover_nav.RoverNavigator`:
+    GUIDED, AUTO and RTL drive as the firmware's navigation does (:class:`~executive.sim.ardupilot.rover_nav.RoverNavigator`:
     GUIDED's shaped stop points, AUTO's S-curves and fast waypoints, pivots), by the parameters the
     vehicle has (:attr:`params`: the firmware's defaults unless set; :data:`SITL_PARAMS` as SITL starts).
     """
@@ -1026,8 +1026,9 @@ class _Firmwares(Mapping[str, type[ArduPilotSim]]):
     """Vehicle kind -> simulated firmware class, imported on first use: the other modules' classes subclass this one's."""
 
     _WHERE: ClassVar[Mapping[str, str]] = MappingProxyType({
-        "rover": "executive.sim.autopilot:ArduRoverSim", "boat": "executive.sim.autopilot:ArduRoverSim",
-        "bunker": "executive.sim.bunker:BunkerSim", "sub": "executive.sim.ardusub:ArduSubSim", "vtol": "executive.sim.arduplane:QuadPlaneSim",
+        "rover": "executive.sim.ardupilot.base:ArduRoverSim", "boat": "executive.sim.ardupilot.base:ArduRoverSim",
+        "bunker": "executive.sim.ardupilot.bunker:BunkerSim", "sub": "executive.sim.ardupilot.sub:ArduSubSim",
+        "vtol": "executive.sim.ardupilot.plane:QuadPlaneSim",
     })  # fmt: skip
 
     def __getitem__(self, kind: str) -> type[ArduPilotSim]:
@@ -1055,7 +1056,7 @@ FIRMWARES = ("ardupilot", "px4")
 def firmwares_for(autopilot: str) -> Mapping[str, type[ArduPilotSim]]:
     """Vehicle kind -> simulated firmware class, for one autopilot (``ardupilot`` or ``px4``)."""
     if autopilot == "px4":
-        from executive.sim.px4 import PX4_AUTOPILOTS  # subclasses this module's classes
+        from executive.sim.px4.base import PX4_AUTOPILOTS  # subclasses this module's classes
 
         return PX4_AUTOPILOTS
     if autopilot != "ardupilot":

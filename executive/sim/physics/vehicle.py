@@ -123,7 +123,7 @@ class LocalFrame:
 
 
 class Navigator(Protocol):
-    """An autopilot's navigation that drives the vehicle (ArduRover's: :class:`executive.sim.rover_nav.RoverNavigator`)."""
+    """An autopilot's navigation that drives the vehicle (ArduRover's: :class:`executive.sim.ardupilot.rover_nav.RoverNavigator`)."""
 
     @property
     def destination(self) -> tuple[float, float] | None:
