@@ -17,7 +17,7 @@ import pytest
 from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, auto_corner_cut_m, sqrt_controller, stopping_distance
 from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.io.mavlink.dialect import mavlink as m
-from executive.sim.ardupilot.base import SITL_PARAMS
+from executive.sim.ardupilot.rover import SITL_PARAMS
 
 if TYPE_CHECKING:
     from sim_support import Gcs
