@@ -14,7 +14,7 @@ from executive.clock import ManualClock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink, mavutil
 from executive.io.mavlink.link import Link, MemoryLink, PymavlinkLink
 from executive.mission.model import Mission
-from executive.sim import ArduPilotSim, make_autopilot
+from executive.sim import FirmwareSim, make_autopilot
 from executive.testing.lockstep import Wire
 from executive.vehicles import AutopilotName
 
@@ -202,7 +202,7 @@ class SimLoop:
         self.port: MemoryPort | None = MemoryPort() if byte_link else None
         self.link: Link = MemoryLink() if self.port is None else self.port.link()
         self.period_s = 1.0 / rate_hz
-        self.ap: ArduPilotSim = make_autopilot(
+        self.ap: FirmwareSim = make_autopilot(
             "rover", self.clock, HOME, autopilot=mission.autopilot or "ardupilot", ekf_ready_after_s=ekf_ready_after_s
         )
         self.uplink = Wire(1, EXECUTIVE_COMPONENT)

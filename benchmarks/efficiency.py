@@ -2,7 +2,7 @@
 
 In process, lock-step on a manual clock (deterministic): the example missions ``rover_square`` and
 ``boat_survey`` on their simulated vehicle, from the mission's home, with the parameters ArduPilot's
-SITL starts that frame with (:data:`executive.sim.autopilot.SITL_PARAMS`: WP_SPEED 5, WP_RADIUS 3), so
+SITL starts that frame with (:data:`executive.sim.ardupilot.rover.SITL_PARAMS`: WP_SPEED 5, WP_RADIUS 3), so
 the figures stand beside the real firmware's (:mod:`benchmarks.recorded`).
 
 - GUIDED: the executive runs the mission (its ``waypoints`` tree, its own tick loop, on
@@ -30,8 +30,8 @@ from executive.geo import distance_bearing
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, SimulatorOptions
-from executive.sim import ArduPilotSim, make_autopilot
-from executive.sim.autopilot import SITL_PARAMS
+from executive.sim import FirmwareSim, make_autopilot
+from executive.sim.ardupilot.rover import SITL_PARAMS
 from executive.sim.options import firmware_options, simulated_home
 from executive.testing import Lockstep
 
@@ -109,7 +109,7 @@ class _Route:
         self.radius_m = mission.limits.acceptance_radius_m
         self.next = 0
 
-    def done(self, ap: ArduPilotSim) -> bool:
+    def done(self, ap: FirmwareSim) -> bool:
         """Whether the vehicle is at the last waypoint, having passed the others in turn."""
         last = len(self.points) - 1
         while self.next <= last and ap.vehicle.distance_to(*self.points[self.next]) <= (self.radius_m if self.next == last else self.PASS_M):
@@ -128,7 +128,7 @@ class _Stopwatch:
         self.seconds: float | None = None
         self.track: list[tuple[float, float, float]] = []
 
-    def observe(self, now: float, ap: ArduPilotSim) -> bool:
+    def observe(self, now: float, ap: FirmwareSim) -> bool:
         """Look at the vehicle now; True once it is at the last waypoint."""
         if self.entered is None and ap.mode == self.mode and ap.armed:
             self.entered = now

@@ -22,7 +22,7 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime import Runtime
 from executive.sim import SimServer
-from executive.sim.autopilot import EKF_FLAGS_READY
+from executive.sim.ardupilot.base import EKF_FLAGS_READY
 
 RATE_HZ = 10.0
 SLACK_S = 0.010

@@ -19,8 +19,8 @@ from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.operator import Reply
 from executive.runtime import Outcome
-from executive.sim.autopilot import ArduPilotSim
 from executive.sim.faults import EkfDegradation, Fault, FaultInjector
+from executive.sim.firmware import FirmwareSim
 from executive.testing import Lockstep
 from tests_support import line_mission
 
@@ -33,7 +33,7 @@ class GroundStation(FaultInjector):
         self.actions = dict(actions or {})
         self.done: list[tuple[float, str]] = []
 
-    def update(self, autopilot: ArduPilotSim) -> None:
+    def update(self, autopilot: FirmwareSim) -> None:
         super().update(autopilot)
         for at_s, mode in list(self.actions.items()):
             if self.elapsed_s >= at_s:

@@ -22,8 +22,8 @@ from executive.clock import Clock
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.model import Mission
 from executive.mode_cause import ModeChange, autopilot_cause
-from executive.sim.autopilot import ArduPilotSim
 from executive.sim.faults import Fault, FaultInjector, LinkLoss
+from executive.sim.firmware import FirmwareSim
 from executive.testing import Lockstep
 from trees._parts import guarded, mission_root, preflight, standard_guards
 
@@ -97,11 +97,11 @@ def test_ardupilot_has_no_disarm_or_take_off_rule() -> None:
 class GroundStation(FaultInjector):
     """Faults, and at ``actions`` times (vehicle seconds after boot, or when ``when(autopilot)`` first holds) a ground station's mode."""
 
-    def __init__(self, clock: Clock, faults: list[Fault], action: tuple[Callable[[ArduPilotSim], bool], str] | None = None) -> None:
+    def __init__(self, clock: Clock, faults: list[Fault], action: tuple[Callable[[FirmwareSim], bool], str] | None = None) -> None:
         super().__init__(faults, clock)
         self.action = action
 
-    def update(self, autopilot: ArduPilotSim) -> None:
+    def update(self, autopilot: FirmwareSim) -> None:
         super().update(autopilot)
         if self.action is not None and self.action[0](autopilot):
             mode, self.action = self.action[1], None
@@ -130,7 +130,7 @@ def simulate(
     *,
     autopilot: str,
     faults: list[Fault] | None = None,
-    action: tuple[Callable[[ArduPilotSim], bool], str] | None = None,
+    action: tuple[Callable[[FirmwareSim], bool], str] | None = None,
     until: Callable[[Lockstep], bool],
     limit_s: float = 120.0,
 ) -> tuple[Lockstep, Changes]:

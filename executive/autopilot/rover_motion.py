@@ -14,7 +14,7 @@ Facts read in ArduPilot 4.7-dev's source (each cited where it is used); the code
 - ``libraries/AP_Math/SCurve.cpp``: an S-curve leg runs from rest to rest, its jerk rising and
   falling as a raised cosine over ``jerk * pi / (2 * snap)`` seconds.
 
-The simulated ArduRover (:mod:`executive.sim.rover_nav`) drives by these; GoTo's look-ahead predicts
+The simulated ArduRover (:mod:`executive.sim.ardupilot.rover_nav`) drives by these; GoTo's look-ahead predicts
 by them, from the parameters the vehicle itself reports (:class:`RoverMotion`).
 """
 

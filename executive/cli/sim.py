@@ -13,7 +13,8 @@ from typing import TYPE_CHECKING
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, number
 from executive.cli.common import faults_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
-from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, FIRMWARES, Home, firmwares_for
+from executive.sim.firmware import DEFAULT_HOME, Home
+from executive.sim.registry import AUTOPILOTS, FIRMWARES, firmwares_for
 from executive.sim.server import SimServer
 
 if TYPE_CHECKING:

@@ -1,8 +1,16 @@
-"""The built-in simulated vehicles: ArduPilot or PX4 firmware behaviour over a real MAVLink link."""
+"""The built-in simulated vehicles: ArduPilot or PX4 firmware behaviour over a real MAVLink link.
 
-from executive.sim.autopilot import AUTOPILOTS, DEFAULT_HOME, FIRMWARES, ArduPilotSim, ArduRoverSim, Home, firmwares_for, make_autopilot
+:mod:`.firmware` is what every simulated autopilot does alike, :mod:`.ardupilot` and :mod:`.px4` a package per
+firmware, :mod:`.physics` the vehicle models, :mod:`.registry` the simulators by name (:func:`make_autopilot`,
+:func:`register_autopilot`), :mod:`.server` the MAVLink endpoint, :mod:`.faults` fault injection.
+"""
+
+from executive.sim.ardupilot.base import ArduPilotSim
+from executive.sim.ardupilot.rover import ArduRoverSim
+from executive.sim.firmware import DEFAULT_HOME, FirmwareSim, Home
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
+from executive.sim.registry import AUTOPILOTS, FIRMWARES, firmwares_for, make_autopilot, register_autopilot
 from executive.sim.server import SimServer
-from executive.sim.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 
 __all__ = [
     "AUTOPILOTS",
@@ -12,6 +20,7 @@ __all__ = [
     "ROVER_LIMITS",
     "ArduPilotSim",
     "ArduRoverSim",
+    "FirmwareSim",
     "Home",
     "Limits",
     "SimServer",
@@ -19,4 +28,5 @@ __all__ = [
     "VehicleModel",
     "firmwares_for",
     "make_autopilot",
+    "register_autopilot",
 ]

@@ -42,9 +42,9 @@ from executive.io.can.agilex import (
 )
 from executive.io.rc import knob_value, switch_position
 from executive.mission.model import SwitchChannels
-from executive.sim.autopilot import ArduPilotSim
-from executive.sim.bunker import BunkerSim
+from executive.sim.ardupilot.bunker import BunkerSim
 from executive.sim.faults import BatterySag, FaultInjector, RcLoss
+from executive.sim.firmware import FirmwareSim
 from executive.state import SwitchPosition
 
 log = logging.getLogger(__name__)
@@ -105,7 +105,7 @@ class SimulatedBase:
         self,
         bus: can.BusABC,
         clock: Clock,
-        autopilot: ArduPilotSim,
+        autopilot: FirmwareSim,
         *,
         faults: FaultInjector | None = None,
         switch_channels: SwitchChannels | None = None,

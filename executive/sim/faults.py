@@ -31,7 +31,7 @@ from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import PX4_MODES
 from executive.mission.errors import MissionError, Path
 from executive.mission.loader import load_model
-from executive.sim.autopilot import ArduPilotSim
+from executive.sim.firmware import FirmwareSim
 from executive.vehicles import PROFILES
 
 log = logging.getLogger(__name__)
@@ -218,7 +218,7 @@ class FaultInjector:
         self._steers = any(isinstance(f, CompassBias | CompassGlitch) for f in self.faults)
         self._warned_steering = False
 
-    def attach(self, autopilot: ArduPilotSim) -> None:
+    def attach(self, autopilot: FirmwareSim) -> None:
         """Count fault times from now, the boot of ``autopilot`` (which must run on the same clock)."""
         if autopilot.clock is not self.clock:
             raise ValueError("the fault injector and the simulated autopilot must share one clock")
@@ -259,7 +259,7 @@ class FaultInjector:
 
     # -- effects on the autopilot ----------------------------------------------------------------
 
-    def update(self, autopilot: ArduPilotSim) -> None:
+    def update(self, autopilot: FirmwareSim) -> None:
         """Apply what starts or ends now to ``autopilot``, and steer it by the compass it has now."""
         t = self.elapsed_s
         for i, (fault, start, end) in enumerate(self._spans):
@@ -283,7 +283,7 @@ class FaultInjector:
                 self._warned_steering = True
                 log.warning("fault injection: the %s model cannot steer by a wrong compass; only the telemetry is biased", autopilot.profile.kind)
 
-    def _start(self, i: int, fault: Fault, autopilot: ArduPilotSim) -> None:
+    def _start(self, i: int, fault: Fault, autopilot: FirmwareSim) -> None:
         if isinstance(fault, RcInput):
             self._saved_inputs[i] = {ch: autopilot.rc_channels[ch - 1] for ch in fault.channels}
             for ch, pwm in fault.channels.items():
@@ -296,20 +296,20 @@ class FaultInjector:
             if fault.disarm:
                 autopilot.disarm()
 
-    def _end(self, i: int, fault: Fault, autopilot: ArduPilotSim) -> None:
+    def _end(self, i: int, fault: Fault, autopilot: FirmwareSim) -> None:
         if isinstance(fault, RcInput):
             for ch, pwm in self._saved_inputs.pop(i).items():
                 autopilot.rc_channels[ch - 1] = pwm
         if isinstance(fault, RcTakeover):  # the switch goes back; the mode stays where the pilot left it
             autopilot.rc_channels[fault.channel - 1] = self._saved_rc.pop(i)
 
-    def _rc_failsafe(self, fault: RcLoss, autopilot: ArduPilotSim) -> None:
+    def _rc_failsafe(self, fault: RcLoss, autopilot: FirmwareSim) -> None:
         # ArduRover acts only when armed, and does not switch back when the RC returns
         if fault.failsafe_mode is not None and autopilot.armed:
             self._set_mode(autopilot, fault.failsafe_mode, "RC failsafe")
 
     @staticmethod
-    def _set_mode(autopilot: ArduPilotSim, mode: str, why: str) -> None:
+    def _set_mode(autopilot: FirmwareSim, mode: str, why: str) -> None:
         number = autopilot.profile.modes.get(mode)
         if number is None or not autopilot.set_mode(number):
             log.warning("fault injection: %s: %s refused mode %s", why, autopilot.FIRMWARE, mode)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from executive.mission.model import Mission, SimulatorOptions
-from executive.sim.autopilot import DEFAULT_HOME, Home
+from executive.sim.firmware import DEFAULT_HOME, Home
 
 
 def simulated_home(mission: Mission) -> Home:

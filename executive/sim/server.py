@@ -9,7 +9,8 @@ from typing import TYPE_CHECKING
 
 from executive.clock import Clock, ScaledClock
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, mavutil
-from executive.sim.autopilot import DEFAULT_HOME, ArduPilotSim, Home, make_autopilot
+from executive.sim.firmware import DEFAULT_HOME, FirmwareSim, Home
+from executive.sim.registry import make_autopilot
 
 if TYPE_CHECKING:
     import can
@@ -55,7 +56,7 @@ class SimServer:
         self.clock = clock if clock is not None else faults.clock if faults is not None else ScaledClock()
         if ekf_ready_after_s is not None:
             firmware_options["ekf_ready_after_s"] = ekf_ready_after_s
-        self.autopilot: ArduPilotSim = make_autopilot(vehicle_kind, self.clock, home, autopilot=autopilot, system_id=system_id, **firmware_options)
+        self.autopilot: FirmwareSim = make_autopilot(vehicle_kind, self.clock, home, autopilot=autopilot, system_id=system_id, **firmware_options)
         self.faults = faults
         if faults is not None:
             faults.attach(self.autopilot)

@@ -24,8 +24,8 @@ from executive.io.mavlink.link import MemoryLink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.runtime import Outcome
-from executive.sim import ArduPilotSim, make_autopilot
-from executive.sim.autopilot import Home
+from executive.sim import FirmwareSim, make_autopilot
+from executive.sim.firmware import Home
 from executive.sim.options import firmware_options, simulated_home
 from executive.testing.canbus import VirtualCan
 
@@ -199,7 +199,7 @@ class Lockstep:
             raise RuntimeError("filterpy did not load within 30 s: the heading filter cannot run")
         self.mission = mission
         self.clock = LockstepClock(self._step_to, start_s, max_step_s=1.0 / rate_hz, overload=overload)
-        self.autopilot: ArduPilotSim = make_autopilot(
+        self.autopilot: FirmwareSim = make_autopilot(
             model or sim.model or mission.vehicle,
             self.clock,
             home or simulated_home(mission),

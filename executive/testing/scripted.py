@@ -191,7 +191,7 @@ class ScriptedAutopilot:
 class MissionAutopilot(ScriptedAutopilot):
     """A scripted autopilot that holds a mission as ArduPilot does, behind a harness with a mission transfer (``Harness.build(..., transfer=True)``).
 
-    :attr:`store` is the simulator's own :class:`~executive.sim.mission_store.MissionStore` (home at item
+    :attr:`store` is the simulator's own :class:`~executive.sim.ardupilot.mission_store.ArduPilotMissionStore` (home at item
     0, uploads driven by MISSION_REQUEST, items read back as stored). The mission messages the
     executive sends go to it (none while :attr:`answers_missions` is off: a link that loses them);
     its replies wait in :attr:`replies` until :meth:`deliver` hands them over as the MAVLink reader
@@ -203,7 +203,7 @@ class MissionAutopilot(ScriptedAutopilot):
     system_id = component_id = 1
 
     def __init__(self, harness: Harness, start: tuple[float, float] = (0.0, 0.0), *, home: tuple[float, float] | None = None, **options: Any) -> None:
-        from executive.sim.mission_store import MissionStore
+        from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 
         assert harness.transfer is not None, "a mission autopilot needs a harness with a mission transfer (Harness.build(..., transfer=True))"
         self.transfer = harness.transfer
@@ -211,7 +211,7 @@ class MissionAutopilot(ScriptedAutopilot):
         self.home: tuple[float, float] | None = home or start
         self.answers_missions = True
         self.replies: list[MAVLinkMessage] = []
-        self.store = MissionStore(self, self.replies.append, self.statustext)
+        self.store = ArduPilotMissionStore(self, self.replies.append, self.statustext)
         self._wire = _M.MAVLink(None, srcSystem=1, srcComponent=EXECUTIVE_COMPONENT)
         super().__init__(harness, start, **options)
 

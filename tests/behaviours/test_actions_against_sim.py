@@ -38,8 +38,8 @@ from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Mission
 from executive.sim import make_autopilot
-from executive.sim.aircraft import QUADPLANE_LIMITS
-from executive.sim.arduplane import LOITER_RADIUS_M
+from executive.sim.ardupilot.plane import LOITER_RADIUS_M
+from executive.sim.physics.aircraft import QUADPLANE_LIMITS
 from executive.vehicles import PROFILES
 
 HOME = (47.397742, 8.545594, 0.0)

@@ -12,7 +12,7 @@ from executive.cli import main
 from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.sim import SimServer
-from executive.sim.autopilot import DEFAULT_HOME
+from executive.sim.firmware import DEFAULT_HOME
 from mavlink_hub import UdpHub
 
 ROOT = Path(__file__).parents[2]

@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavlink, mavutil
-from executive.sim import ArduPilotSim
+from executive.sim import FirmwareSim
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 HOME = (47.397742, 8.545594, 0.0)
@@ -21,9 +21,9 @@ M_PER_DEG_LAT = 111_319.49
 
 
 class Gcs:
-    """Talks to an :class:`ArduPilotSim` as a ground station would, without sockets, on a manual clock."""
+    """Talks to an :class:`FirmwareSim` as a ground station would, without sockets, on a manual clock."""
 
-    def __init__(self, ap: ArduPilotSim, clock: ManualClock) -> None:
+    def __init__(self, ap: FirmwareSim, clock: ManualClock) -> None:
         self.ap = ap
         self.clock = clock
         self.mav = encoder(GCS_SYSTEM, GCS_COMPONENT)

@@ -18,8 +18,8 @@ from executive.clock import ManualClock, ScaledClock
 from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavutil
 from executive.io.mavlink.dialect import mavlink as m
 from executive.sim import SimServer, make_autopilot
-from executive.sim.autopilot import ArduPilotSim
 from executive.sim.faults import FaultFileError, FaultInjector, FaultPlan, GpsGlitch, LinkLoss, RcTakeover, load_faults
+from executive.sim.firmware import FirmwareSim
 
 ROOT = Path(__file__).parents[2]
 EXAMPLES = sorted((ROOT / "missions" / "faults").glob("*.yaml"))
@@ -279,7 +279,7 @@ def test_link_loss_silences_its_direction_only_while_active(direction: str, rece
 # -- the injector on the autopilot -----------------------------------------------------------------
 
 
-def armed_rover(clock: ManualClock, mode: str = "GUIDED") -> ArduPilotSim:
+def armed_rover(clock: ManualClock, mode: str = "GUIDED") -> FirmwareSim:
     ap = make_autopilot("rover", clock, HOME, ekf_ready_after_s=1.0)
     ap.update()
     for _ in range(20):
@@ -297,7 +297,7 @@ def command(cmd: int, *params: float) -> MAVLinkMessage:
     return msg
 
 
-def run(injector: FaultInjector, ap: ArduPilotSim, until: float, step: float = 0.1) -> list[MAVLinkMessage]:
+def run(injector: FaultInjector, ap: FirmwareSim, until: float, step: float = 0.1) -> list[MAVLinkMessage]:
     """As the server does: effects, the autopilot, the link; until ``until`` seconds of injector time."""
     out: list[MAVLinkMessage] = []
     clock = injector.clock
@@ -505,8 +505,8 @@ def test_sim_injects_a_good_fault_file(capsys: pytest.CaptureFixture[str]) -> No
 
 def test_rc_input_moves_sticks_and_switches_then_puts_them_back(tmp_path):
     from executive.clock import ManualClock
-    from executive.sim.autopilot import make_autopilot
     from executive.sim.faults import FaultInjector, load_faults
+    from executive.sim.registry import make_autopilot
 
     path = tmp_path / "operator.yaml"
     events = ["{kind: rc_input, at_s: 5, for_s: 3, channels: {3: 1900, 7: 1000}}", "{kind: rc_input, at_s: 6, channels: {8: 2000}}"]

@@ -13,11 +13,11 @@ from typing import Protocol
 _EARTH_RADIUS_M = 6378137.0
 
 
-def _wrap_pi(angle: float) -> float:
+def wrap_pi(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def _clamp(value: float, limit: float) -> float:
+def clamp(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
 
 
@@ -123,7 +123,7 @@ class LocalFrame:
 
 
 class Navigator(Protocol):
-    """An autopilot's navigation that drives the vehicle (ArduRover's: :class:`executive.sim.rover_nav.RoverNavigator`)."""
+    """An autopilot's navigation that drives the vehicle (ArduRover's: :class:`executive.sim.ardupilot.rover_nav.RoverNavigator`)."""
 
     @property
     def destination(self) -> tuple[float, float] | None:
@@ -163,7 +163,7 @@ class SurfaceVehicle(LocalFrame):
         self.heading_bias_deg = 0.0  # compass error the controller steers by (fault injection): it heads this far off
         self._init_frame(lat, lon)
         self._n = self._e = 0.0
-        self._yaw = _wrap_pi(math.radians(heading_deg))
+        self._yaw = wrap_pi(math.radians(heading_deg))
         self._speed = 0.0
         self._yaw_rate = 0.0
         self._target: tuple[float, float] | None = None  # north, east (m)
@@ -270,7 +270,7 @@ class SurfaceVehicle(LocalFrame):
         """A pilot's sticks, each in [-1, 1]: forward speed and turn rate as fractions of the maximum."""
         self._target = None
         self._navigator = None
-        self._manual = (_clamp(throttle, 1.0), _clamp(steering, 1.0))
+        self._manual = (clamp(throttle, 1.0), clamp(steering, 1.0))
 
     # -- physics -------------------------------------------------------------------------------
 
@@ -291,7 +291,7 @@ class SurfaceVehicle(LocalFrame):
 
     def _move(self, h: float) -> None:
         """Turn and travel ``h`` seconds at the present speed and turn rate."""
-        self._yaw = _wrap_pi(self._yaw + self._yaw_rate * h)
+        self._yaw = wrap_pi(self._yaw + self._yaw_rate * h)
         vn, ve, _ = self.velocity_ned
         self._n += vn * h
         self._e += ve * h
@@ -310,10 +310,10 @@ class SurfaceVehicle(LocalFrame):
                 if want_speed == 0.0 and abs(speed) < self.STANDSTILL_M_S:
                     speed = 0.0  # the lag's tail would creep on for ever: a drive train asked for nothing stops
             if limits.min_turn_radius_m > 0.0:
-                want_rate = _clamp(want_rate, abs(speed) / limits.min_turn_radius_m)
+                want_rate = clamp(want_rate, abs(speed) / limits.min_turn_radius_m)
             return speed, want_rate
         change = want_speed - self._speed
-        return self._speed + _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h), want_rate
+        return self._speed + clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h), want_rate
 
     def _control(self) -> tuple[float, float]:
         """Speed and turn rate wanted now."""
@@ -330,11 +330,11 @@ class SurfaceVehicle(LocalFrame):
             self._arrived = True
             return 0.0, 0.0
         limits = self.limits
-        error = _wrap_pi(math.atan2(de, dn) - self._yaw - math.radians(self.heading_bias_deg))
+        error = wrap_pi(math.atan2(de, dn) - self._yaw - math.radians(self.heading_bias_deg))
         rate_max = math.radians(limits.turn_rate_deg_s)
         if abs(self._speed) > 1e-3:
             rate_max = min(rate_max, limits.lat_accel_m_s2 / abs(self._speed))  # ATC_TURN_MAX_G
-        rate = _clamp(self.HEADING_GAIN * error, rate_max)
+        rate = clamp(self.HEADING_GAIN * error, rate_max)
         # a braking profile with margin, then a linear approach: never overshoots the target (the shape of ArduPilot's
         # sqrt_controller stopping a shaped target, libraries/AP_Math/control.cpp)
         brake = math.sqrt(2.0 * 0.8 * limits.decel_m_s2 * distance)
@@ -416,7 +416,7 @@ class SkidSteerVehicle(SurfaceVehicle):
             speed, rate = super()._actuate(want_speed, want_rate, h)
         else:
             change = want_speed - self._demand_m_s
-            speed, rate = self._demand_m_s + _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h), want_rate
+            speed, rate = self._demand_m_s + clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h), want_rate
         self._demand_m_s = speed
         t = self.tracks
         # a turn-rate controller learns the steering the slip needs: ask the tracks for it
@@ -440,7 +440,7 @@ class SkidSteerVehicle(SurfaceVehicle):
         linear, angular = self.base_command
         t = self.tracks
         change = linear - self._speed
-        linear = self._speed + _clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h)
+        linear = self._speed + clamp(change, (self.limits.accel_m_s2 if change > 0 else self.limits.decel_m_s2) * h)
         half_difference = -angular * t.width_m * t.slip_factor / 2.0  # counter-clockwise: the right track runs faster
         left, right = linear + half_difference, linear - half_difference
         over = max(abs(left), abs(right)) / t.max_m_s
@@ -456,9 +456,9 @@ def skid_steer_mix(throttle: float, steering: float) -> tuple[float, float]:
     Throttle and steering are in [-1, 1] (steering positive = turn right). When they do not fit
     together, steering is scaled back by the saturation and throttle gets what is left.
     """
-    throttle, steering = _clamp(throttle, 1.0), _clamp(steering, 1.0)
+    throttle, steering = clamp(throttle, 1.0), clamp(steering, 1.0)
     saturation = abs(throttle) + abs(steering)
     if saturation > 1.0:
         steering /= saturation
         throttle = math.copysign(1.0 - abs(steering), throttle)
-    return _clamp(throttle + steering, 1.0), _clamp(throttle - steering, 1.0)
+    return clamp(throttle + steering, 1.0), clamp(throttle - steering, 1.0)

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import pytest
 
 from executive.io.mavlink.dialect import mavlink as m
-from executive.sim.autopilot import EKF_FLAGS_READY
+from executive.sim.ardupilot.base import EKF_FLAGS_READY
 
 if TYPE_CHECKING:
     from sim_support import Gcs
@@ -292,7 +292,7 @@ def test_the_mode_switch_channel_is_answered_as_the_firmware_does(make_gcs: Make
 
 def test_a_parameter_set_for_the_simulator_is_answered() -> None:
     from executive.clock import ManualClock
-    from executive.sim.autopilot import make_autopilot
+    from executive.sim.registry import make_autopilot
 
     ap = make_autopilot("rover", ManualClock(), params={"MODE_CH": 0, "WP_SPEED": 3.5})
     assert (ap.params["MODE_CH"], ap.params["WP_SPEED"], ap.params["ATC_ACCEL_MAX"]) == (0, 3.5, 1.0)  # the rest: the firmware's defaults

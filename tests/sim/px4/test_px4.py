@@ -14,19 +14,18 @@ from executive.io.mavlink.dialect import mavlink as m
 from executive.io.mavlink.modes import PX4_MODES
 from executive.sim import SimServer, make_autopilot
 from executive.sim.faults import EkfDegradation, FaultInjector, GpsGlitch
-from executive.sim.px4 import (
+from executive.sim.px4.base import Px4Sim
+from executive.sim.px4.parameters import (
     COM_DISARM_PRFLT,
     COM_FAIL_ACT_T,
     COM_OF_LOSS_T,
     COM_SPOOLUP_TIME,
-    ESTIMATOR_AT_REST,
-    ESTIMATOR_OK,
     HOME_AMSL_M,
     MIS_TAKEOFF_ALT,
     MISSION_CHECK_S,
     TRANSITION_AIRSPEED_M_S,
-    Px4Sim,
 )
+from executive.sim.px4.streams import ESTIMATOR_AT_REST, ESTIMATOR_OK
 from sim_support import HOME, Gcs
 
 if TYPE_CHECKING:

@@ -6,7 +6,7 @@ import itertools
 
 import pytest
 
-from executive.sim.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle
 
 HOME = (47.397742, 8.545594)
 

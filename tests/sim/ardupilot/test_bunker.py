@@ -10,8 +10,8 @@ import pytest
 from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import mavlink as m
 from executive.sim import SimServer
-from executive.sim.bunker import BunkerSim
-from executive.sim.vehicle import BUNKER_LIMITS, SkidSteerVehicle, skid_steer_mix
+from executive.sim.ardupilot.bunker import BunkerSim
+from executive.sim.physics.vehicle import BUNKER_LIMITS, SkidSteerVehicle, skid_steer_mix
 
 if TYPE_CHECKING:
     from sim_support import Client, Gcs

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from executive.sim.vehicle import LocalFrame, _clamp, _wrap_pi
+from executive.sim.physics.vehicle import LocalFrame, clamp, wrap_pi
 
 GRAVITY_M_S2 = 9.80665
 
@@ -75,7 +75,7 @@ class QuadPlaneModel(LocalFrame):
         self._init_frame(lat, lon)
         self._n = self._e = self._h = 0.0
         self._vn = self._ve = self._vd = 0.0
-        self._yaw = _wrap_pi(math.radians(heading_deg))
+        self._yaw = wrap_pi(math.radians(heading_deg))
         self._yaw_rate = 0.0
         self._target: tuple[float, float] = (0.0, 0.0)  # north, east (m): hover point or orbit centre
         self._target_h = 0.0
@@ -254,20 +254,20 @@ class QuadPlaneModel(LocalFrame):
             brake = math.sqrt(2.0 * 0.8 * limits.vertical_accel_m_s2 * abs(error))
             rate = min(brake, self.HEIGHT_GAIN * abs(error), limits.climb_m_s if error > 0 else limits.descend_m_s)
             want_down = -math.copysign(rate, error)
-        self._vd += _clamp(want_down - self._vd, limits.vertical_accel_m_s2 * h)
+        self._vd += clamp(want_down - self._vd, limits.vertical_accel_m_s2 * h)
 
     def _fixed_wing(self, h: float) -> None:
         limits = self.limits
         speed = self.speed_m_s
-        speed += _clamp(limits.cruise_m_s - speed, limits.fw_accel_m_s2 * h)
+        speed += clamp(limits.cruise_m_s - speed, limits.fw_accel_m_s2 * h)
         course = self._yaw if self._radius <= 0 else self._orbit_course()
         max_rate = GRAVITY_M_S2 * math.tan(math.radians(limits.bank_deg)) / max(speed, 5.0)
-        self._yaw_rate = _clamp(self.HEADING_GAIN * _wrap_pi(course - self._yaw), max_rate)
-        self._yaw = _wrap_pi(self._yaw + self._yaw_rate * h)
+        self._yaw_rate = clamp(self.HEADING_GAIN * wrap_pi(course - self._yaw), max_rate)
+        self._yaw = wrap_pi(self._yaw + self._yaw_rate * h)
         self._vn, self._ve = speed * math.cos(self._yaw), speed * math.sin(self._yaw)
         error = self._target_h - self._h
-        want_down = -_clamp(self.FW_HEIGHT_GAIN * error, limits.fw_climb_m_s if error > 0 else limits.fw_sink_m_s)
-        self._vd += _clamp(want_down - self._vd, limits.vertical_accel_m_s2 * h)
+        want_down = -clamp(self.FW_HEIGHT_GAIN * error, limits.fw_climb_m_s if error > 0 else limits.fw_sink_m_s)
+        self._vd += clamp(want_down - self._vd, limits.vertical_accel_m_s2 * h)
 
     def _orbit_course(self) -> float:
         """The course that takes the aircraft onto its circle and around it."""
@@ -277,5 +277,5 @@ class QuadPlaneModel(LocalFrame):
             return self._yaw
         un, ue = out_n / distance, out_e / distance
         along_n, along_e = (ue, -un) if self._ccw else (-ue, un)
-        pull = _clamp(self.ORBIT_GAIN * (self._radius - distance) / self._radius, 3.0)
+        pull = clamp(self.ORBIT_GAIN * (self._radius - distance) / self._radius, 3.0)
         return math.atan2(along_e + pull * ue, along_n + pull * un)

@@ -2,7 +2,7 @@
 
 Expected figures come from the firmware's parameters (SITL's rover.parm: WP_SPEED 5, WP_RADIUS 3; defaults
 ATC_ACCEL_MAX 1, WP_JERK 0 = 1 m/s^3, ATC_TURN_MAX_G 0.6, WP_PIVOT_ANGLE 60, WP_PIVOT_RATE 60) and the
-sources cited in executive/sim/rover_nav.py, worked out by hand, not read back from the model.
+sources cited in executive/sim/ardupilot/rover_nav.py, worked out by hand, not read back from the model.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import pytest
 from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, auto_corner_cut_m, sqrt_controller, stopping_distance
 from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.io.mavlink.dialect import mavlink as m
-from executive.sim.autopilot import SITL_PARAMS
+from executive.sim.ardupilot.rover import SITL_PARAMS
 
 if TYPE_CHECKING:
     from sim_support import Gcs

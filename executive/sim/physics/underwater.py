@@ -1,6 +1,6 @@
 """Kinematics of the simulated underwater vehicle (an ArduSub ROV/AUV) and of the seabed under it. No IO.
 
-Horizontally the vehicle moves like a slow :class:`~executive.sim.vehicle.SurfaceVehicle`; vertically
+Horizontally the vehicle moves like a slow :class:`~executive.sim.physics.vehicle.SurfaceVehicle`; vertically
 it has its own depth controller. Depth is positive down from the surface (altitude = -depth).
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from executive.sim.vehicle import Limits, SurfaceVehicle
+from executive.sim.physics.vehicle import Limits, SurfaceVehicle
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""ArduPlane with QuadPlane lift motors as the simulated VTOL's autopilot; its modes fly a :class:`~executive.sim.aircraft.QuadPlaneModel`.
+"""ArduPlane with QuadPlane lift motors as the simulated VTOL's autopilot; its modes fly a :class:`~executive.sim.physics.aircraft.QuadPlaneModel`.
 
 What follows ArduPlane's source (4.x, a standard "SLT" QuadPlane with default parameters):
 
@@ -55,20 +55,16 @@ from typing import ClassVar
 
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
-from executive.sim.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
-from executive.sim.autopilot import (
-    DEFAULT_HOME,
+from executive.sim.ardupilot.base import (
     GLOBAL_FRAMES,
     NAVIGATION,
     RATE_ATTITUDE,
     TARGET_REPORT_MASK,
     ArduPilotSim,
-    Command,
-    Home,
-    _e7,
-    _valid_latlon,
 )
-from executive.sim.vehicle import VehicleModel
+from executive.sim.firmware import DEFAULT_HOME, Command, Home, e7, valid_latlon
+from executive.sim.physics.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
+from executive.sim.physics.vehicle import VehicleModel
 from executive.vehicles import PLANE_MODES, VehicleProfile
 
 _M = mavlink
@@ -424,7 +420,7 @@ class QuadPlaneSim(ArduPilotSim):
     def _cmd_reposition(self, cmd: Command) -> int:
         lat, lon = cmd.lat_lon
         alt = cmd.params[6]
-        if not _valid_latlon(lat, lon) or cmd.frame not in GLOBAL_FRAMES:
+        if not valid_latlon(lat, lon) or cmd.frame not in GLOBAL_FRAMES:
             return _M.MAV_RESULT_DENIED
         # Location::sanitize() fills in a zero lat/lon or a zero relative altitude: ArduPlane refuses such a target
         if (lat == 0.0 and lon == 0.0) or (alt == 0.0 and cmd.frame not in (_M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT)):
@@ -466,5 +462,5 @@ class QuadPlaneSim(ArduPilotSim):
         if target is None:
             return None
         return self._mav.position_target_global_int_encode(
-            self._ms(), _M.MAV_FRAME_GLOBAL, TARGET_REPORT_MASK, _e7(target[0]), _e7(target[1]), self.vehicle.target_alt_m, 0, 0, 0, 0, 0, 0, 0, 0
+            self._ms(), _M.MAV_FRAME_GLOBAL, TARGET_REPORT_MASK, e7(target[0]), e7(target[1]), self.vehicle.target_alt_m, 0, 0, 0, 0, 0, 0, 0, 0
         )

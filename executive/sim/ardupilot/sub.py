@@ -1,4 +1,4 @@
-"""ArduSub as the simulated AUV's autopilot: its modes drive an :class:`~executive.sim.underwater.UnderwaterVehicle`.
+"""ArduSub as the simulated AUV's autopilot: its modes drive an :class:`~executive.sim.physics.underwater.UnderwaterVehicle`.
 
 What follows ArduSub's source (4.x): every mode may be armed; GUIDED, POSHOLD, AUTO and CIRCLE
 need a position estimate even disarmed ("Mode change failed: X requires position"); SURFACE climbs
@@ -30,22 +30,18 @@ from typing import ClassVar
 
 from executive.clock import Clock
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
-from executive.sim.autopilot import (
+from executive.sim.ardupilot.base import (
     ACC_BITS,
-    DEFAULT_HOME,
     DEFAULT_INTERVALS,
     GLOBAL_FRAMES,
     POS_BITS,
     RATE_ATTITUDE,
     TARGET_REPORT_MASK,
     ArduPilotSim,
-    Command,
-    Home,
-    _e7,
-    _valid_latlon,
 )
-from executive.sim.underwater import SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
-from executive.sim.vehicle import VehicleModel
+from executive.sim.firmware import DEFAULT_HOME, Command, Home, e7, valid_latlon
+from executive.sim.physics.underwater import SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
+from executive.sim.physics.vehicle import VehicleModel
 from executive.vehicles import SUB_MODES, VehicleProfile
 
 _M = mavlink
@@ -238,7 +234,7 @@ class ArduSubSim(ArduPilotSim):
         if self.mode != "GUIDED" or not msg.type_mask & ACC_BITS or msg.type_mask & POS_BITS:
             return  # velocity-only targets (pos ignored) are not simulated
         lat, lon = msg.lat_int * 1e-7, msg.lon_int * 1e-7
-        if not _valid_latlon(lat, lon) or msg.coordinate_frame not in GLOBAL_FRAMES:
+        if not valid_latlon(lat, lon) or msg.coordinate_frame not in GLOBAL_FRAMES:
             return
         if msg.coordinate_frame in RELATIVE_FRAMES:
             self._go(lat, lon)
@@ -258,7 +254,7 @@ class ArduSubSim(ArduPilotSim):
         alt = cmd.params[6]
         # Location::sanitize() fills in a zero lat/lon or a zero relative altitude: ArduSub refuses such a target
         relative_zero = alt == 0.0 and cmd.frame not in (_M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT)
-        if not _valid_latlon(lat, lon) or (lat == 0.0 and lon == 0.0) or relative_zero:
+        if not valid_latlon(lat, lon) or (lat == 0.0 and lon == 0.0) or relative_zero:
             return _M.MAV_RESULT_DENIED
         if cmd.frame in TERRAIN_FRAMES or cmd.frame not in GLOBAL_FRAMES:
             return _M.MAV_RESULT_FAILED  # no terrain database under water
@@ -316,5 +312,5 @@ class ArduSubSim(ArduPilotSim):
         if target is None or depth_target is None:
             return None
         return self._mav.position_target_global_int_encode(
-            self._ms(), _M.MAV_FRAME_GLOBAL, TARGET_REPORT_MASK, _e7(target[0]), _e7(target[1]), -depth_target, 0, 0, 0, 0, 0, 0, 0, 0
+            self._ms(), _M.MAV_FRAME_GLOBAL, TARGET_REPORT_MASK, e7(target[0]), e7(target[1]), -depth_target, 0, 0, 0, 0, 0, 0, 0, 0
         )

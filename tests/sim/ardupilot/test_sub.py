@@ -10,7 +10,7 @@ import pytest
 from executive.clock import ScaledClock
 from executive.io.mavlink.dialect import mavlink as m
 from executive.sim import SimServer
-from executive.sim.underwater import SUB_LIMITS, Seabed, UnderwaterVehicle
+from executive.sim.physics.underwater import SUB_LIMITS, Seabed, UnderwaterVehicle
 from executive.vehicles import profile_for_mav_type
 
 if TYPE_CHECKING:

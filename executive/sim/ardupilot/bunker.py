@@ -14,8 +14,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import ClassVar
 
-from executive.sim.autopilot import BATTERY_EMPTY_V, BATTERY_FULL_V, BATTERY_MAH, BATTERY_SAG_V_PER_A, ArduRoverSim, Home
-from executive.sim.vehicle import BUNKER_LIMITS, Limits, SkidSteerVehicle
+from executive.sim.ardupilot.rover import ArduRoverSim
+from executive.sim.firmware import BATTERY_EMPTY_V, BATTERY_FULL_V, BATTERY_MAH, BATTERY_SAG_V_PER_A, Home
+from executive.sim.physics.vehicle import BUNKER_LIMITS, Limits, SkidSteerVehicle
 
 #: The Bunker's tracks respond quickly; it turns on the spot.
 BUNKER_RESPONSE = {"speed_lag_s": 0.2, "min_turn_radius_m": 0.0}
