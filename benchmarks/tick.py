@@ -37,12 +37,12 @@ from py_trees.common import Status
 
 from benchmarks.common import Row, SimLoop, median, percentile, rover_mission, serpentine
 from executive.assembly import journal_recorder, snapshot_recorder
-from executive.io.heading import HeadingFilter, wait_for_filterpy
 from executive.io.mavlink.dialect import mavlink
 from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.progress import Progress
+from executive.sensing.heading import HeadingFilter, wait_for_filterpy
 from executive.snapshots import SnapshotRecorder
 from executive.testing import Lockstep
 from executive.vehicles import AutopilotName

@@ -17,7 +17,6 @@ from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.clock import Clock
 from executive.intervention import InterventionWatch
-from executive.io.heading import HeadingFilter
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.gcs import GroundStationControl
@@ -28,12 +27,13 @@ from executive.io.mavlink.parameters import ParameterWatch
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.route_keeper import RouteKeeper
 from executive.io.mavlink.streams import StreamRequester, rates_for
-from executive.io.rc import RcReader
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, rc_switch_channels
 from executive.mission.reload import REPLACED
 from executive.operator import Operator
 from executive.runtime import Runtime
+from executive.sensing.heading import HeadingFilter
+from executive.sensing.rc import RcReader
 from executive.services import PacedService, RunObserver, Service, Step
 from executive.status import StatusSource
 from executive.vehicles import PROFILES

@@ -40,8 +40,8 @@ from executive.io.can.agilex import (
     SystemState,
     decode,
 )
-from executive.io.rc import knob_value, switch_position
 from executive.mission.model import SwitchChannels
+from executive.sensing.rc import knob_value, switch_position
 from executive.sim.autopilot import ArduPilotSim
 from executive.sim.bunker import BunkerSim
 from executive.sim.faults import BatterySag, FaultInjector, RcLoss

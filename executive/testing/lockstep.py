@@ -18,12 +18,12 @@ from typing import TYPE_CHECKING, Any
 
 from executive.assembly import build_runtime, can_base, obstacle_camera
 from executive.clock import ManualClock
-from executive.io.heading import wait_for_filterpy
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.link import MemoryLink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.runtime import Outcome
+from executive.sensing.heading import wait_for_filterpy
 from executive.sim import ArduPilotSim, make_autopilot
 from executive.sim.autopilot import Home
 from executive.sim.options import firmware_options, simulated_home

@@ -10,9 +10,9 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from executive.io import heading
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
+from executive.sensing import heading
 from executive.sim.faults import LinkLoss
 from executive.testing import Lockstep, Overload, VehicleTimeLimit
 

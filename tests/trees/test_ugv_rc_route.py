@@ -21,11 +21,11 @@ from executive import geo
 from executive.behaviours.auto_route import MISSION_STATE_COMPLETE
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemReached
-from executive.io.rc import RcReader
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission, RcConfig
 from executive.runtime import Outcome, Runtime
+from executive.sensing.rc import RcReader
 from executive.sim.faults import FaultInjector, RcInput, RcLoss
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
 from executive.testing import EKF_READY, Harness, Lockstep, MissionAutopilot
