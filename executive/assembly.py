@@ -19,7 +19,6 @@ from executive.clock import Clock
 from executive.intervention import InterventionWatch
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link, PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionTransfer
@@ -31,6 +30,7 @@ from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, rc_switch_channels
 from executive.mission.reload import REPLACED
 from executive.operator import Operator
+from executive.operator.ground_station import GroundStationControl
 from executive.runtime import Runtime
 from executive.sensing.heading import HeadingFilter
 from executive.sensing.rc import RcReader

@@ -18,10 +18,10 @@ from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, en
 from executive.io.mavlink.link import Link
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
-from executive.operator import Operator
+from executive.operator.requests import Operator
 from executive.status import StatusSource
 
-log = logging.getLogger(__name__)
+log = logging.getLogger("executive.operator.gcs")  # the journal's event kind: "gcs", as ever
 
 #: NAMED_VALUE_FLOAT "MSN_STATE" values.
 STATE_CODES = {status: float(i) for i, status in enumerate(MissionStatus)}

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.gcs import STATE_CODES, GroundStationControl
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.operator import Operator
+from executive.operator.ground_station import STATE_CODES, GroundStationControl
 from executive.testing import GCS, Peer
 
 US = (1, 191)
