@@ -72,6 +72,11 @@ class GroundStationControl:
         reply_to.send(self._encoder.command_ack_encode(msg.command, result, 0, 0, sender, msg.get_srcComponent()))
         return True
 
+    def answer(self, commands: Iterable[MAVLinkMessage], reply_to: Link) -> None:
+        """Answer the COMMAND_LONGs ``commands`` that came on ``reply_to`` (those not ours are passed over)."""
+        for msg in commands:
+            self.on_command(msg, reply_to)
+
     def service(self) -> None:
         """Send the periodic report when due, and any state-change text."""
         now = self._clock.now()

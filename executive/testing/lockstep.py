@@ -323,7 +323,7 @@ class Lockstep:
     # -- running --------------------------------------------------------------------------------
     def connect(self, limit_s: float = 10.0) -> None:
         """Until the runtime has heard the autopilot (VehicleTimeLimit after ``limit_s`` of vehicle time)."""
-        if self.runtime.reader.autopilot is None and not self.runtime.connect(limit_s):
+        if self.runtime.link.reader.autopilot is None and not self.runtime.link.connect(limit_s):
             raise VehicleTimeLimit(f"no heartbeat from the simulated autopilot within {limit_s:g} s")
 
     def run(

@@ -785,7 +785,7 @@ def test_scenario_the_operator_records_a_route_on_the_simulated_bunker_and_auto_
     for (lat, lon), flip in zip(recorded, observer.flips, strict=True):
         assert geo.distance(lat, lon, *flip) < 0.1
     assert min(geo.distance(*a, *b) for a, b in itertools.pairwise(recorded)) > 5.0  # four distinct places
-    assert flat((i.x, i.y) for i in runtime.mission_transfer.items) == pytest.approx(flat(recorded), abs=1e-7)  # read back
+    assert flat((i.x, i.y) for i in runtime.link.mission_transfer.items) == pytest.approx(flat(recorded), abs=1e-7)  # read back
     store = sim.autopilot.mission
     assert flat((store.command(s).lat, store.command(s).lon) for s in range(1, store.count)) == pytest.approx(flat(recorded), abs=1e-7)
     assert [(seq, mode) for seq, mode, _ in observer.reached] == [(1, "AUTO"), (2, "AUTO"), (3, "AUTO"), (4, "AUTO")]
