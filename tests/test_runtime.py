@@ -34,14 +34,6 @@ def autopilot_at(mission, link, vehicle: str = "rover") -> ObedientAutopilot:
     return ObedientAutopilot(link, vehicle, start=(first.lat, first.lon))
 
 
-def test_connect_waits_for_an_autopilot_heartbeat(square_mission, link, clock):
-    runtime = make_runtime(square_mission, link, clock)
-    assert runtime.link.connect(timeout_s=1.0) is False
-    assert [m.get_type() for m in link.take()][:1] == ["HEARTBEAT"]  # we announce ourselves meanwhile
-    ObedientAutopilot(link).beat()
-    assert runtime.link.connect(timeout_s=1.0) is True
-
-
 def test_a_tick_drains_then_ticks_then_sends(square_mission, link, clock):
     seen = []
 
