@@ -41,7 +41,6 @@ if TYPE_CHECKING:
     from executive.journal import Journal
     from executive.progress import Progress
     from executive.snapshots import SnapshotRecorder
-    from executive.web.server import WebServer
 
 
 @dataclass
@@ -321,22 +320,5 @@ def service_manager(watchdog: Watchdog) -> Plug:
 
         watchdog.status = status
         w.writers.append(watchdog)
-
-    return plug
-
-
-def live_view(server: WebServer) -> Plug:
-    """The live view in a browser on ``server``: a frame handed over after each tick it asks for one, its buttons' requests to the operator."""
-
-    def plug(w: Wiring) -> None:
-        from executive.web.feed import LiveFeed
-        from executive.web.server import LiveSource
-
-        feed = LiveFeed(w.mission_state, w.status, w.operator, w.clock.now)
-        w.readers.append(Step("live view requests", feed.answer))
-        w.writers.append(Step("live view", feed.publish))
-        w.observers.append(feed)
-        server.start(LiveSource(feed), ask=feed.ask)
-        w.closers.append(server.close)
 
     return plug

@@ -18,7 +18,6 @@ from executive.assembly import (
     control_socket,
     ground_stations,
     journal_recorder,
-    live_view,
     obstacle_camera,
     service_manager,
     snapshot_recorder,
@@ -320,6 +319,8 @@ def _plugs(
     if obstacle_socket is not None:
         plugs.append(obstacle_camera(obstacle_socket))
     if web is not None:
+        from executive.web.plug import live_view  # the live view's modules only with --web
+
         plugs.append(live_view(web))
     return plugs
 
