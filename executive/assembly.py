@@ -209,16 +209,9 @@ def ground_stations(link: Link, allowed_systems: Iterable[int] = (255,)) -> Plug
 
     def plug(w: Wiring) -> None:
         gcs = w.ground_station
-        gcs.links.append(link)
-        gcs.allowed_systems = frozenset(allowed_systems)
+        gcs.serve(link, allowed_systems)
         w.writers.append(Heartbeat(link, w.clock, system_id=w.system_id))
-
-        def listen() -> None:
-            while (msg := link.recv()) is not None:
-                if msg.get_type() == "COMMAND_LONG":
-                    gcs.on_command(msg, link)
-
-        w.readers.append(Step("ground stations", listen))
+        w.readers.append(Step("ground stations", lambda: gcs.answer(iter(link.recv, None), link)))
 
     return plug
 

@@ -72,10 +72,16 @@ class GroundStationControl:
         reply_to.send(self._encoder.command_ack_encode(msg.command, result, 0, 0, sender, msg.get_srcComponent()))
         return True
 
-    def answer(self, commands: Iterable[MAVLinkMessage], reply_to: Link) -> None:
-        """Answer the COMMAND_LONGs ``commands`` that came on ``reply_to`` (those not ours are passed over)."""
-        for msg in commands:
-            self.on_command(msg, reply_to)
+    def serve(self, link: Link, allowed_systems: Iterable[int]) -> None:
+        """Ground stations on an endpoint of their own, ``link``, too: reported to; from now on only ``allowed_systems`` obeyed."""
+        self.links.append(link)
+        self.allowed_systems = frozenset(allowed_systems)
+
+    def answer(self, messages: Iterable[MAVLinkMessage], reply_to: Link) -> None:
+        """Answer the COMMAND_LONGs among ``messages``, which came on ``reply_to`` (the others, and commands not ours, are passed over)."""
+        for msg in messages:
+            if msg.get_type() == "COMMAND_LONG":
+                self.on_command(msg, reply_to)
 
     def service(self) -> None:
         """Send the periodic report when due, and any state-change text."""

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import pytest
 
-from executive.assembly import build_runtime
+from executive.assembly import build_runtime, ground_stations
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.operator import Operator
 from executive.operator.ground_station import STATE_CODES, GroundStationControl
-from executive.testing import GCS, ObedientAutopilot, Peer
+from executive.testing import GCS, FakeLink, ObedientAutopilot, Peer
 
 US = (1, 191)
 
@@ -107,3 +107,21 @@ def test_a_command_routed_by_the_autopilot_is_answered_before_the_tree_ticks(squ
     runtime.make_safe()  # made safe meanwhile: the ground station is answered too
     assert acks(link) == [(mavlink.MAV_CMD_DO_PAUSE_CONTINUE, mavlink.MAV_RESULT_ACCEPTED, 255)]
     assert runtime.mission_state.status is MissionStatus.PAUSED
+
+
+def test_ground_stations_on_an_endpoint_of_their_own_are_answered_and_reported_to(square_mission, link, clock):
+    endpoint = FakeLink()
+    runtime = build_runtime(square_mission, link, clock, plugs=[ground_stations(endpoint, allowed_systems=(42,))])
+    first = square_mission.waypoints[0]
+    ObedientAutopilot(link, start=(first.lat, first.lon)).beat()
+    endpoint.incoming.append(command(mavlink.MAV_CMD_MISSION_START))  # from 255: not allow-listed there
+    endpoint.incoming.append(GCS.heartbeat(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0))  # passed over
+    endpoint.incoming.append(command(mavlink.MAV_CMD_MISSION_START, sender=Peer(42, 190)))
+    runtime.tick()
+    assert acks(endpoint) == [
+        (mavlink.MAV_CMD_MISSION_START, mavlink.MAV_RESULT_DENIED, 255),
+        (mavlink.MAV_CMD_MISSION_START, mavlink.MAV_RESULT_ACCEPTED, 42),
+    ]
+    assert runtime.mission_state.status is MissionStatus.RUNNING
+    assert [m.name for m in endpoint.take("NAMED_VALUE_FLOAT")] == ["MSN_STATE", "MSN_LEG", "WP_DIST"]  # reported there too
+    assert [m.get_type() for m in endpoint.take("HEARTBEAT")] == ["HEARTBEAT"]  # we announce ourselves there
