@@ -268,12 +268,12 @@ class SimLoop:
     def connect(self, limit_s: float = 10.0) -> None:
         """Run the vehicle until the runtime has found the autopilot."""
         rt = self.runtime
-        while rt.reader.autopilot is None:
+        while rt.link.reader.autopilot is None:
             if self.clock.now() > limit_s:
                 raise RuntimeError("the simulated autopilot was not found")
-            rt.heartbeat.service()
+            rt.link.heartbeat.service()
             self.step()
-            rt.reader.drain()
+            rt.link.reader.drain()
 
     def run_until(self, done: Callable[[], bool], limit_s: float, tick: Callable[[], object] | None = None) -> None:
         """Step and tick until ``done()`` (RuntimeError after ``limit_s`` of clock time)."""

@@ -23,6 +23,7 @@ from executive.mission.lifecycle import MissionStatus
 from executive.runtime import Runtime
 from executive.sim import SimServer
 from executive.sim.ardupilot.base import EKF_FLAGS_READY
+from executive.vehicles import PROFILES
 
 RATE_HZ = 10.0
 SLACK_S = 0.010
@@ -106,9 +107,9 @@ def run(trials: int = 8, seed: int = 1, settle_s: float = 3.0, speedup: float = 
         link = PymavlinkLink(sim.url_for_client)
         try:
             runtime = build_runtime(mission, link, clock, rate_hz=RATE_HZ)
-            probe = _Probe(runtime.profile.modes[runtime.profile.safe_mode])
+            probe = _Probe(PROFILES[runtime.mission.vehicle].modes[PROFILES[runtime.mission.vehicle].safe_mode])
             _instrument(sim, link, runtime, probe)
-            if not runtime.connect(10.0 * speedup):
+            if not runtime.link.connect(10.0 * speedup):
                 raise RuntimeError("no heartbeat from the simulated rover")
             runtime.mission_state.start()
             period = 1.0 / RATE_HZ
@@ -122,7 +123,7 @@ def run(trials: int = 8, seed: int = 1, settle_s: float = 3.0, speedup: float = 
                 runtime.tick()
                 if runtime.mission_state.status is not MissionStatus.RUNNING:
                     raise RuntimeError(f"mission {runtime.mission_state.status}: {runtime.mission_state.reason}")
-                driving = runtime._bb.get("/vehicle/mode") == "GUIDED" and runtime.mission_state.leg_index == 0 and runtime.tree is not None
+                driving = runtime.link.get("/vehicle/mode") == "GUIDED" and runtime.mission_state.leg_index == 0 and runtime.tree is not None
                 if state == "drive" and driving and clock.now() >= settle_until:
                     threading.Timer(rng.random() * period / speedup, _break, (sim, probe)).start()  # a wall-clock timer
                     state = "broken"
@@ -171,4 +172,4 @@ def _break(sim: SimServer, probe: _Probe) -> None:
 def _guards_pass(runtime: Runtime) -> bool:
     """The route runs again: the link is up and the tree is back at the go-to (every guard passed at the last tick)."""
     tip = runtime.tree.root.tip() if runtime.tree is not None else None
-    return bool(runtime._bb.get("/link/up")) and tip is not None and tip.name == "Go to waypoint"
+    return bool(runtime.link.get("/link/up")) and tip is not None and tip.name == "Go to waypoint"

@@ -63,7 +63,7 @@ def run_once(speedup: float, length_m: float, ekf_ready_after_s: float, timeout_
         link = PymavlinkLink(sim.url_for_client)
         try:
             runtime = build_runtime(mission, link, clock)
-            if not runtime.connect(10.0 * speedup):
+            if not runtime.link.connect(10.0 * speedup):
                 return False, clock.now(), time.perf_counter() - wall0, 0, "no heartbeat"
             watchdog = threading.Timer(timeout_s, runtime.request_stop, ("benchmark time limit",))
             watchdog.start()

@@ -29,7 +29,7 @@ MAX_FIRST_TICK_S = 1.0
 MAX_ABOVE_FLOOR_MB = 16.0
 FLOOR_IMPORTS = (
     "import py_trees, can, yaml\nfrom pymavlink.dialects.v20 import ardupilotmega\n"
-    "from executive.io.heading import kalman_filter_class\nkalman_filter_class()"
+    "from executive.sensing.heading import kalman_filter_class\nkalman_filter_class()"
 )
 
 

@@ -37,12 +37,12 @@ from py_trees.common import Status
 
 from benchmarks.common import Row, SimLoop, median, percentile, rover_mission, serpentine
 from executive.assembly import journal_recorder, snapshot_recorder
-from executive.io.heading import HeadingFilter, wait_for_filterpy
 from executive.io.mavlink.dialect import mavlink
 from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.progress import Progress
+from executive.sensing.heading import HeadingFilter, wait_for_filterpy
 from executive.snapshots import SnapshotRecorder
 from executive.testing import Lockstep
 from executive.vehicles import AutopilotName
@@ -208,22 +208,6 @@ def _timed(target: Any, attribute: str, into: list[int]) -> None:
     setattr(target, attribute, timed)
 
 
-class _TimedStep:
-    """A runtime service (the frozen ``Step`` of the MAVLink reader) whose ``service`` adds the ns it takes to ``into[-1]``."""
-
-    def __init__(self, step: Any, into: list[int]) -> None:
-        self.name = step.name
-        self._service = step.service
-        self._into = into
-
-    def service(self) -> None:
-        t0 = time.thread_time_ns()
-        try:
-            self._service()
-        finally:
-            self._into[-1] += time.thread_time_ns() - t0
-
-
 class _JsonCapture:
     """Stands in for a module's ``json``: ``dumps`` notes each object it writes (for the floor's own ``json.dumps``)."""
 
@@ -263,13 +247,13 @@ def breakdown(waypoints: int, ticks: int, warmup_ticks: int = 50, autopilot: Aut
         loop.connect()
         rt.mission_state.start()
         assert rt.tree is not None
-        guided = rt.autopilot.capabilities.guided_mode
+        guided = rt.link.autopilot.capabilities.guided_mode
 
         def tick() -> None:
             rt.tick()
             progress.update()
 
-        loop.run_until(lambda: rt.mission_state.leg_index >= 1 and rt._bb.get("/vehicle/mode") == guided, 120.0, tick=tick)
+        loop.run_until(lambda: rt.mission_state.leg_index >= 1 and rt.link.get("/vehicle/mode") == guided, 120.0, tick=tick)
         for _ in range(warmup_ticks):
             loop.step()
             tick()
@@ -277,8 +261,7 @@ def breakdown(waypoints: int, ticks: int, warmup_ticks: int = 50, autopilot: Aut
         if heading_filter._kf is None:
             raise RuntimeError("the heading filter has no Kalman filter yet: filterpy not loaded")
         parts: dict[str, list[int]] = {name: [] for name in PARTS}
-        at = next(i for i, s in enumerate(rt.readers) if getattr(s, "name", "") == "mavlink reader")
-        rt.readers[at] = _TimedStep(rt.readers[at], parts["reading"])
+        _timed(rt.link.reader, "drain", parts["reading"])
         _timed(rt.tree, "tick", parts["tree"])
         _timed(heading_filter, "service", parts["heading filter"])
         _timed(progress, "update", parts["status and JSON"])

@@ -1,4 +1,4 @@
-"""How a runtime is put together: the autopilot link every run has, and plugs for the optional parts.
+"""How a runtime is put together: the autopilot link and the operator side every run has, and plugs for the optional parts.
 
 :func:`build_runtime` is the builder (``executive run`` composes its plugs from the command line;
 tests and benchmarks call it directly). A plug is a function of the :class:`Wiring` that adds
@@ -14,26 +14,19 @@ from typing import TYPE_CHECKING, Any
 
 from executive import admission, blackboard
 from executive.autopilot import AutopilotName
-from executive.autopilot.selection import Autopilot
+from executive.autopilot_link import AutopilotLink
 from executive.clock import Clock
 from executive.intervention import InterventionWatch
-from executive.io.heading import HeadingFilter
-from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.gcs import GroundStationControl
 from executive.io.mavlink.heartbeat import Heartbeat
-from executive.io.mavlink.link import Link, PymavlinkLink
-from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.io.mavlink.parameters import ParameterWatch
-from executive.io.mavlink.reader import MavlinkReader
-from executive.io.mavlink.route_keeper import RouteKeeper
-from executive.io.mavlink.streams import StreamRequester, rates_for
-from executive.io.rc import RcReader
+from executive.io.mavlink.link import Link
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, rc_switch_channels
 from executive.mission.reload import REPLACED
 from executive.operator import Operator
+from executive.operator.ground_station import GroundStationControl
 from executive.runtime import Runtime
+from executive.sensing.heading import HeadingFilter
+from executive.sensing.rc import RcReader
 from executive.services import PacedService, RunObserver, Service, Step
 from executive.status import StatusSource
 from executive.vehicles import PROFILES
@@ -48,23 +41,6 @@ if TYPE_CHECKING:
     from executive.journal import Journal
     from executive.progress import Progress
     from executive.snapshots import SnapshotRecorder
-    from executive.web.server import WebServer
-
-
-@dataclass
-class AutopilotLink:
-    """The MAVLink side of every run: commands and acks, mission transfers, telemetry, our heartbeat, streams, route uploads, ground stations."""
-
-    link: Link
-    commander: Commander
-    mission_transfer: MissionTransfer
-    reader: MavlinkReader
-    heartbeat: Heartbeat
-    streams: StreamRequester
-    route_keeper: RouteKeeper
-    ground_station: GroundStationControl
-    #: What the tree asks of the autopilot: intents, turned into its firmware's commands by the back end its heartbeat names (or forced).
-    port: Autopilot
 
 
 @dataclass
@@ -77,7 +53,10 @@ class Wiring:
     mission_state: MissionState
     status: StatusSource
     operator: Operator
-    autopilot: AutopilotLink
+    #: The autopilot: pumped before the readers, flushed after the writers.
+    link: AutopilotLink
+    #: The ground-station endpoint: commands to us answered, the mission reported (on the autopilot's link and on any added).
+    ground_station: GroundStationControl
     simulated_vehicle: bool = True  # the built-in simulator: a simulated instrument may take the samples
     readers: list[Service] = field(default_factory=list)
     writers: list[Service] = field(default_factory=list)
@@ -87,48 +66,6 @@ class Wiring:
 
 
 Plug = Callable[[Wiring], None]
-
-
-def _autopilot_link(
-    mission: Mission,
-    link: Link,
-    clock: Clock,
-    state: MissionState,
-    operator: Operator,
-    system_id: int,
-    target: tuple[int | None, int],
-    forced: AutopilotName | None = None,
-) -> AutopilotLink:
-    commander = Commander(link, clock, PROFILES[mission.vehicle], system_id=system_id)
-    transfer = MissionTransfer(link, clock, system_id=system_id)
-    reader = MavlinkReader(
-        link,
-        clock,
-        commander,
-        link_timeout_s=mission.limits.link_timeout_s,
-        mission=transfer,
-        rc_source=mission.rc.source == "mavlink",
-        target_system=target[0],
-        target_component=target[1],
-    )
-    if isinstance(link, PymavlinkLink):
-        link.skim(reader.kinds_read)  # what the reader does not read is counted from its header, never decoded
-    streams = StreamRequester(commander, rates_for(mission.vehicle))
-    reader.on_reconnect = streams.restart
-    #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.
-    keeper = RouteKeeper(state, transfer, commander, clock)
-    ground_station = GroundStationControl([link], clock, operator, system_id=system_id)
-    reader.on_command = ground_station.on_command
-    heartbeat = Heartbeat(link, clock, system_id=system_id)
-    port = Autopilot(commander, transfer, PROFILES[mission.vehicle], forced=forced)
-    reader.on_autopilot = port.adopt
-
-    def streams_of(name: str) -> None:
-        streams.rates = rates_for(mission.vehicle, name)
-        heartbeat.mav_type = mavlink.MAV_TYPE_GCS if name == "px4" else mavlink.MAV_TYPE_ONBOARD_CONTROLLER
-
-    port.on_backend = streams_of
-    return AutopilotLink(link, commander, transfer, reader, heartbeat, streams, keeper, ground_station, port)
 
 
 def build_runtime(
@@ -153,42 +90,61 @@ def build_runtime(
     ``autopilot``: the back end (``ardupilot``, ``px4``) whatever the heartbeat says (None: the heartbeat's).
     ``simulated_vehicle``: the autopilot is the built-in simulator (False: samples must come from a real instrument).
 
-    Readers run in this order: the autopilot link, the plugs' readers (other links, sensors,
-    operator inputs), then what derives from them (heading filter, RC switches) and our heartbeat.
-    Writers: the autopilot's streams, ground-station reports and route uploads, the plugs'
-    writers, then the commands the tick asked for.
+    Each tick: the autopilot link pumped (its messages onto the blackboard, our heartbeat); then the
+    readers: the ground station's commands to us, the plugs' readers (other links, sensors, operator
+    inputs), what derives from them (heading filter, RC switches, a person's intervention); the
+    tree; the writers: the ground station's reports, the plugs' writers; the link flushed (stream
+    set-up, route uploads, parameter asks, then the commands the tick asked for).
     """
     blackboard.reset()
     state = MissionState()
     status = StatusSource("runtime status", clock)
     tree_watch = TreeWatch()
+    ap = AutopilotLink(
+        link, clock, mission, state, system_id=system_id, target_system=target_system, target_component=target_component, forced=autopilot,
+        period_s=1.0 / rate_hz,
+    )  # fmt: skip
     operator = Operator(
         state,
         mission.vehicle,
         status=status.snapshot,
         clock=clock,
         # what `executive run` refuses of a mission file, for every mission `ctl upload` brings (executive.admission)
-        refuse=lambda m: "; ".join(admission.refusals(m, autopilot=ap.port.backend.name, simulator=simulated_vehicle)) or None,
+        refuse=lambda m: "; ".join(admission.refusals(m, autopilot=ap.autopilot.backend.name, simulator=simulated_vehicle)) or None,
+        autopilot=ap.autopilot,  # a person's arm, disarm and mode
         tree=tree_watch.view,
-        autopilot_name=lambda: ap.port.backend.name,  # asked only once the link below is made
+        autopilot_name=lambda: ap.autopilot.backend.name,
     )
-    ap = _autopilot_link(mission, link, clock, state, operator, system_id, (target_system, target_component), autopilot)
-    operator.autopilot = ap.port  # a person's arm, disarm and mode
-    wiring = Wiring(mission, clock, system_id, state, status, operator, ap, simulated_vehicle)
-    wiring.readers.append(Step("mavlink reader", ap.reader.drain))
+    ground_station = GroundStationControl([link], clock, operator, system_id=system_id)
+    commands = Step("ground-station commands", lambda: ground_station.answer(ap.commands_for_us(), link))
+    wiring = Wiring(mission, clock, system_id, state, status, operator, ap, ground_station, simulated_vehicle)
+    wiring.readers.append(commands)
     wiring.observers.append(tree_watch)  # first: the recorders see what the tree waits for at the tick they record
-    wiring.writers += [ap.streams, ap.ground_station, ap.route_keeper, ParameterWatch(ap.port, clock)]
+    wiring.writers.append(ground_station)
     for plug in plugs:
         plug(wiring)
     # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
-    intervention = InterventionWatch(clock, ap.commander, state, PROFILES[mission.vehicle], mission.rc, firmware=lambda: ap.port.backend.name)
-    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), intervention, ap.heartbeat]
-    wiring.writers += [
-        Step("autopilot port", ap.port.service),
-        Step("commands", ap.commander.flush),
-        Step("mission transfers", ap.mission_transfer.flush),
-    ]
-    return Runtime(wiring, rate_hz=rate_hz, safe_timeout_s=safe_timeout_s, root=root, progress=progress)
+    intervention = InterventionWatch(clock, ap.commander, state, PROFILES[mission.vehicle], mission.rc, firmware=lambda: ap.autopilot.backend.name)
+    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), intervention]
+    return Runtime(
+        mission,
+        clock,
+        ap,
+        state,
+        operator=operator,
+        status=status,
+        readers=wiring.readers,
+        writers=wiring.writers,
+        paced=wiring.paced,
+        observers=wiring.observers,
+        closers=wiring.closers,
+        reporters=[commands, ground_station],
+        simulated_vehicle=simulated_vehicle,
+        rate_hz=rate_hz,
+        safe_timeout_s=safe_timeout_s,
+        root=root,
+        progress=progress,
+    )
 
 
 # -- plugs -----------------------------------------------------------------------------------
@@ -239,7 +195,7 @@ def obstacle_camera(sock: socket.socket) -> Plug:
 
         receiver = ObstacleReceiver(sock, w.clock)
         w.readers.append(Step("obstacle receiver", receiver.drain))
-        w.writers.append(ObstacleForwarder(w.autopilot.link, w.clock))
+        w.writers.append(ObstacleForwarder(w.link.transport, w.clock))
 
     return plug
 
@@ -252,17 +208,10 @@ def ground_stations(link: Link, allowed_systems: Iterable[int] = (255,)) -> Plug
     """
 
     def plug(w: Wiring) -> None:
-        gcs = w.autopilot.ground_station
-        gcs.links.append(link)
-        gcs.allowed_systems = frozenset(allowed_systems)
+        gcs = w.ground_station
+        gcs.serve(link, allowed_systems)
         w.writers.append(Heartbeat(link, w.clock, system_id=w.system_id))
-
-        def listen() -> None:
-            while (msg := link.recv()) is not None:
-                if msg.get_type() == "COMMAND_LONG":
-                    gcs.on_command(msg, link)
-
-        w.readers.append(Step("ground stations", listen))
+        w.readers.append(Step("ground stations", lambda: gcs.answer(iter(link.recv, None), link)))
 
     return plug
 
@@ -364,22 +313,5 @@ def service_manager(watchdog: Watchdog) -> Plug:
 
         watchdog.status = status
         w.writers.append(watchdog)
-
-    return plug
-
-
-def live_view(server: WebServer) -> Plug:
-    """The live view in a browser on ``server``: a frame handed over after each tick it asks for one, its buttons' requests to the operator."""
-
-    def plug(w: Wiring) -> None:
-        from executive.web.feed import LiveFeed
-        from executive.web.server import LiveSource
-
-        feed = LiveFeed(w.mission_state, w.status, w.operator, w.clock.now)
-        w.readers.append(Step("live view requests", feed.answer))
-        w.writers.append(Step("live view", feed.publish))
-        w.observers.append(feed)
-        server.start(LiveSource(feed), ask=feed.ask)
-        w.closers.append(server.close)
 
     return plug

@@ -26,7 +26,7 @@ OPERATOR_LOGGERS = (
     "executive.mission.lifecycle",  # state changes (pauses, resumes, aborts), legs done, samples, route edits
     "executive.runtime",  # the vehicle made safe
     "executive.io.mavlink.reader",  # the autopilot found, the link up, the autopilot's own messages
-    "executive.io.mavlink.route_keeper",  # the route held by the autopilot
+    "executive.autopilot_link.route_keeper",  # the route held by the autopilot
     "executive.behaviours.rc_switches",  # what an RC switch did
 )
 

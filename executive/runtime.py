@@ -1,4 +1,4 @@
-"""The onboard runtime: a fixed-rate loop of drain IO -> blackboard -> tick -> send commands.
+"""The onboard runtime: a fixed-rate loop of link.pump() -> blackboard -> tick -> link.flush().
 
 It owns the process-level safety: a stop request (Ctrl-C, SIGTERM), a failed mission and an
 exception inside a behaviour all end with the vehicle commanded into its safe mode.
@@ -8,33 +8,28 @@ from __future__ import annotations
 
 import logging
 import types
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING, Any
 
 import py_trees
 from py_trees.common import Status
 
 import trees
-from executive import blackboard
+from executive.autopilot_link import AutopilotLink
 from executive.behaviours.failsafe import failsafe_mode
-from executive.behaviours.reacting import READS, Reacting
-from executive.clock import TickClock
-from executive.intervention import rc_takeover
+from executive.clock import Clock, TickClock
 from executive.io.instruments import open_sampler
-from executive.io.mavlink.parameters import wanted_parameters
 from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
-from executive.mission.lifecycle import MissionStatus
+from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SamplingOptions
 from executive.mission.reload import REPLACED
+from executive.operator import Operator
 from executive.pacing import TickPacer
 from executive.progress import Progress
 from executive.reach import ReachGate, Refusal
 from executive.services import PacedService, RunObserver, Service
-from executive.vehicles import PROFILES
-
-if TYPE_CHECKING:
-    from executive.assembly import Wiring
+from executive.status import StatusSource
 
 log = logging.getLogger(__name__)
 
@@ -46,22 +41,6 @@ class BehaviourCrashed(RuntimeError):
         super().__init__(f"{path}: {type(error).__name__}: {error}")
         self.path = path
         self.error = error
-
-
-class SeveralAutopilots(RuntimeError):
-    """More than one autopilot answers on the link and none was named (``--target-system``): commanding one would be a guess."""
-
-    def __init__(self, systems: dict[int, int]) -> None:
-        heard = ", ".join(f"system {sysid} (MAV_TYPE {mav_type})" for sysid, mav_type in sorted(systems.items()))
-        super().__init__(f"{len(systems)} autopilots on the link: {heard}; name the one to command with --target-system N")
-        self.systems = dict(systems)
-
-
-#: The cause the make-safe's steps are logged and announced under: ``make safe: HOLD refused (FAILED)``.
-MAKE_SAFE = "make safe"
-
-#: After the first autopilot's heartbeat, how long (vehicle time) to listen for others when none was named.
-SURVEY_S = 3.0
 
 
 @dataclass(frozen=True)
@@ -119,50 +98,60 @@ class Runtime:
     while PAUSED (hot reload) gets its tree at once, first ticked when the operator resumes (until
     then the vehicle is left as the pause left it). ``serve`` keeps
     the executive up between missions, waiting for operator requests, instead of returning when
-    the mission ends. Each tick drains the readers, ticks the tree and services the writers
-    (:mod:`executive.services`); what they are is decided by :func:`executive.assembly.build_runtime`.
+    the mission ends. Each tick pumps the autopilot link, drains the other readers, ticks the tree,
+    services the writers (:mod:`executive.services`) and flushes the link; what they are is decided
+    by :func:`executive.assembly.build_runtime`.
     """
 
     def __init__(
         self,
-        wiring: Wiring,
+        mission: Mission,
+        clock: Clock,
+        link: AutopilotLink,
+        mission_state: MissionState,
         *,
+        operator: Operator | None = None,
+        status: StatusSource | None = None,
+        readers: Sequence[Service] = (),
+        writers: Sequence[Service] = (),
+        paced: Sequence[PacedService] = (),
+        observers: Sequence[RunObserver] = (),
+        closers: Sequence[Callable[[], object]] = (),
+        reporters: Sequence[Service] = (),
+        simulated_vehicle: bool = True,
         rate_hz: float = 10.0,
         safe_timeout_s: float | None = None,
         root: py_trees.behaviour.Behaviour | None = None,
         progress: Progress | None = None,
     ) -> None:
-        """Built by :func:`executive.assembly.build_runtime`; ``root`` replaces the tree the first mission selects (for tests and tools)."""
-        self.mission = wiring.mission
-        self.clock = wiring.clock
+        """Built by :func:`executive.assembly.build_runtime`; ``root`` replaces the tree the first mission selects (for tests and tools).
+
+        ``reporters`` are serviced while the vehicle is made safe too (the ground station: its commands, the steps' reports).
+        """
+        self.mission = mission
+        self.clock = clock
         self.period_s = 1.0 / rate_hz
-        self.profile = PROFILES[self.mission.vehicle]
-        autopilot = wiring.autopilot
-        self.commander = autopilot.commander
-        #: What the tree asks of the autopilot: intents, turned into its firmware's commands by the back end its heartbeat names.
-        self.autopilot = autopilot.port
-        self.mission_transfer = autopilot.mission_transfer
-        self.reader = autopilot.reader
-        self.heartbeat = autopilot.heartbeat
-        self.streams = autopilot.streams
-        self.mission_state = wiring.mission_state
+        #: The autopilot: pumped before the tree ticks, flushed after; it connects and makes the vehicle safe.
+        self.link = link
+        self.mission_state = mission_state
         # first: the tree (and the journal's run) exist before any other listener hears of the start
         self.mission_state.listeners.insert(0, self._on_transition)
         self.mission_state.replace_checks.append(self._check_tree)
         self.mission_state.replace_listeners.insert(0, self._on_replace)
-        self.status = wiring.status
-        self.operator = wiring.operator
-        #: Drained before the tree ticks, in order.
-        self.readers: list[Service] = list(wiring.readers)
-        #: Serviced after the tree ticks, in order (after the running mission's own: its sampler).
-        self.writers: list[Service] = list(wiring.writers)
+        #: A person's requests (``ctl``, the live view, a ground station) and the status snapshot they are answered with.
+        self.operator, self.status = operator, status
+        #: Drained after the link is pumped, before the tree ticks, in order.
+        self.readers: list[Service] = list(readers)
+        #: Serviced after the tree ticks, in order (after the running mission's own: its sampler), before the link is flushed.
+        self.writers: list[Service] = list(writers)
         #: Serviced between ticks too, until each is due.
-        self.paced: list[PacedService] = list(wiring.paced)
-        self.observers: list[RunObserver] = list(wiring.observers)
-        self._closers = list(wiring.closers)
+        self.paced: list[PacedService] = list(paced)
+        self.observers: list[RunObserver] = list(observers)
+        self._closers = list(closers)
+        self._reporters = list(reporters)
         self._resume: ResumePoint | None = None
         #: The vehicle is the built-in simulator: a simulated instrument may take the samples.
-        self.simulated_vehicle = wiring.simulated_vehicle
+        self.simulated_vehicle = simulated_vehicle
         self.sampler: InstrumentSampler | None = None
         self._run_writers: list[Service] = []
         self._next_root = root
@@ -175,8 +164,6 @@ class Runtime:
         self._refused: str | None = None  # the distance rule refused the starting mission: it ends, nothing commanded
         self.mission_state.upload(self.mission)
         self.progress = progress
-        self._bb = blackboard.reader("runtime", {"/vehicle/mode", "/vehicle/mode_set_by", "/rc/channels", "/rc/switches", *READS})
-        self.ground_station = autopilot.ground_station
         #: The bound on making the vehicle safe; None: as long as the firmware's chain of reactions takes (see :meth:`make_safe`).
         self.safe_timeout_s = safe_timeout_s
         #: What the last make-safe came to (``the vehicle made safe: HOLD (confirmed)``); None until one is done.
@@ -192,43 +179,12 @@ class Runtime:
         self._running: Mission | None = None  # the mission whose tree was installed last (a deleted one keeps its name here)
 
     # -- phases ------------------------------------------------------------------------------
-    def connect(self, timeout_s: float, survey_s: float = SURVEY_S) -> bool:
-        """Announce ourselves and wait for the autopilot's heartbeat (bounded).
-
-        With no target system named, listen ``survey_s`` longer: a second autopilot heard raises
-        :class:`SeveralAutopilots` (nothing has been sent to either but our heartbeat).
-        """
-        deadline = self.clock.now() + timeout_s
-        while self.clock.now() < deadline:
-            self.heartbeat.service()
-            self.reader.drain()
-            if self.reader.autopilot is not None:
-                break
-            self.clock.sleep_until(self.clock.now() + self.period_s)
-        else:
-            return False
-        if self.reader.target_system is None:
-            survey_end = self.clock.now() + survey_s
-            while len(self.reader.autopilots_heard) < 2 and self.clock.now() < survey_end:
-                self.clock.sleep_until(self.clock.now() + self.period_s)
-                self.heartbeat.service()
-                self.reader.drain()
-            if len(self.reader.autopilots_heard) > 1:
-                raise SeveralAutopilots(self.reader.autopilots_heard)
-        # known by pre-flight: the mission's switches are checked against the mode channel before arming, and the
-        # look-ahead drives by the vehicle's own parameters (ParameterWatch asks again for any not answered)
-        wanted = wanted_parameters(self.autopilot)
-        for param in wanted:
-            self.autopilot.read_parameter(param)
-        if wanted:
-            self.commander.flush()
-        return True
-
     def tick(self) -> Status:
-        """One tick: drain the links, answer the operator, tick the tree, send what was asked for.
+        """One tick: pump the autopilot link, drain the other readers (the operator's too), tick the tree, flush the link.
 
         Returns the tree's status (INVALID when no mission is active).
         """
+        self.link.pump()
         for reader in self.readers:
             reader.service()
         status = Status.INVALID
@@ -242,6 +198,7 @@ class Runtime:
             writer.service()
         for writer in self.writers:
             writer.service()
+        self.link.flush()
         self.ticks += 1
         return status
 
@@ -318,107 +275,27 @@ class Runtime:
             self.sampler.close()
             self.sampler = None
 
-    def get(self, key: str) -> Any:
-        """A blackboard key the runtime reads (what its make-safe's :class:`~executive.behaviours.reacting.Reacting` reads)."""
-        return self._bb.get(key)
-
     def make_safe(self) -> bool:
-        """Command the vehicle's safe mode (or the mode of the failsafe that ended the mission) until it is seen in it; True once it is.
+        """Stop the tree and the paced services; command the safe mode (or the ending failsafe's mode) until the vehicle is seen in it.
 
-        The failsafe reactions' rules (:mod:`executive.behaviours.reacting`): asked again every 1.5 s
-        of vehicle time until the autopilot accepts it and the heartbeat shows it; after 3 failed asks
-        the next reaction of the firmware's table (ArduRover: HOLD, then a disarm). Bounded: by
-        ``safe_timeout_s`` if given, else by the time the table's chain takes (3 asks 1.5 s apart for
-        each reaction: 9 s for a rover's HOLD then disarm), after which the outcome is known; a link
-        with no heartbeat asks the same reaction until then. Never against a person: a person's mode
-        (or the RC take-over switch), there at the start or chosen meanwhile, is left alone. What it
-        came to is :attr:`safe_report`, logged last (INFO when made safe, ERROR when not).
+        True once it is; what it came to is :attr:`safe_report`. The rules (bounded, never against a
+        person) are :meth:`executive.autopilot_link.AutopilotLink.make_safe`'s; ``safe_timeout_s`` bounds it.
         """
-        safe = self.autopilot.capabilities.safe_mode
+        mode = None
         if self.tree is not None:
-            safe = failsafe_mode(self.tree.root) or safe  # an RTL or a surfacing the mission's failsafe asked for is not undone
+            mode = failsafe_mode(self.tree.root)  # an RTL or a surfacing the mission's failsafe asked for is not undone
             self.tree.interrupt()
             self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
         for paced in self.paced:  # the base stops at once; the autopilot is told below
             paced.stop()
-        person = self._person_has_the_vehicle(safe)
-        if person:
-            log.warning("not commanding %s: %s", safe, person)
-            self.safe_report = f"not commanding {safe}: {person}"
-            return False
-        reacting = Reacting(self, self.mission.vehicle, announce=self.mission_state.announce, bounded=True, logger=log, prefix="")
-        self.reader.drain()
-        self.heartbeat.service()
-        if self._bb.get("/link/up") and reacting.seen(safe):
-            return self._made_safe(True, f"the vehicle made safe: {self.autopilot.mode_name(safe)} (already in it)")
-        found_in = self._bb.get("/vehicle/mode")
-        reacting.start(safe, MAKE_SAFE)
-        deadline = self.clock.now() + (self.safe_timeout_s if self.safe_timeout_s is not None else reacting.time_to_exhaust(safe))
-        while True:
-            self.autopilot.service()  # PX4: the offboard stream goes on until the heartbeat shows we left OFFBOARD
-            self.commander.flush()
-            self.ground_station.service()  # the steps' STATUSTEXTs
-            self.clock.sleep_until(min(deadline, self.clock.now() + self.period_s / 2))
-            self.reader.drain()
-            self.heartbeat.service()
-            if person := self._person_took_over(found_in, reacting.mode_in_force):
-                reacting.cancel()
-                return self._made_safe(False, f"not commanding {safe}: {person}", logging.WARNING)
-            time_up = self.clock.now() >= deadline - 1e-6  # as the reactions' 1.5 s: a sum of half periods lands a hair short
-            reacting.follow_up(self.clock.now(), ask=not time_up)
-            if reacting.done or reacting.exhausted or time_up:
-                break
-        if reacting.done:
-            return self._made_safe(True, f"the vehicle made safe: {reacting.account()}")
-        reacting.cancel()  # nothing asked goes on being retried after the make-safe gave up (with --wait the executive stays up)
-        self.mission_state.announce("could not make the vehicle safe")
-        return self._made_safe(False, f"could not make the vehicle safe: {reacting.account()}")
+        made = self.link.make_safe(mode, announce=self.mission_state.announce, timeout_s=self.safe_timeout_s, report=self.report)
+        self.safe_report = made.report
+        return made.made
 
-    def _made_safe(self, made: bool, report: str, level: int | None = None) -> bool:
-        """The make-safe's last word: logged (INFO made safe, else ERROR, or ``level``), kept for the last lines, the ground station told."""
-        self.safe_report = report
-        log.log(level if level is not None else logging.INFO if made else logging.ERROR, "%s", report)
-        self.commander.flush()
-        self.ground_station.service()
-        return made
-
-    def _person_took_over(self, found_in: str | None, asked: str | None) -> str | None:
-        """Why a person has taken the vehicle while it is made safe: the RC take-over switch, or a mode in which a person drives set meanwhile."""
-        takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
-        if takeover is not None:
-            return takeover
-        mode = self._bb.get("/vehicle/mode")
-        if mode in self.profile.pilot_modes and mode not in (found_in, asked):
-            return f"the vehicle is in {mode}, set by the RC or a ground station while the executive made it safe: a person drives it"
-        return None
-
-    def _person_has_the_vehicle(self, ours: str) -> str | None:
-        """Why a person has the vehicle, if one has: then hands off.
-
-        The RC take-over switch high, switch C in MANUAL, or a mode in which a person drives (MANUAL,
-        ACRO...) other than ``ours`` (the mode a failsafe of ours left it in) that someone chose while
-        we watched (``/vehicle/mode_set_by``): the RC or a ground station, or we at a person's request
-        (``ctl mode``, the UGV's switch C). The mode the vehicle was in when we found it (its boot mode)
-        is nobody's choice: a pilot mode there is no person driving, and the safe mode is commanded
-        (said so, as README's "When a person intervenes" has it).
-        """
-        takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
-        if takeover is not None:
-            return takeover
-        mode = self._bb.get("/vehicle/mode")
-        if mode not in self.profile.pilot_modes or mode == ours:
-            return None
-        set_by = self._bb.get("/vehicle/mode_set_by")
-        if set_by in (None, "autopilot"):  # as the failsafes judge it (behaviours/failsafe.py): nobody's choice
-            found = (
-                "the mode it was in when the executive found it (its boot mode, or one set before; nobody changed it while the executive watched)"
-                if set_by is None
-                else "set by the autopilot itself (its own transition, executive.mode_cause)"
-            )
-            log.info("commanding %s: the vehicle is in %s, %s", ours, mode, found)
-            return None
-        who = "through the executive at a person's request" if set_by == "us" else "by the RC or a ground station"
-        return f"the vehicle is in {mode}, set {who} while the executive watched: a person drives it"
+    def report(self) -> None:
+        """Service the reporters now (the ground station: its commands answered, the mission reported), as the make-safe does."""
+        for reporter in self._reporters:
+            reporter.service()
 
     def _refuse(self, why: str) -> Outcome:
         """The distance rule refused the starting mission: it ends ABORTED, and as nothing was commanded nothing is undone."""
@@ -492,7 +369,7 @@ class Runtime:
             for observer in self.observers:
                 observer.end(REPLACED, reason)
         self.mission = mission
-        self.reader.link_timeout_s = mission.limits.link_timeout_s
+        self.link.use(mission)
         self._install_tree()
         self._tree_waits_for_resume = True
 
@@ -515,4 +392,4 @@ class Runtime:
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)
-        self.tree.setup(clock=self.tree_clock, autopilot=self.autopilot, mission_state=self.mission_state, sampler=self.sampler)
+        self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=self.mission_state, sampler=self.sampler)

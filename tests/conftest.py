@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from executive.io.heading import wait_for_filterpy
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
+from executive.sensing.heading import wait_for_filterpy
 
 # The suite starts ~150 `python -m executive` processes and each xdist worker rewrites ~130 test modules'
 # asserts: without cached bytecode every one of them compiles the package and the tests from source

@@ -6,6 +6,7 @@ import py_trees
 from py_trees.common import Status
 
 from executive.assembly import Wiring, build_runtime
+from executive.io.mavlink.dialect import mavlink
 from executive.services import Step, service_name
 from executive.testing import ObedientAutopilot
 
@@ -88,9 +89,28 @@ def test_paced_services_run_between_ticks(square_mission, link, clock):
     assert clock.now() == start + 0.125
 
 
-def test_the_mavlink_link_and_the_estimators_are_services_in_order(square_mission, link, clock):
+def test_the_operator_side_and_the_estimators_are_services_in_order(square_mission, link, clock):
     runtime = build_runtime(square_mission, link, clock)
     names = [service_name(s) for s in runtime.readers]
-    assert names == ["mavlink reader", "HeadingFilter", "RcReader", "InterventionWatch", "Heartbeat"]
+    assert names == ["ground-station commands", "HeadingFilter", "RcReader", "InterventionWatch"]
     names = [service_name(s) for s in runtime.writers]
-    assert names == ["StreamRequester", "GroundStationControl", "RouteKeeper", "ParameterWatch", "autopilot port", "commands", "mission transfers"]
+    assert names == ["GroundStationControl"]
+
+
+def test_the_link_is_pumped_before_the_readers_and_flushed_after_the_writers(square_mission, link, clock):
+    seen: list[tuple[str, object, int]] = []
+
+    def probe(w: Wiring) -> None:
+        def read() -> None:
+            seen.append(("read", w.link.get("/vehicle/mode"), len(link.take("COMMAND_LONG"))))
+            w.link.commander.set_mode("HOLD")  # asked during the tick: sent when the link is flushed
+
+        w.readers.append(Step("probe reader", read))
+        w.writers.append(Step("probe writer", lambda: seen.append(("write", None, len(link.take("COMMAND_LONG"))))))
+
+    runtime = build_runtime(square_mission, link, clock, plugs=[probe])
+    ObedientAutopilot(link, mode="MANUAL").beat()
+    runtime.tick()
+    assert seen == [("read", "MANUAL", 0), ("write", None, 0)]  # the heartbeat pumped in before the readers; nothing sent yet
+    sent = [m.command for m in link.take("COMMAND_LONG")]
+    assert sent == [mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL]  # sent after the writers, with the first stream's request

@@ -69,7 +69,7 @@ def run(
 
     def spy(msg: MAVLinkMessage) -> None:
         if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-            record.modes_sent.append((runtime.ticks, runtime.commander.modes.decode(int(msg.param2))))
+            record.modes_sent.append((runtime.ticks, runtime.link.commander.modes.decode(int(msg.param2))))
         if msg.get_type() == "STATUSTEXT":
             record.texts.append(msg.text)
         send(msg)

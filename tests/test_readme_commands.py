@@ -49,7 +49,7 @@ NOT_RUN_HERE: dict[str, str] = {
     "systemctl enable --now mavlink-router": "systemd and mavlink-router",
     "executive ctl --socket /run/executive-boat_survey/control.sock status": "needs the service running (tests/cli/test_ctl.py)",
     "executive ctl pause": "needs a running executive (tests/cli/test_ctl.py)",
-    "executive ctl upload survey-v2.yaml": "needs a paused executive and the operator's new file (tests/cli/test_ctl.py, test_operator_reload.py)",
+    "executive ctl upload survey-v2.yaml": "needs a paused executive and the operator's new file (tests/cli/test_ctl.py, tests/operator/)",
     "executive ctl resume": "needs a running executive (tests/cli/test_ctl.py)",
     "executive ctl status": "needs a running executive (tests/cli/test_ctl.py)",
     "executive report j.db | head": "needs the journal of a run (tests/cli/test_console.py: a reader that goes away)",

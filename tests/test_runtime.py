@@ -34,21 +34,13 @@ def autopilot_at(mission, link, vehicle: str = "rover") -> ObedientAutopilot:
     return ObedientAutopilot(link, vehicle, start=(first.lat, first.lon))
 
 
-def test_connect_waits_for_an_autopilot_heartbeat(square_mission, link, clock):
-    runtime = make_runtime(square_mission, link, clock)
-    assert runtime.connect(timeout_s=1.0) is False
-    assert [m.get_type() for m in link.take()][:1] == ["HEARTBEAT"]  # we announce ourselves meanwhile
-    ObedientAutopilot(link).beat()
-    assert runtime.connect(timeout_s=1.0) is True
-
-
 def test_a_tick_drains_then_ticks_then_sends(square_mission, link, clock):
     seen = []
 
     class Probe(py_trees.behaviour.Behaviour):
         def update(self) -> Status:
             seen.append(py_trees.blackboard.Blackboard.get("/vehicle/mode"))
-            runtime.commander.set_mode("HOLD")
+            runtime.link.commander.set_mode("HOLD")
             assert link.take("COMMAND_LONG") == []  # not sent during the tick
             return Status.RUNNING
 
@@ -89,7 +81,7 @@ def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mis
     runtime = make_runtime(square_mission, link, clock, root=root)
     autopilot = autopilot_at(square_mission, link)
     autopilot.beat()
-    assert runtime.connect(1.0)
+    assert runtime.link.connect(1.0)
     runtime.mission_state.start()
     with pytest.raises(BehaviourCrashed) as crash:
         runtime.tick()

@@ -54,7 +54,7 @@ def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> 
     try:
         runtime = build_runtime(mission, link, clock, **options)
         runtime.pacer.listeners.append(SpeedGovernor(clock))  # as `executive run` does: a busy machine slows the world, not the verdict
-        assert runtime.connect(10.0 * clock.speedup)
+        assert runtime.link.connect(10.0 * clock.speedup)
         return runtime, runtime.run()
     finally:
         link.close()

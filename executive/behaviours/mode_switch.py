@@ -3,7 +3,7 @@
 ArduRover changes mode by itself when its mode channel (MODE_CH, channel 8 by default) moves: a
 mission switch on that channel (the UGV's arm switch D) would switch the vehicle to MANUAL with no
 command from the executive. The runtime asks for the parameter (PARAM_REQUEST_READ) when it finds
-the autopilot and until it answers (:class:`~executive.io.mavlink.parameters.ParameterWatch`); the
+the autopilot and until it answers (:class:`~executive.autopilot_link.parameters.ParameterWatch`); the
 answer is on ``/vehicle/params``. The check never waits and never passes on a value it has not
 read: pre-flight waits for the answer first (:class:`~executive.behaviours.readiness.ReadingsIn`,
 bounded), so an EKF ready at the first tick (a ``--resume``) does not get ahead of it.

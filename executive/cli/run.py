@@ -18,11 +18,11 @@ from executive.assembly import (
     control_socket,
     ground_stations,
     journal_recorder,
-    live_view,
     obstacle_camera,
     service_manager,
     snapshot_recorder,
 )
+from executive.autopilot_link import SURVEY_S, SeveralAutopilots
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
 from executive.cli.common import load_or_report, mavlink_id
 from executive.cli.run_checks import check_run
@@ -37,7 +37,7 @@ from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.pacing import SpeedGovernor, keeping_time
 from executive.progress import Progress
-from executive.runtime import SURVEY_S, Outcome, SeveralAutopilots
+from executive.runtime import Outcome
 from executive.snapshots import SnapshotRecorder
 
 if TYPE_CHECKING:
@@ -319,6 +319,8 @@ def _plugs(
     if obstacle_socket is not None:
         plugs.append(obstacle_camera(obstacle_socket))
     if web is not None:
+        from executive.web.plug import live_view  # the live view's modules only with --web
+
         plugs.append(live_view(web))
     return plugs
 
@@ -391,7 +393,7 @@ def main(args: argparse.Namespace) -> int:
             runtime.pacer.listeners.append(SpeedGovernor(clock))
         try:
             # the built-in simulator is alone on its link: no other autopilot to listen for
-            connected = runtime.connect(args.connect_timeout * clock.speedup, survey_s=SURVEY_S if args.mavlink else 0.0)
+            connected = runtime.link.connect(args.connect_timeout * clock.speedup, survey_s=SURVEY_S if args.mavlink else 0.0)
         except SeveralAutopilots as exc:
             print(f"executive: run: {exc}", file=sys.stderr)
             return EXIT_NO_VEHICLE
@@ -404,7 +406,7 @@ def main(args: argparse.Namespace) -> int:
             print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)
             return EXIT_NO_VEHICLE
         if watchdog is not None:
-            watchdog.ready(f"autopilot {'/'.join(map(str, runtime.reader.autopilot or ()))} heard on {link.url}; mission {mission.name!r}")
+            watchdog.ready(f"autopilot {'/'.join(map(str, runtime.link.reader.autopilot or ()))} heard on {link.url}; mission {mission.name!r}")
         stop.install(runtime.request_stop)
         try:
             # with --wait, an unfinished run in the journal goes on at once (a restart after a crash); a new one waits for `ctl start`

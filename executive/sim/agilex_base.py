@@ -40,8 +40,8 @@ from executive.io.can.agilex import (
     SystemState,
     decode,
 )
-from executive.io.rc import knob_value, switch_position
 from executive.mission.model import SwitchChannels
+from executive.sensing.rc import knob_value, switch_position
 from executive.sim.ardupilot.bunker import BunkerSim
 from executive.sim.faults import BatterySag, FaultInjector, RcLoss
 from executive.sim.firmware import FirmwareSim

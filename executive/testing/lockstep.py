@@ -18,12 +18,12 @@ from typing import TYPE_CHECKING, Any
 
 from executive.assembly import build_runtime, can_base, obstacle_camera
 from executive.clock import ManualClock
-from executive.io.heading import wait_for_filterpy
 from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.link import MemoryLink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.runtime import Outcome
+from executive.sensing.heading import wait_for_filterpy
 from executive.sim import FirmwareSim, make_autopilot
 from executive.sim.firmware import Home
 from executive.sim.options import firmware_options, simulated_home
@@ -323,7 +323,7 @@ class Lockstep:
     # -- running --------------------------------------------------------------------------------
     def connect(self, limit_s: float = 10.0) -> None:
         """Until the runtime has heard the autopilot (VehicleTimeLimit after ``limit_s`` of vehicle time)."""
-        if self.runtime.reader.autopilot is None and not self.runtime.connect(limit_s):
+        if self.runtime.link.reader.autopilot is None and not self.runtime.link.connect(limit_s):
             raise VehicleTimeLimit(f"no heartbeat from the simulated autopilot within {limit_s:g} s")
 
     def run(

@@ -55,7 +55,7 @@ class RuntimeOnLink:
 
     def modes_sent(self) -> list[str]:
         """The modes the executive asked for since the last call (taken off the link with the other COMMAND_LONGs)."""
-        modes = self.runtime.commander.modes
+        modes = self.runtime.link.commander.modes
         return [modes.decode(int(m.param2)) for m in self.link.take("COMMAND_LONG") if m.command == mavlink.MAV_CMD_DO_SET_MODE]
 
     def texts(self) -> list[str]:

@@ -32,7 +32,7 @@ def test_behaviours_and_trees_import_nothing_from_mavlink(path: Path) -> None:
 
 
 def test_route_keeper_does_not_import_behaviours() -> None:
-    names = _imports(ROOT / "executive" / "io" / "mavlink" / "route_keeper.py")
+    names = _imports(ROOT / "executive" / "autopilot_link" / "route_keeper.py")
     assert not [n for n in names if n.startswith("executive.behaviours")]
 
 

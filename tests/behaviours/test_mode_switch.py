@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 from py_trees.common import Status
 
+from executive.autopilot_link.parameters import ParameterWatch
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.parameters import ParameterWatch
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, rc_switch_channels
 from executive.testing import EKF_READY, Harness

@@ -187,7 +187,7 @@ def test_a_mission_completes_over_a_lossy_link(square_mission):
         runtime, outcome = run_over(f"udpout:127.0.0.1:{proxy.port}", square_mission, clock)
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert proxy.up.dropped > 0 and proxy.down.dropped > 0
-    assert runtime.reader.health.lost > 0  # the reader saw the gaps
+    assert runtime.link.reader.health.lost > 0  # the reader saw the gaps
 
 
 def test_the_mission_chooses_its_simulator_and_plays_its_event_file(tmp_path, capsys):

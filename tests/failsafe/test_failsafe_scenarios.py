@@ -155,7 +155,7 @@ def run_scenario(tmp_path: Path, lockstep) -> Iterator[Callable[[Scenario], tupl
 
         def spy(msg: MAVLinkMessage) -> None:  # a command leaves in the flush at the end of tick runtime.ticks
             if msg.get_type() == "COMMAND_LONG" and msg.command == mavlink.MAV_CMD_DO_SET_MODE:
-                record.modes.append((runtime.ticks, runtime.commander.modes.decode(int(msg.param2))))
+                record.modes.append((runtime.ticks, runtime.link.commander.modes.decode(int(msg.param2))))
             send(msg)
 
         link.send = spy  # type: ignore[method-assign]

@@ -10,9 +10,9 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from executive.io import heading
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
+from executive.sensing import heading
 from executive.sim.faults import LinkLoss
 from executive.testing import Lockstep, Overload, VehicleTimeLimit
 
@@ -141,7 +141,7 @@ def test_a_lockstep_is_usable_as_a_context_manager() -> None:
     mission = load_mission(MISSIONS / "rover_square.yaml")
     with Lockstep(mission, can=False) as sim:
         sim.connect()
-        assert sim.runtime.reader.autopilot is not None
+        assert sim.runtime.link.reader.autopilot is not None
 
 
 def test_a_simulated_px4_answers_the_runtime(lockstep) -> None:

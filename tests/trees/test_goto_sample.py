@@ -119,7 +119,7 @@ class Run:
         else:
             runtime.mission_state.start()  # builds the tree and its sampler
             assert runtime.tree is not None and runtime.sampler is not None
-            self.commander, self.state, self.sampler, self.tree = runtime.commander, runtime.mission_state, runtime.sampler, runtime.tree
+            self.commander, self.state, self.sampler, self.tree = runtime.link.commander, runtime.mission_state, runtime.sampler, runtime.tree
         self.boat = Boat(at, self.commander)
 
     @property

@@ -21,11 +21,11 @@ from executive import geo
 from executive.behaviours.auto_route import MISSION_STATE_COMPLETE
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemReached
-from executive.io.rc import RcReader
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission, RcConfig
 from executive.runtime import Outcome, Runtime
+from executive.sensing.rc import RcReader
 from executive.sim.faults import FaultInjector, RcInput, RcLoss
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
 from executive.testing import EKF_READY, Harness, Lockstep, MissionAutopilot
@@ -785,7 +785,7 @@ def test_scenario_the_operator_records_a_route_on_the_simulated_bunker_and_auto_
     for (lat, lon), flip in zip(recorded, observer.flips, strict=True):
         assert geo.distance(lat, lon, *flip) < 0.1
     assert min(geo.distance(*a, *b) for a, b in itertools.pairwise(recorded)) > 5.0  # four distinct places
-    assert flat((i.x, i.y) for i in runtime.mission_transfer.items) == pytest.approx(flat(recorded), abs=1e-7)  # read back
+    assert flat((i.x, i.y) for i in runtime.link.mission_transfer.items) == pytest.approx(flat(recorded), abs=1e-7)  # read back
     store = sim.autopilot.mission
     assert flat((store.command(s).lat, store.command(s).lon) for s in range(1, store.count)) == pytest.approx(flat(recorded), abs=1e-7)
     assert [(seq, mode) for seq, mode, _ in observer.reached] == [(1, "AUTO"), (2, "AUTO"), (3, "AUTO"), (4, "AUTO")]

@@ -133,7 +133,7 @@ def test_a_loiter_of_our_own_delivered_late_mid_leg_is_undone_and_the_survey_com
     sim = lockstep(mission, ekf_ready_after_s=2.0)
     leg_6: list[float] = []
     sim.observers.append(lambda s: leg_6.append(s.clock.now()) if s.runtime.mission_state.leg_index == 5 else None)
-    sim.at(100.0, lambda s: s.runtime.commander.set_mode("LOITER"))  # leg 6 runs from ~84 s to ~113 s of vehicle time
+    sim.at(100.0, lambda s: s.runtime.link.commander.set_mode("LOITER"))  # leg 6 runs from ~84 s to ~113 s of vehicle time
     modes: list[str] = []
     sim.observers.append(lambda s: modes.append(s.autopilot.mode) if s.runtime.mission_state.leg_index == 5 else None)
     outcome = sim.run_to_end(limit_s=400)

@@ -8,9 +8,9 @@ import socket
 import time
 
 from executive import frames
-from executive.assembly import live_view
 from executive.mission.lifecycle import MissionStatus
 from executive.web.feed import TRACK_SPACING_M, Frame, Seen
+from executive.web.plug import live_view
 from executive.web.server import LiveSource, WebAddress, WebServer
 from tests_support import LINE_HOME, line_mission
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import math
 import operator
+from collections import deque
 from collections.abc import Callable
 
 from executive import blackboard
@@ -29,6 +30,8 @@ from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPositi
 
 log = logging.getLogger(__name__)
 
+#: Commands from others kept until taken: more than a ground station sends between two ticks.
+COMMANDS_KEPT = 64
 _NOT_AUTOPILOTS = {mavlink.MAV_TYPE_GCS, mavlink.MAV_TYPE_ONBOARD_CONTROLLER, mavlink.MAV_TYPE_GIMBAL, mavlink.MAV_TYPE_ADSB}
 
 
@@ -101,11 +104,13 @@ class MavlinkReader:
         rc_source: bool = True,
         target_system: int | None = None,
         target_component: int = AUTOPILOT_COMPONENT,
+        on_autopilot: Callable[[int, int], None] | None = None,
+        on_reconnect: Callable[[], None] | None = None,
     ) -> None:
         """``rc_source``: the autopilot's RC_CHANNELS are the RC receiver (False when the RC is read from CAN).
 
         ``target_system``: bind only to the autopilot of that system (and ``target_component``);
-        None: the first autopilot heard.
+        None: the first autopilot heard. ``on_autopilot``, ``on_reconnect``: see the attributes.
         """
         self._link = link
         self._rc_source = rc_source
@@ -131,11 +136,12 @@ class MavlinkReader:
         #: The autopilot's clock against ours: a simulator at another speed-up is warned about.
         self.clock_watch = VehicleClockWatch(clock)
         #: Called when the autopilot is first found, comes back after a link loss, or rebooted.
-        self.on_reconnect: Callable[[], None] | None = None
+        self.on_reconnect = on_reconnect
         #: Called with the HEARTBEAT's (``autopilot``, ``type``) when the autopilot is first found: the port picks its back end.
-        self.on_autopilot: Callable[[int, int], None] | None = None
-        #: Called with (message, link) for a COMMAND_LONG that did not come from the autopilot.
-        self.on_command: Callable[[MAVLinkMessage, Link], object] | None = None
+        self.on_autopilot = on_autopilot
+        #: The COMMAND_LONGs that did not come from the autopilot (a ground station's, routed by it), oldest first, until
+        #: taken (:meth:`take_commands`); the oldest are dropped beyond :data:`COMMANDS_KEPT`.
+        self._commands: deque[MAVLinkMessage] = deque(maxlen=COMMANDS_KEPT)
         self._handlers: dict[str, Callable[[MAVLinkMessage, float], None]] = {
             "HEARTBEAT": self._on_heartbeat,
             "GLOBAL_POSITION_INT": self._on_global_position,
@@ -169,12 +175,18 @@ class MavlinkReader:
     @property
     def kinds_read(self) -> frozenset[str]:
         """The message kinds whose fields it reads; of any other it needs the header alone (and ``time_boot_ms``): a link may skim them."""
-        return frozenset(self._handlers) | {"COMMAND_LONG"}  # a ground station's COMMAND_LONG goes to on_command
+        return frozenset(self._handlers) | {"COMMAND_LONG"}  # a ground station's COMMAND_LONG is kept for take_commands
 
     @property
     def autopilot(self) -> tuple[int, int] | None:
         """(system id, component id) of the autopilot, once its HEARTBEAT was seen."""
         return self._autopilot
+
+    def take_commands(self) -> list[MAVLinkMessage]:
+        """The COMMAND_LONGs from others than the autopilot since the last call (a ground station's, routed by the autopilot), oldest first."""
+        commands = list(self._commands)
+        self._commands.clear()
+        return commands
 
     def drain(self, max_messages: int = 10_000) -> int:
         """Handle every message waiting on the link (at most ``max_messages``); returns how many."""
@@ -208,8 +220,8 @@ class MavlinkReader:
         if kind == "HEARTBEAT" and source != self._autopilot:
             self._heard_heartbeat(msg, source)
         if self._autopilot != source:
-            if kind == "COMMAND_LONG" and self.on_command is not None:
-                self.on_command(msg, self._link)  # a ground station (routed by the autopilot) commanding us
+            if kind == "COMMAND_LONG":
+                self._commands.append(msg)  # a ground station (routed by the autopilot) commanding us: the operator side answers
             return
         self._messages += 1
         self.health.on_packet(msg.get_seq())

@@ -10,8 +10,8 @@ from executive.clock import ManualClock
 from executive.io.can.agilex import MotionState, Odometry, RcState, SystemState
 from executive.io.can.reader import CanReader
 from executive.io.can.state import BaseMotion, BaseOdometry, BaseSystem, RcSticks
-from executive.io.rc import RcReader
 from executive.mission.model import RcConfig
+from executive.sensing.rc import RcReader
 from executive.state import RcSwitches, SwitchPosition
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN

@@ -45,7 +45,7 @@ def test_a_simulator_at_20x_behind_an_executive_at_1x_is_said_once_with_the_flag
         "the autopilot's clock runs 20x real time and the executive's 1x (20 s of the vehicle's time per second of ours): "
         "the executive ticks and times out in its own clock; run it with --speedup 20 (the simulator's speed-up)"
     ]
-    assert runtime.reader.clock_watch.ratio == pytest.approx(20.0, rel=0.01)
+    assert runtime.link.reader.clock_watch.ratio == pytest.approx(20.0, rel=0.01)
 
 
 def feed(watch: VehicleClockWatch, clock: ManualClock, rate: float, seconds: float, jitter_s: float, rng: random.Random, boot: list[float]) -> None:

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import pytest
 
+from executive.assembly import build_runtime, ground_stations
 from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.gcs import STATE_CODES, GroundStationControl
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.operator import Operator
-from executive.testing import GCS, Peer
+from executive.operator.ground_station import STATE_CODES, GroundStationControl
+from executive.testing import GCS, FakeLink, ObedientAutopilot, Peer
 
 US = (1, 191)
 
@@ -90,3 +91,37 @@ def test_a_mission_replaced_while_paused_is_told_in_a_text(link, clock, square_m
     state.replace(square_mission.model_copy(update={"name": "square-v2"}), 1, (), "mission replaced: 'square' -> 'square-v2', ...")
     control.service()
     assert [(m.severity, m.text) for m in link.take("STATUSTEXT")] == [(mavlink.MAV_SEVERITY_NOTICE, "mission replaced: square-v2")]
+
+
+def test_a_command_routed_by_the_autopilot_is_answered_before_the_tree_ticks(square_mission, link, clock):
+    runtime = build_runtime(square_mission, link, clock)
+    first = square_mission.waypoints[0]
+    ObedientAutopilot(link, start=(first.lat, first.lon)).beat()
+    runtime.tick()
+    link.take()
+    link.incoming.append(command(mavlink.MAV_CMD_MISSION_START))  # a ground station's, routed by the autopilot onto our link
+    runtime.tick()
+    assert runtime.mission_state.status is MissionStatus.RUNNING and runtime.tree is not None  # started in that tick
+    assert acks(link) == [(mavlink.MAV_CMD_MISSION_START, mavlink.MAV_RESULT_ACCEPTED, 255)]
+    link.incoming.append(command(mavlink.MAV_CMD_DO_PAUSE_CONTINUE, 0))
+    runtime.make_safe()  # made safe meanwhile: the ground station is answered too
+    assert acks(link) == [(mavlink.MAV_CMD_DO_PAUSE_CONTINUE, mavlink.MAV_RESULT_ACCEPTED, 255)]
+    assert runtime.mission_state.status is MissionStatus.PAUSED
+
+
+def test_ground_stations_on_an_endpoint_of_their_own_are_answered_and_reported_to(square_mission, link, clock):
+    endpoint = FakeLink()
+    runtime = build_runtime(square_mission, link, clock, plugs=[ground_stations(endpoint, allowed_systems=(42,))])
+    first = square_mission.waypoints[0]
+    ObedientAutopilot(link, start=(first.lat, first.lon)).beat()
+    endpoint.incoming.append(command(mavlink.MAV_CMD_MISSION_START))  # from 255: not allow-listed there
+    endpoint.incoming.append(GCS.heartbeat(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0))  # passed over
+    endpoint.incoming.append(command(mavlink.MAV_CMD_MISSION_START, sender=Peer(42, 190)))
+    runtime.tick()
+    assert acks(endpoint) == [
+        (mavlink.MAV_CMD_MISSION_START, mavlink.MAV_RESULT_DENIED, 255),
+        (mavlink.MAV_CMD_MISSION_START, mavlink.MAV_RESULT_ACCEPTED, 42),
+    ]
+    assert runtime.mission_state.status is MissionStatus.RUNNING
+    assert [m.name for m in endpoint.take("NAMED_VALUE_FLOAT")] == ["MSN_STATE", "MSN_LEG", "WP_DIST"]  # reported there too
+    assert [m.get_type() for m in endpoint.take("HEARTBEAT")] == ["HEARTBEAT"]  # we announce ourselves there

@@ -7,8 +7,8 @@ import pytest
 
 from executive import blackboard
 from executive.assembly import build_runtime
-from executive.io.rc import RcReader, knob_value, switch_position
 from executive.mission.model import RcConfig, SwitchChannels
+from executive.sensing.rc import RcReader, knob_value, switch_position
 from executive.state import RcSwitches, SwitchPosition
 from executive.testing import AUTOPILOT
 

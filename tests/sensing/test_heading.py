@@ -17,7 +17,7 @@ import pytest
 
 from executive import blackboard
 from executive.clock import ManualClock
-from executive.io.heading import HeadingFilter, circular_mean, import_long_lived, wrap180
+from executive.sensing.heading import HeadingFilter, circular_mean, import_long_lived, wrap180
 from executive.state import Attitude, GlobalPosition
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -345,7 +345,7 @@ def test_the_kalman_filter_loads_without_the_rest_of_filterpy_and_filterpy_still
     """scipy.stats (1 s of CPU at every start) stays out; a later ``import filterpy`` is the real package, with the same class."""
     code = """
 import sys
-from executive.io.heading import kalman_filter_class
+from executive.sensing.heading import kalman_filter_class
 K = kalman_filter_class()
 print(sorted(m for m in ("scipy.stats", "filterpy", "filterpy.stats", "filterpy.kalman") if m in sys.modules))
 import numpy as np

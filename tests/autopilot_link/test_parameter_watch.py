@@ -7,8 +7,8 @@ import logging
 import pytest
 
 from executive.autopilot.rover_motion import MOTION_PARAMS, vehicle_motion
+from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
 from executive.io.mavlink.dialect import mavlink
-from executive.io.mavlink.parameters import ParameterWatch, wanted_parameters
 from executive.testing import Harness
 
 
@@ -30,7 +30,7 @@ def test_an_ardurover_is_asked_its_driving_parameters_until_each_answers(square_
     h.vehicle.set(vehicle__params={"MODE_CH": 8.0, "WP_SPEED": 5.0, "WP_RADIUS": 3.0})
     asked = run(watch, h, 1.0)
     assert "WP_SPEED" not in asked and "MODE_CH" not in asked and "ATC_ACCEL_MAX" in asked  # the rest again
-    with caplog.at_level(logging.WARNING, logger="executive.io.mavlink.parameters"):
+    with caplog.at_level(logging.WARNING, logger="executive.autopilot_link.parameters"):
         asked += run(watch, h, 10.0)
     assert asked.count("ATC_ACCEL_MAX") == 2  # 3 tries in all, then given up
     (record,) = caplog.records

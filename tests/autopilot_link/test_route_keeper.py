@@ -9,10 +9,10 @@ import py_trees
 import pytest
 
 from executive import geo
+from executive.autopilot_link.route_keeper import RouteKeeper, RouteUpload, RouteUploadState
 from executive.behaviours import KeepRouteOnAutopilot
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import TransferState
-from executive.io.mavlink.route_keeper import RouteKeeper, RouteUpload, RouteUploadState
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Home, Mission
 from executive.mission.route import offset
@@ -109,7 +109,7 @@ def keeping(square_mission) -> Keeping:
 
 
 def test_an_edit_is_uploaded_once_read_back_and_reported(keeping: Keeping, caplog) -> None:
-    caplog.set_level(logging.INFO, logger="executive.io.mavlink.route_keeper")
+    caplog.set_level(logging.INFO, logger="executive.autopilot_link.route_keeper")
     keeping.tick()
     assert keeping.keeper.status is None and keeping.autopilot.sent == []  # nothing to do without an edit
     keeping.tick(keeping.offset_edit)

@@ -40,7 +40,7 @@ from executive.state import CommandStatus, EkfStatus, GlobalPosition
 if TYPE_CHECKING:
     from executive.autopilot.port import AutopilotPort
 
-log = logging.getLogger(__name__)
+log = logging.getLogger("executive.operator")  # as the log and the journal (event kind "operator") have it
 
 REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode", "command")
 #: The commands a person may give the vehicle, and the blackboard keys of their acks.

@@ -10,7 +10,7 @@ from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.operator import Operator
 
 S = MissionStatus
-MISSIONS = Path(__file__).parent.parent / "missions"
+MISSIONS = Path(__file__).parents[2] / "missions"
 
 
 @pytest.fixture

@@ -60,7 +60,7 @@ def refusing_hold(square_mission: Mission, runtime_on_link) -> tuple[RuntimeOnLi
 def test_a_refused_safe_mode_is_asked_again_then_the_vehicle_is_disarmed(square_mission: Mission, runtime_on_link, caplog) -> None:
     caplog.set_level(logging.INFO, logger="executive")
     r, asked = refusing_hold(square_mission, runtime_on_link)
-    r.runtime.ground_station.service()  # the load's STATUSTEXT goes out first
+    r.runtime.report()  # the load's STATUSTEXT goes out first
     r.texts()
     assert r.runtime.make_safe() is True
     assert asked == [(0.0, ("mode", "HOLD")), (1.5, ("mode", "HOLD")), (3.0, ("mode", "HOLD")), (4.5, ("arm", 0.0))]
@@ -175,7 +175,7 @@ def test_a_pilot_mode_the_autopilot_chose_itself_is_nobodys_and_is_made_safe(squ
     r = runtime_on_link(square_mission)
     r.autopilot.mode = "MANUAL"
     r.autopilot.beat()
-    r.runtime.reader.drain()
+    r.runtime.link.reader.drain()
     blackboard = py_trees.blackboard.Client(name="test")
     blackboard.register_key("/vehicle/mode_set_by", access=py_trees.common.Access.WRITE)
     blackboard.set("/vehicle/mode_set_by", set_by)

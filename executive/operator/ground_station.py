@@ -18,10 +18,10 @@ from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, en
 from executive.io.mavlink.link import Link
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
-from executive.operator import Operator
+from executive.operator.requests import Operator
 from executive.status import StatusSource
 
-log = logging.getLogger(__name__)
+log = logging.getLogger("executive.operator.gcs")  # the journal's event kind: "gcs", as ever
 
 #: NAMED_VALUE_FLOAT "MSN_STATE" values.
 STATE_CODES = {status: float(i) for i, status in enumerate(MissionStatus)}
@@ -71,6 +71,17 @@ class GroundStationControl:
             result = mavlink.MAV_RESULT_UNSUPPORTED
         reply_to.send(self._encoder.command_ack_encode(msg.command, result, 0, 0, sender, msg.get_srcComponent()))
         return True
+
+    def serve(self, link: Link, allowed_systems: Iterable[int]) -> None:
+        """Ground stations on an endpoint of their own, ``link``, too: reported to; from now on only ``allowed_systems`` obeyed."""
+        self.links.append(link)
+        self.allowed_systems = frozenset(allowed_systems)
+
+    def answer(self, messages: Iterable[MAVLinkMessage], reply_to: Link) -> None:
+        """Answer the COMMAND_LONGs among ``messages``, which came on ``reply_to`` (the others, and commands not ours, are passed over)."""
+        for msg in messages:
+            if msg.get_type() == "COMMAND_LONG":
+                self.on_command(msg, reply_to)
 
     def service(self) -> None:
         """Send the periodic report when due, and any state-change text."""
