@@ -30,8 +30,9 @@ from executive.io.mavlink.route_keeper import RouteKeeper
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.io.rc import RcReader
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission, rc_switch_channels
+from executive.mission.model import Mission
 from executive.mission.reload import REPLACED
+from executive.mission.rules import rc_switch_channels
 from executive.operator import Operator
 from executive.runtime import Runtime
 from executive.services import PacedService, RunObserver, Service, Step

@@ -25,7 +25,7 @@ from executive.mode_cause import ModeChange, autopilot_cause
 from executive.sim.autopilot import ArduPilotSim
 from executive.sim.faults import Fault, FaultInjector, LinkLoss
 from executive.testing import Lockstep
-from trees._parts import guarded, mission_root, preflight, standard_guards
+from executive.trees.parts import guarded, mission_root, preflight, standard_guards
 
 PERSON = None  # autopilot_cause's answer for a person's change
 

@@ -48,8 +48,8 @@ from executive.behaviours import (
     Surface,
 )
 from executive.mission.model import Mission
+from executive.trees.parts import guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
 from executive.vehicles import PROFILES
-from trees._parts import guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
 
 
 def acceptance(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -56,9 +56,10 @@ from executive.behaviours import (
     rc_auto_mode,
 )
 from executive.behaviours.failsafe import FailsafeNote
-from executive.mission.model import Mission, SamplingOptions, failsafe_policy
+from executive.mission.model import Mission, SamplingOptions
+from executive.mission.rules import failsafe_policy
+from executive.trees.parts import ARM_RETRY_S, checked, guarded, mission_root, preflight, safe_mode, within_reach
 from executive.vehicles import PROFILES
-from trees._parts import ARM_RETRY_S, checked, guarded, mission_root, preflight, safe_mode, within_reach
 
 
 def _sample_hold_mode(mission: Mission) -> str:

@@ -40,7 +40,7 @@ from executive.behaviours import (
     SetMode,
 )
 from executive.mission.model import Mission, RcRouteOptions
-from trees._parts import guarded, mission_root, mode_switch_clear, safe_mode, wait_for_ekf
+from executive.trees.parts import guarded, mission_root, mode_switch_clear, safe_mode, wait_for_ekf
 
 
 def operator_and_route(mission: Mission) -> py_trees.behaviour.Behaviour:

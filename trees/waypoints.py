@@ -17,8 +17,8 @@ import py_trees
 
 from executive.behaviours import ForEachLeg, GoTo, SetMode
 from executive.mission.model import Mission
+from executive.trees.parts import guarded, mission_root, preflight, safe_mode, standard_guards
 from executive.vehicles import PROFILES
-from trees._parts import guarded, mission_root, preflight, safe_mode, standard_guards
 
 
 def leg(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -28,7 +28,9 @@ from executive.behaviours import (
     inside_geofence,
 )
 from executive.behaviours.failsafe import condition_of
-from executive.mission.model import FailsafePolicy, Mission, failsafe_policy, rc_switch_channels
+from executive.mission.failsafes import FailsafePolicy
+from executive.mission.model import Mission
+from executive.mission.rules import failsafe_policy, rc_switch_channels
 from executive.vehicles import PROFILES
 
 ARM_RETRY_S = 2.0
