@@ -108,7 +108,7 @@ class Recomposer:
                 node.slots[slot.name] = taken
 
     def _folded(self, behaviour: py_trees.behaviour.Behaviour, here: str) -> Node | None:
-        """What ``failsafe_guarded`` (executive.trees.parts.guarded) or ``checked`` made, as that node; None for anything else."""
+        """What ``failsafe_guarded`` (executive.trees.parts.failsafe_guarded) or ``checked`` made, as that node; None for anything else."""
         kids = list(behaviour.children)
         if type(behaviour) is not py_trees.composites.Selector or len(kids) != 2 or not isinstance(kids[1], Failsafe):
             return None

@@ -71,13 +71,12 @@ TREE = '''
 
     from executive.behaviours import ForEachLeg, SetMode
     from rangerplugin.guards import CountLeg, EnoughSatellites
-    from executive.trees.parts import guarded, mission_root, preflight, safe_mode, standard_guards
-    from executive.trees.waypoints import leg
+    from executive.trees.parts import failsafe_guarded, guided_leg, mission_root, preflight, safe_mode, standard_guards
 
 
     def build(mission):
-        counted = py_trees.composites.Sequence("Counted leg", memory=True, children=[leg(mission), CountLeg()])
-        route = guarded(ForEachLeg(counted), [*standard_guards(mission), EnoughSatellites(6)], mission)
+        counted = py_trees.composites.Sequence("Counted leg", memory=True, children=[guided_leg(mission), CountLeg()])
+        route = failsafe_guarded(ForEachLeg(counted), [*standard_guards(mission), EnoughSatellites(6)], mission)
         return mission_root(mission, preflight(mission), route, SetMode(safe_mode(mission), name="Hold at the end"))
 '''
 

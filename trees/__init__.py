@@ -22,6 +22,18 @@ if TYPE_CHECKING:
     TreeBuilder = Callable[[Mission], py_trees.behaviour.Behaviour]
 
 
+#: The shared subtrees a tree composed in a mission file may use, by the name of their function in :mod:`.parts`.
+SUBTREES: dict[str, Literal["decorator", "subtree"]] = {
+    "preflight": "subtree",
+    "wait_for_ekf": "subtree",
+    "within_reach": "subtree",
+    "checked": "subtree",
+    "mission_root": "subtree",
+    "guided_leg": "subtree",
+    "failsafe_guarded": "decorator",
+}
+
+
 class UnknownTree(LookupError):
     """A tree name that is neither built in, nor a plugin's, nor ``module:function``."""
 
@@ -36,17 +48,9 @@ def subtrees() -> list[tuple[str, Literal["decorator", "subtree"], Callable[...,
 
     ``use: preflight``; ``failsafe_guarded`` decorates the work it guards.
     """
-    from executive.trees import parts, waypoints
+    from executive.trees import parts
 
-    return [
-        ("preflight", "subtree", parts.preflight),
-        ("wait_for_ekf", "subtree", parts.wait_for_ekf),
-        ("within_reach", "subtree", parts.within_reach),
-        ("checked", "subtree", parts.checked),
-        ("mission_root", "subtree", parts.mission_root),
-        ("guided_leg", "subtree", waypoints.leg),
-        ("failsafe_guarded", "decorator", parts.guarded),
-    ]
+    return [(name, kind, getattr(parts, name)) for name, kind in SUBTREES.items()]
 
 
 def _checked(plugin: str, found: object) -> TreeBuilder:

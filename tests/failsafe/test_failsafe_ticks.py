@@ -26,7 +26,7 @@ from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
 from executive.testing import EKF_READY, FakeLink, Harness, ScriptedAutopilot, Vehicle
-from executive.trees.parts import guarded, mission_root, standard_guards
+from executive.trees.parts import failsafe_guarded, mission_root, standard_guards
 from executive.vehicles import PROFILES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
@@ -98,14 +98,14 @@ def work(r: Obeying) -> py_trees.behaviour.Behaviour:
 
 @pytest.fixture
 def rig(clock: ManualClock) -> Callable[..., Obeying]:
-    """``rig(kind, work, **changes)``: ``guarded(work, standard guards, mission)`` for one vehicle kind, on a Harness, obeyed."""
+    """``rig(kind, work, **changes)``: ``failsafe_guarded(work, standard guards, mission)`` for one vehicle kind, on a Harness, obeyed."""
 
     def make(vehicle_kind: str = "rover", work_: py_trees.behaviour.Behaviour | None = None, **changes: Any) -> Obeying:
         mission = make_mission(vehicle_kind, **changes)
         state = MissionState()
         state.upload(mission)
         state.start()
-        root = guarded(work_ or py_trees.behaviours.Running("Work"), standard_guards(mission), mission)
+        root = failsafe_guarded(work_ or py_trees.behaviours.Running("Work"), standard_guards(mission), mission)
         link = FakeLink()
         r = Obeying(Harness(root, clock, link, Commander(link, clock, PROFILES[mission.vehicle]), state))
         r.h.vehicle.set(
@@ -316,7 +316,7 @@ def test_a_disarm_reaction_brings_an_armed_guard_with_it() -> None:
 
 def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(runtime_on_link, vehicle: Vehicle) -> None:
     mission = make_mission()
-    root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
+    root = mission_root(mission, failsafe_guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
     on_link = runtime_on_link(mission, root=root, safe_timeout_s=2.0)
     runtime, rover = on_link.runtime, on_link.autopilot
     runtime.mission_state.start()
@@ -369,7 +369,7 @@ def test_two_rangefinder_sources_alternating_do_not_flap_the_altitude_failsafe(c
         state.start()
         altitude = AltitudeWithin(Range(min=2.0, max=100.0))
         altitude.hold_after_s, altitude.resume_after_s = hold_after_s, resume_after_s
-        root = guarded(py_trees.behaviours.Running("Survey"), [*standard_guards(mission), altitude], mission)
+        root = failsafe_guarded(py_trees.behaviours.Running("Survey"), [*standard_guards(mission), altitude], mission)
         commander = Commander(link, clock, PROFILES["sub"])
         h = Harness(root, clock, link, commander, state)
         vehicle.set(
@@ -634,7 +634,7 @@ def test_each_step_reaches_the_operator_statustext_status_json_and_line(runtime_
     from executive.status import StatusSource, status_line
 
     mission = make_mission()
-    root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
+    root = mission_root(mission, failsafe_guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
     on_link = runtime_on_link(mission, root=root, beat=True)
     on_link.autopilot.refuse.add("HOLD")
     on_link.runtime.mission_state.start()
