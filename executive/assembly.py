@@ -20,8 +20,9 @@ from executive.intervention import InterventionWatch
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Mission, rc_switch_channels
+from executive.mission.model import Mission
 from executive.mission.reload import REPLACED
+from executive.mission.rules import rc_switch_channels
 from executive.operator import Operator
 from executive.operator.ground_station import GroundStationControl
 from executive.runtime import Runtime

@@ -29,13 +29,11 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 from xml.parsers import expat
 
-import yaml
-
 from executive.composition import NODE, USE
 from executive.mission.errors import FieldError, MissionError
 
 if TYPE_CHECKING:
-    from executive.mission.model import Mission
+    pass
 
 #: The catalogue's parameter types -> the port types BehaviorTree.CPP writes (``BT::demangle`` of the C++ type).
 PORT_TYPES = {
@@ -388,25 +386,6 @@ def to_yaml(node: Node, types: Mapping[str, NodeType]) -> dict[str, Any] | str:
 
 
 # -- files --------------------------------------------------------------------------------------
-
-
-def export_tree(mission_file: str, mission: Mission, catalogue: Any) -> tuple[str, list[tuple[str, str]]]:
-    """The tree of a (valid) mission file as a BehaviorTree.CPP v4 document, and what could not be described exactly (node path, why).
-
-    A tree written in the file (``tree:`` a mapping) is written as it is; a named tree (built in
-    Python) as the nodes it builds (:mod:`executive.recompose`).
-    """
-    with open(mission_file, encoding="utf-8") as stream:
-        tree = (yaml.safe_load(stream) or {}).get("tree", "waypoints")
-    types = node_types(catalogue)
-    if isinstance(tree, Mapping):
-        return write_xml(from_yaml(tree, types), types, mission.name), []
-    import trees
-    from executive.recompose import Recomposer
-
-    recomposer = Recomposer(types, catalogue, mission)
-    root = recomposer.node(trees.build(mission))
-    return write_xml(root, {**types, **recomposer.unknown}, mission.name), recomposer.warnings
 
 
 def import_tree(path: str, catalogue: Any) -> dict[str, Any]:

@@ -17,28 +17,28 @@ limit: :mod:`executive.behaviours.guards`) is part of its entry.
 
 Use it as ``catalogue().get("go_to")``, ``catalogue().nodes(kind="guard")``; ``executive
 behaviours [--json]`` prints it. Plugins' behaviours (entry-point group ``executive.behaviours``,
-:mod:`executive.plugins` when installed) are part of it; :meth:`Catalogue.build` takes others.
+:mod:`executive.registry`) are part of it; :meth:`Catalogue.build` takes others.
 """
 
 from __future__ import annotations
 
 import functools
-import importlib
-import importlib.util
 import inspect
 import re
 import types
 import typing
 from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from importlib.metadata import EntryPoint
 from typing import TYPE_CHECKING, Any, Literal, get_args, get_origin
 
 import py_trees
 
-from executive import behaviours, frames
+from executive import behaviours, frames, registry, trees
 from executive.behaviours import composites
 from executive.behaviours.guards import Guard
-from executive.mission.model import Range, RcRouteOptions, SamplingOptions, VtolOptions, rc_switch_channels
+from executive.mission.model import Range, RcRouteOptions, SamplingOptions, VtolOptions
+from executive.mission.rules import rc_switch_channels
 from executive.vehicles import PROFILES
 
 if TYPE_CHECKING:
@@ -230,15 +230,17 @@ class Catalogue:
 @functools.cache
 def catalogue() -> Catalogue:
     """The catalogue of this installation: ours and the installed plugins' behaviours (a plugin that fails raises its error)."""
-    return Catalogue.build(_plugin_behaviours())
+    return Catalogue.build(load_behaviours())
 
 
-def _plugin_behaviours() -> list[type[py_trees.behaviour.Behaviour]]:
-    if importlib.util.find_spec("executive.plugins") is None:
-        return []
-    plugins = importlib.import_module("executive.plugins")
-    loaded: list[type[py_trees.behaviour.Behaviour]] = plugins.load_behaviours()
-    return loaded
+def plugin_behaviour(point: EntryPoint) -> type[py_trees.behaviour.Behaviour]:
+    """The class an ``executive.behaviours`` entry point names; PluginError if it cannot be loaded or is no behaviour class."""
+    return registry.load_class(point, py_trees.behaviour.Behaviour, "a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)")
+
+
+def load_behaviours() -> list[type[py_trees.behaviour.Behaviour]]:
+    """The behaviour classes plugins add (``executive.behaviours``); PluginError for the first that cannot be loaded or is no behaviour class."""
+    return [plugin_behaviour(point) for point in registry.named(registry.BEHAVIOURS).values()]
 
 
 def _our_classes() -> list[type[py_trees.behaviour.Behaviour]]:
@@ -249,8 +251,6 @@ def _our_classes() -> list[type[py_trees.behaviour.Behaviour]]:
 
 def _our_functions() -> list[tuple[str, Kind, Callable[..., py_trees.behaviour.Behaviour]]]:
     """The composites and plain decorators (:mod:`executive.behaviours.composites`), and the trees' built-in subtrees."""
-    import trees
-
     made: list[tuple[str, Kind, Callable[..., py_trees.behaviour.Behaviour]]] = [
         (name, "composite", getattr(composites, name)) for name in ("sequence", "selector", "parallel")
     ]

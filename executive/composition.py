@@ -35,7 +35,9 @@ from pydantic import ValidationError
 from executive.behaviours.guards import Guard
 from executive.catalogue import ACTION_SLOTS, Catalogue, NodeSpec, ParamSpec, catalogue, mission_value
 from executive.mission.errors import Path, format_path
+from executive.mission.loader import describe_value  # the loader's wording for every other field
 from executive.mission.model import Mission, Range
+from executive.trees.parts import mission_root
 from executive.vehicles import PROFILES
 
 NODE, USE = "node", "use"
@@ -101,8 +103,6 @@ def build(mission: Mission, nodes: Catalogue | None = None) -> py_trees.behaviou
     root = _Builder(mission).make(plan)
     if plan.spec.name in PAUSE_AWARE:
         return root
-    from trees._parts import mission_root
-
     return mission_root(mission, root)
 
 
@@ -135,12 +135,12 @@ class _Checker:
                 return None
             key = keys[0]
             if not isinstance(value[key], str):
-                self.fail((*path, key), f"expected a node name, got {_describe(value[key])}")
+                self.fail((*path, key), f"expected a node name, got {describe_value(value[key])}")
                 return None
             spec = self._spec(value[key], (*path, key), key)
             given = {k: v for k, v in value.items() if k != key}
         else:
-            self.fail(path, f"expected a node: a name, or a mapping with node: or use:, got {_describe(value)}")
+            self.fail(path, f"expected a node: a name, or a mapping with node: or use:, got {describe_value(value)}")
             return None
         if spec is None:
             return None
@@ -187,7 +187,7 @@ class _Checker:
                 if isinstance(value, str):
                     plan.refs[key] = value
                 else:
-                    self.fail((*path, key), f"expected the name of a guard of the tree, got {_describe(value)}")
+                    self.fail((*path, key), f"expected the name of a guard of the tree, got {describe_value(value)}")
             else:
                 checked = self._value(param, value, (*path, key))
                 if checked is not _BAD:
@@ -202,7 +202,7 @@ class _Checker:
     def _children(self, plan: _Plan, param: ParamSpec, value: Any, path: Path) -> None:
         if param.type in ("nodes", "guards"):
             if not isinstance(value, list):
-                self.fail(path, f"expected a list of nodes, got {_describe(value)}")
+                self.fail(path, f"expected a list of nodes, got {describe_value(value)}")
                 return
             made = [self.node(item, (*path, i), (plan.spec.name, param)) for i, item in enumerate(value)]
             plan.children[param.name] = [m for m in made if m is not None]
@@ -227,7 +227,7 @@ class _Checker:
         }
         if kind in ok:
             if not ok[kind]:
-                self.fail(path, f"expected {_kind(param)}, got {_describe(value)}")
+                self.fail(path, f"expected {_kind(param)}, got {describe_value(value)}")
                 return _BAD
             if kind == "float":
                 value = float(value)
@@ -238,7 +238,7 @@ class _Checker:
             return value
         if kind == "one of":
             if value not in param.choices:
-                self.fail(path, f"{_describe(value)}: expected one of {', '.join(param.choices)}")
+                self.fail(path, f"{describe_value(value)}: expected one of {', '.join(param.choices)}")
                 return _BAD
             return value
         if kind == "range":
@@ -249,7 +249,7 @@ class _Checker:
             return self._mapping(value, path, ("east", "north", "up"), lambda v: Enu(**{k: float(x) for k, x in v.items()}))
         if kind == "numbers":
             if not isinstance(value, list) or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
-                self.fail(path, f"expected a list of numbers, got {_describe(value)}")
+                self.fail(path, f"expected a list of numbers, got {describe_value(value)}")
                 return _BAD
             return [float(v) for v in value]
         self.fail(path, f"cannot be given in a mission file ({kind})")
@@ -258,7 +258,7 @@ class _Checker:
     def _mapping(self, value: Any, path: Path, keys: tuple[str, ...], make: Any) -> Any:
         numbers = isinstance(value, dict) and all(isinstance(value.get(k), int | float) and not isinstance(value.get(k), bool) for k in keys)
         if not numbers or set(value) != set(keys):
-            self.fail(path, f"expected a mapping of {', '.join(keys)} (numbers), got {_describe(value)}")
+            self.fail(path, f"expected a mapping of {', '.join(keys)} (numbers), got {describe_value(value)}")
             return _BAD
         try:
             return make(value)
@@ -351,12 +351,6 @@ def _kind(param: ParamSpec) -> str:
 
 def _a(kind: str) -> str:
     return f"an {kind}" if kind[0] in "aeiou" else f"a {kind}"
-
-
-def _describe(value: Any) -> str:
-    from executive.mission.loader import _describe as describe  # the loader's wording for every other field
-
-    return describe(value)
 
 
 # -- the JSON schema of a composed tree, for editors ----------------------------------------------------

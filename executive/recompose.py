@@ -1,5 +1,7 @@
 """A tree built in Python (a built-in tree, a plugin's) described as catalogue nodes: what ``export --format btcpp`` writes for a named tree.
 
+:func:`export_tree` writes a mission's tree, named or composed in its file, as a BehaviorTree.CPP v4 document.
+
 Each behaviour becomes the catalogue node of its class, its parameters read back from the
 attributes of the same names, or those its class's ``param_attributes`` (parameter -> attribute)
 names; those equal to the default, or to the mission's value they default to, are left out
@@ -16,10 +18,12 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import py_trees
+import yaml
 
+from executive import mission_tree
 from executive.behaviours.failsafe import Failsafe
 from executive.behaviours.guards import Guard
-from executive.btcpp import FIELDS, Node, NodeType, Port, Slot
+from executive.btcpp import FIELDS, Node, NodeType, Port, Slot, from_yaml, node_types, write_xml
 from executive.catalogue import mission_value
 
 if TYPE_CHECKING:
@@ -104,7 +108,7 @@ class Recomposer:
                 node.slots[slot.name] = taken
 
     def _folded(self, behaviour: py_trees.behaviour.Behaviour, here: str) -> Node | None:
-        """What ``failsafe_guarded`` (trees._parts.guarded) or ``checked`` made, as that node; None for anything else."""
+        """What ``failsafe_guarded`` (executive.trees.parts.failsafe_guarded) or ``checked`` made, as that node; None for anything else."""
         kids = list(behaviour.children)
         if type(behaviour) is not py_trees.composites.Selector or len(kids) != 2 or not isinstance(kids[1], Failsafe):
             return None
@@ -158,3 +162,19 @@ def _as_port_value(value: Any, port: Port) -> Any:
     if not isinstance(value, str) or (port.choices and value not in port.choices):
         return _UNREADABLE
     return value
+
+
+def export_tree(mission_file: str, mission: Mission, catalogue: Any) -> tuple[str, list[tuple[str, str]]]:
+    """The tree of a (valid) mission file as a BehaviorTree.CPP v4 document, and what could not be described exactly (node path, why).
+
+    A tree written in the file (``tree:`` a mapping) is written as it is; a named tree (built in
+    Python) as the nodes it builds (:class:`Recomposer`).
+    """
+    with open(mission_file, encoding="utf-8") as stream:
+        tree = (yaml.safe_load(stream) or {}).get("tree", "waypoints")
+    types = node_types(catalogue)
+    if isinstance(tree, Mapping):
+        return write_xml(from_yaml(tree, types), types, mission.name), []
+    recomposer = Recomposer(types, catalogue, mission)
+    root = recomposer.node(mission_tree.build(mission))
+    return write_xml(root, {**types, **recomposer.unknown}, mission.name), recomposer.warnings

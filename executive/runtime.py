@@ -14,12 +14,12 @@ from dataclasses import dataclass, replace
 import py_trees
 from py_trees.common import Status
 
-import trees
+from executive import mission_tree
 from executive.autopilot_link import AutopilotLink
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import Clock, TickClock
-from executive.io.instruments import open_sampler
-from executive.io.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
+from executive.instruments.backends import open_sampler
+from executive.instruments.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SamplingOptions
@@ -357,7 +357,7 @@ class Runtime:
     def _check_tree(self, mission: Mission) -> str | None:
         """Before a replacement: the new mission's tree can be built (kept for :meth:`_on_replace`)."""
         try:
-            self._built = (mission, trees.build(mission))
+            self._built = (mission, mission_tree.build(mission))
         except Exception as exc:  # a tree builder's error must refuse the replacement, not take the executive down
             return f"tree: cannot be built: {type(exc).__name__}: {exc}"
         return None
@@ -379,7 +379,7 @@ class Runtime:
         assert mission is not None
         built, self._built = self._built, None
         prebuilt = built[1] if built is not None and built[0] is mission else None
-        root, self._next_root = self._next_root or prebuilt or trees.build(mission), None
+        root, self._next_root = self._next_root or prebuilt or mission_tree.build(mission), None
         self._close_sampler()
         try:
             self.sampler = open_sampler(mission, self.clock, simulator=self.simulated_vehicle)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from executive.logs import OPERATOR_LOGGERS
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.sensing.heading import wait_for_filterpy
@@ -57,12 +58,16 @@ def every_test_on_a_clean_blackboard(clean_blackboard: None) -> None:
 
 @pytest.fixture(autouse=True)
 def logging_as_it_was() -> Iterator[None]:
-    """A command run in a test (``setup_logging``) points the root logger at that test's captured stderr, closed after it: put it back."""
+    """A command run in a test (``setup_logging``) points the root logger at that test's captured stderr, closed after it, and sets
+    the operator's loggers to INFO (a later test's caplog would see their records): put both back."""
     root = logging.getLogger()
     handlers, level = root.handlers[:], root.level
+    operator_levels = {name: logging.getLogger(name).level for name in OPERATOR_LOGGERS}
     yield
     root.handlers[:] = handlers
     root.setLevel(level)
+    for name, was in operator_levels.items():
+        logging.getLogger(name).setLevel(was)
 
 
 @pytest.fixture

@@ -10,7 +10,7 @@ import py_trees
 import pytest
 import yaml
 
-import trees
+from executive import mission_tree
 from executive.btcpp import NodeType, Port, Slot, from_yaml, read_xml, to_yaml, write_xml
 from executive.cli import main
 from executive.mission.errors import MissionError
@@ -196,7 +196,9 @@ def test_a_built_in_tree_exported_and_imported_builds_the_same_tree(name: str, t
     assert {e.tag for e in list(doc.find("BehaviorTree").iter())[1:]} <= model  # every node is of the catalogue, described
     assert main(["import", str(xml), "--mission", str(original), "-o", str(edited)]) == 0, capsys.readouterr().err
     assert isinstance(load_mission(edited).tree, dict)  # a tree written in the mission file now
-    assert described(trees.build(load_mission(edited))) == described(trees.build(load_mission(original)))  # node for node, parameters too
+    assert described(mission_tree.build(load_mission(edited))) == described(
+        mission_tree.build(load_mission(original))
+    )  # node for node, parameters too
     assert all("SpeedWithin" in w and "tolerance_" in w for w in warnings), warnings  # what cannot be read back is said (defaults here)
 
 

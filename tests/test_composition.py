@@ -10,12 +10,12 @@ import pytest
 import yaml
 from py_trees.common import ParallelPolicy, Status
 
-import trees
+from executive import mission_tree
+from executive.admission import load_mission_text
 from executive.behaviours import EkfOk, FailsafeNote, Sample, SetMode, Timeout
 from executive.cli import main
 from executive.mission.errors import MissionError
-from executive.mission.loader import load_mission_text
-from executive.mission.schema import mission_json_schema
+from executive.mission_schema import mission_json_schema
 from executive.testing import Harness
 
 HEAD = "version: 1\nname: m\nvehicle: rover\nauto_arm: true\nwaypoints: [{lat: 47.397742, lon: 8.545594}]\ntree:\n"  # the tree on line 7
@@ -133,7 +133,7 @@ def test_a_good_tree_is_built_from_the_catalogue_s_classes_with_the_mission_s_va
     - {node: go_to, method: reposition}
 """
     mission = load(tree)
-    root = trees.build(mission)
+    root = mission_tree.build(mission)
     assert (root.name, type(root).__name__, root.hold_mode) == ("Mission", "UnlessPaused", "HOLD")  # the rover's hold, from the mission
     run = root.children[0]
     parallel, ekf, note, go = run.children
@@ -149,7 +149,7 @@ def test_a_good_tree_is_built_from_the_catalogue_s_classes_with_the_mission_s_va
 
 def test_a_composed_tree_runs_tick_by_tick_like_any_other(harness, vehicle) -> None:
     mission = load("  {node: sequence, children: [{node: wait_until, limit_s: 5, child: link_alive}, {node: set_mode, mode: HOLD}]}\n")
-    h = harness(trees.build(mission))
+    h = harness(mission_tree.build(mission))
     assert h.tick() == Status.RUNNING
     vehicle.set(link__up=True)
     assert h.tick() == Status.RUNNING
@@ -157,7 +157,7 @@ def test_a_composed_tree_runs_tick_by_tick_like_any_other(harness, vehicle) -> N
 
 
 def test_the_schema_completes_a_composed_tree_and_refuses_what_the_loader_refuses() -> None:
-    from tests.mission.test_schema import violations
+    from tests.test_mission_schema import violations
 
     schema = mission_json_schema()
     good = yaml.safe_load(HEAD + "  {use: mission_root, steps: [{use: preflight}, {node: go_to, look_ahead: true}, armed]}\n")

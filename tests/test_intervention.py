@@ -10,7 +10,7 @@ from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.testing import AUTOPILOT, GCS, RuntimeOnLink
-from trees._parts import mission_root
+from executive.trees.parts import mission_root
 
 MANUAL, HOLD, LOITER, GUIDED = "MANUAL", "HOLD", "LOITER", "GUIDED"
 

@@ -25,7 +25,7 @@ from executive.mode_cause import ModeChange, autopilot_cause
 from executive.sim.faults import Fault, FaultInjector, LinkLoss
 from executive.sim.firmware import FirmwareSim
 from executive.testing import Lockstep
-from trees._parts import guarded, mission_root, preflight, standard_guards
+from executive.trees.parts import failsafe_guarded, mission_root, preflight, standard_guards
 
 PERSON = None  # autopilot_cause's answer for a person's change
 
@@ -135,7 +135,7 @@ def simulate(
     limit_s: float = 120.0,
 ) -> tuple[Lockstep, Changes]:
     """``work`` guarded after the pre-flight, on the simulated ``autopilot``, until ``until(sim)``."""
-    root = mission_root(mission, preflight(mission), guarded(work, standard_guards(mission), mission, name="Work"))
+    root = mission_root(mission, preflight(mission), failsafe_guarded(work, standard_guards(mission), mission, name="Work"))
     sim = Lockstep(mission, root=root, autopilot=autopilot, injector=lambda _, clock: GroundStation(clock, faults or [], action))
     _OPEN.append(sim)
     changes = Changes()

@@ -13,9 +13,9 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from executive import blackboard, plugins
+from executive import admission, blackboard, trees
 from executive.behaviours.base import ExecutiveBehaviour
-from executive.catalogue import Catalogue, catalogue
+from executive.catalogue import Catalogue, catalogue, load_behaviours
 from executive.cli import main
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
@@ -71,13 +71,12 @@ TREE = '''
 
     from executive.behaviours import ForEachLeg, SetMode
     from rangerplugin.guards import CountLeg, EnoughSatellites
-    from trees._parts import guarded, mission_root, preflight, safe_mode, standard_guards
-    from trees.waypoints import leg
+    from executive.trees.parts import failsafe_guarded, guided_leg, mission_root, preflight, safe_mode, standard_guards
 
 
     def build(mission):
-        counted = py_trees.composites.Sequence("Counted leg", memory=True, children=[leg(mission), CountLeg()])
-        route = guarded(ForEachLeg(counted), [*standard_guards(mission), EnoughSatellites(6)], mission)
+        counted = py_trees.composites.Sequence("Counted leg", memory=True, children=[guided_leg(mission), CountLeg()])
+        route = failsafe_guarded(ForEachLeg(counted), [*standard_guards(mission), EnoughSatellites(6)], mission)
         return mission_root(mission, preflight(mission), route, SetMode(safe_mode(mission), name="Hold at the end"))
 '''
 
@@ -155,11 +154,11 @@ def mission_file(tmp_path: Path, tree: str) -> str:
 
 
 def test_an_installed_package_adds_a_tree_and_a_behaviour(ranger: Path) -> None:
-    assert "ranger" in plugins.load_trees() and "waypoints" in plugins.load_trees()
-    assert [cls.__name__ for cls in plugins.load_behaviours()] == ["EnoughSatellites"]
-    assert plugins.resolve_tree("ranger") is sys.modules["rangerplugin.trees"].build
-    assert plugins.problems() == []
-    spec = Catalogue.build(plugins.load_behaviours()).get("enough_satellites")  # the node catalogue has it, as it has ours
+    assert "ranger" in trees.load_all() and "waypoints" in trees.load_all()
+    assert [cls.__name__ for cls in load_behaviours()] == ["EnoughSatellites"]
+    assert trees.resolve("ranger") is sys.modules["rangerplugin.trees"].build
+    assert admission.plugin_problems() == []
+    spec = Catalogue.build(load_behaviours()).get("enough_satellites")  # the node catalogue has it, as it has ours
     assert (
         spec is not None
         and spec.kind == "guard"
@@ -234,7 +233,7 @@ def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Pa
         "executive: validate: plugin 'thing' (executive.behaviours = brokenplugin.things:VALUE, from brokenplugin 1.0): "
         "3 is not a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)",
         "executive: validate: plugin 'sonde' (executive.instruments = brokenplugin.things:VALUE, from brokenplugin 1.0): "
-        "3 is not an instrument (subclass executive.io.sampler.InstrumentSampler)",
+        "3 is not an instrument (subclass executive.instruments.sampler.InstrumentSampler)",
     ]
     assert main(["validate", mission_file(tmp_path, "waypoints")]) == 2  # a mission that does not use it: still said, once
     assert len(capsys.readouterr().err.splitlines()) == 3

@@ -1,25 +1,46 @@
-"""Tree builders, one module per mission kind; a mission file names its module in ``tree:``.
+"""Tree builders, one module per mission kind (installed as ``executive.trees``); a mission file names its tree in ``tree:``.
 
-Each module exposes ``build(mission: Mission) -> py_trees.behaviour.Behaviour``. A mission may
-also name a plugin's tree or ``module:function`` on the Python path (:mod:`executive.plugins`).
+Each tree module exposes ``build(mission: Mission) -> py_trees.behaviour.Behaviour`` and is listed in
+the registry's table of built-in trees (:data:`executive.registry.BUILT_IN`); :mod:`.parts` holds the
+subtrees they share. A mission may also name a plugin's tree (entry-point group ``executive.trees``)
+or ``module:function`` on the Python path: :func:`resolve` finds each.
 """
 
 from __future__ import annotations
 
-import pkgutil
+from collections.abc import Callable
+from importlib.metadata import EntryPoint
 from typing import TYPE_CHECKING, Literal
 
-if TYPE_CHECKING:
-    from collections.abc import Callable
+from executive import registry
 
+if TYPE_CHECKING:
     import py_trees
 
     from executive.mission.model import Mission
 
+    TreeBuilder = Callable[[Mission], py_trees.behaviour.Behaviour]
+
+
+#: The shared subtrees a tree composed in a mission file may use, by the name of their function in :mod:`.parts`.
+SUBTREES: dict[str, Literal["decorator", "subtree"]] = {
+    "preflight": "subtree",
+    "wait_for_ekf": "subtree",
+    "within_reach": "subtree",
+    "checked": "subtree",
+    "mission_root": "subtree",
+    "guided_leg": "subtree",
+    "failsafe_guarded": "decorator",
+}
+
+
+class UnknownTree(LookupError):
+    """A tree name that is neither built in, nor a plugin's, nor ``module:function``."""
+
 
 def available() -> list[str]:
-    """Names of the tree modules a mission may select."""
-    return sorted(m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_"))
+    """Names of the built-in trees a mission may select."""
+    return registry.built_in(registry.TREES)
 
 
 def subtrees() -> list[tuple[str, Literal["decorator", "subtree"], Callable[..., py_trees.behaviour.Behaviour]]]:
@@ -27,25 +48,44 @@ def subtrees() -> list[tuple[str, Literal["decorator", "subtree"], Callable[...,
 
     ``use: preflight``; ``failsafe_guarded`` decorates the work it guards.
     """
-    from trees import _parts, waypoints
+    from executive.trees import parts
 
-    return [
-        ("preflight", "subtree", _parts.preflight),
-        ("wait_for_ekf", "subtree", _parts.wait_for_ekf),
-        ("within_reach", "subtree", _parts.within_reach),
-        ("checked", "subtree", _parts.checked),
-        ("mission_root", "subtree", _parts.mission_root),
-        ("guided_leg", "subtree", waypoints.leg),
-        ("failsafe_guarded", "decorator", _parts.guarded),
-    ]
+    return [(name, kind, getattr(parts, name)) for name, kind in SUBTREES.items()]
 
 
-def build(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """The root behaviour of the tree the mission selects (built in, a plugin's, or ``module:function``)."""
-    if not isinstance(mission.tree, str):
-        from executive import composition
+def _checked(plugin: str, found: object) -> TreeBuilder:
+    if not callable(found) or isinstance(found, type):
+        raise registry.PluginError(plugin, f"{found!r} is not a function build(mission) -> Behaviour")
+    return found
 
-        return composition.build(mission)
-    from executive.plugins import resolve_tree  # it lists this package's trees
 
-    return resolve_tree(mission.tree)(mission)
+def _built_in(name: str) -> TreeBuilder:
+    builder: TreeBuilder = registry.load_built_in(registry.TREES, name)
+    return builder
+
+
+def plugin_tree(point: EntryPoint) -> TreeBuilder:
+    """The builder an ``executive.trees`` entry point names; PluginError if it cannot be loaded, is no function or takes a built-in name."""
+    if point.name in available():
+        raise registry.PluginError(registry.describe(point), f"a built-in tree is named {point.name!r}")
+    return _checked(registry.describe(point), registry.load(point))
+
+
+def resolve(name: str) -> TreeBuilder:
+    """The builder of a tree: built in, a plugin's (``executive.trees``), or ``module:function`` on the path.
+
+    Raises UnknownTree for a name that is none of these, PluginError for one that cannot be loaded.
+    """
+    if ":" in name or "." in name:
+        return _checked(repr(name), registry.load_object(name, "build"))
+    if name in available():
+        return _built_in(name)
+    points = registry.named(registry.TREES)
+    if name not in points:
+        raise UnknownTree(f"unknown tree {name!r} (available: {', '.join(sorted({*available(), *points})) or 'none'}; or module:function)")
+    return plugin_tree(points[name])
+
+
+def load_all() -> dict[str, TreeBuilder]:
+    """Every named tree: the built-in ones and the plugins'; PluginError for the first plugin that cannot be loaded or takes a built-in name."""
+    return {name: _built_in(name) for name in available()} | {name: plugin_tree(point) for name, point in registry.named(registry.TREES).items()}

@@ -48,8 +48,8 @@ from executive.behaviours import (
     Surface,
 )
 from executive.mission.model import Mission
+from executive.trees.parts import failsafe_guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
 from executive.vehicles import PROFILES
-from trees._parts import guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
 
 
 def acceptance(mission: Mission) -> py_trees.behaviour.Behaviour:
@@ -90,5 +90,5 @@ def leg(mission: Mission) -> py_trees.behaviour.Behaviour:
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     """The tree for a ``tree: auv_survey`` mission."""
-    survey = guarded(ForEachLeg(leg(mission)), survey_guards(mission), mission, name="Guarded survey")
+    survey = failsafe_guarded(ForEachLeg(leg(mission)), survey_guards(mission), mission, name="Guarded survey")
     return mission_root(mission, acceptance(mission), preflight(mission), survey, Surface(), SetMode(safe_mode(mission), name="Hold at the surface"))

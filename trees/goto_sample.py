@@ -56,9 +56,10 @@ from executive.behaviours import (
     rc_auto_mode,
 )
 from executive.behaviours.failsafe import FailsafeNote
-from executive.mission.model import Mission, SamplingOptions, failsafe_policy
+from executive.mission.model import Mission, SamplingOptions
+from executive.mission.rules import failsafe_policy
+from executive.trees.parts import ARM_RETRY_S, checked, failsafe_guarded, mission_root, preflight, safe_mode, within_reach
 from executive.vehicles import PROFILES
-from trees._parts import ARM_RETRY_S, checked, guarded, mission_root, preflight, safe_mode, within_reach
 
 
 def _sample_hold_mode(mission: Mission) -> str:
@@ -127,7 +128,7 @@ def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     """The tree for a ``tree: goto_sample`` mission."""
     ekf_loss = failsafe_policy(mission)["ekf_loss"]
     seed_ekf_rule = (ekf_loss.reaction, ekf_loss.recovery) == ("disarm", "resume")
-    path = guarded(ForEachLeg(point(mission)), [LinkAlive(), Armed(), *([] if seed_ekf_rule else [EkfOk()])], mission, name="Guarded path")
+    path = failsafe_guarded(ForEachLeg(point(mission)), [LinkAlive(), Armed(), *([] if seed_ekf_rule else [EkfOk()])], mission, name="Guarded path")
     leave = failsafe_policy(mission)["rc_takeover"].recovery == "abort"
     rc = checked(rc_auto_mode(mission.rc, "RC in auto? (else leave)" if leave else "RC in auto?"), mission)
     goto = py_trees.composites.Sequence("Go-to", memory=False, children=[rc, *([ekf_or_wait_in_manual(mission)] if seed_ekf_rule else []), path])

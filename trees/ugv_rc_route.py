@@ -40,7 +40,7 @@ from executive.behaviours import (
     SetMode,
 )
 from executive.mission.model import Mission, RcRouteOptions
-from trees._parts import guarded, mission_root, mode_switch_clear, safe_mode, wait_for_ekf
+from executive.trees.parts import failsafe_guarded, mission_root, mode_switch_clear, safe_mode, wait_for_ekf
 
 
 def operator_and_route(mission: Mission) -> py_trees.behaviour.Behaviour:
@@ -61,5 +61,5 @@ def operator_and_route(mission: Mission) -> py_trees.behaviour.Behaviour:
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     """The tree for a ``tree: ugv_rc_route`` mission."""
-    route = guarded(operator_and_route(mission), [LinkAlive(), RcFresh()], mission, name="RC route")
+    route = failsafe_guarded(operator_and_route(mission), [LinkAlive(), RcFresh()], mission, name="RC route")
     return mission_root(mission, wait_for_ekf(mission), *mode_switch_clear(mission), route, SetMode(safe_mode(mission), name="Hold at the end"))

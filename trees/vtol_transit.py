@@ -50,8 +50,8 @@ from py_trees.common import OneShotPolicy
 from executive import frames
 from executive.behaviours import ForEachLeg, GoTo, GoToLocal, Land, ParameterIs, SetMode, TakeOff, VtolTransition
 from executive.mission.model import Mission, VtolOptions
+from executive.trees.parts import failsafe_guarded, mission_root, preflight, standard_guards
 from executive.vehicles import PROFILES
-from trees._parts import guarded, mission_root, preflight, standard_guards
 
 #: How close to the hover point (3-D) counts as there: a multicopter stops on a point.
 HOVER_ACCEPTANCE_M = 2.0
@@ -115,6 +115,6 @@ def firmware_check(options: VtolOptions) -> py_trees.behaviour.Behaviour | None:
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:
     """The tree for a ``tree: vtol_transit`` mission."""
     options = mission.vtol or VtolOptions()
-    work = guarded(flight(mission, options), standard_guards(mission), mission, name="Guarded flight")
+    work = failsafe_guarded(flight(mission, options), standard_guards(mission), mission, name="Guarded flight")
     check = firmware_check(options)
     return mission_root(mission, *([check] if check else []), preflight(mission), work, land(mission, options))

@@ -4,7 +4,7 @@ Every guard stands for a condition of the mission's ``failsafe:`` policy (:data:
 :class:`~executive.behaviours.guards.LinkAlive` failing is ``link_loss``...); a guard standing for
 none (a speed or depth limit) holds the vehicle and resumes, within ``limits.recovery_timeout_s``.
 
-:class:`Failsafe` stands behind the guarded work in a reactive selector (``trees._parts.guarded``):
+:class:`Failsafe` stands behind the guarded work in a reactive selector (``executive.trees.parts.failsafe_guarded``):
 the guards are ticked every tick before the work, so the tick in which a condition becomes true on
 the blackboard (the readers write it before the tree ticks) is the tick in which the route fails
 and the failsafe runs; it asks the autopilot for the reaction there and then, and the runtime
@@ -57,8 +57,8 @@ from executive.behaviours.guards import (
     RcNotTakingOver,
 )
 from executive.behaviours.reacting import READS, Reacting
+from executive.mission.failsafes import REACTION_MODES, FailsafeCondition, FailsafePolicy
 from executive.mission.lifecycle import MissionState
-from executive.mission.model import REACTION_MODES, FailsafeCondition, FailsafePolicy
 from executive.vehicles import PROFILES
 
 log = logging.getLogger(__name__)

@@ -8,7 +8,7 @@ from py_trees.common import Status
 
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
-from executive.io.sampler import Sampler
+from executive.instruments.sampler import Sampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Waypoint
 from executive.state import GlobalPosition, SamplerState, SamplerStatus

@@ -92,8 +92,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"executive: {args.command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:
-        plugins = sys.modules.get("executive.plugins")  # loaded if it raised: not imported here, ctl starts fast
-        if plugins is not None and isinstance(exc, plugins.PluginError):
+        registry = sys.modules.get("executive.registry")  # loaded if it raised: not imported here, ctl starts fast
+        if registry is not None and isinstance(exc, registry.PluginError):
             print(f"executive: {args.command}: {exc}", file=sys.stderr)  # an installed plugin that cannot be loaded
             return EXIT_BAD_INPUT
         # a bug: its traceback, and an exit a service manager tells from a mission that ended badly (1)

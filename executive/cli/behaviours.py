@@ -26,7 +26,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 def run(args: argparse.Namespace) -> int:
     """Print the catalogue (or the nodes named); exit 2 naming a node that does not exist, or a plugin that cannot be loaded."""
-    from executive.plugins import PluginError
+    from executive.registry import PluginError
 
     try:
         found = catalogue()

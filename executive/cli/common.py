@@ -5,11 +5,11 @@ from __future__ import annotations
 import sys
 from typing import TYPE_CHECKING
 
+from executive.admission import load_mission
 from executive.cli import BadInput, number
 from executive.clock import Clock
 from executive.io.mavlink.link import load_signing_key
 from executive.mission.errors import MissionError
-from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 
 if TYPE_CHECKING:

@@ -16,12 +16,12 @@ from typing import Any
 
 import yaml
 
-from executive import btcpp
+from executive import btcpp, recompose
+from executive.admission import load_mission_text
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report, print_errors
 from executive.mission.errors import MissionError, format_path
 from executive.mission.errors import Path as MissionPath
-from executive.mission.loader import load_mission_text
 from executive.mission.plan_files import WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
 
 KINDS = ("rover", "boat", "sub", "vtol")
@@ -86,7 +86,7 @@ def run_export(args: argparse.Namespace) -> int:
     if mission is None:
         return EXIT_BAD_INPUT
     if fmt == "btcpp":
-        text, warnings = btcpp.export_tree(args.mission, mission, _catalogue())
+        text, warnings = recompose.export_tree(args.mission, mission, _catalogue())
         for where, why in warnings:
             print(f"{args.mission}: tree {mission.tree}: {where}: {why} (warning)", file=sys.stderr)
         return EXIT_OK if _write(args.output, text, "export") else EXIT_BAD_INPUT

@@ -327,8 +327,8 @@ def _plugs(
 
 def _open_instrument(mission: Mission, *, simulator: bool) -> None:
     """Before anything moves: the mission's instrument answers (NoVehicle); whether its samples can be real here is check_run's."""
-    from executive.io.instruments import open_sampler
-    from executive.io.sampler import InstrumentError
+    from executive.instruments.backends import open_sampler
+    from executive.instruments.sampler import InstrumentError
 
     try:
         sampler = open_sampler(mission, ScaledClock(), simulator=simulator)

@@ -2,10 +2,11 @@
 
 ``executive run`` and ``run --wait`` call :func:`check_run` first thing; ``executive service install``
 calls it on the very command line its unit will run (so a service is never installed to fail at
-boot with exit 2, which its ``RestartPreventExitStatus`` would then never retry); a running
-executive checks each mission ``ctl upload`` brings with the mission part of it
-(:func:`executive.admission.refusals`). A refusal is :class:`~executive.cli.BadInput` (exit 2)
-naming the option or the mission field and why. What only the moment of starting can tell (an
+boot with exit 2, which its ``RestartPreventExitStatus`` would then never retry); ``executive
+validate`` calls the mission's part of it (:func:`check_mission`: :func:`executive.admission.refusals`
+and the mission's simulator event file), and a running executive checks each mission ``ctl upload``
+brings with :func:`executive.admission.refusals`. A refusal is :class:`~executive.cli.BadInput`
+(exit 2) naming the option or the mission field and why. What only the moment of starting can tell (an
 instrument that does not open, a control socket another executive serves, a port in use) is
 ``run``'s alone.
 """
@@ -38,16 +39,38 @@ class Checked:
     notes: tuple[str, ...] = ()  # said on stderr before the run starts
 
 
+def mission_events(mission_file: str, mission: Mission) -> list[str]:
+    """The mission's simulator event file, relative to the mission file (none when it names none)."""
+    if mission.simulator and mission.simulator.events:
+        return [str(Path(mission_file).parent / mission.simulator.events)]
+    return []
+
+
 def event_files(args: argparse.Namespace, mission: Mission) -> list[str]:
     """The mission's simulator event file (relative to the mission file) and --faults, in that order (none with --mavlink)."""
     if args.mavlink:
         return []
-    files = []
-    if mission.simulator and mission.simulator.events:
-        files.append(str(Path(args.mission).parent / mission.simulator.events))
-    if args.faults:
-        files.append(args.faults)
-    return files
+    return mission_events(args.mission, mission) + ([args.faults] if args.faults else [])
+
+
+def refusal(mission: Mission, *, autopilot: str | None, simulator: bool) -> str | None:
+    """The first reason ``mission`` cannot run with ``--autopilot`` ``autopilot`` on the built-in ``simulator`` or a real vehicle."""
+    said_as = f"--autopilot {autopilot}" if autopilot else None
+    refused = admission.refusals(mission, autopilot=autopilot, simulator=simulator, autopilot_said_as=said_as)
+    return refused[0] if refused else None
+
+
+def check_mission(mission_file: str, mission: Mission, *, autopilot: str | None, simulator: bool) -> None:
+    """What ``run`` refuses of the mission itself, with ``--autopilot`` ``autopilot``, on the built-in ``simulator`` (else ``--mavlink``).
+
+    BadInput with the first refusal (:func:`executive.admission.refusals`); MissionError with every
+    located error of the mission's simulator event file (read with the simulator only). The same
+    checks and words as :func:`check_run`'s.
+    """
+    if (why := refusal(mission, autopilot=autopilot, simulator=simulator)) is not None:
+        raise BadInput(why)
+    if simulator:
+        _read_faults(mission_events(mission_file, mission), mission.vehicle)
 
 
 def speedup_refusal(rate_hz: float, speedup: float) -> str | None:
@@ -74,10 +97,8 @@ def check_run(args: argparse.Namespace, mission: Mission) -> Checked:
     if args.resume and not args.journal:
         raise BadInput("--resume needs --journal DB")
     simulator = not args.mavlink
-    said_as = f"--autopilot {args.autopilot}" if args.autopilot else None
-    refused = admission.refusals(mission, autopilot=args.autopilot, simulator=simulator, autopilot_said_as=said_as)
-    if refused:
-        raise BadInput(refused[0])
+    if (why := refusal(mission, autopilot=args.autopilot, simulator=simulator)) is not None:
+        raise BadInput(why)
     notes = []
     if args.mavlink and args.speedup != 1.0:
         # a SITL at --speedup 5 drives 5 s in each wall second: ticking on the wall clock, the executive would react five times
@@ -101,17 +122,22 @@ def check_run(args: argparse.Namespace, mission: Mission) -> Checked:
 
 def _load_faults(paths: list[str], vehicle: str) -> tuple[Fault, ...]:
     """Every fault and event of ``paths``; BadInput after printing each located error."""
+    try:
+        return _read_faults(paths, vehicle)
+    except MissionError as exc:
+        print_errors(exc)
+        raise BadInput(f"{len(exc.errors)} error(s) in the simulator's event and fault files (above): nothing was started") from exc
+
+
+def _read_faults(paths: list[str], vehicle: str) -> tuple[Fault, ...]:
+    """Every fault and event of ``paths``; MissionError naming each located error."""
     if not paths:
         return ()
     from executive.sim.faults import load_faults
 
     faults: list[Fault] = []
-    try:
-        for path in paths:
-            faults += load_faults(path, vehicle=vehicle).faults
-    except MissionError as exc:
-        print_errors(exc)
-        raise BadInput(f"{len(exc.errors)} error(s) in the simulator's event and fault files (above): nothing was started") from exc
+    for path in paths:
+        faults += load_faults(path, vehicle=vehicle).faults
     return tuple(faults)
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import py_trees
 
-import trees
+from executive import mission_tree
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report
 from executive.tree_drawing import dot_graph, unicode_tree
@@ -73,7 +73,7 @@ def main(args: argparse.Namespace) -> int:
         print(f"executive: show: --format {fmt} needs -o FILE", file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
-        out = render(trees.build(mission), fmt, mission.name)
+        out = render(mission_tree.build(mission), fmt, mission.name)
     except FileNotFoundError as exc:  # a picture this machine cannot draw: a usage to change (exit 2), not a mission that failed (1)
         asked = f"--format {fmt}" if args.format else f"-o {args.output} ({fmt}, from its suffix)"
         print(f"executive: show: {asked}: {exc}", file=sys.stderr)

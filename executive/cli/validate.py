@@ -1,7 +1,11 @@
 """``executive validate MISSION...``: check mission files without running them; a directory stands for its ``*.yaml`` files.
 
-The installed plugins (trees and behaviours) are checked too: one that cannot be loaded is named
-with its error (at the ``tree:`` line of a mission that uses it), and the exit is 2.
+A file is refused as ``executive run`` would refuse it, in the same words: the file itself and
+its tree, instrument and plugins (:func:`executive.admission.load_mission`), then what run refuses
+of the mission on the built-in simulator (``--real-vehicle``: as with ``run --mavlink``) and, with
+``--autopilot``, that firmware (:func:`executive.cli.run_checks.check_mission`). The installed
+plugins (trees, behaviours, instruments) are checked too: one that cannot be loaded is named with
+its error (at the ``tree:`` line of a mission that uses it), and the exit is 2.
 """
 
 from __future__ import annotations
@@ -14,10 +18,10 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from executive import plugins
-from executive.cli import EXIT_BAD_INPUT, EXIT_OK
+from executive.admission import load_mission, plugin_problems
+from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput
+from executive.cli.run_checks import check_mission
 from executive.mission.errors import FieldError, MissionError
-from executive.mission.loader import load_mission
 from executive.mission.model import tree_name
 
 
@@ -28,6 +32,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     parser.add_argument("missions", nargs="+", metavar="MISSION", help="mission file (YAML), or a directory: every *.yaml in it, by name")
     parser.add_argument("--json", action="store_true", help="print a JSON list of results on stdout instead")
+    parser.add_argument(
+        "--autopilot", choices=("ardupilot", "px4"), help="check the missions against this autopilot firmware, as `run --autopilot` does"
+    )
+    parser.add_argument(
+        "--real-vehicle",
+        action="store_true",
+        help="check the missions as `run --mavlink` does (a real vehicle: samples from a real instrument), not on the built-in simulator",
+    )
     parser.set_defaults(func=run)
 
 
@@ -49,9 +61,9 @@ def run(args: argparse.Namespace) -> int:
             if not args.json:
                 print(empty, file=sys.stderr)
         for path in files:
-            _validate(path, args.json, results)
+            _validate(path, args, results)
     said = " ".join(e["message"] for r in results for e in r.get("errors", ()))
-    for broken in plugins.problems():
+    for broken in plugin_problems():
         if broken.plugin not in said:  # not already named at a mission's tree: line
             results.append({"plugin": broken.plugin, "ok": False, "error": str(broken)})
             if not args.json:
@@ -61,15 +73,21 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK if all(r["ok"] for r in results) else EXIT_BAD_INPUT
 
 
-def _validate(path: str, as_json: bool, results: list[dict[str, Any]]) -> None:
+def _validate(path: str, args: argparse.Namespace, results: list[dict[str, Any]]) -> None:
     try:
         mission = load_mission(path)
+        check_mission(path, mission, autopilot=args.autopilot, simulator=not args.real_vehicle)
     except MissionError as exc:
         results.append({"file": path, "ok": False, "errors": [asdict(e) for e in exc.errors]})
-        if not as_json:
+        if not args.json:
             print("\n".join(map(str, exc.errors)), file=sys.stderr)
+        return
+    except BadInput as exc:  # run's refusal, in its words
+        results.append({"file": path, "ok": False, "refused": str(exc)})
+        if not args.json:
+            print(f"{path}: {exc}", file=sys.stderr)
         return
     tree = tree_name(mission) or "(composed in the file)"
     results.append({"file": path, "ok": True, "waypoints": len(mission.waypoints), "vehicle": mission.vehicle, "tree": tree})
-    if not as_json:
+    if not args.json:
         print(f"{path}: ok ({len(mission.waypoints)} waypoints, vehicle {mission.vehicle}, tree {tree})")

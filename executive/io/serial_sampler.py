@@ -24,7 +24,7 @@ import serial
 from pydantic import BaseModel, ConfigDict, Field
 
 from executive.clock import Clock
-from executive.io.sampler import SENSOR_MODELS, InstrumentError, InstrumentSampler
+from executive.instruments.sampler import SENSOR_MODELS, InstrumentError, InstrumentSampler
 from executive.mission.model import SamplingOptions
 from executive.state import SampleRead
 

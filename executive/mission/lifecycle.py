@@ -42,8 +42,9 @@ from enum import StrEnum
 from executive import blackboard
 from executive.geo import distance
 from executive.mission.errors import format_path
-from executive.mission.model import Home, Mission, Waypoint, cross_field_errors
+from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.route import Route
+from executive.mission.rules import cross_field_errors
 from executive.state import Sample
 
 log = logging.getLogger(__name__)

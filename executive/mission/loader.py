@@ -18,9 +18,9 @@ from typing import Any, Literal, NoReturn, TypeVar, get_args, get_origin
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from executive import plugins
 from executive.mission.errors import FieldError, MissionError, Path, format_path
-from executive.mission.model import Mission, cross_field_errors
+from executive.mission.model import Mission
+from executive.mission.rules import cross_field_errors
 
 MAX_BYTES = 1 << 20  # a mission file is small; refuse anything bigger before parsing
 MAX_ALIASES = 100
@@ -150,30 +150,17 @@ def _merged_pairs(node: yaml.MappingNode) -> Iterator[tuple[yaml.Node, yaml.Node
                     yield from _merged_pairs(merged)
 
 
-def load_mission(path: str | os.PathLike[str]) -> Mission:
-    """Read and validate a mission file; raises :class:`MissionError` listing every problem."""
-    return load_model(path, Mission, _mission_checks)
+def load_mission(path: str | os.PathLike[str], checks: Checks[Mission] = cross_field_errors) -> Mission:
+    """Read and validate a mission file (its schema, then ``checks``: the rules between fields); raises :class:`MissionError` listing every problem.
+
+    Whether it can run here (its tree, plugins, instrument) is :func:`executive.admission.load_mission`'s to check.
+    """
+    return load_model(path, Mission, checks)
 
 
-def load_mission_text(text: str, filename: str) -> Mission:
-    """Validate mission YAML ``text``; ``filename`` is only used to locate errors."""
-    return load_model_text(text, filename, Mission, _mission_checks)
-
-
-def _mission_checks(mission: Mission) -> list[tuple[Path, str]]:
-    errors = cross_field_errors(mission)
-    if not isinstance(mission.tree, str):
-        from executive import composition  # it reads the node catalogue, which reads the behaviours, which read this package
-
-        try:
-            return errors + composition.errors(mission)
-        except plugins.PluginError as exc:
-            return [*errors, (("tree",), str(exc))]
-    try:
-        plugins.resolve_tree(mission.tree)
-    except (plugins.UnknownTree, plugins.PluginError) as exc:
-        errors.append((("tree",), str(exc)))
-    return errors
+def load_mission_text(text: str, filename: str, checks: Checks[Mission] = cross_field_errors) -> Mission:
+    """Validate mission YAML ``text`` as :func:`load_mission` does; ``filename`` is only used to locate errors."""
+    return load_model_text(text, filename, Mission, checks)
 
 
 def load_model(path: str | os.PathLike[str], model: type[M], checks: Checks[M] | None = None, what: str = "mission") -> M:
@@ -370,7 +357,7 @@ def _parse(text: str, filename: str, what: str) -> tuple[dict[str, Any], _Loader
         if loader is not None:
             loader.dispose()
     if not isinstance(data, dict):
-        raise MissionError([_located(filename, root.start_mark, f"({what})", f"expected a mapping of {what} fields, got {_describe(data)}")])
+        raise MissionError([_located(filename, root.start_mark, f"({what})", f"expected a mapping of {what} fields, got {describe_value(data)}")])
     return data, loader
 
 
@@ -391,7 +378,7 @@ def _message(error: dict[str, Any], node: yaml.Node | None, root: type[BaseModel
         hint = f"did you mean {close[0]}? " if close else ""
         return f"unknown field ({hint}allowed: {', '.join(model.model_fields)})"
     if kind in _EXPECTED:
-        return f"expected {_EXPECTED[kind]}, got {_describe(value)}{_yaml11_hint(node, value)}"
+        return f"expected {_EXPECTED[kind]}, got {describe_value(value)}{_yaml11_hint(node, value)}"
     message = error["msg"].removeprefix("Value error, ")
     return message if isinstance(value, list | dict) else f"{_show(value)}: {message}"
 
@@ -429,7 +416,7 @@ def _show(value: Any) -> str:
     return text if len(text) <= 40 else f"{text[:37]}..."
 
 
-def _describe(value: Any) -> str:
+def describe_value(value: Any) -> str:
     """The YAML type and value found, e.g. ``bool true`` or ``a list``."""
     if isinstance(value, list | dict):
         return "a list" if isinstance(value, list) else "a mapping"

@@ -2,60 +2,22 @@
 
 Strict means: no silent coercion (``"5"`` is not a number, ``yes`` is not a float), no unknown
 fields, every value in range. Rules that relate several fields (a waypoint speed inside the
-mission's speed limits, say) are in :func:`cross_field_errors` so that each gets its own
+mission's speed limits, say) are in :func:`executive.mission.rules.cross_field_errors` so that each gets its own
 location in the file.
 
-The ``failsafe:`` section says, per condition, what the executive does when it becomes true during
-the guarded part of a mission: a *reaction* commanded in the same tick, then a *recovery* (resume
-the same leg once the condition clears, within ``timeout_s``, default ``limits.recovery_timeout_s``;
-or abort the mission at once, the vehicle left in the reaction's mode). An entry, or a field of
-one, left out takes the default of the vehicle kind, or of the tree where a seed system has its
-own rule (:func:`failsafe_policy`). Defaults (reaction, recovery):
-
-================  ==============  ==============  =================  ============================
-condition         rover           boat            sub                vtol
-================  ==============  ==============  =================  ============================
-link_loss         hold, resume    loiter, resume  surface, resume    hold, resume
-rc_takeover       wait, resume    wait, resume    wait, resume       wait, resume
-disarmed          wait, resume    wait, resume    wait, resume       wait, resume
-rc_loss           hold, resume    loiter, resume  hold, resume       hold, resume
-ekf_loss          hold, resume    hold, resume    hold, resume       hold, resume
-gps_glitch        hold, resume    hold, resume    hold, resume       hold, resume
-heading_insane    hold, resume    hold, resume    hold, resume       hold, resume
-battery_low       rtl, abort      rtl, abort      surface, abort     rtl, abort
-geofence_breach   hold, abort     rtl, abort      surface, abort     rtl, abort
-================  ==============  ==============  =================  ============================
-
-rc_takeover and disarmed are a person's acts (or the autopilot's own failsafe's): a person always wins, so
-their reaction is ``wait`` (hands off) and nothing else; any other is refused at load
-(:data:`PERSON_CONDITIONS`). Their recovery is the mission's to choose.
-
-Seed rules, the defaults of their trees: ``goto_sample`` (the ASV) ekf_loss disarm, resume (MANUAL,
-disarmed until the EKF recovers, then re-armed) and rc_takeover wait, abort (the RC leaving auto
-ends the go-to); ``auv_survey`` link_loss hold, resume (the survey holds in POSHOLD).
-
-Reactions (:data:`REACTION_MODES`): ``hold`` rover/boat HOLD, sub POSHOLD, vtol QLOITER; ``loiter``
-rover/boat LOITER, sub POSHOLD, vtol QLOITER; ``rtl`` rover/boat RTL, vtol QRTL (no sub); ``surface``
-sub SURFACE only; ``disarm`` the manual mode, then disarm, re-armed on resume (no vtol); ``wait``
-nothing: hands off. A vtol flying as a plane holds, loiters in LOITER and returns in RTL.
-heading_insane is judged on rovers and boats only (the heading filter checks the compass against
-the course over ground, which a sub or a vtol does not follow); geofence_breach only with a
-``geofence:`` section; rc_loss once an RC transmitter has been seen (or, ugv_rc_route, stale RC).
+The ``failsafe:`` section's defaults and reactions are tables of their own: :mod:`executive.mission.failsafes`.
 """
 
 from __future__ import annotations
 
-import math
 import re
-from dataclasses import dataclass
-from typing import Annotated, Any, Literal, get_args
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, model_validator
 
-from executive.geo import distance
-from executive.geofence import Geofence, open_ring, polygon_problems
-from executive.mission.errors import Path
-from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES, AutopilotName
+from executive.geofence import Geofence
+from executive.mission.failsafes import FailsafeReaction, FailsafeRecovery
+from executive.vehicles import AutopilotName
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
 ControlMode = Literal["depth", "altitude"]
@@ -76,7 +38,7 @@ def _tree_value(value: object) -> object:
     return value
 
 
-#: ``tree:``'s JSON schema; ``executive.mission.schema`` puts the node catalogue's in place of the composed tree's.
+#: ``tree:``'s JSON schema; ``executive.mission_schema`` puts the node catalogue's in place of the composed tree's.
 TREE_SCHEMA = {
     "anyOf": [
         {"type": "string", "pattern": TREE_NAME, "description": "a tree by name: built in, a plugin's, or module:function"},
@@ -237,49 +199,6 @@ class RcRouteOptions(BaseModel):
     operator_timeout_s: float = Field(3600.0, gt=0.0, le=86400.0, description="give up if the operator has not started the route by then")
 
 
-FailsafeCondition = Literal[
-    "link_loss", "rc_takeover", "disarmed", "rc_loss", "ekf_loss", "gps_glitch", "heading_insane", "battery_low", "geofence_breach"
-]
-FailsafeReaction = Literal["hold", "loiter", "rtl", "surface", "disarm", "wait"]
-FailsafeRecovery = Literal["resume", "abort"]
-FAILSAFE_CONDITIONS: tuple[str, ...] = get_args(FailsafeCondition)
-
-#: reaction -> vehicle kind -> the mode it commands (a vtol flying as a plane: the second); a kind left out has no such reaction.
-REACTION_MODES: dict[str, dict[str, tuple[str, str]]] = {
-    "hold": {"rover": ("HOLD", "HOLD"), "boat": ("HOLD", "HOLD"), "sub": ("POSHOLD", "POSHOLD"), "vtol": ("QLOITER", "LOITER")},
-    "loiter": {"rover": ("LOITER", "LOITER"), "boat": ("LOITER", "LOITER"), "sub": ("POSHOLD", "POSHOLD"), "vtol": ("QLOITER", "LOITER")},
-    "rtl": {"rover": ("RTL", "RTL"), "boat": ("RTL", "RTL"), "vtol": ("QRTL", "RTL")},
-    "surface": {"sub": ("SURFACE", "SURFACE")},
-    "disarm": {"rover": ("MANUAL", "MANUAL"), "boat": ("MANUAL", "MANUAL"), "sub": ("MANUAL", "MANUAL")},
-}
-_NO_REACTION = {"rtl": "a sub has no RTL: use surface", "surface": "only a sub can surface", "disarm": "disarming a vtol would drop it"}
-#: Conditions that are a person's act: a person always wins, so their only reaction is ``wait`` (hands off); why, for the loader's error.
-PERSON_CONDITIONS: dict[str, str] = {
-    "rc_takeover": "a person who takes over always wins: the executive keeps its hands off (reaction wait), "
-    "it never commands against the take-over switch",
-    "disarmed": "a vehicle disarmed mid-mission was disarmed by a person (or by the autopilot's own failsafe), who always wins: "
-    "the executive keeps its hands off (reaction wait)",
-}
-
-_R, _W, _A = "resume", "wait", "abort"
-_COMMON = {"rc_takeover": (_W, _R), "disarmed": (_W, _R), "ekf_loss": ("hold", _R), "gps_glitch": ("hold", _R), "heading_insane": ("hold", _R)}
-#: The default failsafe policy of each vehicle kind: condition -> (reaction, recovery). The table in the module docstring.
-VEHICLE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
-    "rover": _COMMON | {"link_loss": ("hold", _R), "rc_loss": ("hold", _R), "battery_low": ("rtl", _A), "geofence_breach": ("hold", _A)},
-    "boat": _COMMON | {"link_loss": ("loiter", _R), "rc_loss": ("loiter", _R), "battery_low": ("rtl", _A), "geofence_breach": ("rtl", _A)},
-    "sub": _COMMON | {"link_loss": ("surface", _R), "rc_loss": ("hold", _R), "battery_low": ("surface", _A), "geofence_breach": ("surface", _A)},
-    "vtol": _COMMON | {"link_loss": ("hold", _R), "rc_loss": ("hold", _R), "battery_low": ("rtl", _A), "geofence_breach": ("rtl", _A)},
-}
-#: Seed systems' rules that differ from their vehicle's defaults: the defaults of their trees.
-TREE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
-    "goto_sample": {"ekf_loss": ("disarm", _R), "rc_takeover": (_W, _A)},
-    "auv_survey": {"link_loss": ("hold", _R)},
-    # The operator drives the tracked UGV (MANUAL) or ArduRover does (AUTO), and skidding tracks take the course off the
-    # heading in every turn: a bad compass is flagged and journalled, the vehicle left as it is (a mission may say hold).
-    "ugv_rc_route": {"heading_insane": (_W, _R)},
-}
-
-
 class FailsafeRule(BaseModel):
     """What the executive does when one condition becomes true; a field left out takes the default."""
 
@@ -296,7 +215,7 @@ class FailsafeRule(BaseModel):
 
 
 class FailsafeConfig(BaseModel):
-    """failsafe: one entry per condition (see the table of defaults in executive/mission/model.py)."""
+    """failsafe: one entry per condition (see the table of defaults in executive/mission/failsafes.py)."""
 
     model_config = _STRICT
     link_loss: FailsafeRule | None = Field(None, description="no HEARTBEAT from the autopilot within limits.link_timeout_s")
@@ -308,16 +227,6 @@ class FailsafeConfig(BaseModel):
     heading_insane: FailsafeRule | None = Field(None, description="the heading filter does not trust the compass (/heading/ok false)")
     battery_low: FailsafeRule | None = Field(None, description="the battery below limits.battery_min_pct or limits.battery_min_v")
     geofence_breach: FailsafeRule | None = Field(None, description="the vehicle outside the mission's geofence (only with a geofence: section)")
-
-
-@dataclass(frozen=True)
-class FailsafePolicy:
-    """One condition's policy, every field decided."""
-
-    condition: str
-    reaction: str
-    recovery: str
-    timeout_s: float
 
 
 class Home(BaseModel):
@@ -448,203 +357,3 @@ class Mission(BaseModel):
         if not isinstance(rc, dict) or "arm_channel" in rc or rc.get("source", "mavlink") != "mavlink":
             return data
         return {**data, "rc": {**rc, "arm_channel": 5}}
-
-
-_PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,15}")
-
-#: Tree -> the vehicle kinds it can drive and the options section it reads.
-TREE_RULES: dict[str, tuple[frozenset[str], str | None]] = {
-    "waypoints": (frozenset({"rover", "boat", "sub", "vtol"}), None),
-    "goto_sample": (frozenset({"rover", "boat"}), "sampling"),
-    "auv_survey": (frozenset({"sub"}), None),
-    "vtol_transit": (frozenset({"vtol"}), "vtol"),
-    "ugv_rc_route": (frozenset({"rover"}), "rc_route"),
-}
-
-
-def rc_switch_channels(mission: Mission) -> dict[int, str]:
-    """The RC channels whose positions this mission reads from the autopilot (``rc.source: mavlink``), each with what it is.
-
-    Empty with RC from CAN: then the autopilot's own RC channels are not the mission's switches.
-    """
-    rc = mission.rc
-    if rc.source != "mavlink":
-        return {}
-    if mission.tree == "ugv_rc_route":  # switch C is the person's: the take-over channel is not read
-        c = rc.switch_channels
-        found = {c.knob: "knob VRA", c.swd: "switch D", c.swc: "switch C", c.swb: "switch B", c.swa: "switch A"}
-    else:
-        found = {rc.takeover_channel: "the take-over switch"}
-    if rc.arm_channel is not None:
-        found.setdefault(rc.arm_channel, "the arm switch")
-    return dict(sorted(found.items()))
-
-
-#: Trees that need what only ArduPilot does, and why.
-ARDUPILOT_ONLY_TREES: dict[str, str] = {
-    "ugv_rc_route": "its operator drives it with ArduRover's modes and switches (arming only in MANUAL, switch C to AUTO)",
-}
-
-
-def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
-    """Why ``autopilot`` cannot fly ``mission`` (empty when it can)."""
-    errors = []
-    kinds = AUTOPILOT_VEHICLES[autopilot]
-    if mission.vehicle not in kinds:
-        errors.append(f"{autopilot} drives {', '.join(sorted(kinds))} here, not a {mission.vehicle}")
-    name = tree_name(mission)
-    if autopilot != "ardupilot" and name in ARDUPILOT_ONLY_TREES:
-        errors.append(f"tree {name} needs ArduPilot: {ARDUPILOT_ONLY_TREES[name]}")
-    return errors
-
-
-def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
-    """Rules between fields; each error is the path of the offending value and why."""
-    errors: list[tuple[Path, str]] = []
-    limits = mission.limits
-    name = tree_name(mission)
-    kinds, section = TREE_RULES.get(name or "", (frozenset({mission.vehicle}), None))
-    if mission.vehicle not in kinds:
-        errors.append((("tree",), f"tree {mission.tree} drives {', '.join(sorted(kinds))}, not a {mission.vehicle}"))
-    for other in ("sampling", "vtol", "rc_route") if name is not None else ():  # a composed tree's nodes read what they need
-        if other != section and getattr(mission, other) is not None:
-            errors.append(((other,), f"only used by tree {next(t for t, (_, s) in TREE_RULES.items() if s == other)} (tree is {mission.tree})"))
-    aux_mode = mission.rc_route.aux_mode if mission.rc_route is not None else None
-    if aux_mode is not None and aux_mode.upper() not in PROFILES[mission.vehicle].modes:
-        known = ", ".join(m for m in PROFILES[mission.vehicle].modes if m != "INITIALISING")
-        errors.append((("rc_route", "aux_mode"), f"{aux_mode!r}: not a {mission.vehicle} mode (known: {known})"))
-    if not mission.waypoints and mission.tree != "ugv_rc_route":
-        errors.append((("waypoints",), "at least one waypoint is needed"))
-    if mission.tree == "goto_sample" and not any(wp.sample for wp in mission.waypoints):
-        errors.append((("waypoints",), "goto_sample needs at least one waypoint with sample: true"))
-    if mission.tree != "goto_sample" and name is not None:  # a composed tree: its sample node (executive.composition)
-        errors += [(("waypoints", i, "sample"), "only goto_sample takes samples") for i, wp in enumerate(mission.waypoints) if wp.sample]
-    for i, wp in enumerate(mission.waypoints):
-        here: Path = ("waypoints", i)
-        if wp.speed_m_s is not None and wp.speed_m_s not in limits.speed_m_s:
-            errors.append(((*here, "speed_m_s"), f"{wp.speed_m_s} m/s is outside limits.speed_m_s "
-                           f"[{limits.speed_m_s.min}, {limits.speed_m_s.max}]"))  # fmt: skip
-        sub_fields = ("depth_m", "altitude_m", "control_mode")
-        if mission.vehicle != "sub":
-            for field in sub_fields:
-                if getattr(wp, field) is not None:
-                    errors.append(((*here, field), f"only a sub has {field} (vehicle is {mission.vehicle})"))
-            continue
-        if wp.depth_m is not None and wp.depth_m not in limits.depth_m:
-            errors.append(((*here, "depth_m"), f"{wp.depth_m} m is outside limits.depth_m "
-                           f"[{limits.depth_m.min}, {limits.depth_m.max}]"))  # fmt: skip
-        if wp.altitude_m is not None and wp.altitude_m not in limits.altitude_m:
-            errors.append(((*here, "altitude_m"), f"{wp.altitude_m} m is outside limits.altitude_m "
-                           f"[{limits.altitude_m.min}, {limits.altitude_m.max}]"))  # fmt: skip
-        if wp.control_mode == "altitude" and wp.altitude_m is None:
-            errors.append(((*here, "altitude_m"), "control_mode altitude needs altitude_m"))
-        if wp.control_mode != "altitude" and wp.altitude_m is not None:
-            errors.append(((*here, "altitude_m"), "altitude_m is only used with control_mode altitude"))
-    if mission.home is not None:  # the distance rule, as the vehicle will judge it at start (executive.reach) if it starts at home
-        limit = limits.max_goal_distance_m
-        for i, wp in enumerate(mission.waypoints):
-            if (d := distance(mission.home.lat, mission.home.lon, wp.lat, wp.lon)) > limit:
-                why = f"{d:.0f} m from home, over limits.max_goal_distance_m ({limit:g} m): refused at start with the vehicle at home"
-                errors.append((("waypoints", i), why))
-    if mission.vehicle == "vtol":
-        errors += _vtol_errors(mission)
-    if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":
-        errors.append((("simulator", "q_guided_mode"), "only the simulated vtol (ArduPlane) has Q_GUIDED_MODE"))
-    if mission.simulator is not None:
-        errors += [
-            (("simulator", "params", name), "not a parameter name (capitals, digits and _, at most 16)")
-            for name in mission.simulator.params
-            if not _PARAM_NAME.fullmatch(name)
-        ]
-    if mission.rc.arm_channel is not None and mission.rc.source != "mavlink":
-        errors.append((("rc", "arm_channel"), "an arm switch is read from the autopilot's RC channels (rc.source: mavlink)"))
-    if mission.autopilot is not None:
-        errors += [(("autopilot",), why) for why in autopilot_errors(mission, mission.autopilot)]
-    if mission.geofence is not None:
-        errors += _geofence_errors(mission)
-    if mission.sampling is not None and mission.sampling.instrument is not None:
-        from executive.io.instruments import option_errors  # the back ends (and their plugins) import this module
-
-        errors += option_errors(mission.sampling.instrument, ("sampling", "instrument"))
-    errors += _failsafe_errors(mission)
-    return errors
-
-
-def failsafe_policy(mission: Mission) -> dict[str, FailsafePolicy]:
-    """Every condition's failsafe for this mission: its ``failsafe:`` entry, else the tree's default, else the vehicle kind's."""
-    defaults = VEHICLE_FAILSAFES[mission.vehicle] | TREE_FAILSAFES.get(tree_name(mission) or "", {})
-    policy = {}
-    for condition in FAILSAFE_CONDITIONS:
-        rule: FailsafeRule = getattr(mission.failsafe, condition) or FailsafeRule()
-        reaction, recovery = defaults[condition]
-        timeout_s = rule.timeout_s if rule.timeout_s is not None else mission.limits.recovery_timeout_s
-        policy[condition] = FailsafePolicy(condition, rule.reaction or reaction, rule.recovery or recovery, timeout_s)
-    return policy
-
-
-def _failsafe_errors(mission: Mission) -> list[tuple[Path, str]]:
-    """A person's act is never reacted to; each reaction exists for the vehicle; a time limit only where the mission resumes."""
-    errors: list[tuple[Path, str]] = []
-    policy = failsafe_policy(mission)
-    for condition in FAILSAFE_CONDITIONS:
-        rule: FailsafeRule | None = getattr(mission.failsafe, condition)
-        if rule is None:
-            continue
-        here: Path = ("failsafe", condition)
-        reaction = policy[condition].reaction
-        if reaction != "wait" and condition in PERSON_CONDITIONS:
-            errors.append(((*here, "reaction"), f"{reaction}: {PERSON_CONDITIONS[condition]}"))
-        elif reaction != "wait" and mission.vehicle not in REACTION_MODES[reaction]:
-            errors.append(((*here, "reaction"), f"{reaction}: not for a {mission.vehicle} ({_NO_REACTION[reaction]})"))
-        elif reaction == "disarm" and mission.tree == "ugv_rc_route":
-            errors.append(((*here, "reaction"), "disarm: not in tree ugv_rc_route (the operator arms and disarms with switch D)"))
-        if condition == "geofence_breach" and policy[condition].recovery == "resume" and reaction != "rtl":
-            # a recovery that cannot happen from where the reaction leaves the vehicle: held outside, it stays outside
-            errors.append(
-                (
-                    (*here, "recovery"),
-                    f"resume after {reaction}: a vehicle held outside the fence never comes back in; use reaction rtl, or recovery abort",
-                )
-            )
-        if rule.timeout_s is not None and policy[condition].recovery == "abort":
-            errors.append(((*here, "timeout_s"), "recovery abort ends the mission at once: a time limit is only for resume"))
-    return errors
-
-
-def _vtol_errors(mission: Mission) -> list[tuple[Path, str]]:
-    """A vtol's legs are flown as a plane; its hover point as a multicopter, near home."""
-    errors: list[tuple[Path, str]] = []
-    radius = mission.limits.acceptance_radius_m
-    if radius < VTOL_MIN_ACCEPTANCE_RADIUS_M:
-        default = "" if "acceptance_radius_m" in mission.limits.model_fields_set else " (the default)"
-        errors.append((("limits", "acceptance_radius_m"), f"{radius:g} m{default} is too small for a vtol: it flies its legs as a plane, "
-                       f"circling each point at WP_LOITER_RAD (60 m); use at least {VTOL_MIN_ACCEPTANCE_RADIUS_M:g} m"))  # fmt: skip
-    hover = mission.vtol.hover_enu if mission.vtol is not None else None
-    if hover is not None and math.hypot(hover.east_m, hover.north_m) > VTOL_HOVER_RADIUS_M:
-        errors.append((("vtol", "hover_enu"), f"{math.hypot(hover.east_m, hover.north_m):.0f} m from home, over {VTOL_HOVER_RADIUS_M:g} m: "
-                       "ArduPlane flies a farther GUIDED target as a plane, not on its lift motors"))  # fmt: skip
-    return errors
-
-
-def _geofence_errors(mission: Mission) -> list[tuple[Path, str]]:
-    """The fence is usable, and the home and every waypoint of the mission are inside it."""
-    config = mission.geofence
-    assert config is not None
-    if config.polygon is None and config.max_distance_from_home_m is None:
-        return [(("geofence",), "a geofence needs a polygon, max_distance_from_home_m or both")]
-    if config.polygon is not None:
-        problems = polygon_problems(open_ring([(v.lat, v.lon) for v in config.polygon]))
-        if problems:
-            return [(("geofence", "polygon", i), why) for i, why in problems]
-    fence = config.fence()
-    home = (mission.home.lat, mission.home.lon) if mission.home else None
-    if home is None:  # the distance rule waits for the autopilot's home, at run time
-        fence = Geofence(fence.polygon)
-    points: list[tuple[Path, float, float]] = [(("home",), *home)] if home else []
-    points += [(("waypoints", i), wp.lat, wp.lon) for i, wp in enumerate(mission.waypoints)]
-    errors: list[tuple[Path, str]] = []
-    for path, lat, lon in points:
-        why = fence.why_outside(lat, lon, home)
-        if why:
-            errors.append((path, f"outside the geofence: {why}"))
-    return errors

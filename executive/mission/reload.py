@@ -25,7 +25,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from executive.geo import distance
-from executive.mission.model import Mission, Waypoint, autopilot_errors
+from executive.mission.model import Mission, Waypoint
+from executive.mission.rules import autopilot_errors
 from executive.state import Sample
 
 #: The outcome a journal gives the run of a mission that another replaced (the run of the new one continues it).

@@ -27,13 +27,13 @@ from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 from executive import blackboard
+from executive.admission import load_mission_text
 from executive.clock import Clock
 from executive.io.mavlink.mission_protocol import route_not_on_autopilot
 from executive.mission import reload
 from executive.mission import route as routes
 from executive.mission.errors import MissionError
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
-from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
 from executive.state import CommandStatus, EkfStatus, GlobalPosition
 

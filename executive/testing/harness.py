@@ -137,7 +137,7 @@ class Harness:
         (:data:`BATTERY_FULL`) and its firmware's default mode-switch channel (``/vehicle/params``: MODE_CH 8 on ArduRover,
         FLTMODE_CH 8 on ArduPlane); ``h.vehicle.set(vehicle__battery=None)`` (or ``vehicle__params=None``) for one that has not.
         """
-        import trees
+        from executive import mission_tree
 
         blackboard.reset()
         clock = clock or ManualClock(START_S)
@@ -148,7 +148,7 @@ class Harness:
             state.start()
         commander = Commander(link, clock, PROFILES[mission.vehicle])
         missions = MissionTransfer(link, clock) if transfer else None
-        harness = cls(root if root is not None else trees.build(mission), clock, link, commander, state, transfer=missions, **setup)
+        harness = cls(root if root is not None else mission_tree.build(mission), clock, link, commander, state, transfer=missions, **setup)
         param = harness.autopilot.capabilities.mode_switch_param
         params = {param: mode_switch_channel(mission)} if param else None
         harness.vehicle.set(vehicle__battery=BATTERY_FULL, vehicle__params=params)

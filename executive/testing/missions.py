@@ -5,8 +5,8 @@ from __future__ import annotations
 
 def mission_errors(text: str, filename: str = "m.yaml") -> list[str]:
     """Every located error of a mission text (``FILE:LINE:COL: field: why``; none when it is valid)."""
+    from executive.admission import load_mission_text
     from executive.mission.errors import MissionError
-    from executive.mission.loader import load_mission_text
 
     try:
         load_mission_text(text, filename)

@@ -17,7 +17,8 @@ from executive.io.mavlink.modes import Px4Modes
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import rates_for
 from executive.mission.lifecycle import MissionState
-from executive.mission.model import Mission, autopilot_errors
+from executive.mission.model import Mission
+from executive.mission.rules import autopilot_errors
 from executive.state import GlobalPosition, HomePosition, MissionCurrent, MissionItemReached, MissionTransferStatus, TransferOperation, TransferState
 from executive.testing import AUTOPILOT, Harness, Peer
 

@@ -11,7 +11,8 @@ from executive.autopilot_link.parameters import ParameterWatch
 from executive.clock import ManualClock
 from executive.io.mavlink.dialect import mavlink
 from executive.mission.loader import load_mission
-from executive.mission.model import Mission, rc_switch_channels
+from executive.mission.model import Mission
+from executive.mission.rules import rc_switch_channels
 from executive.testing import EKF_READY, Harness
 
 UGV = Path(__file__).parents[2] / "missions" / "ugv_rc_route.yaml"

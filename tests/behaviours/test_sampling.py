@@ -10,7 +10,7 @@ from py_trees.common import Status
 
 from executive import blackboard
 from executive.behaviours import NothingToSample, RcNotTakingOver, Sample
-from executive.io.sampler import SimulatedSampler
+from executive.instruments.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
 from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus

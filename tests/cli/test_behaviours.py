@@ -50,7 +50,7 @@ def test_a_misspelt_node_gets_the_suggestion_validate_gives(capsys):
 
 def test_a_plugin_that_cannot_be_loaded_is_named_with_exit_2(capsys, monkeypatch):
     from executive.cli import behaviours
-    from executive.plugins import PluginError
+    from executive.registry import PluginError
 
     def broken() -> None:
         raise PluginError("'sea' (executive.behaviours = mypkg.sea:Sea, from mypkg 1.0)", ModuleNotFoundError("No module named 'mypkg.sea'"))

@@ -7,7 +7,7 @@ from pathlib import Path
 import pydot
 import pytest
 
-import trees
+from executive import mission_tree
 from executive.cli import main
 from executive.mission.loader import load_mission
 
@@ -101,7 +101,7 @@ def test_unicode_draws_lines_and_kinds_where_ascii_does_not(capsys):
 def test_dot_keeps_every_node_apart_and_is_named_after_the_mission(capsys, path):
     assert main(["show", str(path), "--format", "dot"]) == 0
     (graph,) = pydot.graph_from_dot_data(capsys.readouterr().out)
-    tree = list(trees.build(load_mission(path)).iterate())
+    tree = list(mission_tree.build(load_mission(path)).iterate())
     nodes = [n for n in graph.get_nodes() if n.get_name() not in ("graph", "node", "edge")]
     assert len(nodes) == len(tree) and len(graph.get_edges()) == len(tree) - 1
     assert sorted(n.get("label").strip('"') for n in nodes) == sorted(n.name for n in tree)

@@ -6,10 +6,12 @@ import re
 
 import pytest
 
-from executive.mission import model
+from executive.mission import failsafes
 from executive.mission.errors import MissionError
+from executive.mission.failsafes import FAILSAFE_CONDITIONS, FailsafePolicy
 from executive.mission.loader import load_mission_text
-from executive.mission.model import FAILSAFE_CONDITIONS, FailsafePolicy, Mission, failsafe_policy
+from executive.mission.model import Mission
+from executive.mission.rules import failsafe_policy
 
 HEAD = "version: 1\nname: m\nvehicle: {vehicle}\ntree: {tree}\n"  # the body starts on line 5
 WP = "waypoints:\n  - {lat: 47.3978, lon: 8.5456}\n"
@@ -37,7 +39,7 @@ _ROW = re.compile(r"^(\w+)\s+(\w+), (\w+)\s+(\w+), (\w+)\s+(\w+), (\w+)\s+(\w+),
 
 def documented_defaults() -> dict[str, dict[str, tuple[str, str]]]:
     table: dict[str, dict[str, tuple[str, str]]] = {kind: {} for kind in ("rover", "boat", "sub", "vtol")}
-    for line in (model.__doc__ or "").splitlines():
+    for line in (failsafes.__doc__ or "").splitlines():
         if m := _ROW.match(line):
             condition, *cells = m.groups()
             for kind, reaction, recovery in zip(table, cells[0::2], cells[1::2], strict=True):
@@ -56,7 +58,7 @@ def test_the_defaults_are_the_documented_table(vehicle: str) -> None:
 
 def test_the_documented_rover_boat_sub_vtol_defaults() -> None:
     """The safe defaults, spelled out: a rover holds, a boat loiters, a sub surfaces on link loss; low battery goes home and ends."""
-    d = model.VEHICLE_FAILSAFES
+    d = failsafes.VEHICLE_FAILSAFES
     assert [d[k]["link_loss"] for k in ("rover", "boat", "sub", "vtol")] == [
         ("hold", "resume"),
         ("loiter", "resume"),
@@ -84,7 +86,7 @@ def test_a_seed_systems_rules_are_its_trees_defaults(vehicle: str, tree: str, se
     body = "sampling: {duration_s: 2}\n" if tree == "goto_sample" else ""
     waypoint = "waypoints:\n  - {lat: 47.3978, lon: 8.5456, sample: true}\n" if tree == "goto_sample" else WP
     mission = load_mission_text(HEAD.format(vehicle=vehicle, tree=tree) + body + waypoint, "m.yaml")
-    assert pairs(mission) == model.VEHICLE_FAILSAFES[vehicle] | seed
+    assert pairs(mission) == failsafes.VEHICLE_FAILSAFES[vehicle] | seed
 
 
 def test_an_entry_overrides_only_what_it_says() -> None:

@@ -13,7 +13,7 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-import trees
+from executive import mission_tree
 from executive.behaviours import Failsafe, SetMode
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import ManualClock
@@ -21,12 +21,13 @@ from executive.geo import destination
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import PX4_MODES
+from executive.mission.failsafes import FailsafePolicy
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import FailsafePolicy, Mission
+from executive.mission.model import Mission
 from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
 from executive.testing import EKF_READY, FakeLink, Harness, ScriptedAutopilot, Vehicle
+from executive.trees.parts import failsafe_guarded, mission_root, standard_guards
 from executive.vehicles import PROFILES
-from trees._parts import guarded, mission_root, standard_guards
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 HOME = (47.397742, 8.545594)
@@ -97,14 +98,14 @@ def work(r: Obeying) -> py_trees.behaviour.Behaviour:
 
 @pytest.fixture
 def rig(clock: ManualClock) -> Callable[..., Obeying]:
-    """``rig(kind, work, **changes)``: ``guarded(work, standard guards, mission)`` for one vehicle kind, on a Harness, obeyed."""
+    """``rig(kind, work, **changes)``: ``failsafe_guarded(work, standard guards, mission)`` for one vehicle kind, on a Harness, obeyed."""
 
     def make(vehicle_kind: str = "rover", work_: py_trees.behaviour.Behaviour | None = None, **changes: Any) -> Obeying:
         mission = make_mission(vehicle_kind, **changes)
         state = MissionState()
         state.upload(mission)
         state.start()
-        root = guarded(work_ or py_trees.behaviours.Running("Work"), standard_guards(mission), mission)
+        root = failsafe_guarded(work_ or py_trees.behaviours.Running("Work"), standard_guards(mission), mission)
         link = FakeLink()
         r = Obeying(Harness(root, clock, link, Commander(link, clock, PROFILES[mission.vehicle]), state))
         r.h.vehicle.set(
@@ -306,7 +307,7 @@ def test_disarm_puts_the_vehicle_in_manual_disarmed_then_re_arms_it_and_the_work
 
 def test_a_disarm_reaction_brings_an_armed_guard_with_it() -> None:
     from executive.behaviours import Armed, LinkAlive, RcFresh
-    from trees._parts import failsafe_guards
+    from executive.trees.parts import failsafe_guards
 
     plain, disarming = make_mission(), make_mission(failsafe={"link_loss": {"reaction": "disarm"}})
     assert not any(isinstance(g, Armed) for g in failsafe_guards(plain, [LinkAlive(), RcFresh()]))
@@ -315,7 +316,7 @@ def test_a_disarm_reaction_brings_an_armed_guard_with_it() -> None:
 
 def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_the_mission(runtime_on_link, vehicle: Vehicle) -> None:
     mission = make_mission()
-    root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
+    root = mission_root(mission, failsafe_guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
     on_link = runtime_on_link(mission, root=root, safe_timeout_s=2.0)
     runtime, rover = on_link.runtime, on_link.autopilot
     runtime.mission_state.start()
@@ -333,7 +334,7 @@ def test_the_runtime_leaves_the_vehicle_in_the_mode_of_the_failsafe_that_ended_t
 
 
 def test_the_asv_ekf_rule_is_journalled_and_another_ekf_policy_replaces_it(clock: ManualClock, vehicle: Vehicle, caplog) -> None:
-    from trees.goto_sample import ekf_or_wait_in_manual
+    from executive.trees.goto_sample import ekf_or_wait_in_manual
 
     caplog.set_level(logging.WARNING, logger="executive")
     sampling = {"tree": "goto_sample", "waypoints": [{"lat": HOME[0] + 0.0002, "lon": HOME[1], "sample": True}]}
@@ -347,9 +348,9 @@ def test_the_asv_ekf_rule_is_journalled_and_another_ekf_policy_replaces_it(clock
     assert caplog.records[-1].getMessage() == (
         "failsafe ekf_loss: EKF has no position estimate (flags 0x81) -> disarm in MANUAL, resume when it recovers (within 30 s)"
     )
-    names = {n.name for n in trees.build(make_mission("boat", **sampling, failsafe={"ekf_loss": {"reaction": "hold"}})).iterate()}
+    names = {n.name for n in mission_tree.build(make_mission("boat", **sampling, failsafe={"ekf_loss": {"reaction": "hold"}})).iterate()}
     assert "EKF ok, else wait in MANUAL" not in names and "EKF ok?" in names  # then the EKF is one of the path's guards
-    assert "EKF ok, else wait in MANUAL" in {n.name for n in trees.build(mission).iterate()}
+    assert "EKF ok, else wait in MANUAL" in {n.name for n in mission_tree.build(mission).iterate()}
 
 
 def test_two_rangefinder_sources_alternating_do_not_flap_the_altitude_failsafe(clock: ManualClock, vehicle: Vehicle, caplog) -> None:
@@ -368,7 +369,7 @@ def test_two_rangefinder_sources_alternating_do_not_flap_the_altitude_failsafe(c
         state.start()
         altitude = AltitudeWithin(Range(min=2.0, max=100.0))
         altitude.hold_after_s, altitude.resume_after_s = hold_after_s, resume_after_s
-        root = guarded(py_trees.behaviours.Running("Survey"), [*standard_guards(mission), altitude], mission)
+        root = failsafe_guarded(py_trees.behaviours.Running("Survey"), [*standard_guards(mission), altitude], mission)
         commander = Commander(link, clock, PROFILES["sub"])
         h = Harness(root, clock, link, commander, state)
         vehicle.set(
@@ -633,7 +634,7 @@ def test_each_step_reaches_the_operator_statustext_status_json_and_line(runtime_
     from executive.status import StatusSource, status_line
 
     mission = make_mission()
-    root = mission_root(mission, guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
+    root = mission_root(mission, failsafe_guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))
     on_link = runtime_on_link(mission, root=root, beat=True)
     on_link.autopilot.refuse.add("HOLD")
     on_link.runtime.mission_state.start()

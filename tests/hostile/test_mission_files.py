@@ -13,6 +13,7 @@ import functools
 import json
 import math
 import re
+import shutil
 import subprocess
 import sys
 from collections.abc import Callable, Iterator
@@ -24,9 +25,9 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from executive.admission import load_mission, load_mission_text  # the file, its tree and instrument: what run and validate read
 from executive.cli import main
 from executive.mission.errors import MissionError
-from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission
 from executive.mission.plan_files import import_file
 from executive.sim.faults import FaultPlan, load_faults
@@ -192,6 +193,7 @@ def test_the_broken_corpus_through_the_command_line(path: Path, capsys: pytest.C
 @pytest.mark.parametrize("seed", [p for p in sorted((ROOT / "missions").glob("*.yaml"))], ids=lambda p: p.stem)
 def test_crlf_and_a_bom_are_accepted(seed: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """A valid mission saved with Windows line endings (and a UTF-8 BOM) validates, and loads to the same mission."""
+    shutil.copytree(seed.parent / "events", tmp_path / "events")  # a simulator event file it names is checked as run checks it
     path = tmp_path / seed.name
     path.write_bytes(b"\xef\xbb\xbf" + seed.read_bytes().replace(b"\n", b"\r\n"))
     assert validate(path, capsys) == (0, [])

@@ -10,7 +10,7 @@ import py_trees
 import pytest
 
 from executive.clock import ManualClock
-from executive.io.sampler import InstrumentError
+from executive.instruments.sampler import InstrumentError
 from executive.io.serial_sampler import SerialOptions, SerialSampler
 from executive.mission.model import SamplingOptions
 from executive.state import SamplerState, SamplerStatus

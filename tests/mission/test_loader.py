@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import trees
+from executive import admission, trees
 from executive.mission import loader
 from executive.mission.errors import FieldError, MissionError, format_path
 from executive.mission.loader import load_mission, load_mission_text
@@ -28,8 +28,9 @@ def errors_of(text: str) -> list[str]:
 
 
 def file_errors(path: Path) -> list[FieldError]:
+    """Every error of a mission file as ``executive validate`` and ``run`` report them: the file, and whether its tree is found."""
     with pytest.raises(MissionError) as info:
-        load_mission(path)
+        admission.load_mission(path)
     return info.value.errors
 
 
@@ -118,26 +119,6 @@ def test_a_waypoint_that_is_not_a_mapping(minimal_yaml: str) -> None:
 def test_model_validator_message_has_no_pydantic_prefix(minimal_yaml: str) -> None:
     assert errors_of(minimal_yaml + "limits:\n  speed_m_s: {min: 5.0, max: 1.0}\n") == [
         "m.yaml:8:14: limits.speed_m_s: min (5.0) is greater than max (1.0)"
-    ]
-
-
-def test_unknown_tree_lists_the_available_ones(minimal_yaml: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(trees, "available", lambda: ["patrol", "survey"])
-    assert errors_of(minimal_yaml) == ["m.yaml:4:7: tree: unknown tree 'waypoints' (available: patrol, survey; or module:function)"]
-
-
-def test_a_defaulted_unknown_tree_is_located_at_the_mission(minimal_yaml: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(trees, "available", lambda: [])
-    unknown = "m.yaml:1:1: tree: unknown tree 'waypoints' (available: none; or module:function)"
-    assert errors_of(minimal_yaml.replace("tree: waypoints\n", "")) == [unknown]
-
-
-def test_cross_field_and_tree_errors_are_reported_together(minimal_yaml: str) -> None:
-    text = minimal_yaml.replace("tree: waypoints", "tree: nope").replace(WAYPOINT, "{lat: 47.0, lon: 8.0, speed_m_s: 9.0, depth_m: 3.0}")
-    assert errors_of(text) == [
-        "m.yaml:4:7: tree: unknown tree 'nope' (available: waypoints; or module:function)",
-        "m.yaml:6:38: waypoints[0].speed_m_s: 9.0 m/s is outside limits.speed_m_s [0.1, 5.0]",
-        "m.yaml:6:52: waypoints[0].depth_m: only a sub has depth_m (vehicle is rover)",
     ]
 
 

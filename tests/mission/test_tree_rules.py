@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-import trees
+from executive import trees
 from executive.testing import mission_errors as errors_of
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from py_trees.common import Status
 
-import trees
+from executive import mission_tree
 from executive.io.mavlink.dialect import mavlink
 from executive.testing import EKF_READY, Harness, ScriptedAutopilot
 
@@ -39,7 +39,7 @@ def test_statuses_by_path_and_the_mission_started(h: Harness) -> None:
 
 
 def test_asked_reads_setpoints_and_other_commands(square_mission) -> None:
-    h = Harness.build(square_mission, root=trees.build(square_mission))
+    h = Harness.build(square_mission, root=mission_tree.build(square_mission))
     h.commander.change_speed(2.5)
     h.commander.goto(47.3977, 8.5456, 0.0)
     h.commander.flush()

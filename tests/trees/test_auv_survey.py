@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 from py_trees.common import Status
 
-import trees
+from executive import mission_tree
 from executive.clock import ManualClock
 from executive.geo import destination, distance
 from executive.io.mavlink.commander import Commander
@@ -154,7 +154,7 @@ class Survey:
         self.clock, self.state, self.vehicle = clock, state, vehicle
         state.upload(mission)
         state.start()
-        self.root = trees.build(mission)
+        self.root = mission_tree.build(mission)
         self.h = harness(self.root)
         vehicle.set(link__up=True, vehicle__ekf=EKF_READY, rc__channels=(1500,) * 8)
         self.sub = ScriptedSub(self.h, mission, start)

@@ -11,12 +11,12 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-import trees
+from executive import mission_tree
 from executive.assembly import build_runtime
 from executive.clock import ManualClock
 from executive.geo import destination, distance_bearing
+from executive.instruments.sampler import SimulatedSampler
 from executive.io.mavlink.commander import Commander
-from executive.io.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
@@ -113,7 +113,7 @@ class Run:
             self.state = MissionState()
             self.state.upload(mission)
             self.sampler = SimulatedSampler(clock, mission.sampling, seed=1)
-            self.tree = py_trees.trees.BehaviourTree(trees.build(mission))
+            self.tree = py_trees.trees.BehaviourTree(mission_tree.build(mission))
             self.tree.setup(clock=clock, autopilot=port_for(self.commander), mission_state=self.state, sampler=self.sampler)
             self.state.start()
         else:

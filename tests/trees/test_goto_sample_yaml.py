@@ -119,9 +119,9 @@ def test_the_yaml_tree_and_the_python_builder_tick_and_command_alike(composed: M
 
 
 def test_the_example_s_tree_is_the_python_builder_s_node_for_node(composed: Mission) -> None:
-    import trees
+    from executive import mission_tree
 
     def shape(node: py_trees.behaviour.Behaviour) -> list[tuple[str, str, Any]]:
         return [(behaviour_path(n), type(n).__name__, getattr(n, "memory", None)) for n in node.iterate()]
 
-    assert shape(trees.build(composed)) == shape(trees.build(composed.model_copy(update={"tree": "goto_sample"})))
+    assert shape(mission_tree.build(composed)) == shape(mission_tree.build(composed.model_copy(update={"tree": "goto_sample"})))

@@ -16,8 +16,7 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-import trees
-from executive import geo
+from executive import geo, mission_tree
 from executive.behaviours.auto_route import MISSION_STATE_COMPLETE
 from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemReached
@@ -716,7 +715,7 @@ def test_an_aux_mode_the_rover_lacks_is_refused_before_anything_runs() -> None:
 
 
 def test_the_example_mission_shows_its_tree() -> None:
-    text = py_trees.display.unicode_tree(trees.build(load_mission(ROOT / "missions/ugv_rc_route.yaml")))
+    text = py_trees.display.unicode_tree(mission_tree.build(load_mission(ROOT / "missions/ugv_rc_route.yaml")))
     for name in ("Switch A: edit the route", "Keep the route on the autopilot", "Switch C: mode", "Switch D: arm", "Drive the route in AUTO"):
         assert name in text
 

@@ -11,8 +11,7 @@ from typing import Any
 import pytest
 from py_trees.common import Status
 
-import trees
-from executive import blackboard
+from executive import blackboard, mission_tree
 from executive.clock import ManualClock
 from executive.frames import global_to_local, local_to_global
 from executive.io.mavlink.commander import Commander
@@ -192,7 +191,7 @@ class Transit:
         self.state, self.vehicle = state, vehicle
         state.upload(mission)
         state.start()
-        self.root = trees.build(mission)
+        self.root = mission_tree.build(mission)
         self.h = harness(self.root)
         vehicle.set(link__up=True, vehicle__ekf=EKF_READY, rc__channels=(1500,) * 8, vehicle__home=HomePosition(*HOME, 584.0, 0.0))
         self.plane = ScriptedQuadPlane(self.h)

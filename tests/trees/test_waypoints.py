@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from py_trees.common import Status
 
-import trees
+from executive import mission_tree
 from executive.geo import destination
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
@@ -23,7 +23,7 @@ def mission_run(harness, vehicle, square_mission, mission_state):
     """The square mission's tree, started, with the autopilot 30 m south of the first corner."""
     first = square_mission.waypoints[0]
     mission_state.start()
-    h = harness(trees.build(square_mission))
+    h = harness(mission_tree.build(square_mission))
     vehicle.set(link__up=True, vehicle__ekf=EKF_READY)
     return ScriptedAutopilot(h, destination(first.lat, first.lon, 180.0, 30.0))
 

@@ -18,7 +18,7 @@ from py_trees.common import Status
 from executive.behaviours import NothingToSample, Sample
 from executive.cli import main
 from executive.clock import ManualClock
-from executive.io.sampler import InstrumentSampler
+from executive.instruments.sampler import InstrumentSampler
 from executive.journal import Journal
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission_text

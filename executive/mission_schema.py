@@ -1,4 +1,4 @@
-"""The JSON schema of the mission file, for editors and other tools.
+"""The JSON schema of the mission file, for editors and other tools: the model's, and for a composed ``tree:`` the node catalogue's.
 
 The shipped copies (``executive/mission/mission.schema.json`` and ``missions/mission.schema.json``)
 are written by ``executive schema -o FILE``; a test fails when they fall behind the model.
@@ -10,16 +10,15 @@ import json
 from pathlib import Path
 from typing import Any
 
+from executive.composition import tree_json_schema
 from executive.mission.model import Mission
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
-SHIPPED = Path(__file__).with_name("mission.schema.json")
+SHIPPED = Path(__file__).parent / "mission" / "mission.schema.json"
 
 
 def mission_json_schema() -> dict[str, Any]:
     """The JSON schema (draft 2020-12) of a mission file, generated from :class:`Mission` and, for a composed ``tree:``, the node catalogue."""
-    from executive.composition import tree_json_schema
-
     schema = Mission.model_json_schema()
     composed, defs = tree_json_schema()
     tree = schema["properties"]["tree"]

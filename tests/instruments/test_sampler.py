@@ -9,7 +9,7 @@ from executive.assembly import build_runtime
 from executive.behaviours import Sample
 from executive.clock import ManualClock
 from executive.geo import destination
-from executive.io.sampler import SENSOR_MODELS, SimulatedSampler
+from executive.instruments.sampler import SENSOR_MODELS, SimulatedSampler
 from executive.mission.model import Mission, SamplingOptions
 from executive.state import GlobalPosition, SamplerState, SamplerStatus
 from executive.testing import ObedientAutopilot

@@ -13,6 +13,7 @@ from executive.behaviours import (
     BatteryAbove,
     EkfOk,
     Failsafe,
+    GoTo,
     GpsNotGlitching,
     Guard,
     HeadingSane,
@@ -23,12 +24,15 @@ from executive.behaviours import (
     RcNotLost,
     RcNotTakingOver,
     ReadingsIn,
+    SetMode,
     UnlessPaused,
     WaitUntil,
     inside_geofence,
 )
 from executive.behaviours.failsafe import condition_of
-from executive.mission.model import FailsafePolicy, Mission, failsafe_policy, rc_switch_channels
+from executive.mission.failsafes import FailsafePolicy
+from executive.mission.model import Mission
+from executive.mission.rules import failsafe_policy, rc_switch_channels
 from executive.vehicles import PROFILES
 
 ARM_RETRY_S = 2.0
@@ -140,7 +144,7 @@ def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for gu
     return Failsafe(guards, failsafe_policy(mission), mission.vehicle, fallback, name=name)
 
 
-def guarded(
+def failsafe_guarded(
     work: py_trees.behaviour.Behaviour, guards: Sequence[Guard], mission: Mission, name: str = "Guarded route"
 ) -> py_trees.behaviour.Behaviour:
     """``work`` under ``guards`` (and :func:`failsafe_guards`), re-checked every tick; when one fails, its failsafe (the mission's policy).
@@ -152,6 +156,21 @@ def guarded(
     guards = failsafe_guards(mission, guards)
     route = py_trees.composites.Sequence(name, memory=False, children=[*guards, work])
     return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, failsafe(guards, mission)])
+
+
+def guided_leg(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """One leg: GUIDED, then drive to the waypoint (through it, toward the next, unless it is the last).
+
+    GUIDED is checked every tick, not only when the leg starts: ArduPilot drops a position target
+    silently outside GUIDED, so a vehicle that left it in a mode of our own asking (a failsafe's
+    LOITER delivered late by a lagging link) would sit out the leg's timeout while the setpoints
+    went nowhere. It is asked for again, and the leg goes on from where the vehicle is. A mode a
+    person set is an intervention: the mission pauses before the tree ticks (executive.intervention).
+    """
+    limits = mission.limits
+    go = GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True)
+    guided = SetMode(PROFILES[mission.vehicle].guided_mode, confirm_by_ack=True)  # moving a tick after the ack, not at the next heartbeat
+    return py_trees.composites.Sequence("Leg", memory=False, children=[guided, go])
 
 
 def checked(guard: Guard, mission: Mission, name: str | None = None) -> py_trees.behaviour.Behaviour:

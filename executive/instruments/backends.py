@@ -1,9 +1,10 @@
 """Which instrument takes a mission's samples: the back ends (built in, and plugins of the ``executive.instruments`` entry-point group).
 
-A back end is an :class:`~executive.io.sampler.InstrumentSampler` subclass, named by the
-mission's ``sampling.instrument.type``: ``simulated`` (made-up readings, the built-in simulator
-only) and ``serial`` (a line-protocol instrument, :mod:`executive.io.serial_sampler`) are built
-in; a package adds one with an entry point, as python-can's interfaces are added::
+A back end is an :class:`~executive.instruments.sampler.InstrumentSampler` subclass, named by the
+mission's ``sampling.instrument.type`` and found through :mod:`executive.registry`: ``simulated``
+(made-up readings, the built-in simulator only) and ``serial`` (a line-protocol instrument,
+:mod:`executive.io.serial_sampler`) are built in; a package adds one with an entry point, as
+python-can's interfaces are added::
 
     [project.entry-points."executive.instruments"]
     mysonde = "mypackage.sonde:SondeSampler"
@@ -15,34 +16,40 @@ absent, never invented.
 
 from __future__ import annotations
 
+from importlib.metadata import EntryPoint
+
 from pydantic import BaseModel, ValidationError
 
-from executive import plugins
+from executive import registry
 from executive.clock import Clock
-from executive.io.sampler import InstrumentError, InstrumentSampler
+from executive.instruments.sampler import InstrumentError, InstrumentSampler
 from executive.mission.errors import Path
 from executive.mission.model import InstrumentConfig, Mission, SamplingOptions
 
-GROUP = plugins.INSTRUMENTS
-BUILT_IN = {"simulated": "executive.io.sampler:SimulatedSampler", "serial": "executive.io.serial_sampler:SerialSampler"}
+GROUP = registry.INSTRUMENTS
 
 
 def known() -> list[str]:
     """Every instrument type: the built-in ones and those plugins add."""
-    return sorted({*BUILT_IN, *plugins.named(GROUP)})
+    return registry.names(GROUP)
+
+
+def plugin_backend(point: EntryPoint) -> type[InstrumentSampler]:
+    """The class an ``executive.instruments`` entry point names; PluginError if it cannot be loaded or is no instrument."""
+    return registry.load_class(point, InstrumentSampler, "an instrument (subclass executive.instruments.sampler.InstrumentSampler)")
 
 
 def backend(kind: str) -> type[InstrumentSampler]:
     """The sampler class of an instrument type; InstrumentError when there is none."""
-    if kind in BUILT_IN:
-        found: type[InstrumentSampler] = plugins.load_object(BUILT_IN[kind], "")
+    if kind in registry.BUILT_IN[GROUP]:
+        found: type[InstrumentSampler] = registry.load_built_in(GROUP, kind)
         return found
-    points = plugins.named(GROUP)
+    points = registry.named(GROUP)
     if kind not in points:
         raise InstrumentError(f"unknown instrument type {kind!r} (known: {', '.join(known())})")
     try:
-        return plugins.load_class(points[kind], InstrumentSampler, "an instrument (subclass executive.io.sampler.InstrumentSampler)")
-    except plugins.PluginError as exc:
+        return plugin_backend(points[kind])
+    except registry.PluginError as exc:
         raise InstrumentError(str(exc)) from exc
 
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import pytest
 from pydantic import BaseModel, ConfigDict
 
-from executive import plugins
+from executive import registry
 from executive.clock import ManualClock
-from executive.io import instruments
-from executive.io.sampler import InstrumentError, InstrumentSampler, SimulatedSampler
+from executive.instruments import backends as instruments
+from executive.instruments.sampler import InstrumentError, InstrumentSampler, SimulatedSampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
@@ -52,12 +52,12 @@ class EntryPoint:
 
 @pytest.fixture
 def sonde_plugin(monkeypatch):
-    monkeypatch.setattr(plugins, "entry_points", lambda group: [EntryPoint()] if group == instruments.GROUP else [])
+    monkeypatch.setattr(registry, "entry_points", lambda group: [EntryPoint()] if group == instruments.GROUP else [])
 
 
 @pytest.fixture(autouse=True)
 def goto_sample_tree(monkeypatch):
-    import trees
+    from executive import trees
 
     monkeypatch.setattr(trees, "available", lambda: ["goto_sample", "waypoints"])
 

@@ -1,0 +1,96 @@
+"""The failsafe policy tables: per condition, the reaction and the recovery of each vehicle kind and seed tree.
+
+The ``failsafe:`` section says, per condition, what the executive does when it becomes true during
+the guarded part of a mission: a *reaction* commanded in the same tick, then a *recovery* (resume
+the same leg once the condition clears, within ``timeout_s``, default ``limits.recovery_timeout_s``;
+or abort the mission at once, the vehicle left in the reaction's mode). An entry, or a field of
+one, left out takes the default of the vehicle kind, or of the tree where a seed system has its
+own rule (:func:`failsafe_policy`). Defaults (reaction, recovery):
+
+================  ==============  ==============  =================  ============================
+condition         rover           boat            sub                vtol
+================  ==============  ==============  =================  ============================
+link_loss         hold, resume    loiter, resume  surface, resume    hold, resume
+rc_takeover       wait, resume    wait, resume    wait, resume       wait, resume
+disarmed          wait, resume    wait, resume    wait, resume       wait, resume
+rc_loss           hold, resume    loiter, resume  hold, resume       hold, resume
+ekf_loss          hold, resume    hold, resume    hold, resume       hold, resume
+gps_glitch        hold, resume    hold, resume    hold, resume       hold, resume
+heading_insane    hold, resume    hold, resume    hold, resume       hold, resume
+battery_low       rtl, abort      rtl, abort      surface, abort     rtl, abort
+geofence_breach   hold, abort     rtl, abort      surface, abort     rtl, abort
+================  ==============  ==============  =================  ============================
+
+rc_takeover and disarmed are a person's acts (or the autopilot's own failsafe's): a person always wins, so
+their reaction is ``wait`` (hands off) and nothing else; any other is refused at load
+(:data:`PERSON_CONDITIONS`). Their recovery is the mission's to choose.
+
+Seed rules, the defaults of their trees: ``goto_sample`` (the ASV) ekf_loss disarm, resume (MANUAL,
+disarmed until the EKF recovers, then re-armed) and rc_takeover wait, abort (the RC leaving auto
+ends the go-to); ``auv_survey`` link_loss hold, resume (the survey holds in POSHOLD).
+
+Reactions (:data:`REACTION_MODES`): ``hold`` rover/boat HOLD, sub POSHOLD, vtol QLOITER; ``loiter``
+rover/boat LOITER, sub POSHOLD, vtol QLOITER; ``rtl`` rover/boat RTL, vtol QRTL (no sub); ``surface``
+sub SURFACE only; ``disarm`` the manual mode, then disarm, re-armed on resume (no vtol); ``wait``
+nothing: hands off. A vtol flying as a plane holds, loiters in LOITER and returns in RTL.
+heading_insane is judged on rovers and boats only (the heading filter checks the compass against
+the course over ground, which a sub or a vtol does not follow); geofence_breach only with a
+``geofence:`` section; rc_loss once an RC transmitter has been seen (or, ugv_rc_route, stale RC).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+FailsafeCondition = Literal[
+    "link_loss", "rc_takeover", "disarmed", "rc_loss", "ekf_loss", "gps_glitch", "heading_insane", "battery_low", "geofence_breach"
+]
+FailsafeReaction = Literal["hold", "loiter", "rtl", "surface", "disarm", "wait"]
+FailsafeRecovery = Literal["resume", "abort"]
+FAILSAFE_CONDITIONS: tuple[str, ...] = get_args(FailsafeCondition)
+
+#: reaction -> vehicle kind -> the mode it commands (a vtol flying as a plane: the second); a kind left out has no such reaction.
+REACTION_MODES: dict[str, dict[str, tuple[str, str]]] = {
+    "hold": {"rover": ("HOLD", "HOLD"), "boat": ("HOLD", "HOLD"), "sub": ("POSHOLD", "POSHOLD"), "vtol": ("QLOITER", "LOITER")},
+    "loiter": {"rover": ("LOITER", "LOITER"), "boat": ("LOITER", "LOITER"), "sub": ("POSHOLD", "POSHOLD"), "vtol": ("QLOITER", "LOITER")},
+    "rtl": {"rover": ("RTL", "RTL"), "boat": ("RTL", "RTL"), "vtol": ("QRTL", "RTL")},
+    "surface": {"sub": ("SURFACE", "SURFACE")},
+    "disarm": {"rover": ("MANUAL", "MANUAL"), "boat": ("MANUAL", "MANUAL"), "sub": ("MANUAL", "MANUAL")},
+}
+NO_REACTION = {"rtl": "a sub has no RTL: use surface", "surface": "only a sub can surface", "disarm": "disarming a vtol would drop it"}
+#: Conditions that are a person's act: a person always wins, so their only reaction is ``wait`` (hands off); why, for the loader's error.
+PERSON_CONDITIONS: dict[str, str] = {
+    "rc_takeover": "a person who takes over always wins: the executive keeps its hands off (reaction wait), "
+    "it never commands against the take-over switch",
+    "disarmed": "a vehicle disarmed mid-mission was disarmed by a person (or by the autopilot's own failsafe), who always wins: "
+    "the executive keeps its hands off (reaction wait)",
+}
+
+_R, _W, _A = "resume", "wait", "abort"
+_COMMON = {"rc_takeover": (_W, _R), "disarmed": (_W, _R), "ekf_loss": ("hold", _R), "gps_glitch": ("hold", _R), "heading_insane": ("hold", _R)}
+#: The default failsafe policy of each vehicle kind: condition -> (reaction, recovery). The table in the module docstring.
+VEHICLE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
+    "rover": _COMMON | {"link_loss": ("hold", _R), "rc_loss": ("hold", _R), "battery_low": ("rtl", _A), "geofence_breach": ("hold", _A)},
+    "boat": _COMMON | {"link_loss": ("loiter", _R), "rc_loss": ("loiter", _R), "battery_low": ("rtl", _A), "geofence_breach": ("rtl", _A)},
+    "sub": _COMMON | {"link_loss": ("surface", _R), "rc_loss": ("hold", _R), "battery_low": ("surface", _A), "geofence_breach": ("surface", _A)},
+    "vtol": _COMMON | {"link_loss": ("hold", _R), "rc_loss": ("hold", _R), "battery_low": ("rtl", _A), "geofence_breach": ("rtl", _A)},
+}
+#: Seed systems' rules that differ from their vehicle's defaults: the defaults of their trees.
+TREE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
+    "goto_sample": {"ekf_loss": ("disarm", _R), "rc_takeover": (_W, _A)},
+    "auv_survey": {"link_loss": ("hold", _R)},
+    # The operator drives the tracked UGV (MANUAL) or ArduRover does (AUTO), and skidding tracks take the course off the
+    # heading in every turn: a bad compass is flagged and journalled, the vehicle left as it is (a mission may say hold).
+    "ugv_rc_route": {"heading_insane": (_W, _R)},
+}
+
+
+@dataclass(frozen=True)
+class FailsafePolicy:
+    """One condition's policy, every field decided."""
+
+    condition: str
+    reaction: str
+    recovery: str
+    timeout_s: float

@@ -1,0 +1,220 @@
+"""The rules between a mission's fields, each error located at the offending value; the failsafe policy a mission gets.
+
+A rule that needs more than the file (its tree found, its instrument's options) is
+:mod:`executive.admission`'s.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from executive.geo import distance
+from executive.geofence import Geofence, open_ring, polygon_problems
+from executive.mission.errors import Path
+from executive.mission.failsafes import (
+    FAILSAFE_CONDITIONS,
+    NO_REACTION,
+    PERSON_CONDITIONS,
+    REACTION_MODES,
+    TREE_FAILSAFES,
+    VEHICLE_FAILSAFES,
+    FailsafePolicy,
+)
+from executive.mission.model import VTOL_HOVER_RADIUS_M, VTOL_MIN_ACCEPTANCE_RADIUS_M, FailsafeRule, Mission, tree_name
+from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES
+
+_PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,15}")
+
+#: Tree -> the vehicle kinds it can drive and the options section it reads.
+TREE_RULES: dict[str, tuple[frozenset[str], str | None]] = {
+    "waypoints": (frozenset({"rover", "boat", "sub", "vtol"}), None),
+    "goto_sample": (frozenset({"rover", "boat"}), "sampling"),
+    "auv_survey": (frozenset({"sub"}), None),
+    "vtol_transit": (frozenset({"vtol"}), "vtol"),
+    "ugv_rc_route": (frozenset({"rover"}), "rc_route"),
+}
+
+
+def rc_switch_channels(mission: Mission) -> dict[int, str]:
+    """The RC channels whose positions this mission reads from the autopilot (``rc.source: mavlink``), each with what it is.
+
+    Empty with RC from CAN: then the autopilot's own RC channels are not the mission's switches.
+    """
+    rc = mission.rc
+    if rc.source != "mavlink":
+        return {}
+    if mission.tree == "ugv_rc_route":  # switch C is the person's: the take-over channel is not read
+        c = rc.switch_channels
+        found = {c.knob: "knob VRA", c.swd: "switch D", c.swc: "switch C", c.swb: "switch B", c.swa: "switch A"}
+    else:
+        found = {rc.takeover_channel: "the take-over switch"}
+    if rc.arm_channel is not None:
+        found.setdefault(rc.arm_channel, "the arm switch")
+    return dict(sorted(found.items()))
+
+
+#: Trees that need what only ArduPilot does, and why.
+ARDUPILOT_ONLY_TREES: dict[str, str] = {
+    "ugv_rc_route": "its operator drives it with ArduRover's modes and switches (arming only in MANUAL, switch C to AUTO)",
+}
+
+
+def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
+    """Why ``autopilot`` cannot fly ``mission`` (empty when it can)."""
+    errors = []
+    kinds = AUTOPILOT_VEHICLES[autopilot]
+    if mission.vehicle not in kinds:
+        errors.append(f"{autopilot} drives {', '.join(sorted(kinds))} here, not a {mission.vehicle}")
+    name = tree_name(mission)
+    if autopilot != "ardupilot" and name in ARDUPILOT_ONLY_TREES:
+        errors.append(f"tree {name} needs ArduPilot: {ARDUPILOT_ONLY_TREES[name]}")
+    return errors
+
+
+def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """Rules between fields; each error is the path of the offending value and why."""
+    errors: list[tuple[Path, str]] = []
+    limits = mission.limits
+    name = tree_name(mission)
+    kinds, section = TREE_RULES.get(name or "", (frozenset({mission.vehicle}), None))
+    if mission.vehicle not in kinds:
+        errors.append((("tree",), f"tree {mission.tree} drives {', '.join(sorted(kinds))}, not a {mission.vehicle}"))
+    for other in ("sampling", "vtol", "rc_route") if name is not None else ():  # a composed tree's nodes read what they need
+        if other != section and getattr(mission, other) is not None:
+            errors.append(((other,), f"only used by tree {next(t for t, (_, s) in TREE_RULES.items() if s == other)} (tree is {mission.tree})"))
+    aux_mode = mission.rc_route.aux_mode if mission.rc_route is not None else None
+    if aux_mode is not None and aux_mode.upper() not in PROFILES[mission.vehicle].modes:
+        known = ", ".join(m for m in PROFILES[mission.vehicle].modes if m != "INITIALISING")
+        errors.append((("rc_route", "aux_mode"), f"{aux_mode!r}: not a {mission.vehicle} mode (known: {known})"))
+    if not mission.waypoints and mission.tree != "ugv_rc_route":
+        errors.append((("waypoints",), "at least one waypoint is needed"))
+    if mission.tree == "goto_sample" and not any(wp.sample for wp in mission.waypoints):
+        errors.append((("waypoints",), "goto_sample needs at least one waypoint with sample: true"))
+    if mission.tree != "goto_sample" and name is not None:  # a composed tree: its sample node (executive.composition)
+        errors += [(("waypoints", i, "sample"), "only goto_sample takes samples") for i, wp in enumerate(mission.waypoints) if wp.sample]
+    for i, wp in enumerate(mission.waypoints):
+        here: Path = ("waypoints", i)
+        if wp.speed_m_s is not None and wp.speed_m_s not in limits.speed_m_s:
+            errors.append(((*here, "speed_m_s"), f"{wp.speed_m_s} m/s is outside limits.speed_m_s "
+                           f"[{limits.speed_m_s.min}, {limits.speed_m_s.max}]"))  # fmt: skip
+        sub_fields = ("depth_m", "altitude_m", "control_mode")
+        if mission.vehicle != "sub":
+            for field in sub_fields:
+                if getattr(wp, field) is not None:
+                    errors.append(((*here, field), f"only a sub has {field} (vehicle is {mission.vehicle})"))
+            continue
+        if wp.depth_m is not None and wp.depth_m not in limits.depth_m:
+            errors.append(((*here, "depth_m"), f"{wp.depth_m} m is outside limits.depth_m "
+                           f"[{limits.depth_m.min}, {limits.depth_m.max}]"))  # fmt: skip
+        if wp.altitude_m is not None and wp.altitude_m not in limits.altitude_m:
+            errors.append(((*here, "altitude_m"), f"{wp.altitude_m} m is outside limits.altitude_m "
+                           f"[{limits.altitude_m.min}, {limits.altitude_m.max}]"))  # fmt: skip
+        if wp.control_mode == "altitude" and wp.altitude_m is None:
+            errors.append(((*here, "altitude_m"), "control_mode altitude needs altitude_m"))
+        if wp.control_mode != "altitude" and wp.altitude_m is not None:
+            errors.append(((*here, "altitude_m"), "altitude_m is only used with control_mode altitude"))
+    if mission.home is not None:  # the distance rule, as the vehicle will judge it at start (executive.reach) if it starts at home
+        limit = limits.max_goal_distance_m
+        for i, wp in enumerate(mission.waypoints):
+            if (d := distance(mission.home.lat, mission.home.lon, wp.lat, wp.lon)) > limit:
+                why = f"{d:.0f} m from home, over limits.max_goal_distance_m ({limit:g} m): refused at start with the vehicle at home"
+                errors.append((("waypoints", i), why))
+    if mission.vehicle == "vtol":
+        errors += _vtol_errors(mission)
+    if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":
+        errors.append((("simulator", "q_guided_mode"), "only the simulated vtol (ArduPlane) has Q_GUIDED_MODE"))
+    if mission.simulator is not None:
+        errors += [
+            (("simulator", "params", name), "not a parameter name (capitals, digits and _, at most 16)")
+            for name in mission.simulator.params
+            if not _PARAM_NAME.fullmatch(name)
+        ]
+    if mission.rc.arm_channel is not None and mission.rc.source != "mavlink":
+        errors.append((("rc", "arm_channel"), "an arm switch is read from the autopilot's RC channels (rc.source: mavlink)"))
+    if mission.autopilot is not None:
+        errors += [(("autopilot",), why) for why in autopilot_errors(mission, mission.autopilot)]
+    if mission.geofence is not None:
+        errors += _geofence_errors(mission)
+    errors += _failsafe_errors(mission)
+    return errors
+
+
+def failsafe_policy(mission: Mission) -> dict[str, FailsafePolicy]:
+    """Every condition's failsafe for this mission: its ``failsafe:`` entry, else the tree's default, else the vehicle kind's."""
+    defaults = VEHICLE_FAILSAFES[mission.vehicle] | TREE_FAILSAFES.get(tree_name(mission) or "", {})
+    policy = {}
+    for condition in FAILSAFE_CONDITIONS:
+        rule: FailsafeRule = getattr(mission.failsafe, condition) or FailsafeRule()
+        reaction, recovery = defaults[condition]
+        timeout_s = rule.timeout_s if rule.timeout_s is not None else mission.limits.recovery_timeout_s
+        policy[condition] = FailsafePolicy(condition, rule.reaction or reaction, rule.recovery or recovery, timeout_s)
+    return policy
+
+
+def _failsafe_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """A person's act is never reacted to; each reaction exists for the vehicle; a time limit only where the mission resumes."""
+    errors: list[tuple[Path, str]] = []
+    policy = failsafe_policy(mission)
+    for condition in FAILSAFE_CONDITIONS:
+        rule: FailsafeRule | None = getattr(mission.failsafe, condition)
+        if rule is None:
+            continue
+        here: Path = ("failsafe", condition)
+        reaction = policy[condition].reaction
+        if reaction != "wait" and condition in PERSON_CONDITIONS:
+            errors.append(((*here, "reaction"), f"{reaction}: {PERSON_CONDITIONS[condition]}"))
+        elif reaction != "wait" and mission.vehicle not in REACTION_MODES[reaction]:
+            errors.append(((*here, "reaction"), f"{reaction}: not for a {mission.vehicle} ({NO_REACTION[reaction]})"))
+        elif reaction == "disarm" and mission.tree == "ugv_rc_route":
+            errors.append(((*here, "reaction"), "disarm: not in tree ugv_rc_route (the operator arms and disarms with switch D)"))
+        if condition == "geofence_breach" and policy[condition].recovery == "resume" and reaction != "rtl":
+            # a recovery that cannot happen from where the reaction leaves the vehicle: held outside, it stays outside
+            errors.append(
+                (
+                    (*here, "recovery"),
+                    f"resume after {reaction}: a vehicle held outside the fence never comes back in; use reaction rtl, or recovery abort",
+                )
+            )
+        if rule.timeout_s is not None and policy[condition].recovery == "abort":
+            errors.append(((*here, "timeout_s"), "recovery abort ends the mission at once: a time limit is only for resume"))
+    return errors
+
+
+def _vtol_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """A vtol's legs are flown as a plane; its hover point as a multicopter, near home."""
+    errors: list[tuple[Path, str]] = []
+    radius = mission.limits.acceptance_radius_m
+    if radius < VTOL_MIN_ACCEPTANCE_RADIUS_M:
+        default = "" if "acceptance_radius_m" in mission.limits.model_fields_set else " (the default)"
+        errors.append((("limits", "acceptance_radius_m"), f"{radius:g} m{default} is too small for a vtol: it flies its legs as a plane, "
+                       f"circling each point at WP_LOITER_RAD (60 m); use at least {VTOL_MIN_ACCEPTANCE_RADIUS_M:g} m"))  # fmt: skip
+    hover = mission.vtol.hover_enu if mission.vtol is not None else None
+    if hover is not None and math.hypot(hover.east_m, hover.north_m) > VTOL_HOVER_RADIUS_M:
+        errors.append((("vtol", "hover_enu"), f"{math.hypot(hover.east_m, hover.north_m):.0f} m from home, over {VTOL_HOVER_RADIUS_M:g} m: "
+                       "ArduPlane flies a farther GUIDED target as a plane, not on its lift motors"))  # fmt: skip
+    return errors
+
+
+def _geofence_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """The fence is usable, and the home and every waypoint of the mission are inside it."""
+    config = mission.geofence
+    assert config is not None
+    if config.polygon is None and config.max_distance_from_home_m is None:
+        return [(("geofence",), "a geofence needs a polygon, max_distance_from_home_m or both")]
+    if config.polygon is not None:
+        problems = polygon_problems(open_ring([(v.lat, v.lon) for v in config.polygon]))
+        if problems:
+            return [(("geofence", "polygon", i), why) for i, why in problems]
+    fence = config.fence()
+    home = (mission.home.lat, mission.home.lon) if mission.home else None
+    if home is None:  # the distance rule waits for the autopilot's home, at run time
+        fence = Geofence(fence.polygon)
+    points: list[tuple[Path, float, float]] = [(("home",), *home)] if home else []
+    points += [(("waypoints", i), wp.lat, wp.lon) for i, wp in enumerate(mission.waypoints)]
+    errors: list[tuple[Path, str]] = []
+    for path, lat, lon in points:
+        why = fence.why_outside(lat, lon, home)
+        if why:
+            errors.append((path, f"outside the geofence: {why}"))
+    return errors

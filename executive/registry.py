@@ -1,0 +1,119 @@
+"""The one registry of trees, behaviours and instruments: a table of the built-in ones, and entry points for plugins'.
+
+As python-can finds its interfaces (a table of its own, then the ``can.interface`` entry points), a
+package adds to the executive with no change to it by naming objects in entry-point groups of its
+``pyproject.toml``::
+
+    [project.entry-points."executive.trees"]
+    patrol = "mypkg.patrol:build"                        # a mission says `tree: patrol`
+
+    [project.entry-points."executive.behaviours"]
+    enough_satellites = "mypkg.guards:EnoughSatellites"  # a behaviour class, in the node catalogue
+
+    [project.entry-points."executive.instruments"]       # sample-taking instruments: executive.instruments
+    mysonde = "mypkg.sonde:SondeSampler"
+
+A tree is ``build(mission) -> py_trees.behaviour.Behaviour``; a behaviour is a class, an
+:class:`~executive.behaviours.base.ExecutiveBehaviour` subclass for the services ours get; an
+instrument an :class:`~executive.instruments.sampler.InstrumentSampler` subclass. The built-in ones
+are named here as strings (``module:attribute``) and imported when first asked for, so this module
+imports nothing of the executive and anything may import it. A plugin that cannot be loaded is a
+:class:`PluginError` naming it and what went wrong.
+"""
+
+from __future__ import annotations
+
+import importlib
+from importlib.metadata import EntryPoint, entry_points
+from types import MappingProxyType
+from typing import Any, TypeVar
+
+TREES = "executive.trees"
+BEHAVIOURS = "executive.behaviours"
+INSTRUMENTS = "executive.instruments"
+T = TypeVar("T")
+
+#: group -> name -> ``module:attribute`` of each built-in one. Our behaviours are not listed: the node catalogue reads them
+#: from :mod:`executive.behaviours` itself (its ``__all__``).
+BUILT_IN: MappingProxyType[str, MappingProxyType[str, str]] = MappingProxyType({
+    TREES: MappingProxyType({
+        "auv_survey": "executive.trees.auv_survey:build",
+        "goto_sample": "executive.trees.goto_sample:build",
+        "ugv_rc_route": "executive.trees.ugv_rc_route:build",
+        "vtol_transit": "executive.trees.vtol_transit:build",
+        "waypoints": "executive.trees.waypoints:build",
+    }),
+    BEHAVIOURS: MappingProxyType({}),
+    INSTRUMENTS: MappingProxyType({
+        "serial": "executive.io.serial_sampler:SerialSampler",
+        "simulated": "executive.instruments.sampler:SimulatedSampler",
+    }),
+})  # fmt: skip
+
+
+class PluginError(Exception):
+    """A plugin (an entry point, or a ``module:function`` a mission names) that cannot be loaded or is not what it must be."""
+
+    def __init__(self, plugin: str, error: BaseException | str) -> None:
+        self.plugin = plugin
+        self.error = error
+        why = error if isinstance(error, str) else f"{type(error).__name__}: {error}"
+        super().__init__(f"plugin {plugin}: {why}")
+
+
+def built_in(group: str) -> list[str]:
+    """The names of the built-in ones of ``group``, sorted."""
+    return sorted(BUILT_IN[group])
+
+
+def named(group: str) -> dict[str, EntryPoint]:
+    """The entry points of ``group`` by name (of two with one name, the first found on the path)."""
+    found: dict[str, EntryPoint] = {}
+    for point in entry_points(group=group):
+        found.setdefault(point.name, point)
+    return found
+
+
+def names(group: str) -> list[str]:
+    """Every name of ``group``: the built-in ones and those plugins add, sorted."""
+    return sorted({*BUILT_IN[group], *named(group)})
+
+
+def describe(point: EntryPoint) -> str:
+    """How a plugin is named in messages: ``'patrol' (executive.trees = mypkg.patrol:build, from mypkg 1.0)``."""
+    dist = getattr(point, "dist", None)
+    source = f", from {dist.name} {dist.version}" if dist is not None else ""
+    return f"{point.name!r} ({point.group} = {point.value}{source})"
+
+
+def load(point: EntryPoint) -> Any:
+    """What an entry point names; PluginError if it cannot be imported."""
+    try:
+        return point.load()
+    except Exception as exc:  # an import runs the plugin's code: anything may be raised
+        raise PluginError(describe(point), exc) from exc
+
+
+def load_object(reference: str, default: str) -> Any:
+    """What ``module:attribute`` (``module`` alone: its ``default`` attribute) names, imported from the Python path; PluginError if it cannot be."""
+    module, _, attribute = reference.partition(":")
+    try:
+        found: Any = importlib.import_module(module)
+        for part in (attribute or default).split("."):
+            found = getattr(found, part)
+    except Exception as exc:  # an import runs the plugin's code: anything may be raised
+        raise PluginError(repr(reference), exc) from exc
+    return found
+
+
+def load_built_in(group: str, name: str) -> Any:
+    """The built-in object ``name`` of ``group`` (KeyError for a name that is not built in)."""
+    return load_object(BUILT_IN[group][name], "")
+
+
+def load_class(point: EntryPoint, base: type[T], what: str) -> type[T]:
+    """The class an entry point names, a subclass of ``base``; PluginError if it cannot be loaded or is not one (``what`` it must be)."""
+    found = load(point)
+    if not (isinstance(found, type) and issubclass(found, base)):
+        raise PluginError(describe(point), f"{found!r} is not {what}")
+    return found
