@@ -7,7 +7,7 @@ from typing import ClassVar
 
 from executive import geo
 from executive.autopilot.port import Capabilities, Request, VtolState
-from executive.io.mavlink.commander import Commander, command_name
+from executive.io.mavlink.commander import Commander, command_outcome
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, route_items, route_not_on_autopilot
 from executive.mission.model import Waypoint
@@ -27,7 +27,7 @@ class MavlinkPort:
         self.profile = profile
 
     def _request(self, ticket: int, command: int, how: str = "") -> Request:
-        return Request(ticket, command_name(command), how)
+        return Request(ticket, command_outcome(command), how)
 
     def mode_name(self, mode: str) -> str:
         return self.commander.modes.canonical(mode)

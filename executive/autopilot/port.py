@@ -3,8 +3,8 @@
 Behaviours ask for *intents* (hold, go to a point, take off, land, return, transition, change
 speed, start the autopilot's route, arm, disarm, a named mode where a tree really needs one) and
 read *capabilities*; a back end (ArduPilot, PX4) turns them into that firmware's messages. Acked
-intents return a :class:`Request`: its ticket and the command whose ack answers it
-(``/command/<name>`` on the blackboard). Setpoints have no ack and return nothing. Nothing here
+intents return a :class:`Request`: its ticket and the outcome whose ack answers it
+(``/command/<outcome>`` on the blackboard, :class:`~executive.state.Outcome`). Setpoints have no ack and return nothing. Nothing here
 blocks: requests are sent after the tick, as the commander always did.
 """
 
@@ -23,10 +23,10 @@ VtolState = Literal["FW", "MC"]
 
 @dataclass(frozen=True, slots=True)
 class Request:
-    """An acked request: its ticket, the command whose ack answers it (a ``/command/<name>`` key) and how it was asked."""
+    """An acked request: its ticket, the outcome whose ack answers it (``blackboard.command_key(outcome)``) and how it was asked."""
 
     ticket: int
-    command: str  # MAV_CMD name without prefix: DO_SET_MODE, NAV_TAKEOFF...
+    outcome: str  # an Outcome (mode, arming, take_off...); a plugin's raw MAV_CMD: its name (DO_SET_RELAY)
     how: str = ""  # for feedback: the mode, or the command, that carries the intent
 
 

@@ -23,7 +23,7 @@ from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_c
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
 from executive.seabed import depth_for_altitude
-from executive.state import CommandState, CommandStatus, GlobalPosition, HomePosition
+from executive.state import CommandState, CommandStatus, GlobalPosition, HomePosition, Outcome
 
 
 def _refusal(status: CommandStatus | None, request: Request | None, statustext: tuple[int, str] | None) -> str | None:
@@ -57,11 +57,11 @@ class CommandAction(TimedBehaviour):
 
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
-    command_name = ""  # MAV_CMD name without prefix
+    outcome = ""  # what the request asks of the autopilot (an Outcome): its ack is on blackboard.command_key(outcome)
     catalogued = False  # a base: its subclasses are the actions
 
     def __init__(self, name: str, confirm_timeout_s: float = 5.0) -> None:
-        self.reads = (*self.reads, blackboard.command_key(self.command_name), "/vehicle/statustext")
+        self.reads = (*self.reads, blackboard.command_key(self.outcome), "/vehicle/statustext")
         super().__init__(name)
         self.confirm_timeout_s = confirm_timeout_s
         self._ticket: Request | None = None
@@ -94,7 +94,7 @@ class CommandAction(TimedBehaviour):
         if self.confirmed():
             self.feedback_message = "confirmed"
             return Status.SUCCESS
-        status, statustext = self.get(blackboard.command_key(self.command_name)), self.get("/vehicle/statustext")
+        status, statustext = self.get(blackboard.command_key(self.outcome)), self.get("/vehicle/statustext")
         refusal = _refusal(status, self._ticket, statustext)
         if refusal is not None:
             self.feedback_message = refusal
@@ -123,7 +123,7 @@ class SetMode(CommandAction):
     """
 
     reads = ("/vehicle/mode", "/link/last_heartbeat")
-    command_name = "DO_SET_MODE"
+    outcome = Outcome.MODE
     param_docs = {"confirm_by_ack": "its own ACCEPTED ack confirms it too, until the next heartbeat (moving a tick after the ack)"}
 
     def __init__(self, mode: str, name: str | None = None, confirm_timeout_s: float = 5.0, confirm_by_ack: bool = False) -> None:
@@ -141,7 +141,7 @@ class SetMode(CommandAction):
             return True
         if not self.confirm_by_ack:
             return False
-        status: CommandStatus | None = self.get(blackboard.command_key(self.command_name))
+        status: CommandStatus | None = self.get(blackboard.command_key(self.outcome))
         heartbeat: float | None = self.get("/link/last_heartbeat")
         if status is None or heartbeat is None or not _accepted(status, self._last_request):
             return False
@@ -152,7 +152,7 @@ class Arm(CommandAction):
     """Arm the vehicle; confirmed by the heartbeat. A refusal (pre-arm checks) is a FAILURE to retry later."""
 
     reads = ("/vehicle/armed",)
-    command_name = "COMPONENT_ARM_DISARM"
+    outcome = Outcome.ARMING
 
     def __init__(self, name: str = "Arm", confirm_timeout_s: float = 5.0) -> None:
         super().__init__(name, confirm_timeout_s)
@@ -228,7 +228,7 @@ class GoTo(TimedBehaviour):
 
     reads = (
         "/mission/target", "/mission/next_target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position",
-        "/vehicle/statustext", "/vehicle/rangefinder", "/vehicle/params", blackboard.command_key("DO_REPOSITION"),
+        "/vehicle/statustext", "/vehicle/rangefinder", "/vehicle/params", blackboard.command_key(Outcome.REPOSITION),
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
@@ -429,7 +429,7 @@ class GoTo(TimedBehaviour):
             self._last_sent = now
             return
         if self._ticket is not None:
-            self._refusal = _refusal(self.get(blackboard.command_key("DO_REPOSITION")), self._ticket, self.get("/vehicle/statustext"))
+            self._refusal = _refusal(self.get(blackboard.command_key(Outcome.REPOSITION)), self._ticket, self.get("/vehicle/statustext"))
             if self._refusal is None:
                 return  # accepted or still waiting for the ack: the autopilot has the target
         alt = self.target.alt_m
@@ -498,7 +498,7 @@ class ChangeSpeed(CommandAction):
     """
 
     reads = ("/mission/target",)
-    command_name = "DO_CHANGE_SPEED"
+    outcome = Outcome.SPEED
     param_docs = {"airspeed": "an airspeed (a plane in wing-borne flight), else a ground speed"}
 
     def __init__(self, name: str = "Change speed", airspeed: bool = False, confirm_timeout_s: float = 5.0) -> None:
@@ -516,7 +516,7 @@ class ChangeSpeed(CommandAction):
         return self.autopilot.change_speed(self.speed_m_s, airspeed=self.airspeed)
 
     def confirmed(self) -> bool:
-        return self.speed_m_s is None or _accepted(self.get(blackboard.command_key(self.command_name)), self._ticket)
+        return self.speed_m_s is None or _accepted(self.get(blackboard.command_key(self.outcome)), self._ticket)
 
     def update(self) -> Status:
         status = super().update()
@@ -663,7 +663,7 @@ class Surface(CommandAction):
     """
 
     reads = ("/vehicle/position", "/vehicle/mode")
-    command_name = "DO_SET_MODE"
+    outcome = Outcome.MODE
     param_docs = {
         "surface_m": "at the surface within this depth",
         "climb_m_s": "the climb rate (ArduSub's PILOT_SPEED_UP), for the time allowed",
@@ -711,8 +711,8 @@ class TakeOff(CommandAction):
     with Q_GUIDED_MODE=1 flies it on its lift motors, as it does the hover point).
     """
 
-    reads = ("/vehicle/landed_state", "/vehicle/position", "/vehicle/home", blackboard.command_key("DO_REPOSITION"))
-    command_name = "NAV_TAKEOFF"
+    reads = ("/vehicle/landed_state", "/vehicle/position", "/vehicle/home", blackboard.command_key(Outcome.REPOSITION))
+    outcome = Outcome.TAKE_OFF
     from_mission = {"alt_m": "vtol.takeoff_alt_m"}
     param_docs = {"alt_m": "the height above home to climb to", "reached_fraction": "reached at this fraction of alt_m (and IN_AIR)"}
 
@@ -728,7 +728,7 @@ class TakeOff(CommandAction):
             position=self.get("/vehicle/position"),
             airborne=self.get("/vehicle/landed_state") in ("TAKEOFF", "IN_AIR"),
         )
-        self.command_name = request.command  # ArduPilot climbs on in the air with DO_REPOSITION: its ack says whether the climb was taken
+        self.outcome = request.outcome  # ArduPilot climbs on in the air with DO_REPOSITION: its ack says whether the climb was taken
         return request
 
     def confirmed(self) -> bool:
@@ -751,7 +751,7 @@ class Land(CommandAction):
     """
 
     reads = ("/vehicle/landed_state", "/vehicle/armed", "/vehicle/position")
-    command_name = "DO_SET_MODE"
+    outcome = Outcome.MODE
     param_docs = {"mode": "the landing mode (QLAND, QRTL; PX4: AUTO.LAND)"}
 
     def __init__(self, mode: str = "QLAND", name: str = "Land", confirm_timeout_s: float = 120.0) -> None:
@@ -790,7 +790,7 @@ class VtolTransition(TimedBehaviour):
 
     reads = (
         "/vehicle/vtol_state", "/vehicle/mode", "/vehicle/position", "/vehicle/heading_deg", "/vehicle/statustext",
-        blackboard.command_key("DO_VTOL_TRANSITION"), blackboard.command_key("DO_REPOSITION"), blackboard.command_key("DO_SET_MODE"),
+        blackboard.command_key(Outcome.TRANSITION), blackboard.command_key(Outcome.REPOSITION), blackboard.command_key(Outcome.MODE),
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
@@ -827,7 +827,7 @@ class VtolTransition(TimedBehaviour):
             self.to, mode=self.get("/vehicle/mode"), position=position, heading_deg=heading, mc_mode=self.mc_mode, ahead_m=self.ahead_m
         )
         if self._ticket is not None:  # None: update() fails, there is no "ahead" without a position
-            self.how = self._ticket.how or self._ticket.command
+            self.how = self._ticket.how or self._ticket.outcome
 
     def update(self) -> Status:
         state = self.get("/vehicle/vtol_state")
@@ -839,7 +839,7 @@ class VtolTransition(TimedBehaviour):
         if self._ticket is None:
             self.feedback_message = "no position to transition from"
             return Status.FAILURE
-        refusal = _refusal(self.get(blackboard.command_key(self._ticket.command)), self._ticket, self.get("/vehicle/statustext"))
+        refusal = _refusal(self.get(blackboard.command_key(self._ticket.outcome)), self._ticket, self.get("/vehicle/statustext"))
         if refusal is not None:
             self.feedback_message = f"{self.how} {refusal}; still {self.last_state}"
             return Status.FAILURE
@@ -869,7 +869,7 @@ class GoToLocal(TimedBehaviour):
       hovers there; otherwise it flies there as a plane and circles the point.
     """
 
-    reads = ("/vehicle/position", "/vehicle/home", "/vehicle/statustext", blackboard.command_key("DO_REPOSITION"))
+    reads = ("/vehicle/position", "/vehicle/home", "/vehicle/statustext", blackboard.command_key(Outcome.REPOSITION))
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     from_mission = {"acceptance_radius_m": "limits.acceptance_radius_m", "timeout_s": "limits.leg_timeout_s"}
@@ -929,7 +929,7 @@ class GoToLocal(TimedBehaviour):
         if now - self._last_sent < self.resend_s:
             return
         if self._ticket is not None:
-            self._refusal = _refusal(self.get(blackboard.command_key("DO_REPOSITION")), self._ticket, self.get("/vehicle/statustext"))
+            self._refusal = _refusal(self.get(blackboard.command_key(Outcome.REPOSITION)), self._ticket, self.get("/vehicle/statustext"))
             if self._refusal is None:
                 return  # accepted or still waiting for the ack: the autopilot has the target
         lat, lon = frames.local_to_global(home.lat, home.lon, self.ned.north, self.ned.east)

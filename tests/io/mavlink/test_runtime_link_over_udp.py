@@ -51,12 +51,12 @@ def test_streams_are_set_up_and_set_up_again_after_an_autopilot_reboot(idle_runt
         assert runtime.connect(200.0)
         tick_until(runtime, lambda: runtime.streams.done)
         assert not runtime.streams.refused
-        requested = bb("/command/set_message_interval").ticket
+        requested = bb("/command/message_rate").ticket
         first.stop()  # the autopilot reboots: a new one on the same port, its boot clock from zero
         second = SimServer("rover", url=f"udpin:127.0.0.1:{port}", clock=clock, home=HOME).start()
         try:
             tick_until(runtime, lambda: bb("/link/reboots") >= 1)
-            tick_until(runtime, lambda: runtime.streams.done and bb("/command/set_message_interval").ticket >= requested + len(runtime.streams.rates))
+            tick_until(runtime, lambda: runtime.streams.done and bb("/command/message_rate").ticket >= requested + len(runtime.streams.rates))
             assert bb("/link/up")
         finally:
             second.stop()
@@ -75,10 +75,10 @@ def test_link_loss_is_seen_and_recovery_re_requests_streams(idle_runtime, tmp_pa
     try:
         assert runtime.connect(200.0)
         tick_until(runtime, lambda: runtime.streams.done)
-        requested = bb("/command/set_message_interval").ticket
+        requested = bb("/command/message_rate").ticket
         tick_until(runtime, lambda: not bb("/link/up"))
         assert bb("/link/heartbeat_age_s") > runtime.reader.link_timeout_s
         tick_until(runtime, lambda: bb("/link/up"))
-        tick_until(runtime, lambda: runtime.streams.done and bb("/command/set_message_interval").ticket > requested)
+        tick_until(runtime, lambda: runtime.streams.done and bb("/command/message_rate").ticket > requested)
     finally:
         sim.stop()
