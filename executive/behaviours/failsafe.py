@@ -40,8 +40,8 @@ from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort
 from executive.autopilot.fallbacks import DISARM
-from executive.behaviours.actions import SetMode
 from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.commands import SetMode
 from executive.behaviours.guards import (
     Armed,
     BatteryAbove,

@@ -26,9 +26,9 @@ from py_trees.common import Status
 
 from executive import blackboard
 from executive.autopilot import AutopilotPort, Request
-from executive.behaviours.actions import _refusal
 from executive.behaviours.auto_route import AUTO
 from executive.behaviours.base import ExecutiveBehaviour
+from executive.behaviours.commands import refusal_reason
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, Refused
 from executive.mission.model import Waypoint
@@ -182,7 +182,7 @@ class ModeSwitch(SwitchWatcher):
             self._asking = _Asking(mode, self.autopilot.set_mode(mode), now)
             self.report(f"{said}: asked" + (" again" if self._refused_at > float("-inf") else ""))
             return
-        refusal = _refusal(self.get(blackboard.command_key(Outcome.MODE)), self._asking.ticket, self.get("/vehicle/statustext"))
+        refusal = refusal_reason(self.get(blackboard.command_key(Outcome.MODE)), self._asking.ticket, self.get("/vehicle/statustext"))
         waited = now - self._asking.at
         if refusal is None and waited <= self.confirm_timeout_s:
             self.feedback_message = f"{said}: asked, mode is {shown}"
@@ -254,7 +254,7 @@ class ArmSwitch(SwitchWatcher):
             self.report(f"{said}: {what}")
             self._asking = None
             return
-        refusal = _refusal(self.get(blackboard.command_key(Outcome.ARMING)), self._asking.ticket, self.get("/vehicle/statustext"))
+        refusal = refusal_reason(self.get(blackboard.command_key(Outcome.ARMING)), self._asking.ticket, self.get("/vehicle/statustext"))
         if refusal is None and self.clock.now() - self._asking.at <= self.confirm_timeout_s:
             return
         self.report(f"{said}: not {what}: {refusal or f'not shown after {self.confirm_timeout_s:g} s'}")
