@@ -6,7 +6,7 @@ from collections.abc import Sequence
 from typing import ClassVar
 
 from executive import geo
-from executive.autopilot.port import Capabilities, Request, VtolState
+from executive.autopilot.port import Capabilities, Request, Target, VtolState
 from executive.io.mavlink.commander import Commander, command_outcome
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, route_items, route_not_on_autopilot
@@ -83,8 +83,8 @@ class MavlinkPort:
         self.commander.request_parameter(name)
 
     # -- setpoints -----------------------------------------------------------------------------
-    def go_to(self, target: Waypoint) -> None:
-        if target.control_mode == "altitude" and target.altitude_m is not None:
+    def go_to(self, target: Target) -> None:
+        if target.altitude_m is not None:
             self.commander.depth_target(target.lat, target.lon, altitude_m=target.altitude_m)
         elif target.depth_m is not None:
             self.commander.depth_target(target.lat, target.lon, depth_m=target.depth_m)

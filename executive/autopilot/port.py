@@ -31,6 +31,17 @@ class Request:
 
 
 @dataclass(frozen=True, slots=True)
+class Target:
+    """A point to head for in the guided mode, with at most one of a depth below the surface and a height above the seabed (a sub's)."""
+
+    lat: float
+    lon: float
+    alt_m: float = 0.0  # above home, when neither a depth nor a height above the seabed is given
+    depth_m: float | None = None
+    altitude_m: float | None = None  # above the seabed
+
+
+@dataclass(frozen=True, slots=True)
 class Capabilities:
     """What one autopilot firmware offers a mission (mode names as its heartbeat shows them)."""
 
@@ -109,8 +120,8 @@ class AutopilotPort(Protocol):
         ...
 
     # -- setpoints (no ack; re-sent by the behaviour) ------------------------------------------
-    def go_to(self, target: Waypoint) -> None:
-        """Head for a waypoint in the guided mode (a sub's with its depth or height above the seabed)."""
+    def go_to(self, target: Target) -> None:
+        """Head for a point in the guided mode (a sub's with its depth or height above the seabed)."""
         ...
 
     def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:

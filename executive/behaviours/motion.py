@@ -13,13 +13,21 @@ from typing import Literal
 from py_trees.common import Status
 
 from executive import blackboard, geo
-from executive.autopilot import AutopilotPort, Request
+from executive.autopilot import AutopilotPort, Request, Target
 from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.commands import CommandAction, refusal_reason
 from executive.mission.model import Waypoint
 from executive.seabed import depth_for_altitude
 from executive.state import GlobalPosition, Outcome
+
+
+def leg_target(waypoint: Waypoint) -> Target:
+    """The port's target for a mission waypoint: a sub's altitude leg by its height above the seabed, else its depth, else its altitude."""
+    altitude_m = waypoint.altitude_m if waypoint.control_mode == "altitude" else None
+    depth_m = waypoint.depth_m if altitude_m is None else None
+    return Target(waypoint.lat, waypoint.lon, waypoint.alt_m, depth_m=depth_m, altitude_m=altitude_m)
+
 
 #: GoTo's look-ahead predicts the path of the autopilot's shaped target, not the vehicle's: it keeps this share of AUTO's
 #: cut of the corner, the rest left for how the vehicle follows its target (on the simulated rover the vehicle cut up
@@ -269,7 +277,7 @@ class GoTo(TimedBehaviour):
         if self.method == "setpoint":
             target = self._as_depth(self.target, position)
             if target is not None:
-                self.autopilot.go_to(target)
+                self.autopilot.go_to(leg_target(target))
             self._last_sent = now
             return
         if self._ticket is not None:
