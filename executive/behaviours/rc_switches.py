@@ -13,7 +13,7 @@ others act when the switch MOVES:
 
 They never end: RUNNING, with the outcome of the last move in the feedback. A refusal (by these
 rules or by the autopilot) is the operator's to answer by moving the switch again; it does not end
-the mission. Guard them with :class:`~executive.behaviours.guards.RcFresh`: a frozen report must not
+the mission. Guard them with :class:`~executive.behaviours.rc_guards.RcFresh`: a frozen report must not
 pass for a switch held still.
 """
 
