@@ -82,6 +82,13 @@ class MavlinkPort:
     def read_parameter(self, name: str) -> None:
         self.commander.request_parameter(name)
 
+    def mode_asked_at(self, mode: str) -> float | None:
+        return self.commander.modes_asked.get(mode)
+
+    @property
+    def takeoff_height_m(self) -> float | None:
+        return self.commander.takeoff_height_m
+
     # -- setpoints -----------------------------------------------------------------------------
     def go_to(self, target: Target) -> None:
         if target.altitude_m is not None:

@@ -119,6 +119,16 @@ class AutopilotPort(Protocol):
         """Ask for a parameter's value; it arrives on ``/vehicle/params`` (never acked: ask again if it does not come)."""
         ...
 
+    # -- what was asked (to tell our mode changes from a person's) ----------------------------
+    def mode_asked_at(self, mode: str) -> float | None:
+        """When ``mode`` (as the heartbeat shows it) was last asked for, or put by a request of ours; None if never."""
+        ...
+
+    @property
+    def takeoff_height_m(self) -> float | None:
+        """The height above home the latest take-off of ours climbs to; None: none asked, or the autopilot's default height."""
+        ...
+
     # -- setpoints (no ack; re-sent by the behaviour) ------------------------------------------
     def go_to(self, target: Target) -> None:
         """Head for a point in the guided mode (a sub's with its depth or height above the seabed)."""

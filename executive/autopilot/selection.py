@@ -122,6 +122,13 @@ class Autopilot:
     def read_parameter(self, name: str) -> None:
         self.backend.read_parameter(name)
 
+    def mode_asked_at(self, mode: str) -> float | None:
+        return self.backend.mode_asked_at(mode)
+
+    @property
+    def takeoff_height_m(self) -> float | None:
+        return self.backend.takeoff_height_m
+
     def go_to(self, target: Target) -> None:
         self.backend.go_to(target)
 
