@@ -6,6 +6,7 @@ import py_trees
 import pytest
 
 from executive import blackboard
+from executive.io.mavlink.commander import COMMAND_OUTCOMES
 from executive.io.mavlink.dialect import mavlink
 from executive.state import CommandState, Outcome
 from executive.testing import ack
@@ -190,3 +191,18 @@ def test_cancel_leaves_a_newer_request_alone(commander):
     second = commander.set_mode("GUIDED")
     assert not commander.cancel(first)
     assert status().ticket == second and status().state is CommandState.QUEUED
+
+
+def test_each_outcome_is_carried_by_one_mav_cmd_and_its_ack_has_a_documented_key():
+    assert sorted(COMMAND_OUTCOMES.values()) == sorted(Outcome)
+    assert all(blackboard.command_key(outcome) in blackboard.KEYS for outcome in Outcome)
+    mav_cmds = {entry.name.removeprefix("MAV_CMD_") for entry in mavlink.enums["MAV_CMD"].values()}
+    assert not [outcome for outcome in Outcome if outcome.upper() in mav_cmds]  # the keys name outcomes, not MAVLink's commands
+
+
+def test_a_command_s_ack_goes_to_its_outcome_s_key(commander, link):
+    ticket = commander.arm()
+    commander.flush()
+    commander.on_ack(ack(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, mavlink.MAV_RESULT_ACCEPTED))
+    arming = py_trees.blackboard.Blackboard.get("/command/arming")
+    assert (arming.ticket, arming.name, arming.state) == (ticket, "COMPONENT_ARM_DISARM", CommandState.ACCEPTED)
