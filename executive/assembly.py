@@ -125,7 +125,7 @@ def build_runtime(
     for plug in plugs:
         plug(wiring)
     # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
-    intervention = InterventionWatch(clock, ap.commander, state, PROFILES[mission.vehicle], mission.rc, firmware=lambda: ap.autopilot.backend.name)
+    intervention = InterventionWatch(clock, ap.autopilot, state, PROFILES[mission.vehicle], mission.rc)
     wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), intervention]
     return Runtime(
         mission,

@@ -12,7 +12,7 @@ Namespaces:
 - ``/mission``: the mission lifecycle and progress (mission state code), and what the running tree waits for (tree watch).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
 - ``/sampler``: the sample-taking instrument (sampler).
-- ``/command``: the latest command of each MAV_CMD kind and its ack (commander).
+- ``/command``: the latest command of each outcome asked of the autopilot (mode, arming, reposition...) and its ack (commander).
 - ``/plugin/<name>``: keys a plugin's behaviours declare (:func:`declare`) and write; nothing of ours writes there.
 
 Our behaviours only read; a plugin's behaviour may write the keys of its own ``/plugin/<name>/``
@@ -29,6 +29,8 @@ from typing import Any
 import py_trees
 from py_trees.blackboard import Blackboard
 from py_trees.common import Access
+
+from executive.state import Outcome
 
 
 @dataclass(frozen=True)
@@ -142,43 +144,45 @@ _KEYS: tuple[Key, ...] = (
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
 )
 
-#: MAV_CMD kinds the commander tracks; each has a key ``/command/<name lowercase>``.
-COMMAND_NAMES: tuple[str, ...] = (
-    "DO_SET_MODE",
-    "COMPONENT_ARM_DISARM",
-    "SET_MESSAGE_INTERVAL",
-    "DO_SET_HOME",
-    "DO_CHANGE_SPEED",
-    "DO_REPOSITION",
-    "DO_VTOL_TRANSITION",
-    "NAV_TAKEOFF",
-    "NAV_LAND",
-    "NAV_VTOL_TAKEOFF",
-    "NAV_VTOL_LAND",
-    "NAV_RETURN_TO_LAUNCH",
-    "MISSION_START",
-    "DO_SET_MISSION_CURRENT",
-    "REQUEST_MESSAGE",
-)
+
+def command_key(outcome: str) -> str:
+    """The blackboard key holding the CommandStatus of an outcome (``Outcome.MODE`` -> ``/command/mode``).
+
+    A plugin's raw MAV_CMD, one no outcome covers, has ``/command/<its name lowercase>`` (:func:`document_command`).
+    """
+    return f"/command/{outcome.lower()}"
 
 
-def command_key(name: str) -> str:
-    """The blackboard key holding the CommandStatus of a MAV_CMD kind (e.g. DO_SET_MODE)."""
-    return f"/command/{name.lower()}"
+def _command_doc(outcome: Outcome) -> Key:
+    return Key(command_key(outcome), None, "commander", f"CommandStatus of the latest {_OUTCOME_DOCS[outcome]} asked of the autopilot")
 
 
-def _command_doc(name: str) -> Key:
-    return Key(command_key(name), None, "commander", f"CommandStatus of the latest MAV_CMD_{name}")
+_OUTCOME_DOCS: dict[Outcome, str] = {
+    Outcome.MODE: "flight mode",
+    Outcome.ARMING: "arm or disarm",
+    Outcome.MESSAGE_RATE: "message rate (telemetry streams)",
+    Outcome.HOME: "home",
+    Outcome.SPEED: "cruise speed",
+    Outcome.REPOSITION: "reposition (go to a point, acked)",
+    Outcome.TRANSITION: "VTOL transition",
+    Outcome.TAKE_OFF: "take-off",
+    Outcome.LAND: "landing where the vehicle is",
+    Outcome.VTOL_TAKE_OFF: "VTOL take-off (a climb as a multicopter)",
+    Outcome.VTOL_LAND: "VTOL landing",
+    Outcome.RETURN_HOME: "return home",
+    Outcome.START_ROUTE: "start of the autopilot's route",
+    Outcome.ROUTE_ITEM: "route item to head for",
+    Outcome.MESSAGE: "message asked for once",
+}
 
-
-KEYS: dict[str, Key] = {k.name: k for k in _KEYS} | {command_key(n): _command_doc(n) for n in COMMAND_NAMES}
+KEYS: dict[str, Key] = {k.name: k for k in _KEYS} | {command_key(o): _command_doc(o) for o in Outcome}
 
 
 def document_command(name: str) -> str:
-    """Document ``/command/<name>`` for a MAV_CMD kind not listed in COMMAND_NAMES; returns the key."""
+    """Document ``/command/<name>`` for a plugin's raw MAV_CMD kind (e.g. DO_SET_RELAY) that no outcome covers; returns the key."""
     key = command_key(name)
     if key not in KEYS:
-        KEYS[key] = _command_doc(name)
+        KEYS[key] = Key(key, None, "commander", f"CommandStatus of the latest MAV_CMD_{name}")
         PyTreesBoard.set(key, None)
     return key
 

@@ -26,13 +26,12 @@ from collections import deque
 from collections.abc import Callable
 
 from executive import blackboard
+from executive.autopilot.port import AutopilotPort
 from executive.clock import Clock
-from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import RcConfig
 from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause
-from executive.state import GlobalPosition, MissionCurrent, RcSwitches, SwitchPosition
+from executive.state import MISSION_STATE_COMPLETE, GlobalPosition, MissionCurrent, RcSwitches, SwitchPosition
 from executive.vehicles import AutopilotName, VehicleProfile
 
 log = logging.getLogger(__name__)
@@ -57,21 +56,22 @@ class InterventionWatch:
     def __init__(
         self,
         clock: Clock,
-        commander: Commander,
+        autopilot: AutopilotPort,
         mission_state: MissionState,
         profile: VehicleProfile,
         rc: RcConfig,
         *,
         asked_within_s: float = 10.0,
-        firmware: Callable[[], AutopilotName] = lambda: "ardupilot",
+        firmware: Callable[[], AutopilotName] | None = None,
     ) -> None:
+        """``firmware``: whose rules judge a mode change (default: the port's autopilot, once the heartbeat told it)."""
         self._clock = clock
-        self._commander = commander
+        self._autopilot = autopilot
         self.mission_state = mission_state
         self.profile = profile
         self.rc = rc
         self.asked_within_s = asked_within_s
-        self.firmware = firmware  # the autopilot back end's name, once the heartbeat told it
+        self.firmware = firmware or (lambda: autopilot.capabilities.autopilot)
         self._bb = blackboard.reader(
             "intervention watch",
             [
@@ -145,7 +145,7 @@ class InterventionWatch:
         An ask is done once the heartbeat shows its mode (then, or when asked for the mode the vehicle is in already): a later
         change to the same mode is not ours. The autopilot loitering after a take-off is not the pre-flight's LOITER, long done.
         """
-        asked = self._commander.modes_asked.get(mode)
+        asked = self._autopilot.mode_asked_at(mode)
         if asked is None or now - asked > self.asked_within_s or self._asks_seen.get(mode) == asked:
             return False
         self._asks_seen[mode] = asked
@@ -168,11 +168,11 @@ class InterventionWatch:
             armed=self._armed,
             disarmed_just_now=disarmed_just_now,
             landed_state=self._bb.get("/vehicle/landed_state"),
-            mission_complete=current is not None and current.state == mavlink.MISSION_STATE_COMPLETE,
+            mission_complete=current is not None and current.state == MISSION_STATE_COMPLETE,
             system_status=self._bb.get("/vehicle/system_status"),
             failsafe_text=self._failsafe_text(now),
             alt_rel_m=position.alt_rel_m if position is not None else None,
-            takeoff_height_m=self._commander.takeoff_height_m,
+            takeoff_height_m=self._autopilot.takeoff_height_m,
         )
 
     def _failsafe_text(self, now: float) -> str | None:

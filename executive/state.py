@@ -238,9 +238,33 @@ class CommandState(StrEnum):
         return self in (CommandState.ACCEPTED, CommandState.REJECTED, CommandState.TIMED_OUT, CommandState.CANCELLED)
 
 
+class Outcome(StrEnum):
+    """What an acked command asks of the autopilot; the latest of each and its ack are on ``/command/<value>``.
+
+    The autopilot port's requests name the outcome, never the firmware's command: the MAVLink back end maps
+    each to its MAV_CMD (``executive.io.mavlink.commander.COMMAND_OUTCOMES``).
+    """
+
+    MODE = "mode"  # a flight mode (hold, the route's mode, a named mode, a landing mode)
+    ARMING = "arming"  # arm or disarm
+    MESSAGE_RATE = "message_rate"  # how often the autopilot sends a message (the telemetry streams)
+    HOME = "home"  # home set here or at a point
+    SPEED = "speed"  # the cruise speed of the legs
+    REPOSITION = "reposition"  # go to a point, acked (the autopilot switches to the mode that does it)
+    TRANSITION = "transition"  # a VTOL to fixed-wing or multicopter flight
+    TAKE_OFF = "take_off"
+    LAND = "land"  # land (a sub: surface) where the vehicle is
+    VTOL_TAKE_OFF = "vtol_take_off"  # a VTOL's climb as a multicopter
+    VTOL_LAND = "vtol_land"
+    RETURN_HOME = "return_home"
+    START_ROUTE = "start_route"  # fly the route the autopilot holds
+    ROUTE_ITEM = "route_item"  # the route's item the autopilot heads for
+    MESSAGE = "message"  # one message asked for once
+
+
 @dataclass(frozen=True, slots=True)
 class CommandStatus:
-    """The latest command of one MAV_CMD kind and what became of it."""
+    """The latest command of one outcome (:class:`Outcome`) and what became of it: the MAV_CMD that carried it, its ack."""
 
     ticket: int  # unique per request; a behaviour keeps the ticket it was given
     command: int  # MAV_CMD id

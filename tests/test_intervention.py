@@ -138,7 +138,7 @@ def test_an_operators_mode_is_obeyed_and_the_mission_pauses_rather_than_undoing_
 def test_an_operators_disarm_mid_mission_is_obeyed_and_reported_and_the_mission_pauses(driving: RuntimeOnLink) -> None:
     reply = driving.runtime.operator.request("disarm", source="ctl", force=True)
     assert reply.ok and reply.state == "PAUSED"
-    assert reply.command == {"ticket": reply.command["ticket"], "name": "COMPONENT_ARM_DISARM", "what": "force disarm"}
+    assert reply.command == {"ticket": reply.command["ticket"], "name": "arming", "what": "force disarm"}
     driving.tick(2)
     assert ("arm", 0.0) in driving.autopilot.commands and not driving.autopilot.armed
     assert outcome(driving, reply)["state"] == "ACCEPTED"

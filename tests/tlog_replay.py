@@ -80,7 +80,7 @@ class Replay:
         mission = Mission.model_validate(fields)  # a mission running, so that a person's change would pause it
         self.state.upload(mission)
         self.state.start()
-        self.intervention = InterventionWatch(self.clock, self.commander, self.state, profile, RcConfig(), firmware=self._firmware)
+        self.intervention = InterventionWatch(self.clock, self.port, self.state, profile, RcConfig(), firmware=self._firmware)
         self.bb = blackboard.reader("tlog replay", [*self.watch, "/vehicle/home", "/vehicle/position", "/vehicle/ekf"])
         self._last: dict[str, object] = {}
         self._t0: float | None = None

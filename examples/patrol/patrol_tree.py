@@ -46,19 +46,19 @@ class EnoughSatellites(Guard):
 class BeaconOn(CommandAction):
     """Turn the beacon (a relay) on with MAV_CMD_DO_SET_RELAY; confirmed by the autopilot's ACCEPTED ack (nothing else reports a relay)."""
 
-    command_name = "DO_SET_RELAY"
+    outcome = "DO_SET_RELAY"  # a raw MAV_CMD no outcome of the port covers: its key is named after it
 
     def __init__(self, relay: int = 0, name: str = "Beacon on") -> None:
-        blackboard.document_command(self.command_name)  # /command/do_set_relay: where the commander reports its ack
+        blackboard.document_command(self.outcome)  # /command/do_set_relay: where the commander reports its ack
         super().__init__(name)
         self.relay = relay
 
     def request(self) -> Request:
         commander = self.autopilot.backend.commander  # the MAVLink back end's own: the autopilot port has no intent for a relay
-        return Request(commander.command_long(mavlink.MAV_CMD_DO_SET_RELAY, [self.relay, 1]), self.command_name, f"relay {self.relay} on")
+        return Request(commander.command_long(mavlink.MAV_CMD_DO_SET_RELAY, [self.relay, 1]), self.outcome, f"relay {self.relay} on")
 
     def confirmed(self) -> bool:
-        status = self.get(blackboard.command_key(self.command_name))
+        status = self.get(blackboard.command_key(self.outcome))
         return status is not None and self._ticket is not None and status.ticket == self._ticket.ticket and status.state is CommandState.ACCEPTED
 
 

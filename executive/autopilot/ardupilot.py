@@ -63,4 +63,4 @@ class ArduPilotPort(MavlinkPort):
             return None  # there is no "ahead" without a position
         lat, lon = ahead_of(position, heading_deg, ahead_m)
         request = self.reposition(lat, lon, position.alt_rel_m)
-        return Request(request.ticket, request.command, f"reposition {ahead_m:g} m ahead")
+        return Request(request.ticket, request.outcome, f"reposition {ahead_m:g} m ahead")

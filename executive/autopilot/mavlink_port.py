@@ -6,8 +6,8 @@ from collections.abc import Sequence
 from typing import ClassVar
 
 from executive import geo
-from executive.autopilot.port import Capabilities, Request, VtolState
-from executive.io.mavlink.commander import Commander, command_name
+from executive.autopilot.port import Capabilities, Request, Target, VtolState
+from executive.io.mavlink.commander import Commander, command_outcome
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, route_items, route_not_on_autopilot
 from executive.mission.model import Waypoint
@@ -27,7 +27,7 @@ class MavlinkPort:
         self.profile = profile
 
     def _request(self, ticket: int, command: int, how: str = "") -> Request:
-        return Request(ticket, command_name(command), how)
+        return Request(ticket, command_outcome(command), how)
 
     def mode_name(self, mode: str) -> str:
         return self.commander.modes.canonical(mode)
@@ -82,9 +82,16 @@ class MavlinkPort:
     def read_parameter(self, name: str) -> None:
         self.commander.request_parameter(name)
 
+    def mode_asked_at(self, mode: str) -> float | None:
+        return self.commander.modes_asked.get(mode)
+
+    @property
+    def takeoff_height_m(self) -> float | None:
+        return self.commander.takeoff_height_m
+
     # -- setpoints -----------------------------------------------------------------------------
-    def go_to(self, target: Waypoint) -> None:
-        if target.control_mode == "altitude" and target.altitude_m is not None:
+    def go_to(self, target: Target) -> None:
+        if target.altitude_m is not None:
             self.commander.depth_target(target.lat, target.lon, altitude_m=target.altitude_m)
         elif target.depth_m is not None:
             self.commander.depth_target(target.lat, target.lon, depth_m=target.depth_m)

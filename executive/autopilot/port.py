@@ -3,8 +3,8 @@
 Behaviours ask for *intents* (hold, go to a point, take off, land, return, transition, change
 speed, start the autopilot's route, arm, disarm, a named mode where a tree really needs one) and
 read *capabilities*; a back end (ArduPilot, PX4) turns them into that firmware's messages. Acked
-intents return a :class:`Request`: its ticket and the command whose ack answers it
-(``/command/<name>`` on the blackboard). Setpoints have no ack and return nothing. Nothing here
+intents return a :class:`Request`: its ticket and the outcome whose ack answers it
+(``/command/<outcome>`` on the blackboard, :class:`~executive.state.Outcome`). Setpoints have no ack and return nothing. Nothing here
 blocks: requests are sent after the tick, as the commander always did.
 """
 
@@ -23,11 +23,22 @@ VtolState = Literal["FW", "MC"]
 
 @dataclass(frozen=True, slots=True)
 class Request:
-    """An acked request: its ticket, the command whose ack answers it (a ``/command/<name>`` key) and how it was asked."""
+    """An acked request: its ticket, the outcome whose ack answers it (``blackboard.command_key(outcome)``) and how it was asked."""
 
     ticket: int
-    command: str  # MAV_CMD name without prefix: DO_SET_MODE, NAV_TAKEOFF...
+    outcome: str  # an Outcome (mode, arming, take_off...); a plugin's raw MAV_CMD: its name (DO_SET_RELAY)
     how: str = ""  # for feedback: the mode, or the command, that carries the intent
+
+
+@dataclass(frozen=True, slots=True)
+class Target:
+    """A point to head for in the guided mode, with at most one of a depth below the surface and a height above the seabed (a sub's)."""
+
+    lat: float
+    lon: float
+    alt_m: float = 0.0  # above home, when neither a depth nor a height above the seabed is given
+    depth_m: float | None = None
+    altitude_m: float | None = None  # above the seabed
 
 
 @dataclass(frozen=True, slots=True)
@@ -108,9 +119,19 @@ class AutopilotPort(Protocol):
         """Ask for a parameter's value; it arrives on ``/vehicle/params`` (never acked: ask again if it does not come)."""
         ...
 
+    # -- what was asked (to tell our mode changes from a person's) ----------------------------
+    def mode_asked_at(self, mode: str) -> float | None:
+        """When ``mode`` (as the heartbeat shows it) was last asked for, or put by a request of ours; None if never."""
+        ...
+
+    @property
+    def takeoff_height_m(self) -> float | None:
+        """The height above home the latest take-off of ours climbs to; None: none asked, or the autopilot's default height."""
+        ...
+
     # -- setpoints (no ack; re-sent by the behaviour) ------------------------------------------
-    def go_to(self, target: Waypoint) -> None:
-        """Head for a waypoint in the guided mode (a sub's with its depth or height above the seabed)."""
+    def go_to(self, target: Target) -> None:
+        """Head for a point in the guided mode (a sub's with its depth or height above the seabed)."""
         ...
 
     def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:

@@ -28,11 +28,10 @@ from collections.abc import Callable
 
 from executive import blackboard
 from executive.autopilot.mavlink_port import MavlinkPort
-from executive.autopilot.port import Capabilities, Request
+from executive.autopilot.port import Capabilities, Request, Target
 from executive.io.mavlink.commander import FORCE_DISARM_MAGIC, Commander, RefusalRetry
 from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.mission.model import Waypoint
 from executive.state import GlobalPosition, HomePosition, MissionTransferStatus, TransferOperation, TransferState
 from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 
@@ -170,7 +169,7 @@ class Px4Port(MavlinkPort):
         self.commander.note_mode_asked("AUTO.LAND")
         return self._request(self.commander.land(), mavlink.MAV_CMD_NAV_LAND)
 
-    def go_to(self, target: Waypoint) -> None:
+    def go_to(self, target: Target) -> None:
         self.stream.aim(lambda: MavlinkPort.go_to(self, target))
 
     def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:

@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 
 from executive.autopilot.ardupilot import ArduPilotPort
 from executive.autopilot.mavlink_port import MavlinkPort
-from executive.autopilot.port import AutopilotName, Capabilities, Request, VtolState
+from executive.autopilot.port import AutopilotName, Capabilities, Request, Target, VtolState
 from executive.autopilot.px4 import Px4Port
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
@@ -122,7 +122,14 @@ class Autopilot:
     def read_parameter(self, name: str) -> None:
         self.backend.read_parameter(name)
 
-    def go_to(self, target: Waypoint) -> None:
+    def mode_asked_at(self, mode: str) -> float | None:
+        return self.backend.mode_asked_at(mode)
+
+    @property
+    def takeoff_height_m(self) -> float | None:
+        return self.backend.takeoff_height_m
+
+    def go_to(self, target: Target) -> None:
         self.backend.go_to(target)
 
     def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:

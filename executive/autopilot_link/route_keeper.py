@@ -39,11 +39,11 @@ from executive.io.mavlink.mission_protocol import MissionTransfer, MissionTransf
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.mission.route import Route
-from executive.state import CommandState, CommandStatus, HomePosition
+from executive.state import CommandState, CommandStatus, HomePosition, Outcome
 
 log = logging.getLogger(__name__)
 
-_SET_HOME_KEY = blackboard.command_key("DO_SET_HOME")
+_SET_HOME_KEY = blackboard.command_key(Outcome.HOME)
 _PENDING = (CommandState.QUEUED, CommandState.SENT, CommandState.IN_PROGRESS, CommandState.RETRYING)
 
 

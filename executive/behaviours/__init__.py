@@ -1,54 +1,29 @@
 """Behaviours the trees are built from: guards (conditions), actions and flow control."""
 
-from executive.behaviours.actions import (
-    Arm,
-    ChangeAltitude,
-    ChangeDepth,
-    ChangeSpeed,
-    CommandAction,
-    Disarm,
-    GoTo,
-    GoToLocal,
-    HoldFor,
-    Land,
-    SetMode,
-    Surface,
-    TakeOff,
-    VtolTransition,
-)
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
+from executive.behaviours.commands import Arm, ChangeSpeed, CommandAction, Disarm, HoldFor, SetMode
 from executive.behaviours.failsafe import Failsafe, FailsafeNote
 from executive.behaviours.flow import ForEachLeg, Timeout, UnlessPaused, WaitForGuards, WaitUntil
-from executive.behaviours.guards import (
+from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive, ModeIs
+from executive.behaviours.mode_switch import ModeSwitchClear
+from executive.behaviours.motion import ChangeAltitude, ChangeDepth, GoTo, Surface
+from executive.behaviours.parameters import ParameterIs
+from executive.behaviours.position_guards import (
     AllWaypointsWithin,
     AltitudeWithin,
-    Armed,
-    BatteryAbove,
     DepthWithin,
-    EkfOk,
-    GpsNotGlitching,
-    Guard,
-    HeadingSane,
     InsideGeofence,
-    LinkAlive,
-    ModeIs,
     PositionKnown,
     RangefinderReaches,
-    RcAutoMode,
-    RcChannelHigh,
-    RcFresh,
-    RcNotLost,
-    RcNotTakingOver,
     SpeedWithin,
     TargetWithin,
     inside_geofence,
-    rc_auto_mode,
 )
-from executive.behaviours.mode_switch import ModeSwitchClear
-from executive.behaviours.parameters import ParameterIs
+from executive.behaviours.rc_guards import RcAutoMode, RcChannelHigh, RcFresh, RcNotLost, RcNotTakingOver, rc_auto_mode
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
 from executive.behaviours.readiness import ReadingsIn
 from executive.behaviours.sampling import NothingToSample, Sample
+from executive.behaviours.vtol import GoToLocal, Land, TakeOff, VtolTransition
 
 __all__ = [
     "AllWaypointsWithin",

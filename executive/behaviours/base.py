@@ -5,7 +5,7 @@ which passes them to every behaviour's ``setup``; a behaviour takes what it ``ne
 
 A plugin's behaviour (a guard, an action, a decorator of its own) subclasses
 :class:`ExecutiveBehaviour` (or :class:`~executive.behaviours.guards.Guard`,
-:class:`~executive.behaviours.actions.CommandAction`, :class:`TimedBehaviour`) and says, as class
+:class:`~executive.behaviours.commands.CommandAction`, :class:`TimedBehaviour`) and says, as class
 attributes, which documented keys it ``reads``, which new keys of its own it ``declares``
 (under ``/plugin/<plugin name>/``) and which of those it ``writes``::
 

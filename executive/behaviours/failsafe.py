@@ -40,22 +40,11 @@ from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort
 from executive.autopilot.fallbacks import DISARM
-from executive.behaviours.actions import SetMode
 from executive.behaviours.base import TimedBehaviour
-from executive.behaviours.guards import (
-    Armed,
-    BatteryAbove,
-    EkfOk,
-    GpsNotGlitching,
-    Guard,
-    HeadingSane,
-    InsideGeofence,
-    LinkAlive,
-    RcAutoMode,
-    RcFresh,
-    RcNotLost,
-    RcNotTakingOver,
-)
+from executive.behaviours.commands import SetMode
+from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive
+from executive.behaviours.position_guards import InsideGeofence
+from executive.behaviours.rc_guards import RcAutoMode, RcFresh, RcNotLost, RcNotTakingOver
 from executive.behaviours.reacting import READS, Reacting
 from executive.mission.failsafes import REACTION_MODES, FailsafeCondition, FailsafePolicy
 from executive.mission.lifecycle import MissionState

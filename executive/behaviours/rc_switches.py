@@ -13,7 +13,7 @@ others act when the switch MOVES:
 
 They never end: RUNNING, with the outcome of the last move in the feedback. A refusal (by these
 rules or by the autopilot) is the operator's to answer by moving the switch again; it does not end
-the mission. Guard them with :class:`~executive.behaviours.guards.RcFresh`: a frozen report must not
+the mission. Guard them with :class:`~executive.behaviours.rc_guards.RcFresh`: a frozen report must not
 pass for a switch held still.
 """
 
@@ -26,14 +26,14 @@ from py_trees.common import Status
 
 from executive import blackboard
 from executive.autopilot import AutopilotPort, Request
-from executive.behaviours.actions import _refusal
 from executive.behaviours.auto_route import AUTO
 from executive.behaviours.base import ExecutiveBehaviour
+from executive.behaviours.commands import refusal_reason
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, Refused
 from executive.mission.model import Waypoint
 from executive.mission.route import RouteError, add_at_end, clear, current_index, remove_current
-from executive.state import EkfStatus, GlobalPosition, RcSwitches, SwitchPosition
+from executive.state import EkfStatus, GlobalPosition, Outcome, RcSwitches, SwitchPosition
 
 log = logging.getLogger(__name__)
 
@@ -108,7 +108,7 @@ class ModeSwitch(SwitchWatcher):
     wish, then said in the feedback and left to the operator.
     """
 
-    reads = ("/vehicle/mode", "/vehicle/statustext", "/vehicle/mission_items", blackboard.command_key("DO_SET_MODE"))
+    reads = ("/vehicle/mode", "/vehicle/statustext", "/vehicle/mission_items", blackboard.command_key(Outcome.MODE))
     needs = ("clock", "autopilot", "mission_state")
     clock: Clock
     autopilot: AutopilotPort
@@ -182,7 +182,7 @@ class ModeSwitch(SwitchWatcher):
             self._asking = _Asking(mode, self.autopilot.set_mode(mode), now)
             self.report(f"{said}: asked" + (" again" if self._refused_at > float("-inf") else ""))
             return
-        refusal = _refusal(self.get(blackboard.command_key("DO_SET_MODE")), self._asking.ticket, self.get("/vehicle/statustext"))
+        refusal = refusal_reason(self.get(blackboard.command_key(Outcome.MODE)), self._asking.ticket, self.get("/vehicle/statustext"))
         waited = now - self._asking.at
         if refusal is None and waited <= self.confirm_timeout_s:
             self.feedback_message = f"{said}: asked, mode is {shown}"
@@ -207,7 +207,7 @@ class ArmSwitch(SwitchWatcher):
     ``confirm_timeout_s``: said in the feedback.
     """
 
-    reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/statustext", blackboard.command_key("COMPONENT_ARM_DISARM"))
+    reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/statustext", blackboard.command_key(Outcome.ARMING))
     needs = ("clock", "autopilot")
     clock: Clock
     autopilot: AutopilotPort
@@ -254,7 +254,7 @@ class ArmSwitch(SwitchWatcher):
             self.report(f"{said}: {what}")
             self._asking = None
             return
-        refusal = _refusal(self.get(blackboard.command_key("COMPONENT_ARM_DISARM")), self._asking.ticket, self.get("/vehicle/statustext"))
+        refusal = refusal_reason(self.get(blackboard.command_key(Outcome.ARMING)), self._asking.ticket, self.get("/vehicle/statustext"))
         if refusal is None and self.clock.now() - self._asking.at <= self.confirm_timeout_s:
             return
         self.report(f"{said}: not {what}: {refusal or f'not shown after {self.confirm_timeout_s:g} s'}")

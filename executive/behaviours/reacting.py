@@ -26,7 +26,7 @@ from executive import blackboard
 from executive.autopilot import AutopilotPort, Request
 from executive.autopilot.fallbacks import DISARM, Fallback, chain, fallback
 from executive.clock import Clock
-from executive.state import CommandState, CommandStatus, EkfStatus
+from executive.state import CommandState, CommandStatus, EkfStatus, Outcome
 
 log = logging.getLogger("executive.behaviours.failsafe")  # the journal's event kind: "failsafe"
 
@@ -41,7 +41,7 @@ ASKS_BEFORE_NEXT = 3
 #: The blackboard keys a behaviour that reacts reads.
 READS = (
     "/vehicle/armed", "/vehicle/mode", "/vehicle/mode_set_by", "/vehicle/ekf", "/vehicle/ekf_failsafe", "/link/up",
-    blackboard.command_key("DO_SET_MODE"), blackboard.command_key("COMPONENT_ARM_DISARM"),
+    blackboard.command_key(Outcome.MODE), blackboard.command_key(Outcome.ARMING),
 )  # fmt: skip
 #: Told of each step a person must hear: a short text (a STATUSTEXT holds 50 characters), and whether it is a warning.
 Announce = Callable[[str, bool], None]
@@ -201,7 +201,7 @@ class Reacting:
         asking = self.asking
         if asking is None or asking.confirmed or asking.request is None:
             return
-        status: CommandStatus | None = self.host.get(blackboard.command_key(asking.request.command))
+        status: CommandStatus | None = self.host.get(blackboard.command_key(asking.request.outcome))
         mine = status is not None and status.ticket == asking.request.ticket
         if mine and status.state is CommandState.ACCEPTED:
             asking.acked = True

@@ -35,7 +35,7 @@ from executive.mission import route as routes
 from executive.mission.errors import MissionError
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.model import Mission
-from executive.state import CommandStatus, EkfStatus, GlobalPosition
+from executive.state import CommandStatus, EkfStatus, GlobalPosition, Outcome
 
 if TYPE_CHECKING:
     from executive.autopilot.port import AutopilotPort
@@ -45,7 +45,7 @@ log = logging.getLogger("executive.operator")  # as the log and the journal (eve
 REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode", "command")
 #: The commands a person may give the vehicle, and the blackboard keys of their acks.
 VEHICLE_REQUESTS = ("arm", "disarm", "mode")
-_COMMAND_KEYS = {name: blackboard.command_key(name) for name in ("COMPONENT_ARM_DISARM", "DO_SET_MODE")}
+_COMMAND_KEYS = {outcome: blackboard.command_key(outcome) for outcome in (Outcome.ARMING, Outcome.MODE)}
 
 
 @dataclass(frozen=True)
@@ -217,10 +217,10 @@ class Operator:
             self.mission_state.pause(f"{said} by a person: hands off", hold=False)
             said += f"; mission paused at leg {self.mission_state.leg_index + 1}, hands off until resumed"
         log.warning("%s, sent to the autopilot", said)
-        return self._reply(True, f"{said}, sent to the autopilot", command={"ticket": request.ticket, "name": request.command, "what": what})
+        return self._reply(True, f"{said}, sent to the autopilot", command={"ticket": request.ticket, "name": request.outcome, "what": what})
 
     def _command_outcome(self, args: dict[str, Any]) -> Reply:
-        """What became of a command given by ``ticket`` and ``name`` (a MAV_CMD name): its state and the autopilot's result."""
+        """What became of a command given by ``ticket`` and ``name`` (its outcome: arming, mode): its state and the autopilot's result."""
         key = _COMMAND_KEYS.get(str(args.get("name")))
         ticket = args.get("ticket")
         if key is None or not isinstance(ticket, int):

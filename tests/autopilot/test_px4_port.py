@@ -57,7 +57,7 @@ def test_the_first_accepted_of_a_mode_change_is_not_its_result(px4, harness, veh
     assert sent_modes(link) == [(4, 5)]  # AUTO.RTL: main 4, sub 5
     h.commander.on_ack(px4_ack(_M.MAV_CMD_DO_SET_MODE, _M.MAV_RESULT_ACCEPTED))  # MAVLink receiver: received
     assert h.tick() == R  # not confirmed by that ack, even with confirm_by_ack
-    assert blackboard.reader("t", ["/command/do_set_mode"]).get("/command/do_set_mode").state.name == "IN_PROGRESS"
+    assert blackboard.reader("t", ["/command/mode"]).get("/command/mode").state.name == "IN_PROGRESS"
     vehicle.set(vehicle__statustext=(4, "Switching to RTL is currently not available"))
     h.commander.on_ack(px4_ack(_M.MAV_CMD_DO_SET_MODE, _M.MAV_RESULT_TEMPORARILY_REJECTED))  # the commander's answer
     assert h.tick() == F
@@ -175,7 +175,7 @@ def test_reposition_is_a_command_int_with_the_change_mode_flag_and_an_altitude_a
     request = px4.reposition(47.4, 8.55, 40.0)
     commander.flush()
     (cmd,) = link.take("COMMAND_INT")
-    assert request.command == "DO_REPOSITION"
+    assert request.outcome == "reposition"
     assert (cmd.command, cmd.frame, cmd.x, cmd.y) == (_M.MAV_CMD_DO_REPOSITION, _M.MAV_FRAME_GLOBAL_INT, 474000000, 85500000)
     assert int(cmd.param2) & _M.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE
     assert cmd.z == pytest.approx(528.0)

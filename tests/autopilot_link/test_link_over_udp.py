@@ -51,14 +51,14 @@ def test_streams_are_set_up_and_set_up_again_after_an_autopilot_reboot(idle_runt
         assert runtime.link.connect(200.0)
         tick_until(runtime, lambda: runtime.link.streams.done)
         assert not runtime.link.streams.refused
-        requested = bb("/command/set_message_interval").ticket
+        requested = bb("/command/message_rate").ticket
         first.stop()  # the autopilot reboots: a new one on the same port, its boot clock from zero
         second = SimServer("rover", url=f"udpin:127.0.0.1:{port}", clock=clock, home=HOME).start()
         try:
             tick_until(runtime, lambda: bb("/link/reboots") >= 1)
             tick_until(
                 runtime,
-                lambda: runtime.link.streams.done and bb("/command/set_message_interval").ticket >= requested + len(runtime.link.streams.rates),
+                lambda: runtime.link.streams.done and bb("/command/message_rate").ticket >= requested + len(runtime.link.streams.rates),
             )
             assert bb("/link/up")
         finally:
@@ -78,10 +78,10 @@ def test_link_loss_is_seen_and_recovery_re_requests_streams(idle_runtime, tmp_pa
     try:
         assert runtime.link.connect(200.0)
         tick_until(runtime, lambda: runtime.link.streams.done)
-        requested = bb("/command/set_message_interval").ticket
+        requested = bb("/command/message_rate").ticket
         tick_until(runtime, lambda: not bb("/link/up"))
         assert bb("/link/heartbeat_age_s") > runtime.link.reader.link_timeout_s
         tick_until(runtime, lambda: bb("/link/up"))
-        tick_until(runtime, lambda: runtime.link.streams.done and bb("/command/set_message_interval").ticket > requested)
+        tick_until(runtime, lambda: runtime.link.streams.done and bb("/command/message_rate").ticket > requested)
     finally:
         sim.stop()

@@ -10,7 +10,7 @@ from py_trees.common import Status
 from executive import geo
 from executive.autopilot.rover_motion import RoverMotion, TargetEstimate
 from executive.behaviours import Arm, Disarm, GoTo, SetMode
-from executive.behaviours.actions import CUT_SHARE
+from executive.behaviours.motion import CUT_SHARE
 from executive.geo import destination
 from executive.io.mavlink.dialect import mavlink
 from executive.state import GlobalPosition

@@ -18,8 +18,8 @@ from executive.behaviours import (
     RcNotTakingOver,
     SpeedWithin,
     TargetWithin,
-    guards,
     inside_geofence,
+    position_guards,
     rc_auto_mode,
 )
 from executive.geo import destination
@@ -292,8 +292,8 @@ def test_all_waypoints_within_follows_the_vehicle(harness, facts):
 def test_all_waypoints_within_measures_a_long_route_once_while_the_vehicle_stays(harness, facts, monkeypatch):
     route = [waypoint(n % 500, n % 300) for n in range(1000)]
     calls = []
-    real = guards.distance
-    monkeypatch.setattr(guards, "distance", lambda *a: calls.append(a) or real(*a))
+    real = position_guards.distance
+    monkeypatch.setattr(position_guards, "distance", lambda *a: calls.append(a) or real(*a))
     h = harness(AllWaypointsWithin(route, 1000.0))
     facts(vehicle__position=position())
     assert h.tick() == Status.SUCCESS

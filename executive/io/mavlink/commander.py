@@ -2,8 +2,9 @@
 
 Requests never block. A COMMAND_LONG / COMMAND_INT is queued, sent at :meth:`Commander.flush`,
 matched to its COMMAND_ACK on ``command`` (MAVLink allows one command of a kind in flight), retried
-with ``confirmation + 1`` when no ack comes, and its fate is written to ``/command/<name>`` as a
-:class:`~executive.state.CommandStatus`. Setpoints (no ack exists) are just queued and sent.
+with ``confirmation + 1`` when no ack comes, and its fate is written to ``/command/<outcome>`` (the
+outcome the MAV_CMD carries, :data:`COMMAND_OUTCOMES`) as a :class:`~executive.state.CommandStatus`.
+Setpoints (no ack exists) are just queued and sent.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from executive.clock import Clock
 from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
-from executive.state import CommandState, CommandStatus
+from executive.state import CommandState, CommandStatus, Outcome
 from executive.vehicles import VehicleProfile
 
 #: SET_POSITION_TARGET_GLOBAL_INT type_mask: use position only (ignore velocity, acceleration, yaw).
@@ -36,7 +37,7 @@ NAN = float("nan")
 class RefusalRetry:
     """Ask again, every ``every_s``, a request refused TEMPORARILY_REJECTED, until ``for_s`` after it was first due; then the refusal stands.
 
-    Meanwhile its ``/command/<name>`` shows RETRYING with the refusal's result: one ticket, one final answer.
+    Meanwhile its ``/command/<outcome>`` shows RETRYING with the refusal's result: one ticket, one final answer.
     """
 
     every_s: float
@@ -60,6 +61,32 @@ def result_name(result: int | None) -> str:
     """``1`` -> ``TEMPORARILY_REJECTED``; None -> ``no ack``."""
     entry = mavlink.enums["MAV_RESULT"].get(result) if result is not None else None
     return entry.name.removeprefix("MAV_RESULT_") if entry else "no ack"
+
+
+#: The outcome each MAV_CMD the executive sends carries: its ack goes to ``/command/<outcome>``.
+COMMAND_OUTCOMES: dict[int, Outcome] = {
+    mavlink.MAV_CMD_DO_SET_MODE: Outcome.MODE,
+    mavlink.MAV_CMD_COMPONENT_ARM_DISARM: Outcome.ARMING,
+    mavlink.MAV_CMD_SET_MESSAGE_INTERVAL: Outcome.MESSAGE_RATE,
+    mavlink.MAV_CMD_DO_SET_HOME: Outcome.HOME,
+    mavlink.MAV_CMD_DO_CHANGE_SPEED: Outcome.SPEED,
+    mavlink.MAV_CMD_DO_REPOSITION: Outcome.REPOSITION,
+    mavlink.MAV_CMD_DO_VTOL_TRANSITION: Outcome.TRANSITION,
+    mavlink.MAV_CMD_NAV_TAKEOFF: Outcome.TAKE_OFF,
+    mavlink.MAV_CMD_NAV_LAND: Outcome.LAND,
+    mavlink.MAV_CMD_NAV_VTOL_TAKEOFF: Outcome.VTOL_TAKE_OFF,
+    mavlink.MAV_CMD_NAV_VTOL_LAND: Outcome.VTOL_LAND,
+    mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH: Outcome.RETURN_HOME,
+    mavlink.MAV_CMD_MISSION_START: Outcome.START_ROUTE,
+    mavlink.MAV_CMD_DO_SET_MISSION_CURRENT: Outcome.ROUTE_ITEM,
+    mavlink.MAV_CMD_REQUEST_MESSAGE: Outcome.MESSAGE,
+}
+
+
+def command_outcome(command: int) -> str:
+    """The outcome a MAV_CMD carries (``176`` -> ``mode``); a raw command no outcome covers is its own: ``DO_SET_RELAY``."""
+    outcome = COMMAND_OUTCOMES.get(command)
+    return outcome if outcome is not None else command_name(command)
 
 
 def command_name(command: int) -> str:
@@ -91,7 +118,7 @@ class Commander:
         self._tickets = itertools.count(1)
         self._in_flight: dict[int, _InFlight] = {}
         self._outbox: list[MAVLinkMessage] = []
-        self._bb = blackboard.writer("commander", [blackboard.command_key(n) for n in blackboard.COMMAND_NAMES])
+        self._bb = blackboard.writer("commander", [blackboard.command_key(o) for o in Outcome])
         self.target_system = 1
         self.target_component = 1
         #: The autopilot's mode table; the reader replaces it once the HEARTBEAT tells the firmware.
@@ -112,7 +139,7 @@ class Commander:
 
     # -- requests (from behaviours; never block) ---------------------------------------------
     def command_long(self, command: int, params: Sequence[float] = (), *, delay_s: float = 0.0, retry: RefusalRetry | None = None) -> int:
-        """Queue a COMMAND_LONG (sent ``delay_s`` from now; asked again per ``retry`` if refused for now); its ticket in ``/command/<name>``."""
+        """Queue a COMMAND_LONG (sent ``delay_s`` from now; asked again per ``retry`` if refused for now); its ticket in ``/command/<outcome>``."""
         return self._request(command, params, frame=None, delay_s=delay_s, retry=retry)
 
     def command_int(self, command: int, frame: int, params: Sequence[float] = ()) -> int:
@@ -331,7 +358,7 @@ class Commander:
         if attempts is None:
             attempts = entry.status.attempts
         entry.status = replace(entry.status, state=state, result=result, time=now, attempts=attempts, result_name=result_name(result))
-        key = blackboard.command_key(entry.status.name)
+        key = blackboard.command_key(command_outcome(entry.status.command))
         if key not in self._bb.write:
             self._bb.register_key(key=blackboard.document_command(entry.status.name), access=Access.WRITE)
         self._bb.set(key, entry.status)

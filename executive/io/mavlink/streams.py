@@ -12,6 +12,7 @@ from collections import deque
 from executive import blackboard
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.dialect import mavlink
+from executive.state import Outcome
 
 log = logging.getLogger(__name__)
 
@@ -30,7 +31,7 @@ DEFAULT_RATES: dict[str, float] = {
     "HOME_POSITION": 0.2,
 }
 
-_KEY = blackboard.command_key("SET_MESSAGE_INTERVAL")
+_KEY = blackboard.command_key(Outcome.MESSAGE_RATE)
 
 
 def rates_for(kind: str, autopilot: str = "ardupilot") -> dict[str, float]:

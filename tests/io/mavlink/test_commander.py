@@ -6,15 +6,16 @@ import py_trees
 import pytest
 
 from executive import blackboard
+from executive.io.mavlink.commander import COMMAND_OUTCOMES
 from executive.io.mavlink.dialect import mavlink
-from executive.state import CommandState
+from executive.state import CommandState, Outcome
 from executive.testing import ack
 
 DO_SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 
 
-def status(name: str = "DO_SET_MODE"):
-    return py_trees.blackboard.Blackboard.get(blackboard.command_key(name))
+def status(outcome: str = Outcome.MODE):
+    return py_trees.blackboard.Blackboard.get(blackboard.command_key(outcome))
 
 
 def test_requests_are_queued_until_flush(commander, link):
@@ -40,8 +41,8 @@ def test_ack_is_matched_on_the_command(commander, link):
     commander.arm()
     commander.flush()
     commander.on_ack(ack(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, mavlink.MAV_RESULT_FAILED))
-    assert status("COMPONENT_ARM_DISARM").state is CommandState.REJECTED
-    assert status("COMPONENT_ARM_DISARM").result == mavlink.MAV_RESULT_FAILED
+    assert status(Outcome.ARMING).state is CommandState.REJECTED
+    assert status(Outcome.ARMING).result == mavlink.MAV_RESULT_FAILED
     assert status().state is CommandState.SENT
     commander.on_ack(ack(DO_SET_MODE))
     assert status().state is CommandState.ACCEPTED
@@ -66,8 +67,8 @@ def test_retries_carry_increasing_confirmation_then_time_out(commander, link, cl
         clock.advance(0.25)
     sent = link.take("COMMAND_LONG")
     assert [m.confirmation for m in sent] == [0, 1, 2, 3]
-    assert status("COMPONENT_ARM_DISARM").state is CommandState.TIMED_OUT
-    assert status("COMPONENT_ARM_DISARM").attempts == 4
+    assert status(Outcome.ARMING).state is CommandState.TIMED_OUT
+    assert status(Outcome.ARMING).attempts == 4
 
 
 def test_a_newer_request_supersedes_the_one_in_flight(commander, link):
@@ -99,7 +100,7 @@ def test_command_int_scales_coordinates(commander, link):
     commander.flush()
     (msg,) = link.take()
     assert (msg.get_type(), msg.x, msg.y, msg.z) == ("COMMAND_INT", 475000000, 82500000, 10.0)
-    assert status("DO_REPOSITION").state is CommandState.SENT
+    assert status(Outcome.REPOSITION).state is CommandState.SENT
 
 
 def test_commands_go_to_the_autopilot_that_was_found(commander, link):
@@ -190,3 +191,18 @@ def test_cancel_leaves_a_newer_request_alone(commander):
     second = commander.set_mode("GUIDED")
     assert not commander.cancel(first)
     assert status().ticket == second and status().state is CommandState.QUEUED
+
+
+def test_each_outcome_is_carried_by_one_mav_cmd_and_its_ack_has_a_documented_key():
+    assert sorted(COMMAND_OUTCOMES.values()) == sorted(Outcome)
+    assert all(blackboard.command_key(outcome) in blackboard.KEYS for outcome in Outcome)
+    mav_cmds = {entry.name.removeprefix("MAV_CMD_") for entry in mavlink.enums["MAV_CMD"].values()}
+    assert not [outcome for outcome in Outcome if outcome.upper() in mav_cmds]  # the keys name outcomes, not MAVLink's commands
+
+
+def test_a_command_s_ack_goes_to_its_outcome_s_key(commander, link):
+    ticket = commander.arm()
+    commander.flush()
+    commander.on_ack(ack(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, mavlink.MAV_RESULT_ACCEPTED))
+    arming = py_trees.blackboard.Blackboard.get("/command/arming")
+    assert (arming.ticket, arming.name, arming.state) == (ticket, "COMPONENT_ARM_DISARM", CommandState.ACCEPTED)

@@ -159,7 +159,7 @@ def test_command_ack_reaches_the_commander(reader, link, commander):
     commander.set_mode("GUIDED")
     commander.flush()
     receive(reader, link, ack(mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_RESULT_DENIED))
-    assert bb("/command/do_set_mode").state is CommandState.REJECTED
+    assert bb("/command/mode").state is CommandState.REJECTED
 
 
 def test_statustext(reader, link):

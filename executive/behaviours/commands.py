@@ -1,0 +1,244 @@
+"""Commands and their acks: ask the autopilot port for an outcome once, then watch the blackboard for its effect.
+
+An action never waits inside a tick. It asks in ``initialise`` (the command goes out after the
+tick) and each ``update`` looks at what came back: the ack in ``/command/<outcome>`` and, for the
+effect itself, the vehicle state (ArduPilot can ack a mode change that the heartbeat never shows).
+Here: the framework (:class:`CommandAction`, :func:`refusal`...) and the commands of modes, arming and speed.
+
+Every action needs the ``clock`` and the ``autopilot`` (an :class:`~executive.autopilot.AutopilotPort`)
+from ``tree.setup``.
+"""
+
+from __future__ import annotations
+
+from py_trees.common import Status
+
+from executive import blackboard
+from executive.autopilot import AutopilotPort, Request
+from executive.behaviours.base import TimedBehaviour
+from executive.mission.model import Waypoint
+from executive.state import CommandState, CommandStatus, Outcome
+
+
+def refusal_reason(status: CommandStatus | None, request: Request | None, statustext: tuple[int, str] | None) -> str | None:
+    """Why the command of ``request`` failed (refused, or no ack after every retry); None if it has not."""
+    if status is None or request is None or status.ticket != request.ticket:
+        return None
+    if status.state is CommandState.TIMED_OUT:
+        return f"no ack after {status.attempts} attempts"
+    if status.state is CommandState.REJECTED:
+        return f"refused: {status.result_name}" + (f" ({statustext[1]})" if statustext else "")
+    return None
+
+
+def retry_reason(status: CommandStatus | None, request: Request | None, statustext: tuple[int, str] | None) -> str | None:
+    """The refusal the autopilot port answers by asking again (PX4's AUTO.MISSION while it checks a new mission); None if not."""
+    if status is None or request is None or status.ticket != request.ticket or status.state is not CommandState.RETRYING:
+        return None
+    return f"refused: {status.result_name}" + (f" ({statustext[1]})" if statustext else "") + "; asked again"
+
+
+def accepted(status: CommandStatus | None, request: Request | None) -> bool:
+    """The command of ``request`` was accepted."""
+    return status is not None and request is not None and status.ticket == request.ticket and status.state is CommandState.ACCEPTED
+
+
+class CommandAction(TimedBehaviour):
+    """Request a command once; SUCCESS when the vehicle state confirms it, FAILURE when refused or unconfirmed.
+
+    A refusal the autopilot port asks again by itself (RETRYING) is waited out: the confirmation
+    timeout counts from the last refusal, and the port's own bound ends it with the refusal.
+    """
+
+    needs = ("clock", "autopilot")
+    autopilot: AutopilotPort
+    outcome = ""  # what the request asks of the autopilot (an Outcome): its ack is on blackboard.command_key(outcome)
+    catalogued = False  # a base: its subclasses are the actions
+
+    def __init__(self, name: str, confirm_timeout_s: float = 5.0) -> None:
+        self.reads = (*self.reads, blackboard.command_key(self.outcome), "/vehicle/statustext")
+        super().__init__(name)
+        self.confirm_timeout_s = confirm_timeout_s
+        self._ticket: Request | None = None
+        self._refused_at = float("-inf")  # the last refusal the port answered by asking again
+
+    def request(self) -> Request:
+        """Ask the autopilot for the command; returns its request."""
+        raise NotImplementedError
+
+    def confirmed(self) -> bool:
+        """The vehicle state shows the command took effect."""
+        raise NotImplementedError
+
+    def progress(self) -> str | None:
+        """What the vehicle shows so far (for the feedback while waiting, and in a timeout's reason)."""
+        return None
+
+    def initialise(self) -> None:
+        super().initialise()
+        self._ticket = None  # a new run: the ack of the previous one (ChangeSpeed's confirmation) says nothing about it
+        self._refused_at = float("-inf")
+        if not self.confirmed():
+            self._ticket = self.request()
+
+    def terminate(self, new_status: Status) -> None:
+        if new_status == Status.INVALID:  # interrupted: what it asked for no longer matters
+            self.autopilot.cancel(self._ticket)
+
+    def update(self) -> Status:
+        if self.confirmed():
+            self.feedback_message = "confirmed"
+            return Status.SUCCESS
+        status, statustext = self.get(blackboard.command_key(self.outcome)), self.get("/vehicle/statustext")
+        refusal = refusal_reason(status, self._ticket, statustext)
+        if refusal is not None:
+            self.feedback_message = refusal
+            return Status.FAILURE
+        retrying = retry_reason(status, self._ticket, statustext)
+        if retrying is not None:
+            self._refused_at = status.time
+            self.feedback_message = retrying
+            return Status.RUNNING
+        seen = self.progress()
+        if self.clock.now() - max(self.started, self._refused_at) > self.confirm_timeout_s:
+            self.feedback_message = f"not confirmed after {self.confirm_timeout_s:g} s" + (f": {seen}" if seen else "")
+            return Status.FAILURE
+        self.feedback_message = seen or "waiting for the autopilot"
+        return Status.RUNNING
+
+
+class SetMode(CommandAction):
+    """Put the autopilot in a flight mode (by name); confirmed by the heartbeat.
+
+    With ``confirm_by_ack`` the ack ACCEPTED of its own latest request confirms it too, until the
+    next heartbeat speaks: ArduPilot changes mode before it acks (GCS_MAVLINK::_set_mode_common,
+    libraries/GCS_MAVLink/GCS_Common.cpp, acks ACCEPTED only when set_mode succeeded), while its
+    heartbeat comes once a second. A step re-ticked every tick does not ask again meanwhile; a
+    heartbeat after the ack showing another mode (someone changed it since) is believed.
+    """
+
+    reads = ("/vehicle/mode", "/link/last_heartbeat")
+    outcome = Outcome.MODE
+    param_docs = {"confirm_by_ack": "its own ACCEPTED ack confirms it too, until the next heartbeat (moving a tick after the ack)"}
+
+    def __init__(self, mode: str, name: str | None = None, confirm_timeout_s: float = 5.0, confirm_by_ack: bool = False) -> None:
+        super().__init__(name or f"Set {mode.upper()}", confirm_timeout_s)
+        self.mode = mode.upper()
+        self.confirm_by_ack = confirm_by_ack
+        self._last_request: Request | None = None  # kept across runs: its ack still counts until a heartbeat comes
+
+    def request(self) -> Request:
+        self._last_request = self.autopilot.set_mode(self.mode)
+        return self._last_request
+
+    def confirmed(self) -> bool:
+        if self.get("/vehicle/mode") == self.autopilot.mode_name(self.mode):
+            return True
+        if not self.confirm_by_ack:
+            return False
+        status: CommandStatus | None = self.get(blackboard.command_key(self.outcome))
+        heartbeat: float | None = self.get("/link/last_heartbeat")
+        if status is None or heartbeat is None or not accepted(status, self._last_request):
+            return False
+        return heartbeat <= status.time
+
+
+class Arm(CommandAction):
+    """Arm the vehicle; confirmed by the heartbeat. A refusal (pre-arm checks) is a FAILURE to retry later."""
+
+    reads = ("/vehicle/armed",)
+    outcome = Outcome.ARMING
+
+    def __init__(self, name: str = "Arm", confirm_timeout_s: float = 5.0) -> None:
+        super().__init__(name, confirm_timeout_s)
+
+    def request(self) -> Request:
+        return self.autopilot.arm()
+
+    def confirmed(self) -> bool:
+        return bool(self.get("/vehicle/armed"))
+
+
+class Disarm(Arm):
+    """Disarm the vehicle; confirmed by the heartbeat."""
+
+    def __init__(self, name: str = "Disarm", confirm_timeout_s: float = 5.0) -> None:
+        super().__init__(name, confirm_timeout_s)
+
+    def request(self) -> Request:
+        return self.autopilot.disarm()
+
+    def confirmed(self) -> bool:
+        return not self.get("/vehicle/armed")
+
+
+class HoldFor(SetMode):
+    """Hold the vehicle in ``mode`` for ``seconds``: set the mode (confirmed by the heartbeat), then RUNNING until the time is up.
+
+    The time counts from the heartbeat showing the mode. A refused or unconfirmed mode is a
+    FAILURE (as SetMode); so is the vehicle leaving the mode during the hold (someone else has it).
+    """
+
+    param_units = {"seconds": "s"}
+    param_docs = {"seconds": "how long the mode is held, from the heartbeat showing it"}
+
+    def __init__(self, seconds: float, mode: str = "LOITER", name: str | None = None, confirm_timeout_s: float = 5.0) -> None:
+        super().__init__(mode, name or f"Hold {mode.upper()} {seconds:g} s", confirm_timeout_s)
+        self.seconds = seconds
+        self._holding_since: float | None = None
+
+    def initialise(self) -> None:
+        super().initialise()
+        self._holding_since = None
+
+    def update(self) -> Status:
+        if self._holding_since is None:
+            status = super().update()
+            if status != Status.SUCCESS:
+                return status
+            self._holding_since = self.clock.now()
+        elif not self.confirmed():
+            self.feedback_message = f"left {self.mode} (now {self.get('/vehicle/mode')}) after {self.clock.now() - self._holding_since:.1f} s"
+            return Status.FAILURE
+        held = self.clock.now() - self._holding_since
+        if held >= self.seconds:
+            self.feedback_message = f"held {self.mode} for {self.seconds:g} s"
+            return Status.SUCCESS
+        self.feedback_message = f"holding {self.mode}: {held:.0f}/{self.seconds:g} s"
+        return Status.RUNNING
+
+
+class ChangeSpeed(CommandAction):
+    """Set the speed of the current leg (its waypoint's ``speed_m_s``) with MAV_CMD_DO_CHANGE_SPEED.
+
+    SUCCESS at once when the waypoint has no speed. Confirmed by the ack ACCEPTED: ArduPilot
+    reports the new speed nowhere else. Refused or unanswered: FAILURE. ``airspeed`` for a plane
+    in wing-borne flight, else ground speed.
+    """
+
+    reads = ("/mission/target",)
+    outcome = Outcome.SPEED
+    param_docs = {"airspeed": "an airspeed (a plane in wing-borne flight), else a ground speed"}
+
+    def __init__(self, name: str = "Change speed", airspeed: bool = False, confirm_timeout_s: float = 5.0) -> None:
+        super().__init__(name, confirm_timeout_s)
+        self.airspeed = airspeed
+        self.speed_m_s: float | None = None
+
+    def initialise(self) -> None:
+        target: Waypoint | None = self.get("/mission/target")
+        self.speed_m_s = target.speed_m_s if target is not None else None
+        super().initialise()
+
+    def request(self) -> Request:
+        assert self.speed_m_s is not None
+        return self.autopilot.change_speed(self.speed_m_s, airspeed=self.airspeed)
+
+    def confirmed(self) -> bool:
+        return self.speed_m_s is None or accepted(self.get(blackboard.command_key(self.outcome)), self._ticket)
+
+    def update(self) -> Status:
+        status = super().update()
+        if status == Status.SUCCESS:
+            self.feedback_message = "no speed for this leg" if self.speed_m_s is None else f"{self.speed_m_s:g} m/s"
+        return status
