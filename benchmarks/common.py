@@ -11,8 +11,8 @@ from typing import Any
 
 from executive.assembly import build_runtime
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink, mavutil
 from executive.io.mavlink.link import Link, MemoryLink, PymavlinkLink
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink, mavutil
 from executive.mission.model import Mission
 from executive.sim import FirmwareSim, make_autopilot
 from executive.testing.lockstep import Wire

@@ -27,7 +27,7 @@ from pathlib import Path
 from benchmarks.common import Row
 from executive.clock import ManualClock
 from executive.geo import distance_bearing
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, SimulatorOptions
 from executive.sim import FirmwareSim, make_autopilot

@@ -17,8 +17,8 @@ import time
 from benchmarks.common import Row, median, offset, rover_mission
 from executive.assembly import build_runtime
 from executive.clock import ScaledClock
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.link import PymavlinkLink
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime import Runtime
 from executive.sim import SimServer

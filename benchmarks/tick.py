@@ -37,8 +37,8 @@ from py_trees.common import Status
 
 from benchmarks.common import Row, SimLoop, median, percentile, rover_mission, serpentine
 from executive.assembly import journal_recorder, snapshot_recorder
-from executive.io.mavlink.dialect import mavlink
 from executive.journal import Journal
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.progress import Progress

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.vehicles import AutopilotName
 
 #: PX4 modes with mode_req_prevent_arming (src/modules/commander/ModeUtil/mode_requirements.cpp): never the mode it goes

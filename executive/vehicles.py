@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Literal
 
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
 

@@ -6,7 +6,7 @@ import py_trees
 from py_trees.common import Status
 
 from executive.assembly import Wiring, build_runtime
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.services import Step, service_name
 from executive.testing import ObedientAutopilot
 

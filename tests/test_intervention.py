@@ -6,7 +6,7 @@ import py_trees
 import pytest
 
 from executive.behaviours import SetMode
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, mavlink
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.testing import AUTOPILOT, GCS, RuntimeOnLink

@@ -15,7 +15,7 @@ import pytest
 
 from executive import blackboard
 from executive.clock import Clock
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.operator import Reply
 from executive.runtime import Outcome

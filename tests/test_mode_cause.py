@@ -19,7 +19,7 @@ import pytest
 from executive import blackboard
 from executive.behaviours import SetMode, TakeOff
 from executive.clock import Clock
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.model import Mission
 from executive.mode_cause import ModeChange, autopilot_cause
 from executive.sim.faults import Fault, FaultInjector, LinkLoss

@@ -15,8 +15,8 @@ from pathlib import Path
 import pytest
 
 from executive.geo import destination
-from executive.io.mavlink.dialect import MAVLinkMessage
 from executive.journal import ResumePoint
+from executive.mavlink_dialect import MAVLinkMessage
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, Waypoint

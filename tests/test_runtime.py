@@ -10,7 +10,7 @@ import pytest
 from py_trees.common import Status
 
 from executive.assembly import build_runtime
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.runtime import BehaviourCrashed, Runtime, explain_failure

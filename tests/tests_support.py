@@ -9,8 +9,8 @@ from typing import Any
 from executive.assembly import build_runtime
 from executive.clock import ScaledClock
 from executive.geo import destination
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.link import PymavlinkLink
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.model import Mission, Waypoint
 from executive.pacing import SpeedGovernor
 from executive.runtime import Outcome, Runtime

@@ -19,8 +19,8 @@ from executive.autopilot.selection import Autopilot
 from executive.clock import ManualClock
 from executive.intervention import InterventionWatch
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.reader import MavlinkReader
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, RcConfig
 from executive.state import HomePosition

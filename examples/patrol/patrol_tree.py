@@ -20,7 +20,7 @@ from executive import blackboard
 from executive.autopilot.port import Request
 from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, GoTo, Guard, LinkAlive, SetMode, WaitForGuards, WaitUntil
 from executive.behaviours.actions import CommandAction
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.model import Mission
 from executive.state import CommandState, GpsFix
 

@@ -8,8 +8,8 @@ from typing import ClassVar
 from executive import geo
 from executive.autopilot.port import Capabilities, Request, Target, VtolState
 from executive.io.mavlink.commander import Commander, command_outcome
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, route_items, route_not_on_autopilot
+from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
 from executive.state import GlobalPosition, HomePosition
 from executive.vehicles import VehicleProfile

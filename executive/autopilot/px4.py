@@ -30,8 +30,8 @@ from executive import blackboard
 from executive.autopilot.mavlink_port import MavlinkPort
 from executive.autopilot.port import Capabilities, Request, Target
 from executive.io.mavlink.commander import FORCE_DISARM_MAGIC, Commander, RefusalRetry
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer
+from executive.mavlink_dialect import mavlink
 from executive.state import GlobalPosition, HomePosition, MissionTransferStatus, TransferOperation, TransferState
 from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 

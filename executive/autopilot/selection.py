@@ -10,9 +10,9 @@ from executive.autopilot.mavlink_port import MavlinkPort
 from executive.autopilot.port import AutopilotName, Capabilities, Request, Target, VtolState
 from executive.autopilot.px4 import Px4Port
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
+from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
 from executive.state import GlobalPosition, HomePosition
 from executive.vehicles import VehicleProfile

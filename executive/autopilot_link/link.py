@@ -24,12 +24,12 @@ from executive.behaviours.reacting import READS, Announce, Reacting
 from executive.clock import Clock
 from executive.intervention import rc_takeover
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link, PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.vehicles import PROFILES

@@ -34,8 +34,8 @@ from enum import StrEnum
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer, MissionTransferStatus, TransferState, route_items, route_not_on_autopilot
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.mission.route import Route

@@ -30,8 +30,8 @@ from typing import Any
 
 from executive import blackboard
 from executive.clock import Clock
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.link import Link
+from executive.mavlink_dialect import mavlink
 
 log = logging.getLogger(__name__)
 

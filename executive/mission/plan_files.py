@@ -36,7 +36,7 @@ from typing import Any
 import yaml
 
 from executive.geo import distance
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.errors import FieldError, MissionError, Path
 from executive.mission.loader import load_mission_text
 from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Limits, Mission

@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.errors import FieldError
 
 CMD_WAYPOINT = mavlink.MAV_CMD_NAV_WAYPOINT

@@ -13,7 +13,7 @@ import re
 from json.decoder import scanstring
 from typing import Any
 
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.errors import FieldError, MissionError, Path, format_path
 from executive.mission.plan_items import WPL_COLUMNS, WPL_HEADER, At, Item, Source, describe_json, finite
 from executive.vehicles import profile_for_mav_type

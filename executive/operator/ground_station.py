@@ -14,8 +14,8 @@ import logging
 from collections.abc import Iterable
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import Link
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.operator.requests import Operator

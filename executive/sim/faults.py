@@ -27,8 +27,8 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from executive import geo
 from executive.clock import Clock
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import PX4_MODES
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.errors import MissionError, Path
 from executive.mission.loader import load_model
 from executive.sim.firmware import FirmwareSim

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.sim.mission_store import MissionStore
 from executive.sim.physics.vehicle import VehicleModel
 from executive.sim.proximity import Proximity

@@ -18,7 +18,7 @@ from enum import Enum
 from typing import ClassVar, Protocol
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavlink
+from executive.mavlink_dialect import MAVLinkMessage, encoder, mavlink
 
 _M = mavlink
 _MISSION = _M.MAV_MISSION_TYPE_MISSION

@@ -8,7 +8,7 @@ from types import TracebackType
 from typing import TYPE_CHECKING
 
 from executive.clock import Clock, ScaledClock
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, mavutil
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT, mavutil
 from executive.sim.firmware import DEFAULT_HOME, FirmwareSim, Home
 from executive.sim.registry import make_autopilot
 

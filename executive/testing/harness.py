@@ -12,8 +12,8 @@ from executive import blackboard
 from executive.autopilot.selection import Autopilot
 from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander, command_name
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import MissionTransfer
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.state import Battery, EkfFlags, EkfStatus

@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import MemoryLink
+from executive.mavlink_dialect import MAVLinkMessage, encoder, mavlink
 
 
 class Peer:

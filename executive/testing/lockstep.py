@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Any
 
 from executive.assembly import build_runtime, can_base, obstacle_camera
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.link import MemoryLink
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.runtime import Outcome

@@ -6,7 +6,7 @@ from typing import Any
 
 from executive.assembly import build_runtime
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.sim.options import simulated_home

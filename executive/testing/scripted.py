@@ -10,8 +10,8 @@ from py_trees.common import Status
 from executive import blackboard
 from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.state import GlobalPosition
 from executive.testing.harness import BATTERY_FULL, Harness, Vehicle, mode_switch_channel
 from executive.testing.links import AUTOPILOT

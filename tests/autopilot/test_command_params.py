@@ -15,8 +15,8 @@ from collections.abc import Callable
 import pytest
 
 from executive.autopilot.selection import Autopilot
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.streams import StreamRequester
+from executive.mavlink_dialect import mavlink
 from executive.state import GlobalPosition, HomePosition
 from executive.vehicles import PROFILES
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from executive.autopilot.selection import Autopilot
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.vehicles import PROFILES
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from executive import blackboard
 from executive.autopilot_link import AutopilotLink, SeveralAutopilots
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.streams import rates_for
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.testing import ObedientAutopilot, Peer
 

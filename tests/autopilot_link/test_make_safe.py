@@ -14,7 +14,7 @@ import py_trees
 import pytest
 
 from executive.cli.run import last_words
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.testing import RuntimeOnLink

@@ -8,7 +8,7 @@ import pytest
 
 from executive.autopilot.rover_motion import MOTION_PARAMS, vehicle_motion
 from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.testing import Harness
 
 
@@ -56,7 +56,7 @@ def test_an_autopilot_whose_driving_is_not_modelled_is_asked_only_its_mode_chann
 
 def test_the_simulated_ardurover_answers_them_as_the_firmware_types_them() -> None:
     from executive.clock import ManualClock
-    from executive.io.mavlink.dialect import encoder
+    from executive.mavlink_dialect import encoder
     from executive.sim import make_autopilot
 
     ap = make_autopilot("bunker", ManualClock(), ekf_ready_after_s=1.0)

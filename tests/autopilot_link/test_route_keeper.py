@@ -11,8 +11,8 @@ import pytest
 from executive import geo
 from executive.autopilot_link.route_keeper import RouteKeeper, RouteUpload, RouteUploadState
 from executive.behaviours import KeepRouteOnAutopilot
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import TransferState
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Home, Mission
 from executive.mission.route import offset

@@ -12,7 +12,7 @@ from executive.autopilot.rover_motion import RoverMotion, TargetEstimate
 from executive.behaviours import Arm, Disarm, GoTo, SetMode
 from executive.behaviours.motion import CUT_SHARE
 from executive.geo import destination
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.state import GlobalPosition
 from executive.testing.links import ack
 

@@ -32,9 +32,9 @@ from executive.behaviours import (
 from executive.clock import ManualClock
 from executive.geo import destination, distance
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Mission
 from executive.sim import make_autopilot

@@ -14,8 +14,8 @@ from py_trees.common import Status
 from executive.behaviours import ChangeAltitude, ChangeDepth, ChangeSpeed, GoTo, GoToLocal, HoldFor, Land, TakeOff, VtolTransition
 from executive.frames import Enu, local_to_global
 from executive.geo import destination
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.modes import ArduPilotModes
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.state import GlobalPosition, HomePosition, Rangefinder

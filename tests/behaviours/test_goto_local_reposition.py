@@ -7,7 +7,7 @@ from py_trees.common import Status
 
 from executive.behaviours import GoToLocal
 from executive.frames import Enu, global_to_local, local_to_global
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.state import GlobalPosition, HomePosition
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE

@@ -9,7 +9,7 @@ from py_trees.common import Status
 
 from executive.autopilot_link.parameters import ParameterWatch
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.mission.rules import rc_switch_channels

@@ -9,7 +9,7 @@ from py_trees.common import Status
 
 from executive.behaviours import AltitudeWithin, ChangeSpeed, ForEachLeg, PositionKnown, Surface
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, Range
 from executive.state import GlobalPosition

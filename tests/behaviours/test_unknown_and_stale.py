@@ -26,9 +26,9 @@ from executive.behaviours import (
 )
 from executive.catalogue import catalogue
 from executive.cli import main
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.reader import MavlinkReader
 from executive.journal import ResumePoint
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Range
 from executive.state import Battery, Rangefinder

@@ -16,7 +16,7 @@ import pytest
 from executive import geo
 from executive.cli import main
 from executive.io.control import request
-from executive.io.mavlink.dialect import mavlink, mavutil
+from executive.mavlink_dialect import mavlink, mavutil
 from tests_support import mission_text
 
 ROOT = Path(__file__).parents[2]

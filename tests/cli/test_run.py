@@ -20,8 +20,8 @@ import pytest
 
 from executive.cli import main
 from executive.clock import ScaledClock
-from executive.io.mavlink.dialect import mavutil
 from executive.io.mavlink.link import load_signing_key
+from executive.mavlink_dialect import mavutil
 from executive.sim import SimServer
 from tests_support import run_over
 

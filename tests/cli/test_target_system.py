@@ -10,7 +10,7 @@ import pytest
 
 from executive.cli import main
 from executive.clock import ScaledClock
-from executive.io.mavlink.dialect import MAVLinkMessage
+from executive.mavlink_dialect import MAVLinkMessage
 from executive.sim import SimServer
 from executive.sim.firmware import DEFAULT_HOME
 from mavlink_hub import UdpHub

@@ -37,8 +37,8 @@ from executive.behaviours import (
 from executive.cli import main
 from executive.clock import Clock
 from executive.geofence import Geofence
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.journal import Journal, JournalLogHandler
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.runtime import Runtime

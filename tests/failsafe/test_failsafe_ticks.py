@@ -19,8 +19,8 @@ from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import ManualClock
 from executive.geo import destination
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.modes import PX4_MODES
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission

@@ -13,7 +13,6 @@ from hypothesis import strategies as st
 
 from executive import blackboard
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.link import MemoryLink
 from executive.io.obstacles import (
     STALE_S,
@@ -28,6 +27,7 @@ from executive.io.obstacles import (
     parse_endpoint,
     parse_scan,
 )
+from executive.mavlink_dialect import mavlink
 
 
 def scan_bytes(**fields: object) -> bytes:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from executive.assembly import build_runtime, ground_stations
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.operator import Operator
 from executive.operator.ground_station import STATE_CODES, GroundStationControl

@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavlink, mavutil
+from executive.mavlink_dialect import MAVLinkMessage, encoder, mavlink, mavutil
 from executive.sim import FirmwareSim
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190

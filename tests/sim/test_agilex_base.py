@@ -20,7 +20,7 @@ from executive.io.can.agilex import (
     decode,
 )
 from executive.io.can.drive import DriveConfig, motion_from_tracks, track_throttle
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
 from executive.sim.agilex_base import SimulatedBase
 from executive.sim.faults import FaultInjector, FaultPlan

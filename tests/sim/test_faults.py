@@ -15,8 +15,8 @@ from executive import geo
 from executive.cli import main
 from executive.cli import sim as sim_cli
 from executive.clock import ManualClock, ScaledClock
-from executive.io.mavlink.dialect import MAVLinkMessage, encoder, mavutil
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import MAVLinkMessage, encoder, mavutil
+from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer, make_autopilot
 from executive.sim.faults import FaultFileError, FaultInjector, FaultPlan, GpsGlitch, LinkLoss, RcTakeover, load_faults
 from executive.sim.firmware import FirmwareSim

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import mavlink as m
 from executive.sim.proximity import TIMEOUT_S, face_of
 
 if TYPE_CHECKING:

@@ -13,8 +13,8 @@ import pytest
 from executive.cli import EXIT_BAD_INPUT
 from executive.cli import sim as sim_cli
 from executive.clock import ScaledClock
-from executive.io.mavlink.dialect import MAVLinkMessage
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import MAVLinkMessage
+from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
 
 if TYPE_CHECKING:

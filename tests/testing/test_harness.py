@@ -6,7 +6,7 @@ import pytest
 from py_trees.common import Status
 
 from executive import mission_tree
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.testing import EKF_READY, Harness, ScriptedAutopilot
 
 

@@ -13,7 +13,7 @@ from executive import mission_tree
 from executive.clock import ManualClock
 from executive.geo import destination, distance
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission

@@ -18,8 +18,8 @@ from py_trees.common import Status
 
 from executive import geo, mission_tree
 from executive.behaviours.auto_route import MISSION_STATE_COMPLETE
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
 from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemReached
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission, RcConfig

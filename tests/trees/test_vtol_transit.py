@@ -15,8 +15,8 @@ from executive import blackboard, mission_tree
 from executive.clock import ManualClock
 from executive.frames import global_to_local, local_to_global
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.modes import ArduPilotModes
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission

@@ -17,9 +17,9 @@ from py_trees.common import Access
 
 from executive import blackboard
 from executive.clock import Clock
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.state import CommandState, CommandStatus, Outcome
 from executive.vehicles import VehicleProfile
 

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 from executive.io.mavlink.link import Link
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 
 
 class Heartbeat:

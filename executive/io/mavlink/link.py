@@ -11,9 +11,9 @@ from collections.abc import Collection
 from pathlib import Path
 from typing import BinaryIO, Protocol
 
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
 from executive.io.mavlink.endpoint import unreachable
 from executive.io.mavlink.skim import Skimmer
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
 
 
 class Link(Protocol):

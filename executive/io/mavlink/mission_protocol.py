@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING, Any
 
 from executive import blackboard
 from executive.clock import Clock
-from executive.io.mavlink.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.io.mavlink.link import Link
+from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.state import MissionCurrent, MissionItemReached, MissionTransferStatus, TransferOperation, TransferState
 
 if TYPE_CHECKING:
@@ -99,7 +99,7 @@ class MissionItem:
         )  # fmt: skip
 
     def encode(self, mav: mavlink.MAVLink, target_system: int, target_component: int) -> MAVLinkMessage:
-        """As a MISSION_ITEM_INT from ``mav`` (an :func:`~executive.io.mavlink.dialect.encoder`)."""
+        """As a MISSION_ITEM_INT from ``mav`` (an :func:`~executive.mavlink_dialect.encoder`)."""
         return mav.mission_item_int_encode(
             target_system, target_component, self.seq, self.frame, self.command, self.current, self.autocontinue,
             self.param1, self.param2, self.param3, self.param4, round(self.x * 1e7), round(self.y * 1e7), self.z, _MISSION,

@@ -20,12 +20,12 @@ from collections.abc import Callable
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.link_health import LinkHealth
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.io.mavlink.vehicle_clock import VehicleClockWatch
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
 from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, Rangefinder
 
 log = logging.getLogger(__name__)

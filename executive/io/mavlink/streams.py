@@ -11,7 +11,7 @@ from collections import deque
 
 from executive import blackboard
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.state import Outcome
 
 log = logging.getLogger(__name__)

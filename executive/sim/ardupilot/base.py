@@ -18,7 +18,7 @@ from types import MappingProxyType
 from typing import ClassVar
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
 from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 from executive.sim.firmware import DEFAULT_HOME, EPSILON_S, Command, CommandHandler, FirmwareSim, Home, e7
 from executive.sim.mission_store import MissionStore

@@ -54,7 +54,7 @@ from enum import Enum
 from typing import ClassVar
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import (
     GLOBAL_FRAMES,
     NAVIGATION,

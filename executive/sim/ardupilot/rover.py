@@ -9,7 +9,7 @@ from types import MappingProxyType
 from typing import ClassVar
 
 from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS, RoverMotion
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import ACC_BITS, GLOBAL_FRAMES, NAVIGATION, POS_BITS, RATE_ATTITUDE, ArduPilotSim
 from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon

@@ -29,7 +29,7 @@ from types import MappingProxyType
 from typing import ClassVar
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import (
     ACC_BITS,
     DEFAULT_INTERVALS,

@@ -14,7 +14,7 @@ from types import MappingProxyType
 from typing import ClassVar
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import MAVLinkMessage, mavlink
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.firmware import DEFAULT_HOME, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import MissionState
 from executive.sim.px4.mission_store import Px4MissionStore

@@ -6,7 +6,7 @@ import dataclasses
 from collections.abc import Sequence
 
 from executive.clock import Clock
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.sim.firmware import DEFAULT_HOME, Command, CommandHandler, Home
 from executive.sim.physics.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
 from executive.sim.physics.vehicle import VehicleModel

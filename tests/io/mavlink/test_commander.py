@@ -7,7 +7,7 @@ import pytest
 
 from executive import blackboard
 from executive.io.mavlink.commander import COMMAND_OUTCOMES
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.state import CommandState, Outcome
 from executive.testing import ack
 

@@ -8,8 +8,6 @@ from dataclasses import replace
 import py_trees
 import pytest
 
-from executive.io.mavlink.dialect import MAVLinkMessage
-from executive.io.mavlink.dialect import mavlink as m
 from executive.io.mavlink.mission_protocol import (
     MissionCurrent,
     MissionItem,
@@ -22,6 +20,8 @@ from executive.io.mavlink.mission_protocol import (
     waypoint_items,
 )
 from executive.io.mavlink.reader import MavlinkReader
+from executive.mavlink_dialect import MAVLinkMessage
+from executive.mavlink_dialect import mavlink as m
 from executive.testing import AUTOPILOT, GCS
 
 HOME = (47.397742, 8.545594)

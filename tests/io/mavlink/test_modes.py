@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.modes import PX4_MODES, ArduPilotModes, Px4Modes, mode_table
+from executive.mavlink_dialect import mavlink
 from executive.vehicles import PLANE_MODES, ROVER_MODES, SUB_MODES
 
 

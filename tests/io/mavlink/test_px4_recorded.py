@@ -12,7 +12,7 @@ import pytest
 from tlog_replay import PX4, Replay, records
 
 from executive.behaviours import EkfOk
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 
 

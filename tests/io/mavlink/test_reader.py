@@ -7,8 +7,8 @@ import math
 import py_trees
 import pytest
 
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.reader import MavlinkReader
+from executive.mavlink_dialect import mavlink
 from executive.state import CommandState, EkfFlags
 from executive.testing import AUTOPILOT, GCS, Peer, ack
 

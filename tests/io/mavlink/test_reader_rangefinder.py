@@ -6,8 +6,8 @@ from __future__ import annotations
 import py_trees
 import pytest
 
-from executive.io.mavlink.dialect import mavlink
 from executive.io.mavlink.reader import MavlinkReader
+from executive.mavlink_dialect import mavlink
 from executive.testing import AUTOPILOT, Peer
 
 DOWN, FORWARD = mavlink.MAV_SENSOR_ROTATION_PITCH_270, mavlink.MAV_SENSOR_ROTATION_NONE

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from executive.io.mavlink.dialect import encoder, mavlink
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.skim import BOOT_TIME_OFFSETS, Skimmer, UnreadMessage
+from executive.mavlink_dialect import encoder, mavlink
 
 BOOT_MS = 123_456_789
 

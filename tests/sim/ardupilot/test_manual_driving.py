@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from executive.io.mavlink.dialect import mavlink
+from executive.mavlink_dialect import mavlink
 
 
 @pytest.fixture

@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.io.mavlink.dialect import MAVLinkMessage
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import MAVLinkMessage
+from executive.mavlink_dialect import mavlink as m
 
 if TYPE_CHECKING:
     from sim_support import Gcs

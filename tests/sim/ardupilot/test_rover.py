@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import mavlink as m
 from executive.sim.ardupilot.base import EKF_FLAGS_READY
 
 if TYPE_CHECKING:

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING
 import pytest
 
 from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, auto_corner_cut_m, sqrt_controller, stopping_distance
-from executive.io.mavlink.dialect import MAVLinkMessage
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import MAVLinkMessage
+from executive.mavlink_dialect import mavlink as m
 from executive.sim.ardupilot.rover import SITL_PARAMS
 
 if TYPE_CHECKING:

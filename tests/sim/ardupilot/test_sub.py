@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import pytest
 
 from executive.clock import ScaledClock
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
 from executive.sim.physics.underwater import SUB_LIMITS, Seabed, UnderwaterVehicle
 from executive.vehicles import profile_for_mav_type

@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING
 import pytest
 
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import MAVLinkMessage
-from executive.io.mavlink.dialect import mavlink as m
+from executive.mavlink_dialect import MAVLinkMessage
+from executive.mavlink_dialect import mavlink as m
 from executive.sim import make_autopilot
 from executive.sim.faults import EkfDegradation, FaultInjector
 from sim_support import EKF_READY_S, HOME, Gcs

@@ -9,9 +9,9 @@ from typing import TYPE_CHECKING
 import pytest
 
 from executive.clock import ManualClock
-from executive.io.mavlink.dialect import MAVLinkMessage
-from executive.io.mavlink.dialect import mavlink as m
 from executive.io.mavlink.modes import PX4_MODES
+from executive.mavlink_dialect import MAVLinkMessage
+from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer, make_autopilot
 from executive.sim.faults import EkfDegradation, FaultInjector, GpsGlitch
 from executive.sim.px4.base import Px4Sim

@@ -1,0 +1,145 @@
+"""The import contract: the layers README's "Architecture" draws, kept true.
+
+Every module of ``executive`` (``executive.trees`` included) is read with ``ast`` (imports inside
+functions count). The checks: no import cycle between modules; an import runs down the layers, or is
+one of the few listed upward ones; nothing in ``behaviours`` imports ``io``; no module over 600 lines.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "executive"
+
+#: Top first. A module belongs to the layer of the longest prefix naming it.
+LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("entry points", ("executive.cli", "executive.__main__", "executive.sim", "executive.testing")),
+    ("runtime", ("executive.runtime", "executive.assembly", "executive.autopilot_link", "executive.web", "executive.groot2", "executive.operator",
+                 "executive.journal", "executive.progress", "executive.status", "executive.logs",
+                 "executive.pacing", "executive.services")),
+    ("admission", ("executive.admission", "executive.reach", "executive.mission_schema")),
+    ("trees", ("executive.trees", "executive.composition", "executive.catalogue",
+               "executive.btcpp", "executive.recompose", "executive.tree_drawing", "executive.waiting", "executive.mission_tree",
+               "executive.snapshots")),
+    ("behaviours", ("executive.behaviours",)),
+    ("autopilot", ("executive.autopilot", "executive.mode_cause", "executive.intervention", "executive.sensing",
+                   "executive.instruments")),
+    ("io", ("executive.io",)),
+    ("mission", ("executive.mission", "executive.state", "executive.blackboard", "executive.geo", "executive.frames",
+                 "executive.geofence", "executive.clock", "executive.seabed", "executive.vehicles", "executive.registry", "executive")),
+)  # fmt: skip
+
+#: The imports allowed to run up a layer, and why (at most 3).
+UPWARD: dict[tuple[str, str], str] = {
+    (
+        "executive.io.serial_sampler",
+        "executive.instruments.sampler",
+    ): "a serial instrument implements the sampler interface (as a python-can back end, can.BusABC)",
+}
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {module_name(p): p for p in sorted(PACKAGE.rglob("*.py")) if "__pycache__" not in p.parts}
+
+
+def imports_of(name: str) -> set[str]:
+    """The modules of ours ``name`` imports (``from a import b`` names module ``a.b`` when there is one)."""
+    path = MODULES[name]
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        targets: list[str] = []
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = package.split(".")
+                base = ".".join(parts[: len(parts) - node.level + 1] + ([node.module] if node.module else []))
+            targets = [f"{base}.{alias.name}" for alias in node.names] + [base]
+        for target in targets:
+            while target and target not in MODULES:
+                target = target.rpartition(".")[0]
+            if target and target != name:
+                found.add(target)
+    return found
+
+
+GRAPH = {name: imports_of(name) for name in MODULES}
+
+
+def layer(name: str) -> int:
+    best = max(
+        ((i, len(prefix)) for i, (_, prefixes) in enumerate(LAYERS) for prefix in prefixes if name == prefix or name.startswith(prefix + ".")),
+        key=lambda found: found[1],
+    )
+    return best[0]
+
+
+def cycles() -> list[list[str]]:
+    """The strongly connected groups of more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    groups: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(GRAPH[v]):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                groups.append(sorted(group))
+
+    for v in sorted(GRAPH):
+        if v not in index:
+            visit(v)
+    return groups
+
+
+def test_no_import_cycle() -> None:
+    assert cycles() == []
+
+
+def test_imports_run_down_the_layers() -> None:
+    upward = {(a, b) for a, targets in GRAPH.items() for b in targets if layer(b) < layer(a)}
+    assert upward == set(UPWARD), "imports running up a layer (README: Architecture)"
+    assert len(UPWARD) <= 3
+
+
+def test_behaviours_import_no_io() -> None:
+    assert {(a, b) for a, targets in GRAPH.items() if a.startswith("executive.behaviours") for b in targets if b.startswith("executive.io")} == set()
+
+
+@pytest.mark.parametrize("name", sorted(MODULES))
+def test_no_module_over_600_lines(name: str) -> None:
+    assert len(MODULES[name].read_text(encoding="utf-8").splitlines()) <= 600
+
+
+def test_the_contract_reads_the_package_it_guards() -> None:
+    """Imports are found at the top and inside functions; every module has a layer."""
+    assert "executive.autopilot" in GRAPH["executive.behaviours.commands"]  # the package: its __init__ imports the port
+    assert "executive.mavlink_dialect" in GRAPH["executive.io.mavlink.link"]
+    assert "executive.mission_tree" in GRAPH["executive.runtime"]
+    assert {layer(name) for name in MODULES} == set(range(len(LAYERS)))
