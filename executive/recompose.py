@@ -64,10 +64,22 @@ class Recomposer:
         folded = self._folded(behaviour, here)
         if folded is not None:
             return folded
+        node = self._describe(behaviour, here)
+        if node is None:
+            return self._unknown(behaviour, here)
+        self._children(node, self.types[node.type], list(behaviour.children), here)
+        return node
+
+    def describe_one(self, behaviour: py_trees.behaviour.Behaviour) -> Node | None:
+        """``behaviour`` alone as its catalogue node (its type and parameters; no children, nothing folded); None if the catalogue
+        does not offer its class (a Groot2 monitor's view of each running node)."""
+        return self._describe(behaviour, behaviour.name)
+
+    def _describe(self, behaviour: py_trees.behaviour.Behaviour, here: str) -> Node | None:
         cls = type(behaviour)
         type_id, readers = PY_TREES.get(cls, (self.by_class.get(cls), {}))
         if type_id is None or type_id not in self.types:
-            return self._unknown(behaviour, here)
+            return None
         spec = self.types[type_id]
         attributes: Mapping[str, str] = getattr(cls, "param_attributes", {})
         name = getattr(behaviour, attributes.get("name", "name"))
@@ -81,7 +93,6 @@ class Recomposer:
                 self.warnings.append((here, f"{port.name}: not readable from the {cls.__name__}: left at its default"))
             elif value != port.default:
                 node.params[port.name] = value
-        self._children(node, spec, list(behaviour.children), here)
         return node
 
     def _mission_value(self, port: Port) -> Any:

@@ -288,6 +288,11 @@ class Recording:
         self._ticks = [entry.tick for entry in self._entries]
 
     @property
+    def ticks(self) -> list[int]:
+        """Every recorded tick, in order (a run's end repeats its last tick)."""
+        return list(self._ticks)
+
+    @property
     def first(self) -> int:
         return self._ticks[0]
 

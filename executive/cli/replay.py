@@ -1,4 +1,5 @@
-"""``executive replay SNAPSHOTS [--tick N]``: the tree as it was at tick N of a recorded run; ``--web PORT``: in a browser, with a tick slider."""
+"""``executive replay SNAPSHOTS [--tick N]``: the tree as it was at tick N of a recorded run; ``--web PORT``: in a browser, with a tick slider;
+``--groot2 PORT``: played to Groot2 as it ran."""
 
 from __future__ import annotations
 
@@ -14,14 +15,71 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--tick", type=int, help="which tick (default: the last recorded)")
     p.add_argument("--all-keys", action="store_true", help="print the whole blackboard, not just what changed at that tick")
     p.add_argument("--web", metavar="[HOST:]PORT", help="show the recording in a browser on PORT (127.0.0.1 unless HOST is given), until Ctrl-C")
+    p.add_argument(
+        "--groot2",
+        metavar="[HOST:]PORT",
+        help="serve the recording to Groot2 on PORT and PORT+1 as it ran (127.0.0.1 unless HOST is given), until Ctrl-C",
+    )
+    p.add_argument("--speed", type=float, default=1.0, metavar="X", help="with --groot2: play the recording X times faster than it ran (default 1)")
     p.set_defaults(func=main)
+
+
+def _until_stopped() -> None:
+    """Wait for Ctrl-C or SIGTERM."""
+    import signal
+    import threading
+
+    stop = threading.Event()
+    previous = signal.signal(signal.SIGTERM, lambda _s, _f: stop.set())
+    try:
+        while not stop.wait(0.5):
+            pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _serve_groot2(args: argparse.Namespace) -> int:
+    """The recording played to Groot2 clients until Ctrl-C or SIGTERM."""
+    from executive.groot2.replay import ReplayFeed
+    from executive.groot2.server import Groot2AddressError, Groot2Server, parse_address
+    from executive.groot2.view import MonitorView
+    from executive.snapshots import Recording
+
+    try:
+        address = parse_address(args.groot2)
+    except Groot2AddressError as exc:
+        raise BadInput(f"--groot2: {exc}") from exc
+    if args.speed <= 0.0:
+        raise BadInput(f"--speed: {args.speed:g} is not above 0")
+    recording = Recording(args.snapshots)
+    if args.tick is not None:
+        recording.tree_of(args.tick)  # LookupError, naming the ticks there are
+    view = MonitorView()
+    try:
+        server = Groot2Server(address, view)
+    except OSError as exc:
+        raise NoVehicle(f"--groot2: {exc}") from exc
+    feed = ReplayFeed(recording, view, args.speed, start=args.tick)
+    server.start()
+    feed.start()
+    print(
+        f"executive: replay of {args.snapshots} (ticks {recording.first} to {recording.last}) for Groot2 on {address.host} port {address.port} "
+        f"(publisher {address.port + 1}); Ctrl-C to stop",
+        file=sys.stderr,
+        flush=True,
+    )
+    try:
+        _until_stopped()
+    finally:
+        feed.close()
+        server.close()
+    return EXIT_OK
 
 
 def _serve(args: argparse.Namespace) -> int:
     """The recording on the live view's page until Ctrl-C or SIGTERM."""
-    import signal
-    import threading
-
     from executive.web.replay import ReplaySource
     from executive.web.server import WebAddressError, WebServer, parse_address
 
@@ -37,15 +95,9 @@ def _serve(args: argparse.Namespace) -> int:
         raise NoVehicle(f"--web: cannot listen on {args.web}: {exc}") from exc
     recording = source.recording
     print(f"executive: replay of {args.snapshots} (ticks {recording.first} to {recording.last}) on {server.url}; Ctrl-C to stop", file=sys.stderr)
-    stop = threading.Event()
-    previous = signal.signal(signal.SIGTERM, lambda _s, _f: stop.set())
     try:
-        while not stop.wait(0.5):
-            pass
-    except KeyboardInterrupt:
-        pass
+        _until_stopped()
     finally:
-        signal.signal(signal.SIGTERM, previous)
         server.close()
     return EXIT_OK
 
@@ -54,8 +106,12 @@ def main(args: argparse.Namespace) -> int:
     from executive.snapshots import render, replay
 
     try:
+        if args.web is not None and args.groot2 is not None:
+            raise BadInput("--web and --groot2: one at a time")
         if args.web is not None:
             return _serve(args)
+        if args.groot2 is not None:
+            return _serve_groot2(args)
         state = replay(args.snapshots, args.tick)
     except FileNotFoundError:
         print(f"{args.snapshots}:1:1: (file): no such snapshot file", file=sys.stderr)

@@ -96,6 +96,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="[HOST:]PORT",
         help="the live view in a browser on PORT (127.0.0.1 unless HOST is given; beyond it the buttons need the token printed at start-up)",
     )
+    p.add_argument(
+        "--groot2",
+        metavar="[HOST:]PORT",
+        help="serve the running tree to Groot2 (BehaviorTree.CPP's monitor protocol, ZeroMQ) on PORT and PORT+1 (127.0.0.1 unless HOST is given)",
+    )
     p.add_argument("--web-token-file", metavar="FILE", help="the live view's token (its first line, >= 16 characters), instead of a new one")
     p.add_argument(
         "-v", "--verbose", action="count", default=0, help="more log output (default: warnings and the operator's events; -v all info, -vv debug)"
@@ -274,6 +279,29 @@ def _web_server(args: argparse.Namespace, stack: contextlib.ExitStack) -> WebSer
     return server
 
 
+def _groot2(args: argparse.Namespace, stack: contextlib.ExitStack) -> list[Plug]:
+    """The Groot2 publisher of --groot2, listening (BadInput: a bad address; NoVehicle: the ports cannot be had), closed with ``stack``."""
+    if args.groot2 is None:
+        return []
+    from executive.groot2.live import groot2_monitor
+    from executive.groot2.server import Groot2AddressError, Groot2Server, parse_address
+    from executive.groot2.view import MonitorView
+
+    try:
+        address = parse_address(args.groot2)
+    except Groot2AddressError as exc:
+        raise BadInput(f"--groot2: {exc}") from exc
+    view = MonitorView()
+    try:
+        server = Groot2Server(address, view)
+    except OSError as exc:
+        raise NoVehicle(f"--groot2: {exc}") from exc
+    server.start()
+    stack.callback(server.close)
+    print(f"executive: Groot2 can connect to {address.host} port {address.port} (publisher {address.port + 1})", file=sys.stderr, flush=True)
+    return [groot2_monitor(view)]
+
+
 def _signing_hint(link: PymavlinkLink) -> str:
     """Why no heartbeat was heard when signing is the reason: every packet failed the signature check."""
     unsigned, other_key, accepted = link.signature_failures
@@ -360,6 +388,7 @@ def main(args: argparse.Namespace) -> int:
         stack.callback(stop.release)  # the last thing undone: a Ctrl-C anywhere in the shutdown finds our handler
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         web = _web_server(args, stack)
+        groot2 = _groot2(args, stack)
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
         gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
         journal, snapshots = _recorders(args, clock, stack)
@@ -374,7 +403,7 @@ def main(args: argparse.Namespace) -> int:
         progress = Progress(sys.stdout, clock, quiet=watchdog is not None)  # under systemd: status lines on changes, into the journal
         attach_live_line(progress)  # a log record clears the live line first
         stack.callback(attach_live_line, None)
-        plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path, web)
+        plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path, web) + groot2
         runtime = build_runtime(
             mission,
             link,

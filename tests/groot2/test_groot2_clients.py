@@ -1,0 +1,186 @@
+"""Real clients and a real publisher: btview against BehaviorTree.CPP's own Groot2Publisher and ours; `run --groot2`, `replay --groot2`.
+
+behaviortreepy 0.1.4's Groot2Publisher answers FULLTREE, STATUS and BLACKBOARD and refuses the hooks and
+recording requests ("Request not recognized"), which later BehaviorTree.CPP answers: those are
+compared with BehaviorTree.CPP's source in test_groot2_monitor.py, not with this build.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import py_trees
+import pytest
+from btview.client import ConnectionError_, Groot2Client
+from btview.model import NodeStatus
+from btview.protocol.groot2 import ProtocolError as ClientProtocolError
+from test_groot2_monitor import free_port_pair
+
+from executive.assembly import snapshot_recorder
+from executive.groot2.model import CODES, behaviours_in_order, from_tree
+from executive.groot2.server import Groot2Address, Groot2Server
+from executive.groot2.view import MonitorView
+from executive.mission.loader import load_mission
+from executive.snapshots import SnapshotRecorder
+from executive.testing.lockstep import Lockstep
+
+bt = pytest.importorskip("behaviortreepy", reason="BehaviorTree.CPP's Python bindings are a test dependency ('.[test]')")
+ROOT = Path(__file__).parents[2]
+
+# The same shape on both sides: a reactive sequence of a fallback (a failing and a running action) and an action never reached.
+BTCPP_XML = """<root BTCPP_format="4" main_tree_to_execute="MainTree"><BehaviorTree ID="MainTree">
+<ReactiveSequence name="root"><Fallback name="either"><Fails name="first"/><Runs name="second"/></Fallback><Succeeds name="then"/></ReactiveSequence>
+</BehaviorTree></root>"""
+
+
+def our_tree() -> py_trees.behaviour.Behaviour:
+    either = py_trees.composites.Selector(
+        "either", memory=True, children=[py_trees.behaviours.Failure(name="first"), py_trees.behaviours.Running(name="second")]
+    )
+    return py_trees.composites.Sequence("root", memory=False, children=[either, py_trees.behaviours.Success(name="then")])
+
+
+def answers(client: Groot2Client) -> dict[str, object]:
+    """What a client reads: the tree's shape and kinds, the statuses by node name, the blackboard's form, a recording's form."""
+    tree = client.fetch_tree()
+    names = {uid: node.name for uid, node in tree.by_uid.items()}
+    statuses = {names[uid]: state.status for uid, state in client.poll().statuses.items()}
+    board = client.fetch_blackboard(["MainTree", "NoSuchTree"])
+    return {
+        "shape": [(node.name, node.kind, len(node.children)) for node in tree.walk()],
+        "statuses": statuses,
+        "blackboards": sorted(board) if isinstance(board, dict) else board,
+        "uuid": len(client.tree_uuid) == 32,
+    }
+
+
+def test_btview_reads_the_same_kinds_of_answers_from_behaviortree_cpp_and_from_us() -> None:
+    factory = bt.BehaviorTreeFactory()
+    factory.register_simple_action("Fails", lambda node: bt.NodeStatus.FAILURE)
+    factory.register_simple_stateful_action("Runs", lambda node: bt.NodeStatus.RUNNING, lambda node: bt.NodeStatus.RUNNING)
+    factory.register_simple_action("Succeeds", lambda node: bt.NodeStatus.SUCCESS)
+    theirs_port, ours_port = free_port_pair(), None
+    tree = factory.create_tree_from_text(BTCPP_XML)
+    publisher = bt.Groot2Publisher(tree, theirs_port)
+    tree.tick_once()
+
+    ours_port = free_port_pair()
+    while ours_port in (theirs_port, theirs_port + 1):
+        ours_port = free_port_pair()
+    root = our_tree()
+    root.tick_once()
+    view = MonitorView()
+    view.show_tree(from_tree(root))
+    view.ticked([CODES.get(node.status) for node in behaviours_in_order(root)], 0.0)
+    server = Groot2Server(Groot2Address("127.0.0.1", ours_port), view)
+    server.start()
+    theirs, ours = Groot2Client("127.0.0.1", theirs_port, timeout_ms=5000), Groot2Client("127.0.0.1", ours_port, timeout_ms=5000)
+    try:
+        a, b = answers(theirs), answers(ours)
+    finally:
+        theirs.close()
+        ours.close()
+        server.close()
+        del publisher
+    assert a == b
+    assert a["blackboards"] == ["MainTree"]  # the subtree asked for, the unknown one left out
+    assert a["statuses"] == {
+        "root": NodeStatus.RUNNING,
+        "either": NodeStatus.RUNNING,
+        "first": NodeStatus.FAILURE,
+        "second": NodeStatus.RUNNING,
+        "then": NodeStatus.IDLE,
+    }
+
+
+def poll_until(client: Groot2Client, predicate, timeout_s: float = 120.0):
+    """Ask again until ``predicate(answer)`` holds (wall time bounds only a hung process; what is waited for is what the client reads)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            answer = predicate()
+        except (ConnectionError_, ClientProtocolError):
+            answer = None
+        if answer:
+            return answer
+        time.sleep(0.05)
+    pytest.fail("the publisher never gave the expected answer")
+
+
+def test_btview_watches_a_real_run_of_executive_run_groot2(tmp_path) -> None:
+    port = free_port_pair()
+    run = subprocess.Popen(
+        [sys.executable, "-m", "executive", "run", "missions/rover_square.yaml", "--speedup", "5", "--socket", "none", "--groot2", str(port)],
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    client = Groot2Client("127.0.0.1", port, timeout_ms=2000)
+    try:
+        tree = poll_until(client, client.fetch_tree)
+        go = next(node.uid for node in tree.by_uid.values() if node.registration == "go_to")
+        seen = set()
+
+        def go_to_has_run_and_ended() -> bool:
+            seen.add(client.poll().statuses[go].status)
+            return {NodeStatus.RUNNING, NodeStatus.SUCCESS} <= seen
+
+        poll_until(client, go_to_has_run_and_ended)  # live statuses: a leg under way, then reached
+    finally:
+        client.close()
+        run.send_signal(signal.SIGINT)
+        _, err = run.communicate(timeout=120)
+    assert f"Groot2 can connect to 127.0.0.1 port {port} (publisher {port + 1})" in err
+
+
+def test_replay_groot2_plays_a_recording_to_btview(tmp_path) -> None:
+    path = tmp_path / "run.jsonl"
+    recorder = SnapshotRecorder(path)
+    mission = load_mission(ROOT / "missions/rover_square.yaml")
+    Lockstep(mission, mission_dir=ROOT / "missions", plugs=[snapshot_recorder(recorder)]).run_to_end(600)
+    recorder.close()
+    port = free_port_pair()
+    replay = subprocess.Popen(
+        [sys.executable, "-m", "executive", "replay", str(path), "--groot2", str(port), "--speed", "20"],
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    client = Groot2Client("127.0.0.1", port, timeout_ms=2000)
+    try:
+        tree = poll_until(client, client.fetch_tree)
+        assert len(tree.by_uid) > 10 and tree.by_uid[1].name
+        seen: list[list[NodeStatus]] = []
+
+        def statuses_change() -> bool:
+            now = [state.status for state in client.poll().statuses.values()]
+            if not seen or seen[-1] != now:
+                seen.append(now)
+            return len(seen) >= 3
+
+        poll_until(client, statuses_change)
+    finally:
+        client.close()
+        replay.send_signal(signal.SIGTERM)
+        _, err = replay.communicate(timeout=60)
+    assert replay.returncode == 0, err
+    assert f"for Groot2 on 127.0.0.1 port {port}" in err
+
+
+@pytest.mark.parametrize(("value", "why"), [("x:y", "'y' is not a port number"), ("65535", "the port must be 1 to 65534")])
+def test_a_bad_groot2_address_is_refused_before_anything_starts(value: str, why: str) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "executive", "run", "missions/rover_square.yaml", "--groot2", value],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2
+    assert why in done.stderr and "--groot2" in done.stderr
