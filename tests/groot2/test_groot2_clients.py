@@ -97,6 +97,11 @@ def test_btview_reads_the_same_kinds_of_answers_from_behaviortree_cpp_and_from_u
     }
 
 
+def executive(*args: str) -> subprocess.Popen:
+    """``executive ARGS`` in a process of its own, its stderr kept."""
+    return subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
 def poll_until(client: Groot2Client, predicate, timeout_s: float = 120.0):
     """Ask again until ``predicate(answer)`` holds (wall time bounds only a hung process; what is waited for is what the client reads)."""
     deadline = time.monotonic() + timeout_s
@@ -113,13 +118,7 @@ def poll_until(client: Groot2Client, predicate, timeout_s: float = 120.0):
 
 def test_btview_watches_a_real_run_of_executive_run_groot2(tmp_path) -> None:
     port = free_port_pair()
-    run = subprocess.Popen(
-        [sys.executable, "-m", "executive", "run", "missions/rover_square.yaml", "--speedup", "5", "--socket", "none", "--groot2", str(port)],
-        cwd=ROOT,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    run = executive("run", "missions/rover_square.yaml", "--speedup", "5", "--socket", "none", "--groot2", str(port))
     client = Groot2Client("127.0.0.1", port, timeout_ms=2000)
     try:
         tree = poll_until(client, client.fetch_tree)
@@ -145,13 +144,7 @@ def test_replay_groot2_plays_a_recording_to_btview(tmp_path) -> None:
     Lockstep(mission, mission_dir=ROOT / "missions", plugs=[snapshot_recorder(recorder)]).run_to_end(600)
     recorder.close()
     port = free_port_pair()
-    replay = subprocess.Popen(
-        [sys.executable, "-m", "executive", "replay", str(path), "--groot2", str(port), "--speed", "20"],
-        cwd=ROOT,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    replay = executive("replay", str(path), "--groot2", str(port), "--speed", "20")
     client = Groot2Client("127.0.0.1", port, timeout_ms=2000)
     try:
         tree = poll_until(client, client.fetch_tree)
