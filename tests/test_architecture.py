@@ -1,6 +1,6 @@
 """The import contract: the layers README's "Architecture" draws, kept true.
 
-Every module of ``executive`` (``executive.trees`` included) is read with ``ast`` (imports inside
+Every module of ``executive`` (``executive.trees``, the top-level ``trees/`` folder, included) is read with ``ast`` (imports inside
 functions count). The checks: no import cycle between modules; an import runs down the layers, or is
 one of the few listed upward ones; nothing in ``behaviours`` imports ``io``; no module over 600 lines.
 """
@@ -43,10 +43,13 @@ UPWARD: dict[tuple[str, str], str] = {
 
 def module_name(path: Path) -> str:
     parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    if parts[0] == "trees":  # the top-level trees/ folder is the package's executive.trees (pyproject's package-dir)
+        parts = ["executive", *parts]
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-MODULES = {module_name(p): p for p in sorted(PACKAGE.rglob("*.py")) if "__pycache__" not in p.parts}
+SOURCES = [*sorted(PACKAGE.rglob("*.py")), *sorted((PACKAGE.parent / "trees").rglob("*.py"))]
+MODULES = {module_name(p): p for p in SOURCES if "__pycache__" not in p.parts}
 
 
 def imports_of(name: str) -> set[str]:
@@ -142,4 +145,5 @@ def test_the_contract_reads_the_package_it_guards() -> None:
     assert "executive.autopilot" in GRAPH["executive.behaviours.commands"]  # the package: its __init__ imports the port
     assert "executive.mavlink_dialect" in GRAPH["executive.io.mavlink.link"]
     assert "executive.mission_tree" in GRAPH["executive.runtime"]
+    assert "executive.trees.parts" in GRAPH["executive.trees.waypoints"]  # the trees/ folder read as executive.trees
     assert {layer(name) for name in MODULES} == set(range(len(LAYERS)))

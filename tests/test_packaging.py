@@ -36,3 +36,17 @@ def test_no_code_imports_a_top_level_trees_module() -> None:
                     continue
                 wrong += [f"{path.relative_to(ROOT)}:{node.lineno}: {name}" for name in names if name == "trees" or name.startswith("trees.")]
     assert wrong == []
+
+
+def test_from_a_checkout_executive_trees_is_the_top_level_trees_folder(tmp_path: Path) -> None:
+    """Not installed (``python -m executive`` in a checkout, the suite with pytest's pythonpath), the trees are found all the same."""
+    import os
+    import subprocess
+    import sys
+
+    code = "import executive.trees.parts, executive.trees; print(executive.__file__); print(executive.trees.__file__)"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    package, trees = (Path(line) for line in done.stdout.split())
+    assert (package, trees) == (ROOT / "executive" / "__init__.py", ROOT / "trees" / "__init__.py")
