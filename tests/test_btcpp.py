@@ -290,3 +290,48 @@ def test_a_tree_with_nodes_the_catalogue_lacks_exports_them_said_and_import_refu
         f"unknown node type '{cls}' (not in the catalogue: executive behaviours lists it)"
         for cls in ("BeaconOn", "EnoughSatellites", "WaitForGuards")
     ]
+
+
+def test_parallel_and_timeout_are_read_as_ours_and_what_none_of_ours_means_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    xml = tmp_path / "builtins.xml"
+    xml.write_text(
+        """<root BTCPP_format="4"><BehaviorTree ID="T">
+  <Sequence>
+    <Parallel success_count="1" failure_count="1"><Timeout msec="2500"><arm/></Timeout><armed/></Parallel>
+    <Parallel><armed/><link_alive/></Parallel>
+  </Sequence>
+</BehaviorTree></root>""",
+        encoding="utf-8",
+    )
+    assert main(["import", str(xml)]) == 0, capsys.readouterr().err
+    assert yaml.safe_load(capsys.readouterr().out)["tree"]["children"] == [
+        {"node": "parallel", "policy": "success_on_one", "children": [{"node": "timeout", "timeout_s": 2.5, "child": "arm"}, "armed"]},
+        {"node": "parallel", "children": ["armed", "link_alive"]},  # BehaviorTree.CPP's defaults -1, 1: success_on_all
+    ]
+    xml.write_text(
+        """<root BTCPP_format="4"><BehaviorTree ID="T">
+  <Sequence memory="false">
+    <Parallel success_count="2"><armed/><link_alive/></Parallel>
+    <Timeout msec="-5"><arm/></Timeout>
+    <RetryUntilSuccessful failures="3"><arm/></RetryUntilSuccessful>
+  </Sequence>
+</BehaviorTree></root>""",
+        encoding="utf-8",
+    )
+    assert main(["import", str(xml)]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"{xml}:2:3: T/Sequence.memory: unknown port (ports of Sequence: none)",
+        f"{xml}:3:5: T/Sequence/Parallel: success_count=2, failure_count=1: no node of ours does that (parallel: -1 or 1, and 1)",
+        f"{xml}:4:5: T/Sequence/Timeout.msec: '-5': not a number of milliseconds (0 or more)",
+        f"{xml}:5:5: T/Sequence/RetryUntilSuccessful.failures: unknown port (ports of RetryUntilSuccessful: num_attempts)",
+    ]
+
+
+def test_our_nodes_with_several_slots_are_read_grouped_as_export_writes_them_and_as_before() -> None:
+    grouped = from_yaml(TREE, TYPES).slots["children"][1]
+    text = write_xml(grouped, TYPES)
+    assert "<failsafe_guarded>\n      <ReactiveSequence>\n        <ekf_ok" in text
+    old = text.replace("<ReactiveSequence>", "").replace("</ReactiveSequence>", "")
+    work = old[old.index("<Timeout") : old.index("</Timeout>") + len("</Timeout>")]
+    old = old.replace(work, "").replace("<failsafe_guarded>", "<failsafe_guarded>" + work)  # our lower-case form: work, then guards
+    assert to_yaml(read_xml(text, "t.xml", TYPES), TYPES) == to_yaml(read_xml(old, "t.xml", TYPES), TYPES) == TREE["children"][1]
