@@ -42,18 +42,35 @@ PORT_TYPES = {
 }  # fmt: skip
 #: Compound values as BehaviorTree.CPP writes vectors: the items joined by ``;`` (``convertFromString<std::vector<double>>``, basic_types.h).
 FIELDS = {"range": ("min", "max"), "enu": ("east", "north", "up")}
-#: BehaviorTree.CPP's built-in nodes Groot2 offers that are ours under another name: (our node, fixed parameters, port -> parameter).
-#: Sequence and Fallback resume the RUNNING child and start over after a result, as py_trees' composites with memory; the
-#: reactive ones tick every child again each tick (sequence_node.h, fallback_node.h, reactive_sequence.h, reactive_fallback.h).
-#: RetryUntilSuccessful gives up after num_attempts failures, Repeat ends after num_cycles successes (retry_node.h, repeat_node.h).
+#: BehaviorTree.CPP's built-in nodes that are ours under another name: (our node, fixed parameters, port -> parameter); ``export``
+#: writes them, ``import`` reads them (and our own lower-case names). Sequence and Fallback resume the RUNNING child and start over
+#: after a result, as py_trees' composites with memory; the reactive ones tick every child again each tick (sequence_node.h,
+#: fallback_node.h, reactive_sequence.h, reactive_fallback.h). RetryUntilSuccessful gives up after num_attempts failures, Repeat
+#: ends after num_cycles successes (retry_node.h, repeat_node.h). Timeout fails its RUNNING child after msec (timeout_node.h;
+#: ours counts vehicle time). Parallel (parallel_node.cpp) with failure_count 1 fails at a child's failure, success_count -1 (all)
+#: or 1; it decides after each child, py_trees' Parallel after ticking them all: see :func:`differences`.
 BUILT_IN_NODES: dict[str, tuple[str, dict[str, Any], dict[str, str]]] = {
     "Sequence": ("sequence", {"memory": True}, {}),
     "ReactiveSequence": ("sequence", {"memory": False}, {}),
     "Fallback": ("selector", {"memory": True}, {}),
     "ReactiveFallback": ("selector", {"memory": False}, {}),
+    "Parallel": ("parallel", {}, {"success_count": "policy", "failure_count": "policy"}),
     "Inverter": ("inverter", {}, {}),
     "RetryUntilSuccessful": ("retry", {}, {"num_attempts": "failures"}),
     "Repeat": ("repeat", {}, {"num_cycles": "successes"}),
+    "Timeout": ("timeout", {}, {"msec": "timeout_s"}),
+}
+#: Parallel's (success_count, failure_count) -> our policy (BehaviorTree.CPP's defaults: -1, 1).
+PARALLEL_POLICIES = {(-1, 1): "success_on_all", (1, 1): "success_on_one"}
+#: Our nodes that are always written as a built-in (so not declared in the TreeNodesModel).
+WRITTEN_AS_BUILT_INS = frozenset(node for node, _, _ in BUILT_IN_NODES.values())
+#: Our nodes with more than one slot of children, each written as a Decorator of ours over one built-in composite holding them all,
+#: in this order: what the node builds (trees/parts.py: ``failsafe_guarded`` ticks the guards, then the work, every tick, under its
+#: failsafe; ``mission_root`` the steps in order, with memory, held while PAUSED). BehaviorTree.CPP checks a Control's children
+#: by their number only, and its Python bindings register no Control node of ours; a Decorator loads.
+GROUPED_CHILDREN: dict[str, tuple[str, tuple[str, ...]]] = {
+    "failsafe_guarded": ("ReactiveSequence", ("guards", "work")),
+    "mission_root": ("Sequence", ("steps",)),
 }
 MAIN_TREE = "MainTree"
 MAX_BYTES = 1 << 20
@@ -97,10 +114,13 @@ class NodeType:
     def model_tag(self) -> str:
         """Its NodeType in BehaviorTree.CPP (``toStr(NodeType)``): by the children it takes, as BehaviorTree.CPP checks them.
 
-        No children: Condition (a guard) or Action; one child: Decorator; more (or a list): Control.
+        No children: Condition (a guard) or Action; one child, or its children grouped under one built-in (:data:`GROUPED_CHILDREN`):
+        Decorator; more (or a list): Control.
         """
         if not self.slots:
             return "Condition" if self.kind == "guard" else "Action"
+        if self.id in GROUPED_CHILDREN:
+            return "Decorator"
         return "Decorator" if len(self.slots) == 1 and not self.slots[0].many else "Control"
 
 
@@ -149,12 +169,18 @@ def port_text(value: Any, kind: str) -> str:
 
 
 def write_xml(root: Node, types: Mapping[str, NodeType], tree_id: str = MAIN_TREE) -> str:
-    """The tree as a BehaviorTree.CPP v4 document, with a TreeNodesModel of every node type in ``types``."""
+    """The tree as a BehaviorTree.CPP v4 document, with a TreeNodesModel of every node type in ``types`` not written as a built-in.
+
+    Our standard composites and decorators are written as the built-ins that mean the same (:data:`BUILT_IN_NODES`), a node of
+    ours with several slots of children as a Decorator over one built-in composite (:data:`GROUPED_CHILDREN`).
+    """
     doc = ET.Element("root", {"BTCPP_format": "4", "main_tree_to_execute": tree_id})
     tree = ET.SubElement(doc, "BehaviorTree", {"ID": tree_id})
     _write_node(tree, root, types)
     model = ET.SubElement(doc, "TreeNodesModel")
     for spec in sorted(types.values(), key=lambda t: t.id):
+        if spec.id in WRITTEN_AS_BUILT_INS:
+            continue
         element = ET.SubElement(model, spec.model_tag, {"ID": spec.id})
         for port in spec.ports:
             attributes = {"name": port.name, "type": PORT_TYPES[port.type]}
@@ -175,21 +201,82 @@ def _port_doc(port: Port) -> str:
 
 
 def _slots_doc(spec: NodeType) -> str:
+    slots = {s.name: s for s in spec.slots}
+    if spec.id in GROUPED_CHILDREN:
+        composite, order = GROUPED_CHILDREN[spec.id]
+        held = ", then ".join(f"the {name} ({'any number' if slots[name].many else 'one'})" for name in order)
+        return f" Its one child: a {composite} of {held}."
     if len(spec.slots) < 2:
         return ""
     return " Children, in order: " + ", ".join(f"{s.name} ({'any number' if s.many else 'one'})" for s in spec.slots) + "."
 
 
+def _value(node: Node, spec: NodeType, name: str) -> Any:
+    """A parameter of the node: given, or its default."""
+    return node.params.get(name, next((p.default for p in spec.ports if p.name == name), None))
+
+
+def built_in(node: Node, spec: NodeType) -> tuple[str, dict[str, str]] | None:
+    """The BehaviorTree.CPP built-in (its ID and ports) that means what ``node`` does, or None (see :data:`BUILT_IN_NODES`)."""
+    if node.type not in WRITTEN_AS_BUILT_INS or spec.id != node.type:
+        return None
+    if node.type in ("sequence", "selector"):
+        memory = bool(_value(node, spec, "memory"))
+        return {"sequence": ("Sequence", "ReactiveSequence"), "selector": ("Fallback", "ReactiveFallback")}[node.type][not memory], {}
+    if node.type == "parallel":
+        counts = next(c for c, policy in PARALLEL_POLICIES.items() if policy == _value(node, spec, "policy"))
+        return "Parallel", {"success_count": str(counts[0]), "failure_count": str(counts[1])}
+    if node.type == "timeout":
+        return "Timeout", {"msec": str(round(float(_value(node, spec, "timeout_s")) * 1000))}
+    tag, _, renamed = next((t, f, r) for t, (ours, f, r) in BUILT_IN_NODES.items() if ours == node.type)
+    return tag, {port: str(_value(node, spec, param)) for port, param in renamed.items()}
+
+
 def _write_node(parent: ET.Element, node: Node, types: Mapping[str, NodeType]) -> None:
     spec = types.get(node.type)
-    kinds = {p.name: p.type for p in spec.ports} if spec is not None else {}
     attributes = {"name": node.name} if node.name is not None else {}
-    attributes |= {k: port_text(v, kinds.get(k, "")) for k, v in node.params.items()}
-    element = ET.SubElement(parent, node.type, attributes)
-    order = [s.name for s in spec.slots] if spec is not None else list(node.slots)
+    as_built_in = built_in(node, spec) if spec is not None else None
+    if as_built_in is not None:
+        tag, ports = as_built_in
+        attributes |= ports
+    else:
+        kinds = {p.name: p.type for p in spec.ports} if spec is not None else {}
+        tag = node.type
+        attributes |= {k: port_text(v, kinds.get(k, "")) for k, v in node.params.items()}
+    element = ET.SubElement(parent, tag, attributes)
+    if node.type in GROUPED_CHILDREN and spec is not None:
+        composite, order = GROUPED_CHILDREN[node.type]
+        element = ET.SubElement(element, composite)
+    else:
+        order = tuple(s.name for s in spec.slots) if spec is not None else tuple(node.slots)
     for slot in order:
         for child in node.slots.get(slot, ()):
             _write_node(element, child, types)
+
+
+def differences(root: Node, types: Mapping[str, NodeType]) -> list[tuple[str, str]]:
+    """Where BehaviorTree.CPP would run the written tree otherwise than we do, or could not load it without C++ of ours: (node path, why)."""
+    out: list[tuple[str, str]] = []
+
+    def visit(node: Node, path: str) -> None:
+        here = f"{path}/{node.name or node.type}"
+        spec = types.get(node.type)
+        if node.type == "once":
+            out.append((here, "once is written as our own decorator: BehaviorTree.CPP's RunOnce keeps its child's first FAILURE for good, "
+                              "ours ticks the child again until it succeeds (run_once_node.h)"))  # fmt: skip
+        elif node.type == "parallel" and spec is not None and _value(node, spec, "policy") == "success_on_one":
+            out.append((here, "Parallel success_count=1: in a tick where one child succeeds and a later one fails, BehaviorTree.CPP's "
+                              "succeeds, ours fails (parallel_node.cpp decides after each child)"))  # fmt: skip
+        elif node.type == "timeout" and spec is not None and float(_value(node, spec, "timeout_s")) * 1000 % 1:
+            out.append((here, f"Timeout msec is whole milliseconds: {_value(node, spec, 'timeout_s')} s written rounded"))
+        elif spec is not None and spec.model_tag == "Control" and built_in(node, spec) is None:
+            out.append((here, f"{node.type} is a Control node of ours: BehaviorTree.CPP loads it only with a C++ node registered as it"))
+        for children in node.slots.values():
+            for child in children:
+                visit(child, here)
+
+    visit(root, "")
+    return out
 
 
 # -- reading ------------------------------------------------------------------------------------
@@ -273,6 +360,7 @@ def _read_node(element: _Element, types: Mapping[str, NodeType], error: Callable
     explicit = element.tag in ("Action", "Condition", "Control", "Decorator")
     type_id = element.attributes.get("ID", "") if explicit else element.tag
     here = f"{path}/{type_id or element.tag}"
+    tag = type_id
     type_id, fixed, renamed = BUILT_IN_NODES.get(type_id, (type_id, {}, {})) if type_id not in types else (type_id, {}, {})
     spec = types.get(type_id)
     if spec is None:
@@ -281,32 +369,63 @@ def _read_node(element: _Element, types: Mapping[str, NodeType], error: Callable
     node = Node(type_id, name=element.attributes.get("name"))
     ports = {p.name: p for p in spec.ports}
     node.params = {k: v for k, v in fixed.items() if v != ports[k].default}
+    counts: dict[str, int] = {}
     for key, raw in element.attributes.items():
         if key in ("name", "ID") or key.startswith("_"):  # _uid, _fullpath: Groot2's bookkeeping
             continue
         port = ports.get(renamed.get(key, key))
-        if port is None:
-            error(element, f"{here}.{key}", f"unknown port (ports of {type_id}: {', '.join(ports) or 'none'})")
+        if port is None or (key == port.name and key not in renamed and tag != type_id):
+            known = ", ".join(renamed) if tag != type_id else ", ".join(ports)
+            error(element, f"{here}.{key}", f"unknown port (ports of {tag}: {known or 'none'})")
             continue
         try:
-            node.params[port.name] = port_value(raw, port)
+            if tag == "Parallel":
+                counts[key] = int(_number(raw.strip(), "int"))
+            elif tag == "Timeout":
+                node.params[port.name] = _milliseconds(raw) / 1000
+            else:
+                node.params[port.name] = port_value(raw, port)
         except ValueError as exc:
             error(element, f"{here}.{key}", f"{raw!r}: {exc}")
-    children = [_read_node(child, types, error, here) for child in element.children]
+    if tag == "Parallel" and type_id == "parallel":
+        pair = (counts.get("success_count", -1), counts.get("failure_count", 1))
+        if pair not in PARALLEL_POLICIES:
+            error(element, here, f"success_count={pair[0]}, failure_count={pair[1]}: no node of ours does that (parallel: -1 or 1, and 1)")
+        elif PARALLEL_POLICIES[pair] != ports["policy"].default:
+            node.params["policy"] = PARALLEL_POLICIES[pair]
+    order = [s.name for s in spec.slots]
+    kids = element.children
+    if type_id in GROUPED_CHILDREN and len(kids) == 1 and kids[0].tag == GROUPED_CHILDREN[type_id][0]:
+        group = kids[0]  # the children, grouped as export writes them (our lower-case form holds them directly)
+        for key in group.attributes:
+            if not key.startswith("_"):
+                error(group, f"{here}/{group.tag}.{key}", f"the {group.tag} that holds {type_id}'s children takes no ports")
+        kids, order = group.children, list(GROUPED_CHILDREN[type_id][1])
+    children = [_read_node(child, types, error, here) for child in kids]
+    slots = {s.name: s for s in spec.slots}
     singles = sum(not s.many for s in spec.slots)
     many = next((s for s in spec.slots if s.many), None)
     least = singles + (1 if many is not None and many.required else 0)
     if len(children) < least or (many is None and len(children) > singles):
         wanted = f"exactly {singles}" if many is None else f"at least {least}"
-        names = ", ".join(s.name for s in spec.slots) or "none"
+        names = ", ".join(order) or "none"
         error(element, here, f"{type_id} takes {wanted} child node{'' if wanted.endswith(' 1') else 's'} ({names}), has {len(children)}")
         return node
     rest = iter(children)
-    for slot in spec.slots:
+    for name in order:
+        slot = slots[name]
         taken = [next(rest) for _ in range(len(children) - singles if slot.many else 1)]
         if taken or slot.required:
             node.slots[slot.name] = taken
     return node
+
+
+def _milliseconds(raw: str) -> int:
+    """Timeout's msec (an unsigned integer in BehaviorTree.CPP)."""
+    number = int(_number(raw.strip(), "int"))
+    if number < 0:
+        raise ValueError("not a number of milliseconds (0 or more)")
+    return number
 
 
 def port_value(raw: str, port: Port) -> Any:

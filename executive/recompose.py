@@ -7,8 +7,9 @@ attributes of the same names, or those its class's ``param_attributes`` (paramet
 names; those equal to the default, or to the mission's value they default to, are left out
 (a tree built in Python takes them from the mission too). py_trees' composites and
 decorators become ``sequence``, ``selector``, ``parallel``, ``inverter``, ``retry``, ``repeat`` and
-``once``. What ``failsafe_guarded`` and ``checked`` make (a selector of the guarded work, or of a
-guard, and a failsafe) is folded back into them. A behaviour the catalogue does not offer keeps its
+``once`` (written as BehaviorTree.CPP's built-ins where one means the same: :data:`executive.btcpp.BUILT_IN_NODES`).
+What ``failsafe_guarded`` and ``checked`` make (a selector of the guarded work, or of a guard, and a failsafe) is folded back
+into them. A behaviour the catalogue does not offer keeps its
 class name, and is reported: Groot2 shows it, ``import`` refuses it.
 """
 
@@ -23,7 +24,7 @@ import yaml
 from executive import mission_tree
 from executive.behaviours.failsafe import Failsafe
 from executive.behaviours.guards import Guard
-from executive.btcpp import FIELDS, Node, NodeType, Port, Slot, from_yaml, node_types, write_xml
+from executive.btcpp import FIELDS, Node, NodeType, Port, Slot, differences, from_yaml, node_types, write_xml
 from executive.catalogue import mission_value
 
 if TYPE_CHECKING:
@@ -179,13 +180,16 @@ def export_tree(mission_file: str, mission: Mission, catalogue: Any) -> tuple[st
     """The tree of a (valid) mission file as a BehaviorTree.CPP v4 document, and what could not be described exactly (node path, why).
 
     A tree written in the file (``tree:`` a mapping) is written as it is; a named tree (built in
-    Python) as the nodes it builds (:class:`Recomposer`).
+    Python) as the nodes it builds (:class:`Recomposer`). The differences are also where BehaviorTree.CPP
+    would run it otherwise, or needs C++ of ours to load it (:func:`executive.btcpp.differences`).
     """
     with open(mission_file, encoding="utf-8") as stream:
         tree = (yaml.safe_load(stream) or {}).get("tree", "waypoints")
     types = node_types(catalogue)
     if isinstance(tree, Mapping):
-        return write_xml(from_yaml(tree, types), types, mission.name), []
+        root = from_yaml(tree, types)
+        return write_xml(root, types, mission.name), differences(root, types)
     recomposer = Recomposer(types, catalogue, mission)
     root = recomposer.node(mission_tree.build(mission))
-    return write_xml(root, {**types, **recomposer.unknown}, mission.name), recomposer.warnings
+    described = {**types, **recomposer.unknown}
+    return write_xml(root, described, mission.name), recomposer.warnings + differences(root, described)
