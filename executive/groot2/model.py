@@ -3,7 +3,8 @@
 A node's tag is BehaviorTree.CPP's built-in where one means what ours does (py_trees' ``Sequence``
 without memory ticks every child again each tick: ``ReactiveSequence``; with memory: ``Sequence``;
 ``Selector`` likewise ``ReactiveFallback`` / ``Fallback``; ``Parallel``, ``Inverter``,
-``RetryUntilSuccessful``, ``Repeat``, ``RunOnce``, our vehicle-time ``Timeout``), else the catalogue's
+``RetryUntilSuccessful``, ``Repeat``, our vehicle-time ``Timeout``; not py_trees' ``OneShot``: BehaviorTree.CPP's
+``RunOnce`` keeps a first FAILURE for good, ours ticks the child again until it succeeds), else the catalogue's
 name of our node (``go_to``, ``ekf_ok``...), else its class name; every tag that is not a built-in is
 declared in ``<TreeNodesModel>`` with its kind. Uids count from 1 in pre-order, as BehaviorTree.CPP
 gives them. The XML carries ``_uid`` and ``_fullpath`` on every node, as ``WriteTreeToXML`` writes
@@ -25,7 +26,7 @@ from executive.groot2.protocol import FAILURE, IDLE, IDLE_AFTER, RUNNING, SUCCES
 TREE_ID = "MainTree"
 #: BehaviorTree.CPP's built-in node IDs used here: never declared in the model.
 BUILT_INS = frozenset(
-    {"Sequence", "ReactiveSequence", "Fallback", "ReactiveFallback", "Parallel", "Inverter", "RetryUntilSuccessful", "Repeat", "RunOnce", "Timeout"}
+    {"Sequence", "ReactiveSequence", "Fallback", "ReactiveFallback", "Parallel", "Inverter", "RetryUntilSuccessful", "Repeat", "Timeout"}
 )
 KINDS = ("Action", "Condition", "Decorator", "Control")
 CODES = {Status.RUNNING: RUNNING, Status.SUCCESS: SUCCESS, Status.FAILURE: FAILURE}
@@ -68,8 +69,6 @@ def _builtin(behaviour: py_trees.behaviour.Behaviour) -> tuple[str, dict[str, st
         return "RetryUntilSuccessful", {"num_attempts": str(behaviour.num_failures)}
     if type(behaviour) is decorators.Repeat:
         return "Repeat", {"num_cycles": str(behaviour.num_success)}
-    if type(behaviour) is decorators.OneShot:
-        return "RunOnce", {"then_skip": "false"}  # the child's final status, kept
     if type(behaviour) is Timeout:
         return "Timeout", {"msec": str(round(behaviour.timeout_s * 1000))}
     return None

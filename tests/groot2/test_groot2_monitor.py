@@ -198,6 +198,7 @@ def test_py_trees_composites_are_shown_as_the_built_ins_that_mean_the_same() -> 
             py_trees.decorators.Retry("again", child=leaf("f"), num_failures=3),
             py_trees.decorators.Repeat("repeat", child=leaf("g"), num_success=2),
             Timeout(leaf("h"), 2.5, name="within"),
+            py_trees.decorators.OneShot("first time", child=leaf("i"), policy=py_trees.common.OneShotPolicy.ON_SUCCESSFUL_COMPLETION),
         ],
     )
     doc = ET.fromstring(to_xml(from_tree(root)))
@@ -213,7 +214,8 @@ def test_py_trees_composites_are_shown_as_the_built_ins_that_mean_the_same() -> 
     assert tags["within"] == ("Timeout", {"msec": "2500"})
     assert tags["a"] == ("Running", {})
     model = doc.find("TreeNodesModel")
-    assert model is not None and [(e.tag, e.get("ID")) for e in model] == [("Action", "Running")]  # built-ins are not declared
+    assert tags["first time"] == ("OneShot", {})  # not RunOnce: BehaviorTree.CPP's keeps a first FAILURE, ours ticks again
+    assert model is not None and [(e.tag, e.get("ID")) for e in model] == [("Decorator", "OneShot"), ("Action", "Running")]  # built-ins: not declared
 
 
 def test_a_node_no_longer_ticked_is_idle_after_what_it_was(served) -> None:
