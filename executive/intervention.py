@@ -31,7 +31,8 @@ from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import RcConfig
 from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause
-from executive.state import MISSION_STATE_COMPLETE, GlobalPosition, MissionCurrent, RcSwitches, SwitchPosition
+from executive.sensing.rc import RcReading
+from executive.state import MISSION_STATE_COMPLETE, GlobalPosition, MissionCurrent
 from executive.vehicles import AutopilotName, VehicleProfile
 
 log = logging.getLogger(__name__)
@@ -42,12 +43,9 @@ SWITCH_JUMP_US = 300
 EXPLAINS_WITHIN_S = 2.0
 
 
-def rc_takeover(rc: RcConfig, channels: tuple[int, ...], switches: RcSwitches | None) -> str | None:
+def rc_takeover(rc: RcConfig, read: Callable[[str], object]) -> str | None:
     """Why the RC says a person has the vehicle (the take-over channel high, or switch C in MANUAL), if it does."""
-    if rc.source == "mavlink":
-        value = channels[rc.takeover_channel - 1] if len(channels) >= rc.takeover_channel else 0
-        return f"RC channel {rc.takeover_channel} high ({value} µs): a person has the vehicle" if value > rc.takeover_above_us else None
-    return "RC switch C in MANUAL: a person has the vehicle" if switches is not None and switches.swc == SwitchPosition.UP else None
+    return RcReading.of(rc).person_has_vehicle(read)
 
 
 class InterventionWatch:
@@ -132,7 +130,7 @@ class InterventionWatch:
                 log.warning("intervention: %s (from %s) set by the autopilot (%s): no pause", mode, previous, cause.why)
             self.expected = mode if self.expected is not None else None
             return
-        if self.expected is None or rc_takeover(self.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches")) is not None:
+        if self.expected is None or rc_takeover(self.rc, self._bb.get) is not None:
             return  # not yet mid-mission (nothing of ours to keep), or a take-over the rc_takeover failsafe answers
         reason = f"{mode} set by {self._who(now)}"
         log.warning("intervention: %s (the leg was in %s) -> pause, hands off", reason, self.expected)

@@ -238,7 +238,7 @@ class AutopilotLink:
 
     def _person_took_over(self, found_in: str | None, asked: str | None) -> str | None:
         """Why a person has taken the vehicle while it is made safe: the RC take-over switch, or a mode in which a person drives set meanwhile."""
-        takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
+        takeover = rc_takeover(self.mission.rc, self._bb.get)
         if takeover is not None:
             return takeover
         mode = self._bb.get("/vehicle/mode")
@@ -256,7 +256,7 @@ class AutopilotLink:
         is nobody's choice: a pilot mode there is no person driving, and the safe mode is commanded
         (said so, as README's "When a person intervenes" has it).
         """
-        takeover = rc_takeover(self.mission.rc, self._bb.get("/rc/channels"), self._bb.get("/rc/switches"))
+        takeover = rc_takeover(self.mission.rc, self._bb.get)
         if takeover is not None:
             return takeover
         mode = self._bb.get("/vehicle/mode")

@@ -9,7 +9,7 @@ from typing import Literal
 
 from executive.behaviours.guards import Guard
 from executive.mission.model import RcConfig
-from executive.state import RcSwitches, SwitchPosition
+from executive.sensing.rc import RcReading
 
 
 class RcNotTakingOver(Guard):
@@ -35,7 +35,7 @@ class RcNotTakingOver(Guard):
         self.above_us = above_us
 
     def check(self) -> str | None:
-        return _takeover(self.get("/rc/channels"), self.channel, self.above_us)
+        return RcReading("mavlink", self.channel, self.above_us).not_in_auto(self.get)
 
 
 class RcChannelHigh(Guard):
@@ -54,14 +54,6 @@ class RcChannelHigh(Guard):
         channels: tuple[int, ...] = self.get("/rc/channels")
         value = channels[self.channel - 1] if len(channels) >= self.channel else 0
         return None if value > self.above_us else f"RC channel {self.channel} low ({value} µs)"
-
-
-def _takeover(channels: tuple[int, ...], channel: int, above_us: int) -> str | None:
-    value = channels[channel - 1] if len(channels) >= channel else 0
-    return f"RC channel {channel} high ({value} µs): manual take-over" if value > above_us else None
-
-
-_SWC_MEANS = {SwitchPosition.UP: "MANUAL", SwitchPosition.DOWN: "aux mode"}
 
 
 class RcAutoMode(Guard):
@@ -90,16 +82,10 @@ class RcAutoMode(Guard):
         self.source = source
         self.takeover_channel = takeover_channel
         self.takeover_above_us = takeover_above_us
+        self.rc = RcReading(source, takeover_channel, takeover_above_us)
 
     def check(self) -> str | None:
-        if self.source == "mavlink":
-            return _takeover(self.get("/rc/channels"), self.takeover_channel, self.takeover_above_us)
-        switches: RcSwitches | None = self.get("/rc/switches")
-        if switches is None or switches.swc is None:
-            return "no RC switch C position yet"
-        if switches.swc is not SwitchPosition.MIDDLE:
-            return f"RC switch C {switches.swc} ({_SWC_MEANS[switches.swc]}), not MIDDLE (AUTO)"
-        return None
+        return self.rc.not_in_auto(self.get)
 
 
 def rc_auto_mode(rc: RcConfig, name: str = "RC in auto?") -> RcAutoMode:
@@ -152,13 +138,15 @@ class RcNotLost(Guard):
     def __init__(self, source: Literal["mavlink", "can"] = "mavlink", name: str = "RC not lost?") -> None:
         super().__init__(name)
         self.source = source
+        self.rc = RcReading(source)
         self._seen = False
 
     def check(self) -> str | None:
-        if self.get("/rc/connected" if self.source == "mavlink" else "/rc/fresh"):
+        if self.get(self.rc.present_key):
             self._seen = True
-            return self.stale(self.get("/rc/last_update"), self.stale_after_s, "the RC report is") if self.source == "mavlink" else None
+            timed = self.rc.report_time_key
+            return self.stale(self.get(timed), self.stale_after_s, "the RC report is") if timed is not None else None
         if not self._seen:
             self.note = "no RC seen yet"
             return None
-        return "RC transmitter gone (every channel 0)" if self.source == "mavlink" else self.get("/rc/stale_reason") or "RC is stale"
+        return self.rc.gone(self.get)

@@ -18,7 +18,9 @@ moves, because the base keeps repeating the last frame after an RC signal loss.
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Literal
 
 from executive import blackboard
 from executive.clock import Clock
@@ -26,6 +28,77 @@ from executive.mission.model import RcConfig
 from executive.state import RcSwitches, SwitchPosition
 
 log = logging.getLogger(__name__)
+
+#: A blackboard read: key -> value (a guard's ``get``, a reader's client ``get``).
+Read = Callable[[str], object]
+_SWC_MEANS = {SwitchPosition.UP: "MANUAL", SwitchPosition.DOWN: "aux mode"}
+
+
+@dataclass(frozen=True)
+class RcReading:
+    """The operator's RC as guards and the intervention watch judge it, whatever its source (``rc.source``).
+
+    MAVLink: the autopilot's RC channels; a person takes over with the take-over channel high; the
+    transmitter is there while some channel is non-zero (/rc/connected), its reports timed by
+    /rc/last_update. CAN (the AgileX base): switch C (up MANUAL, middle AUTO, down aux mode); the
+    transmitter is there while the RC reader finds its frames fresh (/rc/fresh). Every rule reads the
+    blackboard only, through ``read``.
+    """
+
+    source: Literal["mavlink", "can"] = "mavlink"
+    takeover_channel: int = 6
+    takeover_above_us: int = 1700
+
+    @classmethod
+    def of(cls, rc: RcConfig) -> RcReading:
+        return cls(rc.source, rc.takeover_channel, rc.takeover_above_us)
+
+    def channel_high(self, read: Read) -> str | None:
+        """The take-over channel's value when it is high (MAVLink), as ``RC channel N high (V µs)``; None when it is not."""
+        channels: tuple[int, ...] = read("/rc/channels") or ()  # type: ignore[assignment]
+        value = channels[self.takeover_channel - 1] if len(channels) >= self.takeover_channel else 0
+        return f"RC channel {self.takeover_channel} high ({value} µs)" if value > self.takeover_above_us else None
+
+    def not_in_auto(self, read: Read) -> str | None:
+        """Why the operator's mode switch is not in AUTO; None when it is (MAVLink: a missing transmitter is not a take-over;
+        CAN: no switch C position yet is not AUTO)."""
+        if self.source == "mavlink":
+            high = self.channel_high(read)
+            return f"{high}: manual take-over" if high else None
+        switches = read("/rc/switches")
+        if not isinstance(switches, RcSwitches) or switches.swc is None:
+            return "no RC switch C position yet"
+        if switches.swc is not SwitchPosition.MIDDLE:
+            return f"RC switch C {switches.swc} ({_SWC_MEANS[switches.swc]}), not MIDDLE (AUTO)"
+        return None
+
+    def person_has_vehicle(self, read: Read) -> str | None:
+        """Why the RC says a person has the vehicle (the take-over channel high, or switch C in MANUAL), if it does."""
+        if self.source == "mavlink":
+            high = self.channel_high(read)
+            return f"{high}: a person has the vehicle" if high else None
+        switches = read("/rc/switches")
+        up = isinstance(switches, RcSwitches) and switches.swc == SwitchPosition.UP
+        return "RC switch C in MANUAL: a person has the vehicle" if up else None
+
+    @property
+    def present_key(self) -> str:
+        """The key that says the transmitter is there: /rc/connected (MAVLink) or /rc/fresh (CAN)."""
+        return "/rc/connected" if self.source == "mavlink" else "/rc/fresh"
+
+    @property
+    def report_time_key(self) -> str | None:
+        """The key of the last report's time, when the reports' age is judged beside the link's (MAVLink); None (CAN: the
+        RC reader judges freshness itself)."""
+        return "/rc/last_update" if self.source == "mavlink" else None
+
+    def gone(self, read: Read) -> str:
+        """Why the transmitter seen earlier is gone."""
+        if self.source == "mavlink":
+            return "RC transmitter gone (every channel 0)"
+        reason = read("/rc/stale_reason")
+        return reason if isinstance(reason, str) and reason else "RC is stale"
+
 
 SWITCH_UP_BELOW_US = 1300
 SWITCH_DOWN_ABOVE_US = 1700
