@@ -167,16 +167,21 @@ def test_a_usage_line_names_commands_and_options_that_exist(command):
 
 @pytest.fixture(scope="module")
 def scratch(tmp_path_factory) -> Path:
-    """A directory with README's files: missions/ (a copy) and mission.yaml (the rover's square)."""
+    """A directory with README's files: missions/ (a copy), mission.yaml (the rover's square) and its tree.xml.
+
+    The tree.xml README's `export` writes is made here too: pytest-xdist may run the `import` examples in another
+    worker than the `export` one, each with a directory of its own.
+    """
     where = tmp_path_factory.mktemp("readme")
     shutil.copytree(ROOT / "missions", where / "missions")
     shutil.copy(ROOT / "missions" / "rover_square.yaml", where / "mission.yaml")
+    assert main(["export", str(where / "mission.yaml"), "--format", "btcpp", "-o", str(where / "tree.xml")]) == 0
     return where
 
 
 @pytest.mark.parametrize("command", [c for c in COMMANDS_SHOWN if _kind(c) == "in-process"])
 def test_an_example_runs_and_exits_0(command, scratch, monkeypatch, capsys):
-    """In README's order (the export writes the tree.xml the imports read)."""
+    """Each in a scratch directory with README's files."""
     monkeypatch.chdir(scratch)
     argv = shlex.split(command)[1:]
     if argv[:2] == ["service", "install"]:
