@@ -18,6 +18,7 @@ import pytest
 from btview.client import ConnectionError_, Groot2Client
 from btview.model import NodeStatus
 from btview.protocol.groot2 import ProtocolError as ClientProtocolError
+from btview.protocol.groot2 import RequestType as ClientRequestType
 from test_groot2_monitor import free_port_pair
 
 from executive.assembly import snapshot_recorder
@@ -118,18 +119,21 @@ def poll_until(client: Groot2Client, predicate, timeout_s: float = 120.0):
 
 def test_btview_watches_a_real_run_of_executive_run_groot2(tmp_path) -> None:
     port = free_port_pair()
-    run = executive("run", "missions/rover_square.yaml", "--speedup", "5", "--socket", "none", "--groot2", str(port))
+    run = executive("run", "missions/rover_square.yaml", "--speedup", "20", "--socket", "none", "--groot2", str(port))
     client = Groot2Client("127.0.0.1", port, timeout_ms=2000)
     try:
         tree = poll_until(client, client.fetch_tree)
         go = next(node.uid for node in tree.by_uid.values() if node.registration == "go_to")
-        seen = set()
+        assert client._exchange(ClientRequestType.TOGGLE_RECORDING, b"start")[1].isdigit()
+        poll_until(client, lambda: client.poll().statuses[go].status == NodeStatus.RUNNING)  # live statuses: a leg under way...
+        kept: list[tuple[int, int]] = []
 
-        def go_to_has_run_and_ended() -> bool:
-            seen.add(client.poll().statuses[go].status)
-            return {NodeStatus.RUNNING, NodeStatus.SUCCESS} <= seen
+        def go_to_reached() -> bool:  # ...then reached: a tick's SUCCESS, kept among the transitions however late the client asks
+            raw = client._exchange(ClientRequestType.GET_TRANSITIONS)[1]
+            kept.extend((raw[i + 6] | raw[i + 7] << 8, raw[i + 8]) for i in range(0, len(raw), 9))
+            return (go, 2) in kept
 
-        poll_until(client, go_to_has_run_and_ended)  # live statuses: a leg under way, then reached
+        poll_until(client, go_to_reached)
     finally:
         client.close()
         run.send_signal(signal.SIGINT)
