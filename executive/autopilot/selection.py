@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 from executive.autopilot.ardupilot import ArduPilotPort
 from executive.autopilot.mavlink_port import MavlinkPort
@@ -48,8 +48,6 @@ class Autopilot:
         if forced == "px4":
             self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4, profile.mav_type)
             self._commander.double_acked = DOUBLE_ACKED["px4"]
-        #: Called with the back end's name once it is known (the stream set-up differs per firmware).
-        self.on_backend: Callable[[str], None] | None = None
 
     def adopt(self, heartbeat_autopilot: int, mav_type: int) -> None:
         """The reader found the autopilot: use its back end (unless one was forced) and its mode table."""
@@ -63,8 +61,6 @@ class Autopilot:
         if name != self.backend.name:
             self.backend = BACK_ENDS[name](self._commander, self._transfer, self._profile)
             log.info("autopilot back end: %s", name)
-        if self.on_backend is not None:
-            self.on_backend(name)
 
     def service(self) -> None:
         """Every tick, before the commands are sent: the back end's own traffic (PX4's offboard setpoint stream)."""
