@@ -25,13 +25,13 @@ class ReplayFeed:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._play, name="groot2 replay", daemon=True)
 
-    def show(self, tick: int) -> TickState:
-        """Show recorded tick ``tick`` (its tree first, if it is another run's)."""
+    def show(self, tick: int, state: TickState | None = None) -> TickState:
+        """Show recorded tick ``tick`` (its tree first, if it is another run's); ``state``: that tick's, if already read."""
         tree = self.recording.tree_of(tick)
         if tree != self._tree:
             self._tree = tree
             self.view.show_tree(from_snapshot(self.recording.trees[tree]))
-        state = self.recording.state_at(tick)
+        state = state or self.recording.state_at(tick)
         nodes = self.recording.trees[tree]
         self.view.ticked([SNAPSHOT_CODES.get(state.status.get(n["id"], "-")) for n in nodes], state.t, lambda: dict(state.blackboard))
         self.position = tick
@@ -46,10 +46,12 @@ class ReplayFeed:
             self._thread.join(timeout=2.0)
 
     def _play(self, wait: Callable[[float], bool] | None = None) -> None:
+        """Each tick shown when its recorded time, divided by the speed, has passed since the one before."""
         wait = wait or self._stop.wait
         last_t: float | None = None
         for tick in self.ticks:
-            state = self.show(tick)
+            state = self.recording.state_at(tick)
             if last_t is not None and wait(max(0.0, (state.t - last_t) / self.speed)):
                 return
+            self.show(tick, state)
             last_t = state.t

@@ -132,12 +132,12 @@ def test_a_recording_client_gets_each_transition_in_vehicle_time(served) -> None
     assert view.recording is False
 
 
-def test_a_stalled_client_changes_nothing() -> None:
+def test_a_stalled_client_changes_nothing(tmp_path: Path) -> None:
     """The same run with a monitor whose clients never read their replies, or send garbage, records the same bytes."""
     port = free_port_pair()
     digests = []
     for monitored in (False, True):
-        path = Path(f"/tmp/groot2-stall-{port}-{monitored}.jsonl")
+        path = tmp_path / f"monitored-{monitored}.jsonl"
         recorder = SnapshotRecorder(path)
         view = MonitorView() if monitored else None
         server = Groot2Server(Groot2Address("127.0.0.1", port), view) if view is not None else None
@@ -161,7 +161,6 @@ def test_a_stalled_client_changes_nothing() -> None:
                 server.close()
             context.destroy(linger=0)
         digests.append(hashlib.sha256(path.read_bytes()).hexdigest())
-        path.unlink()
     assert digests[0] == digests[1]
 
 
@@ -227,3 +226,22 @@ def test_a_node_no_longer_ticked_is_idle_after_what_it_was(served) -> None:
     view.ticked([None, None], 0.1)
     states = list(client.poll().statuses.values())
     assert [(s.status, s.previous) for s in states] == [(NodeStatus.IDLE, NodeStatus.SUCCESS)] * 2
+
+
+def test_a_replay_shows_each_tick_once_its_recorded_time_has_passed(tmp_path: Path) -> None:
+    """The pace of replay --groot2, on an injected wait (no wall clock): the tick before is shown during each gap."""
+    from executive.groot2.replay import ReplayFeed
+    from executive.snapshots import Recording
+
+    path = tmp_path / "run.jsonl"
+    recorder = SnapshotRecorder(path)
+    rover_square(None, recorder).run_to_end(600)
+    recorder.close()
+    recording = Recording(path)
+    feed = ReplayFeed(recording, MonitorView(), speed=2.0)
+    waits: list[tuple[float, int | None]] = []
+    feed._play(wait=lambda s: waits.append((s, feed.position)) is not None)
+    first, second, third = recording.ticks[:3]
+    times = [recording.state_at(t).t for t in (first, second, third)]
+    assert waits[:2] == [((times[1] - times[0]) / 2.0, first), ((times[2] - times[1]) / 2.0, second)]
+    assert feed.position == recording.last and len(waits) == len(recording.ticks) - 1
