@@ -18,7 +18,7 @@ from executive.waiting import waiting_text
 KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
-    "/runtime/late_ticks", "/mission/waiting",
+    "/runtime/late_ticks", "/mission/waiting", "/operator/command",
 )  # fmt: skip
 
 
@@ -64,6 +64,7 @@ class StatusSource:
             "battery_pct": None if battery is None else battery.remaining_pct,
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
+            "command": bb.get("/operator/command"),  # a person's latest arm, disarm or mode, and the autopilot's answer
         }
 
 
@@ -79,4 +80,21 @@ def status_line(status: dict[str, Any]) -> str:
     armed = "armed" if status["armed"] else "disarmed"
     why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
     waiting = f"  {waiting_text(status['waiting'])}" if status.get("waiting") and status["state"] == "RUNNING" else ""
-    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}{why}{waiting}"
+    refused = _refused(status)
+    return (
+        f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}{why}{refused}{waiting}"
+    )
+
+
+#: How long (vehicle time) the status line says that the autopilot refused a person's command.
+REFUSAL_SHOWN_S = 30.0
+
+
+def _refused(status: dict[str, Any]) -> str:
+    """``  ctl: mode POSCTL refused by the autopilot (TEMPORARILY_REJECTED)`` for :data:`REFUSAL_SHOWN_S` after the answer."""
+    command = status.get("command")
+    if not command or not command.get("refused"):
+        return ""
+    if status.get("t") is not None and status["t"] - command["t"] > REFUSAL_SHOWN_S:
+        return ""
+    return f"  {command['by']}: {command['what']} {command['answer']}"
