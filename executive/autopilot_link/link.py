@@ -20,7 +20,7 @@ from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
 from executive.autopilot_link.route_keeper import RouteKeeper
-from executive.autopilot_link.safe_state import SafePlan, Until, progress, settled, where
+from executive.autopilot_link.safe_state import SURFACE_COMPLETE_MODE, SafePlan, Until, progress, settled, where
 from executive.autopilot_link.safe_state import plan as safe_plan
 from executive.behaviours.reacting import READS, Announce, Reacting
 from executive.clock import Clock
@@ -314,7 +314,7 @@ class AutopilotLink:
 
     def _own_follow_on(self, plan: SafePlan) -> str | None:
         """The mode the firmware goes on to by itself from the plan's (ArduSub: ALT_HOLD at the surface): not a person's."""
-        return "ALT_HOLD" if plan.until is Until.SURFACED else None
+        return SURFACE_COMPLETE_MODE if plan.until is Until.SURFACED else None
 
     def _made_safe(self, made: bool, text: str, report: Callable[[], object], level: int | None = None) -> MadeSafe:
         """The make-safe's last word: logged (INFO made safe, else ERROR, or ``level``), what was asked sent, the ground station told."""

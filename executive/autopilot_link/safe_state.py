@@ -10,8 +10,9 @@
   lands rather than hover there: QLAND (AUTO.LAND on PX4), until landed and disarmed (ArduPlane
   disarms once QuadPlane::check_land_complete's land detector is sure, 4 s; PX4's commander after
   COM_DISARM_LAND, 2 s, ``commander/Commander.cpp`` handleAutoDisarm).
-- Rovers, boats, and a VTOL higher up: the safe mode as before (HOLD, LOITER, QLOITER or AUTO.LOITER),
-  made once the heartbeat shows it.
+- Rovers, boats, a VTOL higher up, and a disarmed sub or VTOL (the executive never arms a vehicle to
+  make it safe): the safe mode as before (HOLD, LOITER, QLOITER or AUTO.LOITER), made once the
+  heartbeat shows it.
 
 A failsafe of the mission that left the vehicle in a mode of its own (RTL, QRTL, SURFACE) is not undone;
 only a hold is replaced by the phase's plan. Waiting for the safe state is bounded (:meth:`SafePlan.bound_s`).
@@ -36,6 +37,8 @@ LAND_BELOW_M = {"ardupilot": 6.0, "px4": 5.0}
 SLOWEST_M_S = 0.5
 #: Added to the wait: the land detector (ArduPlane 4 s, PX4 ~2 s and COM_DISARM_LAND 2 s), the heartbeat, a round trip, a wave.
 SETTLE_MARGIN_S = 30.0
+#: The mode ArduSub goes on to by itself once SURFACE reaches the surface (ArduSub/mode_surface.cpp, ModeReason::SURFACE_COMPLETE).
+SURFACE_COMPLETE_MODE = "ALT_HOLD"
 #: The modes that only hold the vehicle where it is, per kind (the trees' names): replaced by the phase's plan.
 _HOLDS = {"sub": frozenset({"POSHOLD", "ALT_HOLD"}), "vtol": frozenset({"QLOITER", "LOITER"})}
 
@@ -68,6 +71,8 @@ def plan(kind: str, firmware: str, asked: str | None, safe_mode: str, read: Read
     mode = asked or safe_mode
     if asked is not None and asked not in _HOLDS.get(kind, ()) and not (kind == "sub" and asked == "SURFACE"):
         return SafePlan(mode)  # RTL, QRTL, QLAND...: the mission's failsafe chose it
+    if not read("/vehicle/armed"):
+        return SafePlan(mode)  # nothing moves it (a disarmed sub floats up at its buoyancy); the executive never arms it to make it safe
     position: GlobalPosition | None = read("/vehicle/position")  # type: ignore[assignment]
     height = position.alt_rel_m if position is not None else None
     if kind == "sub":
@@ -78,10 +83,10 @@ def plan(kind: str, firmware: str, asked: str | None, safe_mode: str, read: Read
         return SafePlan("SURFACE", Until.SURFACED, why, then="POSHOLD", distance_m=-height if height is not None else 100.0)
     if kind == "vtol":
         low = LAND_BELOW_M.get(firmware, 6.0)
-        landed_state, armed = read("/vehicle/landed_state"), bool(read("/vehicle/armed"))
+        landed_state = read("/vehicle/landed_state")
         if landed_state == "LANDING":
             why = "landing: it lands rather than hover"
-        elif landed_state == "ON_GROUND" and armed:
+        elif landed_state == "ON_GROUND":
             why = "armed on the ground: it lands (and disarms) rather than take off to hover"
         elif height is not None and height < low:
             why = f"at {height:.1f} m, below the {low:g} m its firmware lands the last metres from: it lands rather than hover"
@@ -93,9 +98,9 @@ def plan(kind: str, firmware: str, asked: str | None, safe_mode: str, read: Read
 
 def settled(plan: SafePlan, read: Read) -> bool:
     """The vehicle is in the safe state ``plan`` waits for (once the heartbeat has shown its mode)."""
-    if plan.until is Until.SURFACED:
+    if plan.until is Until.SURFACED:  # ArduSub's own word (SURFACE_COMPLETE: ALT_HOLD, at SURFACE_DEPTH -10 cm), and the depth agrees
         position: GlobalPosition | None = read("/vehicle/position")  # type: ignore[assignment]
-        return position is not None and position.alt_rel_m >= SUB_AT_SURFACE_M
+        return read("/vehicle/mode") == SURFACE_COMPLETE_MODE and position is not None and position.alt_rel_m >= SUB_AT_SURFACE_M
     if plan.until is Until.LANDED:
         return not read("/vehicle/armed") and read("/vehicle/landed_state") in (None, "ON_GROUND")
     return True
@@ -107,7 +112,7 @@ def progress(plan: SafePlan, read: Read) -> str:
     if position is None:
         return "no position report"
     if plan.until is Until.SURFACED:
-        return f"depth {max(-position.alt_rel_m, 0.0):.1f} m"
+        return f"depth {max(-position.alt_rel_m, 0.0):.1f} m, in {read('/vehicle/mode')}"
     landed = read("/vehicle/landed_state")
     return (
         f"height {position.alt_rel_m:.1f} m"

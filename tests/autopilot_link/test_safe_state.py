@@ -9,14 +9,18 @@ POSHOLD at 26 m, armed; `ctl abort` at 1.9 m in a landing left the VTOL hovering
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import py_trees
+import pytest
 
+from executive.autopilot_link.safe_state import Until, plan
 from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.runtime import Outcome
+from executive.state import GlobalPosition
 from executive.testing import Lockstep
 
 MISSIONS = Path(__file__).parents[2] / "missions"
@@ -125,3 +129,31 @@ def test_a_vtol_stopped_low_in_its_climb_lands_and_high_up_hovers_as_before(lock
     asked = modes_asked(high)
     outcome, _ = stopped(high)
     assert asked == ["QLOITER"] and high.autopilot.armed and outcome.safe == "the vehicle made safe: QLOITER (confirmed)"
+
+
+def readings(alt_rel_m: float | None = None, *, armed: bool = True, landed: str | None = None) -> Callable[[str], object]:
+    position = None if alt_rel_m is None else GlobalPosition(0.0, 0.0, alt_rel_m, 0.0, 0.0, 0.0, None, 0.0)
+    values = {"/vehicle/position": position, "/vehicle/armed": armed, "/vehicle/landed_state": landed}
+    return values.get
+
+
+@pytest.mark.parametrize(
+    ("kind", "firmware", "asked", "read", "mode", "until"),
+    [
+        pytest.param("sub", "ardupilot", None, readings(-26.0), "SURFACE", Until.SURFACED, id="sub-deep"),
+        pytest.param("sub", "ardupilot", "POSHOLD", readings(-26.0), "SURFACE", Until.SURFACED, id="sub-failsafe-hold"),
+        pytest.param("sub", "ardupilot", None, readings(-0.2), "POSHOLD", Until.SHOWN, id="sub-at-surface"),
+        pytest.param("sub", "ardupilot", None, readings(-26.0, armed=False), "POSHOLD", Until.SHOWN, id="sub-disarmed"),
+        pytest.param("vtol", "ardupilot", None, readings(5.5, landed="IN_AIR"), "QLAND", Until.LANDED, id="quadplane-5.5m"),
+        pytest.param("vtol", "px4", None, readings(5.5, landed="IN_AIR"), "QLOITER", Until.SHOWN, id="px4-5.5m"),
+        pytest.param("vtol", "px4", None, readings(20.0, landed="LANDING"), "QLAND", Until.LANDED, id="px4-landing"),
+        pytest.param("vtol", "ardupilot", None, readings(0.0, landed="ON_GROUND"), "QLAND", Until.LANDED, id="armed-on-ground"),
+        pytest.param("vtol", "ardupilot", None, readings(0.0, armed=False, landed="ON_GROUND"), "QLOITER", Until.SHOWN, id="disarmed"),
+        pytest.param("vtol", "ardupilot", "QRTL", readings(3.0, landed="IN_AIR"), "QRTL", Until.SHOWN, id="failsafe-qrtl-kept"),
+        pytest.param("rover", "ardupilot", None, readings(0.0), "HOLD", Until.SHOWN, id="rover"),
+    ],
+)
+def test_the_plan_by_kind_and_phase(kind, firmware, asked, read, mode, until) -> None:
+    safe_mode = {"sub": "POSHOLD", "vtol": "QLOITER", "rover": "HOLD"}[kind]
+    chosen = plan(kind, firmware, asked, safe_mode, read)
+    assert (chosen.mode, chosen.until) == (mode, until)
