@@ -88,7 +88,8 @@ class PersonsCommands:
         done = "disarmed" if sent.disarm else f"{sent.mode} set"
         state = self.mission_state
         if state.status is not MissionStatus.RUNNING:
-            log.warning("%s: %s: the vehicle %s (the mission %s)", sent.source, sent.what, done.replace(" set", ""), state.status)
+            now = "disarmed" if sent.disarm else f"in {sent.mode}"
+            log.warning("%s: %s: the vehicle %s (the mission %s)", sent.source, sent.what, now, state.status)
             return
         reason = f"{done} by a person ({sent.source}: {sent.what})"
         log.warning("%s -> mission paused at leg %d, hands off until resumed", reason, state.leg_index + 1)
