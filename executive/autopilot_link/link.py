@@ -227,7 +227,7 @@ class AutopilotLink:
             log.warning("%s: %s", MAKE_SAFE, plan.why)
         found_in = self._bb.get("/vehicle/mode")
         try:
-            done, account = self._ask(safe, found_in, announce, timeout_s, report)
+            done, account = self._ask(safe, found_in, announce, timeout_s, report, plan)
             if done and plan.until is not Until.SHOWN:
                 return self._settle(plan, account, found_in, announce, timeout_s, report)
         except _PersonTookOver as person_took:
@@ -239,12 +239,20 @@ class AutopilotLink:
         return self._made_safe(False, f"could not make the vehicle safe: {account}", report)
 
     def _ask(
-        self, safe: str, found_in: str | None, announce: Announce | None, timeout_s: float | None, report: Callable[[], object]
+        self,
+        safe: str,
+        found_in: str | None,
+        announce: Announce | None,
+        timeout_s: float | None,
+        report: Callable[[], object],
+        plan: SafePlan | None = None,
     ) -> tuple[bool, str]:
         """Ask ``safe`` by the reactions' rules until the heartbeat shows it, bounded: (done, what each reaction came to).
 
-        _PersonTookOver when a person takes the vehicle meanwhile (nothing more is asked).
+        Done too once the vehicle is in ``plan``'s safe state (a sub near the surface may show SURFACE and ArduSub's own
+        ALT_HOLD after it in one drain). _PersonTookOver when a person takes the vehicle meanwhile (nothing more is asked).
         """
+        own = self._own_follow_on(plan)
         reacting = Reacting(self, self.mission.vehicle, announce=announce, bounded=True, logger=log, prefix="")
         if self._bb.get("/link/up") and reacting.seen(safe):
             return True, f"{self.autopilot.mode_name(safe)} (already in it)"
@@ -257,9 +265,12 @@ class AutopilotLink:
             self.clock.sleep_until(min(deadline, self.clock.now() + self.period_s / 2))
             self.reader.drain()
             self.heartbeat.service()
-            if person := self._person_took_over(found_in, reacting.mode_in_force):
+            if person := self._person_took_over(found_in, reacting.mode_in_force, own):
                 reacting.cancel()
                 raise _PersonTookOver(person)
+            if plan is not None and plan.until is not Until.SHOWN and settled(plan, self._bb.get):
+                reacting.cancel()
+                return True, f"{self.autopilot.mode_name(safe)} ({plan.until})"
             time_up = self.clock.now() >= deadline - 1e-6  # as the reactions' 1.5 s: a sum of half periods lands a hair short
             reacting.follow_up(self.clock.now(), ask=not time_up)
             if reacting.done or reacting.exhausted or time_up:
@@ -312,9 +323,9 @@ class AutopilotLink:
             announce(f"made safe: {left}", False)
         return self._made_safe(done or plan.until is Until.SURFACED, f"the vehicle made safe: {left} ({steps})", report)
 
-    def _own_follow_on(self, plan: SafePlan) -> str | None:
+    def _own_follow_on(self, plan: SafePlan | None) -> str | None:
         """The mode the firmware goes on to by itself from the plan's (ArduSub: ALT_HOLD at the surface): not a person's."""
-        return SURFACE_COMPLETE_MODE if plan.until is Until.SURFACED else None
+        return SURFACE_COMPLETE_MODE if plan is not None and plan.until is Until.SURFACED else None
 
     def _made_safe(self, made: bool, text: str, report: Callable[[], object], level: int | None = None) -> MadeSafe:
         """The make-safe's last word: logged (INFO made safe, else ERROR, or ``level``), what was asked sent, the ground station told."""

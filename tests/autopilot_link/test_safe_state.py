@@ -75,6 +75,16 @@ def test_an_auv_stopped_under_water_surfaces_and_holds_position_there(lockstep) 
     assert took < 30.0 + depth / 0.5  # the bound: the depth at 0.5 m/s and a margin
 
 
+def test_an_auv_just_under_the_surface_surfaces_and_holds_position(lockstep) -> None:
+    """From under a metre the surface comes within a second (SURFACE, then ArduSub's own ALT_HOLD): its ALT_HOLD is nobody's."""
+    sim = lockstep(load_mission(MISSIONS / "auv_survey.yaml"), mission_dir=MISSIONS)
+    assert sim.run(limit_s=600, until=lambda: sim.status is MissionStatus.RUNNING and 0.6 < sim.autopilot.vehicle.depth_m < 0.9) is None
+    asked = modes_asked(sim)
+    outcome, _ = stopped(sim)
+    assert asked[0] == "SURFACE" and asked[-1] == "POSHOLD" and sim.autopilot.mode == "POSHOLD" and sim.autopilot.vehicle.depth_m < 0.5
+    assert (outcome.safe or "").startswith("the vehicle made safe: surfaced, holding position, armed (SURFACE ("), outcome.safe
+
+
 def test_an_auv_a_person_holds_is_not_surfaced(lockstep) -> None:
     """A ground station's POSHOLD mid-leg pauses the mission hands off: stopping then commands nothing over it."""
     sim = lockstep(load_mission(MISSIONS / "auv_survey.yaml"), mission_dir=MISSIONS)
