@@ -99,7 +99,7 @@ class ScriptedSub(ScriptedAutopilot):
             facts["vehicle__position"] = GlobalPosition(self.lat, self.lon, -self.depth, self.speed_over_m_s, 0, 0, 0, 0)
         good = self.sonar and SONAR_MIN_M <= self.altitude <= SONAR_MAX_M
         facts["vehicle__rangefinder"] = (
-            Rangefinder(self.altitude, SONAR_MIN_M, SONAR_MAX_M, "good" if good else "invalid", 0.0) if self.sonar else None
+            Rangefinder(self.altitude, SONAR_MIN_M, SONAR_MAX_M, "good" if good else "invalid", self.h.clock.now()) if self.sonar else None
         )
         facts["vehicle__altitude_above_bottom_m"] = self.altitude if good else None
         return facts
