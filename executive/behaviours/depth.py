@@ -141,7 +141,7 @@ class ChangeDepth(_VerticalSetpoint):
             return super().update()
         floor = depth_floor(-position.alt_rel_m, self.get("/vehicle/rangefinder"), self.clearance_m, self.clock.now())
         held = floor is not None and floor.depth_m < self.target_m - self.tolerance_m
-        self.goal_m = floor.depth_m if held and floor is not None else self.target_m
+        self.goal_m = round(floor.depth_m, 1) if held and floor is not None else self.target_m
         if not held or floor is None:
             return super().update()
         said = f"depth {self.target_m:g} m deeper than the water holds: {floor.why}, {self.clearance_m:g} m above it is {floor.depth_m:.1f} m"
