@@ -149,6 +149,8 @@ class ChangeDepth(_VerticalSetpoint):
             self.feedback_message = f"{said} (limits.seabed_floor: fail)"
             seabed_log.warning("%s: %s", self.name, self.feedback_message)
             return Status.FAILURE
+        if floor.kind == "lost" and self._told != "lost":
+            self._last_sent = float("-inf")  # stop now, not at the next re-send
         status = super().update()
         if floor.kind == "lost":
             self._tell("lost", f"descent stopped at {floor.depth_m:.1f} m: {floor.why} (target {self.target_m:g} m)")
