@@ -578,3 +578,16 @@ def test_on_the_simulator_a_sub_1_km_off_refuses_the_survey_without_arming_or_mo
     # the runtime's distance rule, before the tree's own (the same rule, repeated at its start) ever ticks
     assert outcome.reason.startswith("refused before anything was commanded: Within reach: waypoints[0] (start): 1200 m from the vehicle")
     assert (legs, end["armed"]) == ([], False) and end["moved_m"] < 0.01
+
+
+def test_on_the_simulated_ardusub_a_leg_deeper_than_the_water_is_held_2_m_above_the_seabed_and_the_survey_completes() -> None:
+    """Issue 44's repro: the example's last leg at 80 m over the simulator's 50 m seabed drove onto the bottom (50.2 m deep)."""
+    example = load_mission(ROOT / "missions" / "auv_survey.yaml")
+    assert example.home is not None
+    last = example.waypoints[-1].model_copy(update={"depth_m": 80.0})
+    limits = example.limits.model_copy(update={"leg_timeout_s": 240.0})
+    mission = example.model_copy(update={"waypoints": [*example.waypoints[:-1], last], "limits": limits})
+    outcome, legs, end = _run_on_the_simulator(mission, (example.home.lat, example.home.lon, example.home.heading_deg))
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    assert legs[3]["altitude"] == pytest.approx(2.0, abs=0.5) and legs[3]["depth"] < 48.6  # the floor, not the 80 m (nor the bottom)
+    assert (end["mode"], end["armed"]) == ("POSHOLD", True) and end["depth"] < 0.2

@@ -605,3 +605,20 @@ def test_the_simulated_quadplane_loses_its_ekf_during_the_climb_and_the_climb_go
     assert flight.recorder.vtol_states[flight.recorder.vtol_states.index("MC") :] == TRANSIT_VTOL_STATES
     assert max(alt for *_, alt in flight.recorder.positions) == pytest.approx(40.0, abs=1.0)  # the legs' height: the flight went on
     assert (flight.end["armed"], flight.end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and flight.end["off_home_m"] < 2.5
+
+
+def test_on_the_simulated_quadplane_a_leg_counts_only_once_the_aircraft_is_within_10_m_of_its_height() -> None:
+    """Issue 44: reaching is judged in 3-D (the acceptance radius, and limits.alt_tolerance_m of alt_m): a first waypoint at
+    120 m is passed over lower down, and counts only once the aircraft has climbed to within 10 m of it."""
+    example = load_mission(ROOT / "missions" / "vtol_transit.yaml")
+    high = example.waypoints[0].model_copy(update={"alt_m": 120.0})
+    mission = example.model_copy(update={"waypoints": [high, *example.waypoints[1:]]})
+    recorder = Recorder()
+    with Lockstep(mission, progress=recorder) as sim:
+        outcome = sim.run_to_end(limit_s=600)
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    on_leg_1 = [(math.dist(global_to_local(high.lat, high.lon, lat, lon), (0, 0)), alt) for leg, lat, lon, alt in recorder.positions if leg == 0]
+    low_within = [alt for off, alt in on_leg_1 if off <= mission.limits.acceptance_radius_m and alt < 110.0]
+    assert low_within, "the aircraft was never within the radius below 110 m: the case is not tested"
+    reached_at = next(alt for leg, _, _, alt in recorder.positions if leg == 1)
+    assert reached_at >= 110.0
