@@ -92,3 +92,16 @@ def test_a_route_edit_to_a_height_outside_the_limits_is_refused_and_changes_noth
     with pytest.raises(Refused, match=r"waypoints\[1\].alt_m: -50 m above home is outside limits.alt_m \[10, 120\]"):
         state.set_route([*before.waypoints, new_waypoint(1.001, 2.0, -50.0)], "operator: add")  # type: ignore[union-attr]
     assert state.mission is before
+
+
+def test_an_upload_of_a_mission_built_in_code_is_held_to_the_same_heights() -> None:
+    """The loader is one door; a mission handed to the lifecycle (an upload, a replacement) is checked again."""
+    from executive.mission.model import Mission
+
+    mission = Mission.model_validate(
+        {"version": 1, "name": "m", "vehicle": "vtol", "limits": {"acceptance_radius_m": 100}, "waypoints": [{"lat": 1.0, "lon": 2.0, "alt_m": -50}]}
+    )
+    state = MissionState()
+    with pytest.raises(Refused, match=r"waypoints\[0\].alt_m: -50 m above home is outside limits.alt_m \[10, 120\]"):
+        state.upload(mission)
+    assert state.mission is None
