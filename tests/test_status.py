@@ -28,9 +28,10 @@ def _vehicle(mav_type: int, alt_rel_m: float, reading: Rangefinder | None = None
         (mavlink.MAV_TYPE_SUBMARINE, -5.0, None, "depth 5.0 m, seabed no sonar reading", (5.0, None, None, None)),
         (mavlink.MAV_TYPE_FIXED_WING, 30.04, None, "height 30.0 m", (None, None, None, 30.04)),  # ArduPlane's QuadPlane
         (mavlink.MAV_TYPE_VTOL_TILTROTOR, 118.5, None, "height 118.5 m", (None, None, None, 118.5)),
+        (22, 118.5, None, "height 118.5 m", (None, None, None, 118.5)),  # PX4's standard VTOL (VTOL_FIXEDROTOR)
         (mavlink.MAV_TYPE_GROUND_ROVER, 0.3, None, None, (None, None, None, None)),
     ],
-    ids=["sub-over-the-seabed", "sub-seabed-beyond-the-sonar", "sub-no-sonar", "quadplane", "vtol", "rover"],
+    ids=["sub-over-the-seabed", "sub-seabed-beyond-the-sonar", "sub-no-sonar", "quadplane", "vtol", "px4-standard-vtol", "rover"],
 )
 def test_the_status_shows_the_depth_and_seabed_of_a_sub_and_the_height_of_a_vtol(
     mav_type: int, alt_rel_m: float, reading: Rangefinder | None, shown: str | None, values: tuple[float | None, ...]
