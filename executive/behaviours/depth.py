@@ -188,7 +188,9 @@ class ChangeAltitude(_VerticalSetpoint):
     (:func:`executive.seabed.depth_for_altitude`), re-sent every ``resend_s`` as the reading
     changes: ArduSub silently drops a terrain-frame target. With the seabed beyond the
     rangefinder's reach it dives, without overshooting, until the reading is good. Confirmed by the
-    rangefinder (``/vehicle/altitude_above_bottom_m``). Other legs: SUCCESS at once.
+    rangefinder (``/vehicle/altitude_above_bottom_m``). Other legs: SUCCESS at once. A reading
+    that is invalid or silent (:func:`executive.seabed.depth_floor`: the sonar lost) holds the depth
+    the sub is at: no descent on a sonar that says nothing.
     """
 
     reads = (*_VerticalSetpoint.reads, "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder")
@@ -208,8 +210,13 @@ class ChangeAltitude(_VerticalSetpoint):
         position: GlobalPosition | None = self.get("/vehicle/position")
         if position is None:
             return
-        depth = depth_for_altitude(-position.alt_rel_m, self.get("/vehicle/rangefinder"), target_m)
-        if depth is not None:  # an invalid reading: ArduSub keeps the last depth target
+        here, reading = -position.alt_rel_m, self.get("/vehicle/rangefinder")
+        floor = depth_floor(here, reading, target_m, self.clock.now())
+        if floor is not None and floor.kind == "lost":  # no reading to trust (invalid, or silent): the descent stops where it is
+            self.autopilot.hold_depth(lat, lon, depth_m=here)
+            return
+        depth = depth_for_altitude(here, reading, target_m)
+        if depth is not None:
             self.autopilot.hold_depth(lat, lon, depth_m=depth)
 
 

@@ -493,6 +493,17 @@ def test_losing_the_sonar_on_the_way_down_stops_the_descent_until_it_is_back(mak
     assert survey.depths_at_leg_end == [(25.0, SEABED_M - 25.0)]
 
 
+def test_losing_the_sonar_on_an_altitude_leg_holds_the_depth_the_sub_is_at(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission({**NORTH, "name": "over", "control_mode": "altitude", "altitude_m": 10.0}))
+    survey.sub.dz_m = 0.5
+    survey.run(200, until=lambda: survey.sub.depth >= 5.0)
+    survey.sub.sonar_silent = True
+    survey.run(40)
+    stopped = survey.sub.depth
+    assert 15.0 <= stopped <= 18.0 and ("depth", stopped, "in place") in survey.sub.commands  # not on to 20 m
+    assert survey.run(50) == [Status.RUNNING] * 50 and survey.sub.depth == stopped
+
+
 def test_a_seabed_rising_under_a_depth_leg_lifts_the_sub_to_the_floor(make_survey: MakeSurvey) -> None:
     survey = make_survey(sub_mission(*SURVEY))
     survey.under_way("depth", 5.0, "north")
@@ -585,7 +596,7 @@ def test_on_the_simulated_ardusub_a_leg_deeper_than_the_water_is_held_2_m_above_
     example = load_mission(ROOT / "missions" / "auv_survey.yaml")
     assert example.home is not None
     last = example.waypoints[-1].model_copy(update={"depth_m": 80.0})
-    limits = example.limits.model_copy(update={"leg_timeout_s": 240.0})
+    limits = example.limits.model_copy(update={"leg_timeout_s": 240.0, "water_depth_m": None})  # validate would refuse it
     mission = example.model_copy(update={"waypoints": [*example.waypoints[:-1], last], "limits": limits})
     outcome, legs, end = _run_on_the_simulator(mission, (example.home.lat, example.home.lon, example.home.heading_deg))
     assert str(outcome.status) == "COMPLETED", outcome.reason
