@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -19,6 +20,7 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, Rangefinder
+from executive.status import status_line
 from executive.testing import EKF_READY, Lockstep, ScriptedAutopilot
 from executive.vehicles import PROFILES
 
@@ -550,6 +552,7 @@ def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) ->
             wp = mission.waypoints[runtime.mission_state.leg_index]
             v = sim.autopilot.vehicle
             legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": sim.clock.now()})
+            legs[-1]["status"] = status_line(runtime.status.snapshot())  # type: ignore[assignment]
             advance()
 
         runtime.mission_state.advance_leg = note_and_advance  # type: ignore[method-assign]
@@ -601,4 +604,6 @@ def test_on_the_simulated_ardusub_a_leg_deeper_than_the_water_is_held_2_m_above_
     outcome, legs, end = _run_on_the_simulator(mission, (example.home.lat, example.home.lon, example.home.heading_deg))
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert legs[3]["altitude"] == pytest.approx(2.0, abs=0.5) and legs[3]["depth"] < 48.6  # the floor, not the 80 m (nor the bottom)
+    assert re.search(r"  depth 4[78]\.\d m, seabed [12]\.\d m below  GUIDED armed", str(legs[3]["status"])), legs[3]["status"]
+    assert re.search(r"  depth 2\d\.\d m, seabed 2[345]\.\d m below  ", str(legs[2]["status"])), legs[2]["status"]  # 24 m above it
     assert (end["mode"], end["armed"]) == ("POSHOLD", True) and end["depth"] < 0.2
