@@ -1,25 +1,66 @@
 """Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket, a line mission,
-a mission out of reach run to its refusal, the time a thread waited for a CPU."""
+a mission out of reach run to its refusal, the time a thread waited for a CPU, ``executive run`` in lock-step with its built-in simulator."""
 
 from __future__ import annotations
 
 import os
 from typing import Any
 
+import pytest
+
 from executive.assembly import build_runtime
-from executive.clock import ScaledClock
+from executive.clock import ManualClock, ScaledClock
 from executive.geo import destination
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.model import Mission, Waypoint
 from executive.pacing import SpeedGovernor
 from executive.runtime import Outcome, Runtime
+from executive.sim import SimServer
 from executive.testing import Lockstep
 
 #: Home of the line missions: ArduPilot SITL's default location.
 LINE_HOME = (-35.363261, 149.165230)
 #: EKF ready 2 s after boot in the line missions' simulator.
 LINE_EKF_READY_S = 2.0
+
+
+class SteppedClock(ManualClock):
+    """``executive run``'s clock made lock-step (:func:`run_in_lockstep`): time moves only when the runtime waits, and the
+    simulators served in-process (their threads never started) step with it, every :attr:`STEP_S` of vehicle time.
+
+    Over loopback UDP a datagram sent is in the peer's socket when ``sendto`` returns: the runtime reads at its next tick
+    what the simulator said at this instant, however busy the machine. :attr:`speedup` is the one asked for (kept for
+    what ``run`` derives from it), never the pace: a run takes the CPU time it needs, not its vehicle time over the speed-up.
+    """
+
+    STEP_S = 0.05
+
+    def __init__(self, speedup: float = 1.0) -> None:
+        super().__init__(0.0)
+        self.speedup = speedup
+        self.servers: list[SimServer] = []
+
+    def set_speedup(self, speedup: float) -> None:
+        self.speedup = speedup
+
+    def sleep_until(self, t: float) -> None:
+        while self.now() < t:
+            ManualClock.sleep_until(self, min(t, self.now() + self.STEP_S))
+            for server in self.servers:
+                server.step()
+
+
+def run_in_lockstep(monkeypatch: pytest.MonkeyPatch) -> None:
+    """From now on in this test ``executive run`` (in-process, its built-in simulator) runs lock-step on a :class:`SteppedClock`."""
+
+    def serve_in_step(server: SimServer) -> SimServer:
+        assert isinstance(server.clock, SteppedClock), "run_in_lockstep: a simulator on another clock"
+        server.clock.servers.append(server)
+        return server
+
+    monkeypatch.setattr("executive.cli.run.ScaledClock", SteppedClock)
+    monkeypatch.setattr(SimServer, "start", serve_in_step)
 
 
 def line_mission(name: str, **changes: Any) -> Mission:

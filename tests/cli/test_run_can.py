@@ -5,16 +5,17 @@ from __future__ import annotations
 import can
 
 from executive.cli import main
-from tests_support import mission_text
+from tests_support import mission_text, run_in_lockstep
 
 MISSION = mission_text("short", "{lat: -35.3631710, lon: 149.1652300}", simulator="{model: bunker, ekf_ready_after_s: 2}")
 
 
-def test_the_drive_bridge_talks_to_the_base_and_the_bus_is_recorded(tmp_path, capsys):
+def test_the_drive_bridge_talks_to_the_base_and_the_bus_is_recorded(tmp_path, capsys, monkeypatch):
     """In this process: what it checks is on the bus and in the log, nothing a process of its own would show."""
     mission, log = tmp_path / "short.yaml", tmp_path / "bus.log"
     mission.write_text(MISSION)
     argv = ["run", str(mission), "--speedup", "10", "--socket", "none", "--can", "virtual:run-can", "--can-log", str(log)]
+    run_in_lockstep(monkeypatch)
     assert main(argv) == 0, capsys.readouterr().err
     frames = list(can.LogReader(str(log)))
     ids = {f.arbitration_id for f in frames}

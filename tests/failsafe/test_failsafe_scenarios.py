@@ -44,7 +44,7 @@ from executive.mission.model import Mission
 from executive.runtime import Runtime
 from executive.sim.faults import load_faults
 from executive.state import EkfFlags
-from tests_support import LINE_EKF_READY_S, LINE_HOME, line_mission
+from tests_support import LINE_EKF_READY_S, LINE_HOME, line_mission, run_in_lockstep
 
 ROOT = Path(__file__).parents[2]
 FAULTS = ROOT / "missions" / "faults"
@@ -218,7 +218,7 @@ def test_a_fault_gets_its_failsafe_within_one_tick_and_its_recovery(run_scenario
         assert report["outcome"] == "ABORTED"
 
 
-def test_a_failsafe_abort_exits_1_and_the_report_has_the_event(tmp_path: Path, capsys) -> None:
+def test_a_failsafe_abort_exits_1_and_the_report_has_the_event(tmp_path: Path, capsys, monkeypatch) -> None:
     """``executive run --faults --journal`` from the command line (in this process: its exit code and output are what is checked):
     battery_low, exit 1, the vehicle in RTL, the event in ``executive report --json``."""
     mission = tmp_path / "line.yaml"
@@ -228,6 +228,7 @@ def test_a_failsafe_abort_exits_1_and_the_report_has_the_event(tmp_path: Path, c
     faults.write_text(yaml.safe_dump(plan))
     db = tmp_path / "journal.db"
     # at 10x: the safe mode is confirmed within its bound of vehicle time; at 50x, 0.1 s of wall time, too little beside busy processes
+    run_in_lockstep(monkeypatch)
     code = main(["run", str(mission), "--faults", str(faults), "--speedup", "10", "--journal", str(db), "--socket", "none", "-v"])
     err = capsys.readouterr().err
     assert code == 1, err
