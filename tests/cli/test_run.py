@@ -23,7 +23,7 @@ from executive.clock import ScaledClock
 from executive.io.mavlink.link import load_signing_key
 from executive.mavlink_dialect import mavutil
 from executive.sim import SimServer
-from tests_support import run_in_lockstep, run_over
+from tests_support import SteppedClock, run_in_lockstep, run_over
 
 ROOT = Path(__file__).parents[2]
 #: The in-process simulators' EKF is ready after 2 s, not the firmware's 40: what those tests check comes once the rover drives.
@@ -32,14 +32,6 @@ EKF_READY_S = 2.0
 
 def executive(*args: str, **popen) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stderr=subprocess.PIPE, text=True, **popen)
-
-
-def test_the_readme_mission_completes_in_the_simulator():
-    """README's first command: the rover square completes at speed-up 20 (every example mission: tests/testing/test_lockstep.py)."""
-    proc = executive("run", str(ROOT / "missions/rover_square.yaml"), "--speedup", "20", "--socket", "none", stdout=subprocess.DEVNULL)
-    _, err = proc.communicate(timeout=300)
-    assert proc.returncode == 0, err
-    assert "COMPLETED: every waypoint reached" in err
 
 
 def test_ctrl_c_leaves_the_vehicle_in_its_safe_mode(tmp_path):
@@ -122,10 +114,11 @@ def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp
     assert ticks + skipped >= 100, err
 
 
-def test_in_process_run_against_a_sim_server(square_mission):
-    """The runtime over a real loopback socket, in one process: what `run` does without --mavlink."""
-
-    clock = ScaledClock(50.0)
+def test_in_process_run_against_a_sim_server(square_mission, monkeypatch):
+    """The runtime over a real loopback socket, in one process: what `run` does without --mavlink (lock-step: the server steps
+    when the runtime waits)."""
+    run_in_lockstep(monkeypatch)
+    clock = SteppedClock(50.0)
     first = square_mission.waypoints[0]
     with SimServer("rover", clock=clock, home=(first.lat - 0.0002, first.lon, 0.0), ekf_ready_after_s=EKF_READY_S) as sim:
         _, outcome = run_over(sim.url_for_client, square_mission, clock)
