@@ -1,6 +1,8 @@
-"""The mission protocol over real UDP against the simulated rover (50x), directly and through a lossy link.
+"""The mission protocol over real UDP against the simulated rover, directly (lock-step) and through a lossy link (50x).
 
-Waits are bounded by wall-clock deadlines; the loop polls the socket, as the runtime's tick would.
+The loop polls the socket, as the runtime's tick would. Directly, the server steps when the loop waits (a
+:class:`~tests_support.SteppedClock`): the transfer's timeouts (1.5 s of vehicle time, 30 ms of wall time at 50x) never
+fire for a busy machine's sake, so no retry is a fact to assert. Through the proxy's thread, the waits are in wall time.
 """
 
 from __future__ import annotations
@@ -23,9 +25,11 @@ from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
 from executive.vehicles import PROFILES
 from lossy_udp import LossyUdpProxy
+from tests_support import SteppedClock
 
 HOME = (47.397742, 8.545594, 0.0)
 M_PER_DEG_LAT = 111_319.49
+SPEEDUP = 50.0
 MISSION_IDS = {39, 40, 41, 42, 43, 44, 45, 47, 51, 73}  # MISSION_ITEM .. MISSION_ACK, MISSION_REQUEST_INT, MISSION_ITEM_INT
 
 
@@ -61,17 +65,24 @@ class Executive:
         self.transfer = RecordingTransfer(self.link, clock, **transfer_options)
         self.reader = MavlinkReader(self.link, clock, self.commander, mission=self.transfer)
         self.heartbeat = Heartbeat(self.link, clock)
+        self.clock = clock
 
     def pump_until(self, done: Callable[[], bool], what: str, timeout_s: float = 3.0) -> None:
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
+        """Poll until ``done()``: within ``timeout_s`` of wall time, or in lock-step as much vehicle time as that is at 50x."""
+        stepped = isinstance(self.clock, SteppedClock)
+        now = self.clock.now if stepped else time.monotonic
+        deadline = now() + timeout_s * (SPEEDUP if stepped else 1.0)
+        while now() < deadline:
             self.heartbeat.service()
             self.reader.drain()
             self.commander.flush()
             self.transfer.flush()
             if done():
                 return
-            time.sleep(0.001)  # poll the socket again in a moment
+            if stepped:  # the server answers when our clock moves on
+                self.clock.sleep_until(self.clock.now() + SteppedClock.STEP_S)
+            else:
+                time.sleep(0.001)  # poll the socket again in a moment
         raise AssertionError(f"not within {timeout_s} s: {what}")
 
     def connect(self) -> None:
@@ -95,15 +106,25 @@ class Executive:
 
 @pytest.fixture
 def server() -> Iterator[SimServer]:
-    with SimServer("rover", clock=ScaledClock(50.0), home=HOME, ekf_ready_after_s=2.0) as sim:
+    with SimServer("rover", clock=ScaledClock(SPEEDUP), home=HOME, ekf_ready_after_s=2.0) as sim:
         yield sim
 
 
 @pytest.fixture
-def executive_for(server: SimServer) -> Iterator[Callable[..., Executive]]:
+def stepped_server() -> Iterator[SimServer]:
+    """The simulated rover stepped by its clock (:class:`SteppedClock`), its thread never started."""
+    clock = SteppedClock(SPEEDUP)
+    sim = SimServer("rover", clock=clock, home=HOME, ekf_ready_after_s=2.0)
+    clock.servers.append(sim)
+    yield sim
+    sim.stop()
+
+
+@pytest.fixture
+def executive_for() -> Iterator[Callable[..., Executive]]:
     made: list[Executive] = []
 
-    def make(url: str, **transfer_options: float) -> Executive:
+    def make(server: SimServer, url: str, **transfer_options: float) -> Executive:
         made.append(Executive(url, server.clock, **transfer_options))
         return made[-1]
 
@@ -112,8 +133,9 @@ def executive_for(server: SimServer) -> Iterator[Callable[..., Executive]]:
         executive.close()
 
 
-def test_upload_read_back_set_current_and_fly_the_mission(server: SimServer, executive_for: Callable[..., Executive]) -> None:
-    ex = executive_for(server.url_for_client)
+def test_upload_read_back_set_current_and_fly_the_mission(stepped_server: SimServer, executive_for: Callable[..., Executive]) -> None:
+    server = stepped_server
+    ex = executive_for(server, server.url_for_client)
     ex.connect()
     items = waypoint_items(path(5, 6.0))
     ex.finish(ex.transfer.upload(items, HOME[:2]), "the upload and its read-back")
@@ -142,7 +164,7 @@ def test_upload_read_back_set_current_and_fly_the_mission(server: SimServer, exe
 def test_upload_and_download_survive_a_lossy_link(server: SimServer, executive_for: Callable[..., Executive]) -> None:
     with LossyUdpProxy(server.port, drop=0.2, reorder=0.1, seed=7, lifetime_s=8.0) as proxy:
         # more retries than by default: at 20 % loss each way, a round trip fails 36 % of the time
-        ex = executive_for(f"udpout:127.0.0.1:{proxy.port}", retries=10)
+        ex = executive_for(server, f"udpout:127.0.0.1:{proxy.port}", retries=10)
         ex.connect()
         items = waypoint_items(path(8, 5.0))
         ex.finish(ex.transfer.upload(items, HOME[:2]), "the upload and its read-back", timeout_s=4.0)
