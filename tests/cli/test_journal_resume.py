@@ -21,6 +21,7 @@ from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.snapshots import SnapshotRecorder
 from executive.state import SamplerState
+from tests_support import run_in_lockstep
 
 ROOT = Path(__file__).parents[2]
 MISSION = ROOT / "missions" / "asv_sampling.yaml"
@@ -51,7 +52,7 @@ def report(db: Path, run_id: int, capsys) -> dict:
     return json.loads(capsys.readouterr().out)
 
 
-def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, capsys):
+def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, capsys, monkeypatch):
     """From the command line: a real SIGKILL after the first sample, then ``run --resume`` (each crash moment: the lock-step test below)."""
     db, snapshots, mission = tmp_path / "journal.db", tmp_path / "run.snap", tmp_path / "asv.yaml"
     # the ASV mission with an EKF ready after 2 s (not 40), no EKF dropout and its first sample point near: the crash is what this test is about
@@ -72,7 +73,8 @@ def test_kill_9_then_resume_finishes_with_every_sample_recorded_once(tmp_path, c
     assert crashed["outcome"] is None  # it never ended
     assert len(crashed["samples"]) in (1, 2)
 
-    # the resumed run in this process (what is resumed is in the journal; nothing here needs a process of its own), faster
+    # the resumed run in this process (what is resumed is in the journal; nothing here needs a process of its own), lock-step
+    run_in_lockstep(monkeypatch)
     code = main(["run", str(mission), "--speedup", "40", "--socket", "none", "--journal", str(db), "--resume"])
     err = capsys.readouterr().err
     assert code == 0, err
