@@ -29,7 +29,8 @@ class SteppedClock(ManualClock):
     """``executive run``'s clock made lock-step (:func:`run_in_lockstep`): time moves only when the runtime waits, and the
     simulators served in-process (their threads never started) step with it, every :attr:`STEP_S` of vehicle time.
 
-    Over loopback UDP a datagram sent is in the peer's socket when ``sendto`` returns: the runtime reads at its next tick
+    Over loopback UDP a datagram is in the peer's socket when ``sendto`` returns (Linux delivers it in the sender's
+    system call, save when its soft interrupts are deferred: then a tick later): the runtime reads at its next tick
     what the simulator said at this instant, however busy the machine. :attr:`speedup` is the one asked for (kept for
     what ``run`` derives from it), never the pace: a run takes the CPU time it needs, not its vehicle time over the speed-up.
     """
