@@ -56,6 +56,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/link/reboots", 0, "mavlink reader", "autopilot reboots seen (its boot clock ran backwards)"),
     Key("/link/bad_data", 0, "mavlink reader", "undecodable byte runs received"),
     Key("/link/unsigned_dropped", 0, "mavlink reader", "unsigned packets dropped while signing is on"),
+    Key("/link/device_lost", None, "mavlink reader", "why the serial device is gone while it is opened again (None: it is there, or no serial link)"),
     Key("/link/mission_transfer", None, "mission transfer", "MissionTransferStatus of the latest mission upload, download, clear or set-current"),
     Key("/link/route_upload", None, "route keeper", "RouteUpload: the latest edited route (and home) sent to the autopilot, read back, retried"),
     Key("/vehicle/mav_type", None, "mavlink reader", "HEARTBEAT type (MAV_TYPE)"),

@@ -113,7 +113,7 @@ def _vehicle_link(
     args: argparse.Namespace, mission: Mission, clock: ScaledClock, faults: FaultInjector | None, signing_key: bytes | None
 ) -> Iterator[PymavlinkLink]:
     """A link to the vehicle named by --mavlink, or to a simulated one started here."""
-    options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog}
+    options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog, "clock": clock}
     if args.mavlink:
         link = _open_link("--mavlink", args.mavlink, **options)
         try:
@@ -491,7 +491,12 @@ class StopSignals:
 
 
 def exit_code(outcome: Outcome) -> int:
-    """0 when the mission that ran COMPLETED, or none ran (``--wait``, stopped before any start); 1 when it ended otherwise."""
+    """0 when the mission that ran COMPLETED, or none ran (``--wait``, stopped before any start); 1 when it ended otherwise.
+
+    2 when a user's code (a plugin's tree or behaviour) failed as it started, before anything was commanded: bad input.
+    """
+    if outcome.users_code:
+        return EXIT_BAD_INPUT
     return EXIT_OK if outcome.mission is None or outcome.status is MissionStatus.COMPLETED else EXIT_FAILED
 
 

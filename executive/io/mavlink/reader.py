@@ -476,6 +476,7 @@ class MavlinkReader:
         self._set_if_changed("/link/loss_pct", self.health.loss_pct)
         self._set_if_changed("/link/reboots", self.health.reboots)
         self._set_if_changed("/link/unsigned_dropped", getattr(self._link, "unsigned_dropped", 0))
+        self._set_if_changed("/link/device_lost", getattr(self._link, "device_lost", None))
 
     def _set_if_changed(self, key: str, value: object) -> None:
         if self._bb.get(key) != value:
