@@ -313,6 +313,16 @@ def _signing_hint(link: PymavlinkLink) -> str:
     )
 
 
+def _serial_hint(link: PymavlinkLink, bad_data: int) -> str:
+    """Why no heartbeat was heard on a serial device that sent bytes: not an autopilot's port, or not at its baud rate."""
+    if link.device is None or not bad_data:
+        return ""
+    return (
+        f": bytes that are not MAVLink came in ({bad_data} undecodable runs): is it the autopilot's port, and is it at the autopilot's "
+        "baud rate (,BAUD after the device; ArduPilot's SERIALn_BAUD)? the wrong baud rate garbles every byte"
+    )
+
+
 def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
@@ -432,7 +442,9 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_INTERRUPTED
         if not connected:
             which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
-            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)
+            on = f" on {link.url}" if link.device is not None else ""
+            hint = _signing_hint(link) or _serial_hint(link, runtime.link.reader.bad_data)
+            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{on}{hint}", file=sys.stderr)
             return EXIT_NO_VEHICLE
         if watchdog is not None:
             watchdog.ready(f"autopilot {'/'.join(map(str, runtime.link.reader.autopilot or ()))} heard on {link.url}; mission {mission.name!r}")
