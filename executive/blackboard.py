@@ -127,6 +127,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/runtime/late_ticks", 0, "tick pacer", "ticks that started more than half a period after they were due"),
     Key("/runtime/skipped_ticks", 0, "tick pacer", "ticks never run: the loop fell more than a period behind and restarted its schedule"),
     Key("/runtime/rate_hz", None, "tick pacer", "ticks per second of clock time over the last window (5 s); None until the first"),
+    Key("/runtime/storage_lost", None, "storage", "the recordings that cannot write to the disk now, and why (None: all write)"),
     Key("/mission/state", "IDLE", "mission state", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
     Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
     Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),

@@ -7,6 +7,7 @@ import contextlib
 import logging
 import os
 import signal
+import sqlite3
 import sys
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
@@ -30,6 +31,7 @@ from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.endpoint import Unreachable
 from executive.io.mavlink.link import PymavlinkLink
+from executive.io.storage import Storage
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
 from executive.logs import attach_live_line, setup_logging
@@ -110,10 +112,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 @contextlib.contextmanager
 def _vehicle_link(
-    args: argparse.Namespace, mission: Mission, clock: ScaledClock, faults: FaultInjector | None, signing_key: bytes | None
+    args: argparse.Namespace, mission: Mission, clock: ScaledClock, faults: FaultInjector | None, signing_key: bytes | None, storage: Storage
 ) -> Iterator[PymavlinkLink]:
     """A link to the vehicle named by --mavlink, or to a simulated one started here."""
-    options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog, "clock": clock}
+    options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog, "clock": clock, "storage": storage}
     if args.mavlink:
         link = _open_link("--mavlink", args.mavlink, **options)
         try:
@@ -196,17 +198,34 @@ def _control_socket_path(asked: str | None) -> str | None:
     return path
 
 
-def _recorders(args: argparse.Namespace, clock: ScaledClock, stack: contextlib.ExitStack) -> tuple[Journal | None, SnapshotRecorder | None]:
-    """The journal (with the log's warnings as its events) and the snapshot recorder asked for, closed with ``stack``."""
+def _recorders(
+    args: argparse.Namespace, clock: ScaledClock, stack: contextlib.ExitStack, storage: Storage
+) -> tuple[Journal | None, SnapshotRecorder | None]:
+    """The journal (with the log's warnings as its events) and the snapshot recorder asked for, closed with ``stack``.
+
+    BadInput when one cannot be created (a directory that does not exist, a read-only or full disk): refused before the run.
+    """
     journal = snapshots = None
+    if args.tlog:  # opened with the link: checked here, before anything is
+        try:
+            with open(args.tlog, "ab"):
+                pass
+        except OSError as exc:
+            raise BadInput(f"--tlog {args.tlog}: cannot be created: {exc.strerror or exc}") from exc
     if args.journal:
-        journal = Journal(args.journal, clock)
+        try:
+            journal = Journal(args.journal, clock, storage)
+        except (sqlite3.Error, OSError) as exc:
+            raise BadInput(f"--journal {args.journal}: cannot be created or written: {exc}") from exc
         stack.callback(journal.close)
         handler = JournalLogHandler(journal)
         logging.getLogger("executive").addHandler(handler)
         stack.callback(logging.getLogger("executive").removeHandler, handler)
     if args.snapshots:
-        snapshots = SnapshotRecorder(args.snapshots)
+        try:
+            snapshots = SnapshotRecorder(args.snapshots, storage=storage)
+        except OSError as exc:
+            raise BadInput(f"--snapshots {args.snapshots}: cannot be created: {exc.strerror or exc}") from exc
         stack.callback(snapshots.close)
     return journal, snapshots
 
@@ -399,9 +418,10 @@ def main(args: argparse.Namespace) -> int:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         web = _web_server(args, stack)
         groot2 = _groot2(args, stack)
-        link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
+        storage = Storage()  # the journal, snapshots and tlog on a disk that may fill up: said once, retried
+        journal, snapshots = _recorders(args, clock, stack, storage)  # before the vehicle: one that cannot be created is refused first
+        link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key, storage))
         gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
-        journal, snapshots = _recorders(args, clock, stack)
         can_bus = _can_bus(args, stack)
         resume = None
         if journal is not None and args.resume:
@@ -428,6 +448,7 @@ def main(args: argparse.Namespace) -> int:
             simulated_vehicle=not args.mavlink,
         )
         stack.callback(runtime.close)
+        storage.listeners.append(runtime.mission_state.announce)  # the ground station told (STATUSTEXT), as the log and the status line
         if not args.mavlink and clock.speedup > 1.0:  # the simulated world slows down to what the executive follows
             runtime.pacer.listeners.append(SpeedGovernor(clock))
         try:

@@ -12,11 +12,12 @@ import time
 from collections import deque
 from collections.abc import Collection
 from pathlib import Path
-from typing import Any, BinaryIO, Protocol
+from typing import Any, Protocol
 
 from executive.clock import Clock, ScaledClock
 from executive.io.mavlink.endpoint import Unreachable, is_serial, unreachable
 from executive.io.mavlink.skim import Skimmer
+from executive.io.storage import AppendFile, Storage
 from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
 
 log = logging.getLogger(__name__)
@@ -73,10 +74,13 @@ def load_signing_key(path: str | os.PathLike[str]) -> bytes:
 
 
 class TlogWriter:
-    """Records messages in the .tlog format: an 8-byte big-endian µs wall-clock timestamp, then the raw packet."""
+    """Records messages in the .tlog format: an 8-byte big-endian µs wall-clock timestamp, then the raw packet.
 
-    def __init__(self, path: str | os.PathLike[str]) -> None:
-        self._file: BinaryIO = open(path, "ab")  # noqa: SIM115 - lives as long as the link
+    Each record is written whole or not at all (a full disk loses packets, said once, never the file's end).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], storage: Storage | None = None) -> None:
+        self._file = AppendFile(path, "tlog", "the MAVLink link is not recorded", storage)
 
     def write(self, msg: MAVLinkMessage) -> None:
         self._file.write(struct.pack(">Q", int(time.time() * 1e6)) + bytes(msg.get_msgbuf()))
@@ -104,6 +108,7 @@ class PymavlinkLink:
         signing_key: bytes | None = None,
         tlog: str | os.PathLike[str] | None = None,
         clock: Clock | None = None,
+        storage: Storage | None = None,
     ) -> None:
         device, _, baud = url.partition(",")
         self.url = url
@@ -136,7 +141,7 @@ class PymavlinkLink:
             if len(signing_key) != 32:
                 raise ValueError("a MAVLink signing key is 32 bytes")
             self._conn.setup_signing(signing_key, sign_outgoing=True, allow_unsigned_callback=lambda _mav, _msg_id: False)
-        self._tlog = TlogWriter(tlog) if tlog else None
+        self._tlog = TlogWriter(tlog, storage) if tlog else None
         self._post_message = self._conn.post_message
         self._conn.post_message = self._post  # type: ignore[method-assign]
 
