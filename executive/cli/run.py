@@ -34,7 +34,7 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.io.storage import Storage
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
-from executive.logs import attach_live_line, setup_logging
+from executive.logs import attach_live_line, setup_logging, use_clock
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.pacing import SpeedGovernor, keeping_time
@@ -404,6 +404,7 @@ def main(args: argparse.Namespace) -> int:
     for note in checked.notes:
         print(f"executive: run: {note}", file=sys.stderr)
     clock = ScaledClock(args.speedup)
+    use_clock(clock.now)  # the log's t=: the journal's and the status line's time, whatever the wall clock does
     faults = None
     if checked.faults:
         from executive.sim.faults import FaultInjector
