@@ -2,9 +2,10 @@
 
 Each record reads ``2026-05-01T10:12:03.250Z t=12.345 executive WARNING intervention: ...``: the
 timestamp is the computer's UTC wall clock, ``t=`` the run's clock (vehicle time, monotonic: the
-live status line's ``[  12.3 s]`` and the journal's ``t``), which a wall clock's jump leaves alone. By default the operator's events are shown at INFO - the mission's state changes and
-pauses, legs done, samples, route edits, the autopilot found and its messages, the vehicle made
-safe - and every other module's only from WARNING; ``-v`` shows every INFO, ``-vv`` DEBUG.
+live status line's ``[  12.3 s]`` and the journal's ``t``), which a wall clock's jump leaves alone.
+By default the operator's events are shown at INFO - the mission's state changes and pauses, legs
+done, samples, route edits, the autopilot found and its messages, the vehicle made safe - and every
+other module's only from WARNING; ``-v`` shows every INFO, ``-vv`` DEBUG.
 
 A record never lands on the end of the live status line: the line is cleared before the record
 is written and drawn again after it (:class:`LiveLineHandler`). Under systemd, with stderr going

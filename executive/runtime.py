@@ -230,6 +230,8 @@ class Runtime:
         """
         if start:
             self._resume = resume
+            if resume is not None and self.link.watch.commanded is None:
+                self.link.watch.commanded = "a resumed run"  # the run it continues commanded the vehicle: it is made safe if stopped
             self.mission_state.start()
             if resume is not None:
                 if resume.route is not None:  # the operator had edited it: that is the route being driven

@@ -25,7 +25,10 @@ class Explodes(py_trees.behaviour.Behaviour):
 
 
 def make_runtime(square_mission, link, clock, root=None) -> Runtime:
-    return build_runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
+    """The runtime of a mission under way: the vehicle (in GUIDED, armed) stands as this run left it, and its make-safe acts."""
+    runtime = build_runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
+    runtime.link.watch.commanded = "the run before the test"
+    return runtime
 
 
 def autopilot_at(mission, link, vehicle: str = "rover") -> ObedientAutopilot:
