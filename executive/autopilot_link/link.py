@@ -203,6 +203,7 @@ class AutopilotLink:
         station's reports). Its outcome is logged last (INFO when made safe, ERROR when not).
         """
         if self.watch.commanded is None:  # nothing of ours to undo: commanding the safe mode would be a change of our own
+            self.reader.drain()  # what came meanwhile (a ground station's command) is answered all the same
             return self._made_safe(True, NOTHING_TO_MAKE_SAFE, report)
         safe = mode or self.autopilot.capabilities.safe_mode
         person = self._person_has_the_vehicle(safe)
