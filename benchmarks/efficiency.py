@@ -146,8 +146,19 @@ class _Stopwatch:
 
 def time_guided(mission: Mission, rate_hz: float = RATE_HZ) -> Timing:
     """The executive drives the mission in GUIDED (its tree, its own tick loop) on the lock-step simulation."""
+    return time_executive(mission.model_copy(update={"drive": "guided"}), rate_hz)
+
+
+def time_supervised_auto(mission: Mission, rate_hz: float = RATE_HZ) -> Timing:
+    """The executive runs the mission with ``drive: auto``: the autopilot's AUTO drives it, holding only the horizon."""
+    return time_executive(mission.model_copy(update={"drive": "auto"}), rate_hz)
+
+
+def time_executive(mission: Mission, rate_hz: float = RATE_HZ) -> Timing:
+    """The executive runs the mission as its ``drive:`` says (its tree, its own tick loop) on the lock-step simulation;
+    timed from the vehicle armed in the driving mode (GUIDED, or AUTO)."""
     with Lockstep(mission, ekf_ready_after_s=EKF_READY_S, rate_hz=rate_hz) as sim:
-        watch = _Stopwatch(mission, "GUIDED")
+        watch = _Stopwatch(mission, "AUTO" if mission.drive == "auto" else "GUIDED")
         sim.run(LIMIT_S, until=lambda: watch.observe(sim.clock.now(), sim.autopilot))
     return watch.timing()
 

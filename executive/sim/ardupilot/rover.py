@@ -52,11 +52,13 @@ class ArduRoverSim(ArduPilotSim):
     #: Answered to PARAM_REQUEST_READ: MODE_CH (Rover/Parameters.cpp, MODE_CHANNEL 8 in Rover/config.h), CRUISE_SPEED
     #: (Rover/config.h CRUISE_SPEED 2), and the navigation's parameters with the firmware's defaults.
     #: SERVO1_FUNCTION 26 (GroundSteering) and SERVO3_FUNCTION 70 (Throttle): ArduRover's default outputs (Rover/Parameters.cpp).
+    #: MIS_DONE_BEHAVE 0: stop in AUTO at the mission's end (Rover/Parameters.cpp).
     PARAMS: ClassVar[Mapping[str, float]] = {
-        "MODE_CH": 8, "CRUISE_SPEED": 2.0, "FRAME_CLASS": 1.0, "SERVO1_FUNCTION": 26.0, "SERVO3_FUNCTION": 70.0, **FIRMWARE_DEFAULTS,
+        "MODE_CH": 8, "CRUISE_SPEED": 2.0, "MIS_DONE_BEHAVE": 0.0, "FRAME_CLASS": 1.0, "SERVO1_FUNCTION": 26.0, "SERVO3_FUNCTION": 70.0,
+        **FIRMWARE_DEFAULTS,
     }  # fmt: skip
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset({
-        "MODE_CH", "FRAME_CLASS", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE", "SERVO1_FUNCTION", "SERVO3_FUNCTION",
+        "MODE_CH", "FRAME_CLASS", "MIS_DONE_BEHAVE", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE", "SERVO1_FUNCTION", "SERVO3_FUNCTION",
     })  # fmt: skip
     SKID_STEERING: ClassVar[bool] = False  # SERVO1/3_FUNCTION ThrottleLeft/Right: pivot turns (Rover.cpp set_turn_params)
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
@@ -256,7 +258,7 @@ class ArduRoverSim(ArduPilotSim):
                 return
             item = self.mission.advance()
             if item is None:
-                self._stop()
+                self._mission_done()
                 return
         # the next item, a set-current, or an upload replaced it
         self._auto_item = (self.mission.current_seq, item)
@@ -264,6 +266,16 @@ class ArduRoverSim(ArduPilotSim):
             self._drive(item.lat, item.lon, then=self._next_corner(item))
         else:
             self.mission.advance()
+
+    def _mission_done(self) -> None:
+        """ModeAuto::exit_mission (Rover/mode_auto.cpp): MIS_DONE_BEHAVE 0 stops in AUTO, 1 loiters in AUTO, 2 ACRO, 3 MANUAL."""
+        behave = int(self.params.get("MIS_DONE_BEHAVE", 0))
+        if behave == 1 and self._loiter():
+            return
+        if behave in (2, 3):
+            self._force_mode("ACRO" if behave == 2 else "MANUAL")
+            return
+        self._stop()
 
     def _next_corner(self, item: StoredCommand) -> tuple[float, float] | None:
         """The navigation command after the waypoint ``item``, given to AR_WPNav with it unless the waypoint has a hold time
