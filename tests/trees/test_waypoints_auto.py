@@ -13,6 +13,7 @@ from benchmarks.efficiency import MISSIONS, time_auto, time_supervised_auto, wit
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
+from executive.sim.faults import FaultInjector
 from executive.testing import Lockstep
 from tests_support import line_mission
 
@@ -146,3 +147,39 @@ def test_a_mission_end_that_would_not_stop_the_vehicle_is_refused_at_preflight(l
     if not completes:
         assert f"MIS_DONE_BEHAVE is {value}: set it to 0 or 1" in outcome.reason
         assert sim.autopilot.mission.count <= 1 and not sim.autopilot.armed  # refused before anything was sent or armed
+
+
+class LinkCut(FaultInjector):
+    """The link silent both ways while ``cut`` (the executive alive, its messages lost): a cable pulled and put back."""
+
+    cut = False
+
+    @property
+    def receiving(self) -> bool:
+        return not self.cut and super().receiving
+
+    @property
+    def sending(self) -> bool:
+        return not self.cut and super().sending
+
+
+def test_a_cut_link_leaves_the_vehicle_stopped_at_the_end_of_the_horizon_and_the_failsafe_acts_when_it_is_back(lockstep) -> None:
+    mission = auto_mission("boat_survey")
+    sim = lockstep(mission, ekf_ready_after_s=2.0, injector=lambda faults, clock: LinkCut(faults, clock))
+    cut = sim.faults
+    assert isinstance(cut, LinkCut)
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    second, fourth = mission.waypoints[1], mission.waypoints[3]
+    assert sim.run(until=lambda: state.leg_index == 1 and ap.vehicle.distance_to(second.lat, second.lon) < 30.0) is None
+    cut.cut = True
+    t_cut = sim.clock.now()
+    assert sim.run(until=lambda: sim.clock.now() > t_cut + 60.0) is None
+    assert ap.mode == "AUTO" and not ap.mission.running and ap.vehicle.speed_m_s < 0.2  # its mission done at waypoint 4
+    assert ap.vehicle.distance_to(fourth.lat, fourth.lon) < 5.0 and ap.mission.count - 1 == 4
+    modes: list[str] = []
+    sim.observers.append(lambda s: modes.append(s.autopilot.mode))
+    cut.cut = False
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    changes = [m for i, m in enumerate(modes) if i == 0 or modes[i - 1] != m]
+    assert changes == ["AUTO", "LOITER", "AUTO", "LOITER"]  # the link-loss failsafe (boat: loiter), the route resumed, held at the end
