@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 
 from benchmarks.efficiency import MISSIONS, time_auto, time_supervised_auto, with_sitl_parameters
+from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
@@ -183,3 +184,24 @@ def test_a_cut_link_leaves_the_vehicle_stopped_at_the_end_of_the_horizon_and_the
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     changes = [m for i, m in enumerate(modes) if i == 0 or modes[i - 1] != m]
     assert changes == ["AUTO", "LOITER", "AUTO", "LOITER"]  # the link-loss failsafe (boat: loiter), the route resumed, held at the end
+
+
+def test_a_run_resumed_after_a_crash_starts_the_autopilots_mission_at_the_journals_leg(lockstep) -> None:
+    """`executive run --resume` at leg 3: the horizon uploaded, MISSION_SET_CURRENT 3, then AUTO; items 1-2 never driven to."""
+    mission = line_mission("auto resume", drive="auto")
+    sim = lockstep(mission)
+    sent: list[tuple[str, int]] = []
+    send = sim.link.send
+
+    def spy(msg: Any) -> None:
+        if msg.get_type() in ("MISSION_SET_CURRENT", "MISSION_COUNT"):
+            sent.append((msg.get_type(), msg.seq if msg.get_type() == "MISSION_SET_CURRENT" else msg.count))
+        send(msg)
+
+    sim.link.send = spy  # type: ignore[method-assign]
+    driven: set[int] = set()
+    sim.observers.append(lambda s: driven.add(s.autopilot.mission.current_seq) if s.autopilot.mission.running else None)
+    outcome = sim.run(300, resume=ResumePoint(run=1, leg_index=2, samples=()))
+    assert outcome is not None and outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert sent[:2] == [("MISSION_COUNT", 1 + 4), ("MISSION_SET_CURRENT", 3)]  # home + waypoints 1-4 (leg 3 and two beyond, the route's end)
+    assert driven == {3, 4}  # the autopilot's mission ran items 3 and 4 only
