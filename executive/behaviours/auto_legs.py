@@ -121,8 +121,9 @@ class AutopilotAtLeg(_Transfer):
     item, confirmed by MISSION_CURRENT, so that AUTO resumes at this leg and not where the
     autopilot's mission stood (a ground station may have moved it). ArduPilot keeps a stopped
     mission's item and resumes there (AP_Mission::set_current_cmd, libraries/AP_Mission/AP_Mission.cpp).
-    A mission completed in AUTO with legs left (the horizon ran out under a lagging executive) does
-    not start again by itself there: the vehicle is held first, then set to the leg and put in AUTO.
+    A mission completed in AUTO before the leg's item (the horizon ran out under a lagging executive, or
+    the link was down) does not start again by itself there: the vehicle is held first, then set to the
+    leg and put in AUTO. One completed at the leg's item is the leg's end: :class:`FollowAutoLeg` judges it.
     """
 
     reads = ("/link/mission_transfer", "/vehicle/mode", "/vehicle/mission_current")
@@ -141,7 +142,7 @@ class AutopilotAtLeg(_Transfer):
         seq = self.autopilot.capabilities.first_item_seq + leg
         current: MissionCurrent | None = self.get("/vehicle/mission_current")
         in_auto = self.get("/vehicle/mode") == self.autopilot.mode_name(AUTO)
-        if in_auto and current is not None and current.state == MISSION_STATE_COMPLETE and leg < self.mission_state.leg_count:
+        if in_auto and current is not None and current.state == MISSION_STATE_COMPLETE and current.seq < seq:  # ended before this leg
             if self._set_for is None:
                 self.autopilot.hold()
                 self._set_for = -1  # asked once per run out
