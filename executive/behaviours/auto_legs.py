@@ -124,20 +124,40 @@ class AutopilotAtLeg(_Transfer):
     A mission completed in AUTO before the leg's item (the horizon ran out under a lagging executive, or
     the link was down) does not start again by itself there: the vehicle is held first, then set to the
     leg and put in AUTO. One completed at the leg's item is the leg's end: :class:`FollowAutoLeg` judges it.
+
+    Out of AUTO, a MISSION_CURRENT newer than that is waited for (``fresh_wait_s`` at most: ArduPilot
+    streams it, at 1 Hz as the executive asks), so that a link just back is heard before the leg is set.
+    Every tick, the legs the autopilot finished unheard are caught up (the link was down while
+    it drove on through its horizon): those through the highest MISSION_ITEM_REACHED of this run, or
+    through the item its MISSION_CURRENT says its mission COMPLETED at; never the route's last leg,
+    which is judged on the position. So a vehicle that drove its horizon while cut off is not sent
+    back along it when the link returns.
     """
 
-    reads = ("/link/mission_transfer", "/vehicle/mode", "/vehicle/mission_current")
-    param_docs = {"retry_s": "a failed MISSION_SET_CURRENT is tried again after this"}
+    reads = ("/link/mission_transfer", "/vehicle/mode", "/vehicle/mission_current", "/vehicle/mission_reached")
+    param_docs = {
+        "retry_s": "a failed MISSION_SET_CURRENT is tried again after this",
+        "fresh_wait_s": "out of AUTO, how long to wait for a MISSION_CURRENT newer than that (what the autopilot did unheard) before setting it",
+    }
 
-    def __init__(self, name: str = "Autopilot at the leg", retry_s: float = 2.0) -> None:
+    def __init__(self, name: str = "Autopilot at the leg", retry_s: float = 2.0, fresh_wait_s: float = 3.0) -> None:
         super().__init__(name, retry_s)
+        self.fresh_wait_s = fresh_wait_s
+        self._out_since: float | None = None  # since when the vehicle is out of AUTO with this leg to start
         self._set_for: int | None = None  # the leg the autopilot's mission was set to since it last drove in AUTO
         self._asking: int | None = None
+        self._run_started: float | None = None  # reports before this run's first leg are another run's
+
+    def initialise(self) -> None:
+        super().initialise()
+        if self._run_started is None:
+            self._run_started = self.clock.now()
 
     def update(self) -> Status:
         if not self._settle() and self._asking is not None:
             self._set_for = self._asking if not self.failure else None
             self._asking = None
+        self._catch_up()
         leg = self.mission_state.leg_index
         seq = self.autopilot.capabilities.first_item_seq + leg
         current: MissionCurrent | None = self.get("/vehicle/mission_current")
@@ -149,18 +169,37 @@ class AutopilotAtLeg(_Transfer):
             self.feedback_message = f"the autopilot's mission ended in AUTO before leg {leg + 1}: holding, to set it to item {seq}"
             return Status.RUNNING
         if in_auto:
-            self._set_for = None
+            self._set_for = self._out_since = None
             self.feedback_message = f"the autopilot drives its mission (leg {leg + 1})"
             return Status.SUCCESS
         if self._set_for == leg:
             self.feedback_message = f"the autopilot's mission set to item {seq}"
             return Status.SUCCESS
+        now = self.clock.now()
+        self._out_since = now if self._out_since is None else self._out_since
+        if (current is None or current.time <= self._out_since) and now - self._out_since < self.fresh_wait_s:
+            self.feedback_message = "waiting for the autopilot's MISSION_CURRENT (what it did meanwhile)"
+            return Status.RUNNING
         if self._asking is None and self._may_start():
             self._asking = leg
             self._started(self.autopilot.set_route_leg(leg))
         failed = f" (the last try failed: {self.failure})" if self.failure else ""
         self.feedback_message = f"setting the autopilot's mission to item {seq}{failed}"
         return Status.RUNNING
+
+    def _catch_up(self) -> None:
+        """Advance the leg index past the items the autopilot reported done in this run (see the class)."""
+        assert self._run_started is not None
+        done = -1
+        reached: MissionItemReached | None = self.get("/vehicle/mission_reached")
+        if reached is not None and reached.time >= self._run_started:
+            done = reached.highest
+        current: MissionCurrent | None = self.get("/vehicle/mission_current")
+        if current is not None and current.time >= self._run_started and current.state == MISSION_STATE_COMPLETE:
+            done = max(done, current.seq)
+        first, state = self.autopilot.capabilities.first_item_seq, self.mission_state
+        while state.leg_index < state.leg_count - 1 and first + state.leg_index <= done:
+            state.advance_leg()
 
 
 class FollowAutoLeg(TimedBehaviour):

@@ -19,6 +19,8 @@ def at_leg(square_mission) -> Harness:
 def test_out_of_auto_the_autopilots_mission_is_set_to_the_leg_then_it_succeeds(at_leg: Harness) -> None:
     at_leg.mission_state.continue_from(2)
     at_leg.vehicle.set(vehicle__mode="HOLD", vehicle__mission_current=MissionCurrent(1, 4, mavlink.MISSION_STATE_ACTIVE, False, 0.0))
+    assert at_leg.tick() == Status.RUNNING and at_leg.link.take() == []  # what the autopilot does now is heard first
+    at_leg.vehicle.set(vehicle__mission_current=MissionCurrent(1, 4, mavlink.MISSION_STATE_ACTIVE, False, at_leg.clock.now() + 0.05))
     assert at_leg.tick() == Status.RUNNING
     [sent] = at_leg.link.take("MISSION_SET_CURRENT")
     assert sent.seq == 3  # leg 3's waypoint, after ArduPilot's home item 0
@@ -58,3 +60,21 @@ def test_an_intermediate_leg_ends_on_the_autopilots_word_the_last_on_the_positio
     assert "the autopilot says reached" in h.feedback("Follow the leg in AUTO")
     h.vehicle.set(vehicle__position=GlobalPosition(far.lat, far.lon + 1e-5, 0.0, 0.0, 0.0, 0.0, 90.0, h.clock.now()))  # ~0.8 m off
     assert h.tick() == Status.SUCCESS
+
+
+def test_legs_the_autopilot_finished_unheard_are_caught_up(at_leg: Harness) -> None:
+    """The link was down mid leg 1: back, MISSION_CURRENT says the mission COMPLETED at item 3: legs 1-3 are done, leg 4 is set."""
+    at_leg.vehicle.set(vehicle__mode="LOITER")
+    assert at_leg.tick() == Status.RUNNING  # the run starts: waiting to hear what the autopilot did
+    assert at_leg.link.take("MISSION_SET_CURRENT") == []
+    at_leg.vehicle.set(vehicle__mission_current=MissionCurrent(3, 3, MISSION_STATE_COMPLETE, False, at_leg.clock.now() + 0.05))
+    assert at_leg.tick() == Status.RUNNING
+    assert at_leg.mission_state.leg_index == 3
+    [sent] = at_leg.link.take("MISSION_SET_CURRENT")
+    assert sent.seq == 4
+
+
+def test_a_report_from_before_the_run_catches_nothing_up(at_leg: Harness) -> None:
+    at_leg.vehicle.set(vehicle__mode="HOLD", vehicle__mission_reached=MissionItemReached(3, at_leg.clock.now() - 60.0, 3))
+    at_leg.tick()
+    assert at_leg.mission_state.leg_index == 0

@@ -178,12 +178,14 @@ def test_a_cut_link_leaves_the_vehicle_stopped_at_the_end_of_the_horizon_and_the
     assert ap.mode == "AUTO" and not ap.mission.running and ap.vehicle.speed_m_s < 0.2  # its mission done at waypoint 4
     assert ap.vehicle.distance_to(fourth.lat, fourth.lon) < 5.0 and ap.mission.count - 1 == 4
     modes: list[str] = []
-    sim.observers.append(lambda s: modes.append(s.autopilot.mode))
+    back_to_second: list[float] = []
+    sim.observers.append(lambda s: (modes.append(s.autopilot.mode), back_to_second.append(s.autopilot.vehicle.distance_to(second.lat, second.lon))))
     cut.cut = False
     outcome = sim.run_to_end()
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     changes = [m for i, m in enumerate(modes) if i == 0 or modes[i - 1] != m]
     assert changes == ["AUTO", "LOITER", "AUTO", "LOITER"]  # the link-loss failsafe (boat: loiter), the route resumed, held at the end
+    assert min(back_to_second) > 20.0  # resumed after waypoint 4, which it drove to unheard: not sent back along its horizon
 
 
 def test_a_run_resumed_after_a_crash_starts_the_autopilots_mission_at_the_journals_leg(lockstep) -> None:
