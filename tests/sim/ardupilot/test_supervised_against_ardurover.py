@@ -118,3 +118,15 @@ def test_killed_mid_leg_2_the_real_boat_stops_at_the_end_of_the_horizon_and_goes
     nearest = [min(distance(p.lat * 1e-7, p.lon * 1e-7, w.lat, w.lon) for p in positions) for w in mission.waypoints[4:]]
     assert min(nearest) > 10.0, nearest  # waypoint 5 is 15 m from waypoint 4: never driven to
     assert mavlink.MISSION_STATE_COMPLETE == MISSION_STATE_COMPLETE
+
+
+def test_a_cut_link_on_the_real_boat_the_mission_completed_at_the_horizon_and_the_route_resumed_after_it() -> None:
+    """The link cut for 20 s (40 s of the vehicle's time) mid leg 2, the executive alive: the firmware drove to waypoint 4 and
+    said its mission COMPLETED there (MISSION_CURRENT 4, state 5, in AUTO); with the link back the executive loitered, caught
+    legs 2-4 up from that, and set the mission to item 5, not back to 2."""
+    path = recorded.DATA / "boat_survey-motorboat-supervised-link-cut.tlog"
+    currents, highest, _ = read_through_the_executive(path, "boat")
+    assert (4, MISSION_STATE_COMPLETE, True) in currents
+    assert highest[:2] == [1, 5]  # items 2-4 reached unheard: their MISSION_ITEM_REACHED were lost in the cut
+    sets = [msg.seq for _, msg in records(path) if msg.get_type() == "MISSION_SET_CURRENT"]
+    assert sets == [1, 5]
