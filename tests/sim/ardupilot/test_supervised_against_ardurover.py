@@ -21,7 +21,6 @@ from executive.geo import distance
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import mavlink
 from executive.mission.loader import load_mission
 from executive.state import MISSION_STATE_COMPLETE
 from executive.testing import FakeLink
@@ -117,7 +116,6 @@ def test_killed_mid_leg_2_the_real_boat_stops_at_the_end_of_the_horizon_and_goes
     assert (last.vx**2 + last.vy**2) ** 0.5 / 100.0 < 0.2
     nearest = [min(distance(p.lat * 1e-7, p.lon * 1e-7, w.lat, w.lon) for p in positions) for w in mission.waypoints[4:]]
     assert min(nearest) > 10.0, nearest  # waypoint 5 is 15 m from waypoint 4: never driven to
-    assert mavlink.MISSION_STATE_COMPLETE == MISSION_STATE_COMPLETE
 
 
 def test_a_cut_link_on_the_real_boat_the_mission_completed_at_the_horizon_and_the_route_resumed_after_it() -> None:
