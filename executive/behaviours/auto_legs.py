@@ -128,8 +128,9 @@ class AutopilotAtLeg(_Transfer):
     Out of AUTO, a MISSION_CURRENT newer than that is waited for (``fresh_wait_s`` at most: ArduPilot
     streams it, at 1 Hz as the executive asks), so that a link just back is heard before the leg is set.
     Every tick, the legs the autopilot finished unheard are caught up (the link was down while
-    it drove on through its horizon): those through the highest MISSION_ITEM_REACHED of this run, or
-    through the item its MISSION_CURRENT says its mission COMPLETED at; never the route's last leg,
+    it drove on through its horizon, or the executive was restarted): those through the highest
+    MISSION_ITEM_REACHED, or through the item its MISSION_CURRENT says its mission COMPLETED at,
+    reported since this run first saw the vehicle in AUTO; never the route's last leg,
     which is judged on the position. So a vehicle that drove its horizon while cut off is not sent
     back along it when the link returns.
     """
@@ -146,22 +147,19 @@ class AutopilotAtLeg(_Transfer):
         self._out_since: float | None = None  # since when the vehicle is out of AUTO with this leg to start
         self._set_for: int | None = None  # the leg the autopilot's mission was set to since it last drove in AUTO
         self._asking: int | None = None
-        self._run_started: float | None = None  # reports before this run's first leg are another run's
-
-    def initialise(self) -> None:
-        super().initialise()
-        if self._run_started is None:
-            self._run_started = self.clock.now()
+        self._first_auto: float | None = None  # when this run first saw the vehicle in AUTO: reports before are another run's
 
     def update(self) -> Status:
         if not self._settle() and self._asking is not None:
             self._set_for = self._asking if not self.failure else None
             self._asking = None
+        in_auto = self.get("/vehicle/mode") == self.autopilot.mode_name(AUTO)
+        if in_auto and self._first_auto is None:
+            self._first_auto = self.clock.now()
         self._catch_up()
         leg = self.mission_state.leg_index
         seq = self.autopilot.capabilities.first_item_seq + leg
         current: MissionCurrent | None = self.get("/vehicle/mission_current")
-        in_auto = self.get("/vehicle/mode") == self.autopilot.mode_name(AUTO)
         if in_auto and current is not None and current.state == MISSION_STATE_COMPLETE and current.seq < seq:  # ended before this leg
             if self._set_for is None:
                 self.autopilot.hold()
@@ -188,14 +186,19 @@ class AutopilotAtLeg(_Transfer):
         return Status.RUNNING
 
     def _catch_up(self) -> None:
-        """Advance the leg index past the items the autopilot reported done in this run (see the class)."""
-        assert self._run_started is not None
+        """Advance the leg index past the items the autopilot reported done since this run first saw it in AUTO (see the class).
+
+        Not before: ArduPilot keeps a completed mission's state and item through uploads until it is
+        started again (AP_Mission::truncate and replace_cmd leave the state), so the report of a mission
+        run before this one (the same route driven again without a reboot) would pass for this run's."""
+        if self._first_auto is None:
+            return
         done = -1
         reached: MissionItemReached | None = self.get("/vehicle/mission_reached")
-        if reached is not None and reached.time >= self._run_started:
+        if reached is not None and reached.time >= self._first_auto:
             done = reached.highest
         current: MissionCurrent | None = self.get("/vehicle/mission_current")
-        if current is not None and current.time >= self._run_started and current.state == MISSION_STATE_COMPLETE:
+        if current is not None and current.time >= self._first_auto and current.state == MISSION_STATE_COMPLETE:
             done = max(done, current.seq)
         first, state = self.autopilot.capabilities.first_item_seq, self.mission_state
         while state.leg_index < state.leg_count - 1 and first + state.leg_index <= done:

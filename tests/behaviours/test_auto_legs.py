@@ -64,8 +64,10 @@ def test_an_intermediate_leg_ends_on_the_autopilots_word_the_last_on_the_positio
 
 def test_legs_the_autopilot_finished_unheard_are_caught_up(at_leg: Harness) -> None:
     """The link was down mid leg 1: back, MISSION_CURRENT says the mission COMPLETED at item 3: legs 1-3 are done, leg 4 is set."""
-    at_leg.vehicle.set(vehicle__mode="LOITER")
-    assert at_leg.tick() == Status.RUNNING  # the run starts: waiting to hear what the autopilot did
+    at_leg.vehicle.set(vehicle__mode="AUTO")
+    assert at_leg.tick() == Status.SUCCESS  # driving leg 1 in AUTO
+    at_leg.vehicle.set(vehicle__mode="LOITER")  # the link-loss failsafe's
+    assert at_leg.tick() == Status.RUNNING  # waiting to hear what the autopilot did
     assert at_leg.link.take("MISSION_SET_CURRENT") == []
     at_leg.vehicle.set(vehicle__mission_current=MissionCurrent(3, 3, MISSION_STATE_COMPLETE, False, at_leg.clock.now() + 0.05))
     assert at_leg.tick() == Status.RUNNING
@@ -74,7 +76,12 @@ def test_legs_the_autopilot_finished_unheard_are_caught_up(at_leg: Harness) -> N
     assert sent.seq == 4
 
 
-def test_a_report_from_before_the_run_catches_nothing_up(at_leg: Harness) -> None:
-    at_leg.vehicle.set(vehicle__mode="HOLD", vehicle__mission_reached=MissionItemReached(3, at_leg.clock.now() - 60.0, 3))
+def test_a_mission_completed_before_this_run_drove_in_auto_catches_nothing_up(at_leg: Harness) -> None:
+    """The same route driven before without a reboot: ArduPilot still says COMPLETED at its last item until AUTO starts it again."""
+    at_leg.vehicle.set(vehicle__mode="HOLD")
+    at_leg.tick()
+    at_leg.vehicle.set(vehicle__mission_current=MissionCurrent(4, 4, MISSION_STATE_COMPLETE, False, at_leg.clock.now() + 0.05))
     at_leg.tick()
     assert at_leg.mission_state.leg_index == 0
+    [sent] = at_leg.link.take("MISSION_SET_CURRENT")
+    assert sent.seq == 1
