@@ -144,6 +144,7 @@ class Px4Port(MavlinkPort):
         """
         self._leaving_offboard()
         self.commander.note_mode_asked("AUTO.LOITER")  # the mode it puts PX4 in: ours, not a person's
+        self.commander.note_target_asked(lat, lon)  # the navigator's setpoint it makes: ours, not a person's
         home: HomePosition | None = self._bb.get("/vehicle/home")
         amsl = home.alt_m + alt_m if home is not None else math.nan
         flags = float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)

@@ -53,8 +53,10 @@ class GoTo(TimedBehaviour):
     FAILURE after the leg timeout. A target changed during the leg (an operator edited the route)
     is followed at once. ``method``:
 
-    - ``"setpoint"``: SET_POSITION_TARGET_GLOBAL_INT, re-sent every ``resend_s``: ArduPilot gives no
-      ack for it and drops it silently outside GUIDED. A sub's waypoint goes with its depth (an
+    - ``"setpoint"``: SET_POSITION_TARGET_GLOBAL_INT, re-sent every ``resend_s`` until the autopilot
+      reports it as its target (``/vehicle/target_set_by`` ``us``): ArduPilot gives no ack for it and
+      drops it silently outside GUIDED. Once reported it is not sent again: a ground station's Go-to
+      that replaced it must be seen (a person's, :mod:`executive.target_watch`), never overwritten. A sub's waypoint goes with its depth (an
       altitude leg: the depth that keeps its height above the seabed, from the measured depth and
       rangefinder, re-sent as the seabed changes), so a leg never brings the sub up.
     - ``"reposition"``: MAV_CMD_DO_REPOSITION (acked; switches to GUIDED), sent once and again only
@@ -81,6 +83,7 @@ class GoTo(TimedBehaviour):
     reads = (
         "/mission/target", "/mission/next_target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position",
         "/vehicle/statustext", "/vehicle/rangefinder", "/vehicle/params", blackboard.command_key(Outcome.REPOSITION),
+        "/vehicle/target_set_by",
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
@@ -122,6 +125,7 @@ class GoTo(TimedBehaviour):
         self._ticket = None
         self._refusal: str | None = None
         self._seabed_depth: float | None = None  # an altitude leg's last depth target
+        self._setpoint: Waypoint | None = None  # the setpoint sent last
         self._leg_start: GlobalPosition | None = None  # where the vehicle was when the leg began
         self._predict_at = -math.inf  # the look-ahead's next prediction of the swing, and its last (time, cut)
         self._last_prediction: tuple[float, float] | None = None
@@ -276,8 +280,9 @@ class GoTo(TimedBehaviour):
             return
         if self.method == "setpoint":
             target = self._as_depth(self.target, position)
-            if target is not None:
+            if target is not None and not (target == self._setpoint and self._reported(target)):
                 self.autopilot.go_to(leg_target(target))
+                self._setpoint = target
             self._last_sent = now
             return
         if self._ticket is not None:
@@ -291,6 +296,12 @@ class GoTo(TimedBehaviour):
             alt = position.alt_rel_m
         self._ticket = self.autopilot.reposition(self.target.lat, self.target.lon, alt)
         self._last_sent = now
+
+    def _reported(self, target: Waypoint) -> bool:
+        """The autopilot reports steering to ``target``, our latest ask (POSITION_TARGET_GLOBAL_INT)."""
+        asked = self.autopilot.target_asked
+        ours = asked is not None and (asked.lat, asked.lon) == (target.lat, target.lon)
+        return ours and self.get("/vehicle/target_set_by") == "us"
 
     def _as_depth(self, target: Waypoint, position: GlobalPosition | None) -> Waypoint | None:
         """A sub's altitude leg as a depth target from the measured depth and rangefinder (executive.seabed: ArduSub drops
