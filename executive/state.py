@@ -144,10 +144,12 @@ class PositionTarget:
 
 @dataclass(frozen=True, slots=True)
 class TargetAsk:
-    """A point the executive asked the autopilot to steer to, and when; no ``lat``/``lon`` for a local-frame setpoint."""
+    """A point the executive asked the autopilot to steer to in ``mode`` (as the heartbeat shows it), and when; no ``lat``/``lon``
+    for a local-frame setpoint."""
 
     lat: float | None
     lon: float | None
+    mode: str | None  # the mode that follows it: the one asked last (GUIDED, OFFBOARD; PX4's AUTO.LOITER for a DO_REPOSITION)
     time: float
 
 

@@ -14,7 +14,9 @@ target the autopilot reports, POSITION_TARGET_GLOBAL_INT:
 - ArduRover: the mode's desired location (Rover/GCS_MAVLink_Rover.cpp send_position_target_global_int,
   ModeGuided::get_desired_location), in the EXTENDED_STATUS stream (GCS_MAVLink_Parameters.cpp).
 
-Told apart from the autopilot's own: the autopilot sets a target of its own only when a mode starts
+Told apart from the autopilot's own: only the mode that follows our point is judged (the mode asked with it: GUIDED,
+PX4's AUTO.LOITER for a reposition); other modes steer by themselves (PX4's RTL moves its setpoint from stage to
+stage, navigator/rtl_direct.cpp), and in them nothing is judged. The autopilot sets a target of its own only when a mode starts
 (PX4's Loiter::on_activation -> set_loiter_position, navigator/loiter.cpp; its take-off, RTL, mission;
 ArduRover's ModeGuided::_enter, a stop): in a mode whose target it has reported as ours, with no mode
 change since, neither firmware moves it by itself (PX4 changes the loiter setpoint only on a
@@ -79,8 +81,8 @@ class TargetWatch:
         if report is None or report is self._report:
             return None
         self._report = report
-        if asked is None or asked.lat is None or asked.lon is None:
-            self.forget()
+        if asked is None or asked.lat is None or asked.lon is None or asked.mode != mode:
+            self.forget()  # nothing of ours to judge by in this mode: another mode's own targets (PX4's RTL stages) are its own
             return None
         if geo.distance(report.lat, report.lon, asked.lat, asked.lon) <= SAME_POINT_M:
             self._adopted, self.set_by = asked, "us"

@@ -163,9 +163,10 @@ class Commander:
         self.last_mode_asked = name
 
     def note_target_asked(self, lat: float | None, lon: float | None) -> None:
-        """A point our request (a setpoint, a DO_REPOSITION) has the autopilot steer to: not a person's target."""
-        if self.target_asked is None or (self.target_asked.lat, self.target_asked.lon) != (lat, lon):
-            self.target_asked = TargetAsk(lat, lon, self._clock.now())
+        """A point our request (a setpoint, a DO_REPOSITION) has the autopilot steer to, in the mode asked last: not a person's target."""
+        asked = self.target_asked
+        if asked is None or (asked.lat, asked.lon, asked.mode) != (lat, lon, self.last_mode_asked):
+            self.target_asked = TargetAsk(lat, lon, self.last_mode_asked, self._clock.now())
 
     def arm(self, *, force: bool = False, force_magic: float = FORCE_ARM_MAGIC) -> int:
         """Arm; forced with ``force_magic`` in param2 (ArduPilot's 2989; PX4 takes MAVLink's 21196)."""
