@@ -15,6 +15,9 @@ from pathlib import Path
 import pytest
 
 from executive import blackboard, geo
+from executive.assembly import journal_recorder
+from executive.clock import Clock
+from executive.journal import Journal
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
@@ -57,6 +60,7 @@ class GroundStationPlay:
     targets_while_paused: list[tuple[float, float]] = field(default_factory=list)  # what the autopilot reported steering to
     sent_while_paused: list[str] = field(default_factory=list)  # what the executive sent the autopilot while paused
     texts: list[str] = field(default_factory=list)  # STATUSTEXT the executive sent
+    ctl_status: dict | None = None  # what `executive ctl status` said at the resume
 
     def __call__(self, sim: Lockstep) -> None:
         if self.sent_at is None and self.when(sim):  # type: ignore[operator]
@@ -73,6 +77,7 @@ class GroundStationPlay:
             if target is not None:
                 self.targets_while_paused.append((target.lat, target.lon))
             if sim.clock.now() >= self.paused_at + self.hold_s:
+                self.ctl_status = sim.runtime.operator.request("status", source="ctl").to_dict()
                 self.resumed = sim.runtime.operator.request("resume", source="ctl")
 
 
@@ -154,9 +159,15 @@ def test_qgcs_go_to_on_px4_mid_leg_is_reported_with_its_point_and_resume_flies_t
     assert sim.runtime.mission_state.leg_index >= 1 and wp is not None
 
 
-def test_qgcs_go_to_on_ardurover_in_guided_mid_leg_the_rover_goes_there_paused_and_resume_completes(lockstep) -> None:
+def test_qgcs_go_to_on_ardurover_in_guided_mid_leg_the_rover_goes_there_paused_and_resume_completes(lockstep, tmp_path) -> None:
     """The issue's ArduRover run: a Go-to ~33 m off the route mid-leg 2; the rover drives there, nothing of ours overwrites it."""
-    sim = lockstep(line_mission("go-to"), as_bytes=True)
+    journals: list[Journal] = []
+
+    def journal_plug(clock: Clock) -> dict[str, object]:
+        journals.append(Journal(tmp_path / "journal.db", clock))
+        return {"plugs": [journal_recorder(journals[0])]}
+
+    sim = lockstep(line_mission("go-to"), as_bytes=True, options_for_clock=journal_plug)
     there: list[tuple[float, float]] = []
 
     def go_to(s: Lockstep) -> MAVLinkMessage:
@@ -167,6 +178,12 @@ def test_qgcs_go_to_on_ardurover_in_guided_mid_leg_the_rover_goes_there_paused_a
     outcome, gcs = play(sim, GroundStationPlay(when=_mid_leg(1, 8.0, 20.0), command=go_to, hold_s=40.0))
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert gcs.sent_at is not None and gcs.paused_at is not None and gcs.paused_at - gcs.sent_at <= 1.0
-    assert set(gcs.reasons) == {f"a ground station sent it to {there[0][0]:.5f}, {there[0][1]:.5f}"}
+    reason = f"a ground station sent it to {there[0][0]:.5f}, {there[0][1]:.5f}"
+    assert set(gcs.reasons) == {reason}
     assert gcs.modes_while_paused == {"GUIDED"} and gcs.sent_while_paused == []
     assert all(geo.distance(lat, lon, *there[0]) < 0.1 for lat, lon in gcs.targets_while_paused)
+    assert gcs.ctl_status is not None and gcs.ctl_status["status"]["state"] == "PAUSED"
+    assert gcs.ctl_status["reason"] == reason and geo.distance(gcs.ctl_status["status"]["lat"], gcs.ctl_status["status"]["lon"], *there[0]) < 2.0
+    report = journals[0].report()  # what `executive report` prints
+    assert ("RUNNING", "PAUSED", reason) in [(t["before"], t["after"], t["reason"]) for t in report["transitions"]]
+    assert report["outcome"] == "COMPLETED"

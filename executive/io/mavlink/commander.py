@@ -162,11 +162,13 @@ class Commander:
         self.modes_asked[name] = self._clock.now()
         self.last_mode_asked = name
 
-    def note_target_asked(self, lat: float | None, lon: float | None) -> None:
-        """A point our request (a setpoint, a DO_REPOSITION) has the autopilot steer to, in the mode asked last: not a person's target."""
+    def note_target_asked(self, lat: float | None, lon: float | None, mode: str | None = None) -> None:
+        """A point our request (a setpoint, a DO_REPOSITION) has the autopilot steer to in ``mode`` (default: the mode asked last):
+        not a person's target."""
+        mode = mode or self.last_mode_asked
         asked = self.target_asked
-        if asked is None or (asked.lat, asked.lon, asked.mode) != (lat, lon, self.last_mode_asked):
-            self.target_asked = TargetAsk(lat, lon, self.last_mode_asked, self._clock.now())
+        if asked is None or (asked.lat, asked.lon, asked.mode) != (lat, lon, mode):
+            self.target_asked = TargetAsk(lat, lon, mode, self._clock.now())
 
     def arm(self, *, force: bool = False, force_magic: float = FORCE_ARM_MAGIC) -> int:
         """Arm; forced with ``force_magic`` in param2 (ArduPilot's 2989; PX4 takes MAVLink's 21196)."""
@@ -221,9 +223,9 @@ class Commander:
         ArduSub surfaces (GCS_MAVLink_Sub.cpp handle_MAV_CMD_NAV_LAND)."""
         return self.command_long(mavlink.MAV_CMD_NAV_LAND, (0, 0, 0, NAN, NAN, NAN, NAN))
 
-    def goto(self, lat: float, lon: float, alt_m: float = 0.0) -> None:
-        """Queue a GUIDED position target (ArduPilot ignores it, silently, outside GUIDED)."""
-        self.note_target_asked(lat, lon)
+    def goto(self, lat: float, lon: float, alt_m: float = 0.0, *, mode: str | None = None) -> None:
+        """Queue a GUIDED position target (ArduPilot ignores it, silently, outside GUIDED); ``mode``: the one that follows it."""
+        self.note_target_asked(lat, lon, mode)
         self._outbox.append(
             self._encoder.set_position_target_global_int_encode(
                 0,
