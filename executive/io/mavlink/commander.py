@@ -158,9 +158,14 @@ class Commander:
         return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub), delay_s=delay_s, retry=retry)
 
     def note_mode_asked(self, name: str) -> None:
-        """A mode our request puts the vehicle in (asked by name, or the effect of a command): not a person's change."""
+        """A mode our request puts the vehicle in (asked by name, or the effect of a command): not a person's change.
+
+        Another mode than our point's ends the point: that mode steers by itself (PX4's RTL sets its own setpoint before its
+        heartbeat shows AUTO.RTL), nothing is judged by the point any more."""
         self.modes_asked[name] = self._clock.now()
         self.last_mode_asked = name
+        if self.target_asked is not None and self.target_asked.mode != name:
+            self.target_asked = None
 
     def note_target_asked(self, lat: float | None, lon: float | None, mode: str | None = None) -> None:
         """A point our request (a setpoint, a DO_REPOSITION) has the autopilot steer to in ``mode`` (default: the mode asked last):
