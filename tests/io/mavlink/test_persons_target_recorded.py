@@ -12,11 +12,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from tlog_replay import DATA, Replay, records
+from tlog_replay import DATA, PX4, Replay, records
 
 from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage
 from executive.mission.lifecycle import MissionStatus
 
+HELD = "a ground station held the vehicle (reposition to its position)"
 OUR_COMMANDS = ("COMMAND_LONG", "COMMAND_INT", "SET_POSITION_TARGET_GLOBAL_INT")
 WATCH = ("/vehicle/mode", "/vehicle/mode_set_by", "/vehicle/target_set_by", "/mission/reason")
 
@@ -73,5 +74,31 @@ def test_ardurover_before_the_go_to_every_target_report_was_ours() -> None:
     path = DATA / "ardurover" / "rover_square-rover-guided-gcs-goto.tlog"
     sent_s, _ = ground_station_command(path)
     replay = Replay(vehicle="rover", watch=WATCH).play(path, until_s=sent_s)
+    assert replay.state.status is MissionStatus.RUNNING and "others" not in replay.values("/vehicle/target_set_by")
+    assert replay.values("/vehicle/target_set_by")[-1] == "us"
+
+
+def test_px4_qgcs_pause_mid_leg_shows_in_the_next_target_report_as_the_aircrafts_position_and_pauses_hands_off() -> None:
+    """vtol_transit, leg 2, wing-borne in AUTO.LOITER: QGC's Pause (DO_REPOSITION, COMMAND_LONG, NaN position); PX4 ACCEPTED it."""
+    path = PX4 / "vtol_transit-gcs-pause.tlog"
+    sent_s, command = ground_station_command(path)
+    assert command.param5 != command.param5  # NaN: "here"
+    replay = Replay(watch=WATCH).play(path)
+    reported_s, _ = first_report_after(path, sent_s)  # the aircraft's position (a fixed wing's pause: navigator_main.cpp)
+    assert reported_s - sent_s == pytest.approx(0.2, abs=0.05)  # measured 0.195 s: the 5 Hz stream we asked
+    paused_s = replay.when("/vehicle/target_set_by", "others")
+    assert paused_s == pytest.approx(reported_s, abs=1e-6)
+    assert (replay.state.status, replay.state.reason) == (MissionStatus.PAUSED, HELD)
+    assert replay.values("/vehicle/mode")[-1] == "AUTO.LOITER" and replay.values("/vehicle/mode_set_by")[-1] == "us"
+    resent_s = next(t for t, k, v in replay.seen if k == "/vehicle/target_set_by" and v == "us" and t > paused_s)
+    assert resent_s - sent_s > 20.0  # the leg's DO_REPOSITION again only after `ctl resume`, 20 s on
+    assert ours_between(path, sent_s, resent_s - 0.5) == []
+
+
+def test_px4_before_the_pause_the_take_off_transitions_and_legs_were_all_ours() -> None:
+    """NAV_TAKEOFF's own setpoint, the hover point, both legs' DO_REPOSITION: nothing taken for a person's."""
+    path = PX4 / "vtol_transit-gcs-pause.tlog"
+    sent_s, _ = ground_station_command(path)
+    replay = Replay(watch=WATCH).play(path, until_s=sent_s)
     assert replay.state.status is MissionStatus.RUNNING and "others" not in replay.values("/vehicle/target_set_by")
     assert replay.values("/vehicle/target_set_by")[-1] == "us"
