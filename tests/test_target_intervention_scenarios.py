@@ -187,3 +187,23 @@ def test_qgcs_go_to_on_ardurover_in_guided_mid_leg_the_rover_goes_there_paused_a
     report = journals[0].report()  # what `executive report` prints
     assert ("RUNNING", "PAUSED", reason) in [(t["before"], t["after"], t["reason"]) for t in report["transitions"]]
     assert report["outcome"] == "COMPLETED"
+
+
+def test_a_ground_stations_guided_setpoint_on_ardurover_is_a_persons_too(lockstep) -> None:
+    """SET_POSITION_TARGET_GLOBAL_INT from a ground station in GUIDED (ArduRover takes it from anyone, unacknowledged)."""
+    sim = lockstep(line_mission("setpoint"), as_bytes=True)
+    there: list[tuple[float, float]] = []
+
+    def setpoint(s: Lockstep) -> MAVLinkMessage:
+        v = s.autopilot.vehicle
+        there.append(geo.destination(v.lat, v.lon, 90.0, 30.0))
+        lat, lon = (round(x * 1e7) for x in there[0])
+        return _ENCODER.set_position_target_global_int_encode(
+            0, s.autopilot.system_id, 1, _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, 0x0DF8, lat, lon, 0.0, 0, 0, 0, 0, 0, 0, 0, 0
+        )
+
+    outcome, gcs = play(sim, GroundStationPlay(when=_mid_leg(1, 8.0, 20.0), command=setpoint, hold_s=10.0))
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert gcs.paused_at is not None and gcs.sent_at is not None and gcs.paused_at - gcs.sent_at <= 1.0
+    assert set(gcs.reasons) == {f"a ground station sent it to {there[0][0]:.5f}, {there[0][1]:.5f}"}
+    assert gcs.sent_while_paused == [] and sim.ground_station_heard == []  # no ack exists for a setpoint
