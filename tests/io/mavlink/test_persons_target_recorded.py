@@ -102,3 +102,17 @@ def test_px4_before_the_pause_the_take_off_transitions_and_legs_were_all_ours() 
     replay = Replay(watch=WATCH).play(path, until_s=sent_s)
     assert replay.state.status is MissionStatus.RUNNING and "others" not in replay.values("/vehicle/target_set_by")
     assert replay.values("/vehicle/target_set_by")[-1] == "us"
+
+
+def test_px4_qgcs_go_to_mid_leg_shows_in_the_next_target_report_with_its_point() -> None:
+    """vtol_transit, leg 2: QGC's Go-to (DO_REPOSITION, COMMAND_INT, MAV_FRAME_GLOBAL) 300 m south; PX4 ACCEPTED it."""
+    path = PX4 / "vtol_transit-gcs-goto.tlog"
+    sent_s, command = ground_station_command(path)
+    replay = Replay(watch=WATCH).play(path)
+    reported_s, report = first_report_after(path, sent_s)
+    assert abs(report.lat_int - command.x) <= 1 and abs(report.lon_int - command.y) <= 1  # PX4's float setpoint, to 1e-7
+    assert reported_s - sent_s < 0.25  # measured 0.097 s
+    assert replay.when("/vehicle/target_set_by", "others") == pytest.approx(reported_s, abs=1e-6)
+    reason = f"a ground station sent it to {command.x * 1e-7:.5f}, {command.y * 1e-7:.5f}"
+    assert (replay.state.status, replay.state.reason) == (MissionStatus.PAUSED, reason)
+    assert replay.values("/vehicle/mode")[-1] == "AUTO.LOITER"
