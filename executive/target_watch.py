@@ -78,6 +78,8 @@ class TargetWatch:
         if mode != self._mode:
             self._mode = mode
             self.forget()  # a new mode starts with a target of its own (the autopilot's): ours counts again once reported
+        if self.set_by == "us" and asked is not self._adopted:
+            self.set_by = None  # a new ask of ours, not reported yet
         if report is None or report is self._report:
             return None
         self._report = report

@@ -102,3 +102,12 @@ def test_a_setpoint_sent_again_is_the_same_ask_a_new_point_or_mode_a_new_one() -
     assert commander.target_asked == TargetAsk(*HERE, "GUIDED", 1.0)
     commander.goto(*HERE, mode="OFFBOARD")
     assert commander.target_asked == TargetAsk(*HERE, "OFFBOARD", 1.0)
+
+
+def test_a_new_ask_is_not_ours_until_reported_even_with_no_new_report() -> None:
+    """GoTo sends a setpoint again while it is not reported: a new leg's first send lost must not pass for reported."""
+    watch = TargetWatch()
+    watch.judge("GUIDED", report(*OURS), TargetAsk(*OURS, "GUIDED", 0.0), None)
+    assert watch.set_by == "us"
+    next_leg = TargetAsk(*HERE, "GUIDED", 1.0)
+    assert watch.judge("GUIDED", None, next_leg, None) is None and watch.set_by is None

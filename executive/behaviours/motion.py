@@ -46,6 +46,14 @@ class Corner:
     auto_cut_m: float
 
 
+#: Slower than this the vehicle stands (stopped short of the acceptance radius): the setpoint goes again.
+STANDING_M_S = 0.2
+
+
+def _standing(position: GlobalPosition | None) -> bool:
+    return position is not None and position.ground_speed_m_s < STANDING_M_S
+
+
 class GoTo(TimedBehaviour):
     """Go to the current leg's waypoint in GUIDED.
 
@@ -55,8 +63,10 @@ class GoTo(TimedBehaviour):
 
     - ``"setpoint"``: SET_POSITION_TARGET_GLOBAL_INT, re-sent every ``resend_s`` until the autopilot
       reports it as its target (``/vehicle/target_set_by`` ``us``): ArduPilot gives no ack for it and
-      drops it silently outside GUIDED. Once reported it is not sent again: a ground station's Go-to
-      that replaced it must be seen (a person's, :mod:`executive.target_watch`), never overwritten. A sub's waypoint goes with its depth (an
+      drops it silently outside GUIDED. Once reported it is sent again only while the vehicle stands
+      (stopped short of the acceptance radius: a new target drives it on): a ground station's Go-to
+      that replaced it must be seen first (a person's, :mod:`executive.target_watch`), never overwritten
+      under way. A sub's waypoint goes with its depth (an
       altitude leg: the depth that keeps its height above the seabed, from the measured depth and
       rangefinder, re-sent as the seabed changes), so a leg never brings the sub up.
     - ``"reposition"``: MAV_CMD_DO_REPOSITION (acked; switches to GUIDED), sent once and again only
@@ -280,7 +290,8 @@ class GoTo(TimedBehaviour):
             return
         if self.method == "setpoint":
             target = self._as_depth(self.target, position)
-            if target is not None and not (target == self._setpoint and self._reported(target)):
+            held = target == self._setpoint and self._reported(target) and not _standing(position)
+            if target is not None and not held:
                 self.autopilot.go_to(leg_target(target))
                 self._setpoint = target
             self._last_sent = now
