@@ -150,6 +150,12 @@ _KEYS: tuple[Key, ...] = (
     ),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
+    Key(
+        "/operator/command",
+        None,
+        "persons commands",
+        "a person's latest arm, disarm or mode through the executive: {what, by, answer, refused, t}; None until one is sent",
+    ),
 )
 
 

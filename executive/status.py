@@ -21,6 +21,7 @@ KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
     "/runtime/late_ticks", "/mission/waiting", "/vehicle/mav_type", "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder",
+    "/operator/command",
 )  # fmt: skip
 
 
@@ -67,6 +68,7 @@ class StatusSource:
             **_heights(bb),
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
+            "command": bb.get("/operator/command"),  # a person's latest arm, disarm or mode, and the autopilot's answer
         }
 
 
@@ -102,7 +104,8 @@ def status_line(status: dict[str, Any]) -> str:
     why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
     waiting = f"  {waiting_text(status['waiting'])}" if status.get("waiting") and status["state"] == "RUNNING" else ""
     where = f"{to_go}{_vertical(status)}"
-    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{where}  {status['mode'] or '-'} {armed}{battery}{samples}{why}{waiting}"
+    head = f"{status['state']:<9} leg {status['leg']}/{status['legs']}{where}  {status['mode'] or '-'} {armed}"
+    return f"{head}{battery}{samples}{why}{_refused(status)}{waiting}"
 
 
 def _vertical(status: dict[str, Any]) -> str:
@@ -118,3 +121,17 @@ def _vertical(status: dict[str, Any]) -> str:
     if status.get("height_m") is not None:
         return f"  height {status['height_m']:.1f} m"
     return ""
+
+
+#: How long (vehicle time) the status line says that the autopilot refused a person's command.
+REFUSAL_SHOWN_S = 30.0
+
+
+def _refused(status: dict[str, Any]) -> str:
+    """``  ctl: mode POSCTL refused by the autopilot (TEMPORARILY_REJECTED)`` for :data:`REFUSAL_SHOWN_S` after the answer."""
+    command = status.get("command")
+    if not command or not command.get("refused"):
+        return ""
+    if status.get("t") is not None and status["t"] - command["t"] > REFUSAL_SHOWN_S:
+        return ""
+    return f"  {command['by']}: {command['what']} {command['answer']}"
