@@ -26,7 +26,7 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.io.mavlink.vehicle_clock import VehicleClockWatch
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
-from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, Rangefinder
+from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, PositionTarget, Rangefinder
 
 log = logging.getLogger(__name__)
 
@@ -153,6 +153,7 @@ class MavlinkReader:
             "COMMAND_ACK": self._on_command_ack,
             "STATUSTEXT": self._on_statustext,
             "HOME_POSITION": self._on_home_position,
+            "POSITION_TARGET_GLOBAL_INT": self._on_position_target,
             "VFR_HUD": self._on_vfr_hud,
             "GPS_RAW_INT": self._on_gps_raw,
             "SERVO_OUTPUT_RAW": self._on_servo_output,
@@ -181,6 +182,11 @@ class MavlinkReader:
     def autopilot(self) -> tuple[int, int] | None:
         """(system id, component id) of the autopilot, once its HEARTBEAT was seen."""
         return self._autopilot
+
+    @property
+    def bad_data(self) -> int:
+        """Undecodable byte runs received so far (bytes that are not MAVLink, or at the wrong baud rate)."""
+        return self._bad_data
 
     def take_commands(self) -> list[MAVLinkMessage]:
         """The COMMAND_LONGs from others than the autopilot since the last call (a ground station's, routed by the autopilot), oldest first."""
@@ -403,6 +409,13 @@ class MavlinkReader:
         if _on_the_globe(lat, lon):  # 0/0: no home yet
             self._bb.set("/vehicle/home", HomePosition(lat, lon, msg.altitude / 1000.0, now))
 
+    def _on_position_target(self, msg: MAVLinkMessage, now: float) -> None:
+        """The point the autopilot steers to: ArduPilot's mode's desired location (Rover/GCS_MAVLink_Rover.cpp
+        send_position_target_global_int), PX4's navigator's current setpoint (mavlink/streams/POSITION_TARGET_GLOBAL_INT.hpp)."""
+        lat, lon = msg.lat_int / 1e7, msg.lon_int / 1e7
+        if _on_the_globe(lat, lon) and _finite(msg.alt):
+            self._bb.set("/vehicle/position_target", PositionTarget(lat, lon, msg.alt, now))
+
     def _on_vfr_hud(self, msg: MAVLinkMessage, now: float) -> None:
         if _finite(msg.groundspeed) and 0.0 <= msg.groundspeed < 1000.0:
             self._bb.set("/vehicle/ground_speed_m_s", msg.groundspeed)
@@ -479,6 +492,7 @@ class MavlinkReader:
         self._set_if_changed("/link/loss_pct", self.health.loss_pct)
         self._set_if_changed("/link/reboots", self.health.reboots)
         self._set_if_changed("/link/unsigned_dropped", getattr(self._link, "unsigned_dropped", 0))
+        self._set_if_changed("/link/device_lost", getattr(self._link, "device_lost", None))
 
     def _set_if_changed(self, key: str, value: object) -> None:
         if self._bb.get(key) != value:
