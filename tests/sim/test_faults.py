@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
-import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +20,7 @@ from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer, make_autopilot
 from executive.sim.faults import FaultFileError, FaultInjector, FaultPlan, GpsGlitch, LinkLoss, RcTakeover, load_faults
 from executive.sim.firmware import FirmwareSim
+from tests_support import SteppedClock
 
 ROOT = Path(__file__).parents[2]
 EXAMPLES = sorted((ROOT / "missions" / "faults").glob("*.yaml"))
@@ -387,9 +388,24 @@ def test_a_biased_compass_makes_the_vehicle_steer_off_while_the_telemetry_shows_
 # -- over a real UDP link ------------------------------------------------------------------------
 
 
-def serve(*faults: dict[str, Any]) -> SimServer:
-    clock = ScaledClock(50.0)
-    return SimServer("rover", clock=clock, home=HOME, ekf_ready_after_s=2.0, faults=FaultInjector(plan(*faults), clock))
+@contextlib.contextmanager
+def serve(*faults: dict[str, Any]) -> Iterator[SimServer]:
+    """The rover served lock-step: it steps (:func:`step`) when the reader finds nothing to read, its thread never started.
+
+    On a 50x clock of its own its thread, starved 0.4 s on a busy machine, stepped from 2 s to 22 s of vehicle time at once:
+    the test had stopped reading before the heartbeats after the loss were sent."""
+    clock = SteppedClock(50.0)
+    sim = SimServer("rover", clock=clock, home=HOME, ekf_ready_after_s=2.0, faults=FaultInjector(plan(*faults), clock))
+    clock.servers.append(sim)
+    try:
+        yield sim
+    finally:
+        sim.stop()
+
+
+def step(sim: SimServer) -> None:
+    """Nothing to read: the simulated world moves on a step (and says what it has to say)."""
+    sim.clock.sleep_until(sim.clock.now() + SteppedClock.STEP_S)
 
 
 def test_the_server_and_the_injector_must_share_a_clock() -> None:
@@ -408,14 +424,13 @@ def test_link_loss_stops_heartbeats_for_its_duration_and_loses_what_is_sent_mean
             heartbeats: list[tuple[float, int]] = []
             stamps: list[float] = []  # vehicle time each ATTITUDE was sent at, by its own stamp
             sent_during_loss = False
-            deadline = time.monotonic() + 30.0  # a hang guard: 22 s of vehicle time is 0.44 s of wall time
-            while sim.faults.elapsed_s < loss[1] + 6.0 and time.monotonic() < deadline:
+            while sim.faults.elapsed_s < loss[1] + 6.0:
                 if not sent_during_loss and loss[0] + 2.0 <= sim.faults.elapsed_s < loss[1] - 2.0:
                     conn.mav.command_long_send(1, 1, m.MAV_CMD_DO_SET_MODE, 0, m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4, 0, 0, 0, 0, 0)
                     sent_during_loss = True
                 msg = conn.recv_msg()
                 if msg is None:
-                    time.sleep(0.001)
+                    step(sim)
                 elif msg.get_type() == "HEARTBEAT":
                     heartbeats.append((stamps[-1] if stamps else 0.0, msg.custom_mode))
                 elif msg.get_type() == "ATTITUDE":
@@ -443,11 +458,10 @@ def test_rc_takeover_shows_in_rc_channels_and_the_mode() -> None:
                 ("HEARTBEAT", lambda msg: msg.custom_mode == 4),
                 ("RC_CHANNELS", lambda msg: msg.chan6_raw == 1000),
             ]
-            deadline = time.monotonic() + 3.0
-            while want and time.monotonic() < deadline:
+            while want and sim.clock.now() < 30.0:  # vehicle time: the take-over is over at 9 s
                 msg = conn.recv_msg()
                 if msg is None:
-                    time.sleep(0.001)
+                    step(sim)
                 elif msg.get_type() == want[0][0] and want[0][1](msg):
                     want.pop(0)
         finally:
