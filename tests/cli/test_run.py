@@ -233,7 +233,8 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
     put back)."""
     square = tmp_path / "square.yaml"
     square.write_text((ROOT / "missions/rover_square.yaml").read_text() + "simulator: {ekf_ready_after_s: 2}\n")
-    sim = SimServer("rover", clock=ScaledClock(), home=(-35.363261, 149.165230, 0.0)).start()
+    # the EKF ready after 2 s, not ArduPilot's 40 (the mission's simulator options are the built-in one's): armed in seconds
+    sim = SimServer("rover", clock=ScaledClock(), home=(-35.363261, 149.165230, 0.0), ekf_ready_after_s=EKF_READY_S).start()
     try:
         proc = executive("run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--socket", "none", stdout=subprocess.PIPE)
         assert proc.stdout is not None and proc.stderr is not None
