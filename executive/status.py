@@ -71,12 +71,39 @@ def _leg(bb: py_trees.blackboard.Client) -> int:
     return min(bb.get("/mission/leg_index") + 1, bb.get("/mission/leg_count"))
 
 
-def status_line(status: dict[str, Any]) -> str:
-    """``RUNNING   leg 2/4    12.3 m at 090°  GUIDED armed  batt 87%  waiting: Go to waypoint (14 s): leg 2/4: 12.3 m at 090°``"""
-    to_go = "" if status["distance_m"] is None else f"  {status['distance_m']:7.1f} m at {status['bearing_deg']:03.0f}°"
-    battery = "" if status["battery_pct"] is None else f"  batt {status['battery_pct']}%"
-    samples = f"  samples {status['samples']}" if status["samples"] else ""
-    armed = "armed" if status["armed"] else "disarmed"
-    why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
-    waiting = f"  {waiting_text(status['waiting'])}" if status.get("waiting") and status["state"] == "RUNNING" else ""
-    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}{why}{waiting}"
+def status_fields(status: dict[str, Any]) -> list[str]:
+    """The status line's fields, most important first: a narrow terminal drops them from the end (:func:`fit`).
+
+    A field added to the status goes in at its rank here; nothing else changes for it to fit.
+    """
+    fields = [f"{status['state']:<9} leg {status['leg']}/{status['legs']}"]
+    if status["distance_m"] is not None:
+        fields.append(f"{status['distance_m']:7.1f} m at {status['bearing_deg']:03.0f}°")
+    fields.append(f"{status['mode'] or '-'} {'armed' if status['armed'] else 'disarmed'}")
+    if status["state"] == "PAUSED" and status.get("reason"):
+        fields.append(f"({status['reason']})")
+    if status["battery_pct"] is not None:
+        fields.append(f"batt {status['battery_pct']}%")
+    if status.get("waiting") and status["state"] == "RUNNING":
+        fields.append(waiting_text(status["waiting"]))
+    if status["samples"]:
+        fields.append(f"samples {status['samples']}")
+    return fields
+
+
+def fit(fields: list[str], width: int | None = None, separator: str = "  ") -> str:
+    """``fields`` joined, as many as fit in ``width`` columns from the first (None: all); the first alone is cut to fit."""
+    line = fields[0] if width is None or len(fields[0]) <= width else fields[0][: max(width, 0)]
+    for field in fields[1:]:
+        if width is not None and len(line) + len(separator) + len(field) > width:
+            break
+        line += separator + field
+    return line
+
+
+def status_line(status: dict[str, Any], width: int | None = None) -> str:
+    """``RUNNING   leg 2/4    12.3 m at 090°  GUIDED armed  batt 87%  waiting: Go to waypoint (14 s): leg 2/4: 12.3 m at 090°``
+
+    With ``width``, at most that many characters: the least important fields left out (:func:`status_fields`).
+    """
+    return fit(status_fields(status), width)
