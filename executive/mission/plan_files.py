@@ -85,6 +85,13 @@ class Exported:
 # -- from what a file says to a mission -------------------------------------------------------
 
 
+#: Said in an imported mission's header and by ``executive import`` when it was imported without ``--auto-arm``.
+WAITS_FOR_ARMING = (
+    "The mission waits for a person to arm the vehicle (`executive ctl arm`, a ground station); "
+    "import with --auto-arm (auto_arm: true) to have it armed in pre-flight."
+)
+
+
 class _IndentedDumper(yaml.SafeDumper):
     """Lists indented under their key, as the example missions are written."""
 
@@ -150,6 +157,8 @@ def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what:
     if src.errors:
         raise MissionError(src.errors)
     header = [f"Imported from {os.path.basename(src.filename)} ({what}) by `executive import`.", *notes]
+    if not auto_arm:
+        header.append(WAITS_FOR_ARMING)
     if src.warnings:
         header.append("Not imported or changed on the way (details in the import's warnings):")
         header += [f"  line {w.line}: {w.field}: {w.message}" for w in sorted(src.warnings, key=lambda w: (w.line, w.column))]
