@@ -70,6 +70,10 @@ class ResumePoint:
     route: Route | None = None  # None: the mission file's own
     mission: Mission | None = None  # the mission that replaced the one asked for (hot reload); None: that one
 
+    def started_text(self, leg_count: int) -> str:
+        """What the resumed run's start says (log, journal, report): ``resumed at waypoint 4 of 8 (run 3 was unfinished)``."""
+        return f"resumed at waypoint {self.leg_index + 1} of {leg_count} (run {self.run} was unfinished)"
+
 
 def mission_hash(mission: Mission) -> str:
     """Identifies a mission's content (a resumed run must be the same mission)."""

@@ -225,8 +225,11 @@ class Runtime:
         """
         if start:
             self._resume = resume
-            self.mission_state.start()
-            if resume is not None:
+            if resume is None:
+                self.mission_state.start()
+            else:
+                legs = len(resume.route.waypoints) if resume.route is not None else self.mission_state.leg_count
+                self.mission_state.start(reason=resume.started_text(legs))
                 if resume.route is not None:  # the operator had edited it: that is the route being driven
                     route = resume.route
                     reason = "the route as last edited, from the journal"

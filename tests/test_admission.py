@@ -53,8 +53,8 @@ def test_cross_field_and_tree_errors_are_reported_together(minimal_yaml: str, wa
     text = minimal_yaml.replace("tree: waypoints", "tree: nope").replace(WAYPOINT, "{lat: 47.0, lon: 8.0, speed_m_s: 9.0, depth_m: 3.0}")
     assert errors_of(text) == [
         "m.yaml:4:7: tree: unknown tree 'nope' (available: waypoints; or module:function)",
-        "m.yaml:6:38: waypoints[0].speed_m_s: 9.0 m/s is outside limits.speed_m_s [0.1, 5.0]",
-        "m.yaml:6:52: waypoints[0].depth_m: only a sub has depth_m (vehicle is rover)",
+        "m.yaml:6:38: waypoints[0].speed_m_s: 9.0 m/s is outside limits.speed_m_s [0.1, 5.0] (waypoint 1)",
+        "m.yaml:6:52: waypoints[0].depth_m: only a sub has depth_m (vehicle is rover) (waypoint 1)",
     ]
 
 

@@ -177,10 +177,11 @@ class MissionState:
         for listener in self.replace_listeners:
             listener(mission, reason)
 
-    def start(self, vehicle_at: tuple[float, float] | None = None) -> None:
+    def start(self, vehicle_at: tuple[float, float] | None = None, reason: str = "started from the first waypoint") -> None:
         """READY (or ended) -> RUNNING from the first waypoint; refused (nothing changes) when a waypoint is out of reach of ``vehicle_at``.
 
         Without a position the runtime checks the distances before the tree first ticks (:mod:`executive.reach`).
+        ``reason``: what the transition says (a run resumed from the journal says where it resumes).
         """
         self._check("start")
         assert self.mission is not None
@@ -189,7 +190,7 @@ class MissionState:
             raise Refused(f"mission {self.mission.name!r} refused: " + "; ".join(far))
         self.leg_index = 0
         self.samples = ()
-        self._transition("start", "started from the first waypoint")
+        self._transition("start", reason)
 
     def pause(self, reason: str = "pause requested", *, hold: bool = True) -> None:
         """RUNNING -> PAUSED; ``hold=False``: a person has the vehicle (a mode change we did not ask for), nothing is commanded meanwhile."""

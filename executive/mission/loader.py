@@ -192,7 +192,8 @@ def load_model_text(text: str, filename: str, model: type[M], checks: Checks[M] 
     def error(path: Path, message: str, node: yaml.Node | None = None) -> FieldError:
         """Located at ``node``, else at the value of ``path`` or of its nearest enclosing value in the file."""
         node = node or next(loader.values[path[:n]] for n in range(len(path), -1, -1) if path[:n] in loader.values)
-        return _located(filename, node.start_mark, format_path(path) if path else f"({what})", message)
+        number = _waypoint_number(data, path) if what == "mission" else ""  # after the message: FIELD stays one token for tools
+        return _located(filename, node.start_mark, format_path(path) if path else f"({what})", message + number)
 
     errors = [error(path, "duplicate key (an earlier one is ignored)", key) for path, key in loader.duplicates.values()]
     try:
@@ -213,6 +214,16 @@ def load_model_text(text: str, filename: str, model: type[M], checks: Checks[M] 
     if errors:
         raise MissionError(errors)
     return result
+
+
+def _waypoint_number(data: object, path: Path) -> str:
+    """`` (waypoint 7, 'far')`` for an error in ``waypoints[6]``: the path locates the YAML, a person counts from 1 by name."""
+    if len(path) < 2 or path[0] != "waypoints" or not isinstance(path[1], int) or isinstance(path[1], bool):
+        return ""
+    waypoints = data.get("waypoints") if isinstance(data, dict) else None
+    item = waypoints[path[1]] if isinstance(waypoints, list) and 0 <= path[1] < len(waypoints) else None
+    name = item.get("name") if isinstance(item, dict) and path[2:3] != ("name",) else None  # not a name that is itself refused
+    return f" (waypoint {path[1] + 1}" + (f", {name!r}" if isinstance(name, str) and name else "") + ")"
 
 
 #: Passes of leaving out what pydantic refuses before the rules between fields give up.

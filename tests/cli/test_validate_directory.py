@@ -38,7 +38,7 @@ def test_a_bad_file_of_the_directory_is_reported_with_its_location_and_exits_2(m
     assert main(["validate", str(mission_list)]) == 2
     out, err = capsys.readouterr()
     assert len(out.splitlines()) == 2  # a.yaml and b.yaml are still checked and reported
-    assert err == f"{mission_list / 'c.yaml'}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90\n"
+    assert err == f"{mission_list / 'c.yaml'}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90 (waypoint 1)\n"
 
 
 def test_a_directory_without_mission_files_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
