@@ -253,7 +253,7 @@ def _checks_on_the_valid_part(data: dict[str, Any], model: type[M], checks: Chec
                 path = _file_path(e["loc"], pruned, missing=e["type"] == "missing")
                 path = _original_path(path[:-1] if e["type"] in _MISSING else path, kept)
                 if not path:
-                    return []
+                    return _whatever_it_is(data, model, checks, e["loc"][:1] if e["type"] in _MISSING else ())
                 refused.add(path)
             if refused <= dropped:
                 return []
@@ -267,6 +267,29 @@ def _checks_on_the_valid_part(data: dict[str, Any], model: type[M], checks: Chec
             found.append((original, message))
         return found
     return []
+
+
+def _whatever_it_is(data: dict[str, Any], model: type[M], checks: Checks[M], field: tuple[Any, ...]) -> list[tuple[Path, str]]:
+    """The rules' errors that hold whatever a refused required field of a few choices (``vehicle: boats``) would have been.
+
+    The document cannot be kept without it; each of its choices stands in for it in turn, and an error
+    found with every one of them (``tree: unknown tree 'waypoint'``) is the file's. Nothing for any other field.
+    """
+    name = field[0] if len(field) == 1 and isinstance(field[0], str) else None
+    choices = _literal_choices(model.model_fields[name].annotation) if name in model.model_fields else ()
+    if not choices or name not in data:
+        return []
+    common: list[tuple[Path, str]] | None = None
+    for choice in choices:
+        found = _checks_on_the_valid_part({**data, name: choice}, model, checks)
+        common = found if common is None else [error for error in common if error in found]
+    return common or []
+
+
+def _literal_choices(annotation: Any) -> tuple[Any, ...]:
+    """The values of a ``Literal[...]`` annotation (a few of them), else none."""
+    values = get_args(annotation) if get_origin(annotation) is Literal else ()
+    return values if 0 < len(values) <= 8 else ()
 
 
 def _without(value: Any, dropped: set[Path], path: Path = ()) -> tuple[Any, dict[Path, list[int]]]:
