@@ -92,8 +92,9 @@ def speedup_refusal(rate_hz: float, speedup: float) -> str | None:
 
 def check_run(args: argparse.Namespace, mission: Mission) -> Checked:
     """``executive run``'s checks of ``args`` (its parsed options) and ``mission``: BadInput with the first refusal; nothing opened or sent."""
-    if args.rate <= 0 or args.speedup <= 0:
-        raise BadInput("--rate and --speedup must be > 0")
+    for option, value in (("--rate", args.rate), ("--speedup", args.speedup)):
+        if not value > 0 or value == float("inf"):  # NaN is no number of anything
+            raise BadInput(f"{option} {value:g}: must be a number > 0")
     if args.resume and not args.journal:
         raise BadInput("--resume needs --journal DB")
     simulator = not args.mavlink

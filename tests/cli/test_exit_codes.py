@@ -53,3 +53,15 @@ def test_a_port_in_use_is_the_same_fault_for_sim_and_run_exit_3_said_alike(port_
 def test_sims_refusals_carry_the_common_prefix_and_code(argv, code, message, capsys):
     assert main(argv) == code
     assert capsys.readouterr().err.startswith(message)
+
+
+def test_readme_names_the_socket_a_second_executive_takes(monkeypatch):
+    """Issue 43: README said `executive-PID.sock`; without $XDG_RUNTIME_DIR it is `executive-UID-PID.sock` (executive-0-PID.sock as root)."""
+    from executive.io.control import default_socket_path
+
+    text = README.read_text(encoding="utf-8")
+    monkeypatch.delenv("XDG_RUNTIME_DIR", raising=False)
+    assert default_socket_path(1234).endswith("/executive-" + str(__import__("os").getuid()) + "-1234.sock")
+    assert "`executive-UID-PID.sock`" in text
+    monkeypatch.setenv("XDG_RUNTIME_DIR", "/run/user/1000")
+    assert default_socket_path(1234) == "/run/user/1000/executive-1234.sock" and "`executive-PID.sock` under `$XDG_RUNTIME_DIR`" in text

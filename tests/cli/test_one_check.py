@@ -54,7 +54,9 @@ REFUSED = [
     pytest.param(SQUARE, ["--obstacles", "tcp:x"], ["--run-options=--obstacles tcp:x"], "--obstacles: ", id="obstacles"),
     pytest.param(SQUARE, ["--web-token-file", "t"], ["--run-options=--web-token-file t"], "--web-token-file needs --web [HOST:]PORT", id="web-token"),
     pytest.param(SQUARE, ["--web", "80x"], ["--run-options=--web 80x"], "--web: '80x': the port '80x' is not a number", id="web"),
-    pytest.param(SQUARE, ["--rate", "0"], ["--run-options=--rate 0"], "--rate and --speedup must be > 0", id="rate"),
+    pytest.param(SQUARE, ["--rate", "0"], ["--run-options=--rate 0"], "--rate 0: must be a number > 0", id="rate"),
+    pytest.param(SQUARE, ["--speedup", "nan"], ["--run-options=--speedup nan"], "--speedup nan: must be a number > 0", id="speedup-nan"),
+    pytest.param(SQUARE, ["--speedup", "-1"], ["--run-options=--speedup -1"], "--speedup -1: must be a number > 0", id="speedup-negative"),
 ]
 
 

@@ -16,7 +16,7 @@ BROKEN = Path(__file__).parents[1] / "data" / "broken_missions"
 def test_a_good_mission(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["validate", str(minimal_mission)]) == 0
     out, err = capsys.readouterr()
-    assert (out, err) == (f"{minimal_mission}: ok (1 waypoints, vehicle rover, tree waypoints)\n", "")
+    assert (out, err) == (f"{minimal_mission}: ok (1 waypoint, vehicle rover, tree waypoints)\n", "")
 
 
 def test_a_bad_mission(capsys: pytest.CaptureFixture[str]) -> None:
@@ -31,7 +31,7 @@ def test_every_error_of_every_file_and_ok_for_the_good_ones(minimal_mission: Pat
     bad.write_text(minimal_mission.read_text().replace("lat: 47.397742", "lat: 95.0").replace("rover", "car"), encoding="utf-8")
     assert main(["validate", str(bad), str(minimal_mission), str(tmp_path / "missing.yaml")]) == 2
     out, err = capsys.readouterr()
-    assert out == f"{minimal_mission}: ok (1 waypoints, vehicle rover, tree waypoints)\n"
+    assert out == f"{minimal_mission}: ok (1 waypoint, vehicle rover, tree waypoints)\n"
     assert err.splitlines() == [
         f"{bad}:3:10: vehicle: 'car': Input should be 'rover', 'boat', 'sub' or 'vtol'",
         f"{bad}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90 (waypoint 1)",
@@ -104,3 +104,8 @@ def test_a_waypoint_out_of_reach_of_home_is_refused_with_its_distance(tmp_path: 
         " (waypoint 1)",
     ]
     assert out == f"{near}: ok (2 waypoints, vehicle rover, tree waypoints)\n"
+
+
+def test_one_waypoint_is_said_in_the_singular(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["validate", str(minimal_mission)]) == 0
+    assert capsys.readouterr().out == f"{minimal_mission}: ok (1 waypoint, vehicle rover, tree waypoints)\n"

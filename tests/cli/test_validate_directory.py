@@ -31,7 +31,7 @@ def test_every_yaml_file_of_a_directory_in_name_order_and_nothing_else(mission_l
     assert main(["validate", str(mission_list)]) == 0
     out, err = capsys.readouterr()
     assert err == ""
-    assert out.splitlines() == [f"{mission_list / name}: ok (1 waypoints, vehicle rover, tree waypoints)" for name in ("a.yaml", "b.yaml")]
+    assert out.splitlines() == [f"{mission_list / name}: ok (1 waypoint, vehicle rover, tree waypoints)" for name in ("a.yaml", "b.yaml")]
 
 
 def test_a_bad_file_of_the_directory_is_reported_with_its_location_and_exits_2(mission_list: Path, capsys: pytest.CaptureFixture[str]) -> None:
