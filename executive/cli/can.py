@@ -264,6 +264,11 @@ def run_monitor(args: argparse.Namespace) -> int:
     except CanOpenError as exc:
         _error(str(exc))
         return EXIT_NO_VEHICLE
+    if args.bus.lower().startswith("virtual:"):
+        _error(
+            f"{args.bus}: python-can's virtual bus lives inside one process: this monitor hears frames sent in it only, never another "
+            "process's (an executive's or a simulator's); to watch a bus between processes use a vcan: socketcan:vcan0 (note)"
+        )
     printer = _Printer(args.json)
     analysis = Analysis()
     try:

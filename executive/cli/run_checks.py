@@ -100,6 +100,11 @@ def check_run(args: argparse.Namespace, mission: Mission) -> Checked:
     simulator = not args.mavlink
     if (why := refusal(mission, autopilot=args.autopilot, simulator=simulator)) is not None:
         raise BadInput(why)
+    if mission.rc.source == "can" and not args.can:  # else the RC guard waits out its limit for a report that never comes
+        raise BadInput(
+            f"{args.mission}: rc.source: can reads the transmitter from the AgileX base's CAN bus (frame 0x241): give --can IFACE:CHANNEL "
+            "(socketcan:can0, slcan:/dev/ttyACM0@115200; with the built-in simulator a virtual:NAME bus), or rc.source: mavlink"
+        )
     notes = []
     if args.mavlink and args.speedup != 1.0:
         # a SITL at --speedup 5 drives 5 s in each wall second: ticking on the wall clock, the executive would react five times

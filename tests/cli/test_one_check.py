@@ -111,3 +111,17 @@ def test_ctl_upload_refuses_what_run_would_refuse(running, upload, autopilot, si
         assert runtime.mission_state.mission is not None and runtime.mission_state.mission.name == load_mission(running).name  # unchanged
     finally:
         runtime.close()
+
+
+def test_rc_from_can_without_a_can_bus_is_refused_at_start_with_the_hint(capsys, tmp_path):
+    """Issue 43: it ran, waited 60 s and ended `RC fresh? no RC report yet`."""
+    import yaml
+
+    mission = yaml.safe_load(Path(SQUARE).read_text(encoding="utf-8"))
+    mission["rc"] = {**mission.get("rc", {}), "source": "can"}
+    path = tmp_path / "can_rc.yaml"
+    path.write_text(yaml.safe_dump(mission), encoding="utf-8")
+    assert main(["run", str(path), "--socket", "none"]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: rc.source: can reads the transmitter from the AgileX base's CAN bus (frame 0x241): give --can IFACE:CHANNEL" in err
+    assert "executive: simulated" not in err  # nothing started
