@@ -255,9 +255,12 @@ def route_lines(route: dict[str, Any]) -> str:
     held = "yes" if route["on_autopilot"] else "no"
     if upload is not None and upload["state"] != "DONE":
         held += f" ({upload['state'].lower()}: {upload['detail']})"
-    lines = [f"{len(route['waypoints'])} waypoints; on the autopilot: {held}"]
-    for n, (lat, lon, alt) in enumerate(route["waypoints"], start=1):
-        lines.append(f"{'>' if n == route['current'] else ' '} {n:3d}  {lat:.7f}, {lon:.7f}{f'  alt {alt:g} m' if alt else ''}")
+    count = len(route["waypoints"])
+    lines = [f"{count} waypoint{'' if count == 1 else 's'}; on the autopilot: {held}"]
+    names = route.get("names") or [None] * len(route["waypoints"])  # an older executive sends none
+    for n, ((lat, lon, alt), name) in enumerate(zip(route["waypoints"], names, strict=False), start=1):
+        named = f"  {name!r}" if name else ""
+        lines.append(f"{'>' if n == route['current'] else ' '} {n:3d}  {lat:.7f}, {lon:.7f}{f'  alt {alt:g} m' if alt else ''}{named}")
     if route["home"] is not None:
         lines.append(f"  home {route['home'][0]:.7f}, {route['home'][1]:.7f}")
     return "\n".join(lines)
