@@ -123,7 +123,7 @@ def outcome(driving: RuntimeOnLink, reply) -> dict:
 def test_an_operators_mode_is_obeyed_and_the_mission_pauses_rather_than_undoing_it(driving: RuntimeOnLink) -> None:
     reply = driving.runtime.operator.request("mode", source="ctl", mode="hold")
     assert reply.ok and reply.state == "PAUSED" and reply.command["what"] == "mode HOLD"
-    assert reply.reason == "ctl: mode HOLD; mission paused at leg 1, hands off until resumed, sent to the autopilot"
+    assert reply.reason == "ctl: mode HOLD; mission paused at leg 1/4, hands off until resumed, sent to the autopilot"
     assert driving.runtime.mission_state.reason == "ctl: mode HOLD by a person: hands off"
     driving.tick(2)
     assert driving.modes_sent() == [HOLD] and driving.autopilot.mode == HOLD

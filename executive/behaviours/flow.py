@@ -276,12 +276,12 @@ class UnlessPaused(py_trees.decorators.Decorator):
             if self.decorated.status == Status.RUNNING:
                 self.decorated.stop(Status.INVALID)
             if not state.hold_while_paused:  # a person took the vehicle (a mode we did not ask for): hands off
-                self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: {state.reason}; hands off"
+                self.feedback_message = f"paused at leg {state.leg_number}/{state.leg_count}: {state.reason}; hands off"
             else:
                 if self._holding is None:
                     self._holding = hold_mode_for(self._bb.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode) or self.hold_mode
                     self._hold_ticket = self.autopilot.set_mode(self._holding)
-                self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: holding in {self._holding}"
+                self.feedback_message = f"paused at leg {state.leg_number}/{state.leg_count}: holding in {self._holding}"
             new_status = Status.RUNNING
         else:
             if self._holding is not None:  # resumed: a hold still being retried must not undo the resumed leg

@@ -201,7 +201,7 @@ class MissionState:
     def resume(self, reason: str = "") -> None:
         self._check("resume")
         self.hold_while_paused = True
-        self._transition("resume", f"resumed at leg {self.leg_index + 1}" + (f": {reason}" if reason else ""))
+        self._transition("resume", f"resumed at leg {self.leg_number}" + (f": {reason}" if reason else ""))
 
     def delete(self) -> None:
         self._check("delete")
@@ -224,6 +224,11 @@ class MissionState:
     @property
     def leg_count(self) -> int:
         return len(self.mission.waypoints) if self.mission else 0
+
+    @property
+    def leg_number(self) -> int:
+        """The leg as a person counts it, as the status shows it (``leg 2/2``): from 1, the last one once past it (a VTOL landing)."""
+        return min(self.leg_index + 1, self.leg_count)
 
     @property
     def target(self) -> Waypoint | None:

@@ -215,7 +215,7 @@ class Operator:
         said = f"{source}: {what}"
         if op != "arm" and self.mission_state.status is MissionStatus.RUNNING:
             self.mission_state.pause(f"{said} by a person: hands off", hold=False)
-            said += f"; mission paused at leg {self.mission_state.leg_index + 1}, hands off until resumed"
+            said += f"; mission paused at leg {self.mission_state.leg_number}/{self.mission_state.leg_count}, hands off until resumed"
         log.warning("%s, sent to the autopilot", said)
         return self._reply(True, f"{said}, sent to the autopilot", command={"ticket": request.ticket, "name": request.outcome, "what": what})
 

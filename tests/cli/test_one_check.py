@@ -67,7 +67,7 @@ def test_run_refuses_before_anything_is_opened(capsys, mission, run_options, ser
     assert main(["run", mission, *run_options, *wait, "--socket", "none"]) == 2
     err = capsys.readouterr().err
     assert why in err
-    assert "executive: simulated" not in err and "autopilot found" not in err  # nothing started, nothing heard
+    assert "executive: run: simulated" not in err and "autopilot found" not in err  # nothing started, nothing heard
 
 
 @pytest.mark.parametrize(("mission", "run_options", "service_options", "why"), REFUSED)
@@ -124,4 +124,4 @@ def test_rc_from_can_without_a_can_bus_is_refused_at_start_with_the_hint(capsys,
     assert main(["run", str(path), "--socket", "none"]) == 2
     err = capsys.readouterr().err
     assert f"{path}: rc.source: can reads the transmitter from the AgileX base's CAN bus (frame 0x241): give --can IFACE:CHANNEL" in err
-    assert "executive: simulated" not in err  # nothing started
+    assert "executive: run: simulated" not in err  # nothing started
