@@ -38,7 +38,7 @@ from executive import behaviours, frames, registry, trees
 from executive.behaviours import composites
 from executive.behaviours.guards import Guard
 from executive.mission.model import Range, RcRouteOptions, SamplingOptions, VtolOptions
-from executive.mission.rules import rc_switch_channels
+from executive.mission.rules import height_tolerance, rc_switch_channels, seabed_clearance
 from executive.vehicles import PROFILES
 
 if TYPE_CHECKING:
@@ -117,6 +117,8 @@ MISSION_VALUES: dict[str, Callable[[Mission], Any]] = {
     "vehicle.guided_mode": lambda m: PROFILES[m.vehicle].guided_mode,
     "vehicle.manual_mode": lambda m: PROFILES[m.vehicle].manual_mode,
     "vehicle.fixed_wing_hold_mode": lambda m: "LOITER" if m.vehicle == "vtol" else None,
+    "vehicle.seabed_clearance_m": seabed_clearance,
+    "vehicle.height_tolerance_m": height_tolerance,
     "geofence": lambda m: m.geofence.fence() if m.geofence is not None else None,
     "home": lambda m: (m.home.lat, m.home.lon) if m.home is not None else None,
     "rc.switch_channels": rc_switch_channels,

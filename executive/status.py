@@ -2,7 +2,8 @@
 
 Shown on the progress line, returned by ``executive ctl status``, written as JSON lines and sent
 to the ground station. Battery, position, yaw, pitch/roll, vehicle id and armed come from the
-ASV node's 2 Hz status; mode, mission state, leg and distance/bearing from the executive.
+ASV node's 2 Hz status; mode, mission state, leg and distance/bearing from the executive; a sub's
+depth and height above the seabed (its downward sonar), a vtol's height above home.
 """
 
 from __future__ import annotations
@@ -13,12 +14,13 @@ import py_trees
 
 from executive import blackboard, geo
 from executive.clock import Clock
+from executive.vehicles import profile_for_mav_type
 from executive.waiting import waiting_text
 
 KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
-    "/runtime/late_ticks", "/mission/waiting",
+    "/runtime/late_ticks", "/mission/waiting", "/vehicle/mav_type", "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder",
 )  # fmt: skip
 
 
@@ -62,9 +64,29 @@ class StatusSource:
             "roll_deg": None if attitude is None else round(attitude.roll_deg, 1),
             "battery_v": None if battery is None else battery.voltage_v,
             "battery_pct": None if battery is None else battery.remaining_pct,
+            **_heights(bb),
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
         }
+
+
+def _heights(bb: py_trees.blackboard.Client) -> dict[str, Any]:
+    """``depth_m`` and ``altitude_above_bottom_m`` (a sub: None without a good sonar reading, ``seabed_beyond_m`` when the
+    seabed is farther than the sonar reaches), ``height_m`` (a vtol, above home): None where not this kind or not known."""
+    position, mav_type = bb.get("/vehicle/position"), bb.get("/vehicle/mav_type")
+    profile = profile_for_mav_type(mav_type) if mav_type is not None else None
+    kind = profile.kind if profile is not None else None
+    found: dict[str, Any] = {"depth_m": None, "altitude_above_bottom_m": None, "seabed_beyond_m": None, "height_m": None}
+    if position is None:
+        return found
+    if kind == "sub":
+        altitude, reading = bb.get("/vehicle/altitude_above_bottom_m"), bb.get("/vehicle/rangefinder")
+        found["depth_m"] = round(max(0.0, -position.alt_rel_m), 2)
+        found["altitude_above_bottom_m"] = None if altitude is None else round(altitude, 2)
+        found["seabed_beyond_m"] = reading.max_m if reading is not None and reading.status == "too_far" else None
+    elif kind == "vtol":
+        found["height_m"] = round(position.alt_rel_m, 2)
+    return found
 
 
 def _leg(bb: py_trees.blackboard.Client) -> int:
@@ -79,6 +101,8 @@ def status_fields(status: dict[str, Any]) -> list[str]:
     fields = [f"{status['state']:<9} leg {status['leg']}/{status['legs']}"]
     if status["distance_m"] is not None:
         fields.append(f"{status['distance_m']:7.1f} m at {status['bearing_deg']:03.0f}°")
+    if vertical := _vertical(status):
+        fields.append(vertical)
     fields.append(f"{status['mode'] or '-'} {'armed' if status['armed'] else 'disarmed'}")
     if status["state"] == "PAUSED" and status.get("reason"):
         fields.append(f"({status['reason']})")
@@ -107,3 +131,18 @@ def status_line(status: dict[str, Any], width: int | None = None) -> str:
     With ``width``, at most that many characters: the least important fields left out (:func:`status_fields`).
     """
     return fit(status_fields(status), width)
+
+
+def _vertical(status: dict[str, Any]) -> str:
+    """``depth 26.0 m, seabed 24.0 m below`` (a sub), ``height 30.0 m`` (a vtol, above home); empty for others."""
+    if status.get("depth_m") is not None:
+        if status.get("altitude_above_bottom_m") is not None:
+            seabed = f"{status['altitude_above_bottom_m']:.1f} m below"
+        elif status.get("seabed_beyond_m") is not None:
+            seabed = f"beyond {status['seabed_beyond_m']:g} m"
+        else:
+            seabed = "no sonar reading"
+        return f"depth {status['depth_m']:.1f} m, seabed {seabed}"
+    if status.get("height_m") is not None:
+        return f"height {status['height_m']:.1f} m"
+    return ""

@@ -32,7 +32,7 @@ from executive.behaviours import (
 from executive.behaviours.failsafe import condition_of
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.model import Mission
-from executive.mission.rules import failsafe_policy, rc_switch_channels
+from executive.mission.rules import failsafe_policy, height_tolerance, rc_switch_channels, seabed_clearance
 from executive.vehicles import PROFILES
 
 ARM_RETRY_S = 2.0
@@ -175,7 +175,13 @@ def guided_leg(mission: Mission) -> py_trees.behaviour.Behaviour:
     person set is an intervention: the mission pauses before the tree ticks (executive.intervention).
     """
     limits = mission.limits
-    go = GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True)
+    go = GoTo(
+        limits.acceptance_radius_m,
+        limits.leg_timeout_s,
+        look_ahead=True,
+        seabed_clearance_m=seabed_clearance(mission),
+        height_tolerance_m=height_tolerance(mission),
+    )
     guided = SetMode(PROFILES[mission.vehicle].guided_mode, confirm_by_ack=True)  # moving a tick after the ack, not at the next heartbeat
     return py_trees.composites.Sequence("Leg", memory=False, children=[guided, go])
 

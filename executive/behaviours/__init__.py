@@ -2,11 +2,12 @@
 
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
 from executive.behaviours.commands import Arm, ChangeSpeed, CommandAction, Disarm, HoldFor, SetMode
+from executive.behaviours.depth import ChangeAltitude, ChangeDepth, Surface
 from executive.behaviours.failsafe import Failsafe, FailsafeNote
 from executive.behaviours.flow import ForEachLeg, Timeout, UnlessPaused, WaitForGuards, WaitUntil
 from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive, ModeIs
 from executive.behaviours.mode_switch import ModeSwitchClear
-from executive.behaviours.motion import ChangeAltitude, ChangeDepth, GoTo, Surface
+from executive.behaviours.motion import GoTo
 from executive.behaviours.parameters import ParameterIs
 from executive.behaviours.position_guards import (
     AllWaypointsWithin,

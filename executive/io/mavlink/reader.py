@@ -318,7 +318,10 @@ class MavlinkReader:
     def _on_estimator_status(self, msg: MAVLinkMessage, now: float) -> None:
         """PX4's estimator: ESTIMATOR_STATUS flags (ESTIMATOR_STATUS_FLAGS; src/modules/mavlink/streams/ESTIMATOR_STATUS.hpp sends
         estimator_status.solution_status_flags) and innovation test ratios (1.0 = at the gate) in place of the variances."""
-        ratios = (msg.vel_ratio, msg.pos_horiz_ratio, msg.pos_vert_ratio, msg.mag_ratio, msg.hagl_ratio)
+        # hagl_ratio is estimator_status.hagl_test_ratio: NaN while no height above the ground is fused (seen on real PX4 SIH
+        # standard_vtol from ~100 m up, out of its range sensor's reach): a test not made, not a broken report (issue 44)
+        hagl = msg.hagl_ratio if _finite(msg.hagl_ratio) else 0.0
+        ratios = (msg.vel_ratio, msg.pos_horiz_ratio, msg.pos_vert_ratio, msg.mag_ratio, hagl)
         if not _finite(*ratios) or min(ratios) < 0.0:
             return
         self._estimator_status_at = now
