@@ -1,8 +1,10 @@
 """The simulated autopilot's end of the link: every MAVLink client of a ``tcpin:`` or ``udpin:`` address, at once.
 
-As SITL's and mavlink-router's endpoints do, each client (an executive, a ground station, a
-MAVProxy) gets every message the vehicle sends, and what any of them sends is taken. pymavlink's
-own ``tcpin`` serves one client at a time: a second one connected, heard nothing and gave up.
+As mavlink-router's endpoints do, each client (an executive, a ground station, a MAVProxy) gets
+every message the vehicle sends, and what any of them sends is taken. pymavlink's own ``tcpin``
+serves one client at a time: a second one connected, heard nothing and gave up. (ArduPilot SITL,
+measured: one client per TCP port; a second client of port 5760+10i heard no HEARTBEAT in 10 s while
+port 5762+10i served a third; a ground station beside an executive takes that other port.)
 Each client has its own parser (a message cut in two by one client is not spliced into another's);
 what the vehicle sends is packed once (one sequence, one signature) and written to each.
 A TCP client comes on ``accept`` and goes when its connection closes; a UDP client comes with its
