@@ -21,6 +21,7 @@ KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
     "/runtime/late_ticks", "/mission/waiting", "/vehicle/mav_type", "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder",
+    "/operator/command", "/link/device_lost", "/runtime/storage_lost",
 )  # fmt: skip
 
 
@@ -57,6 +58,8 @@ class StatusSource:
             "armed": bool(bb.get("/vehicle/armed")),
             "vehicle_id": bb.get("/link/system_id"),
             "link_up": bool(bb.get("/link/up")),
+            "link_device_lost": bb.get("/link/device_lost"),
+            "storage_lost": bb.get("/runtime/storage_lost"),
             "lat": None if position is None else round(position.lat, 7),
             "lon": None if position is None else round(position.lon, 7),
             "yaw_deg": None if attitude is None else round(attitude.yaw_deg, 1),
@@ -67,6 +70,7 @@ class StatusSource:
             **_heights(bb),
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
+            "command": bb.get("/operator/command"),  # a person's latest arm, disarm or mode, and the autopilot's answer
         }
 
 
@@ -104,8 +108,14 @@ def status_fields(status: dict[str, Any]) -> list[str]:
     if vertical := _vertical(status):
         fields.append(vertical)
     fields.append(f"{status['mode'] or '-'} {'armed' if status['armed'] else 'disarmed'}")
+    if status.get("link_device_lost"):
+        fields.append(f"LINK: {status['link_device_lost']}")
+    if status.get("storage_lost"):
+        fields.append(f"DISK: {status['storage_lost']}")
     if status["state"] == "PAUSED" and status.get("reason"):
         fields.append(f"({status['reason']})")
+    if refused := _refused(status):
+        fields.append(refused)
     if status["battery_pct"] is not None:
         fields.append(f"batt {status['battery_pct']}%")
     if status.get("waiting") and status["state"] == "RUNNING":
@@ -146,3 +156,17 @@ def _vertical(status: dict[str, Any]) -> str:
     if status.get("height_m") is not None:
         return f"height {status['height_m']:.1f} m"
     return ""
+
+
+#: How long (vehicle time) the status line says that the autopilot refused a person's command.
+REFUSAL_SHOWN_S = 30.0
+
+
+def _refused(status: dict[str, Any]) -> str:
+    """``ctl: mode POSCTL refused by the autopilot (TEMPORARILY_REJECTED)`` for :data:`REFUSAL_SHOWN_S` after the answer."""
+    command = status.get("command")
+    if not command or not command.get("refused"):
+        return ""
+    if status.get("t") is not None and status["t"] - command["t"] > REFUSAL_SHOWN_S:
+        return ""
+    return f"{command['by']}: {command['what']} {command['answer']}"
