@@ -227,7 +227,7 @@ def tree_text(reply: dict[str, Any]) -> str:
 
 
 def _watch_tree(args: argparse.Namespace) -> int:
-    """``ctl tree --watch``: the tree again every ``--interval`` s (in place on a terminal) until Ctrl-C or the executive stops."""
+    """``ctl tree --watch``: the tree every ``--interval`` s (in place on a terminal) until the run's last tick, Ctrl-C or the executive stops."""
     clear = "\x1b[H\x1b[2J" if sys.stdout.isatty() and not args.json else ""
     shown = 0
     try:
@@ -238,7 +238,8 @@ def _watch_tree(args: argparse.Namespace) -> int:
                 if not shown:
                     print(f"executive: ctl: no executive answers on {args.socket}: {exc}", file=sys.stderr)
                     return EXIT_NO_VEHICLE
-                print(f"executive: ctl: the executive on {args.socket} has stopped", file=sys.stderr)
+                # it ended between two looks: what is shown is a tick before its last, and is said to be
+                print(f"executive: ctl: the executive on {args.socket} has stopped; the tree above is from a tick before its last", file=sys.stderr)
                 return EXIT_OK
             if args.json:
                 print(json.dumps(reply), flush=True)
@@ -247,6 +248,8 @@ def _watch_tree(args: argparse.Namespace) -> int:
             else:
                 print(f"{clear}{reply['state']}: {reply['reason']}\n", flush=True)
             shown += 1
+            if reply.get("ok") and not reply["tree"]["live"]:
+                return EXIT_OK  # the run's last tick, shown: the watch ends on it, not on a frame of a tick still running
             time.sleep(args.interval)
     except KeyboardInterrupt:
         return EXIT_OK  # the way to stop watching

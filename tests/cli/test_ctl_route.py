@@ -227,3 +227,21 @@ def test_route_show_names_each_waypoint_it_has_a_name_for() -> None:
         "    1  1.0000000, 2.0000000  'gate'",
         ">   2  1.5000000, 2.0000000",
     ]
+
+
+def test_tree_watch_ends_on_the_runs_last_tick(tmp_path) -> None:
+    """Issue 43: `ctl tree --watch` went on past the end (or ended on a frame of a tick still running): it ends on the last one."""
+    import contextlib
+    import io
+
+    final = {"ok": True, "state": "COMPLETED", "reason": "every waypoint reached", "tree": {"live": False}, "status": {}}
+    out, codes = io.StringIO(), []
+    with serving(tmp_path / "ctl.sock", final) as seen, contextlib.redirect_stdout(out):
+        watch = threading.Thread(
+            target=lambda: codes.append(main(["ctl", "--socket", str(tmp_path / "ctl.sock"), "--json", "tree", "--watch", "--interval", "0.05"]))
+        )
+        watch.start()
+        watch.join(10)  # bounds the old behaviour: it polled until Ctrl-C
+        assert not watch.is_alive(), "the watch did not end on the run's last tick"
+    assert codes == [0] and len(seen) == 1
+    assert json.loads(out.getvalue())["tree"]["live"] is False
