@@ -30,6 +30,7 @@ OPERATOR_LOGGERS = (
     "executive.autopilot_link.route_keeper",  # the route held by the autopilot
     "executive.behaviours.rc_switches",  # what an RC switch did
     "executive.behaviours.flow",  # what a person does to end a wait (how to arm the vehicle)
+    "executive.io.can.reader",  # the AgileX base found on the CAN bus (with --can)
 )
 
 

@@ -21,7 +21,7 @@ KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
     "/runtime/late_ticks", "/mission/waiting", "/vehicle/mav_type", "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder",
-    "/operator/command", "/link/device_lost", "/runtime/storage_lost",
+    "/operator/command", "/link/device_lost", "/runtime/storage_lost", "/base/system", "/base/up",
 )  # fmt: skip
 
 
@@ -71,7 +71,16 @@ class StatusSource:
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
             "command": bb.get("/operator/command"),  # a person's latest arm, disarm or mode, and the autopilot's answer
+            "base": _base(bb),
         }
+
+
+def _base(bb: py_trees.blackboard.Client) -> dict[str, Any] | None:
+    """The AgileX base on CAN (``--can``), once heard: heard now, its state, who it obeys, its battery; None without one."""
+    system = bb.get("/base/system")
+    if system is None:
+        return None
+    return {"up": bool(bb.get("/base/up")), "state": system.vehicle_state, "mode": system.control_mode, "battery_v": round(system.battery_v, 1)}
 
 
 def _heights(bb: py_trees.blackboard.Client) -> dict[str, Any]:
@@ -118,6 +127,8 @@ def status_fields(status: dict[str, Any]) -> list[str]:
         fields.append(refused)
     if status["battery_pct"] is not None:
         fields.append(f"batt {status['battery_pct']}%")
+    if base := status.get("base"):
+        fields.append(f"base {base['state']} {base['mode']} {base['battery_v']:.1f}V" + ("" if base["up"] else " (not heard)"))
     if status.get("waiting") and status["state"] == "RUNNING":
         fields.append(waiting_text(status["waiting"]))
     if status["samples"]:
