@@ -297,9 +297,10 @@ class _SnapshotRuns:
 
 
 def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
-    """Record every tick of the tree (node statuses, blackboard changes) for ``executive replay``."""
+    """Record every tick of the tree (node statuses, blackboard changes) and the mission's transitions for ``executive replay``."""
 
     def plug(w: Wiring) -> None:
+        w.mission_state.listeners.append(recorder.event)
         w.observers.append(_SnapshotRuns(recorder))
 
     return plug

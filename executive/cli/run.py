@@ -223,7 +223,7 @@ def _recorders(
         stack.callback(logging.getLogger("executive").removeHandler, handler)
     if args.snapshots:
         try:
-            snapshots = SnapshotRecorder(args.snapshots, storage=storage)
+            snapshots = SnapshotRecorder(args.snapshots, storage=storage, clock=clock)
         except OSError as exc:
             raise BadInput(f"--snapshots {args.snapshots}: cannot be created: {exc.strerror or exc}") from exc
         stack.callback(snapshots.close)
