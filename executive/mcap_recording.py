@@ -26,6 +26,7 @@ import collections
 import json
 import logging
 import os
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -223,3 +224,28 @@ class McapFile:
             message = {"timestamp": _stamp(t), "level": level, "message": record.getMessage(), "name": record.name,
                        "file": record.pathname, "line": record.lineno}  # fmt: skip
             self._put("/log", t, message)
+
+
+MAGIC = b"\x89MCAP0\r\n"
+
+
+def tick_lines(part: Path) -> Iterator[dict[str, Any]]:
+    """An MCAP recording as the JSON-lines file's lines (``tree``, then each tick's with its ``bb``), in the order written."""
+    from mcap.reader import make_reader
+
+    pending: dict[str, Any] | None = None
+    with part.open("rb") as f:
+        for _, channel, message in make_reader(f).iter_messages(topics=["/tree", "/tree/tick", "/blackboard"], log_time_order=False):
+            body = json.loads(message.data)
+            if channel.topic == "/blackboard" and pending is not None:
+                pending["bb"] = body["bb"]  # a tick's blackboard follows its /tree/tick message
+                continue
+            if pending is not None:
+                yield pending
+            if channel.topic == "/tree":
+                pending = None
+                yield {"tree": body["nodes"]}
+            else:
+                pending = {**body, "t": round(message.log_time / 1e9, 3)}
+    if pending is not None:
+        yield pending

@@ -222,6 +222,7 @@ class TickState:
 
 
 SQLITE_HEADER = b"SQLite format 3\x00"
+MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 
 class NotSnapshots(ValueError):
@@ -237,14 +238,24 @@ def _check_kind(part: Path) -> None:
             f"{part}:1:1: (snapshot): this is a journal (SQLite), not a snapshot file: `executive report {part}` shows what its runs did; "
             "`executive run --snapshots FILE` records the ticks that `executive replay` shows"
         )
-    if head and not head.startswith(b'{"tree"'):
+    if head and not head.startswith((b'{"tree"', MCAP_MAGIC)):
         raise NotSnapshots(f"{part}:1:1: (snapshot): not a snapshot file (one is written by `executive run --snapshots FILE`)")
+
+
+def _is_mcap(part: Path) -> bool:
+    with part.open("rb") as f:
+        return f.read(len(MCAP_MAGIC)) == MCAP_MAGIC
 
 
 def _lines(path: Path) -> Iterator[dict[str, Any]]:
     for part in (path.with_name(path.name + ".1"), path):
         if part.exists():
             _check_kind(part)
+            if _is_mcap(part):
+                from executive.mcap_recording import tick_lines
+
+                yield from tick_lines(part)
+                continue
             with part.open(encoding="utf-8") as f:
                 for number, line in enumerate(f, 1):
                     try:
@@ -338,6 +349,10 @@ class Recording:
         self._entries: list[_Entry] = []
         for part in _parts(self.path):
             _check_kind(part)
+            if _is_mcap(part):
+                raise NotSnapshots(
+                    f"{part}:1:1: (snapshot): an MCAP recording: `replay FILE --tick N` shows it; --web and --groot2 read JSON lines only"
+                )
             with part.open("rb") as f:
                 offset = 0
                 for number, raw in enumerate(f, 1):
