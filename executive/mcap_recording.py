@@ -17,7 +17,9 @@ recorded at ``--speedup 20`` draws true speeds. The channels:
 - ``/log`` (``foxglove.Log``): the executive's log lines (what its logger lets through), for the Log panel.
 
 Past ``max_bytes`` the file is finished (its index written) and rotated to ``FILE.1`` (the one
-before is dropped), as the JSON-lines file is.
+before is dropped), as the JSON-lines file is. A finished file's metadata ``executive.keyframes``
+lists each keyframe (tick, its time, its tree's time): a replay of tick N seeks to the keyframe
+before it through the MCAP index, whatever the file's length.
 """
 
 from __future__ import annotations
@@ -143,18 +145,21 @@ class McapFile:
         self._mission: tuple[Any, ...] | None = None
         self._fix_time: float | None = None
         self._logs = _LogLines(clock)
+        self._tree_ns = 0
         self._start()
         logging.getLogger("executive").addHandler(self._logs)
 
     def write_tree(self, nodes: list[dict[str, Any]]) -> None:
         self._nodes = nodes
-        self._put("/tree", self._now(), {"nodes": nodes})
+        self._tree_ns = self._put("/tree", self._now(), {"nodes": nodes})
 
     def write_tick(self, line: dict[str, Any]) -> bool:
         t = self._t = line["t"]
         self._write_logs()
         marks = {k: line[k] for k in ("key", "end") if k in line}
-        self._put("/tree/tick", t, {"tick": line["tick"], **marks, **{k: line[k] for k in ("s", "f") if k in line}})
+        ns = self._put("/tree/tick", t, {"tick": line["tick"], **marks, **{k: line[k] for k in ("s", "f") if k in line}})
+        if line.get("key"):
+            self._keyframes.append((line["tick"], ns, self._tree_ns))
         if "bb" in line:
             self._put("/blackboard", t, {"tick": line["tick"], **marks, "bb": line["bb"]})
         mission = tuple(blackboard.value(k) for k in MISSION_KEYS)
@@ -183,8 +188,10 @@ class McapFile:
         schemas = {name: self._writer.register_schema(name, "jsonschema", json.dumps(body).encode()) for name, body in SCHEMAS.items()}
         self._channels = {topic: self._writer.register_channel(topic, "json", schemas[name]) for topic, name in CHANNELS.items()}
         self._sequence = 0
+        self._keyframes: list[tuple[int, int, int]] = []
 
     def _finish(self) -> None:
+        self._writer.add_metadata("executive.keyframes", {"ticks": json.dumps(self._keyframes, separators=(",", ":"))})
         self._writer.finish()
         self._file.close()
 
@@ -194,16 +201,18 @@ class McapFile:
         self._start()
         self._mission = None
         if self._nodes:
-            self._put("/tree", self._t, {"nodes": self._nodes})
+            self._tree_ns = self._put("/tree", self._t, {"nodes": self._nodes})
 
     def _now(self) -> float:
         return self._clock.now() if self._clock else self._t
 
-    def _put(self, topic: str, t: float, message: dict[str, Any]) -> None:
+    def _put(self, topic: str, t: float, message: dict[str, Any]) -> int:
+        """Write ``message`` at time ``t``; its log time, ns."""
         self._sequence += 1
         ns = _ns(t)
         data = json.dumps(message, ensure_ascii=False, separators=(",", ":")).encode()
         self._writer.add_message(self._channels[topic], log_time=ns, data=data, publish_time=ns, sequence=self._sequence)
+        return ns
 
     def _write_fix(self) -> None:
         fix = blackboard.value("/vehicle/position")
@@ -229,13 +238,38 @@ class McapFile:
 MAGIC = b"\x89MCAP0\r\n"
 
 
-def tick_lines(part: Path) -> Iterator[dict[str, Any]]:
-    """An MCAP recording as the JSON-lines file's lines (``tree``, then each tick's with its ``bb``), in the order written."""
+def _seek(reader: Any, tick: int) -> tuple[int, dict[str, Any]] | None:
+    """The time of the last keyframe before ``tick`` and the tree line it belongs to; None without (an unfinished file).
+
+    Before, not at: a keyframe's own changes are told against the tick before it.
+    """
+    try:
+        keyframes = [k for record in reader.iter_metadata() if record.name == "executive.keyframes" for k in json.loads(record.metadata["ticks"])]
+    except Exception:  # no summary (a file cut by a crash): read from the start
+        return None
+    before = [(ns, tree_ns) for key, ns, tree_ns in keyframes if key < tick]
+    if not before:
+        return None
+    ns, tree_ns = before[-1]
+    trees = [json.loads(m.data) for _, _, m in reader.iter_messages(topics=["/tree"], starting_at=tree_ns, ending_at=tree_ns)]
+    return (ns, {"tree": trees[-1]["nodes"]}) if trees else None
+
+
+def tick_lines(part: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
+    """An MCAP recording as the JSON-lines file's lines (``tree``, then each tick's with its ``bb``), in the order written.
+
+    With ``near``: from the last keyframe before tick ``near`` (its tree line first), found through the index.
+    """
     from mcap.reader import make_reader
 
     pending: dict[str, Any] | None = None
     with part.open("rb") as f:
-        for _, channel, message in make_reader(f).iter_messages(topics=["/tree", "/tree/tick", "/blackboard"], log_time_order=False):
+        reader = make_reader(f)
+        start = _seek(reader, near) if near is not None else None
+        if start is not None:
+            yield start[1]
+        window = {"starting_at": start[0]} if start is not None else {}
+        for _, channel, message in reader.iter_messages(topics=["/tree", "/tree/tick", "/blackboard"], log_time_order=False, **window):
             body = json.loads(message.data)
             if channel.topic == "/blackboard" and pending is not None:
                 pending["bb"] = body["bb"]  # a tick's blackboard follows its /tree/tick message

@@ -247,14 +247,15 @@ def _is_mcap(part: Path) -> bool:
         return f.read(len(MCAP_MAGIC)) == MCAP_MAGIC
 
 
-def _lines(path: Path) -> Iterator[dict[str, Any]]:
+def _lines(path: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
+    """The recording's lines, oldest first; with ``near``, an MCAP file's from its last keyframe before that tick."""
     for part in (path.with_name(path.name + ".1"), path):
         if part.exists():
             _check_kind(part)
             if _is_mcap(part):
                 from executive.mcap_recording import tick_lines
 
-                yield from tick_lines(part)
+                yield from tick_lines(part, near)
                 continue
             with part.open(encoding="utf-8") as f:
                 for number, line in enumerate(f, 1):
@@ -310,7 +311,7 @@ def replay(path: str | Path, tick: int | None = None) -> TickState:
     _parts(path)
     state: TickState | None = None
     nodes: list[dict[str, Any]] = []
-    for line in _lines(path):
+    for line in _lines(path, tick):
         if "tree" in line:
             nodes = line["tree"]
             state = None

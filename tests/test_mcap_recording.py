@@ -15,6 +15,7 @@ from executive.assembly import Wiring, snapshot_recorder
 from executive.behaviours import LinkAlive
 from executive.cli import main
 from executive.clock import Clock
+from executive.mcap_recording import tick_lines
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
@@ -163,7 +164,7 @@ def test_a_long_run_is_rotated_and_each_file_stands_alone(tmp_path: Path, vehicl
     assert messages(path, "/tree/tick")[-1][1]["tick"] == 5999
 
 
-@pytest.mark.parametrize("tick", [0, 1, 99, 100, 101, 500, None])
+@pytest.mark.parametrize("tick", [0, 1, 99, 100, 101, 102, 500, 987, None])
 def test_replay_shows_the_same_tick_from_either_file(square, tick: int | None) -> None:
     path, jsonl, _, _ = square
     assert list(render(replay(path, tick))) == list(render(replay(jsonl, tick)))  # None: the last tick, as the run's end left it
@@ -176,3 +177,9 @@ def test_cli_replay_of_an_mcap_file(square, capsys: pytest.CaptureFixture[str]) 
     assert last[1] == "✓ Mission" and "  /mission/state: 'COMPLETED'" in last and "  /mission/reason: 'every waypoint reached'" in last
     assert main(["replay", str(path), "--web", "127.0.0.1:0"]) == 2  # the slider reads JSON lines only (yet): said, not served
     assert "an MCAP recording" in capsys.readouterr().err
+
+
+def test_a_replay_of_a_tick_seeks_to_the_keyframe_before_it(square) -> None:
+    path, _, _, _ = square
+    tree, first, *_ = tick_lines(path, near=500)
+    assert "tree" in tree and first.get("key") is True and 400 <= first["tick"] < 500  # keyframes every 100 ticks
