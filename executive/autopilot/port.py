@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Literal, Protocol
 
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, HomePosition
+from executive.state import GlobalPosition, HomePosition, TargetAsk
 from executive.vehicles import AutopilotName
 
 VtolState = Literal["FW", "MC"]
@@ -125,6 +125,11 @@ class AutopilotPort(Protocol):
         ...
 
     @property
+    def target_asked(self) -> TargetAsk | None:
+        """The point we last asked the autopilot to steer to (a setpoint, a DO_REPOSITION) and when; None if never."""
+        ...
+
+    @property
     def takeoff_height_m(self) -> float | None:
         """The height above home the latest take-off of ours climbs to; None: none asked, or the autopilot's default height."""
         ...
@@ -154,4 +159,17 @@ class AutopilotPort(Protocol):
 
     def upload_route(self, waypoints: Sequence[Waypoint], home: HomePosition | None) -> int:
         """Upload a route (read back before it counts); the transfer's ticket (``/link/mission_transfer``)."""
+        ...
+
+    def horizon_differs(self, waypoints: Sequence[Waypoint], leg: int, horizon: int, held: object | None) -> str | None:
+        """drive: auto: why the autopilot's route (``/vehicle/mission_items``) is not the route's first waypoints through leg ``leg``'s
+        and at most ``horizon`` beyond it; None when it is."""
+        ...
+
+    def extend_route(self, waypoint: Waypoint) -> int:
+        """Add one waypoint after those the autopilot holds (read back before it counts); the transfer's ticket."""
+        ...
+
+    def set_route_leg(self, leg: int) -> int:
+        """Make the autopilot's route go on with leg ``leg`` (to its waypoint ``leg``); the transfer's ticket, confirmed by MISSION_CURRENT."""
         ...

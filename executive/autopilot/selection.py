@@ -14,7 +14,7 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, HomePosition
+from executive.state import GlobalPosition, HomePosition, TargetAsk
 from executive.vehicles import VehicleProfile
 
 log = logging.getLogger(__name__)
@@ -122,6 +122,10 @@ class Autopilot:
         return self.backend.mode_asked_at(mode)
 
     @property
+    def target_asked(self) -> TargetAsk | None:
+        return self.backend.target_asked
+
+    @property
     def takeoff_height_m(self) -> float | None:
         return self.backend.takeoff_height_m
 
@@ -143,3 +147,12 @@ class Autopilot:
 
     def upload_route(self, waypoints: Sequence[Waypoint], home: HomePosition | None) -> int:
         return self.backend.upload_route(waypoints, home)
+
+    def horizon_differs(self, waypoints: Sequence[Waypoint], leg: int, horizon: int, held: object | None) -> str | None:
+        return self.backend.horizon_differs(waypoints, leg, horizon, held)
+
+    def extend_route(self, waypoint: Waypoint) -> int:
+        return self.backend.extend_route(waypoint)
+
+    def set_route_leg(self, leg: int) -> int:
+        return self.backend.set_route_leg(leg)
