@@ -288,6 +288,7 @@ class _SnapshotRuns:
 
     def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
         self._recorder.attach(root)
+        self._recorder.route([(w.lat, w.lon) for w in mission.waypoints])
 
     def ticked(self, tick: int, now: float) -> None:
         self._recorder.record(tick, now)

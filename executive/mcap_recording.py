@@ -13,6 +13,7 @@ recorded at ``--speedup 20`` draws true speeds. The channels:
 - ``/blackboard`` (``executive.Blackboard``): ``tick``, ``key``, ``bb`` (key -> value as short text), the changed keys;
 - ``/mission/state`` (``executive.MissionState``): state, leg_index, leg_count, reason, when one changes;
 - ``/mission/events`` (``executive.MissionEvent``): each mission transition: before, after, reason;
+- ``/mission/route`` (``foxglove.GeoJSON``): the route each run starts on, a line through its waypoints (edits are not);
 - ``/vehicle/location`` (``foxglove.LocationFix``): each new GLOBAL_POSITION_INT, for the Map panel;
 - ``/log`` (``foxglove.Log``): the executive's log lines (what its logger lets through), for the Log panel.
 
@@ -74,6 +75,7 @@ SCHEMAS: dict[str, dict[str, Any]] = {
             "position_covariance_type": {"type": "integer"},
         },
     },
+    "foxglove.GeoJSON": {"type": "object", "properties": {"geojson": {"type": "string"}}},
     "foxglove.Log": {
         "type": "object",
         "properties": {
@@ -88,6 +90,7 @@ CHANNELS = {
     "/blackboard": "executive.Blackboard",
     "/mission/state": "executive.MissionState",
     "/mission/events": "executive.MissionEvent",
+    "/mission/route": "foxglove.GeoJSON",
     "/vehicle/location": "foxglove.LocationFix",
     "/log": "foxglove.Log",
 }
@@ -174,6 +177,15 @@ class McapFile:
 
     def write_event(self, before: str, after: str, reason: str) -> None:
         self._put("/mission/events", self._now(), {"before": before, "after": after, "reason": reason})
+
+    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
+        line = [[lon, lat] for lat, lon in waypoints]  # GeoJSON: longitude first
+        points = [
+            {"type": "Feature", "geometry": {"type": "Point", "coordinates": p}, "properties": {"name": f"waypoint {i}"}}
+            for i, p in enumerate(line, 1)
+        ]
+        route = {"type": "Feature", "geometry": {"type": "LineString", "coordinates": line}, "properties": {"name": "route"}}
+        self._put("/mission/route", self._now(), {"geojson": json.dumps({"type": "FeatureCollection", "features": [route, *points]})})
 
     def close(self) -> None:
         logging.getLogger("executive").removeHandler(self._logs)

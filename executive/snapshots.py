@@ -67,6 +67,9 @@ class TickFile(Protocol):
     def write_event(self, before: str, after: str, reason: str) -> None:
         """A mission transition, as it happened."""
 
+    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
+        """The route a run starts on: its waypoints' (lat, lon)."""
+
     def close(self) -> None: ...
 
 
@@ -87,6 +90,9 @@ class JsonLinesFile:
 
     def write_event(self, before: str, after: str, reason: str) -> None:
         """Nothing to add: the transition is in the tick's blackboard (/mission/state, /mission/reason)."""
+
+    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
+        """Nothing to add: the mission file holds the route (and the journal its edits)."""
 
     def close(self) -> None:
         self._file.close()
@@ -148,6 +154,10 @@ class SnapshotRecorder:
         self._status, self._feedback, self._values = [], [], {}
         self._since_keyframe = self.keyframe_every
         self._last = None
+
+    def route(self, waypoints: list[tuple[float, float]]) -> None:
+        """The route the run starts on: its waypoints' (lat, lon)."""
+        self._file.write_route(waypoints)
 
     def event(self, before: object, after: object, reason: str) -> None:
         """A mission transition (a MissionState listener)."""

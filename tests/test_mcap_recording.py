@@ -86,6 +86,7 @@ def test_the_file_is_chunked_compressed_and_indexed_with_a_schema_per_channel(sq
         "/blackboard": "executive.Blackboard",
         "/mission/state": "executive.MissionState",
         "/mission/events": "executive.MissionEvent",
+        "/mission/route": "foxglove.GeoJSON",
         "/vehicle/location": "foxglove.LocationFix",
         "/log": "foxglove.Log",
     }
@@ -129,6 +130,15 @@ def test_the_track_is_a_location_fix_at_the_time_it_was_received(square) -> None
     for t, fix in fixes:
         assert fix["timestamp"]["sec"] * 10**9 + fix["timestamp"]["nsec"] == t
         assert -35.37 < fix["latitude"] < -35.35 and 149.15 < fix["longitude"] < 149.18 and len(fix["position_covariance"]) == 9
+
+
+def test_the_route_is_geojson_for_the_map(square) -> None:
+    path, _, _, _ = square
+    ((_, message),) = messages(path, "/mission/route")
+    route, *points = json.loads(message["geojson"])["features"]
+    waypoints = load_mission(MISSIONS / "rover_square.yaml").waypoints
+    assert route["geometry"] == {"type": "LineString", "coordinates": [[w.lon, w.lat] for w in waypoints]}
+    assert [p["geometry"]["coordinates"] for p in points] == [[w.lon, w.lat] for w in waypoints]
 
 
 def test_log_lines_are_foxglove_logs(square) -> None:
