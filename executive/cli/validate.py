@@ -90,4 +90,5 @@ def _validate(path: str, args: argparse.Namespace, results: list[dict[str, Any]]
     tree = tree_name(mission) or "(composed in the file)"
     results.append({"file": path, "ok": True, "waypoints": len(mission.waypoints), "vehicle": mission.vehicle, "tree": tree})
     if not args.json:
-        print(f"{path}: ok ({len(mission.waypoints)} waypoints, vehicle {mission.vehicle}, tree {tree})")
+        count = len(mission.waypoints)
+        print(f"{path}: ok ({count} waypoint{'' if count == 1 else 's'}, vehicle {mission.vehicle}, tree {tree})")
