@@ -225,8 +225,13 @@ class _JsonCapture:
 PARTS = ("reading", "tree", "heading filter", "status and JSON", "recording")
 
 
-def breakdown(waypoints: int, ticks: int, warmup_ticks: int = 50, autopilot: AutopilotName = "ardupilot") -> dict[str, Any]:
-    """Per tick, on a ``waypoints`` rover route of 50 m legs: each part's ns and its floor's; the full tick's."""
+def breakdown(
+    waypoints: int, ticks: int, warmup_ticks: int = 50, autopilot: AutopilotName = "ardupilot", snapshots_file: str = "snapshots.jsonl"
+) -> dict[str, Any]:
+    """Per tick, on a ``waypoints`` rover route of 50 m legs: each part's ns and its floor's; the full tick's.
+
+    ``snapshots_file``'s suffix chooses the recorder's back end (``.mcap``: MCAP; its floor stays the JSON lines').
+    """
     import executive.progress as progress_module
     import executive.snapshots as snapshots_module
 
@@ -236,7 +241,7 @@ def breakdown(waypoints: int, ticks: int, warmup_ticks: int = 50, autopilot: Aut
 
         def plugs_for(clock: Any) -> list[Any]:
             journal = Journal(Path(tmp) / "journal.db", clock)
-            snapshots = SnapshotRecorder(Path(tmp) / "snapshots.jsonl")
+            snapshots = SnapshotRecorder(Path(tmp) / snapshots_file, clock=clock)
             journal_snapshots.extend([journal, snapshots])
             return [journal_recorder(journal), snapshot_recorder(snapshots)]
 

@@ -288,6 +288,7 @@ class _SnapshotRuns:
 
     def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
         self._recorder.attach(root)
+        self._recorder.route([(w.lat, w.lon) for w in mission.waypoints])
 
     def ticked(self, tick: int, now: float) -> None:
         self._recorder.record(tick, now)
@@ -297,9 +298,10 @@ class _SnapshotRuns:
 
 
 def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
-    """Record every tick of the tree (node statuses, blackboard changes) for ``executive replay``."""
+    """Record every tick of the tree (node statuses, blackboard changes) and the mission's transitions for ``executive replay``."""
 
     def plug(w: Wiring) -> None:
+        w.mission_state.listeners.append(recorder.event)
         w.observers.append(_SnapshotRuns(recorder))
 
     return plug

@@ -19,11 +19,12 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import py_trees
 
 from executive import blackboard
+from executive.clock import Clock
 from executive.io.storage import AppendFile, Storage
 
 STATUS_CODES = {py_trees.common.Status.SUCCESS: "S", py_trees.common.Status.FAILURE: "F", py_trees.common.Status.RUNNING: "R"}
@@ -54,17 +55,92 @@ def status_codes(nodes: list[py_trees.behaviour.Behaviour]) -> list[str]:
     return [STATUS_CODES.get(n.status, "-") for n in nodes]
 
 
-class SnapshotRecorder:
-    """Writes one line per tick of ``tree`` to ``path``; call :meth:`record` after each tick."""
+class TickFile(Protocol):
+    """Where a :class:`SnapshotRecorder` writes: one back end per file format, chosen by the file's suffix."""
 
-    def __init__(self, path: str | Path, *, max_bytes: int = 50 << 20, keyframe_every: int = 100, storage: Storage | None = None) -> None:
-        self.path = Path(path)
-        self.max_bytes = max_bytes
-        self.keyframe_every = keyframe_every
-        self.storage = storage
-        self._file = self._open()
-        self._nodes: list[py_trees.behaviour.Behaviour] = []
+    def write_tree(self, nodes: list[dict[str, Any]]) -> None:
+        """A (new) tree's description: its nodes in pre-order."""
+
+    def write_tick(self, line: dict[str, Any]) -> bool:
+        """One tick's line (what changed); False when what follows must be a keyframe (the line was lost, or a new file began)."""
+
+    def write_event(self, before: str, after: str, reason: str) -> None:
+        """A mission transition, as it happened."""
+
+    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
+        """The route a run starts on: its waypoints' (lat, lon)."""
+
+    def close(self) -> None: ...
+
+
+class JsonLinesFile:
+    """The snapshot file as JSON lines: rotated to ``FILE.1`` past ``max_bytes``, each new file starting with the tree line."""
+
+    def __init__(self, path: Path, max_bytes: int, storage: Storage | None) -> None:
+        self.path, self.max_bytes, self.storage = path, max_bytes, storage
         self._tree_line = ""
+        self._file = self._open()
+
+    def write_tree(self, nodes: list[dict[str, Any]]) -> None:
+        self._tree_line = json.dumps({"tree": nodes})
+        self._write(self._tree_line)
+
+    def write_tick(self, line: dict[str, Any]) -> bool:
+        return self._write(json.dumps(line, ensure_ascii=False))
+
+    def write_event(self, before: str, after: str, reason: str) -> None:
+        """Nothing to add: the transition is in the tick's blackboard (/mission/state, /mission/reason)."""
+
+    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
+        """Nothing to add: the mission file holds the route (and the journal its edits)."""
+
+    def close(self) -> None:
+        self._file.close()
+
+    def _open(self) -> AppendFile:
+        return AppendFile(self.path, "snapshots", "ticks are not recorded for replay", self.storage, append=False)
+
+    def _write(self, line: str) -> bool:
+        if not self._file.write((line + "\n").encode()):
+            return False  # the disk took nothing: what follows is a keyframe, readable alone
+        if self._file.size > self.max_bytes:
+            self._file.close()
+            os.replace(self.path, self.path.with_name(self.path.name + ".1"))
+            self._file = self._open()
+            self._file.write((self._tree_line + "\n").encode())
+            return False  # the new file starts with a keyframe
+        return True
+
+
+def open_tick_file(path: Path, max_bytes: int, storage: Storage | None, clock: Clock | None) -> TickFile:
+    """The back end for ``path``: MCAP for ``.mcap`` (Foxglove and the MCAP tools read it), JSON lines otherwise."""
+    if path.suffix.lower() == ".mcap":
+        from executive.mcap_recording import McapFile
+
+        return McapFile(path, max_bytes, storage, clock)
+    return JsonLinesFile(path, max_bytes, storage)
+
+
+class SnapshotRecorder:
+    """Writes one line per tick of ``tree`` to ``path``; call :meth:`record` after each tick.
+
+    ``FILE.mcap`` is written as MCAP (:mod:`executive.mcap_recording`), anything else as JSON lines;
+    ``clock`` times what happens between ticks (mission transitions, log lines) in an MCAP file.
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        max_bytes: int = 50 << 20,
+        keyframe_every: int = 100,
+        storage: Storage | None = None,
+        clock: Clock | None = None,
+    ) -> None:
+        self.path = Path(path)
+        self.keyframe_every = keyframe_every
+        self._file = open_tick_file(self.path, max_bytes, storage, clock)
+        self._nodes: list[py_trees.behaviour.Behaviour] = []
         self._status: list[str] = []
         self._feedback: list[str] = []
         self._values: dict[str, str] = {}
@@ -74,11 +150,18 @@ class SnapshotRecorder:
     def attach(self, root: py_trees.behaviour.Behaviour) -> None:
         """Start recording a (new) tree: describes it and forces a keyframe."""
         self._nodes, nodes = describe(root)
-        self._tree_line = json.dumps({"tree": nodes})
-        self._write(self._tree_line)
+        self._file.write_tree(nodes)
         self._status, self._feedback, self._values = [], [], {}
         self._since_keyframe = self.keyframe_every
         self._last = None
+
+    def route(self, waypoints: list[tuple[float, float]]) -> None:
+        """The route the run starts on: its waypoints' (lat, lon)."""
+        self._file.write_route(waypoints)
+
+    def event(self, before: object, after: object, reason: str) -> None:
+        """A mission transition (a MissionState listener)."""
+        self._file.write_event(str(before), str(after), reason)
 
     def record(self, tick: int, t: float) -> None:
         """Write what changed during tick ``tick`` (clock time ``t``)."""
@@ -101,7 +184,7 @@ class SnapshotRecorder:
             line["bb"] = keys
         self._status, self._feedback, self._values = status, feedback, values
         self._last = (tick, t)
-        self._write(json.dumps(line, ensure_ascii=False))
+        self._write(line)
 
     def record_end(self) -> None:
         """The run has ended: its last tick again, with the blackboard as the end left it (the statuses as the tick left them)."""
@@ -115,27 +198,14 @@ class SnapshotRecorder:
             line["bb"] = keys
         self._values = values
         self._last = None
-        self._write(json.dumps(line, ensure_ascii=False))
+        self._write(line)
 
     def close(self) -> None:
         self._file.close()
 
-    def _open(self) -> AppendFile:
-        return AppendFile(self.path, "snapshots", "ticks are not recorded for replay", self.storage, append=False)
-
-    def _write(self, line: str) -> None:
-        if not self._file.write((line + "\n").encode()):
-            self._since_keyframe = self.keyframe_every  # the disk took nothing: what follows is a keyframe, readable alone
-            return
-        if self._file.size > self.max_bytes:
-            self._rotate()
-
-    def _rotate(self) -> None:
-        self._file.close()
-        os.replace(self.path, self.path.with_name(self.path.name + ".1"))
-        self._file = self._open()
-        self._file.write((self._tree_line + "\n").encode())
-        self._since_keyframe = self.keyframe_every  # the new file starts with a keyframe
+    def _write(self, line: dict[str, Any]) -> None:
+        if not self._file.write_tick(line):
+            self._since_keyframe = self.keyframe_every
 
 
 @dataclass
@@ -162,6 +232,7 @@ class TickState:
 
 
 SQLITE_HEADER = b"SQLite format 3\x00"
+MCAP_MAGIC = b"\x89MCAP0\r\n"
 
 
 class NotSnapshots(ValueError):
@@ -177,14 +248,25 @@ def _check_kind(part: Path) -> None:
             f"{part}:1:1: (snapshot): this is a journal (SQLite), not a snapshot file: `executive report {part}` shows what its runs did; "
             "`executive run --snapshots FILE` records the ticks that `executive replay` shows"
         )
-    if head and not head.startswith(b'{"tree"'):
+    if head and not head.startswith((b'{"tree"', MCAP_MAGIC)):
         raise NotSnapshots(f"{part}:1:1: (snapshot): not a snapshot file (one is written by `executive run --snapshots FILE`)")
 
 
-def _lines(path: Path) -> Iterator[dict[str, Any]]:
+def _is_mcap(part: Path) -> bool:
+    with part.open("rb") as f:
+        return f.read(len(MCAP_MAGIC)) == MCAP_MAGIC
+
+
+def _lines(path: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
+    """The recording's lines, oldest first; with ``near``, an MCAP file's from its last keyframe before that tick."""
     for part in (path.with_name(path.name + ".1"), path):
         if part.exists():
             _check_kind(part)
+            if _is_mcap(part):
+                from executive.mcap_recording import tick_lines
+
+                yield from tick_lines(part, near)
+                continue
             with part.open(encoding="utf-8") as f:
                 for number, line in enumerate(f, 1):
                     try:
@@ -239,7 +321,7 @@ def replay(path: str | Path, tick: int | None = None) -> TickState:
     _parts(path)
     state: TickState | None = None
     nodes: list[dict[str, Any]] = []
-    for line in _lines(path):
+    for line in _lines(path, tick):
         if "tree" in line:
             nodes = line["tree"]
             state = None
@@ -278,6 +360,10 @@ class Recording:
         self._entries: list[_Entry] = []
         for part in _parts(self.path):
             _check_kind(part)
+            if _is_mcap(part):
+                raise NotSnapshots(
+                    f"{part}:1:1: (snapshot): an MCAP recording: `replay FILE --tick N` shows it; --web and --groot2 read JSON lines only"
+                )
             with part.open("rb") as f:
                 offset = 0
                 for number, raw in enumerate(f, 1):

@@ -89,7 +89,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--gcs-sysid", type=int, action="append", metavar="N", help="system id allowed to command us (repeatable; default 255)")
     p.add_argument("--journal", metavar="DB", help="record the run (transitions, legs, samples, events) in this SQLite journal")
     p.add_argument("--resume", action="store_true", help="continue the last unfinished run of this mission in --journal (after a crash)")
-    p.add_argument("--snapshots", metavar="FILE", help="record every tick (node statuses, blackboard changes) for `executive replay`")
+    p.add_argument("--snapshots", metavar="FILE", help="record every tick (statuses, blackboard) for `executive replay`; FILE.mcap: MCAP (Foxglove)")
     p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
     p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
     p.add_argument("--obstacles", metavar="URL", help="a camera's obstacle distances (JSON over UDP, udpin:HOST:PORT), sent on as OBSTACLE_DISTANCE")
@@ -224,7 +224,7 @@ def _recorders(
         stack.callback(logging.getLogger("executive").removeHandler, handler)
     if args.snapshots:
         try:
-            snapshots = SnapshotRecorder(args.snapshots, storage=storage)
+            snapshots = SnapshotRecorder(args.snapshots, storage=storage, clock=clock)
         except OSError as exc:
             raise BadInput(f"--snapshots {args.snapshots}: cannot be created: {exc.strerror or exc}") from exc
         stack.callback(snapshots.close)

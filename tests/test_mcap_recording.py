@@ -1,0 +1,195 @@
+"""`run --snapshots FILE.mcap`: the rover's square driven lock-step, recorded as MCAP, read back with the `mcap` library's reader."""
+
+from __future__ import annotations
+
+import json
+import logging
+from pathlib import Path
+from typing import Any
+
+import py_trees
+import pytest
+from mcap.reader import make_reader
+
+from executive.assembly import Wiring, snapshot_recorder
+from executive.behaviours import LinkAlive
+from executive.cli import main
+from executive.clock import Clock
+from executive.mcap_recording import tick_lines
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission
+from executive.mission.model import Mission
+from executive.snapshots import SnapshotRecorder, render, replay
+
+MISSIONS = Path(__file__).resolve().parent.parent / "missions"
+
+
+class Ticks:
+    """Each tick's number and vehicle time, and the position the blackboard held after it, as the runtime reports them."""
+
+    def __init__(self) -> None:
+        self.times: list[tuple[int, float]] = []
+
+    def plug(self, wiring: Wiring) -> None:
+        wiring.observers.append(self)
+
+    def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
+        pass
+
+    def ticked(self, tick: int, now: float) -> None:
+        self.times.append((tick, now))
+
+    def end(self, status: str, reason: str) -> None:
+        pass
+
+
+def messages(path: Path, topic: str, **window: int) -> list[tuple[int, dict[str, Any]]]:
+    """(log time in ns, message) of ``topic``, through the file's index (``starting_at``/``ending_before`` seek)."""
+    with path.open("rb") as f:
+        return [(m.log_time, json.loads(m.data)) for _, _, m in make_reader(f).iter_messages(topics=[topic], **window)]
+
+
+@pytest.fixture(scope="module")
+def square(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks, MissionStatus]:
+    """rover_square to its end, recorded twice from the same ticks: as MCAP and as JSON lines."""
+    from executive.testing import Lockstep
+
+    where = tmp_path_factory.mktemp("square")
+    ticks = Ticks()
+    recorders: list[SnapshotRecorder] = []
+
+    def plugs(clock: Clock) -> dict[str, Any]:
+        recorders.extend([SnapshotRecorder(where / "run.mcap", clock=clock), SnapshotRecorder(where / "run.jsonl", clock=clock)])
+        return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders)]}
+
+    logging.getLogger("executive").setLevel(logging.INFO)  # as `executive run` logs: the mission's transitions are INFO lines
+    try:
+        with Lockstep(load_mission(MISSIONS / "rover_square.yaml"), mission_dir=MISSIONS, options_for_clock=plugs) as sim:
+            outcome = sim.run_to_end(limit_s=400)
+    finally:
+        logging.getLogger("executive").setLevel(logging.NOTSET)
+    for recorder in recorders:
+        recorder.close()
+    return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
+
+
+def test_the_file_is_chunked_compressed_and_indexed_with_a_schema_per_channel(square) -> None:
+    path, _, _, status = square
+    assert status is MissionStatus.COMPLETED
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None and summary.chunk_indexes and {c.compression for c in summary.chunk_indexes} == {"zstd"}
+    schemas = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
+    assert {topic: schema.name for topic, schema in schemas.items()} == {
+        "/tree": "executive.Tree",
+        "/tree/tick": "executive.TreeTick",
+        "/blackboard": "executive.Blackboard",
+        "/mission/state": "executive.MissionState",
+        "/mission/events": "executive.MissionEvent",
+        "/mission/route": "foxglove.GeoJSON",
+        "/vehicle/location": "foxglove.LocationFix",
+        "/log": "foxglove.Log",
+    }
+    assert all(s.encoding == "jsonschema" and json.loads(s.data)["type"] == "object" for s in schemas.values())
+    assert all(c.message_encoding == "json" for c in summary.channels.values())
+
+
+def test_every_tick_is_there_at_its_vehicle_time(square) -> None:
+    path, _, ticks, _ = square
+    recorded = messages(path, "/tree/tick")
+    assert [(m["tick"], t) for t, m in recorded if not m.get("end")] == [(tick, round(round(now, 3) * 1e9)) for tick, now in ticks.times]
+    assert recorded[-1][1]["end"] is True
+
+
+def test_the_mcap_file_holds_what_the_json_lines_file_holds(square) -> None:
+    path, jsonl, _, _ = square
+    lines = [json.loads(line) for line in jsonl.read_text().splitlines()]
+    trees, ticked = [line["tree"] for line in lines if "tree" in line], [line for line in lines if "tree" not in line]
+    assert [m["nodes"] for _, m in messages(path, "/tree")] == trees
+    boards = {m["tick"] if not m.get("end") else "end": m["bb"] for _, m in messages(path, "/blackboard")}
+    for line, (_, tick) in zip(ticked, messages(path, "/tree/tick"), strict=True):
+        assert {k: v for k, v in tick.items() if k in "sf"} == {k: {str(i): x for i, x in line[k].items()} for k in "sf" if k in line}
+        assert boards.get("end" if line.get("end") else line["tick"]) == line.get("bb")
+
+
+def test_the_mission_s_transitions_and_state(square) -> None:
+    path, _, _, _ = square
+    events = [(m["before"], m["after"]) for _, m in messages(path, "/mission/events")]
+    assert events == [("IDLE", "READY"), ("READY", "RUNNING"), ("RUNNING", "COMPLETED")]
+    states = [(m["state"], m["leg_index"]) for _, m in messages(path, "/mission/state")]
+    assert states[0] == ("RUNNING", 0) and states[-1] == ("COMPLETED", 4)  # as each tick found it: READY was before the first
+    assert [leg for state, leg in states if state == "RUNNING"] == [0, 1, 2, 3, 4]  # 4: the last waypoint reached, ending
+
+
+def test_the_track_is_a_location_fix_at_the_time_it_was_received(square) -> None:
+    path, _, _, _ = square
+    fixes = messages(path, "/vehicle/location")
+    assert len(fixes) > 100
+    times = [t for t, _ in fixes]
+    assert times == sorted(times) and len(set(times)) == len(times)  # each GLOBAL_POSITION_INT once
+    for t, fix in fixes:
+        assert fix["timestamp"]["sec"] * 10**9 + fix["timestamp"]["nsec"] == t
+        assert -35.37 < fix["latitude"] < -35.35 and 149.15 < fix["longitude"] < 149.18 and len(fix["position_covariance"]) == 9
+
+
+def test_the_route_is_geojson_for_the_map(square) -> None:
+    path, _, _, _ = square
+    ((_, message),) = messages(path, "/mission/route")
+    route, *points = json.loads(message["geojson"])["features"]
+    waypoints = load_mission(MISSIONS / "rover_square.yaml").waypoints
+    assert route["geometry"] == {"type": "LineString", "coordinates": [[w.lon, w.lat] for w in waypoints]}
+    assert [p["geometry"]["coordinates"] for p in points] == [[w.lon, w.lat] for w in waypoints]
+
+
+def test_log_lines_are_foxglove_logs(square) -> None:
+    path, _, _, _ = square
+    logs = {m["message"]: m for _, m in messages(path, "/log")}
+    done = logs["mission RUNNING -> COMPLETED: every waypoint reached"]
+    assert (done["level"], done["name"]) == (2, "executive.mission.lifecycle")  # foxglove.Log: INFO is 2
+
+
+def test_a_time_window_is_read_through_the_index(square) -> None:
+    path, _, ticks, _ = square
+    middle = round(ticks.times[len(ticks.times) // 2][1], 3)
+    window = messages(path, "/tree/tick", starting_at=round(middle * 1e9), ending_before=round((middle + 1) * 1e9))
+    assert [round(t / 1e9, 3) for t, _ in window] == [round(now, 3) for _, now in ticks.times if middle <= round(now, 3) < middle + 1]
+
+
+def test_a_long_run_is_rotated_and_each_file_stands_alone(tmp_path: Path, vehicle) -> None:
+    root = py_trees.composites.Sequence("Mission", memory=False, children=[LinkAlive()])
+    tree = py_trees.trees.BehaviourTree(root)
+    path = tmp_path / "run.mcap"
+    recorder = SnapshotRecorder(path, max_bytes=300_000, keyframe_every=10)
+    recorder.attach(root)
+    for tick in range(6000):
+        vehicle.set(link__up=tick % 3 != 0, link__messages=tick)
+        tree.tick()
+        recorder.record(tick, tick * 0.1)
+    recorder.close()
+    for part in (tmp_path / "run.mcap.1", path):
+        assert part.stat().st_size < 300_000 + 300_000  # at most a chunk past the limit
+        trees, ticked = messages(part, "/tree"), messages(part, "/tree/tick")
+        assert len(trees) == 1 and trees[0][0] <= ticked[0][0]  # the tree first, then ticks
+        assert ticked[0][1].get("key") is True  # a file starts with a keyframe: readable alone
+    assert messages(path, "/tree/tick")[-1][1]["tick"] == 5999
+
+
+@pytest.mark.parametrize("tick", [0, 1, 99, 100, 101, 102, 500, 987, None])
+def test_replay_shows_the_same_tick_from_either_file(square, tick: int | None) -> None:
+    path, jsonl, _, _ = square
+    assert list(render(replay(path, tick))) == list(render(replay(jsonl, tick)))  # None: the last tick, as the run's end left it
+
+
+def test_cli_replay_of_an_mcap_file(square, capsys: pytest.CaptureFixture[str]) -> None:
+    path, _, _, _ = square
+    assert main(["replay", str(path)]) == 0
+    last = capsys.readouterr().out.splitlines()
+    assert last[1] == "✓ Mission" and "  /mission/state: 'COMPLETED'" in last and "  /mission/reason: 'every waypoint reached'" in last
+    assert main(["replay", str(path), "--web", "127.0.0.1:0"]) == 2  # the slider reads JSON lines only (yet): said, not served
+    assert "an MCAP recording" in capsys.readouterr().err
+
+
+def test_a_replay_of_a_tick_seeks_to_the_keyframe_before_it(square) -> None:
+    path, _, _, _ = square
+    tree, first, *_ = tick_lines(path, near=500)
+    assert "tree" in tree and first.get("key") is True and 400 <= first["tick"] < 500  # keyframes every 100 ticks
