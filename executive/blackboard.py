@@ -75,6 +75,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/vehicle/ekf", None, "mavlink reader", "EkfStatus (EKF_STATUS_REPORT)"),
     Key("/vehicle/ekf_failsafe", False, "mavlink reader", "the autopilot's own EKF failsafe acted ('EKF failsafe') and has not cleared"),
     Key("/vehicle/battery", None, "mavlink reader", "Battery (SYS_STATUS)"),
+    Key("/vehicle/battery_status", None, "mavlink reader", "BatteryStatus (BATTERY_STATUS of battery 0): consumed mAh and Wh, remaining"),
     Key("/vehicle/statustext", None, "mavlink reader", "(severity, text) of the last STATUSTEXT"),
     Key("/vehicle/params", None, "mavlink reader", "parameters the autopilot sent (PARAM_VALUE): name -> value; None until one came"),
     Key("/rc/chancount", None, "mavlink reader", "RC_CHANNELS chancount: channels the receiver has (every field present is read whatever it says)"),

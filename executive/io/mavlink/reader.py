@@ -26,7 +26,7 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.io.mavlink.vehicle_clock import VehicleClockWatch
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
-from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, Rangefinder
+from executive.state import Attitude, Battery, BatteryStatus, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, Rangefinder
 
 log = logging.getLogger(__name__)
 
@@ -149,6 +149,7 @@ class MavlinkReader:
             "EKF_STATUS_REPORT": self._on_ekf_status,
             "ESTIMATOR_STATUS": self._on_estimator_status,
             "SYS_STATUS": self._on_sys_status,
+            "BATTERY_STATUS": self._on_battery_status,
             "RC_CHANNELS": self._on_rc_channels,
             "COMMAND_ACK": self._on_command_ack,
             "STATUSTEXT": self._on_statustext,
@@ -334,6 +335,24 @@ class MavlinkReader:
                 None if msg.voltage_battery == 65535 else msg.voltage_battery / 1000.0,
                 None if msg.current_battery == -1 else msg.current_battery / 100.0,
                 msg.battery_remaining if 0 <= msg.battery_remaining <= 100 else None,  # -1 = unknown; the rest nonsense
+                now,
+            ),
+        )
+
+    def _on_battery_status(self, msg: MAVLinkMessage, now: float) -> None:
+        if msg.id != 0:  # the main battery; ArduPilot numbers its monitors from 0, PX4 its battery 1 as 0 (BATTERY_STATUS.hpp: id - 1)
+            return
+        cells = [v for v in msg.voltages if v != 65535]  # UINT16_MAX: no such cell (common.xml)
+        self._bb.set(
+            "/vehicle/battery_status",
+            BatteryStatus(
+                None if msg.current_consumed < 0 else float(msg.current_consumed),
+                None if msg.energy_consumed < 0 else msg.energy_consumed / 36.0,  # hJ -> Wh
+                msg.battery_remaining if 0 <= msg.battery_remaining <= 100 else None,
+                getattr(msg, "time_remaining", 0) or None,  # 0: not estimated (a MAVLink 2 extension)
+                sum(cells) / 1000.0 if cells else None,
+                None if msg.current_battery == -1 else msg.current_battery / 100.0,
+                getattr(msg, "charge_state", 0),
                 now,
             ),
         )

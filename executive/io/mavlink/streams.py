@@ -22,6 +22,7 @@ DEFAULT_RATES: dict[str, float] = {
     "ATTITUDE": 10.0,
     "EKF_STATUS_REPORT": 2.0,
     "SYS_STATUS": 1.0,
+    "BATTERY_STATUS": 1.0,
     "RC_CHANNELS": 5.0,
     "SERVO_OUTPUT_RAW": 5.0,
     "VFR_HUD": 2.0,
