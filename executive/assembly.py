@@ -26,6 +26,7 @@ from executive.mission.rules import rc_switch_channels
 from executive.operator import Operator
 from executive.operator.ground_station import GroundStationControl
 from executive.runtime import Runtime
+from executive.sensing.energy import EnergyWatch
 from executive.sensing.heading import HeadingFilter
 from executive.sensing.rc import RcReader
 from executive.services import PacedService, RunObserver, Service, Step
@@ -127,6 +128,7 @@ def build_runtime(
     # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
     intervention = InterventionWatch(clock, ap.autopilot, state, PROFILES[mission.vehicle], mission.rc)
     wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), intervention]
+    wiring.readers.append(EnergyWatch(clock, state, lambda: ap.autopilot.backend.name))
     return Runtime(
         mission,
         clock,

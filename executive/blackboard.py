@@ -119,6 +119,13 @@ _KEYS: tuple[Key, ...] = (
     Key("/heading/bias_deg", None, "heading filter", "estimated compass bias against course over ground"),
     Key("/heading/reason", "", "heading filter", "why the compass is not ok (empty when it is, or is not judged)"),
     Key("/heading/last_update", None, "heading filter", "clock time the attitude the verdict rests on was received (ATTITUDE); None = none yet"),
+    Key(
+        "/energy/estimate",
+        None,
+        "energy watch",
+        "EnergyEstimate: left above the reserve, what the route and the way home need; None = none",
+    ),
+    Key("/energy/unknown", "", "energy watch", "why no energy estimate can be made (what to set); empty when one is, or no energy: block"),
     Key("/obstacles/scan", None, "obstacle receiver", "ObstacleScan: the camera's latest valid scan"),
     Key("/obstacles/received", 0, "obstacle receiver", "valid scans received"),
     Key("/obstacles/rejected", 0, "obstacle receiver", "datagrams dropped as not a scan"),

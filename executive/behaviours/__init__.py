@@ -2,6 +2,7 @@
 
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
 from executive.behaviours.commands import Arm, ChangeSpeed, CommandAction, Disarm, HoldFor, SetMode
+from executive.behaviours.energy import EnergyEnough, EnergyFits
 from executive.behaviours.failsafe import Failsafe, FailsafeNote
 from executive.behaviours.flow import ForEachLeg, Timeout, UnlessPaused, WaitForGuards, WaitUntil
 from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive, ModeIs
@@ -40,6 +41,8 @@ __all__ = [
     "Disarm",
     "DriveRouteInAuto",
     "EkfOk",
+    "EnergyEnough",
+    "EnergyFits",
     "Failsafe",
     "FailsafeNote",
     "ForEachLeg",

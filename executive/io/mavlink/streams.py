@@ -22,7 +22,6 @@ DEFAULT_RATES: dict[str, float] = {
     "ATTITUDE": 10.0,
     "EKF_STATUS_REPORT": 2.0,
     "SYS_STATUS": 1.0,
-    "BATTERY_STATUS": 1.0,
     "RC_CHANNELS": 5.0,
     "SERVO_OUTPUT_RAW": 5.0,
     "VFR_HUD": 2.0,
@@ -30,6 +29,7 @@ DEFAULT_RATES: dict[str, float] = {
     "EXTENDED_SYS_STATE": 1.0,
     "MISSION_CURRENT": 1.0,
     "HOME_POSITION": 0.2,
+    "BATTERY_STATUS": 1.0,  # last: the energy rule's, asked once the guards' streams are set
 }
 
 _KEY = blackboard.command_key(Outcome.MESSAGE_RATE)

@@ -1,0 +1,209 @@
+"""Will the rest of the route and the way home fit the battery? The estimate, re-made every battery report.
+
+:class:`EnergyWatch` is a reader service (run each tick after the MAVLink reader, as the heading
+filter is): it reads the battery (:mod:`executive.sensing.battery_energy`), learns the consumption
+(:class:`~executive.sensing.consumption.ConsumptionModel`) from what the battery reports drawn while
+armed, and writes ``/energy/estimate``: what is left above the reserve, what the rest of the route
+and the way home need (with the model's 1-sigma uncertainty), and the margin. The energy guard
+(:class:`~executive.behaviours.energy.EnergyEnough`) judges it; the status line, ``ctl status``, the
+ground station and the journal show it. Each leg's estimate (and each move of the margin by more
+than a twentieth of the capacity) is logged to the journal, so ``report`` tells where the energy went.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from executive import blackboard, geo
+from executive.clock import Clock
+from executive.mission.lifecycle import MissionState
+from executive.mission.model import Mission
+from executive.sensing import battery_energy
+from executive.sensing.consumption import SEEDS, SPEEDS, ConsumptionModel
+from executive.sensing.heading import filterpy_ready, load_filterpy
+from executive.state import Battery, BatteryStatus, GlobalPosition
+
+log = logging.getLogger("executive.energy")  # the journal's event kind: "energy"
+
+WINDOW_S = 10.0  # consumption measured over windows this long: ten 1 Hz reports, the current's noise averaged
+
+
+@dataclass(frozen=True, slots=True)
+class EnergyEstimate:
+    """One estimate, Wh. ``has_wh``: left above the reserve now; ``route_wh``: the rest of the route from where the vehicle is;
+    ``home_wh``: from its end home; ``sigma_wh``: 1 sigma of their sum; ``margin_wh`` = has - (route + home + sigma)."""
+
+    has_wh: float
+    route_wh: float
+    home_wh: float
+    sigma_wh: float
+    capacity_wh: float
+    reserve_pct: float
+    drawn_wh: float  # since the start
+    wh_per_km: float
+    wh_per_min: float
+    leg_index: int
+    time: float
+
+    @property
+    def margin_wh(self) -> float:
+        return self.has_wh - (self.route_wh + self.home_wh + self.sigma_wh)
+
+    @property
+    def fits(self) -> bool:
+        return self.margin_wh >= 0.0
+
+    def figures(self) -> str:
+        """``needs 41 Wh + 9 Wh home (+/- 6), has 38 Wh above the 20 % reserve``"""
+        return (
+            f"needs {self.route_wh:.0f} Wh + {self.home_wh:.0f} Wh home (+/- {self.sigma_wh:.0f}), "
+            f"has {self.has_wh:.0f} Wh above the {self.reserve_pct:g} % reserve"
+        )
+
+
+def route_back(mission: Mission) -> str:
+    return mission.energy.return_by if mission.energy is not None else "straight"
+
+
+class EnergyWatch:
+    """Writes ``/energy/estimate`` (an :class:`EnergyEstimate`) and ``/energy/unknown`` (why none can be made, else "")."""
+
+    def __init__(self, clock: Clock, state: MissionState, autopilot: Callable[[], str] = lambda: "ardupilot") -> None:
+        """``autopilot``: the firmware driving the vehicle (its battery parameters' names), asked each time."""
+        self._clock = clock
+        self._state = state
+        self._autopilot = autopilot
+        self._in = blackboard.reader(
+            "energy watch in",
+            ["/vehicle/battery_status", "/vehicle/battery", "/vehicle/params", "/vehicle/position", "/vehicle/home", "/vehicle/armed"],
+        )
+        self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
+        self._model: ConsumptionModel | None = None
+        self._start: tuple[float, int] | None = None  # (drawn Wh, remaining %) when the mission's energy was first counted
+        self._window: tuple[float, float, float] | None = None  # (time, drawn Wh, metres) at the window's start
+        self._metres = 0.0
+        self._last_position: GlobalPosition | None = None
+        self._said: tuple[int, float] | None = None  # (leg, margin) last logged
+        load_filterpy()
+
+    def service(self) -> None:
+        mission = self._state.mission
+        if mission is None or mission.energy is None:
+            return
+        if self._model is None:
+            if not filterpy_ready():
+                self._unknown("the consumption model is loading")
+                return
+            seed_km, seed_min = SEEDS[mission.vehicle]
+            self._model = ConsumptionModel(mission.energy.wh_per_km or seed_km, mission.energy.wh_per_min or seed_min)
+        status: BatteryStatus | None = self._in.get("/vehicle/battery_status")
+        battery: Battery | None = self._in.get("/vehicle/battery")
+        params = self._in.get("/vehicle/params") or {}
+        self._track_distance()
+        capacity = battery_energy.capacity(mission.energy, params, self._autopilot())
+        if isinstance(capacity, str):
+            self._unknown(capacity)
+            return
+        unknown = battery_energy.unknown_reading(status, battery, params)
+        if unknown is not None:
+            self._unknown(unknown)
+            return
+        drawn = battery_energy.drawn_wh(status, battery)
+        remaining = battery_energy.remaining_pct(status, battery)
+        assert drawn is not None and remaining is not None  # unknown_reading said so
+        if self._start is None:
+            self._start = (drawn, remaining)
+        self._learn(drawn)
+        self._publish(mission, capacity.wh, drawn - self._start[0])
+
+    # -- learning ------------------------------------------------------------------------------
+    def _track_distance(self) -> None:
+        position: GlobalPosition | None = self._in.get("/vehicle/position")
+        if position is None or position is self._last_position:
+            return
+        if self._last_position is not None and self._in.get("/vehicle/armed"):
+            self._metres += geo.distance(self._last_position.lat, self._last_position.lon, position.lat, position.lon)
+        self._last_position = position
+
+    def _learn(self, drawn: float) -> None:
+        now = self._clock.now()
+        if not self._in.get("/vehicle/armed"):
+            self._window = None
+            return
+        if self._window is None:
+            self._window = (now, drawn, self._metres)
+            return
+        t0, wh0, m0 = self._window
+        if now - t0 < WINDOW_S:
+            return
+        used, metres, seconds = drawn - wh0, self._metres - m0, now - t0
+        assert self._model is not None
+        # the counter's resolution (0.1 Wh in hJ, 1 mAh) and the current's noise averaged over the window
+        self._model.update(used, metres, seconds, noise_wh=0.05 + 0.1 * abs(used))
+        self._window = (now, drawn, self._metres)
+
+    # -- the estimate --------------------------------------------------------------------------
+    def _legs_ahead(self, mission: Mission) -> tuple[list[tuple[float, float, float]], tuple[float, float]]:
+        """The points still to go (lat, lon, speed) from the current leg on, and home."""
+        route = self._state.route
+        speed = mission.energy.speed_m_s if mission.energy and mission.energy.speed_m_s else SPEEDS[mission.vehicle]
+        ahead = [(w.lat, w.lon, w.speed_m_s or speed) for w in route.waypoints[self._state.leg_index :]]
+        home = self._in.get("/vehicle/home")
+        if home is not None:
+            where = (home.lat, home.lon)
+        elif mission.home is not None:
+            where = (mission.home.lat, mission.home.lon)
+        elif self._last_position is not None and self._start is not None:
+            where = (self._last_position.lat, self._last_position.lon)
+        else:
+            where = (ahead[0][0], ahead[0][1]) if ahead else (0.0, 0.0)
+        return ahead, where
+
+    def _need(self, points: list[tuple[float, float, float]], start: tuple[float, float]) -> tuple[float, float]:
+        metres = seconds = 0.0
+        lat, lon = start
+        for plat, plon, speed in points:
+            d = geo.distance(lat, lon, plat, plon)
+            metres, seconds = metres + d, seconds + d / speed
+            lat, lon = plat, plon
+        return metres, seconds
+
+    def _publish(self, mission: Mission, capacity_wh: float, drawn_since_start: float) -> None:
+        assert self._model is not None and self._start is not None and mission.energy is not None
+        config = mission.energy
+        ahead, home = self._legs_ahead(mission)
+        here = (self._last_position.lat, self._last_position.lon) if self._last_position else (ahead[0][0], ahead[0][1]) if ahead else home
+        route_m, route_s = self._need(ahead, here)
+        end = (ahead[-1][0], ahead[-1][1]) if ahead else here
+        speed = ahead[-1][2] if ahead else SPEEDS[mission.vehicle]
+        back = [(w.lat, w.lon, speed) for w in reversed(self._state.route.waypoints[:-1])]
+        home_points = [*back, (*home, speed)] if route_back(mission) == "route" else [(*home, speed)]
+        home_m, home_s = self._need(home_points, end)
+        route_wh = self._model.need(route_m, route_s)[0]
+        home_wh = self._model.need(home_m, home_s)[0]
+        _, sigma = self._model.need(route_m + home_m, route_s + home_s)
+        kept = capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
+        has = capacity_wh * self._start[1] / 100.0 - drawn_since_start - kept
+        estimate = EnergyEstimate(
+            has, route_wh, home_wh, sigma, capacity_wh, config.reserve_pct, drawn_since_start,
+            self._model.wh_per_m * 1000.0, self._model.wh_per_s * 60.0, self._state.leg_index, self._clock.now(),
+        )  # fmt: skip
+        self._out.set("/energy/estimate", estimate)
+        self._out.set("/energy/unknown", "")
+        self._journal(estimate)
+
+    def _journal(self, estimate: EnergyEstimate) -> None:
+        said = self._said
+        if said is not None and said[0] == estimate.leg_index and abs(said[1] - estimate.margin_wh) < 0.05 * estimate.capacity_wh:
+            return
+        self._said = (estimate.leg_index, estimate.margin_wh)
+        log.info(
+            "energy at leg %d: %s: margin %+.0f Wh; drawn %.1f Wh so far; %.1f Wh/km + %.2f Wh/min",
+            estimate.leg_index + 1, estimate.figures(), estimate.margin_wh, estimate.drawn_wh, estimate.wh_per_km, estimate.wh_per_min,
+        )  # fmt: skip
+
+    def _unknown(self, why: str) -> None:
+        self._out.set("/energy/estimate", None)
+        self._out.set("/energy/unknown", why)
