@@ -27,9 +27,9 @@ SEEDS: dict[str, tuple[float, float]] = {"rover": (6.0, 0.5), "boat": (6.0, 0.5)
 SPEEDS: dict[str, float] = {"rover": 2.0, "boat": 2.0, "sub": 0.5, "vtol": 18.0}
 
 _SEED_SIGMA = 0.5  # of the seed, 1 sigma
-_WALK = 0.05  # of the seed per window, 1 sigma: a change shows within a few windows
+_WALK = 0.15  # of the seed per window, 1 sigma: a change shows within a few windows
 _GATE = 9.0  # chi-square, 3 sigma
-_REJECTIONS_TO_REOPEN = 3
+_REJECTIONS_TO_REOPEN = 2
 
 
 class ConsumptionModel:

@@ -58,9 +58,14 @@ class EnergyEstimate:
     def figures(self) -> str:
         """``needs 41 Wh + 9 Wh home (+/- 6), has 38 Wh above the 20 % reserve``"""
         return (
-            f"needs {self.route_wh:.0f} Wh + {self.home_wh:.0f} Wh home (+/- {self.sigma_wh:.0f}), "
-            f"has {self.has_wh:.0f} Wh above the {self.reserve_pct:g} % reserve"
+            f"needs {wh(self.route_wh)} Wh + {wh(self.home_wh)} Wh home (+/- {wh(self.sigma_wh)}), "
+            f"has {wh(self.has_wh)} Wh above the {self.reserve_pct:g} % reserve"
         )
+
+
+def wh(value: float) -> str:
+    """Watt-hours as a person reads them: whole ones, tenths under 10."""
+    return f"{value:.0f}" if abs(value) >= 10 else f"{value:.1f}"
 
 
 def route_back(mission: Mission) -> str:
@@ -200,8 +205,8 @@ class EnergyWatch:
             return
         self._said = (estimate.leg_index, estimate.margin_wh)
         log.info(
-            "energy at leg %d: %s: margin %+.0f Wh; drawn %.1f Wh so far; %.1f Wh/km + %.2f Wh/min",
-            estimate.leg_index + 1, estimate.figures(), estimate.margin_wh, estimate.drawn_wh, estimate.wh_per_km, estimate.wh_per_min,
+            "energy at leg %d: %s: margin %s Wh; drawn %.1f Wh so far; %.1f Wh/km + %.2f Wh/min",
+            estimate.leg_index + 1, estimate.figures(), wh(estimate.margin_wh), estimate.drawn_wh, estimate.wh_per_km, estimate.wh_per_min,
         )  # fmt: skip
 
     def _unknown(self, why: str) -> None:
