@@ -57,15 +57,17 @@ class EnergyEstimate:
 
     def figures(self) -> str:
         """``needs 41 Wh + 9 Wh home (+/- 6), has 38 Wh above the 20 % reserve``"""
+        places = 0 if max(self.route_wh, self.home_wh, self.has_wh) >= 10 else 1
         return (
-            f"needs {wh(self.route_wh)} Wh + {wh(self.home_wh)} Wh home (+/- {wh(self.sigma_wh)}), "
-            f"has {wh(self.has_wh)} Wh above the {self.reserve_pct:g} % reserve"
+            f"needs {wh(self.route_wh, places)} Wh + {wh(self.home_wh, places)} Wh home (+/- {wh(self.sigma_wh, places)}), "
+            f"has {wh(self.has_wh, places)} Wh above the {self.reserve_pct:g} % reserve"
         )
 
 
-def wh(value: float) -> str:
-    """Watt-hours as a person reads them: whole ones, tenths under 10."""
-    return f"{value:.0f}" if abs(value) >= 10 else f"{value:.1f}"
+def wh(value: float, places: int | None = None) -> str:
+    """Watt-hours as a person reads them: whole ones, tenths under 10 (or ``places``)."""
+    places = (0 if abs(value) >= 10 else 1) if places is None else places
+    return f"{value:.{places}f}"
 
 
 def route_back(mission: Mission) -> str:
