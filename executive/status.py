@@ -18,7 +18,7 @@ from executive.waiting import waiting_text
 KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
-    "/runtime/late_ticks", "/mission/waiting",
+    "/runtime/late_ticks", "/mission/waiting", "/energy/estimate",
 )  # fmt: skip
 
 
@@ -64,7 +64,21 @@ class StatusSource:
             "battery_pct": None if battery is None else battery.remaining_pct,
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
+            "energy": _energy(bb.get("/energy/estimate")),
         }
+
+
+def _energy(estimate: Any) -> dict[str, float] | None:
+    """The energy left above the reserve, the estimate to finish and return (and its 1 sigma), the margin, Wh; None: no estimate."""
+    if estimate is None:
+        return None
+    return {
+        "has_wh": round(estimate.has_wh, 2),
+        "need_wh": round(estimate.route_wh + estimate.home_wh, 2),
+        "home_wh": round(estimate.home_wh, 2),
+        "sigma_wh": round(estimate.sigma_wh, 2),
+        "margin_wh": round(estimate.margin_wh, 2),
+    }
 
 
 def _leg(bb: py_trees.blackboard.Client) -> int:
@@ -76,6 +90,9 @@ def status_line(status: dict[str, Any]) -> str:
     to_go = "" if status["distance_m"] is None else f"  {status['distance_m']:7.1f} m at {status['bearing_deg']:03.0f}°"
     battery = "" if status["battery_pct"] is None else f"  batt {status['battery_pct']}%"
     samples = f"  samples {status['samples']}" if status["samples"] else ""
+    energy = status.get("energy")
+    if energy is not None:  # left above the reserve; to finish and return, +/- 1 sigma
+        battery += f"  energy {energy['has_wh']:.1f}/{energy['need_wh']:.1f}±{energy['sigma_wh']:.1f} Wh"
     armed = "armed" if status["armed"] else "disarmed"
     why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
     waiting = f"  {waiting_text(status['waiting'])}" if status.get("waiting") and status["state"] == "RUNNING" else ""

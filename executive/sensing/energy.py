@@ -74,6 +74,40 @@ def route_back(mission: Mission) -> str:
     return mission.energy.return_by if mission.energy is not None else "straight"
 
 
+def path_length(points: list[tuple[float, float, float]], start: tuple[float, float]) -> tuple[float, float]:
+    """Metres and seconds from ``start`` through ``points`` (lat, lon, speed)."""
+    metres = seconds = 0.0
+    lat, lon = start
+    for plat, plon, speed in points:
+        d = geo.distance(lat, lon, plat, plon)
+        metres, seconds = metres + d, seconds + d / speed
+        lat, lon = plat, plon
+    return metres, seconds
+
+
+def planned(mission: Mission) -> EnergyEstimate | str | None:
+    """What can be said without a vehicle (``validate``): the estimate from home (else the first waypoint) on a full pack
+    of ``energy.capacity_wh`` with the seeds; a string when only the vehicle can tell; None without an ``energy:`` block."""
+    config = mission.energy
+    if config is None:
+        return None
+    if config.capacity_wh is None or not mission.waypoints:
+        return "judged on the vehicle (its capacity from the autopilot's BATT_CAPACITY or BAT1_CAPACITY)"
+    seed_km, seed_min = SEEDS[mission.vehicle]
+    model = ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min)
+    speed = config.speed_m_s or SPEEDS[mission.vehicle]
+    points = [(w.lat, w.lon, w.speed_m_s or speed) for w in mission.waypoints]
+    home = (mission.home.lat, mission.home.lon) if mission.home is not None else (points[0][0], points[0][1])
+    route_m, route_s = path_length(points, home)
+    back = [(lat, lon, speed) for lat, lon, _ in reversed(points[:-1])] if config.return_by == "route" else []
+    home_m, home_s = path_length([*back, (*home, speed)], points[-1][:2])
+    kept = config.capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
+    return EnergyEstimate(
+        config.capacity_wh - kept, model.need(route_m, route_s)[0], model.need(home_m, home_s)[0],
+        model.need(route_m + home_m, route_s + home_s)[1], config.capacity_wh, config.reserve_pct, 0.0, seed_km, seed_min, 0, 0.0,
+    )  # fmt: skip
+
+
 class EnergyWatch:
     """Writes ``/energy/estimate`` (an :class:`EnergyEstimate`) and ``/energy/unknown`` (why none can be made, else "")."""
 
@@ -168,26 +202,17 @@ class EnergyWatch:
             where = (ahead[0][0], ahead[0][1]) if ahead else (0.0, 0.0)
         return ahead, where
 
-    def _need(self, points: list[tuple[float, float, float]], start: tuple[float, float]) -> tuple[float, float]:
-        metres = seconds = 0.0
-        lat, lon = start
-        for plat, plon, speed in points:
-            d = geo.distance(lat, lon, plat, plon)
-            metres, seconds = metres + d, seconds + d / speed
-            lat, lon = plat, plon
-        return metres, seconds
-
     def _publish(self, mission: Mission, capacity_wh: float, drawn_since_start: float) -> None:
         assert self._model is not None and self._start is not None and mission.energy is not None
         config = mission.energy
         ahead, home = self._legs_ahead(mission)
         here = (self._last_position.lat, self._last_position.lon) if self._last_position else (ahead[0][0], ahead[0][1]) if ahead else home
-        route_m, route_s = self._need(ahead, here)
+        route_m, route_s = path_length(ahead, here)
         end = (ahead[-1][0], ahead[-1][1]) if ahead else here
         speed = ahead[-1][2] if ahead else SPEEDS[mission.vehicle]
         back = [(w.lat, w.lon, speed) for w in reversed(self._state.route.waypoints[:-1])]
         home_points = [*back, (*home, speed)] if route_back(mission) == "route" else [(*home, speed)]
-        home_m, home_s = self._need(home_points, end)
+        home_m, home_s = path_length(home_points, end)
         route_wh = self._model.need(route_m, route_s)[0]
         home_wh = self._model.need(home_m, home_s)[0]
         _, sigma = self._model.need(route_m + home_m, route_s + home_s)
@@ -206,9 +231,11 @@ class EnergyWatch:
         if said is not None and said[0] == estimate.leg_index and abs(said[1] - estimate.margin_wh) < 0.05 * estimate.capacity_wh:
             return
         self._said = (estimate.leg_index, estimate.margin_wh)
+        legs = len(self._state.route.waypoints)
+        where = f"leg {estimate.leg_index + 1}/{legs}" if estimate.leg_index < legs else "the end of the route"
         log.info(
-            "energy at leg %d: %s: margin %s Wh; drawn %.1f Wh so far; %.1f Wh/km + %.2f Wh/min",
-            estimate.leg_index + 1, estimate.figures(), wh(estimate.margin_wh), estimate.drawn_wh, estimate.wh_per_km, estimate.wh_per_min,
+            "energy at %s: %s: margin %s Wh; drawn %.1f Wh so far; %.1f Wh/km + %.2f Wh/min",
+            where, estimate.figures(), wh(estimate.margin_wh), estimate.drawn_wh, estimate.wh_per_km, estimate.wh_per_min,
         )  # fmt: skip
 
     def _unknown(self, why: str) -> None:

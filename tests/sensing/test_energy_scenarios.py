@@ -16,6 +16,7 @@ from executive import blackboard, geo
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.sim.faults import Headwind
+from executive.status import status_line
 from tests_support import LINE_HOME
 
 LEG_DEG = 0.0002248 * 60.0 / 25.0  # 60 m of latitude
@@ -49,8 +50,13 @@ def test_a_battery_whose_capacity_is_not_known_in_wh_is_refused_naming_what_to_s
     assert "BATT_CAPACITY 1000 mAh, but not the pack's voltage: set energy.nominal_v" in outcome.reason
 
 
-def test_a_route_that_fits_is_driven_to_the_end(lockstep) -> None:
+def test_a_route_that_fits_is_driven_to_the_end_its_energy_shown_on_the_way(lockstep) -> None:
     sim = lockstep(energy_line(1000.0), home=(*LINE_HOME, 0.0))
+    sim.run(until=lambda: sim.runtime.mission_state.leg_index == 2)
+    status = sim.runtime.operator.request("tree").to_dict()["status"]  # as `executive ctl status` has it
+    energy = status["energy"]
+    assert energy["margin_wh"] == round(energy["has_wh"] - energy["need_wh"] - energy["sigma_wh"], 2) and energy["margin_wh"] > 0
+    assert f"energy {energy['has_wh']:.1f}/{energy['need_wh']:.1f}±{energy['sigma_wh']:.1f} Wh" in status_line(status)
     assert sim.run_to_end(limit_s=400).status is MissionStatus.COMPLETED
 
 
