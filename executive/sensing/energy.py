@@ -23,11 +23,24 @@ from executive.mission.model import Mission
 from executive.sensing import battery_energy
 from executive.sensing.consumption import SEEDS, SPEEDS, ConsumptionModel
 from executive.sensing.heading import filterpy_ready, load_filterpy
-from executive.state import Battery, BatteryStatus, GlobalPosition
+from executive.state import Battery, BatteryStatus, EkfStatus, GlobalPosition
 
 log = logging.getLogger("executive.energy")  # the journal's event kind: "energy"
 
 WINDOW_S = 10.0  # consumption measured over windows this long: ten 1 Hz reports, the current's noise averaged
+# A VTOL hovers to climb and to land: ArduPlane's QuadPlane climbs at Q_WP_SPEED_UP 2.5 m/s and descends at Q_WP_SPEED_DN
+# 1.5 m/s (libraries/AC_WPNav/AC_WPNav.cpp WPNAV_WP_SPEED_UP_CMS, _DOWN_CMS), the last Q_LAND_FINAL_ALT 6 m at
+# Q_LAND_FINAL_SPD 0.5 m/s (ArduPlane/quadplane.cpp): seconds of hover the route's distance does not count.
+CLIMB_M_S, DESCENT_M_S, FINAL_ALT_M, FINAL_M_S = 2.5, 1.5, 6.0, 0.5
+
+
+def hover_s(mission: Mission, take_off: bool) -> tuple[float, float]:
+    """Seconds of hover a VTOL spends climbing (when ``take_off``) and landing at home; none for the other kinds."""
+    if mission.vehicle != "vtol":
+        return 0.0, 0.0
+    alt = max([w.alt_m for w in mission.waypoints] + [mission.vtol.takeoff_alt_m if mission.vtol else 0.0])
+    climb = alt / CLIMB_M_S if take_off else 0.0
+    return climb, max(0.0, alt - FINAL_ALT_M) / DESCENT_M_S + min(alt, FINAL_ALT_M) / FINAL_M_S
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,6 +114,8 @@ def planned(mission: Mission) -> EnergyEstimate | str | None:
     route_m, route_s = path_length(points, home)
     back = [(lat, lon, speed) for lat, lon, _ in reversed(points[:-1])] if config.return_by == "route" else []
     home_m, home_s = path_length([*back, (*home, speed)], points[-1][:2])
+    climb_s, land_s = hover_s(mission, take_off=True)
+    route_s, home_s = route_s + climb_s, home_s + land_s
     kept = config.capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
     return EnergyEstimate(
         config.capacity_wh - kept, model.need(route_m, route_s)[0], model.need(home_m, home_s)[0],
@@ -118,7 +133,15 @@ class EnergyWatch:
         self._autopilot = autopilot
         self._in = blackboard.reader(
             "energy watch in",
-            ["/vehicle/battery_status", "/vehicle/battery", "/vehicle/params", "/vehicle/position", "/vehicle/home", "/vehicle/armed"],
+            [
+                "/vehicle/battery_status",
+                "/vehicle/battery",
+                "/vehicle/params",
+                "/vehicle/position",
+                "/vehicle/home",
+                "/vehicle/armed",
+                "/vehicle/ekf",
+            ],
         )
         self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
         self._model: ConsumptionModel | None = None
@@ -162,7 +185,9 @@ class EnergyWatch:
     # -- learning ------------------------------------------------------------------------------
     def _track_distance(self) -> None:
         position: GlobalPosition | None = self._in.get("/vehicle/position")
-        if position is None or position is self._last_position:
+        ekf: EkfStatus | None = self._in.get("/vehicle/ekf")
+        # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (README)
+        if position is None or position is self._last_position or ekf is None or not ekf.position_ok():
             return
         if self._last_position is not None and self._in.get("/vehicle/armed"):
             self._metres += geo.distance(self._last_position.lat, self._last_position.lon, position.lat, position.lon)
@@ -213,6 +238,8 @@ class EnergyWatch:
         back = [(w.lat, w.lon, speed) for w in reversed(self._state.route.waypoints[:-1])]
         home_points = [*back, (*home, speed)] if route_back(mission) == "route" else [(*home, speed)]
         home_m, home_s = path_length(home_points, end)
+        climb_s, land_s = hover_s(mission, take_off=not self._in.get("/vehicle/armed") and self._state.leg_index == 0)
+        route_s, home_s = route_s + climb_s, home_s + land_s
         route_wh = self._model.need(route_m, route_s)[0]
         home_wh = self._model.need(home_m, home_s)[0]
         _, sigma = self._model.need(route_m + home_m, route_s + home_s)
