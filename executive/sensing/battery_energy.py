@@ -73,14 +73,19 @@ def unknown_reading(status: BatteryStatus | None, battery: Battery | None, param
     """Why the readings cannot be counted as energy (None: they can)."""
     if status is None:
         return "no BATTERY_STATUS from the autopilot yet"
-    if drawn_wh(status, battery) is None:
-        monitor = params.get("BATT_MONITOR")
-        kind = f" (BATT_MONITOR {monitor:g}: {MONITOR_KINDS.get(int(monitor), 'see AP_BattMonitor.h')})" if monitor is not None else ""
-        return f"the battery monitor counts no energy drawn{kind}: fit a current sensor (BATT_MONITOR 4) or remove energy:"
-    remaining = status.remaining_pct if status.remaining_pct is not None else (battery.remaining_pct if battery is not None else None)
-    if remaining is None:
+    if remaining_pct(status, battery) is None:
+        if drawn_wh(status, battery) is None:
+            monitor = params.get("BATT_MONITOR")
+            kind = f" (BATT_MONITOR {monitor:g}: {MONITOR_KINDS.get(int(monitor), 'see AP_BattMonitor.h')})" if monitor is not None else ""
+            return f"the battery monitor counts no energy drawn{kind}: fit a current sensor (BATT_MONITOR 4) or remove energy:"
         return "the autopilot does not estimate the remaining charge (battery_remaining -1): set its battery capacity"
     return None
+
+
+def counts_current(status: BatteryStatus) -> bool:
+    """The monitor measures the current (its counters move): PX4's SIH has no current sensor (BatterySimulator.cpp: ibatt -1,
+    reported as current_battery -100 with current_consumed stuck at 0); its drawn energy is read from battery_remaining."""
+    return status.current_a is not None and status.current_a >= 0.0 and drawn_wh(status, None) is not None
 
 
 def remaining_pct(status: BatteryStatus | None, battery: Battery | None) -> int | None:

@@ -174,12 +174,14 @@ class EnergyWatch:
         if unknown is not None:
             self._unknown(unknown)
             return
-        drawn = battery_energy.drawn_wh(status, battery)
         remaining = battery_energy.remaining_pct(status, battery)
-        assert drawn is not None and remaining is not None  # unknown_reading said so
+        assert status is not None and remaining is not None  # unknown_reading said so
+        counted = battery_energy.drawn_wh(status, battery) if battery_energy.counts_current(status) else None
+        # no current measured: the drawn energy is the remaining charge's fall, in its 1 % steps
+        drawn = counted if counted is not None else capacity.wh * (100 - remaining) / 100.0
         if self._start is None:
             self._start = (drawn, remaining)
-        self._learn(drawn)
+        self._learn(drawn, 0.0 if counted is not None else capacity.wh / 100.0)
         self._publish(mission, capacity.wh, drawn - self._start[0])
 
     # -- learning ------------------------------------------------------------------------------
@@ -193,7 +195,7 @@ class EnergyWatch:
             self._metres += geo.distance(self._last_position.lat, self._last_position.lon, position.lat, position.lon)
         self._last_position = position
 
-    def _learn(self, drawn: float) -> None:
+    def _learn(self, drawn: float, resolution_wh: float) -> None:
         now = self._clock.now()
         if not self._in.get("/vehicle/armed"):
             self._window = None
@@ -207,7 +209,7 @@ class EnergyWatch:
         used, metres, seconds = drawn - wh0, self._metres - m0, now - t0
         assert self._model is not None
         # the counter's resolution (0.1 Wh in hJ, 1 mAh) and the current's noise averaged over the window
-        self._model.update(used, metres, seconds, noise_wh=0.05 + 0.1 * abs(used))
+        self._model.update(used, metres, seconds, noise_wh=0.05 + 0.1 * abs(used) + resolution_wh)
         self._window = (now, drawn, self._metres)
 
     # -- the estimate --------------------------------------------------------------------------

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from executive.mission.model import EnergyConfig
-from executive.sensing.battery_energy import capacity, drawn_wh, unknown_reading
+from executive.sensing.battery_energy import capacity, counts_current, drawn_wh, unknown_reading
 from executive.state import Battery, BatteryStatus
 
 
@@ -38,7 +38,8 @@ def test_energy_drawn_is_ardupilots_counter_else_px4s_mah_times_the_voltage() ->
 
 
 def test_a_voltage_only_monitor_cannot_count_energy_and_says_what_to_fit() -> None:
-    why = unknown_reading(status(mah=None, wh=None), Battery(12.0, None, None, 0.0), {"BATT_MONITOR": 3.0})
+    # ArduPilot estimates no remaining charge without a current (GCS_Common.cpp battery_remaining_pct: -1)
+    why = unknown_reading(status(mah=None, wh=None, pct=None), Battery(12.0, None, None, 0.0), {"BATT_MONITOR": 3.0})
     assert why == (
         "the battery monitor counts no energy drawn (BATT_MONITOR 3: voltage only (no current: nothing counted)): "
         "fit a current sensor (BATT_MONITOR 4) or remove energy:"
@@ -48,3 +49,10 @@ def test_a_voltage_only_monitor_cannot_count_energy_and_says_what_to_fit() -> No
 def test_no_remaining_charge_estimate_is_refused() -> None:
     why = unknown_reading(status(pct=None), Battery(12.0, 1.0, None, 0.0), {})
     assert why is not None and "battery_remaining -1" in why
+
+
+def test_px4_sih_measures_no_current_its_energy_is_read_from_the_remaining_charge() -> None:
+    """PX4 SIH's BATTERY_STATUS as recorded (current_battery -100, current_consumed 0, energy_consumed -1, remaining 99)."""
+    sih = BatteryStatus(0.0, None, 99, 1187, 16.2, -1.0, 1, 0.0)
+    assert unknown_reading(sih, None, {}) is None and not counts_current(sih)
+    assert counts_current(status(mah=120.0, wh=1.4))

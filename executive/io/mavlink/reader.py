@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import math
 import operator
+import struct
 from collections import deque
 from collections.abc import Callable
 
@@ -372,8 +373,13 @@ class MavlinkReader:
 
     def _on_param_value(self, msg: MAVLinkMessage, now: float) -> None:
         name = msg.param_id.rstrip("\x00") if isinstance(msg.param_id, str) else msg.param_id.decode("ascii", "replace").rstrip("\x00")
-        if name and _finite(msg.param_value):
-            self._bb.set("/vehicle/params", {**(self._bb.get("/vehicle/params") or {}), name: msg.param_value})
+        value = msg.param_value
+        if self._px4 and msg.param_type == mavlink.MAV_PARAM_TYPE_INT32:
+            # PX4 copies an INT32 parameter's bytes into the float (src/modules/mavlink/mavlink_parameters.cpp send_param:
+            # memcpy); ArduPilot casts it to a float. BAT1_N_CELLS 4 arrives as 5.6e-45 read as a float.
+            value = float(struct.unpack("<i", struct.pack("<f", value))[0])
+        if name and _finite(value):
+            self._bb.set("/vehicle/params", {**(self._bb.get("/vehicle/params") or {}), name: value})
 
     def _on_command_ack(self, msg: MAVLinkMessage, now: float) -> None:
         self._commander.on_ack(msg)

@@ -254,3 +254,15 @@ def test_battery_status_of_battery_0_read_as_energy_its_unknowns_none(reader, li
     assert (status.consumed_mah, status.consumed_wh, status.remaining_pct, status.current_a) == (None, None, None, None)
     receive(reader, link, AUTOPILOT.battery_status(1, 0, 0, 32767, cells, 100, 100, 100, 10, 0, 0))  # a second battery: not the main one
     assert bb("/vehicle/battery_status") is status
+
+
+def test_px4s_integer_parameters_are_read_from_their_bytes_ardupilots_as_cast(reader, link):
+    """PX4 copies an INT32 parameter's bytes into param_value (mavlink_parameters.cpp send_param): BAT1_N_CELLS 4 is 4,
+    not 5.6e-45; ArduPilot casts it to a float (MODE_CH 8.0)."""
+    import struct
+
+    px4 = AUTOPILOT.heartbeat(mavlink.MAV_TYPE_VTOL_TILTROTOR, mavlink.MAV_AUTOPILOT_PX4, 0, 0, mavlink.MAV_STATE_STANDBY)
+    as_float = struct.unpack("<f", struct.pack("<i", 4))[0]
+    receive(reader, link, px4, AUTOPILOT.param_value(b"BAT1_N_CELLS", as_float, mavlink.MAV_PARAM_TYPE_INT32, 1, 0))
+    receive(reader, link, AUTOPILOT.param_value(b"BAT1_CAPACITY", 5000.0, mavlink.MAV_PARAM_TYPE_REAL32, 1, 0))
+    assert bb("/vehicle/params") == {"BAT1_N_CELLS": 4.0, "BAT1_CAPACITY": 5000.0}
