@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from tlog_replay import records
 
 from executive import blackboard
 from executive.clock import ManualClock
@@ -24,7 +25,6 @@ from executive.sensing.heading import wait_for_filterpy
 from executive.state import BatteryStatus
 from executive.testing import FakeLink
 from executive.vehicles import PROFILES
-from tlog_replay import records
 
 DATA = Path(__file__).parents[1] / "data" / "energy"
 ROOT = Path(__file__).parents[2]
