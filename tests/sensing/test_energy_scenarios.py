@@ -90,3 +90,17 @@ def test_the_estimate_at_the_start_is_within_a_quarter_of_what_the_route_and_the
     assert sim.run_to_end(limit_s=400).status is MissionStatus.COMPLETED
     route_drawn = sim.autopilot.battery.consumed_wh
     assert abs(first[0].route_wh - route_drawn) < 0.25 * route_drawn
+
+
+def test_a_weak_battery_is_refused_on_px4_which_reads_its_charge_and_not_on_ardupilot_which_counts_from_full(lockstep) -> None:
+    """Half a 1000 mAh pack: PX4 reports 50 % (its estimator starts from the voltage), ArduPilot 100 % (its counter starts full)."""
+    from executive.sim.faults import WeakBattery
+
+    weak = [WeakBattery(kind="weak_battery", at_s=0.0, share=0.5)]
+    px4 = {"params": {"BAT1_CAPACITY": 1000.0}}  # BAT1_N_CELLS 3: 11.1 Wh
+    sim = lockstep(energy_line(1000.0), home=(*LINE_HOME, 0.0), events=weak, autopilot="px4", firmware=px4)
+    outcome = sim.run_to_end(limit_s=60)
+    assert outcome.status is MissionStatus.ABORTED and not sim.autopilot.armed
+    assert "does not fit the battery" in outcome.reason and "has 3.3 Wh above the 20 % reserve" in outcome.reason
+    ardupilot = lockstep(energy_line(1000.0), home=(*LINE_HOME, 0.0), events=weak)
+    ardupilot.run(until=lambda: ardupilot.autopilot.armed)  # it cannot know: the mission starts
