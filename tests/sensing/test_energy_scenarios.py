@@ -104,3 +104,26 @@ def test_a_weak_battery_is_refused_on_px4_which_reads_its_charge_and_not_on_ardu
     assert "does not fit the battery" in outcome.reason and "has 3.3 Wh above the 20 % reserve" in outcome.reason
     ardupilot = lockstep(energy_line(1000.0), home=(*LINE_HOME, 0.0), events=weak)
     ardupilot.run(until=lambda: ardupilot.autopilot.armed)  # it cannot know: the mission starts
+
+
+def test_a_person_who_takes_over_wins_over_the_energy_failsafe(lockstep) -> None:
+    """The same headwind, and a pilot who takes the rover (take-over switch high, MANUAL) at 80 s, before the estimate fails:
+    the mission pauses hands off and nothing is asked of the vehicle, however short the energy gets."""
+    from executive.sim.faults import RcTakeover
+
+    faults = [Headwind(kind="headwind", at_s=60.0, factor=FACTOR), RcTakeover(kind="rc_takeover", at_s=80.0, channel=6, pwm=1900, mode="MANUAL")]
+    sim = lockstep(energy_line(1000.0), home=(*LINE_HOME, 0.0), events=faults)
+    asked: list[int] = []
+    send = sim.link.send
+
+    def spy(msg: Any) -> None:
+        if msg.get_type() == "COMMAND_LONG" and sim.clock.now() > 80.0:
+            asked.append(msg.command)
+        send(msg)
+
+    sim.link.send = spy  # type: ignore[method-assign]
+    sim.run(limit_s=200.0, until=lambda: sim.clock.now() > 190.0)
+    assert sim.status is MissionStatus.PAUSED and sim.autopilot.mode == "MANUAL"
+    estimate = blackboard.reader("energy test", ["/energy/estimate"]).get("/energy/estimate")
+    assert estimate.margin_wh < 0.0  # short (needs 1.6 Wh + 4.1 Wh home (+/- 1.3), has 4.5 Wh): still nothing asked
+    assert asked == []
