@@ -243,8 +243,7 @@ class EnergyConfig(BaseModel):
     usable_pct: float = Field(100.0, gt=0.0, le=100.0, description="the share of the capacity that can be drawn at all")
     reserve_pct: float = Field(20.0, ge=0.0, lt=100.0, description="the share of the capacity kept when the vehicle is home")
     wh_per_km: float | None = Field(None, gt=0.0, le=100_000.0, description="seed of the consumption per km moved (else the kind's default)")
-    wh_per_min: float | None = Field(None, ge=0.0, le=100_000.0, description="seed of the consumption per minute (else the kind's default)")
-    speed_m_s: float | None = Field(None, gt=0.0, le=100.0, description="the speed legs are reckoned at (else waypoint speeds, the kind's)")
+    wh_per_min: float | None = Field(None, ge=0.0, le=100_000.0, description="seed of the consumption per minute held (else the kind's default)")
     return_by: Literal["straight", "route"] = Field("straight", description="the way home: the straight line, or the route back")
 
 

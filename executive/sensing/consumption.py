@@ -1,16 +1,17 @@
-"""Consumption learned on the way: energy per metre moved and per second, a filterpy Kalman filter with its uncertainty.
+"""Consumption learned on the way: energy per metre moved and per second held, a filterpy Kalman filter with its uncertainty.
 
-State ``x = [Wh per m, Wh per s]``; each measurement is the energy the battery reports drawn over a
-window (``z = dWh``) against the metres moved and the seconds spent in it (``H = [dm, ds]``). The
+State ``x = [Wh per m, Wh per s held]``; each measurement is the energy the battery reports drawn over a
+window (``z = dWh``) against the metres moved and the seconds held in it (``H = [dm, ds]``): held is armed and
+barely moving (hover, loiter, station keeping, a stop), whose cost the distance does not count. The
 state walks (process noise, a few percent of the seed per window) so that a change of conditions (a
 headwind, a current, a heavier load) shows within a few legs; a window is gated at 3 sigma before
 the update (LIBRARY-NOTES: filterpy computes its Mahalanobis distance after the update) and a run of
 rejections re-opens the uncertainty, so a real change is taken, not locked out.
 
 Seeds per kind (``energy.wh_per_km`` / ``wh_per_min`` replace them), from the simulated packs' loads
-(:mod:`executive.sim.battery`) and typical small vehicles: a rover or boat at cruise 6 Wh/km + 0.5 Wh/min
-(electronics and idle), a sub 20 Wh/km + 1 Wh/min, a VTOL 10 Wh/km + 16 Wh/min (hovering on its lift
-motors is what costs). The seed is trusted to within half its value (1 sigma).
+(:mod:`executive.sim.battery`) and typical small vehicles: a rover or boat 10 Wh/km moving (its electronics
+included) + 0.5 Wh/min held, a sub 20 Wh/km + 1 Wh/min, a VTOL 5 Wh/km in wing-borne cruise + 16 Wh/min
+hovering on its lift motors. The seed is trusted to within half its value (1 sigma).
 """
 
 from __future__ import annotations
@@ -22,9 +23,9 @@ import numpy as np
 from executive.sensing.heading import kalman_filter_class
 
 #: kind -> (Wh per km, Wh per minute), the seeds.
-SEEDS: dict[str, tuple[float, float]] = {"rover": (6.0, 0.5), "boat": (6.0, 0.5), "sub": (20.0, 1.0), "vtol": (10.0, 16.0)}
-#: kind -> the speed legs are reckoned at when neither the waypoint nor energy.speed_m_s says, m/s.
-SPEEDS: dict[str, float] = {"rover": 2.0, "boat": 2.0, "sub": 0.5, "vtol": 18.0}
+SEEDS: dict[str, tuple[float, float]] = {"rover": (10.0, 0.5), "boat": (10.0, 0.5), "sub": (20.0, 1.0), "vtol": (5.0, 16.0)}
+#: Slower than this (ground speed, m/s) the vehicle is held: its seconds cost, not its metres.
+HELD_BELOW_M_S = 0.3
 
 _SEED_SIGMA = 0.5  # of the seed, 1 sigma
 _WALK = 0.15  # of the seed per window, 1 sigma: a change shows within a few windows
@@ -55,13 +56,13 @@ class ConsumptionModel:
         return float(self._kf.x[1, 0])
 
     def need(self, metres: float, seconds: float) -> tuple[float, float]:
-        """The energy ``metres`` and ``seconds`` take, Wh, and its 1-sigma uncertainty."""
+        """The energy ``metres`` moved and ``seconds`` held take, Wh, and its 1-sigma uncertainty."""
         h = np.array([[metres, seconds]])
         mean = (h @ self._kf.x).item()
         return max(0.0, mean), math.sqrt(max(0.0, (h @ self._kf.P @ h.T).item()))
 
     def update(self, drawn_wh: float, metres: float, seconds: float, noise_wh: float) -> bool:
-        """One window: ``drawn_wh`` over ``metres`` and ``seconds``, measured to ``noise_wh`` (1 sigma); whether it was taken."""
+        """One window: ``drawn_wh`` over ``metres`` moved and ``seconds`` held, measured to ``noise_wh`` (1 sigma); whether it was taken."""
         kf = self._kf
         kf.predict()
         h = np.array([[metres, seconds]])

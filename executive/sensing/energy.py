@@ -21,7 +21,7 @@ from executive.clock import Clock
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.sensing import battery_energy
-from executive.sensing.consumption import SEEDS, SPEEDS, ConsumptionModel
+from executive.sensing.consumption import HELD_BELOW_M_S, SEEDS, ConsumptionModel
 from executive.sensing.heading import filterpy_ready, load_filterpy
 from executive.state import Battery, BatteryStatus, EkfStatus, GlobalPosition
 
@@ -87,15 +87,14 @@ def route_back(mission: Mission) -> str:
     return mission.energy.return_by if mission.energy is not None else "straight"
 
 
-def path_length(points: list[tuple[float, float, float]], start: tuple[float, float]) -> tuple[float, float]:
-    """Metres and seconds from ``start`` through ``points`` (lat, lon, speed)."""
-    metres = seconds = 0.0
+def path_length(points: list[tuple[float, float]], start: tuple[float, float]) -> float:
+    """Metres from ``start`` through ``points`` (lat, lon)."""
+    metres = 0.0
     lat, lon = start
-    for plat, plon, speed in points:
-        d = geo.distance(lat, lon, plat, plon)
-        metres, seconds = metres + d, seconds + d / speed
+    for plat, plon in points:
+        metres += geo.distance(lat, lon, plat, plon)
         lat, lon = plat, plon
-    return metres, seconds
+    return metres
 
 
 def planned(mission: Mission) -> EnergyEstimate | str | None:
@@ -108,14 +107,12 @@ def planned(mission: Mission) -> EnergyEstimate | str | None:
         return "judged on the vehicle (its capacity from the autopilot's BATT_CAPACITY or BAT1_CAPACITY)"
     seed_km, seed_min = SEEDS[mission.vehicle]
     model = ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min)
-    speed = config.speed_m_s or SPEEDS[mission.vehicle]
-    points = [(w.lat, w.lon, w.speed_m_s or speed) for w in mission.waypoints]
-    home = (mission.home.lat, mission.home.lon) if mission.home is not None else (points[0][0], points[0][1])
-    route_m, route_s = path_length(points, home)
-    back = [(lat, lon, speed) for lat, lon, _ in reversed(points[:-1])] if config.return_by == "route" else []
-    home_m, home_s = path_length([*back, (*home, speed)], points[-1][:2])
-    climb_s, land_s = hover_s(mission, take_off=True)
-    route_s, home_s = route_s + climb_s, home_s + land_s
+    points = [(w.lat, w.lon) for w in mission.waypoints]
+    home = (mission.home.lat, mission.home.lon) if mission.home is not None else points[0]
+    route_m = path_length(points, home)
+    back = list(reversed(points[:-1])) if config.return_by == "route" else []
+    home_m = path_length([*back, home], points[-1])
+    route_s, home_s = hover_s(mission, take_off=True)
     kept = config.capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
     return EnergyEstimate(
         config.capacity_wh - kept, model.need(route_m, route_s)[0], model.need(home_m, home_s)[0],
@@ -141,13 +138,16 @@ class EnergyWatch:
                 "/vehicle/home",
                 "/vehicle/armed",
                 "/vehicle/ekf",
+                "/vehicle/ground_speed_m_s",
             ],
         )
         self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
         self._model: ConsumptionModel | None = None
         self._start: tuple[float, int] | None = None  # (drawn Wh, remaining %) when the mission's energy was first counted
-        self._window: tuple[float, float, float] | None = None  # (time, drawn Wh, metres) at the window's start
+        self._window: tuple[float, float, float, float] | None = None  # (time, drawn Wh, metres, held s) at the window's start
         self._metres = 0.0
+        self._held_s = 0.0  # armed and slower than HELD_BELOW_M_S
+        self._ticked_at: float | None = None
         self._last_position: GlobalPosition | None = None
         self._said: tuple[int, float] | None = None  # (leg, margin) last logged
         load_filterpy()
@@ -186,6 +186,11 @@ class EnergyWatch:
 
     # -- learning ------------------------------------------------------------------------------
     def _track_distance(self) -> None:
+        now = self._clock.now()
+        speed: float | None = self._in.get("/vehicle/ground_speed_m_s")
+        if self._in.get("/vehicle/armed") and self._ticked_at is not None and (speed is None or speed < HELD_BELOW_M_S):
+            self._held_s += now - self._ticked_at  # hover, loiter, station keeping, a stop: its seconds cost, not its metres
+        self._ticked_at = now
         position: GlobalPosition | None = self._in.get("/vehicle/position")
         ekf: EkfStatus | None = self._in.get("/vehicle/ekf")
         # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (README)
@@ -201,23 +206,22 @@ class EnergyWatch:
             self._window = None
             return
         if self._window is None:
-            self._window = (now, drawn, self._metres)
+            self._window = (now, drawn, self._metres, self._held_s)
             return
-        t0, wh0, m0 = self._window
+        t0, wh0, m0, h0 = self._window
         if now - t0 < WINDOW_S:
             return
-        used, metres, seconds = drawn - wh0, self._metres - m0, now - t0
+        used, metres, held = drawn - wh0, self._metres - m0, self._held_s - h0
         assert self._model is not None
         # the counter's resolution (0.1 Wh in hJ, 1 mAh) and the current's noise averaged over the window
-        self._model.update(used, metres, seconds, noise_wh=0.05 + 0.1 * abs(used) + resolution_wh)
-        self._window = (now, drawn, self._metres)
+        self._model.update(used, metres, held, noise_wh=0.05 + 0.1 * abs(used) + resolution_wh)
+        self._window = (now, drawn, self._metres, self._held_s)
 
     # -- the estimate --------------------------------------------------------------------------
-    def _legs_ahead(self, mission: Mission) -> tuple[list[tuple[float, float, float]], tuple[float, float]]:
-        """The points still to go (lat, lon, speed) from the current leg on, and home."""
+    def _legs_ahead(self, mission: Mission) -> tuple[list[tuple[float, float]], tuple[float, float]]:
+        """The points still to go (lat, lon) from the current leg on, and home."""
         route = self._state.route
-        speed = mission.energy.speed_m_s if mission.energy and mission.energy.speed_m_s else SPEEDS[mission.vehicle]
-        ahead = [(w.lat, w.lon, w.speed_m_s or speed) for w in route.waypoints[self._state.leg_index :]]
+        ahead = [(w.lat, w.lon) for w in route.waypoints[self._state.leg_index :]]
         home = self._in.get("/vehicle/home")
         if home is not None:
             where = (home.lat, home.lon)
@@ -234,14 +238,11 @@ class EnergyWatch:
         config = mission.energy
         ahead, home = self._legs_ahead(mission)
         here = (self._last_position.lat, self._last_position.lon) if self._last_position else (ahead[0][0], ahead[0][1]) if ahead else home
-        route_m, route_s = path_length(ahead, here)
-        end = (ahead[-1][0], ahead[-1][1]) if ahead else here
-        speed = ahead[-1][2] if ahead else SPEEDS[mission.vehicle]
-        back = [(w.lat, w.lon, speed) for w in reversed(self._state.route.waypoints[:-1])]
-        home_points = [*back, (*home, speed)] if route_back(mission) == "route" else [(*home, speed)]
-        home_m, home_s = path_length(home_points, end)
-        climb_s, land_s = hover_s(mission, take_off=not self._in.get("/vehicle/armed") and self._state.leg_index == 0)
-        route_s, home_s = route_s + climb_s, home_s + land_s
+        route_m = path_length(ahead, here)
+        end = ahead[-1] if ahead else here
+        back = list(reversed([(w.lat, w.lon) for w in self._state.route.waypoints[:-1]])) if route_back(mission) == "route" else []
+        home_m = path_length([*back, home], end)
+        route_s, home_s = hover_s(mission, take_off=not self._in.get("/vehicle/armed") and self._state.leg_index == 0)
         route_wh = self._model.need(route_m, route_s)[0]
         home_wh = self._model.need(home_m, home_s)[0]
         _, sigma = self._model.need(route_m + home_m, route_s + home_s)
