@@ -25,6 +25,7 @@ from executive.mission.reload import REPLACED
 from executive.mission.rules import rc_switch_channels
 from executive.operator import Operator
 from executive.operator.ground_station import GroundStationControl
+from executive.operator.persons_commands import PersonsCommands
 from executive.runtime import Runtime
 from executive.sensing.energy import EnergyWatch
 from executive.sensing.heading import HeadingFilter
@@ -106,6 +107,7 @@ def build_runtime(
         link, clock, mission, state, system_id=system_id, target_system=target_system, target_component=target_component, forced=autopilot,
         period_s=1.0 / rate_hz,
     )  # fmt: skip
+    persons = PersonsCommands(clock, state)  # a person's arm, disarm and mode, followed to what the vehicle did
     operator = Operator(
         state,
         mission.vehicle,
@@ -116,6 +118,7 @@ def build_runtime(
         autopilot=ap.autopilot,  # a person's arm, disarm and mode
         tree=tree_watch.view,
         autopilot_name=lambda: ap.autopilot.backend.name,
+        persons=persons,
     )
     ground_station = GroundStationControl([link], clock, operator, system_id=system_id)
     commands = Step("ground-station commands", lambda: ground_station.answer(ap.commands_for_us(), link))
@@ -127,7 +130,7 @@ def build_runtime(
         plug(wiring)
     # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
     intervention = InterventionWatch(clock, ap.autopilot, state, PROFILES[mission.vehicle], mission.rc)
-    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), intervention]
+    wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), persons, intervention]
     wiring.readers.append(EnergyWatch(clock, state, lambda: ap.autopilot.backend.name))
     return Runtime(
         mission,

@@ -56,6 +56,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/link/reboots", 0, "mavlink reader", "autopilot reboots seen (its boot clock ran backwards)"),
     Key("/link/bad_data", 0, "mavlink reader", "undecodable byte runs received"),
     Key("/link/unsigned_dropped", 0, "mavlink reader", "unsigned packets dropped while signing is on"),
+    Key("/link/device_lost", None, "mavlink reader", "why the serial device is gone while it is opened again (None: it is there, or no serial link)"),
     Key("/link/mission_transfer", None, "mission transfer", "MissionTransferStatus of the latest mission upload, download, clear or set-current"),
     Key("/link/route_upload", None, "route keeper", "RouteUpload: the latest edited route (and home) sent to the autopilot, read back, retried"),
     Key("/vehicle/mav_type", None, "mavlink reader", "HEARTBEAT type (MAV_TYPE)"),
@@ -134,6 +135,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/runtime/late_ticks", 0, "tick pacer", "ticks that started more than half a period after they were due"),
     Key("/runtime/skipped_ticks", 0, "tick pacer", "ticks never run: the loop fell more than a period behind and restarted its schedule"),
     Key("/runtime/rate_hz", None, "tick pacer", "ticks per second of clock time over the last window (5 s); None until the first"),
+    Key("/runtime/storage_lost", None, "storage", "the recordings that cannot write to the disk now, and why (None: all write)"),
     Key("/mission/state", "IDLE", "mission state", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
     Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
     Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),
@@ -150,6 +152,12 @@ _KEYS: tuple[Key, ...] = (
     ),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
+    Key(
+        "/operator/command",
+        None,
+        "persons commands",
+        "a person's latest arm, disarm or mode through the executive: {what, by, answer, refused, t}; None until one is sent",
+    ),
 )
 
 

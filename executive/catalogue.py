@@ -38,7 +38,7 @@ from executive import behaviours, frames, registry, trees
 from executive.behaviours import composites
 from executive.behaviours.guards import Guard
 from executive.mission.model import Range, RcRouteOptions, SamplingOptions, VtolOptions
-from executive.mission.rules import rc_switch_channels
+from executive.mission.rules import height_tolerance, rc_switch_channels, seabed_clearance
 from executive.vehicles import PROFILES
 
 if TYPE_CHECKING:
@@ -116,6 +116,8 @@ MISSION_VALUES: dict[str, Callable[[Mission], Any]] = {
     "vehicle.guided_mode": lambda m: PROFILES[m.vehicle].guided_mode,
     "vehicle.manual_mode": lambda m: PROFILES[m.vehicle].manual_mode,
     "vehicle.fixed_wing_hold_mode": lambda m: "LOITER" if m.vehicle == "vtol" else None,
+    "vehicle.seabed_clearance_m": seabed_clearance,
+    "vehicle.height_tolerance_m": height_tolerance,
     "geofence": lambda m: m.geofence.fence() if m.geofence is not None else None,
     "home": lambda m: (m.home.lat, m.home.lon) if m.home is not None else None,
     "rc.switch_channels": rc_switch_channels,
@@ -238,9 +240,20 @@ def plugin_behaviour(point: EntryPoint) -> type[py_trees.behaviour.Behaviour]:
     return registry.load_class(point, py_trees.behaviour.Behaviour, "a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)")
 
 
-def load_behaviours() -> list[type[py_trees.behaviour.Behaviour]]:
-    """The behaviour classes plugins add (``executive.behaviours``); PluginError for the first that cannot be loaded or is no behaviour class."""
-    return [plugin_behaviour(point) for point in registry.named(registry.BEHAVIOURS).values()]
+def load_behaviours(broken: list[registry.PluginError] | None = None) -> list[type[py_trees.behaviour.Behaviour]]:
+    """The behaviour classes plugins add (``executive.behaviours``); PluginError for the first that cannot be loaded or is no behaviour class.
+
+    With ``broken``, those that cannot be loaded are put there instead, and the others returned.
+    """
+    found = []
+    for point in registry.named(registry.BEHAVIOURS).values():
+        try:
+            found.append(plugin_behaviour(point))
+        except registry.PluginError as exc:
+            if broken is None:
+                raise
+            broken.append(exc)
+    return found
 
 
 def _our_classes() -> list[type[py_trees.behaviour.Behaviour]]:

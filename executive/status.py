@@ -2,7 +2,8 @@
 
 Shown on the progress line, returned by ``executive ctl status``, written as JSON lines and sent
 to the ground station. Battery, position, yaw, pitch/roll, vehicle id and armed come from the
-ASV node's 2 Hz status; mode, mission state, leg and distance/bearing from the executive.
+ASV node's 2 Hz status; mode, mission state, leg and distance/bearing from the executive; a sub's
+depth and height above the seabed (its downward sonar), a vtol's height above home.
 """
 
 from __future__ import annotations
@@ -13,12 +14,14 @@ import py_trees
 
 from executive import blackboard, geo
 from executive.clock import Clock
+from executive.vehicles import profile_for_mav_type
 from executive.waiting import waiting_text
 
 KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
-    "/runtime/late_ticks", "/mission/waiting", "/energy/estimate",
+    "/runtime/late_ticks", "/mission/waiting", "/vehicle/mav_type", "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder",
+    "/operator/command", "/link/device_lost", "/runtime/storage_lost", "/energy/estimate",
 )  # fmt: skip
 
 
@@ -55,6 +58,8 @@ class StatusSource:
             "armed": bool(bb.get("/vehicle/armed")),
             "vehicle_id": bb.get("/link/system_id"),
             "link_up": bool(bb.get("/link/up")),
+            "link_device_lost": bb.get("/link/device_lost"),
+            "storage_lost": bb.get("/runtime/storage_lost"),
             "lat": None if position is None else round(position.lat, 7),
             "lon": None if position is None else round(position.lon, 7),
             "yaw_deg": None if attitude is None else round(attitude.yaw_deg, 1),
@@ -62,23 +67,30 @@ class StatusSource:
             "roll_deg": None if attitude is None else round(attitude.roll_deg, 1),
             "battery_v": None if battery is None else battery.voltage_v,
             "battery_pct": None if battery is None else battery.remaining_pct,
+            **_heights(bb),
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
-            "energy": _energy(bb.get("/energy/estimate")),
+            "command": bb.get("/operator/command"),  # a person's latest arm, disarm or mode, and the autopilot's answer
         }
 
 
-def _energy(estimate: Any) -> dict[str, float] | None:
-    """The energy left above the reserve, the estimate to finish and return (and its 1 sigma), the margin, Wh; None: no estimate."""
-    if estimate is None:
-        return None
-    return {
-        "has_wh": round(estimate.has_wh, 2),
-        "need_wh": round(estimate.route_wh + estimate.home_wh, 2),
-        "home_wh": round(estimate.home_wh, 2),
-        "sigma_wh": round(estimate.sigma_wh, 2),
-        "margin_wh": round(estimate.margin_wh, 2),
-    }
+def _heights(bb: py_trees.blackboard.Client) -> dict[str, Any]:
+    """``depth_m`` and ``altitude_above_bottom_m`` (a sub: None without a good sonar reading, ``seabed_beyond_m`` when the
+    seabed is farther than the sonar reaches), ``height_m`` (a vtol, above home): None where not this kind or not known."""
+    position, mav_type = bb.get("/vehicle/position"), bb.get("/vehicle/mav_type")
+    profile = profile_for_mav_type(mav_type) if mav_type is not None else None
+    kind = profile.kind if profile is not None else None
+    found: dict[str, Any] = {"depth_m": None, "altitude_above_bottom_m": None, "seabed_beyond_m": None, "height_m": None}
+    if position is None:
+        return found
+    if kind == "sub":
+        altitude, reading = bb.get("/vehicle/altitude_above_bottom_m"), bb.get("/vehicle/rangefinder")
+        found["depth_m"] = round(max(0.0, -position.alt_rel_m), 2)
+        found["altitude_above_bottom_m"] = None if altitude is None else round(altitude, 2)
+        found["seabed_beyond_m"] = reading.max_m if reading is not None and reading.status == "too_far" else None
+    elif kind == "vtol":
+        found["height_m"] = round(position.alt_rel_m, 2)
+    return found
 
 
 def _leg(bb: py_trees.blackboard.Client) -> int:
@@ -96,4 +108,37 @@ def status_line(status: dict[str, Any]) -> str:
     armed = "armed" if status["armed"] else "disarmed"
     why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
     waiting = f"  {waiting_text(status['waiting'])}" if status.get("waiting") and status["state"] == "RUNNING" else ""
-    return f"{status['state']:<9} leg {status['leg']}/{status['legs']}{to_go}  {status['mode'] or '-'} {armed}{battery}{samples}{why}{waiting}"
+    where = f"{to_go}{_vertical(status)}"
+    lost = f"  LINK: {status['link_device_lost']}" if status.get("link_device_lost") else ""
+    lost += f"  DISK: {status['storage_lost']}" if status.get("storage_lost") else ""
+    head = f"{status['state']:<9} leg {status['leg']}/{status['legs']}{where}  {status['mode'] or '-'} {armed}"
+    return f"{head}{battery}{samples}{why}{_refused(status)}{waiting}{lost}"
+
+
+def _vertical(status: dict[str, Any]) -> str:
+    """``  depth 26.0 m, seabed 24.0 m below`` (a sub), ``  height 30.0 m`` (a vtol, above home); empty for others."""
+    if status.get("depth_m") is not None:
+        if status.get("altitude_above_bottom_m") is not None:
+            seabed = f"{status['altitude_above_bottom_m']:.1f} m below"
+        elif status.get("seabed_beyond_m") is not None:
+            seabed = f"beyond {status['seabed_beyond_m']:g} m"
+        else:
+            seabed = "no sonar reading"
+        return f"  depth {status['depth_m']:.1f} m, seabed {seabed}"
+    if status.get("height_m") is not None:
+        return f"  height {status['height_m']:.1f} m"
+    return ""
+
+
+#: How long (vehicle time) the status line says that the autopilot refused a person's command.
+REFUSAL_SHOWN_S = 30.0
+
+
+def _refused(status: dict[str, Any]) -> str:
+    """``  ctl: mode POSCTL refused by the autopilot (TEMPORARILY_REJECTED)`` for :data:`REFUSAL_SHOWN_S` after the answer."""
+    command = status.get("command")
+    if not command or not command.get("refused"):
+        return ""
+    if status.get("t") is not None and status["t"] - command["t"] > REFUSAL_SHOWN_S:
+        return ""
+    return f"  {command['by']}: {command['what']} {command['answer']}"

@@ -67,6 +67,7 @@ _BY_MAV_TYPE = {
     mavlink.MAV_TYPE_FIXED_WING: "vtol",
     mavlink.MAV_TYPE_VTOL_QUADROTOR: "vtol",
     mavlink.MAV_TYPE_VTOL_TILTROTOR: "vtol",
+    mavlink.MAV_TYPE_VTOL_RESERVED2: "vtol",  # VTOL_FIXEDROTOR in today's MAVLink: PX4's standard VTOL (its HEARTBEAT's type 22)
 }
 
 

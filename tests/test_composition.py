@@ -59,7 +59,7 @@ def test_every_error_at_once_each_at_its_line_and_column() -> None:
         "m.yaml:16:18: tree.steps[1].children[2].child: armed is a guard, which never runs: timeout.child needs an action, a composite or a subtree",
         "m.yaml:17:37: tree.steps[1].children[3].look_ahead: expected true or false, got integer 1",
         "m.yaml:17:48: tree.steps[1].children[3].radius: unknown parameter of go_to (allowed: acceptance_radius_m, leg_timeout_s, name, "
-        "resend_s, method, look_ahead)",
+        "resend_s, method, look_ahead, seabed_clearance_m, height_tolerance_m)",
         "m.yaml:19:28: tree.steps[2].guards[1]: set_mode is an action: failsafe_guarded.guards takes guards only",
         "m.yaml:20:41: tree.steps[2].work.child: armed is a guard, which never runs: for_each_leg.child needs an action, a composite or a subtree",
         "m.yaml:21:13: tree.steps[3].use: sequence is a composite, not a built-in subtree: write node: sequence",

@@ -122,11 +122,13 @@ def outcome(driving: RuntimeOnLink, reply) -> dict:
 
 def test_an_operators_mode_is_obeyed_and_the_mission_pauses_rather_than_undoing_it(driving: RuntimeOnLink) -> None:
     reply = driving.runtime.operator.request("mode", source="ctl", mode="hold")
-    assert reply.ok and reply.state == "PAUSED" and reply.command["what"] == "mode HOLD"
-    assert reply.reason == "ctl: mode HOLD; mission paused at leg 1, hands off until resumed, sent to the autopilot"
-    assert driving.runtime.mission_state.reason == "ctl: mode HOLD by a person: hands off"
+    assert reply.ok and reply.state == "RUNNING" and reply.command["what"] == "mode HOLD"  # the vehicle decides, not the request
+    assert (
+        reply.reason == "ctl: mode HOLD; the mission pauses, hands off, once the vehicle shows it (refused: nothing changes), sent to the autopilot"
+    )
     driving.tick(2)
     assert driving.modes_sent() == [HOLD] and driving.autopilot.mode == HOLD
+    assert driving.status is MissionStatus.PAUSED and driving.runtime.mission_state.reason == "HOLD set by a person (ctl: mode HOLD)"
     assert outcome(driving, reply) == {"ticket": reply.command["ticket"], "state": "ACCEPTED", "result": "ACCEPTED", "final": True}
     driving.tick(50)
     assert driving.modes_sent() == [] and driving.status is MissionStatus.PAUSED  # never taken back to GUIDED
@@ -137,14 +139,15 @@ def test_an_operators_mode_is_obeyed_and_the_mission_pauses_rather_than_undoing_
 
 def test_an_operators_disarm_mid_mission_is_obeyed_and_reported_and_the_mission_pauses(driving: RuntimeOnLink) -> None:
     reply = driving.runtime.operator.request("disarm", source="ctl", force=True)
-    assert reply.ok and reply.state == "PAUSED"
+    assert reply.ok and reply.state == "RUNNING"
     assert reply.command == {"ticket": reply.command["ticket"], "name": "arming", "what": "force disarm"}
     driving.tick(2)
+    assert driving.status is MissionStatus.PAUSED and driving.runtime.mission_state.reason == "disarmed by a person (ctl: force disarm)"
     assert ("arm", 0.0) in driving.autopilot.commands and not driving.autopilot.armed
     assert outcome(driving, reply)["state"] == "ACCEPTED"
     driving.tick(50)
     assert driving.modes_sent() == [] and not driving.autopilot.armed and driving.status is MissionStatus.PAUSED
-    assert driving.texts() == ["mission PAUSED: ctl: force disarm by a person: han"]  # the ground station is told (50 characters)
+    assert driving.texts() == ["mission PAUSED: disarmed by a person (ctl: force d"]  # the ground station is told (50 characters)
 
 
 def test_an_operators_arm_does_not_pause_the_mission(driving: RuntimeOnLink) -> None:
@@ -160,6 +163,9 @@ def test_a_refused_command_is_reported_as_the_autopilot_answered(driving: Runtim
     reply = driving.runtime.operator.request("disarm", source="ctl")
     driving.tick(2)
     assert outcome(driving, reply) == {"ticket": reply.command["ticket"], "state": "REJECTED", "result": "FAILED", "final": True}
+    driving.tick(20)
+    assert driving.status is MissionStatus.RUNNING and driving.autopilot.armed  # a refused command changes nothing
+    assert driving.texts() == ["ctl: disarm refused (FAILED)"]
 
 
 def test_an_unknown_mode_is_refused_and_nothing_is_sent_or_paused(driving: RuntimeOnLink) -> None:

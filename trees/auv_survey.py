@@ -81,9 +81,9 @@ def leg(mission: Mission) -> py_trees.behaviour.Behaviour:
         children=[
             SetMode(PROFILES[mission.vehicle].guided_mode),
             ChangeSpeed(),
-            ChangeDepth(timeout_s=limits.leg_timeout_s),
+            ChangeDepth(timeout_s=limits.leg_timeout_s, clearance_m=limits.altitude_m.min, too_deep=limits.seabed_floor),
             ChangeAltitude(timeout_s=limits.leg_timeout_s),
-            GoTo(limits.acceptance_radius_m, limits.leg_timeout_s),
+            GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, seabed_clearance_m=limits.altitude_m.min),
         ],
     )
 

@@ -84,7 +84,7 @@ def flight(mission: Mission, options: VtolOptions) -> py_trees.behaviour.Behavio
     if options.hover_enu is not None:
         point = frames.Enu(options.hover_enu.east_m, options.hover_enu.north_m, options.hover_enu.up_m)
         steps.append(once("Hover point", GoToLocal(point, HOVER_ACCEPTANCE_M, limits.leg_timeout_s, method="reposition")))
-    leg = GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, method="reposition")
+    leg = GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, method="reposition", height_tolerance_m=limits.alt_tolerance_m)
     to_fw = VtolTransition("FW", options.transition_timeout_s, ahead_m=TRANSITION_AHEAD_M)
     wing_borne: list[py_trees.behaviour.Behaviour] = [to_fw, ForEachLeg(leg)]
     if options.land == "home":

@@ -18,8 +18,11 @@ from typing import Any
 from executive import blackboard
 from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
+from executive.autopilot_link.commanded import CommandWatch
 from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
 from executive.autopilot_link.route_keeper import RouteKeeper
+from executive.autopilot_link.safe_state import SURFACE_COMPLETE_MODE, SafePlan, Until, progress, settled, where
+from executive.autopilot_link.safe_state import plan as safe_plan
 from executive.behaviours.reacting import READS, Announce, Reacting
 from executive.clock import Clock
 from executive.intervention import rc_takeover
@@ -30,7 +33,7 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
-from executive.mission.lifecycle import MissionState
+from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.vehicles import PROFILES
 
@@ -39,8 +42,17 @@ log = logging.getLogger("executive.runtime")  # the make-safe's lines, as the lo
 #: The cause the make-safe's steps are logged and announced under: ``make safe: HOLD refused (FAILED)``.
 MAKE_SAFE = "make safe"
 
+#: The make-safe's word when this run never sent the vehicle anything that could change it (:mod:`.commanded`).
+NOTHING_TO_MAKE_SAFE = "nothing to make safe: the vehicle was never armed or commanded by this run"
+
 #: After the first autopilot's heartbeat, how long (vehicle time) to listen for others when none was named.
 SURVEY_S = 3.0
+#: While the make-safe waits for the safe state (surfaced, landed), how often (vehicle time) it says how far the vehicle is.
+SAY_WAITING_EVERY_S = 10.0
+
+
+class _PersonTookOver(Exception):
+    """A person took the vehicle while it was made safe: nothing more is asked (the reason is the message)."""
 
 
 class SeveralAutopilots(RuntimeError):
@@ -84,10 +96,14 @@ class AutopilotLink:
         period_s: float = 0.1,
     ) -> None:
         profile = PROFILES[mission.vehicle]
-        self.transport = transport
+        #: What is sent, watched: the make-safe acts only on a vehicle this run has commanded.
+        self.watch = CommandWatch(transport)
+        self.transport: Link = self.watch
+        transport = self.watch
         self.clock = clock
         self.mission = mission
         self.period_s = period_s
+        self._mission_state = mission_state
         self.commander = Commander(transport, clock, profile, system_id=system_id)
         self.mission_transfer = MissionTransfer(transport, clock, system_id=system_id)
         #: What the tree asks of the autopilot: intents, turned into its firmware's commands by the back end its heartbeat names (or forced).
@@ -106,12 +122,16 @@ class AutopilotLink:
             on_autopilot=self._found,
             on_reconnect=self.streams.restart,
         )
-        if isinstance(transport, PymavlinkLink):
-            transport.skim(self.reader.kinds_read)  # what the reader does not read is counted from its header, never decoded
+        if isinstance(self.watch.link, PymavlinkLink):
+            self.watch.link.skim(self.reader.kinds_read)  # what the reader does not read is counted from its header, never decoded
         #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.
         self.route_keeper = RouteKeeper(mission_state, self.mission_transfer, self.commander, clock)
         self.parameters = ParameterWatch(self.autopilot, clock)
-        self._bb = blackboard.reader("autopilot link", {"/vehicle/mode", "/vehicle/mode_set_by", "/rc/channels", "/rc/switches", *READS})
+        keys = {"/vehicle/mode", "/vehicle/mode_set_by", "/rc/channels", "/rc/switches", "/vehicle/position", "/vehicle/landed_state", *READS}
+        self._bb = blackboard.reader("autopilot link", keys)
+        #: Why a person holds the vehicle: the mission paused hands off (a person's mode or disarm), until it runs again.
+        self._hands_off: str | None = None
+        mission_state.listeners.append(self._on_transition)
 
     def _found(self, heartbeat_autopilot: int, mav_type: int) -> None:
         """The reader found the autopilot: the port takes its back end; the streams and our heartbeat follow the firmware."""
@@ -119,6 +139,12 @@ class AutopilotLink:
         name = self.autopilot.backend.name
         self.streams.rates = rates_for(self.mission.vehicle, name)
         self.heartbeat.mav_type = mavlink.MAV_TYPE_GCS if name == "px4" else mavlink.MAV_TYPE_ONBOARD_CONTROLLER
+
+    def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
+        if after is MissionStatus.PAUSED and not self._mission_state.hold_while_paused:
+            self._hands_off = f"a person holds the vehicle (the mission paused hands off: {reason})"
+        elif after in (MissionStatus.RUNNING, MissionStatus.READY, MissionStatus.IDLE):
+            self._hands_off = None
 
     def use(self, mission: Mission) -> None:
         """A mission replacing the one served (hot reload): its link timeout and RC from now on."""
@@ -183,29 +209,63 @@ class AutopilotLink:
     def make_safe(
         self, mode: str | None, *, announce: Announce | None = None, timeout_s: float | None = None, report: Callable[[], object] = lambda: None
     ) -> MadeSafe:
-        """Command ``mode`` (None: the vehicle's safe mode) until the vehicle is seen in it.
+        """Command ``mode`` (None: the vehicle's safe mode) until the vehicle is seen in it, then (a sub, a VTOL near the ground) in its safe state.
 
-        The failsafe reactions' rules (:mod:`executive.behaviours.reacting`): asked again every 1.5 s
-        of vehicle time until the autopilot accepts it and the heartbeat shows it; after 3 failed asks
-        the next reaction of the firmware's table (ArduRover: HOLD, then a disarm). Bounded: by
-        ``timeout_s`` if given, else by the time the table's chain takes (3 asks 1.5 s apart for
-        each reaction: 9 s for a rover's HOLD then disarm), after which the outcome is known; a link
-        with no heartbeat asks the same reaction until then. Never against a person: a person's mode
-        (or the RC take-over switch), there at the start or chosen meanwhile, is left alone. Its
-        steps go to ``announce``; ``report`` is called each time what was asked is sent (the ground
-        station's reports). Its outcome is logged last (INFO when made safe, ERROR when not).
+        Where depends on the kind and what the vehicle is doing (:mod:`executive.autopilot_link.safe_state`): a sub surfaces,
+        a VTOL low down or landing lands and disarms, the others hold. The mode is asked by the failsafe reactions' rules
+        (:mod:`executive.behaviours.reacting`): again every 1.5 s of vehicle time until the autopilot accepts it and the
+        heartbeat shows it; after 3 failed asks the next reaction of the firmware's table (ArduRover: HOLD, then a disarm).
+        Bounded: by ``timeout_s`` if given, else by the time the table's chain takes (3 asks 1.5 s apart for each reaction: 9 s
+        for a rover's HOLD then disarm); the safe state after it by :meth:`SafePlan.bound_s`. Never against a person: a
+        person's mode (or the RC take-over switch), there at the start or chosen meanwhile, is left alone, and so is a sub or a
+        VTOL a person holds (the mission paused hands off). Its steps go to ``announce``; ``report`` is called each time what
+        was asked is sent (the ground station's reports). Its outcome is logged last (INFO when made safe, ERROR when not).
         """
-        safe = mode or self.autopilot.capabilities.safe_mode
-        person = self._person_has_the_vehicle(safe)
+        if self.watch.commanded is None:  # nothing of ours to undo: commanding the safe mode would be a change of our own
+            self.reader.drain()  # what came meanwhile (a ground station's command) is answered all the same
+            return self._made_safe(True, NOTHING_TO_MAKE_SAFE, report)
+        self.reader.drain()
+        self.heartbeat.service()
+        kind = self.mission.vehicle
+        plan = safe_plan(kind, self.autopilot.capabilities.autopilot, mode, self.autopilot.capabilities.safe_mode, self._bb.get)
+        safe = plan.mode
+        person = self._person_has_the_vehicle(safe) or (self._hands_off if kind in ("sub", "vtol") else None)
         if person:
             log.warning("not commanding %s: %s", safe, person)
             return MadeSafe(False, f"not commanding {safe}: {person}")
-        reacting = Reacting(self, self.mission.vehicle, announce=announce, bounded=True, logger=log, prefix="")
-        self.reader.drain()
-        self.heartbeat.service()
-        if self._bb.get("/link/up") and reacting.seen(safe):
-            return self._made_safe(True, f"the vehicle made safe: {self.autopilot.mode_name(safe)} (already in it)", report)
+        if plan.why is not None:
+            log.warning("%s: %s", MAKE_SAFE, plan.why)
         found_in = self._bb.get("/vehicle/mode")
+        try:
+            done, account = self._ask(safe, found_in, announce, timeout_s, report, plan)
+            if done and plan.until is not Until.SHOWN:
+                return self._settle(plan, account, found_in, announce, timeout_s, report)
+        except _PersonTookOver as person_took:
+            return self._made_safe(False, f"not commanding {safe}: {person_took}", report, logging.WARNING)
+        if done:
+            return self._made_safe(True, f"the vehicle made safe: {account}", report)
+        if announce is not None:
+            announce("could not make the vehicle safe", True)
+        return self._made_safe(False, f"could not make the vehicle safe: {account}", report)
+
+    def _ask(
+        self,
+        safe: str,
+        found_in: str | None,
+        announce: Announce | None,
+        timeout_s: float | None,
+        report: Callable[[], object],
+        plan: SafePlan | None = None,
+    ) -> tuple[bool, str]:
+        """Ask ``safe`` by the reactions' rules until the heartbeat shows it, bounded: (done, what each reaction came to).
+
+        Done too once the vehicle is in ``plan``'s safe state (a sub near the surface may show SURFACE and ArduSub's own
+        ALT_HOLD after it in one drain). _PersonTookOver when a person takes the vehicle meanwhile (nothing more is asked).
+        """
+        own = self._own_follow_on(plan)
+        reacting = Reacting(self, self.mission.vehicle, announce=announce, bounded=True, logger=log, prefix="")
+        if self._bb.get("/link/up") and reacting.seen(safe):
+            return True, f"{self.autopilot.mode_name(safe)} (already in it)"
         reacting.start(safe, MAKE_SAFE)
         deadline = self.clock.now() + (timeout_s if timeout_s is not None else reacting.time_to_exhaust(safe))
         while True:
@@ -215,19 +275,67 @@ class AutopilotLink:
             self.clock.sleep_until(min(deadline, self.clock.now() + self.period_s / 2))
             self.reader.drain()
             self.heartbeat.service()
-            if person := self._person_took_over(found_in, reacting.mode_in_force):
+            if person := self._person_took_over(found_in, reacting.mode_in_force, own):
                 reacting.cancel()
-                return self._made_safe(False, f"not commanding {safe}: {person}", report, logging.WARNING)
+                raise _PersonTookOver(person)
+            if plan is not None and plan.until is not Until.SHOWN and settled(plan, self._bb.get):
+                reacting.cancel()
+                return True, f"{self.autopilot.mode_name(safe)} ({plan.until})"
             time_up = self.clock.now() >= deadline - 1e-6  # as the reactions' 1.5 s: a sum of half periods lands a hair short
             reacting.follow_up(self.clock.now(), ask=not time_up)
             if reacting.done or reacting.exhausted or time_up:
                 break
-        if reacting.done:
-            return self._made_safe(True, f"the vehicle made safe: {reacting.account()}", report)
-        reacting.cancel()  # nothing asked goes on being retried after the make-safe gave up (with --wait the executive stays up)
+        if not reacting.done:
+            reacting.cancel()  # nothing asked goes on being retried after the make-safe gave up (with --wait the executive stays up)
+        return reacting.done, reacting.account()
+
+    def _settle(
+        self,
+        plan: SafePlan,
+        account: str,
+        found_in: str | None,
+        announce: Announce | None,
+        timeout_s: float | None,
+        report: Callable[[], object],
+    ) -> MadeSafe:
+        """The mode is shown: wait (bounded, saying for what) until the vehicle is in the plan's safe state, then ask its next mode."""
+        start = self.clock.now()
+        bound = plan.bound_s()
+        log.warning("%s: %s; waiting until %s (%s; at most %.0f s)", MAKE_SAFE, account, plan.until, progress(plan, self._bb.get), bound)
         if announce is not None:
-            announce("could not make the vehicle safe", True)
-        return self._made_safe(False, f"could not make the vehicle safe: {reacting.account()}", report)
+            announce(f"{MAKE_SAFE}: waiting until {plan.until}", False)
+        said_at = start
+        while not settled(plan, self._bb.get) and self.clock.now() < start + bound - 1e-6:
+            self.autopilot.service()
+            self.commander.flush()
+            report()
+            self.clock.sleep_until(min(start + bound, self.clock.now() + self.period_s / 2))
+            self.reader.drain()
+            self.heartbeat.service()
+            if person := self._person_took_over(found_in, plan.mode, self._own_follow_on(plan)):
+                raise _PersonTookOver(person)
+            if self.clock.now() - said_at >= SAY_WAITING_EVERY_S:
+                said_at = self.clock.now()
+                log.info("%s: waiting until %s: %s (%.0f s)", MAKE_SAFE, plan.until, progress(plan, self._bb.get), said_at - start)
+        took = self.clock.now() - start
+        if not settled(plan, self._bb.get):
+            if announce is not None:
+                announce(f"could not make the vehicle safe: not {plan.until}", True)
+            text = f"{account}, not {plan.until} after {took:.0f} s ({progress(plan, self._bb.get)})"
+            return self._made_safe(False, f"could not make the vehicle safe: {text}", report)
+        steps = f"{account}, {plan.until} after {took:.1f} s"
+        done = True
+        if plan.then is not None:
+            done, then_account = self._ask(plan.then, self._bb.get("/vehicle/mode"), announce, timeout_s, report)
+            steps += f", {then_account}"
+        left = where(self.mission.vehicle, self._bb.get("/vehicle/mode"), self._bb.get)
+        if announce is not None:
+            announce(f"made safe: {left}", False)
+        return self._made_safe(done or plan.until is Until.SURFACED, f"the vehicle made safe: {left} ({steps})", report)
+
+    def _own_follow_on(self, plan: SafePlan | None) -> str | None:
+        """The mode the firmware goes on to by itself from the plan's (ArduSub: ALT_HOLD at the surface): not a person's."""
+        return SURFACE_COMPLETE_MODE if plan is not None and plan.until is Until.SURFACED else None
 
     def _made_safe(self, made: bool, text: str, report: Callable[[], object], level: int | None = None) -> MadeSafe:
         """The make-safe's last word: logged (INFO made safe, else ERROR, or ``level``), what was asked sent, the ground station told."""
@@ -236,13 +344,16 @@ class AutopilotLink:
         report()
         return MadeSafe(made, text)
 
-    def _person_took_over(self, found_in: str | None, asked: str | None) -> str | None:
-        """Why a person has taken the vehicle while it is made safe: the RC take-over switch, or a mode in which a person drives set meanwhile."""
+    def _person_took_over(self, found_in: str | None, asked: str | None, own: str | None = None) -> str | None:
+        """Why a person has taken the vehicle while it is made safe: the RC take-over switch, or a mode in which a person drives set meanwhile.
+
+        ``own``: a mode the firmware goes on to by itself from the one asked (ArduSub's ALT_HOLD at the surface), nobody's.
+        """
         takeover = rc_takeover(self.mission.rc, self._bb.get)
         if takeover is not None:
             return takeover
         mode = self._bb.get("/vehicle/mode")
-        if mode in PROFILES[self.mission.vehicle].pilot_modes and mode not in (found_in, asked):
+        if mode in PROFILES[self.mission.vehicle].pilot_modes and mode not in (found_in, asked, own):
             return f"the vehicle is in {mode}, set by the RC or a ground station while the executive made it safe: a person drives it"
         return None
 

@@ -1,13 +1,15 @@
 """Behaviours the trees are built from: guards (conditions), actions and flow control."""
 
+from executive.behaviours.auto_legs import AutopilotAtLeg, FollowAutoLeg, HorizonOnAutopilot
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
 from executive.behaviours.commands import Arm, ChangeSpeed, CommandAction, Disarm, HoldFor, SetMode
+from executive.behaviours.depth import ChangeAltitude, ChangeDepth, Surface
 from executive.behaviours.energy import EnergyEnough, EnergyFits
 from executive.behaviours.failsafe import Failsafe, FailsafeNote
 from executive.behaviours.flow import ForEachLeg, Timeout, UnlessPaused, WaitForGuards, WaitUntil
 from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive, ModeIs
 from executive.behaviours.mode_switch import ModeSwitchClear
-from executive.behaviours.motion import ChangeAltitude, ChangeDepth, GoTo, Surface
+from executive.behaviours.motion import GoTo
 from executive.behaviours.parameters import ParameterIs
 from executive.behaviours.position_guards import (
     AllWaypointsWithin,
@@ -32,6 +34,7 @@ __all__ = [
     "Arm",
     "ArmSwitch",
     "Armed",
+    "AutopilotAtLeg",
     "BatteryAbove",
     "ChangeAltitude",
     "ChangeDepth",
@@ -45,6 +48,7 @@ __all__ = [
     "EnergyFits",
     "Failsafe",
     "FailsafeNote",
+    "FollowAutoLeg",
     "ForEachLeg",
     "GoTo",
     "GoToLocal",
@@ -52,6 +56,7 @@ __all__ = [
     "Guard",
     "HeadingSane",
     "HoldFor",
+    "HorizonOnAutopilot",
     "InsideGeofence",
     "KeepRouteOnAutopilot",
     "Land",

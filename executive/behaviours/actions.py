@@ -1,10 +1,11 @@
 """The actions, by concept: :mod:`~executive.behaviours.commands` (commands and their acks, modes, arming, speed),
-:mod:`~executive.behaviours.motion` (go to, depth and altitude, surfacing), :mod:`~executive.behaviours.vtol`
+:mod:`~executive.behaviours.motion` (go to), :mod:`~executive.behaviours.depth` (depth and altitude, surfacing), :mod:`~executive.behaviours.vtol`
 (take-off, landing, transitions, local points). Kept for users' trees that import them from here.
 """
 
 from executive.behaviours.commands import Arm, ChangeSpeed, CommandAction, Disarm, HoldFor, SetMode
-from executive.behaviours.motion import ChangeAltitude, ChangeDepth, GoTo, Surface
+from executive.behaviours.depth import ChangeAltitude, ChangeDepth, Surface
+from executive.behaviours.motion import GoTo
 from executive.behaviours.vtol import GoToLocal, Land, TakeOff, VtolTransition
 
 __all__ = [

@@ -1,4 +1,4 @@
-"""Motion: go to the current leg's waypoint, a sub's depth and height above the seabed, surfacing.
+"""Motion: go to the current leg's waypoint (a sub's depth and height above the seabed, surfacing: :mod:`executive.behaviours.depth`).
 
 Setpoints have no ack: a setpoint action re-sends its target and watches the vehicle get there.
 The current leg's waypoint comes from ``/mission/target``.
@@ -6,6 +6,7 @@ The current leg's waypoint comes from ``/mission/target``.
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -16,10 +17,13 @@ from executive import blackboard, geo
 from executive.autopilot import AutopilotPort, Request, Target
 from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
 from executive.behaviours.base import TimedBehaviour
-from executive.behaviours.commands import CommandAction, refusal_reason
+from executive.behaviours.commands import refusal_reason
 from executive.mission.model import Waypoint
-from executive.seabed import depth_for_altitude
+from executive.seabed import depth_floor, depth_for_altitude
 from executive.state import GlobalPosition, Outcome
+
+#: The seabed floor's warnings: the journal's event kind "seabed".
+seabed_log = logging.getLogger("executive.behaviours.seabed")
 
 
 def leg_target(waypoint: Waypoint) -> Target:
@@ -84,9 +88,16 @@ class GoTo(TimedBehaviour):
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
-    from_mission = {"acceptance_radius_m": "limits.acceptance_radius_m", "leg_timeout_s": "limits.leg_timeout_s"}
+    from_mission = {
+        "acceptance_radius_m": "limits.acceptance_radius_m",
+        "leg_timeout_s": "limits.leg_timeout_s",
+        "seabed_clearance_m": "vehicle.seabed_clearance_m",
+        "height_tolerance_m": "vehicle.height_tolerance_m",
+    }
     param_docs = {
         "look_ahead": "a waypoint that needs no stop is driven through toward the next (setpoint only, ArduRover)",
+        "seabed_clearance_m": "sub: no depth target closer to the seabed than this, as the sonar reads it (null: no floor)",
+        "height_tolerance_m": "a waypoint with a height (alt_m) is reached only within this of it as well (null: distance only)",
     }
 
     def __init__(
@@ -97,6 +108,8 @@ class GoTo(TimedBehaviour):
         resend_s: float = 1.0,
         method: Literal["setpoint", "reposition"] = "setpoint",
         look_ahead: bool = False,
+        seabed_clearance_m: float | None = None,
+        height_tolerance_m: float | None = None,
     ) -> None:
         if method not in ("setpoint", "reposition"):
             raise ValueError(f"method must be setpoint or reposition, not {method!r}")
@@ -106,6 +119,8 @@ class GoTo(TimedBehaviour):
         self.resend_s = resend_s
         self.method = method
         self.look_ahead = look_ahead
+        self.seabed_clearance_m = seabed_clearance_m
+        self.height_tolerance_m = height_tolerance_m
         self.distance_m: float | None = None
         self.bearing_deg: float | None = None
         self._ticket: Request | None = None
@@ -122,6 +137,7 @@ class GoTo(TimedBehaviour):
         self._ticket = None
         self._refusal: str | None = None
         self._seabed_depth: float | None = None  # an altitude leg's last depth target
+        self._floor_told: str | None = None  # the seabed floor's kind last warned of
         self._leg_start: GlobalPosition | None = None  # where the vehicle was when the leg began
         self._predict_at = -math.inf  # the look-ahead's next prediction of the swing, and its last (time, cut)
         self._last_prediction: tuple[float, float] | None = None
@@ -140,9 +156,10 @@ class GoTo(TimedBehaviour):
         self._follow_shaped_target(position)
         self._send(position)
         leg = f"leg {self.get('/mission/leg_index') + 1}/{self.get('/mission/leg_count')}"
+        height = self._height_off(position)
         if position is not None:
             self.distance_m, self.bearing_deg = geo.distance_bearing(position.lat, position.lon, self.target.lat, self.target.lon)
-            if self.distance_m <= self.acceptance_radius_m:
+            if self.distance_m <= self.acceptance_radius_m and height is None:
                 self.feedback_message = f"{leg}: reached ({self.distance_m:.1f} m)"
                 return Status.SUCCESS
             through = self.drive_through(position, self.distance_m)
@@ -152,13 +169,27 @@ class GoTo(TimedBehaviour):
         if self.elapsed > self.leg_timeout_s:
             short = f", {self.distance_m:.1f} m short" if self.distance_m is not None else ""
             why = f" (DO_REPOSITION {self._refusal})" if self._refusal else ""
-            self.feedback_message = f"{leg}: timed out after {self.leg_timeout_s:g} s{short}{why}"
+            off = f", {height}" if height else ""
+            self.feedback_message = f"{leg}: timed out after {self.leg_timeout_s:g} s{short}{off}{why}"
             return Status.FAILURE
         if self.distance_m is None:
             self.feedback_message = f"{leg}: no position"
         else:
-            self.feedback_message = f"{leg}: {self.distance_m:.1f} m at {self.bearing_deg:03.0f}°"
+            self.feedback_message = f"{leg}: {self.distance_m:.1f} m at {self.bearing_deg:03.0f}°{f', {height}' if height else ''}"
         return Status.RUNNING
+
+    def _height_off(self, position: GlobalPosition | None) -> str | None:
+        """How the vehicle's height misses the waypoint's, if by more than ``height_tolerance_m`` (None: reached in height, or not
+        judged: no tolerance, or ``alt_m`` 0, flown at the height the vehicle is at)."""
+        assert self.target is not None
+        if self.height_tolerance_m is None or self.target.alt_m == 0.0:
+            return None
+        if position is None:
+            return "height unknown"
+        off = position.alt_rel_m - self.target.alt_m
+        if abs(off) <= self.height_tolerance_m:
+            return None
+        return f"at {position.alt_rel_m:.1f} m above home, {abs(off):.1f} m {'above' if off > 0 else 'below'} its {self.target.alt_m:g} m"
 
     def drive_through(self, position: GlobalPosition, distance_m: float) -> str | None:
         """Whether the next leg's target goes out now, ``distance_m`` short of the waypoint (why, for the feedback); None: not yet,
@@ -294,184 +325,28 @@ class GoTo(TimedBehaviour):
 
     def _as_depth(self, target: Waypoint, position: GlobalPosition | None) -> Waypoint | None:
         """A sub's altitude leg as a depth target from the measured depth and rangefinder (executive.seabed: ArduSub drops
-        terrain-frame targets); the last one again while the reading says nothing, the current depth before any."""
+        terrain-frame targets); the last one again while the reading says nothing, the current depth before any. Any
+        sub's depth no deeper than the seabed floor (``seabed_clearance_m``: :func:`executive.seabed.depth_floor`)."""
         if target.control_mode != "altitude" or target.altitude_m is None:
-            return target
+            return self._above_floor(target, position)
         if position is None:
             return None
         depth = depth_for_altitude(-position.alt_rel_m, self.get("/vehicle/rangefinder"), target.altitude_m)
         depth = depth if depth is not None else self._seabed_depth if self._seabed_depth is not None else -position.alt_rel_m
         self._seabed_depth = depth
-        return target.model_copy(update={"control_mode": "depth", "depth_m": depth, "altitude_m": None})
+        return self._above_floor(target.model_copy(update={"control_mode": "depth", "depth_m": depth, "altitude_m": None}), position)
 
-
-class _VerticalSetpoint(TimedBehaviour):
-    """A sub's vertical target for the current leg, held where the vehicle is when the action starts.
-
-    The setpoint (no ack exists) is re-sent every ``resend_s`` at that same point; SUCCESS once the
-    vehicle shows the target within ``tolerance_m``; FAILURE after ``timeout_s``. SUCCESS at once
-    when the leg has no target of this kind.
-    """
-
-    reads = ("/mission/target", "/vehicle/position", "/vehicle/mode")
-    needs = ("clock", "autopilot")
-    autopilot: AutopilotPort
-    what = ""
-    catalogued = False
-    param_docs = {"tolerance_m": "reached within this of the target"}
-
-    def __init__(self, name: str, tolerance_m: float, timeout_s: float, resend_s: float) -> None:
-        super().__init__(name)
-        self.tolerance_m = tolerance_m
-        self.timeout_s = timeout_s
-        self.resend_s = resend_s
-        self.target_m: float | None = None
-
-    def wanted(self, waypoint: Waypoint) -> float | None:
-        """The leg's target of this kind, if it has one."""
-        raise NotImplementedError
-
-    def measured(self, position: GlobalPosition) -> float | None:
-        """The vehicle's current value of that kind, if known."""
-        raise NotImplementedError
-
-    def send(self, lat: float, lon: float, target_m: float) -> None:
-        raise NotImplementedError
-
-    def refuse(self) -> str | None:
-        """Why the setpoint cannot be sent now (None: it can)."""
-        return None
-
-    def initialise(self) -> None:
-        super().initialise()
-        waypoint: Waypoint | None = self.get("/mission/target")
-        self.target_m = self.wanted(waypoint) if waypoint is not None else None
-        self._here: tuple[float, float] | None = None
-        self._last_sent = float("-inf")
-
-    def update(self) -> Status:
-        if self.target_m is None:
-            self.feedback_message = f"no {self.what} for this leg"
-            return Status.SUCCESS
-        refusal = self.refuse()
-        if refusal is not None:
-            self.feedback_message = refusal
-            return Status.FAILURE
-        position: GlobalPosition | None = self.get("/vehicle/position")
-        if self._here is None and position is not None:
-            self._here = (position.lat, position.lon)
-        now = self.clock.now()
-        if self._here is not None and now - self._last_sent >= self.resend_s:
-            self.send(*self._here, self.target_m)
-            self._last_sent = now
-        value = self.measured(position) if position is not None else None
-        if value is not None and abs(value - self.target_m) <= self.tolerance_m and self._last_sent > float("-inf"):
-            self.feedback_message = f"{self.what} {value:.1f} m (target {self.target_m:g} m)"
-            return Status.SUCCESS
-        now_at = f"{value:.1f} m" if value is not None else "unknown"
-        if self.elapsed > self.timeout_s:
-            self.feedback_message = f"{self.what} {now_at}, target {self.target_m:g} m, not reached after {self.timeout_s:g} s"
-            return Status.FAILURE
-        self.feedback_message = f"{self.what} {now_at} -> {self.target_m:g} m"
-        return Status.RUNNING
-
-
-class ChangeDepth(_VerticalSetpoint):
-    """Sub: dive (or rise) to the current leg's ``depth_m`` where the vehicle is; SUCCESS when ``/vehicle/position`` shows it.
-
-    The depth goes as ``alt = -depth`` in the relative-altitude frame, which ArduSub takes in
-    GUIDED (with the position: the vehicle holds where it was when the action started) and in
-    ALT_HOLD (the depth alone). A leg with control_mode ``altitude`` or no depth: SUCCESS at once
-    (ChangeAltitude's job, or nothing to do), so one tree can put both in every leg.
-    """
-
-    what = "depth"
-
-    def __init__(self, name: str = "Change depth", tolerance_m: float = 0.5, timeout_s: float = 120.0, resend_s: float = 1.0) -> None:
-        super().__init__(name, tolerance_m, timeout_s, resend_s)
-
-    def wanted(self, waypoint: Waypoint) -> float | None:
-        return None if waypoint.control_mode == "altitude" else waypoint.depth_m
-
-    def measured(self, position: GlobalPosition) -> float | None:
-        return -position.alt_rel_m
-
-    def send(self, lat: float, lon: float, target_m: float) -> None:
-        self.autopilot.hold_depth(lat, lon, depth_m=target_m)
-
-
-class ChangeAltitude(_VerticalSetpoint):
-    """Sub: reach the current leg's ``altitude_m`` above the seabed (control_mode ``altitude``), where the vehicle is.
-
-    Flown as depth targets computed from the measured depth and the downward rangefinder
-    (:func:`executive.seabed.depth_for_altitude`), re-sent every ``resend_s`` as the reading
-    changes: ArduSub silently drops a terrain-frame target. With the seabed beyond the
-    rangefinder's reach it dives, without overshooting, until the reading is good. Confirmed by the
-    rangefinder (``/vehicle/altitude_above_bottom_m``). Other legs: SUCCESS at once.
-    """
-
-    reads = (*_VerticalSetpoint.reads, "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder")
-    what = "altitude"
-
-    def __init__(self, name: str = "Change altitude", tolerance_m: float = 0.5, timeout_s: float = 120.0, resend_s: float = 1.0) -> None:
-        super().__init__(name, tolerance_m, timeout_s, resend_s)
-
-    def wanted(self, waypoint: Waypoint) -> float | None:
-        return waypoint.altitude_m if waypoint.control_mode == "altitude" else None
-
-    def measured(self, position: GlobalPosition) -> float | None:
-        value: float | None = self.get("/vehicle/altitude_above_bottom_m")
-        return value
-
-    def send(self, lat: float, lon: float, target_m: float) -> None:
-        position: GlobalPosition | None = self.get("/vehicle/position")
-        if position is None:
-            return
-        depth = depth_for_altitude(-position.alt_rel_m, self.get("/vehicle/rangefinder"), target_m)
-        if depth is not None:  # an invalid reading: ArduSub keeps the last depth target
-            self.autopilot.hold_depth(lat, lon, depth_m=depth)
-
-
-class Surface(CommandAction):
-    """Sub: come up with ArduSub's SURFACE mode; SUCCESS once the vehicle is at the surface and SURFACE is done.
-
-    SURFACE climbs at PILOT_SPEED_UP (``climb_m_s``, 0.5 m/s by default) and hands over to
-    ALT_HOLD by itself at the surface (ModeReason SURFACE_COMPLETE). Confirmed by the depth
-    (``/vehicle/position``, within ``surface_m``) in any mode but SURFACE: the heartbeat may never
-    show SURFACE at all when the vehicle is nearly up. Already there: SUCCESS without a command.
-    Refused (no depth sensor...): FAILURE; not up after the climb's time plus ``margin_s``: FAILURE.
-    """
-
-    reads = ("/vehicle/position", "/vehicle/mode")
-    outcome = Outcome.MODE
-    param_docs = {
-        "surface_m": "at the surface within this depth",
-        "climb_m_s": "the climb rate (ArduSub's PILOT_SPEED_UP), for the time allowed",
-        "margin_s": "time allowed over the climb's",
-    }
-
-    def __init__(self, name: str = "Surface", surface_m: float = 0.5, climb_m_s: float = 0.5, margin_s: float = 30.0) -> None:
-        super().__init__(name, margin_s)
-        self.surface_m = surface_m
-        self.climb_m_s = climb_m_s
-        self.margin_s = margin_s
-
-    def _depth(self) -> float | None:
-        position: GlobalPosition | None = self.get("/vehicle/position")
-        return -position.alt_rel_m if position is not None else None
-
-    def initialise(self) -> None:
-        depth = self._depth()
-        self.confirm_timeout_s = self.margin_s + max(0.0, depth or 0.0) / self.climb_m_s
-        super().initialise()
-
-    def request(self) -> Request:
-        return self.autopilot.set_mode("SURFACE")
-
-    def confirmed(self) -> bool:
-        depth = self._depth()
-        return depth is not None and depth <= self.surface_m and self.get("/vehicle/mode") != "SURFACE"
-
-    def progress(self) -> str | None:
-        depth = self._depth()
-        return f"depth {depth:.1f} m in {self.get('/vehicle/mode')}" if depth is not None else "no position"
+    def _above_floor(self, target: Waypoint, position: GlobalPosition | None) -> Waypoint:
+        """``target``'s depth, no deeper than the seabed floor (a warning the first time the floor holds the leg)."""
+        if self.seabed_clearance_m is None or target.depth_m is None or position is None:
+            return target
+        floor = depth_floor(-position.alt_rel_m, self.get("/vehicle/rangefinder"), self.seabed_clearance_m, self.clock.now())
+        if floor is None or floor.depth_m >= target.depth_m:
+            return target
+        if floor.kind != "beyond" and self._floor_told != floor.kind:
+            self._floor_told = floor.kind
+            seabed_log.warning(
+                "%s: depth %g m held at %.1f m: %s, %g m above it (limits.altitude_m.min)", self.name, target.depth_m, floor.depth_m, floor.why,
+                self.seabed_clearance_m,
+            )  # fmt: skip
+        return target.model_copy(update={"depth_m": floor.depth_m})

@@ -5,7 +5,7 @@ arguments (``executive ctl route OPERATION --help``). Waypoint numbers are 1-bas
 line counts them. ``tree`` prints the running tree with each node's status and feedback (``--watch``:
 again every ``--interval`` seconds until Ctrl-C or the executive stops). ``arm``, ``disarm`` and
 ``mode MODE`` command the vehicle for a person and wait (bounded) for the autopilot's answer;
-mid-mission, ``disarm`` and ``mode`` pause the mission hands off.
+mid-mission, a ``disarm`` or ``mode`` the vehicle shows pauses the mission hands off, a refused one changes nothing.
 """
 
 from __future__ import annotations
@@ -74,12 +74,13 @@ mission is refused with the reason, and nothing changes."""
 
 _VEHICLE = {
     "arm": "arm the vehicle",
-    "disarm": "disarm the vehicle (mid-mission: the mission pauses, hands off)",
-    "mode": "put the vehicle in a mode (mid-mission: the mission pauses, hands off)",
+    "disarm": "disarm the vehicle (mid-mission: once disarmed, the mission pauses, hands off)",
+    "mode": "put the vehicle in a mode (mid-mission: once in it, the mission pauses, hands off)",
 }
 _PERSON_WINS = (
-    "A person always wins: the command is sent whatever the mission's state; a running mission pauses rather than undoing it "
-    "(`ctl resume` hands the vehicle back to it). Waits for the autopilot's answer."
+    "A person always wins: the command is sent whatever the mission's state; once the vehicle shows it, a running mission pauses "
+    "rather than undoing it (`ctl resume` hands the vehicle back to it); refused by the autopilot, it changes nothing. Waits for the "
+    "autopilot's answer."
 )
 
 _ROUTE_HELP = """Show or edit the route of the loaded mission (while READY, RUNNING or PAUSED). After an edit the
@@ -197,9 +198,11 @@ def _report_answer(args: argparse.Namespace, reply: dict[str, Any]) -> int:
         print(f"{reply['state']}: {reply['reason']}")
     deadline = time.monotonic() + ANSWER_WAIT_S
     outcome: dict[str, Any] = {"state": "QUEUED"}
+    mission = reply["state"]
     while time.monotonic() < deadline:
         answer = request(args.socket, "command", ticket=command["ticket"], name=command["name"])
         outcome = answer.get("command") or {"state": "UNKNOWN", "result": answer.get("reason"), "final": True}
+        mission = answer.get("state", mission)
         if outcome.get("final"):
             break
         time.sleep(0.1)
@@ -211,7 +214,7 @@ def _report_answer(args: argparse.Namespace, reply: dict[str, Any]) -> int:
     else:
         said = {"REJECTED": f"refused by the autopilot ({outcome.get('result')})", "TIMED_OUT": "no answer from the autopilot"}
         why = said.get(outcome["state"], f"{outcome['state'].lower()} ({outcome.get('result', 'no answer yet')})")
-        print(f"executive: ctl: {command['what']}: {why}", file=sys.stderr)
+        print(f"executive: ctl: {command['what']}: {why}; nothing changed (the mission {mission})", file=sys.stderr)
     return EXIT_OK if accepted else EXIT_FAILED
 
 

@@ -117,6 +117,8 @@ def check_run(args: argparse.Namespace, mission: Mission) -> Checked:
                 raise BadInput(f"{option} {exc}") from exc
     signing_key = signing_key_arg(args.signing_key)
     _check_other_inputs(args)
+    if (why := vehicle_option_refusal(args, mission)) is not None:
+        raise BadInput(why)
     return Checked(faults, signing_key, tuple(notes))
 
 
@@ -171,3 +173,25 @@ def _check_other_inputs(args: argparse.Namespace) -> None:
                 read_token(args.web_token_file)
         except WebAddressError as exc:
             raise BadInput(f"--web: {exc}") from exc
+
+
+def vehicle_option_refusal(args: argparse.Namespace, mission: Mission) -> str | None:
+    """Why an option of ``run`` does not fit the mission's vehicle, if one does not (README lists them under the run options).
+
+    ``--can`` is the AgileX tracked base's bus, driven from ArduRover's skid-steer outputs: SERVO1 the left track, SERVO3
+    the right (``libraries/AR_Motors/AP_MotorsUGV.cpp`` output_skid_steering; SERVO1_FUNCTION 73 and SERVO3_FUNCTION 74,
+    ``libraries/SRV_Channel/SRV_Channel.h``). Only a rover on ArduPilot has them; on the built-in simulator only the
+    ``bunker`` model is skid-steered with a base on the bus (another's steering and throttle would be read as tracks).
+    """
+    if args.can is None:
+        return None
+    base = "--can: the bus of the AgileX tracked base, driven from ArduRover's skid-steer outputs (SERVO1 left track, SERVO3 right)"
+    if mission.vehicle != "rover":
+        return f"{base}: this mission drives a {mission.vehicle} (vehicle: {mission.vehicle}), which has no tracks to drive"
+    autopilot = args.autopilot or mission.autopilot
+    if autopilot == "px4":
+        return f"{base}: the autopilot is PX4 (--autopilot/autopilot: px4), whose rover outputs are not ArduRover's skid-steer channels"
+    model = (mission.simulator.model if mission.simulator else None) or mission.vehicle
+    if not args.mavlink and model != "bunker":
+        return f"{base}: the built-in simulator's {model} has no tracked base on a bus (simulator.model: bunker simulates one)"
+    return None

@@ -103,7 +103,31 @@ class Limits(BaseModel):
     )
     speed_m_s: Range = Field(default_factory=lambda: Range(min=0.1, max=5.0), description="allowed waypoint speeds (sub: 0.1-1 by default)")
     depth_m: Range = Field(default_factory=lambda: Range(min=0.0, max=100.0), description="allowed depths (sub)")
-    altitude_m: Range = Field(default_factory=lambda: Range(min=2.0, max=100.0), description="allowed altitudes above seabed/ground")
+    altitude_m: Range = Field(
+        default_factory=lambda: Range(min=2.0, max=100.0),
+        description="allowed altitudes above the seabed (sub): no leg, in any control mode, takes the sub closer to the seabed than min, "
+        "as its sonar reads it",
+    )
+    seabed_floor: Literal["hold", "fail"] = Field(
+        "hold",
+        description="sub: a depth deeper than the water holds (the seabed, by the sonar, less altitude_m.min): hold: held at that floor, "
+        "the leg judged reached there (a warning with the figures); fail: the leg fails",
+    )
+    water_depth_m: float | None = Field(
+        None, gt=0.0, le=11_000.0, description="sub: the water depth over the route where known (a chart): validate refuses a depth it cannot hold"
+    )
+    alt_m: Range = Field(
+        default_factory=lambda: Range(min=10.0, max=120.0),
+        description="vtol: allowed heights above home of waypoints and take-off: by default 10 m (clear of people and trees) to "
+        "120 m (the common ceiling for small drones: EU open category, FAA part 107's 400 ft)",
+    )
+    alt_tolerance_m: float = Field(
+        10.0,
+        gt=0.0,
+        le=500.0,
+        description="vtol: a waypoint counts as reached only within this of its height as well as acceptance_radius_m "
+        "(10 m: PX4's NAV_FW_ALT_RAD, a wing-borne waypoint's altitude acceptance)",
+    )
     link_timeout_s: float = Field(3.0, gt=0.0, le=60.0, description="heartbeat age after which the link counts as lost")
     recovery_timeout_s: float = Field(120.0, gt=0.0, le=86400.0, description="how long a failed guard may take to recover before the mission aborts")
     ekf_wait_s: float = Field(120.0, gt=0.0, le=3600.0, description="how long pre-flight waits for the EKF to become ready")
@@ -111,6 +135,9 @@ class Limits(BaseModel):
         20.0, ge=0.0, le=100.0, description="remaining battery below this, percent, fails the battery guard (null: not checked)"
     )
     battery_min_v: float | None = Field(None, gt=0.0, le=1000.0, description="battery voltage below this fails the battery guard (null: not checked)")
+    auto_horizon_legs: int = Field(
+        2, ge=1, le=20, description="drive: auto: waypoints the autopilot holds beyond the current leg's (it stops at the last one it holds)"
+    )
 
 
 class SwitchChannels(BaseModel):
@@ -342,6 +369,11 @@ class Mission(BaseModel):
         "module:function of a module on the Python path (module alone: its build), or a tree composed in the file (a mapping)",
     )
     description: str | None = Field(None, max_length=4096)
+    drive: Literal["guided", "auto"] = Field(
+        "guided",
+        description="guided: the executive sends each leg's target (GUIDED); auto: the autopilot drives its own mission in AUTO, "
+        "holding only limits.auto_horizon_legs waypoints beyond the current leg, under the executive's supervision",
+    )
     auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
     home: Home | None = None
     geofence: GeofenceConfig | None = Field(None, description="where the vehicle may be")

@@ -21,7 +21,7 @@ from executive.mission.failsafes import (
     VEHICLE_FAILSAFES,
     FailsafePolicy,
 )
-from executive.mission.model import VTOL_HOVER_RADIUS_M, VTOL_MIN_ACCEPTANCE_RADIUS_M, FailsafeRule, Mission, tree_name
+from executive.mission.model import VTOL_HOVER_RADIUS_M, VTOL_MIN_ACCEPTANCE_RADIUS_M, FailsafeRule, Mission, VtolOptions, tree_name
 from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES
 
 _PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,15}")
@@ -60,6 +60,34 @@ ARDUPILOT_ONLY_TREES: dict[str, str] = {
 }
 
 
+#: drive: auto: the trees that can be driven by the autopilot's own AUTO, and the vehicle kinds (ArduRover: rover, boat).
+AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {"waypoints": frozenset({"rover", "boat"})}
+#: drive: auto refused, per tree, until it can be flown so: why.
+AUTO_DRIVE_REFUSED: dict[str, str] = {
+    "goto_sample": "its sample points as stops in the autopilot's mission are not done yet",
+    "auv_survey": "ArduSub's AUTO with depth is not done yet",
+    "vtol_transit": "its take-off, transitions and landing are the executive's",
+    "ugv_rc_route": "its operator puts the route in AUTO already",
+}
+
+
+def drive_errors(mission: Mission) -> list[str]:
+    """Why ``drive: auto`` cannot drive this mission's tree and vehicle (empty: it can, or the drive is guided)."""
+    if mission.drive != "auto":
+        return []
+    name = tree_name(mission)
+    if name is None:
+        return ["a tree composed in the file is not driven in AUTO: use drive: guided"]
+    if name in AUTO_DRIVE_REFUSED:
+        return [f"tree {name}: {AUTO_DRIVE_REFUSED[name]}; use drive: guided"]
+    kinds = AUTO_DRIVE_TREES.get(name)
+    if kinds is None:
+        return [f"tree {name} is not known to be driven in AUTO; use drive: guided"]
+    if mission.vehicle not in kinds:
+        return [f"tree {name} is driven in AUTO on a {' or '.join(sorted(kinds))} (ArduRover) so far, not a {mission.vehicle}; use drive: guided"]
+    return []
+
+
 def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
     """Why ``autopilot`` cannot fly ``mission`` (empty when it can)."""
     errors = []
@@ -69,6 +97,8 @@ def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
     name = tree_name(mission)
     if autopilot != "ardupilot" and name in ARDUPILOT_ONLY_TREES:
         errors.append(f"tree {name} needs ArduPilot: {ARDUPILOT_ONLY_TREES[name]}")
+    if autopilot != "ardupilot" and mission.drive == "auto":
+        errors.append("drive: auto needs ArduPilot so far (its partial mission writes hold the horizon; PX4's AUTO.MISSION is not done yet)")
     return errors
 
 
@@ -110,6 +140,8 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
         if wp.altitude_m is not None and wp.altitude_m not in limits.altitude_m:
             errors.append(((*here, "altitude_m"), f"{wp.altitude_m} m is outside limits.altitude_m "
                            f"[{limits.altitude_m.min}, {limits.altitude_m.max}]"))  # fmt: skip
+        if limits.water_depth_m is not None:
+            errors += _water_depth_errors(mission, i)
         if wp.control_mode == "altitude" and wp.altitude_m is None:
             errors.append(((*here, "altitude_m"), "control_mode altitude needs altitude_m"))
         if wp.control_mode != "altitude" and wp.altitude_m is not None:
@@ -120,8 +152,9 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
             if (d := distance(mission.home.lat, mission.home.lon, wp.lat, wp.lon)) > limit:
                 why = f"{d:.0f} m from home, over limits.max_goal_distance_m ({limit:g} m): refused at start with the vehicle at home"
                 errors.append((("waypoints", i), why))
+    errors += [(("drive",), why) for why in drive_errors(mission)]
     if mission.vehicle == "vtol":
-        errors += _vtol_errors(mission)
+        errors += _vtol_errors(mission) + _height_errors(mission)
     if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":
         errors.append((("simulator", "q_guided_mode"), "only the simulated vtol (ArduPlane) has Q_GUIDED_MODE"))
     if mission.simulator is not None:
@@ -194,6 +227,44 @@ def _vtol_errors(mission: Mission) -> list[tuple[Path, str]]:
         errors.append((("vtol", "hover_enu"), f"{math.hypot(hover.east_m, hover.north_m):.0f} m from home, over {VTOL_HOVER_RADIUS_M:g} m: "
                        "ArduPlane flies a farther GUIDED target as a plane, not on its lift motors"))  # fmt: skip
     return errors
+
+
+def _water_depth_errors(mission: Mission, i: int) -> list[tuple[Path, str]]:
+    """Waypoint ``i`` of a sub within the water ``limits.water_depth_m`` states: no deeper than ``limits.altitude_m.min`` above
+    the seabed (the floor the sub is held at in flight, executive.seabed), no higher above the seabed than the water is deep."""
+    limits, wp = mission.limits, mission.waypoints[i]
+    water, clearance = limits.water_depth_m, limits.altitude_m.min
+    assert water is not None
+    if wp.control_mode != "altitude" and wp.depth_m is not None and wp.depth_m > water - clearance:
+        return [(("waypoints", i, "depth_m"), f"{wp.depth_m:g} m is deeper than the water holds: limits.water_depth_m {water:g} m less "
+                 f"limits.altitude_m.min {clearance:g} m above the seabed: at most {max(0.0, water - clearance):g} m")]  # fmt: skip
+    if wp.control_mode == "altitude" and wp.altitude_m is not None and wp.altitude_m > water:
+        return [(("waypoints", i, "altitude_m"), f"{wp.altitude_m:g} m above the seabed is above the surface: "
+                 f"limits.water_depth_m is {water:g} m")]  # fmt: skip
+    return []
+
+
+def seabed_clearance(mission: Mission) -> float | None:
+    """How close to the seabed a sub may go, as its sonar reads it (``limits.altitude_m.min``); None: not a sub."""
+    return mission.limits.altitude_m.min if mission.vehicle == "sub" else None
+
+
+def height_tolerance(mission: Mission) -> float | None:
+    """How near its height (``alt_m``, but 0) a vtol must be for a waypoint to count as reached; None: not a vtol, distance only."""
+    return mission.limits.alt_tolerance_m if mission.vehicle == "vtol" else None
+
+
+def _height_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """Every height a vtol is sent to (waypoints, take-off, hover point) within ``limits.alt_m`` above home."""
+    allowed = mission.limits.alt_m
+    heights: list[tuple[Path, float]] = [(("waypoints", i, "alt_m"), wp.alt_m) for i, wp in enumerate(mission.waypoints) if wp.alt_m != 0.0]
+    if mission.vtol is not None:
+        heights.append((("vtol", "takeoff_alt_m"), mission.vtol.takeoff_alt_m))
+        if mission.vtol.hover_enu is not None:
+            heights.append((("vtol", "hover_enu", "up_m"), mission.vtol.hover_enu.up_m))
+    elif mission.tree == "vtol_transit":  # the options' defaults are flown too
+        heights.append((("vtol",), VtolOptions().takeoff_alt_m))
+    return [(path, f"{alt:g} m above home is outside limits.alt_m [{allowed.min:g}, {allowed.max:g}]") for path, alt in heights if alt not in allowed]
 
 
 def _geofence_errors(mission: Mission) -> list[tuple[Path, str]]:

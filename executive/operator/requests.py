@@ -13,10 +13,11 @@ route. Refused with the reason, nothing changed, when the mission is not compati
 
 ``arm``, ``disarm`` (``"force": true`` skips the autopilot's checks) and ``mode`` (``"mode": "HOLD"``)
 command the vehicle for a person, and a person always wins: the command is sent whatever the
-mission's state, and a running mission is first paused hands off (``disarm`` or a mode change
-mid-mission: the tree would otherwise undo it); ``arm`` never pauses (a mission may be waiting for
-it). The reply carries the command's ticket; ``command`` (``"ticket"``, ``"name"``) says what the
-autopilot answered.
+mission's state. What it did to the vehicle decides the rest (:mod:`executive.operator.persons_commands`):
+a running mission pauses hands off once the heartbeat shows the mode or the disarm (the tree would
+otherwise undo it), and one the autopilot refuses changes nothing; ``arm`` never pauses (a mission may
+be waiting for it). The reply carries the command's ticket; ``command`` (``"ticket"``, ``"name"``) says
+what the autopilot answered.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from executive.state import CommandStatus, EkfStatus, GlobalPosition, Outcome
 
 if TYPE_CHECKING:
     from executive.autopilot.port import AutopilotPort
+    from executive.operator.persons_commands import PersonsCommands
 
 log = logging.getLogger("executive.operator")  # as the log and the journal (event kind "operator") have it
 
@@ -72,7 +74,7 @@ class Operator:
     at the vehicle's position needs one the EKF vouches for, no older than ``max_position_age_s``
     (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
     (its samples could not be real), if it cannot. ``autopilot`` takes a person's arm, disarm and
-    mode (None: refused). ``tree`` supplies the running tree for ``tree`` requests
+    mode (None: refused), followed by ``persons`` to what they did. ``tree`` supplies the running tree for ``tree`` requests
     (:meth:`executive.waiting.TreeWatch.view`). ``autopilot_name`` names the firmware driven (a
     replacement mission for another is refused).
     """
@@ -88,6 +90,7 @@ class Operator:
         autopilot: AutopilotPort | None = None,
         tree: Callable[[], dict[str, Any] | None] | None = None,
         autopilot_name: Callable[[], str | None] | None = None,
+        persons: PersonsCommands | None = None,
     ) -> None:
         self.mission_state = mission_state
         self.vehicle = vehicle
@@ -98,6 +101,7 @@ class Operator:
         self.autopilot = autopilot
         self._tree = tree
         self._autopilot_name = autopilot_name
+        self._persons = persons
         keys = ["/vehicle/position", "/vehicle/ekf", "/vehicle/mission_items", "/link/route_upload", *_COMMAND_KEYS.values()]
         self._bb = blackboard.reader("operator", keys)
 
@@ -196,10 +200,11 @@ class Operator:
         return self._reply(True, f"{source}: {done}", route=self._route_view())
 
     def _command_vehicle(self, op: str, args: dict[str, Any], source: str) -> Reply:
-        """A person's arm, disarm or mode: sent whatever the state; a running mission paused hands off first, unless arming."""
+        """A person's arm, disarm or mode: sent whatever the state; what it did to the vehicle is followed (``persons``)."""
         if self.autopilot is None:
             return self._reply(False, f"{op}: no autopilot to command")
         force = args.get("force") is True
+        shows: str | None = None
         if op == "mode":
             mode = args.get("mode")
             if not isinstance(mode, str) or not mode:
@@ -208,14 +213,16 @@ class Operator:
                 request = self.autopilot.set_mode(mode.upper())
             except KeyError:
                 return self._reply(False, f"mode {mode}: not a mode of this vehicle's autopilot")
-            what = f"mode {request.how or mode.upper()}"
+            shows = self.autopilot.mode_name(mode.upper())
+            what = f"mode {request.how or shows}"
         else:
             request = self.autopilot.arm(force=force) if op == "arm" else self.autopilot.disarm(force=force)
             what = f"{'force ' if force else ''}{op}"
         said = f"{source}: {what}"
+        if self._persons is not None:
+            self._persons.sent(what, source, request, mode=shows, disarm=op == "disarm")
         if op != "arm" and self.mission_state.status is MissionStatus.RUNNING:
-            self.mission_state.pause(f"{said} by a person: hands off", hold=False)
-            said += f"; mission paused at leg {self.mission_state.leg_index + 1}, hands off until resumed"
+            said += "; the mission pauses, hands off, once the vehicle shows it (refused: nothing changes)"
         log.warning("%s, sent to the autopilot", said)
         return self._reply(True, f"{said}, sent to the autopilot", command={"ticket": request.ticket, "name": request.outcome, "what": what})
 

@@ -19,6 +19,7 @@ from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.state import GlobalPosition, HomePosition, Rangefinder
+from executive.testing import START_S
 from executive.vehicles import PLANE_MODES, SUB_MODES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
@@ -216,10 +217,10 @@ class TestChangeDepth:
 
 
 def sonar(distance_m: float, max_m: float = 30.0) -> dict:
-    """What the reader writes for a downward DISTANCE_SENSOR of range 0.5 to ``max_m``."""
+    """What the reader writes for a downward DISTANCE_SENSOR of range 0.5 to ``max_m``, heard as the test starts."""
     status = "good" if 0.5 <= distance_m <= max_m else "too_far" if distance_m > max_m else "too_close"
     return {
-        "vehicle__rangefinder": Rangefinder(distance_m, 0.5, max_m, status, 0.0),
+        "vehicle__rangefinder": Rangefinder(distance_m, 0.5, max_m, status, START_S),
         "vehicle__altitude_above_bottom_m": distance_m if status == "good" else None,
     }
 

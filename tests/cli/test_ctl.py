@@ -17,6 +17,7 @@ from executive import geo
 from executive.cli import main
 from executive.io.control import request
 from executive.mavlink_dialect import mavlink, mavutil
+from executive.status import status_line
 from tests_support import mission_text
 
 ROOT = Path(__file__).parents[2]
@@ -131,11 +132,16 @@ def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path, caps
         assert code == 0, err
         assert out.splitlines() == ["RUNNING: ctl: arm, sent to the autopilot", "arm: ACCEPTED by the autopilot"]
         wait_status(sock, lambda s: s["armed"] and s["mode"] == "GUIDED")
+        code, out, err = ctl_text(capsys, sock, "mode", "FOLLOW")  # no target to follow: refused, and nothing changes
+        assert code == 1 and "executive: ctl: mode FOLLOW: refused by the autopilot (FAILED); nothing changed (the mission RUNNING)" in err
+        status = request(str(sock), "status")["status"]
+        assert (status["state"], status["mode"]) == ("RUNNING", "GUIDED")
+        assert "ctl: mode FOLLOW refused by the autopilot (FAILED)" in status_line(status)
         code, out, err = ctl_text(capsys, sock, "mode", "HOLD")
         assert code == 0, err
         assert out.splitlines()[-1] == "mode HOLD: ACCEPTED by the autopilot"
         status = wait_status(sock, lambda s: s["mode"] == "HOLD")
-        assert (status["state"], status["reason"]) == ("PAUSED", "ctl: mode HOLD by a person: hands off")
+        assert (status["state"], status["reason"]) == ("PAUSED", "HOLD set by a person (ctl: mode HOLD)")
         disarmed = ctl(capsys, sock, "disarm")  # mid-mission: allowed
         assert (disarmed["ok"], disarmed["state"], disarmed["command"]["state"]) == (True, "PAUSED", "ACCEPTED")
         status = after(sock, wait_status(sock, lambda s: not s["armed"]), 5.0)  # nothing arms it again or takes it out of HOLD
@@ -144,7 +150,7 @@ def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path, caps
         assert code == 1 and "mode WARP: not a mode of this vehicle's autopilot" in err
         assert ctl(capsys, sock, "abort")["state"] == "ABORTED"
         _, err = run.communicate(timeout=30)
-        assert re.search(r"WARNING operator: ctl: mode HOLD; mission paused at leg [12], hands off until resumed, sent to the autopilot", err)
+        assert re.search(r"WARNING operator: HOLD set by a person \(ctl: mode HOLD\) -> mission paused at leg [12], hands off until resumed", err)
         assert "WARNING operator: ctl: disarm, sent to the autopilot" in err
     finally:
         run.kill()

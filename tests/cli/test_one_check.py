@@ -24,6 +24,7 @@ SQUARE = str(MISSIONS / "rover_square.yaml")
 #: The ASV mission samples with no instrument named (the simulated one: the built-in simulator only).
 ASV = str(MISSIONS / "asv_sampling.yaml")
 AUV = str(MISSIONS / "auv_survey.yaml")
+VTOL = str(MISSIONS / "vtol_transit.yaml")
 
 #: (mission, `run` options, `service install` options, what the refusal says)
 REFUSED = [
@@ -51,6 +52,14 @@ REFUSED = [
     pytest.param(SQUARE, ["--gcs", "udpin:0.0.0.0:99999"], ["--run-options=--gcs udpin:0.0.0.0:99999"], "--gcs ", id="gcs"),
     pytest.param(SQUARE, ["--can-log", "x.log"], ["--run-options=--can-log x.log"], "--can-log needs --can IFACE:CHANNEL", id="can-log"),
     pytest.param(SQUARE, ["--can", "nonsense"], ["--run-options=--can nonsense"], "--can: 'nonsense': expected IFACE:CHANNEL", id="can"),
+    pytest.param(AUV, ["--can", "virtual:x"], ["--run-options=--can virtual:x"], "drives a sub (vehicle: sub), which has no tracks", id="can-sub"),
+    pytest.param(VTOL, ["--can", "virtual:x"], ["--run-options=--can virtual:x"], "this mission drives a vtol (vehicle: vtol)", id="can-vtol"),
+    pytest.param(
+        SQUARE, ["--can", "virtual:x", "--autopilot", "px4"], ["--run-options=--can virtual:x --autopilot px4"], "the autopilot is PX4", id="can-px4"
+    ),
+    pytest.param(
+        SQUARE, ["--can", "virtual:x"], ["--run-options=--can virtual:x"], "the built-in simulator's rover has no tracked base", id="can-rover-sim"
+    ),
     pytest.param(SQUARE, ["--obstacles", "tcp:x"], ["--run-options=--obstacles tcp:x"], "--obstacles: ", id="obstacles"),
     pytest.param(SQUARE, ["--web-token-file", "t"], ["--run-options=--web-token-file t"], "--web-token-file needs --web [HOST:]PORT", id="web-token"),
     pytest.param(SQUARE, ["--web", "80x"], ["--run-options=--web 80x"], "--web: '80x': the port '80x' is not a number", id="web"),

@@ -233,6 +233,8 @@ def missions(draw: st.DrawFn) -> Mission:
                 wp |= {"control_mode": "altitude", "altitude_m": draw(st.floats(2.0, 100.0))}
             else:
                 wp["alt_m"] = draw(st.floats(0.0, 10.0))  # a sub's altitude below zero is a depth
+        elif kind == "vtol":  # within the default limits.alt_m, or 0: flown at the height it is at
+            wp["alt_m"] = draw(st.just(0.0) | st.floats(10.0, 120.0))
         else:
             wp["alt_m"] = draw(st.floats(-50.0, 500.0))
         waypoints.append(wp)

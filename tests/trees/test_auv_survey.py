@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -19,6 +20,7 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import explain_failure
 from executive.state import EkfFlags, EkfStatus, GlobalPosition, Rangefinder
+from executive.status import status_line
 from executive.testing import EKF_READY, Lockstep, ScriptedAutopilot
 from executive.vehicles import PROFILES
 
@@ -86,6 +88,7 @@ class ScriptedSub(ScriptedAutopilot):
         self.depth_target: float | None = None
         self.position_known = True
         self.sonar = True
+        self.sonar_silent = False  # the sonar stops reporting: the last reading stays on the blackboard and ages
         super().__init__(harness, start, step_m=8.0)
         self.refusal = _M.MAV_RESULT_DENIED
 
@@ -99,9 +102,11 @@ class ScriptedSub(ScriptedAutopilot):
             facts["vehicle__position"] = GlobalPosition(self.lat, self.lon, -self.depth, self.speed_over_m_s, 0, 0, 0, 0)
         good = self.sonar and SONAR_MIN_M <= self.altitude <= SONAR_MAX_M
         facts["vehicle__rangefinder"] = (
-            Rangefinder(self.altitude, SONAR_MIN_M, SONAR_MAX_M, "good" if good else "invalid", 0.0) if self.sonar else None
+            Rangefinder(self.altitude, SONAR_MIN_M, SONAR_MAX_M, "good" if good else "invalid", self.h.clock.now()) if self.sonar else None
         )
         facts["vehicle__altitude_above_bottom_m"] = self.altitude if good else None
+        if self.sonar_silent:
+            del facts["vehicle__rangefinder"], facts["vehicle__altitude_above_bottom_m"]
         return facts
 
     def _where(self, lat: float, lon: float) -> str:
@@ -443,6 +448,76 @@ def test_a_sub_that_does_not_come_up_fails_after_the_climb_time_and_a_margin(mak
     assert explain_failure(survey.root) == "Surface: not confirmed after 36 s: depth 2.0 m in SURFACE"
 
 
+# -- the seabed floor: never closer to the seabed than limits.altitude_m.min, as the sonar reads it (issue 44) ----------
+
+
+def test_a_depth_leg_deeper_than_the_water_is_held_at_the_seabed_floor_and_judged_there(
+    make_survey: MakeSurvey, caplog: pytest.LogCaptureFixture
+) -> None:
+    survey = make_survey(sub_mission({**NORTH, "name": "deep", "control_mode": "depth", "depth_m": 80.0}, SURVEY[2]))
+    statuses = survey.run(400)
+    assert statuses[-1] == Status.SUCCESS
+    sent = [c[1] for c in survey.sub.commands if c[0] == "depth"]
+    assert max(sent) == SEABED_M - 2.0  # 80 m never sent: 2 m (limits.altitude_m.min) above the 30 m seabed
+    assert survey.depths_at_leg_end[0] == (SEABED_M - 2.0, 2.0)  # the leg judged where it could be flown
+    warnings = [r.getMessage() for r in caplog.records if r.name == "executive.behaviours.seabed"]
+    assert warnings[0] == (
+        "Change depth: depth 80 m deeper than the water holds: seabed at 30.0 m by the sonar (30.0 m below), 2 m above it is 28.0 m: "
+        "held there (limits.altitude_m.min)"
+    )
+    assert warnings[1].startswith("Change depth: leg judged at the seabed floor: depth 28.0 m (target 28 m)")
+
+
+def test_a_mission_whose_policy_is_fail_fails_the_too_deep_leg_once_the_sonar_shows_the_seabed(make_survey: MakeSurvey) -> None:
+    mission = sub_mission({**NORTH, "name": "deep", "control_mode": "depth", "depth_m": 80.0})
+    survey = make_survey(mission.model_copy(update={"limits": mission.limits.model_copy(update={"seabed_floor": "fail"})}))
+    statuses = survey.run(100)
+    assert statuses[-1] == Status.FAILURE
+    assert explain_failure(survey.root) == (
+        "For each leg: leg 1/1 failed: Change depth: depth 80 m deeper than the water holds: seabed at 30.0 m by the sonar "
+        "(30.0 m below), 2 m above it is 28.0 m (limits.seabed_floor: fail)"
+    )
+    assert [c for c in survey.sub.commands if c[0] == "depth"] == []  # nothing sent toward the seabed
+
+
+def test_losing_the_sonar_on_the_way_down_stops_the_descent_until_it_is_back(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission({**NORTH, "name": "down", "control_mode": "depth", "depth_m": 25.0}))
+    survey.sub.dz_m = 0.5  # 5 m/s
+    survey.run(200, until=lambda: survey.sub.depth >= 5.0)
+    survey.sub.sonar_silent = True  # the last reading (25 m above the seabed) stays and ages
+    survey.run(40)
+    stopped = survey.sub.depth
+    assert 15.0 <= stopped <= 16.0  # 2 s of silence (SONAR_STALE_S) at 5 m/s, then no deeper than where it was
+    assert survey.run(100) == [Status.RUNNING] * 100 and survey.sub.depth == stopped
+    assert survey.state.leg_index == 0
+    survey.sub.sonar_silent = False
+    assert survey.run(200)[-1] == Status.SUCCESS
+    assert survey.depths_at_leg_end == [(25.0, SEABED_M - 25.0)]
+
+
+def test_losing_the_sonar_on_an_altitude_leg_holds_the_depth_the_sub_is_at(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission({**NORTH, "name": "over", "control_mode": "altitude", "altitude_m": 10.0}))
+    survey.sub.dz_m = 0.5
+    survey.run(200, until=lambda: survey.sub.depth >= 5.0)
+    survey.sub.sonar_silent = True
+    survey.run(40)
+    stopped = survey.sub.depth
+    assert 15.0 <= stopped <= 18.0 and ("depth", stopped, "in place") in survey.sub.commands  # not on to 20 m
+    assert survey.run(50) == [Status.RUNNING] * 50 and survey.sub.depth == stopped
+
+
+def test_a_seabed_rising_under_a_depth_leg_lifts_the_sub_to_the_floor(make_survey: MakeSurvey) -> None:
+    survey = make_survey(sub_mission(*SURVEY))
+    survey.under_way("depth", 5.0, "north")
+    survey.sub.step_m = 1.0
+    survey.sub.seabed_m = 6.0  # a rock 1 m under the sub
+    survey.run(15)  # the next setpoint (one a second)
+    assert ("depth", 4.0, "north") in survey.sub.commands and survey.sub.depth == 4.0  # 2 m above it
+    survey.sub.seabed_m = SEABED_M
+    survey.sub.step_m = 8.0
+    assert survey.run(400)[-1] == Status.SUCCESS
+
+
 # -- the lifecycle: pause holds, resume carries on with the same leg at the same depth -----------
 
 
@@ -477,6 +552,7 @@ def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) ->
             wp = mission.waypoints[runtime.mission_state.leg_index]
             v = sim.autopilot.vehicle
             legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": sim.clock.now()})
+            legs[-1]["status"] = status_line(runtime.status.snapshot())  # type: ignore[assignment]
             advance()
 
         runtime.mission_state.advance_leg = note_and_advance  # type: ignore[method-assign]
@@ -516,3 +592,18 @@ def test_on_the_simulator_a_sub_1_km_off_refuses_the_survey_without_arming_or_mo
     # the runtime's distance rule, before the tree's own (the same rule, repeated at its start) ever ticks
     assert outcome.reason.startswith("refused before anything was commanded: Within reach: waypoints[0] (start): 1200 m from the vehicle")
     assert (legs, end["armed"]) == ([], False) and end["moved_m"] < 0.01
+
+
+def test_on_the_simulated_ardusub_a_leg_deeper_than_the_water_is_held_2_m_above_the_seabed_and_the_survey_completes() -> None:
+    """Issue 44's repro: the example's last leg at 80 m over the simulator's 50 m seabed drove onto the bottom (50.2 m deep)."""
+    example = load_mission(ROOT / "missions" / "auv_survey.yaml")
+    assert example.home is not None
+    last = example.waypoints[-1].model_copy(update={"depth_m": 80.0})
+    limits = example.limits.model_copy(update={"leg_timeout_s": 240.0, "water_depth_m": None})  # validate would refuse it
+    mission = example.model_copy(update={"waypoints": [*example.waypoints[:-1], last], "limits": limits})
+    outcome, legs, end = _run_on_the_simulator(mission, (example.home.lat, example.home.lon, example.home.heading_deg))
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    assert legs[3]["altitude"] == pytest.approx(2.0, abs=0.5) and legs[3]["depth"] < 48.6  # the floor, not the 80 m (nor the bottom)
+    assert re.search(r"  depth 4[78]\.\d m, seabed [12]\.\d m below  GUIDED armed", str(legs[3]["status"])), legs[3]["status"]
+    assert re.search(r"  depth 2\d\.\d m, seabed 2[345]\.\d m below  ", str(legs[2]["status"])), legs[2]["status"]  # 24 m above it
+    assert (end["mode"], end["armed"]) == ("POSHOLD", True) and end["depth"] < 0.2

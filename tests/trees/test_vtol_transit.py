@@ -387,6 +387,32 @@ def test_a_leg_that_never_gets_within_the_acceptance_radius_times_out(make_trans
     assert transit.why == "For each leg: leg 1/2 failed: leg 1/2: timed out after 30 s, 303.2 m short"
 
 
+def _at_60_m(mission: Mission) -> Mission:
+    return mission.model_copy(update={"waypoints": [wp.model_copy(update={"alt_m": 60.0}) for wp in mission.waypoints]})
+
+
+def test_a_leg_over_its_waypoint_at_a_height_it_never_climbs_to_is_not_reached_and_times_out_saying_so(make_transit: MakeTransit) -> None:
+    """Issue 44: reached in 3-D. A plane that cannot climb (a downdraught) circles its 60 m waypoint 60 m out, 20 m under it."""
+    transit = make_transit(_at_60_m(vtol_mission(leg_timeout_s=30.0)))
+    transit.run_until_command(("reposition", *WP1, 60.0))
+    transit.plane.CLIMB_STEP_M = 0.0
+    statuses = transit.run(30 * 10 + 10)
+    assert statuses[-1] == F and transit.state.leg_index == 0
+    below = 60.0 - transit.plane.alt
+    assert below > 10.0 and transit.why == (
+        "For each leg: leg 1/2 failed: leg 1/2: timed out after 30 s, 60.0 m short, "
+        f"at {transit.plane.alt:.1f} m above home, {below:.1f} m below its 60 m"
+    )
+
+
+def test_a_leg_is_reached_within_its_height_tolerance(make_transit: MakeTransit) -> None:
+    transit = make_transit(_at_60_m(vtol_mission(alt_tolerance_m=30.0)))
+    transit.run_until_command(("reposition", *WP1, 60.0))
+    transit.plane.CLIMB_STEP_M = 0.0
+    transit.run_until_command(("reposition", *WP2, 60.0))  # over the first waypoint, under 30 m below it: reached
+    assert transit.state.leg_index == 1 and transit.plane.alt < 60.0 - 10.0
+
+
 def test_landing_ends_only_disarmed_on_the_ground_and_fails_after_the_leg_timeout(make_transit: MakeTransit) -> None:
     transit = make_transit(vtol_mission(land="last", leg_timeout_s=40.0))
     transit.plane.keeps_armed = True
@@ -605,3 +631,20 @@ def test_the_simulated_quadplane_loses_its_ekf_during_the_climb_and_the_climb_go
     assert flight.recorder.vtol_states[flight.recorder.vtol_states.index("MC") :] == TRANSIT_VTOL_STATES
     assert max(alt for *_, alt in flight.recorder.positions) == pytest.approx(40.0, abs=1.0)  # the legs' height: the flight went on
     assert (flight.end["armed"], flight.end["landed"]) == (False, _M.MAV_LANDED_STATE_ON_GROUND) and flight.end["off_home_m"] < 2.5
+
+
+def test_on_the_simulated_quadplane_a_leg_counts_only_once_the_aircraft_is_within_10_m_of_its_height() -> None:
+    """Issue 44: reaching is judged in 3-D (the acceptance radius, and limits.alt_tolerance_m of alt_m): a first waypoint at
+    120 m is passed over lower down, and counts only once the aircraft has climbed to within 10 m of it."""
+    example = load_mission(ROOT / "missions" / "vtol_transit.yaml")
+    high = example.waypoints[0].model_copy(update={"alt_m": 120.0})
+    mission = example.model_copy(update={"waypoints": [high, *example.waypoints[1:]]})
+    recorder = Recorder()
+    with Lockstep(mission, progress=recorder) as sim:
+        outcome = sim.run_to_end(limit_s=600)
+    assert str(outcome.status) == "COMPLETED", outcome.reason
+    on_leg_1 = [(math.dist(global_to_local(high.lat, high.lon, lat, lon), (0, 0)), alt) for leg, lat, lon, alt in recorder.positions if leg == 0]
+    low_within = [alt for off, alt in on_leg_1 if off <= mission.limits.acceptance_radius_m and alt < 110.0]
+    assert low_within, "the aircraft was never within the radius below 110 m: the case is not tested"
+    reached_at = next(alt for leg, _, _, alt in recorder.positions if leg == 1)
+    assert reached_at >= 110.0

@@ -4,6 +4,9 @@ The recordings (tests/data/px4/, cut from one run of missions/vtol_transit.yaml,
 PX4 main a70a558393 software-in-the-loop with SIH physics, standard VTOL, speed factor 1; the run
 COMPLETED) go through the MAVLink reader, the PX4 autopilot port and the intervention watch
 (tests/tlog_replay.py). Times are seconds from the first record of each file.
+``vtol_climb_past_hagl.tlog`` (issue 44) is cut (seconds 54-70) from a run of vtol_transit.yaml with its first waypoint
+at 120 m, same firmware, instance 2, speed factor 1, filtered to HEARTBEAT, GLOBAL_POSITION_INT, ESTIMATOR_STATUS,
+SYS_STATUS, EXTENDED_SYS_STATE, STATUSTEXT and the commands; that run ABORTED on the NaN it records (fixed since).
 """
 
 from __future__ import annotations
@@ -78,3 +81,17 @@ def test_judged_by_ardupilots_rules_the_same_change_would_be_a_persons_and_pause
     """A control: ArduPilot has no such transition, so the watch that let it pass is the one that would pause otherwise."""
     replay = Replay(judged_as="ardupilot").play(PX4 / "vtol_landing.tlog")
     assert replay.values("/vehicle/mode_set_by")[-1] == "others" and replay.state.status is MissionStatus.PAUSED
+
+
+def test_climbing_past_the_height_above_ground_it_can_fuse_px4_reports_a_nan_hagl_ratio_and_the_ekf_stays_judged() -> None:
+    """Issue 44, real PX4 SIH standard_vtol climbing to a 120 m waypoint: from 96.6 m ESTIMATOR_STATUS's hagl_ratio is NaN
+    (estimator_status.hagl_test_ratio: no height above the ground fused). The whole report was dropped: 3 s later the EKF
+    guard held the aircraft (failsafe ekf_loss) and the mission aborted 60 s on. A test not made is no broken report."""
+    path = PX4 / "vtol_climb_past_hagl.tlog"
+    hagl = [msg.hagl_ratio for _, msg in records(path) if msg.get_type() == "ESTIMATOR_STATUS"]
+    assert any(r != r for r in hagl) and any(r == r for r in hagl)  # NaN from part-way through
+    replay = Replay().play(path)
+    ekf = replay.bb.get("/vehicle/ekf")
+    last = max(t for t, _ in records(path)) - min(t for t, _ in records(path))
+    assert ekf is not None and last - ekf.time < 1.0  # still read at 2 Hz to the end
+    assert int(ekf.flags) == 0x37F and EkfOk().check() is None
