@@ -71,7 +71,21 @@ class StatusSource:
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
             "command": bb.get("/operator/command"),  # a person's latest arm, disarm or mode, and the autopilot's answer
+            "energy": _energy(bb.get("/energy/estimate")),
         }
+
+
+def _energy(estimate: Any) -> dict[str, float] | None:
+    """The energy left above the reserve, the estimate to finish and return (and its 1 sigma), the margin, Wh; None: no estimate."""
+    if estimate is None:
+        return None
+    return {
+        "has_wh": round(estimate.has_wh, 2),
+        "need_wh": round(estimate.route_wh + estimate.home_wh, 2),
+        "home_wh": round(estimate.home_wh, 2),
+        "sigma_wh": round(estimate.sigma_wh, 2),
+        "margin_wh": round(estimate.margin_wh, 2),
+    }
 
 
 def _heights(bb: py_trees.blackboard.Client) -> dict[str, Any]:
