@@ -129,7 +129,7 @@ class InterventionWatch:
         if status is MissionStatus.PAUSED and self._paused_here:
             if mode == self.expected and not self._target_paused:
                 self._paused_here = False
-                log.warning("intervention: the vehicle is back in %s -> resume", mode)
+                log.warning("the vehicle is back in %s -> resume", mode)
                 self.mission_state.resume(f"{mode} set again")
             return
         if status is MissionStatus.RUNNING and persons_target is not None:
@@ -142,15 +142,15 @@ class InterventionWatch:
             return
         if cause is not None:  # the autopilot's own transition: its failsafe is answered by ours, which resume the leg's mode
             if cause.failsafe:
-                log.warning("intervention: %s set by the autopilot (%s): left to the failsafes, no pause", mode, cause.why)
+                log.warning("%s set by the autopilot (%s): left to the failsafes, no pause", mode, cause.why)
             else:
-                log.warning("intervention: %s (from %s) set by the autopilot (%s): no pause", mode, previous, cause.why)
+                log.warning("%s (from %s) set by the autopilot (%s): no pause", mode, previous, cause.why)
             self.expected = mode if self.expected is not None else None
             return
         if self.expected is None or rc_takeover(self.rc, self._bb.get) is not None:
             return  # not yet mid-mission (nothing of ours to keep), or a take-over the rc_takeover failsafe answers
         reason = f"{mode} set by {self._who(now)}"
-        log.warning("intervention: %s (the leg was in %s) -> pause, hands off", reason, self.expected)
+        log.warning("%s (the leg was in %s) -> pause, hands off", reason, self.expected)
         self._paused_here = True
         self.mission_state.pause(reason, hold=False)
 

@@ -95,4 +95,8 @@ def _validate(path: str, args: argparse.Namespace, results: list[dict[str, Any]]
     if said is not None:
         results[-1]["energy"] = said
     if not args.json:
-        print(f"{path}: ok ({len(mission.waypoints)} waypoints, vehicle {mission.vehicle}, tree {tree})" + (f"; energy: {said}" if said else ""))
+        count = len(mission.waypoints)
+        print(
+            f"{path}: ok ({count} waypoint{'' if count == 1 else 's'}, vehicle {mission.vehicle}, tree {tree})"
+            + (f"; energy: {said}" if said else "")
+        )

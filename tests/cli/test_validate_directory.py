@@ -31,14 +31,14 @@ def test_every_yaml_file_of_a_directory_in_name_order_and_nothing_else(mission_l
     assert main(["validate", str(mission_list)]) == 0
     out, err = capsys.readouterr()
     assert err == ""
-    assert out.splitlines() == [f"{mission_list / name}: ok (1 waypoints, vehicle rover, tree waypoints)" for name in ("a.yaml", "b.yaml")]
+    assert out.splitlines() == [f"{mission_list / name}: ok (1 waypoint, vehicle rover, tree waypoints)" for name in ("a.yaml", "b.yaml")]
 
 
 def test_a_bad_file_of_the_directory_is_reported_with_its_location_and_exits_2(mission_list: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["validate", str(mission_list)]) == 2
     out, err = capsys.readouterr()
     assert len(out.splitlines()) == 2  # a.yaml and b.yaml are still checked and reported
-    assert err == f"{mission_list / 'c.yaml'}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90\n"
+    assert err == f"{mission_list / 'c.yaml'}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90 (waypoint 1)\n"
 
 
 def test_a_directory_without_mission_files_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
