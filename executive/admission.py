@@ -25,11 +25,15 @@ from executive.mission import loader
 from executive.mission.errors import Path
 from executive.mission.model import Mission
 from executive.mission.rules import autopilot_errors, cross_field_errors
+from executive.sensing.energy import planned
 
 
 def mission_errors(mission: Mission) -> list[tuple[Path, str]]:
     """The rules between the mission's fields, its instrument's options, and its tree: each error the path of the offending value and why."""
     errors = cross_field_errors(mission)
+    energy = planned(mission)
+    if energy is not None and not isinstance(energy, str) and not energy.fits:  # not even on a full pack
+        errors.append((("energy",), f"the route and the way home do not fit a full pack: {energy.figures()}"))
     if mission.sampling is not None and mission.sampling.instrument is not None:
         errors += option_errors(mission.sampling.instrument, ("sampling", "instrument"))
     if not isinstance(mission.tree, str):

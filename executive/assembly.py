@@ -27,6 +27,7 @@ from executive.operator import Operator
 from executive.operator.ground_station import GroundStationControl
 from executive.operator.persons_commands import PersonsCommands
 from executive.runtime import Runtime
+from executive.sensing.energy import EnergyWatch
 from executive.sensing.heading import HeadingFilter
 from executive.sensing.rc import RcReader
 from executive.services import PacedService, RunObserver, Service, Step
@@ -130,6 +131,7 @@ def build_runtime(
     # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
     intervention = InterventionWatch(clock, ap.autopilot, state, PROFILES[mission.vehicle], mission.rc)
     wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), persons, intervention]
+    wiring.readers.append(EnergyWatch(clock, state, lambda: ap.autopilot.backend.name))
     return Runtime(
         mission,
         clock,

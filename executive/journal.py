@@ -331,11 +331,17 @@ def open_journal(path: str | Path, clock: Clock) -> Iterator[Journal]:
 class JournalLogHandler(logging.Handler):
     """Puts the executive's warnings and errors (link lost, guards failing, refusals, crashes) in the journal as events."""
 
+    #: Loggers whose notes (INFO) are kept too: the energy estimate of every leg (``report`` tells where the energy went).
+    NOTED = frozenset({"executive.energy"})
+
     def __init__(self, journal: Journal, level: int = logging.WARNING) -> None:
-        super().__init__(level)
+        super().__init__(min(level, logging.INFO))
+        self._level = level
         self._journal = journal
 
     def emit(self, record: logging.LogRecord) -> None:
+        if record.levelno < self._level and record.name not in self.NOTED:
+            return
         try:
             self._journal.event(record.name.rsplit(".", 1)[-1], record.getMessage())
         except Exception:  # the journal must never take the executive down with it

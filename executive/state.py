@@ -103,6 +103,28 @@ class Battery:
 
 
 @dataclass(frozen=True, slots=True)
+class BatteryStatus:
+    """BATTERY_STATUS (MAVLink common.xml, id 147) of the main battery (``id`` 0); ``None`` where the autopilot says 'unknown'.
+
+    ``consumed_mah``: current_consumed, mAh (-1: not estimated); ``consumed_wh``: energy_consumed, hJ / 36
+    (-1: not estimated; ArduPilot sends consumed_wh * 36, ``GCS_Common.cpp`` send_battery_status; PX4 always -1,
+    ``src/modules/mavlink/streams/BATTERY_STATUS.hpp``); ``remaining_pct``: battery_remaining (-1: not estimated);
+    ``time_remaining_s``: time_remaining (0: not estimated); ``voltage_v``: the cells summed (UINT16_MAX: no cell;
+    a monitor without cell voltages puts the pack's voltage in cell 0, both firmwares); ``current_a``: current_battery
+    (-1: not measured); ``charge_state``: MAV_BATTERY_CHARGE_STATE (0: undefined).
+    """
+
+    consumed_mah: float | None
+    consumed_wh: float | None
+    remaining_pct: int | None
+    time_remaining_s: int | None
+    voltage_v: float | None
+    current_a: float | None
+    charge_state: int
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
 class Rangefinder:
     """The downward rangefinder (DISTANCE_SENSOR, orientation PITCH_270): its reading judged against its own range.
 

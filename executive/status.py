@@ -21,7 +21,7 @@ KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
     "/runtime/late_ticks", "/mission/waiting", "/vehicle/mav_type", "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder",
-    "/operator/command", "/link/device_lost", "/runtime/storage_lost", "/base/system", "/base/up",
+    "/operator/command", "/link/device_lost", "/runtime/storage_lost", "/base/system", "/base/up", "/energy/estimate",
 )  # fmt: skip
 
 
@@ -72,6 +72,7 @@ class StatusSource:
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
             "command": bb.get("/operator/command"),  # a person's latest arm, disarm or mode, and the autopilot's answer
             "base": _base(bb),
+            "energy": _energy(bb.get("/energy/estimate")),
         }
 
 
@@ -81,6 +82,19 @@ def _base(bb: py_trees.blackboard.Client) -> dict[str, Any] | None:
     if system is None:
         return None
     return {"up": bool(bb.get("/base/up")), "state": system.vehicle_state, "mode": system.control_mode, "battery_v": round(system.battery_v, 1)}
+
+
+def _energy(estimate: Any) -> dict[str, float] | None:
+    """The energy left above the reserve, the estimate to finish and return (and its 1 sigma), the margin, Wh; None: no estimate."""
+    if estimate is None:
+        return None
+    return {
+        "has_wh": round(estimate.has_wh, 2),
+        "need_wh": round(estimate.route_wh + estimate.home_wh, 2),
+        "home_wh": round(estimate.home_wh, 2),
+        "sigma_wh": round(estimate.sigma_wh, 2),
+        "margin_wh": round(estimate.margin_wh, 2),
+    }
 
 
 def _heights(bb: py_trees.blackboard.Client) -> dict[str, Any]:
@@ -127,6 +141,8 @@ def status_fields(status: dict[str, Any]) -> list[str]:
         fields.append(refused)
     if status["battery_pct"] is not None:
         fields.append(f"batt {status['battery_pct']}%")
+    if energy := status.get("energy"):  # left above the reserve / to finish and return, +/- 1 sigma
+        fields.append(f"energy {energy['has_wh']:.1f}/{energy['need_wh']:.1f}±{energy['sigma_wh']:.1f} Wh")
     if base := status.get("base"):
         fields.append(f"base {base['state']} {base['mode']} {base['battery_v']:.1f}V" + ("" if base["up"] else " (not heard)"))
     if status.get("waiting") and status["state"] == "RUNNING":

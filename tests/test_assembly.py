@@ -92,7 +92,7 @@ def test_paced_services_run_between_ticks(square_mission, link, clock):
 def test_the_operator_side_and_the_estimators_are_services_in_order(square_mission, link, clock):
     runtime = build_runtime(square_mission, link, clock)
     names = [service_name(s) for s in runtime.readers]
-    assert names == ["ground-station commands", "HeadingFilter", "RcReader", "PersonsCommands", "InterventionWatch"]
+    assert names == ["ground-station commands", "HeadingFilter", "RcReader", "PersonsCommands", "InterventionWatch", "EnergyWatch"]
     names = [service_name(s) for s in runtime.writers]
     assert names == ["GroundStationControl"]
 

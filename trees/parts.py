@@ -13,6 +13,8 @@ from executive.behaviours import (
     AutopilotAtLeg,
     BatteryAbove,
     EkfOk,
+    EnergyEnough,
+    EnergyFits,
     Failsafe,
     FollowAutoLeg,
     GoTo,
@@ -92,6 +94,11 @@ def readings_in(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
     return [ReadingsIn(switches, limits.battery_min_pct, limits.battery_min_v)]
 
 
+def energy_fits(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
+    """With an ``energy:`` block: the whole route and the way home must fit the battery above the reserve, else refused unarmed."""
+    return [EnergyFits()] if mission.energy is not None else []
+
+
 def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
     """A usable EKF, the readings its checks need (bounded), the autopilot's mode switch clear of the mission's; then arm or wait for it.
 
@@ -110,7 +117,7 @@ def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
         arming = WaitUntil(either, limits.recovery_timeout_s, name=name, hint=how_to_arm(mission))
     else:
         arming = WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm", hint=how_to_arm(mission))
-    checks = [wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission), *mission_end_checks(mission)]
+    checks = [wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission), *mission_end_checks(mission), *energy_fits(mission)]
     return py_trees.composites.Sequence("Pre-flight", memory=True, children=[*checks, arming])
 
 
@@ -154,6 +161,7 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
         ("battery_low", BatteryAbove(limits.battery_min_pct, limits.battery_min_v) if battery_checked else None),
         ("rc_loss", RcNotLost(mission.rc.source)),
         ("geofence_breach", inside_geofence(mission)),
+        ("energy", EnergyEnough() if mission.energy is not None else None),
     ]
     extra = [guard for condition, guard in candidates if condition not in covered and guard is not None]
     policy = failsafe_policy(mission)

@@ -34,6 +34,9 @@ class ArduPilotPort(MavlinkPort):
             first_item_seq=1,
             mode_switch_param=MODE_SWITCH_PARAMS.get(profile.kind),
             motion_params=MOTION_PARAMS if profile.kind in ("rover", "boat") else (),
+            # libraries/AP_BattMonitor/AP_BattMonitor_Params.cpp: MONITOR (0 none, 3 voltage only, 4 voltage and current...),
+            # CAPACITY (mAh, 3300 by default), ARM_MAH and ARM_VOLT (what arming requires; 0: nothing)
+            battery_params=("BATT_MONITOR", "BATT_CAPACITY", "BATT_ARM_MAH", "BATT_ARM_VOLT"),
         )
 
     def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:

@@ -58,6 +58,9 @@ class Capabilities:
     #: Parameters that say how the vehicle drives to a point, read at pre-flight for GoTo's look-ahead (ArduRover:
     #: executive.autopilot.rover_motion.MOTION_PARAMS); empty: its driving is not modelled, every waypoint is a stop.
     motion_params: tuple[str, ...] = ()
+    #: The battery's parameters, read at pre-flight for the energy rule (executive.energy.battery): ArduPilot BATT_MONITOR,
+    #: BATT_CAPACITY, BATT_ARM_MAH, BATT_ARM_VOLT; PX4 BAT1_CAPACITY, BAT1_N_CELLS, BAT1_V_EMPTY, BAT1_V_CHARGED.
+    battery_params: tuple[str, ...] = ()
 
 
 class AutopilotPort(Protocol):

@@ -104,6 +104,9 @@ class Px4Port(MavlinkPort):
             transition_anywhere=True,
             takeoff_alt_amsl=True,
             first_item_seq=0,  # PX4's mission has no home slot: src/modules/mavlink/mavlink_mission.cpp stores item 0 as the first item
+            # src/lib/battery/module.yaml: BAT1_CAPACITY mAh (-1: unknown, the default), BAT1_N_CELLS (0: unknown), per-cell
+            # BAT1_V_EMPTY (3.6 V) and BAT1_V_CHARGED (4.05 V)
+            battery_params=("BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED"),
         )
         self.stream = OffboardStream(commander)
         self._bb = blackboard.reader("px4 port", ["/link/mission_transfer", "/vehicle/home"])

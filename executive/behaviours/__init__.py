@@ -4,6 +4,7 @@ from executive.behaviours.auto_legs import AutopilotAtLeg, FollowAutoLeg, Horizo
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
 from executive.behaviours.commands import Arm, ChangeSpeed, CommandAction, Disarm, HoldFor, SetMode
 from executive.behaviours.depth import ChangeAltitude, ChangeDepth, Surface
+from executive.behaviours.energy import EnergyEnough, EnergyFits
 from executive.behaviours.failsafe import Failsafe, FailsafeNote
 from executive.behaviours.flow import ForEachLeg, Timeout, UnlessPaused, WaitForGuards, WaitUntil
 from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive, ModeIs
@@ -43,6 +44,8 @@ __all__ = [
     "Disarm",
     "DriveRouteInAuto",
     "EkfOk",
+    "EnergyEnough",
+    "EnergyFits",
     "Failsafe",
     "FailsafeNote",
     "FollowAutoLeg",

@@ -42,6 +42,7 @@ from executive.autopilot import AutopilotPort
 from executive.autopilot.fallbacks import DISARM
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.commands import SetMode
+from executive.behaviours.energy import EnergyEnough
 from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive
 from executive.behaviours.position_guards import InsideGeofence
 from executive.behaviours.rc_guards import RcAutoMode, RcFresh, RcNotLost, RcNotTakingOver
@@ -65,6 +66,7 @@ CONDITIONS: tuple[tuple[type[Guard], str], ...] = (
     (HeadingSane, "heading_insane"),
     (BatteryAbove, "battery_low"),
     (InsideGeofence, "geofence_breach"),
+    (EnergyEnough, "energy"),
 )
 #: A stronger reaction replaces a weaker one in force, never the reverse (a surfacing sub is not stopped by a later hold).
 RANK = {"wait": 0, "hold": 1, "loiter": 1, "rtl": 2, "surface": 2, "disarm": 3}

@@ -65,6 +65,10 @@ def render(report: dict[str, Any]) -> str:
     if report.get("routes"):
         lines.append(f"route edits ({len(report['routes'])}):")
         lines += [f"  [{r['t']:9.1f} s] {r['waypoints']} waypoints, {_heading(r)}: {r['reason']}" for r in report["routes"]]
+    energy = [e for e in report["events"] if e["kind"] == "energy"]
+    if energy:  # each leg's estimate (executive.sensing.energy): where the energy went, leg by leg
+        lines.append(f"energy ({len(energy)} estimates):")
+        lines += [f"  [{e['t']:9.1f} s] {e['text']}" for e in energy]
     lines.append(f"events ({len(report['events'])}):")
     lines += [f"  [{e['t']:9.1f} s] {e['kind']}: {e['text']}" for e in report["events"]]
     return "\n".join(lines)

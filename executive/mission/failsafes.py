@@ -19,6 +19,7 @@ gps_glitch        hold, resume    hold, resume    hold, resume       hold, resum
 heading_insane    hold, resume    hold, resume    hold, resume       hold, resume
 battery_low       rtl, abort      rtl, abort      surface, abort     rtl, abort
 geofence_breach   hold, abort     rtl, abort      surface, abort     rtl, abort
+energy            rtl, abort      rtl, abort      surface, abort     rtl, abort
 ================  ==============  ==============  =================  ============================
 
 rc_takeover and disarmed are a person's acts (or the autopilot's own failsafe's): a person always wins, so
@@ -44,7 +45,7 @@ from dataclasses import dataclass
 from typing import Literal, get_args
 
 FailsafeCondition = Literal[
-    "link_loss", "rc_takeover", "disarmed", "rc_loss", "ekf_loss", "gps_glitch", "heading_insane", "battery_low", "geofence_breach"
+    "link_loss", "rc_takeover", "disarmed", "rc_loss", "ekf_loss", "gps_glitch", "heading_insane", "battery_low", "geofence_breach", "energy"
 ]
 FailsafeReaction = Literal["hold", "loiter", "rtl", "surface", "disarm", "wait"]
 FailsafeRecovery = Literal["resume", "abort"]
@@ -69,6 +70,8 @@ PERSON_CONDITIONS: dict[str, str] = {
 
 _R, _W, _A = "resume", "wait", "abort"
 _COMMON = {"rc_takeover": (_W, _R), "disarmed": (_W, _R), "ekf_loss": ("hold", _R), "gps_glitch": ("hold", _R), "heading_insane": ("hold", _R)}
+#: energy: home the shortest safe way while it still fits (RTL, where the firmware's RTL goes home); a sub surfaces.
+_ENERGY = {"rover": ("rtl", _A), "boat": ("rtl", _A), "sub": ("surface", _A), "vtol": ("rtl", _A)}
 #: The default failsafe policy of each vehicle kind: condition -> (reaction, recovery). The table in the module docstring.
 VEHICLE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
     "rover": _COMMON | {"link_loss": ("hold", _R), "rc_loss": ("hold", _R), "battery_low": ("rtl", _A), "geofence_breach": ("hold", _A)},
@@ -76,6 +79,8 @@ VEHICLE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
     "sub": _COMMON | {"link_loss": ("surface", _R), "rc_loss": ("hold", _R), "battery_low": ("surface", _A), "geofence_breach": ("surface", _A)},
     "vtol": _COMMON | {"link_loss": ("hold", _R), "rc_loss": ("hold", _R), "battery_low": ("rtl", _A), "geofence_breach": ("rtl", _A)},
 }
+for _kind, _rule in _ENERGY.items():
+    VEHICLE_FAILSAFES[_kind]["energy"] = _rule
 #: Seed systems' rules that differ from their vehicle's defaults: the defaults of their trees.
 TREE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
     "goto_sample": {"ekf_loss": ("disarm", _R), "rc_takeover": (_W, _A)},

@@ -254,6 +254,24 @@ class FailsafeConfig(BaseModel):
     heading_insane: FailsafeRule | None = Field(None, description="the heading filter does not trust the compass (/heading/ok false)")
     battery_low: FailsafeRule | None = Field(None, description="the battery below limits.battery_min_pct or limits.battery_min_v")
     geofence_breach: FailsafeRule | None = Field(None, description="the vehicle outside the mission's geofence (only with a geofence: section)")
+    energy: FailsafeRule | None = Field(None, description="the rest of the route and the way home no longer fit the battery (energy:)")
+
+
+class EnergyConfig(BaseModel):
+    """energy: will the rest of the route and the way home fit the battery, above a reserve (executive.sensing.energy)."""
+
+    model_config = _STRICT
+    capacity_wh: float | None = Field(
+        None, gt=0.0, le=1_000_000.0, description="the pack's energy, Wh (else the autopilot's capacity in mAh times nominal_v)"
+    )
+    nominal_v: float | None = Field(
+        None, gt=0.0, le=1000.0, description="the pack's nominal voltage, to turn the autopilot's mAh into Wh (PX4: BAT1_N_CELLS x 3.7 V)"
+    )
+    usable_pct: float = Field(100.0, gt=0.0, le=100.0, description="the share of the capacity that can be drawn at all")
+    reserve_pct: float = Field(20.0, ge=0.0, lt=100.0, description="the share of the capacity kept when the vehicle is home")
+    wh_per_km: float | None = Field(None, gt=0.0, le=100_000.0, description="seed of the consumption per km moved (else the kind's default)")
+    wh_per_min: float | None = Field(None, ge=0.0, le=100_000.0, description="seed of the consumption per minute held (else the kind's default)")
+    return_by: Literal["straight", "route"] = Field("straight", description="the way home: the straight line, or the route back")
 
 
 class Home(BaseModel):
@@ -371,6 +389,7 @@ class Mission(BaseModel):
     vtol: VtolOptions | None = Field(None, description="vtol_transit options")
     rc_route: RcRouteOptions | None = Field(None, description="ugv_rc_route options")
     simulator: SimulatorOptions | None = Field(None, description="the built-in simulated vehicle for `executive run` without --mavlink")
+    energy: EnergyConfig | None = Field(None, description="the battery's energy and reserve: the route and the way home must fit")
     waypoints: list[Waypoint] = Field(max_length=100_000, description="the route; only ugv_rc_route may start empty (the operator records it)")
 
     @model_validator(mode="before")

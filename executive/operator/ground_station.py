@@ -94,6 +94,9 @@ class GroundStationControl:
                 "MSN_LEG": float(status["leg"]),
                 "WP_DIST": -1.0 if status["distance_m"] is None else float(status["distance_m"]),
             }
+            if status.get("energy") is not None:  # Wh: left above the reserve, to finish and return, the margin (1 sigma off)
+                energy = status["energy"]
+                values |= {"EN_LEFT": energy["has_wh"], "EN_NEED": energy["need_wh"], "EN_MARGIN": energy["margin_wh"]}
             boot_ms = int(now * 1000) & 0xFFFFFFFF
             self._outbox += [self._encoder.named_value_float_encode(boot_ms, name.encode(), value) for name, value in values.items()]
         for msg in self._outbox:

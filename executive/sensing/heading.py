@@ -203,6 +203,11 @@ def load_filterpy() -> None:
         threading.Thread(target=load, name="load filterpy", daemon=True).start()
 
 
+def filterpy_ready() -> bool:
+    """filterpy's Kalman filter is loaded (:func:`load_filterpy`): a filter can be made without waiting."""
+    return _filterpy_ready.is_set()
+
+
 def wait_for_filterpy(timeout_s: float = 30.0) -> bool:
     """Block until filterpy is loaded (tools and tests that want a judging filter from the first reading)."""
     load_filterpy()

@@ -138,8 +138,22 @@ class BatterySag(_Fault):
         return self
 
 
+class WeakBattery(_Fault):
+    """The pack holds only ``share`` of its rated charge from the start (aged, or not fully charged): see executive.sim.battery."""
+
+    kind: Literal["weak_battery"]
+    share: float = Field(gt=0.0, le=1.0, description="the share of its rated charge it holds")
+
+
+class Headwind(_Fault):
+    """A headwind or a current: the vehicle draws ``factor`` times the current for the same work while it lasts."""
+
+    kind: Literal["headwind"]
+    factor: float = Field(gt=0.0, le=10.0, description="how many times the current it draws")
+
+
 Fault = Annotated[
-    LinkLoss | EkfDegradation | GpsGlitch | CompassBias | CompassGlitch | RcTakeover | RcInput | RcLoss | BatterySag,
+    LinkLoss | EkfDegradation | GpsGlitch | CompassBias | CompassGlitch | RcTakeover | RcInput | RcLoss | BatterySag | WeakBattery | Headwind,
     Field(discriminator="kind"),
 ]
 
@@ -274,6 +288,7 @@ class FaultInjector:
             if isinstance(fault, RcLoss) and start <= t < end and t >= start + RC_FAILSAFE_TIMEOUT_S and i not in self._failsafe_done:
                 self._failsafe_done.add(i)
                 self._rc_failsafe(fault, autopilot)
+        autopilot.load_factor = math.prod(f.factor for f in self.active(t) if isinstance(f, Headwind))
         if self._loses_position:
             autopilot.ekf_position_lost = any(isinstance(f, EkfDegradation) and f.lose_position for f in self.active(t))
         if self._steers:
@@ -284,6 +299,8 @@ class FaultInjector:
                 log.warning("fault injection: the %s model cannot steer by a wrong compass; only the telemetry is biased", autopilot.profile.kind)
 
     def _start(self, i: int, fault: Fault, autopilot: FirmwareSim) -> None:
+        if isinstance(fault, WeakBattery):
+            autopilot.battery.start_charge = fault.share
         if isinstance(fault, RcInput):
             self._saved_inputs[i] = {ch: autopilot.rc_channels[ch - 1] for ch in fault.channels}
             for ch, pwm in fault.channels.items():

@@ -17,11 +17,12 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 from executive.clock import Clock
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.sim.battery import SPECS, SimBattery
 from executive.sim.mission_store import MissionStore
 from executive.sim.physics.vehicle import VehicleModel
 from executive.sim.proximity import Proximity
@@ -32,9 +33,7 @@ Home = tuple[float, float, float]  # latitude, longitude (degrees), heading (deg
 #: Where ArduPilot's own simulator starts: Canberra Model Aircraft Club.
 DEFAULT_HOME: Home = (-35.363261, 149.165230, 353.0)
 
-BATTERY_MAH = 10000.0
 RELAYS = 16  # ArduPilot 4.5: RELAY1..RELAY16 (AP_Relay)
-BATTERY_FULL_V, BATTERY_EMPTY_V, BATTERY_SAG_V_PER_A = 12.6, 10.5, 0.03
 
 _M = mavlink
 EPSILON_S = 1e-6  # clock times closer than this are the same instant
@@ -87,6 +86,12 @@ class FirmwareSim(ABC):
     MISSION_STORE: ClassVar[type[MissionStore]]  # the firmware's side of the mission protocol
     PARAMS: ClassVar[Mapping[str, float]] = {}  # parameters answered to PARAM_REQUEST_READ, with the firmware's defaults
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset()  # answered as integers (MAV_PARAM_TYPE_INT8), the rest REAL32
+    #: battery_remaining counted from a full pack at boot (ArduPilot's analog monitor), else the charge the pack holds (PX4).
+    BATTERY_COUNTED_FROM_FULL: ClassVar[bool] = True
+    #: energy_consumed reported (ArduPilot: consumed_wh * 36); PX4 sends -1.
+    BATTERY_REPORTS_ENERGY: ClassVar[bool] = True
+    #: The parameter holding the pack's capacity in mAh (set in ``params``, it sizes the simulated pack too).
+    BATTERY_CAPACITY_PARAM: ClassVar[str] = ""
 
     def __init__(
         self,
@@ -116,7 +121,12 @@ class FirmwareSim(ABC):
         self.rc_channels = [1500] * 16
         self.rc_channels[4] = self.rc_channels[5] = 1000  # ch5/ch6 switches low
         self.ekf_position_lost = False  # set by fault injection: the EKF has no horizontal position
-        self.consumed_mah = 0.0
+        spec = SPECS.get(profile.kind, SPECS["rover"])
+        if params and self.BATTERY_CAPACITY_PARAM in params:  # a pack of another size fitted (and the autopilot told so)
+            spec = replace(spec, capacity_mah=float(params[self.BATTERY_CAPACITY_PARAM]))
+        self.battery = SimBattery(spec)
+        self.params = {**self.battery_params(spec.capacity_mah), **self.params}
+        self.load_factor = 1.0  # a headwind or a current (fault injection) makes the same work draw more
         self._mav = encoder(system_id, component_id)
         self._t0 = self._t = clock.now()
         self._mode_names = {number: name for name, number in profile.modes.items()}
@@ -277,6 +287,7 @@ class FirmwareSim(ABC):
         return {
             _M.MAVLINK_MSG_ID_HEARTBEAT: self._msg_heartbeat,
             _M.MAVLINK_MSG_ID_SYS_STATUS: self._msg_sys_status,
+            _M.MAVLINK_MSG_ID_BATTERY_STATUS: self._msg_battery_status,
             _M.MAVLINK_MSG_ID_GPS_RAW_INT: self._msg_gps_raw_int,
             _M.MAVLINK_MSG_ID_ATTITUDE: self._msg_attitude,
             _M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: self._msg_global_position_int,
@@ -328,11 +339,20 @@ class FirmwareSim(ABC):
                 # at a high speed-up several intervals may pass between updates: send once, no burst
                 self._due[msg_id] = due + interval if due + interval > self._t else self._t + interval
 
+    def battery_params(self, capacity_mah: float) -> dict[str, float]:
+        """The battery monitor's parameters, as the firmware answers them for a pack of ``capacity_mah``."""
+        return {}
+
     def _drain_battery(self, dt: float) -> None:
-        self.consumed_mah += self._current_a() * dt / 3.6
+        self.battery.draw(self._current_a(), dt)
 
     def _current_a(self) -> float:
-        return 0.5 + (2.0 + 10.0 * self._throttle() if self.armed else 0.0)
+        return self.battery.load_a(self._throttle(), self.armed, self.load_factor)
+
+    @property
+    def consumed_mah(self) -> float:
+        """The charge drawn since boot."""
+        return self.battery.consumed_mah
 
     # -- incoming messages -----------------------------------------------------------------------
 
@@ -434,11 +454,19 @@ class FirmwareSim(ABC):
     # -- outgoing messages -----------------------------------------------------------------------
 
     def _msg_sys_status(self) -> MAVLinkMessage:
-        current = self._current_a()
-        remaining = max(0.0, 1.0 - self.consumed_mah / BATTERY_MAH)
-        volts = BATTERY_EMPTY_V + (BATTERY_FULL_V - BATTERY_EMPTY_V) * remaining - BATTERY_SAG_V_PER_A * current
-        battery = (round(volts * 1000), round(current * 100), round(remaining * 100))
+        b = self.battery
+        battery = (round(b.voltage_v * 1000), round(b.current_a * 100), b.remaining_pct(self.BATTERY_COUNTED_FROM_FULL))
         return self._mav.sys_status_encode(*self.sensor_status(), 150, *battery, 0, 0, 0, 0, 0, 0)
+
+    def _msg_battery_status(self) -> MAVLinkMessage:
+        """BATTERY_STATUS of battery 0 as the firmware fills it (executive.sim.battery says how each does)."""
+        b = self.battery
+        cells = [min(round(b.voltage_v * 1000), 65534)] + [65535] * 9  # no cell voltages: the pack's in cell 0
+        energy_hj = round(b.consumed_wh * 36) if self.BATTERY_REPORTS_ENERGY else -1
+        return self._mav.battery_status_encode(
+            0, _M.MAV_BATTERY_FUNCTION_UNKNOWN, _M.MAV_BATTERY_TYPE_UNKNOWN, 32767, cells, round(b.current_a * 100), round(b.consumed_mah),
+            energy_hj, b.remaining_pct(self.BATTERY_COUNTED_FROM_FULL), 0, _M.MAV_BATTERY_CHARGE_STATE_OK,
+        )  # fmt: skip
 
     def _msg_gps_raw_int(self) -> MAVLinkMessage:
         v = self.vehicle

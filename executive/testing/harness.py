@@ -45,7 +45,7 @@ class Vehicle:
     """
 
     def __init__(self) -> None:
-        self.bb = blackboard.writer("test vehicle", blackboard.keys_under("/link/", "/vehicle/", "/rc/", "/heading/"))
+        self.bb = blackboard.writer("test vehicle", blackboard.keys_under("/link/", "/vehicle/", "/rc/", "/heading/", "/energy/"))
 
     def set(self, **facts: object) -> None:
         """``set(vehicle__mode="GUIDED", link__up=True)`` -> ``/vehicle/mode``, ``/link/up``."""

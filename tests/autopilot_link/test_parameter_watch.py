@@ -22,12 +22,13 @@ def run(watch: ParameterWatch, h: Harness, seconds: float) -> list[str]:
 
 def test_an_ardurover_is_asked_its_driving_parameters_until_each_answers(square_mission, caplog: pytest.LogCaptureFixture) -> None:
     h = Harness.build(square_mission)
-    assert wanted_parameters(h.autopilot) == ("MODE_CH", *MOTION_PARAMS)
+    battery = ("BATT_MONITOR", "BATT_CAPACITY", "BATT_ARM_MAH", "BATT_ARM_VOLT")  # the energy rule's
+    assert wanted_parameters(h.autopilot) == ("MODE_CH", *MOTION_PARAMS, *battery)
     watch = ParameterWatch(h.autopilot, h.clock, retry_s=1.0, tries=3)
     h.vehicle.set(link__up=True, vehicle__params=None)  # an autopilot that has answered nothing yet
     asked = run(watch, h, 1.0)
-    assert sorted(asked) == sorted(["MODE_CH", *MOTION_PARAMS])  # all at once, one each
-    h.vehicle.set(vehicle__params={"MODE_CH": 8.0, "WP_SPEED": 5.0, "WP_RADIUS": 3.0})
+    assert sorted(asked) == sorted(["MODE_CH", *MOTION_PARAMS, *battery])  # all at once, one each
+    h.vehicle.set(vehicle__params={"MODE_CH": 8.0, "WP_SPEED": 5.0, "WP_RADIUS": 3.0} | dict.fromkeys(battery, 0.0))
     asked = run(watch, h, 1.0)
     assert "WP_SPEED" not in asked and "MODE_CH" not in asked and "ATC_ACCEL_MAX" in asked  # the rest again
     with caplog.at_level(logging.WARNING, logger="executive.autopilot_link.parameters"):
@@ -51,7 +52,7 @@ def test_an_autopilot_whose_driving_is_not_modelled_is_asked_only_its_mode_chann
     h = Harness.build(square_mission)
     h.autopilot.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_GROUND_ROVER)
     assert vehicle_motion(h.autopilot.capabilities, {"WP_SPEED": 5.0}) is None
-    assert set(wanted_parameters(h.autopilot)) <= {"MODE_CH"}
+    assert set(wanted_parameters(h.autopilot)) <= {"MODE_CH", "BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED"}
 
 
 def test_the_simulated_ardurover_answers_them_as_the_firmware_types_them() -> None:

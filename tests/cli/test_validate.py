@@ -106,6 +106,20 @@ def test_a_waypoint_out_of_reach_of_home_is_refused_with_its_distance(tmp_path: 
     assert out == f"{near}: ok (2 waypoints, vehicle rover, tree waypoints)\n"
 
 
+def test_validate_says_what_it_can_of_the_energy_without_a_vehicle(minimal_mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    text = minimal_mission.read_text() + "home: {lat: 47.39, lon: 8.5456}\n"  # about 860 m from its waypoint
+    judged, fits, short = (tmp_path / f"{name}.yaml" for name in ("judged", "fits", "short"))
+    judged.write_text(text + "energy: {nominal_v: 11.1}\n", encoding="utf-8")
+    fits.write_text(text + "energy: {capacity_wh: 100}\n", encoding="utf-8")
+    short.write_text(text + "energy: {capacity_wh: 100, wh_per_km: 100000}\n", encoding="utf-8")
+    assert main(["validate", str(judged), str(fits)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].endswith("; energy: judged on the vehicle (its capacity from the autopilot's BATT_CAPACITY or BAT1_CAPACITY)")
+    assert re.search(r"; energy: needs [0-9.]+ Wh \+ [0-9.]+ Wh home \(\+/- [0-9.]+\), has 80 Wh above the 20 % reserve on a full pack", out[1])
+    assert main(["validate", str(short)]) == 2
+    assert re.match(rf"{re.escape(str(short))}:\d+:\d+: energy: the route and the way home do not fit a full pack: needs ", capsys.readouterr().err)
+
+
 def test_one_waypoint_is_said_in_the_singular(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["validate", str(minimal_mission)]) == 0
     assert capsys.readouterr().out == f"{minimal_mission}: ok (1 waypoint, vehicle rover, tree waypoints)\n"

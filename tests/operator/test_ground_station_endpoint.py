@@ -125,3 +125,13 @@ def test_ground_stations_on_an_endpoint_of_their_own_are_answered_and_reported_t
     assert runtime.mission_state.status is MissionStatus.RUNNING
     assert [m.name for m in endpoint.take("NAMED_VALUE_FLOAT")] == ["MSN_STATE", "MSN_LEG", "WP_DIST"]  # reported there too
     assert [m.get_type() for m in endpoint.take("HEARTBEAT")] == ["HEARTBEAT"]  # we announce ourselves there
+
+
+def test_the_energy_estimate_is_reported_as_named_values_once_there_is_one(control, link, clock):
+    from executive.sensing.energy import EnergyEstimate
+    from executive.testing import Vehicle
+
+    Vehicle().set(energy__estimate=EnergyEstimate(38.0, 41.0, 9.0, 6.0, 100.0, 20.0, 0.0, 6.0, 0.5, 0, 0.0))
+    control.service()
+    values = {m.name: m.value for m in link.take("NAMED_VALUE_FLOAT")}
+    assert (values["EN_LEFT"], values["EN_NEED"], values["EN_MARGIN"]) == (38.0, 50.0, -18.0)

@@ -95,7 +95,7 @@ def test_the_shipped_examples_cover_every_kind() -> None:
 
 KIND_TAGS = (
     "expected one of 'link_loss', 'ekf_degradation', 'gps_glitch', 'compass_bias', 'compass_glitch', "
-    "'rc_takeover', 'rc_input', 'rc_loss', 'battery_sag'"
+    "'rc_takeover', 'rc_input', 'rc_loss', 'battery_sag', 'weak_battery', 'headwind'"
 )
 ROVER_MODES = "(known: MANUAL, ACRO, STEERING, HOLD, LOITER, FOLLOW, SIMPLE, DOCK, CIRCLE, AUTO, RTL, SMART_RTL, GUIDED)"
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import logging
 import math
 import operator
+import struct
 from collections import deque
 from collections.abc import Callable
 
@@ -26,7 +27,18 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.io.mavlink.vehicle_clock import VehicleClockWatch
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
-from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, PositionTarget, Rangefinder
+from executive.state import (
+    Attitude,
+    Battery,
+    BatteryStatus,
+    EkfFlags,
+    EkfStatus,
+    GlobalPosition,
+    GpsFix,
+    HomePosition,
+    PositionTarget,
+    Rangefinder,
+)
 
 log = logging.getLogger(__name__)
 
@@ -149,6 +161,7 @@ class MavlinkReader:
             "EKF_STATUS_REPORT": self._on_ekf_status,
             "ESTIMATOR_STATUS": self._on_estimator_status,
             "SYS_STATUS": self._on_sys_status,
+            "BATTERY_STATUS": self._on_battery_status,
             "RC_CHANNELS": self._on_rc_channels,
             "COMMAND_ACK": self._on_command_ack,
             "STATUSTEXT": self._on_statustext,
@@ -347,6 +360,24 @@ class MavlinkReader:
             ),
         )
 
+    def _on_battery_status(self, msg: MAVLinkMessage, now: float) -> None:
+        if msg.id != 0:  # the main battery; ArduPilot numbers its monitors from 0, PX4 its battery 1 as 0 (BATTERY_STATUS.hpp: id - 1)
+            return
+        cells = [v for v in msg.voltages if v != 65535]  # UINT16_MAX: no such cell (common.xml)
+        self._bb.set(
+            "/vehicle/battery_status",
+            BatteryStatus(
+                None if msg.current_consumed < 0 else float(msg.current_consumed),
+                None if msg.energy_consumed < 0 else msg.energy_consumed / 36.0,  # hJ -> Wh
+                msg.battery_remaining if 0 <= msg.battery_remaining <= 100 else None,
+                getattr(msg, "time_remaining", 0) or None,  # 0: not estimated (a MAVLink 2 extension)
+                sum(cells) / 1000.0 if cells else None,
+                None if msg.current_battery == -1 else msg.current_battery / 100.0,
+                getattr(msg, "charge_state", 0),
+                now,
+            ),
+        )
+
     def _on_rc_channels(self, msg: MAVLinkMessage, now: float) -> None:
         # every field, whatever chancount says: ArduPilot acts on an RC override of a channel past it (chancount 8, chan9_raw 1500)
         channels = _RC_CHANNELS(msg)
@@ -362,8 +393,13 @@ class MavlinkReader:
 
     def _on_param_value(self, msg: MAVLinkMessage, now: float) -> None:
         name = msg.param_id.rstrip("\x00") if isinstance(msg.param_id, str) else msg.param_id.decode("ascii", "replace").rstrip("\x00")
-        if name and _finite(msg.param_value):
-            self._bb.set("/vehicle/params", {**(self._bb.get("/vehicle/params") or {}), name: msg.param_value})
+        value = msg.param_value
+        if self._px4 and msg.param_type == mavlink.MAV_PARAM_TYPE_INT32:
+            # PX4 copies an INT32 parameter's bytes into the float (src/modules/mavlink/mavlink_parameters.cpp send_param:
+            # memcpy); ArduPilot casts it to a float. BAT1_N_CELLS 4 arrives as 5.6e-45 read as a float.
+            value = float(struct.unpack("<i", struct.pack("<f", value))[0])
+        if name and _finite(value):
+            self._bb.set("/vehicle/params", {**(self._bb.get("/vehicle/params") or {}), name: value})
 
     def _on_command_ack(self, msg: MAVLinkMessage, now: float) -> None:
         self._commander.on_ack(msg)

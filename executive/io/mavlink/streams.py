@@ -31,6 +31,7 @@ DEFAULT_RATES: dict[str, float] = {
     "HOME_POSITION": 0.2,
     # the point the autopilot steers to: a target we did not ask for is a person's (executive.target_watch)
     "POSITION_TARGET_GLOBAL_INT": 5.0,
+    "BATTERY_STATUS": 1.0,  # last: the energy rule's, asked once the guards' streams are set
 }
 
 _KEY = blackboard.command_key(Outcome.MESSAGE_RATE)

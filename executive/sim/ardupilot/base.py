@@ -67,7 +67,7 @@ DEFAULT_INTERVALS: Mapping[int, float] = MappingProxyType({
         _M.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, _M.MAVLINK_MSG_ID_VFR_HUD, _M.MAVLINK_MSG_ID_RC_CHANNELS,
         _M.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW, _M.MAVLINK_MSG_ID_EKF_STATUS_REPORT,
         _M.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT, _M.MAVLINK_MSG_ID_POSITION_TARGET_GLOBAL_INT,
-        _M.MAVLINK_MSG_ID_MISSION_CURRENT,
+        _M.MAVLINK_MSG_ID_MISSION_CURRENT, _M.MAVLINK_MSG_ID_BATTERY_STATUS,  # BATTERY_STATUS: SRn_EXT_STAT, as SYS_STATUS
     ), _STREAM_S),
 })  # fmt: skip
 
@@ -90,6 +90,11 @@ class ArduPilotSim(FirmwareSim):
     EKF_CHECK_ITERATIONS_MAX: ClassVar[int] = 10
     MISSION_STORE: ClassVar[type[MissionStore]] = ArduPilotMissionStore  # the firmware's side of the mission protocol
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset({"MODE_CH", "FLTMODE_CH"})  # answered as integers (MAV_PARAM_TYPE_INT8), the rest REAL32
+    BATTERY_CAPACITY_PARAM = "BATT_CAPACITY"
+
+    def battery_params(self, capacity_mah: float) -> dict[str, float]:
+        """SITL's analog voltage-and-current monitor (BATT_MONITOR 4) on the pack (AP_BattMonitor_Params.cpp); arming asks nothing of it."""
+        return {"BATT_MONITOR": 4.0, "BATT_CAPACITY": capacity_mah, "BATT_ARM_MAH": 0.0, "BATT_ARM_VOLT": 0.0}
 
     def __init__(
         self,

@@ -15,7 +15,7 @@ from collections.abc import Mapping, Sequence
 from typing import ClassVar
 
 from executive.sim.ardupilot.rover import ArduRoverSim
-from executive.sim.firmware import BATTERY_EMPTY_V, BATTERY_FULL_V, BATTERY_MAH, BATTERY_SAG_V_PER_A, Home
+from executive.sim.firmware import Home
 from executive.sim.physics.vehicle import BUNKER_LIMITS, Limits, SkidSteerVehicle
 
 #: The Bunker's tracks respond quickly; it turns on the spot.
@@ -60,8 +60,7 @@ class BunkerSim(ArduRoverSim):
     @property
     def battery_v(self) -> float:
         """The battery's voltage now, as SYS_STATUS reports it (for the base's 0x211)."""
-        remaining = max(0.0, 1.0 - self.consumed_mah / BATTERY_MAH)
-        return BATTERY_EMPTY_V + (BATTERY_FULL_V - BATTERY_EMPTY_V) * remaining - BATTERY_SAG_V_PER_A * self._current_a()
+        return self.battery.voltage_v
 
     def _servo_outputs(self) -> Sequence[int]:
         outputs = [0] * 16

@@ -71,6 +71,15 @@ class Px4Sim(Px4Streams):
     MAV_TYPE: ClassVar[int]
     FLIES: ClassVar[bool]  # takes off and lands (mission take-off and landing items are passed over otherwise)
     UNAVAILABLE_MODES: ClassVar[frozenset[str]] = frozenset()  # modes this airframe has not
+    # src/modules/mavlink/streams/BATTERY_STATUS.hpp: energy_consumed -1; battery_remaining from src/lib/battery/battery.cpp's
+    # estimate, which starts from the voltage at rest (a pack not fully charged reads so)
+    BATTERY_COUNTED_FROM_FULL = False
+    BATTERY_REPORTS_ENERGY = False
+    BATTERY_CAPACITY_PARAM = "BAT1_CAPACITY"
+
+    def battery_params(self, capacity_mah: float) -> dict[str, float]:
+        """The pack as src/lib/battery/module.yaml names it: BAT1_CAPACITY mAh, BAT1_N_CELLS, per-cell V_EMPTY and V_CHARGED (defaults)."""
+        return {"BAT1_CAPACITY": capacity_mah, "BAT1_N_CELLS": float(self.battery.spec.cells), "BAT1_V_EMPTY": 3.6, "BAT1_V_CHARGED": 4.05}
 
     def __init__(
         self,

@@ -119,6 +119,9 @@ function showStatus(status, t, tick) {
   $("link").textContent = status.link_up ? "up" : "DOWN";
   $("battery").textContent = status.battery_pct === null || status.battery_pct === undefined ? "-"
     : `${status.battery_pct}%` + (status.battery_v ? ` ${Number(status.battery_v).toFixed(1)} V` : "");
+  const energy = status.energy;  // Wh left above the reserve / to finish and return, +/- 1 sigma; the margin
+  $("energy").textContent = energy ? `${energy.has_wh.toFixed(1)} / ${energy.need_wh.toFixed(1)} \u00b1${energy.sigma_wh.toFixed(1)} Wh`
+    + ` (margin ${energy.margin_wh.toFixed(1)})` : "-";
   $("reason").textContent = status.reason || "";
 }
 

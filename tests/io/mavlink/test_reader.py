@@ -239,3 +239,30 @@ def test_a_heartbeat_saying_it_is_starting_again_is_a_reboot(reader, link):
     assert (len(calls), bb("/link/reboots")) == (1, 0)
     receive(reader, link, boot)
     assert (len(calls), bb("/link/reboots")) == (2, 1)
+
+
+def test_battery_status_of_battery_0_read_as_energy_its_unknowns_none(reader, link):
+    """ArduPilot's (GCS_Common.cpp send_battery_status): the pack's voltage in cell 0, energy_consumed in hJ (consumed_wh * 36)."""
+    cells = [12345] + [65535] * 9
+    receive(reader, link, heartbeat(), AUTOPILOT.battery_status(0, 0, 0, 32767, cells, 550, 1200, 540, 88, 0, 1))
+    status = bb("/vehicle/battery_status")
+    assert (status.consumed_mah, status.consumed_wh, status.remaining_pct, status.time_remaining_s) == (1200.0, 15.0, 88, None)
+    assert (status.voltage_v, status.current_a, status.charge_state) == (12.345, 5.5, 1)
+    # PX4's (BATTERY_STATUS.hpp): energy_consumed -1; a voltage-only monitor: no current, nothing consumed, no remaining
+    receive(reader, link, AUTOPILOT.battery_status(0, 0, 0, 32767, cells, -1, -1, -1, -1, 0, 0))
+    status = bb("/vehicle/battery_status")
+    assert (status.consumed_mah, status.consumed_wh, status.remaining_pct, status.current_a) == (None, None, None, None)
+    receive(reader, link, AUTOPILOT.battery_status(1, 0, 0, 32767, cells, 100, 100, 100, 10, 0, 0))  # a second battery: not the main one
+    assert bb("/vehicle/battery_status") is status
+
+
+def test_px4s_integer_parameters_are_read_from_their_bytes_ardupilots_as_cast(reader, link):
+    """PX4 copies an INT32 parameter's bytes into param_value (mavlink_parameters.cpp send_param): BAT1_N_CELLS 4 is 4,
+    not 5.6e-45; ArduPilot casts it to a float (MODE_CH 8.0)."""
+    import struct
+
+    px4 = AUTOPILOT.heartbeat(mavlink.MAV_TYPE_VTOL_TILTROTOR, mavlink.MAV_AUTOPILOT_PX4, 0, 0, mavlink.MAV_STATE_STANDBY)
+    as_float = struct.unpack("<f", struct.pack("<i", 4))[0]
+    receive(reader, link, px4, AUTOPILOT.param_value(b"BAT1_N_CELLS", as_float, mavlink.MAV_PARAM_TYPE_INT32, 1, 0))
+    receive(reader, link, AUTOPILOT.param_value(b"BAT1_CAPACITY", 5000.0, mavlink.MAV_PARAM_TYPE_REAL32, 1, 0))
+    assert bb("/vehicle/params") == {"BAT1_N_CELLS": 4.0, "BAT1_CAPACITY": 5000.0}

@@ -1,0 +1,95 @@
+"""The battery read as energy: what the pack holds, what has been drawn, and what is left above the mission's reserve.
+
+From what the autopilot reports and the mission's ``energy:`` block, never a guess presented as a figure:
+
+- **capacity**, Wh: ``energy.capacity_wh``; else the autopilot's capacity in mAh (ArduPilot BATT_CAPACITY,
+  ``libraries/AP_BattMonitor/AP_BattMonitor_Params.cpp``; PX4 BAT1_CAPACITY, ``src/lib/battery/module.yaml``,
+  -1 = unknown) times the pack's nominal voltage: ``energy.nominal_v``, or PX4's BAT1_N_CELLS x 3.7 V (a
+  Li-ion/LiPo cell's nominal). ArduPilot has no cell count: without ``nominal_v`` its mAh are not Wh.
+- **drawn**, Wh: BATTERY_STATUS ``energy_consumed`` (hJ; ArduPilot sends consumed_wh * 36, ``GCS_Common.cpp``
+  send_battery_status); else ``current_consumed`` mAh times the pack's voltage (PX4 sends energy_consumed -1,
+  ``src/modules/mavlink/streams/BATTERY_STATUS.hpp``). A monitor that measures no current (ArduPilot
+  BATT_MONITOR 3, voltage only) reports both -1: the energy drawn cannot be counted, the rule refuses.
+- **charge at the start**: ``battery_remaining`` when the mission starts (BATTERY_STATUS, else SYS_STATUS);
+  -1 = not estimated: refused.
+
+Left above the reserve = capacity x remaining at start - drawn since - capacity x (reserve + unusable share).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from executive.mission.model import EnergyConfig
+from executive.state import Battery, BatteryStatus
+
+#: A Li-ion/LiPo cell's nominal voltage: PX4's BAT1_N_CELLS turned into a pack voltage.
+CELL_NOMINAL_V = 3.7
+
+#: What each ArduPilot BATT_MONITOR kind can tell (AP_BattMonitor.h Type): README's table says the same.
+MONITOR_KINDS: dict[int, str] = {0: "none", 3: "voltage only (no current: nothing counted)", 4: "voltage and current"}
+
+
+@dataclass(frozen=True, slots=True)
+class Capacity:
+    """The pack's energy and where the figure came from (for the refusal and the status)."""
+
+    wh: float
+    source: str
+
+
+def capacity(config: EnergyConfig, params: Mapping[str, float], autopilot: str) -> Capacity | str:
+    """The pack's capacity in Wh, or why it cannot be told (naming what to set)."""
+    if config.capacity_wh is not None:
+        return Capacity(config.capacity_wh, f"energy.capacity_wh {config.capacity_wh:g} Wh")
+    name = "BAT1_CAPACITY" if autopilot == "px4" else "BATT_CAPACITY"
+    mah = params.get(name)
+    if mah is None:
+        return f"{name} not read from the autopilot: set energy.capacity_wh"
+    if mah <= 0:
+        return f"{name} is {mah:g} (unknown): set it on the autopilot, or energy.capacity_wh"
+    volts, said = config.nominal_v, "energy.nominal_v"
+    if volts is None and autopilot == "px4" and params.get("BAT1_N_CELLS", 0) > 0:
+        volts, said = params["BAT1_N_CELLS"] * CELL_NOMINAL_V, f"BAT1_N_CELLS {params['BAT1_N_CELLS']:g} x {CELL_NOMINAL_V} V"
+    if volts is None:
+        return f"{name} {mah:g} mAh, but not the pack's voltage: set energy.nominal_v (11.1 for a 3S pack) or energy.capacity_wh"
+    return Capacity(mah / 1000.0 * volts, f"{name} {mah:g} mAh x {volts:g} V ({said})")
+
+
+def drawn_wh(status: BatteryStatus | None, battery: Battery | None) -> float | None:
+    """Energy drawn since the autopilot booted, Wh; None when the monitor counts none (no current measured)."""
+    if status is None:
+        return None
+    if status.consumed_wh is not None:
+        return status.consumed_wh
+    volts = status.voltage_v or (battery.voltage_v if battery is not None else None)
+    if status.consumed_mah is not None and volts:
+        return status.consumed_mah / 1000.0 * volts
+    return None
+
+
+def unknown_reading(status: BatteryStatus | None, battery: Battery | None, params: Mapping[str, float]) -> str | None:
+    """Why the readings cannot be counted as energy (None: they can)."""
+    if status is None:
+        return "no BATTERY_STATUS from the autopilot yet"
+    if remaining_pct(status, battery) is None:
+        if drawn_wh(status, battery) is None:
+            monitor = params.get("BATT_MONITOR")
+            kind = f" (BATT_MONITOR {monitor:g}: {MONITOR_KINDS.get(int(monitor), 'see AP_BattMonitor.h')})" if monitor is not None else ""
+            return f"the battery monitor counts no energy drawn{kind}: fit a current sensor (BATT_MONITOR 4) or remove energy:"
+        return "the autopilot does not estimate the remaining charge (battery_remaining -1): set its battery capacity"
+    return None
+
+
+def counts_current(status: BatteryStatus) -> bool:
+    """The monitor measures the current (its counters move): PX4's SIH has no current sensor (BatterySimulator.cpp: ibatt -1,
+    reported as current_battery -100 with current_consumed stuck at 0); its drawn energy is read from battery_remaining."""
+    return status.current_a is not None and status.current_a >= 0.0 and drawn_wh(status, None) is not None
+
+
+def remaining_pct(status: BatteryStatus | None, battery: Battery | None) -> int | None:
+    """battery_remaining, BATTERY_STATUS's else SYS_STATUS's."""
+    if status is not None and status.remaining_pct is not None:
+        return status.remaining_pct
+    return battery.remaining_pct if battery is not None else None

@@ -1,0 +1,273 @@
+"""Will the rest of the route and the way home fit the battery? The estimate, re-made every battery report.
+
+:class:`EnergyWatch` is a reader service (run each tick after the MAVLink reader, as the heading
+filter is): it reads the battery (:mod:`executive.sensing.battery_energy`), learns the consumption
+(:class:`~executive.sensing.consumption.ConsumptionModel`) from what the battery reports drawn while
+armed, and writes ``/energy/estimate``: what is left above the reserve, what the rest of the route
+and the way home need (with the model's 1-sigma uncertainty), and the margin. The energy guard
+(:class:`~executive.behaviours.energy.EnergyEnough`) judges it; the status line, ``ctl status``, the
+ground station and the journal show it. Each leg's estimate (and each move of the margin by more
+than a twentieth of the capacity) is logged to the journal, so ``report`` tells where the energy went.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from executive import blackboard, geo
+from executive.clock import Clock
+from executive.mission.lifecycle import MissionState
+from executive.mission.model import Mission
+from executive.sensing import battery_energy
+from executive.sensing.consumption import HELD_BELOW_M_S, SEEDS, ConsumptionModel
+from executive.sensing.heading import filterpy_ready, load_filterpy
+from executive.state import Battery, BatteryStatus, EkfStatus, GlobalPosition
+
+log = logging.getLogger("executive.energy")  # the journal's event kind: "energy"
+
+WINDOW_S = 10.0  # consumption measured over windows this long: ten 1 Hz reports, the current's noise averaged
+# A VTOL hovers to climb and to land: ArduPlane's QuadPlane climbs at Q_WP_SPEED_UP 2.5 m/s and descends at Q_WP_SPEED_DN
+# 1.5 m/s (libraries/AC_WPNav/AC_WPNav.cpp WPNAV_WP_SPEED_UP_CMS, _DOWN_CMS), the last Q_LAND_FINAL_ALT 6 m at
+# Q_LAND_FINAL_SPD 0.5 m/s (ArduPlane/quadplane.cpp): seconds of hover the route's distance does not count.
+CLIMB_M_S, DESCENT_M_S, FINAL_ALT_M, FINAL_M_S = 2.5, 1.5, 6.0, 0.5
+
+
+def hover_s(mission: Mission, take_off: bool) -> tuple[float, float]:
+    """Seconds of hover a VTOL spends climbing (when ``take_off``) and landing at home; none for the other kinds."""
+    if mission.vehicle != "vtol":
+        return 0.0, 0.0
+    alt = max([w.alt_m for w in mission.waypoints] + [mission.vtol.takeoff_alt_m if mission.vtol else 0.0])
+    climb = alt / CLIMB_M_S if take_off else 0.0
+    return climb, max(0.0, alt - FINAL_ALT_M) / DESCENT_M_S + min(alt, FINAL_ALT_M) / FINAL_M_S
+
+
+@dataclass(frozen=True, slots=True)
+class EnergyEstimate:
+    """One estimate, Wh. ``has_wh``: left above the reserve now; ``route_wh``: the rest of the route from where the vehicle is;
+    ``home_wh``: from its end home; ``sigma_wh``: 1 sigma of their sum; ``margin_wh`` = has - (route + home + sigma)."""
+
+    has_wh: float
+    route_wh: float
+    home_wh: float
+    sigma_wh: float
+    capacity_wh: float
+    reserve_pct: float
+    drawn_wh: float  # since the start
+    wh_per_km: float
+    wh_per_min: float
+    leg_index: int
+    time: float
+
+    @property
+    def margin_wh(self) -> float:
+        return self.has_wh - (self.route_wh + self.home_wh + self.sigma_wh)
+
+    @property
+    def fits(self) -> bool:
+        return self.margin_wh >= 0.0
+
+    def figures(self) -> str:
+        """``needs 41 Wh + 9 Wh home (+/- 6), has 38 Wh above the 20 % reserve``"""
+        places = 0 if max(self.route_wh, self.home_wh, self.has_wh) >= 10 else 1
+        return (
+            f"needs {wh(self.route_wh, places)} Wh + {wh(self.home_wh, places)} Wh home (+/- {wh(self.sigma_wh, places)}), "
+            f"has {wh(self.has_wh, places)} Wh above the {self.reserve_pct:g} % reserve"
+        )
+
+
+def wh(value: float, places: int | None = None) -> str:
+    """Watt-hours as a person reads them: whole ones, tenths under 10 (or ``places``)."""
+    places = (0 if abs(value) >= 10 else 1) if places is None else places
+    return f"{value:.{places}f}"
+
+
+def route_back(mission: Mission) -> str:
+    return mission.energy.return_by if mission.energy is not None else "straight"
+
+
+def path_length(points: list[tuple[float, float]], start: tuple[float, float]) -> float:
+    """Metres from ``start`` through ``points`` (lat, lon)."""
+    metres = 0.0
+    lat, lon = start
+    for plat, plon in points:
+        metres += geo.distance(lat, lon, plat, plon)
+        lat, lon = plat, plon
+    return metres
+
+
+def planned(mission: Mission) -> EnergyEstimate | str | None:
+    """What can be said without a vehicle (``validate``): the estimate from home (else the first waypoint) on a full pack
+    of ``energy.capacity_wh`` with the seeds; a string when only the vehicle can tell; None without an ``energy:`` block."""
+    config = mission.energy
+    if config is None:
+        return None
+    if config.capacity_wh is None or not mission.waypoints:
+        return "judged on the vehicle (its capacity from the autopilot's BATT_CAPACITY or BAT1_CAPACITY)"
+    seed_km, seed_min = SEEDS[mission.vehicle]
+    model = ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min)
+    points = [(w.lat, w.lon) for w in mission.waypoints]
+    home = (mission.home.lat, mission.home.lon) if mission.home is not None else points[0]
+    route_m = path_length(points, home)
+    back = list(reversed(points[:-1])) if config.return_by == "route" else []
+    home_m = path_length([*back, home], points[-1])
+    route_s, home_s = hover_s(mission, take_off=True)
+    kept = config.capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
+    return EnergyEstimate(
+        config.capacity_wh - kept, model.need(route_m, route_s)[0], model.need(home_m, home_s)[0],
+        model.need(route_m + home_m, route_s + home_s)[1], config.capacity_wh, config.reserve_pct, 0.0, seed_km, seed_min, 0, 0.0,
+    )  # fmt: skip
+
+
+class EnergyWatch:
+    """Writes ``/energy/estimate`` (an :class:`EnergyEstimate`) and ``/energy/unknown`` (why none can be made, else "")."""
+
+    def __init__(self, clock: Clock, state: MissionState, autopilot: Callable[[], str] = lambda: "ardupilot") -> None:
+        """``autopilot``: the firmware driving the vehicle (its battery parameters' names), asked each time."""
+        self._clock = clock
+        self._state = state
+        self._autopilot = autopilot
+        self._in = blackboard.reader(
+            "energy watch in",
+            [
+                "/vehicle/battery_status",
+                "/vehicle/battery",
+                "/vehicle/params",
+                "/vehicle/position",
+                "/vehicle/home",
+                "/vehicle/armed",
+                "/vehicle/ekf",
+                "/vehicle/ground_speed_m_s",
+            ],
+        )
+        self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
+        self._model: ConsumptionModel | None = None
+        self._start: tuple[float, int] | None = None  # (drawn Wh, remaining %) when the mission's energy was first counted
+        self._window: tuple[float, float, float, float] | None = None  # (time, drawn Wh, metres, held s) at the window's start
+        self._metres = 0.0
+        self._held_s = 0.0  # armed and slower than HELD_BELOW_M_S
+        self._ticked_at: float | None = None
+        self._last_position: GlobalPosition | None = None
+        self._said: tuple[int, float] | None = None  # (leg, margin) last logged
+        load_filterpy()
+
+    def service(self) -> None:
+        mission = self._state.mission
+        if mission is None or mission.energy is None:
+            return
+        if self._model is None:
+            if not filterpy_ready():
+                self._unknown("the consumption model is loading")
+                return
+            seed_km, seed_min = SEEDS[mission.vehicle]
+            self._model = ConsumptionModel(mission.energy.wh_per_km or seed_km, mission.energy.wh_per_min or seed_min)
+        status: BatteryStatus | None = self._in.get("/vehicle/battery_status")
+        battery: Battery | None = self._in.get("/vehicle/battery")
+        params = self._in.get("/vehicle/params") or {}
+        self._track_distance()
+        capacity = battery_energy.capacity(mission.energy, params, self._autopilot())
+        if isinstance(capacity, str):
+            self._unknown(capacity)
+            return
+        unknown = battery_energy.unknown_reading(status, battery, params)
+        if unknown is not None:
+            self._unknown(unknown)
+            return
+        remaining = battery_energy.remaining_pct(status, battery)
+        assert status is not None and remaining is not None  # unknown_reading said so
+        counted = battery_energy.drawn_wh(status, battery) if battery_energy.counts_current(status) else None
+        # no current measured: the drawn energy is the remaining charge's fall, in its 1 % steps
+        drawn = counted if counted is not None else capacity.wh * (100 - remaining) / 100.0
+        if self._start is None:
+            self._start = (drawn, remaining)
+        self._learn(drawn, 0.0 if counted is not None else capacity.wh / 100.0)
+        self._publish(mission, capacity.wh, drawn - self._start[0])
+
+    # -- learning ------------------------------------------------------------------------------
+    def _track_distance(self) -> None:
+        now = self._clock.now()
+        speed: float | None = self._in.get("/vehicle/ground_speed_m_s")
+        if self._in.get("/vehicle/armed") and self._ticked_at is not None and (speed is None or speed < HELD_BELOW_M_S):
+            self._held_s += now - self._ticked_at  # hover, loiter, station keeping, a stop: its seconds cost, not its metres
+        self._ticked_at = now
+        position: GlobalPosition | None = self._in.get("/vehicle/position")
+        ekf: EkfStatus | None = self._in.get("/vehicle/ekf")
+        # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (README)
+        if position is None or position is self._last_position or ekf is None or not ekf.position_ok():
+            return
+        if self._last_position is not None and self._in.get("/vehicle/armed"):
+            self._metres += geo.distance(self._last_position.lat, self._last_position.lon, position.lat, position.lon)
+        self._last_position = position
+
+    def _learn(self, drawn: float, resolution_wh: float) -> None:
+        now = self._clock.now()
+        if not self._in.get("/vehicle/armed"):
+            self._window = None
+            return
+        if self._window is None:
+            self._window = (now, drawn, self._metres, self._held_s)
+            return
+        t0, wh0, m0, h0 = self._window
+        if now - t0 < WINDOW_S:
+            return
+        used, metres, held = drawn - wh0, self._metres - m0, self._held_s - h0
+        assert self._model is not None
+        # the counter's resolution (0.1 Wh in hJ, 1 mAh) and the current's noise averaged over the window
+        self._model.update(used, metres, held, noise_wh=0.05 + 0.1 * abs(used) + resolution_wh)
+        self._window = (now, drawn, self._metres, self._held_s)
+
+    # -- the estimate --------------------------------------------------------------------------
+    def _legs_ahead(self, mission: Mission) -> tuple[list[tuple[float, float]], tuple[float, float]]:
+        """The points still to go (lat, lon) from the current leg on, and home."""
+        route = self._state.route
+        ahead = [(w.lat, w.lon) for w in route.waypoints[self._state.leg_index :]]
+        home = self._in.get("/vehicle/home")
+        if home is not None:
+            where = (home.lat, home.lon)
+        elif mission.home is not None:
+            where = (mission.home.lat, mission.home.lon)
+        elif self._last_position is not None and self._start is not None:
+            where = (self._last_position.lat, self._last_position.lon)
+        else:
+            where = (ahead[0][0], ahead[0][1]) if ahead else (0.0, 0.0)
+        return ahead, where
+
+    def _publish(self, mission: Mission, capacity_wh: float, drawn_since_start: float) -> None:
+        assert self._model is not None and self._start is not None and mission.energy is not None
+        config = mission.energy
+        ahead, home = self._legs_ahead(mission)
+        here = (self._last_position.lat, self._last_position.lon) if self._last_position else (ahead[0][0], ahead[0][1]) if ahead else home
+        route_m = path_length(ahead, here)
+        end = ahead[-1] if ahead else here
+        back = list(reversed([(w.lat, w.lon) for w in self._state.route.waypoints[:-1]])) if route_back(mission) == "route" else []
+        home_m = path_length([*back, home], end)
+        route_s, home_s = hover_s(mission, take_off=not self._in.get("/vehicle/armed") and self._state.leg_index == 0)
+        route_wh = self._model.need(route_m, route_s)[0]
+        home_wh = self._model.need(home_m, home_s)[0]
+        _, sigma = self._model.need(route_m + home_m, route_s + home_s)
+        kept = capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
+        has = capacity_wh * self._start[1] / 100.0 - drawn_since_start - kept
+        estimate = EnergyEstimate(
+            has, route_wh, home_wh, sigma, capacity_wh, config.reserve_pct, drawn_since_start,
+            self._model.wh_per_m * 1000.0, self._model.wh_per_s * 60.0, self._state.leg_index, self._clock.now(),
+        )  # fmt: skip
+        self._out.set("/energy/estimate", estimate)
+        self._out.set("/energy/unknown", "")
+        self._journal(estimate)
+
+    def _journal(self, estimate: EnergyEstimate) -> None:
+        said = self._said
+        if said is not None and said[0] == estimate.leg_index and abs(said[1] - estimate.margin_wh) < 0.05 * estimate.capacity_wh:
+            return
+        self._said = (estimate.leg_index, estimate.margin_wh)
+        legs = len(self._state.route.waypoints)
+        where = f"leg {estimate.leg_index + 1}/{legs}" if estimate.leg_index < legs else "the end of the route"
+        log.info(
+            "energy at %s: %s: margin %s Wh; drawn %.1f Wh so far; %.1f Wh/km + %.2f Wh/min",
+            where, estimate.figures(), wh(estimate.margin_wh), estimate.drawn_wh, estimate.wh_per_km, estimate.wh_per_min,
+        )  # fmt: skip
+
+    def _unknown(self, why: str) -> None:
+        self._out.set("/energy/estimate", None)
+        self._out.set("/energy/unknown", why)
