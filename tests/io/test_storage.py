@@ -61,7 +61,24 @@ def test_a_run_on_a_disk_that_fills_up_completes_and_keeps_what_was_written(tmp_
     assert lines[-1] == "" and all(json.loads(line) for line in lines[:-1])  # the last record whole: no half line at the end
     tlog = mavutil.mavlink_connection(str(tmp_path / "t.tlog"), dialect="ardupilotmega")
     kinds = [msg.get_type() for msg in iter(tlog.recv_msg, None)]
-    assert kinds and "BAD_DATA" not in kinds and os.path.getsize(tmp_path / "t.tlog") < 64_000
+    assert kinds and "BAD_DATA" not in kinds
+    data = (tmp_path / "t.tlog").read_bytes()
+    assert len(data) <= 64_000 and tlog_record_ends(data)[-1] == len(data)  # whole records only: the file ends at one's end
+
+
+def tlog_record_ends(data: bytes) -> list[int]:
+    """Where each .tlog record ends: 8 bytes of time, then a MAVLink v2 (0xFD) or v1 (0xFE) frame of the length it declares."""
+    ends, at = [0], 0
+    while at + 10 <= len(data):
+        start, length = at + 8, data[at + 9]
+        if data[start] == 0xFD:
+            at = start + 12 + length + (13 if data[start + 2] & 0x01 else 0)  # header 10, checksum 2, signature 13 if signed
+        elif data[start] == 0xFE:
+            at = start + 8 + length  # header 6, checksum 2
+        else:
+            break
+        ends.append(at)
+    return ends
 
 
 @pytest.fixture
