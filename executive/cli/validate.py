@@ -23,6 +23,7 @@ from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput
 from executive.cli.run_checks import check_mission
 from executive.mission.errors import FieldError, MissionError
 from executive.mission.model import tree_name
+from executive.mission.rules import waits_for_the_vehicle
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -88,6 +89,12 @@ def _validate(path: str, args: argparse.Namespace, results: list[dict[str, Any]]
             print(f"{path}: {exc}", file=sys.stderr)
         return
     tree = tree_name(mission) or "(composed in the file)"
-    results.append({"file": path, "ok": True, "waypoints": len(mission.waypoints), "vehicle": mission.vehicle, "tree": tree})
+    result = {"file": path, "ok": True, "waypoints": len(mission.waypoints), "vehicle": mission.vehicle, "tree": tree}
+    waits = waits_for_the_vehicle(mission)
+    if waits:
+        result["warnings"] = [f"no home: checked only at start, against the vehicle's position: {'; '.join(waits)}"]
+    results.append(result)
     if not args.json:
         print(f"{path}: ok ({len(mission.waypoints)} waypoints, vehicle {mission.vehicle}, tree {tree})")
+        for warning in result.get("warnings", ()):
+            print(f"{path}: warning: {warning}", file=sys.stderr)

@@ -13,10 +13,24 @@ from executive.cli import main
 BROKEN = Path(__file__).parents[1] / "data" / "broken_missions"
 
 
+#: What validate says of a mission without ``home:`` (issue 40: never silence about the checks left to the vehicle).
+NO_HOME = (
+    "no home: checked only at start, against the vehicle's position: every waypoint within limits.max_goal_distance_m (5000 m) "
+    "of the vehicle; the first leg's time against limits.leg_timeout_s"
+)
+
+
 def test_a_good_mission(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["validate", str(minimal_mission)]) == 0
     out, err = capsys.readouterr()
-    assert (out, err) == (f"{minimal_mission}: ok (1 waypoints, vehicle rover, tree waypoints)\n", "")
+    assert (out, err) == (f"{minimal_mission}: ok (1 waypoints, vehicle rover, tree waypoints)\n", f"{minimal_mission}: warning: {NO_HOME}\n")
+
+
+def test_a_mission_with_home_is_ok_without_a_warning(minimal_mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    homed = tmp_path / "homed.yaml"
+    homed.write_text(minimal_mission.read_text().replace("waypoints:", "home: {lat: 47.3977, lon: 8.5455}\nwaypoints:"), encoding="utf-8")
+    assert main(["validate", str(homed)]) == 0
+    assert capsys.readouterr() == (f"{homed}: ok (1 waypoints, vehicle rover, tree waypoints)\n", "")
 
 
 def test_a_bad_mission(capsys: pytest.CaptureFixture[str]) -> None:
@@ -35,6 +49,7 @@ def test_every_error_of_every_file_and_ok_for_the_good_ones(minimal_mission: Pat
     assert err.splitlines() == [
         f"{bad}:3:10: vehicle: 'car': Input should be 'rover', 'boat', 'sub' or 'vtol'",
         f"{bad}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90",
+        f"{minimal_mission}: warning: {NO_HOME}",
         f"{tmp_path / 'missing.yaml'}:1:1: (file): No such file or directory",
     ]
 
@@ -56,7 +71,7 @@ def test_json_lists_a_result_per_file(minimal_mission: Path, capsys: pytest.Capt
     out, err = capsys.readouterr()
     assert err == ""
     assert json.loads(out) == [
-        {"file": str(minimal_mission), "ok": True, "waypoints": 1, "vehicle": "rover", "tree": "waypoints"},
+        {"file": str(minimal_mission), "ok": True, "waypoints": 1, "vehicle": "rover", "tree": "waypoints", "warnings": [NO_HOME]},
         {
             "file": str(bad),
             "ok": False,
@@ -81,18 +96,22 @@ def test_a_waypoint_out_of_reach_of_home_is_refused_with_its_distance(tmp_path: 
     """Issue 28: 10 km from home passed `validate` and was driven toward; the rule (5 km, a sub's 1 km) holds against `home:`."""
     far = tmp_path / "far.yaml"
     far.write_text(
-        "version: 1\nname: far\nvehicle: rover\nhome: {lat: -35.363261, lon: 149.165230}\nwaypoints:\n"
+        "version: 1\nname: far\nvehicle: rover\nhome: {lat: -35.363261, lon: 149.165230}\nlimits: {leg_timeout_s: 3000}\nwaypoints:\n"
         "  - {lat: -35.3629906, lon: 149.1652300}\n  - {lat: -35.2730000, lon: 149.1652300, name: town}\n",
         encoding="utf-8",
     )
     sub = tmp_path / "sub.yaml"
-    sub.write_text("version: 1\nname: deep\nvehicle: sub\nhome: {lat: 44.095, lon: 9.863}\nwaypoints:\n  - {lat: 44.1085, lon: 9.863}\n")
+    sub.write_text(
+        "version: 1\nname: deep\nvehicle: sub\nhome: {lat: 44.095, lon: 9.863}\nlimits: {leg_timeout_s: 3000}\n"
+        "waypoints:\n  - {lat: 44.1085, lon: 9.863}\n"
+    )
     near = tmp_path / "near.yaml"  # no home: nothing to measure against until the vehicle's position (at upload, at start)
     near.write_text(far.read_text().replace("home: {lat: -35.363261, lon: 149.165230}\n", ""), encoding="utf-8")
     assert main(["validate", str(far), str(sub), str(near)]) == 2
     out, err = capsys.readouterr()
     assert err.splitlines() == [
-        f"{far}:7:5: waypoints[1]: 10014 m from home, over limits.max_goal_distance_m (5000 m): refused at start with the vehicle at home",
-        f"{sub}:6:5: waypoints[0]: 1500 m from home, over limits.max_goal_distance_m (1000 m): refused at start with the vehicle at home",
+        f"{far}:8:5: waypoints[1]: 10014 m from home, over limits.max_goal_distance_m (5000 m): refused at start with the vehicle at home",
+        f"{sub}:7:5: waypoints[0]: 1500 m from home, over limits.max_goal_distance_m (1000 m): refused at start with the vehicle at home",
+        f"{near}: warning: {NO_HOME}",
     ]
     assert out == f"{near}: ok (2 waypoints, vehicle rover, tree waypoints)\n"
