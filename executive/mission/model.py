@@ -322,7 +322,9 @@ class GeofenceConfig(BaseModel):
 
     def fence(self) -> Geofence:
         """The :class:`Geofence` value the guard checks (the polygon must be valid: see cross_field_errors)."""
-        return Geofence(tuple((v.lat, v.lon) for v in self.polygon or ()), self.max_distance_from_home_m)
+        polygons = tuple(tuple((v.lat, v.lon) for v in z.polygon) for z in self.inclusion if z.polygon is not None)
+        circles = tuple((z.circle.lat, z.circle.lon, z.circle.radius_m) for z in self.inclusion if z.circle is not None)
+        return Geofence(tuple((v.lat, v.lon) for v in self.polygon or ()), self.max_distance_from_home_m, polygons, circles)
 
 
 class Waypoint(BaseModel):

@@ -178,3 +178,16 @@ def test_1000_waypoints_against_100_zones_are_checked_in_a_route_edits_time():
         worst = max(worst, time.process_time() - began)
     # CPU time, generous: the figure itself is benchmarks/route_check.py's (python -m benchmarks --only route)
     assert worst < 0.5
+
+
+def test_the_run_time_fence_counts_an_inclusion_zone_as_inside():
+    """Validate accepts a waypoint in an inclusion zone outside the polygon: the geofence guard must not call it a breach there."""
+    square = "[" + ", ".join(vertex(n, e) for n, e in ((-20, -20), (20, -20), (20, 20), (-20, 20))) + "]"
+    bay = at(100, 0)
+    fence = f"  polygon: {square}\n  inclusion:\n    - {{name: bay, circle: {{lat: {bay[0]:.7f}, lon: {bay[1]:.7f}, radius_m: 30}}}}"
+    text = mission_text([(0, 0, "a"), (10, 0, "b")], fence)
+    mission = load_mission_text(text, "m.yaml")
+    guard = mission.geofence.fence()
+    assert guard.why_outside(*at(110, 0), None) is None  # in the bay
+    assert guard.why_outside(*at(0, 0), None) is None  # in the polygon
+    assert guard.why_outside(*at(60, 0), None) == "10 m outside the fence polygon and every inclusion zone"
