@@ -21,6 +21,8 @@ from benchmarks.common import Row
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "ardurover"
 #: The SITL frame each example mission was recorded on.
 FRAMES = {"rover_square": "rover", "boat_survey": "motorboat"}
+#: The recorded runs: the executive's GUIDED legs, its drive: auto (horizon 2), and the firmware's own AUTO over the whole route.
+DRIVES = {"guided": "GUIDED", "auto": "SUPERVISED", "whole": "AUTO"}
 PASS_M = 5.0  # an intermediate waypoint counts as passed within this (as benchmarks.efficiency._Route)
 
 Sample = tuple[float, float, float]  # vehicle seconds since the mode was entered, lat, lon
@@ -116,7 +118,7 @@ def leg_times(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]],
 
 
 def available(mission: str) -> bool:
-    """Whether both modes of ``mission`` were recorded."""
+    """Whether GUIDED and AUTO runs of ``mission`` were recorded."""
     return mission in FRAMES and all(path_of(mission, mode).exists() for mode in ("GUIDED", "AUTO"))
 
 
@@ -131,14 +133,18 @@ def rows(missions: Sequence[str]) -> list[Row]:
             continue
         mission = load_mission(MISSIONS / f"{name}.yaml")
         waypoints = [(w.lat, w.lon) for w in mission.waypoints]
-        timings = []
-        for mode in ("GUIDED", "AUTO"):
-            recording = read(path_of(name, mode), mode)
+        recordings = {
+            drive: read(path_of(name, mode), "AUTO" if drive == "auto" else mode) for drive, mode in DRIVES.items() if path_of(name, mode).exists()
+        }
+        timings = {}
+        for drive, recording in recordings.items():
             seconds = arrival_s(recording.track, waypoints, mission.limits.acceptance_radius_m)
             if seconds is None:
                 raise ValueError(f"{recording.path}: the vehicle never reached the last waypoint")
-            timings.append(Timing(mode, seconds, tuple(sample for sample in recording.track if sample[0] <= seconds)))
-        against = f"a recorded real ArduRover SITL AUTO run ({path_of(name, 'AUTO').name}; GUIDED recorded too)"
-        row = ratio_row(name, timings[0], timings[1], route_of(mission), against, f"{mission.vehicle}, SITL frame {FRAMES[name]}")
-        out.append(row)
+            timings[drive] = Timing(recording.mode, seconds, tuple(sample for sample in recording.track if sample[0] <= seconds))
+        vehicle = f"{mission.vehicle}, SITL frame {FRAMES[name]}"
+        for drive in ("guided", "auto"):
+            if drive in timings:
+                against = f"a recorded real ArduRover SITL AUTO run ({path_of(name, 'AUTO').name}; {path_of(name, DRIVES[drive]).name})"
+                out.append(ratio_row(name, timings[drive], timings["whole"], route_of(mission), against, vehicle, drive))
     return out

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 
-from executive import composition, registry, trees
+from executive import composition, mission_tree, registry, trees
 from executive.catalogue import plugin_behaviour
 from executive.instruments.backends import option_errors, plugin_backend
 from executive.instruments.backends import refusal as instrument_refusal
@@ -38,7 +38,7 @@ def mission_errors(mission: Mission) -> list[tuple[Path, str]]:
         except registry.PluginError as exc:
             return [*errors, (("tree",), str(exc))]
     try:
-        trees.resolve(mission.tree)
+        mission_tree.build(mission)  # as run builds it: a user's tree that raises is refused here too
     except (trees.UnknownTree, registry.PluginError) as exc:
         errors.append((("tree",), str(exc)))
     return errors

@@ -240,9 +240,20 @@ def plugin_behaviour(point: EntryPoint) -> type[py_trees.behaviour.Behaviour]:
     return registry.load_class(point, py_trees.behaviour.Behaviour, "a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)")
 
 
-def load_behaviours() -> list[type[py_trees.behaviour.Behaviour]]:
-    """The behaviour classes plugins add (``executive.behaviours``); PluginError for the first that cannot be loaded or is no behaviour class."""
-    return [plugin_behaviour(point) for point in registry.named(registry.BEHAVIOURS).values()]
+def load_behaviours(broken: list[registry.PluginError] | None = None) -> list[type[py_trees.behaviour.Behaviour]]:
+    """The behaviour classes plugins add (``executive.behaviours``); PluginError for the first that cannot be loaded or is no behaviour class.
+
+    With ``broken``, those that cannot be loaded are put there instead, and the others returned.
+    """
+    found = []
+    for point in registry.named(registry.BEHAVIOURS).values():
+        try:
+            found.append(plugin_behaviour(point))
+        except registry.PluginError as exc:
+            if broken is None:
+                raise
+            broken.append(exc)
+    return found
 
 
 def _our_classes() -> list[type[py_trees.behaviour.Behaviour]]:

@@ -19,6 +19,7 @@ import json
 import logging
 import sqlite3
 import time
+from collections import deque
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
@@ -26,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.clock import Clock
+from executive.io.storage import Storage
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.route import Route
@@ -56,6 +58,9 @@ CREATE TABLE IF NOT EXISTS routes (
 """
 
 
+#: While the disk refuses the journal's writes, how often (clock seconds) they are tried again when nothing new comes.
+RETRY_EVERY_S = 1.0
+
 #: Columns of ``samples`` a journal written by an older executive lacks: name -> declaration.
 _ADDED_SAMPLE_COLUMNS = {"instrument": "TEXT NOT NULL DEFAULT ''", "missing": "TEXT NOT NULL DEFAULT '[]'", "partial": "INTEGER NOT NULL DEFAULT 0"}
 
@@ -79,9 +84,15 @@ def mission_hash(mission: Mission) -> str:
 class Journal:
     """An SQLite journal of runs; :meth:`attach` it to a run's mission state."""
 
-    def __init__(self, path: str | Path, clock: Clock) -> None:
+    def __init__(self, path: str | Path, clock: Clock, storage: Storage | None = None) -> None:
+        """Open (or create) the journal; sqlite3.Error when it cannot be (a directory that does not exist, a read-only disk)."""
         self.path = str(path)
         self._clock = clock
+        self.storage = storage or Storage()
+        #: Statements the disk did not take (full, read-only): tried again, in order, before the next and every RETRY_EVERY_S.
+        self._pending: deque[tuple[str, tuple[Any, ...]]] = deque()
+        self._next_try = 0.0
+        self._flushing = False
         self._db = sqlite3.connect(self.path, isolation_level=None)  # autocommit: every statement is durable on return
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=FULL")
@@ -92,14 +103,15 @@ class Journal:
                 self._db.execute(f"ALTER TABLE samples ADD COLUMN {column} {declared}")
         self.run: int | None = None
         self._leg: int | None = None
+        self._next_run = int(self._db.execute("SELECT COALESCE(MAX(id), 0) FROM runs").fetchone()[0]) + 1  # known even if its row waits
 
     # -- writing -------------------------------------------------------------------------------
     def begin_run(self, mission: Mission, resumed_from: int | None = None) -> int:
-        cursor = self._db.execute(
-            "INSERT INTO runs (mission, mission_hash, mission_json, vehicle, started, resumed_from) VALUES (?, ?, ?, ?, ?, ?)",
-            (mission.name, mission_hash(mission), mission.model_dump_json(), mission.vehicle, time.time(), resumed_from),
+        self.run, self._next_run = self._next_run, self._next_run + 1
+        self._execute(
+            "INSERT INTO runs (id, mission, mission_hash, mission_json, vehicle, started, resumed_from) VALUES (?, ?, ?, ?, ?, ?, ?)",
+            (self.run, mission.name, mission_hash(mission), mission.model_dump_json(), mission.vehicle, time.time(), resumed_from),
         )
-        self.run = int(cursor.lastrowid or 0)
         self._leg = None
         return self.run
 
@@ -116,6 +128,8 @@ class Journal:
 
     def observe_leg(self, state: MissionState, lat: float | None, lon: float | None) -> None:
         """Called every tick: records the leg when it changes (with where the vehicle is)."""
+        if self._pending and self._clock.now() >= self._next_try:
+            self._flush()  # the disk may have room again
         if self.run is None or state.status not in (MissionStatus.RUNNING, MissionStatus.PAUSED) or state.leg_index == self._leg:
             return
         self._leg = state.leg_index
@@ -128,10 +142,13 @@ class Journal:
     def end_run(self, outcome: str, reason: str) -> None:
         """The run is over: its outcome recorded; what happens until the next run begins (another mission uploaded...) is none of its business."""
         if self.run is not None:
-            self._db.execute("UPDATE runs SET ended = ?, outcome = ?, reason = ? WHERE id = ?", (time.time(), outcome, reason, self.run))
+            self._execute("UPDATE runs SET ended = ?, outcome = ?, reason = ? WHERE id = ?", (time.time(), outcome, reason, self.run))
         self.run = None
 
     def close(self) -> None:
+        self._flush()  # a last try
+        if self._pending:
+            logging.getLogger("executive.storage").error("journal: %d record(s) lost: the disk would not take them", len(self._pending))
         self._db.close()
 
     # -- reading -------------------------------------------------------------------------------
@@ -255,7 +272,41 @@ class Journal:
 
     def _insert(self, table: str, **row: Any) -> None:
         names = ", ".join(row)
-        self._db.execute(f"INSERT INTO {table} ({names}) VALUES ({', '.join('?' * len(row))})", tuple(row.values()))
+        self._execute(f"INSERT INTO {table} ({names}) VALUES ({', '.join('?' * len(row))})", tuple(row.values()))
+
+    def _execute(self, sql: str, params: tuple[Any, ...]) -> None:
+        """Write now, after what waits; what the disk refuses waits (a full or read-only disk never takes the mission down)."""
+        self._pending.append((sql, params))
+        self._flush()
+
+    def _flush(self) -> None:
+        if self._flushing:  # the loss's own log line, journalled as an event: it waits its turn
+            return
+        self._flushing = True
+        batch = list(self._pending)
+        try:
+            if len(batch) > 1:
+                self._db.execute("BEGIN")  # what waited, in one transaction: all of it or none, and one commit's pages
+            for statement in batch:
+                self._db.execute(*statement)
+            if len(batch) > 1:
+                self._db.execute("COMMIT")
+        except sqlite3.OperationalError as exc:  # full, read-only, I/O error: SQLite rolls back, the file stays whole
+            if self._db.in_transaction:
+                self._db.execute("ROLLBACK")
+            self._next_try = self._clock.now() + RETRY_EVERY_S
+            self.storage.failed("journal", "progress will not survive a restart", exc)
+            return
+        except sqlite3.Error:  # not the disk (a sample recorded twice): the newest statement will never go in; the caller hears it
+            if self._db.in_transaction:
+                self._db.execute("ROLLBACK")
+            self._pending.pop()
+            raise
+        finally:
+            self._flushing = False
+        for _ in batch:
+            self._pending.popleft()
+        self.storage.wrote("journal")
 
     def _rows(self, sql: str, run: int) -> list[dict[str, Any]]:
         cursor = self._db.execute(sql, (run,))

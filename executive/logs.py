@@ -1,10 +1,11 @@
 """The log for a person: UTC timestamps, what an operator follows shown by default, and the live status line kept apart.
 
-Each record reads ``2026-05-01T10:12:03.250Z executive WARNING intervention: ...``: the
-timestamp is the computer's UTC wall clock (the live status line's ``[  12.3 s]`` is vehicle
-time). By default the operator's events are shown at INFO - the mission's state changes and
-pauses, legs done, samples, route edits, the autopilot found and its messages, the vehicle made
-safe - and every other module's only from WARNING; ``-v`` shows every INFO, ``-vv`` DEBUG.
+Each record reads ``2026-05-01T10:12:03.250Z t=12.345 executive WARNING intervention: ...``: the
+timestamp is the computer's UTC wall clock, ``t=`` the run's clock (vehicle time, monotonic: the
+live status line's ``[  12.3 s]`` and the journal's ``t``), which a wall clock's jump leaves alone.
+By default the operator's events are shown at INFO - the mission's state changes and pauses, legs
+done, samples, route edits, the autopilot found and its messages, the vehicle made safe - and every
+other module's only from WARNING; ``-v`` shows every INFO, ``-vv`` DEBUG.
 
 A record never lands on the end of the live status line: the line is cleared before the record
 is written and drawn again after it (:class:`LiveLineHandler`). Under systemd, with stderr going
@@ -39,16 +40,25 @@ class LiveLine(Protocol):
 
 
 class UtcFormatter(logging.Formatter):
-    """``2026-05-01T10:12:03.250Z executive LEVEL name: message``, in UTC."""
+    """``2026-05-01T10:12:03.250Z t=12.345 executive LEVEL name: message``: UTC, and the run's clock beside it.
+
+    The UTC wall clock may jump (a computer without a real-time clock boots in 1970, then NTP or GPS
+    time arrives): ``t=`` is the run's own time line (the vehicle's, the journal's ``t``; monotonic),
+    which orders the records whatever the wall clock did. Before a run names its clock (:func:`use_clock`),
+    seconds since the log was set up.
+    """
 
     converter = time.gmtime
 
-    def __init__(self) -> None:
-        super().__init__("%(asctime)s.%(msecs)03dZ executive %(levelname)s %(name)s: %(message)s", datefmt="%Y-%m-%dT%H:%M:%S")
+    def __init__(self, clock: Callable[[], float] | None = None) -> None:
+        super().__init__("%(asctime)s.%(msecs)03dZ t=%(t).3f executive %(levelname)s %(name)s: %(message)s", datefmt="%Y-%m-%dT%H:%M:%S")
+        start = time.monotonic()
+        self.clock = clock or (lambda: time.monotonic() - start)
 
     def format(self, record: logging.LogRecord) -> str:
         record = logging.makeLogRecord(record.__dict__)
         record.name = record.name.removeprefix("executive.")
+        record.t = self.clock()
         return super().format(record)
 
 
@@ -103,6 +113,13 @@ def setup_logging(verbose: int = 0, stream: TextIO | None = None) -> LiveLineHan
     for name in OPERATOR_LOGGERS:
         logging.getLogger(name).setLevel(logging.DEBUG if verbose >= 2 else logging.INFO)
     return handler
+
+
+def use_clock(now: Callable[[], float]) -> None:
+    """The log's ``t=`` from now on: the run's clock (its ``now``)."""
+    for handler in logging.getLogger().handlers:
+        if isinstance(handler.formatter, UtcFormatter):
+            handler.formatter.clock = now
 
 
 def attach_live_line(live: LiveLine | None) -> None:

@@ -24,6 +24,10 @@ imports nothing of the executive and anything may import it. A plugin that canno
 from __future__ import annotations
 
 import importlib
+import os
+import sys
+import sysconfig
+import traceback
 from importlib.metadata import EntryPoint, entry_points
 from types import MappingProxyType
 from typing import Any, TypeVar
@@ -51,14 +55,58 @@ BUILT_IN: MappingProxyType[str, MappingProxyType[str, str]] = MappingProxyType({
 })  # fmt: skip
 
 
-class PluginError(Exception):
-    """A plugin (an entry point, or a ``module:function`` a mission names) that cannot be loaded or is not what it must be."""
+#: The libraries a plugin calls into: a frame of theirs is not where the plugin went wrong.
+_LIBRARIES = ("py_trees", "pymavlink", "can", "filterpy", "yaml", "pydantic", "pydantic_core", "serial", "numpy")
+_EXECUTIVE = os.path.dirname(os.path.abspath(__file__))
+#: The module a user's tree imported before the redesign: said with where it went.
+_MOVED = {"trees": "the built-in trees are the package executive.trees: from executive.trees import ..."}
 
-    def __init__(self, plugin: str, error: BaseException | str) -> None:
+
+def _not_theirs(filename: str) -> bool:
+    """A file of Python's, of the executive's or of a library's (a frame there did not go wrong by itself)."""
+    if filename.startswith("<"):  # <frozen importlib._bootstrap>, <string>
+        return True
+    path = os.path.abspath(filename)
+    places = [_EXECUTIVE, sysconfig.get_paths()["stdlib"], sysconfig.get_paths()["platstdlib"]]
+    for name in _LIBRARIES:
+        module = sys.modules.get(name)
+        if module is not None and getattr(module, "__file__", None):
+            places.append(os.path.dirname(os.path.abspath(module.__file__)))  # type: ignore[arg-type]
+    return any(path == place or path.startswith(place + os.sep) for place in places)
+
+
+def user_frame(error: BaseException) -> str | None:
+    """``FILE:LINE`` of the innermost frame of ``error``'s traceback in a user's file (None: none is: the error is ours or a library's)."""
+    frames = traceback.extract_tb(error.__traceback__)
+    for frame in reversed(frames):
+        if not _not_theirs(frame.filename):
+            path = os.path.relpath(frame.filename) if not os.path.relpath(frame.filename).startswith("..") else frame.filename
+            return f"{path}:{frame.lineno}"
+    return None
+
+
+def _hint(error: BaseException | str) -> str:
+    if isinstance(error, ModuleNotFoundError) and error.name in _MOVED:
+        return f" ({_MOVED[error.name]})"
+    return ""
+
+
+class PluginError(Exception):
+    """A plugin (an entry point, or a ``module:function`` a mission names) that cannot be loaded, is not what it must be, or raised.
+
+    Said as ``FILE:LINE: plugin NAME: [DOING raised ]Error: message``, the file and line the user's
+    own (the innermost frame of the traceback in a file neither the executive's, Python's nor a
+    library's), when the error came from there.
+    """
+
+    def __init__(self, plugin: str, error: BaseException | str, doing: str = "") -> None:
         self.plugin = plugin
         self.error = error
         why = error if isinstance(error, str) else f"{type(error).__name__}: {error}"
-        super().__init__(f"plugin {plugin}: {why}")
+        #: ``FILE:LINE`` in the user's code where it went wrong (None: not known, or not there).
+        self.where = user_frame(error) if isinstance(error, BaseException) else None
+        at = f"{self.where}: " if self.where else ""
+        super().__init__(f"{at}plugin {plugin}: {f'{doing} raised ' if doing else ''}{why}{_hint(error)}")
 
 
 def built_in(group: str) -> list[str]:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 import py_trees
 from py_trees.common import Status
 
-from executive import mission_tree
+from executive import mission_tree, registry
 from executive.autopilot_link import AutopilotLink
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import Clock, TickClock
@@ -38,7 +38,8 @@ class BehaviourCrashed(RuntimeError):
     """A behaviour raised during a tick; ``path`` names it from the root."""
 
     def __init__(self, path: str, error: BaseException) -> None:
-        super().__init__(f"{path}: {type(error).__name__}: {error}")
+        where = registry.user_frame(error)  # a plugin's behaviour: the user's file and line
+        super().__init__(f"{path}: {f'{where}: ' if where else ''}{type(error).__name__}: {error}")
         self.path = path
         self.error = error
 
@@ -56,6 +57,8 @@ class Outcome:
     mission: str | None = None
     samples: int = 0
     safe: str | None = None
+    #: A user's code (a plugin's tree or behaviour) failed before anything was commanded: bad input (exit 2), not a failed mission.
+    users_code: bool = False
 
 
 def behaviour_path(node: py_trees.behaviour.Behaviour) -> str:
@@ -161,7 +164,8 @@ class Runtime:
         self._tree_waits_for_resume = False
         #: The distance rule, judged before a mission's tree first ticks, whatever the tree (a user's may leave it out).
         self.reach = ReachGate(self.clock)
-        self._refused: str | None = None  # the distance rule refused the starting mission: it ends, nothing commanded
+        self._refused: str | None = None  # the distance rule (or a user's code) refused the starting mission: it ends, nothing commanded
+        self._refused_users_code = False
         self.mission_state.upload(self.mission)
         self.progress = progress
         #: The bound on making the vehicle safe; None: as long as the firmware's chain of reactions takes (see :meth:`make_safe`).
@@ -188,7 +192,8 @@ class Runtime:
         for reader in self.readers:
             reader.service()
         status = Status.INVALID
-        if self.tree is not None and self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED) and not self._tree_waits_for_resume:
+        running = self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
+        if self.tree is not None and running and not self._tree_waits_for_resume and self._refused is None:
             verdict = self.reach.judge(self.mission_state)
             if isinstance(verdict, Refusal):
                 self._refused = verdict.reason
@@ -225,6 +230,8 @@ class Runtime:
         """
         if start:
             self._resume = resume
+            if resume is not None and self.link.watch.commanded is None:
+                self.link.watch.commanded = "a resumed run"  # the run it continues commanded the vehicle: it is made safe if stopped
             self.mission_state.start()
             if resume is not None:
                 if resume.route is not None:  # the operator had edited it: that is the route being driven
@@ -285,7 +292,11 @@ class Runtime:
         if self.tree is not None:
             mode = failsafe_mode(self.tree.root)  # an RTL or a surfacing the mission's failsafe asked for is not undone
             self.tree.interrupt()
-            self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
+            try:
+                self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
+            except Exception as exc:  # a behaviour's terminate() that raises: the vehicle is made safe all the same
+                node = _crashed_behaviour(exc.__traceback__)
+                log.error("stopping the tree: %s", BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc), exc_info=exc)
         for paced in self.paced:  # the base stops at once; the autopilot is told below
             paced.stop()
         made = self.link.make_safe(mode, announce=self.mission_state.announce, timeout_s=self.safe_timeout_s, report=self.report)
@@ -299,11 +310,11 @@ class Runtime:
 
     def _refuse(self, why: str) -> Outcome:
         """The distance rule refused the starting mission: it ends ABORTED, and as nothing was commanded nothing is undone."""
-        self._refused = None
+        users_code, self._refused, self._refused_users_code = self._refused_users_code, None, False
         reason = f"refused before anything was commanded: {why}"
         log.warning("mission %r %s", self.mission_state.mission.name if self.mission_state.mission else "", reason)
         self.mission_state.abort(reason)
-        return Outcome(MissionStatus.ABORTED, reason, self.ticks)
+        return Outcome(MissionStatus.ABORTED, reason, self.ticks, users_code=users_code)
 
     def _abort(self, reason: str) -> Outcome:
         log.warning("mission aborted: %s", reason)
@@ -317,22 +328,23 @@ class Runtime:
         try:
             status = self.tick()
         except BehaviourCrashed as crash:
-            log.error("behaviour crashed: %s", crash, exc_info=crash.error)
+            ours = registry.user_frame(crash.error) is None  # a user's behaviour is said by its file and line, without our traceback
+            log.error("behaviour crashed: %s", crash, exc_info=crash.error if ours else None)
             return self._end(self._abort(f"behaviour crashed: {crash}"))
         if self.progress:
             self.progress.update()
-        if not active:
-            return None
         if self._refused is not None:
             return self._end(self._refuse(self._refused))
+        if not active:
+            return None
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
             return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
         if status == Status.SUCCESS and (undone := self.mission_state.work_left()) is not None:
             return self._end(self._abort(f"the tree ended, but {undone}"))  # never report success for work not done
         if status == Status.SUCCESS:
-            self.mission_state.complete()
-            return self._end(Outcome(MissionStatus.COMPLETED, "every waypoint reached", self.ticks))
+            self.mission_state.complete()  # its reason says how many waypoints were reached
+            return self._end(Outcome(MissionStatus.COMPLETED, self.mission_state.reason, self.ticks))
         if status == Status.FAILURE:
             return self._end(self._abort(explain_failure(self.tree.root)))  # type: ignore[union-attr]
         return None
@@ -379,7 +391,11 @@ class Runtime:
         assert mission is not None
         built, self._built = self._built, None
         prebuilt = built[1] if built is not None and built[0] is mission else None
-        root, self._next_root = self._next_root or prebuilt or mission_tree.build(mission), None
+        try:
+            root, self._next_root = self._next_root or prebuilt or mission_tree.build(mission), None
+        except registry.PluginError as exc:  # a user's tree that built at the check and raises now
+            self._users_code_failed(str(exc))
+            return
         self._close_sampler()
         try:
             self.sampler = open_sampler(mission, self.clock, simulator=self.simulated_vehicle)
@@ -392,4 +408,17 @@ class Runtime:
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)
-        self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=self.mission_state, sampler=self.sampler)
+        try:
+            self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=self.mission_state, sampler=self.sampler)
+        except Exception as exc:
+            node = _crashed_behaviour(exc.__traceback__)
+            named = f"{type(node).__module__}.{type(node).__qualname__} ({node.name!r})" if node else "(tree)"
+            error = registry.PluginError(named, exc, doing="setup()")
+            if error.where is None:
+                raise  # not a user's code: a bug of ours
+            self._users_code_failed(str(error))
+
+    def _users_code_failed(self, why: str) -> None:
+        """A user's tree or behaviour failed as the mission starts: it is refused before its tree ticks, nothing commanded (exit 2)."""
+        log.error("%s", why)
+        self._refused, self._refused_users_code = why, True

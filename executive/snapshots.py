@@ -19,11 +19,12 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 import py_trees
 
 from executive import blackboard
+from executive.io.storage import AppendFile, Storage
 
 STATUS_CODES = {py_trees.common.Status.SUCCESS: "S", py_trees.common.Status.FAILURE: "F", py_trees.common.Status.RUNNING: "R"}
 MAX_VALUE_CHARS = 160
@@ -56,11 +57,12 @@ def status_codes(nodes: list[py_trees.behaviour.Behaviour]) -> list[str]:
 class SnapshotRecorder:
     """Writes one line per tick of ``tree`` to ``path``; call :meth:`record` after each tick."""
 
-    def __init__(self, path: str | Path, *, max_bytes: int = 50 << 20, keyframe_every: int = 100) -> None:
+    def __init__(self, path: str | Path, *, max_bytes: int = 50 << 20, keyframe_every: int = 100, storage: Storage | None = None) -> None:
         self.path = Path(path)
         self.max_bytes = max_bytes
         self.keyframe_every = keyframe_every
-        self._file: TextIO = self.path.open("w", encoding="utf-8")
+        self.storage = storage
+        self._file = self._open()
         self._nodes: list[py_trees.behaviour.Behaviour] = []
         self._tree_line = ""
         self._status: list[str] = []
@@ -118,17 +120,21 @@ class SnapshotRecorder:
     def close(self) -> None:
         self._file.close()
 
+    def _open(self) -> AppendFile:
+        return AppendFile(self.path, "snapshots", "ticks are not recorded for replay", self.storage, append=False)
+
     def _write(self, line: str) -> None:
-        self._file.write(line + "\n")
-        self._file.flush()
-        if self._file.tell() > self.max_bytes:
+        if not self._file.write((line + "\n").encode()):
+            self._since_keyframe = self.keyframe_every  # the disk took nothing: what follows is a keyframe, readable alone
+            return
+        if self._file.size > self.max_bytes:
             self._rotate()
 
     def _rotate(self) -> None:
         self._file.close()
         os.replace(self.path, self.path.with_name(self.path.name + ".1"))
-        self._file = self.path.open("w", encoding="utf-8")
-        self._file.write(self._tree_line + "\n")
+        self._file = self._open()
+        self._file.write((self._tree_line + "\n").encode())
         self._since_keyframe = self.keyframe_every  # the new file starts with a keyframe
 
 

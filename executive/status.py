@@ -21,7 +21,7 @@ KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
     "/runtime/late_ticks", "/mission/waiting", "/vehicle/mav_type", "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder",
-    "/operator/command",
+    "/operator/command", "/link/device_lost", "/runtime/storage_lost",
 )  # fmt: skip
 
 
@@ -58,6 +58,8 @@ class StatusSource:
             "armed": bool(bb.get("/vehicle/armed")),
             "vehicle_id": bb.get("/link/system_id"),
             "link_up": bool(bb.get("/link/up")),
+            "link_device_lost": bb.get("/link/device_lost"),
+            "storage_lost": bb.get("/runtime/storage_lost"),
             "lat": None if position is None else round(position.lat, 7),
             "lon": None if position is None else round(position.lon, 7),
             "yaw_deg": None if attitude is None else round(attitude.yaw_deg, 1),
@@ -104,8 +106,10 @@ def status_line(status: dict[str, Any]) -> str:
     why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
     waiting = f"  {waiting_text(status['waiting'])}" if status.get("waiting") and status["state"] == "RUNNING" else ""
     where = f"{to_go}{_vertical(status)}"
+    lost = f"  LINK: {status['link_device_lost']}" if status.get("link_device_lost") else ""
+    lost += f"  DISK: {status['storage_lost']}" if status.get("storage_lost") else ""
     head = f"{status['state']:<9} leg {status['leg']}/{status['legs']}{where}  {status['mode'] or '-'} {armed}"
-    return f"{head}{battery}{samples}{why}{_refused(status)}{waiting}"
+    return f"{head}{battery}{samples}{why}{_refused(status)}{waiting}{lost}"
 
 
 def _vertical(status: dict[str, Any]) -> str:

@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 
 from executive import blackboard
+from executive.autopilot_link.link import NOTHING_TO_MAKE_SAFE
 from executive.clock import Clock
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
@@ -148,27 +149,28 @@ def _said(caplog: pytest.LogCaptureFixture) -> list[str]:
     return [r.getMessage() for r in caplog.records if r.name == "executive.runtime"]
 
 
-def test_ctrl_c_while_waiting_for_the_ekf_after_boot_holds_the_vehicle_the_boot_mode_is_nobodys(lockstep, caplog) -> None:
-    """Ctrl-C right after boot, the EKF not ready: the vehicle was in MANUAL because it booted so, not because a person drives it."""
+def test_ctrl_c_while_waiting_for_the_ekf_after_boot_leaves_the_vehicle_as_it_was(lockstep, caplog) -> None:
+    """Ctrl-C right after boot, the EKF not ready: nothing was armed or commanded, so nothing is (issue 34: it used to be put in HOLD)."""
     caplog.set_level(logging.INFO, logger="executive")
     sim = lockstep(line_mission("boot mode"), ekf_ready_after_s=40.0)
     sim.at(5.0, lambda s: s.runtime.request_stop("SIGINT"))
     outcome = sim.run_to_end(limit_s=60)
     assert (outcome.status, outcome.reason) == (MissionStatus.ABORTED, "stopped: SIGINT")
-    assert sim.autopilot.mode == "HOLD"
+    assert sim.autopilot.mode == "MANUAL" and not sim.autopilot.armed  # its boot mode, as it was
     said = _said(caplog)
-    assert BOOT_MODE in said and "the vehicle made safe: HOLD (confirmed)" in said
+    assert NOTHING_TO_MAKE_SAFE in said and BOOT_MODE not in said
     assert not any("a person drives it" in text for text in said), said
 
 
 def test_the_operators_silence_is_not_a_person_driving(lockstep, caplog) -> None:
-    """Nobody arms the vehicle: the wait gives up, the mission aborts, and the vehicle is held in HOLD (it was in its boot MANUAL)."""
+    """Nobody arms the vehicle: the wait gives up and the mission aborts; nothing was commanded, so the vehicle is left in its boot MANUAL."""
     caplog.set_level(logging.INFO, logger="executive")
     mission = line_mission("nobody arms", auto_arm=False, limits={"acceptance_radius_m": 1.5, "recovery_timeout_s": 5.0})
-    outcome = lockstep(mission).run_to_end(limit_s=120)
+    sim = lockstep(mission)
+    outcome = sim.run_to_end(limit_s=120)
     assert outcome.status is MissionStatus.ABORTED and "Wait for the operator to arm" in outcome.reason, outcome.reason
     said = _said(caplog)
-    assert BOOT_MODE in said and "the vehicle made safe: HOLD (confirmed)" in said
+    assert NOTHING_TO_MAKE_SAFE in said and sim.autopilot.mode == "MANUAL"
     assert not any("a person drives it" in text for text in said), said
 
 

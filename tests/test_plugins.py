@@ -228,7 +228,7 @@ def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Pa
     assert main(["validate", path]) == 2
     err = capsys.readouterr().err.splitlines()
     assert err == [
-        f"{path}:4:7: tree: plugin 'broken' (executive.trees = brokenplugin.trees:build, from brokenplugin 1.0): "
+        f"{path}:4:7: tree: {broken}/brokenplugin/trees.py:1: plugin 'broken' (executive.trees = brokenplugin.trees:build, from brokenplugin 1.0): "
         "ModuleNotFoundError: No module named 'not_installed_anywhere'",
         "executive: validate: plugin 'thing' (executive.behaviours = brokenplugin.things:VALUE, from brokenplugin 1.0): "
         "3 is not a behaviour class (subclass executive.behaviours.base.ExecutiveBehaviour)",

@@ -86,5 +86,5 @@ def test_a_log_record_from_another_thread_is_written_apart_from_the_live_line() 
         logger.removeHandler(handler)
     after = terminal.getvalue().removeprefix("\r\x1b[K" + line)
     # the line erased, the record from the line's start, the line drawn again
-    record = r"\r\x1b\[K\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z executive WARNING test_progress: link lost\n"
+    record = r"\r\x1b\[K\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z t=\d+\.\d{3} executive WARNING test_progress: link lost\n"
     assert re.fullmatch(record + re.escape(line), after), repr(after)

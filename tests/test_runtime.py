@@ -25,7 +25,10 @@ class Explodes(py_trees.behaviour.Behaviour):
 
 
 def make_runtime(square_mission, link, clock, root=None) -> Runtime:
-    return build_runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
+    """The runtime of a mission under way: the vehicle (in GUIDED, armed) stands as this run left it, and its make-safe acts."""
+    runtime = build_runtime(square_mission, link, clock, root=root, safe_timeout_s=2.0)
+    runtime.link.watch.commanded = "the run before the test"
+    return runtime
 
 
 def autopilot_at(mission, link, vehicle: str = "rover") -> ObedientAutopilot:
@@ -88,7 +91,8 @@ def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mis
     assert crash.value.path == "Mission/Divide"
     outcome = runtime.run(start=False)
     assert outcome.status is MissionStatus.ABORTED
-    assert "behaviour crashed: Mission/Divide: ZeroDivisionError: boom" in outcome.reason
+    # a behaviour not of ours (here, this file's): named by its file and line
+    assert "behaviour crashed: Mission/Divide: tests/test_runtime.py:24: ZeroDivisionError: boom" in outcome.reason
     assert autopilot.mode == "HOLD"
     assert runtime.mission_state.status is MissionStatus.ABORTED
 

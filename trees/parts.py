@@ -10,15 +10,19 @@ from executive.behaviours import (
     AllWaypointsWithin,
     Arm,
     Armed,
+    AutopilotAtLeg,
     BatteryAbove,
     EkfOk,
     Failsafe,
+    FollowAutoLeg,
     GoTo,
     GpsNotGlitching,
     Guard,
     HeadingSane,
+    HorizonOnAutopilot,
     LinkAlive,
     ModeSwitchClear,
+    ParameterIs,
     PositionKnown,
     RcChannelHigh,
     RcNotLost,
@@ -105,8 +109,22 @@ def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
         arming = WaitUntil(either, limits.recovery_timeout_s, name=f"Wait for the operator to arm (or RC channel {rc.arm_channel} high)")
     else:
         arming = WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm")
-    checks = [wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission)]
+    checks = [wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission), *mission_end_checks(mission)]
     return py_trees.composites.Sequence("Pre-flight", memory=True, children=[*checks, arming])
+
+
+#: drive: auto: what stops the vehicle at the end of the horizon it holds. ArduRover's ModeAuto::exit_mission
+#: (Rover/mode_auto.cpp): MIS_DONE_BEHAVE 0 stops in AUTO, 1 loiters in AUTO; 2 (ACRO) and 3 (MANUAL) change mode and
+#: drive on as the sticks say (Rover/Parameters.cpp: "0:Hold in Auto Mode,1:Loiter in Auto Mode,2:Acro Mode,3:Manual Mode").
+MISSION_END_STOPS = ("MIS_DONE_BEHAVE", (0.0, 1.0), "drive: auto needs the vehicle stopped at the end of the horizon it holds (0 Hold, 1 Loiter)")
+
+
+def mission_end_checks(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
+    """drive: auto: the check that the autopilot stops the vehicle at the end of its mission (else the mission is refused)."""
+    if mission.drive != "auto":
+        return []
+    name, allowed, why = MISSION_END_STOPS
+    return [ParameterIs(name, allowed, why)]
 
 
 def standard_guards(mission: Mission) -> list[Guard]:
@@ -177,6 +195,27 @@ def guided_leg(mission: Mission) -> py_trees.behaviour.Behaviour:
     )
     guided = SetMode(PROFILES[mission.vehicle].guided_mode, confirm_by_ack=True)  # moving a tick after the ack, not at the next heartbeat
     return py_trees.composites.Sequence("Leg", memory=False, children=[guided, go])
+
+
+def auto_leg(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """One leg in AUTO (drive: auto): the horizon on the autopilot, its mission at this leg, AUTO, then the leg as AUTO drives it.
+
+    AUTO is checked every tick as GUIDED is in :func:`guided_leg`: asked again if a mode of our own
+    asking left it; a mode a person set pauses the mission (executive.intervention).
+    """
+    limits = mission.limits
+    steps = [
+        HorizonOnAutopilot(limits.auto_horizon_legs),
+        AutopilotAtLeg(),
+        SetMode("AUTO", confirm_by_ack=True),  # the port names it per firmware (mode_name)
+        FollowAutoLeg(limits.acceptance_radius_m, limits.leg_timeout_s),
+    ]
+    return py_trees.composites.Sequence("Leg in AUTO", memory=False, children=steps)
+
+
+def leg(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """One leg as the mission's ``drive:`` says: :func:`auto_leg` or :func:`guided_leg`."""
+    return auto_leg(mission) if mission.drive == "auto" else guided_leg(mission)
 
 
 def checked(guard: Guard, mission: Mission, name: str | None = None) -> py_trees.behaviour.Behaviour:

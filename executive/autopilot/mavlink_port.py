@@ -8,7 +8,7 @@ from typing import ClassVar
 from executive import geo
 from executive.autopilot.port import Capabilities, Request, Target, VtolState
 from executive.io.mavlink.commander import Commander, command_outcome
-from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, route_items, route_not_on_autopilot
+from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, horizon_not_on_autopilot, route_items, route_not_on_autopilot
 from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
 from executive.state import GlobalPosition, HomePosition
@@ -117,6 +117,21 @@ class MavlinkPort:
         if self.transfer is None:
             raise RuntimeError("no mission transfer on this link")
         return self.transfer.upload(route_items(waypoints), (home.lat, home.lon, home.alt_m) if home else None)
+
+    def horizon_differs(self, waypoints: Sequence[Waypoint], leg: int, horizon: int, held: object | None) -> str | None:
+        items: Sequence[MissionItem] | None = held  # type: ignore[assignment]  # /vehicle/mission_items
+        return horizon_not_on_autopilot(waypoints, leg, horizon, items)
+
+    def extend_route(self, waypoint: Waypoint) -> int:
+        if self.transfer is None:
+            raise RuntimeError("no mission transfer on this link")
+        [item] = route_items([waypoint])
+        return self.transfer.append(item)
+
+    def set_route_leg(self, leg: int) -> int:
+        if self.transfer is None:
+            raise RuntimeError("no mission transfer on this link")
+        return self.transfer.set_current(self.capabilities.first_item_seq + leg)
 
 
 def ahead_of(position: GlobalPosition, heading_deg: float, distance_m: float) -> tuple[float, float]:

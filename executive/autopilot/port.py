@@ -155,3 +155,16 @@ class AutopilotPort(Protocol):
     def upload_route(self, waypoints: Sequence[Waypoint], home: HomePosition | None) -> int:
         """Upload a route (read back before it counts); the transfer's ticket (``/link/mission_transfer``)."""
         ...
+
+    def horizon_differs(self, waypoints: Sequence[Waypoint], leg: int, horizon: int, held: object | None) -> str | None:
+        """drive: auto: why the autopilot's route (``/vehicle/mission_items``) is not the route's first waypoints through leg ``leg``'s
+        and at most ``horizon`` beyond it; None when it is."""
+        ...
+
+    def extend_route(self, waypoint: Waypoint) -> int:
+        """Add one waypoint after those the autopilot holds (read back before it counts); the transfer's ticket."""
+        ...
+
+    def set_route_leg(self, leg: int) -> int:
+        """Make the autopilot's route go on with leg ``leg`` (to its waypoint ``leg``); the transfer's ticket, confirmed by MISSION_CURRENT."""
+        ...

@@ -18,6 +18,7 @@ from typing import Any
 from executive import blackboard
 from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
+from executive.autopilot_link.commanded import CommandWatch
 from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
 from executive.autopilot_link.route_keeper import RouteKeeper
 from executive.autopilot_link.safe_state import SURFACE_COMPLETE_MODE, SafePlan, Until, progress, settled, where
@@ -40,6 +41,9 @@ log = logging.getLogger("executive.runtime")  # the make-safe's lines, as the lo
 
 #: The cause the make-safe's steps are logged and announced under: ``make safe: HOLD refused (FAILED)``.
 MAKE_SAFE = "make safe"
+
+#: The make-safe's word when this run never sent the vehicle anything that could change it (:mod:`.commanded`).
+NOTHING_TO_MAKE_SAFE = "nothing to make safe: the vehicle was never armed or commanded by this run"
 
 #: After the first autopilot's heartbeat, how long (vehicle time) to listen for others when none was named.
 SURVEY_S = 3.0
@@ -92,7 +96,10 @@ class AutopilotLink:
         period_s: float = 0.1,
     ) -> None:
         profile = PROFILES[mission.vehicle]
-        self.transport = transport
+        #: What is sent, watched: the make-safe acts only on a vehicle this run has commanded.
+        self.watch = CommandWatch(transport)
+        self.transport: Link = self.watch
+        transport = self.watch
         self.clock = clock
         self.mission = mission
         self.period_s = period_s
@@ -115,8 +122,8 @@ class AutopilotLink:
             on_autopilot=self._found,
             on_reconnect=self.streams.restart,
         )
-        if isinstance(transport, PymavlinkLink):
-            transport.skim(self.reader.kinds_read)  # what the reader does not read is counted from its header, never decoded
+        if isinstance(self.watch.link, PymavlinkLink):
+            self.watch.link.skim(self.reader.kinds_read)  # what the reader does not read is counted from its header, never decoded
         #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.
         self.route_keeper = RouteKeeper(mission_state, self.mission_transfer, self.commander, clock)
         self.parameters = ParameterWatch(self.autopilot, clock)
@@ -214,6 +221,9 @@ class AutopilotLink:
         VTOL a person holds (the mission paused hands off). Its steps go to ``announce``; ``report`` is called each time what
         was asked is sent (the ground station's reports). Its outcome is logged last (INFO when made safe, ERROR when not).
         """
+        if self.watch.commanded is None:  # nothing of ours to undo: commanding the safe mode would be a change of our own
+            self.reader.drain()  # what came meanwhile (a ground station's command) is answered all the same
+            return self._made_safe(True, NOTHING_TO_MAKE_SAFE, report)
         self.reader.drain()
         self.heartbeat.service()
         kind = self.mission.vehicle

@@ -9,6 +9,10 @@ replaces the one being uploaded. When the edit moved the mission's home (SET_HOM
 home is set too (MAV_CMD_DO_SET_HOME, acked; the commander retries it). The outcome is
 ``/link/route_upload`` (a :class:`RouteUpload`) and a log line.
 
+With ``drive: auto`` the autopilot is given only the edited route's horizon (its waypoints through
+the current leg's and ``limits.auto_horizon_legs`` beyond it): the tree's HorizonOnAutopilot
+extends it as legs are reached (executive.behaviours.auto_legs).
+
 A mission replaced while paused (hot reload, ``ctl upload``) is taken to the autopilot the same
 way, at once: the operator sees it uploaded and read back (``ctl route show``) before resuming,
 and a mission upload does not move a vehicle held in its safe mode (ArduPilot's mission is stopped
@@ -34,7 +38,15 @@ from enum import StrEnum
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.mission_protocol import MissionTransfer, MissionTransferStatus, TransferState, route_items, route_not_on_autopilot
+from executive.io.mavlink.mission_protocol import (
+    MissionTransfer,
+    MissionTransferStatus,
+    TransferState,
+    horizon_not_on_autopilot,
+    horizon_span,
+    route_items,
+    route_not_on_autopilot,
+)
 from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
@@ -109,8 +121,12 @@ class RouteKeeper:
         if self._ticket is not None and not self._follow(self._transfer.status, now):
             return
         home_problem = self._home_problem()
-        if self._ticket is None and route_not_on_autopilot(route.waypoints, self._vehicle.get("/vehicle/mission_items")) is None:
+        horizon = self._horizon()
+        wanted = route.waypoints if horizon is None else route.waypoints[: horizon_span(n, *horizon)[1]]
+        if self._ticket is None and self._held(route, horizon) is None:
             held = f"{n} waypoints, {'read back' if self._attempt else 'already held'}"
+            if horizon is not None:
+                held = f"the horizon of leg {horizon[0] + 1} (drive: auto), {'read back' if self._attempt else 'already held'}"
             if home_problem == "":
                 self._finish(RouteUploadState.DONE, f"{held}{self._home_words()}", now)
             elif home_problem is not None:
@@ -133,8 +149,8 @@ class RouteKeeper:
             return
         self._attempt += 1
         self._superseded = None
-        self._ticket = self._transfer.upload(route_items(route.waypoints), self._home_item(), verify=True)
-        self._publish(RouteUploadState.UPLOADING, f"uploading {n} waypoints (upload {self._attempt}/{self.attempts})", now)
+        self._ticket = self._transfer.upload(route_items(wanted), self._home_item(), verify=True)
+        self._publish(RouteUploadState.UPLOADING, f"uploading {len(wanted)} waypoints of {n} (upload {self._attempt}/{self.attempts})", now)
 
     # -- listeners ---------------------------------------------------------------------------
     def _on_route(self, route: Route, reason: str) -> None:
@@ -147,7 +163,11 @@ class RouteKeeper:
         self.service()
 
     def _on_replace(self, mission: Mission, reason: str) -> None:
-        """A mission replaced while paused: its route goes to the autopilot now; its home is not an edit."""
+        """With ``drive: auto`` the autopilot is given only the edited route's horizon (its waypoints through
+        the current leg's and ``limits.auto_horizon_legs`` beyond it): the tree's HorizonOnAutopilot
+        extends it as legs are reached (executive.behaviours.auto_legs).
+
+        A mission replaced while paused: its route goes to the autopilot now; its home is not an edit."""
         route = self._mission_state.route
         self._home = route.home
         self._on_route(route, reason)
@@ -157,6 +177,20 @@ class RouteKeeper:
             self._home = self._mission_state.route.home
 
     # -- internals ---------------------------------------------------------------------------
+    def _horizon(self) -> tuple[int, int] | None:
+        """drive: auto: (the current leg, limits.auto_horizon_legs): the autopilot is given no more of the route than that horizon."""
+        mission = self._mission_state.mission
+        if mission is None or mission.drive != "auto":
+            return None
+        return self._mission_state.leg_index, mission.limits.auto_horizon_legs
+
+    def _held(self, route: Route, horizon: tuple[int, int] | None) -> str | None:
+        """Why the autopilot does not hold the edit (its horizon, with drive: auto); None when it does."""
+        held = self._vehicle.get("/vehicle/mission_items")
+        if horizon is None:
+            return route_not_on_autopilot(route.waypoints, held)
+        return horizon_not_on_autopilot(route.waypoints, *horizon, held)
+
     def _follow(self, status: MissionTransferStatus | None, now: float) -> bool:
         """Follow our upload; True once it ended (for better or worse)."""
         if status is None or status.ticket != self._ticket:

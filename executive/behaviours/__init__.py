@@ -1,5 +1,6 @@
 """Behaviours the trees are built from: guards (conditions), actions and flow control."""
 
+from executive.behaviours.auto_legs import AutopilotAtLeg, FollowAutoLeg, HorizonOnAutopilot
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
 from executive.behaviours.commands import Arm, ChangeSpeed, CommandAction, Disarm, HoldFor, SetMode
 from executive.behaviours.depth import ChangeAltitude, ChangeDepth, Surface
@@ -32,6 +33,7 @@ __all__ = [
     "Arm",
     "ArmSwitch",
     "Armed",
+    "AutopilotAtLeg",
     "BatteryAbove",
     "ChangeAltitude",
     "ChangeDepth",
@@ -43,6 +45,7 @@ __all__ = [
     "EkfOk",
     "Failsafe",
     "FailsafeNote",
+    "FollowAutoLeg",
     "ForEachLeg",
     "GoTo",
     "GoToLocal",
@@ -50,6 +53,7 @@ __all__ = [
     "Guard",
     "HeadingSane",
     "HoldFor",
+    "HorizonOnAutopilot",
     "InsideGeofence",
     "KeepRouteOnAutopilot",
     "Land",

@@ -7,8 +7,9 @@ import difflib
 import json
 import sys
 
-from executive.catalogue import KINDS, NodeSpec, ParamSpec, catalogue
+from executive.catalogue import KINDS, Catalogue, NodeSpec, ParamSpec, load_behaviours
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
+from executive.registry import PluginError
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -26,13 +27,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 def run(args: argparse.Namespace) -> int:
     """Print the catalogue (or the nodes named); exit 2 naming a node that does not exist, or a plugin that cannot be loaded."""
-    from executive.registry import PluginError
-
-    try:
-        found = catalogue()
-    except PluginError as exc:
+    broken: list[PluginError] = []
+    found = Catalogue.build(load_behaviours(broken))  # a broken plugin is said, the others listed all the same
+    for exc in broken:
         print(f"executive: behaviours: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
     unknown = [n for n in args.names if found.get(n) is None]
     if unknown:
         said = ", ".join(f"no node {name!r}{_did_you_mean(name, found.names())}" for name in unknown)
@@ -42,9 +40,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         json.dump([s.to_json() for s in specs], sys.stdout, indent=2, ensure_ascii=False)
         sys.stdout.write("\n")
-        return EXIT_OK
+        return EXIT_BAD_INPUT if broken else EXIT_OK
     sys.stdout.write("".join(describe(s) for s in specs))
-    return EXIT_OK
+    return EXIT_BAD_INPUT if broken else EXIT_OK
 
 
 def _did_you_mean(name: str, names: list[str]) -> str:

@@ -7,6 +7,7 @@ import contextlib
 import logging
 import os
 import signal
+import sqlite3
 import sys
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
@@ -30,9 +31,10 @@ from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.endpoint import Unreachable
 from executive.io.mavlink.link import PymavlinkLink
+from executive.io.storage import Storage
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
 from executive.journal import Journal, JournalLogHandler, ResumePoint
-from executive.logs import attach_live_line, setup_logging
+from executive.logs import attach_live_line, setup_logging, use_clock
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.pacing import SpeedGovernor, keeping_time
@@ -110,10 +112,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 @contextlib.contextmanager
 def _vehicle_link(
-    args: argparse.Namespace, mission: Mission, clock: ScaledClock, faults: FaultInjector | None, signing_key: bytes | None
+    args: argparse.Namespace, mission: Mission, clock: ScaledClock, faults: FaultInjector | None, signing_key: bytes | None, storage: Storage
 ) -> Iterator[PymavlinkLink]:
     """A link to the vehicle named by --mavlink, or to a simulated one started here."""
-    options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog}
+    options = {"system_id": args.sysid, "signing_key": signing_key, "tlog": args.tlog, "clock": clock, "storage": storage}
     if args.mavlink:
         link = _open_link("--mavlink", args.mavlink, **options)
         try:
@@ -196,17 +198,34 @@ def _control_socket_path(asked: str | None) -> str | None:
     return path
 
 
-def _recorders(args: argparse.Namespace, clock: ScaledClock, stack: contextlib.ExitStack) -> tuple[Journal | None, SnapshotRecorder | None]:
-    """The journal (with the log's warnings as its events) and the snapshot recorder asked for, closed with ``stack``."""
+def _recorders(
+    args: argparse.Namespace, clock: ScaledClock, stack: contextlib.ExitStack, storage: Storage
+) -> tuple[Journal | None, SnapshotRecorder | None]:
+    """The journal (with the log's warnings as its events) and the snapshot recorder asked for, closed with ``stack``.
+
+    BadInput when one cannot be created (a directory that does not exist, a read-only or full disk): refused before the run.
+    """
     journal = snapshots = None
+    if args.tlog:  # opened with the link: checked here, before anything is
+        try:
+            with open(args.tlog, "ab"):
+                pass
+        except OSError as exc:
+            raise BadInput(f"--tlog {args.tlog}: cannot be created: {exc.strerror or exc}") from exc
     if args.journal:
-        journal = Journal(args.journal, clock)
+        try:
+            journal = Journal(args.journal, clock, storage)
+        except (sqlite3.Error, OSError) as exc:
+            raise BadInput(f"--journal {args.journal}: cannot be created or written: {exc}") from exc
         stack.callback(journal.close)
         handler = JournalLogHandler(journal)
         logging.getLogger("executive").addHandler(handler)
         stack.callback(logging.getLogger("executive").removeHandler, handler)
     if args.snapshots:
-        snapshots = SnapshotRecorder(args.snapshots)
+        try:
+            snapshots = SnapshotRecorder(args.snapshots, storage=storage)
+        except OSError as exc:
+            raise BadInput(f"--snapshots {args.snapshots}: cannot be created: {exc.strerror or exc}") from exc
         stack.callback(snapshots.close)
     return journal, snapshots
 
@@ -313,6 +332,16 @@ def _signing_hint(link: PymavlinkLink) -> str:
     )
 
 
+def _serial_hint(link: PymavlinkLink, bad_data: int) -> str:
+    """Why no heartbeat was heard on a serial device that sent bytes: not an autopilot's port, or not at its baud rate."""
+    if link.device is None or not bad_data:
+        return ""
+    return (
+        f": bytes that are not MAVLink came in ({bad_data} undecodable runs): is it the autopilot's port, and is it at the autopilot's "
+        "baud rate (,BAUD after the device; ArduPilot's SERIALn_BAUD)? the wrong baud rate garbles every byte"
+    )
+
+
 def _resume_text(resume: ResumePoint | None) -> str:
     if resume is None:
         return "nothing to resume: the journal has no unfinished run of this mission; starting from the first waypoint"
@@ -375,6 +404,7 @@ def main(args: argparse.Namespace) -> int:
     for note in checked.notes:
         print(f"executive: run: {note}", file=sys.stderr)
     clock = ScaledClock(args.speedup)
+    use_clock(clock.now)  # the log's t=: the journal's and the status line's time, whatever the wall clock does
     faults = None
     if checked.faults:
         from executive.sim.faults import FaultInjector
@@ -389,9 +419,10 @@ def main(args: argparse.Namespace) -> int:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         web = _web_server(args, stack)
         groot2 = _groot2(args, stack)
-        link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key))
+        storage = Storage()  # the journal, snapshots and tlog on a disk that may fill up: said once, retried
+        journal, snapshots = _recorders(args, clock, stack, storage)  # before the vehicle: one that cannot be created is refused first
+        link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key, storage))
         gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
-        journal, snapshots = _recorders(args, clock, stack)
         can_bus = _can_bus(args, stack)
         resume = None
         if journal is not None and args.resume:
@@ -418,6 +449,7 @@ def main(args: argparse.Namespace) -> int:
             simulated_vehicle=not args.mavlink,
         )
         stack.callback(runtime.close)
+        storage.listeners.append(runtime.mission_state.announce)  # the ground station told (STATUSTEXT), as the log and the status line
         if not args.mavlink and clock.speedup > 1.0:  # the simulated world slows down to what the executive follows
             runtime.pacer.listeners.append(SpeedGovernor(clock))
         try:
@@ -432,7 +464,9 @@ def main(args: argparse.Namespace) -> int:
             return EXIT_INTERRUPTED
         if not connected:
             which = "an autopilot" if args.target_system is None else f"autopilot {args.target_system}/{args.target_component}"
-            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{_signing_hint(link)}", file=sys.stderr)
+            on = f" on {link.url}" if link.device is not None else ""
+            hint = _signing_hint(link) or _serial_hint(link, runtime.link.reader.bad_data)
+            print(f"executive: run: no heartbeat from {which} within {args.connect_timeout:g} s{on}{hint}", file=sys.stderr)
             return EXIT_NO_VEHICLE
         if watchdog is not None:
             watchdog.ready(f"autopilot {'/'.join(map(str, runtime.link.reader.autopilot or ()))} heard on {link.url}; mission {mission.name!r}")
@@ -491,7 +525,12 @@ class StopSignals:
 
 
 def exit_code(outcome: Outcome) -> int:
-    """0 when the mission that ran COMPLETED, or none ran (``--wait``, stopped before any start); 1 when it ended otherwise."""
+    """0 when the mission that ran COMPLETED, or none ran (``--wait``, stopped before any start); 1 when it ended otherwise.
+
+    2 when a user's code (a plugin's tree or behaviour) failed as it started, before anything was commanded: bad input.
+    """
+    if outcome.users_code:
+        return EXIT_BAD_INPUT
     return EXIT_OK if outcome.mission is None or outcome.status is MissionStatus.COMPLETED else EXIT_FAILED
 
 

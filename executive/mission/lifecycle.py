@@ -213,8 +213,11 @@ class MissionState:
         self._transition("delete", "mission deleted")
 
     def complete(self) -> None:
+        """RUNNING -> COMPLETED, said as what was done: every waypoint reached, or how many were (a user's tree may succeed short of them)."""
         self._check("complete")
-        self._transition("complete", "every waypoint reached")
+        reached = min(self.leg_index, self.leg_count)
+        said = "every waypoint reached" if reached >= self.leg_count else f"the tree succeeded; {reached} of {self.leg_count} waypoints reached"
+        self._transition("complete", said)
 
     def abort(self, reason: str) -> None:
         self._check("abort")

@@ -135,6 +135,9 @@ class Limits(BaseModel):
         20.0, ge=0.0, le=100.0, description="remaining battery below this, percent, fails the battery guard (null: not checked)"
     )
     battery_min_v: float | None = Field(None, gt=0.0, le=1000.0, description="battery voltage below this fails the battery guard (null: not checked)")
+    auto_horizon_legs: int = Field(
+        2, ge=1, le=20, description="drive: auto: waypoints the autopilot holds beyond the current leg's (it stops at the last one it holds)"
+    )
 
 
 class SwitchChannels(BaseModel):
@@ -389,6 +392,11 @@ class Mission(BaseModel):
         "module:function of a module on the Python path (module alone: its build), or a tree composed in the file (a mapping)",
     )
     description: str | None = Field(None, max_length=4096)
+    drive: Literal["guided", "auto"] = Field(
+        "guided",
+        description="guided: the executive sends each leg's target (GUIDED); auto: the autopilot drives its own mission in AUTO, "
+        "holding only limits.auto_horizon_legs waypoints beyond the current leg, under the executive's supervision",
+    )
     auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
     home: Home | None = None
     geofence: GeofenceConfig | None = Field(None, description="where the vehicle may be")

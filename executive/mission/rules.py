@@ -61,6 +61,34 @@ ARDUPILOT_ONLY_TREES: dict[str, str] = {
 }
 
 
+#: drive: auto: the trees that can be driven by the autopilot's own AUTO, and the vehicle kinds (ArduRover: rover, boat).
+AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {"waypoints": frozenset({"rover", "boat"})}
+#: drive: auto refused, per tree, until it can be flown so: why.
+AUTO_DRIVE_REFUSED: dict[str, str] = {
+    "goto_sample": "its sample points as stops in the autopilot's mission are not done yet",
+    "auv_survey": "ArduSub's AUTO with depth is not done yet",
+    "vtol_transit": "its take-off, transitions and landing are the executive's",
+    "ugv_rc_route": "its operator puts the route in AUTO already",
+}
+
+
+def drive_errors(mission: Mission) -> list[str]:
+    """Why ``drive: auto`` cannot drive this mission's tree and vehicle (empty: it can, or the drive is guided)."""
+    if mission.drive != "auto":
+        return []
+    name = tree_name(mission)
+    if name is None:
+        return ["a tree composed in the file is not driven in AUTO: use drive: guided"]
+    if name in AUTO_DRIVE_REFUSED:
+        return [f"tree {name}: {AUTO_DRIVE_REFUSED[name]}; use drive: guided"]
+    kinds = AUTO_DRIVE_TREES.get(name)
+    if kinds is None:
+        return [f"tree {name} is not known to be driven in AUTO; use drive: guided"]
+    if mission.vehicle not in kinds:
+        return [f"tree {name} is driven in AUTO on a {' or '.join(sorted(kinds))} (ArduRover) so far, not a {mission.vehicle}; use drive: guided"]
+    return []
+
+
 def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
     """Why ``autopilot`` cannot fly ``mission`` (empty when it can)."""
     errors = []
@@ -70,6 +98,8 @@ def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
     name = tree_name(mission)
     if autopilot != "ardupilot" and name in ARDUPILOT_ONLY_TREES:
         errors.append(f"tree {name} needs ArduPilot: {ARDUPILOT_ONLY_TREES[name]}")
+    if autopilot != "ardupilot" and mission.drive == "auto":
+        errors.append("drive: auto needs ArduPilot so far (its partial mission writes hold the horizon; PX4's AUTO.MISSION is not done yet)")
     return errors
 
 
@@ -126,6 +156,7 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
                 why = f"{d:.0f} m from home, over limits.max_goal_distance_m ({limit:g} m): refused at start with the vehicle at home"
                 errors.append((("waypoints", i), why))
     errors += _leg_time_errors(mission)
+    errors += [(("drive",), why) for why in drive_errors(mission)]
     if mission.vehicle == "vtol":
         errors += _vtol_errors(mission) + _height_errors(mission)
     if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":

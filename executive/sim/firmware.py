@@ -257,7 +257,7 @@ class FirmwareSim(ABC):
         return {
             "COMMAND_LONG": self._on_command,
             "COMMAND_INT": self._on_command,
-            **dict.fromkeys(MissionStore.MESSAGES, self.mission.handle),
+            **dict.fromkeys(self.mission.MESSAGES, self.mission.handle),
             "OBSTACLE_DISTANCE": lambda msg: self.proximity.handle(msg, self.elapsed_s),
             "PARAM_REQUEST_READ": self._on_param_request_read,
         }

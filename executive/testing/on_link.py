@@ -23,7 +23,8 @@ class RuntimeOnLink:
     :class:`ObedientAutopilot` of the mission's vehicle in ``mode`` (``armed``) where its simulated
     vehicle would start (the mission's home, else its first waypoint), answers each command and
     heartbeat as it is sent, its position with each heartbeat; with ``beat`` its heartbeat also
-    arrives before every tick. Other facts (the EKF) are the test's to write. :meth:`tick` advances the clock
+    arrives before every tick; ``commanded=False``: a run that has commanded nothing yet (its make-safe
+    has nothing to undo). Other facts (the EKF) are the test's to write. :meth:`tick` advances the clock
     and ticks; :meth:`modes_sent` and :meth:`texts` are what the executive sent since the last call.
     """
 
@@ -36,11 +37,14 @@ class RuntimeOnLink:
         mode: str = "GUIDED",
         armed: bool = True,
         beat: bool = False,
+        commanded: bool = True,
         **runtime_options: Any,
     ) -> None:
         self.clock = clock if clock is not None else ManualClock(START_S)
         self.link = link if link is not None else FakeLink()
         self.runtime = build_runtime(mission, self.link, self.clock, **runtime_options)
+        if commanded:  # the vehicle stands as this run left it mid-mission (in GUIDED, armed): its make-safe acts
+            self.runtime.link.watch.commanded = "the run before the test"
         start = simulated_home(mission)
         self.autopilot = ObedientAutopilot(self.link, mission.vehicle, mode=mode, armed=armed, start=(start[0], start[1]))
         self.beat = beat

@@ -182,3 +182,21 @@ def test_a_pilot_mode_the_autopilot_chose_itself_is_nobodys_and_is_made_safe(squ
     asked = asked_when(r)
     r.runtime.make_safe()
     assert (("mode", "HOLD") in [c for _, c in asked]) is commanded, (asked, r.runtime.safe_report)
+
+
+def test_a_run_stopped_before_it_commanded_anything_leaves_the_vehicle_as_it_was(square_mission: Mission) -> None:
+    """Stopped while its pre-flight waits for the EKF: only heartbeats, stream requests and parameter reads went out; nothing is commanded."""
+    from executive.autopilot_link.link import NOTHING_TO_MAKE_SAFE
+    from executive.testing import Lockstep
+    from tests_support import acting
+
+    received: list[MAVLinkMessage] = []
+    with Lockstep(square_mission, ekf_ready_after_s=600.0) as sim:
+        handle = sim.autopilot.handle
+        sim.autopilot.handle = lambda msg: received.append(msg) or handle(msg)  # type: ignore[method-assign]
+        assert sim.run(60, until=lambda: sim.clock.now() > 10.0) is None
+        sim.runtime.request_stop("SIGTERM")
+        outcome = sim.run_to_end(limit_s=30)
+    assert outcome.status is MissionStatus.ABORTED and outcome.safe == NOTHING_TO_MAKE_SAFE
+    assert last_words(outcome, sim.runtime.mission_state)[0] == NOTHING_TO_MAKE_SAFE
+    assert acting(received) == [] and sim.autopilot.mode == "MANUAL" and not sim.autopilot.armed  # its boot mode, disarmed

@@ -108,6 +108,19 @@ def keeping(square_mission) -> Keeping:
     return Keeping(square_mission, None)
 
 
+def test_with_drive_auto_an_edit_gives_the_autopilot_only_the_horizon(square_mission: Mission) -> None:
+    """drive: auto: the autopilot never holds more than the current leg's waypoint and limits.auto_horizon_legs beyond it."""
+    mission = square_mission.model_copy(update={"drive": "auto", "limits": square_mission.limits.model_copy(update={"auto_horizon_legs": 1})})
+    keeping = Keeping(mission, None)
+    keeping.state.continue_from(1)
+    keeping.tick(keeping.offset_edit)
+    done = keeping.until(ended)
+    assert (done.state, done.detail) == (RouteUploadState.DONE, "the horizon of leg 2 (drive: auto), read back")
+    edited = keeping.state.route.waypoints
+    held = [x for point in keeping.autopilot.held() for x in point]
+    assert held == pytest.approx([x for wp in edited[:3] for x in (wp.lat, wp.lon)], abs=1.5e-7)  # legs 1-2, and one beyond
+
+
 def test_an_edit_is_uploaded_once_read_back_and_reported(keeping: Keeping, caplog) -> None:
     caplog.set_level(logging.INFO, logger="executive.autopilot_link.route_keeper")
     keeping.tick()

@@ -52,6 +52,26 @@ def test_run_with_autopilot_px4_refuses_a_sub_before_starting_a_vehicle(tmp_path
     assert "simulated" not in err  # no vehicle was started
 
 
+def test_run_with_autopilot_px4_refuses_drive_auto_before_starting_a_vehicle(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "rover.yaml"
+    path.write_text("version: 1\nname: r\nvehicle: rover\ndrive: auto\nwaypoints:\n  - {lat: 47.0, lon: 8.0}\n", encoding="utf-8")
+    assert main(["validate", str(path)]) == 0
+    assert main(["validate", "--autopilot", "px4", str(path)]) == 2
+    assert "drive: auto needs ArduPilot so far" in capsys.readouterr().err
+    assert main(["run", str(path), "--autopilot", "px4", "--socket", "none"]) == 2
+    err = capsys.readouterr().err
+    assert "--autopilot px4: drive: auto needs ArduPilot so far" in err
+    assert "simulated" not in err  # no vehicle was started
+
+
+def test_run_refuses_drive_auto_of_a_tree_it_cannot_drive_yet(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    text = (Path(__file__).parents[2] / "missions" / "auv_survey.yaml").read_text(encoding="utf-8")
+    path = tmp_path / "auv.yaml"
+    path.write_text(text.replace("tree: auv_survey\n", "tree: auv_survey\ndrive: auto\n"), encoding="utf-8")
+    assert main(["run", str(path), "--socket", "none"]) == 2
+    assert "drive: tree auv_survey: ArduSub's AUTO with depth is not done yet; use drive: guided" in capsys.readouterr().err
+
+
 def test_run_with_autopilot_px4_flies_the_simulated_px4_and_ctrl_c_in_the_take_off_lands_it() -> None:
     """No --mavlink: the built-in simulator runs PX4 (HEARTBEAT autopilot 12, type 22); the tree's GUIDED is OFFBOARD there.
 

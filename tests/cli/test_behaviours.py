@@ -48,16 +48,19 @@ def test_a_misspelt_node_gets_the_suggestion_validate_gives(capsys):
     )
 
 
-def test_a_plugin_that_cannot_be_loaded_is_named_with_exit_2(capsys, monkeypatch):
+def test_a_plugin_that_cannot_be_loaded_is_named_with_exit_2_and_the_rest_still_listed(capsys, monkeypatch):
     from executive.cli import behaviours
     from executive.registry import PluginError
 
-    def broken() -> None:
-        raise PluginError("'sea' (executive.behaviours = mypkg.sea:Sea, from mypkg 1.0)", ModuleNotFoundError("No module named 'mypkg.sea'"))
+    def broken(found: list[PluginError]) -> list[type]:
+        found.append(PluginError("'sea' (executive.behaviours = mypkg.sea:Sea, from mypkg 1.0)", ModuleNotFoundError("No module named 'mypkg.sea'")))
+        return []
 
-    monkeypatch.setattr(behaviours, "catalogue", broken)
+    monkeypatch.setattr(behaviours, "load_behaviours", broken)
     assert main(["behaviours"]) == 2
-    assert capsys.readouterr().err == (
+    out, err = capsys.readouterr()
+    assert err == (
         "executive: behaviours: plugin 'sea' (executive.behaviours = mypkg.sea:Sea, from mypkg 1.0): "
         "ModuleNotFoundError: No module named 'mypkg.sea'\n"
     )
+    assert "go_to (action)" in out  # the others, listed all the same

@@ -14,7 +14,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).parents[2]
 MINIMAL = ROOT / "tests/data/minimal_mission.yaml"  # one waypoint, no auto-arm: it runs, waiting for the operator to arm
-RECORD = re.compile(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z executive (INFO|WARNING|ERROR) [\w.]+: ")
+RECORD = re.compile(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z t=\d+\.\d{3} executive (INFO|WARNING|ERROR) [\w.]+: ")
 LIVE = "\r\x1b[K["  # the live line drawn (again)
 
 

@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 
 from executive.assembly import journal_recorder
+from executive.autopilot_link.link import NOTHING_TO_MAKE_SAFE
 from executive.cli import EXIT_OK, main
 from executive.cli.run import exit_code, last_words
 from executive.clock import Clock
@@ -68,7 +69,7 @@ def test_stopped_before_any_mission_ran_it_says_so_and_exits_0(lockstep) -> None
     assert outcome is not None and outcome.mission is None
     said = last_words(outcome, sim.runtime.mission_state)
     assert said == [
-        "the vehicle made safe: HOLD (confirmed)",  # its boot MANUAL is nobody's: Ctrl-C holds it, and says so
+        NOTHING_TO_MAKE_SAFE,  # the mission never started: nothing was commanded, nothing is (issue 34), and it says so
         f"mission 'waiting' READY: loaded, never started; no mission ran ({outcome.ticks} ticks)",
     ]
     assert exit_code(outcome) == EXIT_OK  # nothing aborted, nothing failed: 1 would say a mission did

@@ -240,7 +240,7 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
         proc = executive("run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--socket", "none", stdout=subprocess.PIPE)
         assert proc.stdout is not None and proc.stderr is not None
         for line in proc.stdout:
-            if json.loads(line)["state"] == "RUNNING":
+            if json.loads(line)["armed"]:  # armed by this run: there is something to make safe (issue 34: else nothing is commanded)
                 break
     finally:
         sim.stop()

@@ -259,8 +259,8 @@ waypoints:
 def test_every_error_comes_in_one_pass_cross_field_ones_included() -> None:
     """Issue 13: depth 150 and altitude 1 were reported only once the 6 other errors were fixed."""
     assert errors_of(ONE_PASS) == [
-        "m.yaml:4:1: bogus: unknown field (allowed: version, name, vehicle, autopilot, tree, description, auto_arm, home, geofence, rally_points, "
-        "limits, rc, failsafe, sampling, vtol, rc_route, simulator, waypoints)",
+        "m.yaml:4:1: bogus: unknown field (allowed: version, name, vehicle, autopilot, tree, description, drive, auto_arm, home, geofence, "
+        "rally_points, limits, rc, failsafe, sampling, vtol, rc_route, simulator, waypoints)",
         "m.yaml:6:30: limits.speed_m_s.max: expected a number, got string 'fast'",
         "m.yaml:7:19: limits.link_timeout_s: -1: Input should be greater than 0",
         "m.yaml:9:38: waypoints[0].depth_m: 150.0 m is outside limits.depth_m [0.0, 100.0]",

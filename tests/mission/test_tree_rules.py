@@ -52,3 +52,52 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
         "m.yaml:4:14: rc.source: 'serial': Input should be 'mavlink' or 'can'",
         "m.yaml:4:45: rc.switch_channels.swc: 0: Input should be greater than or equal to 1",
     ]
+
+
+@pytest.mark.parametrize(
+    ("body", "expected"),
+    [
+        ("vehicle: rover\ntree: waypoints\n" + WP, []),
+        ("vehicle: rover\ntree: waypoints\ndrive: guided\n" + WP, []),
+        ("vehicle: rover\ntree: waypoints\ndrive: auto\n" + WP, []),
+        ("vehicle: boat\ntree: waypoints\ndrive: auto\nlimits: {auto_horizon_legs: 3}\n" + WP, []),
+        (
+            "vehicle: sub\ntree: waypoints\ndrive: auto\n" + WP,
+            ["m.yaml:5:8: drive: tree waypoints is driven in AUTO on a boat or rover (ArduRover) so far, not a sub; use drive: guided"],
+        ),
+        (
+            "vehicle: boat\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP,
+            ["m.yaml:5:8: drive: tree goto_sample: its sample points as stops in the autopilot's mission are not done yet; use drive: guided"],
+        ),
+        (
+            "vehicle: sub\ntree: auv_survey\ndrive: auto\n" + WP,
+            ["m.yaml:5:8: drive: tree auv_survey: ArduSub's AUTO with depth is not done yet; use drive: guided"],
+        ),
+        (
+            "vehicle: rover\ntree: ugv_rc_route\ndrive: auto\nwaypoints: []\n",
+            ["m.yaml:5:8: drive: tree ugv_rc_route: its operator puts the route in AUTO already; use drive: guided"],
+        ),
+        ("vehicle: rover\ndrive: sideways\n" + WP, ["m.yaml:4:8: drive: 'sideways': Input should be 'guided' or 'auto'"]),
+        (
+            "vehicle: rover\nlimits: {auto_horizon_legs: 0}\n" + WP,
+            ["m.yaml:4:29: limits.auto_horizon_legs: 0: Input should be greater than or equal to 1"],
+        ),
+        (
+            "vehicle: rover\nautopilot: px4\ndrive: auto\n" + WP,
+            [
+                "m.yaml:4:12: autopilot: drive: auto needs ArduPilot so far "
+                "(its partial mission writes hold the horizon; PX4's AUTO.MISSION is not done yet)"
+            ],
+        ),
+    ],
+)
+def test_drive_rules(body: str, expected: list[str]) -> None:
+    """drive: auto only where the autopilot's AUTO can drive the tree; elsewhere refused at drive:, with the reason."""
+    assert errors_of(HEAD + body) == expected
+
+
+def test_drive_defaults_to_guided_with_a_horizon_of_two() -> None:
+    from executive.mission import loader
+
+    mission = loader.load_mission_text(HEAD + "vehicle: rover\n" + WP, "m.yaml")
+    assert (mission.drive, mission.limits.auto_horizon_legs) == ("guided", 2)

@@ -45,6 +45,11 @@ def check_endpoint(url: str) -> None:
         raise BadEndpoint(f"{url}: port {port!r} is not a number {lowest}-65535")
 
 
+def is_serial(url: str) -> bool:
+    """``url`` names a serial device (``/dev/ttyACM0[,BAUD]``, ``COM3``), not a network endpoint."""
+    return bool(_SERIAL.match(url))
+
+
 def unreachable(url: str, error: OSError) -> Unreachable:
     """The error to raise when opening ``url`` failed with ``error``, saying what was tried."""
     # pyserial's strerror repeats the device and the errno: the errno's own text is enough
@@ -58,4 +63,4 @@ def unreachable(url: str, error: OSError) -> Unreachable:
     return Unreachable(f"{url}: {doing} {address}: {reason}{hint}")
 
 
-__all__ = ["BadEndpoint", "Unreachable", "check_endpoint", "unreachable"]
+__all__ = ["BadEndpoint", "Unreachable", "check_endpoint", "is_serial", "unreachable"]

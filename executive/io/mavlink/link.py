@@ -2,18 +2,28 @@
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import hashlib
+import logging
 import os
 import struct
 import time
 from collections import deque
 from collections.abc import Collection
 from pathlib import Path
-from typing import BinaryIO, Protocol
+from typing import Any, Protocol
 
-from executive.io.mavlink.endpoint import unreachable
+from executive.clock import Clock, ScaledClock
+from executive.io.mavlink.endpoint import Unreachable, is_serial, unreachable
 from executive.io.mavlink.skim import Skimmer
+from executive.io.storage import AppendFile, Storage
 from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
+
+log = logging.getLogger(__name__)
+
+#: While a serial device is gone (its cable knocked out, the autopilot rebooting), how often it is opened again (clock seconds).
+REOPEN_EVERY_S = 1.0
 
 
 class Link(Protocol):
@@ -64,10 +74,13 @@ def load_signing_key(path: str | os.PathLike[str]) -> bytes:
 
 
 class TlogWriter:
-    """Records messages in the .tlog format: an 8-byte big-endian µs wall-clock timestamp, then the raw packet."""
+    """Records messages in the .tlog format: an 8-byte big-endian µs wall-clock timestamp, then the raw packet.
 
-    def __init__(self, path: str | os.PathLike[str]) -> None:
-        self._file: BinaryIO = open(path, "ab")  # noqa: SIM115 - lives as long as the link
+    Each record is written whole or not at all (a full disk loses packets, said once, never the file's end).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], storage: Storage | None = None) -> None:
+        self._file = AppendFile(path, "tlog", "the MAVLink link is not recorded", storage)
 
     def write(self, msg: MAVLinkMessage) -> None:
         self._file.write(struct.pack(">Q", int(time.time() * 1e6)) + bytes(msg.get_msgbuf()))
@@ -94,6 +107,8 @@ class PymavlinkLink:
         *,
         signing_key: bytes | None = None,
         tlog: str | os.PathLike[str] | None = None,
+        clock: Clock | None = None,
+        storage: Storage | None = None,
     ) -> None:
         device, _, baud = url.partition(",")
         self.url = url
@@ -109,11 +124,24 @@ class PymavlinkLink:
             )
         except OSError as exc:  # nothing listening, no such device, the port taken (serial.SerialException is an OSError)
             raise unreachable(url, exc) from exc
+        #: The serial device (None: a network link), its baud rate, and why it is gone while it is (None: it is there).
+        self.device = device if is_serial(url) else None
+        self._baud = int(baud) if baud else 115200
+        self.device_lost: str | None = None
+        self._clock: Clock = clock or ScaledClock()
+        self._lost_at = self._next_open = 0.0
+        self._tries = 0
+        if self.device is not None:
+            try:
+                self._claim(self._conn.port)
+            except Unreachable:
+                self._conn.close()
+                raise
         if signing_key is not None:
             if len(signing_key) != 32:
                 raise ValueError("a MAVLink signing key is 32 bytes")
             self._conn.setup_signing(signing_key, sign_outgoing=True, allow_unsigned_callback=lambda _mav, _msg_id: False)
-        self._tlog = TlogWriter(tlog) if tlog else None
+        self._tlog = TlogWriter(tlog, storage) if tlog else None
         self._post_message = self._conn.post_message
         self._conn.post_message = self._post  # type: ignore[method-assign]
 
@@ -149,12 +177,22 @@ class PymavlinkLink:
         return signing.reject_count - signing.badsig_count, signing.badsig_count, signing.goodsig_count
 
     def recv(self) -> MAVLinkMessage | None:
-        msg = self._conn.recv_msg()
+        if self.device_lost is not None and not self._reopen():
+            return None
+        try:
+            msg = self._conn.recv_msg()
+        except OSError as exc:  # serial.SerialException: the device went away (pymavlink raises it from its read)
+            if self.device is None:
+                raise
+            self._lose(exc)
+            return None
         if msg is not None and self._tlog is not None and msg.get_type() != "BAD_DATA":
             self._tlog.write(msg)
         return msg
 
     def send(self, msg: MAVLinkMessage) -> None:
+        if self.device_lost is not None:
+            return  # nobody to send it to; pymavlink's own write would try to reopen the device at every message
         self._conn.mav.send(msg)
         if self._tlog is not None:
             self._tlog.write(msg)
@@ -163,3 +201,53 @@ class PymavlinkLink:
         self._conn.close()
         if self._tlog is not None:
             self._tlog.close()
+
+    # -- a serial device that comes and goes -----------------------------------------------------
+    def _claim(self, port: Any) -> None:
+        """Hold the device alone (an advisory lock, as pyserial's ``exclusive``): one another process holds is refused, Unreachable."""
+        import fcntl
+
+        try:
+            fcntl.flock(port.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN):
+                raise Unreachable(
+                    f"{self.url}: the serial device {self.device} is taken by another process (MAVProxy, ModemManager, another executive?)"
+                ) from exc
+            raise unreachable(self.url, exc) from exc
+
+    def _lose(self, error: OSError) -> None:
+        """The device went away: its port closed, opened again every REOPEN_EVERY_S by :meth:`recv` (the tick loop never waits on it)."""
+        self._lost_at = self._clock.now()
+        self._next_open = self._lost_at + REOPEN_EVERY_S
+        self._tries = 0
+        self.device_lost = f"serial device {self.device} gone ({error}): opening it again every {REOPEN_EVERY_S:g} s"
+        log.warning("%s", self.device_lost)
+        with contextlib.suppress(OSError):
+            self._conn.port.close()
+
+    def _reopen(self) -> bool:
+        """Once due, try opening the lost device again (its name: a ``/dev/serial/by-id/`` name finds it whatever it is called now)."""
+        now = self._clock.now()
+        if now < self._next_open:
+            return False
+        self._next_open = now + REOPEN_EVERY_S
+        self._tries += 1
+        import serial
+
+        try:
+            port = serial.Serial(self.device, self._baud, timeout=0, dsrdtr=False, rtscts=False, xonxoff=False)
+        except (OSError, ValueError):  # not there yet (serial.SerialException), or not a serial device yet
+            self.device_lost = f"serial device {self.device} gone: opening it again every {REOPEN_EVERY_S:g} s ({self._tries} tries)"
+            return False
+        try:
+            self._claim(port)
+        except Unreachable as exc:
+            port.close()
+            self.device_lost = f"{exc}: opening it again every {REOPEN_EVERY_S:g} s ({self._tries} tries)"
+            return False
+        conn = self._conn
+        conn.port, conn.fd, conn.portdead = port, port.fileno(), False  # as pymavlink's own reset(), without its print
+        log.warning("serial device %s open again after %.1f s (%d tries)", self.device, now - self._lost_at, self._tries)
+        self.device_lost = None
+        return True

@@ -149,6 +149,24 @@ def route_not_on_autopilot(waypoints: Sequence[Waypoint], held: Sequence[Mission
     return None if mismatch is None else f"the autopilot's mission differs ({mismatch})"
 
 
+def horizon_span(count: int, leg: int, horizon: int) -> tuple[int, int]:
+    """drive: auto: how many of a ``count``-waypoint route the autopilot must hold with leg ``leg`` under way, and the most it may:
+    up to the current leg's waypoint, and ``horizon`` waypoints beyond it (the route's end sooner)."""
+    return min(count, leg + 1), min(count, leg + 1 + horizon)
+
+
+def horizon_not_on_autopilot(waypoints: Sequence[Waypoint], leg: int, horizon: int, held: Sequence[MissionItem] | None) -> str | None:
+    """Why the autopilot's mission (``held``) is not the route's horizon: the route's first waypoints, through the current leg's
+    at least and ``horizon`` beyond it at most; None when it is."""
+    if held is None:
+        return "the autopilot's mission is not known yet"
+    least, most = horizon_span(len(waypoints), leg, horizon)
+    if not least <= len(held) <= most:
+        return f"the vehicle holds {len(held)} items, {least}-{most} are the horizon of leg {leg + 1}"
+    mismatch = first_mismatch(route_items(waypoints[: len(held)]), held)
+    return None if mismatch is None else f"the autopilot's mission differs ({mismatch})"
+
+
 class _Step(Enum):
     IDLE = "idle"
     SEND_COUNT = "count sent, waiting for the first request"
@@ -233,6 +251,30 @@ class MissionTransfer:
         self._step = _Step.SEND_COUNT
         count = self._mav.mission_count_encode(self.target_system, self.target_component, len(self._upload), _MISSION)
         self._send(count, "MISSION_REQUEST for item 0")
+        return ticket
+
+    def append(self, item: MissionItem) -> int:
+        """Add ``item`` after the mission the vehicle holds (as last read back), leaving the rest as it is; returns the ticket.
+
+        A partial write (MISSION_WRITE_PARTIAL_LIST from the end to the end): ArduPilot takes one whose
+        indices are at most its item count, and an item whose seq is that count is appended
+        (MissionItemProtocol::handle_mission_write_partial_list and handle_mission_item,
+        libraries/GCS_MAVLink/MissionItemProtocol.cpp), so a mission running in AUTO goes on with
+        one more item and nothing else rewritten. Read back whole before it counts, as an upload.
+        """
+        if self.items is None:
+            raise RuntimeError("append needs the vehicle's mission read back first")
+        first = self._first
+        home = (self.home or MissionItem.waypoint(0, 0.0, 0.0),) if self.home_slot else ()
+        held = tuple(replace(held, seq=seq) for seq, held in enumerate(self.items, start=first))
+        seq = first + len(held)
+        self._upload = (*home, *held, replace(item, seq=seq))
+        self._verify_upload = True
+        self._final_item_sent = False
+        ticket = self._start(TransferOperation.UPLOAD, len(self._upload))
+        self._step = _Step.SEND_COUNT
+        partial = self._mav.mission_write_partial_list_encode(self.target_system, self.target_component, seq, seq, _MISSION)
+        self._send(partial, f"MISSION_REQUEST for item {seq}")
         return ticket
 
     def download(self) -> int:
@@ -446,8 +488,9 @@ class MissionTransfer:
         return 1 if self.home_slot else 0
 
     def _hold(self, home: MissionItem | None, items: tuple[MissionItem, ...]) -> None:
-        """What the vehicle holds, as far as we know; another mission's reports of items reached say nothing about this one."""
-        if items != self.items:
+        """What the vehicle holds, as far as we know; another mission's reports of items reached say nothing about this one
+        (the same mission with items appended is this one)."""
+        if self.items is None or first_mismatch(self.items, items[: len(self.items)]) is not None:
             self._reached = None
             self._bb.set("/vehicle/mission_reached", None)
         self.home, self.items = home, items

@@ -182,6 +182,11 @@ class MavlinkReader:
         """(system id, component id) of the autopilot, once its HEARTBEAT was seen."""
         return self._autopilot
 
+    @property
+    def bad_data(self) -> int:
+        """Undecodable byte runs received so far (bytes that are not MAVLink, or at the wrong baud rate)."""
+        return self._bad_data
+
     def take_commands(self) -> list[MAVLinkMessage]:
         """The COMMAND_LONGs from others than the autopilot since the last call (a ground station's, routed by the autopilot), oldest first."""
         commands = list(self._commands)
@@ -479,6 +484,7 @@ class MavlinkReader:
         self._set_if_changed("/link/loss_pct", self.health.loss_pct)
         self._set_if_changed("/link/reboots", self.health.reboots)
         self._set_if_changed("/link/unsigned_dropped", getattr(self._link, "unsigned_dropped", 0))
+        self._set_if_changed("/link/device_lost", getattr(self._link, "device_lost", None))
 
     def _set_if_changed(self, key: str, value: object) -> None:
         if self._bb.get(key) != value:

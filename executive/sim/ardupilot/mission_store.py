@@ -12,6 +12,11 @@ It follows the firmware (GCS_MAVLink/MissionItemProtocol*.cpp, AP_Mission) where
 - items are kept as ArduPilot keeps them: latitude and longitude in 1e-7 degree, altitude in whole
   centimetres, a NAV_WAYPOINT's hold time in whole seconds and none of its other parameters, and
   frames read back in their non-INT form;
+- MISSION_WRITE_PARTIAL_LIST rewrites items from start_index to end_index, each at most the item
+  count (else MISSION_ACK ERROR and "Flight plan update rejected"), refused (DENIED) during an
+  upload; an item whose seq is the count is appended, so a partial write from the end to the end
+  adds one item to a mission that may be running (MissionItemProtocol::handle_mission_write_partial_list,
+  handle_mission_item);
 - MISSION_SET_CURRENT has no ack: a MISSION_CURRENT echoing the seq confirms it, an item the vehicle
   does not hold is ignored.
 
@@ -22,10 +27,11 @@ from a ground station (the float forms) are not handled.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import ClassVar
 
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
-from executive.sim.mission_store import MissionStore, StoredCommand
+from executive.sim.mission_store import MissionOwner, MissionStore, StoredCommand
 
 _M = mavlink
 _MISSION = _M.MAV_MISSION_TYPE_MISSION
@@ -77,6 +83,33 @@ class ArduPilotMissionStore(MissionStore):
 
     HOME_SLOT: ClassVar[bool] = True
     AUTO_MODE: ClassVar[str] = "AUTO"
+    MESSAGES: ClassVar[frozenset[str]] = MissionStore.MESSAGES | {"MISSION_WRITE_PARTIAL_LIST"}
+
+    def __init__(
+        self,
+        owner: MissionOwner,
+        emit: Callable[[MAVLinkMessage], None],
+        text: Callable[[int, str], None],
+        *,
+        max_items: int = MissionStore.MAX_ITEMS,
+    ) -> None:
+        super().__init__(owner, emit, text, max_items=max_items)
+        self._handlers["MISSION_WRITE_PARTIAL_LIST"] = self._on_write_partial_list
+
+    def _on_write_partial_list(self, msg: MAVLinkMessage) -> None:
+        """Items start_index..end_index rewritten (one at the count appended), as the firmware does (see the module)."""
+        if self.receiving:
+            self._ack(msg, _M.MAV_MISSION_DENIED)
+            return
+        if msg.start_index > self.count or msg.end_index > self.count or msg.end_index < msg.start_index or msg.start_index < 0:
+            self._text(_M.MAV_SEVERITY_WARNING, "Flight plan update rejected")
+            self._ack(msg, _M.MAV_MISSION_ERROR)
+            return
+        self._uploader = (msg.get_srcSystem(), msg.get_srcComponent())
+        self.receiving = True
+        self._request_i, self._request_last = msg.start_index, msg.end_index
+        self._last_item_at = self._owner.clock.now()
+        self._request()
 
     def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
         """As AP_Mission stores it (:func:`to_stored`)."""

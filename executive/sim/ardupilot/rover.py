@@ -52,11 +52,13 @@ class ArduRoverSim(ArduPilotSim):
     #: Answered to PARAM_REQUEST_READ: MODE_CH (Rover/Parameters.cpp, MODE_CHANNEL 8 in Rover/config.h), CRUISE_SPEED
     #: (Rover/config.h CRUISE_SPEED 2), and the navigation's parameters with the firmware's defaults.
     #: SERVO1_FUNCTION 26 (GroundSteering) and SERVO3_FUNCTION 70 (Throttle): ArduRover's default outputs (Rover/Parameters.cpp).
+    #: MIS_DONE_BEHAVE 0: stop in AUTO at the mission's end (Rover/Parameters.cpp).
     PARAMS: ClassVar[Mapping[str, float]] = {
-        "MODE_CH": 8, "CRUISE_SPEED": 2.0, "FRAME_CLASS": 1.0, "SERVO1_FUNCTION": 26.0, "SERVO3_FUNCTION": 70.0, **FIRMWARE_DEFAULTS,
+        "MODE_CH": 8, "CRUISE_SPEED": 2.0, "MIS_DONE_BEHAVE": 0.0, "FRAME_CLASS": 1.0, "SERVO1_FUNCTION": 26.0, "SERVO3_FUNCTION": 70.0,
+        **FIRMWARE_DEFAULTS,
     }  # fmt: skip
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset({
-        "MODE_CH", "FRAME_CLASS", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE", "SERVO1_FUNCTION", "SERVO3_FUNCTION",
+        "MODE_CH", "FRAME_CLASS", "MIS_DONE_BEHAVE", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE", "SERVO1_FUNCTION", "SERVO3_FUNCTION",
     })  # fmt: skip
     SKID_STEERING: ClassVar[bool] = False  # SERVO1/3_FUNCTION ThrottleLeft/Right: pivot turns (Rover.cpp set_turn_params)
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
@@ -78,6 +80,7 @@ class ArduRoverSim(ArduPilotSim):
     motion: RoverMotion
     _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
     _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
+    _auto_written_at: float | None = None  # the mission's last write AUTO has seen
     _auto_hold_until = 0.0  # elapsed_s at which a waypoint's hold time ends
 
     @property
@@ -166,7 +169,7 @@ class ArduRoverSim(ArduPilotSim):
             if not self.mission.present:
                 self._text(_M.MAV_SEVERITY_NOTICE, "No Mission. Can't set AUTO.")
                 return False
-            self._auto_waiting, self._auto_item = True, None
+            self._auto_waiting, self._auto_item, self._auto_written_at = True, None, self.mission.uploaded_at
             self._navigator()  # ModeAuto::_enter: wp_nav.init()
             if not (self.is_boat and self._loiter()):
                 self._stop()
@@ -241,6 +244,9 @@ class ArduRoverSim(ArduPilotSim):
             self._auto_waiting = False
             self.mission.start_or_resume()
         item = self.mission.current
+        if self.mission.uploaded_at != self._auto_written_at:
+            self._auto_written_at = self.mission.uploaded_at
+            self._restart_on_change(item)
         if item is None:  # complete (ArduRover stays in AUTO, stopped), or the mission was cleared
             if self._driving or self._loitering:
                 self._stop()
@@ -256,7 +262,7 @@ class ArduRoverSim(ArduPilotSim):
                 return
             item = self.mission.advance()
             if item is None:
-                self._stop()
+                self._mission_done()
                 return
         # the next item, a set-current, or an upload replaced it
         self._auto_item = (self.mission.current_seq, item)
@@ -264,6 +270,27 @@ class ArduRoverSim(ArduPilotSim):
             self._drive(item.lat, item.lon, then=self._next_corner(item))
         else:
             self.mission.advance()
+
+    def _restart_on_change(self, item: StoredCommand | None) -> None:
+        """A mission written while AUTO drives a waypoint restarts that waypoint's command (ModeAuto::update, Rover/mode_auto.cpp:
+        mis_change_detector, then AP_Mission::restart_current_nav_cmd): AR_WPNav::set_desired_location, the leg not
+        reached, starts again from the stopping point. The firmware's AP_Mission_ChangeDetector compares only the next
+        three navigation commands, yet the real ArduRover 4.7-dev restarted at every one-item append of a partial write
+        (tests/data/ardurover/boat_survey-motorboat-supervised.tlog): so does this one."""
+        if item is None or not self._driving or item.command != _M.MAV_CMD_NAV_WAYPOINT:
+            return
+        self._text(_M.MAV_SEVERITY_CRITICAL, "Auto mission changed, restarted command")
+        self._auto_item = None
+
+    def _mission_done(self) -> None:
+        """ModeAuto::exit_mission (Rover/mode_auto.cpp): MIS_DONE_BEHAVE 0 stops in AUTO, 1 loiters in AUTO, 2 ACRO, 3 MANUAL."""
+        behave = int(self.params.get("MIS_DONE_BEHAVE", 0))
+        if behave == 1 and self._loiter():
+            return
+        if behave in (2, 3):
+            self._force_mode("ACRO" if behave == 2 else "MANUAL")
+            return
+        self._stop()
 
     def _next_corner(self, item: StoredCommand) -> tuple[float, float] | None:
         """The navigation command after the waypoint ``item``, given to AR_WPNav with it unless the waypoint has a hold time

@@ -418,3 +418,44 @@ def test_px4_has_no_home_slot_the_route_goes_from_item_0_and_is_read_back_whole(
     assert x.tick(held(second)) == [("MISSION_ACK", m.MAV_MISSION_ACCEPTED)]
     assert x.status.state is TransferState.DONE
     assert [i.seq for i in bb("/vehicle/mission_items")] == [0, 1] and bb("/vehicle/mission_home") is None
+
+
+def read_back(x: Exchange, items: tuple[MissionItem, ...]) -> None:
+    """The vehicle answers a read-back of home and ``items``."""
+    assert x.tick(count(len(items) + 1)) == [("MISSION_REQUEST_INT", 0)]
+    assert x.tick(home_item()) == [("MISSION_REQUEST_INT", 1)]
+    for i, item in enumerate(items):
+        assert x.tick(held(item)) == ([("MISSION_REQUEST_INT", i + 2)] if i + 1 < len(items) else [("MISSION_ACK", m.MAV_MISSION_ACCEPTED)])
+
+
+def test_append_writes_one_item_at_the_end_by_a_partial_write_and_reads_back(x: Exchange, link) -> None:
+    """drive: auto's horizon grows by MISSION_WRITE_PARTIAL_LIST count..count: only the new item is sent, the held ones stay."""
+    upload_until_last_item(x, ITEMS[:1])
+    assert x.tick(ack()) == [("MISSION_REQUEST_LIST",)]
+    read_back(x, ITEMS[:1])
+    x.tick(AUTOPILOT.mission_item_reached(1))
+    ticket = x.transfer.append(ITEMS[1])
+    x.clock.advance(0.1)
+    x.reader.drain()
+    x.transfer.flush()
+    [partial] = link.take()
+    assert (partial.get_type(), partial.start_index, partial.end_index, partial.target_component) == ("MISSION_WRITE_PARTIAL_LIST", 2, 2, 1)
+    assert x.tick(request(2)) == [("MISSION_ITEM_INT", 2)]
+    assert x.tick(ack()) == [("MISSION_REQUEST_LIST",)]
+    read_back(x, ITEMS)
+    status = x.status
+    assert (status.ticket, status.state) == (ticket, TransferState.DONE)
+    assert [i.seq for i in bb("/vehicle/mission_items")] == [1, 2]
+    assert bb("/vehicle/mission_reached").highest == 1  # the same mission, one item longer: its reports still count
+
+
+def test_append_read_back_mismatch_fails(x: Exchange) -> None:
+    upload_until_last_item(x, ITEMS[:1])
+    x.tick(ack())
+    read_back(x, ITEMS[:1])
+    x.transfer.append(ITEMS[1])
+    x.tick()
+    x.tick(request(2))
+    x.tick(ack())
+    read_back(x, (ITEMS[0], replace(ITEMS[1], x=ITEMS[1].x + 1e-4)))
+    assert x.status.state is TransferState.FAILED and "read-back mismatch: item 2 x (latitude)" in x.status.reason

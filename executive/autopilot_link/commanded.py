@@ -1,0 +1,51 @@
+"""Whether this run has commanded the vehicle: what it sent that could change it, as opposed to who it is and what it wants to hear.
+
+The make-safe acts only on what this run started: a run refused before it armed, set a mode, sent a
+target or a route, has nothing to undo, and commanding the safe mode then would be a change of our
+own (real ArduPlane, on the ground and disarmed, was put in QLOITER by a pre-flight that never armed).
+"""
+
+from __future__ import annotations
+
+from executive.io.mavlink.link import Link
+from executive.mavlink_dialect import MAVLinkMessage, mavlink
+
+#: What the executive says that changes nothing on the vehicle: who it is, what to stream, the parameters it reads, its
+#: reports, acks of a ground station's commands, the obstacle distances it forwards. Anything else counts as commanding.
+HARMLESS = frozenset({
+    "HEARTBEAT", "REQUEST_DATA_STREAM", "PARAM_REQUEST_READ", "PARAM_REQUEST_LIST", "STATUSTEXT", "NAMED_VALUE_FLOAT",
+    "COMMAND_ACK", "OBSTACLE_DISTANCE", "TIMESYNC", "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT", "MISSION_ACK",
+})  # fmt: skip
+#: Commands that only ask for messages.
+HARMLESS_COMMANDS = frozenset({mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, mavlink.MAV_CMD_REQUEST_MESSAGE})
+
+
+def commands_the_vehicle(msg: MAVLinkMessage) -> bool:
+    """``msg`` could change the vehicle: a command (but asking for messages), a mode, a target, a route, a parameter set."""
+    kind = msg.get_type()
+    if kind in ("COMMAND_LONG", "COMMAND_INT"):
+        return msg.command not in HARMLESS_COMMANDS
+    return kind not in HARMLESS
+
+
+class CommandWatch:
+    """A link that notes the first message sent that commands the vehicle (:attr:`commanded`), and passes everything on."""
+
+    def __init__(self, link: Link) -> None:
+        self.link = link
+        #: The first message sent that could change the vehicle (its type); None: none yet.
+        self.commanded: str | None = None
+
+    def recv(self) -> MAVLinkMessage | None:
+        return self.link.recv()
+
+    def send(self, msg: MAVLinkMessage) -> None:
+        if self.commanded is None and commands_the_vehicle(msg):
+            self.commanded = msg.get_type()
+        self.link.send(msg)
+
+    def close(self) -> None:
+        self.link.close()
+
+    def __getattr__(self, name: str) -> object:  # the link's own attributes (device_lost, unsigned_dropped, url...)
+        return getattr(self.link, name)
