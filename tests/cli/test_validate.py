@@ -115,3 +115,18 @@ def test_a_waypoint_out_of_reach_of_home_is_refused_with_its_distance(tmp_path: 
         f"{near}: warning: {NO_HOME}",
     ]
     assert out == f"{near}: ok (2 waypoints, vehicle rover, tree waypoints)\n"
+
+
+def test_a_leg_across_a_keep_out_zone_is_refused_exit_2_named_and_located(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Issue 40: both waypoints outside the pier, the leg between them across it (PX4-Autopilot issue 22362's hole)."""
+    lake = tmp_path / "lake.yaml"
+    lake.write_text(
+        "version: 1\nname: lake\nvehicle: boat\nhome: {lat: 47.3977, lon: 8.5456}\ngeofence:\n  keep_out:\n"
+        "    - {name: pier, circle: {lat: 47.3985, lon: 8.5456, radius_m: 8}}\nwaypoints:\n"
+        "  - {lat: 47.3978, lon: 8.5456, name: line-2-start}\n  - {lat: 47.3992, lon: 8.5456, name: line-2-end}\n",
+        encoding="utf-8",
+    )
+    assert main(["validate", str(lake)]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err == f"{lake}:10:5: waypoints[1]: waypoints[0] -> waypoints[1] ('line-2-start' -> 'line-2-end'): crosses keep-out zone 'pier' for 16 m\n"
