@@ -19,7 +19,6 @@ from dataclasses import dataclass
 from executive import blackboard
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, out_of_reach
-from executive.mission.rules import first_leg_time_problem
 from executive.mission.zones import first_leg_problems
 from executive.state import EkfStatus, GlobalPosition
 from executive.waiting import Waiting
@@ -76,7 +75,6 @@ class ReachGate:
         ekf: EkfStatus | None = self._bb.get("/vehicle/ekf")
         far = [] if position is None else out_of_reach(mission, position.lat, position.lon, first=ahead)
         crossing = [] if position is None else first_leg_problems(mission, position.lat, position.lon, first=ahead)
-        crossing += [] if position is None else first_leg_time_problem(mission, position.lat, position.lon, first=ahead)
         # ArduPilot sends GLOBAL_POSITION_INT whether or not it has a position (GCS_Common.cpp send_global_position_int: "we
         # send stale data"); before a fix ArduPlane's DCM dead-reckons from 0, 0 on its airspeed (AP_AHRS_DCM.cpp
         # drift_correction): seen on real ArduPlane SITL, 14960 km from its waypoints. A refusal needs a position the EKF

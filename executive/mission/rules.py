@@ -326,19 +326,6 @@ def _leg_time_errors(mission: Mission) -> list[tuple[Path, str]]:
     return errors
 
 
-def first_leg_time_problem(mission: Mission, lat: float, lon: float, *, first: int = 0) -> list[str]:
-    """The leg from the vehicle at (lat, lon) to ``waypoints[first]``, if it can only time out (as :func:`_leg_time_errors`)."""
-    if tree_name(mission) not in TIMED_LEG_TREES or mission.vehicle == "vtol" or first >= len(mission.waypoints):
-        return []
-    limits, wp = mission.limits, mission.waypoints[first]
-    length = float(chord_m([lat], [lon], [wp.lat], [wp.lon])[0]) - limits.acceptance_radius_m
-    speed = wp.speed_m_s or limits.speed_m_s.max
-    if length <= 0.0 or length / speed <= limits.leg_timeout_s:
-        return []
-    return [f"the vehicle -> waypoints[{first}]: {length:.0f} m at most {speed:g} m/s takes {length / speed:.0f} s, "
-            f"over limits.leg_timeout_s {limits.leg_timeout_s:g}: it can only time out"]  # fmt: skip
-
-
 def waits_for_the_vehicle(mission: Mission) -> list[str]:
     """The checks a mission without ``home:`` leaves to the vehicle's position at start (empty with a home)."""
     if mission.home is not None or not mission.waypoints:

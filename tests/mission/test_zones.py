@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 import time
 
 import pytest
@@ -12,7 +11,7 @@ from executive.geo import destination, distance
 from executive.mission.errors import MissionError
 from executive.mission.lifecycle import MissionState, Refused
 from executive.mission.loader import load_mission_text
-from executive.mission.rules import cross_field_errors, first_leg_time_problem, waits_for_the_vehicle
+from executive.mission.rules import cross_field_errors, waits_for_the_vehicle
 from executive.mission.zones import Plane, first_leg_problems, route_errors
 
 HOME = (47.3977, 8.5456)
@@ -192,11 +191,3 @@ def test_the_run_time_fence_counts_an_inclusion_zone_as_inside():
     assert guard.why_outside(*at(110, 0), None) is None  # in the bay
     assert guard.why_outside(*at(0, 0), None) is None  # in the polygon
     assert guard.why_outside(*at(60, 0), None) == "10 m outside the fence polygon and every inclusion zone"
-
-
-def test_without_home_the_first_legs_time_is_judged_from_the_vehicle_at_upload():
-    mission = load_mission_text(mission_text([(0, 0, "a")], pier(north_m=-500), home=False, limits="{leg_timeout_s: 20}"), "m.yaml")
-    assert first_leg_time_problem(mission, *at(90, 0)) == []  # 88 m at 5 m/s: 18 s
-    state = MissionState()
-    with pytest.raises(Refused, match=re.escape("the vehicle -> waypoints[0]: 198 m at most 5 m/s takes 40 s, over limits.leg_timeout_s 20")):
-        state.upload(mission, vehicle_at=at(200, 0))
