@@ -327,12 +327,13 @@ def _leg_time_errors(mission: Mission) -> list[tuple[Path, str]]:
 
 
 def waits_for_the_vehicle(mission: Mission) -> list[str]:
-    """The checks a mission without ``home:`` leaves to the vehicle's position at start (empty with a home)."""
+    """The checks a mission without ``home:`` leaves to the vehicle's position at start (empty with a home).
+
+    The first leg's time is not among them: it is judged only from ``home:`` (at start the vehicle may be anywhere).
+    """
     if mission.home is not None or not mission.waypoints:
         return []
     waits = [f"every waypoint within limits.max_goal_distance_m ({mission.limits.max_goal_distance_m:g} m) of the vehicle"]
-    if tree_name(mission) in TIMED_LEG_TREES and mission.vehicle != "vtol":
-        waits.append("the first leg's time against limits.leg_timeout_s")
     if mission.geofence is not None and (mission.geofence.keep_out or mission.geofence.inclusion):
         waits.append("the first leg against the keep-out and inclusion zones")
     if mission.geofence is not None and mission.geofence.max_distance_from_home_m is not None:

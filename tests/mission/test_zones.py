@@ -151,7 +151,6 @@ def test_without_home_validate_names_the_checks_that_wait_for_the_vehicle():
     mission = load_mission_text(mission_text([(80, 0, "far")], pier(), home=False), "m.yaml")
     assert waits_for_the_vehicle(mission) == [
         "every waypoint within limits.max_goal_distance_m (5000 m) of the vehicle",
-        "the first leg's time against limits.leg_timeout_s",
         "the first leg against the keep-out and inclusion zones",
     ]
     with_home = load_mission_text(mission_text([(80, 20, "far")], pier()), "m.yaml")
