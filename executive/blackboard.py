@@ -69,6 +69,14 @@ _KEYS: tuple[Key, ...] = (
         "who set the mode: 'us' (we asked for it), 'autopilot' (its own transition, by cause: executive.mode_cause), 'others' (a person, "
         "a GCS); None = unknown (boot)",
     ),
+    Key("/vehicle/position_target", None, "mavlink reader", "PositionTarget (POSITION_TARGET_GLOBAL_INT): the point the autopilot steers to"),
+    Key(
+        "/vehicle/target_set_by",
+        None,
+        "intervention watch",
+        "who set the point the autopilot reports steering to: 'us' (the target we asked, reported since), 'others' (a person: "
+        "executive.target_watch); None = not judged (no report, or ours not reported yet since the last ask or mode change)",
+    ),
     Key("/vehicle/custom_mode", None, "mavlink reader", "flight mode number"),
     Key("/vehicle/system_status", None, "mavlink reader", "HEARTBEAT system_status (MAV_STATE)"),
     Key("/vehicle/position", None, "mavlink reader", "GlobalPosition (GLOBAL_POSITION_INT)"),

@@ -91,6 +91,7 @@ PARAM_DOCS: dict[str, str] = {
     "awaiting_recovery": "judged as failed already: passes only once the condition has held for resume_after_s (a wait for a recovery)",
     "limit_s": "FAILURE when the child has not succeeded by then",
     "retry_s": "a failed attempt is tried again this much later",
+    "hint": "what a person does to end the wait (how to arm the vehicle), logged when the wait starts and said again on giving up",
     "hold_mode": "the mode the vehicle is held in",
     "fixed_wing_hold_mode": "the hold of a VTOL flying as a plane (none: hold_mode)",
     "work": "the work the guards guard",

@@ -17,6 +17,13 @@ autopilot announces, "EKF failsafe": our failsafe for the same condition holds a
 asking again for its mode while the firmware's latch refuses it), and a change while the RC
 take-over switch is high (the ``rc_takeover`` failsafe's business). ``/vehicle/mode_set_by`` says
 whose each change was: ``us``, ``autopilot`` or ``others`` (a person).
+
+A person may also steer without a mode change: a ground station's Pause or Go-to moves the target the
+autopilot reports (:mod:`executive.target_watch`) while the mode stays the leg's. That pauses the
+mission the same way, hands off (``a ground station sent it to 47.39712, 8.54562``), and only an
+explicit resume (``ctl resume``, the ground station's MISSION_START or DO_PAUSE_CONTINUE, the RC's)
+takes it back: the mode never changed, so it says nothing. ``/vehicle/target_set_by`` says whose the
+reported target is.
 """
 
 from __future__ import annotations
@@ -33,6 +40,7 @@ from executive.mission.model import RcConfig
 from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause
 from executive.sensing.rc import RcReading
 from executive.state import MISSION_STATE_COMPLETE, GlobalPosition, MissionCurrent
+from executive.target_watch import PersonsTarget, TargetWatch
 from executive.vehicles import AutopilotName, VehicleProfile
 
 log = logging.getLogger(__name__)
@@ -75,13 +83,16 @@ class InterventionWatch:
             [
                 "/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected", "/vehicle/armed",
                 "/vehicle/landed_state", "/vehicle/mission_current", "/vehicle/system_status", "/vehicle/position",
+                "/vehicle/position_target",
             ],
         )  # fmt: skip
-        self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by"])
+        self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by", "/vehicle/target_set_by"])
         self._shown: str | None = None  # the mode the heartbeat showed at the last tick
         #: The mode the executive put the vehicle in (the current leg's); None until it has in this run.
         self.expected: str | None = None
         self._paused_here = False  # this watch paused the mission (a person has the vehicle)
+        self._targets = TargetWatch()
+        self._target_paused = False  # ... for a target of a person's, the mode unchanged: only an explicit resume ends it
         self._texts: deque[tuple[float, str]] = deque(maxlen=8)
         self._last_text: tuple[int, str] | None = None
         self._channels: tuple[int, ...] = ()
@@ -111,12 +122,18 @@ class InterventionWatch:
                 cause = autopilot_cause(self.firmware(), self.profile.kind, self._change(previous, mode, now, disarmed_just_now))
                 set_by = "others" if cause is None else "autopilot"
             self._out.set("/vehicle/mode_set_by", set_by)
+        report, position = self._bb.get("/vehicle/position_target"), self._bb.get("/vehicle/position")
+        persons_target = self._targets.judge(mode, report, self._autopilot.target_asked, position)
+        self._out.set("/vehicle/target_set_by", self._targets.set_by)
         status = self.mission_state.status
         if status is MissionStatus.PAUSED and self._paused_here:
-            if mode == self.expected:
+            if mode == self.expected and not self._target_paused:
                 self._paused_here = False
-                log.warning("intervention: the vehicle is back in %s -> resume", mode)
+                log.warning("the vehicle is back in %s -> resume", mode)
                 self.mission_state.resume(f"{mode} set again")
+            return
+        if status is MissionStatus.RUNNING and persons_target is not None:
+            self._pause_for_target(persons_target)
             return
         if status is not MissionStatus.RUNNING or mode == previous:
             return
@@ -125,16 +142,25 @@ class InterventionWatch:
             return
         if cause is not None:  # the autopilot's own transition: its failsafe is answered by ours, which resume the leg's mode
             if cause.failsafe:
-                log.warning("intervention: %s set by the autopilot (%s): left to the failsafes, no pause", mode, cause.why)
+                log.warning("%s set by the autopilot (%s): left to the failsafes, no pause", mode, cause.why)
             else:
-                log.warning("intervention: %s (from %s) set by the autopilot (%s): no pause", mode, previous, cause.why)
+                log.warning("%s (from %s) set by the autopilot (%s): no pause", mode, previous, cause.why)
             self.expected = mode if self.expected is not None else None
             return
         if self.expected is None or rc_takeover(self.rc, self._bb.get) is not None:
             return  # not yet mid-mission (nothing of ours to keep), or a take-over the rc_takeover failsafe answers
         reason = f"{mode} set by {self._who(now)}"
-        log.warning("intervention: %s (the leg was in %s) -> pause, hands off", reason, self.expected)
+        log.warning("%s (the leg was in %s) -> pause, hands off", reason, self.expected)
         self._paused_here = True
+        self.mission_state.pause(reason, hold=False)
+
+    def _pause_for_target(self, target: PersonsTarget) -> None:
+        """A target the autopilot reports that we did not ask for, in the leg's mode: a person's; pause, hands off."""
+        if self.expected is None or rc_takeover(self.rc, self._bb.get) is not None:
+            return  # not yet mid-mission, or a take-over the rc_takeover failsafe answers
+        reason = f"a ground station {target.what}"
+        log.warning("intervention: %s (POSITION_TARGET_GLOBAL_INT, the mode still %s) -> pause, hands off", reason, self._shown)
+        self._paused_here = self._target_paused = True
         self.mission_state.pause(reason, hold=False)
 
     def _our_ask(self, mode: str, now: float) -> bool:
@@ -207,4 +233,6 @@ class InterventionWatch:
         if after is MissionStatus.RUNNING and before is not MissionStatus.PAUSED:
             self.expected = None  # a new run: nothing of ours yet
         if after is not MissionStatus.PAUSED:
-            self._paused_here = False
+            self._paused_here = self._target_paused = False
+        if after is MissionStatus.RUNNING:
+            self._targets.forget()  # the leg's target goes out again: judged anew from its report

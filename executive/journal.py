@@ -75,6 +75,10 @@ class ResumePoint:
     route: Route | None = None  # None: the mission file's own
     mission: Mission | None = None  # the mission that replaced the one asked for (hot reload); None: that one
 
+    def started_text(self, leg_count: int) -> str:
+        """What the resumed run's start says (log, journal, report): ``resumed at waypoint 4 of 8 (run 3 was unfinished)``."""
+        return f"resumed at waypoint {self.leg_index + 1} of {leg_count} (run {self.run} was unfinished)"
+
 
 def mission_hash(mission: Mission) -> str:
     """Identifies a mission's content (a resumed run must be the same mission)."""
@@ -205,8 +209,8 @@ class Journal:
         """Everything about one run (the last by default), as plain data.
 
         Waypoints are numbered from 1, as the status line and ``ctl`` number them: each leg row
-        and route edit says the ``waypoint`` the vehicle headed for then (None once past the last)
-        of the route's ``waypoints`` then; each sample the ``waypoint`` it was taken at.
+        and route edit says the ``waypoint`` the vehicle headed for then (None once past the last),
+        its ``name`` (None: unnamed) and the route's ``waypoints`` then; each sample the ``waypoint`` it was taken at.
         """
         if run is None:
             row = self._db.execute("SELECT MAX(id) FROM runs").fetchone()
@@ -219,18 +223,19 @@ class Journal:
             raise LookupError(f"{self.path}: no run {run}")
         (mission_json,) = self._db.execute("SELECT mission_json FROM runs WHERE id = ?", (run,)).fetchone()
         edits = [
-            {"t": r["t"], "leg": r["leg"], "waypoints": len(json.loads(r["waypoints"])), "reason": r["reason"]}
+            {"t": r["t"], "leg": r["leg"], "names": [w.get("name") for w in json.loads(r["waypoints"])], "reason": r["reason"]}
             for r in self._rows("SELECT t, leg, waypoints, reason FROM routes WHERE run = ? ORDER BY rowid", run)
         ]
-        planned = len(json.loads(mission_json).get("waypoints", []))
+        planned = [w.get("name") for w in json.loads(mission_json).get("waypoints", [])]
 
-        def route_size(t: float) -> int:
-            """The number of waypoints of the route driven at ``t``: the mission's, or its last edit's before then."""
-            return next((edit["waypoints"] for edit in reversed(edits) if edit["t"] <= t), planned)
+        def route_names(t: float) -> list[str | None]:
+            """The names of the route's waypoints driven at ``t``: the mission's, or its last edit's before then."""
+            return next((edit["names"] for edit in reversed(edits) if edit["t"] <= t), planned)
 
-        def heading_for(leg: int, t: float, size: int | None = None) -> dict[str, Any]:
-            size = route_size(t) if size is None else size
-            return {"waypoint": leg + 1 if leg < size else None, "waypoints": size}
+        def heading_for(leg: int, t: float, names: list[str | None] | None = None) -> dict[str, Any]:
+            names = route_names(t) if names is None else names
+            here = leg < len(names)
+            return {"waypoint": leg + 1 if here else None, "waypoints": len(names), "name": names[leg] if here else None}
 
         samples = []
         for sample in self.samples(run):
@@ -245,7 +250,7 @@ class Journal:
             ],
             "samples": samples,
             "events": self._rows("SELECT t, kind, text FROM events WHERE run = ? ORDER BY rowid", run),
-            "routes": [{"t": e["t"], **heading_for(e["leg"], e["t"], e["waypoints"]), "reason": e["reason"]} for e in edits],
+            "routes": [{"t": e["t"], **heading_for(e["leg"], e["t"], e["names"]), "reason": e["reason"]} for e in edits],
         }
 
     def runs(self) -> list[int]:

@@ -29,6 +29,8 @@ OPERATOR_LOGGERS = (
     "executive.io.mavlink.reader",  # the autopilot found, the link up, the autopilot's own messages
     "executive.autopilot_link.route_keeper",  # the route held by the autopilot
     "executive.behaviours.rc_switches",  # what an RC switch did
+    "executive.behaviours.flow",  # what a person does to end a wait (how to arm the vehicle)
+    "executive.io.can.reader",  # the AgileX base found on the CAN bus (with --can)
 )
 
 

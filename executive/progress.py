@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import threading
 from collections.abc import Callable
-from typing import TextIO
+from typing import Any, TextIO
 
 from executive.clock import Clock
 from executive.status import StatusSource, status_line
@@ -21,8 +22,11 @@ class Progress:
     journal) one JSON object per line, with the clock time, for tools: every ``period_s`` and at
     once on a change of state, leg, mode or armed, so a tool sees even a mode held for less than a
     period. ``quiet`` keeps the JSON lines to those changes (and one every ``quiet_period_s``).
-    The log writes its records :meth:`apart` from the terminal's line (erased before, drawn again
-    after, from any thread), so a warning never lands on its end. A reader that goes away (``run | head``)
+    The terminal's line is fitted to its width, read at each write (a window resized): the least
+    important fields are left out (:func:`~executive.status.status_fields`), as erasing the line
+    (CR, ESC [K) clears one row only: a wrapped line would leave a stale row at each redraw. The log
+    writes its records :meth:`apart` from the terminal's line (erased before, drawn again after, from
+    any thread), so a warning never lands on its end. A reader that goes away (``run | head``)
     ends the status output, never the mission.
     """
 
@@ -42,7 +46,12 @@ class Progress:
 
     def line(self) -> str:
         """The current status line."""
-        return f"[{self._clock.now():8.1f} s] {status_line(self._source.snapshot())}"
+        return self._fitted(self._clock.now(), self._source.snapshot())
+
+    def _fitted(self, now: float, status: dict[str, Any]) -> str:
+        """The terminal's line: time and status, within the terminal's width (one column spare: some terminals wrap on the last)."""
+        stamp = f"[{now:8.1f} s] "
+        return stamp + status_line(status, terminal_columns(self._stream) - len(stamp) - 1)
 
     def update(self, force: bool = False) -> None:
         """Write the status if it is due (or ``force``)."""
@@ -56,7 +65,7 @@ class Progress:
         self._last_key = key
         with self._lock:
             if self._tty:
-                self._shown = f"[{now:8.1f} s] {status_line(status)}"
+                self._shown = self._fitted(now, status)
                 self._emit(f"\r\x1b[K{self._shown}")
             else:
                 self._emit(json.dumps({"t": round(now, 2), **status}) + "\n")
@@ -104,3 +113,17 @@ class Progress:
         exc, self._closed_by = self._closed_by, None
         if exc is not None:
             log.warning("the status output was closed (%s): the mission goes on without it; `executive ctl status` still answers", exc)
+
+
+def terminal_columns(stream: TextIO, default: int = 80) -> int:
+    """The width of the terminal ``stream`` writes to: ``$COLUMNS`` if set (as shutil reads it), else the terminal's, else ``default``."""
+    try:
+        columns = int(os.environ.get("COLUMNS", ""))
+    except ValueError:
+        columns = 0
+    if columns > 0:
+        return columns
+    try:
+        return os.get_terminal_size(stream.fileno()).columns or default
+    except (AttributeError, ValueError, OSError):  # no file descriptor (a test's StringIO), or not a terminal
+        return default

@@ -232,8 +232,11 @@ class Runtime:
             self._resume = resume
             if resume is not None and self.link.watch.commanded is None:
                 self.link.watch.commanded = "a resumed run"  # the run it continues commanded the vehicle: it is made safe if stopped
-            self.mission_state.start()
-            if resume is not None:
+            if resume is None:
+                self.mission_state.start()
+            else:
+                legs = len(resume.route.waypoints) if resume.route is not None else self.mission_state.leg_count
+                self.mission_state.start(reason=resume.started_text(legs))
                 if resume.route is not None:  # the operator had edited it: that is the route being driven
                     route = resume.route
                     reason = "the route as last edited, from the journal"

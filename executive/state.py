@@ -133,6 +133,27 @@ class HomePosition:
 
 
 @dataclass(frozen=True, slots=True)
+class PositionTarget:
+    """POSITION_TARGET_GLOBAL_INT: the point the autopilot's mode steers to (ArduPilot in GUIDED, AUTO...; PX4 its navigator's setpoint)."""
+
+    lat: float
+    lon: float
+    alt_m: float  # in the report's frame: above sea level (PX4, ArduRover's MAV_FRAME_GLOBAL)
+    time: float  # executive clock time of reception
+
+
+@dataclass(frozen=True, slots=True)
+class TargetAsk:
+    """A point the executive asked the autopilot to steer to in ``mode`` (as the heartbeat shows it), and when; no ``lat``/``lon``
+    for a local-frame setpoint."""
+
+    lat: float | None
+    lon: float | None
+    mode: str | None  # the mode that follows it: the one asked last (GUIDED, OFFBOARD; PX4's AUTO.LOITER for a DO_REPOSITION)
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
 class GpsFix:
     """GPS_RAW_INT: fix type (GPS_FIX_TYPE: 3 = 3D fix), satellites, horizontal dilution."""
 

@@ -21,7 +21,7 @@ KEYS = (
     "/mission/state", "/mission/reason", "/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/samples", "/vehicle/position",
     "/vehicle/attitude", "/vehicle/battery", "/vehicle/mode", "/vehicle/armed", "/link/system_id", "/link/up",
     "/runtime/late_ticks", "/mission/waiting", "/vehicle/mav_type", "/vehicle/altitude_above_bottom_m", "/vehicle/rangefinder",
-    "/operator/command", "/link/device_lost", "/runtime/storage_lost",
+    "/operator/command", "/link/device_lost", "/runtime/storage_lost", "/base/system", "/base/up",
 )  # fmt: skip
 
 
@@ -71,7 +71,16 @@ class StatusSource:
             "late_ticks": bb.get("/runtime/late_ticks"),
             "waiting": None if waiting is None else waiting.to_dict(self._clock.now() if self._clock else None),
             "command": bb.get("/operator/command"),  # a person's latest arm, disarm or mode, and the autopilot's answer
+            "base": _base(bb),
         }
+
+
+def _base(bb: py_trees.blackboard.Client) -> dict[str, Any] | None:
+    """The AgileX base on CAN (``--can``), once heard: heard now, its state, who it obeys, its battery; None without one."""
+    system = bb.get("/base/system")
+    if system is None:
+        return None
+    return {"up": bool(bb.get("/base/up")), "state": system.vehicle_state, "mode": system.control_mode, "battery_v": round(system.battery_v, 1)}
 
 
 def _heights(bb: py_trees.blackboard.Client) -> dict[str, Any]:
@@ -97,23 +106,56 @@ def _leg(bb: py_trees.blackboard.Client) -> int:
     return min(bb.get("/mission/leg_index") + 1, bb.get("/mission/leg_count"))
 
 
-def status_line(status: dict[str, Any]) -> str:
-    """``RUNNING   leg 2/4    12.3 m at 090°  GUIDED armed  batt 87%  waiting: Go to waypoint (14 s): leg 2/4: 12.3 m at 090°``"""
-    to_go = "" if status["distance_m"] is None else f"  {status['distance_m']:7.1f} m at {status['bearing_deg']:03.0f}°"
-    battery = "" if status["battery_pct"] is None else f"  batt {status['battery_pct']}%"
-    samples = f"  samples {status['samples']}" if status["samples"] else ""
-    armed = "armed" if status["armed"] else "disarmed"
-    why = f"  ({status['reason']})" if status["state"] == "PAUSED" and status.get("reason") else ""
-    waiting = f"  {waiting_text(status['waiting'])}" if status.get("waiting") and status["state"] == "RUNNING" else ""
-    where = f"{to_go}{_vertical(status)}"
-    lost = f"  LINK: {status['link_device_lost']}" if status.get("link_device_lost") else ""
-    lost += f"  DISK: {status['storage_lost']}" if status.get("storage_lost") else ""
-    head = f"{status['state']:<9} leg {status['leg']}/{status['legs']}{where}  {status['mode'] or '-'} {armed}"
-    return f"{head}{battery}{samples}{why}{_refused(status)}{waiting}{lost}"
+def status_fields(status: dict[str, Any]) -> list[str]:
+    """The status line's fields, most important first: a narrow terminal drops them from the end (:func:`fit`).
+
+    A field added to the status goes in at its rank here; nothing else changes for it to fit.
+    """
+    fields = [f"{status['state']:<9} leg {status['leg']}/{status['legs']}"]
+    if status["distance_m"] is not None:
+        fields.append(f"{status['distance_m']:7.1f} m at {status['bearing_deg']:03.0f}°")
+    if vertical := _vertical(status):
+        fields.append(vertical)
+    fields.append(f"{status['mode'] or '-'} {'armed' if status['armed'] else 'disarmed'}")
+    if status.get("link_device_lost"):
+        fields.append(f"LINK: {status['link_device_lost']}")
+    if status.get("storage_lost"):
+        fields.append(f"DISK: {status['storage_lost']}")
+    if status["state"] == "PAUSED" and status.get("reason"):
+        fields.append(f"({status['reason']})")
+    if refused := _refused(status):
+        fields.append(refused)
+    if status["battery_pct"] is not None:
+        fields.append(f"batt {status['battery_pct']}%")
+    if base := status.get("base"):
+        fields.append(f"base {base['state']} {base['mode']} {base['battery_v']:.1f}V" + ("" if base["up"] else " (not heard)"))
+    if status.get("waiting") and status["state"] == "RUNNING":
+        fields.append(waiting_text(status["waiting"]))
+    if status["samples"]:
+        fields.append(f"samples {status['samples']}")
+    return fields
+
+
+def fit(fields: list[str], width: int | None = None, separator: str = "  ") -> str:
+    """``fields`` joined, as many as fit in ``width`` columns from the first (None: all); the first alone is cut to fit."""
+    line = fields[0] if width is None or len(fields[0]) <= width else fields[0][: max(width, 0)]
+    for field in fields[1:]:
+        if width is not None and len(line) + len(separator) + len(field) > width:
+            break
+        line += separator + field
+    return line
+
+
+def status_line(status: dict[str, Any], width: int | None = None) -> str:
+    """``RUNNING   leg 2/4    12.3 m at 090°  GUIDED armed  batt 87%  waiting: Go to waypoint (14 s): leg 2/4: 12.3 m at 090°``
+
+    With ``width``, at most that many characters: the least important fields left out (:func:`status_fields`).
+    """
+    return fit(status_fields(status), width)
 
 
 def _vertical(status: dict[str, Any]) -> str:
-    """``  depth 26.0 m, seabed 24.0 m below`` (a sub), ``  height 30.0 m`` (a vtol, above home); empty for others."""
+    """``depth 26.0 m, seabed 24.0 m below`` (a sub), ``height 30.0 m`` (a vtol, above home); empty for others."""
     if status.get("depth_m") is not None:
         if status.get("altitude_above_bottom_m") is not None:
             seabed = f"{status['altitude_above_bottom_m']:.1f} m below"
@@ -121,9 +163,9 @@ def _vertical(status: dict[str, Any]) -> str:
             seabed = f"beyond {status['seabed_beyond_m']:g} m"
         else:
             seabed = "no sonar reading"
-        return f"  depth {status['depth_m']:.1f} m, seabed {seabed}"
+        return f"depth {status['depth_m']:.1f} m, seabed {seabed}"
     if status.get("height_m") is not None:
-        return f"  height {status['height_m']:.1f} m"
+        return f"height {status['height_m']:.1f} m"
     return ""
 
 
@@ -132,10 +174,10 @@ REFUSAL_SHOWN_S = 30.0
 
 
 def _refused(status: dict[str, Any]) -> str:
-    """``  ctl: mode POSCTL refused by the autopilot (TEMPORARILY_REJECTED)`` for :data:`REFUSAL_SHOWN_S` after the answer."""
+    """``ctl: mode POSCTL refused by the autopilot (TEMPORARILY_REJECTED)`` for :data:`REFUSAL_SHOWN_S` after the answer."""
     command = status.get("command")
     if not command or not command.get("refused"):
         return ""
     if status.get("t") is not None and status["t"] - command["t"] > REFUSAL_SHOWN_S:
         return ""
-    return f"  {command['by']}: {command['what']} {command['answer']}"
+    return f"{command['by']}: {command['what']} {command['answer']}"

@@ -53,8 +53,8 @@ def test_cross_field_and_tree_errors_are_reported_together(minimal_yaml: str, wa
     text = minimal_yaml.replace("tree: waypoints", "tree: nope").replace(WAYPOINT, "{lat: 47.0, lon: 8.0, speed_m_s: 9.0, depth_m: 3.0}")
     assert errors_of(text) == [
         "m.yaml:4:7: tree: unknown tree 'nope' (available: waypoints; or module:function)",
-        "m.yaml:6:38: waypoints[0].speed_m_s: 9.0 m/s is outside limits.speed_m_s [0.1, 5.0]",
-        "m.yaml:6:52: waypoints[0].depth_m: only a sub has depth_m (vehicle is rover)",
+        "m.yaml:6:38: waypoints[0].speed_m_s: 9.0 m/s is outside limits.speed_m_s [0.1, 5.0] (waypoint 1)",
+        "m.yaml:6:52: waypoints[0].depth_m: only a sub has depth_m (vehicle is rover) (waypoint 1)",
     ]
 
 
@@ -100,3 +100,14 @@ def test_a_broken_simulator_event_file_is_refused_by_both_at_its_line(tmp_path: 
     assert located and all(line.startswith(str(tmp_path / "events" / "asv_ekf_dropout.yaml") + ":3:") for line in located)
     assert by_validate.splitlines() == located
     assert main(["validate", path, "--real-vehicle", "--json"]) == 2  # against a real vehicle: no event file, but samples need an instrument
+
+
+def test_a_refused_vehicle_does_not_hide_an_unknown_tree() -> None:
+    """Issue 43: `vehicle: boats` with `tree: waypoint` reported the vehicle only; an error whatever the vehicle is also said."""
+    text = "version: 1\nname: x\nvehicle: boats\ntree: waypoint\nwaypoints:\n  - {lat: 1.0, lon: 2.0, speed_m_s: 3.0}\n"
+    with pytest.raises(MissionError) as info:
+        admission.load_mission_text(text, "m.yaml")
+    assert [str(e) for e in info.value.errors] == [
+        "m.yaml:3:10: vehicle: 'boats': Input should be 'rover', 'boat', 'sub' or 'vtol'",
+        "m.yaml:4:7: tree: unknown tree 'waypoint' (available: auv_survey, goto_sample, ugv_rc_route, vtol_transit, waypoints; or module:function)",
+    ]  # not the speed: 3 m/s is over a sub's limit only, and the vehicle is not known

@@ -78,7 +78,7 @@ def test_a_guard_named_must_come_before_and_sample_points_need_a_sample_node() -
 """
     head = HEAD.replace("waypoints: [{lat: 47.397742, lon: 8.545594}]", "waypoints: [{lat: 47.397742, lon: 8.545594, sample: true}]")
     assert errors_of(tree, head) == [
-        "m.yaml:5:53: waypoints[0].sample: no sample node in the tree takes it",
+        "m.yaml:5:53: waypoints[0].sample: no sample node in the tree takes it (waypoint 1)",
         "m.yaml:9:66: tree.children[0].guard: no guard named 'EKF ok?' comes before it in the tree",
     ]
 

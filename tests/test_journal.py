@@ -91,11 +91,12 @@ def test_an_edited_route_is_recorded_and_resumed_as_edited(journal, clock, squar
     after_crash.close()
     assert point.route == Route((first, extra, last), 2, home)
     assert point.leg_index == 2  # the route edit is the latest word on the leg
-    assert [(r["waypoint"], r["waypoints"], r["reason"]) for r in report["routes"]] == [
-        (2, 3, "ctl route: remove 2 and 3, add one"),
-        (3, 3, "switch A: home here"),
+    assert [(r["waypoint"], r["name"], r["waypoints"], r["reason"]) for r in report["routes"]] == [
+        (2, "added", 3, "ctl route: remove 2 and 3, add one"),
+        (3, None, 3, "switch A: home here"),
     ]
-    assert "route edits (2):" in render(report)
+    text = render(report)
+    assert "route edits (2):" in text and "3 waypoints, heading for waypoint 2 'added' of 3: ctl route: remove 2 and 3, add one" in text
 
 
 def test_a_leg_change_after_an_edit_is_where_it_resumes(journal, clock, square_mission):
@@ -127,3 +128,12 @@ def test_a_sample_is_never_recorded_twice_for_a_leg(journal, square_mission):
 
 def test_the_database_is_in_wal_mode(journal):
     assert journal._db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+
+
+def test_an_empty_route_is_not_every_waypoint_reached(journal, clock, square_mission):
+    """Issue 43: a UGV's report opened with `every waypoint reached (0 of 0)` (its route is driven, then recorded by RC)."""
+    _, run = started(journal, square_mission)
+    report = journal.report(run)
+    report["legs"] = [{"t": 0.0, "waypoint": None, "waypoints": 0, "name": None, "lat": None, "lon": None}]  # ugv_rc_route before a record
+    text = render(report)
+    assert "no waypoint yet (an empty route)" in text and "(0 of 0)" not in text

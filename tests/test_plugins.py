@@ -170,7 +170,7 @@ def test_an_installed_package_adds_a_tree_and_a_behaviour(ranger: Path) -> None:
 def test_validate_and_show_use_the_plugin_tree_and_its_guard(ranger: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = mission_file(tmp_path, "ranger")
     assert main(["validate", path]) == 0
-    assert capsys.readouterr().out == f"{path}: ok (1 waypoints, vehicle rover, tree ranger)\n"
+    assert capsys.readouterr().out == f"{path}: ok (1 waypoint, vehicle rover, tree ranger)\n"
     assert main(["show", path, "--format", "ascii"]) == 0
     out = capsys.readouterr().out
     assert "Enough satellites?" in out and "Count the leg" in out and "Link alive?" in out

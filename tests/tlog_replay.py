@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from executive import blackboard
+from executive.autopilot.port import Target
 from executive.autopilot.selection import Autopilot
 from executive.clock import ManualClock
 from executive.intervention import InterventionWatch
@@ -125,6 +126,8 @@ class Replay:
             self.port.take_off(height, home=home, position=self.bb.get("/vehicle/position"), airborne=False)
         elif kind == "COMMAND_INT" and msg.command == mavlink.MAV_CMD_DO_REPOSITION:
             self.port.reposition(msg.x * 1e-7, msg.y * 1e-7, msg.z - (home.alt_m if home is not None else 0.0))
+        elif kind == "SET_POSITION_TARGET_GLOBAL_INT":
+            self.port.go_to(Target(msg.lat_int * 1e-7, msg.lon_int * 1e-7, msg.alt))
         self.link.take()  # the port's commands go nowhere
 
     def _note(self) -> None:

@@ -106,9 +106,10 @@ def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
             f"RC channel {rc.arm_channel} high: arm", memory=False, children=[RcChannelHigh(rc.arm_channel, rc.takeover_above_us), arm]
         )
         either = py_trees.composites.Selector("Armed, or arm on the RC switch", memory=False, children=[Armed(), switch])
-        arming = WaitUntil(either, limits.recovery_timeout_s, name=f"Wait for the operator to arm (or RC channel {rc.arm_channel} high)")
+        name = f"Wait for the operator to arm (or RC channel {rc.arm_channel} high)"
+        arming = WaitUntil(either, limits.recovery_timeout_s, name=name, hint=how_to_arm(mission))
     else:
-        arming = WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm")
+        arming = WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm", hint=how_to_arm(mission))
     checks = [wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission), *mission_end_checks(mission)]
     return py_trees.composites.Sequence("Pre-flight", memory=True, children=[*checks, arming])
 
@@ -125,6 +126,12 @@ def mission_end_checks(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
         return []
     name, allowed, why = MISSION_END_STOPS
     return [ParameterIs(name, allowed, why)]
+
+
+def how_to_arm(mission: Mission) -> str:
+    """What a person does to arm this mission's vehicle, said when the pre-flight starts waiting for it and when it gives up."""
+    switch = f", RC channel {mission.rc.arm_channel} high" if mission.rc.arm_channel is not None else ""
+    return f"to arm it: `executive ctl arm`{switch} or a ground station; or `auto_arm: true` in the mission to have it armed in pre-flight"
 
 
 def standard_guards(mission: Mission) -> list[Guard]:

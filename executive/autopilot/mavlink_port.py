@@ -11,7 +11,7 @@ from executive.io.mavlink.commander import Commander, command_outcome
 from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, horizon_not_on_autopilot, route_items, route_not_on_autopilot
 from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, HomePosition
+from executive.state import GlobalPosition, HomePosition, TargetAsk
 from executive.vehicles import VehicleProfile
 
 
@@ -84,6 +84,10 @@ class MavlinkPort:
 
     def mode_asked_at(self, mode: str) -> float | None:
         return self.commander.modes_asked.get(mode)
+
+    @property
+    def target_asked(self) -> TargetAsk | None:
+        return self.commander.target_asked
 
     @property
     def takeoff_height_m(self) -> float | None:

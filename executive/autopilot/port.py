@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Literal, Protocol
 
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, HomePosition
+from executive.state import GlobalPosition, HomePosition, TargetAsk
 from executive.vehicles import AutopilotName
 
 VtolState = Literal["FW", "MC"]
@@ -122,6 +122,11 @@ class AutopilotPort(Protocol):
     # -- what was asked (to tell our mode changes from a person's) ----------------------------
     def mode_asked_at(self, mode: str) -> float | None:
         """When ``mode`` (as the heartbeat shows it) was last asked for, or put by a request of ours; None if never."""
+        ...
+
+    @property
+    def target_asked(self) -> TargetAsk | None:
+        """The point we last asked the autopilot to steer to (a setpoint, a DO_REPOSITION) and when; None if never."""
         ...
 
     @property

@@ -81,7 +81,7 @@ class OffboardStream:
             if position is None:
                 return  # nothing to hold on to yet: no stream, and PX4 refuses OFFBOARD
             lat, lon, alt = position.lat, position.lon, position.alt_rel_m
-            self.target = lambda: self._commander.goto(lat, lon, alt)
+            self.target = lambda: self._commander.goto(lat, lon, alt, mode=OFFBOARD)
         self.target()
         self._last_sent = now
         if self.started_at is None:
@@ -144,6 +144,7 @@ class Px4Port(MavlinkPort):
         """
         self._leaving_offboard()
         self.commander.note_mode_asked("AUTO.LOITER")  # the mode it puts PX4 in: ours, not a person's
+        self.commander.note_target_asked(lat, lon)  # the navigator's setpoint it makes: ours, not a person's
         home: HomePosition | None = self._bb.get("/vehicle/home")
         amsl = home.alt_m + alt_m if home is not None else math.nan
         flags = float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)
@@ -170,7 +171,8 @@ class Px4Port(MavlinkPort):
         return self._request(self.commander.land(), mavlink.MAV_CMD_NAV_LAND)
 
     def go_to(self, target: Target) -> None:
-        self.stream.aim(lambda: MavlinkPort.go_to(self, target))
+        # OFFBOARD's setpoints, even those the stream sends on after another mode was asked (until the heartbeat shows it)
+        self.stream.aim(lambda: self.commander.goto(target.lat, target.lon, target.alt_m, mode=OFFBOARD))
 
     def go_to_local(self, north_m: float, east_m: float, down_m: float) -> None:
         self.stream.aim(lambda: self.commander.local_setpoint(north_m, east_m, down_m))

@@ -14,7 +14,7 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, HomePosition
+from executive.state import GlobalPosition, HomePosition, TargetAsk
 from executive.vehicles import VehicleProfile
 
 log = logging.getLogger(__name__)
@@ -120,6 +120,10 @@ class Autopilot:
 
     def mode_asked_at(self, mode: str) -> float | None:
         return self.backend.mode_asked_at(mode)
+
+    @property
+    def target_asked(self) -> TargetAsk | None:
+        return self.backend.target_asked
 
     @property
     def takeoff_height_m(self) -> float | None:

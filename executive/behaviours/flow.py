@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterator, Sequence
 from typing import Any
 
@@ -14,6 +15,8 @@ from executive.behaviours.guards import Guard
 from executive.behaviours.reacting import READS, Announce, Reacting
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, MissionStatus
+
+log = logging.getLogger(__name__)
 
 
 class ClockedDecorator(py_trees.decorators.Decorator):
@@ -33,18 +36,22 @@ class WaitUntil(ClockedDecorator):
     """RUNNING until the child succeeds (then SUCCESS); FAILURE if it has not within ``limit_s``.
 
     A failed child is ticked again ``retry_s`` later (a condition: every tick; an action such as
-    arming: not so often that the autopilot is flooded).
+    arming: not so often that the autopilot is flooded). A ``hint`` (what a person does to end the
+    wait: ``to arm it: executive ctl arm ...``) is logged when the wait starts, unless the child
+    succeeds at once, and said again on giving up.
     """
 
-    def __init__(self, child: py_trees.behaviour.Behaviour, limit_s: float, name: str | None = None, retry_s: float = 0.0) -> None:
+    def __init__(self, child: py_trees.behaviour.Behaviour, limit_s: float, name: str | None = None, retry_s: float = 0.0, hint: str = "") -> None:
         super().__init__(name=name or f"Wait until {child.name}", child=child)
         self.limit_s = limit_s
         self.retry_s = retry_s
+        self.hint = hint
 
     def initialise(self) -> None:
         assert self.clock is not None
         self.started = self.clock.now()
         self._failed_at = float("-inf")
+        self._hinted = not self.hint
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         assert self.clock is not None
@@ -67,8 +74,12 @@ class WaitUntil(ClockedDecorator):
             return Status.SUCCESS
         waited = self.clock.now() - self.started
         if waited > self.limit_s:
-            self.feedback_message = f"gave up after {self.limit_s:g} s: {self.decorated.feedback_message}"
+            hint = f" ({self.hint})" if self.hint else ""
+            self.feedback_message = f"gave up after {self.limit_s:g} s: {self.decorated.feedback_message}{hint}"
             return Status.FAILURE
+        if not self._hinted:
+            self._hinted = True
+            log.info("%s (up to %g s): %s", self.name, self.limit_s, self.hint)
         self.feedback_message = f"waiting ({waited:.0f}/{self.limit_s:g} s): {self.decorated.feedback_message}"
         return Status.RUNNING
 
@@ -265,12 +276,12 @@ class UnlessPaused(py_trees.decorators.Decorator):
             if self.decorated.status == Status.RUNNING:
                 self.decorated.stop(Status.INVALID)
             if not state.hold_while_paused:  # a person took the vehicle (a mode we did not ask for): hands off
-                self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: {state.reason}; hands off"
+                self.feedback_message = f"paused at leg {state.leg_number}/{state.leg_count}: {state.reason}; hands off"
             else:
                 if self._holding is None:
                     self._holding = hold_mode_for(self._bb.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode) or self.hold_mode
                     self._hold_ticket = self.autopilot.set_mode(self._holding)
-                self.feedback_message = f"paused at leg {state.leg_index + 1}/{state.leg_count}: holding in {self._holding}"
+                self.feedback_message = f"paused at leg {state.leg_number}/{state.leg_count}: holding in {self._holding}"
             new_status = Status.RUNNING
         else:
             if self._holding is not None:  # resumed: a hold still being retried must not undo the resumed leg

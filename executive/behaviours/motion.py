@@ -50,6 +50,14 @@ class Corner:
     auto_cut_m: float
 
 
+#: Slower than this the vehicle stands (stopped short of the acceptance radius): the setpoint goes again.
+STANDING_M_S = 0.2
+
+
+def _standing(position: GlobalPosition | None) -> bool:
+    return position is not None and position.ground_speed_m_s < STANDING_M_S
+
+
 class GoTo(TimedBehaviour):
     """Go to the current leg's waypoint in GUIDED.
 
@@ -57,8 +65,12 @@ class GoTo(TimedBehaviour):
     FAILURE after the leg timeout. A target changed during the leg (an operator edited the route)
     is followed at once. ``method``:
 
-    - ``"setpoint"``: SET_POSITION_TARGET_GLOBAL_INT, re-sent every ``resend_s``: ArduPilot gives no
-      ack for it and drops it silently outside GUIDED. A sub's waypoint goes with its depth (an
+    - ``"setpoint"``: SET_POSITION_TARGET_GLOBAL_INT, re-sent every ``resend_s`` until the autopilot
+      reports it as its target (``/vehicle/target_set_by`` ``us``): ArduPilot gives no ack for it and
+      drops it silently outside GUIDED. Once reported it is sent again only while the vehicle stands
+      (stopped short of the acceptance radius: a new target drives it on): a ground station's Go-to
+      that replaced it must be seen first (a person's, :mod:`executive.target_watch`), never overwritten
+      under way. A sub's waypoint goes with its depth (an
       altitude leg: the depth that keeps its height above the seabed, from the measured depth and
       rangefinder, re-sent as the seabed changes), so a leg never brings the sub up.
     - ``"reposition"``: MAV_CMD_DO_REPOSITION (acked; switches to GUIDED), sent once and again only
@@ -85,6 +97,7 @@ class GoTo(TimedBehaviour):
     reads = (
         "/mission/target", "/mission/next_target", "/mission/leg_index", "/mission/leg_count", "/vehicle/position",
         "/vehicle/statustext", "/vehicle/rangefinder", "/vehicle/params", blackboard.command_key(Outcome.REPOSITION),
+        "/vehicle/target_set_by",
     )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
@@ -137,6 +150,7 @@ class GoTo(TimedBehaviour):
         self._ticket = None
         self._refusal: str | None = None
         self._seabed_depth: float | None = None  # an altitude leg's last depth target
+        self._setpoint: Waypoint | None = None  # the setpoint sent last
         self._floor_told: str | None = None  # the seabed floor's kind last warned of
         self._leg_start: GlobalPosition | None = None  # where the vehicle was when the leg began
         self._predict_at = -math.inf  # the look-ahead's next prediction of the swing, and its last (time, cut)
@@ -307,8 +321,9 @@ class GoTo(TimedBehaviour):
             return
         if self.method == "setpoint":
             target = self._as_depth(self.target, position)
-            if target is not None:
+            if target is not None and not (target == self._setpoint and self._reported(target) and not _standing(position)):
                 self.autopilot.go_to(leg_target(target))
+                self._setpoint = target
             self._last_sent = now
             return
         if self._ticket is not None:
@@ -322,6 +337,12 @@ class GoTo(TimedBehaviour):
             alt = position.alt_rel_m
         self._ticket = self.autopilot.reposition(self.target.lat, self.target.lon, alt)
         self._last_sent = now
+
+    def _reported(self, target: Waypoint) -> bool:
+        """The autopilot reports steering to ``target``, our latest ask (POSITION_TARGET_GLOBAL_INT)."""
+        asked = self.autopilot.target_asked
+        ours = asked is not None and (asked.lat, asked.lon) == (target.lat, target.lon)
+        return ours and self.get("/vehicle/target_set_by") == "us"
 
     def _as_depth(self, target: Waypoint, position: GlobalPosition | None) -> Waypoint | None:
         """A sub's altitude leg as a depth target from the measured depth and rangefinder (executive.seabed: ArduSub drops

@@ -12,7 +12,7 @@ from typing import Protocol
 from executive.behaviours.guards import Guard
 from executive.geo import distance
 from executive.geofence import Geofence
-from executive.mission.model import Mission, Range, Waypoint
+from executive.mission.model import Mission, Range, Waypoint, waypoint_label
 from executive.state import GlobalPosition, HomePosition, Rangefinder
 
 #: What a guard of the vehicle's position does without one, or with an old one (its ``unknown_or_stale``).
@@ -104,8 +104,7 @@ class AllWaypointsWithin(Guard):
         for i, wp in enumerate(self.waypoints):
             d = distance(position.lat, position.lon, wp.lat, wp.lon)
             if d > self.max_distance_m:
-                named = f" ({wp.name})" if getattr(wp, "name", None) else ""
-                return f"waypoint {i}{named} is {d:.0f} m away, over {self.max_distance_m:g} m"
+                return f"{waypoint_label(i, getattr(wp, 'name', None))} is {d:.0f} m away, over {self.max_distance_m:g} m"
             farthest = max(farthest, d)
         self._measured = (position.lat, position.lon, farthest)
         return None
@@ -145,7 +144,7 @@ class RangefinderReaches(Guard):
             return "no downward rangefinder reported (DISTANCE_SENSOR, PITCH_270): an altitude leg needs one (RNGFND1_TYPE, RNGFND1_ORIENT 25)"
         for i, wp in self.legs:
             assert wp.altitude_m is not None
-            named = f"waypoint {i}{f' ({wp.name})' if wp.name else ''} keeps {wp.altitude_m:g} m above the seabed"
+            named = f"{waypoint_label(i, wp.name)} keeps {wp.altitude_m:g} m above the seabed"
             if wp.altitude_m + self.margin_m > reading.max_m:
                 return f"{named}: the rangefinder reads to {reading.max_m:g} m: set RNGFND1_MAX to at least {wp.altitude_m + self.margin_m:g} m"
             if wp.altitude_m - self.margin_m < reading.min_m:

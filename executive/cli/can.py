@@ -6,15 +6,18 @@ frames of other ids, and every stretch where the RC frame's (0x241) rolling coun
 is how the executive notices a lost transmitter in CAN command mode. ``--json`` prints one JSON
 object per frame and the summary as the last one (``{"summary": ...}``).
 
-``decode`` reads any log python-can reads (by extension): candump ``-L`` ``.log`` files, ``.asc``,
-``.blf``, ``.trc``, ``.csv``. ``monitor`` watches a live bus until ``--duration`` or Ctrl-C.
-Exit codes: 0 done, 2 bad input (no such file, unreadable log, bad IFACE:CHANNEL), 3 the bus
-cannot be opened.
+``decode`` reads any log python-can reads: candump ``-L`` ``.log`` files, ``.asc``, ``.blf``,
+``.trc``, ``.csv``, as ``--format`` says, else by the file's extension, else by its first bytes
+(a candump log named ``bus.txt``). A candump line python-can cannot read is skipped and counted
+(``3 lines not understood: 6, 19, 40``), the frames after it decoded. ``monitor`` watches a live
+bus until ``--duration`` or Ctrl-C. Exit codes: 0 done, 1 lines were skipped, 2 bad input (no
+such file, unreadable log, bad IFACE:CHANNEL), 3 the bus cannot be opened.
 """
 
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import sys
 import time
@@ -25,7 +28,7 @@ from typing import Any
 
 import can
 
-from executive.cli import EXIT_BAD_INPUT, EXIT_NO_VEHICLE, EXIT_OK, number
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, number
 from executive.io.can.agilex import RC_STATE_ID, FrameStats, RcState, decode, is_agilex
 from executive.io.can.bus import CanOpenError, CanSpecError, open_can
 
@@ -157,7 +160,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     actions = parser.add_subparsers(dest="can_action", required=True, metavar="ACTION")
     decode_parser = actions.add_parser("decode", help="decode a CAN log (candump -L .log, .asc, .blf, ...)")
-    decode_parser.add_argument("file", metavar="FILE", help="the log; its extension names the format")
+    decode_parser.add_argument("file", metavar="FILE", help="the log (its format: --format, else its extension, else its first bytes)")
+    decode_parser.add_argument("--format", choices=sorted(FORMATS), help="the log's format, whatever the file's name")
     decode_parser.add_argument("--json", action="store_true", help="one JSON object per frame, the summary last")
     decode_parser.set_defaults(func=run_decode)
     monitor = actions.add_parser("monitor", help="watch a live CAN bus")
@@ -173,42 +177,80 @@ def _error(text: str) -> None:
     print(f"executive: can: {text}", file=sys.stderr)
 
 
-def _failing_line(path: Path, frames_read: int) -> int | None:
-    """The line of a candump .log that failed to parse: the one after the last frame read (empty lines are skipped)."""
+#: ``--format`` -> python-can's reader of it.
+FORMATS: dict[str, type[can.io.generic.MessageReader]] = {
+    "candump": can.CanutilsLogReader, "asc": can.ASCReader, "blf": can.BLFReader, "trc": can.TRCReader, "csv": can.CSVReader,
+}  # fmt: skip
+_SUFFIXES = {".log": "candump", ".asc": "asc", ".blf": "blf", ".trc": "trc", ".csv": "csv"}
+
+
+def log_format(path: Path, asked: str | None = None) -> str | None:
+    """The log's format: ``asked``, else by its extension, else by its first bytes (None: not one python-can reads)."""
+    if asked is not None:
+        return asked
+    if path.suffix.lower() in _SUFFIXES:
+        return _SUFFIXES[path.suffix.lower()]
     try:
-        with path.open(encoding="utf-8", errors="replace") as f:
-            seen = 0
-            for number, line in enumerate(f, 1):
-                if line.strip():
-                    seen += 1
-                    if seen > frames_read:
-                        return number
+        with path.open("rb") as f:
+            head = f.read(512)
     except OSError:
         return None
+    if head.startswith(b"LOGG"):
+        return "blf"
+    text = head.decode("utf-8", "replace").lstrip()
+    if text.startswith("("):  # candump -L: (1699999999.123456) can0 241#...
+        return "candump"
+    if text.startswith(";$FILEVERSION"):
+        return "trc"
+    if text.lower().startswith(("date ", "base ")):
+        return "asc"
+    if text.startswith("timestamp,"):
+        return "csv"
     return None
 
 
+def _candump_frames(path: Path, skipped: list[tuple[int, str]]) -> Iterable[can.Message]:
+    """Each line of a candump log that python-can reads, as a frame; the others added to ``skipped`` (line, why)."""
+    with path.open(encoding="utf-8", errors="replace") as f:
+        for number, line in enumerate(f, 1):
+            if not line.strip():
+                continue
+            try:
+                yield from can.CanutilsLogReader(io.StringIO(line))
+            except Exception as exc:  # python-can's reader raises ValueError, IndexError... on a damaged line
+                skipped.append((number, str(exc) or type(exc).__name__))
+
+
 def run_decode(args: argparse.Namespace) -> int:
-    """Decode every frame of a log file."""
+    """Decode every frame of a log file; 1 when lines of it could not be read (the rest decoded)."""
     path = Path(args.file)
     printer = _Printer(args.json)
     analysis = Analysis()
+    kind = log_format(path, args.format)
+    if not path.is_file():
+        _error(f"{path}: cannot read: No such file or directory")
+        return EXIT_BAD_INPUT
+    if kind is None:
+        _error(f"{path}: not a CAN log python-can reads by its name or first bytes: give --format {'|'.join(sorted(FORMATS))}")
+        return EXIT_BAD_INPUT
+    skipped: list[tuple[int, str]] = []
     try:
-        reader = can.LogReader(path)
+        frames = _candump_frames(path, skipped) if kind == "candump" else FORMATS[kind](path)
     except (OSError, ValueError) as exc:
         _error(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}")
         return EXIT_BAD_INPUT
     try:
-        with reader:
-            for msg in reader:
-                printer.frame(analysis.feed(msg))
-    except Exception as exc:  # python-can's readers raise ValueError, IndexError, UnicodeDecodeError... on a damaged log
-        line = _failing_line(path, analysis.stats.frames) if path.suffix.lower() == ".log" else None
-        where = f"{path}:{line}" if line is not None else f"{path} (after frame {analysis.stats.frames})"
+        for msg in frames:
+            printer.frame(analysis.feed(msg))
+    except Exception as exc:  # a binary or structured log damaged past reading: what came before it stands
         printer.summary(analysis.summary())
-        _error(f"{where}: not a CAN log line python-can can read: {exc}")
+        _error(f"{path} (after frame {analysis.stats.frames}): not a {kind} log python-can can read: {exc}")
         return EXIT_BAD_INPUT
-    printer.summary(analysis.summary())
+    printer.summary(analysis.summary() | ({"not_understood": [n for n, _ in skipped]} if skipped else {}))
+    if skipped:
+        lines = ", ".join(str(n) for n, _ in skipped)
+        _error(f"{path}: {len(skipped)} line{'s' if len(skipped) > 1 else ''} not understood: {lines} (line {skipped[0][0]}: {skipped[0][1]})")
+        return EXIT_FAILED
     return EXIT_OK
 
 
@@ -222,6 +264,11 @@ def run_monitor(args: argparse.Namespace) -> int:
     except CanOpenError as exc:
         _error(str(exc))
         return EXIT_NO_VEHICLE
+    if args.bus.lower().startswith("virtual:"):
+        _error(
+            f"{args.bus}: python-can's virtual bus lives inside one process: this monitor hears frames sent in it only, never another "
+            "process's (an executive's or a simulator's); to watch a bus between processes use a vcan: socketcan:vcan0 (note)"
+        )
     printer = _Printer(args.json)
     analysis = Analysis()
     try:

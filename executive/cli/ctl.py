@@ -227,7 +227,7 @@ def tree_text(reply: dict[str, Any]) -> str:
 
 
 def _watch_tree(args: argparse.Namespace) -> int:
-    """``ctl tree --watch``: the tree again every ``--interval`` s (in place on a terminal) until Ctrl-C or the executive stops."""
+    """``ctl tree --watch``: the tree every ``--interval`` s (in place on a terminal) until the run's last tick, Ctrl-C or the executive stops."""
     clear = "\x1b[H\x1b[2J" if sys.stdout.isatty() and not args.json else ""
     shown = 0
     try:
@@ -238,7 +238,8 @@ def _watch_tree(args: argparse.Namespace) -> int:
                 if not shown:
                     print(f"executive: ctl: no executive answers on {args.socket}: {exc}", file=sys.stderr)
                     return EXIT_NO_VEHICLE
-                print(f"executive: ctl: the executive on {args.socket} has stopped", file=sys.stderr)
+                # it ended between two looks: what is shown is a tick before its last, and is said to be
+                print(f"executive: ctl: the executive on {args.socket} has stopped; the tree above is from a tick before its last", file=sys.stderr)
                 return EXIT_OK
             if args.json:
                 print(json.dumps(reply), flush=True)
@@ -247,6 +248,8 @@ def _watch_tree(args: argparse.Namespace) -> int:
             else:
                 print(f"{clear}{reply['state']}: {reply['reason']}\n", flush=True)
             shown += 1
+            if reply.get("ok") and not reply["tree"]["live"]:
+                return EXIT_OK  # the run's last tick, shown: the watch ends on it, not on a frame of a tick still running
             time.sleep(args.interval)
     except KeyboardInterrupt:
         return EXIT_OK  # the way to stop watching
@@ -258,9 +261,12 @@ def route_lines(route: dict[str, Any]) -> str:
     held = "yes" if route["on_autopilot"] else "no"
     if upload is not None and upload["state"] != "DONE":
         held += f" ({upload['state'].lower()}: {upload['detail']})"
-    lines = [f"{len(route['waypoints'])} waypoints; on the autopilot: {held}"]
-    for n, (lat, lon, alt) in enumerate(route["waypoints"], start=1):
-        lines.append(f"{'>' if n == route['current'] else ' '} {n:3d}  {lat:.7f}, {lon:.7f}{f'  alt {alt:g} m' if alt else ''}")
+    count = len(route["waypoints"])
+    lines = [f"{count} waypoint{'' if count == 1 else 's'}; on the autopilot: {held}"]
+    names = route.get("names") or [None] * len(route["waypoints"])  # an older executive sends none
+    for n, ((lat, lon, alt), name) in enumerate(zip(route["waypoints"], names, strict=False), start=1):
+        named = f"  {name!r}" if name else ""
+        lines.append(f"{'>' if n == route['current'] else ' '} {n:3d}  {lat:.7f}, {lon:.7f}{f'  alt {alt:g} m' if alt else ''}{named}")
     if route["home"] is not None:
         lines.append(f"  home {route['home'][0]:.7f}, {route['home'][1]:.7f}")
     return "\n".join(lines)

@@ -22,7 +22,7 @@ from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report, print_errors
 from executive.mission.errors import MissionError, format_path
 from executive.mission.errors import Path as MissionPath
-from executive.mission.plan_files import WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
+from executive.mission.plan_files import WAITS_FOR_ARMING, WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
 
 KINDS = ("rover", "boat", "sub", "vtol")
 
@@ -69,6 +69,8 @@ def run_import(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
     for warning in imported.warnings:
         print(f"{warning} (warning)", file=sys.stderr)
+    if not imported.mission.auto_arm:
+        print(f"{args.file}: {WAITS_FOR_ARMING} (note)", file=sys.stderr)
     if not _write(args.output, imported.yaml_text, "import"):
         return EXIT_BAD_INPUT
     if args.output is not None:

@@ -30,10 +30,13 @@ def _when(wall: float | None) -> str:
 
 
 def _heading(row: dict[str, Any]) -> str:
-    """``heading for waypoint 3 of 8``, or ``every waypoint reached (8 of 8)`` once past the last."""
+    """``heading for waypoint 3 'inlet' of 8``, or ``every waypoint reached (8 of 8)`` once past the last (``no waypoint yet``: an empty route)."""
+    if not row["waypoints"]:
+        return "no waypoint yet (an empty route)"
     if row["waypoint"] is None:
         return f"every waypoint reached ({row['waypoints']} of {row['waypoints']})"
-    return f"heading for waypoint {row['waypoint']} of {row['waypoints']}"
+    name = f" {row['name']!r}" if row.get("name") else ""
+    return f"heading for waypoint {row['waypoint']}{name} of {row['waypoints']}"
 
 
 def render(report: dict[str, Any]) -> str:

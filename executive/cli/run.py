@@ -124,7 +124,7 @@ def _vehicle_link(
             link.close()
         return
     from executive.sim import SimServer
-    from executive.sim.options import firmware_options, simulated_home
+    from executive.sim.options import firmware_options, simulated_home, where_it_starts
 
     sim_options = mission.simulator or SimulatorOptions()
     model = sim_options.model or mission.vehicle
@@ -143,7 +143,8 @@ def _vehicle_link(
             **(firmware_options(mission) if firmware == "ardupilot" else {}),  # q_guided_mode is ArduPlane's
         ) as sim:
             on = "" if firmware == "ardupilot" else f" ({firmware})"
-            print(f"executive: simulated {model}{on} on {sim.url_for_client} (speed-up {clock.speedup:g}x)", file=sys.stderr)
+            start = where_it_starts(mission)
+            print(f"executive: run: simulated {model}{on} on {sim.url_for_client} (speed-up {clock.speedup:g}x){start}", file=sys.stderr)
             link = PymavlinkLink(sim.url_for_client, **options)
             try:
                 yield link

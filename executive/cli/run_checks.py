@@ -92,13 +92,19 @@ def speedup_refusal(rate_hz: float, speedup: float) -> str | None:
 
 def check_run(args: argparse.Namespace, mission: Mission) -> Checked:
     """``executive run``'s checks of ``args`` (its parsed options) and ``mission``: BadInput with the first refusal; nothing opened or sent."""
-    if args.rate <= 0 or args.speedup <= 0:
-        raise BadInput("--rate and --speedup must be > 0")
+    for option, value in (("--rate", args.rate), ("--speedup", args.speedup)):
+        if not value > 0 or value == float("inf"):  # NaN is no number of anything
+            raise BadInput(f"{option} {value:g}: must be a number > 0")
     if args.resume and not args.journal:
         raise BadInput("--resume needs --journal DB")
     simulator = not args.mavlink
     if (why := refusal(mission, autopilot=args.autopilot, simulator=simulator)) is not None:
         raise BadInput(why)
+    if mission.rc.source == "can" and not args.can:  # else the RC guard waits out its limit for a report that never comes
+        raise BadInput(
+            f"{args.mission}: rc.source: can reads the transmitter from the AgileX base's CAN bus (frame 0x241): give --can IFACE:CHANNEL "
+            "(socketcan:can0, slcan:/dev/ttyACM0@115200; with the built-in simulator a virtual:NAME bus), or rc.source: mavlink"
+        )
     notes = []
     if args.mavlink and args.speedup != 1.0:
         # a SITL at --speedup 5 drives 5 s in each wall second: ticking on the wall clock, the executive would react five times

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import re
 import signal
-import sys
 import threading
 from types import FrameType
 from typing import TYPE_CHECKING
 
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, number
+from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput, NoVehicle, number
 from executive.cli.common import faults_or_report, mavlink_id, signing_key_arg
 from executive.clock import ScaledClock
+from executive.io.mavlink.endpoint import unreachable
+from executive.logs import setup_logging
+from executive.sim.clients import ClientAddressError
 from executive.sim.firmware import DEFAULT_HOME, Home
 from executive.sim.registry import AUTOPILOTS, FIRMWARES, firmwares_for
 from executive.sim.server import SimServer
@@ -63,14 +66,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 
 def run(args: argparse.Namespace) -> int:
-    """Serve the simulated vehicle in the foreground."""
+    """Serve the simulated vehicle in the foreground; each MAVLink client that comes and goes is logged."""
+    setup_logging()
+    logging.getLogger("executive.sim.clients").setLevel(logging.INFO)
     if args.vehicle not in firmwares_for(args.autopilot):
         known = ", ".join(firmwares_for(args.autopilot))
-        print(f"executive sim: no simulated {args.autopilot} {args.vehicle} (known: {known})", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        raise BadInput(f"no simulated {args.autopilot} {args.vehicle} (known: {known})")
     if args.can is not None and args.vehicle != "bunker":
-        print(f"executive sim: --can simulates the AgileX base of the tracked UGV: use it with --vehicle bunker, not {args.vehicle}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        raise BadInput(f"--can simulates the AgileX base of the tracked UGV: use it with --vehicle bunker, not {args.vehicle}")
     clock = ScaledClock(args.speedup)
     faults = None
     if args.faults is not None:
@@ -85,11 +88,9 @@ def run(args: argparse.Namespace) -> int:
         try:
             can_bus = open_can(args.can)
         except CanSpecError as exc:
-            print(f"executive sim: --can: {exc}", file=sys.stderr)
-            return EXIT_BAD_INPUT
+            raise BadInput(f"--can: {exc}") from exc
         except CanOpenError as exc:
-            print(f"executive sim: --can: {exc}", file=sys.stderr)
-            return EXIT_FAILED
+            raise NoVehicle(f"--can: {exc}") from exc
     try:
         return _serve(args, clock, faults, signing_key, can_bus)
     finally:
@@ -111,9 +112,10 @@ def _serve(args: argparse.Namespace, clock: ScaledClock, faults: FaultInjector |
             can_bus=can_bus,
             autopilot=args.autopilot,
         )
-    except (OSError, ValueError) as exc:
-        print(f"executive sim: cannot listen on {args.mavlink}: {exc}", file=sys.stderr)
-        return EXIT_FAILED
+    except ClientAddressError as exc:
+        raise BadInput(f"--mavlink {exc}") from exc
+    except OSError as exc:  # as run: an address that cannot be listened on is a vehicle that cannot be reached
+        raise NoVehicle(f"--mavlink {unreachable(args.mavlink, exc)}") from exc
     done = threading.Event()
 
     def on_sigterm(signum: int, frame: FrameType | None) -> None:
@@ -123,15 +125,15 @@ def _serve(args: argparse.Namespace, clock: ScaledClock, faults: FaultInjector |
     previous = signal.signal(signal.SIGTERM, on_sigterm) if in_main_thread else None
     ap = server.autopilot
     print(
-        f"executive sim: {ap.FIRMWARE} {args.vehicle} listening on {args.mavlink} (connect to {server.url_for_client}), "
+        f"executive: sim: {ap.FIRMWARE} {args.vehicle} listening on {args.mavlink} (connect to {server.url_for_client}), "
         f"system {args.sysid}, speed-up {args.speedup:g}x",
         flush=True,
     )
     if faults is not None:
-        print(f"executive sim: injecting {len(faults.faults)} fault(s) from {args.faults}", flush=True)
+        print(f"executive: sim: injecting {len(faults.faults)} fault(s) from {args.faults}", flush=True)
     if can_bus is not None:
         only_here = " (a virtual bus is seen only by this process)" if args.can.lower().startswith("virtual:") else ""
-        print(f"executive sim: AgileX base on CAN {args.can}{only_here}", flush=True)
+        print(f"executive: sim: AgileX base on CAN {args.can}{only_here}", flush=True)
     end = None if args.duration is None else clock.now() + args.duration
     try:
         with server:

@@ -95,6 +95,7 @@ def _validate(path: str, args: argparse.Namespace, results: list[dict[str, Any]]
         result["warnings"] = [f"no home: checked only at start, against the vehicle's position: {'; '.join(waits)}"]
     results.append(result)
     if not args.json:
-        print(f"{path}: ok ({len(mission.waypoints)} waypoints, vehicle {mission.vehicle}, tree {tree})")
+        count = len(mission.waypoints)
+        print(f"{path}: ok ({count} waypoint{'' if count == 1 else 's'}, vehicle {mission.vehicle}, tree {tree})")
         for warning in result.get("warnings", ()):
             print(f"{path}: warning: {warning}", file=sys.stderr)

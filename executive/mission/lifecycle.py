@@ -178,10 +178,11 @@ class MissionState:
         for listener in self.replace_listeners:
             listener(mission, reason)
 
-    def start(self, vehicle_at: tuple[float, float] | None = None) -> None:
+    def start(self, vehicle_at: tuple[float, float] | None = None, reason: str = "started from the first waypoint") -> None:
         """READY (or ended) -> RUNNING from the first waypoint; refused (nothing changes) when a waypoint is out of reach of ``vehicle_at``.
 
         Without a position the runtime checks the distances before the tree first ticks (:mod:`executive.reach`).
+        ``reason``: what the transition says (a run resumed from the journal says where it resumes).
         """
         self._check("start")
         assert self.mission is not None
@@ -190,7 +191,7 @@ class MissionState:
             raise Refused(f"mission {self.mission.name!r} refused: " + "; ".join(far))
         self.leg_index = 0
         self.samples = ()
-        self._transition("start", "started from the first waypoint")
+        self._transition("start", reason)
 
     def pause(self, reason: str = "pause requested", *, hold: bool = True) -> None:
         """RUNNING -> PAUSED; ``hold=False``: a person has the vehicle (a mode change we did not ask for), nothing is commanded meanwhile."""
@@ -201,7 +202,7 @@ class MissionState:
     def resume(self, reason: str = "") -> None:
         self._check("resume")
         self.hold_while_paused = True
-        self._transition("resume", f"resumed at leg {self.leg_index + 1}" + (f": {reason}" if reason else ""))
+        self._transition("resume", f"resumed at leg {self.leg_number}" + (f": {reason}" if reason else ""))
 
     def delete(self) -> None:
         self._check("delete")
@@ -227,6 +228,11 @@ class MissionState:
     @property
     def leg_count(self) -> int:
         return len(self.mission.waypoints) if self.mission else 0
+
+    @property
+    def leg_number(self) -> int:
+        """The leg as a person counts it, as the status shows it (``leg 2/2``): from 1, the last one once past it (a VTOL landing)."""
+        return min(self.leg_index + 1, self.leg_count)
 
     @property
     def target(self) -> Waypoint | None:

@@ -192,7 +192,8 @@ def load_model_text(text: str, filename: str, model: type[M], checks: Checks[M] 
     def error(path: Path, message: str, node: yaml.Node | None = None) -> FieldError:
         """Located at ``node``, else at the value of ``path`` or of its nearest enclosing value in the file."""
         node = node or next(loader.values[path[:n]] for n in range(len(path), -1, -1) if path[:n] in loader.values)
-        return _located(filename, node.start_mark, format_path(path) if path else f"({what})", message)
+        number = _waypoint_number(data, path) if what == "mission" else ""  # after the message: FIELD stays one token for tools
+        return _located(filename, node.start_mark, format_path(path) if path else f"({what})", message + number)
 
     errors = [error(path, "duplicate key (an earlier one is ignored)", key) for path, key in loader.duplicates.values()]
     try:
@@ -213,6 +214,16 @@ def load_model_text(text: str, filename: str, model: type[M], checks: Checks[M] 
     if errors:
         raise MissionError(errors)
     return result
+
+
+def _waypoint_number(data: object, path: Path) -> str:
+    """`` (waypoint 7, 'far')`` for an error in ``waypoints[6]``: the path locates the YAML, a person counts from 1 by name."""
+    if len(path) < 2 or path[0] != "waypoints" or not isinstance(path[1], int) or isinstance(path[1], bool):
+        return ""
+    waypoints = data.get("waypoints") if isinstance(data, dict) else None
+    item = waypoints[path[1]] if isinstance(waypoints, list) and 0 <= path[1] < len(waypoints) else None
+    name = item.get("name") if isinstance(item, dict) and path[2:3] != ("name",) else None  # not a name that is itself refused
+    return f" (waypoint {path[1] + 1}" + (f", {name!r}" if isinstance(name, str) and name else "") + ")"
 
 
 #: Passes of leaving out what pydantic refuses before the rules between fields give up.
@@ -242,7 +253,7 @@ def _checks_on_the_valid_part(data: dict[str, Any], model: type[M], checks: Chec
                 path = _file_path(e["loc"], pruned, missing=e["type"] == "missing")
                 path = _original_path(path[:-1] if e["type"] in _MISSING else path, kept)
                 if not path:
-                    return []
+                    return _whatever_it_is(data, model, checks, e["loc"][:1] if e["type"] in _MISSING else ())
                 refused.add(path)
             if refused <= dropped:
                 return []
@@ -256,6 +267,29 @@ def _checks_on_the_valid_part(data: dict[str, Any], model: type[M], checks: Chec
             found.append((original, message))
         return found
     return []
+
+
+def _whatever_it_is(data: dict[str, Any], model: type[M], checks: Checks[M], field: tuple[Any, ...]) -> list[tuple[Path, str]]:
+    """The rules' errors that hold whatever a refused required field of a few choices (``vehicle: boats``) would have been.
+
+    The document cannot be kept without it; each of its choices stands in for it in turn, and an error
+    found with every one of them (``tree: unknown tree 'waypoint'``) is the file's. Nothing for any other field.
+    """
+    name = field[0] if len(field) == 1 and isinstance(field[0], str) else None
+    choices = _literal_choices(model.model_fields[name].annotation) if name in model.model_fields else ()
+    if not choices or name not in data:
+        return []
+    common: list[tuple[Path, str]] | None = None
+    for choice in choices:
+        found = _checks_on_the_valid_part({**data, name: choice}, model, checks)
+        common = found if common is None else [error for error in common if error in found]
+    return common or []
+
+
+def _literal_choices(annotation: Any) -> tuple[Any, ...]:
+    """The values of a ``Literal[...]`` annotation (a few of them), else none."""
+    values = get_args(annotation) if get_origin(annotation) is Literal else ()
+    return values if 0 < len(values) <= 8 else ()
 
 
 def _without(value: Any, dropped: set[Path], path: Path = ()) -> tuple[Any, dict[Path, list[int]]]:

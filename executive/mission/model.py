@@ -345,6 +345,11 @@ class Waypoint(BaseModel):
     sample: bool = Field(False, description="goto_sample: hold here and run the sampler")
 
 
+def waypoint_label(index: int, name: str | None = None) -> str:
+    """A waypoint as a person counts it, from 1, with its name: ``waypoint 7 'far'`` for ``waypoints[6]``."""
+    return f"waypoint {index + 1}" + (f" {name!r}" if name else "")
+
+
 class SimulatorOptions(BaseModel):
     """How ``executive run`` sets up its built-in simulated vehicle (ignored with --mavlink)."""
 

@@ -86,6 +86,18 @@ class Exported:
 # -- from what a file says to a mission -------------------------------------------------------
 
 
+#: What ``executive import`` takes, said of any other file.
+IMPORTED_KINDS = (
+    "it takes a QGroundControl .plan (JSON), a Mission Planner .waypoints (QGC WPL 110; .txt, .mission) or a BehaviorTree.CPP / Groot2 tree (.xml)"
+)
+
+#: Said in an imported mission's header and by ``executive import`` when it was imported without ``--auto-arm``.
+WAITS_FOR_ARMING = (
+    "The mission waits for a person to arm the vehicle (`executive ctl arm`, a ground station); "
+    "import with --auto-arm (auto_arm: true) to have it armed in pre-flight."
+)
+
+
 class _IndentedDumper(yaml.SafeDumper):
     """Lists indented under their key, as the example missions are written."""
 
@@ -156,6 +168,8 @@ def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what:
     if src.errors:
         raise MissionError(src.errors)
     header = [f"Imported from {os.path.basename(src.filename)} ({what}) by `executive import`.", *notes]
+    if not auto_arm:
+        header.append(WAITS_FOR_ARMING)
     if src.warnings:
         header.append("Not imported or changed on the way (details in the import's warnings):")
         header += [f"  line {w.line}: {w.field}: {w.message}" for w in sorted(src.warnings, key=lambda w: (w.line, w.column))]
@@ -329,6 +343,8 @@ def import_waypoints(text: str, filename: str, *, vehicle: str | None = None, na
 def import_text(text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False) -> Imported:
     """Either format, told apart by content (``QGC WPL``) or the file name's suffix (.waypoints, .txt, .mission)."""
     is_wpl = text.removeprefix("\ufeff").startswith("QGC WPL") or filename.lower().endswith(WPL_SUFFIXES)
+    if not is_wpl and not filename.lower().endswith(".plan") and not text.removeprefix("\ufeff").lstrip().startswith("{"):
+        raise MissionError([FieldError(filename, 1, 1, "(file)", f"not a file import reads: {IMPORTED_KINDS}")])
     reader: Callable[..., Imported] = import_waypoints if is_wpl else import_plan
     return reader(text, filename, vehicle=vehicle, name=name, auto_arm=auto_arm)
 

@@ -25,7 +25,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from executive.geo import distance
-from executive.mission.model import Mission, Waypoint
+from executive.mission.model import Mission, Waypoint, waypoint_label
 from executive.mission.rules import autopilot_errors
 from executive.state import Sample
 
@@ -129,7 +129,7 @@ def _same_place(waypoint: Waypoint, index: int, new: Mission, exclude: set[int] 
 
 
 def _named(waypoint: Waypoint, index: int) -> str:
-    return f"waypoint {index + 1}" + (f" {waypoint.name!r}" if waypoint.name else "") + f" at {waypoint.lat:.7f}, {waypoint.lon:.7f}"
+    return f"{waypoint_label(index, waypoint.name)} at {waypoint.lat:.7f}, {waypoint.lon:.7f}"
 
 
 __all__ = ["REPLACED", "Incompatible", "Replacement", "incompatibilities", "plan"]

@@ -260,7 +260,7 @@ class Operator:
             return None
 
     def _route_view(self) -> dict[str, Any]:
-        """The route as JSON: waypoints (lat, lon, alt_m), the one heading for (1-based; legs + 1 when done), home, and the autopilot's copy."""
+        """The route as JSON: waypoints (lat, lon, alt_m), names, the one heading for (1-based; legs + 1 when done), home, the autopilot's copy."""
         route = self.mission_state.route
         upload = self._bb.get("/link/route_upload")
         upload_view = (
@@ -268,6 +268,7 @@ class Operator:
         )
         return {
             "waypoints": [[wp.lat, wp.lon, wp.alt_m] for wp in route.waypoints],
+            "names": [wp.name for wp in route.waypoints],
             "current": route.current + 1,
             "home": None if route.home is None else [route.home.lat, route.home.lon],
             "on_autopilot": route_not_on_autopilot(route.waypoints, self._bb.get("/vehicle/mission_items")) is None,

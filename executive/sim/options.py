@@ -14,6 +14,17 @@ def simulated_home(mission: Mission) -> Home:
     return (start.lat, start.lon, getattr(start, "heading_deg", 0.0)) if start else DEFAULT_HOME
 
 
+def where_it_starts(mission: Mission) -> str:
+    """Where the simulated vehicle starts, for a person, when the mission has no ``home:`` (empty when it has one)."""
+    if mission.home is not None or not mission.waypoints:
+        return ""
+    first = mission.waypoints[0]
+    return (
+        f"; the mission has no home: so it starts at waypoint 1 ({first.lat:.7f}, {first.lon:.7f}): the distance to the first "
+        "waypoint and the reach of the others are not tried here as a real start would try them (set home: where the vehicle will be)"
+    )
+
+
 def firmware_options(mission: Mission) -> dict[str, Any]:
     """The simulated firmware's options a mission sets: ``q_guided_mode`` (ArduPlane), the seabed and rangefinder (ArduSub), parameters."""
     options = mission.simulator or SimulatorOptions()

@@ -8,7 +8,8 @@ from types import TracebackType
 from typing import TYPE_CHECKING
 
 from executive.clock import Clock, ScaledClock
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, mavutil
+from executive.mavlink_dialect import AUTOPILOT_COMPONENT
+from executive.sim.clients import Clients
 from executive.sim.firmware import DEFAULT_HOME, FirmwareSim, Home
 from executive.sim.registry import make_autopilot
 
@@ -26,7 +27,7 @@ class SimServer:
 
     Port 0 lets the OS choose: :attr:`port` and :attr:`url_for_client` tell where it landed. As on
     a real vehicle behind a ``udpin`` endpoint, nothing is sent until a peer has sent something.
-    pymavlink's ``tcpin`` serves one client at a time. The autopilot runs in ``clock`` time; the
+    Several clients are served at once (:class:`~executive.sim.clients.Clients`). The autopilot runs in ``clock`` time; the
     loop sleeps ``period_s`` of wall time between iterations whatever the speed-up. Hold
     :attr:`lock` to touch :attr:`autopilot` from another thread. ``faults`` (on the same clock)
     are injected from the moment the server is created, the simulated vehicle's boot. Other
@@ -68,29 +69,21 @@ class SimServer:
         self.url = url
         self.period_s = period_s
         self.lock = threading.Lock()
-        self._conn = mavutil.mavlink_connection(url, source_system=system_id, source_component=AUTOPILOT_COMPONENT, dialect="ardupilotmega")
-        if signing_key is not None:  # like ArduPilot with a key set: sign everything, refuse unsigned packets
-            self._conn.setup_signing(signing_key, sign_outgoing=True, allow_unsigned_callback=lambda _mav, _msg_id: False)
+        self._conn = Clients(url, system_id, AUTOPILOT_COMPONENT, signing_key)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
     @property
-    def _socket_name(self) -> tuple[str, int]:
-        sock = self._conn.listen if isinstance(self._conn, mavutil.mavtcpin) else self._conn.port
-        host, port = sock.getsockname()[:2]
-        return host, port
-
-    @property
     def port(self) -> int:
         """The local port the link listens on."""
-        return self._socket_name[1]
+        return self._conn.address[1]
 
     @property
     def url_for_client(self) -> str:
         """What a client (the executive, a ground station) connects to: ``udpout:`` or ``tcp:``."""
-        host, port = self._socket_name
+        host, port = self._conn.address
         host = "127.0.0.1" if host in ("0.0.0.0", "") else host
-        scheme = "tcp" if isinstance(self._conn, mavutil.mavtcpin) else "udpout"
+        scheme = "tcp" if self._conn.tcp else "udpout"
         return f"{scheme}:{host}:{port}"
 
     def start(self) -> SimServer:

@@ -110,6 +110,10 @@ class LockstepClock(ManualClock):
             raise VehicleTimeLimit(f"still running at {self.now():.1f} s of vehicle time (the limit)")
 
 
+#: QGroundControl's MAVLink system and component ids.
+GROUND_STATION = (255, 190)
+
+
 class Wire:
     """One way of a MAVLink link in memory: each message gets its header (system, component, sequence) as when sent.
 
@@ -212,6 +216,10 @@ class Lockstep:
             self.faults.attach(self.autopilot)
         self.uplink = Wire(1, EXECUTIVE_COMPONENT, as_bytes=as_bytes)
         self.downlink = Wire(self.autopilot.system_id, AUTOPILOT_COMPONENT, as_bytes=as_bytes)
+        #: A second MAVLink client on the autopilot, as a ground station (QGroundControl: system 255, component 190).
+        self.ground_station = Wire(GROUND_STATION[0], GROUND_STATION[1], as_bytes=as_bytes)
+        #: What the autopilot answered the ground station (its COMMAND_ACKs), oldest first.
+        self.ground_station_heard: list[MAVLinkMessage] = []
         self.link = MemoryLink()
         self.base: SimulatedBase | None = None
         self.can_bus: can.BusABC | None = None
@@ -296,7 +304,7 @@ class Lockstep:
             self.base.service()
         if faults is not None:
             out = faults.transform(out)
-        self.link.incoming.extend(self.downlink.carry(out))
+        self.link.incoming.extend(self.downlink.carry(self._answer_ground_station(out)))
         while self._scheduled and self._scheduled[0][0] <= t + 1e-9:
             _, action = self._scheduled.pop(0)
             action(self)
@@ -304,6 +312,23 @@ class Lockstep:
             observer(self)
         if self._stop_when is not None and self._stop_when():
             raise _Stopped
+
+    def send_from_ground_station(self, msg: MAVLinkMessage) -> None:
+        """A ground station's message reaches the autopilot now, on a link of its own.
+
+        The firmware answers a command on the channel it came on (ArduPilot's GCS_MAVLINK::handle_command_*; PX4's
+        acks go to a component its link has heard, mavlink_main.cpp handleAndGetCurrentCommandAck): its COMMAND_ACK
+        goes to the ground station (:attr:`ground_station_heard`), what else it sends reaches the executive as usual.
+        """
+        replies = [r for m in self.ground_station.carry([msg]) for r in self.autopilot.handle(m)]
+        self.link.incoming.extend(self.downlink.carry(self._answer_ground_station(replies)))
+
+    def _answer_ground_station(self, messages: list[MAVLinkMessage]) -> list[MAVLinkMessage]:
+        """The autopilot's COMMAND_ACKs to the ground station kept for it (:attr:`ground_station_heard`); the rest, for the executive."""
+        ours = [m for m in messages if not (m.get_type() == "COMMAND_ACK" and m.target_system == GROUND_STATION[0])]
+        if len(ours) < len(messages):
+            self.ground_station_heard += [m for m in messages if m not in ours]
+        return ours
 
     def step(self, dt: float) -> None:
         """Move the world ``dt`` seconds without ticking the runtime (before it connects, between runs)."""

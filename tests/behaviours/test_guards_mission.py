@@ -108,13 +108,13 @@ CASES = [
         lambda: AllWaypointsWithin([waypoint(500), waypoint(1200), waypoint(-1500)], 1000.0),
         {"vehicle__position": position()},
         Status.FAILURE,
-        "waypoint 1 is 1200 m away, over 1000 m",
+        "waypoint 2 is 1200 m away, over 1000 m",
     ),
     (
         lambda: AllWaypointsWithin([waypoint(0), waypoint(0, 1001, "far")], 1000.0),
         {"vehicle__position": position()},
         Status.FAILURE,
-        "waypoint 1 (far) is 1001 m away, over 1000 m",
+        "waypoint 2 'far' is 1001 m away, over 1000 m",
     ),
     (lambda: AllWaypointsWithin([], 1000.0), {"vehicle__position": position()}, Status.SUCCESS, "ok"),
     (lambda: SpeedWithin(SPEED), {}, Status.FAILURE, "speed not reported yet (no GLOBAL_POSITION_INT, no VFR_HUD)"),  # unknown: not healthy
@@ -304,7 +304,7 @@ def test_all_waypoints_within_measures_a_long_route_once_while_the_vehicle_stays
     assert len(calls) == 1003  # one distance a tick: how far the vehicle went from where it was measured
     facts(vehicle__position=position(-1100))
     assert h.tick() == Status.FAILURE
-    assert h.root.feedback_message == "waypoint 0 is 1100 m away, over 1000 m"
+    assert h.root.feedback_message == "waypoint 1 is 1100 m away, over 1000 m"
     assert len(calls) == 1005  # moved too far to trust the verdict: measured again, up to the first offender
 
 

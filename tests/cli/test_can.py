@@ -55,16 +55,44 @@ def test_decode_a_missing_file_or_an_unknown_format(tmp_path: Path, capsys: pyte
     odd = tmp_path / "capture.foo"
     odd.write_text("x")
     assert main(["can", "decode", str(odd)]) == 2
-    assert 'unknown log format ".foo"' in capsys.readouterr().err
+    assert capsys.readouterr().err == (
+        f"executive: can: {odd}: not a CAN log python-can reads by its name or first bytes: give --format asc|blf|candump|csv|trc\n"
+    )
 
 
 def test_decode_a_damaged_log_names_the_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     damaged = tmp_path / "damaged.log"
     damaged.write_text("(1.000000) can0 241#A60000B00000007E\n\ncan0 241 [8] A6 00 00 B0 00 00 00 7F\n", encoding="utf-8")  # candump without -L
-    assert main(["can", "decode", str(damaged)]) == 2
+    assert main(["can", "decode", str(damaged)]) == 1
     out, err = capsys.readouterr()
     assert out.splitlines()[0].endswith("counter=126")
-    assert err.startswith(f"executive: can: {damaged}:3: not a CAN log line python-can can read: ")
+    assert err.startswith(f"executive: can: {damaged}: 1 line not understood: 3 (line 3: ")
+
+
+def test_bad_lines_of_a_candump_log_are_skipped_and_counted_the_frames_after_them_decoded_exit_1(tmp_path: Path, capsys) -> None:
+    """Issue 43: one garbage line ended the decode (exit 2, python-can's `could not convert string to float`), the frames after it lost."""
+    lines = LOG.read_text(encoding="utf-8").splitlines()
+    for number in (6, 19, 40):  # 1-based lines of the file
+        lines[number - 1] = "garbage (the logger was restarted mid-line)"
+    damaged = tmp_path / "damaged.log"
+    damaged.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    assert main(["can", "decode", str(damaged)]) == 1
+    out, err = capsys.readouterr()
+    assert out.splitlines()[-2].startswith("summary: 227 frames")  # 230 less the 3 lines
+    assert err.startswith(f"executive: can: {damaged}: 3 lines not understood: 6, 19, 40 (line 6: ")
+    assert main(["can", "decode", "--json", str(damaged)]) == 1
+    assert json.loads(capsys.readouterr().out.splitlines()[-1])["summary"]["not_understood"] == [6, 19, 40]
+
+
+def test_a_candump_log_is_read_whatever_its_name(tmp_path: Path, capsys) -> None:
+    renamed = tmp_path / "bus-capture.txt"
+    renamed.write_bytes(LOG.read_bytes())
+    assert main(["can", "decode", str(renamed)]) == 0  # sniffed: a candump -L line starts with its (timestamp)
+    assert capsys.readouterr().out.splitlines()[-2].startswith("summary: 230 frames")
+    odd = tmp_path / "capture.foo"
+    odd.write_bytes(b"  \n" + LOG.read_bytes())
+    assert main(["can", "decode", "--format", "candump", str(odd)]) == 0
+    assert capsys.readouterr().out.splitlines()[-2].startswith("summary: 230 frames")
 
 
 def test_monitor_a_bad_spec_or_a_bus_that_will_not_open(capsys: pytest.CaptureFixture[str]) -> None:
@@ -105,7 +133,10 @@ def test_monitor_a_live_virtual_bus(base_sending: tuple[str, threading.Event], c
     started = time.monotonic()
     assert main(["can", "monitor", f"virtual:{channel}", "--duration", "0.5"]) == 0
     assert 0.5 <= time.monotonic() - started < 3.0
-    lines = capsys.readouterr().out.splitlines()
+    out, err = capsys.readouterr()
+    lines = out.splitlines()
+    # issue 43: beside another process it printed `0 frames` with no word of why
+    assert f"executive: can: virtual:{channel}: python-can's virtual bus lives inside one process" in err
     rc_lines = [line for line in lines if " 241 [8] " in line]
     assert len(rc_lines) >= 5
     assert rc_lines[0].endswith("RC SWA=UP SWB=UP SWC=MIDDLE SWD=DOWN right=(0,0) left=(0,0) VRA=0 counter=66")

@@ -101,7 +101,7 @@ def test_each_route_command_sends_its_request(server, capsys, argv: list[str], s
     assert main(["ctl", "--socket", str(sock), "route", *argv]) == 0
     assert seen == [{"op": "route", **sent}]
     out = capsys.readouterr().out
-    assert out.startswith("RUNNING: done\n1 waypoints; on the autopilot: no\n>   1  1.0000000, 2.0000000")
+    assert out.startswith("RUNNING: done\n1 waypoint; on the autopilot: no\n>   1  1.0000000, 2.0000000")
 
 
 def test_options_may_follow_the_request(server, capsys) -> None:
@@ -215,3 +215,33 @@ def test_route_edits_while_driving_reach_the_status_the_autopilot_and_the_vehicl
     # before it on the way; heading for the old one it would have ended ~8 m short of the new), the last one ends in a stop
     assert geo.distance(*ended[2], *new_wp2) < 4.3
     assert geo.distance(*ended[3], *wp3) < 2.0
+
+
+def test_route_show_names_each_waypoint_it_has_a_name_for() -> None:
+    """Issue 43: `ctl route show` gave numbers and coordinates only; status and report say `waypoint 7 'far'`."""
+    from executive.cli.ctl import route_lines
+
+    route = {"waypoints": [[1.0, 2.0, 0.0], [1.5, 2.0, 0.0]], "names": ["gate", None], "current": 2, "home": None, "on_autopilot": True}
+    assert route_lines(route).splitlines() == [
+        "2 waypoints; on the autopilot: yes",
+        "    1  1.0000000, 2.0000000  'gate'",
+        ">   2  1.5000000, 2.0000000",
+    ]
+
+
+def test_tree_watch_ends_on_the_runs_last_tick(tmp_path) -> None:
+    """Issue 43: `ctl tree --watch` went on past the end (or ended on a frame of a tick still running): it ends on the last one."""
+    import contextlib
+    import io
+
+    final = {"ok": True, "state": "COMPLETED", "reason": "every waypoint reached", "tree": {"live": False}, "status": {}}
+    out, codes = io.StringIO(), []
+    with serving(tmp_path / "ctl.sock", final) as seen, contextlib.redirect_stdout(out):
+        watch = threading.Thread(
+            target=lambda: codes.append(main(["ctl", "--socket", str(tmp_path / "ctl.sock"), "--json", "tree", "--watch", "--interval", "0.05"]))
+        )
+        watch.start()
+        watch.join(10)  # bounds the old behaviour: it polled until Ctrl-C
+        assert not watch.is_alive(), "the watch did not end on the run's last tick"
+    assert codes == [0] and len(seen) == 1
+    assert json.loads(out.getvalue())["tree"]["live"] is False

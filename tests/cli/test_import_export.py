@@ -114,3 +114,25 @@ def test_export_needs_a_format_and_a_valid_mission(tmp_path, capsys, minimal_mis
     bad.write_text("version: 1\nname: x\nvehicle: rover\nwaypoints:\n  - {lat: 95.0, lon: 8.5}\n")
     assert main(["export", str(bad), "--format", "plan"]) == 2
     assert f"{bad}:5:11: waypoints[0].lat:" in capsys.readouterr().err
+
+
+def test_an_import_without_auto_arm_says_the_mission_will_wait_for_arming_on_stderr_and_in_its_header(tmp_path, capsys):
+    mission = tmp_path / "cmac.yaml"
+    assert main(["import", str(CMAC), "--vehicle", "rover", "-o", str(mission)]) == 0
+    note = f"{CMAC}: The mission waits for a person to arm the vehicle (`executive ctl arm`, a ground station); import with --auto-arm"
+    assert note in capsys.readouterr().err
+    header = [line for line in mission.read_text().splitlines() if line.startswith("#")]
+    assert any("waits for a person to arm the vehicle" in line for line in header), header
+    assert main(["import", str(CMAC), "--vehicle", "rover", "-o", str(mission), "--auto-arm"]) == 0
+    assert "arm the vehicle" not in capsys.readouterr().err and "arm the vehicle" not in mission.read_text()
+
+
+def test_a_file_of_another_kind_is_named_for_what_import_takes(tmp_path, capsys):
+    """Issue 43: `executive import lake.yaml` said `(json): Expecting value`."""
+    lake = tmp_path / "lake.yaml"
+    lake.write_text("version: 1\nname: lake\nvehicle: boat\nwaypoints: []\n")
+    assert main(["import", str(lake)]) == 2
+    assert capsys.readouterr().err == (
+        f"{lake}:1:1: (file): not a file import reads: it takes a QGroundControl .plan (JSON), a Mission Planner .waypoints "
+        "(QGC WPL 110; .txt, .mission) or a BehaviorTree.CPP / Groot2 tree (.xml)\n"
+    )

@@ -127,6 +127,8 @@ def test_a_crash_at_any_moment_then_resume_records_every_sample_once(tmp_path, c
 
     resumed = report(db, 2, capsys)
     assert (resumed["resumed_from"], resumed["outcome"]) == (1, "COMPLETED")
+    first = resumed["transitions"][0]  # issue 43: it said "started from the first waypoint"
+    assert (first["after"], first["reason"]) == ("RUNNING", f"resumed at waypoint {resume.leg_index + 1} of 4 (run 1 was unfinished)")
     waypoints = [s["waypoint"] for s in crashed["samples"]] + [s["waypoint"] for s in resumed["samples"]]
     assert sorted(waypoints) == [2, 4]  # each sample point exactly once, across the crash
     assert all(len(s["reads"]) == 40 for s in crashed["samples"] + resumed["samples"])  # 10 s x 1 Hz x 4 sensors

@@ -63,7 +63,9 @@ REFUSED = [
     pytest.param(SQUARE, ["--obstacles", "tcp:x"], ["--run-options=--obstacles tcp:x"], "--obstacles: ", id="obstacles"),
     pytest.param(SQUARE, ["--web-token-file", "t"], ["--run-options=--web-token-file t"], "--web-token-file needs --web [HOST:]PORT", id="web-token"),
     pytest.param(SQUARE, ["--web", "80x"], ["--run-options=--web 80x"], "--web: '80x': the port '80x' is not a number", id="web"),
-    pytest.param(SQUARE, ["--rate", "0"], ["--run-options=--rate 0"], "--rate and --speedup must be > 0", id="rate"),
+    pytest.param(SQUARE, ["--rate", "0"], ["--run-options=--rate 0"], "--rate 0: must be a number > 0", id="rate"),
+    pytest.param(SQUARE, ["--speedup", "nan"], ["--run-options=--speedup nan"], "--speedup nan: must be a number > 0", id="speedup-nan"),
+    pytest.param(SQUARE, ["--speedup", "-1"], ["--run-options=--speedup -1"], "--speedup -1: must be a number > 0", id="speedup-negative"),
 ]
 
 
@@ -74,7 +76,7 @@ def test_run_refuses_before_anything_is_opened(capsys, mission, run_options, ser
     assert main(["run", mission, *run_options, *wait, "--socket", "none"]) == 2
     err = capsys.readouterr().err
     assert why in err
-    assert "executive: simulated" not in err and "autopilot found" not in err  # nothing started, nothing heard
+    assert "executive: run: simulated" not in err and "autopilot found" not in err  # nothing started, nothing heard
 
 
 @pytest.mark.parametrize(("mission", "run_options", "service_options", "why"), REFUSED)
@@ -118,3 +120,17 @@ def test_ctl_upload_refuses_what_run_would_refuse(running, upload, autopilot, si
         assert runtime.mission_state.mission is not None and runtime.mission_state.mission.name == load_mission(running).name  # unchanged
     finally:
         runtime.close()
+
+
+def test_rc_from_can_without_a_can_bus_is_refused_at_start_with_the_hint(capsys, tmp_path):
+    """Issue 43: it ran, waited 60 s and ended `RC fresh? no RC report yet`."""
+    import yaml
+
+    mission = yaml.safe_load(Path(SQUARE).read_text(encoding="utf-8"))
+    mission["rc"] = {**mission.get("rc", {}), "source": "can"}
+    path = tmp_path / "can_rc.yaml"
+    path.write_text(yaml.safe_dump(mission), encoding="utf-8")
+    assert main(["run", str(path), "--socket", "none"]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: rc.source: can reads the transmitter from the AgileX base's CAN bus (frame 0x241): give --can IFACE:CHANNEL" in err
+    assert "executive: run: simulated" not in err  # nothing started

@@ -20,21 +20,21 @@ NO_HOME = "no home: checked only at start, against the vehicle's position: every
 def test_a_good_mission(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["validate", str(minimal_mission)]) == 0
     out, err = capsys.readouterr()
-    assert (out, err) == (f"{minimal_mission}: ok (1 waypoints, vehicle rover, tree waypoints)\n", f"{minimal_mission}: warning: {NO_HOME}\n")
+    assert (out, err) == (f"{minimal_mission}: ok (1 waypoint, vehicle rover, tree waypoints)\n", f"{minimal_mission}: warning: {NO_HOME}\n")
 
 
 def test_a_mission_with_home_is_ok_without_a_warning(minimal_mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     homed = tmp_path / "homed.yaml"
     homed.write_text(minimal_mission.read_text().replace("waypoints:", "home: {lat: 47.3977, lon: 8.5455}\nwaypoints:"), encoding="utf-8")
     assert main(["validate", str(homed)]) == 0
-    assert capsys.readouterr() == (f"{homed}: ok (1 waypoints, vehicle rover, tree waypoints)\n", "")
+    assert capsys.readouterr() == (f"{homed}: ok (1 waypoint, vehicle rover, tree waypoints)\n", "")
 
 
 def test_a_bad_mission(capsys: pytest.CaptureFixture[str]) -> None:
     path = BROKEN / "duplicate_key.yaml"
     assert main(["validate", str(path)]) == 2
     out, err = capsys.readouterr()
-    assert (out, err) == ("", f"{path}:9:5: waypoints[1].lat: duplicate key (an earlier one is ignored)\n")
+    assert (out, err) == ("", f"{path}:9:5: waypoints[1].lat: duplicate key (an earlier one is ignored) (waypoint 2)\n")
 
 
 def test_every_error_of_every_file_and_ok_for_the_good_ones(minimal_mission: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -42,10 +42,10 @@ def test_every_error_of_every_file_and_ok_for_the_good_ones(minimal_mission: Pat
     bad.write_text(minimal_mission.read_text().replace("lat: 47.397742", "lat: 95.0").replace("rover", "car"), encoding="utf-8")
     assert main(["validate", str(bad), str(minimal_mission), str(tmp_path / "missing.yaml")]) == 2
     out, err = capsys.readouterr()
-    assert out == f"{minimal_mission}: ok (1 waypoints, vehicle rover, tree waypoints)\n"
+    assert out == f"{minimal_mission}: ok (1 waypoint, vehicle rover, tree waypoints)\n"
     assert err.splitlines() == [
         f"{bad}:3:10: vehicle: 'car': Input should be 'rover', 'boat', 'sub' or 'vtol'",
-        f"{bad}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90",
+        f"{bad}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90 (waypoint 1)",
         f"{minimal_mission}: warning: {NO_HOME}",
         f"{tmp_path / 'missing.yaml'}:1:1: (file): No such file or directory",
     ]
@@ -73,7 +73,13 @@ def test_json_lists_a_result_per_file(minimal_mission: Path, capsys: pytest.Capt
             "file": str(bad),
             "ok": False,
             "errors": [
-                {"file": str(bad), "line": 7, "column": 11, "field": "waypoints[0].lat", "message": "95.0: Input should be less than or equal to 90"}
+                {
+                    "file": str(bad),
+                    "line": 7,
+                    "column": 11,
+                    "field": "waypoints[0].lat",
+                    "message": "95.0: Input should be less than or equal to 90 (waypoint 1)",
+                }
             ],
         },
     ]
@@ -107,8 +113,10 @@ def test_a_waypoint_out_of_reach_of_home_is_refused_with_its_distance(tmp_path: 
     assert main(["validate", str(far), str(sub), str(near)]) == 2
     out, err = capsys.readouterr()
     assert err.splitlines() == [
-        f"{far}:8:5: waypoints[1]: 10014 m from home, over limits.max_goal_distance_m (5000 m): refused at start with the vehicle at home",
-        f"{sub}:7:5: waypoints[0]: 1500 m from home, over limits.max_goal_distance_m (1000 m): refused at start with the vehicle at home",
+        f"{far}:8:5: waypoints[1]: 10014 m from home, over limits.max_goal_distance_m (5000 m): refused at start with the vehicle at home"
+        " (waypoint 2, 'town')",
+        f"{sub}:7:5: waypoints[0]: 1500 m from home, over limits.max_goal_distance_m (1000 m): refused at start with the vehicle at home"
+        " (waypoint 1)",
         f"{near}: warning: {NO_HOME}",
     ]
     assert out == f"{near}: ok (2 waypoints, vehicle rover, tree waypoints)\n"
@@ -126,4 +134,10 @@ def test_a_leg_across_a_keep_out_zone_is_refused_exit_2_named_and_located(tmp_pa
     assert main(["validate", str(lake)]) == 2
     out, err = capsys.readouterr()
     assert out == ""
-    assert err == f"{lake}:10:5: waypoints[1]: waypoints[0] -> waypoints[1] ('line-2-start' -> 'line-2-end'): crosses keep-out zone 'pier' for 16 m\n"
+    leg = "waypoints[0] -> waypoints[1] ('line-2-start' -> 'line-2-end')"
+    assert err == f"{lake}:10:5: waypoints[1]: {leg}: crosses keep-out zone 'pier' for 16 m (waypoint 2, 'line-2-end')\n"
+
+
+def test_one_waypoint_is_said_in_the_singular(minimal_mission: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["validate", str(minimal_mission)]) == 0
+    assert capsys.readouterr().out == f"{minimal_mission}: ok (1 waypoint, vehicle rover, tree waypoints)\n"

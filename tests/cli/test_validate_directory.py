@@ -31,7 +31,7 @@ def test_every_yaml_file_of_a_directory_in_name_order_and_nothing_else(mission_l
     assert main(["validate", str(mission_list)]) == 0
     out, err = capsys.readouterr()
     assert [line for line in err.splitlines() if ": warning: no home:" not in line] == []  # issue 40: the homeless are told so
-    assert out.splitlines() == [f"{mission_list / name}: ok (1 waypoints, vehicle rover, tree waypoints)" for name in ("a.yaml", "b.yaml")]
+    assert out.splitlines() == [f"{mission_list / name}: ok (1 waypoint, vehicle rover, tree waypoints)" for name in ("a.yaml", "b.yaml")]
 
 
 def test_a_bad_file_of_the_directory_is_reported_with_its_location_and_exits_2(mission_list: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -39,7 +39,7 @@ def test_a_bad_file_of_the_directory_is_reported_with_its_location_and_exits_2(m
     out, err = capsys.readouterr()
     assert len(out.splitlines()) == 2  # a.yaml and b.yaml are still checked and reported
     errors = [line for line in err.splitlines() if ": warning: no home:" not in line]  # issue 40: the homeless are told so
-    assert errors == [f"{mission_list / 'c.yaml'}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90"]
+    assert errors == [f"{mission_list / 'c.yaml'}:6:11: waypoints[0].lat: 95.0: Input should be less than or equal to 90 (waypoint 1)"]
 
 
 def test_a_directory_without_mission_files_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -25,9 +25,9 @@ OUTSIDE = "above home is outside limits.alt_m [10, 120]"
     [
         ("waypoints:\n  - {lat: 1.0, lon: 2.0, alt_m: 40}\n", []),
         ("waypoints:\n  - {lat: 1.0, lon: 2.0}\n", []),  # alt_m 0: flown at the height the aircraft is at
-        ("waypoints:\n  - {lat: 1.0, lon: 2.0, alt_m: -50}\n", [f"m.yaml:7:33: waypoints[0].alt_m: -50 m {OUTSIDE}"]),
-        ("waypoints:\n  - {lat: 1.0, lon: 2.0, alt_m: 9000}\n", [f"m.yaml:7:33: waypoints[0].alt_m: 9000 m {OUTSIDE}"]),
-        ("waypoints:\n  - {lat: 1.0, lon: 2.0, alt_m: 9.5}\n", [f"m.yaml:7:33: waypoints[0].alt_m: 9.5 m {OUTSIDE}"]),
+        ("waypoints:\n  - {lat: 1.0, lon: 2.0, alt_m: -50}\n", [f"m.yaml:7:33: waypoints[0].alt_m: -50 m {OUTSIDE} (waypoint 1)"]),
+        ("waypoints:\n  - {lat: 1.0, lon: 2.0, alt_m: 9000}\n", [f"m.yaml:7:33: waypoints[0].alt_m: 9000 m {OUTSIDE} (waypoint 1)"]),
+        ("waypoints:\n  - {lat: 1.0, lon: 2.0, alt_m: 9.5}\n", [f"m.yaml:7:33: waypoints[0].alt_m: 9.5 m {OUTSIDE} (waypoint 1)"]),
         ("vtol: {takeoff_alt_m: 150}\nwaypoints:\n  - {lat: 1.0, lon: 2.0}\n", [f"m.yaml:6:23: vtol.takeoff_alt_m: 150 m {OUTSIDE}"]),
         (
             "vtol: {hover_enu: {east_m: 3, north_m: 4, up_m: 6}}\nwaypoints:\n  - {lat: 1.0, lon: 2.0}\n",
@@ -57,20 +57,20 @@ SUB = "version: 1\nname: m\nvehicle: sub\ntree: auv_survey\nlimits: {water_depth
             "{lat: 1.0, lon: 2.0, control_mode: depth, depth_m: 80}",
             [
                 "m.yaml:7:56: waypoints[0].depth_m: 80 m is deeper than the water holds: limits.water_depth_m 50 m less "
-                "limits.altitude_m.min 2 m above the seabed: at most 48 m"
+                "limits.altitude_m.min 2 m above the seabed: at most 48 m (waypoint 1)"
             ],
         ),
         (
             "{lat: 1.0, lon: 2.0, depth_m: 49}",
             [
                 "m.yaml:7:35: waypoints[0].depth_m: 49 m is deeper than the water holds: "
-                "limits.water_depth_m 50 m less limits.altitude_m.min 2 m above the seabed: at most 48 m"
+                "limits.water_depth_m 50 m less limits.altitude_m.min 2 m above the seabed: at most 48 m (waypoint 1)"
             ],
         ),
         ("{lat: 1.0, lon: 2.0, control_mode: altitude, altitude_m: 40}", []),
         (
             "{lat: 1.0, lon: 2.0, control_mode: altitude, altitude_m: 60}",
-            ["m.yaml:7:62: waypoints[0].altitude_m: 60 m above the seabed is above the surface: limits.water_depth_m is 50 m"],
+            ["m.yaml:7:62: waypoints[0].altitude_m: 60 m above the seabed is above the surface: limits.water_depth_m is 50 m (waypoint 1)"],
         ),
     ],
     ids=["48-m", "80-m", "49-m-no-control-mode", "40-m-above", "60-m-above"],

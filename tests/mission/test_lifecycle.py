@@ -129,3 +129,14 @@ def test_progress_is_published(state_in, square_mission):
     assert (bb("/mission/target"), bb("/mission/next_target")) == (square_mission.waypoints[3], None)  # the last leg stops
     state.advance_leg()
     assert (bb("/mission/target"), bb("/mission/next_target")) == (None, None)
+
+
+def test_past_the_last_waypoint_the_leg_a_person_reads_is_the_last_as_the_status_says(state_in, square_mission):
+    """Issue 43: a 2-leg VTOL mission paused while landing said `paused at leg 3` beside the status's `leg 2/2`."""
+    state = state_in(S.RUNNING)
+    for _ in square_mission.waypoints:
+        state.advance_leg()  # every waypoint reached: a VTOL lands now, still RUNNING
+    assert (state.leg_index, state.leg_number) == (4, 4)
+    state.pause()
+    state.resume()
+    assert state.reason == "resumed at leg 4"

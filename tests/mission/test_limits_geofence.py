@@ -49,7 +49,7 @@ def test_a_sub_takes_the_auv_seeds_limits_by_default() -> None:
     rover = load(HEAD + WP).limits
     assert (rover.speed_m_s.max, rover.max_goal_distance_m) == (5.0, 5000.0)
     fast = HEAD.replace("vehicle: rover", "vehicle: sub") + "waypoints:\n  - {lat: 47.3978, lon: 8.5456, speed_m_s: 1.5}\n"
-    assert errors_of(fast) == ["m.yaml:6:44: waypoints[0].speed_m_s: 1.5 m/s is outside limits.speed_m_s [0.1, 1.0]"]
+    assert errors_of(fast) == ["m.yaml:6:44: waypoints[0].speed_m_s: 1.5 m/s is outside limits.speed_m_s [0.1, 1.0] (waypoint 1)"]
     own = load(HEAD.replace("vehicle: rover", "vehicle: sub") + "limits: {speed_m_s: {min: 0.2, max: 1.5}}\n" + WP).limits
     assert (own.speed_m_s.max, own.max_goal_distance_m) == (1.5, 1000.0)  # a field the file sets wins; the others keep the sub's
 
@@ -152,19 +152,19 @@ def test_geofence_is_validated(body: str, expected: list[str]) -> None:
             f"{{polygon: {SQUARE}}}",
             [(50, 50), (50, 150), (-130, 0)],
             [
-                "m.yaml:8:5: waypoints[1]: outside the geofence: 50 m outside the fence polygon",
-                "m.yaml:9:5: waypoints[2]: outside the geofence: 30 m outside the fence polygon",
+                "m.yaml:8:5: waypoints[1]: outside the geofence: 50 m outside the fence polygon (waypoint 2)",
+                "m.yaml:9:5: waypoints[2]: outside the geofence: 30 m outside the fence polygon (waypoint 3)",
             ],
         ),
         (
             "{max_distance_from_home_m: 100}",
             [(50, 50), (0, 101)],
-            ["m.yaml:8:5: waypoints[1]: outside the geofence: 101 m from home, over the fence's 100 m"],
+            ["m.yaml:8:5: waypoints[1]: outside the geofence: 101 m from home, over the fence's 100 m (waypoint 2)"],
         ),
         (
             f"{{polygon: {SQUARE}, max_distance_from_home_m: 100}}",
             [(90, 90)],
-            ["m.yaml:7:5: waypoints[0]: outside the geofence: 127 m from home, over the fence's 100 m"],
+            ["m.yaml:7:5: waypoints[0]: outside the geofence: 127 m from home, over the fence's 100 m (waypoint 1)"],
         ),
     ],
 )

@@ -55,10 +55,10 @@ def test_broken_mission_reports_first_error_where_its_comment_says(path: Path) -
 def test_every_error_is_reported_in_file_order(minimal_yaml: str) -> None:
     text = minimal_yaml + "  - lat: 95.0\n    lon: yes\n    latt: 1\nrc: {takeover_channel: 6.0}\n"
     assert errors_of(text) == [
-        "m.yaml:7:10: waypoints[1].lat: 95.0: Input should be less than or equal to 90",
-        "m.yaml:8:10: waypoints[1].lon: expected a number, got bool true (YAML 1.1 reads yes as a boolean)",
+        "m.yaml:7:10: waypoints[1].lat: 95.0: Input should be less than or equal to 90 (waypoint 2)",
+        "m.yaml:8:10: waypoints[1].lon: expected a number, got bool true (YAML 1.1 reads yes as a boolean) (waypoint 2)",
         "m.yaml:9:5: waypoints[1].latt: unknown field (did you mean lat? "
-        "allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode, sample)",
+        "allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode, sample) (waypoint 2)",
         "m.yaml:10:24: rc.takeover_channel: expected an integer, got number 6.0",
     ]
 
@@ -109,11 +109,11 @@ def test_each_duplicate_is_located_at_its_own_key(minimal_yaml: str) -> None:
 def test_waypoint_messages_say_what_is_wrong(minimal_yaml: str, waypoint: str, field: str, message: str) -> None:
     with pytest.raises(MissionError) as info:
         load_mission_text(minimal_yaml.replace(WAYPOINT, waypoint), "m.yaml")
-    assert [(e.line, e.field, e.message) for e in info.value.errors] == [(6, f"waypoints[0].{field}", message)]
+    assert [(e.line, e.field, e.message) for e in info.value.errors] == [(6, f"waypoints[0].{field}", f"{message} (waypoint 1)")]
 
 
 def test_a_waypoint_that_is_not_a_mapping(minimal_yaml: str) -> None:
-    assert errors_of(minimal_yaml.replace(WAYPOINT, "[47.3, 8.5]")) == ["m.yaml:6:5: waypoints[0]: expected a mapping, got a list"]
+    assert errors_of(minimal_yaml.replace(WAYPOINT, "[47.3, 8.5]")) == ["m.yaml:6:5: waypoints[0]: expected a mapping, got a list (waypoint 1)"]
 
 
 def test_model_validator_message_has_no_pydantic_prefix(minimal_yaml: str) -> None:
@@ -125,7 +125,7 @@ def test_model_validator_message_has_no_pydantic_prefix(minimal_yaml: str) -> No
 def test_values_merged_with_an_anchor_are_located_at_the_anchor(minimal_yaml: str) -> None:
     text = minimal_yaml + "  - &base {lat: 47.4, lon: 8.55, speed_m_s: 9.0}\n  - <<: *base\n    speed_m_s: 1.0\n  - <<: *base\n  - *base\n"
     outside = "9.0 m/s is outside limits.speed_m_s [0.1, 5.0]"
-    assert errors_of(text) == [f"m.yaml:7:45: waypoints[{i}].speed_m_s: {outside}" for i in (1, 3, 4)]
+    assert errors_of(text) == [f"m.yaml:7:45: waypoints[{i}].speed_m_s: {outside} (waypoint {i + 1})" for i in (1, 3, 4)]
 
 
 def test_anchors_and_merges_within_the_limits_load(minimal_yaml: str) -> None:
@@ -146,7 +146,7 @@ def test_a_null_key_beside_a_refused_value_is_reported_with_it() -> None:
     # the rules between fields ran without both values and asked whether their message named the null key's path
     text = "version: 1\nname: square\nvehicle: rover\ntree: waypoints\nwaypoints: [.nan]\nnull: .nan\n"
     assert errors_of(text) == [
-        "m.yaml:5:13: waypoints[0]: expected a mapping, got number nan",
+        "m.yaml:5:13: waypoints[0]: expected a mapping, got number nan (waypoint 1)",
         "m.yaml:6:1: null: expected a string key, got null",
     ]
 
@@ -263,12 +263,13 @@ def test_every_error_comes_in_one_pass_cross_field_ones_included() -> None:
         "rally_points, limits, rc, failsafe, sampling, vtol, rc_route, simulator, waypoints)",
         "m.yaml:6:30: limits.speed_m_s.max: expected a number, got string 'fast'",
         "m.yaml:7:19: limits.link_timeout_s: -1: Input should be greater than 0",
-        "m.yaml:9:38: waypoints[0].depth_m: 150.0 m is outside limits.depth_m [0.0, 100.0]",
-        "m.yaml:10:11: waypoints[1].lat: 444.0: Input should be less than or equal to 90",
-        "m.yaml:11:65: waypoints[2].altitude_m: 1.0 m is outside limits.altitude_m [2.0, 100.0]",
-        "m.yaml:11:68: waypoints[2].colour: unknown field (allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode, sample)",
-        "m.yaml:12:59: waypoints[3].depth_m: -2: Input should be greater than or equal to 0",
-        "m.yaml:13:53: waypoints[4].sample: only goto_sample takes samples",
+        "m.yaml:9:38: waypoints[0].depth_m: 150.0 m is outside limits.depth_m [0.0, 100.0] (waypoint 1)",
+        "m.yaml:10:11: waypoints[1].lat: 444.0: Input should be less than or equal to 90 (waypoint 2)",
+        "m.yaml:11:65: waypoints[2].altitude_m: 1.0 m is outside limits.altitude_m [2.0, 100.0] (waypoint 3)",
+        "m.yaml:11:68: waypoints[2].colour: unknown field (allowed: lat, lon, alt_m, name, speed_m_s, depth_m, altitude_m, control_mode, sample)"
+        " (waypoint 3)",
+        "m.yaml:12:59: waypoints[3].depth_m: -2: Input should be greater than or equal to 0 (waypoint 4)",
+        "m.yaml:13:53: waypoints[4].sample: only goto_sample takes samples (waypoint 5)",
     ]
 
 
@@ -277,11 +278,17 @@ def test_a_rule_judged_by_a_value_left_out_is_not_reported() -> None:
     errors = errors_of(ONE_PASS)
     assert not any("].speed_m_s:" in e for e in errors)
     with_limits = errors_of(ONE_PASS.replace('"fast"', "1.0"))  # the file's own limits: judged by them
-    assert "m.yaml:9:75: waypoints[0].speed_m_s: 2.0 m/s is outside limits.speed_m_s [0.1, 1.0]" in with_limits
+    assert "m.yaml:9:75: waypoints[0].speed_m_s: 2.0 m/s is outside limits.speed_m_s [0.1, 1.0] (waypoint 1)" in with_limits
 
 
 def test_a_list_that_lost_an_item_is_not_judged_whole(monkeypatch: pytest.MonkeyPatch) -> None:
     """goto_sample's 'a waypoint with sample: true' is not claimed missing when the sample point itself was refused."""
     monkeypatch.setattr(trees, "available", lambda: ["goto_sample"])
     text = "version: 1\nname: s\nvehicle: boat\ntree: goto_sample\nwaypoints:\n  - {lat: 1.0, lon: 1.0}\n  - {lat: 100.0, lon: 1.0, sample: true}\n"
-    assert errors_of(text) == ["m.yaml:7:11: waypoints[1].lat: 100.0: Input should be less than or equal to 90"]
+    assert errors_of(text) == ["m.yaml:7:11: waypoints[1].lat: 100.0: Input should be less than or equal to 90 (waypoint 2)"]
+
+
+def test_an_error_in_a_waypoint_says_the_persons_number_and_its_name_after_the_path(minimal_yaml: str) -> None:
+    """Issue 43: `waypoints[6]` (the file's path, 0-based) beside status, `ctl route` and `report`'s `waypoint 7 of 8`."""
+    text = minimal_yaml + "".join(f"  - {{lat: 47.3977{n}, lon: 8.5456}}\n" for n in range(5)) + "  - {lat: 95.0, lon: 8.5, name: far}\n"
+    assert errors_of(text) == ["m.yaml:12:11: waypoints[6].lat: 95.0: Input should be less than or equal to 90 (waypoint 7, 'far')"]

@@ -29,7 +29,7 @@ SAMPLE_WP = "waypoints:\n  - {lat: 1.0, lon: 2.0, sample: true}\n"
         ("vehicle: boat\ntree: goto_sample\n" + WP, ["m.yaml:6:3: waypoints: goto_sample needs at least one waypoint with sample: true"]),
         (
             "vehicle: rover\ntree: waypoints\nwaypoints:\n  - {lat: 1.0, lon: 2.0, sample: true}\n",
-            ["m.yaml:6:34: waypoints[0].sample: only goto_sample takes samples"],
+            ["m.yaml:6:34: waypoints[0].sample: only goto_sample takes samples (waypoint 1)"],
         ),
         ("vehicle: vtol\ntree: vtol_transit\nlimits: {acceptance_radius_m: 80}\nvtol: {takeoff_alt_m: 40}\n" + WP, []),
         (

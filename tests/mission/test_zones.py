@@ -64,7 +64,10 @@ def test_a_leg_crossing_a_keep_out_zone_between_two_waypoints_outside_it_is_refu
     crossing = [(20, 0, "line-2-start"), (80, 0, "line-2-end")]
     assert load_mission_text(mission_text(route[:2], pier()), "m.yaml")  # nothing near the pier
     errors = errors_of(mission_text([(0, -30, "a"), *crossing], pier()))
-    assert errors == ["waypoints[2]: waypoints[1] -> waypoints[2] ('line-2-start' -> 'line-2-end'): crosses keep-out zone 'pier' for 10 m"]
+    assert errors == [
+        "waypoints[2]: waypoints[1] -> waypoints[2] ('line-2-start' -> 'line-2-end'): crosses keep-out zone 'pier' for 10 m "
+        "(waypoint 3, 'line-2-end')"
+    ]
 
 
 def test_the_acceptance_radius_is_the_margin_and_the_distance_is_said():
@@ -72,7 +75,7 @@ def test_the_acceptance_radius_is_the_margin_and_the_distance_is_said():
     assert load_mission_text(mission_text(passing, pier(), limits="{acceptance_radius_m: 2.0}"), "m.yaml")
     errors = errors_of(mission_text(passing, pier(), limits="{acceptance_radius_m: 4.0}"))
     assert errors == ["waypoints[1]: waypoints[0] -> waypoints[1] ('a' -> 'b'): passes 3.0 m from keep-out zone 'pier', "
-                      "within the 4 m margin (limits.acceptance_radius_m)"]  # fmt: skip
+                      "within the 4 m margin (limits.acceptance_radius_m) (waypoint 2, 'b')"]  # fmt: skip
 
 
 def test_a_waypoint_inside_a_keep_out_circle_and_the_leg_from_home_are_refused():
@@ -80,8 +83,8 @@ def test_a_waypoint_inside_a_keep_out_circle_and_the_leg_from_home_are_refused()
     fence = f"  keep_out:\n    - {{circle: {{lat: {lat:.7f}, lon: {lon:.7f}, radius_m: 10}}}}"
     errors = errors_of(mission_text([(50, 0, "buoy")], fence))
     assert errors == [
-        "waypoints[0]: 'buoy' is inside keep-out zone geofence.keep_out[0]",
-        "waypoints[0]: home -> waypoints[0] ('buoy'): crosses keep-out zone geofence.keep_out[0] for 10 m",
+        "waypoints[0]: 'buoy' is inside keep-out zone geofence.keep_out[0] (waypoint 1, 'buoy')",
+        "waypoints[0]: home -> waypoints[0] ('buoy'): crosses keep-out zone geofence.keep_out[0] for 10 m (waypoint 1, 'buoy')",
     ]
 
 
@@ -93,9 +96,9 @@ def test_a_leg_leaving_every_inclusion_zone_is_refused_though_its_ends_are_insid
     )
     errors = errors_of(mission_text([(0, 0, "a"), (100, 0, "b"), (200, 0, "c")], fence))
     assert errors == [
-        "waypoints[1]: waypoints[0] -> waypoints[1] ('a' -> 'b'): leaves the inclusion zones for 40 m",
-        "waypoints[2]: 'c' is outside every inclusion zone",
-        "waypoints[2]: waypoints[1] -> waypoints[2] ('b' -> 'c'): leaves the inclusion zones for 70 m",
+        "waypoints[1]: waypoints[0] -> waypoints[1] ('a' -> 'b'): leaves the inclusion zones for 40 m (waypoint 2, 'b')",
+        "waypoints[2]: 'c' is outside every inclusion zone (waypoint 3, 'c')",
+        "waypoints[2]: waypoints[1] -> waypoints[2] ('b' -> 'c'): leaves the inclusion zones for 70 m (waypoint 3, 'c')",
     ]
 
 
@@ -132,7 +135,8 @@ def test_a_route_edit_into_a_zone_is_refused_and_the_route_kept():
 def test_legs_that_can_only_time_out_are_refused_with_the_figures():
     text = mission_text([(0, 0, "line-start"), (62, 0, "line-end")], pier(north_m=500), limits="{leg_timeout_s: 20, speed_m_s: {min: 0.1, max: 0.5}}")
     assert errors_of(text) == [
-        "waypoints[1]: waypoints[0] -> waypoints[1]: 60 m at most 0.5 m/s takes 120 s, over limits.leg_timeout_s 20: it can only time out"
+        "waypoints[1]: waypoints[0] -> waypoints[1]: 60 m at most 0.5 m/s takes 120 s, over limits.leg_timeout_s 20: it can only time out "
+        "(waypoint 2, 'line-end')"
     ]
     ok = mission_text([(0, 0, "line-start"), (62, 0, "line-end")], pier(north_m=500), limits="{leg_timeout_s: 130, speed_m_s: {min: 0.1, max: 0.5}}")
     assert load_mission_text(ok, "m.yaml")
@@ -143,7 +147,7 @@ def test_a_waypoint_speed_is_the_legs_speed():
     text = text.replace("name: b}", "name: b, speed_m_s: 2.0}")
     assert errors_of(text) == [
         "waypoints[1]: waypoints[0] -> waypoints[1]: 2000 m at 2 m/s (waypoints[1].speed_m_s) takes 1000 s, over limits.leg_timeout_s 600: "
-        "it can only time out"
+        "it can only time out (waypoint 2, 'b')"
     ]
 
 

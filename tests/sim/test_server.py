@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import math
+import re
 import socket
+import time
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.cli import EXIT_BAD_INPUT
+from executive.cli import EXIT_BAD_INPUT, main
 from executive.cli import sim as sim_cli
 from executive.clock import ScaledClock
 from executive.mavlink_dialect import MAVLinkMessage
@@ -113,9 +116,8 @@ def test_cli_simulates_px4_on_the_vtol_and_the_rover_only(capsys: pytest.Capture
     args = parse("--vehicle", "vtol", "--autopilot", "px4", "--mavlink", "udpin:127.0.0.1:0", "--speedup", "50", "--duration", "1")
     assert args.func(args) == 0
     assert "PX4 vtol listening on udpin:127.0.0.1:0" in capsys.readouterr().out
-    args = parse("--vehicle", "boat", "--autopilot", "px4", "--duration", "1")
-    assert args.func(args) == EXIT_BAD_INPUT
-    assert "no simulated px4 boat (known: vtol, rover)" in capsys.readouterr().err
+    assert main(["sim", "--vehicle", "boat", "--autopilot", "px4", "--duration", "1"]) == EXIT_BAD_INPUT
+    assert capsys.readouterr().err == "executive: sim: no simulated px4 boat (known: vtol, rover)\n"
 
 
 def test_cli_defaults_and_bad_values(capsys: pytest.CaptureFixture[str]) -> None:
@@ -125,3 +127,34 @@ def test_cli_defaults_and_bad_values(capsys: pytest.CaptureFixture[str]) -> None
         with pytest.raises(SystemExit):
             parse(*bad)
     assert "LAT,LON[,HEADING]" in capsys.readouterr().err
+
+
+def _until(condition: Callable[[], bool], timeout: float = 10.0) -> None:
+    """Wait for ``condition`` (the server's thread acts on its own time); ``timeout`` only bounds a hung server."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, "the server never got there"
+        time.sleep(0.005)
+
+
+@pytest.mark.parametrize("scheme", ["tcpin", "udpin"])
+def test_several_clients_at_once_each_hear_the_vehicle_and_each_command_it_comings_and_goings_logged(
+    scheme: str, client_for: Callable[[str], Client], caplog: pytest.LogCaptureFixture
+) -> None:
+    """An executive and a ground station beside it (issue 43: the second client heard nothing and exited 3 after 30 s)."""
+    caplog.set_level(logging.INFO, logger="executive.sim.clients")
+    with SimServer("rover", f"{scheme}:127.0.0.1:0", clock=ScaledClock(50.0), home=HOME, ekf_ready_after_s=2.0) as sim:
+        executive, ground_station = client_for(sim.url_for_client), client_for(sim.url_for_client)
+        for client in (executive, ground_station):
+            client.conn.mav.heartbeat_send(m.MAV_TYPE_GCS, m.MAV_AUTOPILOT_INVALID, 0, 0, 0)  # udpin: a client is one that has spoken
+            client.wait("HEARTBEAT", booted)
+        said = lambda: [r.getMessage() for r in caplog.records]  # noqa: E731
+        _until(lambda: any("connected (2 clients)" in text for text in said()))
+        assert ground_station.command(m.MAV_CMD_DO_SET_MODE, m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 4).result == m.MAV_RESULT_ACCEPTED
+        executive.wait("HEARTBEAT", lambda msg: msg.custom_mode == 4)  # what one commands, the other sees
+        assert executive.command(m.MAV_CMD_DO_SET_MODE, m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 15).result == m.MAV_RESULT_ACCEPTED
+        ground_station.wait("HEARTBEAT", lambda msg: msg.custom_mode == 15)
+        if scheme == "tcpin":  # a TCP client says it leaves; a UDP one is let go after a silence
+            ground_station.close()
+            _until(lambda: any(re.search(r"MAVLink client 127\.0\.0\.1:\d+ left: disconnected \(1 client\)", t) for t in said()))
+            executive.wait("HEARTBEAT")  # the one left is still served

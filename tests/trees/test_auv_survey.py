@@ -262,8 +262,8 @@ def test_a_last_leg_at_the_surface_needs_no_surfacing(make_survey: MakeSurvey) -
     ("vehicle_at", "far", "refusal"),
     [
         (START, 999.0, None),
-        (START, 1001.0, "waypoint 1 (far) is 1001 m away, over 1000 m"),
-        (destination(*START, 180.0, 1100.0), 0.0, "waypoint 0 (north) is 1130 m away, over 1000 m"),  # the live position, not the plan
+        (START, 1001.0, "waypoint 2 'far' is 1001 m away, over 1000 m"),
+        (destination(*START, 180.0, 1100.0), 0.0, "waypoint 1 'north' is 1130 m away, over 1000 m"),  # the live position, not the plan
     ],
     ids=["999-m-accepted", "1001-m-refused", "vehicle-1.1-km-off"],
 )

@@ -247,7 +247,7 @@ def test_a_point_over_5_km_away_is_rejected_before_arming_or_any_mode_change(clo
     run.boat.mode, run.boat.armed = ("MANUAL", False) if auto_arm else ("LOITER", True)  # without auto_arm, the operator had readied it
     assert run.tick(10) == [F]
     assert run.boat.commands == [] and run.boat.setpoints == 0 and run.link.take() == []
-    assert run.reason == "Every point within 5000 m?: waypoint 0 (p0) is 5230 m away, over 5000 m"
+    assert run.reason == "Every point within 5000 m?: waypoint 1 'p0' is 5230 m away, over 5000 m"
 
 
 def test_a_go_to_in_progress_refuses_another(run):

@@ -76,8 +76,20 @@ class CanReader:
         if count:
             self._write_counts()
         self._write_frames(latest, now, new_rc_counter)
-        self._set_if_changed("/base/up", self._last_frame is not None and now - self._last_frame <= self.base_timeout_s)
+        self._base_up(self._last_frame is not None and now - self._last_frame <= self.base_timeout_s, now)
         return count
+
+    def _base_up(self, up: bool, now: float) -> None:
+        """``/base/up``, and a word when the base is found or lost (the operator reads it; a run with --can says what it found)."""
+        if self._bb.get("/base/up") == up:
+            return
+        self._bb.set("/base/up", up)
+        system: BaseSystem | None = self._bb.get("/base/system")
+        if up:
+            said = "" if system is None else f": {system.vehicle_state}, {system.control_mode} command mode, {system.battery_v:.1f} V"
+            log.info("AgileX base heard on the CAN bus%s", said)
+        elif self._last_frame is not None:
+            log.warning("AgileX base not heard on the CAN bus for %.1f s", now - self._last_frame)
 
     def _on_rc_counter(self, counter: int) -> bool:
         """True when ``counter`` moved (and the base does not report RC signal loss)."""

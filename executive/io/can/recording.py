@@ -26,6 +26,7 @@ class RecordingBus(can.BusABC):
         self._bus.send(msg, timeout)
         if not msg.timestamp:  # frames we build carry no time; a log line needs the moment it left
             msg.timestamp = time.time()
+        msg.is_rx = False  # candump's T, not R: the executive's own 0x111/0x421 told from the base's frames
         self._log(msg)
 
     def shutdown(self) -> None:

@@ -20,7 +20,7 @@ from executive.clock import Clock
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
 from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
-from executive.state import CommandState, CommandStatus, Outcome
+from executive.state import CommandState, CommandStatus, Outcome, TargetAsk
 from executive.vehicles import VehicleProfile
 
 #: SET_POSITION_TARGET_GLOBAL_INT type_mask: use position only (ignore velocity, acceleration, yaw).
@@ -127,6 +127,8 @@ class Commander:
         self.modes_asked: dict[str, float] = {}
         #: The mode asked for last, if any.
         self.last_mode_asked: str | None = None
+        #: The point we asked the autopilot to steer to last (a setpoint or a DO_REPOSITION): its report of another is someone else's.
+        self.target_asked: TargetAsk | None = None
         #: The height above home the latest take-off of ours climbs to (None: none asked, or the autopilot's default height).
         self.takeoff_height_m: float | None = None
         #: Commands the autopilot acks twice, the first ACCEPTED saying only "received": PX4's MAVLink receiver
@@ -156,9 +158,22 @@ class Commander:
         return self.command_long(mavlink.MAV_CMD_DO_SET_MODE, (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main, sub), delay_s=delay_s, retry=retry)
 
     def note_mode_asked(self, name: str) -> None:
-        """A mode our request puts the vehicle in (asked by name, or the effect of a command): not a person's change."""
+        """A mode our request puts the vehicle in (asked by name, or the effect of a command): not a person's change.
+
+        Another mode than our point's ends the point: that mode steers by itself (PX4's RTL sets its own setpoint before its
+        heartbeat shows AUTO.RTL), nothing is judged by the point any more."""
         self.modes_asked[name] = self._clock.now()
         self.last_mode_asked = name
+        if self.target_asked is not None and self.target_asked.mode != name:
+            self.target_asked = None
+
+    def note_target_asked(self, lat: float | None, lon: float | None, mode: str | None = None) -> None:
+        """A point our request (a setpoint, a DO_REPOSITION) has the autopilot steer to in ``mode`` (default: the mode asked last):
+        not a person's target."""
+        mode = mode or self.last_mode_asked
+        asked = self.target_asked
+        if asked is None or (asked.lat, asked.lon, asked.mode) != (lat, lon, mode):
+            self.target_asked = TargetAsk(lat, lon, mode, self._clock.now())
 
     def arm(self, *, force: bool = False, force_magic: float = FORCE_ARM_MAGIC) -> int:
         """Arm; forced with ``force_magic`` in param2 (ArduPilot's 2989; PX4 takes MAVLink's 21196)."""
@@ -186,6 +201,7 @@ class Commander:
         """Go to a point (switching to GUIDED where the firmware does); acked, unlike a setpoint."""
         flags = float(mavlink.MAV_DO_REPOSITION_FLAGS_CHANGE_MODE)
         self.note_mode_asked(self.profile.guided_mode)  # the firmware switches to GUIDED itself: a mode we asked for
+        self.note_target_asked(lat, lon)
         return self.command_int(
             mavlink.MAV_CMD_DO_REPOSITION, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, (-1, flags, 0, float("nan"), lat, lon, alt_m)
         )
@@ -212,8 +228,9 @@ class Commander:
         ArduSub surfaces (GCS_MAVLink_Sub.cpp handle_MAV_CMD_NAV_LAND)."""
         return self.command_long(mavlink.MAV_CMD_NAV_LAND, (0, 0, 0, NAN, NAN, NAN, NAN))
 
-    def goto(self, lat: float, lon: float, alt_m: float = 0.0) -> None:
-        """Queue a GUIDED position target (ArduPilot ignores it, silently, outside GUIDED)."""
+    def goto(self, lat: float, lon: float, alt_m: float = 0.0, *, mode: str | None = None) -> None:
+        """Queue a GUIDED position target (ArduPilot ignores it, silently, outside GUIDED); ``mode``: the one that follows it."""
+        self.note_target_asked(lat, lon, mode)
         self._outbox.append(
             self._encoder.set_position_target_global_int_encode(
                 0,
@@ -241,6 +258,7 @@ class Commander:
             frame, mask, alt = mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT, POSITION_VELOCITY_MASK, altitude_m
         else:
             raise ValueError("give exactly one of depth_m and altitude_m")
+        self.note_target_asked(lat, lon)
         self._outbox.append(
             self._encoder.set_position_target_global_int_encode(
                 0, self.target_system, self.target_component, frame, mask, round(lat * 1e7), round(lon * 1e7), alt,
@@ -250,6 +268,7 @@ class Commander:
 
     def local_setpoint(self, north_m: float, east_m: float, down_m: float) -> None:
         """Queue a position target in the local NED frame (MAV_FRAME_LOCAL_NED: from the EKF origin, z down). Never acknowledged."""
+        self.note_target_asked(None, None)  # not comparable with a global report: ours is never confirmed, nothing judged
         self._outbox.append(
             self._encoder.set_position_target_local_ned_encode(
                 0, self.target_system, self.target_component, mavlink.MAV_FRAME_LOCAL_NED, POSITION_ONLY_MASK,

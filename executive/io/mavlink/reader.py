@@ -26,7 +26,7 @@ from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.io.mavlink.vehicle_clock import VehicleClockWatch
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
-from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, Rangefinder
+from executive.state import Attitude, Battery, EkfFlags, EkfStatus, GlobalPosition, GpsFix, HomePosition, PositionTarget, Rangefinder
 
 log = logging.getLogger(__name__)
 
@@ -153,6 +153,7 @@ class MavlinkReader:
             "COMMAND_ACK": self._on_command_ack,
             "STATUSTEXT": self._on_statustext,
             "HOME_POSITION": self._on_home_position,
+            "POSITION_TARGET_GLOBAL_INT": self._on_position_target,
             "VFR_HUD": self._on_vfr_hud,
             "GPS_RAW_INT": self._on_gps_raw,
             "SERVO_OUTPUT_RAW": self._on_servo_output,
@@ -407,6 +408,13 @@ class MavlinkReader:
         lat, lon = msg.latitude / 1e7, msg.longitude / 1e7
         if _on_the_globe(lat, lon):  # 0/0: no home yet
             self._bb.set("/vehicle/home", HomePosition(lat, lon, msg.altitude / 1000.0, now))
+
+    def _on_position_target(self, msg: MAVLinkMessage, now: float) -> None:
+        """The point the autopilot steers to: ArduPilot's mode's desired location (Rover/GCS_MAVLink_Rover.cpp
+        send_position_target_global_int), PX4's navigator's current setpoint (mavlink/streams/POSITION_TARGET_GLOBAL_INT.hpp)."""
+        lat, lon = msg.lat_int / 1e7, msg.lon_int / 1e7
+        if _on_the_globe(lat, lon) and _finite(msg.alt):
+            self._bb.set("/vehicle/position_target", PositionTarget(lat, lon, msg.alt, now))
 
     def _on_vfr_hud(self, msg: MAVLinkMessage, now: float) -> None:
         if _finite(msg.groundspeed) and 0.0 <= msg.groundspeed < 1000.0:

@@ -29,6 +29,8 @@ DEFAULT_RATES: dict[str, float] = {
     "EXTENDED_SYS_STATE": 1.0,
     "MISSION_CURRENT": 1.0,
     "HOME_POSITION": 0.2,
+    # the point the autopilot steers to: a target we did not ask for is a person's (executive.target_watch)
+    "POSITION_TARGET_GLOBAL_INT": 5.0,
 }
 
 _KEY = blackboard.command_key(Outcome.MESSAGE_RATE)

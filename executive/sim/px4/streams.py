@@ -142,7 +142,9 @@ class Px4Streams(FirmwareSim):
         return self._mav.home_position_encode(e7(self.home[0]), e7(self.home[1]), alt_mm, 0, 0, 0, (1.0, 0.0, 0.0, 0.0), 0, 0, 0, self._us())
 
     def _msg_position_target_global_int(self) -> MAVLinkMessage | None:
-        if self._goal is None:
+        """The navigator's current setpoint (streams/POSITION_TARGET_GLOBAL_INT.hpp); none in OFFBOARD, where the navigator
+        publishes its triplet invalid once (navigator_main.cpp Navigator::run, the modes it does not fly: reset_triplets)."""
+        if self._goal is None or self.mode == "OFFBOARD":
             return None
         lat, lon, alt = self._goal
         return self._mav.position_target_global_int_encode(

@@ -166,3 +166,25 @@ def test_a_bus_error_is_counted_not_raised(clock: ManualClock) -> None:
         assert reader.drain() == 0
         assert reader.drain() == 0
     assert bb("/base/bus_errors") == 2
+
+
+def test_the_base_found_and_lost_is_said_and_its_state_is_in_the_status(can_buses, clock: ManualClock, caplog) -> None:
+    """Issue 43: `run --can` said nothing of the base it found, and the status had nothing of it."""
+    import logging
+
+    from executive.status import StatusSource, status_line
+
+    caplog.set_level(logging.INFO, logger="executive.io.can.reader")
+    base, executive = can_buses
+    reader = CanReader(executive, clock)
+    base.send(SystemState(0, 1, 486, 0x0000, 7).encode())
+    reader.drain()
+    status = StatusSource("test").snapshot()
+    assert status["base"] == {"up": True, "state": "NORMAL", "mode": "CAN", "battery_v": 48.6}
+    assert "base NORMAL CAN 48.6V" in status_line(status | {"state": "RUNNING", "leg": 1, "legs": 1, "distance_m": None})
+    clock.advance(reader.base_timeout_s + 0.5)
+    reader.drain()
+    said = [r.getMessage() for r in caplog.records]
+    assert said[0] == "AgileX base heard on the CAN bus: NORMAL, CAN command mode, 48.6 V"
+    assert said[1].startswith("AgileX base not heard on the CAN bus for ")
+    assert StatusSource("test").snapshot()["base"]["up"] is False
