@@ -12,7 +12,7 @@ import time
 from collections.abc import Callable, Sequence
 from functools import partial
 
-from benchmarks import can_decode, efficiency, ingest, reaction, simspeed, soak, startup, tick
+from benchmarks import can_decode, efficiency, ingest, reaction, route_check, simspeed, soak, startup, tick
 from benchmarks.common import Row
 
 #: name -> the benchmark (each returns its rows); in the order they run.
@@ -21,6 +21,7 @@ BENCHMARKS: dict[str, Callable[[], list[Row]]] = {
     "tick-px4": partial(tick.run, autopilot="px4"),  # issue 12: the rows hold for both back ends
     "ingest": ingest.run,
     "can": can_decode.run,
+    "route": route_check.run,
     "reaction": reaction.run,
     "sim": simspeed.run,
     "startup": startup.run,

@@ -115,7 +115,12 @@ class Geofence:
 
     polygon: tuple[LatLon, ...] = ()
     max_distance_m: float | None = None
+    #: More areas the vehicle may be in besides ``polygon`` (a mission's ``geofence.inclusion``): polygons, and circles as
+    #: (lat, lon, radius m). With any, the vehicle must be inside ``polygon`` or one of them.
+    inclusion_polygons: tuple[tuple[LatLon, ...], ...] = ()
+    inclusion_circles: tuple[tuple[float, float, float], ...] = ()
     _plane: tuple[Point, ...] = field(init=False, repr=False, compare=False)
+    _others: tuple[Geofence, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         ring = open_ring(self.polygon)
@@ -127,9 +132,18 @@ class Geofence:
             raise ValueError(f"max_distance_m must be > 0, not {self.max_distance_m}")
         object.__setattr__(self, "polygon", ring)
         object.__setattr__(self, "_plane", tuple(project(ring[0], lat, lon) for lat, lon in ring) if ring else ())
+        object.__setattr__(self, "_others", tuple(Geofence(tuple(p)) for p in self.inclusion_polygons))
 
     def outside_polygon_m(self, lat: float, lon: float) -> float:
-        """How far (lat, lon) is outside the polygon, metres; 0.0 inside, on the boundary, or with no polygon."""
+        """How far (lat, lon) is outside the polygon (or the nearest inclusion zone), metres; 0.0 inside one, on a boundary, or with none."""
+        if not self._others and not self.inclusion_circles:
+            return self._outside_own(lat, lon)
+        own = self._outside_own(lat, lon) if self._plane else math.inf
+        others = [g._outside_own(lat, lon) for g in self._others]
+        others += [max(0.0, distance(c_lat, c_lon, lat, lon) - radius) for c_lat, c_lon, radius in self.inclusion_circles]
+        return min(own, *others)
+
+    def _outside_own(self, lat: float, lon: float) -> float:
         if not self._plane:
             return 0.0
         p = project(self.polygon[0], lat, lon)
@@ -150,7 +164,7 @@ class Geofence:
         """
         outside = self.outside_polygon_m(lat, lon)
         if outside > 0.0:
-            return f"{outside:.0f} m outside the fence polygon"
+            return f"{outside:.0f} m outside the fence polygon" + (" and every inclusion zone" if self._others or self.inclusion_circles else "")
         if self.max_distance_m is None:
             return None
         if home is None:

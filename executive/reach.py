@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from executive import blackboard
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, out_of_reach
+from executive.mission.zones import first_leg_problems
 from executive.state import EkfStatus, GlobalPosition
 from executive.waiting import Waiting
 
@@ -73,6 +74,7 @@ class ReachGate:
         position: GlobalPosition | None = self._bb.get("/vehicle/position")
         ekf: EkfStatus | None = self._bb.get("/vehicle/ekf")
         far = [] if position is None else out_of_reach(mission, position.lat, position.lon, first=ahead)
+        crossing = [] if position is None else first_leg_problems(mission, position.lat, position.lon, first=ahead)
         # ArduPilot sends GLOBAL_POSITION_INT whether or not it has a position (GCS_Common.cpp send_global_position_int: "we
         # send stale data"); before a fix ArduPlane's DCM dead-reckons from 0, 0 on its airspeed (AP_AHRS_DCM.cpp
         # drift_correction): seen on real ArduPlane SITL, 14960 km from its waypoints. A refusal needs a position the EKF
@@ -90,8 +92,8 @@ class ReachGate:
             if shown is None or shown.feedback != f"{why}: {rule}":  # no tree ticks yet: the gate says what the mission waits for
                 self._waiting.set("/mission/waiting", Waiting(NAME, NAME, f"{why}: {rule}", self._closed_at))
             return self.WAIT
-        if far:
-            return Refusal(f"{NAME}: " + "; ".join(far))
+        if far or crossing:  # the leg from where the vehicle is to its first waypoint, against the keep-out zones (executive.mission.zones)
+            return Refusal(f"{NAME}: " + "; ".join(far + crossing))
         return self._pass()
 
     def _pass(self) -> None:

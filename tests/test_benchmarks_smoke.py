@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks import __main__ as bench
-from benchmarks import can_decode, efficiency, ingest, reaction, simspeed, soak, startup, tick
+from benchmarks import can_decode, efficiency, ingest, reaction, route_check, simspeed, soak, startup, tick
 from benchmarks.common import Row
 
 
@@ -36,6 +36,10 @@ def test_ingest() -> None:
 
 def test_can_decode() -> None:
     _check(can_decode.run(frames=600, repeats=1), 2)
+
+
+def test_route_check() -> None:
+    _check(route_check.run(legs=20, zones=5, repeats=1), 2)
 
 
 def test_soak() -> None:

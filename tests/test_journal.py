@@ -80,9 +80,9 @@ def test_an_edited_route_is_recorded_and_resumed_as_edited(journal, clock, squar
     journal.observe_leg(state, None, None)  # heading for waypoint 2 of 4
     clock.advance(3.0)
     first, *_, last = square_mission.waypoints
-    extra = Waypoint(lat=47.4, lon=8.55, name="added")
+    extra = Waypoint(lat=47.3981, lon=8.5458, name="added")  # a leg the square's leg_timeout_s fits
     state.set_route([first, extra, last], "ctl route: remove 2 and 3, add one")  # renumbers: heading for waypoint 2 of 3
-    home = Home(lat=47.39, lon=8.54, heading_deg=90.0)
+    home = Home(lat=47.3978, lon=8.5457, heading_deg=90.0)
     clock.advance(1.0)
     state.set_route([first, extra, last], "switch A: home here", leg_index=2, home=home)
     after_crash = reopen(journal, clock)

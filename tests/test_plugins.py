@@ -236,7 +236,7 @@ def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Pa
         "3 is not an instrument (subclass executive.instruments.sampler.InstrumentSampler)",
     ]
     assert main(["validate", mission_file(tmp_path, "waypoints")]) == 2  # a mission that does not use it: still said, once
-    assert len(capsys.readouterr().err.splitlines()) == 3
+    assert len([line for line in capsys.readouterr().err.splitlines() if ": warning: no home:" not in line]) == 3
     assert main(["behaviours"]) == 2  # any command that needs the plugins says it, no traceback
     assert capsys.readouterr().err.startswith("executive: behaviours: plugin 'thing' (executive.behaviours = brokenplugin.things:VALUE")
 

@@ -62,6 +62,7 @@ NOT_RUN_HERE: dict[str, str] = {
     "python -m benchmarks --json bench.json": "about 4 minutes on 2 cores (tests/test_benchmarks_smoke.py)",
     "python -m benchmarks --only tick ingest": "a minute (tests/test_benchmarks_smoke.py)",
     "python -m benchmarks --only efficiency": "a minute (tests/test_benchmarks_smoke.py)",
+    "python -m benchmarks --only route": "seconds (tests/test_benchmarks_smoke.py)",
 }
 #: Commands that need nothing but files: run in-process, in a scratch directory.
 IN_PROCESS = frozenset({"validate", "show", "schema", "behaviours", "export", "import", "service"})

@@ -109,11 +109,15 @@ HARMLESS_COMMANDS = {mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, mavlink.MAV_CMD_REQUE
 
 
 def with_far_waypoint(mission: Mission, metres: float, **changes: object) -> tuple[Mission, tuple[float, float, float]]:
-    """``mission`` without its home (validate would refuse it), a waypoint ``metres`` north of its start appended; and where its vehicle boots."""
+    """``mission`` without its home (validate would refuse it), a waypoint ``metres`` north of its start appended; and where its vehicle boots.
+
+    Its ``limits.leg_timeout_s`` is a day, so that the far leg is refused for its distance, not for the time it takes (issue 40).
+    """
     start = mission.home or mission.waypoints[0]
     lat, lon = destination(start.lat, start.lon, 0.0, metres)
     far = Waypoint(lat=lat, lon=lon, name="far")
-    edited = mission.model_copy(update={"home": None, "waypoints": [*mission.waypoints, far], **changes})
+    limits = mission.limits.model_copy(update={"leg_timeout_s": 86400.0})
+    edited = mission.model_copy(update={"home": None, "waypoints": [*mission.waypoints, far], "limits": limits, **changes})
     return edited, (start.lat, start.lon, 0.0)
 
 

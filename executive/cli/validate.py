@@ -23,6 +23,7 @@ from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput
 from executive.cli.run_checks import check_mission
 from executive.mission.errors import FieldError, MissionError
 from executive.mission.model import tree_name
+from executive.mission.rules import waits_for_the_vehicle
 from executive.sensing.energy import planned
 
 
@@ -89,14 +90,20 @@ def _validate(path: str, args: argparse.Namespace, results: list[dict[str, Any]]
             print(f"{path}: {exc}", file=sys.stderr)
         return
     tree = tree_name(mission) or "(composed in the file)"
-    results.append({"file": path, "ok": True, "waypoints": len(mission.waypoints), "vehicle": mission.vehicle, "tree": tree})
+    result: dict[str, object] = {"file": path, "ok": True, "waypoints": len(mission.waypoints), "vehicle": mission.vehicle, "tree": tree}
     energy = planned(mission)
     said = None if energy is None else energy if isinstance(energy, str) else f"{energy.figures()} on a full pack, the kind's seeds"
     if said is not None:
-        results[-1]["energy"] = said
+        result["energy"] = said
+    waits = waits_for_the_vehicle(mission)
+    if waits:
+        result["warnings"] = [f"no home: checked only at start, against the vehicle's position: {'; '.join(waits)}"]
+    results.append(result)
     if not args.json:
         count = len(mission.waypoints)
         print(
             f"{path}: ok ({count} waypoint{'' if count == 1 else 's'}, vehicle {mission.vehicle}, tree {tree})"
             + (f"; energy: {said}" if said else "")
         )
+        for warning in result.get("warnings", ()):
+            print(f"{path}: warning: {warning}", file=sys.stderr)

@@ -45,6 +45,7 @@ from executive.mission.errors import format_path
 from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.route import Route
 from executive.mission.rules import cross_field_errors
+from executive.mission.zones import first_leg_problems
 from executive.state import Sample
 
 log = logging.getLogger(__name__)
@@ -139,7 +140,7 @@ class MissionState:
         self._check("upload")
         problems = [f"{format_path(path)}: {why}" for path, why in cross_field_errors(mission)]
         if vehicle_at is not None:
-            problems += out_of_reach(mission, *vehicle_at)
+            problems += out_of_reach(mission, *vehicle_at) + first_leg_problems(mission, *vehicle_at)
         if problems:
             raise Refused(f"mission {mission.name!r} refused: " + "; ".join(problems))
         self.mission = mission
@@ -162,7 +163,7 @@ class MissionState:
             raise Refused(f"leg {leg_index + 1} is outside a route of {len(mission.waypoints)} waypoints")
         problems = [f"{format_path(path)}: {why}" for path, why in cross_field_errors(mission)]
         if vehicle_at is not None:
-            problems += out_of_reach(mission, *vehicle_at)
+            problems += out_of_reach(mission, *vehicle_at) + first_leg_problems(mission, *vehicle_at)
         problems += [why for check in self.replace_checks if (why := check(mission)) is not None]
         if problems:
             raise Refused(f"mission {mission.name!r} refused: " + "; ".join(problems))

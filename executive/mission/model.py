@@ -291,8 +291,39 @@ class Vertex(BaseModel):
     lon: Longitude
 
 
+class Circle(BaseModel):
+    """A circle on the ground: its centre and radius."""
+
+    model_config = _STRICT
+    lat: Latitude
+    lon: Longitude
+    radius_m: float = Field(gt=0.0, le=1_000_000.0)
+
+
+class Zone(BaseModel):
+    """An area of the world, a polygon or a circle, with an optional name the checks' messages use."""
+
+    # for editors: a shape (cross_field_errors also refuses two)
+    model_config = ConfigDict(**_STRICT, json_schema_extra={"anyOf": [{"required": ["polygon"]}, {"required": ["circle"]}]})
+    name: str | None = Field(None, min_length=1, max_length=64)
+    polygon: Annotated[list[Vertex], Field(min_length=3, max_length=500)] | None = Field(
+        None, description="corners in order (either direction; a last corner repeating the first is allowed); must not cross itself"
+    )
+    circle: Circle | None = Field(None, description="a circle instead of a polygon")
+
+
+class RallyPoint(BaseModel):
+    """A safe place to return to instead of home (QGroundControl's rally points)."""
+
+    model_config = _STRICT
+    lat: Latitude
+    lon: Longitude
+    alt_m: float = Field(0.0, ge=-1000.0, le=10_000.0, description="altitude above home (air vehicles)")
+    name: str | None = Field(None, min_length=1, max_length=64)
+
+
 class GeofenceConfig(BaseModel):
-    """Where the vehicle may be: inside a polygon, within a distance of home, or both."""
+    """Where the vehicle may be: inside a polygon or any inclusion zone, within a distance of home, never in a keep-out zone."""
 
     model_config = _STRICT
     polygon: Annotated[list[Vertex], Field(min_length=3, max_length=500)] | None = Field(
@@ -301,10 +332,20 @@ class GeofenceConfig(BaseModel):
     max_distance_from_home_m: float | None = Field(
         None, gt=0.0, le=1_000_000.0, description="how far from home the vehicle may be (the autopilot's home, else the mission's home)"
     )
+    inclusion: list[Zone] = Field(
+        default_factory=list,
+        max_length=100,
+        description="more areas the route may use: every leg stays inside polygon or these (validate, start, upload, route edits)",
+    )
+    keep_out: list[Zone] = Field(
+        default_factory=list, max_length=1000, description="areas no waypoint and no leg may enter, acceptance_radius_m as a margin (islands, piers)"
+    )
 
     def fence(self) -> Geofence:
         """The :class:`Geofence` value the guard checks (the polygon must be valid: see cross_field_errors)."""
-        return Geofence(tuple((v.lat, v.lon) for v in self.polygon or ()), self.max_distance_from_home_m)
+        polygons = tuple(tuple((v.lat, v.lon) for v in z.polygon) for z in self.inclusion if z.polygon is not None)
+        circles = tuple((z.circle.lat, z.circle.lon, z.circle.radius_m) for z in self.inclusion if z.circle is not None)
+        return Geofence(tuple((v.lat, v.lon) for v in self.polygon or ()), self.max_distance_from_home_m, polygons, circles)
 
 
 class Waypoint(BaseModel):
@@ -382,6 +423,7 @@ class Mission(BaseModel):
     auto_arm: bool = Field(False, description="arm the vehicle in pre-flight (else wait for the operator to arm it)")
     home: Home | None = None
     geofence: GeofenceConfig | None = Field(None, description="where the vehicle may be")
+    rally_points: list[RallyPoint] = Field(default_factory=list, max_length=100, description="safe places to return to besides home")
     limits: Limits = Field(default_factory=Limits)
     rc: RcConfig = Field(default_factory=RcConfig)
     failsafe: FailsafeConfig = Field(default_factory=FailsafeConfig, description="what each failing condition makes the executive do")

@@ -11,13 +11,14 @@ What maps, both ways:
   ``limits.speed_m_s`` widens the limits, with a warning.
 - ``plannedHomePosition`` / the WPL's line of item 0 <-> ``home``.
 - ``.plan`` only: the first inclusion polygon of ``geoFence`` <-> ``geofence.polygon``; an inclusion
-  circle centred on home <-> ``geofence.max_distance_from_home_m``. A survey or corridor scan
+  circle centred on home <-> ``geofence.max_distance_from_home_m``; every other inclusion polygon or
+  circle <-> ``geofence.inclusion``, every exclusion one <-> ``geofence.keep_out`` (a zone's name is
+  not carried: a plan's shapes have none); ``rallyPoints`` <-> ``rally_points``. A survey or corridor scan
   (``ComplexItem``) is imported as the mission items QGroundControl generated for it (its
   ``TransectStyleComplexItem.Items``), with a warning that the pattern itself is not kept.
 
 Everything else is reported as a located warning, never dropped silently: other commands, a
-waypoint's hold time, acceptance or pass radius and yaw, ``autoContinue`` false, exclusion fences,
-circles not centred on home, rally points. Bad input raises :class:`MissionError`, every problem
+waypoint's hold time, acceptance or pass radius and yaw, ``autoContinue`` false. Bad input raises :class:`MissionError`, every problem
 as ``FILE:LINE:COL: FIELD: message`` (JSON: the decoder's position, or where the offending value
 starts; WPL: the line and the column of the field). Export writes what a mission holds, and says
 (as ``(path, why)`` pairs) what the format cannot carry: waypoint names, sample flags, a geofence in
@@ -39,7 +40,7 @@ from executive.geo import distance
 from executive.mavlink_dialect import mavlink
 from executive.mission.errors import FieldError, MissionError, Path
 from executive.mission.loader import load_mission_text
-from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Limits, Mission
+from executive.mission.model import VEHICLE_LIMITS, VTOL_MIN_ACCEPTANCE_RADIUS_M, Limits, Mission
 from executive.mission.plan_items import (
     ARDUPILOT,
     CMD_CHANGE_SPEED,
@@ -122,6 +123,9 @@ def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what:
     fence = _fence(src, sources)
     if fence:
         doc["geofence"] = fence
+    rally = _rally(src, sources)
+    if rally:
+        doc["rally_points"] = rally
     waypoints: list[dict[str, Any]] = []
     speed: tuple[float, At] | None = None
     skipped: dict[tuple[str, int], list[At]] = {}
@@ -155,6 +159,8 @@ def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what:
         notes.append(f"limits.acceptance_radius_m is {VTOL_MIN_ACCEPTANCE_RADIUS_M:g} m, the least for a vtol (it circles its points as a plane).")
     if speeds := _speed_limits(src, waypoints, sources):
         limits["speed_m_s"] = speeds
+    if (timeout := _leg_timeout(src, kind, doc.get("home"), waypoints, limits, sources)) is not None:
+        limits["leg_timeout_s"] = timeout
     if limits:
         doc["limits"] = limits
     doc["waypoints"] = waypoints
@@ -244,24 +250,63 @@ def _waypoint_params(src: Source, item: Item, wp: dict[str, Any]) -> dict[str, A
 
 
 def _fence(src: Source, sources: dict[str, At]) -> dict[str, Any]:
+    """The plan's geoFence as a mission's: the first inclusion polygon is ``polygon``, an inclusion circle on home
+    ``max_distance_from_home_m``; other inclusion shapes are ``inclusion`` zones, exclusion shapes ``keep_out`` zones."""
     fence: dict[str, Any] = {}
-    if src.polygon is not None and src.polygon_at is not None:
-        fence["polygon"] = [{"lat": lat, "lon": lon} for lat, lon, _ in src.polygon]
-        sources["geofence.polygon"] = src.polygon_at
-        sources |= {f"geofence.polygon[{i}]": at for i, (_, _, at) in enumerate(src.polygon)}
-    for lat, lon, radius, at in src.circles:
-        if src.home is None:
-            src.warn(at, "not imported: an inclusion circle, and no home it could be a distance from")
-        elif distance(lat, lon, src.home[0], src.home[1]) > HOME_CIRCLE_M:
-            src.warn(at, "not imported: an inclusion circle not centred on home (a mission geofence has a distance from home)")
-        elif "max_distance_from_home_m" in fence:
-            src.warn(at, "not imported: a second inclusion circle around home")
+    zones: dict[str, list[dict[str, Any]]] = {"inclusion": [], "keep_out": []}
+    for polygon in src.polygons:
+        corners = [{"lat": lat, "lon": lon} for lat, lon, _ in polygon.corners]
+        if polygon.inclusion and "polygon" not in fence:
+            fence["polygon"], here = corners, "geofence.polygon"
         else:
-            fence["max_distance_from_home_m"] = radius
-            sources["geofence.max_distance_from_home_m"] = at
+            kind = "inclusion" if polygon.inclusion else "keep_out"
+            zones[kind].append({"polygon": corners})
+            here = f"geofence.{kind}[{len(zones[kind]) - 1}].polygon"
+        sources[here] = polygon.at
+        sources |= {f"{here}[{i}]": at for i, (_, _, at) in enumerate(polygon.corners)}
+    for circle in src.circles:
+        on_home = src.home is not None and distance(circle.lat, circle.lon, src.home[0], src.home[1]) <= HOME_CIRCLE_M
+        if circle.inclusion and on_home and "max_distance_from_home_m" not in fence:
+            fence["max_distance_from_home_m"] = circle.radius_m
+            sources["geofence.max_distance_from_home_m"] = circle.at
+            continue
+        kind = "inclusion" if circle.inclusion else "keep_out"
+        zones[kind].append({"circle": {"lat": circle.lat, "lon": circle.lon, "radius_m": circle.radius_m}})
+        sources[f"geofence.{kind}[{len(zones[kind]) - 1}]"] = circle.at
+    fence |= {kind: found for kind, found in zones.items() if found}
     if fence:
-        sources["geofence"] = src.polygon_at or sources["geofence.max_distance_from_home_m"]
+        first = src.polygons[0].at if src.polygons else src.circles[0].at
+        sources["geofence"] = first
     return fence
+
+
+def _rally(src: Source, sources: dict[str, At]) -> list[dict[str, Any]]:
+    sources |= {f"rally_points[{i}]": at for i, (*_, at) in enumerate(src.rally)}
+    return [{"lat": lat, "lon": lon, "alt_m": alt} for lat, lon, alt, _ in src.rally]
+
+
+def _leg_timeout(
+    src: Source, kind: str | None, home: dict[str, float] | None, waypoints: list[dict[str, Any]], limits: dict[str, Any], sources: dict[str, At]
+) -> float | None:
+    """limits.leg_timeout_s widened to twice the longest leg's shortest time, where the default would refuse it (with a warning):
+    a plan has no leg time limit, and a slow survey line is not a mistake (the rule: executive.mission.rules)."""
+    if kind == "vtol" or not waypoints:
+        return None
+    default = Limits()
+    cap = limits.get("speed_m_s", {}).get("max", (VEHICLE_LIMITS.get(kind or "", {}).get("speed_m_s") or {"max": default.speed_m_s.max})["max"])
+    points = ([(home["lat"], home["lon"])] if home else []) + [(wp["lat"], wp["lon"]) for wp in waypoints]
+    first = len(points) - len(waypoints)
+    legs = [
+        ((distance(*a, *b) - default.acceptance_radius_m) / (waypoints[i].get("speed_m_s") or cap), i)
+        for a, b, i in zip(points, points[1:], range(1 - first, len(waypoints)), strict=False)
+    ]
+    longest, i = max(legs, default=(0.0, 0))
+    if not longest > default.leg_timeout_s:  # NaN too: a bad coordinate is reported as such
+        return None
+    timeout = float(math.ceil(2.0 * longest))
+    why = f"this leg takes at least {longest:.0f} s: limits.leg_timeout_s set to {timeout:g} (the default {default.leg_timeout_s:g} would refuse it)"
+    src.warn(sources[f"waypoints[{i}]"], why)
+    return timeout
 
 
 def _speed_limits(src: Source, waypoints: list[dict[str, Any]], sources: dict[str, At]) -> dict[str, float] | None:
@@ -394,6 +439,23 @@ def export_plan(mission: Mission) -> Exported:
                 circles.append({"circle": {"center": home[:2], "radius": mission.geofence.max_distance_from_home_m}, "inclusion": True, "version": 1})
             else:
                 warnings.append((("geofence", "max_distance_from_home_m"), "not exported: no home to centre the circle on"))
+        for kind, inclusion in (("inclusion", True), ("keep_out", False)):
+            for i, zone in enumerate(getattr(mission.geofence, kind)):
+                if zone.name:  # QGroundControl's fence shapes have no names
+                    warnings.append((("geofence", kind, i, "name"), f"not exported: {zone.name!r} (a plan's fence shapes have no names)"))
+                if zone.circle is not None:
+                    centre = [zone.circle.lat, zone.circle.lon]
+                    circles.append({"circle": {"center": centre, "radius": zone.circle.radius_m}, "inclusion": inclusion, "version": 1})
+                else:
+                    ring = [[v.lat, v.lon] for v in zone.polygon or ()]
+                    if len(ring) > 3 and ring[0] == ring[-1]:
+                        ring.pop()
+                    polygons.append({"inclusion": inclusion, "polygon": ring, "version": 1})
+    rally = []
+    for i, point in enumerate(mission.rally_points):
+        rally.append([point.lat, point.lon, point.alt_m])  # RallyPointController::save: [latitude, longitude, altitude]
+        if point.name:
+            warnings.append((("rally_points", i, "name"), f"not exported: {point.name!r} (a plan's rally points have no names)"))
     speeds = [wp.speed_m_s for wp in mission.waypoints if wp.speed_m_s is not None]
     plan = {
         "fileType": "Plan",
@@ -409,7 +471,7 @@ def export_plan(mission: Mission) -> Exported:
             "vehicleType": PROFILES[mission.vehicle].mav_type,
             "version": 2,
         },
-        "rallyPoints": {"points": [], "version": 2},
+        "rallyPoints": {"points": rally, "version": 2},
         "version": 1,
     }
     return Exported(json.dumps(plan, indent=4) + "\n", tuple(warnings))
@@ -423,6 +485,8 @@ def export_waypoints(mission: Mission) -> Exported:
         warnings.append((("home",), "a home at 0°, 0° reads as no home in a .waypoints file"))
     if mission.geofence is not None:
         warnings.append((("geofence",), "not exported: a .waypoints file has no geofence"))
+    if mission.rally_points:
+        warnings.append((("rally_points",), "not exported: a .waypoints file has no rally points (Mission Planner keeps them in a .rally file)"))
     lines = [WPL_HEADER, _wpl_line(0, 1, mavlink.MAV_FRAME_GLOBAL, CMD_WAYPOINT, [0.0, 0.0, 0.0, 0.0, *home, 0.0])]
     lines += [_wpl_line(n, 0, frame, command, params) for n, (command, frame, params) in enumerate(rows, start=1)]
     return Exported("\n".join(lines) + "\n", tuple(warnings))

@@ -51,6 +51,26 @@ class Item:
     group: str | None = None  # the complex item it was generated for, if any
 
 
+@dataclass(frozen=True)
+class FencePolygon:
+    """A geoFence polygon: inclusion or exclusion, its corners (lat, lon, where) and where its corner list is."""
+
+    inclusion: bool
+    corners: list[tuple[float, float, At]]
+    at: At
+
+
+@dataclass(frozen=True)
+class FenceCircle:
+    """A geoFence circle: inclusion or exclusion, centre, radius, where."""
+
+    inclusion: bool
+    lat: float
+    lon: float
+    radius_m: float
+    at: At
+
+
 @dataclass
 class Source:
     """What a file says, before it becomes a mission."""
@@ -61,9 +81,9 @@ class Source:
     items_at: At | None = None
     home: tuple[float, float, float | None] | None = None  # lat, lon, altitude above mean sea level
     home_at: At | None = None
-    polygon: list[tuple[float, float, At]] | None = None
-    polygon_at: At | None = None
-    circles: list[tuple[float, float, float, At]] = field(default_factory=list)  # inclusion circles: lat, lon, radius
+    polygons: list[FencePolygon] = field(default_factory=list)
+    circles: list[FenceCircle] = field(default_factory=list)
+    rally: list[tuple[float, float, float, At]] = field(default_factory=list)  # lat, lon, altitude (QGroundControl: above home)
     vehicle: str | None = None
     vehicle_at: At | None = None
     vehicle_why: str = ""  # why no vehicle kind could be inferred

@@ -15,7 +15,7 @@ from typing import Any
 
 from executive.mavlink_dialect import mavlink
 from executive.mission.errors import FieldError, MissionError, Path, format_path
-from executive.mission.plan_items import WPL_COLUMNS, WPL_HEADER, At, Item, Source, describe_json, finite
+from executive.mission.plan_items import WPL_COLUMNS, WPL_HEADER, At, FenceCircle, FencePolygon, Item, Source, describe_json, finite
 from executive.vehicles import profile_for_mav_type
 
 MAX_JSON_DEPTH = 64
@@ -118,8 +118,16 @@ class _PlanReader:
             self._fence(fence)
         rally = self.get(data, ("rallyPoints",), "object", required=False)
         points = self.get(rally, ("rallyPoints", "points"), "array", required=False) if rally is not None else None
-        if points:
-            src.warn(self.at(("rallyPoints", "points")), f"{len(points)} rally point(s) not imported: a mission file has no rally points")
+        for i, point in enumerate(points or []):
+            path = ("rallyPoints", "points", i)
+            if self.check(point, path, "array") is None:
+                continue
+            if len(point) != 3:  # QGroundControl writes [latitude, longitude, altitude] (RallyPointController::save)
+                src.error(self.at(path), f"expected [latitude, longitude, altitude], got {len(point)} values")
+                continue
+            lat, lon, alt = (self.check(v, (*path, j), "number") for j, v in enumerate(point))
+            if lat is not None and lon is not None and alt is not None:
+                src.rally.append((lat, lon, alt, self.at(path)))
         return src
 
     def _mission(self, mission: dict[str, Any]) -> None:
@@ -215,12 +223,6 @@ class _PlanReader:
             vertices = self.get(polygon, (*path, "polygon"), "array")
             if vertices is None:
                 continue
-            if inclusion is False:
-                src.warn(self.at(path), "not imported: an exclusion polygon (a mission geofence is one inclusion polygon)")
-                continue
-            if src.polygon is not None:
-                src.warn(self.at(path), "not imported: a second inclusion polygon (a mission geofence is one polygon)")
-                continue
             corners = []
             for j, vertex in enumerate(vertices):
                 vpath = (*path, "polygon", j)
@@ -232,7 +234,7 @@ class _PlanReader:
                 lat, lon = self.check(vertex[0], (*vpath, 0), "number"), self.check(vertex[1], (*vpath, 1), "number")
                 if lat is not None and lon is not None:
                     corners.append((lat, lon, self.at(vpath)))
-            src.polygon, src.polygon_at = corners, self.at((*path, "polygon"))
+            src.polygons.append(FencePolygon(inclusion is not False, corners, self.at((*path, "polygon"))))
         for i, circle in enumerate(self.get(fence, (*here, "circles"), "array", required=False) or []):
             path = (*here, "circles", i)
             if self.check(circle, path, "object") is None:
@@ -252,10 +254,7 @@ class _PlanReader:
             lon = self.check(centre[1], (*path, "circle", "center", 1), "number")
             if lat is None or lon is None:
                 continue
-            if inclusion is False:
-                src.warn(self.at(path), "not imported: an exclusion circle (a mission geofence has none)")
-            else:
-                src.circles.append((lat, lon, radius, self.at(path)))
+            src.circles.append(FenceCircle(inclusion is not False, lat, lon, radius, self.at(path)))
 
 
 def read_plan(text: str, filename: str) -> Source:

@@ -21,7 +21,8 @@ from executive.mission.failsafes import (
     VEHICLE_FAILSAFES,
     FailsafePolicy,
 )
-from executive.mission.model import VTOL_HOVER_RADIUS_M, VTOL_MIN_ACCEPTANCE_RADIUS_M, FailsafeRule, Mission, VtolOptions, tree_name
+from executive.mission.model import VTOL_HOVER_RADIUS_M, VTOL_MIN_ACCEPTANCE_RADIUS_M, FailsafeRule, Mission, Vertex, VtolOptions, tree_name
+from executive.mission.zones import chord_m, route_errors, zone_shape_errors
 from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES
 
 _PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,15}")
@@ -148,10 +149,13 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
             errors.append(((*here, "altitude_m"), "altitude_m is only used with control_mode altitude"))
     if mission.home is not None:  # the distance rule, as the vehicle will judge it at start (executive.reach) if it starts at home
         limit = limits.max_goal_distance_m
-        for i, wp in enumerate(mission.waypoints):
-            if (d := distance(mission.home.lat, mission.home.lon, wp.lat, wp.lon)) > limit:
+        wps = mission.waypoints
+        far = chord_m([mission.home.lat] * len(wps), [mission.home.lon] * len(wps), [w.lat for w in wps], [w.lon for w in wps])
+        for i, wp in enumerate(wps):
+            if far[i] > limit - 2.0 and (d := distance(mission.home.lat, mission.home.lon, wp.lat, wp.lon)) > limit:  # chord: a metre short
                 why = f"{d:.0f} m from home, over limits.max_goal_distance_m ({limit:g} m): refused at start with the vehicle at home"
                 errors.append((("waypoints", i), why))
+    errors += _leg_time_errors(mission)
     errors += [(("drive",), why) for why in drive_errors(mission)]
     if mission.vehicle == "vtol":
         errors += _vtol_errors(mission) + _height_errors(mission)
@@ -271,21 +275,67 @@ def _geofence_errors(mission: Mission) -> list[tuple[Path, str]]:
     """The fence is usable, and the home and every waypoint of the mission are inside it."""
     config = mission.geofence
     assert config is not None
-    if config.polygon is None and config.max_distance_from_home_m is None:
-        return [(("geofence",), "a geofence needs a polygon, max_distance_from_home_m or both")]
-    if config.polygon is not None:
-        problems = polygon_problems(open_ring([(v.lat, v.lon) for v in config.polygon]))
-        if problems:
-            return [(("geofence", "polygon", i), why) for i, why in problems]
+    if config.polygon is None and config.max_distance_from_home_m is None and not config.inclusion and not config.keep_out:
+        return [(("geofence",), "a geofence needs a polygon, max_distance_from_home_m, inclusion or keep_out zones")]
+    polygons: list[tuple[Path, list[Vertex]]] = [(("geofence", "polygon"), config.polygon)] if config.polygon is not None else []
+    for zones in ("inclusion", "keep_out"):
+        polygons += [(("geofence", zones, i, "polygon"), z.polygon) for i, z in enumerate(getattr(config, zones)) if z.polygon is not None]
+    errors = zone_shape_errors(mission)
+    for path, polygon in polygons:
+        errors += [((*path, i), why) for i, why in polygon_problems(open_ring([(v.lat, v.lon) for v in polygon]))]
+    if errors:
+        return errors
     fence = config.fence()
+    if config.inclusion:  # the waypoints inside polygon or an inclusion zone: route_errors judges the union
+        fence = Geofence((), fence.max_distance_m)
     home = (mission.home.lat, mission.home.lon) if mission.home else None
     if home is None:  # the distance rule waits for the autopilot's home, at run time
         fence = Geofence(fence.polygon)
     points: list[tuple[Path, float, float]] = [(("home",), *home)] if home else []
     points += [(("waypoints", i), wp.lat, wp.lon) for i, wp in enumerate(mission.waypoints)]
-    errors: list[tuple[Path, str]] = []
     for path, lat, lon in points:
         why = fence.why_outside(lat, lon, home)
         if why:
             errors.append((path, f"outside the geofence: {why}"))
+    return errors + route_errors(mission)
+
+
+#: Built-in trees whose legs each end after ``limits.leg_timeout_s`` at speeds within ``limits.speed_m_s`` (a vtol flies its
+#: legs at its airspeed; ugv_rc_route's timeout is for progress, not a leg).
+TIMED_LEG_TREES = frozenset({"waypoints", "goto_sample", "auv_survey"})
+
+
+def _leg_time_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """Each leg (from home where known) drivable within ``limits.leg_timeout_s``: its length less the acceptance radius at its speed
+    (the waypoint's ``speed_m_s``, else the cap ``limits.speed_m_s.max``, a vehicle kind's default limits included)."""
+    if tree_name(mission) not in TIMED_LEG_TREES or mission.vehicle == "vtol":  # a vtol flies its legs at its airspeed
+        return []
+    limits, wps = mission.limits, mission.waypoints
+    points = [("home", mission.home.lat, mission.home.lon)] if mission.home else []
+    points += [(f"waypoints[{i}]", wp.lat, wp.lon) for i, wp in enumerate(wps)]
+    first = len(points) - len(wps)
+    errors: list[tuple[Path, str]] = []
+    lats, lons = [p[1] for p in points], [p[2] for p in points]
+    lengths = chord_m(lats[:-1], lons[:-1], lats[1:], lons[1:]) - limits.acceptance_radius_m
+    for (start, *_), (end, *_), i, length in zip(points, points[1:], range(1 - first, len(wps)), lengths.tolist(), strict=False):
+        speed = wps[i].speed_m_s or limits.speed_m_s.max
+        if length > 0.0 and length / speed > limits.leg_timeout_s:
+            at = f"at {speed:g} m/s (waypoints[{i}].speed_m_s)" if wps[i].speed_m_s else f"at most {speed:g} m/s"
+            errors.append((("waypoints", i), f"{start} -> {end}: {length:.0f} m {at} takes {length / speed:.0f} s, "
+                           f"over limits.leg_timeout_s {limits.leg_timeout_s:g}: it can only time out"))  # fmt: skip
     return errors
+
+
+def waits_for_the_vehicle(mission: Mission) -> list[str]:
+    """The checks a mission without ``home:`` leaves to the vehicle's position at start (empty with a home).
+
+    The first leg's time is not among them: it is judged only from ``home:`` (at start the vehicle may be anywhere).
+    """
+    if mission.home is not None or not mission.waypoints:
+        return []
+    waits = [f"every waypoint within limits.max_goal_distance_m ({mission.limits.max_goal_distance_m:g} m) of the vehicle"]
+    if mission.geofence is not None and (mission.geofence.keep_out or mission.geofence.inclusion):
+        waits.append("the first leg against the keep-out and inclusion zones")
+    if mission.geofence is not None and mission.geofence.max_distance_from_home_m is not None:
+        waits.append("geofence.max_distance_from_home_m (from the autopilot's home)")
+    return waits

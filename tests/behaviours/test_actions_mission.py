@@ -36,7 +36,8 @@ WAYPOINTS = [
 @pytest.fixture
 def mission_state() -> MissionState:
     """Replaces the shared square: four legs with a depth and speed, a height above the seabed, an altitude, nothing."""
-    mission = Mission.model_validate({"version": 1, "name": "mixed", "vehicle": "sub", "waypoints": WAYPOINTS})
+    doc = {"version": 1, "name": "mixed", "vehicle": "sub", "waypoints": WAYPOINTS, "limits": {"leg_timeout_s": 300.0}}  # 125 m at 1 m/s
+    mission = Mission.model_validate(doc)
     state = MissionState()
     state.upload(mission)
     state.start()

@@ -209,9 +209,9 @@ def test_a_waypoint_out_of_reach_is_refused_at_start_exit_1_with_nothing_sent(tm
     the log, the status (JSON lines) and the last line say why, exit 1 (README: aborted at run time), the vehicle untouched."""
     far = tmp_path / "far.yaml"  # no home: the simulated rover boots at the first waypoint
     far.write_text(
-        "version: 1\nname: far\nvehicle: rover\nauto_arm: true\nsimulator: {ekf_ready_after_s: 2}\nwaypoints:\n"
+        "version: 1\nname: far\nvehicle: rover\nauto_arm: true\nsimulator: {ekf_ready_after_s: 2}\nlimits: {leg_timeout_s: 3000}\nwaypoints:\n"
         "  - {lat: -35.3629906, lon: 149.1652300}\n  - {lat: -35.2730000, lon: 149.1652300, name: town}\n"
-    )
+    )  # a leg_timeout_s the 10 km leg fits (issue 40: else validate refuses it, exit 2)
     run_in_lockstep(monkeypatch)
     assert main(["run", str(far), "--speedup", "10", "--socket", "none"]) == 1
     out, err = capsys.readouterr()

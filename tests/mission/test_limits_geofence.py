@@ -115,10 +115,10 @@ BOW_TIE = """geofence:
 @pytest.mark.parametrize(
     ("body", "expected"),
     [
-        ("geofence: {}\n" + WP, ["m.yaml:5:11: geofence: a geofence needs a polygon, max_distance_from_home_m or both"]),
+        ("geofence: {}\n" + WP, ["m.yaml:5:11: geofence: a geofence needs a polygon, max_distance_from_home_m, inclusion or keep_out zones"]),
         (
             "geofence: {polygon: null, max_distance_from_home_m: null}\n" + WP,
-            ["m.yaml:5:11: geofence: a geofence needs a polygon, max_distance_from_home_m or both"],
+            ["m.yaml:5:11: geofence: a geofence needs a polygon, max_distance_from_home_m, inclusion or keep_out zones"],
         ),
         (
             "geofence: {polygon: [{lat: 47.39, lon: 8.54}, {lat: 47.40, lon: 8.54}]}\n" + WP,
@@ -136,7 +136,7 @@ BOW_TIE = """geofence:
         ("geofence: {max_distance_from_home_m: 0}\n" + WP, ["m.yaml:5:38: geofence.max_distance_from_home_m: 0: Input should be greater than 0"]),
         (
             "geofence: {max_distance_from_home_m: 10, radius: 5}\n" + WP,
-            ["m.yaml:5:42: geofence.radius: unknown field (allowed: polygon, max_distance_from_home_m)"],
+            ["m.yaml:5:42: geofence.radius: unknown field (allowed: polygon, max_distance_from_home_m, inclusion, keep_out)"],
         ),
     ],
 )

@@ -123,14 +123,14 @@ def test_model_validator_message_has_no_pydantic_prefix(minimal_yaml: str) -> No
 
 
 def test_values_merged_with_an_anchor_are_located_at_the_anchor(minimal_yaml: str) -> None:
-    text = minimal_yaml + "  - &base {lat: 47.0, lon: 8.0, speed_m_s: 9.0}\n  - <<: *base\n    speed_m_s: 1.0\n  - <<: *base\n  - *base\n"
+    text = minimal_yaml + "  - &base {lat: 47.4, lon: 8.55, speed_m_s: 9.0}\n  - <<: *base\n    speed_m_s: 1.0\n  - <<: *base\n  - *base\n"
     outside = "9.0 m/s is outside limits.speed_m_s [0.1, 5.0]"
-    assert errors_of(text) == [f"m.yaml:7:44: waypoints[{i}].speed_m_s: {outside} (waypoint {i + 1})" for i in (1, 3, 4)]
+    assert errors_of(text) == [f"m.yaml:7:45: waypoints[{i}].speed_m_s: {outside} (waypoint {i + 1})" for i in (1, 3, 4)]
 
 
 def test_anchors_and_merges_within_the_limits_load(minimal_yaml: str) -> None:
-    mission = load_mission_text(minimal_yaml + "  - &p {lat: 47.0, lon: 8.0}\n  - *p\n  - {<<: *p, lat: 47.5}\n", "m.yaml")
-    assert [(w.lat, w.lon) for w in mission.waypoints[1:]] == [(47.0, 8.0), (47.0, 8.0), (47.5, 8.0)]
+    mission = load_mission_text(minimal_yaml + "  - &p {lat: 47.4, lon: 8.55}\n  - *p\n  - {<<: *p, lat: 47.401}\n", "m.yaml")
+    assert [(w.lat, w.lon) for w in mission.waypoints[1:]] == [(47.4, 8.55), (47.4, 8.55), (47.401, 8.55)]
 
 
 def test_a_key_yaml_reads_as_a_bool_is_named_as_written(minimal_yaml: str) -> None:
@@ -259,8 +259,8 @@ waypoints:
 def test_every_error_comes_in_one_pass_cross_field_ones_included() -> None:
     """Issue 13: depth 150 and altitude 1 were reported only once the 6 other errors were fixed."""
     assert errors_of(ONE_PASS) == [
-        "m.yaml:4:1: bogus: unknown field (allowed: version, name, vehicle, autopilot, tree, description, drive, auto_arm, home, geofence, limits, "
-        "rc, failsafe, sampling, vtol, rc_route, simulator, energy, waypoints)",
+        "m.yaml:4:1: bogus: unknown field (allowed: version, name, vehicle, autopilot, tree, description, drive, auto_arm, home, geofence, "
+        "rally_points, limits, rc, failsafe, sampling, vtol, rc_route, simulator, energy, waypoints)",
         "m.yaml:6:30: limits.speed_m_s.max: expected a number, got string 'fast'",
         "m.yaml:7:19: limits.link_timeout_s: -1: Input should be greater than 0",
         "m.yaml:9:38: waypoints[0].depth_m: 150.0 m is outside limits.depth_m [0.0, 100.0] (waypoint 1)",
@@ -290,5 +290,5 @@ def test_a_list_that_lost_an_item_is_not_judged_whole(monkeypatch: pytest.Monkey
 
 def test_an_error_in_a_waypoint_says_the_persons_number_and_its_name_after_the_path(minimal_yaml: str) -> None:
     """Issue 43: `waypoints[6]` (the file's path, 0-based) beside status, `ctl route` and `report`'s `waypoint 7 of 8`."""
-    text = minimal_yaml + "".join(f"  - {{lat: 47.{n}, lon: 8.5}}\n" for n in range(5)) + "  - {lat: 95.0, lon: 8.5, name: far}\n"
+    text = minimal_yaml + "".join(f"  - {{lat: 47.3977{n}, lon: 8.5456}}\n" for n in range(5)) + "  - {lat: 95.0, lon: 8.5, name: far}\n"
     assert errors_of(text) == ["m.yaml:12:11: waypoints[6].lat: 95.0: Input should be less than or equal to 90 (waypoint 7, 'far')"]

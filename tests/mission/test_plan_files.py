@@ -121,7 +121,6 @@ def test_what_a_plan_cannot_give_is_reported_where_it_is():
     text = BOAT_SURVEY.read_text()
     warnings = {w.field: w for w in import_file(BOAT_SURVEY).warnings}
     expected = {
-        "geoFence.polygons[1]": ("exclusion polygon", "{"),
         "mission.items[3]": ("DO_SET_SERVO (183)", "{"),
         "mission.items[4]": ("NAV_LOITER_TIME (19)", "{"),
         "mission.items[5].params[0]": ("hold time 5 s", "5"),
@@ -129,7 +128,6 @@ def test_what_a_plan_cannot_give_is_reported_where_it_is():
         "mission.items[6]": ("survey: imported as the 8 mission items", "{"),
         "mission.items[6].TransectStyleComplexItem.Items[0]": ("DO_SET_CAM_TRIGG_DIST (206) and 1 more", "{"),
         "mission.items[7]": ("NAV_RETURN_TO_LAUNCH (20)", "{"),
-        "rallyPoints.points": ("2 rally point(s) not imported", "["),
     }
     assert set(warnings) == set(expected)
     for field, (message, starts) in expected.items():
@@ -247,10 +245,18 @@ def missions(draw: st.DrawFn) -> Mission:
         fence["polygon"] = [{"lat": lat0 + a, "lon": lon0 + b} for a, b in ((-d, -d), (d, -d), (d, d), (-d, d))]
     if "home" in doc and draw(st.booleans()):
         fence["max_distance_from_home_m"] = draw(st.floats(2000.0, 10_000.0))
+    if draw(st.booleans()):  # keep-out zones 3 km off the route, an inclusion circle holding it
+        away = [{"lat": lat0 - 0.03 + a, "lon": lon0 + b} for a, b in ((0.0, 0.0), (0.001, 0.0), (0.0, 0.001))]
+        fence["keep_out"] = [{"polygon": away}, {"circle": {"lat": lat0 + 0.03, "lon": lon0, "radius_m": draw(st.floats(1.0, 300.0))}}]
+        fence["inclusion"] = [{"circle": {"lat": lat0 + 0.000123, "lon": lon0, "radius_m": 3000.0}}]  # not on a home: that is a distance
+    if draw(st.booleans()):
+        doc["rally_points"] = [{"lat": lat0 + draw(near), "lon": lon0 + draw(near), "alt_m": draw(st.floats(0.0, 100.0))}]
     if fence:
         doc["geofence"] = fence
     if kind == "vtol":
         doc["limits"] = {"acceptance_radius_m": VTOL_MIN_ACCEPTANCE_RADIUS_M}
+    else:  # legs of up to 1.3 km at 0.1 m/s
+        doc["limits"] = {"leg_timeout_s": 86400.0}
     mission = Mission.model_validate(doc)
     assert cross_field_errors(mission) == []
     return mission
@@ -270,6 +276,7 @@ def assert_missions_equal(back: Mission, mission: Mission, *, fence: bool) -> No
         assert (b.depth_m or 0.0, b.altitude_m or 0.0) == pytest.approx((w.depth_m or 0.0, w.altitude_m or 0.0), abs=METRE)
     if fence:
         assert back.geofence == mission.geofence
+        assert back.rally_points == mission.rally_points  # JSON carries a float exactly
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -293,7 +300,12 @@ def test_random_missions_round_trip_through_a_waypoints_file(mission):
     if home_at_zero:  # Mission Planner's "no home"
         mission = mission.model_copy(update={"home": None})
     assert_missions_equal(back, mission, fence=False)
-    expected = [*_kept_speeds(mission), *([("home",)] if home_at_zero else []), *([("geofence",)] if mission.geofence is not None else [])]
+    expected = [
+        *_kept_speeds(mission),
+        *([("home",)] if home_at_zero else []),
+        *([("geofence",)] if mission.geofence is not None else []),
+        *([("rally_points",)] if mission.rally_points else []),
+    ]
     assert [p for p, _ in exported.warnings] == expected
 
 
@@ -338,7 +350,7 @@ def test_a_speed_above_the_default_limits_widens_them_with_a_warning():
     ]
 
 
-def test_a_fence_circle_not_around_home_and_a_second_inclusion_polygon_are_reported():
+def test_a_fence_circle_not_around_home_and_a_second_inclusion_polygon_are_inclusion_zones():
     square = [[47.39, 8.54], [47.41, 8.54], [47.41, 8.56], [47.39, 8.56]]
     fence = {
         "circles": [{"circle": {"center": [47.40, 8.55], "radius": 300}, "inclusion": True, "version": 1}],
@@ -347,8 +359,61 @@ def test_a_fence_circle_not_around_home_and_a_second_inclusion_polygon_are_repor
     }
     text = json.dumps(json.loads(plan_text()) | {"geoFence": fence}, indent=4)
     imported = import_plan(text, "f.plan")
-    assert imported.mission.geofence.polygon is not None and imported.mission.geofence.max_distance_from_home_m is None
-    assert {w.field for w in imported.warnings} == {"geoFence.circles[0]", "geoFence.polygons[1]"}
+    geofence = imported.mission.geofence
+    assert geofence.polygon is not None and geofence.max_distance_from_home_m is None
+    assert [(z.circle.lat, z.circle.lon, z.circle.radius_m) if z.circle else len(z.polygon) for z in geofence.inclusion] == [4, (47.40, 8.55, 300)]
+    assert imported.warnings == ()
+
+
+def test_exclusion_shapes_and_rally_points_as_qgroundcontrol_writes_them_round_trip():
+    """QGroundControl 4's geoFence (GeoFenceController::save: polygons and circles, each with its inclusion flag) and
+    rallyPoints (RallyPointController::save: [latitude, longitude, altitude]) come in as keep-out zones and rally points and
+    go out as they came."""
+    island = [[47.3979, 8.5457], [47.3980, 8.5457], [47.3980, 8.5458]]
+    fence = {
+        "circles": [{"circle": {"center": [47.3990, 8.5470], "radius": 15.5}, "inclusion": False, "version": 1}],
+        "polygons": [{"inclusion": False, "polygon": island, "version": 1}],
+        "version": 2,
+    }
+    rally = {"points": [[47.3978, 8.5455, 0], [47.3985, 8.5460, 12.5]], "version": 2}
+    text = json.dumps(json.loads(plan_text()) | {"geoFence": fence, "rallyPoints": rally}, indent=4)
+    imported = import_plan(text, "f.plan")
+    mission = imported.mission
+    assert imported.warnings == ()
+    shapes = [
+        [[v.lat, v.lon] for v in z.polygon] if z.polygon else [z.circle.lat, z.circle.lon, z.circle.radius_m] for z in mission.geofence.keep_out
+    ]
+    assert shapes == [island, [47.3990, 8.5470, 15.5]]
+    assert [[p.lat, p.lon, p.alt_m] for p in mission.rally_points] == rally["points"]
+    plan = json.loads(export_plan(mission).text)
+    assert sorted(map(json.dumps, plan["geoFence"]["polygons"] + plan["geoFence"]["circles"])) == sorted(
+        map(json.dumps, fence["polygons"] + fence["circles"])
+    )
+    assert plan["rallyPoints"] == rally
+    back = import_plan(export_plan(mission).text, "again.plan", name=mission.name).mission
+    assert (back.geofence, back.rally_points) == (mission.geofence, mission.rally_points)
+
+
+def test_a_zone_or_rally_point_name_is_reported_where_a_format_cannot_carry_it(minimal_yaml: str):
+    mission = load_mission_text(
+        minimal_yaml + "geofence:\n  keep_out: [{name: pier, circle: {lat: 47.3, lon: 8.5, radius_m: 10}}]\n"
+        "rally_points: [{lat: 47.3977, lon: 8.5456, name: slipway}]\n",
+        "m.yaml",
+    )
+    assert [path for path, _ in export_plan(mission).warnings] == [("home",), ("geofence", "keep_out", 0, "name"), ("rally_points", 0, "name")]
+    assert [path for path, _ in export_waypoints(mission).warnings] == [("geofence",), ("rally_points",)]
+
+
+def test_a_slow_plan_gets_a_leg_time_limit_it_can_keep_with_a_warning():
+    """A 60 m line at 0.5 m/s (QGroundControl's DO_CHANGE_SPEED) takes 116 s past the acceptance radius: over the
+    default 120 s? no; 300 m takes 596 s: limits.leg_timeout_s becomes twice that, said where the leg is."""
+    speed = {"autoContinue": True, "command": 178, "doJumpId": 1, "frame": 2, "params": [1, 0.5, -1, 0, 0, 0, 0], "type": "SimpleItem"}
+    far = {"autoContinue": True, "command": 16, "doJumpId": 2, "frame": 3, "params": [0, 0, 0, None, 47.4004419, 8.545594, 0], "type": "SimpleItem"}
+    imported = import_plan(plan_text(items=[speed, far]), "slow.plan")
+    assert imported.mission.limits.leg_timeout_s == 1193.0
+    assert [(w.field, w.message) for w in imported.warnings] == [
+        ("mission.items[1]", "this leg takes at least 596 s: limits.leg_timeout_s set to 1193 (the default 120 would refuse it)")
+    ]
 
 
 def test_the_vehicle_option_wins_over_the_plans_vehicle_type_with_a_warning():

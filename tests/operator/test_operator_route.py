@@ -69,7 +69,7 @@ def test_the_vehicle_position_must_be_known_well(operator: Operator, state: Miss
     reply = operator.request("route", operation="add")
     assert (reply.ok, reply.reason) == (False, why)
     assert state.route == before
-    assert operator.request("route", operation="add", lat=47.0, lon=8.0).ok  # a position given needs none
+    assert operator.request("route", operation="add", lat=47.3981, lon=8.5458).ok  # a position given needs none
 
 
 @pytest.mark.parametrize(

@@ -47,7 +47,7 @@ def at(lat_lon: tuple[float, float], bearing_deg: float, metres: float) -> dict[
     return {"lat": lat, "lon": lon}
 
 
-def sub_mission(*waypoints: dict[str, Any]) -> Mission:
+def sub_mission(*waypoints: dict[str, Any], **limits: Any) -> Mission:
     return Mission.model_validate(
         {
             "version": 1,
@@ -55,7 +55,7 @@ def sub_mission(*waypoints: dict[str, Any]) -> Mission:
             "vehicle": "sub",
             "tree": "auv_survey",
             "auto_arm": True,
-            "limits": LIMITS,
+            "limits": {**LIMITS, **limits},
             "waypoints": list(waypoints),
         }
     )
@@ -270,7 +270,8 @@ def test_a_last_leg_at_the_surface_needs_no_surfacing(make_survey: MakeSurvey) -
 def test_a_waypoint_over_1_km_from_the_live_position_refuses_the_whole_mission_before_anything_is_sent(
     make_survey: MakeSurvey, vehicle_at: tuple[float, float], far: float, refusal: str | None
 ) -> None:
-    survey = make_survey(sub_mission(SURVEY[0], {**at(START, 90.0, far), "name": "far", "depth_m": 2.0}), start=vehicle_at)
+    far_leg = {"leg_timeout_s": 3600.0}  # refused for its distance, not for its time (issue 40)
+    survey = make_survey(sub_mission(SURVEY[0], {**at(START, 90.0, far), "name": "far", "depth_m": 2.0}, **far_leg), start=vehicle_at)
     statuses = survey.run(1)
     if refusal is None:
         assert statuses == [Status.RUNNING]
@@ -308,7 +309,7 @@ def test_no_position_within_the_ekf_wait_fails_the_mission(make_survey: MakeSurv
 def test_the_1_km_rule_is_checked_once_so_resuming_far_from_the_first_waypoint_carries_on(make_survey: MakeSurvey) -> None:
     """900 m out and 1.8 km back: accepted at the start (both within 1 km); from the turn the second is 1.8 km away."""
     out, back = at(START, 0.0, 900.0), at(START, 180.0, 900.0)
-    survey = make_survey(sub_mission({**out, "name": "out", "depth_m": 2.0}, {**back, "name": "back", "depth_m": 2.0}))
+    survey = make_survey(sub_mission({**out, "name": "out", "depth_m": 2.0}, {**back, "name": "back", "depth_m": 2.0}, leg_timeout_s=3600.0))
     survey.sub.step_m = 100.0
     survey.run_to_leg(1)
     survey.state.pause("operator: pause")
