@@ -49,6 +49,7 @@ from executive.behaviours.rc_guards import RcAutoMode, RcFresh, RcNotLost, RcNot
 from executive.behaviours.reacting import READS, Reacting
 from executive.mission.failsafes import REACTION_MODES, FailsafeCondition, FailsafePolicy
 from executive.mission.lifecycle import MissionState
+from executive.sensing.vtol_flight import flies_as_plane
 from executive.vehicles import PROFILES
 
 log = logging.getLogger(__name__)
@@ -98,7 +99,7 @@ class Failsafe(TimedBehaviour):
     left the vehicle in (the runtime then leaves it there).
     """
 
-    reads = ("/vehicle/vtol_state", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count", *READS)
+    reads = ("/vehicle/vtol_state", "/vehicle/ground_speed_m_s", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count", *READS)
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     #: Where its steps are announced to a person (the ground station's STATUSTEXT); from ``setup(mission_state=...)`` when given.
@@ -262,8 +263,18 @@ class Failsafe(TimedBehaviour):
             self.mission_state.announce(text, warning)
 
     def _mode_of(self, what: str) -> str:
+        """The mode of reaction ``what`` for this vehicle; a VTOL flying as a plane takes the plane's.
+
+        A return (rtl) is the plane's RTL from the moment a transition to fixed-wing flight starts, or when the
+        speed says wing-borne before EXTENDED_SYS_STATE does: QRTL entered then hovers the whole way home
+        (:mod:`executive.sensing.vtol_flight`). A hold or loiter is the plane's only in FW: mid-transition,
+        QLOITER stops it where it is.
+        """
         modes = REACTION_MODES[what][self.vehicle]
-        return modes[1] if self.get("/vehicle/vtol_state") == "FW" else modes[0]
+        state = self.get("/vehicle/vtol_state")
+        if what == "rtl" and self.vehicle == "vtol":
+            return modes[1] if flies_as_plane(state, self.get("/vehicle/ground_speed_m_s")) else modes[0]
+        return modes[1] if state == "FW" else modes[0]
 
     def _rearm(self, now: float) -> Status:
         """Every condition cleared, the vehicle disarmed by this failsafe: arm it again (retried), then the work resumes."""

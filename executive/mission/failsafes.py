@@ -33,7 +33,9 @@ ends the go-to); ``auv_survey`` link_loss hold, resume (the survey holds in POSH
 Reactions (:data:`REACTION_MODES`): ``hold`` rover/boat HOLD, sub POSHOLD, vtol QLOITER; ``loiter``
 rover/boat LOITER, sub POSHOLD, vtol QLOITER; ``rtl`` rover/boat RTL, vtol QRTL (no sub); ``surface``
 sub SURFACE only; ``disarm`` the manual mode, then disarm, re-armed on resume (no vtol); ``wait``
-nothing: hands off. A vtol flying as a plane holds, loiters in LOITER and returns in RTL.
+nothing: hands off. A vtol flying as a plane holds, loiters in LOITER and returns in RTL; it returns in RTL
+from the moment a transition to fixed-wing flight starts, or at a wing-borne ground speed not yet reported as FW
+(QRTL asked then would hover the whole way home: :mod:`executive.sensing.vtol_flight`).
 heading_insane is judged on rovers and boats only (the heading filter checks the compass against
 the course over ground, which a sub or a vtol does not follow); geofence_breach only with a
 ``geofence:`` section; rc_loss once an RC transmitter has been seen (or, ugv_rc_route, stale RC).

@@ -23,6 +23,7 @@ from executive.mission.model import Mission
 from executive.sensing import battery_energy
 from executive.sensing.consumption import HELD_BELOW_M_S, SEEDS, ConsumptionModel
 from executive.sensing.heading import filterpy_ready, load_filterpy
+from executive.sensing.vtol_flight import flies_as_plane
 from executive.state import Battery, BatteryStatus, EkfStatus, GlobalPosition
 
 log = logging.getLogger("executive.energy")  # the journal's event kind: "energy"
@@ -139,6 +140,7 @@ class EnergyWatch:
                 "/vehicle/armed",
                 "/vehicle/ekf",
                 "/vehicle/ground_speed_m_s",
+                "/vehicle/vtol_state",
             ],
         )
         self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
@@ -150,6 +152,7 @@ class EnergyWatch:
         self._ticked_at: float | None = None
         self._last_position: GlobalPosition | None = None
         self._said: tuple[int, float] | None = None  # (leg, margin) last logged
+        self._vtol = False
         load_filterpy()
 
     def service(self) -> None:
@@ -162,6 +165,7 @@ class EnergyWatch:
                 return
             seed_km, seed_min = SEEDS[mission.vehicle]
             self._model = ConsumptionModel(mission.energy.wh_per_km or seed_km, mission.energy.wh_per_min or seed_min)
+        self._vtol = mission.vehicle == "vtol"
         status: BatteryStatus | None = self._in.get("/vehicle/battery_status")
         battery: Battery | None = self._in.get("/vehicle/battery")
         params = self._in.get("/vehicle/params") or {}
@@ -188,7 +192,10 @@ class EnergyWatch:
     def _track_distance(self) -> None:
         now = self._clock.now()
         speed: float | None = self._in.get("/vehicle/ground_speed_m_s")
-        if self._in.get("/vehicle/armed") and self._ticked_at is not None and (speed is None or speed < HELD_BELOW_M_S):
+        # a VTOL on its lift motors pays by the second however it moves: its metres are the plane's (the way home is flown as one)
+        hovering = self._vtol and not flies_as_plane(self._in.get("/vehicle/vtol_state"), speed)
+        held = speed is None or speed < HELD_BELOW_M_S or hovering
+        if self._in.get("/vehicle/armed") and self._ticked_at is not None and held:
             self._held_s += now - self._ticked_at  # hover, loiter, station keeping, a stop: its seconds cost, not its metres
         self._ticked_at = now
         position: GlobalPosition | None = self._in.get("/vehicle/position")
@@ -196,7 +203,7 @@ class EnergyWatch:
         # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (README)
         if position is None or position is self._last_position or ekf is None or not ekf.position_ok():
             return
-        if self._last_position is not None and self._in.get("/vehicle/armed"):
+        if self._last_position is not None and self._in.get("/vehicle/armed") and not hovering:
             self._metres += geo.distance(self._last_position.lat, self._last_position.lon, position.lat, position.lon)
         self._last_position = position
 
