@@ -122,6 +122,7 @@ FENCE = {"geofence": {"max_distance_from_home_m": 50.0}}
 FW = {"vehicle__vtol_state": "FW"}
 TO_FW = {"vehicle__vtol_state": "TRANSITION_TO_FW"}
 WING_BORNE_STILL_SAID_MC = {"vehicle__vtol_state": "MC", "vehicle__ground_speed_m_s": 18.0}
+HOVERING_ALONG = {"vehicle__vtol_state": "MC", "vehicle__ground_speed_m_s": 5.0}
 LOW = {"vehicle__battery": Battery(11.0, 2.0, 15, 1.0)}
 
 # (vehicle, mission changes, facts before, what breaks, the commands of that very tick, the status of that tick)
@@ -151,7 +152,7 @@ REACTIONS = [
     # transition's start, and at a wing-borne speed EXTENDED_SYS_STATE has not caught up with; a hold mid-transition stays QLOITER
     pytest.param("vtol", {}, TO_FW, LOW, [("mode", "RTL")], F, id="vtol-transitioning-to-a-plane-battery_low-rtl"),
     pytest.param("vtol", {}, WING_BORNE_STILL_SAID_MC, LOW, [("mode", "RTL")], F, id="vtol-wing-borne-still-said-mc-battery_low-rtl"),
-    pytest.param("vtol", {}, {"vehicle__vtol_state": "MC", "vehicle__ground_speed_m_s": 5.0}, LOW, [("mode", "QRTL")], F, id="vtol-hovering-along-qrtl"),
+    pytest.param("vtol", {}, HOVERING_ALONG, LOW, [("mode", "QRTL")], F, id="vtol-hovering-along-qrtl"),
     pytest.param("vtol", {}, TO_FW, {"link__up": False}, [("mode", "QLOITER")], R, id="vtol-transitioning-link_loss-qloiter"),
     pytest.param("rover", FENCE, {}, {"vehicle__position": position(60.0)}, [("mode", "HOLD")], F, id="rover-geofence_breach-hold-abort"),
     pytest.param("boat", FENCE, {}, {"vehicle__position": position(60.0)}, [("mode", "RTL")], F, id="boat-geofence_breach-rtl-abort"),

@@ -93,8 +93,11 @@ def test_arduplane_reports_the_energy_drawn_in_hj_and_the_flight_teaches_its_con
     assert round(first.capacity_wh, 1) == 55.5 and (first.wh_per_km, first.wh_per_min) == (5.0, 16.0)  # the vtol's seeds
     # before arming: the whole flight needs 6 Wh + 11 Wh home (+/- 7), 17 Wh: it drew 12.97 (+31 %, within 1 sigma)
     assert abs(first.route_wh + first.home_wh - 12.97) < first.sigma_wh
-    # the flight taught it: 8.1 Wh/km in wing-borne flight, 20 Wh/min hovering (the landing last)
-    assert final.wh_per_km > 6.0 and final.wh_per_min > 16.0
+    # the flight taught it, its hover (moving or not: MC, TRANSITION_TO_MC, slower than 10 m/s) by the minute and its
+    # plane flight by the km (issue 33b): the tlog's own split, armed, is 9.56 Wh in 77 s hovering (7.5 Wh/min) and 3.42 Wh
+    # over 1084 m wing-borne (3.2 Wh/km, the transitions in it); it learned 8.7 Wh/min and 1.4 Wh/km. Counted as one
+    # (every metre at one rate) it had learned 20 Wh/min and 8.1 Wh/km: a plane at 25 m/s then "drew" more than the hover.
+    assert 6.0 < final.wh_per_min < 11.0 and 1.0 < final.wh_per_km < 5.0
 
 
 def test_arduplane_with_a_300_mah_pack_does_not_fit_before_arming() -> None:
