@@ -648,3 +648,29 @@ def test_on_the_simulated_quadplane_a_leg_counts_only_once_the_aircraft_is_withi
     assert low_within, "the aircraft was never within the radius below 110 m: the case is not tested"
     reached_at = next(alt for leg, _, _, alt in recorder.positions if leg == 1)
     assert reached_at >= 110.0
+
+
+def test_on_the_simulated_quadplane_an_energy_return_asked_during_the_transition_to_fw_is_the_planes_rtl(caplog) -> None:
+    """Issue 33: on the real QuadPlane SITL the energy failsafe fired 0.5 s after the transition, before EXTENDED_SYS_STATE said
+    FW; QRTL, entered with the lift motors running (ArduPlane/mode_qrtl.cpp), hovered home for 106 s and emptied the pack.
+    The pack drained to 21 % (the reserve is 20 %) as the transition starts: the return asked then is RTL, flown as a plane."""
+    import yaml
+
+    fields = yaml.safe_load((ROOT / "missions" / "vtol_transit.yaml").read_text(encoding="utf-8"))
+    mission = Mission.model_validate(fields | {"energy": {"nominal_v": 22.2}})
+    bb = blackboard.reader("energy return test", ["/vehicle/vtol_state"])
+    states: list[str | None] = []  # the vtol state the executive saw at each tick
+    with Lockstep(mission) as sim:
+        sim.observers.append(lambda s: states.append(bb.get("/vehicle/vtol_state")))
+        assert sim.run(limit_s=300, until=lambda: bb.get("/vehicle/vtol_state") == "TRANSITION_TO_FW") is None
+        pack = sim.autopilot.battery
+        drained_mah = 0.79 * pack.spec.capacity_mah - pack.consumed_mah
+        pack.consumed_mah += drained_mah
+        pack.consumed_wh += drained_mah / 1000.0 * pack.spec.cells * 3.7
+        outcome = sim.run_to_end(limit_s=60)
+        assert str(outcome.status) == "ABORTED" and outcome.reason.startswith("Enough energy to finish and return?: energy short")
+        # the reaction and the abort are one tick: the executive had not seen FW yet when it asked (as on the bench)
+        assert states[-1] == "TRANSITION_TO_FW" and "FW" not in states[states.index("TRANSITION_TO_FW") :]
+        assert "-> rtl (RTL), abort the mission" in caplog.text
+        sim.step(2.0)
+        assert sim.autopilot.mode == "RTL"
