@@ -17,6 +17,7 @@ from py_trees.common import Status
 
 from executive import geo
 from executive.autopilot import AutopilotPort
+from executive.behaviours.auto_route import AUTO
 from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
 from executive.mission.lifecycle import MissionState
 from executive.state import (
@@ -28,9 +29,6 @@ from executive.state import (
     MissionTransferStatus,
     TransferState,
 )
-
-#: The mode that drives the autopilot's own mission, as the trees name it.
-AUTO = "AUTO"
 
 
 class _Transfer(ExecutiveBehaviour):
