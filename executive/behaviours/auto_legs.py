@@ -17,8 +17,8 @@ from py_trees.common import Status
 
 from executive import geo
 from executive.autopilot import AutopilotPort
-from executive.behaviours.auto_route import AUTO
-from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
+from executive.behaviours.auto_route import AUTO, MissionTransferFollower
+from executive.behaviours.base import TimedBehaviour
 from executive.mission.lifecycle import MissionState
 from executive.state import (
     MISSION_STATE_COMPLETE,
@@ -26,52 +26,10 @@ from executive.state import (
     HomePosition,
     MissionCurrent,
     MissionItemReached,
-    MissionTransferStatus,
-    TransferState,
 )
 
 
-class _Transfer(ExecutiveBehaviour):
-    """Follows one mission transfer of its own at a time (``/link/mission_transfer``); a failed one is tried again ``retry_s`` later."""
-
-    needs = ("clock", "mission_state", "autopilot")
-    mission_state: MissionState
-    autopilot: AutopilotPort
-
-    def __init__(self, name: str, retry_s: float = 2.0) -> None:
-        super().__init__(name)
-        self.retry_s = retry_s
-        # kept across re-entries: a transfer started before a guard failed goes on
-        self._ticket: int | None = None
-        self.failure = ""
-        self._failed_at = float("-inf")
-
-    def _settle(self) -> bool:
-        """Follow our transfer; True while it runs."""
-        if self._ticket is None:
-            return False
-        status: MissionTransferStatus | None = self.get("/link/mission_transfer")
-        if status is None or status.ticket != self._ticket:  # superseded by another request
-            self._ticket = None
-            return False
-        if status.state is TransferState.IN_PROGRESS:
-            return True
-        self._ticket = None
-        if status.state is TransferState.FAILED:
-            self.failure, self._failed_at = status.reason, self.clock.now()
-        else:
-            self.failure = ""
-        return False
-
-    def _may_start(self) -> bool:
-        """No transfer runs (ours or another's) and no failure is being waited out."""
-        return self.autopilot.route_transfer_idle and self.clock.now() - self._failed_at >= self.retry_s
-
-    def _started(self, ticket: int) -> None:
-        self._ticket = ticket
-
-
-class HorizonOnAutopilot(_Transfer):
+class HorizonOnAutopilot(MissionTransferFollower):
     """SUCCESS while the autopilot holds the route's horizon for the current leg; RUNNING while it is being put there.
 
     The horizon of leg k: the route's waypoints 1..k+1 at least (through the current leg's), k+1+``horizon_legs``
@@ -112,7 +70,7 @@ class HorizonOnAutopilot(_Transfer):
         return Status.RUNNING
 
 
-class AutopilotAtLeg(_Transfer):
+class AutopilotAtLeg(MissionTransferFollower):
     """SUCCESS once the autopilot's mission goes on with the current leg: in AUTO, driving its own mission; else once it was set to the leg.
 
     Out of AUTO (the start, a pause, a failsafe, a crash resumed): MISSION_SET_CURRENT to the leg's

@@ -38,7 +38,47 @@ from executive.state import (
 AUTO = "AUTO"
 
 
-class KeepRouteOnAutopilot(ExecutiveBehaviour):
+class MissionTransferFollower(ExecutiveBehaviour):
+    """Follows one mission transfer of its own at a time (``/link/mission_transfer``); a failed one is tried again ``retry_s`` later."""
+
+    needs = ("clock", "mission_state", "autopilot")
+    mission_state: MissionState
+    autopilot: AutopilotPort
+
+    def __init__(self, name: str, retry_s: float = 2.0) -> None:
+        super().__init__(name)
+        self.retry_s = retry_s
+        # kept across re-entries: a transfer started before a guard failed goes on
+        self._ticket: int | None = None
+        self.failure = ""
+        self._failed_at = float("-inf")
+
+    def _settle(self) -> bool:
+        """Follow our transfer; True while it runs."""
+        if self._ticket is None:
+            return False
+        status: MissionTransferStatus | None = self.get("/link/mission_transfer")
+        if status is None or status.ticket != self._ticket:  # superseded by another request
+            self._ticket = None
+            return False
+        if status.state is TransferState.IN_PROGRESS:
+            return True
+        self._ticket = None
+        if status.state is TransferState.FAILED:
+            self.failure, self._failed_at = status.reason, self.clock.now()
+        else:
+            self.failure = ""
+        return False
+
+    def _may_start(self) -> bool:
+        """No transfer runs (ours or another's) and no failure is being waited out."""
+        return self.autopilot.route_transfer_idle and self.clock.now() - self._failed_at >= self.retry_s
+
+    def _started(self, ticket: int) -> None:
+        self._ticket = ticket
+
+
+class KeepRouteOnAutopilot(MissionTransferFollower):
     """Upload the mission state's route whenever the autopilot's mission is not it; never ends (RUNNING).
 
     One upload at a time, with the autopilot's home (``/vehicle/home``, else a placeholder ArduPilot
@@ -48,54 +88,34 @@ class KeepRouteOnAutopilot(ExecutiveBehaviour):
     """
 
     reads = ("/link/mission_transfer", "/vehicle/mission_items", "/vehicle/home")
-    needs = ("clock", "mission_state", "autopilot")
     clock: Clock
-    mission_state: MissionState
-    autopilot: AutopilotPort
 
     def __init__(self, name: str = "Keep the route on the autopilot", retry_s: float = 5.0) -> None:
-        super().__init__(name)
-        self.retry_s = retry_s
-        # kept across re-entries: an upload started before a guard failed goes on in the transfer
-        self._ticket: int | None = None
-        self._failure = ""
-        self._failed_at = float("-inf")
+        super().__init__(name, retry_s)
 
     def update(self) -> Status:
         now = self.clock.now()
-        self._settle(self.get("/link/mission_transfer"), now)
-        if self._ticket is not None:
+        if self._settle():
+            status: MissionTransferStatus = self.get("/link/mission_transfer")
+            step = "reading back" if status.verifying else "sending"
+            self.feedback_message = f"uploading the route: {step} {status.progress}/{status.total} items"
             return Status.RUNNING
         waypoints = self.mission_state.route.waypoints
         why = self.autopilot.route_differs(waypoints, self.get("/vehicle/mission_items"))
         if why is None:
-            self._failure = ""
+            self.failure = ""
             self.feedback_message = f"the autopilot holds the route: {len(waypoints)} waypoints, read back"
             return Status.RUNNING
-        if self._failure and now - self._failed_at < self.retry_s:
-            self.feedback_message = f"upload failed ({self._failure}); trying again in {self._failed_at + self.retry_s - now:.0f} s"
+        if self.failure and now - self._failed_at < self.retry_s:
+            self.feedback_message = f"upload failed ({self.failure}); trying again in {self._failed_at + self.retry_s - now:.0f} s"
             return Status.RUNNING
         if not self.autopilot.route_transfer_idle:
             self.feedback_message = "waiting for another mission transfer to end"
             return Status.RUNNING
         home: HomePosition | None = self.get("/vehicle/home")
-        self._ticket = self.autopilot.upload_route(waypoints, home)
+        self._started(self.autopilot.upload_route(waypoints, home))
         self.feedback_message = f"uploading {len(waypoints)} waypoints: {why}"
         return Status.RUNNING
-
-    def _settle(self, status: MissionTransferStatus | None, now: float) -> None:
-        """Follow our upload: the feedback while it runs, the reason when it failed."""
-        if self._ticket is None:
-            return
-        if status is None or status.ticket != self._ticket:  # superseded by another request
-            self._ticket = None
-        elif status.state is TransferState.IN_PROGRESS:
-            step = "reading back" if status.verifying else "sending"
-            self.feedback_message = f"uploading the route: {step} {status.progress}/{status.total} items"
-        else:
-            self._ticket = None
-            if status.state is TransferState.FAILED:
-                self._failure, self._failed_at = status.reason, now
 
 
 #: Waypoints closer than this to the first are the same place: a route of them was recorded by a vehicle that never moved.
