@@ -20,13 +20,16 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import shapely
 
 from executive.geofence import open_ring
 from executive.mission.errors import Path
 from executive.mission.model import Mission, Zone
+
+if TYPE_CHECKING:  # shapely is imported where zones are checked: only a mission with zones pays its ~3 MB
+    import shapely
 
 _A = 6378137.0  # WGS84
 _E2 = 6.69437999014e-3
@@ -77,6 +80,8 @@ class Area:
 
 def _shapes(plane: Plane, zones: Sequence[Zone], keep_out: bool) -> np.ndarray:
     """The zones as shapes in the plane, in order: one projection and one GEOS call for all of them (a route edit's budget)."""
+    import shapely
+
     shapes = np.empty(len(zones), dtype=object)
     circles = [(i, z.circle) for i, z in enumerate(zones) if z.circle is not None]
     if circles:
@@ -111,6 +116,8 @@ class Zones:
     """A mission's zones in one plane, ready to check legs against (build once per check: a route edit builds anew)."""
 
     def __init__(self, mission: Mission, plane: Plane) -> None:
+        import shapely
+
         config = mission.geofence
         assert config is not None
         self.plane = plane
@@ -124,6 +131,8 @@ class Zones:
 
     def point_problems(self, xy: np.ndarray) -> list[tuple[int, str]]:
         """(index, why) of each point inside a keep-out zone (or its margin), or outside every inclusion zone."""
+        import shapely
+
         found: list[tuple[int, str]] = []
         points = shapely.points(xy)
         for p, z in zip(*self._tree.query(points, predicate="intersects"), strict=True):
@@ -137,6 +146,8 @@ class Zones:
 
     def leg_problems(self, starts: np.ndarray, ends: np.ndarray) -> list[tuple[int, str]]:
         """(leg index, why) of each leg (starts[i] -> ends[i]) that crosses a keep-out zone or its margin, or leaves the inclusion zones."""
+        import shapely
+
         found: list[tuple[int, str]] = []
         legs = shapely.linestrings(np.stack([starts, ends], axis=1))
         for leg, z in zip(*self._tree.query(legs, predicate="intersects"), strict=True):
