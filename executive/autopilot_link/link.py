@@ -217,9 +217,9 @@ class AutopilotLink:
         heartbeat shows it; after 3 failed asks the next reaction of the firmware's table (ArduRover: HOLD, then a disarm).
         Bounded: by ``timeout_s`` if given, else by the time the table's chain takes (3 asks 1.5 s apart for each reaction: 9 s
         for a rover's HOLD then disarm); the safe state after it by :meth:`SafePlan.bound_s`. Never against a person: a
-        person's mode (or the RC take-over switch), there at the start or chosen meanwhile, is left alone, and so is a sub or a
-        VTOL a person holds (the mission paused hands off). Its steps go to ``announce``; ``report`` is called each time what
-        was asked is sent (the ground station's reports). Its outcome is logged last (INFO when made safe, ERROR when not).
+        person's mode (or the RC take-over switch), there at the start or chosen meanwhile, is left alone, and so is any vehicle
+        a person holds (the mission paused hands off: a ground station's RTL or Go-to is not stopped by a HOLD of ours).
+        Its steps go to ``announce``; ``report`` is called each time what was asked is sent (the ground station's reports). Its outcome is logged last (INFO when made safe, ERROR when not).
         """
         if self.watch.commanded is None:  # nothing of ours to undo: commanding the safe mode would be a change of our own
             self.reader.drain()  # what came meanwhile (a ground station's command) is answered all the same
@@ -229,7 +229,7 @@ class AutopilotLink:
         kind = self.mission.vehicle
         plan = safe_plan(kind, self.autopilot.capabilities.autopilot, mode, self.autopilot.capabilities.safe_mode, self._bb.get)
         safe = plan.mode
-        person = self._person_has_the_vehicle(safe) or (self._hands_off if kind in ("sub", "vtol") else None)
+        person = self._person_has_the_vehicle(safe) or self._hands_off
         if person:
             log.warning("not commanding %s: %s", safe, person)
             return MadeSafe(False, f"not commanding {safe}: {person}")

@@ -97,6 +97,18 @@ def test_an_auv_a_person_holds_is_not_surfaced(lockstep) -> None:
     assert (outcome.safe or "").startswith("not commanding SURFACE: a person holds the vehicle (the mission paused hands off: POSHOLD set by")
 
 
+def test_a_rover_a_person_sent_home_is_not_held(lockstep) -> None:
+    """A ground station's RTL mid-leg pauses the mission hands off: stopping then commands no HOLD over it (a person wins)."""
+    sim = lockstep(load_mission(MISSIONS / "rover_square.yaml"), mission_dir=MISSIONS)
+    assert sim.run(limit_s=300, until=lambda: sim.status is MissionStatus.RUNNING and sim.autopilot.mode == "GUIDED") is None
+    sim.autopilot.set_mode(sim.autopilot.profile.modes["RTL"])  # a person's RTL (the ground station)
+    assert sim.run(limit_s=5, until=lambda: sim.status is MissionStatus.PAUSED) is None
+    asked = modes_asked(sim)
+    outcome, _ = stopped(sim)
+    assert outcome.status is MissionStatus.ABORTED and asked == [] and sim.autopilot.mode == "RTL"
+    assert (outcome.safe or "").startswith("not commanding HOLD: a person holds the vehicle (the mission paused hands off: RTL set by")
+
+
 def landing_low(sim: Lockstep) -> None:
     """Run the example transit until it is landing at home, under 2 m."""
     assert sim.run(limit_s=600, until=lambda: bb("/vehicle/landed_state") == "LANDING" and height() < 2.0) is None
