@@ -219,7 +219,8 @@ class AutopilotLink:
         for a rover's HOLD then disarm); the safe state after it by :meth:`SafePlan.bound_s`. Never against a person: a
         person's mode (or the RC take-over switch), there at the start or chosen meanwhile, is left alone, and so is any vehicle
         a person holds (the mission paused hands off: a ground station's RTL or Go-to is not stopped by a HOLD of ours).
-        Its steps go to ``announce``; ``report`` is called each time what was asked is sent (the ground station's reports). Its outcome is logged last (INFO when made safe, ERROR when not).
+        Its steps go to ``announce``; ``report`` is called each time what was asked is sent (the ground station's reports).
+        Its outcome is logged last (INFO when made safe, ERROR when not).
         """
         if self.watch.commanded is None:  # nothing of ours to undo: commanding the safe mode would be a change of our own
             self.reader.drain()  # what came meanwhile (a ground station's command) is answered all the same
