@@ -9,11 +9,18 @@ leg) and, failing, is the failsafe condition ``energy``. Both read ``/energy/est
 
 from __future__ import annotations
 
+import logging
+
 from py_trees.common import Status
 
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
 from executive.sensing.energy import EnergyEstimate
+
+log = logging.getLogger(__name__)
+
+#: What a mission run unjudged is told to do about it.
+UNJUDGED_HINT = "the battery floor (limits.battery_min_pct / battery_min_v) alone turns it back; energy: {check: off} says it is meant"
 
 #: Once failed, the margin must be back above this share of the capacity to pass again: a margin hovering about zero does not flap.
 HYSTERESIS_SHARE = 0.03
@@ -27,7 +34,7 @@ class EnergyEnough(Guard):
     passes only after 10 s with the margin above 3 % of the capacity (hysteresis).
     """
 
-    reads = ("/energy/estimate", "/energy/unknown")
+    reads = ("/energy/estimate", "/energy/unknown", "/energy/not_judged")
     hold_after_s = 5.0
     resume_after_s = 10.0
     unknown_or_stale = (
@@ -39,12 +46,15 @@ class EnergyEnough(Guard):
         super().__init__(name)
 
     def awaits(self) -> str | None:
-        if self.get("/energy/estimate") is not None:
+        if self.get("/energy/estimate") is not None or self.get("/energy/not_judged"):
             return None
         return self.get("/energy/unknown") or "an energy estimate (BATTERY_STATUS)"
 
     def check(self) -> str | None:
         estimate: EnergyEstimate | None = self.get("/energy/estimate")
+        if estimate is None and (why := self.get("/energy/not_judged")):
+            self.note = f"energy not judged: {why}"
+            return None
         if estimate is None:
             return f"energy unknown: {self.get('/energy/unknown') or 'no estimate yet'}"
         floor = HYSTERESIS_SHARE * estimate.capacity_wh if self._failed else 0.0
@@ -56,9 +66,10 @@ class EnergyEnough(Guard):
 
 class EnergyFits(TimedBehaviour):
     """Pre-flight: SUCCESS when the whole route and the way home fit; FAILURE with the figures when they do not, or, after
-    ``timeout_s`` without an estimate, naming what the battery cannot tell (what to set)."""
+    ``timeout_s`` without an estimate, naming what the battery cannot tell (what to set). A mission without ``energy:`` on a
+    battery that cannot tell its energy (``/energy/not_judged``): SUCCESS, with a warning saying so."""
 
-    reads = ("/energy/estimate", "/energy/unknown")
+    reads = ("/energy/estimate", "/energy/unknown", "/energy/not_judged")
     needs = ("clock",)
     param_docs = {"timeout_s": "FAILURE, naming what is missing, when no estimate has come by then"}
 
@@ -68,6 +79,10 @@ class EnergyFits(TimedBehaviour):
 
     def update(self) -> Status:
         estimate: EnergyEstimate | None = self.get("/energy/estimate")
+        if estimate is None and (unjudged := self.get("/energy/not_judged")):
+            self.feedback_message = f"energy not judged: {unjudged}"
+            log.warning("energy not judged on this vehicle: %s; %s", unjudged, UNJUDGED_HINT)
+            return Status.SUCCESS
         if estimate is None:
             why = self.get("/energy/unknown") or "no energy estimate yet"
             if self.elapsed > self.timeout_s:
