@@ -162,7 +162,7 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
         ("battery_low", BatteryAbove(limits.battery_min_pct, limits.battery_min_v) if battery_checked else None),
         ("rc_loss", RcNotLost(mission.rc.source)),
         ("geofence_breach", inside_geofence(mission)),
-        ("energy", EnergyEnough() if mission.energy_rule() is not None else None),
+        ("energy", EnergyEnough(required=mission.energy is not None) if mission.energy_rule() is not None else None),
     ]
     extra = [guard for condition, guard in candidates if condition not in covered and guard is not None]
     policy = failsafe_policy(mission)

@@ -28,7 +28,8 @@ HYSTERESIS_SHARE = 0.03
 
 class EnergyEnough(Guard):
     """Enough energy to finish and return: the estimate's margin (left above the reserve, less the route, the way home and
-    1 sigma) is not negative.
+    1 sigma) is not negative. Without an estimate it fails only for a mission that asked for the rule (``required``); for one
+    that said nothing it passes unjudged (what the battery cannot tell is refused before arming by :class:`EnergyFits`).
 
     Debounce: fails after 5 s short (five battery reports: one noisy window does not turn the vehicle back); once failed,
     passes only after 10 s with the margin above 3 % of the capacity (hysteresis).
@@ -42,17 +43,20 @@ class EnergyEnough(Guard):
         "the estimate is re-made at each battery report (BATTERY_STATUS, 1 Hz)"
     )
 
-    def __init__(self, name: str = "Enough energy to finish and return?") -> None:
+    param_docs = {"required": "the mission asked for the rule (energy:): no estimate fails; else it passes unjudged (pre-flight refused)"}
+
+    def __init__(self, required: bool = True, name: str = "Enough energy to finish and return?") -> None:
         super().__init__(name)
+        self.required = required
 
     def awaits(self) -> str | None:
-        if self.get("/energy/estimate") is not None or self.get("/energy/not_judged"):
+        if self.get("/energy/estimate") is not None or self.get("/energy/not_judged") or not self.required:
             return None
         return self.get("/energy/unknown") or "an energy estimate (BATTERY_STATUS)"
 
     def check(self) -> str | None:
         estimate: EnergyEstimate | None = self.get("/energy/estimate")
-        if estimate is None and (why := self.get("/energy/not_judged")):
+        if estimate is None and (why := self.get("/energy/not_judged") or (not self.required and "no estimate yet")):
             self.note = f"energy not judged: {why}"
             return None
         if estimate is None:

@@ -126,8 +126,9 @@ def path_length(points: list[tuple[float, float]], start: tuple[float, float]) -
 
 def planned(mission: Mission) -> EnergyEstimate | str | None:
     """What can be said without a vehicle (``validate``): the estimate from home (else the first waypoint) on a full pack
-    of ``energy.capacity_wh`` with the seeds; a string when only the vehicle can tell; None without the rule (``check: off``)."""
-    config = mission.energy_rule()
+    of ``energy.capacity_wh`` with the seeds; a string when only the vehicle can tell; None without an ``energy:`` block (the
+    rule's defaults then can only be judged on the vehicle: validate says nothing of them) or with ``check: off``."""
+    config = mission.energy_rule() if mission.energy is not None else None
     if config is None:
         return None
     if config.capacity_wh is None or not mission.waypoints:
