@@ -106,7 +106,13 @@ def unknown_reading(status: BatteryStatus | None, battery: Battery | None, param
 
 
 def judgeable(
-    config: EnergyConfig, said: bool, status: BatteryStatus, battery: Battery | None, params: Mapping[str, float], autopilot: str, rest_v: float | None
+    config: EnergyConfig,
+    said: bool,
+    status: BatteryStatus,
+    battery: Battery | None,
+    params: Mapping[str, float],
+    autopilot: str,
+    rest_v: float | None,
 ) -> Capacity | NotJudged | str:
     """The capacity when the battery can tell the mission's energy; else why: a :class:`NotJudged` when the mission did not ``said``
     the rule and the monitor measures no current (a voltage-only monitor: the energy is neither counted nor told by a capacity);

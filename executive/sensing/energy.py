@@ -172,6 +172,13 @@ class EnergyWatch:
             ],
         )
         self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
+        self._mission: Mission | None = None
+        self._begin(None)
+        load_filterpy()
+
+    def _begin(self, mission: Mission | None) -> None:
+        """A mission's own count: its seeds, its start, its windows (a mission uploaded in ``--wait`` starts afresh)."""
+        self._mission = mission
         self._model: ConsumptionModel | None = None
         self._start: tuple[float, int] | None = None  # (drawn Wh, remaining %) when the mission's energy was first counted
         self._window: tuple[float, float, float, float] | None = None  # (time, drawn Wh, metres, held s) at the window's start
@@ -184,13 +191,14 @@ class EnergyWatch:
         self._wing_borne = False  # a VTOL has flown as a plane: its transition to FW is behind it
         self._since = 0.0  # when the mission's energy was first looked at
         self._rest_v: float | None = None  # the pack's voltage before arming
-        load_filterpy()
 
     def service(self) -> None:
         mission = self._state.mission
         config = mission.energy_rule() if mission is not None else None
         if mission is None or config is None:
             return
+        if mission is not self._mission:
+            self._begin(mission)
         if self._model is None:
             if not filterpy_ready():
                 self._unknown("the consumption model is loading")

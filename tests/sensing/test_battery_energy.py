@@ -25,7 +25,7 @@ def status(mah: float | None = 100.0, wh: float | None = None, pct: int | None =
         # ArduPilot says no cell count: the cells counted from the pack at rest, where only one count fits
         (EnergyConfig(), {"BATT_CAPACITY": 3300.0, "rest_v": 12.6}, "ardupilot", 36.63),
         (EnergyConfig(), {"BATT_CAPACITY": 10000.0, "rest_v": 16.3}, "ardupilot", 148.0),
-        (EnergyConfig(), {"BATT_CAPACITY": 3300.0, "rest_v": 10.6}, "ardupilot", "BATT_CAPACITY 3300 mAh, but not the pack's voltage (10.6 V at rest"),
+        (EnergyConfig(), {"BATT_CAPACITY": 3300.0, "rest_v": 10.6}, "ardupilot", "BATT_CAPACITY 3300 mAh, but not the pack's voltage (10.6 V"),
     ],
 )
 def test_the_capacity_or_what_to_set(config: EnergyConfig, params: dict[str, float], autopilot: str, expected: float | str) -> None:
