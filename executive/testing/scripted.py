@@ -61,7 +61,8 @@ class ScriptedAutopilot:
     def report_health(self) -> None:
         """What a healthy autopilot has told by now, where the test has not said otherwise (the key unset): a full battery
         (:data:`~executive.testing.BATTERY_FULL`), an energy rule that cannot judge it, the firmware's mode-switch channel
-        (MODE_CH or FLTMODE_CH: the mission's ``simulator.params``, else 8), which the guards and pre-flight need. Once, when it is made: a test's ``vehicle.set`` wins."""
+        (MODE_CH or FLTMODE_CH: the mission's ``simulator.params``, else 8), which the guards and pre-flight need. Once, when it
+        is made: a test's ``vehicle.set`` wins."""
         from executive.autopilot.ardupilot import MODE_SWITCH_PARAMS
 
         profile = self.commander.profile if self.commander is not None else getattr(self, "profile", None)
