@@ -53,9 +53,11 @@ class Held:
     home_s: float
 
 
-def held_s(mission: Mission, leg_index: int, take_off: bool, to_fw_ahead: bool) -> Held:
+def held_s(mission: Mission, leg_index: int, take_off: bool, to_fw_ahead: bool, hovering_at_m: float | None = None) -> Held:
     """The seconds held ahead from leg ``leg_index``: a VTOL's take-off climb and hover point (``take_off``), its transition
-    to FW (``to_fw_ahead``), the transition back and the landing descent home; every sample point's ``sampling.duration_s``."""
+    to FW (``to_fw_ahead``), the transition back and the landing descent home (``hovering_at_m``: the route flown and the
+    aircraft on its lift motors at that height: no transition back, the descent from there); every sample point's
+    ``sampling.duration_s``."""
     route = 0.0
     if mission.sampling is not None:
         route += mission.sampling.duration_s * sum(1 for w in mission.waypoints[leg_index:] if w.sample)
@@ -70,8 +72,9 @@ def held_s(mission: Mission, leg_index: int, take_off: bool, to_fw_ahead: bool) 
             route += math.hypot(point.east_m, point.north_m) / HOVER_M_S + abs(point.up_m - takeoff_alt) / CLIMB_M_S
     if to_fw_ahead:
         route += TO_FW_S
-    alt = max([w.alt_m for w in mission.waypoints] + [takeoff_alt])
-    return Held(route, TO_MC_S + max(0.0, alt - FINAL_ALT_M) / DESCENT_M_S + min(alt, FINAL_ALT_M) / FINAL_M_S)
+    alt = max([w.alt_m for w in mission.waypoints] + [takeoff_alt]) if hovering_at_m is None else max(0.0, hovering_at_m)
+    back = TO_MC_S if hovering_at_m is None else 0.0
+    return Held(route, back + max(0.0, alt - FINAL_ALT_M) / DESCENT_M_S + min(alt, FINAL_ALT_M) / FINAL_M_S)
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,6 +176,7 @@ class EnergyWatch:
         )
         self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
         self._mission: Mission | None = None
+        self._rest_v: float | None = None  # the pack's voltage before arming (kept from mission to mission: the same pack)
         self._begin(None)
         load_filterpy()
 
@@ -189,8 +193,8 @@ class EnergyWatch:
         self._said: tuple[int, float] | None = None  # (leg, margin) last logged
         self._vtol = False
         self._wing_borne = False  # a VTOL has flown as a plane: its transition to FW is behind it
+        self._hovering = False  # a VTOL armed on its lift motors now
         self._since = 0.0  # when the mission's energy was first looked at
-        self._rest_v: float | None = None  # the pack's voltage before arming
 
     def service(self) -> None:
         mission = self._state.mission
@@ -218,8 +222,9 @@ class EnergyWatch:
             else:
                 self._unknown("no BATTERY_STATUS from the autopilot yet")
             return
-        if not self._in.get("/vehicle/armed") and self._start is None and status.voltage_v:
-            self._rest_v = status.voltage_v  # the pack at rest: its cells counted where the autopilot does not say its voltage
+        if status.voltage_v and (not self._in.get("/vehicle/armed") or self._rest_v is None):
+            # the pack at rest (else as first seen: an armed vehicle): its cells counted where the autopilot does not say its voltage
+            self._rest_v = status.voltage_v if self._start is None or self._rest_v is None else self._rest_v
         capacity = battery_energy.judgeable(config, said, status, battery, params, self._autopilot(), self._rest_v)
         if isinstance(capacity, battery_energy.NotJudged):
             self._not_judged(capacity.why)
@@ -244,6 +249,7 @@ class EnergyWatch:
         # a VTOL on its lift motors pays by the second however it moves: its metres are the plane's (the way home is flown as one)
         hovering = self._vtol and not flies_as_plane(self._in.get("/vehicle/vtol_state"), speed)
         self._wing_borne = self._wing_borne or (self._vtol and not hovering)
+        self._hovering = hovering and bool(self._in.get("/vehicle/armed"))
         held = speed is None or speed < HELD_BELOW_M_S or hovering
         if self._in.get("/vehicle/armed") and self._ticked_at is not None and held:
             self._held_s += now - self._ticked_at  # hover, loiter, station keeping, a stop: its seconds cost, not its metres
@@ -300,7 +306,9 @@ class EnergyWatch:
         home_m = path_length([*back, home], end)
         take_off = not self._in.get("/vehicle/armed") and self._state.leg_index == 0
         legs = len(self._state.route.waypoints)
-        held = held_s(mission, self._state.leg_index, take_off, to_fw_ahead=not self._wing_borne and self._state.leg_index < legs)
+        done = self._state.leg_index >= legs
+        landing = self._last_position.alt_rel_m if done and self._hovering and self._last_position is not None else None
+        held = held_s(mission, self._state.leg_index, take_off, not self._wing_borne and not done, landing)
         route_s, home_s = held.route_s, held.home_s
         route_wh = self._model.need(route_m, route_s)[0]
         home_wh = self._model.need(home_m, home_s)[0]
