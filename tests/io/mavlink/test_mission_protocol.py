@@ -434,7 +434,7 @@ def test_append_writes_one_item_at_the_end_by_a_partial_write_and_reads_back(x: 
     assert x.tick(ack()) == [("MISSION_REQUEST_LIST",)]
     read_back(x, ITEMS[:1])
     x.tick(AUTOPILOT.mission_item_reached(1))
-    ticket = x.transfer.append(ITEMS[1])
+    ticket = x.transfer.append([ITEMS[1]])
     x.clock.advance(0.1)
     x.reader.drain()
     x.transfer.flush()
@@ -453,7 +453,7 @@ def test_append_read_back_mismatch_fails(x: Exchange) -> None:
     upload_until_last_item(x, ITEMS[:1])
     x.tick(ack())
     read_back(x, ITEMS[:1])
-    x.transfer.append(ITEMS[1])
+    x.transfer.append([ITEMS[1]])
     x.tick()
     x.tick(request(2))
     x.tick(ack())
