@@ -14,9 +14,11 @@ By its source, a write beyond those three commands would change nothing; the rea
 SITL build (2598e9d4b2e7) restarted at every write wherever it lay: an identical rewrite of item 8 and
 an append of item 9 while it drove to item 1 each restarted it
 (tests/data/ardurover/mission-writes-in-auto-rover.tlog). Its comparison (Mission_Command's
-``operator==``, a memcmp that "relies on all bytes in the structure") evidently sees bytes that differ
-between reads, so here any write counts as a change; what spares a write is the current command
-changing in the same check.
+``operator==``, a memcmp that "relies on all bytes in the structure") runs over buffers left
+uninitialised (the stack array ``cmd[]`` and the member ``mis_change_detect``: padding and unused union
+bytes), reported upstream as ArduPilot issue #31495 (Valgrind), a fix proposed in pull request #33861.
+So here any write counts as a change; what spares a write is the current command changing in the same
+check.
 """
 
 from __future__ import annotations
