@@ -45,6 +45,7 @@ NOT_RUN_HERE: dict[str, str] = {
     "pip install '.[test]'": "installs the package from the network or a cache (this suite runs installed)",
     "pytest -q -n auto": "the whole suite, of which this test is part",
     "pip install uxv-executive": "installs the released package from the package index (tests/test_wheel.py installs the wheel it builds)",
+    "pip install dist/uxv_executive-*.whl": "installs the wheel python -m build makes (tests/test_wheel.py does, in a fresh virtualenv)",
     "python -m build": "tests/test_wheel.py runs it (an sdist and a wheel, twine check, the wheel run in a fresh virtualenv)",
     "sphinx-build -W -b html docs docs/_build/html": ".ci/run builds the manual so, warnings as errors (tests/docs/ checks its generated reference)",
     "systemctl daemon-reload": "systemd, as root",
