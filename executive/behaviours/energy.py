@@ -70,7 +70,8 @@ class EnergyEnough(Guard):
 
 class EnergyFits(TimedBehaviour):
     """Pre-flight: SUCCESS when the whole route and the way home fit; FAILURE with the figures when they do not, or, after
-    ``timeout_s`` without an estimate, naming what the battery cannot tell (what to set). A mission without ``energy:`` on a
+    ``timeout_s`` of the energy watch saying why it has none, naming what the battery cannot tell (what to set); while it
+    says nothing yet (its model loading at a high speed-up), it waits. A mission without ``energy:`` on a
     battery that cannot tell its energy (``/energy/not_judged``): SUCCESS, with a warning saying so."""
 
     reads = ("/energy/estimate", "/energy/unknown", "/energy/not_judged")
@@ -88,7 +89,11 @@ class EnergyFits(TimedBehaviour):
             log.warning("energy not judged on this vehicle: %s; %s", unjudged, UNJUDGED_HINT)
             return Status.SUCCESS
         if estimate is None:
-            why = self.get("/energy/unknown") or "no energy estimate yet"
+            why = self.get("/energy/unknown")
+            if not why:  # the energy watch has nothing to say yet (its model loading): the time to judge has not begun
+                self.started = self.clock.now()
+                self.feedback_message = "waiting for the energy estimate (the consumption model loading)"
+                return Status.RUNNING
             if self.elapsed > self.timeout_s:
                 self.feedback_message = f"the energy rule cannot judge: {why}"
                 return Status.FAILURE

@@ -205,7 +205,7 @@ class EnergyWatch:
             self._begin(mission)
         if self._model is None:
             if not filterpy_ready():
-                self._unknown("the consumption model is loading")
+                self._unknown("")  # the consumption model is loading (filterpy, in the background): nothing to say yet
                 return
             seed_km, seed_min = SEEDS[mission.vehicle]
             self._model = ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min)
