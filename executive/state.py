@@ -354,6 +354,7 @@ class MissionTransferStatus:
     retries: int  # messages resent after a timeout, over the whole transfer
     verifying: bool  # an upload is reading the mission back
     time: float
+    mission_type: int = 0  # MAV_MISSION_TYPE: 0 the flight plan, 1 the fence, 2 the rally points
 
 
 @dataclass(frozen=True, slots=True)
