@@ -90,6 +90,7 @@ _KEYS: tuple[Key, ...] = (
     Key("/rc/chancount", None, "mavlink reader", "RC_CHANNELS chancount: channels the receiver has (every field present is read whatever it says)"),
     Key("/vehicle/mission_home", None, "mission transfer", "home as item 0 of the last mission read back (MissionItem); None = not read"),
     Key("/vehicle/mission_items", None, "mission transfer", "the mission items 1..n the vehicle holds (tuple of MissionItem); None = unknown"),
+    Key("/vehicle/fence_status", None, "mavlink reader", "FenceStatus of the autopilot's own fence (FENCE_STATUS); None = never reported"),
     Key("/vehicle/fence_items", None, "mission transfer", "the fence items the vehicle holds, read back (tuple of MissionItem); None = unknown"),
     Key("/vehicle/rally_items", None, "mission transfer", "the rally points the vehicle holds, read back (tuple of MissionItem); None = unknown"),
     Key("/vehicle/mission_current", None, "mission transfer", "MissionCurrent (MISSION_CURRENT): the item the vehicle is on"),

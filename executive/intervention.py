@@ -39,7 +39,7 @@ from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import RcConfig
 from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause
 from executive.sensing.rc import RcReading
-from executive.state import MISSION_STATE_COMPLETE, GlobalPosition, MissionCurrent
+from executive.state import MISSION_STATE_COMPLETE, FenceStatus, GlobalPosition, MissionCurrent
 from executive.target_watch import PersonsTarget, TargetWatch
 from executive.vehicles import AutopilotName, VehicleProfile
 
@@ -83,7 +83,7 @@ class InterventionWatch:
             [
                 "/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected", "/vehicle/armed",
                 "/vehicle/landed_state", "/vehicle/mission_current", "/vehicle/system_status", "/vehicle/position",
-                "/vehicle/position_target",
+                "/vehicle/position_target", "/vehicle/fence_status",
             ],
         )  # fmt: skip
         self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by", "/vehicle/target_set_by"])
@@ -139,6 +139,12 @@ class InterventionWatch:
             return
         if set_by == "us":
             self.expected = mode
+            return
+        if cause is not None and cause.pauses:  # the autopilot's own fence holds the vehicle: we do not drive it back out
+            reason = f"{mode} set by the autopilot: {cause.why}"
+            log.warning("%s -> pause, hands off (`ctl resume` goes on)", reason)
+            self._paused_here = self._target_paused = True  # only an explicit resume: the leg's mode set again would drive on
+            self.mission_state.pause(reason, hold=False)
             return
         if cause is not None:  # the autopilot's own transition: its failsafe is answered by ours, which resume the leg's mode
             if cause.failsafe:
@@ -197,7 +203,13 @@ class InterventionWatch:
             failsafe_text=self._failsafe_text(now),
             alt_rel_m=position.alt_rel_m if position is not None else None,
             takeoff_height_m=self._autopilot.takeoff_height_m,
+            fence_breached=self._fence_breached(now),
         )
+
+    def _fence_breached(self, now: float) -> bool:
+        """FENCE_STATUS reported the autopilot's fence breached within :data:`EXPLAINS_WITHIN_S` (it comes with the breach, at once)."""
+        status: FenceStatus | None = self._bb.get("/vehicle/fence_status")
+        return status is not None and status.breached and now - status.time <= EXPLAINS_WITHIN_S
 
     def _failsafe_text(self, now: float) -> str | None:
         """The autopilot's failsafe notice just before the change ("EKF failsafe"), if it sent one; its RC failsafe if the transmitter is gone.

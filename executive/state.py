@@ -358,6 +358,16 @@ class MissionTransferStatus:
 
 
 @dataclass(frozen=True, slots=True)
+class FenceStatus:
+    """FENCE_STATUS: the autopilot's own fence breached or not (ArduPilot sends it while its fence is enabled, and at once on a breach)."""
+
+    breached: bool
+    count: int  # breaches since boot
+    breach_type: int  # FENCE_BREACH: 3 boundary (ArduPilot's circle and polygon)
+    time: float  # when it arrived (clock time)
+
+
+@dataclass(frozen=True, slots=True)
 class MissionCurrent:
     """MISSION_CURRENT: the item the vehicle is on and the mission's state."""
 

@@ -194,6 +194,10 @@ class AutopilotPort(Protocol):
         (executive.autopilot.fence), read back item by item before it counts; the transfer's ticket (``/link/mission_transfer``)."""
         ...
 
+    def zones_differ(self, items: Sequence[object], held: object) -> str | None:
+        """How the fence or rally items held (``/vehicle/fence_items``, ``/vehicle/rally_items``) differ from ``items``; None if alike."""
+        ...
+
     def set_parameter(self, name: str, value: float, param_type: int) -> None:
         """Ask the autopilot to hold ``value`` in ``name``; its PARAM_VALUE answer lands on ``/vehicle/params`` (no ack: ask again)."""
         ...

@@ -160,6 +160,9 @@ class Autopilot:
     def upload_zones(self, items: Sequence[object], mission_type: int) -> int:
         return self.backend.upload_zones(items, mission_type)
 
+    def zones_differ(self, items: Sequence[object], held: object) -> str | None:
+        return self.backend.zones_differ(items, held)
+
     def set_parameter(self, name: str, value: float, param_type: int) -> None:
         self.backend.set_parameter(name, value, param_type)
 

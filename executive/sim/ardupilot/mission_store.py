@@ -117,7 +117,7 @@ class ArduPilotMissionStore(MissionStore):
 
     def _request(self) -> None:
         self._last_request_at = self._owner.clock.now()
-        self._emit(self._mav.mission_request_encode(*self._uploader, self._request_i, _MISSION))
+        self._emit(self._mav.mission_request_encode(*self._uploader, self._request_i, self.MISSION_TYPE))
 
     def _received(self) -> None:
         """An upload completed (ArduPilot says so in a STATUSTEXT)."""
