@@ -101,12 +101,14 @@ class InterventionWatch:
         self._armed = False  # the armed flag at the last tick
         self._asks_seen: dict[str, float] = {}  # mode -> the time of our ask of it that the heartbeat has shown done
         self._disarmed_at = float("-inf")
+        self._fence_breaches = 0  # FENCE_STATUS breach_count last said
         mission_state.listeners.append(self._on_transition)
 
     def service(self) -> None:
         now = self._clock.now()
         self._note_texts(now)
         self._note_switches(now)
+        self._note_fence()
         disarmed_just_now = self._note_arming(now)
         mode: str | None = self._bb.get("/vehicle/mode")
         if mode is None or not self._bb.get("/link/up"):
@@ -205,6 +207,16 @@ class InterventionWatch:
             takeoff_height_m=self._autopilot.takeoff_height_m,
             fence_breached=self._fence_breached(now),
         )
+
+    def _note_fence(self) -> None:
+        """A new breach of the autopilot's own fence is said (log, ground station) whatever the mission's state: a person may have
+        driven it there."""
+        status: FenceStatus | None = self._bb.get("/vehicle/fence_status")
+        if status is None or not status.breached or status.count <= self._fence_breaches:
+            return
+        self._fence_breaches = status.count
+        log.warning("the autopilot's own fence is breached (FENCE_STATUS, breach %d): its FENCE_ACTION acts", status.count)
+        self.mission_state.announce("autopilot's fence breached")
 
     def _fence_breached(self, now: float) -> bool:
         """FENCE_STATUS reported the autopilot's fence breached within :data:`EXPLAINS_WITHIN_S` (it comes with the breach, at once)."""
