@@ -73,7 +73,7 @@ class ZonesOnAutopilot(MissionTransferFollower):
     def initialise(self) -> None:
         super().initialise()
         self._began = self.clock.now()
-        self._asked_at = float("-inf")
+        self._asked_at = self._set_at = float("-inf")
         self._told = False
         self._set_told: set[str] = set()
 
@@ -133,16 +133,18 @@ class ZonesOnAutopilot(MissionTransferFollower):
                 self._told = True
             return Status.SUCCESS
         now = self.clock.now()
-        if now - self._asked_at >= self.ask_every_s:
+        if missing and now - self._asked_at >= self.ask_every_s:
             self._asked_at = now
             for name in missing:
                 self.autopilot.read_parameter(name)
-            for name, (value, param_type) in to_set.items():
-                if name in held:
-                    if name not in self._set_told:
-                        self._set_told.add(name)
-                        log.info("geofence.autopilot enforce: %s %g -> %g", name, held[name], value)
-                    self.autopilot.set_parameter(name, value, param_type)
+        settable = {n: v for n, v in to_set.items() if n in held}  # what it holds is said before it is changed
+        if settable and now - self._set_at >= self.ask_every_s:
+            self._set_at = now
+            for name, (value, param_type) in settable.items():
+                if name not in self._set_told:
+                    self._set_told.add(name)
+                    log.info("geofence.autopilot enforce: %s %g -> %g", name, held[name], value)
+                self.autopilot.set_parameter(name, value, param_type)
         if missing:
             self.feedback_message = f"reading the autopilot's fence parameters: {', '.join(missing)}"
         else:

@@ -463,7 +463,8 @@ class MissionTransfer:
         if self._step is not _Step.IDLE:
             self._fail(f"superseded by a {operation.lower().replace('_', '-')} request", now)
         self._type = mission_type
-        self._outbox.clear()
+        # a download's closing MISSION_ACK still goes: PX4 stays busy with the list it sent until it comes (mavlink_mission.cpp)
+        self._outbox[:] = [msg for msg in self._outbox if msg.get_type() == "MISSION_ACK"]
         self._timeouts = 0
         self._deadline = math.inf
         ticket = next(self._tickets)
