@@ -13,8 +13,9 @@ Each is a :class:`~executive.sim.mission_store.MissionStore` of its own mission 
   only, an altitude in whole metres (int16, truncated), read back in its frame (MAV_FRAME_GLOBAL or
   _RELATIVE_ALT); at most :data:`ARDUPILOT_RALLY_POINTS`.
 - PX4's (src/modules/mavlink/mavlink_mission.cpp, upstream a70a558393): a polygon vertex with a count
-  under 3 is MISSION_ACK ERROR at its item ("Fence: too few vertices"); items are kept with their frame
-  and altitude; at most 64 fence items and 32 rally points (src/modules/dataman/dataman.h).
+  under 3 is MISSION_ACK ERROR at its item ("Fence: too few vertices"); items keep their altitude and are
+  read back in the INT frames (fence MAV_FRAME_GLOBAL_INT, rally points _RELATIVE_ALT_INT: measured on
+  PX4 SIH, tests/data/zones); at most 64 fence items and 32 rally points (src/modules/dataman/dataman.h).
 """
 
 from __future__ import annotations
@@ -157,7 +158,8 @@ class Px4FenceStore(Px4MissionStore):
         if msg.command in _POLYGONS and msg.param1 < 3:
             self._text(_M.MAV_SEVERITY_CRITICAL, "Fence: too few vertices")
             return _M.MAV_MISSION_ERROR
-        return StoredCommand(msg.command, (msg.param1, 0.0, 0.0, 0.0), msg.x, msg.y, round(msg.z * 100), msg.frame)
+        # read back in MAV_FRAME_GLOBAL_INT whatever it was sent in (measured on PX4 SIH, tests/data/zones)
+        return StoredCommand(msg.command, (msg.param1, 0.0, 0.0, 0.0), msg.x, msg.y, round(msg.z * 100), _M.MAV_FRAME_GLOBAL_INT)
 
 
 class Px4RallyStore(Px4MissionStore):
@@ -173,4 +175,6 @@ class Px4RallyStore(Px4MissionStore):
     def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
         if msg.command != _M.MAV_CMD_NAV_RALLY_POINT or msg.frame not in _GLOBAL_FRAMES or not math.isfinite(msg.z):
             return _M.MAV_MISSION_ERROR
-        return StoredCommand(msg.command, (0.0, 0.0, 0.0, 0.0), msg.x, msg.y, round(msg.z * 100), msg.frame)
+        relative = msg.frame in (_M.MAV_FRAME_GLOBAL_RELATIVE_ALT, _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT)
+        frame = _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT if relative else _M.MAV_FRAME_GLOBAL_INT  # as PX4 SIH read them back
+        return StoredCommand(msg.command, (0.0, 0.0, 0.0, 0.0), msg.x, msg.y, round(msg.z * 100), frame)
