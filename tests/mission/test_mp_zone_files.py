@@ -50,7 +50,8 @@ def test_mission_planners_fence_and_rally_plans_become_the_missions_zones_and_ra
 
 
 def test_the_older_fen_and_rally_files_with_what_they_cannot_carry_said_where_it_is(tmp_path: Path) -> None:
-    points = ["#saved by Mission Planner 1.3.82", "-35.363262 149.165237", *(f"{lat} {lon}" for lat, lon in INCLUSION), f"{INCLUSION[0][0]} {INCLUSION[0][1]}"]
+    corners = [f"{lat} {lon}" for lat, lon in INCLUSION]
+    points = ["#saved by Mission Planner 1.3.82", "-35.363262 149.165237", *corners, corners[0]]  # the return point first, closed
     fen = write(tmp_path, "area.fen", "\n".join(points) + "\n")
     ral = write(tmp_path, "home.rally", "RALLY -35.3634 149.1652 20 40 0 0\nRALLY\t-35.3626\t149.1652\t30\t0\t0\t0\n")
     imported = import_file(CMAC, vehicle="rover", zone_files=[fen, ral])
