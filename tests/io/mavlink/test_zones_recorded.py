@@ -1,6 +1,6 @@
 """Our reading of what real ArduRover and PX4 said to the fence and rally transfers, the fence parameters and a fence breach.
 
-The recordings (tests/data/zones/README.md): the zoned line mission of tests/behaviours/test_zones.py with
+The recordings (tests/data/zones/README.md): the zoned line mission of tests/behaviours/test_zones_on_autopilot.py with
 ``geofence.autopilot: enforce`` on ArduRover SITL, a VTOL mission's zones on PX4 SIH, and ArduRover's own fence
 acting (its avoidance holding a ground station's Go-to off the pier, then a breach in MANUAL).
 """
@@ -54,7 +54,7 @@ def replay_transfer(path: Path, mission_type: int, items: tuple) -> tuple[Missio
     return transfer, link.take()
 
 
-def _zoned_line_mission():  # the mission recorded on ArduRover (tests/behaviours/test_zones.py's, enforce)
+def _zoned_line_mission():  # the mission recorded on ArduRover (tests/behaviours/test_zones_on_autopilot.py's, enforce)
     return load_mission(ZONES / "zones-line.yaml")
 
 
