@@ -159,3 +159,26 @@ def test_a_person_sending_the_rover_into_a_keep_out_zone_is_held_by_ardurovers_o
     assert bb.get("/mission/reason").startswith("a ground station sent it to")
     sim.run(limit_s=2, until=lambda: any(m.get_type() == "STATUSTEXT" and "fence breached" in m.text for m in sent))
     assert any(m.get_type() == "STATUSTEXT" and m.text == "autopilot's fence breached" for m in sent)
+
+
+def test_a_running_mission_held_by_ardurovers_own_fence_pauses_hands_off_and_resumes_on_request(lockstep) -> None:
+    sim = lockstep(zoned_mission("enforce"))
+    bb = blackboard.reader("t", ["/mission/reason"])
+    tightened: list[float] = []
+
+    def ground_station(s: Lockstep) -> None:  # mid leg 2, a ground station narrows ArduRover's fence to 20 m around home
+        if not tightened and s.runtime.mission_state.leg_index == 1 and s.autopilot.params.get("FENCE_ENABLE") == 1:
+            for name, value in (("FENCE_RADIUS", 20.0), ("FENCE_TYPE", 6.0)):
+                s.send_from_ground_station(_GCS.param_set_encode(s.autopilot.system_id, 1, name.encode(), value, _M.MAV_PARAM_TYPE_REAL32))
+            tightened.append(s.clock.now())
+
+    sim.observers.append(ground_station)
+    assert sim.run(limit_s=200, until=lambda: sim.status is MissionStatus.PAUSED) is None
+    assert sim.autopilot.mode == "HOLD"  # FENCE_ACTION 2 on the circle's breach
+    assert bb.get("/mission/reason").startswith("HOLD set by the autopilot: its own fence breached (FENCE_STATUS)")
+    paused_at = sim.clock.now()
+    assert sim.run(limit_s=10, until=lambda: sim.clock.now() >= paused_at + 5.0) is None
+    assert sim.autopilot.mode == "HOLD" and sim.status is MissionStatus.PAUSED  # 5 s of ticks, hands off: not driven back out
+    assert sim.runtime.operator.request("resume", source="ctl").ok
+    outcome = sim.run_to_end(limit_s=200)
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason  # a breach already acted on is not acted on again
