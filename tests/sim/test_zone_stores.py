@@ -48,7 +48,7 @@ def test_ardupilot_takes_a_fence_and_reads_it_back_with_frame_0_z_0_and_autocont
 def test_ardupilot_refuses_a_bad_fence_when_the_upload_ends_and_keeps_the_old_one(make_gcs: MakeGcs) -> None:
     gcs = make_gcs(ekf_ready=True)
     upload(gcs, FENCE, square(5001))
-    replies = upload(gcs, FENCE, [*square(5002, 3), (5002, 3.0, -35.3629, 149.1651, 0.0, 0)][:3] + [(5003, 0.0, -35.36, 149.16, 0.0, 0)])
+    replies = upload(gcs, FENCE, [*square(5002, 3), (5003, 0.0, -35.36, 149.16, 0.0, 0)])
     assert replies[-1].type == M.MAV_MISSION_ERROR  # AC_PolyFence_loader::validate_fence: a circle of radius 0
     assert [m.text for m in replies if m.get_type() == "STATUSTEXT"] == ["Non-positive circle radius", "Fence validation failed"]
     assert [m.command for m in read_back(gcs, FENCE)] == [5001] * 4
