@@ -84,13 +84,13 @@ class MissionStore(ABC):
     MAX_ITEMS = 700  # depends on the board's storage
 
     def __init__(
-        self, owner: MissionOwner, emit: Callable[[MAVLinkMessage], None], text: Callable[[int, str], None], *, max_items: int = MAX_ITEMS
+        self, owner: MissionOwner, emit: Callable[[MAVLinkMessage], None], text: Callable[[int, str], None], *, max_items: int | None = None
     ) -> None:
         self._owner = owner
         self._emit = emit
         self._text = text
         self._mav = encoder(owner.system_id, owner.component_id)
-        self.max_items = max_items
+        self.max_items = self.MAX_ITEMS if max_items is None else max_items  # a store's own class limit by default
         self._commands: list[StoredCommand] = []  # [0] is the home slot, read back as the current home
         self.state = MissionState.STOPPED
         self.current_seq: int | None = None  # the item AUTO is on (or starts from); None = from the first

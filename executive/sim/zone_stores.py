@@ -77,7 +77,7 @@ class ArduPilotFenceStore(ArduPilotMissionStore):
     MAX_ITEMS = ARDUPILOT_FENCE_ITEMS
 
     def __init__(self, *args: object, **kwargs: object) -> None:
-        super().__init__(*args, **{"max_items": self.MAX_ITEMS, **kwargs})  # type: ignore[arg-type]
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
         self._kept: list[StoredCommand] = []  # the fence before an upload: kept if the new one is refused
 
     def _on_count(self, msg: MAVLinkMessage) -> None:
@@ -119,9 +119,6 @@ class ArduPilotRallyStore(ArduPilotMissionStore):
     READ_BACK_AUTOCONTINUE: ClassVar[int] = 0
     MAX_ITEMS = ARDUPILOT_RALLY_POINTS
 
-    def __init__(self, *args: object, **kwargs: object) -> None:
-        super().__init__(*args, **{"max_items": self.MAX_ITEMS, **kwargs})  # type: ignore[arg-type]
-
     def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
         """As MissionItemProtocol_Rally::convert_MISSION_ITEM_INT_to_RallyLocation."""
         if msg.command != _M.MAV_CMD_NAV_RALLY_POINT:
@@ -149,9 +146,6 @@ class Px4FenceStore(Px4MissionStore):
     READ_BACK_AUTOCONTINUE: ClassVar[int] = 0
     MAX_ITEMS = 64
 
-    def __init__(self, *args: object, **kwargs: object) -> None:
-        super().__init__(*args, **{"max_items": self.MAX_ITEMS, **kwargs})  # type: ignore[arg-type]
-
     def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
         if msg.command not in FENCE_COMMANDS or msg.frame not in _GLOBAL_FRAMES or not math.isfinite(msg.z):
             return _M.MAV_MISSION_ERROR
@@ -168,9 +162,6 @@ class Px4RallyStore(Px4MissionStore):
     MISSION_TYPE: ClassVar[int] = _M.MAV_MISSION_TYPE_RALLY
     READ_BACK_AUTOCONTINUE: ClassVar[int] = 0
     MAX_ITEMS = 32
-
-    def __init__(self, *args: object, **kwargs: object) -> None:
-        super().__init__(*args, **{"max_items": self.MAX_ITEMS, **kwargs})  # type: ignore[arg-type]
 
     def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
         if msg.command != _M.MAV_CMD_NAV_RALLY_POINT or msg.frame not in _GLOBAL_FRAMES or not math.isfinite(msg.z):

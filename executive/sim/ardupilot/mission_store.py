@@ -91,7 +91,7 @@ class ArduPilotMissionStore(MissionStore):
         emit: Callable[[MAVLinkMessage], None],
         text: Callable[[int, str], None],
         *,
-        max_items: int = MissionStore.MAX_ITEMS,
+        max_items: int | None = None,
     ) -> None:
         super().__init__(owner, emit, text, max_items=max_items)
         self._handlers["MISSION_WRITE_PARTIAL_LIST"] = self._on_write_partial_list
