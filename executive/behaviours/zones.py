@@ -111,8 +111,8 @@ class ZonesOnAutopilot(MissionTransferFollower):
     def _refusal(self, what: str, zone_items: ZoneItems, reason: str) -> str:
         found = _ITEM.search(reason)
         where = f" ({zone_items.source_of(int(found.group(1)))})" if found else f" ({', '.join(zone_items.shapes())})"
-        text = self.get("/vehicle/statustext")
-        said = f"; the autopilot said '{text[1]}'" if text else ""
+        text = self.get("/vehicle/statustext")  # its last warning explains a refusal ("Fence validation failed", "Only 84 items ...")
+        said = f"; the autopilot said '{text[1]}'" if text and text[0] <= mavlink.MAV_SEVERITY_WARNING else ""
         return f"the autopilot did not take the {what}{where}: {reason}{said}"
 
     def _fence_parameters(self) -> Status:
