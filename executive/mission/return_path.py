@@ -24,15 +24,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from executive.geofence import open_ring
 from executive.mission.model import Mission
-from executive.mission.zones import Plane, Zones, has_zones
+from executive.mission.zones import Plane, has_zones
 
 #: How far beyond the acceptance radius the path's corners keep off a keep-out zone, metres: a rover following a straight
 #: GUIDED leg keeps within about a metre of the line (ArduRover's L1/position controller; the simulated rover within 0.5 m),
 #: and a node reached an acceptance radius early cuts the corner by as much: 2 m covers the rest.
 MARGIN_M = 2.0
-#: A zone's ring is simplified within this (metres, outward of MARGIN_M's ring): a circle gets ~10 corners, not 64.
-_SIMPLIFY_M = MARGIN_M / 2
+#: A grown zone's rounding: 2 chords a quarter turn (a circle an 8-gon): few corners, each a node of the graph.
+_QUAD_SEGS = 2
 
 LatLon = tuple[float, float]
 
@@ -98,6 +99,27 @@ class ReturnPlanner:
         return _Graph(self.mission, plane).search(places, targets)
 
 
+def _grown(plane: Plane, mission: Mission, by_m: float) -> np.ndarray:
+    """The keep-out zones grown by ``by_m``, drawn with few corners and never inside the true shape: a circle as an 8-gon round
+    the circle of its radius plus ``by_m``, a polygon's corners rounded by two chords, each at least ``by_m`` off the corner."""
+    import shapely
+
+    assert mission.geofence is not None
+    zones = mission.geofence.keep_out
+    out = 1.0 / math.cos(math.pi / (4 * _QUAD_SEGS))  # a chord of the rounding stays outside the true distance
+    shapes = np.empty(len(zones), dtype=object)
+    circles = [(i, z.circle) for i, z in enumerate(zones) if z.circle is not None]
+    if circles:
+        centres = plane.xy([c.lat for _, c in circles], [c.lon for _, c in circles])
+        radii = (np.array([c.radius_m for _, c in circles]) + by_m) * out
+        shapes[[i for i, _ in circles]] = shapely.buffer(shapely.points(centres), radii, quad_segs=_QUAD_SEGS)
+    rings = [(i, open_ring([(v.lat, v.lon) for v in z.polygon])) for i, z in enumerate(zones) if z.circle is None and z.polygon]
+    for i, ring in rings:
+        polygon = shapely.polygons(plane.xy([p[0] for p in ring], [p[1] for p in ring]))
+        shapes[i] = shapely.buffer(polygon, by_m * out, quad_segs=_QUAD_SEGS)
+    return shapes
+
+
 class _Graph:
     """The visibility graph of one plan: the zones grown, their corners, the edges made as A* expands a node."""
 
@@ -105,25 +127,40 @@ class _Graph:
         import shapely
 
         self.plane = plane
-        zones = Zones(mission, plane)
         reach = mission.limits.acceptance_radius_m
-        shapes = [a.shape for a in zones.keep_out]
-        self.blocking = shapely.buffer(shapes, reach, quad_segs=16)  # what an edge must not touch
+        self.blocking = _grown(plane, mission, reach)  # what an edge must not touch
+        shapely.prepare(self.blocking)  # prepared: an expansion's ~800 lines against them in a few milliseconds
         self.tree = shapely.STRtree(self.blocking)
-        self.rings = shapely.simplify(shapely.buffer(shapes, reach + MARGIN_M + _SIMPLIFY_M, quad_segs=4), _SIMPLIFY_M)
-        corners = [np.asarray(shapely.get_coordinates(shapely.get_exterior_ring(r)))[:-1] for r in self.rings]
+        self.rings = _grown(plane, mission, reach + MARGIN_M)
+        corners, before, after = [], [], []
+        for ring in self.rings:
+            xy = np.asarray(shapely.get_coordinates(shapely.get_exterior_ring(ring)))[:-1]
+            corners.append(xy)
+            before.append(np.roll(xy, 1, axis=0))
+            after.append(np.roll(xy, -1, axis=0))
         xy = np.vstack(corners) if corners else np.empty((0, 2))
-        inside = self.tree.query(shapely.points(xy), predicate="intersects")[0]  # a corner inside another zone: no way through it
-        self.corners = np.delete(xy, np.unique(inside), axis=0)
+        inside = np.unique(self.tree.query(shapely.points(xy), predicate="intersects")[0])  # inside another zone: no way through it
+        keep = np.setdiff1d(np.arange(len(xy)), inside)
+        self.corners = xy[keep]
+        # each corner's neighbours on its ring: a shortest path only turns at a corner it touches as a tangent
+        self.before = (np.vstack(before) if before else np.empty((0, 2)))[keep]
+        self.after = (np.vstack(after) if after else np.empty((0, 2)))[keep]
 
     def _blocked(self, origin: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        """For each end, whether the straight line from ``origin`` to it touches a zone."""
+        """For each end, whether the straight line from ``origin`` to it touches a zone (the zones, prepared, queried against the lines)."""
         import shapely
 
         lines = shapely.linestrings(np.stack([np.broadcast_to(origin, ends.shape), ends], axis=1))
         blocked = np.zeros(len(ends), dtype=bool)
-        blocked[np.unique(self.tree.query(lines, predicate="intersects")[0])] = True
+        blocked[np.unique(shapely.STRtree(lines).query(self.blocking, predicate="intersects")[1])] = True
         return blocked
+
+    def _tangent(self, origin: np.ndarray, corners: np.ndarray) -> np.ndarray:
+        """For each corner (an index into :attr:`corners`), whether the line from ``origin`` touches its ring there without entering it."""
+        ray = self.corners[corners] - origin
+        left = ray[:, 0] * (self.before[corners] - origin)[:, 1] - ray[:, 1] * (self.before[corners] - origin)[:, 0]
+        right = ray[:, 0] * (self.after[corners] - origin)[:, 1] - ray[:, 1] * (self.after[corners] - origin)[:, 0]
+        return left * right >= 0.0
 
     def _way_out(self, start: np.ndarray) -> np.ndarray | None:
         """The nearest point of the grown ring of the zone(s) the vehicle is in; None when it is in none."""
@@ -167,10 +204,14 @@ class _Graph:
             steps = np.hypot(*(nodes[open_] - nodes[i]).T)
             better = cost[i] + steps < cost[open_]
             candidates = open_[better]
+            corner = candidates > n_targets
+            candidates[corner] = np.where(self._tangent(nodes[i], candidates[corner] - 1 - n_targets), candidates[corner], -1)
+            keep = candidates >= 0
+            candidates, better_steps = candidates[keep], steps[better][keep]
             if len(candidates) == 0:
                 continue
             free = ~self._blocked(nodes[i], nodes[candidates])
-            for j, step in zip(candidates[free], steps[better][free], strict=True):
+            for j, step in zip(candidates[free], better_steps[free], strict=True):
                 cost[j] = cost[i] + step
                 came[j] = i
                 heapq.heappush(queue, (cost[j] + heuristic(int(j)), int(j)))
@@ -185,5 +226,5 @@ class _Graph:
         length = float(cost[reached]) + (float(np.hypot(*out)) if out is not None else 0.0)
         place, where = places[reached - 1]
         straight = out is None and not self._blocked(start, targets[reached - 1][None, :])[0]
-        points = _to_lat_lon(self.plane, way[:-1]) + [where] if len(way) > 1 else [where]
+        points = [*_to_lat_lon(self.plane, way[:-1]), where] if len(way) > 1 else [where]
         return ReturnPath(place, tuple(points), length, straight=straight, leaves_zone=out is not None)
