@@ -154,6 +154,7 @@ class Failsafe(TimedBehaviour):
         self._rearm_at = float("-inf")
         self._return: ReturningDrive | None = None  # the executive's own return, when the firmware's RTL will not do
         self._return_ends_mission = False
+        self._return_reason = ""
         self._deferred_said: set[Guard] = set()
 
     def initialise(self) -> None:
@@ -220,7 +221,7 @@ class Failsafe(TimedBehaviour):
             self._log(cause, failing[cause.guard], person, "abort the mission", driving)  # the cause first, then each step of its reaction
             mode = None if hands_off else self._react(cause)
             if self._return is not None:  # the executive's own return: the mission ends where it arrives
-                self._return_ends_mission = True
+                self._return_ends_mission, self._return_reason = True, f"{cause.guard.name} {failing[cause.guard]}"
                 return self._returning(now, hands_off)
             self.left_in = mode or self._mode_in_force
             self.feedback_message = "" if cause.guard.status == Status.FAILURE else f"{cause.guard.name} {failing[cause.guard]}"
@@ -267,13 +268,13 @@ class Failsafe(TimedBehaviour):
             self._reacting.stand_back()
             log.warning("failsafe %s: a person took the vehicle during the return -> hands off, abort the mission", self._return.cause)
             self.left_in = None
-            self.feedback_message = "a person took the vehicle during the return: hands off"
+            self.feedback_message = f"{self._return_reason}; a person took the vehicle during the return: hands off"
             return Status.FAILURE
         self._reacting.follow_up(now)
         text = self._return.follow(now, self._reacting.done)
         if self._return.arrived or self._return.failed is not None:
             self.left_in = self._return.hold_mode
-            self.feedback_message = text
+            self.feedback_message = f"{self._return_reason}; {text}"
             return Status.FAILURE
         self.feedback_message = text
         return Status.RUNNING

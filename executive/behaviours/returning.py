@@ -122,7 +122,7 @@ class ReturningDrive:
                 if self._leg.index == len(self.path.points) - 1:
                     self.arrived = True
                     log.warning("failsafe %s: returned to %s", self.cause, self.path.to)
-                    return f"at {self.path.to}"
+                    return f"returned to {self.path.describe()}"
                 self._leg = _Leg(self._leg.index + 1)
                 point = self.path.points[self._leg.index]
         if not self._guided.done:

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from executive.behaviours.guards import Guard
 from executive.behaviours.position_guards import POSITION_RULE
 from executive.mission.model import Mission
@@ -74,7 +76,7 @@ class OutsideKeepOut(Guard):
                 return f"inside {area.label}"
         if speed < 0.05:
             return None
-        end = here + ahead * (position.ve_m_s, position.vn_m_s) / max(speed, 1e-9)
+        end = here + ahead * np.array([position.ve_m_s, position.vn_m_s]) / speed
         path: shapely.Geometry = shapely.linestrings([here, end])
         for area in zones.keep_out:
             if shapely.intersects(path, area.shape):

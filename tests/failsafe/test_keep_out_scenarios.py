@@ -1,0 +1,83 @@
+"""Keep-out zones while the mission runs, on the lock-step simulated ArduRover.
+
+A pier stands between the far end of the route and home. The route goes round it (the checks at
+every door saw to that); the return, the take-over and the route edit are where the vehicle meets it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import shapely
+
+from executive import geo
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.model import Mission
+from executive.mission.zones import Plane, Zones
+from executive.sim.faults import BatterySag, RcInput, RcTakeover
+from tests_support import LINE_HOME, line_mission
+
+PIER_NORTH_M, PIER_RADIUS_M = 30.0, 8.0
+
+
+def at(north_m: float, east_m: float) -> tuple[float, float]:
+    lat, lon = geo.destination(*LINE_HOME, 0.0, north_m)
+    return geo.destination(lat, lon, 90.0, east_m)
+
+
+def point(north_m: float, east_m: float, **more: Any) -> dict[str, Any]:
+    lat, lon = at(north_m, east_m)
+    return {"lat": lat, "lon": lon, **more}
+
+
+def round_the_pier(**changes: Any) -> Mission:
+    """East 40 m, north 60 m, back west over home's meridian: the way home from there runs straight through the pier."""
+    lat, lon = at(PIER_NORTH_M, 0.0)
+    fields: dict[str, Any] = {
+        "waypoints": [point(0, 40, name="east"), point(60, 40, name="north-east"), point(60, 0, name="north")],
+        "geofence": {"keep_out": [{"name": "pier", "circle": {"lat": lat, "lon": lon, "radius_m": PIER_RADIUS_M}}]},
+    }
+    return line_mission("round the pier", **(fields | changes))
+
+
+class Track:
+    """The simulated vehicle's true positions, every step of the world, and how deep into the pier it ever went."""
+
+    def __init__(self, sim: Any, mission: Mission) -> None:
+        self.vehicle = sim.autopilot.vehicle
+        self.zones = Zones(mission, Plane(LINE_HOME))
+        self.points: list[tuple[float, float]] = []
+        sim.observers.append(lambda s: self.points.append((self.vehicle.lat, self.vehicle.lon)))
+
+    def deepest_in_pier_m(self) -> float:
+        """How far inside the pier the vehicle went (0: never in it)."""
+        xy = self.zones.plane.xy([p[0] for p in self.points], [p[1] for p in self.points])
+        pier = self.zones.keep_out[0].shape
+        inside = shapely.contains_xy(pier, xy[:, 0], xy[:, 1])
+        return float(max((shapely.distance(shapely.points(p), pier.exterior) for p in xy[inside]), default=0.0))
+
+
+def test_the_battery_return_goes_round_the_pier_to_home_not_through_it(lockstep) -> None:
+    mission = round_the_pier(limits={**line_mission("x").limits.model_dump(), "battery_min_pct": 20})
+    # on the last leg, heading west at the north end: the battery sags under the floor for good (battery_low: rtl, abort)
+    sim = lockstep(mission, events=[BatterySag(kind="battery_sag", at_s=75.0, drop_v=1.0, drop_pct=85)])
+    track = Track(sim, mission)
+    outcome = sim.run_to_end(limit_s=300)
+    assert outcome.status is MissionStatus.ABORTED
+    assert outcome.reason.startswith("Wait for guards: Battery above floor? battery 14% below 20%; returned to home, ")
+    v = track.vehicle
+    assert geo.distance(v.lat, v.lon, *LINE_HOME) <= 1.5 + 0.5  # at home, within the acceptance radius (and a stop)
+    assert sim.autopilot.mode == "HOLD"  # the executive's own return ends held, not in RTL
+    north_of_pier = [p for p in track.points if geo.distance(*LINE_HOME, *p) > 50.0]
+    assert north_of_pier, "the return started from the far end"
+    assert track.deepest_in_pier_m() == 0.0  # never inside the pier
+
+
+def test_a_person_who_hands_back_inside_the_pier_is_held_then_brought_out_and_home(lockstep) -> None:
+    mission = round_the_pier()
+    # on the second leg (north along east 40 m), a person takes over (switch 6 high, MANUAL) and drives ~west into the pier
+    takeover = RcTakeover(kind="rc_takeover", at_s=30.0, for_s=25.0, channel=6, pwm=1900, mode="MANUAL")
+    sim = lockstep(mission, events=[takeover])
+    track = Track(sim, mission)
+    outcome = sim.run_to_end(limit_s=300)
+    assert outcome.status is MissionStatus.ABORTED, outcome.reason
