@@ -36,6 +36,7 @@ from executive.behaviours import (
     inside_geofence,
 )
 from executive.behaviours.failsafe import condition_of
+from executive.behaviours.returning import NoReturnUnderWay
 from executive.behaviours.zone_guards import outside_keep_out
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.model import Mission
@@ -194,8 +195,10 @@ def failsafe_guarded(
     so the work resumes where it was when the guard recovers.
     """
     guards = failsafe_guards(mission, guards)
-    route = py_trees.composites.Sequence(name, memory=False, children=[*guards, work])
-    return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, failsafe(guards, mission)])
+    react = failsafe(guards, mission)
+    gate = [NoReturnUnderWay(react)] if react.returns is not None else []  # a return that ends the mission is not resumed from
+    route = py_trees.composites.Sequence(name, memory=False, children=[*gate, *guards, work])
+    return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, react])
 
 
 def guided_leg(mission: Mission) -> py_trees.behaviour.Behaviour:

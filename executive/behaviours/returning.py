@@ -23,6 +23,9 @@ import logging
 from dataclasses import dataclass
 from typing import Any
 
+import py_trees
+from py_trees.common import Status
+
 from executive import geo
 from executive.autopilot import Target
 from executive.behaviours.reacting import Announce, Host, Reacting
@@ -137,3 +140,21 @@ class ReturningDrive:
     def cancel(self) -> None:
         """A person has the vehicle, or the failsafe ended: nothing more is asked."""
         self._guided.cancel()
+
+
+class NoReturnUnderWay(py_trees.behaviour.Behaviour):
+    """FAILURE while ``failsafe`` drives a return that ends the mission, so the guarded work does not resume under it when the
+    condition that started the return clears on the way (a vehicle out of the zone is not sent back along its route)."""
+
+    catalogued = False  # made by failsafe_guarded for a mission whose returns are the executive's
+
+    def __init__(self, failsafe: Any, name: str = "No return under way?") -> None:
+        super().__init__(name)
+        self.failsafe = failsafe
+
+    def update(self) -> Status:
+        if self.failsafe.returning:
+            self.feedback_message = "returning: the mission ends where the return arrives"
+            return Status.FAILURE
+        self.feedback_message = ""
+        return Status.SUCCESS

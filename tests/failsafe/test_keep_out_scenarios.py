@@ -18,6 +18,7 @@ from executive.sim.faults import BatterySag, RcInput, RcTakeover
 from tests_support import LINE_HOME, line_mission
 
 PIER_NORTH_M, PIER_RADIUS_M = 30.0, 8.0
+BOAT_EAST_M, BOAT_RADIUS_M = 58.0, 8.0  # a moored boat just past the first waypoint: 10 m off it and off the second leg
 
 
 def at(north_m: float, east_m: float) -> tuple[float, float]:
@@ -31,11 +32,12 @@ def point(north_m: float, east_m: float, **more: Any) -> dict[str, Any]:
 
 
 def round_the_pier(**changes: Any) -> Mission:
-    """East 40 m, north 60 m, back west over home's meridian: the way home from there runs straight through the pier."""
-    lat, lon = at(PIER_NORTH_M, 0.0)
+    """East 40 m, north 60 m, back west over home's meridian: the way home from there runs straight through the pier; a moored
+    boat lies 10 m beyond the first waypoint, where a rover driven straight on would go."""
+    pier, boat = point(PIER_NORTH_M, 0.0, radius_m=PIER_RADIUS_M), point(0.0, BOAT_EAST_M, radius_m=BOAT_RADIUS_M)
     fields: dict[str, Any] = {
         "waypoints": [point(0, 40, name="east"), point(60, 40, name="north-east"), point(60, 0, name="north")],
-        "geofence": {"keep_out": [{"name": "pier", "circle": {"lat": lat, "lon": lon, "radius_m": PIER_RADIUS_M}}]},
+        "geofence": {"keep_out": [{"name": "pier", "circle": pier}, {"name": "moored boat", "circle": boat}]},
     }
     return line_mission("round the pier", **(fields | changes))
 
@@ -47,14 +49,20 @@ class Track:
         self.vehicle = sim.autopilot.vehicle
         self.zones = Zones(mission, Plane(LINE_HOME))
         self.points: list[tuple[float, float]] = []
-        sim.observers.append(lambda s: self.points.append((self.vehicle.lat, self.vehicle.lon)))
+        self.modes_while_switch_high: list[str] = []
+        sim.observers.append(self._step)
 
-    def deepest_in_pier_m(self) -> float:
-        """How far inside the pier the vehicle went (0: never in it)."""
+    def _step(self, sim: Any) -> None:
+        self.points.append((self.vehicle.lat, self.vehicle.lon))
+        if sim.autopilot.rc_channels[5] > 1700:
+            self.modes_while_switch_high.append(sim.autopilot.mode)
+
+    def deepest_in(self, zone: str) -> float:
+        """How far inside ``zone`` the vehicle ever went, metres (0: never in it)."""
         xy = self.zones.plane.xy([p[0] for p in self.points], [p[1] for p in self.points])
-        pier = self.zones.keep_out[0].shape
-        inside = shapely.contains_xy(pier, xy[:, 0], xy[:, 1])
-        return float(max((shapely.distance(shapely.points(p), pier.exterior) for p in xy[inside]), default=0.0))
+        shape = next(a.shape for a in self.zones.keep_out if a.label == f"keep-out zone {zone!r}")
+        inside = shapely.contains_xy(shape, xy[:, 0], xy[:, 1])
+        return float(max((shapely.distance(shapely.points(p), shape.exterior) for p in xy[inside]), default=0.0))
 
 
 def test_the_battery_return_goes_round_the_pier_to_home_not_through_it(lockstep) -> None:
@@ -70,14 +78,26 @@ def test_the_battery_return_goes_round_the_pier_to_home_not_through_it(lockstep)
     assert sim.autopilot.mode == "HOLD"  # the executive's own return ends held, not in RTL
     north_of_pier = [p for p in track.points if geo.distance(*LINE_HOME, *p) > 50.0]
     assert north_of_pier, "the return started from the far end"
-    assert track.deepest_in_pier_m() == 0.0  # never inside the pier
+    assert track.deepest_in("pier") == 0.0  # never inside the pier
 
 
-def test_a_person_who_hands_back_inside_the_pier_is_held_then_brought_out_and_home(lockstep) -> None:
+def test_a_person_who_hands_back_inside_a_zone_is_left_alone_while_driving_then_brought_out_and_home(lockstep, caplog) -> None:
     mission = round_the_pier()
-    # on the second leg (north along east 40 m), a person takes over (switch 6 high, MANUAL) and drives ~west into the pier
-    takeover = RcTakeover(kind="rc_takeover", at_s=30.0, for_s=25.0, channel=6, pwm=1900, mode="MANUAL")
-    sim = lockstep(mission, events=[takeover])
+    # on the first leg (east), a person takes over (switch 6 high, MANUAL) and drives straight on into the moored boat;
+    # sticks released at 37 s, the switch back at 38 s: the rover stands ~2 m inside the boat's circle
+    takeover = RcTakeover(kind="rc_takeover", at_s=20.0, for_s=18.0, channel=6, pwm=1900, mode="MANUAL")
+    throttle = RcInput(kind="rc_input", at_s=20.0, for_s=17.0, channels={3: 1700, 1: 1500})
+    sim = lockstep(mission, events=[takeover, throttle])
     track = Track(sim, mission)
     outcome = sim.run_to_end(limit_s=300)
     assert outcome.status is MissionStatus.ABORTED, outcome.reason
+    assert outcome.reason == (
+        "Wait for guards: Outside keep-out zones? inside keep-out zone 'moored boat'; returned to home, 53 m by 2 legs around the keep-out zones"
+    )
+    v = track.vehicle
+    assert geo.distance(v.lat, v.lon, *LINE_HOME) <= 2.0 and sim.autopilot.mode == "HOLD"
+    # the person won while they drove: MANUAL throughout, and the condition only reported then
+    assert set(track.modes_while_switch_high) == {"MANUAL"}
+    assert track.deepest_in("moored boat") > 1.0  # they did drive in
+    warnings = [r.getMessage() for r in caplog.records if r.name == "executive.behaviours.failsafe"]
+    assert any("moored boat" in w and "a person has the vehicle: judged when they hand back" in w for w in warnings)
