@@ -157,6 +157,7 @@ class Failsafe(TimedBehaviour):
         self._return_reason = ""
         self._deferred_said: set[Guard] = set()
         self._takeover_mode: str | None = None
+        self._rtl_judged: dict[Guard, str | None] = {}  # per guard: why the firmware's RTL will not do (None: it will)
 
     def initialise(self) -> None:
         super().initialise()
@@ -329,17 +330,25 @@ class Failsafe(TimedBehaviour):
         """Whether this return is the executive's own (the firmware's RTL would not do, :func:`why_not_rtl`); if so it is made."""
         if self.returns is None or self.vehicle not in DRIVEN_KINDS:
             return False
-        home = self.get("/vehicle/home")
-        mission_home = self.returns.mission.home
-        where = (home.lat, home.lon) if home is not None else ((mission_home.lat, mission_home.lon) if mission_home else None)
         cause = self._name(reaction.guard)
-        why = why_not_rtl(self.returns, cause, self.get("/vehicle/position"), where)
+        why = self._why_not_rtl(reaction)
         if why is None:
             return False
         hold = self._mode_of("hold")
         log.warning("failsafe %s: not the autopilot's RTL (%s) -> %s, then the executive's own return around the keep-out zones", cause, why, hold)
         self._return = ReturningDrive(self, self.vehicle, self.returns, cause, hold, reach_m=self.reach_m, announce=self._announce)
         return True
+
+    def _why_not_rtl(self, reaction: _Reaction) -> str | None:
+        """Why the firmware's RTL will not do for ``reaction`` (None: it will), judged once per episode of its guard."""
+        if self.returns is None or self.vehicle not in DRIVEN_KINDS:
+            return None
+        if reaction.guard not in self._rtl_judged:
+            home = self.get("/vehicle/home")
+            mission_home = self.returns.mission.home
+            where = (home.lat, home.lon) if home is not None else ((mission_home.lat, mission_home.lon) if mission_home else None)
+            self._rtl_judged[reaction.guard] = why_not_rtl(self.returns, self._name(reaction.guard), self.get("/vehicle/position"), where)
+        return self._rtl_judged[reaction.guard]
 
     @property
     def _mode_in_force(self) -> str | None:
@@ -442,6 +451,10 @@ class Failsafe(TimedBehaviour):
         elif what != "wait":
             mode = self._mode_of(what)
             short = done = f"disarm in {mode}" if what == "disarm" else f"{what} ({mode})"
+            if what == "rtl" and self._return is None and self._why_not_rtl(reaction) is not None:
+                hold = self._mode_of("hold")
+                done = f"{hold}, then the executive's own return around the keep-out zones"
+                short = f"{hold}, then return around zones"
             stronger = self._in_force
             if stronger is not None and stronger.rank > reaction.rank:
                 done += f" not commanded: {stronger.policy.reaction} ({self._mode_in_force}) for {self._name(stronger.guard)} in force"

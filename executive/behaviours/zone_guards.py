@@ -4,10 +4,10 @@ The route was checked against the zones before it was driven (:mod:`executive.mi
 vehicle meets a zone only off its route: a person drove it, a current or the wind set it, a
 take-over ended there. :class:`OutsideKeepOut` fails when the vehicle is inside a zone, or when the
 straight line ahead of it at its velocity, as long as it needs to stop, enters one. That horizon is
-the distance covered while the hold is asked and taken (:data:`REACT_S`) plus the braking distance
-at the firmware's deceleration (:data:`DECEL_M_S2`): ``v * 1 s + v^2 / 2 m/s^2``, 4 m (2 s) at 2 m/s,
-17.5 m (3.5 s) at 5 m/s. A shorter look would stop the vehicle inside; a longer one would
-stop it for zones it was turning away from.
+the distance covered while the hold is asked and taken (:data:`REACT_S`) plus the distance the
+vehicle coasts to a stop in it (:data:`COAST_M_S2`): ``v * 1 s + v^2 / 1 m/s^2``, 6 m (4 s) at 2 m/s, 30 m
+(7 s) at 5 m/s. A shorter look would let the vehicle coast in; a longer one would stop it for zones it
+was turning away from.
 """
 
 from __future__ import annotations
@@ -28,14 +28,15 @@ if TYPE_CHECKING:
 #: From the tick the guard fails to the vehicle braking: the hold asked that tick, its ack and the firmware's mode change within a
 #: round trip, and a position report 0.2 s old (GLOBAL_POSITION_INT at 5 Hz). One second covers them with a heartbeat to spare.
 REACT_S = 1.0
-#: How hard the vehicle brakes in its hold, m/s^2: ArduRover's HOLD stops at ATC_DECEL_MAX, 0 meaning ATC_ACCEL_MAX, 1 m/s^2 by
-#: default (Rover/mode_hold.cpp, AR_AttitudeControl::get_throttle_out_stop; executive.autopilot.rover_motion.FIRMWARE_DEFAULTS).
-DECEL_M_S2 = 1.0
+#: How fast a held vehicle slows, m/s^2. ArduRover's HOLD does not brake: it sets the throttle and the steering to zero and the
+#: vehicle coasts (Rover/mode_hold.cpp ModeHold::update), slowed by its own drag; a rover stops within a few metres, a boat
+#: glides further. 0.5 m/s^2 is a light hull's coast-down (the lock-step simulated rover, cut at 1.4 m/s, stood ~2.4 m on).
+COAST_M_S2 = 0.5
 
 
 def stopping_m(speed_m_s: float) -> float:
-    """How far ahead a vehicle at ``speed_m_s`` still goes before it stands: reaction then braking."""
-    return speed_m_s * REACT_S + speed_m_s**2 / (2.0 * DECEL_M_S2)
+    """How far ahead a vehicle at ``speed_m_s`` still goes before it stands: reaction, then coasting in its hold."""
+    return speed_m_s * REACT_S + speed_m_s**2 / (2.0 * COAST_M_S2)
 
 
 class OutsideKeepOut(Guard):

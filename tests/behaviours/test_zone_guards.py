@@ -27,19 +27,19 @@ def moving(north_m: float, vn_m_s: float, ve_m_s: float = 0.0) -> GlobalPosition
 
 
 def test_the_horizon_is_a_second_of_reaction_and_the_braking_distance():
-    assert stopping_m(2.0) == pytest.approx(4.0)  # 2 s at 2 m/s
-    assert stopping_m(5.0) == pytest.approx(17.5)  # 3.5 s at 5 m/s
+    assert stopping_m(2.0) == pytest.approx(6.0)  # 4 s at 2 m/s
+    assert stopping_m(5.0) == pytest.approx(30.0)  # 7 s at 5 m/s
 
 
 @pytest.mark.parametrize(
     ("north_m", "vn", "ve", "expected", "why"),
     [
         (20.0, 0.0, 0.0, Status.FAILURE, "inside keep-out zone 'pier'"),
-        (11.0, 2.0, 0.0, Status.FAILURE, "heading into keep-out zone 'pier': 4.0 m ahead at 2.0 m/s (stops in 4.0 m)"),
-        (10.0, 2.0, 0.0, Status.SUCCESS, ""),  # 5 m ahead: it stops in 4 m
-        (5.0, 5.0, 0.0, Status.FAILURE, "10.0 m ahead at 5.0 m/s (stops in 17.5 m)"),  # faster: seen further ahead
-        (11.0, 0.0, 2.0, Status.SUCCESS, ""),  # beside it, heading east: passes it by
-        (11.0, -2.0, 0.0, Status.SUCCESS, ""),  # turning away
+        (10.0, 2.0, 0.0, Status.FAILURE, "heading into keep-out zone 'pier': 5.0 m ahead at 2.0 m/s (stops in 6.0 m)"),
+        (8.0, 2.0, 0.0, Status.SUCCESS, ""),  # 7 m ahead: it stops in 6 m
+        (0.0, 5.0, 0.0, Status.FAILURE, "15.0 m ahead at 5.0 m/s (stops in 30.0 m)"),  # faster: seen further ahead
+        (10.0, 0.0, 2.0, Status.SUCCESS, ""),  # beside it, heading east: passes it by
+        (10.0, -2.0, 0.0, Status.SUCCESS, ""),  # turning away
     ],
 )
 def test_a_vehicle_in_or_heading_into_a_zone_before_it_could_stop_fails(harness, vehicle, north_m, vn, ve, expected, why):
