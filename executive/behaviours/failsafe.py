@@ -156,7 +156,6 @@ class Failsafe(TimedBehaviour):
         self._return_ends_mission = False
         self._return_reason = ""
         self._deferred_said: set[Guard] = set()
-        self._takeover_mode: str | None = None
         self._rtl_judged: dict[Guard, str | None] = {}  # per guard: why the firmware's RTL will not do (None: it will)
 
     def initialise(self) -> None:
@@ -197,11 +196,9 @@ class Failsafe(TimedBehaviour):
         if self._own_disarm:  # disarmed by this failsafe, not by a person
             failing = {g: why for g, why in failing.items() if self._conditions.get(g) != "disarmed"}
         person = next((g for g in failing if g.pilot_in_control), None)  # whatever a policy says (the loader refuses any but wait)
-        if person is not None:  # the mode the take-over leaves is handed back with the switch, as the work takes it back then
-            self._takeover_mode = self.get("/vehicle/mode")
         driving = self._person_drives()
         hands_off = person is not None or driving is not None
-        deferred = self._defer(failing) if person is not None else {}
+        deferred = self._defer(failing) if hands_off else {}
         failing = {g: why for g, why in failing.items() if g not in deferred}
         if self._return is not None and self._return_ends_mission:
             return self._returning(now, hands_off)
@@ -434,8 +431,7 @@ class Failsafe(TimedBehaviour):
         """
         mode = self.get("/vehicle/mode")
         set_by = self.get("/vehicle/mode_set_by")  # None: the boot mode, nobody's choice
-        handed_back = mode == self._takeover_mode  # left by a take-over whose switch is back: the person handed the vehicle back
-        if mode in PROFILES[self.vehicle].pilot_modes and set_by not in (None, "autopilot") and mode != self._mode_in_force and not handed_back:
+        if mode in PROFILES[self.vehicle].pilot_modes and set_by not in (None, "autopilot") and mode != self._mode_in_force:
             return f"the vehicle is in {mode}: a person drives it"
         return None
 

@@ -50,12 +50,19 @@ class Track:
         self.zones = Zones(mission, Plane(LINE_HOME))
         self.points: list[tuple[float, float]] = []
         self.modes_while_switch_high: list[str] = []
+        self.modes: list[tuple[float, str]] = []  # (vehicle time, mode) at each step
         sim.observers.append(self._step)
 
     def _step(self, sim: Any) -> None:
         self.points.append((self.vehicle.lat, self.vehicle.lon))
+        self.modes.append((sim.clock.now(), sim.autopilot.mode))
         if sim.autopilot.rc_channels[5] > 1700:
             self.modes_while_switch_high.append(sim.autopilot.mode)
+
+    def first_move_after(self, t_s: float) -> float:
+        """The vehicle time the mode first changed after ``t_s``."""
+        before = next(mode for t, mode in reversed(self.modes) if t <= t_s)
+        return next(t for t, mode in self.modes if t > t_s and mode != before)
 
     def deepest_in(self, zone: str) -> float:
         """How far inside ``zone`` the vehicle ever went, metres (0: never in it)."""
@@ -84,10 +91,12 @@ def test_the_battery_return_goes_round_the_pier_to_home_not_through_it(lockstep)
 def test_a_person_who_hands_back_inside_a_zone_is_left_alone_while_driving_then_brought_out_and_home(lockstep, caplog) -> None:
     mission = round_the_pier()
     # on the first leg (east), a person takes over (switch 6 high, MANUAL) and drives straight on into the moored boat;
-    # sticks released at 37 s, the switch back at 38 s: the rover stands ~2 m inside the boat's circle
+    # sticks released at 37 s, the switch back at 38 s: the rover stands ~2 m inside the boat's circle, still in MANUAL (a
+    # person's mode: still theirs); at 45 s they hand it back, out of MANUAL (their mode switch to GUIDED)
     takeover = RcTakeover(kind="rc_takeover", at_s=20.0, for_s=18.0, channel=6, pwm=1900, mode="MANUAL")
     throttle = RcInput(kind="rc_input", at_s=20.0, for_s=17.0, channels={3: 1700, 1: 1500})
     sim = lockstep(mission, events=[takeover, throttle])
+    sim.at(45.0, lambda s: s.autopilot.set_mode(s.autopilot.profile.modes["GUIDED"]))
     track = Track(sim, mission)
     outcome = sim.run_to_end(limit_s=300)
     assert outcome.status is MissionStatus.ABORTED, outcome.reason
@@ -98,6 +107,7 @@ def test_a_person_who_hands_back_inside_a_zone_is_left_alone_while_driving_then_
     assert geo.distance(v.lat, v.lon, *LINE_HOME) <= 2.0 and sim.autopilot.mode == "HOLD"
     # the person won while they drove: MANUAL throughout, and the condition only reported then
     assert set(track.modes_while_switch_high) == {"MANUAL"}
+    assert track.first_move_after(38.0) >= 45.0  # nothing commanded after the switch went back, while MANUAL stayed theirs
     assert track.deepest_in("moored boat") > 1.0  # they did drive in
     warnings = [r.getMessage() for r in caplog.records if r.name == "executive.behaviours.failsafe"]
     assert any("moored boat" in w and "a person has the vehicle: judged when they hand back" in w for w in warnings)
