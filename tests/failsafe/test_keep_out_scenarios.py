@@ -111,3 +111,22 @@ def test_a_person_who_hands_back_inside_a_zone_is_left_alone_while_driving_then_
     assert track.deepest_in("moored boat") > 1.0  # they did drive in
     warnings = [r.getMessage() for r in caplog.records if r.name == "executive.behaviours.failsafe"]
     assert any("moored boat" in w and "a person has the vehicle: judged when they hand back" in w for w in warnings)
+
+
+def test_a_route_edit_that_would_take_the_rover_through_a_buoy_from_where_it_is_is_refused_and_the_route_kept(lockstep) -> None:
+    # the line north (waypoints 25 m apart); a 3 m buoy 44 m north, 13 m east. On leg 2 the operator moves waypoint 2 30 m east:
+    # from waypoint 1 the new leg passes 6 m from the buoy, but the rover is already 10 m on, and from there it runs through it
+    buoy = point(44.0, 13.0, radius_m=3.0)
+    mission = line_mission("line past a buoy", geofence={"keep_out": [{"name": "buoy", "circle": buoy}]})
+    sim = lockstep(mission)
+    replies: list[Any] = []
+    sim.run(until=lambda: sim.runtime.mission_state.leg_index == 1 and geo.distance(*LINE_HOME, *_at(sim)) >= 35.0)
+    replies.append(sim.runtime.operator.request("route", source="ctl", operation="offset", waypoint=2, distance_m=30, bearing_deg=90))
+    assert not replies[0].ok
+    assert "the vehicle -> waypoints[1] (-): crosses keep-out zone 'buoy'" in replies[0].reason
+    assert list(sim.runtime.mission_state.route.waypoints) == mission.waypoints  # nothing changed, nothing sent
+    assert sim.run_to_end(limit_s=200).status is MissionStatus.COMPLETED
+
+
+def _at(sim: Any) -> tuple[float, float]:
+    return sim.autopilot.vehicle.lat, sim.autopilot.vehicle.lon
