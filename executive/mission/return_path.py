@@ -160,7 +160,8 @@ class _Graph:
         ray = self.corners[corners] - origin
         left = ray[:, 0] * (self.before[corners] - origin)[:, 1] - ray[:, 1] * (self.before[corners] - origin)[:, 0]
         right = ray[:, 0] * (self.after[corners] - origin)[:, 1] - ray[:, 1] * (self.after[corners] - origin)[:, 0]
-        return left * right >= 0.0
+        along = np.minimum(np.abs(left), np.abs(right)) <= 1e-6 * np.einsum("ij,ij->i", ray, ray)  # on the ring's edge: a way out
+        return (left * right >= 0.0) | along
 
     def _way_out(self, start: np.ndarray) -> np.ndarray | None:
         """The nearest point of the grown ring of the zone(s) the vehicle is in; None when it is in none."""

@@ -9,13 +9,19 @@ from __future__ import annotations
 from typing import Any
 
 import shapely
+from tlog_replay import DATA as RECORDINGS
+from tlog_replay import records
 
 from executive import geo
 from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.mission.zones import Plane, Zones
 from executive.sim.faults import BatterySag, RcInput, RcTakeover
+from executive.vehicles import ROVER_MODES
 from tests_support import LINE_HOME, line_mission
+
+DATA = RECORDINGS / "ardurover"
 
 PIER_NORTH_M, PIER_RADIUS_M = 30.0, 8.0
 BOAT_EAST_M, BOAT_RADIUS_M = 58.0, 8.0  # a moored boat just past the first waypoint: 10 m off it and off the second leg
@@ -130,3 +136,24 @@ def test_a_route_edit_that_would_take_the_rover_through_a_buoy_from_where_it_is_
 
 def _at(sim: Any) -> tuple[float, float]:
     return sim.autopilot.vehicle.lat, sim.autopilot.vehicle.lon
+
+
+def test_on_the_real_ardurover_the_battery_return_went_round_the_pier_and_home() -> None:
+    """tests/data/ardurover/round_the_pier-rover-battery-return.tlog: ArduRover 4.7-dev SITL driven by `executive run` of
+    round_the_pier.yaml beside it; a ground station sagged the battery (SIM_BATT_VOLTAGE 11.0) on the last leg."""
+    mission = load_mission(DATA / "round_the_pier.yaml")
+    zones = Zones(mission, Plane(LINE_HOME))
+    pier = zones.keep_out[0].shape
+    positions, modes = [], []
+    for _, msg in records(DATA / "round_the_pier-rover-battery-return.tlog"):
+        if msg.get_type() == "GLOBAL_POSITION_INT":
+            positions.append((msg.lat / 1e7, msg.lon / 1e7))
+        elif msg.get_type() == "HEARTBEAT" and msg.get_srcComponent() == 1:
+            mode = next(name for name, number in ROVER_MODES.items() if number == msg.custom_mode)
+            if not modes or modes[-1] != mode:
+                modes.append(mode)
+    xy = zones.plane.xy([p[0] for p in positions], [p[1] for p in positions])
+    clearance = min(float(shapely.distance(shapely.points(p), pier)) for p in xy)
+    assert clearance >= 3.5  # the track's closest to the pier: 4.0 m (the way's edges keep the 2 m acceptance radius off it)
+    assert modes[-4:] == ["GUIDED", "HOLD", "GUIDED", "HOLD"]  # the legs; the hold; the executive's return; held at home
+    assert geo.distance(*positions[-1], *LINE_HOME) <= 2.0 + 1.5  # the acceptance radius, and the coast in HOLD
