@@ -182,6 +182,7 @@ def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for gu
     return Failsafe(
         guards, failsafe_policy(mission), mission.vehicle, fallback, name=name,
         returns=returns if returns.needed else None, reach_m=mission.limits.acceptance_radius_m,
+        leg_timeout_s=mission.limits.leg_timeout_s,
     )  # fmt: skip
 
 

@@ -123,11 +123,12 @@ class Failsafe(TimedBehaviour):
         *,
         returns: ReturnPlanner | None = None,
         reach_m: float = 2.0,
+        leg_timeout_s: float = 120.0,
     ) -> None:
         super().__init__(name)
         #: The mission's return around its keep-out zones to a rally point or home (None: the firmware's RTL always).
         self.returns = returns
-        self.reach_m = reach_m
+        self.reach_m, self.leg_timeout_s = reach_m, leg_timeout_s
         self.guards = tuple(guards)
         self.policy = dict(policy)
         self.vehicle = vehicle
@@ -333,7 +334,9 @@ class Failsafe(TimedBehaviour):
             return False
         hold = self._mode_of("hold")
         log.warning("failsafe %s: not the autopilot's RTL (%s) -> %s, then the executive's own return around the keep-out zones", cause, why, hold)
-        self._return = ReturningDrive(self, self.vehicle, self.returns, cause, hold, reach_m=self.reach_m, announce=self._announce)
+        self._return = ReturningDrive(
+            self, self.vehicle, self.returns, cause, hold, reach_m=self.reach_m, leg_timeout_s=self.leg_timeout_s, announce=self._announce
+        )
         return True
 
     def _why_not_rtl(self, reaction: _Reaction) -> str | None:

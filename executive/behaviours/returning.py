@@ -70,6 +70,7 @@ def why_not_rtl(planner: ReturnPlanner, condition: str, position: GlobalPosition
 @dataclass
 class _Leg:
     index: int
+    started: float
     sent_at: float = float("-inf")
 
 
@@ -77,17 +78,27 @@ class ReturningDrive:
     """One return driven by the executive for ``host`` (a failsafe): :meth:`follow` each tick until :attr:`arrived`."""
 
     def __init__(
-        self, host: Host, vehicle: str, planner: ReturnPlanner, cause: str, hold_mode: str, *, reach_m: float, announce: Announce | None = None
+        self,
+        host: Host,
+        vehicle: str,
+        planner: ReturnPlanner,
+        cause: str,
+        hold_mode: str,
+        *,
+        reach_m: float,
+        leg_timeout_s: float,
+        announce: Announce | None = None,
     ) -> None:
         self.host, self.vehicle, self.planner, self.cause = host, vehicle, planner, cause
-        self.hold_mode, self.reach_m, self.announce = hold_mode, reach_m, announce
+        self.hold_mode, self.reach_m, self.leg_timeout_s, self.announce = hold_mode, reach_m, leg_timeout_s, announce
         self.mission_home = (planner.mission.home.lat, planner.mission.home.lon) if planner.mission.home else None
         self.path: ReturnPath | None = None
         self.started = host.clock.now()
         self._guided = Reacting(host, vehicle, announce=announce, escalate=False)
         self._leg: _Leg | None = None
         self.arrived = False
-        self.failed: str | None = None  # no way found: the vehicle is left in its hold
+        self.failed: str | None = None  # no way found, or a leg not reached in time: the vehicle is left in its hold
+        self._end = ""
 
     @property
     def guided_mode(self) -> str:
@@ -100,22 +111,23 @@ class ReturningDrive:
     def follow(self, now: float, held: bool) -> str:
         """One tick of the return (``held``: the failsafe's hold is done); what it is doing, for the feedback."""
         position: GlobalPosition | None = self.host.get("/vehicle/position")
+        if self.arrived or self.failed is not None:  # held there: the hold asked until the autopilot shows it
+            self._guided.follow_up(now)
+            return self._end
         if self.path is None:
             standing = position is not None and position.ground_speed_m_s < STANDING_M_S
             if not ((held and standing) or now - self.started > STOP_WAIT_S) or position is None:
                 return f"holding before the return ({position.ground_speed_m_s:.1f} m/s)" if position else "holding before the return"
             self.path = self.planner.plan(position.lat, position.lon, _home(self.host, self.mission_home))
             if self.path is None:
-                self.failed = "no way to a rally point or home around the keep-out zones"
+                self.failed = self._end = "no way to a rally point or home around the keep-out zones"
                 log.warning("failsafe %s: %s -> left in %s", self.cause, self.failed, self.hold_mode)
                 return self.failed
             log.warning("failsafe %s: return to %s", self.cause, self.path.describe())
             if self.announce is not None:
                 self.announce(f"{self.cause}: return to {self.path.to}"[:50], False)
             self._guided.start(self.guided_mode, self.cause)
-            self._leg = _Leg(0)
-        if self.failed is not None:
-            return self.failed
+            self._leg = _Leg(0, now)
         assert self._leg is not None
         self._guided.follow_up(now)
         point = self.path.points[self._leg.index]
@@ -125,9 +137,13 @@ class ReturningDrive:
                 if self._leg.index == len(self.path.points) - 1:
                     self.arrived = True
                     log.warning("failsafe %s: returned to %s", self.cause, self.path.to)
-                    return f"returned to {self.path.describe()}"
-                self._leg = _Leg(self._leg.index + 1)
+                    return self._stop(f"returned to {self.path.describe()}")
+                self._leg = _Leg(self._leg.index + 1, now)
                 point = self.path.points[self._leg.index]
+        if now - self._leg.started > self.leg_timeout_s:
+            self.failed = f"leg {self._leg.index + 1}/{len(self.path.points)} of the return to {self.path.to} not reached in {self.leg_timeout_s:g} s"
+            log.warning("failsafe %s: %s -> left in %s", self.cause, self.failed, self.hold_mode)
+            return self._stop(self.failed)
         if not self._guided.done:
             return f"returning to {self.path.to}: {self._guided.state()}"
         if now - self._leg.sent_at >= RESEND_S:
@@ -136,6 +152,12 @@ class ReturningDrive:
         legs = f"leg {self._leg.index + 1}/{len(self.path.points)}"
         far = f", {geo.distance(position.lat, position.lon, *point):.0f} m" if position is not None else ""
         return f"returning to {self.path.to} around the keep-out zones: {legs}{far}"
+
+    def _stop(self, why: str) -> str:
+        """Hold the vehicle where the return ended (asked and verified as a reaction); ``why`` is said from now on."""
+        self._end = why
+        self._guided.start(self.hold_mode, self.cause)
+        return why
 
     def cancel(self) -> None:
         """A person has the vehicle, or the failsafe ended: nothing more is asked."""
