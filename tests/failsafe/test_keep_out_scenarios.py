@@ -119,6 +119,23 @@ def test_a_person_who_hands_back_inside_a_zone_is_left_alone_while_driving_then_
     assert any("moored boat" in w and "a person has the vehicle: judged when they hand back" in w for w in warnings)
 
 
+def test_a_rover_handed_back_heading_into_a_zone_is_held_before_it_enters(lockstep) -> None:
+    # a person drives on past the first waypoint toward the moored boat and hands back at 33 s, 3 m short of it at 1.4 m/s:
+    # switch low and their mode switch to GUIDED. The resumed leg would turn the rover back, but it would swing into the
+    # boat's circle doing so (0.1 m in, before this failsafe); it is held at once (it stops in 3.3 m) and goes home round it
+    takeover = RcTakeover(kind="rc_takeover", at_s=20.0, for_s=13.0, channel=6, pwm=1900, mode="MANUAL")
+    throttle = RcInput(kind="rc_input", at_s=20.0, for_s=13.0, channels={3: 1700, 1: 1500})
+    mission = round_the_pier()
+    sim = lockstep(mission, events=[takeover, throttle])
+    sim.at(33.0, lambda s: s.autopilot.set_mode(s.autopilot.profile.modes["GUIDED"]))
+    track = Track(sim, mission)
+    outcome = sim.run_to_end(limit_s=300)
+    assert outcome.reason.startswith(
+        "Wait for guards: Outside keep-out zones? heading into keep-out zone 'moored boat': 2.9 m ahead at 1.4 m/s (stops in 3.3 m); returned to home"
+    )
+    assert track.deepest_in("moored boat") == 0.0
+
+
 def test_a_route_edit_that_would_take_the_rover_through_a_buoy_from_where_it_is_is_refused_and_the_route_kept(lockstep) -> None:
     # the line north (waypoints 25 m apart); a 3 m buoy 44 m north, 13 m east. On leg 2 the operator moves waypoint 2 30 m east:
     # from waypoint 1 the new leg passes 6 m from the buoy, but the rover is already 10 m on, and from there it runs through it
