@@ -1,0 +1,91 @@
+"""goto_sample with drive: auto on the real ArduRover, recorded: a sample point is a NAV_LOITER_UNLIM stop.
+
+tests/data/ardurover/asv_sampling-motorboat-supervised*.tlog: real ArduRover SITL (4.7-dev, motorboat) driving
+missions/asv_sampling.yaml with ``drive: auto`` (horizon 2, a serial sonde stand-in) under the executive, speed-up 2;
+the second run paused by ``ctl pause`` 1 s into the first sample and resumed ~9 s later (tests/data/ardurover/README.md).
+Read here through the executive's own reader (MISSION_CURRENT, MISSION_ITEM_REACHED) and mission items.
+"""
+
+from __future__ import annotations
+
+import math
+
+from test_supervised_against_ardurover import read_through_the_executive, texts
+from tlog_replay import records
+
+from benchmarks import recorded
+from benchmarks.efficiency import MISSIONS
+from executive.geo import distance
+from executive.io.mavlink.mission_protocol import MissionItem, route_not_on_autopilot
+from executive.mavlink_dialect import mavlink
+from executive.mission.loader import load_mission
+
+SAMPLED = recorded.DATA / "asv_sampling-motorboat-supervised.tlog"
+PAUSED = recorded.DATA / "asv_sampling-motorboat-supervised-pause.tlog"
+MISSION = load_mission(MISSIONS / "asv_sampling.yaml")
+AUTOPILOT = 1  # the firmware's component; the executive's messages are the others
+
+
+def held_items(path) -> list[MissionItem]:
+    """The mission the vehicle last read back: its MISSION_ITEM_INTs 1..n, the latest of each seq."""
+    held: dict[int, MissionItem] = {}
+    for _, msg in records(path):
+        if msg.get_type() == "MISSION_ITEM_INT" and msg.get_srcComponent() == AUTOPILOT and msg.seq > 0:
+            held[msg.seq] = MissionItem.from_message(msg)
+    return [held[seq] for seq in sorted(held)]
+
+
+def track(path) -> list[tuple[float, float, float, float, int | None]]:
+    """(vehicle time s, lat, lon, ground speed m/s, MISSION_CURRENT seq) at each GLOBAL_POSITION_INT of the vehicle."""
+    rows, current = [], None
+    for _, msg in records(path):
+        if msg.get_srcComponent() != AUTOPILOT:
+            continue
+        if msg.get_type() == "MISSION_CURRENT":
+            current = msg.seq
+        elif msg.get_type() == "GLOBAL_POSITION_INT":
+            rows.append((msg.time_boot_ms / 1000.0, msg.lat * 1e-7, msg.lon * 1e-7, math.hypot(msg.vx, msg.vy) / 100.0, current))
+    return rows
+
+
+def set_currents(path) -> list[int]:
+    return [msg.seq for _, msg in records(path) if msg.get_type() == "MISSION_SET_CURRENT"]
+
+
+def test_the_recordings_are_small() -> None:
+    assert all(path.stat().st_size < 60_000 for path in (SAMPLED, PAUSED))
+
+
+def test_the_real_firmware_holds_each_sample_point_as_a_loiter_unlimited_and_our_reading_is_the_route() -> None:
+    held = held_items(SAMPLED)
+    assert [item.command for item in held] == [
+        mavlink.MAV_CMD_NAV_LOITER_UNLIM if wp.sample else mavlink.MAV_CMD_NAV_WAYPOINT for wp in MISSION.waypoints
+    ]
+    assert route_not_on_autopilot(MISSION.waypoints, held) is None  # as the executive compares what the vehicle read back
+
+
+def test_the_real_firmware_never_reports_a_sample_point_reached_and_stays_on_it_until_moved_on() -> None:
+    """Rover/mode_auto.cpp verify_loiter_unlimited never completes: MISSION_ITEM_REACHED only for the waypoints between (1, 3);
+    at sample point 2 MISSION_CURRENT stayed 2 until the executive's MISSION_SET_CURRENT 3, after the sample."""
+    currents, highest, _ = read_through_the_executive(SAMPLED, "boat")
+    assert highest == [1, 3]
+    assert "Mission: 2 LoitUnlim" in texts(SAMPLED) and "Mission: 4 LoitUnlim" in texts(SAMPLED)
+    assert set_currents(SAMPLED) == [1, 3]
+    inlet, radius = MISSION.waypoints[1], MISSION.limits.acceptance_radius_m
+    rows = track(SAMPLED)
+    there = [(t, distance(lat, lon, inlet.lat, inlet.lon), seq) for t, lat, lon, _, seq in rows]
+    arrived = next(t for t, d, _ in there if d <= radius)
+    moved_on = next(t for t, _, seq in there if t > arrived and seq == 3)
+    stay = [(d, seq) for t, d, seq in there if arrived <= t < moved_on]
+    assert moved_on - arrived >= MISSION.sampling.duration_s  # held the whole sample (10.9 s in the recording)
+    assert all(seq == 2 for _, seq in stay) and max(d for d, _ in stay) <= radius  # item 2 all along, within 1.5 m (0.94 m)
+
+
+def test_a_pause_during_the_real_sample_resumes_at_the_sample_points_item_then_goes_on() -> None:
+    """ctl pause 1 s into the sample at item 2, resume ~9 s later (18 s of the vehicle's time): MISSION_SET_CURRENT 2 and AUTO
+    (the boat 0.8 m from the point), the sample taken again, then MISSION_SET_CURRENT 3; MISSION_ITEM_REACHED only 1 and 3."""
+    _, highest, _ = read_through_the_executive(PAUSED, "boat")
+    assert highest == [1, 3]
+    assert set_currents(PAUSED) == [1, 2, 3]
+    said = [msg.text for _, msg in records(PAUSED) if msg.get_type() == "STATUSTEXT" and msg.get_srcComponent() != AUTOPILOT]
+    assert said[:2] == ["mission PAUSED: ctl: pause", "mission RUNNING: resumed at leg 2"]
