@@ -2,7 +2,8 @@
 
 tests/data/ardurover/asv_sampling-motorboat-supervised*.tlog: real ArduRover SITL (4.7-dev, motorboat) driving
 missions/asv_sampling.yaml with ``drive: auto`` (horizon 2, a serial sonde stand-in) under the executive, speed-up 2;
-the second run paused by ``ctl pause`` 1 s into the first sample and resumed ~9 s later (tests/data/ardurover/README.md).
+the second run paused by ``ctl pause`` 1 s into the first sample and resumed ~9 s later; the third with the executive
+``kill -9``ed 28 m short of the first sample point, recorded by a second client (tests/data/ardurover/README.md).
 Read here through the executive's own reader (MISSION_CURRENT, MISSION_ITEM_REACHED) and mission items.
 """
 
@@ -22,6 +23,7 @@ from executive.mission.loader import load_mission
 
 SAMPLED = recorded.DATA / "asv_sampling-motorboat-supervised.tlog"
 PAUSED = recorded.DATA / "asv_sampling-motorboat-supervised-pause.tlog"
+KILLED = recorded.DATA / "asv_sampling-motorboat-supervised-killed.tlog"
 MISSION = load_mission(MISSIONS / "asv_sampling.yaml")
 AUTOPILOT = 1  # the firmware's component; the executive's messages are the others
 
@@ -53,7 +55,7 @@ def set_currents(path) -> list[int]:
 
 
 def test_the_recordings_are_small() -> None:
-    assert all(path.stat().st_size < 60_000 for path in (SAMPLED, PAUSED))
+    assert all(path.stat().st_size < 60_000 for path in (SAMPLED, PAUSED, KILLED))
 
 
 def test_the_real_firmware_holds_each_sample_point_as_a_loiter_unlimited_and_our_reading_is_the_route() -> None:
@@ -67,7 +69,7 @@ def test_the_real_firmware_holds_each_sample_point_as_a_loiter_unlimited_and_our
 def test_the_real_firmware_never_reports_a_sample_point_reached_and_stays_on_it_until_moved_on() -> None:
     """Rover/mode_auto.cpp verify_loiter_unlimited never completes: MISSION_ITEM_REACHED only for the waypoints between (1, 3);
     at sample point 2 MISSION_CURRENT stayed 2 until the executive's MISSION_SET_CURRENT 3, after the sample."""
-    currents, highest, _ = read_through_the_executive(SAMPLED, "boat")
+    _, highest, _ = read_through_the_executive(SAMPLED, "boat")
     assert highest == [1, 3]
     assert "Mission: 2 LoitUnlim" in texts(SAMPLED) and "Mission: 4 LoitUnlim" in texts(SAMPLED)
     assert set_currents(SAMPLED) == [1, 3]
@@ -89,3 +91,21 @@ def test_a_pause_during_the_real_sample_resumes_at_the_sample_points_item_then_g
     assert set_currents(PAUSED) == [1, 2, 3]
     said = [msg.text for _, msg in records(PAUSED) if msg.get_type() == "STATUSTEXT" and msg.get_srcComponent() != AUTOPILOT]
     assert said[:2] == ["mission PAUSED: ctl: pause", "mission RUNNING: resumed at leg 2"]
+
+
+def test_killed_on_the_way_to_a_sample_point_the_real_boat_stops_there_and_never_drives_on() -> None:
+    """The executive killed 28 m short of sample point 2, the autopilot holding items 1-3 (MISSION_CURRENT total 3): the firmware
+    drove to item 2, said "Reached waypoint #2" and stayed on it in AUTO (never reported reached, never moved on) for the
+    2.5 minutes recorded; waypoint 3, held beyond it, never approached."""
+    currents, highest, mode = read_through_the_executive(KILLED, "boat")
+    assert highest == [1] and mode == "AUTO"
+    assert currents[-1][0] == 2 and "Reached waypoint #2" in texts(KILLED)
+    totals = {msg.total for _, msg in records(KILLED) if msg.get_type() == "MISSION_CURRENT" and msg.seq == 2}
+    assert totals == {3}  # waypoint 3 was on the autopilot all along
+    inlet, beyond = MISSION.waypoints[1], MISSION.waypoints[2]
+    rows = track(KILLED)
+    stopped = next(t for t, lat, lon, speed, _ in rows if distance(lat, lon, inlet.lat, inlet.lon) < 3.0 and speed < 0.2)
+    after = [(distance(lat, lon, inlet.lat, inlet.lon), speed) for t, lat, lon, speed, _ in rows if t >= stopped]
+    assert rows[-1][0] - stopped > 150.0
+    assert max(d for d, _ in after) < 3.0 and max(v for _, v in after) < 0.5  # loitering on the point (LOIT_RADIUS 2, waves)
+    assert min(distance(lat, lon, beyond.lat, beyond.lon) for _, lat, lon, _, _ in rows) > 25.0
