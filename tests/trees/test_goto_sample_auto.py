@@ -13,7 +13,7 @@ from executive.geo import distance
 from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.mission.model import Mission
+from executive.mission.model import Mission, SimulatorOptions
 from executive.testing import Lockstep
 
 ROOT = Path(__file__).parents[2]
@@ -115,3 +115,12 @@ def test_a_pause_during_a_sample_cancels_it_and_resume_takes_it_again_then_goes_
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert sorted(s.leg_index for s in state.samples) == [1, 3]  # taken again at the resume, once
     assert sets[:2] == [2, 3]  # resumed at the sample point's item, then on at the next, never back to the first
+
+
+def test_a_mission_end_that_would_not_stop_the_boat_is_refused_before_arming(lockstep) -> None:
+    """The same pre-flight as waypoints' drive: auto: MIS_DONE_BEHAVE 2 (ACRO) would drive on past the horizon."""
+    mission = example(simulator=SimulatorOptions(ekf_ready_after_s=2.0, params={"MIS_DONE_BEHAVE": 2.0}))
+    sim = lockstep(mission)
+    outcome = sim.run_to_end(limit_s=120)
+    assert outcome.status is not MissionStatus.COMPLETED and "MIS_DONE_BEHAVE is 2: set it to 0 or 1" in outcome.reason
+    assert not sim.autopilot.armed and sim.autopilot.mission.count <= 1  # nothing armed or uploaded
