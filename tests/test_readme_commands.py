@@ -64,6 +64,8 @@ NOT_RUN_HERE: dict[str, str] = {
     "executive replay run.jsonl --groot2 1667 --speed 10": "a recorded run, served to Groot2 until Ctrl-C (tests/groot2/test_groot2_clients.py)",
     "executive sim --vehicle boat --mavlink tcpin:0.0.0.0:5760": "serves a ground station until Ctrl-C (tests/sim/test_server.py)",
     "executive sim": "serves a simulated vehicle until Ctrl-C (tests/sim/test_server.py)",
+    "executive import cmac.waypoints --vehicle rover --zones fence.waypoints --zones points.rally -o m.yaml": "needs Mission Planner's "
+    "files (tests/mission/test_mp_zone_files.py imports the same kinds, and runs `executive import --zones`)",
     "python -m benchmarks": "about 4 minutes on 2 cores (tests/test_benchmarks_smoke.py runs each benchmark once, small)",
     "python -m benchmarks --json bench.json": "about 4 minutes on 2 cores (tests/test_benchmarks_smoke.py)",
     "python -m benchmarks --only tick ingest": "a minute (tests/test_benchmarks_smoke.py)",

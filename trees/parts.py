@@ -36,8 +36,12 @@ from executive.behaviours import (
     inside_geofence,
 )
 from executive.behaviours.failsafe import condition_of
+from executive.behaviours.returning import NoReturnUnderWay
+from executive.behaviours.zone_guards import outside_keep_out
+from executive.behaviours.zones import ZonesOnAutopilot
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.model import Mission
+from executive.mission.return_path import ReturnPlanner
 from executive.mission.rules import failsafe_policy, height_tolerance, rc_switch_channels, seabed_clearance
 from executive.vehicles import PROFILES
 
@@ -118,7 +122,10 @@ def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
         arming = WaitUntil(either, limits.recovery_timeout_s, name=name, hint=how_to_arm(mission))
     else:
         arming = WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm", hint=how_to_arm(mission))
-    checks = [wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission), *mission_end_checks(mission), *energy_fits(mission)]
+    checks = [
+        wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission), *mission_end_checks(mission), *energy_fits(mission),
+        *zones_on_autopilot(mission),
+    ]  # fmt: skip
     return py_trees.composites.Sequence("Pre-flight", memory=True, children=[*checks, arming])
 
 
@@ -134,6 +141,16 @@ def mission_end_checks(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
         return []
     name, allowed, why = MISSION_END_STOPS
     return [ParameterIs(name, allowed, why)]
+
+
+def zones_on_autopilot(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
+    """The zones and rally points sent to the autopilot and read back (``geofence.autopilot``, default upload), if the mission has any."""
+    geofence = mission.geofence
+    shapes = geofence is not None and (geofence.polygon is not None or geofence.inclusion or geofence.keep_out)
+    enforce = geofence is not None and geofence.autopilot == "enforce"  # max_distance_from_home_m alone is the fence's circle
+    if (geofence is not None and geofence.autopilot == "off") or not (shapes or mission.rally_points or enforce):
+        return []
+    return [ZonesOnAutopilot(geofence, mission.rally_points)]
 
 
 def how_to_arm(mission: Mission) -> str:
@@ -163,6 +180,7 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
         ("rc_loss", RcNotLost(mission.rc.source)),
         ("geofence_breach", inside_geofence(mission)),
         ("energy", EnergyEnough(required=mission.energy is not None) if mission.energy_rule() is not None else None),
+        ("keep_out", outside_keep_out(mission)),
     ]
     extra = [guard for condition, guard in candidates if condition not in covered and guard is not None]
     policy = failsafe_policy(mission)
@@ -175,7 +193,12 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
 def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for guards") -> Failsafe:
     """The mission's failsafe for ``guards``; a guard of no failsafe condition (a limit) holds and resumes within ``limits.recovery_timeout_s``."""
     fallback = FailsafePolicy("limit", "hold", "resume", mission.limits.recovery_timeout_s)
-    return Failsafe(guards, failsafe_policy(mission), mission.vehicle, fallback, name=name)
+    returns = ReturnPlanner(mission)
+    return Failsafe(
+        guards, failsafe_policy(mission), mission.vehicle, fallback, name=name,
+        returns=returns if returns.needed else None, reach_m=mission.limits.acceptance_radius_m,
+        leg_timeout_s=mission.limits.leg_timeout_s,
+    )  # fmt: skip
 
 
 def failsafe_guarded(
@@ -188,8 +211,10 @@ def failsafe_guarded(
     so the work resumes where it was when the guard recovers.
     """
     guards = failsafe_guards(mission, guards)
-    route = py_trees.composites.Sequence(name, memory=False, children=[*guards, work])
-    return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, failsafe(guards, mission)])
+    react = failsafe(guards, mission)
+    gate = [NoReturnUnderWay(react)] if react.returns is not None else []  # a return that ends the mission is not resumed from
+    route = py_trees.composites.Sequence(name, memory=False, children=[*gate, *guards, work])
+    return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, react])
 
 
 def guided_leg(mission: Mission) -> py_trees.behaviour.Behaviour:

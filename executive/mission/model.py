@@ -255,6 +255,9 @@ class FailsafeConfig(BaseModel):
     battery_low: FailsafeRule | None = Field(None, description="the battery below limits.battery_min_pct or limits.battery_min_v")
     geofence_breach: FailsafeRule | None = Field(None, description="the vehicle outside the mission's geofence (only with a geofence: section)")
     energy: FailsafeRule | None = Field(None, description="the rest of the route and the way home no longer fit the battery (energy:)")
+    keep_out: FailsafeRule | None = Field(
+        None, description="the vehicle inside a keep-out zone, or heading into one closer than it can stop (geofence.keep_out)"
+    )
 
 
 class EnergyConfig(BaseModel):
@@ -342,6 +345,12 @@ class GeofenceConfig(BaseModel):
     )
     keep_out: list[Zone] = Field(
         default_factory=list, max_length=1000, description="areas no waypoint and no leg may enter, acceptance_radius_m as a margin (islands, piers)"
+    )
+    autopilot: Literal["upload", "enforce", "off"] = Field(
+        "upload",
+        description="the zones and rally_points on the autopilot at pre-flight (its fence and rally items, read back): upload sends them "
+        "and leaves the autopilot's own fence settings as they are; enforce also switches its fence on (ArduPilot FENCE_ENABLE, "
+        "FENCE_TYPE, FENCE_ACTION Hold; PX4 GF_ACTION Hold), left on after the mission; off sends nothing",
     )
 
     def fence(self) -> Geofence:

@@ -12,6 +12,7 @@ from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS, RoverMotion
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import ACC_BITS, GLOBAL_FRAMES, NAVIGATION, POS_BITS, RATE_ATTITUDE, ArduPilotSim
 from executive.sim.ardupilot.mission_change import MissionChangeDetector
+from executive.sim.ardupilot.rover_fence import FENCE_ACTIONS, FENCE_DEFAULTS, breaches
 from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import StoredCommand
@@ -40,7 +41,7 @@ class ArduRoverSim(ArduPilotSim):
     HOLD and the manual modes stop (no pilot in the sim). LOITER holds a point within
     ``LOITER_RADIUS_M``. GUIDED drives to position targets, then stops (rover) or loiters (boat).
     RTL drives home, then stops or loiters, staying in RTL as the firmware does. AUTO drives to each
-    NAV_WAYPOINT of the mission in turn, then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
+    NAV_WAYPOINT of the mission in turn (a NAV_LOITER_UNLIM: to stay there), then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
     refused without a mission ("No Mission. Can't set AUTO.").
 
     GUIDED, AUTO and RTL drive as the firmware's navigation does (:class:`~executive.sim.ardupilot.rover_nav.RoverNavigator`:
@@ -56,10 +57,11 @@ class ArduRoverSim(ArduPilotSim):
     #: MIS_DONE_BEHAVE 0: stop in AUTO at the mission's end (Rover/Parameters.cpp).
     PARAMS: ClassVar[Mapping[str, float]] = {
         "MODE_CH": 8, "CRUISE_SPEED": 2.0, "MIS_DONE_BEHAVE": 0.0, "FRAME_CLASS": 1.0, "SERVO1_FUNCTION": 26.0, "SERVO3_FUNCTION": 70.0,
-        **FIRMWARE_DEFAULTS,
+        **FIRMWARE_DEFAULTS, **FENCE_DEFAULTS,
     }  # fmt: skip
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset({
         "MODE_CH", "FRAME_CLASS", "MIS_DONE_BEHAVE", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE", "SERVO1_FUNCTION", "SERVO3_FUNCTION",
+        "FENCE_ENABLE", "FENCE_TYPE", "FENCE_ACTION", "FENCE_OPTIONS",
     })  # fmt: skip
     SKID_STEERING: ClassVar[bool] = False  # SERVO1/3_FUNCTION ThrottleLeft/Right: pivot turns (Rover.cpp set_turn_params)
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
@@ -118,6 +120,43 @@ class ArduRoverSim(ArduPilotSim):
         assert isinstance(self.vehicle, SurfaceVehicle)
         self.vehicle.follow(self._nav)
         return self._nav
+
+    _fence_breaches = 0  # the fence types breached at the last check (AC_Fence's _breached_fences)
+    _fence_breach_count = 0
+    _fence_breach_ms = 0
+
+    def _check_health(self) -> None:
+        super()._check_health()
+        self._check_fence()
+
+    def _check_fence(self) -> None:
+        """Rover/fence.cpp fence_check, at 10 Hz: a new breach sends FENCE_STATUS (no STATUSTEXT: AC_Fence::record_breach) and, armed,
+        takes FENCE_ACTION once (see rover_fence)."""
+        if not self.ekf_ready:
+            return
+        fence = self.zone_stores[_M.MAV_MISSION_TYPE_FENCE].commands
+        found = breaches(self.params, fence, self.home, self.vehicle.lat, self.vehicle.lon)
+        new = found & ~self._fence_breaches
+        if found != self._fence_breaches:
+            if new:
+                self._fence_breach_count += 1
+                self._fence_breach_ms = self._ms()
+            self._fence_breaches = found
+            self._emit(self._msg_fence_status())
+        if not new or not self.armed:
+            return
+        for action in FENCE_ACTIONS.get(int(self.params.get("FENCE_ACTION", 1)), ("HOLD",)):
+            if action == "DISARM":
+                self.disarm()
+                break
+            self._force_mode(action)
+            if self.mode == action:
+                break
+
+    def _msg_fence_status(self) -> MAVLinkMessage:
+        """FENCE_STATUS (GCS_MAVLink/GCS_Fence.cpp send_fence_status): breach_type 3 (boundary) for the circle and polygon."""
+        breach_type = _M.FENCE_BREACH_BOUNDARY if self._fence_breaches else _M.FENCE_BREACH_NONE
+        return self._mav.fence_status_encode(int(bool(self._fence_breaches)), self._fence_breach_count, breach_type, self._fence_breach_ms, 0)
 
     def _message_handlers(self) -> dict[str, Callable[[MAVLinkMessage], None]]:
         return {**super()._message_handlers(), "SET_POSITION_TARGET_GLOBAL_INT": self._on_position_target}
@@ -238,6 +277,8 @@ class ArduRoverSim(ArduPilotSim):
         As ModeAuto::do_nav_wp (Rover/mode_auto.cpp): a waypoint followed by another navigation command and
         without a hold time is driven through toward that one (AR_WPNav's "fast waypoint": no stop, the corner
         cut within WP_RADIUS); the last one, or one with a hold time, is a stop. The next item starts at once.
+        A NAV_LOITER_UNLIM is a stop at its location (do_nav_wp with always_stop_at_destination; a boat loiters
+        there) that never completes (verify_loiter_unlimited: no MISSION_ITEM_REACHED), until MISSION_SET_CURRENT.
         """
         if self._auto_waiting:
             if not self.position_ok:
@@ -252,15 +293,18 @@ class ArduRoverSim(ArduPilotSim):
             if self._driving or self._loitering:
                 self._stop()
             return
+        stop_here = item.command == _M.MAV_CMD_NAV_LOITER_UNLIM
         if (self.mission.current_seq, item) == self._auto_item:
             if self._driving and self.vehicle.arrived:
                 self._driving = False
-                hold_s = item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
+                hold_s = 0.0 if stop_here else item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
                 self._auto_hold_until = self.elapsed_s + hold_s
                 seq = self.mission.current_seq
                 self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{seq}" + (f". Loiter for {hold_s:.0f} seconds" if hold_s else ""))
-            if self._driving or self.elapsed_s < self._auto_hold_until - EPSILON_S:
-                return
+                if stop_here and self.is_boat:  # ModeAuto::update: boats loiter once a waypoint that is not a fast one is reached
+                    self._loiter()
+            if stop_here or self._driving or self.elapsed_s < self._auto_hold_until - EPSILON_S:
+                return  # verify_loiter_unlimited never completes: the vehicle stays until the mission is moved on
             item = self.mission.advance()
             if item is None:
                 self._mission_done()
@@ -269,6 +313,8 @@ class ArduRoverSim(ArduPilotSim):
         self._auto_item = (self.mission.current_seq, item)
         if item.command == _M.MAV_CMD_NAV_WAYPOINT:
             self._drive(item.lat, item.lon, then=self._next_corner(item))
+        elif item.command == _M.MAV_CMD_NAV_LOITER_UNLIM:  # do_nav_wp(cmd, always_stop_at_destination=true)
+            self._drive(item.lat, item.lon)
         else:
             self.mission.advance()
 
@@ -276,7 +322,7 @@ class ArduRoverSim(ArduPilotSim):
         """The mission changed while AUTO drives a waypoint (:class:`MissionChangeDetector`): ModeAuto::update restarts that
         waypoint's command (Rover/mode_auto.cpp, AP_Mission::restart_current_nav_cmd): AR_WPNav::set_desired_location, the
         leg not reached, starts again from the stopping point."""
-        if item is None or not self._driving or item.command != _M.MAV_CMD_NAV_WAYPOINT:
+        if item is None or not self._driving or item.command not in (_M.MAV_CMD_NAV_WAYPOINT, _M.MAV_CMD_NAV_LOITER_UNLIM):
             return
         self._text(_M.MAV_SEVERITY_CRITICAL, "Auto mission changed, restarted command")
         self._auto_item = None
