@@ -59,11 +59,16 @@ def cells_at_rest(volts: float) -> int | None:
     return counts[0] if len(counts) == 1 else None
 
 
+def capacity_param(autopilot: str) -> str:
+    """The autopilot's parameter holding the pack's capacity in mAh."""
+    return "BAT1_CAPACITY" if autopilot == "px4" else "BATT_CAPACITY"
+
+
 def capacity(config: EnergyConfig, params: Mapping[str, float], autopilot: str, rest_v: float | None = None) -> Capacity | str:
     """The pack's capacity in Wh, or why it cannot be told (naming what to set); ``rest_v``: the pack's voltage before arming."""
     if config.capacity_wh is not None:
         return Capacity(config.capacity_wh, f"energy.capacity_wh {config.capacity_wh:g} Wh")
-    name = "BAT1_CAPACITY" if autopilot == "px4" else "BATT_CAPACITY"
+    name = capacity_param(autopilot)
     mah = params.get(name)
     if mah is None:
         return f"{name} not read from the autopilot: set energy.capacity_wh"

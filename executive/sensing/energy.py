@@ -31,6 +31,8 @@ log = logging.getLogger("executive.energy")  # the journal's event kind: "energy
 
 #: A mission that did not ask for the rule runs unjudged (warned) on a vehicle that sends no BATTERY_STATUS by then.
 NO_REPORT_S = 5.0
+#: How long the capacity parameter may take to come: the parameter watch asks 10 times, 1 s apart (autopilot_link.parameters).
+PARAMS_WAIT_S = 12.0
 WINDOW_S = 10.0  # consumption measured over windows this long: ten 1 Hz reports, the current's noise averaged
 # A VTOL hovers to climb and to land: ArduPlane's QuadPlane climbs at Q_WP_SPEED_UP 2.5 m/s and descends at Q_WP_SPEED_DN
 # 1.5 m/s (libraries/AC_WPNav/AC_WPNav.cpp WPNAV_WP_SPEED_UP_CMS, _DOWN_CMS), the last Q_LAND_FINAL_ALT 6 m at
@@ -225,6 +227,10 @@ class EnergyWatch:
         if status.voltage_v and (not self._in.get("/vehicle/armed") or self._rest_v is None):
             # the pack at rest (else as first seen: an armed vehicle): its cells counted where the autopilot does not say its voltage
             self._rest_v = status.voltage_v if self._start is None or self._rest_v is None else self._rest_v
+        name = battery_energy.capacity_param(self._autopilot())
+        if config.capacity_wh is None and name not in params and self._clock.now() - self._since < PARAMS_WAIT_S:
+            self._unknown("")  # the parameter watch is still asking for it: nothing to say yet (the pre-flight's wait not begun)
+            return
         capacity = battery_energy.judgeable(config, said, status, battery, params, self._autopilot(), self._rest_v)
         if isinstance(capacity, battery_energy.NotJudged):
             self._not_judged(capacity.why)
