@@ -29,7 +29,7 @@ import collections
 import json
 import logging
 import os
-from collections.abc import Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -141,8 +141,11 @@ class _LogLines(logging.Handler):
 class McapFile:
     """A snapshot recording as one MCAP file (see the module's doc for its channels)."""
 
-    def __init__(self, path: Path, max_bytes: int, storage: Storage | None, clock: Clock | None) -> None:
-        self.path, self.max_bytes, self.storage, self._clock = path, max_bytes, storage, clock
+    def __init__(
+        self, path: Path, max_bytes: int, storage: Storage | None, clock: Clock | None, values: Callable[[str], Any] = blackboard.value
+    ) -> None:
+        """``values``: where the vehicle and the mission are read after each tick (the blackboard; a recorded one for ``convert``)."""
+        self.path, self.max_bytes, self.storage, self._clock, self._value = path, max_bytes, storage, clock, values
         self._nodes: list[dict[str, Any]] = []
         self._t = 0.0  # vehicle time of the last tick: what a line without a clock is timed by
         self._mission: tuple[Any, ...] | None = None
@@ -165,7 +168,7 @@ class McapFile:
             self._keyframes.append((line["tick"], ns, self._tree_ns))
         if "bb" in line:
             self._put("/blackboard", t, {"tick": line["tick"], **marks, "bb": line["bb"]})
-        mission = tuple(blackboard.value(k) for k in MISSION_KEYS)
+        mission = tuple(self._value(k) for k in MISSION_KEYS)
         if mission != self._mission:
             self._mission = mission
             self._put("/mission/state", t, dict(zip(("state", "leg_index", "leg_count", "reason"), mission, strict=True)))
@@ -227,7 +230,7 @@ class McapFile:
         return ns
 
     def _write_fix(self) -> None:
-        fix = blackboard.value("/vehicle/position")
+        fix = self._value("/vehicle/position")
         if fix is None or fix.time == self._fix_time:
             return
         self._fix_time = fix.time
@@ -245,53 +248,3 @@ class McapFile:
             message = {"timestamp": _stamp(t), "level": level, "message": record.getMessage(), "name": record.name,
                        "file": record.pathname, "line": record.lineno}  # fmt: skip
             self._put("/log", t, message)
-
-
-MAGIC = b"\x89MCAP0\r\n"
-
-
-def _seek(reader: Any, tick: int) -> tuple[int, dict[str, Any]] | None:
-    """The time of the last keyframe before ``tick`` and the tree line it belongs to; None without (an unfinished file).
-
-    Before, not at: a keyframe's own changes are told against the tick before it.
-    """
-    try:
-        keyframes = [k for record in reader.iter_metadata() if record.name == "executive.keyframes" for k in json.loads(record.metadata["ticks"])]
-    except Exception:  # no summary (a file cut by a crash): read from the start
-        return None
-    before = [(ns, tree_ns) for key, ns, tree_ns in keyframes if key < tick]
-    if not before:
-        return None
-    ns, tree_ns = before[-1]
-    trees = [json.loads(m.data) for _, _, m in reader.iter_messages(topics=["/tree"], starting_at=tree_ns, ending_at=tree_ns)]
-    return (ns, {"tree": trees[-1]["nodes"]}) if trees else None
-
-
-def tick_lines(part: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
-    """An MCAP recording as the JSON-lines file's lines (``tree``, then each tick's with its ``bb``), in the order written.
-
-    With ``near``: from the last keyframe before tick ``near`` (its tree line first), found through the index.
-    """
-    from mcap.reader import make_reader
-
-    pending: dict[str, Any] | None = None
-    with part.open("rb") as f:
-        reader = make_reader(f)
-        start = _seek(reader, near) if near is not None else None
-        if start is not None:
-            yield start[1]
-        window = {"starting_at": start[0]} if start is not None else {}
-        for _, channel, message in reader.iter_messages(topics=["/tree", "/tree/tick", "/blackboard"], log_time_order=False, **window):
-            body = json.loads(message.data)
-            if channel.topic == "/blackboard" and pending is not None:
-                pending["bb"] = body["bb"]  # a tick's blackboard follows its /tree/tick message
-                continue
-            if pending is not None:
-                yield pending
-            if channel.topic == "/tree":
-                pending = None
-                yield {"tree": body["nodes"]}
-            else:
-                pending = {**body, "t": round(message.log_time / 1e9, 3)}
-    if pending is not None:
-        yield pending

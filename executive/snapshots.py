@@ -13,12 +13,16 @@ twice ``max_bytes`` however long the run.
 
 from __future__ import annotations
 
+import ast
 import bisect
+import itertools
 import json
 import os
+import re
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any, Protocol
 
 import py_trees
@@ -35,6 +39,22 @@ def show_value(value: Any) -> str:
     """A blackboard value as short text (its repr, cut to MAX_VALUE_CHARS)."""
     text = repr(value)
     return text if len(text) <= MAX_VALUE_CHARS else text[: MAX_VALUE_CHARS - 3] + "..."
+
+
+_FIELD = re.compile(r"""(\w+)=('(?:[^'\\]|\\.)*'|"(?:[^"\\]|\\.)*"|[^,)]+)""")
+
+
+def literal(text: str | None) -> Any:
+    """A value shown as its repr, back (None when it is not a plain literal)."""
+    try:
+        return ast.literal_eval(text) if text is not None else None
+    except (ValueError, SyntaxError, MemoryError, RecursionError):
+        return None
+
+
+def shown_fields(text: str | None) -> dict[str, Any]:
+    """The fields of a value shown as ``Name(field=value, ...)`` (a dataclass's repr), each back as a literal; those cut off are missing."""
+    return {name: literal(value) for name, value in _FIELD.findall(text or "") if not value.endswith("...")}
 
 
 def _preorder(node: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:
@@ -257,13 +277,13 @@ def _is_mcap(part: Path) -> bool:
         return f.read(len(MCAP_MAGIC)) == MCAP_MAGIC
 
 
-def _lines(path: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
+def read_lines(path: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
     """The recording's lines, oldest first; with ``near``, an MCAP file's from its last keyframe before that tick."""
     for part in (path.with_name(path.name + ".1"), path):
         if part.exists():
             _check_kind(part)
             if _is_mcap(part):
-                from executive.mcap_recording import tick_lines
+                from executive.mcap_reading import tick_lines
 
                 yield from tick_lines(part, near)
                 continue
@@ -280,7 +300,7 @@ def _lines(path: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
 def recorded_ticks(path: str | Path) -> list[tuple[int, int]]:
     """The ticks a recording holds, as (first, last) runs of consecutive ticks."""
     spans: list[tuple[int, int]] = []
-    for line in _lines(Path(path)):
+    for line in read_lines(Path(path)):
         if "tick" not in line:
             continue
         tick = line["tick"]
@@ -321,7 +341,7 @@ def replay(path: str | Path, tick: int | None = None) -> TickState:
     _parts(path)
     state: TickState | None = None
     nodes: list[dict[str, Any]] = []
-    for line in _lines(path, tick):
+    for line in read_lines(path, tick):
         if "tree" in line:
             nodes = line["tree"]
             state = None
@@ -336,9 +356,59 @@ def replay(path: str | Path, tick: int | None = None) -> TickState:
     return state
 
 
+class _RecordedBoard:
+    """A recorded blackboard (values as text) read back as :mod:`executive.mcap_recording` reads the live one."""
+
+    def __init__(self) -> None:
+        self.text: dict[str, str] = {}
+        self._t = 0.0
+        self._fix: tuple[str | None, Any] = (None, None)
+
+    def update(self, line: dict[str, Any]) -> None:
+        self.text.update(line.get("bb", {}))
+        self._t = line["t"]
+
+    def value(self, key: str) -> Any:
+        text = self.text.get(key)
+        if key != "/vehicle/position":
+            return literal(text)
+        if text != self._fix[0]:  # a new fix: timed by the tick that saw it when its time was cut off the text
+            fields = shown_fields(text)
+            whole = "lat" in fields and "lon" in fields
+            self._fix = (text, SimpleNamespace(**{"alt_rel_m": 0.0, **fields, "time": fields.get("time", self._t)}) if whole else None)
+        return self._fix[1]
+
+
+def convert(old: Path, new: Path) -> int:
+    """The JSON-lines recording ``old`` (and ``old.1``) written as the MCAP recording ``new``; how many tick lines."""
+    from executive.mcap_recording import McapFile
+
+    for part in _parts(old):
+        if _is_mcap(part):
+            raise NotSnapshots(f"{part}:1:1: (snapshot): already an MCAP recording")
+    board = _RecordedBoard()
+    out = McapFile(new, 1 << 62, None, None, values=board.value)  # one file, however long: nothing of the run is rotated away
+    ticks = 0
+    try:
+        for line in read_lines(old):
+            if "tree" in line:
+                out.write_tree(line["tree"])
+                continue
+            before = board.value("/mission/state")
+            board.update(line)
+            after = board.value("/mission/state")
+            if before is not None and after != before:
+                out.write_event(str(before), str(after), str(board.value("/mission/reason") or ""))
+            out.write_tick(line)
+            ticks += 1
+    finally:
+        out.close()
+    return ticks
+
+
 @dataclass(frozen=True)
 class _Entry:
-    """Where a tick's line is: its file, its byte offset, the tree it belongs to, whether it is a keyframe."""
+    """Where a tick's line is: its file, its byte offset (MCAP: its log time, ns), the tree it belongs to, whether it is a keyframe."""
 
     tick: int
     part: Path
@@ -360,21 +430,13 @@ class Recording:
         self._entries: list[_Entry] = []
         for part in _parts(self.path):
             _check_kind(part)
-            if _is_mcap(part):
-                raise NotSnapshots(
-                    f"{part}:1:1: (snapshot): an MCAP recording: `replay FILE --tick N` shows it; --web and --groot2 read JSON lines only"
-                )
-            with part.open("rb") as f:
-                offset = 0
-                for number, raw in enumerate(f, 1):
-                    line = _parse(raw, part, number)
-                    if "tree" in line:
-                        self.trees.append(line["tree"])
-                    elif self.trees:
-                        self._entries.append(_Entry(line["tick"], part, offset, len(self.trees) - 1, bool(line.get("key"))))
-                        if watch is not None:
-                            watch(line)
-                    offset += len(raw)
+            for offset, line in _offset_lines(part):
+                if "tree" in line:
+                    self.trees.append(line["tree"])
+                elif self.trees:
+                    self._entries.append(_Entry(line["tick"], part, offset, len(self.trees) - 1, bool(line.get("key"))))
+                    if watch is not None:
+                        watch(line)
         if not self._entries:
             raise LookupError(f"{self.path}: no tick recorded")
         self._ticks = [entry.tick for entry in self._entries]
@@ -407,12 +469,15 @@ class Recording:
         while not self._entries[k].key:  # each file of a recording starts each tree with a keyframe
             k -= 1
         start = self._entries[k]
-        state: TickState | None = None
-        with start.part.open("rb") as f:
-            f.seek(start.offset)
-            for n in range(i - k + 1):
-                state = _apply(state, self.trees[start.tree], _parse(f.readline(), start.part, n))
-        assert state is not None
+        lines = _offset_lines(start.part, start.offset)
+        for _, line in lines:
+            if line.get("tick") == start.tick and line.get("key"):
+                break  # an MCAP file's seek may start a message early: at its keyframe's tree
+        else:
+            raise ValueError(f"{start.part}: the keyframe of tick {start.tick} is no longer there")
+        state = _apply(None, self.trees[start.tree], line)
+        for _, line in itertools.islice((entry for entry in lines if "tree" not in entry[1]), i - k):
+            state = _apply(state, self.trees[start.tree], line)
         return state
 
     def _index(self, tick: int) -> int:
@@ -421,6 +486,20 @@ class Recording:
         if i < 0 or self._ticks[i] != tick:
             raise LookupError(f"{self.path}: tick {tick} is not in the recording (ticks {self.first} to {self.last})")
         return i
+
+
+def _offset_lines(part: Path, offset: int = 0) -> Iterator[tuple[int, dict[str, Any]]]:
+    """Each line of one file with where it is: a JSON-lines file's byte offset, an MCAP file's log time (ns, found through its index)."""
+    if _is_mcap(part):
+        from executive.mcap_reading import timed_lines
+
+        yield from timed_lines(part, offset)
+        return
+    with part.open("rb") as f:
+        f.seek(offset)
+        for number, raw in enumerate(f, 1):
+            yield offset, _parse(raw, part, number)
+            offset += len(raw)
 
 
 def _parse(raw: bytes, part: Path, number: int) -> dict[str, Any]:

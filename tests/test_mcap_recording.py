@@ -15,11 +15,11 @@ from executive.assembly import Wiring, snapshot_recorder
 from executive.behaviours import LinkAlive
 from executive.cli import main
 from executive.clock import Clock
-from executive.mcap_recording import tick_lines
+from executive.mcap_reading import tick_lines
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.snapshots import SnapshotRecorder, render, replay
+from executive.snapshots import Recording, SnapshotRecorder, render, replay
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 
@@ -185,11 +185,69 @@ def test_cli_replay_of_an_mcap_file(square, capsys: pytest.CaptureFixture[str]) 
     assert main(["replay", str(path)]) == 0
     last = capsys.readouterr().out.splitlines()
     assert last[1] == "✓ Mission" and "  /mission/state: 'COMPLETED'" in last and "  /mission/reason: 'every waypoint reached'" in last
-    assert main(["replay", str(path), "--web", "127.0.0.1:0"]) == 2  # the slider reads JSON lines only (yet): said, not served
-    assert "an MCAP recording" in capsys.readouterr().err
 
 
 def test_a_replay_of_a_tick_seeks_to_the_keyframe_before_it(square) -> None:
     path, _, _, _ = square
     tree, first, *_ = tick_lines(path, near=500)
     assert "tree" in tree and first.get("key") is True and 400 <= first["tick"] < 500  # keyframes every 100 ticks
+
+
+def test_the_slider_s_index_of_an_mcap_file_is_the_json_lines_file_s(square) -> None:
+    path, jsonl, _, _ = square
+    mcap, lines = Recording(path), Recording(jsonl)
+    assert (mcap.trees, mcap.ticks) == (lines.trees, lines.ticks)
+    for tick in (mcap.first, 99, 100, 101, 555, mcap.last):
+        a, b = mcap.state_at(tick), lines.state_at(tick)
+        assert (a.tick, a.status, a.feedback, a.blackboard, a.changed) == (b.tick, b.status, b.feedback, b.blackboard, b.changed)
+        assert a.t == round(b.t, 3)  # the JSON-lines end line keeps the clock's unrounded time
+
+
+def test_replay_web_shows_an_mcap_file_as_the_json_lines_file(square) -> None:
+    from executive.web.feed import Seen
+    from executive.web.replay import ReplaySource
+
+    path, jsonl, _, _ = square
+    mcap, lines = ReplaySource(str(path)), ReplaySource(str(jsonl))
+    assert mcap.hello() == lines.hello()
+    for tick in (300, None):
+        shown, expected = mcap.frame(tick).message(Seen()), lines.frame(tick).message(Seen())
+        assert shown["tree"]["nodes"] == expected["tree"]["nodes"]  # its id is the page's, new for each source
+        assert {k: v for k, v in shown.items() if k not in ("tree", "t")} == {k: v for k, v in expected.items() if k not in ("tree", "t")}
+
+
+def test_replay_groot2_plays_an_mcap_file(square) -> None:
+    from executive.groot2.replay import ReplayFeed
+    from executive.groot2.view import MonitorView
+
+    path, _, _, _ = square
+    view = MonitorView()
+    feed = ReplayFeed(Recording(path), view, start=500)
+    waits: list[float] = []
+    feed._play(lambda seconds: waits.append(seconds) or len(waits) >= 3)  # three ticks played, no wall clock
+    assert feed.position == 502 and waits[:2] == [pytest.approx(0.1, abs=0.002)] * 2
+
+
+def test_convert_writes_an_old_snapshot_file_as_mcap(square, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path, jsonl, _, _ = square
+    new = tmp_path / "old.mcap"
+    assert main(["convert", str(jsonl), str(new)]) == 0
+    assert "tick lines written" in capsys.readouterr().err
+    for tick in (0, 101, 555, None):
+        assert list(render(replay(new, tick))) == list(render(replay(jsonl, tick)))
+    assert [m["nodes"] for _, m in messages(new, "/tree")] == [m["nodes"] for _, m in messages(path, "/tree")]
+    events = [(m["before"], m["after"], m["reason"]) for _, m in messages(new, "/mission/events")]
+    assert events == [("RUNNING", "COMPLETED", "every waypoint reached")]  # the recorded blackboard's: READY was before the first tick
+    assert [m["state"] for _, m in messages(new, "/mission/state")] == [m["state"] for _, m in messages(path, "/mission/state")]
+    fixes, recorded = messages(new, "/vehicle/location"), messages(path, "/vehicle/location")
+    assert len(fixes) > 100 and all(-35.37 < m["latitude"] < -35.35 for _, m in fixes)
+    assert fixes[-1][1]["latitude"] == pytest.approx(recorded[-1][1]["latitude"], abs=1e-7)
+
+
+def test_convert_refuses_what_it_cannot_convert(square, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path, jsonl, _, _ = square
+    assert main(["convert", str(path), str(tmp_path / "again.mcap")]) == 2
+    assert "already an MCAP recording" in capsys.readouterr().err
+    assert main(["convert", str(jsonl), str(tmp_path / "new.jsonl")]) == 2
+    assert main(["convert", str(tmp_path / "none"), str(tmp_path / "new.mcap")]) == 2
+    assert "no such snapshot file" in capsys.readouterr().err
