@@ -305,6 +305,8 @@ def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
     def plug(w: Wiring) -> None:
         w.mission_state.listeners.append(recorder.event)
         w.observers.append(_SnapshotRuns(recorder))
+        if recorder.mavlink is not None:
+            w.link.watch.listeners.append(recorder.mavlink)
 
     return plug
 

@@ -44,7 +44,7 @@ def timed_lines(part: Path, starting_at: int | None = None) -> Iterator[tuple[in
     pending: tuple[int, dict[str, Any]] | None = None
     window = {"starting_at": starting_at} if starting_at is not None else {}
     with part.open("rb") as f:
-        for _, channel, message in make_reader(f).iter_messages(topics=TICK_TOPICS, log_time_order=False, **window):
+        for _, channel, message in make_reader(f).iter_messages(topics=TICK_TOPICS, **window):
             body = json.loads(message.data)
             if channel.topic == "/blackboard" and pending is not None:
                 pending[1]["bb"] = body["bb"]  # a tick's blackboard follows its /tree/tick message

@@ -23,13 +23,16 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import SimpleNamespace
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import py_trees
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.storage import AppendFile, Storage
+
+if TYPE_CHECKING:
+    from executive.mavlink_dialect import MAVLinkMessage  # pymavlink: not imported to replay a file
 
 STATUS_CODES = {py_trees.common.Status.SUCCESS: "S", py_trees.common.Status.FAILURE: "F", py_trees.common.Status.RUNNING: "R"}
 MAX_VALUE_CHARS = 160
@@ -135,9 +138,9 @@ class JsonLinesFile:
 def open_tick_file(path: Path, max_bytes: int, storage: Storage | None, clock: Clock | None) -> TickFile:
     """The back end for ``path``: MCAP for ``.mcap`` (Foxglove and the MCAP tools read it), JSON lines otherwise."""
     if path.suffix.lower() == ".mcap":
-        from executive.mcap_recording import McapFile
+        from executive.mcap_recording import ChannelFeed, McapSink
 
-        return McapFile(path, max_bytes, storage, clock)
+        return ChannelFeed([McapSink(path, max_bytes, storage)], clock)
     return JsonLinesFile(path, max_bytes, storage)
 
 
@@ -178,6 +181,14 @@ class SnapshotRecorder:
     def route(self, waypoints: list[tuple[float, float]]) -> None:
         """The route the run starts on: its waypoints' (lat, lon)."""
         self._file.write_route(waypoints)
+
+    @property
+    def mavlink(self) -> Callable[[str, MAVLinkMessage], object] | None:
+        """What hears each MAVLink message received (``in``) or sent (``out``) on the autopilot's link; None: the file takes none.
+
+        Only the Foxglove back end records them (one channel per kind); ``run --tlog`` records the link's bytes.
+        """
+        return getattr(self._file, "mavlink", None)
 
     def event(self, before: object, after: object, reason: str) -> None:
         """A mission transition (a MissionState listener)."""
@@ -381,13 +392,13 @@ class _RecordedBoard:
 
 def convert(old: Path, new: Path) -> int:
     """The JSON-lines recording ``old`` (and ``old.1``) written as the MCAP recording ``new``; how many tick lines."""
-    from executive.mcap_recording import McapFile
+    from executive.mcap_recording import ChannelFeed, McapSink
 
     for part in _parts(old):
         if _is_mcap(part):
             raise NotSnapshots(f"{part}:1:1: (snapshot): already an MCAP recording")
     board = _RecordedBoard()
-    out = McapFile(new, 1 << 62, None, None, values=board.value)  # one file, however long: nothing of the run is rotated away
+    out = ChannelFeed([McapSink(new, 1 << 62, None)], None, values=board.value)  # one file, however long: nothing is rotated away
     ticks = 0
     try:
         for line in read_lines(old):

@@ -23,7 +23,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("admission", ("executive.admission", "executive.reach", "executive.mission_schema")),
     ("trees", ("executive.trees", "executive.composition", "executive.catalogue",
                "executive.btcpp", "executive.recompose", "executive.tree_drawing", "executive.waiting", "executive.mission_tree",
-               "executive.snapshots", "executive.mcap_recording", "executive.mcap_reading")),
+               "executive.snapshots", "executive.mcap_recording", "executive.mcap_reading", "executive.mcap_messages")),
     ("behaviours", ("executive.behaviours",)),
     ("autopilot", ("executive.autopilot", "executive.mode_cause", "executive.intervention", "executive.sensing",
                    "executive.instruments")),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +16,7 @@ from executive.assembly import Wiring, snapshot_recorder
 from executive.behaviours import LinkAlive
 from executive.cli import main
 from executive.clock import Clock
+from executive.frames import global_to_local
 from executive.mcap_reading import tick_lines
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
@@ -80,7 +82,10 @@ def test_the_file_is_chunked_compressed_and_indexed_with_a_schema_per_channel(sq
         summary = make_reader(f).get_summary()
     assert summary is not None and summary.chunk_indexes and {c.compression for c in summary.chunk_indexes} == {"zstd"}
     schemas = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
-    assert {topic: schema.name for topic, schema in schemas.items()} == {
+    mavlink = {topic: schema.name for topic, schema in schemas.items() if topic.startswith("/mavlink/")}
+    assert {"/mavlink/in/HEARTBEAT", "/mavlink/in/GLOBAL_POSITION_INT", "/mavlink/out/HEARTBEAT", "/mavlink/out/COMMAND_LONG"} <= set(mavlink)
+    assert all(name == "mavlink." + topic.rsplit("/", 1)[1] for topic, name in mavlink.items())
+    assert {topic: schema.name for topic, schema in schemas.items() if topic not in mavlink} == {
         "/tree": "executive.Tree",
         "/tree/tick": "executive.TreeTick",
         "/blackboard": "executive.Blackboard",
@@ -88,6 +93,8 @@ def test_the_file_is_chunked_compressed_and_indexed_with_a_schema_per_channel(sq
         "/mission/events": "executive.MissionEvent",
         "/mission/route": "foxglove.GeoJSON",
         "/vehicle/location": "foxglove.LocationFix",
+        "/vehicle/pose": "foxglove.PoseInFrame",
+        "/tf": "foxglove.FrameTransforms",
         "/log": "foxglove.Log",
     }
     assert all(s.encoding == "jsonschema" and json.loads(s.data)["type"] == "object" for s in schemas.values())
@@ -130,6 +137,39 @@ def test_the_track_is_a_location_fix_at_the_time_it_was_received(square) -> None
     for t, fix in fixes:
         assert fix["timestamp"]["sec"] * 10**9 + fix["timestamp"]["nsec"] == t
         assert -35.37 < fix["latitude"] < -35.35 and 149.15 < fix["longitude"] < 149.18 and len(fix["position_covariance"]) == 9
+
+
+def test_each_mavlink_message_on_its_own_channel_with_its_fields(square) -> None:
+    path, _, _, _ = square
+    received, fixes = messages(path, "/mavlink/in/GLOBAL_POSITION_INT"), messages(path, "/vehicle/location")
+    by_time = dict(received)
+    assert len(received) >= len(fixes) and all(by_time[t]["lat"] / 1e7 == pytest.approx(f["latitude"]) for t, f in fixes)  # as received
+    sent = [m for _, m in messages(path, "/mavlink/out/COMMAND_LONG")]
+    assert any(m["command"] == 400 and m["param1"] == 1 for m in sent)  # MAV_CMD_COMPONENT_ARM_DISARM: the arming we asked
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    schema = next(summary.schemas[c.schema_id] for c in summary.channels.values() if c.topic == "/mavlink/in/GLOBAL_POSITION_INT")
+    assert json.loads(schema.data)["properties"]["lat"] == {"type": "integer"} and json.loads(schema.data)["properties"]["hdg"]
+
+
+def test_the_pose_is_in_the_home_frame_east_north_up(square) -> None:
+    path, _, _, _ = square
+    poses, transforms = messages(path, "/vehicle/pose"), messages(path, "/tf")
+    assert len(poses) > 100 and [t for t, _ in poses] == [t for t, _ in transforms]
+    attitude = {round(t, -8): m for t, m in messages(path, "/mavlink/in/ATTITUDE")}
+    fixes = {round(t, -8): m for t, m in messages(path, "/vehicle/location")}
+    home = load_mission(MISSIONS / "rover_square.yaml").home
+    for t, message in poses[::50]:
+        (tf,) = dict(transforms)[t]["transforms"]
+        assert message["frame_id"] == tf["parent_frame_id"] == "home" and tf["child_frame_id"] == "vehicle"
+        assert message["pose"]["position"] == tf["translation"] and message["pose"]["orientation"] == tf["rotation"]
+        q = message["pose"]["orientation"]
+        yaw_enu = math.atan2(2 * (q["w"] * q["z"] + q["x"] * q["y"]), 1 - 2 * (q["y"] ** 2 + q["z"] ** 2))
+        heading = attitude[max(k for k in attitude if k <= t)]["yaw"]  # ATTITUDE's yaw: from north, clockwise
+        assert math.cos(yaw_enu - (math.pi / 2 - heading)) == pytest.approx(1.0)
+        fix = fixes[max(k for k in fixes if k <= t)]
+        north, east = global_to_local(home.lat, home.lon, fix["latitude"], fix["longitude"])
+        assert (message["pose"]["position"]["x"], message["pose"]["position"]["y"]) == (pytest.approx(east, abs=0.05), pytest.approx(north, abs=0.05))
 
 
 def test_the_route_is_geojson_for_the_map(square) -> None:
