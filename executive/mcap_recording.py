@@ -244,7 +244,8 @@ class McapSink:
     def _start(self) -> None:
         self._file = AppendFile(self.path, "snapshots", "ticks are not recorded for replay", self.storage, append=False)
         self._stream = _Stream(self._file)
-        self._writer = Writer(self._stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
+        chunk = min(CHUNK_BYTES, max(4096, self.max_bytes))  # a file rotated at less than a chunk would be one chunk, over its size
+        self._writer = Writer(self._stream, chunk_size=chunk, compression=CompressionType.ZSTD)
         self._writer.start(profile="", library="executive")
         self._schema_ids: dict[str, int] = {}
         self._channels: dict[str, int] = {}

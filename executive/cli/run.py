@@ -24,7 +24,7 @@ from executive.assembly import (
     snapshot_recorder,
 )
 from executive.autopilot_link import SURVEY_S, SeveralAutopilots
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle, number
 from executive.cli.common import load_or_report, mavlink_id
 from executive.cli.run_checks import check_run
 from executive.clock import ScaledClock
@@ -90,6 +90,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--journal", metavar="DB", help="record the run (transitions, legs, samples, events) in this SQLite journal")
     p.add_argument("--resume", action="store_true", help="continue the last unfinished run of this mission in --journal (after a crash)")
     p.add_argument("--snapshots", metavar="FILE", help="record every tick (statuses, blackboard) for `executive replay`; FILE.mcap: MCAP (Foxglove)")
+    p.add_argument(
+        "--snapshots-rotate-mb",
+        type=number(at_least=0.01),
+        default=50.0,
+        metavar="MB",
+        help="past MB MiB the --snapshots file is finished (an MCAP file indexed) and moved to FILE.1, the one before dropped; default 50",
+    )
     p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
     p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
     p.add_argument("--obstacles", metavar="URL", help="a camera's obstacle distances (JSON over UDP, udpin:HOST:PORT), sent on as OBSTACLE_DISTANCE")
@@ -224,7 +231,7 @@ def _recorders(
         stack.callback(logging.getLogger("executive").removeHandler, handler)
     if args.snapshots:
         try:
-            snapshots = SnapshotRecorder(args.snapshots, storage=storage, clock=clock)
+            snapshots = SnapshotRecorder(args.snapshots, storage=storage, clock=clock, max_bytes=round(args.snapshots_rotate_mb * (1 << 20)))
         except OSError as exc:
             raise BadInput(f"--snapshots {args.snapshots}: cannot be created: {exc.strerror or exc}") from exc
         stack.callback(snapshots.close)
