@@ -38,13 +38,12 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
-from mcap.writer import CompressionType, Writer
-
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.storage import AppendFile, Storage
 from executive.mavlink_dialect import MAVLinkMessage
-from executive.mcap_messages import CHANNELS, location_fix, log_line, mavlink_fields, mavlink_schema, ns, pose, route_geojson, schema_bytes
+from executive.mcap_messages import CHANNELS, MavlinkJson, location_fix, log_line, mavlink_schema, ns, pose, route_geojson, schema_bytes
+from executive.mcap_writer import ChunkedWriter
 
 #: Small enough that a crash loses little (a chunk is written whole, when full), large enough that zstd compresses well.
 CHUNK_BYTES = 256 << 10
@@ -96,6 +95,7 @@ class ChannelFeed:
         self._logs = _LogLines(clock)
         self._mavlink: collections.deque[tuple[float, str, MAVLinkMessage]] = collections.deque(maxlen=10_000)
         self._mavlink_schemas: dict[str, tuple[str, bytes]] = {}
+        self._mavlink_json = MavlinkJson()
         self._schemas = {topic: (name, schema_bytes(name)) for topic, name in CHANNELS.items()}
         logging.getLogger("executive").addHandler(self._logs)
 
@@ -173,7 +173,7 @@ class ChannelFeed:
             schema = self._mavlink_schemas.get(kind)
             if schema is None:
                 schema = self._mavlink_schemas[kind] = mavlink_schema(msg)
-            log_ns, data = ns(t), mavlink_fields(msg)
+            log_ns, data = ns(t), self._mavlink_json.encode(msg)
             for sink in self.sinks:
                 sink.put(topic, schema, log_ns, data)
 
@@ -219,7 +219,7 @@ class McapSink:
                 schema_id = self._schema_ids[schema[0]] = self._writer.register_schema(schema[0], "jsonschema", schema[1])
             channel = self._channels[topic] = self._writer.register_channel(topic, "json", schema_id)
         self._sequence += 1
-        self._writer.add_message(channel, log_time=log_ns, data=data, publish_time=log_ns, sequence=self._sequence)
+        self._writer.add_message(channel, log_ns, data, self._sequence)
         if topic in LATCHED:
             self._latched[topic] = (schema, log_ns, data)
             if topic == "/tree":
@@ -245,8 +245,7 @@ class McapSink:
         self._file = AppendFile(self.path, "snapshots", "ticks are not recorded for replay", self.storage, append=False)
         self._stream = _Stream(self._file)
         chunk = min(CHUNK_BYTES, max(4096, self.max_bytes))  # a file rotated at less than a chunk would be one chunk, over its size
-        self._writer = Writer(self._stream, chunk_size=chunk, compression=CompressionType.ZSTD)
-        self._writer.start(profile="", library="executive")
+        self._writer = ChunkedWriter(self._stream, chunk)
         self._schema_ids: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._sequence = 0

@@ -21,6 +21,7 @@ import os
 import re
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
+from enum import Enum
 from pathlib import Path
 from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any, Protocol
@@ -42,6 +43,44 @@ def show_value(value: Any) -> str:
     """A blackboard value as short text (its repr, cut to MAX_VALUE_CHARS)."""
     text = repr(value)
     return text if len(text) <= MAX_VALUE_CHARS else text[: MAX_VALUE_CHARS - 3] + "..."
+
+
+def _immutable(kind: type) -> bool:
+    """Values of ``kind`` are never changed in place (the blackboard's values are replaced whole): their text can be kept."""
+    if kind in (str, int, float, bool, tuple, type(None)) or issubclass(kind, Enum):
+        return True
+    params = getattr(kind, "__dataclass_params__", None)
+    if params is not None:
+        return bool(params.frozen)
+    config = getattr(kind, "model_config", None)  # a pydantic model: frozen (the mission's waypoints)
+    return isinstance(config, dict) and bool(config.get("frozen"))
+
+
+class ShownValues:
+    """The blackboard as short text (:func:`show_value`), an immutable value's repr made again only once it is replaced.
+
+    Most values stay the same object from tick to tick; their repr is most of what recording a tick costs.
+    """
+
+    def __init__(self) -> None:
+        self._seen: dict[str, tuple[Any, str, bool]] = {}  # key -> the value, its text, whether it is kept while the same object
+        self._kinds: dict[type, bool] = {}
+
+    def read(self) -> dict[str, str]:
+        shown: dict[str, str] = {}
+        seen, kinds = self._seen, self._kinds
+        for key, value in blackboard.documented_values():
+            last = seen.get(key)
+            if last is not None and last[2] and last[0] is value:
+                shown[key] = last[1]
+                continue
+            kind = type(value)
+            keep = kinds.get(kind)
+            if keep is None:
+                keep = kinds[kind] = _immutable(kind)
+            text = shown[key] = show_value(value)
+            seen[key] = (value, text, keep)
+        return shown
 
 
 _FIELD = re.compile(r"""(\w+)=('(?:[^'\\]|\\.)*'|"(?:[^"\\]|\\.)*"|[^,)]+)""")
@@ -167,6 +206,7 @@ class SnapshotRecorder:
         self._status: list[str] = []
         self._feedback: list[str] = []
         self._values: dict[str, str] = {}
+        self._shown = ShownValues()
         self._since_keyframe = 0
         self._last: tuple[int, float] | None = None  # the last tick recorded of this tree, and its time
 
@@ -200,7 +240,7 @@ class SnapshotRecorder:
         self._since_keyframe = 0 if keyframe else self._since_keyframe + 1
         status = status_codes(self._nodes)
         feedback = [n.feedback_message or "" for n in self._nodes]
-        values = {key: show_value(blackboard.value(key)) for key in blackboard.KEYS}
+        values = self._shown.read()
         line: dict[str, Any] = {"tick": tick, "t": round(t, 3)}
         if keyframe:
             line["key"] = True
@@ -222,7 +262,7 @@ class SnapshotRecorder:
         if self._last is None:
             return  # no tick of this tree was recorded (a mission refused before its tree ran)
         tick, t = self._last
-        values = {key: show_value(blackboard.value(key)) for key in blackboard.KEYS}
+        values = self._shown.read()
         line: dict[str, Any] = {"tick": tick, "t": t, "end": True}
         keys = {k: v for k, v in values.items() if self._values.get(k) != v}
         if keys:
