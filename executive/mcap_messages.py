@@ -42,6 +42,13 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         "type": "object",
         "properties": {"state": {"type": "string"}, "leg_index": {"type": "integer"}, "leg_count": {"type": "integer"}, "reason": {"type": "string"}},
     },
+    "executive.Run": {
+        "type": "object",
+        "properties": {"mission": {"type": "string"}, "vehicle": {"type": "string"}, "resumed_from": {"type": ["integer", "null"]},
+                       "started": {"type": "number", "description": "wall clock, s since 1970"},
+                       "waypoints": {"type": "array", "items": {"type": "object", "properties": {
+                           "lat": {"type": "number"}, "lon": {"type": "number"}, "name": {"type": ["string", "null"]}}}}},
+    },
     "executive.MissionEvent": {
         "type": "object", "properties": {"before": {"type": "string"}, "after": {"type": "string"}, "reason": {"type": "string"}},
     },
@@ -74,6 +81,7 @@ CHANNELS = {
     "/tree": "executive.Tree",
     "/tree/tick": "executive.TreeTick",
     "/blackboard": "executive.Blackboard",
+    "/mission/run": "executive.Run",
     "/mission/state": "executive.MissionState",
     "/mission/events": "executive.MissionEvent",
     "/mission/route": "foxglove.GeoJSON",

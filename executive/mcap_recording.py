@@ -12,6 +12,7 @@ channels:
   ``end`` (the run's end), ``s`` (node id -> status S/F/R/-, changed ones) and ``f`` (node id ->
   feedback, changed ones), as the JSON-lines snapshot file holds them;
 - ``/blackboard`` (``executive.Blackboard``): ``tick``, ``key``, ``bb`` (key -> value as short text), the changed keys;
+- ``/mission/run`` (``executive.Run``): each run's mission, vehicle, run it resumes, wall-clock start, waypoints (lat, lon, name);
 - ``/mission/state`` (``executive.MissionState``): state, leg_index, leg_count, reason, when one changes;
 - ``/mission/events`` (``executive.MissionEvent``): each mission transition: before, after, reason;
 - ``/mission/route`` (``foxglove.GeoJSON``): the route each run starts on, a line through its waypoints (edits are not);
@@ -49,7 +50,7 @@ from executive.mcap_writer import ChunkedWriter
 CHUNK_BYTES = 256 << 10
 MISSION_KEYS = ("/mission/state", "/mission/leg_index", "/mission/leg_count", "/mission/reason")
 #: What a file (or a client joining late) needs whatever the time: written again at the top of each rotated file.
-LATCHED = ("/tree", "/mission/route", "/mission/state")
+LATCHED = ("/tree", "/mission/run", "/mission/route", "/mission/state")
 _DUMPS = json.JSONEncoder(ensure_ascii=False, separators=(",", ":")).encode
 
 
@@ -123,8 +124,10 @@ class ChannelFeed:
     def write_event(self, before: str, after: str, reason: str) -> None:
         self._put("/mission/events", self._now(), {"before": before, "after": after, "reason": reason})
 
-    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
-        self._put("/mission/route", self._now(), route_geojson(waypoints))
+    def write_run(self, run: dict[str, Any]) -> None:
+        t = self._now()
+        self._put("/mission/run", t, run)
+        self._put("/mission/route", t, route_geojson([(w["lat"], w["lon"]) for w in run["waypoints"]]))
 
     def mavlink(self, direction: str, msg: MAVLinkMessage) -> None:
         """A MAVLink message received (``in``) or sent (``out``) on the autopilot's link: kept until the tick writes it."""

@@ -19,6 +19,7 @@ import itertools
 import json
 import os
 import re
+import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from enum import Enum
@@ -129,8 +130,8 @@ class TickFile(Protocol):
     def write_event(self, before: str, after: str, reason: str) -> None:
         """A mission transition, as it happened."""
 
-    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
-        """The route a run starts on: its waypoints' (lat, lon)."""
+    def write_run(self, run: dict[str, Any]) -> None:
+        """A run begins: ``mission``, ``vehicle``, ``resumed_from``, ``started`` (wall time) and its ``waypoints`` (lat, lon, name)."""
 
     def close(self) -> None: ...
 
@@ -153,8 +154,8 @@ class JsonLinesFile:
     def write_event(self, before: str, after: str, reason: str) -> None:
         """Nothing to add: the transition is in the tick's blackboard (/mission/state, /mission/reason)."""
 
-    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
-        """Nothing to add: the mission file holds the route (and the journal its edits)."""
+    def write_run(self, run: dict[str, Any]) -> None:
+        """Nothing to add: the mission file holds the route (and the journal the run)."""
 
     def close(self) -> None:
         self._file.close()
@@ -218,9 +219,11 @@ class SnapshotRecorder:
         self._since_keyframe = self.keyframe_every
         self._last = None
 
-    def route(self, waypoints: list[tuple[float, float]]) -> None:
-        """The route the run starts on: its waypoints' (lat, lon)."""
-        self._file.write_route(waypoints)
+    def run_started(self, mission: Any, resumed_from: int | None) -> None:
+        """A run of ``mission`` (a :class:`~executive.mission.model.Mission`) begins: what it is, and the route it starts on."""
+        waypoints = [{"lat": w.lat, "lon": w.lon, "name": w.name} for w in mission.waypoints]
+        info = {"mission": mission.name, "vehicle": str(mission.vehicle), "resumed_from": resumed_from, "started": time.time()}
+        self._file.write_run({**info, "waypoints": waypoints})
 
     @property
     def mavlink(self) -> Callable[[str, MAVLinkMessage], object] | None:

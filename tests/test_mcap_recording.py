@@ -12,11 +12,12 @@ import py_trees
 import pytest
 from mcap.reader import make_reader
 
-from executive.assembly import Wiring, snapshot_recorder
+from executive.assembly import Wiring, journal_recorder, snapshot_recorder
 from executive.behaviours import LinkAlive
 from executive.cli import main
 from executive.clock import Clock
 from executive.frames import global_to_local
+from executive.journal import Journal, JournalLogHandler
 from executive.mcap_reading import tick_lines
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
@@ -59,10 +60,15 @@ def square(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks,
     where = tmp_path_factory.mktemp("square")
     ticks = Ticks()
     recorders: list[SnapshotRecorder] = []
+    closers: list[Any] = []
 
     def plugs(clock: Clock) -> dict[str, Any]:
         recorders.extend([SnapshotRecorder(where / "run.mcap", clock=clock), SnapshotRecorder(where / "run.jsonl", clock=clock)])
-        return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders)]}
+        journal = Journal(where / "journal.db", clock)
+        closers.append(journal.close)
+        logging.getLogger("executive").addHandler(handler := JournalLogHandler(journal))
+        closers.append(lambda: logging.getLogger("executive").removeHandler(handler))
+        return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders), journal_recorder(journal)]}
 
     logging.getLogger("executive").setLevel(logging.INFO)  # as `executive run` logs: the mission's transitions are INFO lines
     try:
@@ -70,8 +76,8 @@ def square(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks,
             outcome = sim.run_to_end(limit_s=400)
     finally:
         logging.getLogger("executive").setLevel(logging.NOTSET)
-    for recorder in recorders:
-        recorder.close()
+    for close in [*(r.close for r in recorders), *closers]:
+        close()
     return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
 
 
@@ -89,6 +95,7 @@ def test_the_file_is_chunked_compressed_and_indexed_with_a_schema_per_channel(sq
         "/tree": "executive.Tree",
         "/tree/tick": "executive.TreeTick",
         "/blackboard": "executive.Blackboard",
+        "/mission/run": "executive.Run",
         "/mission/state": "executive.MissionState",
         "/mission/events": "executive.MissionEvent",
         "/mission/route": "foxglove.GeoJSON",
@@ -291,3 +298,28 @@ def test_convert_refuses_what_it_cannot_convert(square, tmp_path: Path, capsys: 
     assert main(["convert", str(jsonl), str(tmp_path / "new.jsonl")]) == 2
     assert main(["convert", str(tmp_path / "none"), str(tmp_path / "new.mcap")]) == 2
     assert "no such snapshot file" in capsys.readouterr().err
+
+
+def test_report_from_the_mcap_file_tells_what_the_journal_tells(square, capsys: pytest.CaptureFixture[str]) -> None:
+    path, _, _, _ = square
+    journal = path.with_name("journal.db")
+    assert main(["report", str(journal), "--json"]) == 0
+    expected = json.loads(capsys.readouterr().out)
+    assert main(["report", str(path), "--json"]) == 0
+    told = json.loads(capsys.readouterr().out)
+    for row in (*expected["transitions"], *expected["legs"], *expected["events"]):
+        row["t"] = round(row["t"], 3)  # vehicle time, as MCAP keeps it (ns)
+    same = ("mission", "vehicle", "outcome", "reason", "resumed_from", "transitions")
+    assert {k: told[k] for k in same} == {k: expected[k] for k in same}
+    assert told["started"] == pytest.approx(expected["started"], abs=5.0) and told["ended"] is None  # wall clock: the journal's alone
+    strip = ("lat", "lon")
+    assert [{k: v for k, v in leg.items() if k not in strip} for leg in told["legs"]] == [
+        {k: v for k, v in leg.items() if k not in strip} for leg in expected["legs"]
+    ]
+    assert all(a["lat"] == pytest.approx(b["lat"], abs=1e-5) for a, b in zip(told["legs"], expected["legs"], strict=True))
+    assert told["events"] == expected["events"]
+    assert main(["report", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("run 1: mission 'rover-square' (rover)") and "RUNNING -> COMPLETED: every waypoint reached" in text
+    assert main(["report", str(path), "--run", "2"]) == 2
+    assert "no run 2 (runs 1 to 1)" in capsys.readouterr().err
