@@ -198,16 +198,19 @@ class MavlinkJson:
     """
 
     def __init__(self) -> None:
-        self._templates: dict[str, str | None] = {}
+        self._templates: dict[str, tuple[str, tuple[int, ...]] | None] = {}
 
     def encode(self, msg: MAVLinkMessage) -> bytes:
         kind = msg.get_type()
-        template = self._templates.get(kind, "")
-        if template == "":
+        template = self._templates.get(kind, False)
+        if template is False:
             template = self._templates[kind] = _template(msg)
         values = [getattr(msg, name) for name in msg.fieldnames]
         if template is not None and _finite(values):
-            return (template % (*values, msg.get_srcSystem(), msg.get_srcComponent())).encode()
+            text, arrays = template
+            for i in arrays:
+                values[i] = list(values[i])  # pymavlink may hold an array as a tuple: "(0, 0)" is no JSON
+            return (text % (*values, msg.get_srcSystem(), msg.get_srcComponent())).encode()
         fields = dict(zip(msg.fieldnames, values, strict=True))
         fields["sysid"], fields["compid"] = msg.get_srcSystem(), msg.get_srcComponent()
         try:
@@ -216,14 +219,16 @@ class MavlinkJson:
             return _STRICT_JSON({k: _plain(v) for k, v in fields.items()}).encode()
 
 
-def _template(msg: MAVLinkMessage) -> str | None:
-    """``{"field":%d,...}`` for a kind of numbers and arrays of integers (None: one with text or arrays of floats)."""
-    parts = []
-    for name, kind, length in _definition(msg):
+def _template(msg: MAVLinkMessage) -> tuple[str, tuple[int, ...]] | None:
+    """``{"field":%d,...}`` and where its arrays are, for a kind of numbers and arrays of integers (None: text or arrays of floats)."""
+    parts, arrays = [], []
+    for i, (name, kind, length) in enumerate(_definition(msg)):
         if kind == "char" or (length and kind in ("float", "double")):
             return None
+        if length:
+            arrays.append(i)
         parts.append(f'"{name}":' + ("%s" if length else "%.9g" if kind == "float" else "%r" if kind == "double" else "%d"))
-    return "{" + ",".join([*parts, '"sysid":%d', '"compid":%d']) + "}"
+    return "{" + ",".join([*parts, '"sysid":%d', '"compid":%d']) + "}", tuple(arrays)
 
 
 def _definition(msg: MAVLinkMessage) -> list[tuple[str, str, int]]:

@@ -175,12 +175,16 @@ class JsonLinesFile:
         return True
 
 
-def open_tick_file(path: Path, max_bytes: int, storage: Storage | None, clock: Clock | None) -> TickFile:
-    """The back end for ``path``: MCAP for ``.mcap`` (Foxglove and the MCAP tools read it), JSON lines otherwise."""
-    if path.suffix.lower() == ".mcap":
+def open_tick_file(path: Path | None, max_bytes: int, storage: Storage | None, clock: Clock | None, live: Any = None) -> TickFile:
+    """The back end for ``path``: MCAP for ``.mcap`` (Foxglove and the MCAP tools read it), JSON lines otherwise.
+
+    ``live`` (a :class:`~executive.foxglove_live.FoxgloveSink`) is given the MCAP file's messages too; with no ``path``, only it.
+    """
+    if path is None or path.suffix.lower() == ".mcap":
         from executive.mcap_recording import ChannelFeed, McapSink
 
-        return ChannelFeed([McapSink(path, max_bytes, storage)], clock)
+        sinks = [McapSink(path, max_bytes, storage)] if path is not None else []
+        return ChannelFeed([*sinks, *([live] if live is not None else [])], clock)
     return JsonLinesFile(path, max_bytes, storage)
 
 
@@ -189,20 +193,22 @@ class SnapshotRecorder:
 
     ``FILE.mcap`` is written as MCAP (:mod:`executive.mcap_recording`), anything else as JSON lines;
     ``clock`` times what happens between ticks (mission transitions, log lines) in an MCAP file.
+    ``live``: a Foxglove server given what an MCAP file is (``path`` None: the server alone).
     """
 
     def __init__(
         self,
-        path: str | Path,
+        path: str | Path | None,
         *,
         max_bytes: int = 50 << 20,
         keyframe_every: int = 100,
         storage: Storage | None = None,
         clock: Clock | None = None,
+        live: Any = None,
     ) -> None:
-        self.path = Path(path)
+        self.path = Path(path) if path is not None else None
         self.keyframe_every = keyframe_every
-        self._file = open_tick_file(self.path, max_bytes, storage, clock)
+        self._file = open_tick_file(self.path, max_bytes, storage, clock, live)
         self._nodes: list[py_trees.behaviour.Behaviour] = []
         self._status: list[str] = []
         self._feedback: list[str] = []

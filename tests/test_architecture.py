@@ -24,7 +24,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("trees", ("executive.trees", "executive.composition", "executive.catalogue",
                "executive.btcpp", "executive.recompose", "executive.tree_drawing", "executive.waiting", "executive.mission_tree",
                "executive.snapshots", "executive.mcap_recording", "executive.mcap_reading", "executive.mcap_messages",
-               "executive.mcap_writer", "executive.mcap_report")),
+               "executive.mcap_writer", "executive.mcap_report", "executive.foxglove_live")),
     ("behaviours", ("executive.behaviours",)),
     ("autopilot", ("executive.autopilot", "executive.mode_cause", "executive.intervention", "executive.sensing",
                    "executive.instruments")),

@@ -323,3 +323,19 @@ def test_report_from_the_mcap_file_tells_what_the_journal_tells(square, capsys: 
     assert text.startswith("run 1: mission 'rover-square' (rover)") and "RUNNING -> COMPLETED: every waypoint reached" in text
     assert main(["report", str(path), "--run", "2"]) == 2
     assert "no run 2 (runs 1 to 1)" in capsys.readouterr().err
+
+
+def test_every_message_is_strict_json_of_the_type_its_schema_says(square) -> None:
+    path, _, _, _ = square
+    kinds = {"integer": int, "number": (int, float), "string": str, "array": list, "object": dict, "boolean": bool}
+
+    def no_constant(name: str) -> None:
+        raise AssertionError(f"{name} is not JSON")
+
+    with path.open("rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages():
+            body = json.loads(message.data, parse_constant=no_constant)
+            for field, spec in json.loads(schema.data)["properties"].items():
+                allowed = spec["type"] if isinstance(spec["type"], list) else [spec["type"]]
+                value = body.get(field)
+                assert value is None or any(isinstance(value, kinds[k]) for k in allowed if k != "null"), (channel.topic, field, value)
