@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import shutil
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -23,20 +22,14 @@ from executive.foxglove_live import FoxgloveSink
 from executive.mission.lifecycle import MissionStatus
 from executive.snapshots import SnapshotRecorder
 from executive.testing import Lockstep
-from tests_support import line_mission
-
-CLIENT = Path(__file__).resolve().parent / "foxglove"
+from tests_support import foxglove_js, line_mission
 
 
 class NodeClient:
     """``node client.js URL``: Foxglove's client subscribed to every channel; its JSON lines read back."""
 
     def __init__(self, url: str, *flags: str) -> None:
-        if shutil.which("node") is None or not (CLIENT / "node_modules" / "@foxglove" / "ws-protocol").is_dir():
-            pytest.fail("needs node and Foxglove's client: npm ci --prefix tests/foxglove (as .ci/run does)")
-        self.proc = subprocess.Popen(
-            ["node", str(CLIENT / "client.js"), url, *flags], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=CLIENT
-        )
+        self.proc = subprocess.Popen(foxglove_js("client.js", url, *flags), stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
         assert self.proc.stdout is not None
         self.first = json.loads(self.proc.stdout.readline())  # subscribed to what the server advertised when it connected
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import logging
 import math
+import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +24,7 @@ from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.snapshots import Recording, SnapshotRecorder, render, replay
+from tests_support import foxglove_js
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 
@@ -339,3 +341,20 @@ def test_every_message_is_strict_json_of_the_type_its_schema_says(square) -> Non
                 allowed = spec["type"] if isinstance(spec["type"], list) else [spec["type"]]
                 value = body.get(field)
                 assert value is None or any(isinstance(value, kinds[k]) for k in allowed if k != "null"), (channel.topic, field, value)
+
+
+def test_foxglove_s_own_mcap_reader_reads_the_file(square) -> None:
+    """@mcap/core (TypeScript, another implementation than the `mcap` library's) reads every message, CRCs checked, and seeks."""
+    path, _, ticks, _ = square
+    middle = round(ticks.times[len(ticks.times) // 2][1], 3)
+    told = json.loads(subprocess.run(foxglove_js("read_mcap.js", str(path), str(round(middle * 1e9))), capture_output=True, text=True,
+                                     check=True, timeout=120).stdout)  # fmt: skip
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    counts = summary.statistics.channel_message_counts
+    assert {topic: c["count"] for topic, c in told["channels"].items()} == {c.topic: counts[i] for i, c in summary.channels.items()}
+    assert told["messageCount"] == summary.statistics.message_count and told["compression"] == ["zstd"]
+    assert told["library"] == "executive" and told["metadata"] == ["executive.keyframes"]
+    assert told["channels"]["/vehicle/location"]["schema"] == "foxglove.LocationFix"
+    assert told["channels"]["/tree"]["first"]["nodes"][0]["name"] == "Mission"
+    assert told["seek"] == [tick for tick, now in ticks.times if middle <= round(now, 3) < middle + 1]
