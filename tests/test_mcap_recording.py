@@ -358,3 +358,22 @@ def test_foxglove_s_own_mcap_reader_reads_the_file(square) -> None:
     assert told["channels"]["/vehicle/location"]["schema"] == "foxglove.LocationFix"
     assert told["channels"]["/tree"]["first"]["nodes"][0]["name"] == "Mission"
     assert told["seek"] == [tick for tick, now in ticks.times if middle <= round(now, 3) < middle + 1]
+
+
+def test_the_shipped_foxglove_layout_reads_only_what_the_recording_holds(square, tmp_path: Path) -> None:
+    from executive.foxglove_layout import paths
+
+    path, _, _, _ = square
+    assert main(["foxglove-layout", "-o", str(tmp_path / "layout.json")]) == 0
+    layout = json.loads((tmp_path / "layout.json").read_text())
+    assert {"map!route", "RosOut!log", "RawMessages!tree"} <= set(layout["configById"])
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    schemas = {c.topic: json.loads(summary.schemas[c.schema_id].data) for c in summary.channels.values()}
+    for wanted in paths(layout):
+        topic, _, field = wanted.partition(".")
+        if topic == "vehicle":  # the 3D panel's frame, not a topic
+            continue
+        assert topic in schemas, wanted
+        name = field.split("[", 1)[0]
+        assert not name or name in schemas[topic]["properties"], wanted
