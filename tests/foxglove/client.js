@@ -1,6 +1,7 @@
 // Foxglove's own WebSocket protocol client (@foxglove/ws-protocol) on the executive's live server, as Foxglove connects.
 // node client.js URL [--stall]: prints one JSON line per event ("subscribed", then "done" with what it received);
-// subscribes to every channel advertised; ends at /mission/state COMPLETED or ABORTED, or when its stdin closes.
+// subscribes to every channel advertised; ends once it has the run's end (/mission/state COMPLETED or ABORTED, and the
+// /tree/tick of the run's end: two channels, in either order), or 20 s after its stdin closes.
 // --stall: subscribes, then never reads again (its socket paused): the server must drop for it, never wait.
 const { FoxgloveClient } = require("@foxglove/ws-protocol");
 const WebSocket = require("ws");
@@ -12,6 +13,7 @@ const client = new FoxgloveClient({ ws });
 const channels = new Map(); // subscription id -> channel
 const received = {}; // topic -> { count, first, last, schemaName, encoding }
 let serverName = null;
+const ended = { state: false, tick: false };
 const say = (event) => process.stdout.write(JSON.stringify(event) + "\n");
 
 function finish() {
@@ -33,8 +35,10 @@ client.on("message", ({ subscriptionId, timestamp, data }) => {
   seen.count += 1;
   seen.first ??= { timestamp: Number(timestamp), body };
   seen.last = { timestamp: Number(timestamp), body };
-  if (channel.topic === "/mission/state" && ["COMPLETED", "ABORTED"].includes(body.state)) finish();
+  if (channel.topic === "/mission/state" && ["COMPLETED", "ABORTED"].includes(body.state)) ended.state = true;
+  if (channel.topic === "/tree/tick" && body.end) ended.tick = true;
+  if (ended.state && ended.tick) finish();
 });
 client.on("error", (error) => say({ event: "error", error: String(error) }));
-process.stdin.on("end", finish);
+process.stdin.on("end", () => setTimeout(finish, 20000)); // a run that never ended: what it had, 20 s on (not a judged margin)
 process.stdin.resume();
