@@ -70,6 +70,7 @@ NOT_RUN_HERE: dict[str, str] = {
     "python -m benchmarks --only tick ingest": "a minute (tests/test_benchmarks_smoke.py)",
     "python -m benchmarks --only efficiency": "a minute (tests/test_benchmarks_smoke.py)",
     "python -m benchmarks --only route": "seconds (tests/test_benchmarks_smoke.py)",
+    "python -m benchmarks --only tick": "minutes (tests/test_benchmarks_smoke.py runs it small)",
 }
 #: Commands that need nothing but files: run in-process, in a scratch directory.
 IN_PROCESS = frozenset({"validate", "show", "schema", "behaviours", "export", "import", "service", "examples", "foxglove-layout"})
