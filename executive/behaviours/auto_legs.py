@@ -33,8 +33,12 @@ class HorizonOnAutopilot(MissionTransferFollower):
     """SUCCESS while the autopilot holds the route's horizon for the current leg; RUNNING while it is being put there.
 
     The horizon of leg k: the route's waypoints 1..k+1 at least (through the current leg's), k+1+``horizon_legs``
-    at most. Held and a prefix of the route: one more waypoint is appended whenever there is room
-    (SUCCESS meanwhile, while the current leg's is held). Anything else (nothing known, another route,
+    at most. Held and a prefix of the route: once the autopilot holds no more than one waypoint beyond the
+    current leg's (the least AUTO needs to plan the corner it drives to next), the horizon is filled in one
+    burst of appends (SUCCESS meanwhile, while the current leg's is held). Not sooner: the real ArduRover
+    restarts the waypoint it drives at every write to its mission in AUTO, wherever the item lies
+    (tests/data/ardurover/mission-writes-in-auto-rover.tlog), so the fewer the bursts the less time is
+    lost; a horizon of H has one burst every H-1 legs. Anything else (nothing known, another route,
     more than the horizon): the horizon is uploaded whole. Never more than the horizon is sent.
     """
 
@@ -53,11 +57,11 @@ class HorizonOnAutopilot(MissionTransferFollower):
         held = self.get("/vehicle/mission_items")
         n_held = len(held) if held is not None else 0
         prefix = held is not None and n_held <= most and self.autopilot.route_differs(route[:n_held], held) is None
-        if prefix and not busy and n_held < most and self._may_start():
-            self._started(self.autopilot.extend_route(route[n_held]))
+        if prefix and not busy and n_held < most and n_held - least <= 1 and self._may_start():
+            self._started(self.autopilot.extend_route(route[n_held:most]))
             busy = True
         if prefix and n_held >= least:
-            extra = f"; appending waypoint {n_held + 1}" if busy else ""
+            extra = f"; appending up to waypoint {most}" if busy else ""
             self.feedback_message = f"the autopilot holds waypoints 1-{n_held} of {len(route)}{extra}"
             return Status.SUCCESS
         if not busy and not prefix and self._may_start():
@@ -167,8 +171,10 @@ class FollowAutoLeg(TimedBehaviour):
     Reached: the autopilot says so (MISSION_ITEM_REACHED of the leg's item or a later one in this run,
     or MISSION_CURRENT past it since the leg began), the waypoint driven through as the firmware counts
     it: the leg index never runs ahead of the autopilot's, so the horizon appended after it never
-    holds more than it should. The last waypoint is reached on the position (within the acceptance
-    radius), as in GUIDED, not on the autopilot's word.
+    holds more than it should. Where the vehicle must be at the point, the last waypoint and a sample
+    point (a stop in the autopilot's mission, which it never reports reached: see
+    :func:`~executive.io.mavlink.mission_protocol.route_items`), it is reached on the position (within the
+    acceptance radius), as in GUIDED, not on the autopilot's word.
     """
 
     reads = ("/vehicle/position", "/vehicle/mission_current", "/vehicle/mission_reached", "/mission/leg_index", "/mission/leg_count")
@@ -201,11 +207,12 @@ class FollowAutoLeg(TimedBehaviour):
             where = f"{distance:.1f} m at {bearing:03.0f}°"
         within = distance is not None and distance <= self.acceptance_radius_m
         said = self._autopilot_passed(self.autopilot.capabilities.first_item_seq + leg)
-        if said and leg + 1 < n:
+        stop = leg + 1 == n or target.sample  # the vehicle must be there: judged on the position
+        if said and not stop:
             self.feedback_message = f"leg {leg + 1}/{n} in AUTO: reached as AUTO counts it ({where or 'no position'})"
             return Status.SUCCESS
-        if within and leg + 1 == n:
-            self.feedback_message = f"leg {n}/{n} in AUTO: reached ({where})"
+        if within and stop:
+            self.feedback_message = f"leg {leg + 1}/{n} in AUTO: reached ({where})"
             return Status.SUCCESS
         if self.elapsed > self.leg_timeout_s:
             self.feedback_message = f"leg {leg + 1}/{n} in AUTO: timed out after {self.leg_timeout_s:g} s" + (f", {where}" if where else "")

@@ -136,7 +136,7 @@ class Limits(BaseModel):
     )
     battery_min_v: float | None = Field(None, gt=0.0, le=1000.0, description="battery voltage below this fails the battery guard (null: not checked)")
     auto_horizon_legs: int = Field(
-        2, ge=1, le=20, description="drive: auto: waypoints the autopilot holds beyond the current leg's (it stops at the last one it holds)"
+        3, ge=1, le=20, description="drive: auto: waypoints the autopilot holds beyond the current leg's (it stops at the last one it holds)"
     )
 
 
@@ -255,6 +255,9 @@ class FailsafeConfig(BaseModel):
     battery_low: FailsafeRule | None = Field(None, description="the battery below limits.battery_min_pct or limits.battery_min_v")
     geofence_breach: FailsafeRule | None = Field(None, description="the vehicle outside the mission's geofence (only with a geofence: section)")
     energy: FailsafeRule | None = Field(None, description="the rest of the route and the way home no longer fit the battery (energy:)")
+    keep_out: FailsafeRule | None = Field(
+        None, description="the vehicle inside a keep-out zone, or heading into one closer than it can stop (geofence.keep_out)"
+    )
 
 
 class EnergyConfig(BaseModel):

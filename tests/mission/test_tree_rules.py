@@ -65,10 +65,8 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
             "vehicle: sub\ntree: waypoints\ndrive: auto\n" + WP,
             ["m.yaml:5:8: drive: tree waypoints is driven in AUTO on a boat or rover (ArduRover) so far, not a sub; use drive: guided"],
         ),
-        (
-            "vehicle: boat\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP,
-            ["m.yaml:5:8: drive: tree goto_sample: its sample points as stops in the autopilot's mission are not done yet; use drive: guided"],
-        ),
+        ("vehicle: boat\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
+        ("vehicle: rover\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
         (
             "vehicle: sub\ntree: auv_survey\ndrive: auto\n" + WP,
             ["m.yaml:5:8: drive: tree auv_survey: ArduSub's AUTO with depth is not done yet; use drive: guided"],
@@ -96,8 +94,8 @@ def test_drive_rules(body: str, expected: list[str]) -> None:
     assert errors_of(HEAD + body) == expected
 
 
-def test_drive_defaults_to_guided_with_a_horizon_of_two() -> None:
+def test_drive_defaults_to_guided_with_a_horizon_of_three() -> None:
     from executive.mission import loader
 
     mission = loader.load_mission_text(HEAD + "vehicle: rover\n" + WP, "m.yaml")
-    assert (mission.drive, mission.limits.auto_horizon_legs) == ("guided", 2)
+    assert (mission.drive, mission.limits.auto_horizon_legs) == ("guided", 3)

@@ -11,6 +11,7 @@ from typing import ClassVar
 from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS, RoverMotion
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import ACC_BITS, GLOBAL_FRAMES, NAVIGATION, POS_BITS, RATE_ATTITUDE, ArduPilotSim
+from executive.sim.ardupilot.mission_change import MissionChangeDetector
 from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import StoredCommand
@@ -39,7 +40,7 @@ class ArduRoverSim(ArduPilotSim):
     HOLD and the manual modes stop (no pilot in the sim). LOITER holds a point within
     ``LOITER_RADIUS_M``. GUIDED drives to position targets, then stops (rover) or loiters (boat).
     RTL drives home, then stops or loiters, staying in RTL as the firmware does. AUTO drives to each
-    NAV_WAYPOINT of the mission in turn, then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
+    NAV_WAYPOINT of the mission in turn (a NAV_LOITER_UNLIM: to stay there), then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
     refused without a mission ("No Mission. Can't set AUTO.").
 
     GUIDED, AUTO and RTL drive as the firmware's navigation does (:class:`~executive.sim.ardupilot.rover_nav.RoverNavigator`:
@@ -80,7 +81,7 @@ class ArduRoverSim(ArduPilotSim):
     motion: RoverMotion
     _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
     _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
-    _auto_written_at: float | None = None  # the mission's last write AUTO has seen
+    _mission_change: MissionChangeDetector  # ModeAuto's mis_change_detector
     _auto_hold_until = 0.0  # elapsed_s at which a waypoint's hold time ends
 
     @property
@@ -169,7 +170,7 @@ class ArduRoverSim(ArduPilotSim):
             if not self.mission.present:
                 self._text(_M.MAV_SEVERITY_NOTICE, "No Mission. Can't set AUTO.")
                 return False
-            self._auto_waiting, self._auto_item, self._auto_written_at = True, None, self.mission.uploaded_at
+            self._auto_waiting, self._auto_item, self._mission_change = True, None, MissionChangeDetector()
             self._navigator()  # ModeAuto::_enter: wp_nav.init()
             if not (self.is_boat and self._loiter()):
                 self._stop()
@@ -237,29 +238,34 @@ class ArduRoverSim(ArduPilotSim):
         As ModeAuto::do_nav_wp (Rover/mode_auto.cpp): a waypoint followed by another navigation command and
         without a hold time is driven through toward that one (AR_WPNav's "fast waypoint": no stop, the corner
         cut within WP_RADIUS); the last one, or one with a hold time, is a stop. The next item starts at once.
+        A NAV_LOITER_UNLIM is a stop at its location (do_nav_wp with always_stop_at_destination; a boat loiters
+        there) that never completes (verify_loiter_unlimited: no MISSION_ITEM_REACHED), until MISSION_SET_CURRENT.
         """
         if self._auto_waiting:
             if not self.position_ok:
                 return
             self._auto_waiting = False
             self.mission.start_or_resume()
+            self._mission_change.start(self.mission.changes, self.mission.current_seq)
         item = self.mission.current
-        if self.mission.uploaded_at != self._auto_written_at:
-            self._auto_written_at = self.mission.uploaded_at
+        if self._mission_change.check(self.mission.changes, self.mission.current_seq):
             self._restart_on_change(item)
         if item is None:  # complete (ArduRover stays in AUTO, stopped), or the mission was cleared
             if self._driving or self._loitering:
                 self._stop()
             return
+        stop_here = item.command == _M.MAV_CMD_NAV_LOITER_UNLIM
         if (self.mission.current_seq, item) == self._auto_item:
             if self._driving and self.vehicle.arrived:
                 self._driving = False
-                hold_s = item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
+                hold_s = 0.0 if stop_here else item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
                 self._auto_hold_until = self.elapsed_s + hold_s
                 seq = self.mission.current_seq
                 self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{seq}" + (f". Loiter for {hold_s:.0f} seconds" if hold_s else ""))
-            if self._driving or self.elapsed_s < self._auto_hold_until - EPSILON_S:
-                return
+                if stop_here and self.is_boat:  # ModeAuto::update: boats loiter once a waypoint that is not a fast one is reached
+                    self._loiter()
+            if stop_here or self._driving or self.elapsed_s < self._auto_hold_until - EPSILON_S:
+                return  # verify_loiter_unlimited never completes: the vehicle stays until the mission is moved on
             item = self.mission.advance()
             if item is None:
                 self._mission_done()
@@ -268,16 +274,16 @@ class ArduRoverSim(ArduPilotSim):
         self._auto_item = (self.mission.current_seq, item)
         if item.command == _M.MAV_CMD_NAV_WAYPOINT:
             self._drive(item.lat, item.lon, then=self._next_corner(item))
+        elif item.command == _M.MAV_CMD_NAV_LOITER_UNLIM:  # do_nav_wp(cmd, always_stop_at_destination=true)
+            self._drive(item.lat, item.lon)
         else:
             self.mission.advance()
 
     def _restart_on_change(self, item: StoredCommand | None) -> None:
-        """A mission written while AUTO drives a waypoint restarts that waypoint's command (ModeAuto::update, Rover/mode_auto.cpp:
-        mis_change_detector, then AP_Mission::restart_current_nav_cmd): AR_WPNav::set_desired_location, the leg not
-        reached, starts again from the stopping point. The firmware's AP_Mission_ChangeDetector compares only the next
-        three navigation commands, yet the real ArduRover 4.7-dev restarted at every one-item append of a partial write
-        (tests/data/ardurover/boat_survey-motorboat-supervised.tlog): so does this one."""
-        if item is None or not self._driving or item.command != _M.MAV_CMD_NAV_WAYPOINT:
+        """The mission changed while AUTO drives a waypoint (:class:`MissionChangeDetector`): ModeAuto::update restarts that
+        waypoint's command (Rover/mode_auto.cpp, AP_Mission::restart_current_nav_cmd): AR_WPNav::set_desired_location, the
+        leg not reached, starts again from the stopping point."""
+        if item is None or not self._driving or item.command not in (_M.MAV_CMD_NAV_WAYPOINT, _M.MAV_CMD_NAV_LOITER_UNLIM):
             return
         self._text(_M.MAV_SEVERITY_CRITICAL, "Auto mission changed, restarted command")
         self._auto_item = None

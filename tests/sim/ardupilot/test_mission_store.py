@@ -254,6 +254,25 @@ def test_auto_stops_at_a_waypoint_with_a_hold_time_and_waits_it_out(make_gcs: Ma
     assert [msg.seq for msg in reached][:1] == [1]
 
 
+def test_auto_stops_at_a_loiter_unlimited_and_stays_until_the_mission_is_set_on(make_gcs: MakeGcs) -> None:
+    """Rover/mode_auto.cpp: NAV_LOITER_UNLIM is do_nav_wp(cmd, always_stop_at_destination) and verify_loiter_unlimited never
+    completes: the waypoint before it is driven through toward it, no MISSION_ITEM_REACHED for it, the mission goes on only
+    at a MISSION_SET_CURRENT."""
+    gcs = make_gcs(ekf_ready=True)
+    items = square(gcs, side_m=30.0)
+    items[2] = item(gcs, 2, items[2].x / 1e7, items[2].y / 1e7, command=m.MAV_CMD_NAV_LOITER_UNLIM)
+    track = _drive_auto(gcs, items, 90.0)
+    first = min(range(len(track)), key=lambda i: math.dist(track[i][:2], (30.0, 0.0)))
+    assert track[first][2] >= 1.2  # through the corner before it at speed
+    assert math.dist(track[-1][:2], (30.0, 30.0)) <= 1.0 and track[-1][2] < 0.05  # stopped there, still after 90 s
+    assert [msg.seq for msg in gcs.of_type(gcs.log, "MISSION_ITEM_REACHED")] == [1]
+    assert "Reached waypoint #2" in gcs.texts(gcs.log) and gcs.ap.mode == "AUTO" and gcs.ap.mission.current_seq == 2
+    gcs.send(gcs.mav.mission_set_current_encode(1, 1, 3))
+    out = gcs.run(30.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [3]
+    assert gcs.ap.vehicle.distance_to(items[3].x / 1e7, items[3].y / 1e7) <= 1.0
+
+
 def test_a_speed_change_in_auto_keeps_the_corner_driven_through(make_gcs: MakeGcs) -> None:
     gcs = make_gcs(ekf_ready=True)
     upload(gcs, square(gcs, side_m=30.0))
@@ -287,3 +306,66 @@ def test_a_skid_steered_vehicle_stops_to_pivot_at_a_sharp_corner_and_drives_thro
     assert slowest_near(gentle[0]) >= 0.5  # driven through (cruise 1 m/s)
     assert slowest_near(sharp[0]) <= 0.2  # braked to a stop point there (the next leg starts on arrival, within 0.3 m)
     assert min(math.dist((n, e), sharp[0]) for n, e, _ in track) <= 0.3
+
+
+RESTARTED = "Auto mission changed, restarted command"
+
+
+def line_north(gcs: Gcs, count: int, spacing_m: float = 30.0) -> list[MAVLinkMessage]:
+    """Home and ``count`` waypoints every ``spacing_m`` north of the start."""
+    lat0, lon0 = gcs.ap.start
+    return [item(gcs, 0, lat0, lon0), *(item(gcs, seq, lat0 + seq * spacing_m / M_PER_DEG_LAT, lon0) for seq in range(1, count + 1))]
+
+
+def write_partial(gcs: Gcs, seq: int, items: list[MAVLinkMessage]) -> list[MAVLinkMessage]:
+    """MISSION_WRITE_PARTIAL_LIST seq..seq, answered with ``items[seq]``; the vehicle's last replies."""
+    replies = gcs.send(gcs.mav.mission_write_partial_list_encode(1, 1, seq, seq, 0))
+    assert kinds(replies) == ["MISSION_REQUEST"] and replies[0].seq == seq
+    return gcs.send(items[seq])
+
+
+def test_any_write_to_the_mission_in_auto_restarts_the_waypoint_wherever_the_item_lies(make_gcs: MakeGcs) -> None:
+    """As the real ArduRover did (tests/data/ardurover/mission-writes-in-auto-rover.tlog): driving to item 1, an identical
+    rewrite of item 6 and an append of item 7, both past the three commands AP_Mission_ChangeDetector compares, each restart it."""
+    gcs = make_gcs(ekf_ready=True)
+    items = line_north(gcs, 6)
+    upload(gcs, items)
+    gcs.arm()
+    gcs.set_mode("AUTO")
+    gcs.run(2.0)
+    write_partial(gcs, 6, items)
+    gcs.run(0.5)
+    assert gcs.texts(gcs.log).count(RESTARTED) == 1
+    items.append(item(gcs, 7, items[6].x / 1e7 + 30.0 / M_PER_DEG_LAT, items[6].y / 1e7))
+    write_partial(gcs, 7, items)
+    gcs.run(0.5)
+    assert gcs.texts(gcs.log).count(RESTARTED) == 2
+    assert gcs.ap.mission.current_seq == 1  # the same waypoint, driven again from where the vehicle can stop
+
+
+def test_each_item_written_restarts_the_waypoint_not_the_upload_as_a_whole(make_gcs: MakeGcs) -> None:
+    """AP_Mission::write_cmd_to_storage moves the mission's change time at every item (home aside), and ModeAuto checks at
+    every loop: the same 6 waypoints uploaded again in AUTO, an item per update, restart it 6 times."""
+    gcs = make_gcs(ekf_ready=True)
+    items = line_north(gcs, 6)
+    upload(gcs, items)
+    gcs.arm()
+    gcs.set_mode("AUTO")
+    gcs.run(2.0)
+    replies = gcs.send(gcs.mav.mission_count_encode(1, 1, len(items), 0))
+    while replies and replies[-1].get_type() == "MISSION_REQUEST":
+        replies = gcs.send(items[replies[-1].seq])
+        gcs.run(0.1)
+    assert gcs.texts(gcs.log).count(RESTARTED) == 6
+
+
+def test_a_write_noticed_with_a_new_current_command_is_taken_silently() -> None:
+    """AP_Mission_ChangeDetector::check_for_mission_change returns ``cmds_changed && !curr_cmd_idx_changed``."""
+    from executive.sim.ardupilot.mission_change import MissionChangeDetector
+
+    detector = MissionChangeDetector()
+    detector.start(changes=7, current=1)
+    assert not detector.check(changes=7, current=1)  # nothing written
+    assert detector.check(changes=8, current=1)  # written, the same command: restart
+    assert not detector.check(changes=9, current=2)  # written as the mission moved on: taken in
+    assert not detector.check(changes=9, current=3)  # the mission moved on alone
