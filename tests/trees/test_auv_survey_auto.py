@@ -1,0 +1,118 @@
+"""drive: auto on the AUV survey: the simulated ArduSub's AUTO flies the waypoints at their depths, the executive supervises.
+
+Lock-step (manual clock) against the simulated ArduSub: the route as ArduSub's own mission (a NAV_WAYPOINT per
+waypoint at minus its depth above home), no more than the horizon held, ArduSub holding position and depth at
+the end of what it holds (Sub::exit_mission), the seabed floor bounding every depth it is given.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.loader import load_mission
+from executive.mission.model import Mission
+from executive.testing import Lockstep
+
+ROOT = Path(__file__).parents[2]
+
+
+def auto_survey(seabed_depth_m: float = 50.0, **limits: Any) -> Mission:
+    """missions/auv_survey.yaml with ``drive: auto``, its altitude leg flown at a depth (AUTO takes depth legs only)."""
+    mission = load_mission(ROOT / "missions" / "auv_survey.yaml")
+    third = mission.waypoints[2].model_copy(update={"control_mode": "depth", "depth_m": 12.0, "altitude_m": None})
+    simulator = mission.simulator.model_copy(update={"seabed_depth_m": seabed_depth_m}) if mission.simulator else None
+    return mission.model_copy(
+        update={
+            "drive": "auto",
+            "waypoints": [*mission.waypoints[:2], third, mission.waypoints[3]],
+            "limits": mission.limits.model_copy(update=limits),
+            "simulator": simulator,
+        }
+    )
+
+
+class Watch:
+    """After each step: the items the autopilot holds beyond the one it flies, the mode, the depths it was given, the deepest reached."""
+
+    def __init__(self) -> None:
+        self.ahead: list[int] = []
+        self.modes: list[str] = []
+        self.depths_given: set[float] = set()
+        self.deepest = 0.0
+
+    def __call__(self, sim: Lockstep) -> None:
+        store = sim.autopilot.mission
+        if store.running and store.current_seq is not None:
+            self.ahead.append(store.count - 1 - store.current_seq)
+        self.modes.append(sim.autopilot.mode)
+        self.depths_given |= {-store.command(seq).alt_cm / 100 for seq in range(1, store.count)}
+        self.deepest = max(self.deepest, sim.autopilot.vehicle.depth_m)
+
+
+def test_the_survey_is_flown_in_arduSubs_auto_at_each_waypoints_depth_and_completes(lockstep) -> None:
+    mission = auto_survey()
+    sim = lockstep(mission)
+    watch = Watch()
+    sim.observers.append(watch)
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert max(watch.ahead) == 2 and sim.autopilot.mission.count - 1 == 4  # the horizon, extended to the end
+    assert watch.depths_given == {0.01, 5.0, 12.0, 8.0}  # the surface just under it: an altitude of 0 keeps the depth (do_nav_wp)
+    assert "AUTO" in watch.modes and watch.modes[-1] == "POSHOLD"  # then surfaced and held for the pick-up, as in GUIDED
+    assert 11.5 <= watch.deepest <= 12.6
+
+
+def test_a_dead_executive_leaves_the_sub_holding_position_and_depth_at_the_end_of_the_horizon(lockstep) -> None:
+    """The executive stops ticking on leg 2 (kill -9): ArduSub flies what it holds (items 1-3 here: horizon 1),
+    then holds the last one's position and depth in AUTO (Sub::exit_mission, ModeAuto::auto_loiter_start)."""
+    mission = auto_survey(auto_horizon_legs=1)
+    sim = lockstep(mission)
+    state = sim.runtime.mission_state
+    assert sim.run(until=lambda: state.leg_index == 1 and sim.autopilot.mission.count - 1 == 3) is None  # legs 1, 2 and one beyond
+    held = 3
+    for _ in range(1800):  # three minutes of the vehicle's time, nobody ticking
+        sim.step(0.1)
+    ap = sim.autopilot
+    last_held = mission.waypoints[held - 1]
+    assert ap.mode == "AUTO" and not ap.mission.running  # its mission complete, held in AUTO
+    assert ap.vehicle.speed_m_s < 0.1 and ap.vehicle.distance_to(last_held.lat, last_held.lon) < 2.5
+    assert abs(ap.vehicle.depth_m - 12.0) < 0.5  # at the depth of the last item it holds
+    fourth = mission.waypoints[3]
+    assert ap.vehicle.distance_to(fourth.lat, fourth.lon) > 20.0  # never flew on to a waypoint it was not given
+
+
+def test_a_depth_the_water_cannot_hold_is_given_at_the_seabed_floor(lockstep) -> None:
+    """Seabed 10 m down: leg 3's 12 m is given at the floor (2 m above the seabed by the sonar), never deeper; as GUIDED holds it."""
+    mission = auto_survey(seabed_depth_m=10.0)
+    mission = mission.model_copy(update={"limits": mission.limits.model_copy(update={"water_depth_m": None})})
+    sim = lockstep(mission)
+    watch = Watch()
+    sim.observers.append(watch)
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert max(watch.depths_given) <= 8.0 + 0.05  # 10 m seabed less limits.altitude_m.min
+    assert watch.deepest <= 8.3
+
+
+def test_with_seabed_floor_fail_a_depth_the_water_cannot_hold_fails_the_mission(lockstep) -> None:
+    mission = auto_survey(seabed_depth_m=10.0, seabed_floor="fail")
+    mission = mission.model_copy(update={"limits": mission.limits.model_copy(update={"water_depth_m": None})})
+    sim = lockstep(mission)
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.ABORTED
+    assert "deeper than the water holds" in outcome.reason and "limits.seabed_floor: fail" in outcome.reason
+
+
+def test_a_person_changing_the_mode_pauses_and_auto_again_resumes_at_the_leg(lockstep) -> None:
+    mission = auto_survey()
+    sim = lockstep(mission)
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    assert sim.run(until=lambda: state.leg_index == 1 and ap.mode == "AUTO") is None
+    assert ap.set_mode(ap.profile.modes["POSHOLD"])  # a ground station's POSHOLD
+    sim.run(until=lambda: state.status is MissionStatus.PAUSED)
+    assert state.reason == "POSHOLD set by the ground station"
+    assert ap.set_mode(ap.profile.modes["AUTO"])
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
