@@ -64,6 +64,7 @@ ARDUPILOT_ONLY_TREES: dict[str, str] = {
 #: drive: auto: the trees that can be driven by the autopilot's own AUTO, and the vehicle kinds (ArduRover: rover, boat;
 #: ArduSub: sub, its waypoints at their depths).
 AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {"waypoints": frozenset({"rover", "boat"}), "auv_survey": frozenset({"sub"})}
+AUTO_DRIVE_FIRMWARE = {"waypoints": "ArduRover", "auv_survey": "ArduSub"}
 #: drive: auto refused, per tree, until it can be flown so: why.
 AUTO_DRIVE_REFUSED: dict[str, str] = {
     "goto_sample": "its sample points as stops in the autopilot's mission are not done yet",
@@ -85,7 +86,8 @@ def drive_errors(mission: Mission) -> list[str]:
     if kinds is None:
         return [f"tree {name} is not known to be driven in AUTO; use drive: guided"]
     if mission.vehicle not in kinds:
-        return [f"tree {name} is driven in AUTO on a {' or '.join(sorted(kinds))} so far, not a {mission.vehicle}; use drive: guided"]
+        kinds_here = f"{' or '.join(sorted(kinds))} ({AUTO_DRIVE_FIRMWARE[name]})"
+        return [f"tree {name} is driven in AUTO on a {kinds_here} so far, not a {mission.vehicle}; use drive: guided"]
     return []
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
@@ -81,6 +82,15 @@ def test_a_dead_executive_leaves_the_sub_holding_position_and_depth_at_the_end_o
     assert abs(ap.vehicle.depth_m - 12.0) < 0.5  # at the depth of the last item it holds
     fourth = mission.waypoints[3]
     assert ap.vehicle.distance_to(fourth.lat, fourth.lon) > 20.0  # never flew on to a waypoint it was not given
+    # its words, unheard, as the real ArduSub's (tests/data/ardusub/auv_survey-auto-killed.tlog): each item reached with a
+    # STATUSTEXT and MISSION_ITEM_REACHED, the end only in MISSION_CURRENT (its last item, COMPLETE), nothing said
+    said = list(sim.link.incoming)
+    texts = [m.text for m in said if m.get_type() == "STATUSTEXT"]
+    assert [t for t in texts if t.startswith("Reached")] == ["Reached command #2", "Reached command #3"]
+    assert not any("Complete" in t for t in texts)
+    assert [m.seq for m in said if m.get_type() == "MISSION_ITEM_REACHED"] == [2, 3]
+    last = [m for m in said if m.get_type() == "MISSION_CURRENT"][-1]
+    assert (last.seq, last.mission_state) == (3, mavlink.MISSION_STATE_COMPLETE)
 
 
 def test_a_depth_the_water_cannot_hold_is_given_at_the_seabed_floor(lockstep) -> None:
