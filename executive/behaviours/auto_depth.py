@@ -74,10 +74,14 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
             wanted = wp.depth_m or 0.0
             allowed = wanted if floor is None else min(wanted, math.floor(floor.depth_m * 10) / 10)
             kept = self._given.get(i)
+            if kept is not None and kept[0] == wanted and i < self.mission_state.leg_index:  # a leg done: its item stays as flown
+                given.append(wp.model_copy(update={"depth_m": kept[1], "control_mode": "depth"}))
+                continue
             held = allowed < wanted and kept is not None and kept[0] == wanted and allowed - FLOOR_SLACK_M <= kept[1] <= allowed
             depth = kept[1] if held and kept is not None else allowed
-            if kept is not None and depth < kept[1] and i == self.mission_state.leg_index:
-                self._restart = i
+            if kept is not None and depth < kept[1]:  # the floor rose above it: half the slack above, not written again at each reading
+                depth = max(0.0, round(allowed - FLOOR_SLACK_M / 2, 1))
+                self._restart = i if i == self.mission_state.leg_index else self._restart
             self._given[i] = (wanted, depth)
             if depth < wanted and i not in self._told and floor is not None:
                 self._told.add(i)
@@ -89,17 +93,24 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
         return given
 
     def update(self) -> Status:
-        status = super().update()
         leg = self.mission_state.leg_index
-        wanted, depth = self._given.get(leg, (0.0, 0.0))
+        if self._restart == leg and not self._settle() and self._may_start() and self._holds_given(leg):
+            self._restart = None
+            if self.get("/vehicle/mode") == self.autopilot.mode_name(AUTO):  # before anything else is written: the leg flies deeper meanwhile
+                self._started(self.autopilot.set_route_leg(leg))
+                self.feedback_message = f"leg {leg + 1} started again at {self._given[leg][1]:g} m (the seabed floor)"
+                return Status.SUCCESS
+        status = super().update()
+        wanted = self._given.get(leg, (0.0, 0.0))[0]
         floor = self._floor
         if self.too_deep == "fail" and floor is not None and floor.kind == "seabed" and floor.depth_m < wanted:
             self.feedback_message = f"depth {wanted:g} m deeper than the water holds: {floor.why} (limits.seabed_floor: fail)"
             seabed_log.warning("%s: %s", self.name, self.feedback_message)
             return Status.FAILURE
-        if self._restart == leg and status is Status.SUCCESS and self._ticket is None and self._may_start():
-            if self.get("/vehicle/mode") == self.autopilot.mode_name(AUTO):
-                self._started(self.autopilot.set_route_leg(leg))
-                self.feedback_message += f"; leg {leg + 1} started again at {depth:g} m (the seabed floor)"
-            self._restart = None
         return status
+
+    def _holds_given(self, leg: int) -> bool:
+        """The autopilot holds (read back) the depth last given for leg ``leg``."""
+        held = self.get("/vehicle/mission_items")
+        given = self._given.get(leg)
+        return held is not None and given is not None and leg < len(held) and abs(-held[leg].z - given[1]) <= 0.011

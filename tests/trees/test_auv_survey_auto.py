@@ -14,22 +14,21 @@ from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
+from executive.sim.physics.underwater import Seabed
 from executive.testing import Lockstep
 
 ROOT = Path(__file__).parents[2]
 
 
-def auto_survey(seabed_depth_m: float = 50.0, **limits: Any) -> Mission:
+def auto_survey(**limits: Any) -> Mission:
     """missions/auv_survey.yaml with ``drive: auto``, its altitude leg flown at a depth (AUTO takes depth legs only)."""
     mission = load_mission(ROOT / "missions" / "auv_survey.yaml")
     third = mission.waypoints[2].model_copy(update={"control_mode": "depth", "depth_m": 12.0, "altitude_m": None})
-    simulator = mission.simulator.model_copy(update={"seabed_depth_m": seabed_depth_m}) if mission.simulator else None
     return mission.model_copy(
         update={
             "drive": "auto",
             "waypoints": [*mission.waypoints[:2], third, mission.waypoints[3]],
             "limits": mission.limits.model_copy(update=limits),
-            "simulator": simulator,
         }
     )
 
@@ -94,10 +93,10 @@ def test_a_dead_executive_leaves_the_sub_holding_position_and_depth_at_the_end_o
 
 
 def test_a_depth_the_water_cannot_hold_is_given_at_the_seabed_floor(lockstep) -> None:
-    """Seabed 10 m down: leg 3's 12 m is given at the floor (2 m above the seabed by the sonar), never deeper; as GUIDED holds it."""
-    mission = auto_survey(seabed_depth_m=10.0)
+    """A flat seabed 10 m down: leg 3's 12 m is given at the floor (2 m above the seabed by the sonar), never deeper; as GUIDED holds it."""
+    mission = auto_survey()
     mission = mission.model_copy(update={"limits": mission.limits.model_copy(update={"water_depth_m": None})})
-    sim = lockstep(mission)
+    sim = lockstep(mission, firmware={"seabed": Seabed(depth_m=10.0, slope=0.0)})
     watch = Watch()
     sim.observers.append(watch)
     outcome = sim.run_to_end()
@@ -107,9 +106,9 @@ def test_a_depth_the_water_cannot_hold_is_given_at_the_seabed_floor(lockstep) ->
 
 
 def test_with_seabed_floor_fail_a_depth_the_water_cannot_hold_fails_the_mission(lockstep) -> None:
-    mission = auto_survey(seabed_depth_m=10.0, seabed_floor="fail")
+    mission = auto_survey(seabed_floor="fail")
     mission = mission.model_copy(update={"limits": mission.limits.model_copy(update={"water_depth_m": None})})
-    sim = lockstep(mission)
+    sim = lockstep(mission, firmware={"seabed": Seabed(depth_m=10.0, slope=0.0)})
     outcome = sim.run_to_end()
     assert outcome.status is MissionStatus.ABORTED
     assert "deeper than the water holds" in outcome.reason and "limits.seabed_floor: fail" in outcome.reason
@@ -126,3 +125,27 @@ def test_a_person_changing_the_mode_pauses_and_auto_again_resumes_at_the_leg(loc
     assert ap.set_mode(ap.profile.modes["AUTO"])
     outcome = sim.run_to_end()
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+
+
+def test_a_seabed_rising_under_the_leg_raises_its_depth_and_starts_it_again(lockstep) -> None:
+    """The seabed rises 0.15 m per metre north (12.8 m under waypoint 3): as the sonar reads it rising under leg 3 (12 m), the
+    item is written shallower and the leg started again (MISSION_SET_CURRENT): ArduSub flies the item it began with (no
+    mission change detection). The sub never comes within 1.5 m of the seabed (GUIDED, the same seabed: 1.68 m)."""
+    mission = auto_survey()
+    mission = mission.model_copy(update={"limits": mission.limits.model_copy(update={"water_depth_m": None})})
+    sim = lockstep(mission, firmware={"seabed": Seabed(depth_m=18.0, slope=0.15, downhill_deg=180.0)})
+    sets: list[int] = []
+    send = sim.link.send
+
+    def spy(msg: Any) -> None:
+        if msg.get_type() == "MISSION_SET_CURRENT":
+            sets.append(msg.seq)
+        send(msg)
+
+    sim.link.send = spy  # type: ignore[method-assign]
+    clearance: list[float] = []
+    sim.observers.append(lambda s: clearance.append(s.autopilot.vehicle.altitude_m))
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert sets[0] == 1 and sets.count(3) >= 1  # leg 3 started again at its raised depth
+    assert min(clearance) >= 1.5, min(clearance)
