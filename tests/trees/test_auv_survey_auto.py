@@ -149,3 +149,29 @@ def test_a_seabed_rising_under_the_leg_raises_its_depth_and_starts_it_again(lock
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert sets[0] == 1 and sets.count(3) >= 1  # leg 3 started again at its raised depth
     assert min(clearance) >= 1.5, min(clearance)
+
+
+def test_pause_holds_in_poshold_and_resume_goes_on_with_the_leg_at_its_depth(lockstep) -> None:
+    """ctl pause: the sub's safe mode (POSHOLD: position and depth); ctl resume: MISSION_SET_CURRENT to the leg's item, then AUTO."""
+    mission = auto_survey()
+    sim = lockstep(mission)
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    sets: list[int] = []
+    send = sim.link.send
+
+    def spy(msg: Any) -> None:
+        if msg.get_type() == "MISSION_SET_CURRENT":
+            sets.append(msg.seq)
+        send(msg)
+
+    sim.link.send = spy  # type: ignore[method-assign]
+    assert sim.run(until=lambda: state.leg_index == 2 and ap.vehicle.depth_m > 7.0) is None
+    assert sim.runtime.operator.request("pause", source="ctl").ok
+    sim.run(until=lambda: ap.mode == "POSHOLD" and ap.vehicle.speed_m_s < 0.05)
+    held_at = ap.vehicle.depth_m
+    assert sim.run(until=lambda: sim.clock.now() > 200.0) is None  # long past the 90 s leg timeout
+    assert state.status is MissionStatus.PAUSED and abs(ap.vehicle.depth_m - held_at) < 0.3
+    assert sim.runtime.operator.request("resume", source="ctl").ok
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert sets == [1, 3]  # the first leg at the start, the third at the resume
