@@ -79,7 +79,8 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
                 continue
             held = allowed < wanted and kept is not None and kept[0] == wanted and allowed - FLOOR_SLACK_M <= kept[1] <= allowed
             depth = kept[1] if held and kept is not None else allowed
-            if kept is not None and depth < kept[1]:  # the floor rose above it: half the slack above, not written again at each reading
+            # the floor rose above it: half the slack above the floor, not rewritten at each reading
+            if kept is not None and kept[0] == wanted and depth < kept[1]:
                 depth = max(0.0, round(allowed - FLOOR_SLACK_M / 2, 1))
                 self._restart = i if i == self.mission_state.leg_index else self._restart
             self._given[i] = (wanted, depth)
