@@ -40,9 +40,11 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
     A waypoint's depth is given as the floor allows when it is put on the autopilot (a warning, a
     journal event ``seabed``, the first time the floor holds one) and kept while it is no deeper than the
     floor and not more than :data:`FLOOR_SLACK_M` shallower than the floor now allows: the horizon is
-    written again when it must. The current leg, so changed while AUTO flies it, is started again at its
-    new item. With ``too_deep: fail`` (``limits.seabed_floor``), a leg the measured seabed holds shallower
-    than its depth fails, as GUIDED's ChangeDepth does.
+    written again when it must (raised half the slack above the floor). The current leg, so changed while
+    AUTO flies it, is started again at its new item: a dive toward a seabed beyond the sonar's reach goes
+    down in steps of about the slack, as GUIDED's ChangeDepth does, until the sonar reads it. With
+    ``too_deep: fail`` (``limits.seabed_floor``), a leg the measured seabed holds shallower than its depth
+    fails, as GUIDED's ChangeDepth does.
     """
 
     reads = (*HorizonOnAutopilot.reads, "/vehicle/position", "/vehicle/rangefinder", "/vehicle/mode")
@@ -60,7 +62,7 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
         self.clearance_m = clearance_m
         self.too_deep = too_deep
         self._given: dict[int, tuple[float, float]] = {}  # waypoint index -> (its depth, the depth given)
-        self._restart: int | None = None  # the leg whose item was raised while AUTO flew it
+        self._restart: int | None = None  # the leg whose item was changed while AUTO flew it
         self._told: set[int] = set()
         self._floor: Floor | None = None
 
@@ -82,7 +84,8 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
             # the floor rose above it: half the slack above the floor, not rewritten at each reading
             if kept is not None and kept[0] == wanted and depth < kept[1]:
                 depth = max(0.0, round(allowed - FLOOR_SLACK_M / 2, 1))
-                self._restart = i if i == self.mission_state.leg_index else self._restart
+            if kept is not None and kept[0] == wanted and depth != kept[1] and i == self.mission_state.leg_index:
+                self._restart = i  # raised (the seabed rising) or deepened (the sonar reaching further down)
             self._given[i] = (wanted, depth)
             if depth < wanted and i not in self._told and floor is not None:
                 self._told.add(i)

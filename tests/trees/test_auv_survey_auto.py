@@ -175,3 +175,17 @@ def test_pause_holds_in_poshold_and_resume_goes_on_with_the_leg_at_its_depth(loc
     outcome = sim.run_to_end()
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert sets == [1, 3]  # the first leg at the start, the third at the resume
+
+
+def test_a_dive_toward_a_seabed_beyond_the_sonar_goes_down_as_the_sonar_reaches_further(lockstep) -> None:
+    """Leg 3 at 45 m over a 50 m seabed the 30 m sonar does not reach from the surface: given at 28 m (the surface's floor),
+    deepened, and the leg started again, as the sub goes down, to its 45 m once the sonar reads the seabed."""
+    mission = auto_survey(leg_timeout_s=300)
+    deep = [*mission.waypoints[:2], mission.waypoints[2].model_copy(update={"depth_m": 45.0}), mission.waypoints[3]]
+    sim = lockstep(mission.model_copy(update={"waypoints": deep}), firmware={"seabed": Seabed(depth_m=50.0, slope=0.0)})
+    watch = Watch()
+    sim.observers.append(watch)
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert min(watch.depths_given - {0.01, 5.0, 8.0}) == 28.0 and max(watch.depths_given) == 45.0
+    assert 44.5 <= watch.deepest <= 45.6

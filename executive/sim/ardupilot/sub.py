@@ -42,7 +42,7 @@ from executive.sim.ardupilot.base import (
 from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 from executive.sim.firmware import DEFAULT_HOME, Command, Home, e7, valid_latlon
 from executive.sim.mission_store import StoredCommand
-from executive.sim.physics.underwater import SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
+from executive.sim.physics.underwater import SUB_HORIZONTAL_LIMITS, SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
 from executive.sim.physics.vehicle import VehicleModel
 from executive.vehicles import SUB_MODES, VehicleProfile
 
@@ -264,13 +264,17 @@ class ArduSubSim(ArduPilotSim):
         v.hold_depth_at(depth)
 
     def _waypoint_reached(self, item: StoredCommand) -> bool:
-        """AC_WPNav: the leg finished and the vehicle within WPNAV_RADIUS of the point, in 3-D; when, remembered."""
+        """AC_WPNav: the leg finished and the vehicle within WPNAV_RADIUS of the point, in 3-D; when, remembered.
+
+        Its leg is one 3-D track, finished when its target is at the point in depth too: here, arrived horizontally and
+        within the horizontal arrival distance of the depth."""
         if self._auto_reached_at is not None:
             return True
         v = self.vehicle
         depth = v.depth_target_m if v.depth_target_m is not None else v.depth_m
         off = math.hypot(v.distance_to(item.lat, item.lon), v.depth_m - depth)
-        if v.arrived and off <= float(self.params.get("WPNAV_RADIUS", WPNAV_RADIUS_M * 100)) / 100:
+        finished = v.arrived and abs(v.depth_m - depth) <= SUB_HORIZONTAL_LIMITS.arrive_m
+        if finished and off <= float(self.params.get("WPNAV_RADIUS", WPNAV_RADIUS_M * 100)) / 100:
             self._auto_reached_at = self.elapsed_s
             return True
         return False
