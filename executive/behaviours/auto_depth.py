@@ -32,6 +32,8 @@ from executive.state import GlobalPosition
 #: A depth given is kept while it is no deeper than the floor and at most this much shallower than the floor now allows:
 #: the floor moves with every sonar reading, a mission write does not.
 FLOOR_SLACK_M = 1.0
+#: Two item depths this close are the same (ArduPilot keeps an altitude to the centimetre).
+DEPTH_SAME_M = 0.011
 
 
 class DepthsOnAutopilot(HorizonOnAutopilot):
@@ -62,7 +64,7 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
         self.clearance_m = clearance_m
         self.too_deep = too_deep
         self._given: dict[int, tuple[float, float]] = {}  # waypoint index -> (its depth, the depth given)
-        self._restart: int | None = None  # the leg whose item was changed while AUTO flew it
+        self._flown: tuple[int, float] | None = None  # in AUTO: (the leg, the depth of the item AUTO began it with)
         self._told: set[int] = set()
         self._floor: Floor | None = None
 
@@ -84,8 +86,6 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
             # the floor rose above it: half the slack above the floor, not rewritten at each reading
             if kept is not None and kept[0] == wanted and depth < kept[1]:
                 depth = max(0.0, round(allowed - FLOOR_SLACK_M / 2, 1))
-            if kept is not None and kept[0] == wanted and depth != kept[1] and i == self.mission_state.leg_index:
-                self._restart = i  # raised (the seabed rising) or deepened (the sonar reaching further down)
             self._given[i] = (wanted, depth)
             if depth < wanted and i not in self._told and floor is not None:
                 self._told.add(i)
@@ -98,12 +98,17 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
 
     def update(self) -> Status:
         leg = self.mission_state.leg_index
-        if self._restart == leg and not self._settle() and self._may_start() and self._holds_given(leg):
-            self._restart = None
-            if self.get("/vehicle/mode") == self.autopilot.mode_name(AUTO):  # before anything else is written: the leg flies deeper meanwhile
-                self._started(self.autopilot.set_route_leg(leg))
-                self.feedback_message = f"leg {leg + 1} started again at {self._given[leg][1]:g} m (the seabed floor)"
-                return Status.SUCCESS
+        held = self._held_depth(leg)
+        if self.get("/vehicle/mode") != self.autopilot.mode_name(AUTO) or held is None:
+            self._flown = None  # AUTO (re)starts the leg at the item it then holds
+        elif self._flown is None or self._flown[0] != leg:
+            self._flown = (leg, held)
+        elif abs(held - self._flown[1]) > DEPTH_SAME_M and not self._settle() and self._may_start():
+            # its item rewritten (the floor moved) since AUTO began it: before anything else is written, flown as it now is
+            self._flown = (leg, held)
+            self._started(self.autopilot.set_route_leg(leg))
+            self.feedback_message = f"leg {leg + 1} started again at {held:g} m (the seabed floor moved)"
+            return Status.SUCCESS
         status = super().update()
         wanted = self._given.get(leg, (0.0, 0.0))[0]
         floor = self._floor
@@ -113,8 +118,7 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
             return Status.FAILURE
         return status
 
-    def _holds_given(self, leg: int) -> bool:
-        """The autopilot holds (read back) the depth last given for leg ``leg``."""
+    def _held_depth(self, leg: int) -> float | None:
+        """The depth of the item the autopilot holds (read back) for leg ``leg``; None when it holds none."""
         held = self.get("/vehicle/mission_items")
-        given = self._given.get(leg)
-        return held is not None and given is not None and leg < len(held) and abs(-held[leg].z - given[1]) <= 0.011
+        return -held[leg].z if held is not None and leg < len(held) else None
