@@ -26,6 +26,7 @@ from executive.vehicles import PROFILES
 DATA = Path(__file__).parents[2] / "data" / "ardusub"
 COMPLETED = DATA / "auv_survey-auto.tlog"
 KILLED = DATA / "auv_survey-auto-killed.tlog"
+DEEP = DATA / "auv_survey-auto-deep-paused.tlog"
 #: missions/auv_survey.yaml's waypoints, the altitude leg flown at 12 m: (lat, lon, depth)
 ROUTE = [(44.0951350, 9.8630000, 0.0), (44.0951350, 9.8633122, 5.0), (44.0953150, 9.8633122, 12.0), (44.0953150, 9.8630000, 8.0)]
 
@@ -65,7 +66,7 @@ class Replay:
 
 
 def test_the_recordings_are_small() -> None:
-    assert all(path.stat().st_size < 100_000 for path in (COMPLETED, KILLED))
+    assert all(path.stat().st_size < 100_000 for path in (COMPLETED, KILLED, DEEP))
 
 
 def test_each_waypoint_is_reported_reached_at_its_position_and_depth() -> None:
@@ -94,3 +95,30 @@ def test_killed_the_real_sub_holds_position_and_depth_at_the_end_of_its_horizon(
     assert math.hypot(last.vx, last.vy) / 100 < 0.1
     fourth = ROUTE[3]
     assert min(distance(p.lat * 1e-7, p.lon * 1e-7, fourth[0], fourth[1]) for p in replay.positions) > 19.0  # 25 m from waypoint 3
+
+
+def test_paused_and_resumed_the_real_sub_goes_on_with_the_leg_and_dives_past_its_sonar_under_the_floor() -> None:
+    """Waypoint 3 at 45 m over SITL's 50 m seabed, beyond the 30 m sonar from the surface; ``ctl pause`` on leg 2, ``ctl resume``
+    40 s later. ArduSub held POSHOLD; the executive set its mission to item 2 (MISSION_SET_CURRENT, echoed by MISSION_CURRENT)
+    before AUTO, and it reached item 2, not item 1. Item 3 was written no deeper than the floor when written (the sub's depth
+    plus the sonar's 30 m, less 2 m), deepened as the sub went down, the leg started again after each write (MISSION_SET_CURRENT
+    3), and reached at 45 m."""
+    replay = Replay(DEEP)
+    assert [seq for seq, _, _ in replay.reached] == [1, 2, 3, 4]  # item 4 too, here before the executive's own judgement
+    assert abs(replay.reached[2][2] - 45.0) < 0.2 and replay.reached[2][1] < 0.5
+    sent = [(t, msg) for t, msg in records(DEEP) if msg.get_srcComponent() != 1]
+    sets = [msg.seq for _, msg in sent if msg.get_type() == "MISSION_SET_CURRENT"]
+    assert sets[:2] == [1, 2] and set(sets[2:]) == {3} and len(sets) >= 5  # the start, the resume, leg 3 restarted
+    third: list[tuple[float, float]] = []  # (item 3's depth written, the sub's depth when that write began)
+    depth = began = 0.0
+    for _, msg in records(DEEP):
+        ours = msg.get_srcComponent() != 1
+        if msg.get_type() == "GLOBAL_POSITION_INT" and not ours:
+            depth = -msg.relative_alt / 1000
+        elif msg.get_type() == "MISSION_COUNT" and ours:
+            began = depth
+        elif msg.get_type() == "MISSION_ITEM_INT" and ours and msg.seq == 3:
+            third.append((-msg.z, began))
+    assert third[0][0] == 28.0 and max(given for given, _ in third) == 45.0
+    # the depth as recorded (GLOBAL_POSITION_INT at up to 10 Hz) a little after the executive's reading, the sub going down at 1.1 m/s
+    assert all(given <= sub + 30.0 - 2.0 + 0.2 for given, sub in third), third
