@@ -10,6 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from test_waypoints_auto import LinkCut
+
 from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
@@ -189,3 +191,30 @@ def test_a_dive_toward_a_seabed_beyond_the_sonar_goes_down_as_the_sonar_reaches_
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert min(watch.depths_given - {0.01, 5.0, 8.0}) == 28.0 and max(watch.depths_given) == 45.0
     assert 44.5 <= watch.deepest <= 45.6
+
+
+def test_a_cut_link_leaves_the_sub_at_the_end_of_its_horizon_and_the_failsafe_acts_when_the_link_is_back(lockstep) -> None:
+    """Cut on leg 2 (horizon 1: items 1-3): ArduSub flies to waypoint 3 and holds it at 12 m in AUTO. Link back: the mission's
+    link-loss failsafe (the survey's: hold in POSHOLD, then resume), legs 2-3 caught up from MISSION_CURRENT (COMPLETE at
+    item 3), item 4 set: not sent back to waypoint 2."""
+    mission = auto_survey(auto_horizon_legs=1, recovery_timeout_s=180)  # the link down 120 s
+    sim = lockstep(mission, injector=lambda faults, clock: LinkCut(faults, clock))
+    cut = sim.faults
+    assert isinstance(cut, LinkCut)
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    second, third = mission.waypoints[1], mission.waypoints[2]
+    assert sim.run(until=lambda: state.leg_index == 1 and ap.mission.count - 1 == 3) is None
+    cut.cut = True
+    t_cut = sim.clock.now()
+    assert sim.run(until=lambda: sim.clock.now() > t_cut + 120.0) is None
+    assert ap.mode == "AUTO" and not ap.mission.running and ap.vehicle.distance_to(third.lat, third.lon) < 1.0
+    assert abs(ap.vehicle.depth_m - 12.0) < 0.3
+    modes: list[str] = []
+    back: list[float] = []
+    sim.observers.append(lambda s: (modes.append(s.autopilot.mode), back.append(s.autopilot.vehicle.distance_to(second.lat, second.lon))))
+    cut.cut = False
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    changes = [m for i, m in enumerate(modes) if i == 0 or modes[i - 1] != m]
+    assert changes[:3] == ["AUTO", "POSHOLD", "AUTO"]  # the failsafe's hold, then the route resumed
+    assert min(back) > 15.0  # resumed after waypoint 3: never sent back along its horizon
