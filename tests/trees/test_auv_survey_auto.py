@@ -12,6 +12,7 @@ from typing import Any
 
 from test_waypoints_auto import LinkCut
 
+from executive.journal import ResumePoint
 from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
@@ -218,3 +219,22 @@ def test_a_cut_link_leaves_the_sub_at_the_end_of_its_horizon_and_the_failsafe_ac
     changes = [m for i, m in enumerate(modes) if i == 0 or modes[i - 1] != m]
     assert changes[:3] == ["AUTO", "POSHOLD", "AUTO"]  # the failsafe's hold, then the route resumed
     assert min(back) > 15.0  # resumed after waypoint 3: never sent back along its horizon
+
+
+def test_a_run_resumed_after_a_crash_starts_arduSubs_mission_at_the_journals_leg(lockstep) -> None:
+    """`executive run --resume` at leg 3: the horizon uploaded, MISSION_SET_CURRENT 3, then AUTO; items 1-2 never flown to."""
+    sim = lockstep(auto_survey())
+    sets: list[int] = []
+    send = sim.link.send
+
+    def spy(msg: Any) -> None:
+        if msg.get_type() == "MISSION_SET_CURRENT":
+            sets.append(msg.seq)
+        send(msg)
+
+    sim.link.send = spy  # type: ignore[method-assign]
+    flown: set[int] = set()
+    sim.observers.append(lambda s: flown.add(s.autopilot.mission.current_seq) if s.autopilot.mission.running else None)
+    outcome = sim.run(400, resume=ResumePoint(run=1, leg_index=2, samples=()))
+    assert outcome is not None and outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert sets[0] == 3 and flown == {3, 4}
