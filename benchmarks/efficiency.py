@@ -12,7 +12,7 @@ the figures stand beside the real firmware's (:mod:`benchmarks.recorded`).
   vehicle armed and put in AUTO; timed from entering AUTO to the same point.
 
 - drive: auto: the executive runs the mission with ``drive: auto`` (the autopilot's AUTO drives, holding
-  only the horizon, ``limits.auto_horizon_legs`` 2); timed from the vehicle armed in AUTO, as AUTO.
+  only the horizon, ``limits.auto_horizon_legs``, default 3); timed from the vehicle armed in AUTO, as AUTO.
 
 The row is GUIDED (or drive: auto) time / AUTO time, and says what AUTO it compared against: the simulated
 ArduRover's (here), or a recorded run of the real firmware (:mod:`benchmarks.recorded`). Its detail

@@ -21,7 +21,7 @@ from benchmarks.common import Row
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "ardurover"
 #: The SITL frame each example mission was recorded on.
 FRAMES = {"rover_square": "rover", "boat_survey": "motorboat"}
-#: The recorded runs: the executive's GUIDED legs, its drive: auto (horizon 2), and the firmware's own AUTO over the whole route.
+#: The recorded runs: the executive's GUIDED legs, its drive: auto (horizon 3), and the firmware's own AUTO over the whole route.
 DRIVES = {"guided": "GUIDED", "auto": "SUPERVISED", "whole": "AUTO"}
 PASS_M = 5.0  # an intermediate waypoint counts as passed within this (as benchmarks.efficiency._Route)
 

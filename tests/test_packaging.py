@@ -11,14 +11,14 @@ SETUPTOOLS = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8")
 
 
 def test_the_trees_folder_installs_as_executive_trees_and_nothing_installs_at_the_top_but_executive() -> None:
-    assert SETUPTOOLS["package-dir"] == {"executive.trees": "trees"}
+    assert SETUPTOOLS["package-dir"] == {"executive.trees": "trees", "executive.examples": "missions"}
     assert all(name == "executive" or name.startswith("executive.") for name in SETUPTOOLS["packages"])
 
 
 def test_every_package_of_the_repository_is_listed() -> None:
     """A mapped package is not found by packages.find, so the list is written out: a package left out of it would not be installed."""
     found = {".".join(init.parent.relative_to(ROOT).parts) for init in (ROOT / "executive").rglob("__init__.py")}
-    assert sorted(SETUPTOOLS["packages"]) == sorted(found | {"executive.trees"})
+    assert sorted(SETUPTOOLS["packages"]) == sorted(found | {"executive.trees", "executive.examples"})  # examples: missions/, data
     assert (ROOT / "trees" / "__init__.py").is_file()
 
 

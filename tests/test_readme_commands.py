@@ -1,19 +1,20 @@
-"""Every command README shows is run here, or checked against the command line it names, so README and the code cannot drift.
+"""Every command README and the manual's pages show is run here, or checked against the command line it names, so they cannot drift.
 
-The commands are read from README itself: each line of a ``sh`` (or unlabelled) code block, and
-each inline code span, that starts with a command (``executive``, ``python``, ``pytest``, ``pip``,
-``sudo``, ``systemctl``, ``journalctl``, ``mavproxy.py``); ``&&`` chains are split, ``$ `` prompts,
-``sudo`` and trailing ``# comments`` dropped. Each is then one of:
+The commands are read from README.md and every page of ``docs/`` (the generated reference holds none): each line of a
+``sh`` (or unlabelled) code block, and each inline code span, that starts with a command (``executive``, ``python``,
+``pytest``, ``pip``, ``sudo``, ``systemctl``, ``journalctl``, ``mavproxy.py``, ``sphinx-build``); ``&&`` chains are split,
+``$ `` prompts, ``sudo`` and trailing ``# comments`` dropped. Each is then one of:
 
 - a usage line (placeholders: ``MISSION``, ``[--rate HZ]``, ``a|b``, ``...``, ``<x>``), or a mention
   of a command alone: its command and subcommands exist and every option it names is one of theirs;
 - an ``executive`` example that needs nothing else: run in-process in a scratch directory (with
-  ``missions/`` and a ``mission.yaml``), exit 0 (``service install`` with ``--unit-dir`` there);
-- an ``executive run`` of a shipped mission: its options parsed and checked by the very function
+  ``missions/``, a ``mission.yaml`` and the ``rover_square.yaml`` getting started copies out), exit 0 (``service install``
+  with ``--unit-dir`` there, ``examples --copy`` with ``--to`` a directory of its own);
+- an ``executive run`` of a shipped mission (a file, or an example by name): its options parsed and checked by the very function
   ``run`` calls before it opens anything; README's first command, the rover's square, also run to
   COMPLETED, lock-step with its simulator (seconds, not the minute README's pace takes, and the same on a busy machine);
 - in :data:`NOT_RUN_HERE`, with the reason (hardware, systemd, a live executive, minutes); its
-  ``executive`` part still parsed by the real command line. An entry README no longer shows fails.
+  ``executive`` part still parsed by the real command line. An entry no page shows any more fails.
 """
 
 from __future__ import annotations
@@ -32,8 +33,9 @@ from executive.mission.loader import load_mission
 from tests_support import run_in_lockstep
 
 ROOT = Path(__file__).parents[1]
+PAGES = [ROOT / "README.md", *sorted(p for p in (ROOT / "docs").rglob("*.md") if "_build" not in p.parts)]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
-COMMAND_WORDS = ("executive", "python", "python3", "pytest", "pip", "sudo", "systemctl", "journalctl", "mavproxy.py", ".")
+COMMAND_WORDS = ("executive", "python", "python3", "pytest", "pip", "sudo", "systemctl", "journalctl", "mavproxy.py", "sphinx-build", ".")
 
 #: Commands README shows that are not run here: exact text (after a ``$ ``, ``sudo`` and a comment are taken off) -> why.
 NOT_RUN_HERE: dict[str, str] = {
@@ -42,6 +44,10 @@ NOT_RUN_HERE: dict[str, str] = {
     "pip install .": "installs the package from the network or a cache (this suite runs installed)",
     "pip install '.[test]'": "installs the package from the network or a cache (this suite runs installed)",
     "pytest -q -n auto": "the whole suite, of which this test is part",
+    "pip install uxv-executive": "installs the released package from the package index (tests/test_wheel.py installs the wheel it builds)",
+    "pip install dist/uxv_executive-*.whl": "installs the wheel python -m build makes (tests/test_wheel.py does, in a fresh virtualenv)",
+    "python -m build": "tests/test_wheel.py runs it (an sdist and a wheel, twine check, the wheel run in a fresh virtualenv)",
+    "sphinx-build -W -b html docs docs/_build/html": ".ci/run builds the manual so, warnings as errors (tests/docs/ checks its generated reference)",
     "systemctl daemon-reload": "systemd, as root",
     "systemctl enable --now executive-boat_survey": "systemd, as root",
     "systemctl status executive-boat_survey": "systemd (tests/cli/test_service.py runs the unit's ExecStart under a fake service manager)",
@@ -65,20 +71,22 @@ NOT_RUN_HERE: dict[str, str] = {
     "python -m benchmarks --only route": "seconds (tests/test_benchmarks_smoke.py)",
 }
 #: Commands that need nothing but files: run in-process, in a scratch directory.
-IN_PROCESS = frozenset({"validate", "show", "schema", "behaviours", "export", "import", "service"})
+IN_PROCESS = frozenset({"validate", "show", "schema", "behaviours", "export", "import", "service", "examples"})
 #: README's first command: run for real, as shown, its simulator lock-step with it (its pace is the reader's, not the suite's).
 RUN_FOR_REAL = {"executive run missions/rover_square.yaml --speedup 20": []}
 _PLACEHOLDER = re.compile(r"^\[|[|<>\[\]]|\.\.\.|^[A-Z][A-Z0-9_]*(\.[a-z]+)?$|^[A-Z]+:|:[A-Z]+$|^\d+\.\d+\.\d+\.\d+:[A-Z]+$")
 
 
 def _commands() -> list[str]:
-    """Every command README shows, in order, each once."""
+    """Every command README and the pages show, in order, each once."""
     found: list[str] = []
-    for lang, body in re.findall(r"```(\w*)\n(.*?)```", README, re.S):
-        if lang in ("sh", "bash", ""):
-            found += [line for line in body.splitlines() if _is_command(line)]
-    prose = re.sub(r"```.*?```", "", README, flags=re.S).replace("\\|", "|")
-    found += [span for span in re.findall(r"`([^`\n]+)`", prose) if _is_command(span)]
+    for page in PAGES:
+        text = page.read_text(encoding="utf-8")
+        for lang, body in re.findall(r"```(\w*)\n(.*?)```", text, re.S):
+            if lang in ("sh", "bash", ""):
+                found += [line for line in body.splitlines() if _is_command(line)]
+        prose = re.sub(r"```.*?```", "", text, flags=re.S).replace("\\|", "|")
+        found += [span for span in re.findall(r"`([^`\n]+)`", prose) if _is_command(span)]
     commands: list[str] = []
     for line in found:
         for part in line.split("&&"):
@@ -105,8 +113,9 @@ def test_readme_shows_commands_and_every_one_is_accounted_for():
     assert len(COMMANDS_SHOWN) > 40
     kinds = {c: _kind(c) for c in COMMANDS_SHOWN}
     assert [c for c, kind in kinds.items() if kind is None] == []
-    assert sorted(set(NOT_RUN_HERE) - set(COMMANDS_SHOWN)) == []  # a command README no longer shows is not excused here
+    assert sorted(set(NOT_RUN_HERE) - set(COMMANDS_SHOWN)) == []  # a command no page shows any more is not excused here
     assert set(RUN_FOR_REAL) <= set(COMMANDS_SHOWN)
+    assert README.split("```sh\n")[1].split("```")[0].splitlines()[0].endswith(next(iter(RUN_FOR_REAL)))  # README's first command
 
 
 def _kind(command: str) -> str | None:
@@ -114,13 +123,18 @@ def _kind(command: str) -> str | None:
     words = command.split()
     if command in NOT_RUN_HERE:
         return "listed"
-    if words[0] != "executive" or (len(words) > 1 and words[1] not in COMMANDS):
+    if words[0] != "executive" or (len(words) > 1 and words[1] not in COMMANDS and not _top_level(words[1])):
         return None
-    if len(words) == 1 or any(_PLACEHOLDER.search(w) for w in words[2:]) or not _parses(words[1:]):
+    if len(words) == 1 or _top_level(words[1]) or any(_PLACEHOLDER.search(w) for w in words[2:]) or not _parses(words[1:]):
         return "usage"  # a usage line, or a command named without what it needs (`executive run`, `ctl upload`)
     if words[1] == "run":
         return "run"
     return "in-process" if words[1] in IN_PROCESS else None
+
+
+def _top_level(word: str) -> bool:
+    """An option of ``executive`` itself, or any command (``COMMAND``)."""
+    return word.startswith("-") or word == "COMMAND"
 
 
 def _parses(argv: list[str]) -> bool:
@@ -136,8 +150,8 @@ def _parses(argv: list[str]) -> bool:
 
 def _parser_chain(words: list[str]) -> list[argparse.ArgumentParser]:
     """The parsers a usage line goes through: the command's, then each subcommand's it names (every alternative of ``a|b``)."""
-    if len(words) == 1:
-        return [build_parser()]  # `executive` alone
+    if len(words) == 1 or _top_level(words[1]):
+        return [build_parser()]  # `executive` alone, `executive --version`, `executive COMMAND --help`
     command = words[1]
     root = build_parser(command)
     sub = next(a for a in root._actions if isinstance(a, argparse._SubParsersAction))
@@ -169,7 +183,7 @@ def test_a_usage_line_names_commands_and_options_that_exist(command):
 
 @pytest.fixture(scope="module")
 def scratch(tmp_path_factory) -> Path:
-    """A directory with README's files: missions/ (a copy), mission.yaml (the rover's square) and its tree.xml.
+    """A directory with the pages' files: missions/ (a copy), mission.yaml (the rover's square), its tree.xml, rover_square.yaml.
 
     The tree.xml README's `export` writes is made here too: pytest-xdist may run the `import` examples in another
     worker than the `export` one, each with a directory of its own.
@@ -178,23 +192,26 @@ def scratch(tmp_path_factory) -> Path:
     shutil.copytree(ROOT / "missions", where / "missions")
     shutil.copy(ROOT / "missions" / "rover_square.yaml", where / "mission.yaml")
     assert main(["export", str(where / "mission.yaml"), "--format", "btcpp", "-o", str(where / "tree.xml")]) == 0
+    assert main(["examples", "--copy", "rover_square", "--to", str(where)]) == 0  # as getting started does, before it validates
     return where
 
 
 @pytest.mark.parametrize("command", [c for c in COMMANDS_SHOWN if _kind(c) == "in-process"])
-def test_an_example_runs_and_exits_0(command, scratch, monkeypatch, capsys):
-    """Each in a scratch directory with README's files."""
+def test_an_example_runs_and_exits_0(command, scratch, tmp_path, monkeypatch, capsys):
+    """Each in a scratch directory with the pages' files."""
     monkeypatch.chdir(scratch)
     argv = shlex.split(command)[1:]
     if argv[:2] == ["service", "install"]:
         argv += ["--unit-dir", str(scratch)]  # not /etc/systemd/system: no root here
+    if argv[:2] == ["examples", "--copy"]:
+        argv += ["--to", str(tmp_path)]  # the scratch has its copy already
     code = main(argv)
     assert code == 0, f"{command}: exit {code}: {capsys.readouterr().err}"
 
 
 @pytest.mark.parametrize("command", [c for c in COMMANDS_SHOWN if _kind(c) == "run"])
-def test_a_run_example_passes_runs_own_checks(command, monkeypatch):
-    monkeypatch.chdir(ROOT)
+def test_a_run_example_passes_runs_own_checks(command, scratch, monkeypatch):
+    monkeypatch.chdir(scratch)
     argv = shlex.split(command)[1:]
     args = build_parser("run").parse_args(argv)
     check_run(args, load_mission(args.mission))  # BadInput (exit 2) if run would refuse it

@@ -4,7 +4,7 @@ A reaction is a mode, named the way the trees name modes (``HOLD``; the PX4 back
 ``AUTO.LOITER``), or :data:`DISARM`. Each has what it needs of the vehicle's present state that the
 executive can see (a position estimate) and the reaction to ask for instead when it is refused
 again and again, or cannot be entered at all in that state. A reaction with no next one is asked
-again until the failsafe's time is up. The README's failsafe table is this table.
+again until the failsafe's time is up. The manual's failsafe table (docs/failsafes.md) is this table.
 """
 
 from __future__ import annotations

@@ -126,11 +126,10 @@ class MavlinkPort:
         items: Sequence[MissionItem] | None = held  # type: ignore[assignment]  # /vehicle/mission_items
         return horizon_not_on_autopilot(waypoints, leg, horizon, items)
 
-    def extend_route(self, waypoint: Waypoint) -> int:
+    def extend_route(self, waypoints: Sequence[Waypoint]) -> int:
         if self.transfer is None:
             raise RuntimeError("no mission transfer on this link")
-        [item] = route_items([waypoint])
-        return self.transfer.append(item)
+        return self.transfer.append(route_items(waypoints))
 
     def set_route_leg(self, leg: int) -> int:
         if self.transfer is None:

@@ -169,8 +169,9 @@ class AutopilotPort(Protocol):
         and at most ``horizon`` beyond it; None when it is."""
         ...
 
-    def extend_route(self, waypoint: Waypoint) -> int:
-        """Add one waypoint after those the autopilot holds (read back before it counts); the transfer's ticket."""
+    def extend_route(self, waypoints: Sequence[Waypoint]) -> int:
+        """Add waypoints after those the autopilot holds, one partial write each, back to back (read back before it counts);
+        the transfer's ticket."""
         ...
 
     def set_route_leg(self, leg: int) -> int:

@@ -151,8 +151,8 @@ class Autopilot:
     def horizon_differs(self, waypoints: Sequence[Waypoint], leg: int, horizon: int, held: object | None) -> str | None:
         return self.backend.horizon_differs(waypoints, leg, horizon, held)
 
-    def extend_route(self, waypoint: Waypoint) -> int:
-        return self.backend.extend_route(waypoint)
+    def extend_route(self, waypoints: Sequence[Waypoint]) -> int:
+        return self.backend.extend_route(waypoints)
 
     def set_route_leg(self, leg: int) -> int:
         return self.backend.set_route_leg(leg)

@@ -36,8 +36,12 @@ class HorizonOnAutopilot(MissionTransferFollower):
     """SUCCESS while the autopilot holds the route's horizon for the current leg; RUNNING while it is being put there.
 
     The horizon of leg k: the route's waypoints 1..k+1 at least (through the current leg's), k+1+``horizon_legs``
-    at most. Held and a prefix of the route: one more waypoint is appended whenever there is room
-    (SUCCESS meanwhile, while the current leg's is held). Anything else (nothing known, another route,
+    at most. Held and a prefix of the route: once the autopilot holds no more than one waypoint beyond the
+    current leg's (the least AUTO needs to plan the corner it drives to next), the horizon is filled in one
+    burst of appends (SUCCESS meanwhile, while the current leg's is held). Not sooner: the real ArduRover
+    restarts the waypoint it drives at every write to its mission in AUTO, wherever the item lies
+    (tests/data/ardurover/mission-writes-in-auto-rover.tlog), so the fewer the bursts the less time is
+    lost; a horizon of H has one burst every H-1 legs. Anything else (nothing known, another route,
     more than the horizon): the horizon is uploaded whole. Never more than the horizon is sent.
     """
 
@@ -60,11 +64,11 @@ class HorizonOnAutopilot(MissionTransferFollower):
         held = self.get("/vehicle/mission_items")
         n_held = len(held) if held is not None else 0
         prefix = held is not None and n_held <= most and self.autopilot.route_differs(route[:n_held], held) is None
-        if prefix and not busy and n_held < most and self._may_start():
-            self._started(self.autopilot.extend_route(route[n_held]))
+        if prefix and not busy and n_held < most and n_held - least <= 1 and self._may_start():
+            self._started(self.autopilot.extend_route(route[n_held:most]))
             busy = True
         if prefix and n_held >= least:
-            extra = f"; appending waypoint {n_held + 1}" if busy else ""
+            extra = f"; appending up to waypoint {most}" if busy else ""
             self.feedback_message = f"the autopilot holds waypoints 1-{n_held} of {len(route)}{extra}"
             return Status.SUCCESS
         if not busy and not prefix and self._may_start():

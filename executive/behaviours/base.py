@@ -68,6 +68,7 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
             self.bb.register_key(key=key, access=Access.WRITE)
 
     def setup(self, **services: Any) -> None:
+        """Take the services this behaviour ``needs`` (the clock, the autopilot port, the mission state) from the runtime."""
         missing = [n for n in self.needs if services.get(n) is None]
         if missing:
             raise RuntimeError(f"{self.name}: setup() needs {', '.join(missing)}")

@@ -56,6 +56,7 @@ def number(
 COMMANDS = {
     "validate": "validate", "show": "show", "run": "run", "sim": "sim", "schema": "schema", "ctl": "ctl", "report": "report",
     "replay": "replay", "can": "can", "import": "plan_files", "export": "plan_files", "service": "service", "behaviours": "behaviours",
+    "examples": "examples",
 }  # fmt: skip
 
 

@@ -20,6 +20,7 @@ from executive import btcpp, recompose
 from executive.admission import load_mission_text
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report, print_errors
+from executive.cli.examples import mission_file
 from executive.mission.errors import MissionError, format_path
 from executive.mission.errors import Path as MissionPath
 from executive.mission.plan_files import WAITS_FOR_ARMING, WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
@@ -52,7 +53,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "(what the format cannot carry is reported on stderr), or its tree (written in the file) as BehaviorTree.CPP v4 XML with "
         "the node catalogue as its TreeNodesModel, for Groot2.",
     )
-    exp.add_argument("mission", metavar="MISSION", help="mission file (YAML)")
+    exp.add_argument("mission", metavar="MISSION", type=mission_file, help="mission file (YAML), or an example's name")
     exp.add_argument("--format", choices=("plan", "waypoints", "btcpp"), help="output format (default: from the -o file's suffix)")
     exp.add_argument("-o", "--output", metavar="FILE", help="write here (default: stdout)")
     exp.set_defaults(func=run_export)

@@ -26,6 +26,7 @@ from executive.assembly import (
 from executive.autopilot_link import SURVEY_S, SeveralAutopilots
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
 from executive.cli.common import load_or_report, mavlink_id
+from executive.cli.examples import fault_file, mission_file
 from executive.cli.run_checks import check_run
 from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
@@ -53,7 +54,7 @@ if TYPE_CHECKING:
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("run", help="run a mission (on the built-in simulated vehicle unless --mavlink is given)")
-    p.add_argument("mission", help="mission YAML file")
+    p.add_argument("mission", type=mission_file, help="mission YAML file, or an example's name (executive examples)")
     p.add_argument("--mavlink", metavar="URL", help="autopilot link: udpin:0.0.0.0:14550, tcp:HOST:PORT, /dev/ttyACM0[,BAUD]")
     p.add_argument("--rate", type=float, default=10.0, metavar="HZ", help="tick rate (default 10)")
     p.add_argument(
@@ -75,7 +76,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--target-system", type=mavlink_id, metavar="N", help=target)
     p.add_argument("--target-component", type=mavlink_id, default=1, metavar="N", help="the autopilot's component id (default 1)")
     p.add_argument("--connect-timeout", type=float, default=30.0, metavar="S", help="seconds to wait for the autopilot (default 30)")
-    p.add_argument("--faults", metavar="FILE", help="simulator only: YAML list of faults to inject into the simulated vehicle")
+    p.add_argument(
+        "--faults",
+        metavar="FILE",
+        type=fault_file,
+        help="simulator only: YAML list of faults to inject into the simulated vehicle; or an example's, by name",
+    )
     p.add_argument("--tlog", metavar="FILE", help="record the whole MAVLink link in FILE (.tlog, for Mission Planner and pymavlink)")
     p.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key (32 bytes, 64 hex digits or a passphrase)")
     p.add_argument(

@@ -28,6 +28,7 @@ from pathlib import Path
 from executive import __version__
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OK, BadInput, number
 from executive.cli.common import load_or_report
+from executive.cli.examples import mission_file
 
 UNIT_DIR = "/etc/systemd/system"
 #: Where the service's state lives (systemd's StateDirectory=executive): the journals.
@@ -43,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Write the systemd unit that runs MISSION: Type=notify, WatchdogSec fed from the tick loop, Restart=on-failure with "
         "--journal and --resume so a restart continues the mission, logs in the system journal.",
     )
-    install.add_argument("mission", help="mission YAML file (checked now; the unit names it by its absolute path)")
+    install.add_argument("mission", type=mission_file, help="mission YAML file (checked now; the unit names it by its absolute path)")
     install.add_argument("--mavlink", metavar="URL", help="the autopilot link (/dev/ttyACM0,921600, udpin:0.0.0.0:14550...); none: the simulator")
     install.add_argument("--journal", metavar="DB", help=f"the run's journal, for --resume (default {STATE_DIR}/NAME.db)")
     install.add_argument("--name", help="the unit is executive-NAME.service (default: the mission file's name)")

@@ -13,6 +13,7 @@ import py_trees
 from executive import mission_tree
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report
+from executive.cli.examples import mission_file
 from executive.tree_drawing import dot_graph, unicode_tree
 
 FORMATS = ("ascii", "unicode", "dot", "svg", "png")
@@ -26,7 +27,7 @@ GRAPHVIZ_HINT = (
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("show", help="print or draw the behaviour tree a mission would run")
-    p.add_argument("mission", help="mission YAML file")
+    p.add_argument("mission", type=mission_file, help="mission YAML file, or an example's name (executive examples)")
     p.add_argument("--format", choices=FORMATS, help="default: the output file's suffix (.txt .dot .gv .svg .png), else unicode")
     p.add_argument("-o", "--output", metavar="FILE", help="write here instead of stdout (required for svg/png)")
     p.set_defaults(func=main)

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput, NoVehicle, number
 from executive.cli.common import faults_or_report, mavlink_id, signing_key_arg
+from executive.cli.examples import fault_file
 from executive.clock import ScaledClock
 from executive.io.mavlink.endpoint import unreachable
 from executive.logs import setup_logging
@@ -58,7 +59,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     sysid = "the vehicle's MAVLink system id, 1-255 (SYSID_THISMAV; default: %(default)s)"
     parser.add_argument("--sysid", metavar="N", type=mavlink_id, default=1, help=sysid)
     parser.add_argument("--duration", metavar="S", type=positive, help="exit after S simulated seconds")
-    parser.add_argument("--faults", metavar="FILE", help="YAML list of faults to inject (link loss, EKF, GPS, compass, RC, battery)")
+    parser.add_argument("--faults", metavar="FILE", type=fault_file, help="YAML list of faults to inject (link loss, EKF, GPS, compass, RC, battery)")
     parser.add_argument("--signing-key", metavar="FILE", help="MAVLink 2 signing key: sign everything, drop unsigned packets")
     can_help = "bunker: the AgileX base on this CAN bus (socketcan:vcan0, virtual:x...): RC and state frames out, motion commands in"
     parser.add_argument("--can", metavar="IFACE:CHANNEL", help=can_help)

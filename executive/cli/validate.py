@@ -20,6 +20,7 @@ from typing import Any
 
 from executive.admission import load_mission, plugin_problems
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput
+from executive.cli.examples import mission_file
 from executive.cli.run_checks import check_mission
 from executive.mission.errors import FieldError, MissionError
 from executive.mission.model import tree_name
@@ -32,7 +33,13 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser = subparsers.add_parser(
         "validate", help="check mission files", description="Check mission files; errors go to stderr as FILE:LINE:COL: FIELD: message."
     )
-    parser.add_argument("missions", nargs="+", metavar="MISSION", help="mission file (YAML), or a directory: every *.yaml in it, by name")
+    parser.add_argument(
+        "missions",
+        nargs="+",
+        metavar="MISSION",
+        type=mission_file,
+        help="mission file (YAML), a directory (every *.yaml in it, by name), or an example's name",
+    )
     parser.add_argument("--json", action="store_true", help="print a JSON list of results on stdout instead")
     parser.add_argument(
         "--autopilot", choices=("ardupilot", "px4"), help="check the missions against this autopilot firmware, as `run --autopilot` does"

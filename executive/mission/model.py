@@ -136,7 +136,7 @@ class Limits(BaseModel):
     )
     battery_min_v: float | None = Field(None, gt=0.0, le=1000.0, description="battery voltage below this fails the battery guard (null: not checked)")
     auto_horizon_legs: int = Field(
-        2, ge=1, le=20, description="drive: auto: waypoints the autopilot holds beyond the current leg's (it stops at the last one it holds)"
+        3, ge=1, le=20, description="drive: auto: waypoints the autopilot holds beyond the current leg's (it stops at the last one it holds)"
     )
 
 

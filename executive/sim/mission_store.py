@@ -97,6 +97,9 @@ class MissionStore(ABC):
         self._uploader = (0, 0)  # system and component id of whoever uploads
         self._last_item_at = self._last_request_at = 0.0
         self.uploaded_at: float | None = None  # clock time of the last completed upload
+        #: Writes to the stored mission so far: items stored (a home slot's item 0 aside), cut or cleared
+        #: (AP_Mission::write_cmd_to_storage, truncate and clear move its last change time).
+        self.changes = 0
         self._handlers: dict[str, Callable[[MAVLinkMessage], None]] = {
             "MISSION_COUNT": self._on_count,
             "MISSION_ITEM_INT": self._on_item,
@@ -184,7 +187,9 @@ class MissionStore(ABC):
             self._ack(msg, _M.MAV_MISSION_NO_SPACE)
             self._text(_M.MAV_SEVERITY_WARNING, f"Only {self.max_items} items are supported")
             return
-        del self._commands[msg.count :]
+        if msg.count < self.count:
+            del self._commands[msg.count :]
+            self.changes += 1
         self._uploader = sender
         if msg.count == 0:
             self._upload_complete(msg)
@@ -207,6 +212,7 @@ class MissionStore(ABC):
         stored = self._to_stored(msg)
         if isinstance(stored, StoredCommand) and msg.seq <= self.count:
             self._commands[msg.seq : msg.seq + 1] = [stored]
+            self.changes += int(msg.seq != 0 or not self.HOME_SLOT)  # "Update of home location is not a true change"
         else:
             self._ack(msg, stored if isinstance(stored, int) else _M.MAV_MISSION_ERROR)
             self.receiving = False
@@ -252,6 +258,7 @@ class MissionStore(ABC):
             self._ack(msg, _M.MAV_MISSION_ERROR)
             return
         self._commands.clear()
+        self.changes += 1
         self.state, self.current_seq = MissionState.STOPPED, None
         self._ack(msg, _M.MAV_MISSION_ACCEPTED)
 

@@ -101,8 +101,8 @@ def test_drive_rules(body: str, expected: list[str]) -> None:
     assert errors_of(HEAD + body) == expected
 
 
-def test_drive_defaults_to_guided_with_a_horizon_of_two() -> None:
+def test_drive_defaults_to_guided_with_a_horizon_of_three() -> None:
     from executive.mission import loader
 
     mission = loader.load_mission_text(HEAD + "vehicle: rover\n" + WP, "m.yaml")
-    assert (mission.drive, mission.limits.auto_horizon_legs) == ("guided", 2)
+    assert (mission.drive, mission.limits.auto_horizon_legs) == ("guided", 3)

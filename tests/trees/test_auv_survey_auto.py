@@ -55,7 +55,7 @@ class Watch:
 
 
 def test_the_survey_is_flown_in_arduSubs_auto_at_each_waypoints_depth_and_completes(lockstep) -> None:
-    mission = auto_survey()
+    mission = auto_survey(auto_horizon_legs=2)  # 3 of the 4 waypoints held at the start, the 4th appended on leg 2
     sim = lockstep(mission)
     watch = Watch()
     sim.observers.append(watch)

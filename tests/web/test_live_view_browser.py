@@ -1,6 +1,6 @@
 """The live view in a real browser (headless Chromium, Debian's ``chromium``: .ci/run installs it) during a real run from the command line.
 
-``EXECUTIVE_LIVE_VIEW_PNG=docs/live-view.png`` keeps the screenshot README shows.
+``EXECUTIVE_LIVE_VIEW_PNG=docs/live-view.png`` keeps the screenshot README and the manual show (tests/docs/test_pictures.py).
 """
 
 from __future__ import annotations

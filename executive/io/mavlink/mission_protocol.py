@@ -236,6 +236,7 @@ class MissionTransfer:
         self._upload: tuple[MissionItem, ...] = ()  # home first, with a home slot
         self._verify_upload = verify
         self._final_item_sent = False
+        self._partial_end: int | None = None  # an append's partial write under way: its item; None: an upload
         self._last_item_seq = 0
         self._count = 0
         self._received: list[MissionItem] = []
@@ -260,35 +261,45 @@ class MissionTransfer:
             self._upload = tuple(replace(item, seq=seq) for seq, item in enumerate(items))
         self._verify_upload = self.verify if verify is None else verify
         self._final_item_sent = False
+        self._partial_end = None
         ticket = self._start(TransferOperation.UPLOAD, len(self._upload))
         self._step = _Step.SEND_COUNT
         count = self._mav.mission_count_encode(self.target_system, self.target_component, len(self._upload), _MISSION)
         self._send(count, "MISSION_REQUEST for item 0")
         return ticket
 
-    def append(self, item: MissionItem) -> int:
-        """Add ``item`` after the mission the vehicle holds (as last read back), leaving the rest as it is; returns the ticket.
+    def append(self, items: Sequence[MissionItem]) -> int:
+        """Add ``items`` after the mission the vehicle holds (as last read back), leaving the rest as it is; returns the ticket.
 
-        A partial write (MISSION_WRITE_PARTIAL_LIST from the end to the end): ArduPilot takes one whose
-        indices are at most its item count, and an item whose seq is that count is appended
-        (MissionItemProtocol::handle_mission_write_partial_list and handle_mission_item,
-        libraries/GCS_MAVLink/MissionItemProtocol.cpp), so a mission running in AUTO goes on with
-        one more item and nothing else rewritten. Read back whole before it counts, as an upload.
+        A partial write (MISSION_WRITE_PARTIAL_LIST from the end to the end) per item, one after the
+        other: ArduPilot takes one whose indices are at most its item count, and an item whose seq is
+        that count is appended (MissionItemProtocol::handle_mission_write_partial_list and
+        handle_mission_item, libraries/GCS_MAVLink/MissionItemProtocol.cpp), so a mission running in
+        AUTO goes on with more items and nothing else rewritten. The partial writes follow each other at
+        once (their acks), so that ArduRover, which restarts its current waypoint at each write,
+        restarts it in one burst. Read back whole before it counts, as an upload.
         """
         if self.items is None:
             raise RuntimeError("append needs the vehicle's mission read back first")
+        if not items:
+            raise ValueError("nothing to append")
         first = self._first
         home = (self.home or MissionItem.waypoint(0, 0.0, 0.0),) if self.home_slot else ()
         held = tuple(replace(held, seq=seq) for seq, held in enumerate(self.items, start=first))
         seq = first + len(held)
-        self._upload = (*home, *held, replace(item, seq=seq))
+        self._upload = (*home, *held, *(replace(item, seq=n) for n, item in enumerate(items, start=seq)))
         self._verify_upload = True
-        self._final_item_sent = False
         ticket = self._start(TransferOperation.UPLOAD, len(self._upload))
+        self._write_partial(seq)
+        return ticket
+
+    def _write_partial(self, seq: int) -> None:
+        """Start the partial write of item ``seq`` of the upload (an append: ``seq`` is the vehicle's count)."""
+        self._final_item_sent = False
+        self._partial_end = seq
         self._step = _Step.SEND_COUNT
         partial = self._mav.mission_write_partial_list_encode(self.target_system, self.target_component, seq, seq, _MISSION)
         self._send(partial, f"MISSION_REQUEST for item {seq}")
-        return ticket
 
     def download(self) -> int:
         """Read the vehicle's mission into ``/vehicle/mission_home`` and ``/vehicle/mission_items``; returns the ticket."""
@@ -355,7 +366,7 @@ class MissionTransfer:
         self._step = _Step.SEND_ITEMS
         self._timeouts = 0
         if not any(m.get_type() == "MISSION_ITEM_INT" and m.seq == seq for m in self._outbox):
-            last = seq == len(self._upload) - 1
+            last = seq == (len(self._upload) - 1 if self._partial_end is None else self._partial_end)
             self._final_item_sent = self._final_item_sent or last
             self._last_item_seq = seq
             item = self._upload[seq].encode(self._mav, self.target_system, self.target_component)
@@ -371,12 +382,12 @@ class MissionTransfer:
         if self._step in _UPLOADING:
             if result == _M.MAV_MISSION_ACCEPTED:
                 if self._final_item_sent:  # else a stale ack (of an earlier clear, say)
-                    self._uploaded(now)
+                    self._written(now)
             elif result == _M.MAV_MISSION_INVALID_SEQUENCE:
                 pass  # a resent or reordered item arrived after the vehicle moved on; it re-requests what it lacks
             elif result == _M.MAV_MISSION_ERROR and self._final_item_sent and self._verify_upload:
                 # ArduPilot answers an item with ERROR once it stopped receiving: its ACCEPTED may have been lost
-                self._uploaded(now)
+                self._written(now)
             elif result == _M.MAV_MISSION_ERROR and self._final_item_sent:
                 self._fail(f"the vehicle answered the last item with {name}: its MISSION_ACK may have been lost; download to check", now, result)
             else:
@@ -473,6 +484,13 @@ class MissionTransfer:
 
     def _request_item(self, seq: int) -> None:
         self._send(self._mav.mission_request_int_encode(self.target_system, self.target_component, seq, _MISSION), f"MISSION_ITEM_INT {seq}")
+
+    def _written(self, now: float) -> None:
+        """The vehicle took the last item sent: the next partial write of an append, or the upload is done."""
+        if self._partial_end is not None and self._partial_end + 1 < len(self._upload):
+            self._write_partial(self._partial_end + 1)
+            return
+        self._uploaded(now)
 
     def _uploaded(self, now: float) -> None:
         if not self._verify_upload:

@@ -11,6 +11,7 @@ from typing import ClassVar
 from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS, RoverMotion
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import ACC_BITS, GLOBAL_FRAMES, NAVIGATION, POS_BITS, RATE_ATTITUDE, ArduPilotSim
+from executive.sim.ardupilot.mission_change import MissionChangeDetector
 from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import StoredCommand
@@ -80,7 +81,7 @@ class ArduRoverSim(ArduPilotSim):
     motion: RoverMotion
     _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
     _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
-    _auto_written_at: float | None = None  # the mission's last write AUTO has seen
+    _mission_change: MissionChangeDetector  # ModeAuto's mis_change_detector
     _auto_hold_until = 0.0  # elapsed_s at which a waypoint's hold time ends
 
     @property
@@ -169,7 +170,7 @@ class ArduRoverSim(ArduPilotSim):
             if not self.mission.present:
                 self._text(_M.MAV_SEVERITY_NOTICE, "No Mission. Can't set AUTO.")
                 return False
-            self._auto_waiting, self._auto_item, self._auto_written_at = True, None, self.mission.uploaded_at
+            self._auto_waiting, self._auto_item, self._mission_change = True, None, MissionChangeDetector()
             self._navigator()  # ModeAuto::_enter: wp_nav.init()
             if not (self.is_boat and self._loiter()):
                 self._stop()
@@ -243,9 +244,9 @@ class ArduRoverSim(ArduPilotSim):
                 return
             self._auto_waiting = False
             self.mission.start_or_resume()
+            self._mission_change.start(self.mission.changes, self.mission.current_seq)
         item = self.mission.current
-        if self.mission.uploaded_at != self._auto_written_at:
-            self._auto_written_at = self.mission.uploaded_at
+        if self._mission_change.check(self.mission.changes, self.mission.current_seq):
             self._restart_on_change(item)
         if item is None:  # complete (ArduRover stays in AUTO, stopped), or the mission was cleared
             if self._driving or self._loitering:
@@ -272,11 +273,9 @@ class ArduRoverSim(ArduPilotSim):
             self.mission.advance()
 
     def _restart_on_change(self, item: StoredCommand | None) -> None:
-        """A mission written while AUTO drives a waypoint restarts that waypoint's command (ModeAuto::update, Rover/mode_auto.cpp:
-        mis_change_detector, then AP_Mission::restart_current_nav_cmd): AR_WPNav::set_desired_location, the leg not
-        reached, starts again from the stopping point. The firmware's AP_Mission_ChangeDetector compares only the next
-        three navigation commands, yet the real ArduRover 4.7-dev restarted at every one-item append of a partial write
-        (tests/data/ardurover/boat_survey-motorboat-supervised.tlog): so does this one."""
+        """The mission changed while AUTO drives a waypoint (:class:`MissionChangeDetector`): ModeAuto::update restarts that
+        waypoint's command (Rover/mode_auto.cpp, AP_Mission::restart_current_nav_cmd): AR_WPNav::set_desired_location, the
+        leg not reached, starts again from the stopping point."""
         if item is None or not self._driving or item.command != _M.MAV_CMD_NAV_WAYPOINT:
             return
         self._text(_M.MAV_SEVERITY_CRITICAL, "Auto mission changed, restarted command")

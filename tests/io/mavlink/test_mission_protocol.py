@@ -40,7 +40,7 @@ def brief(messages: list[MAVLinkMessage]) -> list[tuple]:
     out: list[tuple] = []
     for msg in messages:
         kind = msg.get_type()
-        detail = {"MISSION_COUNT": "count", "MISSION_ACK": "type"}.get(kind, "seq")
+        detail = {"MISSION_COUNT": "count", "MISSION_ACK": "type", "MISSION_WRITE_PARTIAL_LIST": "start_index"}.get(kind, "seq")
         out.append((kind, getattr(msg, detail)) if hasattr(msg, detail) else (kind,))
     return out
 
@@ -434,7 +434,7 @@ def test_append_writes_one_item_at_the_end_by_a_partial_write_and_reads_back(x: 
     assert x.tick(ack()) == [("MISSION_REQUEST_LIST",)]
     read_back(x, ITEMS[:1])
     x.tick(AUTOPILOT.mission_item_reached(1))
-    ticket = x.transfer.append(ITEMS[1])
+    ticket = x.transfer.append([ITEMS[1]])
     x.clock.advance(0.1)
     x.reader.drain()
     x.transfer.flush()
@@ -449,11 +449,29 @@ def test_append_writes_one_item_at_the_end_by_a_partial_write_and_reads_back(x: 
     assert bb("/vehicle/mission_reached").highest == 1  # the same mission, one item longer: its reports still count
 
 
+def test_appending_several_items_writes_them_back_to_back_then_reads_back_once(x: Exchange) -> None:
+    """drive: auto fills its horizon in one burst: each item by its own partial write (ArduPilot appends only at its count),
+    the next as soon as the last is acknowledged, the whole mission read back once at the end."""
+    upload_until_last_item(x, ITEMS[:1])
+    x.tick(ack())
+    read_back(x, ITEMS[:1])
+    items = waypoint_items([*POINTS, (47.3981, 8.5461, 0.0)])
+    ticket = x.transfer.append(items[1:])
+    assert x.tick() == [("MISSION_WRITE_PARTIAL_LIST", 2)]  # 2..2: the vehicle's count
+    assert x.tick(request(2)) == [("MISSION_ITEM_INT", 2)]
+    assert x.tick(ack()) == [("MISSION_WRITE_PARTIAL_LIST", 3)]
+    assert x.tick(request(3)) == [("MISSION_ITEM_INT", 3)]
+    assert x.tick(ack()) == [("MISSION_REQUEST_LIST",)]
+    read_back(x, items)
+    assert (x.status.ticket, x.status.state) == (ticket, TransferState.DONE)
+    assert [i.seq for i in bb("/vehicle/mission_items")] == [1, 2, 3]
+
+
 def test_append_read_back_mismatch_fails(x: Exchange) -> None:
     upload_until_last_item(x, ITEMS[:1])
     x.tick(ack())
     read_back(x, ITEMS[:1])
-    x.transfer.append(ITEMS[1])
+    x.transfer.append([ITEMS[1]])
     x.tick()
     x.tick(request(2))
     x.tick(ack())

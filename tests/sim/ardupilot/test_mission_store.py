@@ -287,3 +287,66 @@ def test_a_skid_steered_vehicle_stops_to_pivot_at_a_sharp_corner_and_drives_thro
     assert slowest_near(gentle[0]) >= 0.5  # driven through (cruise 1 m/s)
     assert slowest_near(sharp[0]) <= 0.2  # braked to a stop point there (the next leg starts on arrival, within 0.3 m)
     assert min(math.dist((n, e), sharp[0]) for n, e, _ in track) <= 0.3
+
+
+RESTARTED = "Auto mission changed, restarted command"
+
+
+def line_north(gcs: Gcs, count: int, spacing_m: float = 30.0) -> list[MAVLinkMessage]:
+    """Home and ``count`` waypoints every ``spacing_m`` north of the start."""
+    lat0, lon0 = gcs.ap.start
+    return [item(gcs, 0, lat0, lon0), *(item(gcs, seq, lat0 + seq * spacing_m / M_PER_DEG_LAT, lon0) for seq in range(1, count + 1))]
+
+
+def write_partial(gcs: Gcs, seq: int, items: list[MAVLinkMessage]) -> list[MAVLinkMessage]:
+    """MISSION_WRITE_PARTIAL_LIST seq..seq, answered with ``items[seq]``; the vehicle's last replies."""
+    replies = gcs.send(gcs.mav.mission_write_partial_list_encode(1, 1, seq, seq, 0))
+    assert kinds(replies) == ["MISSION_REQUEST"] and replies[0].seq == seq
+    return gcs.send(items[seq])
+
+
+def test_any_write_to_the_mission_in_auto_restarts_the_waypoint_wherever_the_item_lies(make_gcs: MakeGcs) -> None:
+    """As the real ArduRover did (tests/data/ardurover/mission-writes-in-auto-rover.tlog): driving to item 1, an identical
+    rewrite of item 6 and an append of item 7, both past the three commands AP_Mission_ChangeDetector compares, each restart it."""
+    gcs = make_gcs(ekf_ready=True)
+    items = line_north(gcs, 6)
+    upload(gcs, items)
+    gcs.arm()
+    gcs.set_mode("AUTO")
+    gcs.run(2.0)
+    write_partial(gcs, 6, items)
+    gcs.run(0.5)
+    assert gcs.texts(gcs.log).count(RESTARTED) == 1
+    items.append(item(gcs, 7, items[6].x / 1e7 + 30.0 / M_PER_DEG_LAT, items[6].y / 1e7))
+    write_partial(gcs, 7, items)
+    gcs.run(0.5)
+    assert gcs.texts(gcs.log).count(RESTARTED) == 2
+    assert gcs.ap.mission.current_seq == 1  # the same waypoint, driven again from where the vehicle can stop
+
+
+def test_each_item_written_restarts_the_waypoint_not_the_upload_as_a_whole(make_gcs: MakeGcs) -> None:
+    """AP_Mission::write_cmd_to_storage moves the mission's change time at every item (home aside), and ModeAuto checks at
+    every loop: the same 6 waypoints uploaded again in AUTO, an item per update, restart it 6 times."""
+    gcs = make_gcs(ekf_ready=True)
+    items = line_north(gcs, 6)
+    upload(gcs, items)
+    gcs.arm()
+    gcs.set_mode("AUTO")
+    gcs.run(2.0)
+    replies = gcs.send(gcs.mav.mission_count_encode(1, 1, len(items), 0))
+    while replies and replies[-1].get_type() == "MISSION_REQUEST":
+        replies = gcs.send(items[replies[-1].seq])
+        gcs.run(0.1)
+    assert gcs.texts(gcs.log).count(RESTARTED) == 6
+
+
+def test_a_write_noticed_with_a_new_current_command_is_taken_silently() -> None:
+    """AP_Mission_ChangeDetector::check_for_mission_change returns ``cmds_changed && !curr_cmd_idx_changed``."""
+    from executive.sim.ardupilot.mission_change import MissionChangeDetector
+
+    detector = MissionChangeDetector()
+    detector.start(changes=7, current=1)
+    assert not detector.check(changes=7, current=1)  # nothing written
+    assert detector.check(changes=8, current=1)  # written, the same command: restart
+    assert not detector.check(changes=9, current=2)  # written as the mission moved on: taken in
+    assert not detector.check(changes=9, current=3)  # the mission moved on alone

@@ -1,8 +1,9 @@
 """drive: auto on the real ArduRover, recorded, and the simulated ArduRover against it.
 
 tests/data/ardurover/*-supervised*.tlog: real ArduRover SITL (4.7-dev) driving the example missions with
-``drive: auto`` (horizon 2) under the executive, speed-up 2, the mission's home, SITL's parameters; and
-boat_survey's run with the executive killed (``kill -9``) mid leg 2, what the vehicle said afterwards
+``drive: auto`` (horizon 3, filled in bursts) under the executive, speed-up 2, the mission's home, SITL's
+parameters; boat_survey's run with the executive killed (``kill -9``) mid leg 2, what the vehicle said
+afterwards; and mission-writes-in-auto-rover.tlog, which writes restart the waypoint AUTO drives
 (tests/data/ardurover/README.md). Read here through the executive's own MAVLink reader and mission
 transfer, and the same missions run on the lock-step simulation.
 """
@@ -21,6 +22,7 @@ from executive.geo import distance
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
+from executive.mavlink_dialect import mavlink
 from executive.mission.loader import load_mission
 from executive.state import MISSION_STATE_COMPLETE
 from executive.testing import FakeLink
@@ -81,14 +83,35 @@ def test_each_waypoint_is_reported_reached_in_turn_and_the_mission_moves_on(name
     assert driving == sorted(driving) and driving[-1] == n  # MISSION_CURRENT only forward, to the last item
 
 
+def test_the_real_firmware_restarts_its_waypoint_at_any_write_even_past_the_commands_its_detector_compares() -> None:
+    """AP_Mission_ChangeDetector compares the current and next two navigation commands (items 1-3 here), yet an identical
+    rewrite of item 8, an append of item 9 and an identical rewrite of item 2, each while AUTO drove to item 1, restarted it."""
+    path = recorded.DATA / "mission-writes-in-auto-rover.tlog"
+    events = [(msg.get_type(), getattr(msg, "start_index", None) or getattr(msg, "text", "")) for _, msg in records(path)]
+    writes = [(kind, what) for kind, what in events if kind == "MISSION_WRITE_PARTIAL_LIST" or what == RESTARTED]
+    assert writes == [("MISSION_WRITE_PARTIAL_LIST", 8), ("STATUSTEXT", RESTARTED), ("MISSION_WRITE_PARTIAL_LIST", 9), ("STATUSTEXT", RESTARTED),
+                      ("MISSION_WRITE_PARTIAL_LIST", 2), ("STATUSTEXT", RESTARTED)]  # fmt: skip
+    driving = {msg.seq for _, msg in records(path) if msg.get_type() == "MISSION_CURRENT" and msg.mission_state == mavlink.MISSION_STATE_ACTIVE}
+    assert driving == {1}
+
+
+#: drive: auto, horizon 3: the waypoints appended in each burst, after the waypoint reached (none for rover_square: held whole).
+BURSTS = {"rover_square": {}, "boat_survey": {2: [5, 6], 4: [7, 8]}}
+
+
 @pytest.mark.parametrize("name", sorted(SUPERVISED))
-def test_the_real_firmware_restarts_the_waypoint_at_each_append(name: str) -> None:
-    """Rover/mode_auto.cpp: a mission changed in AUTO restarts the current waypoint (AP_Mission::restart_current_nav_cmd): each
-    extension of the horizon costs a restarted leg. The simulated ArduRover does the same (its _restart_on_change)."""
-    mission = load_mission(MISSIONS / f"{name}.yaml")
-    appends = sum(1 for _, msg in records(SUPERVISED[name]) if msg.get_type() == "MISSION_WRITE_PARTIAL_LIST")
-    assert appends == len(mission.waypoints) - 3  # held 3 at the start (horizon 2), one more per leg reached
-    assert texts(SUPERVISED[name]).count(RESTARTED) == appends
+def test_the_horizon_is_filled_in_bursts_and_each_write_restarts_the_waypoint(name: str) -> None:
+    """The autopilot holding one waypoint past the current one, the executive appends up to the horizon at once: the real
+    firmware restarts its waypoint at each write (Rover/mode_auto.cpp), so the writes come in one burst per H-1 legs."""
+    bursts: dict[int, list[int]] = {}
+    reached = 0
+    for _, msg in records(SUPERVISED[name]):
+        if msg.get_type() == "MISSION_ITEM_REACHED":
+            reached = max(reached, msg.seq)
+        elif msg.get_type() == "MISSION_WRITE_PARTIAL_LIST":
+            bursts.setdefault(reached, []).append(msg.start_index)
+    assert bursts == BURSTS[name]
+    assert texts(SUPERVISED[name]).count(RESTARTED) == sum(len(items) for items in bursts.values())
 
 
 @pytest.mark.parametrize("name", sorted(SUPERVISED))
@@ -102,7 +125,7 @@ def test_the_simulated_firmware_takes_the_recorded_time_within_5_percent(name: s
 
 
 def test_killed_mid_leg_2_the_real_boat_stops_at_the_end_of_the_horizon_and_goes_no_further() -> None:
-    """The executive killed 39 m short of waypoint 2 (horizon 2: waypoints 1-4 held): the firmware drove to waypoint 4, said
+    """The executive killed 6 s into leg 2 (horizon 3, before its first burst: waypoints 1-4 held): the firmware drove to waypoint 4, said
     "Mission Complete", and held there in AUTO (MIS_DONE_BEHAVE 0); waypoints 5-8 were never approached."""
     mission = load_mission(MISSIONS / "boat_survey.yaml")
     currents, highest, mode = read_through_the_executive(KILLED, "boat")

@@ -1,0 +1,73 @@
+"""The package as a user gets it: ``python -m build`` (an sdist, then the wheel from it), ``twine check``, the wheel in a
+fresh virtualenv outside the checkout, and an example run by name there.
+
+Slow (two isolated builds, a run): marked ``slow``, so ``pytest -m 'not slow'`` leaves it out while working; README's test
+command runs it. No network beyond the suite's own install: the build's isolated environment takes setuptools from pip's
+cache, and the fresh virtualenv installs the wheel alone (``--no-deps``) and sees this environment's dependencies through a
+``.pth`` file, behind its own site-packages: ``executive`` itself comes from the wheel, never from the checkout.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import sysconfig
+import venv
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).parents[1]
+#: What the sdist is made of (the rest of the repository is not the package's).
+SOURCES = ("executive", "trees", "missions", "pyproject.toml", "README.md", "CHANGELOG.md")
+
+
+def _run(command: list[str], **kwargs) -> subprocess.CompletedProcess[str]:
+    done = subprocess.run(command, capture_output=True, text=True, timeout=600, **kwargs)
+    assert done.returncode == 0, f"{' '.join(command)}: exit {done.returncode}\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+    return done
+
+
+@pytest.mark.slow
+def test_the_wheel_installed_in_a_fresh_virtualenv_lists_and_runs_the_examples_by_name(tmp_path: Path) -> None:
+    source = tmp_path / "source"  # a copy: the build's egg-info and build/ stay out of the checkout
+    for name in SOURCES:
+        if (ROOT / name).is_dir():
+            shutil.copytree(ROOT / name, source / name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+        else:
+            shutil.copy(ROOT / name, source / name)
+    dist = tmp_path / "dist"
+    _run([sys.executable, "-m", "build", "--outdir", str(dist), str(source)])
+    wheel, sdist = next(dist.glob("uxv_executive-*.whl")), next(dist.glob("uxv_executive-*.tar.gz"))
+    _run([sys.executable, "-m", "twine", "check", "--strict", str(wheel), str(sdist)])
+    names = zipfile.ZipFile(wheel).namelist()
+    examples = {"rover_square.yaml", "faults/rc_loss.yaml", "events/ugv_operator.yaml", "mission.schema.json"}
+    assert {f"executive/examples/{name}" for name in examples} <= set(names)
+    assert [n for n in names if n.split("/")[0] != "executive" and ".dist-info/" not in n] == []  # nothing at the top but executive
+
+    fresh = tmp_path / "venv"
+    venv.EnvBuilder(with_pip=False).create(fresh)
+    python = fresh / "bin" / "python"
+    _run([sys.executable, "-m", "pip", "--python", str(python), "install", "--no-deps", "--no-index", "-q", str(wheel)])
+    purelib = Path(_run([str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"]).stdout.strip())
+    (purelib / "zz_dependencies.pth").write_text(sysconfig.get_path("purelib") + "\n")  # after the venv's own: its executive first
+    home = tmp_path / "home"  # outside the checkout, nothing of it on the path
+    home.mkdir()
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")} | {"HOME": str(home)}
+    where = _run([str(python), "-c", "import executive; print(executive.__file__)"], cwd=home, env=env).stdout.strip()
+    assert Path(where).is_relative_to(purelib), where
+    executive = str(fresh / "bin" / "executive")
+
+    listed = json.loads(_run([executive, "examples", "--json"], cwd=home, env=env).stdout)
+    assert {m["name"] for m in listed["missions"]} >= {"rover_square", "boat_survey", "auv_survey", "vtol_transit", "ugv_rc_route"}
+    assert all(Path(m["file"]).is_relative_to(purelib) for m in listed["missions"])
+    assert "rc_loss" in listed["faults"]
+
+    ran = subprocess.run([executive, "run", "rover_square", "--speedup", "50", "--socket", str(home / "ctl.sock")], cwd=home, env=env,
+                         capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert ran.returncode == 0, ran.stderr[-3000:]
+    assert "executive: mission 'rover-square' COMPLETED: every waypoint reached" in ran.stderr
