@@ -39,7 +39,7 @@ def test_can_decode() -> None:
 
 
 def test_route_check() -> None:
-    _check(route_check.run(legs=20, zones=5, repeats=1), 2)
+    _check(route_check.run(legs=20, zones=5, repeats=1), 3)
 
 
 def test_soak() -> None:

@@ -16,10 +16,16 @@
     │   └── Guarded path or hold (reactive selector)
     │       ├── Guarded path: link alive? armed? (disarmed = the RC took over), and the failsafe guards -> for each point:
     │       │   ├── Go to the point: GUIDED (else set it), go to (within 1.5 m; over 60 s fails; a point
-    │       │   │   that is neither a sample point nor the last is driven through toward the next)
+    │       │   │   that is neither a sample point nor the last is driven through toward the next);
+    │       │   │   drive: auto: the horizon on the autopilot (a sample point a NAV_LOITER_UNLIM stop), its
+    │       │   │   mission at the leg, AUTO, the leg followed (a sample point or the last within 1.5 m)
     │       │   └── Sample if due: nothing to sample here? or: LOITER (else set it), sample (recorded)
     │       └── Wait for guards: the failsafe of the failing guard (mission failsafe: policy)
     └── Hold at the end (LOITER for a boat)
+
+With ``drive: auto`` the sample is taken as in GUIDED (the hold mode set, then the sampler); the next
+leg sets the autopilot's mission to its item (MISSION_SET_CURRENT) and AUTO again, so the route goes on
+only when the executive has the sample.
 
 "LOITER" before the go-to is the vehicle's hold, the mode the executive itself holds it in (a boat's
 LOITER, a rover's HOLD), so a go-to resumed after a pause (accepted again) starts from there.
@@ -58,7 +64,7 @@ from executive.behaviours import (
 from executive.behaviours.failsafe import FailsafeNote
 from executive.mission.model import Mission, SamplingOptions
 from executive.mission.rules import failsafe_policy
-from executive.trees.parts import ARM_RETRY_S, checked, failsafe_guarded, mission_root, preflight, safe_mode, within_reach
+from executive.trees.parts import ARM_RETRY_S, auto_leg, checked, failsafe_guarded, mission_root, preflight, safe_mode, within_reach
 from executive.vehicles import PROFILES
 
 
@@ -107,11 +113,12 @@ def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
     return py_trees.composites.Selector(f"EKF ok, else wait in {manual}", memory=True, children=[ekf, pilot_has_it, wait])
 
 
-def point(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """One point of the path: go there in GUIDED; at a sample point not sampled yet, hold in LOITER and sample."""
-    limits, hold = mission.limits, _sample_hold_mode(mission)
-    guided = PROFILES[mission.vehicle].guided_mode
-    go = py_trees.composites.Sequence(
+def go_to_point(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """To the current point: GUIDED (else set it), go to; drive: auto: the leg in AUTO (:func:`~executive.trees.parts.auto_leg`)."""
+    if mission.drive == "auto":
+        return auto_leg(mission)
+    limits, guided = mission.limits, PROFILES[mission.vehicle].guided_mode
+    return py_trees.composites.Sequence(
         "Go to the point",
         memory=False,  # the mode is checked every tick (someone may change it): set again when it is not GUIDED
         children=[
@@ -119,6 +126,11 @@ def point(mission: Mission) -> py_trees.behaviour.Behaviour:
             GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, look_ahead=True),
         ],
     )
+
+
+def point(mission: Mission) -> py_trees.behaviour.Behaviour:
+    """One point of the path: go there; at a sample point not sampled yet, hold in LOITER and sample."""
+    hold, go = _sample_hold_mode(mission), go_to_point(mission)
     sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), Sample()])
     due = py_trees.composites.Selector("Sample if due", memory=False, children=[NothingToSample(), sample])
     return py_trees.composites.Sequence("Point", memory=True, children=[go, due])

@@ -37,8 +37,11 @@ from executive.behaviours import (
     inside_geofence,
 )
 from executive.behaviours.failsafe import condition_of
+from executive.behaviours.returning import NoReturnUnderWay
+from executive.behaviours.zone_guards import outside_keep_out
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.model import Mission
+from executive.mission.return_path import ReturnPlanner
 from executive.mission.rules import failsafe_policy, height_tolerance, rc_switch_channels, seabed_clearance
 from executive.vehicles import PROFILES
 
@@ -169,6 +172,7 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
         ("rc_loss", RcNotLost(mission.rc.source)),
         ("geofence_breach", inside_geofence(mission)),
         ("energy", EnergyEnough() if mission.energy is not None else None),
+        ("keep_out", outside_keep_out(mission)),
     ]
     extra = [guard for condition, guard in candidates if condition not in covered and guard is not None]
     policy = failsafe_policy(mission)
@@ -181,7 +185,12 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
 def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for guards") -> Failsafe:
     """The mission's failsafe for ``guards``; a guard of no failsafe condition (a limit) holds and resumes within ``limits.recovery_timeout_s``."""
     fallback = FailsafePolicy("limit", "hold", "resume", mission.limits.recovery_timeout_s)
-    return Failsafe(guards, failsafe_policy(mission), mission.vehicle, fallback, name=name)
+    returns = ReturnPlanner(mission)
+    return Failsafe(
+        guards, failsafe_policy(mission), mission.vehicle, fallback, name=name,
+        returns=returns if returns.needed else None, reach_m=mission.limits.acceptance_radius_m,
+        leg_timeout_s=mission.limits.leg_timeout_s,
+    )  # fmt: skip
 
 
 def failsafe_guarded(
@@ -194,8 +203,10 @@ def failsafe_guarded(
     so the work resumes where it was when the guard recovers.
     """
     guards = failsafe_guards(mission, guards)
-    route = py_trees.composites.Sequence(name, memory=False, children=[*guards, work])
-    return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, failsafe(guards, mission)])
+    react = failsafe(guards, mission)
+    gate = [NoReturnUnderWay(react)] if react.returns is not None else []  # a return that ends the mission is not resumed from
+    route = py_trees.composites.Sequence(name, memory=False, children=[*gate, *guards, work])
+    return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, react])
 
 
 def guided_leg(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -2,7 +2,7 @@
 
 Whatever the tree, an edit (from ``executive ctl route``, the RC switches, the library API) reaches
 the mission state's ``set_route``; the keeper, one of its route listeners, makes the autopilot's
-mission the new route: one NAV_WAYPOINT per waypoint after a home item 0 (the same items the
+mission the new route: one NAV_WAYPOINT per waypoint (a NAV_LOITER_UNLIM per sample point) after a home item 0 (the same items the
 ``ugv_rc_route`` tree's KeepRouteOnAutopilot uploads), read back item by item before it counts. A
 failed upload is tried again ``retry_s`` later, up to ``attempts`` uploads per edit; a newer edit
 replaces the one being uploaded. When the edit moved the mission's home (SET_HOME) the autopilot's

@@ -178,8 +178,11 @@ class FollowAutoLeg(TimedBehaviour):
     Reached: the autopilot says so (MISSION_ITEM_REACHED of the leg's item or a later one in this run,
     or MISSION_CURRENT past it since the leg began), the waypoint driven through as the firmware counts
     it: the leg index never runs ahead of the autopilot's, so the horizon appended after it never
-    holds more than it should. The last waypoint is reached on the position (within the acceptance
-    radius), as in GUIDED, not on the autopilot's word; a sub's (``depth_tolerance_m``) at the depth its item gives too.
+    holds more than it should. Where the vehicle must be at the point, the last waypoint and a sample
+    point (a stop in the autopilot's mission, which it never reports reached: see
+    :func:`~executive.io.mavlink.mission_protocol.route_items`), it is reached on the position (within the
+    acceptance radius), as in GUIDED, not on the autopilot's word; a sub's (``depth_tolerance_m``) at the depth
+    its item gives too.
     """
 
     reads = (
@@ -226,11 +229,12 @@ class FollowAutoLeg(TimedBehaviour):
         within = distance is not None and distance <= self.acceptance_radius_m and depth_off is None
         where = f"{where}{depth_off or ''}" if where else where
         said = self._autopilot_passed(self.autopilot.capabilities.first_item_seq + leg)
-        if said and leg + 1 < n:
+        stop = leg + 1 == n or target.sample  # the vehicle must be there: judged on the position
+        if said and not stop:
             self.feedback_message = f"leg {leg + 1}/{n} in AUTO: reached as AUTO counts it ({where or 'no position'})"
             return Status.SUCCESS
-        if within and leg + 1 == n:
-            self.feedback_message = f"leg {n}/{n} in AUTO: reached ({where})"
+        if within and stop:
+            self.feedback_message = f"leg {leg + 1}/{n} in AUTO: reached ({where})"
             return Status.SUCCESS
         if self.elapsed > self.leg_timeout_s:
             self.feedback_message = f"leg {leg + 1}/{n} in AUTO: timed out after {self.leg_timeout_s:g} s" + (f", {where}" if where else "")

@@ -47,8 +47,11 @@ from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitch
 from executive.behaviours.position_guards import InsideGeofence
 from executive.behaviours.rc_guards import RcAutoMode, RcFresh, RcNotLost, RcNotTakingOver
 from executive.behaviours.reacting import READS, Reacting
-from executive.mission.failsafes import REACTION_MODES, FailsafeCondition, FailsafePolicy
+from executive.behaviours.returning import DRIVEN_KINDS, ReturningDrive, why_not_rtl
+from executive.behaviours.zone_guards import OutsideKeepOut
+from executive.mission.failsafes import JUDGED_AFTER_PERSON, REACTION_MODES, FailsafeCondition, FailsafePolicy
 from executive.mission.lifecycle import MissionState
+from executive.mission.return_path import ReturnPlanner
 from executive.sensing.vtol_flight import flies_as_plane
 from executive.vehicles import PROFILES
 
@@ -68,6 +71,7 @@ CONDITIONS: tuple[tuple[type[Guard], str], ...] = (
     (BatteryAbove, "battery_low"),
     (InsideGeofence, "geofence_breach"),
     (EnergyEnough, "energy"),
+    (OutsideKeepOut, "keep_out"),
 )
 #: A stronger reaction replaces a weaker one in force, never the reverse (a surfacing sub is not stopped by a later hold).
 RANK = {"wait": 0, "hold": 1, "loiter": 1, "rtl": 2, "surface": 2, "disarm": 3}
@@ -99,7 +103,10 @@ class Failsafe(TimedBehaviour):
     left the vehicle in (the runtime then leaves it there).
     """
 
-    reads = ("/vehicle/vtol_state", "/vehicle/ground_speed_m_s", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count", *READS)
+    reads = (
+        "/vehicle/vtol_state", "/vehicle/ground_speed_m_s", "/vehicle/mode_set_by", "/mission/leg_index", "/mission/leg_count",
+        "/vehicle/position", "/vehicle/home", *READS,
+    )  # fmt: skip
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     #: Where its steps are announced to a person (the ground station's STATUSTEXT); from ``setup(mission_state=...)`` when given.
@@ -107,9 +114,21 @@ class Failsafe(TimedBehaviour):
     catalogued = False  # made with the mission's policy by failsafe_guarded and checked
 
     def __init__(
-        self, guards: Sequence[Guard], policy: Mapping[str, FailsafePolicy], vehicle: str, fallback: FailsafePolicy, name: str = "Wait for guards"
+        self,
+        guards: Sequence[Guard],
+        policy: Mapping[str, FailsafePolicy],
+        vehicle: str,
+        fallback: FailsafePolicy,
+        name: str = "Wait for guards",
+        *,
+        returns: ReturnPlanner | None = None,
+        reach_m: float = 2.0,
+        leg_timeout_s: float = 120.0,
     ) -> None:
         super().__init__(name)
+        #: The mission's return around its keep-out zones to a rally point or home (None: the firmware's RTL always).
+        self.returns = returns
+        self.reach_m, self.leg_timeout_s = reach_m, leg_timeout_s
         self.guards = tuple(guards)
         self.policy = dict(policy)
         self.vehicle = vehicle
@@ -134,6 +153,11 @@ class Failsafe(TimedBehaviour):
         self._reacting = Reacting(self, self.vehicle, announce=self._announce, on_disarm=self._disarming)
         self._rearm_from: float | None = None
         self._rearm_at = float("-inf")
+        self._return: ReturningDrive | None = None  # the executive's own return, when the firmware's RTL will not do
+        self._return_ends_mission = False
+        self._return_reason = ""
+        self._deferred_said: set[Guard] = set()
+        self._rtl_judged: dict[Guard, str | None] = {}  # per guard: why the firmware's RTL will not do (None: it will)
 
     def initialise(self) -> None:
         super().initialise()
@@ -153,6 +177,8 @@ class Failsafe(TimedBehaviour):
             return  # ended the mission: the reaction must reach the vehicle
         # interrupted: by the guards recovering (the work resumes) or by a pause; a reaction still being retried must not undo either
         self._reacting.cancel()
+        if self._return is not None:
+            self._return.cancel()
         if self._since and all(g.status == Status.SUCCESS for g in self.guards):
             causes = ", ".join(self._name(g) for g in self._since)
             self._resume_until = max(since + self.policy_of(g).timeout_s for g, since in self._since.items())
@@ -170,18 +196,25 @@ class Failsafe(TimedBehaviour):
         failing = {g: why for g in self.guards if (why := g.judge()) is not None}  # debounced: see guards
         if self._own_disarm:  # disarmed by this failsafe, not by a person
             failing = {g: why for g, why in failing.items() if self._conditions.get(g) != "disarmed"}
+        person = next((g for g in failing if g.pilot_in_control), None)  # whatever a policy says (the loader refuses any but wait)
+        driving = self._person_drives()
+        hands_off = person is not None or driving is not None
+        deferred = self._defer(failing) if hands_off else {}
+        failing = {g: why for g, why in failing.items() if g not in deferred}
+        if self._return is not None and self._return_ends_mission:
+            return self._returning(now, hands_off)
         for g in [g for g in self._since if g not in failing]:
             del self._since[g]
         new = [g for g in failing if g not in self._since]
         for g in new:
             self._since[g] = now
+        if not failing and deferred:
+            self.feedback_message = "hands off: " + "; ".join(f"{g.name} {why}" for g, why in deferred.items()) + " (judged when they hand back)"
+            return Status.RUNNING
         if not failing:
             return self._rearm(now) if self._own_disarm else self._retry_refused_mode(now) or self._nothing_to_wait_for()
         self._rearm_from = None
         why = "; ".join(f"{g.name} {reason}" for g, reason in failing.items())
-        person = next((g for g in failing if g.pilot_in_control), None)  # whatever a policy says (the loader refuses any but wait)
-        driving = self._person_drives()
-        hands_off = person is not None or driving is not None
         aborting = [_Reaction(g, self.policy_of(g)) for g in failing if self.policy_of(g).recovery == "abort"]
         if aborting:
             cause = max(aborting, key=lambda r: r.rank)
@@ -189,6 +222,9 @@ class Failsafe(TimedBehaviour):
                 self._in_force = cause
             self._log(cause, failing[cause.guard], person, "abort the mission", driving)  # the cause first, then each step of its reaction
             mode = None if hands_off else self._react(cause)
+            if self._return is not None:  # the executive's own return: the mission ends where it arrives
+                self._return_ends_mission, self._return_reason = True, f"{cause.guard.name} {failing[cause.guard]}"
+                return self._returning(now, hands_off)
             self.left_in = mode or self._mode_in_force
             self.feedback_message = "" if cause.guard.status == Status.FAILURE else f"{cause.guard.name} {failing[cause.guard]}"
             return Status.FAILURE
@@ -204,6 +240,8 @@ class Failsafe(TimedBehaviour):
             if chosen is not None:
                 self._react(chosen)
             self._reacting.follow_up(now)
+            if self._return is not None:
+                why = f"{self._return.follow(now, self._reacting.done)}; {why}"
         late = [g for g in failing if now - self._since[g] > self.policy_of(g).timeout_s]
         if late:
             limit = self.policy_of(late[0]).timeout_s
@@ -213,6 +251,39 @@ class Failsafe(TimedBehaviour):
             return Status.FAILURE
         waited, limit = max(((now - self._since[g], self.policy_of(g).timeout_s) for g in failing), key=lambda x: x[0] / x[1])
         self.feedback_message = f"{self._state(hands_off)} ({waited:.0f}/{limit:g} s): {why}"
+        return Status.RUNNING
+
+    @property
+    def returning(self) -> bool:
+        """It drives a return of its own that ends the mission where it arrives."""
+        return self._return is not None and self._return_ends_mission
+
+    def _defer(self, failing: Mapping[Guard, str]) -> dict[Guard, str]:
+        """The failing conditions not judged while a person has the vehicle (:data:`JUDGED_AFTER_PERSON`), each said once."""
+        deferred = {g: why for g, why in failing.items() if self._conditions.get(g) in JUDGED_AFTER_PERSON}
+        for g, why in deferred.items():
+            if g not in self._deferred_said:
+                log.warning("failsafe %s: %s -> a person has the vehicle: judged when they hand back", self._name(g), why)
+        self._deferred_said = set(deferred)
+        return deferred
+
+    def _returning(self, now: float, hands_off: bool) -> Status:
+        """The executive's own return that ends the mission: followed until it arrives (then FAILURE, left in the hold)."""
+        assert self._return is not None
+        if hands_off:  # a person took the vehicle during the return: they have it, the mission ends hands off
+            self._return.cancel()
+            self._reacting.stand_back()
+            log.warning("failsafe %s: a person took the vehicle during the return -> hands off, abort the mission", self._return.cause)
+            self.left_in = None
+            self.feedback_message = f"{self._return_reason}; a person took the vehicle during the return: hands off"
+            return Status.FAILURE
+        self._reacting.follow_up(now)
+        text = self._return.follow(now, self._reacting.done)
+        if self._return.arrived or self._return.failed is not None:
+            self.left_in = self._return.hold_mode
+            self.feedback_message = f"{self._return_reason}; {text}"
+            return Status.FAILURE
+        self.feedback_message = text
         return Status.RUNNING
 
     def _state(self, hands_off: bool) -> str:
@@ -239,6 +310,8 @@ class Failsafe(TimedBehaviour):
         what = reaction.policy.reaction
         if what == "wait":
             return None
+        if what == "rtl" and self._return is None and self._drive_return(reaction):
+            what = "hold"  # first: stopped where it is; then the return (self._return)
         mode = self._mode_of(what)
         first = DISARM if what == "disarm" else mode
         if self._reacting.covers(first):  # asked already (or refused, and the next one asked)
@@ -250,6 +323,32 @@ class Failsafe(TimedBehaviour):
                 log.error("failsafe %s: the autopilot has no mode %s", self._name(reaction.guard), mode)
         self._reacting.start(first, self._name(reaction.guard))
         return self._mode_in_force
+
+    def _drive_return(self, reaction: _Reaction) -> bool:
+        """Whether this return is the executive's own (the firmware's RTL would not do, :func:`why_not_rtl`); if so it is made."""
+        if self.returns is None or self.vehicle not in DRIVEN_KINDS:
+            return False
+        cause = self._name(reaction.guard)
+        why = self._why_not_rtl(reaction)
+        if why is None:
+            return False
+        hold = self._mode_of("hold")
+        log.warning("failsafe %s: not the autopilot's RTL (%s) -> %s, then the executive's own return around the keep-out zones", cause, why, hold)
+        self._return = ReturningDrive(
+            self, self.vehicle, self.returns, cause, hold, reach_m=self.reach_m, leg_timeout_s=self.leg_timeout_s, announce=self._announce
+        )
+        return True
+
+    def _why_not_rtl(self, reaction: _Reaction) -> str | None:
+        """Why the firmware's RTL will not do for ``reaction`` (None: it will), judged once per episode of its guard."""
+        if self.returns is None or self.vehicle not in DRIVEN_KINDS:
+            return None
+        if reaction.guard not in self._rtl_judged:
+            home = self.get("/vehicle/home")
+            mission_home = self.returns.mission.home
+            where = (home.lat, home.lon) if home is not None else ((mission_home.lat, mission_home.lon) if mission_home else None)
+            self._rtl_judged[reaction.guard] = why_not_rtl(self.returns, self._name(reaction.guard), self.get("/vehicle/position"), where)
+        return self._rtl_judged[reaction.guard]
 
     @property
     def _mode_in_force(self) -> str | None:
@@ -351,6 +450,10 @@ class Failsafe(TimedBehaviour):
         elif what != "wait":
             mode = self._mode_of(what)
             short = done = f"disarm in {mode}" if what == "disarm" else f"{what} ({mode})"
+            if what == "rtl" and self._return is None and self._why_not_rtl(reaction) is not None:
+                hold = self._mode_of("hold")
+                done = f"{hold}, then the executive's own return around the keep-out zones"
+                short = f"{hold}, then return around zones"
             stronger = self._in_force
             if stronger is not None and stronger.rank > reaction.rank:
                 done += f" not commanded: {stronger.policy.reaction} ({self._mode_in_force}) for {self._name(stronger.guard)} in force"

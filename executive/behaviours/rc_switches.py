@@ -316,7 +316,9 @@ class RouteEditSwitch(SwitchWatcher):
             else:
                 here = self._here()
                 new, done = add_at_end(route, here), f"waypoint {len(route) + 1} added at {here.lat:.7f}, {here.lon:.7f}"
-            self.mission_state.set_route(new.waypoints, f"{said}: {done}", leg_index=new.current)
+            position: GlobalPosition | None = self.get("/vehicle/position")
+            at = (position.lat, position.lon) if position is not None else None
+            self.mission_state.set_route(new.waypoints, f"{said}: {done}", leg_index=new.current, vehicle_at=at)
         except (RouteError, Refused) as exc:
             self.report(f"{said}: {edit} refused: {exc}")
             return

@@ -20,6 +20,7 @@ heading_insane    hold, resume    hold, resume    hold, resume       hold, resum
 battery_low       rtl, abort      rtl, abort      surface, abort     rtl, abort
 geofence_breach   hold, abort     rtl, abort      surface, abort     rtl, abort
 energy            rtl, abort      rtl, abort      surface, abort     rtl, abort
+keep_out          rtl, abort      rtl, abort      surface, abort     rtl, abort
 ================  ==============  ==============  =================  ============================
 
 rc_takeover and disarmed are a person's acts (or the autopilot's own failsafe's): a person always wins, so
@@ -38,7 +39,12 @@ from the moment a transition to fixed-wing flight starts, or at a wing-borne gro
 (QRTL asked then would hover the whole way home: :mod:`executive.sensing.vtol_flight`).
 heading_insane is judged on rovers and boats only (the heading filter checks the compass against
 the course over ground, which a sub or a vtol does not follow); geofence_breach only with a
-``geofence:`` section; rc_loss once an RC transmitter has been seen (or, ugv_rc_route, stale RC).
+``geofence:`` section; rc_loss once an RC transmitter has been seen (or, ugv_rc_route, stale RC); keep_out with
+``geofence.keep_out`` zones, and never while a person has the vehicle (:data:`JUDGED_AFTER_PERSON`).
+
+A return (``rtl``) of a rover or a boat on a mission with keep-out zones or rally points is the executive's own
+where the firmware's RTL would not do (:mod:`executive.behaviours.returning`): to the nearest rally point or home,
+around the zones, in GUIDED legs.
 """
 
 from __future__ import annotations
@@ -47,7 +53,17 @@ from dataclasses import dataclass
 from typing import Literal, get_args
 
 FailsafeCondition = Literal[
-    "link_loss", "rc_takeover", "disarmed", "rc_loss", "ekf_loss", "gps_glitch", "heading_insane", "battery_low", "geofence_breach", "energy"
+    "link_loss",
+    "rc_takeover",
+    "disarmed",
+    "rc_loss",
+    "ekf_loss",
+    "gps_glitch",
+    "heading_insane",
+    "battery_low",
+    "geofence_breach",
+    "energy",
+    "keep_out",
 ]
 FailsafeReaction = Literal["hold", "loiter", "rtl", "surface", "disarm", "wait"]
 FailsafeRecovery = Literal["resume", "abort"]
@@ -83,6 +99,11 @@ VEHICLE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
 }
 for _kind, _rule in _ENERGY.items():
     VEHICLE_FAILSAFES[_kind]["energy"] = _rule
+    # keep_out: a rover or a boat holds, then returns around the zones (behaviours.returning); a sub surfaces, a vtol returns
+    VEHICLE_FAILSAFES[_kind]["keep_out"] = _rule
+#: Conditions not judged while a person has the vehicle (a take-over, a mode a person drives in): a person who drives near a
+#: pier does it on purpose. They act in the tick the person hands back, if still true then.
+JUDGED_AFTER_PERSON = frozenset({"keep_out"})
 #: Seed systems' rules that differ from their vehicle's defaults: the defaults of their trees.
 TREE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
     "goto_sample": {"ekf_loss": ("disarm", _R), "rc_takeover": (_W, _A)},

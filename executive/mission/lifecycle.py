@@ -289,13 +289,22 @@ class MissionState:
             return f"cannot change the route while {self.status} (allowed while {', '.join(sorted(ROUTE_EDITABLE))})"
         return None
 
-    def set_route(self, waypoints: Sequence[Waypoint], reason: str, *, leg_index: int | None = None, home: Home | None = None) -> None:
+    def set_route(
+        self,
+        waypoints: Sequence[Waypoint],
+        reason: str,
+        *,
+        leg_index: int | None = None,
+        home: Home | None = None,
+        vehicle_at: tuple[float, float] | None = None,
+    ) -> None:
         """Replace the mission's waypoints (an operator's edit), and its home if given: publish the new route and tell the route listeners.
 
         Allowed while READY, RUNNING or PAUSED. ``leg_index`` (the waypoint the vehicle heads for)
         defaults to the current one, kept inside the new route. Samples keep the legs they were
         taken at. Refused (nothing changes) without a mission, in other states, with a leg index
-        outside the route, or when the edited mission breaks the mission file's rules.
+        outside the route, or when the edited mission breaks the mission file's rules; with the vehicle's position
+        (``vehicle_at``) while RUNNING or PAUSED, also when the leg from there to the waypoint it heads for enters a zone.
         """
         refusal = self.route_refusal()
         if refusal is not None:
@@ -305,9 +314,11 @@ class MissionState:
         if not 0 <= leg <= len(waypoints):
             raise Refused(f"leg {leg + 1} is outside a route of {len(waypoints)} waypoints")
         edited = self.mission.model_copy(update={"waypoints": list(waypoints), "home": self.mission.home if home is None else home})
-        errors = cross_field_errors(edited)
-        if errors:
-            raise Refused("the edited mission breaks its rules: " + "; ".join(f"{format_path(path)}: {why}" for path, why in errors))
+        problems = [f"{format_path(path)}: {why}" for path, why in cross_field_errors(edited)]
+        if vehicle_at is not None and self.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
+            problems += first_leg_problems(edited, *vehicle_at, first=leg)  # the leg it is on is from where it is, not from a waypoint
+        if problems:
+            raise Refused("the edited mission breaks its rules: " + "; ".join(problems))
         self.mission = edited
         self.leg_index = leg
         self._publish()

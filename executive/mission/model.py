@@ -255,6 +255,9 @@ class FailsafeConfig(BaseModel):
     battery_low: FailsafeRule | None = Field(None, description="the battery below limits.battery_min_pct or limits.battery_min_v")
     geofence_breach: FailsafeRule | None = Field(None, description="the vehicle outside the mission's geofence (only with a geofence: section)")
     energy: FailsafeRule | None = Field(None, description="the rest of the route and the way home no longer fit the battery (energy:)")
+    keep_out: FailsafeRule | None = Field(
+        None, description="the vehicle inside a keep-out zone, or heading into one closer than it can stop (geofence.keep_out)"
+    )
 
 
 class EnergyConfig(BaseModel):

@@ -63,11 +63,14 @@ ARDUPILOT_ONLY_TREES: dict[str, str] = {
 
 #: drive: auto: the trees that can be driven by the autopilot's own AUTO, and the vehicle kinds (ArduRover: rover, boat;
 #: ArduSub: sub, its waypoints at their depths).
-AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {"waypoints": frozenset({"rover", "boat"}), "auv_survey": frozenset({"sub"})}
-AUTO_DRIVE_FIRMWARE = {"waypoints": "ArduRover", "auv_survey": "ArduSub"}
+AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {
+    "waypoints": frozenset({"rover", "boat"}),
+    "goto_sample": frozenset({"rover", "boat"}),
+    "auv_survey": frozenset({"sub"}),
+}
+AUTO_DRIVE_FIRMWARE = {"waypoints": "ArduRover", "goto_sample": "ArduRover", "auv_survey": "ArduSub"}
 #: drive: auto refused, per tree, until it can be flown so: why.
 AUTO_DRIVE_REFUSED: dict[str, str] = {
-    "goto_sample": "its sample points as stops in the autopilot's mission are not done yet",
     "vtol_transit": "its take-off, transitions and landing are the executive's",
     "ugv_rc_route": "its operator puts the route in AUTO already",
 }

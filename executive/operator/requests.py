@@ -194,7 +194,7 @@ class Operator:
             return self._reply(False, refusal)
         try:
             new, done = routes.apply(state.route, operation, params, self._here)
-            state.set_route(new.waypoints, f"{source}: {done}", leg_index=new.current, home=new.home)
+            state.set_route(new.waypoints, f"{source}: {done}", leg_index=new.current, home=new.home, vehicle_at=self._here_if_known())
         except (routes.RouteError, Refused) as exc:
             return self._reply(False, f"route {operation}: {exc}")
         return self._reply(True, f"{source}: {done}", route=self._route_view())

@@ -100,7 +100,7 @@ def test_an_entry_overrides_only_what_it_says() -> None:
     assert policy["battery_low"] == FailsafePolicy("battery_low", "rtl", "abort", 45.0)
 
 
-ALLOWED = "link_loss, rc_takeover, disarmed, rc_loss, ekf_loss, gps_glitch, heading_insane, battery_low, geofence_breach, energy"
+ALLOWED = "link_loss, rc_takeover, disarmed, rc_loss, ekf_loss, gps_glitch, heading_insane, battery_low, geofence_breach, energy, keep_out"
 
 
 @pytest.mark.parametrize(

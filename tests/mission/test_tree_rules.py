@@ -65,10 +65,8 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
             "vehicle: sub\ntree: waypoints\ndrive: auto\n" + WP,
             ["m.yaml:5:8: drive: tree waypoints is driven in AUTO on a boat or rover (ArduRover) so far, not a sub; use drive: guided"],
         ),
-        (
-            "vehicle: boat\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP,
-            ["m.yaml:5:8: drive: tree goto_sample: its sample points as stops in the autopilot's mission are not done yet; use drive: guided"],
-        ),
+        ("vehicle: boat\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
+        ("vehicle: rover\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
         ("vehicle: sub\ntree: auv_survey\ndrive: auto\nwaypoints:\n  - {lat: 1.0, lon: 2.0, control_mode: depth, depth_m: 5}\n", []),
         (
             "vehicle: sub\ntree: auv_survey\ndrive: auto\nwaypoints:\n  - {lat: 1.0, lon: 2.0, control_mode: altitude, altitude_m: 5}\n",

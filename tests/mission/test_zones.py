@@ -194,3 +194,18 @@ def test_the_run_time_fence_counts_an_inclusion_zone_as_inside():
     assert guard.why_outside(*at(110, 0), None) is None  # in the bay
     assert guard.why_outside(*at(0, 0), None) is None  # in the polygon
     assert guard.why_outside(*at(60, 0), None) == "10 m outside the fence polygon and every inclusion zone"
+
+
+def test_a_route_edit_while_running_checks_the_leg_from_where_the_vehicle_is():
+    # a (20 m N, 20 m W) -> b (80 m N, 20 m W); the pier 45-55 m N straddles home's meridian; the vehicle is on the leg to b
+    mission = load_mission_text(mission_text([(20, -20, "a"), (80, -20, "b")], pier(), limits="{acceptance_radius_m: 1.0}"), "m.yaml")
+    state = MissionState()
+    state.upload(mission)
+    state.start()
+    state.continue_from(1, ())
+    lat, lon = at(55, 20)
+    moved = mission.waypoints[1].model_copy(update={"lat": lat, "lon": lon})  # a -> b' is clear of the pier (passes 7.5 m south)
+    with pytest.raises(Refused, match="the vehicle -> waypoints\\[1\\] \\('b'\\): crosses keep-out zone 'pier'"):
+        state.set_route([mission.waypoints[0], moved], reason="ctl route", vehicle_at=at(45, -20))
+    assert state.mission == mission
+    state.set_route([mission.waypoints[0], moved], reason="ctl route", vehicle_at=at(20, -19))  # from by a: clear

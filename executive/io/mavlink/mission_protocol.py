@@ -91,6 +91,11 @@ class MissionItem:
         return cls(seq, frame, _M.MAV_CMD_NAV_WAYPOINT, 0, 1, hold_s, 0.0, 0.0, 0.0, lat, lon, alt_m)
 
     @classmethod
+    def stop(cls, seq: int, lat: float, lon: float, alt_m: float = 0.0, *, frame: int = _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT) -> MissionItem:
+        """A NAV_LOITER_UNLIM at ``lat``/``lon``: the vehicle stops there until its mission is moved on (MISSION_SET_CURRENT)."""
+        return cls(seq, frame, _M.MAV_CMD_NAV_LOITER_UNLIM, 0, 1, 0.0, 0.0, 0.0, 0.0, lat, lon, alt_m)
+
+    @classmethod
     def from_message(cls, msg: MAVLinkMessage) -> MissionItem:
         """From a MISSION_ITEM_INT."""
         return cls(
@@ -150,8 +155,19 @@ def item_altitude(wp: Waypoint) -> float:
 
 
 def route_items(waypoints: Sequence[Waypoint]) -> tuple[MissionItem, ...]:
-    """The mission items 1..n a route is uploaded as: a NAV_WAYPOINT per waypoint (a sub's at its depth)."""
-    return waypoint_items((wp.lat, wp.lon, item_altitude(wp)) for wp in waypoints)
+    """The mission items 1..n a route is uploaded as: a NAV_WAYPOINT per waypoint, a NAV_LOITER_UNLIM per sample point;
+    a sub's at its depth (:func:`item_altitude`).
+
+    A sample point is a stop that lasts as long as the sample: ArduRover drives to a NAV_LOITER_UNLIM and stops
+    there (ModeAuto::do_nav_wp with always_stop_at_destination, so the waypoint before it is driven through toward it,
+    and a boat loiters once there), and never completes it (verify_loiter_unlimited returns false: no
+    MISSION_ITEM_REACHED), so the vehicle stays until the executive moves the mission on (Rover/mode_auto.cpp). A
+    NAV_WAYPOINT's hold time (p1) would drive on after a fixed time whether the sample is done or not; NAV_DELAY
+    likewise, and it has no location to stop at.
+    """
+    return tuple(
+        (MissionItem.stop if wp.sample else MissionItem.waypoint)(seq, wp.lat, wp.lon, item_altitude(wp)) for seq, wp in enumerate(waypoints, start=1)
+    )
 
 
 def route_not_on_autopilot(waypoints: Sequence[Waypoint], held: Sequence[MissionItem] | None) -> str | None:

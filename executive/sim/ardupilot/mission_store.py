@@ -10,8 +10,8 @@ It follows the firmware (GCS_MAVLink/MissionItemProtocol*.cpp, AP_Mission) where
 - MISSION_COUNT cuts the mission to the new count at once and items replace the old ones as they
   arrive, so a failed upload leaves a mixed mission;
 - items are kept as ArduPilot keeps them: latitude and longitude in 1e-7 degree, altitude in whole
-  centimetres, a NAV_WAYPOINT's hold time in whole seconds and none of its other parameters, and
-  frames read back in their non-INT form;
+  centimetres, a NAV_WAYPOINT's hold time in whole seconds and none of its other parameters, a
+  NAV_LOITER_UNLIM's radius (param3) alone, and frames read back in their non-INT form;
 - MISSION_WRITE_PARTIAL_LIST rewrites items from start_index to end_index, each at most the item
   count (else MISSION_ACK ERROR and "Flight plan update rejected"), refused (DENIED) during an
   upload; an item whose seq is the count is appended, so a partial write from the end to the end
@@ -59,12 +59,14 @@ def to_stored(msg: MAVLinkMessage) -> StoredCommand | int:
     """A MISSION_ITEM_INT as ArduPilot would store it, or the MAV_MISSION_RESULT refusing it."""
     params = (msg.param1, msg.param2, msg.param3, msg.param4)
     for i, value in enumerate(params):
-        if math.isnan(value) and not (i == 3 and msg.command == _M.MAV_CMD_NAV_WAYPOINT):  # a waypoint's yaw may be NaN
+        if math.isnan(value) and not (i == 3 and msg.command in (_M.MAV_CMD_NAV_WAYPOINT, _M.MAV_CMD_NAV_LOITER_UNLIM)):  # the yaw may be NaN
             return _INVALID_PARAM[i]
     if msg.command not in KNOWN_COMMANDS:
         return _M.MAV_MISSION_UNSUPPORTED
     if msg.command == _M.MAV_CMD_NAV_WAYPOINT:
         params = (float(max(0, min(int(msg.param1), 0xFFFF))), 0.0, 0.0, 0.0)  # only the hold time, in a uint16 of seconds
+    elif msg.command == _M.MAV_CMD_NAV_LOITER_UNLIM:  # only the radius, a uint16 of metres, its sign the direction (AP_Mission.cpp)
+        params = (0.0, 0.0, math.copysign(float(min(int(abs(msg.param3)), 0xFFFF)), msg.param3), 0.0)
     if msg.command not in LOCATION_COMMANDS:
         return StoredCommand(msg.command, params, 0, 0, 0, _M.MAV_FRAME_GLOBAL)
     if abs(msg.x) > 90 * 10**7:

@@ -40,7 +40,7 @@ class ArduRoverSim(ArduPilotSim):
     HOLD and the manual modes stop (no pilot in the sim). LOITER holds a point within
     ``LOITER_RADIUS_M``. GUIDED drives to position targets, then stops (rover) or loiters (boat).
     RTL drives home, then stops or loiters, staying in RTL as the firmware does. AUTO drives to each
-    NAV_WAYPOINT of the mission in turn, then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
+    NAV_WAYPOINT of the mission in turn (a NAV_LOITER_UNLIM: to stay there), then stops and stays in AUTO (MIS_DONE_BEHAVE=0); it is
     refused without a mission ("No Mission. Can't set AUTO.").
 
     GUIDED, AUTO and RTL drive as the firmware's navigation does (:class:`~executive.sim.ardupilot.rover_nav.RoverNavigator`:
@@ -238,6 +238,8 @@ class ArduRoverSim(ArduPilotSim):
         As ModeAuto::do_nav_wp (Rover/mode_auto.cpp): a waypoint followed by another navigation command and
         without a hold time is driven through toward that one (AR_WPNav's "fast waypoint": no stop, the corner
         cut within WP_RADIUS); the last one, or one with a hold time, is a stop. The next item starts at once.
+        A NAV_LOITER_UNLIM is a stop at its location (do_nav_wp with always_stop_at_destination; a boat loiters
+        there) that never completes (verify_loiter_unlimited: no MISSION_ITEM_REACHED), until MISSION_SET_CURRENT.
         """
         if self._auto_waiting:
             if not self.position_ok:
@@ -252,15 +254,18 @@ class ArduRoverSim(ArduPilotSim):
             if self._driving or self._loitering:
                 self._stop()
             return
+        stop_here = item.command == _M.MAV_CMD_NAV_LOITER_UNLIM
         if (self.mission.current_seq, item) == self._auto_item:
             if self._driving and self.vehicle.arrived:
                 self._driving = False
-                hold_s = item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
+                hold_s = 0.0 if stop_here else item.params[0]  # ModeAuto::verify_nav_wp: a hold time waits there, counted from arrival
                 self._auto_hold_until = self.elapsed_s + hold_s
                 seq = self.mission.current_seq
                 self._text(_M.MAV_SEVERITY_INFO, f"Reached waypoint #{seq}" + (f". Loiter for {hold_s:.0f} seconds" if hold_s else ""))
-            if self._driving or self.elapsed_s < self._auto_hold_until - EPSILON_S:
-                return
+                if stop_here and self.is_boat:  # ModeAuto::update: boats loiter once a waypoint that is not a fast one is reached
+                    self._loiter()
+            if stop_here or self._driving or self.elapsed_s < self._auto_hold_until - EPSILON_S:
+                return  # verify_loiter_unlimited never completes: the vehicle stays until the mission is moved on
             item = self.mission.advance()
             if item is None:
                 self._mission_done()
@@ -269,6 +274,8 @@ class ArduRoverSim(ArduPilotSim):
         self._auto_item = (self.mission.current_seq, item)
         if item.command == _M.MAV_CMD_NAV_WAYPOINT:
             self._drive(item.lat, item.lon, then=self._next_corner(item))
+        elif item.command == _M.MAV_CMD_NAV_LOITER_UNLIM:  # do_nav_wp(cmd, always_stop_at_destination=true)
+            self._drive(item.lat, item.lon)
         else:
             self.mission.advance()
 
@@ -276,7 +283,7 @@ class ArduRoverSim(ArduPilotSim):
         """The mission changed while AUTO drives a waypoint (:class:`MissionChangeDetector`): ModeAuto::update restarts that
         waypoint's command (Rover/mode_auto.cpp, AP_Mission::restart_current_nav_cmd): AR_WPNav::set_desired_location, the
         leg not reached, starts again from the stopping point."""
-        if item is None or not self._driving or item.command != _M.MAV_CMD_NAV_WAYPOINT:
+        if item is None or not self._driving or item.command not in (_M.MAV_CMD_NAV_WAYPOINT, _M.MAV_CMD_NAV_LOITER_UNLIM):
             return
         self._text(_M.MAV_SEVERITY_CRITICAL, "Auto mission changed, restarted command")
         self._auto_item = None

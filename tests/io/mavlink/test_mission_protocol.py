@@ -17,11 +17,14 @@ from executive.io.mavlink.mission_protocol import (
     TransferOperation,
     TransferState,
     first_mismatch,
+    route_items,
+    route_not_on_autopilot,
     waypoint_items,
 )
 from executive.io.mavlink.reader import MavlinkReader
 from executive.mavlink_dialect import MAVLinkMessage
 from executive.mavlink_dialect import mavlink as m
+from executive.mission.model import Waypoint
 from executive.testing import AUTOPILOT, GCS
 
 HOME = (47.397742, 8.545594)
@@ -477,3 +480,14 @@ def test_append_read_back_mismatch_fails(x: Exchange) -> None:
     x.tick(ack())
     read_back(x, (ITEMS[0], replace(ITEMS[1], x=ITEMS[1].x + 1e-4)))
     assert x.status.state is TransferState.FAILED and "read-back mismatch: item 2 x (latitude)" in x.status.reason
+
+
+def test_a_sample_point_is_uploaded_as_a_stop_and_a_waypoint_held_there_does_not_count_as_the_route() -> None:
+    """A sample point is a NAV_LOITER_UNLIM: the autopilot stops there until moved on (Rover/mode_auto.cpp verify_loiter_unlimited)."""
+    route = [Waypoint(lat=47.0, lon=8.0), Waypoint(lat=47.001, lon=8.0, sample=True), Waypoint(lat=47.001, lon=8.001)]
+    items = route_items(route)
+    assert [i.command for i in items] == [m.MAV_CMD_NAV_WAYPOINT, m.MAV_CMD_NAV_LOITER_UNLIM, m.MAV_CMD_NAV_WAYPOINT]
+    assert [(i.seq, i.x, i.y) for i in items] == [(1, 47.0, 8.0), (2, 47.001, 8.0), (3, 47.001, 8.001)]
+    held_as_waypoints = waypoint_items((wp.lat, wp.lon) for wp in route)
+    assert route_not_on_autopilot(route, held_as_waypoints) == "the autopilot's mission differs (item 2 command: sent 17, the vehicle holds 16)"
+    assert route_not_on_autopilot(route, items) is None

@@ -254,6 +254,25 @@ def test_auto_stops_at_a_waypoint_with_a_hold_time_and_waits_it_out(make_gcs: Ma
     assert [msg.seq for msg in reached][:1] == [1]
 
 
+def test_auto_stops_at_a_loiter_unlimited_and_stays_until_the_mission_is_set_on(make_gcs: MakeGcs) -> None:
+    """Rover/mode_auto.cpp: NAV_LOITER_UNLIM is do_nav_wp(cmd, always_stop_at_destination) and verify_loiter_unlimited never
+    completes: the waypoint before it is driven through toward it, no MISSION_ITEM_REACHED for it, the mission goes on only
+    at a MISSION_SET_CURRENT."""
+    gcs = make_gcs(ekf_ready=True)
+    items = square(gcs, side_m=30.0)
+    items[2] = item(gcs, 2, items[2].x / 1e7, items[2].y / 1e7, command=m.MAV_CMD_NAV_LOITER_UNLIM)
+    track = _drive_auto(gcs, items, 90.0)
+    first = min(range(len(track)), key=lambda i: math.dist(track[i][:2], (30.0, 0.0)))
+    assert track[first][2] >= 1.2  # through the corner before it at speed
+    assert math.dist(track[-1][:2], (30.0, 30.0)) <= 1.0 and track[-1][2] < 0.05  # stopped there, still after 90 s
+    assert [msg.seq for msg in gcs.of_type(gcs.log, "MISSION_ITEM_REACHED")] == [1]
+    assert "Reached waypoint #2" in gcs.texts(gcs.log) and gcs.ap.mode == "AUTO" and gcs.ap.mission.current_seq == 2
+    gcs.send(gcs.mav.mission_set_current_encode(1, 1, 3))
+    out = gcs.run(30.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [3]
+    assert gcs.ap.vehicle.distance_to(items[3].x / 1e7, items[3].y / 1e7) <= 1.0
+
+
 def test_a_speed_change_in_auto_keeps_the_corner_driven_through(make_gcs: MakeGcs) -> None:
     gcs = make_gcs(ekf_ready=True)
     upload(gcs, square(gcs, side_m=30.0))
