@@ -90,6 +90,9 @@ _KEYS: tuple[Key, ...] = (
     Key("/rc/chancount", None, "mavlink reader", "RC_CHANNELS chancount: channels the receiver has (every field present is read whatever it says)"),
     Key("/vehicle/mission_home", None, "mission transfer", "home as item 0 of the last mission read back (MissionItem); None = not read"),
     Key("/vehicle/mission_items", None, "mission transfer", "the mission items 1..n the vehicle holds (tuple of MissionItem); None = unknown"),
+    Key("/vehicle/fence_status", None, "mavlink reader", "FenceStatus of the autopilot's own fence (FENCE_STATUS); None = never reported"),
+    Key("/vehicle/fence_items", None, "mission transfer", "the fence items the vehicle holds, read back (tuple of MissionItem); None = unknown"),
+    Key("/vehicle/rally_items", None, "mission transfer", "the rally points the vehicle holds, read back (tuple of MissionItem); None = unknown"),
     Key("/vehicle/mission_current", None, "mission transfer", "MissionCurrent (MISSION_CURRENT): the item the vehicle is on"),
     Key("/vehicle/mission_reached", None, "mission transfer", "MissionItemReached: the last item the vehicle reported reached"),
     Key("/vehicle/home", None, "mavlink reader", "HomePosition (HOME_POSITION)"),
@@ -250,6 +253,11 @@ def value(key: str) -> Any:
     return PyTreesBoard.value(key)
 
 
+def documented_values() -> list[tuple[str, Any]]:
+    """Every documented key and its value now, in :data:`KEYS`' order: for recorders, never for behaviours."""
+    return PyTreesBoard.values(KEYS)
+
+
 def keys_under(*prefixes: str) -> list[str]:
     """Documented keys whose names start with one of ``prefixes`` (e.g. ``"/vehicle/"``)."""
     return [name for name in KEYS if name.startswith(prefixes)]
@@ -271,6 +279,11 @@ class PyTreesBoard:
     @staticmethod
     def value(key: str) -> Any:
         return Blackboard.storage.get(key)
+
+    @staticmethod
+    def values(keys: Iterable[str]) -> list[tuple[str, Any]]:
+        get = Blackboard.storage.get
+        return [(key, get(key)) for key in keys]
 
     @staticmethod
     def client(name: str, keys: Iterable[str], access: Access) -> Client:

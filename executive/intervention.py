@@ -39,7 +39,7 @@ from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import RcConfig
 from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause
 from executive.sensing.rc import RcReading
-from executive.state import MISSION_STATE_COMPLETE, GlobalPosition, MissionCurrent
+from executive.state import MISSION_STATE_COMPLETE, FenceStatus, GlobalPosition, MissionCurrent
 from executive.target_watch import PersonsTarget, TargetWatch
 from executive.vehicles import AutopilotName, VehicleProfile
 
@@ -83,7 +83,7 @@ class InterventionWatch:
             [
                 "/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected", "/vehicle/armed",
                 "/vehicle/landed_state", "/vehicle/mission_current", "/vehicle/system_status", "/vehicle/position",
-                "/vehicle/position_target",
+                "/vehicle/position_target", "/vehicle/fence_status",
             ],
         )  # fmt: skip
         self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by", "/vehicle/target_set_by"])
@@ -101,12 +101,14 @@ class InterventionWatch:
         self._armed = False  # the armed flag at the last tick
         self._asks_seen: dict[str, float] = {}  # mode -> the time of our ask of it that the heartbeat has shown done
         self._disarmed_at = float("-inf")
+        self._fence_breaches = 0  # FENCE_STATUS breach_count last said
         mission_state.listeners.append(self._on_transition)
 
     def service(self) -> None:
         now = self._clock.now()
         self._note_texts(now)
         self._note_switches(now)
+        self._note_fence()
         disarmed_just_now = self._note_arming(now)
         mode: str | None = self._bb.get("/vehicle/mode")
         if mode is None or not self._bb.get("/link/up"):
@@ -139,6 +141,12 @@ class InterventionWatch:
             return
         if set_by == "us":
             self.expected = mode
+            return
+        if cause is not None and cause.pauses:  # the autopilot's own fence holds the vehicle: we do not drive it back out
+            reason = f"{mode} set by the autopilot: {cause.why}"
+            log.warning("%s -> pause, hands off (`ctl resume` goes on)", reason)
+            self._paused_here = self._target_paused = True  # only an explicit resume: the leg's mode set again would drive on
+            self.mission_state.pause(reason, hold=False)
             return
         if cause is not None:  # the autopilot's own transition: its failsafe is answered by ours, which resume the leg's mode
             if cause.failsafe:
@@ -197,7 +205,23 @@ class InterventionWatch:
             failsafe_text=self._failsafe_text(now),
             alt_rel_m=position.alt_rel_m if position is not None else None,
             takeoff_height_m=self._autopilot.takeoff_height_m,
+            fence_breached=self._fence_breached(now),
         )
+
+    def _note_fence(self) -> None:
+        """A new breach of the autopilot's own fence is said (log, ground station) whatever the mission's state: a person may have
+        driven it there."""
+        status: FenceStatus | None = self._bb.get("/vehicle/fence_status")
+        if status is None or not status.breached or status.count <= self._fence_breaches:
+            return
+        self._fence_breaches = status.count
+        log.warning("the autopilot's own fence is breached (FENCE_STATUS, breach %d): its FENCE_ACTION acts", status.count)
+        self.mission_state.announce("autopilot's fence breached")
+
+    def _fence_breached(self, now: float) -> bool:
+        """FENCE_STATUS reported the autopilot's fence breached within :data:`EXPLAINS_WITHIN_S` (it comes with the breach, at once)."""
+        status: FenceStatus | None = self._bb.get("/vehicle/fence_status")
+        return status is not None and status.breached and now - status.time <= EXPLAINS_WITHIN_S
 
     def _failsafe_text(self, now: float) -> str | None:
         """The autopilot's failsafe notice just before the change ("EKF failsafe"), if it sent one; its RC failsafe if the transmitter is gone.

@@ -31,6 +31,7 @@ OPERATOR_LOGGERS = (
     "executive.energy",  # the energy estimate of each leg (what is left, what the route and the way home need)
     "executive.behaviours.rc_switches",  # what an RC switch did
     "executive.behaviours.flow",  # what a person does to end a wait (how to arm the vehicle)
+    "executive.behaviours.zones",  # the zones and rally points on the autopilot, its fence parameters read and set
     "executive.io.can.reader",  # the AgileX base found on the CAN bus (with --can)
 )
 

@@ -33,6 +33,8 @@ class AutopilotCause:
 
     why: str
     failsafe: bool = False
+    #: The autopilot's own protection took the vehicle (its fence): the mission pauses hands off; a person resumes it.
+    pauses: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -49,6 +51,7 @@ class ModeChange:
     failsafe_text: str | None  # the autopilot's failsafe notice just before ("EKF failsafe"), or its RC failsafe
     alt_rel_m: float | None  # GLOBAL_POSITION_INT relative altitude (minus the depth under water)
     takeoff_height_m: float | None = None  # the height above home our latest take-off climbs to (None: unknown)
+    fence_breached: bool = False  # FENCE_STATUS said the autopilot's own fence is breached, just before or with the change
 
 
 def autopilot_cause(firmware: AutopilotName, vehicle: str, change: ModeChange) -> AutopilotCause | None:
@@ -87,6 +90,10 @@ def _at_takeoff_height(c: ModeChange) -> bool:
 
 
 def _ardupilot_cause(vehicle: str, c: ModeChange) -> AutopilotCause | None:
+    if c.fence_breached and c.armed:
+        # Rover/fence.cpp fence_check: a new breach sets FENCE_ACTION's mode (reason FENCE_BREACHED); AC_Fence::record_breach sends
+        # FENCE_STATUS at once, and no STATUSTEXT
+        return AutopilotCause(f"its own fence breached (FENCE_STATUS), FENCE_ACTION -> {c.mode}, Rover/fence.cpp", pauses=True)
     if vehicle == "sub" and c.previous == "SURFACE" and c.mode == "ALT_HOLD" and c.alt_rel_m is not None and c.alt_rel_m >= SUB_AT_SURFACE_M:
         return AutopilotCause("at the surface, ArduSub mode_surface.cpp SURFACE_COMPLETE")
     return None

@@ -354,6 +354,17 @@ class MissionTransferStatus:
     retries: int  # messages resent after a timeout, over the whole transfer
     verifying: bool  # an upload is reading the mission back
     time: float
+    mission_type: int = 0  # MAV_MISSION_TYPE: 0 the flight plan, 1 the fence, 2 the rally points
+
+
+@dataclass(frozen=True, slots=True)
+class FenceStatus:
+    """FENCE_STATUS: the autopilot's own fence breached or not (ArduPilot sends it while its fence is enabled, and at once on a breach)."""
+
+    breached: bool
+    count: int  # breaches since boot
+    breach_type: int  # FENCE_BREACH: 3 boundary (ArduPilot's circle and polygon)
+    time: float  # when it arrived (clock time)
 
 
 @dataclass(frozen=True, slots=True)

@@ -91,6 +91,14 @@ def test_ardupilot_has_no_disarm_or_take_off_rule() -> None:
     assert why("ardupilot", "vtol", change("GUIDED", "QLOITER", system_status=mavlink.MAV_STATE_CRITICAL)) is PERSON
 
 
+def test_ardupilots_fence_action_is_the_autopilots_and_pauses_the_mission_but_a_hold_without_a_breach_is_a_persons() -> None:
+    rover = change("GUIDED", "HOLD", landed_state=None, alt_rel_m=0.0)
+    cause = autopilot_cause("ardupilot", "rover", dataclasses.replace(rover, fence_breached=True))
+    assert cause is not None and cause.pauses and not cause.failsafe and "its own fence breached (FENCE_STATUS)" in cause.why
+    assert autopilot_cause("ardupilot", "rover", rover) is PERSON
+    assert autopilot_cause("ardupilot", "rover", dataclasses.replace(rover, fence_breached=True, armed=False)) is PERSON
+
+
 # -- on the simulated firmware ---------------------------------------------------------------------
 
 

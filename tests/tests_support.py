@@ -4,6 +4,8 @@ a mission out of reach run to its refusal, the time a thread waited for a CPU, `
 from __future__ import annotations
 
 import os
+import shutil
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -164,3 +166,13 @@ def runqueue_wait_s(native_id: int | None = None) -> float:
         return int(os.read(fd, 256).split()[1]) / 1e9
     finally:
         os.close(fd)
+
+
+FOXGLOVE_JS = Path(__file__).resolve().parent / "foxglove"
+
+
+def foxglove_js(script: str, *args: str) -> list[str]:
+    """``node tests/foxglove/SCRIPT ARGS``: Foxglove's own npm packages driven by node; the test fails (not skips) without them."""
+    if shutil.which("node") is None or not (FOXGLOVE_JS / "node_modules" / "@mcap" / "core").is_dir():
+        pytest.fail("needs node and Foxglove's npm packages: npm ci --prefix tests/foxglove (as .ci/run does)")
+    return ["node", str(FOXGLOVE_JS / script), *args]

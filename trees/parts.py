@@ -39,6 +39,7 @@ from executive.behaviours import (
 from executive.behaviours.failsafe import condition_of
 from executive.behaviours.returning import NoReturnUnderWay
 from executive.behaviours.zone_guards import outside_keep_out
+from executive.behaviours.zones import ZonesOnAutopilot
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.model import Mission
 from executive.mission.return_path import ReturnPlanner
@@ -123,7 +124,10 @@ def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
         arming = WaitUntil(either, limits.recovery_timeout_s, name=name, hint=how_to_arm(mission))
     else:
         arming = WaitUntil(Armed(), limits.recovery_timeout_s, name="Wait for the operator to arm", hint=how_to_arm(mission))
-    checks = [wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission), *mission_end_checks(mission), *energy_fits(mission)]
+    checks = [
+        wait_for_ekf(mission), *readings_in(mission), *mode_switch_clear(mission), *mission_end_checks(mission), *energy_fits(mission),
+        *zones_on_autopilot(mission),
+    ]  # fmt: skip
     return py_trees.composites.Sequence("Pre-flight", memory=True, children=[*checks, arming])
 
 
@@ -143,6 +147,16 @@ def mission_end_checks(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
         return []
     name, allowed, why = MISSION_END_STOPS
     return [ParameterIs(name, allowed, why)]
+
+
+def zones_on_autopilot(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
+    """The zones and rally points sent to the autopilot and read back (``geofence.autopilot``, default upload), if the mission has any."""
+    geofence = mission.geofence
+    shapes = geofence is not None and (geofence.polygon is not None or geofence.inclusion or geofence.keep_out)
+    enforce = geofence is not None and geofence.autopilot == "enforce"  # max_distance_from_home_m alone is the fence's circle
+    if (geofence is not None and geofence.autopilot == "off") or not (shapes or mission.rally_points or enforce):
+        return []
+    return [ZonesOnAutopilot(geofence, mission.rally_points)]
 
 
 def how_to_arm(mission: Mission) -> str:

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from executive.autopilot.mavlink_port import MavlinkPort, ahead_of
-from executive.autopilot.port import Capabilities, Request, VtolState
+from executive.autopilot.port import Capabilities, FenceSettings, Request, VtolState
 from executive.autopilot.rover_motion import MOTION_PARAMS
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
+from executive.mavlink_dialect import mavlink
 from executive.state import GlobalPosition, HomePosition
 from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 
@@ -14,6 +17,13 @@ from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 #: default MODE_CHANNEL 8 in Rover/config.h), ArduPlane FLTMODE_CH (ArduPlane/Parameters.cpp, default 8). ArduSub has
 #: none: its modes come from joystick buttons. RC_Channels::flight_mode_channel() takes no channel for 0 or less.
 MODE_SWITCH_PARAMS = {"rover": "MODE_CH", "boat": "MODE_CH", "vtol": "FLTMODE_CH"}
+
+#: libraries/AC_Fence/AC_Fence.cpp: FENCE_TYPE bit 1 the circle centred on home (FENCE_RADIUS), bit 2 the uploaded inclusion and
+#: exclusion polygons and circles; FENCE_OPTIONS bit 1 (2) makes several inclusion shapes a union (AC_PolyFence_loader.cpp
+#: breached: an intersection without it); FENCE_ACTION {Rover} 2 Hold (Rover/fence.cpp fence_check: set_mode(mode_hold)).
+FENCE_TYPE_CIRCLE, FENCE_TYPE_POLYGON, FENCE_OPTION_INCLUSION_UNION, ROVER_FENCE_ACTION_HOLD = 2, 4, 2, 2
+_INT = mavlink.MAV_PARAM_TYPE_INT32
+_REAL = mavlink.MAV_PARAM_TYPE_REAL32
 
 
 class ArduPilotPort(MavlinkPort):
@@ -37,7 +47,24 @@ class ArduPilotPort(MavlinkPort):
             # libraries/AP_BattMonitor/AP_BattMonitor_Params.cpp: MONITOR (0 none, 3 voltage only, 4 voltage and current...),
             # CAPACITY (mAh, 3300 by default), ARM_MAH and ARM_VOLT (what arming requires; 0: nothing)
             battery_params=("BATT_MONITOR", "BATT_CAPACITY", "BATT_ARM_MAH", "BATT_ARM_VOLT"),
+            fence_params=("FENCE_ENABLE", "FENCE_TYPE", "FENCE_ACTION", "FENCE_RADIUS", "FENCE_OPTIONS"),
         )
+
+    def fence_settings(self, *, radius_m: float | None, inclusion_shapes: Sequence[str], held: dict[str, float]) -> FenceSettings:
+        """ArduRover: FENCE_ENABLE 1, FENCE_TYPE's circle and polygon bits as the mission has them (other bits kept), FENCE_RADIUS
+        the mission's max_distance_from_home_m, FENCE_ACTION 2 (Hold), FENCE_OPTIONS' union bit with several inclusion shapes."""
+        if self.profile.kind not in ("rover", "boat"):
+            why = "ArduPlane's and ArduSub's fence actions (RTL, Land) are not a hold: set FENCE_* on the vehicle yourself"
+            return FenceSettings({}, f"geofence.autopilot: enforce is built for ArduRover (FENCE_ACTION 2, Hold); {why}")
+        fence_type = (int(held.get("FENCE_TYPE", 0)) & ~(FENCE_TYPE_CIRCLE | FENCE_TYPE_POLYGON)) | FENCE_TYPE_POLYGON
+        params = {"FENCE_ENABLE": (1.0, _INT), "FENCE_ACTION": (float(ROVER_FENCE_ACTION_HOLD), _INT)}
+        if radius_m is not None:
+            fence_type |= FENCE_TYPE_CIRCLE
+            params["FENCE_RADIUS"] = (radius_m, _REAL)
+        params["FENCE_TYPE"] = (float(fence_type), _INT)
+        if len(inclusion_shapes) > 1:
+            params["FENCE_OPTIONS"] = (float(int(held.get("FENCE_OPTIONS", 0)) | FENCE_OPTION_INCLUSION_UNION), _INT)
+        return FenceSettings(params)
 
     def take_off(self, alt_m: float, *, home: HomePosition | None, position: GlobalPosition | None, airborne: bool) -> Request:
         if airborne and position is not None:

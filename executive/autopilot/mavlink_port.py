@@ -6,9 +6,16 @@ from collections.abc import Sequence
 from typing import ClassVar
 
 from executive import geo
-from executive.autopilot.port import Capabilities, Request, Target, VtolState
+from executive.autopilot.port import Capabilities, FenceSettings, Request, Target, VtolState
 from executive.io.mavlink.commander import Commander, command_outcome
-from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, horizon_not_on_autopilot, route_items, route_not_on_autopilot
+from executive.io.mavlink.mission_protocol import (
+    MissionItem,
+    MissionTransfer,
+    first_mismatch,
+    horizon_not_on_autopilot,
+    route_items,
+    route_not_on_autopilot,
+)
 from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
 from executive.state import GlobalPosition, HomePosition, TargetAsk
@@ -135,6 +142,26 @@ class MavlinkPort:
         if self.transfer is None:
             raise RuntimeError("no mission transfer on this link")
         return self.transfer.set_current(self.capabilities.first_item_seq + leg)
+
+    # -- the autopilot's fence and rally points ---------------------------------------------------
+    def upload_zones(self, items: Sequence[object], mission_type: int) -> int:
+        if self.transfer is None:
+            raise RuntimeError("no mission transfer on this link")
+        zone_items: Sequence[MissionItem] = items  # type: ignore[assignment]  # executive.autopilot.fence
+        return self.transfer.upload(zone_items, verify=True, mission_type=mission_type)
+
+    def zones_differ(self, items: Sequence[object], held: object) -> str | None:
+        sent: Sequence[MissionItem] = items  # type: ignore[assignment]  # executive.autopilot.fence
+        return first_mismatch(sent, held)  # type: ignore[arg-type]  # /vehicle/fence_items, /vehicle/rally_items
+
+    #: PARAM_SET carries an integer parameter's bytes in its float (PX4), else its value (ArduPilot).
+    bytewise_params: ClassVar[bool] = False
+
+    def set_parameter(self, name: str, value: float, param_type: int) -> None:
+        self.commander.set_parameter(name, value, param_type, bytewise=self.bytewise_params)
+
+    def fence_settings(self, *, radius_m: float | None, inclusion_shapes: Sequence[str], held: dict[str, float]) -> FenceSettings:
+        return FenceSettings({}, f"the {self.name or 'autopilot'} back end enforces no fence")
 
 
 def ahead_of(position: GlobalPosition, heading_deg: float, distance_m: float) -> tuple[float, float]:

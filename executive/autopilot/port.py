@@ -61,6 +61,17 @@ class Capabilities:
     #: The battery's parameters, read at pre-flight for the energy rule (executive.energy.battery): ArduPilot BATT_MONITOR,
     #: BATT_CAPACITY, BATT_ARM_MAH, BATT_ARM_VOLT; PX4 BAT1_CAPACITY, BAT1_N_CELLS, BAT1_V_EMPTY, BAT1_V_CHARGED.
     battery_params: tuple[str, ...] = ()
+    #: The fence's parameters read at pre-flight (logged, and what ``geofence.autopilot: enforce`` changes): ArduPilot
+    #: FENCE_ENABLE, FENCE_TYPE, FENCE_ACTION, FENCE_RADIUS, FENCE_OPTIONS; PX4 GF_ACTION, GF_MAX_HOR_DIST.
+    fence_params: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class FenceSettings:
+    """What ``geofence.autopilot: enforce`` sets on this firmware (name -> (value, MAV_PARAM_TYPE)), or why it cannot (``refused``)."""
+
+    params: dict[str, tuple[float, int]]
+    refused: str = ""
 
 
 class AutopilotPort(Protocol):
@@ -176,4 +187,23 @@ class AutopilotPort(Protocol):
 
     def set_route_leg(self, leg: int) -> int:
         """Make the autopilot's route go on with leg ``leg`` (to its waypoint ``leg``); the transfer's ticket, confirmed by MISSION_CURRENT."""
+        ...
+
+    # -- the autopilot's fence and rally points ---------------------------------------------------
+    def upload_zones(self, items: Sequence[object], mission_type: int) -> int:
+        """Replace the autopilot's fence or rally points (``mission_type`` MAV_MISSION_TYPE_FENCE / _RALLY) with ``items``
+        (executive.autopilot.fence), read back item by item before it counts; the transfer's ticket (``/link/mission_transfer``)."""
+        ...
+
+    def zones_differ(self, items: Sequence[object], held: object) -> str | None:
+        """How the fence or rally items held (``/vehicle/fence_items``, ``/vehicle/rally_items``) differ from ``items``; None if alike."""
+        ...
+
+    def set_parameter(self, name: str, value: float, param_type: int) -> None:
+        """Ask the autopilot to hold ``value`` in ``name``; its PARAM_VALUE answer lands on ``/vehicle/params`` (no ack: ask again)."""
+        ...
+
+    def fence_settings(self, *, radius_m: float | None, inclusion_shapes: Sequence[str], held: dict[str, float]) -> FenceSettings:
+        """What enforcing the uploaded fence sets (``radius_m``: the mission's max_distance_from_home_m), from the fence
+        parameters ``held`` now (:attr:`Capabilities.fence_params`)."""
         ...

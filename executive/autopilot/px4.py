@@ -24,11 +24,11 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from executive import blackboard
 from executive.autopilot.mavlink_port import MavlinkPort
-from executive.autopilot.port import Capabilities, Request, Target
+from executive.autopilot.port import Capabilities, FenceSettings, Request, Target
 from executive.io.mavlink.commander import FORCE_DISARM_MAGIC, Commander, RefusalRetry
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.mavlink_dialect import mavlink
@@ -107,12 +107,30 @@ class Px4Port(MavlinkPort):
             # src/lib/battery/module.yaml: BAT1_CAPACITY mAh (-1: unknown, the default), BAT1_N_CELLS (0: unknown), per-cell
             # BAT1_V_EMPTY (3.6 V) and BAT1_V_CHARGED (4.05 V)
             battery_params=("BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED"),
+            fence_params=("GF_ACTION", "GF_MAX_HOR_DIST"),
         )
         self.stream = OffboardStream(commander)
         self._bb = blackboard.reader("px4 port", ["/link/mission_transfer", "/vehicle/home"])
 
     def service(self) -> None:
         self.stream.service()
+
+    bytewise_params = True  # src/modules/mavlink/mavlink_parameters.cpp: an INT32's bytes in PARAM_SET's float
+
+    def fence_settings(self, *, radius_m: float | None, inclusion_shapes: Sequence[str], held: dict[str, float]) -> FenceSettings:
+        """PX4 acts on any fence it holds at GF_ACTION (navigator/geofence_params.c: default 2, Hold): enforce sets GF_ACTION 2 and
+        GF_MAX_HOR_DIST the mission's max_distance_from_home_m. Several inclusion shapes are refused: PX4 holds a vehicle inside
+        every one at once (navigator/geofence.cpp isInsidePolygonOrCircle), where the mission allows any of them."""
+        if len(inclusion_shapes) > 1:
+            return FenceSettings(
+                {},
+                f"PX4 keeps a vehicle inside every inclusion shape at once (navigator/geofence.cpp), the mission inside any of "
+                f"{', '.join(inclusion_shapes)}: make them one polygon, or geofence.autopilot: off",
+            )
+        params = {"GF_ACTION": (2.0, mavlink.MAV_PARAM_TYPE_INT32)}
+        if radius_m is not None:
+            params["GF_MAX_HOR_DIST"] = (radius_m, mavlink.MAV_PARAM_TYPE_REAL32)
+        return FenceSettings(params)
 
     def set_mode(self, mode: str) -> Request:
         name = self.mode_name(mode)

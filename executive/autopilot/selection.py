@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 from executive.autopilot.ardupilot import ArduPilotPort
 from executive.autopilot.mavlink_port import MavlinkPort
-from executive.autopilot.port import AutopilotName, Capabilities, Request, Target, VtolState
+from executive.autopilot.port import AutopilotName, Capabilities, FenceSettings, Request, Target, VtolState
 from executive.autopilot.px4 import Px4Port
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
@@ -156,3 +156,15 @@ class Autopilot:
 
     def set_route_leg(self, leg: int) -> int:
         return self.backend.set_route_leg(leg)
+
+    def upload_zones(self, items: Sequence[object], mission_type: int) -> int:
+        return self.backend.upload_zones(items, mission_type)
+
+    def zones_differ(self, items: Sequence[object], held: object) -> str | None:
+        return self.backend.zones_differ(items, held)
+
+    def set_parameter(self, name: str, value: float, param_type: int) -> None:
+        self.backend.set_parameter(name, value, param_type)
+
+    def fence_settings(self, *, radius_m: float | None, inclusion_shapes: Sequence[str], held: dict[str, float]) -> FenceSettings:
+        return self.backend.fence_settings(radius_m=radius_m, inclusion_shapes=inclusion_shapes, held=held)

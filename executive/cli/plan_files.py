@@ -39,6 +39,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     imp.add_argument("file", metavar="FILE", help="FILE.plan, FILE.waypoints, or FILE.xml (a BehaviorTree.CPP v4 / Groot2 tree)")
     imp.add_argument("-o", "--output", metavar="MISSION.yaml", help="write the mission here (default: stdout)")
+    imp.add_argument(
+        "--zones",
+        metavar="FILE",
+        action="append",
+        default=[],
+        help="a Mission Planner fence or rally file whose zones and rally points join the mission (.fen, .poly, .rally, or a QGC WPL 110 "
+        "fence/rally plan); repeatable",
+    )
     imp.add_argument("--vehicle", choices=KINDS, help="the vehicle kind (needed for .waypoints; a .plan's vehicleType otherwise)")
     imp.add_argument("--name", help="the mission's name (default: the file's name)")
     imp.add_argument("--auto-arm", action="store_true", help="arm the vehicle in pre-flight (auto_arm: true)")
@@ -64,7 +72,7 @@ def run_import(args: argparse.Namespace) -> int:
     if args.file.lower().endswith(".xml"):
         return _import_btcpp(args)
     try:
-        imported = import_file(args.file, vehicle=args.vehicle, name=args.name, auto_arm=args.auto_arm)
+        imported = import_file(args.file, vehicle=args.vehicle, name=args.name, auto_arm=args.auto_arm, zone_files=args.zones)
     except MissionError as exc:
         print_errors(exc)
         return EXIT_BAD_INPUT

@@ -343,6 +343,12 @@ class GeofenceConfig(BaseModel):
     keep_out: list[Zone] = Field(
         default_factory=list, max_length=1000, description="areas no waypoint and no leg may enter, acceptance_radius_m as a margin (islands, piers)"
     )
+    autopilot: Literal["upload", "enforce", "off"] = Field(
+        "upload",
+        description="the zones and rally_points on the autopilot at pre-flight (its fence and rally items, read back): upload sends them "
+        "and leaves the autopilot's own fence settings as they are; enforce also switches its fence on (ArduPilot FENCE_ENABLE, "
+        "FENCE_TYPE, FENCE_ACTION Hold; PX4 GF_ACTION Hold), left on after the mission; off sends nothing",
+    )
 
     def fence(self) -> Geofence:
         """The :class:`Geofence` value the guard checks (the polygon must be valid: see cross_field_errors)."""

@@ -30,7 +30,7 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,6 +41,7 @@ from executive.mavlink_dialect import mavlink
 from executive.mission.errors import FieldError, MissionError, Path
 from executive.mission.loader import load_mission_text
 from executive.mission.model import VEHICLE_LIMITS, VTOL_MIN_ACCEPTANCE_RADIUS_M, Limits, Mission
+from executive.mission.mp_zone_files import read_zone_file
 from executive.mission.plan_items import (
     ARDUPILOT,
     CMD_CHANGE_SPEED,
@@ -105,8 +106,10 @@ class _IndentedDumper(yaml.SafeDumper):
         super().increase_indent(flow, False)
 
 
-def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what: str) -> Imported:
-    """The mission a source describes, validated; every problem located in the source file."""
+def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what: str, zones: Sequence[Source] = ()) -> Imported:
+    """The mission a source describes (with the zones and rally points of ``zones``), validated; every problem located in its file."""
+    for other in zones:
+        src.merge(other)
     kind = kind_given or src.vehicle
     if kind is None and (src.vehicle_at is not None or not src.errors):  # no mission section at all says enough
         src.error(src.vehicle_at or src.start, src.vehicle_why or "no vehicle kind: pass --vehicle")
@@ -172,7 +175,8 @@ def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what:
         header.append(WAITS_FOR_ARMING)
     if src.warnings:
         header.append("Not imported or changed on the way (details in the import's warnings):")
-        header += [f"  line {w.line}: {w.field}: {w.message}" for w in sorted(src.warnings, key=lambda w: (w.line, w.column))]
+        where = {w: (f"{os.path.basename(w.file)} " if w.file != src.filename else "") + f"line {w.line}" for w in src.warnings}
+        header += [f"  {where[w]}: {w.field}: {w.message}" for w in sorted(src.warnings, key=lambda w: (w.file != src.filename, w.line, w.column))]
     text = "".join(f"# {line}\n" for line in header) + yaml.dump(
         doc, Dumper=_IndentedDumper, sort_keys=False, default_flow_style=None, allow_unicode=True, width=150
     )
@@ -187,7 +191,7 @@ def _relocate(error: FieldError, sources: dict[str, At], src: Source) -> FieldEr
     """An error found in the generated YAML, located at what it came from in the source file."""
     keys = [k for k in sources if error.field == k or error.field.startswith((f"{k}.", f"{k}["))]
     at = sources[max(keys, key=len)] if keys else src.start
-    return FieldError(src.filename, at.line, at.column, at.field, f"{error.message} (as {error.field} of the mission)")
+    return FieldError(at.filename or src.filename, at.line, at.column, at.field, f"{error.message} (as {error.field} of the mission)")
 
 
 def _speed_change(src: Source, item: Item, speed: tuple[float, At] | None) -> tuple[float, At] | None:
@@ -328,29 +332,46 @@ def _speed_limits(src: Source, waypoints: list[dict[str, Any]], sources: dict[st
 # -- importing --------------------------------------------------------------------------------
 
 
-def import_plan(text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False) -> Imported:
+def import_plan(
+    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[Source] = ()
+) -> Imported:
     """A QGroundControl .plan as a mission; ``vehicle`` overrides the plan's vehicleType. Raises :class:`MissionError`."""
     src = read_plan(text.removeprefix("\ufeff"), filename)
-    return _build(src, vehicle, name or _default_name(filename), auto_arm, "QGroundControl plan")
+    return _build(src, vehicle, name or _default_name(filename), auto_arm, "QGroundControl plan", zones)
 
 
-def import_waypoints(text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False) -> Imported:
+def import_waypoints(
+    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[Source] = ()
+) -> Imported:
     """A Mission Planner ``QGC WPL 110`` file as a mission; it does not name its vehicle, so ``vehicle`` is needed. Raises :class:`MissionError`."""
     src = read_waypoints(text.removeprefix("\ufeff"), filename)
-    return _build(src, vehicle, name or _default_name(filename), auto_arm, "Mission Planner waypoints")
+    return _build(src, vehicle, name or _default_name(filename), auto_arm, "Mission Planner waypoints", zones)
 
 
-def import_text(text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False) -> Imported:
-    """Either format, told apart by content (``QGC WPL``) or the file name's suffix (.waypoints, .txt, .mission)."""
+def import_text(
+    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[Source] = ()
+) -> Imported:
+    """Either format, told apart by content (``QGC WPL``) or the file name's suffix (.waypoints, .txt, .mission); ``zones``: Mission
+    Planner fence and rally files read (:func:`~executive.mission.mp_zone_files.read_zone_file`), their zones and rally points added."""
     is_wpl = text.removeprefix("\ufeff").startswith("QGC WPL") or filename.lower().endswith(WPL_SUFFIXES)
     if not is_wpl and not filename.lower().endswith(".plan") and not text.removeprefix("\ufeff").lstrip().startswith("{"):
         raise MissionError([FieldError(filename, 1, 1, "(file)", f"not a file import reads: {IMPORTED_KINDS}")])
     reader: Callable[..., Imported] = import_waypoints if is_wpl else import_plan
-    return reader(text, filename, vehicle=vehicle, name=name, auto_arm=auto_arm)
+    return reader(text, filename, vehicle=vehicle, name=name, auto_arm=auto_arm, zones=zones)
 
 
-def import_file(path: str | os.PathLike[str], *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False) -> Imported:
-    """Read a .plan or .waypoints file and import it; every problem located. Raises :class:`MissionError`."""
+def import_file(
+    path: str | os.PathLike[str], *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zone_files: Sequence[str] = ()
+) -> Imported:
+    """Read a .plan or .waypoints file and import it, with Mission Planner fence and rally files (``zone_files``: .fen, .poly,
+    .rally, or QGC WPL 110 fence/rally plans); every problem located. Raises :class:`MissionError`."""
+    zones = [read_zone_file(*_text_of(zone_file)) for zone_file in zone_files]
+    text, filename = _text_of(path)
+    return import_text(text, filename, vehicle=vehicle, name=name, auto_arm=auto_arm, zones=zones)
+
+
+def _text_of(path: str | os.PathLike[str]) -> tuple[str, str]:
+    """A file's text and name; MissionError (located) if it cannot be read as UTF-8 text of at most MAX_BYTES."""
     filename = os.fsdecode(path)
     try:
         with open(path, "rb") as stream:
@@ -365,7 +386,7 @@ def import_file(path: str | os.PathLike[str], *, vehicle: str | None = None, nam
         before = data[: exc.start].decode("utf-8", "replace")
         line, column = before.count("\n") + 1, len(before) - before.rfind("\n")
         raise MissionError([FieldError(filename, line, column, "(file)", f"not UTF-8 text: byte 0x{data[exc.start]:02x}")]) from None
-    return import_text(text, filename, vehicle=vehicle, name=name, auto_arm=auto_arm)
+    return text, filename
 
 
 def _default_name(filename: str) -> str:

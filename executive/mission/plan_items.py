@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from executive.mavlink_dialect import mavlink
@@ -35,6 +35,7 @@ class At:
     line: int
     column: int
     field: str
+    filename: str | None = None  # another file than the import's (a fence or rally file imported with it)
 
 
 @dataclass(frozen=True)
@@ -91,10 +92,22 @@ class Source:
     warnings: list[FieldError] = field(default_factory=list)
 
     def error(self, at: At, message: str) -> None:
-        self.errors.append(FieldError(self.filename, at.line, at.column, at.field, message))
+        self.errors.append(FieldError(at.filename or self.filename, at.line, at.column, at.field, message))
 
     def warn(self, at: At, message: str) -> None:
-        self.warnings.append(FieldError(self.filename, at.line, at.column, at.field, message))
+        self.warnings.append(FieldError(at.filename or self.filename, at.line, at.column, at.field, message))
+
+    def merge(self, other: Source) -> None:
+        """Take ``other``'s zones, rally points and problems (a fence or rally file imported with this one), located in its file."""
+
+        def there(at: At) -> At:
+            return replace(at, filename=at.filename or other.filename)
+
+        self.polygons += [FencePolygon(p.inclusion, [(a, b, there(at)) for a, b, at in p.corners], there(p.at)) for p in other.polygons]
+        self.circles += [replace(c, at=there(c.at)) for c in other.circles]
+        self.rally += [(lat, lon, alt, there(at)) for lat, lon, alt, at in other.rally]
+        self.errors += other.errors
+        self.warnings += other.warnings
 
 
 def command_name(command: int) -> str:

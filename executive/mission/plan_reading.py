@@ -15,7 +15,7 @@ from typing import Any
 
 from executive.mavlink_dialect import mavlink
 from executive.mission.errors import FieldError, MissionError, Path, format_path
-from executive.mission.plan_items import WPL_COLUMNS, WPL_HEADER, At, FenceCircle, FencePolygon, Item, Source, describe_json, finite
+from executive.mission.plan_items import WPL_COLUMNS, WPL_HEADER, At, FenceCircle, FencePolygon, Item, Source, command_name, describe_json, finite
 from executive.vehicles import profile_for_mav_type
 
 MAX_JSON_DEPTH = 64
@@ -287,6 +287,7 @@ def read_waypoints(text: str, filename: str) -> Source:
         src.error(src.start, f"expected {WPL_HEADER!r} on the first line (a Mission Planner waypoint file), got {found}")
         return src
     number = 0
+    zones: list[Item] = []
     for line_no, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
@@ -305,15 +306,65 @@ def read_waypoints(text: str, filename: str) -> Source:
             continue
         index, _, frame, command, *params, autocontinue = values
         lat, lon, alt = params[4:]
-        if number == 1:  # line 0 is home; 0, 0 = not set
+        zone_item = int(command) in ZONE_COMMANDS
+        if number == 1 and not zone_item:  # line 0 is home; 0, 0 = not set (a fence or rally file may start with its first item)
             if (lat, lon) != (0.0, 0.0):
                 src.home, src.home_at = (lat, lon, alt), At(line_no, at[8].column, name)
             continue
-        unset = tuple(None if math.isnan(p) else p for p in params)  # params 1-4 may be NaN
-        src.items.append(Item(int(command), int(frame), unset, bool(autocontinue), At(line_no, 1, name), at[2], tuple(at[4:11])))
-        if index != number - 1:
+        if index != number - 1 and not (zone_item and index == number - 2):
             src.warn(at[0], f"index {index:g} out of sequence (expected {number - 1}): items are taken in file order")
+        unset = tuple(None if math.isnan(p) else p for p in params)  # params 1-4 may be NaN
+        item = Item(int(command), int(frame), unset, bool(autocontinue), At(line_no, 1, name), at[2], tuple(at[4:11]))
+        if zone_item:
+            zones.append(item)
+        else:
+            src.items.append(item)
+    _zones(src, zones)
     return src
+
+
+#: Mission Planner's Fence and Rally plans (and a route file) hold these; they become zones and rally points.
+_POLYGON_VERTEX = {mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION: True, mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION: False}
+_CIRCLE = {mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION: True, mavlink.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION: False}
+ZONE_COMMANDS = frozenset({*_POLYGON_VERTEX, *_CIRCLE, mavlink.MAV_CMD_NAV_FENCE_RETURN_POINT, mavlink.MAV_CMD_NAV_RALLY_POINT})
+
+
+def _zones(src: Source, items: list[Item]) -> None:
+    """Fence items as polygons (runs of param1 corners) and circles, rally points as rally points, each located."""
+    run: list[Item] = []
+
+    def close() -> None:
+        if not run:
+            return
+        count = int(run[0].params[0] or 0)
+        if count < 3 or len(run) != count:
+            src.error(run[0].param_at[0], f"a fence polygon of {count} corners (param1) has {len(run)} vertex items here")
+        else:
+            corners = [(i.params[4] or 0.0, i.params[5] or 0.0, i.param_at[4]) for i in run]
+            src.polygons.append(FencePolygon(_POLYGON_VERTEX[run[0].command], corners, run[0].at))
+        run.clear()
+
+    for item in items:
+        if item.command in _POLYGON_VERTEX:
+            if run and (item.command != run[0].command or item.params[0] != run[0].params[0] or len(run) == int(run[0].params[0] or 0)):
+                close()
+            run.append(item)
+            continue
+        close()
+        lat, lon = item.params[4], item.params[5]
+        if lat is None or lon is None:
+            src.error(item.param_at[4], f"{command_name(item.command)} needs a latitude and a longitude")
+        elif item.command in _CIRCLE:
+            radius = item.params[0] or 0.0
+            if radius <= 0:
+                src.error(item.param_at[0], f"a fence circle needs a radius over 0 m (param1), got {radius:g}")
+            else:
+                src.circles.append(FenceCircle(_CIRCLE[item.command], lat, lon, radius, item.at))
+        elif item.command == mavlink.MAV_CMD_NAV_RALLY_POINT:
+            src.rally.append((lat, lon, item.params[6] or 0.0, item.at))
+        else:
+            src.warn(item.at, "the fence's return point is not imported: a return goes to a rally point or home")
+    close()
 
 
 def _wpl_value(src: Source, at: At, token: str) -> float:

@@ -15,6 +15,7 @@ speed-up; a ManualClock steps it in tests).
 from __future__ import annotations
 
 import math
+import struct
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -84,6 +85,7 @@ class FirmwareSim(ABC):
     STREAMS: ClassVar[Mapping[int, float]]  # messages sent unasked, with their default interval (s)
     NAV_PERIOD_S: ClassVar[float] = 0.1  # how often mode logic runs, in clock time
     MISSION_STORE: ClassVar[type[MissionStore]]  # the firmware's side of the mission protocol
+    ZONE_STORES: ClassVar[tuple[type[MissionStore], ...]] = ()  # its fence and rally points (executive.sim.zone_stores)
     PARAMS: ClassVar[Mapping[str, float]] = {}  # parameters answered to PARAM_REQUEST_READ, with the firmware's defaults
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset()  # answered as integers (MAV_PARAM_TYPE_INT8), the rest REAL32
     #: battery_remaining counted from a full pack at boot (ArduPilot's analog monitor), else the charge the pack holds (PX4).
@@ -136,6 +138,7 @@ class FirmwareSim(ABC):
         self._booted = self._origin_set = False
         self._text_id = 0
         self.mission = self.MISSION_STORE(self, self._emit, self._text)
+        self.zone_stores = {store.MISSION_TYPE: store(self, self._emit, self._text) for store in self.ZONE_STORES}
         self.proximity = Proximity()  # a MAVLink proximity sensor (PRX1_TYPE 2): what OBSTACLE_DISTANCE tells
         self.relays: dict[int, bool] = {}  # relay instance -> on, as MAV_CMD_DO_SET_RELAY left it
         self._builders = self._message_builders()
@@ -183,6 +186,8 @@ class FirmwareSim(ABC):
             self._drain_battery(h)
             self._t = now if now - self._t - h < EPSILON_S else self._t + h
         self.mission.update()
+        for store in self.zone_stores.values():
+            store.update()
         self._events()
         self._telemetry()
         return self._flush()
@@ -267,10 +272,15 @@ class FirmwareSim(ABC):
         return {
             "COMMAND_LONG": self._on_command,
             "COMMAND_INT": self._on_command,
-            **dict.fromkeys(self.mission.MESSAGES, self.mission.handle),
+            **dict.fromkeys(self.mission.MESSAGES, self._on_mission_message),
             "OBSTACLE_DISTANCE": lambda msg: self.proximity.handle(msg, self.elapsed_s),
             "PARAM_REQUEST_READ": self._on_param_request_read,
+            "PARAM_SET": self._on_param_set,
         }
+
+    def _on_mission_message(self, msg: MAVLinkMessage) -> None:
+        """A MISSION_* message, to the store of its mission type (the flight plan's refuses one it has no store for)."""
+        self.zone_stores.get(getattr(msg, "mission_type", _M.MAV_MISSION_TYPE_MISSION), self.mission).handle(msg)
 
     def _command_handlers(self) -> dict[int, CommandHandler]:
         return {
@@ -385,6 +395,22 @@ class FirmwareSim(ABC):
         if name in self.params:
             kind = _M.MAV_PARAM_TYPE_INT8 if name in self.INT_PARAMS else _M.MAV_PARAM_TYPE_REAL32
             self._emit(self._mav.param_value_encode(name.encode(), self.params[name], kind, len(names), names.index(name)))
+
+    #: PARAM_SET's float carries an integer parameter's bytes (PX4, src/modules/mavlink/mavlink_parameters.cpp), else its value.
+    PARAM_SET_BYTEWISE: ClassVar[bool] = False
+
+    def _on_param_set(self, msg: MAVLinkMessage) -> None:
+        """A parameter the firmware has takes the value, answered by its PARAM_VALUE (GCS_Param.cpp handle_param_set); others: nothing."""
+        name = msg.param_id.rstrip("\x00") if isinstance(msg.param_id, str) else msg.param_id.decode("ascii", "replace").rstrip("\x00")
+        if name not in self.params or not math.isfinite(msg.param_value):
+            return
+        value = msg.param_value
+        if self.PARAM_SET_BYTEWISE and msg.param_type == _M.MAV_PARAM_TYPE_INT32:
+            value = float(struct.unpack("<i", struct.pack("<f", value))[0])
+        self.params[name] = float(int(value)) if name in self.INT_PARAMS else value
+        names = sorted(self.params)
+        kind = _M.MAV_PARAM_TYPE_INT8 if name in self.INT_PARAMS else _M.MAV_PARAM_TYPE_REAL32
+        self._emit(self._mav.param_value_encode(name.encode(), self.params[name], kind, len(names), names.index(name)))
 
     def _ack_first(self, msg: MAVLinkMessage, command: int, run: Callable[[], int]) -> None:
         """Run a command; its COMMAND_ACK goes out before whatever the command itself sent."""

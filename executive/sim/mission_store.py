@@ -76,19 +76,21 @@ class MissionStore(ABC):
         {"MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT", "MISSION_CLEAR_ALL", "MISSION_SET_CURRENT"}
     )
     HOME_SLOT: ClassVar[bool]  # item 0 is home (ArduPilot); the mission proper starts at 1
+    MISSION_TYPE: ClassVar[int] = _MISSION  # the MAV_MISSION_TYPE it keeps (fence and rally stores: executive.sim.zone_stores)
+    READ_BACK_AUTOCONTINUE: ClassVar[int] = 1  # MISSION_ITEM_INT autocontinue of an item read back
     AUTO_MODE: ClassVar[str]  # the mode that runs the mission (MISSION_CURRENT mission_mode)
     RE_REQUEST_S = 1.0  # MissionItemProtocol: ask again for an item after this long without it
     UPLOAD_TIMEOUT_S = 8.0  # ... and give up on the upload after this long
     MAX_ITEMS = 700  # depends on the board's storage
 
     def __init__(
-        self, owner: MissionOwner, emit: Callable[[MAVLinkMessage], None], text: Callable[[int, str], None], *, max_items: int = MAX_ITEMS
+        self, owner: MissionOwner, emit: Callable[[MAVLinkMessage], None], text: Callable[[int, str], None], *, max_items: int | None = None
     ) -> None:
         self._owner = owner
         self._emit = emit
         self._text = text
         self._mav = encoder(owner.system_id, owner.component_id)
-        self.max_items = max_items
+        self.max_items = self.MAX_ITEMS if max_items is None else max_items  # a store's own class limit by default
         self._commands: list[StoredCommand] = []  # [0] is the home slot, read back as the current home
         self.state = MissionState.STOPPED
         self.current_seq: int | None = None  # the item AUTO is on (or starts from); None = from the first
@@ -142,8 +144,8 @@ class MissionStore(ABC):
         handler = self._handlers.get(msg.get_type())
         if handler is None:
             return
-        if getattr(msg, "mission_type", _MISSION) != _MISSION:
-            self._ack(msg, _M.MAV_MISSION_UNSUPPORTED)  # no fence or rally points in the sim
+        if getattr(msg, "mission_type", _MISSION) != self.MISSION_TYPE:
+            self._ack(msg, _M.MAV_MISSION_UNSUPPORTED)  # not this store's (the firmware hands each type to its own store)
             return
         handler(msg)
 
@@ -155,12 +157,12 @@ class MissionStore(ABC):
         if now - self._last_item_at > self.UPLOAD_TIMEOUT_S:
             self.receiving = False
             self._text(_M.MAV_SEVERITY_WARNING, "Mission upload timeout")
-            self._emit(self._mav.mission_ack_encode(*self._uploader, _M.MAV_MISSION_OPERATION_CANCELLED, _MISSION))
+            self._emit(self._mav.mission_ack_encode(*self._uploader, _M.MAV_MISSION_OPERATION_CANCELLED, self.MISSION_TYPE))
         elif now - self._last_request_at > self.RE_REQUEST_S:
             self._request()
 
     def _ack(self, msg: MAVLinkMessage, result: int) -> None:
-        self._emit(self._mav.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(), result, _MISSION))
+        self._emit(self._mav.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(), result, self.MISSION_TYPE))
 
     @abstractmethod
     def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
@@ -230,26 +232,31 @@ class MissionStore(ABC):
         self._received()
         self._ack(msg, _M.MAV_MISSION_ACCEPTED)
 
+    @property
+    def commands(self) -> tuple[StoredCommand, ...]:
+        """The items held (home's slot included)."""
+        return tuple(self._commands)
+
     def _on_request_list(self, msg: MAVLinkMessage) -> None:
         if self.receiving:
             self._ack(msg, _M.MAV_MISSION_DENIED)
             return
-        self._emit(self._mav.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), self.count, _MISSION))
+        self._emit(self._mav.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), self.count, self.MISSION_TYPE))
 
     def _on_request_int(self, msg: MAVLinkMessage) -> None:
         if self.receiving:
             self._ack(msg, _M.MAV_MISSION_DENIED)
             return
         if (msg.seq != 0 or not self.HOME_SLOT) and msg.seq >= self.count:  # home can always be read
-            self._emit(self._mav.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), self.count, _MISSION))  # the real size
+            self._emit(self._mav.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), self.count, self.MISSION_TYPE))  # the real size
             self._ack(msg, _M.MAV_MISSION_ERROR)
             return
         cmd = self.command(msg.seq)
         current = int(msg.seq != 0 and msg.seq == self.current_seq)
         self._emit(
             self._mav.mission_item_int_encode(
-                msg.get_srcSystem(), msg.get_srcComponent(), msg.seq, cmd.frame, cmd.command, current, 1,
-                *cmd.params, cmd.lat_e7, cmd.lon_e7, cmd.alt_cm / 100.0, _MISSION,
+                msg.get_srcSystem(), msg.get_srcComponent(), msg.seq, cmd.frame, cmd.command, current, self.READ_BACK_AUTOCONTINUE,
+                *cmd.params, cmd.lat_e7, cmd.lon_e7, cmd.alt_cm / 100.0, self.MISSION_TYPE,
             )
         )  # fmt: skip
 

@@ -136,7 +136,7 @@ BOW_TIE = """geofence:
         ("geofence: {max_distance_from_home_m: 0}\n" + WP, ["m.yaml:5:38: geofence.max_distance_from_home_m: 0: Input should be greater than 0"]),
         (
             "geofence: {max_distance_from_home_m: 10, radius: 5}\n" + WP,
-            ["m.yaml:5:42: geofence.radius: unknown field (allowed: polygon, max_distance_from_home_m, inclusion, keep_out)"],
+            ["m.yaml:5:42: geofence.radius: unknown field (allowed: polygon, max_distance_from_home_m, inclusion, keep_out, autopilot)"],
         ),
     ],
 )

@@ -10,6 +10,7 @@ Setpoints (no ack exists) are just queued and sent.
 from __future__ import annotations
 
 import itertools
+import struct
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -279,6 +280,17 @@ class Commander:
     def request_parameter(self, name: str) -> None:
         """Queue a PARAM_REQUEST_READ by name; the PARAM_VALUE answer goes to ``/vehicle/params`` (no ack: ask again if none comes)."""
         self._outbox.append(self._encoder.param_request_read_encode(self.target_system, self.target_component, name.encode(), -1))
+
+    def set_parameter(self, name: str, value: float, param_type: int, *, bytewise: bool = False) -> None:
+        """Queue a PARAM_SET; the autopilot answers with the PARAM_VALUE it now holds (``/vehicle/params``; no ack: set again if none comes).
+
+        ``bytewise``: an integer parameter's bytes go in the float (PX4, src/modules/mavlink/mavlink_parameters.cpp
+        handle_message PARAM_SET: memcpy), else its value as a float (ArduPilot casts it).
+        """
+        sent = float(value)
+        if bytewise and param_type == mavlink.MAV_PARAM_TYPE_INT32:
+            sent = struct.unpack("<f", struct.pack("<i", round(value)))[0]
+        self._outbox.append(self._encoder.param_set_encode(self.target_system, self.target_component, name.encode(), sent, param_type))
 
     def cancel(self, ticket: int | None) -> bool:
         """Forget a request that no longer matters (its behaviour was interrupted); returns whether one was pending.

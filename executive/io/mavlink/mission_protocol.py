@@ -7,7 +7,11 @@ resends its last message when a reply is late and gives up after ``retries`` res
 One transfer runs at a time: a new request supersedes the one in progress. Its fate is
 ``/link/mission_transfer`` (a :class:`MissionTransferStatus`); what the vehicle holds and does is
 ``/vehicle/mission_home``, ``/vehicle/mission_items``, ``/vehicle/mission_current`` and
-``/vehicle/mission_reached``.
+``/vehicle/mission_reached``. Each request names its ``mission_type``: the flight plan (the default),
+the fence or the rally points (MAV_MISSION_TYPE_FENCE, _RALLY), which the firmware keeps apart
+(ArduPilot's GCS_MAVLink/MissionItemProtocol_Fence.cpp and _Rally.cpp, PX4's
+src/modules/mavlink/mavlink_mission.cpp) and neither numbers from a home item; what the vehicle holds
+of those is ``/vehicle/fence_items`` and ``/vehicle/rally_items``.
 
 ArduPilot's conventions, which the firmware follows rather than the spec:
 
@@ -56,8 +60,18 @@ _SAME_FRAME = {
     _M.MAV_FRAME_MISSION: _M.MAV_FRAME_GLOBAL,
 }
 
+_FENCE = _M.MAV_MISSION_TYPE_FENCE
+_RALLY = _M.MAV_MISSION_TYPE_RALLY
+#: Where what the vehicle holds of the fence and the rally points goes (the flight plan: /vehicle/mission_items).
+_HELD_KEY = {_FENCE: "/vehicle/fence_items", _RALLY: "/vehicle/rally_items"}
+#: What a person calls each mission type, for the log and the failures.
+MISSION_TYPE_NAMES = {_MISSION: "mission", _FENCE: "fence", _RALLY: "rally points"}
+
 #: The blackboard keys a :class:`MissionTransfer` writes.
-MISSION_KEYS = ("/link/mission_transfer", "/vehicle/mission_home", "/vehicle/mission_items", "/vehicle/mission_current", "/vehicle/mission_reached")
+MISSION_KEYS = (
+    "/link/mission_transfer", "/vehicle/mission_home", "/vehicle/mission_items", "/vehicle/mission_current", "/vehicle/mission_reached",
+    *_HELD_KEY.values(),
+)  # fmt: skip
 
 
 def mission_result_name(result: int) -> str:
@@ -82,6 +96,7 @@ class MissionItem:
     x: float  # latitude, degrees
     y: float  # longitude, degrees
     z: float  # altitude, metres, in ``frame``
+    mission_type: int = _MISSION  # MAV_MISSION_TYPE: the flight plan, the fence or the rally points
 
     @classmethod
     def waypoint(
@@ -100,14 +115,14 @@ class MissionItem:
         """From a MISSION_ITEM_INT."""
         return cls(
             msg.seq, msg.frame, msg.command, msg.current, msg.autocontinue,
-            msg.param1, msg.param2, msg.param3, msg.param4, msg.x / 1e7, msg.y / 1e7, msg.z,
+            msg.param1, msg.param2, msg.param3, msg.param4, msg.x / 1e7, msg.y / 1e7, msg.z, getattr(msg, "mission_type", _MISSION),
         )  # fmt: skip
 
     def encode(self, mav: mavlink.MAVLink, target_system: int, target_component: int) -> MAVLinkMessage:
         """As a MISSION_ITEM_INT from ``mav`` (an :func:`~executive.mavlink_dialect.encoder`)."""
         return mav.mission_item_int_encode(
             target_system, target_component, self.seq, self.frame, self.command, self.current, self.autocontinue,
-            self.param1, self.param2, self.param3, self.param4, round(self.x * 1e7), round(self.y * 1e7), self.z, _MISSION,
+            self.param1, self.param2, self.param3, self.param4, round(self.x * 1e7), round(self.y * 1e7), self.z, self.mission_type,
         )  # fmt: skip
 
 
@@ -249,6 +264,7 @@ class MissionTransfer:
         self._timeouts = 0  # in a row, without a word from the vehicle
         #: Item 0 is home (ArduPilot); PX4 flies item 0 as the first item (its mission has no home slot). The autopilot port sets it.
         self.home_slot = True
+        self._type = _MISSION  # the MAV_MISSION_TYPE of the transfer in progress (or the last one)
         self._upload: tuple[MissionItem, ...] = ()  # home first, with a home slot
         self._verify_upload = verify
         self._final_item_sent = False
@@ -262,14 +278,18 @@ class MissionTransfer:
         self._reached: MissionItemReached | None = None  # latched: the highest item reached since the mission changed
 
     # -- requests (from behaviours; never block) ---------------------------------------------
-    def upload(self, items: Iterable[MissionItem], home: Sequence[float] | None = None, *, verify: bool | None = None) -> int:
+    def upload(
+        self, items: Iterable[MissionItem], home: Sequence[float] | None = None, *, verify: bool | None = None, mission_type: int = _MISSION
+    ) -> int:
         """Replace the vehicle's mission with ``items`` (renumbered from 1) after a home item 0 at ``home`` (lat, lon[, alt]).
 
         ArduPilot reports its own home as item 0 whatever is uploaded there, so ``home`` may stay
         None (a placeholder). With ``verify`` (default: the instance's), the mission is read back
-        and compared item by item before the upload counts as DONE. Returns the ticket.
+        and compared item by item before the upload counts as DONE. ``mission_type`` FENCE or RALLY
+        replaces the fence or the rally points instead, numbered from 0 (no home item). Returns the ticket.
         """
-        if self.home_slot:
+        items = tuple(replace(item, mission_type=mission_type) for item in items)
+        if self.home_slot and mission_type == _MISSION:
             lat, lon, alt = (*home, 0.0)[:3] if home else (0.0, 0.0, 0.0)
             home_item = MissionItem(0, _M.MAV_FRAME_GLOBAL, _M.MAV_CMD_NAV_WAYPOINT, 0, 1, 0.0, 0.0, 0.0, 0.0, lat, lon, alt)
             self._upload = (home_item, *(replace(item, seq=seq) for seq, item in enumerate(items, start=1)))
@@ -278,9 +298,9 @@ class MissionTransfer:
         self._verify_upload = self.verify if verify is None else verify
         self._final_item_sent = False
         self._partial_end = None
-        ticket = self._start(TransferOperation.UPLOAD, len(self._upload))
+        ticket = self._start(TransferOperation.UPLOAD, len(self._upload), mission_type)
         self._step = _Step.SEND_COUNT
-        count = self._mav.mission_count_encode(self.target_system, self.target_component, len(self._upload), _MISSION)
+        count = self._mav.mission_count_encode(self.target_system, self.target_component, len(self._upload), mission_type)
         self._send(count, "MISSION_REQUEST for item 0")
         return ticket
 
@@ -299,7 +319,7 @@ class MissionTransfer:
             raise RuntimeError("append needs the vehicle's mission read back first")
         if not items:
             raise ValueError("nothing to append")
-        first = self._first
+        first = 1 if self.home_slot else 0  # the flight plan's (``_first`` is the last transfer's type's)
         home = (self.home or MissionItem.waypoint(0, 0.0, 0.0),) if self.home_slot else ()
         held = tuple(replace(held, seq=seq) for seq, held in enumerate(self.items, start=first))
         seq = first + len(held)
@@ -317,9 +337,10 @@ class MissionTransfer:
         partial = self._mav.mission_write_partial_list_encode(self.target_system, self.target_component, seq, seq, _MISSION)
         self._send(partial, f"MISSION_REQUEST for item {seq}")
 
-    def download(self) -> int:
-        """Read the vehicle's mission into ``/vehicle/mission_home`` and ``/vehicle/mission_items``; returns the ticket."""
-        ticket = self._start(TransferOperation.DOWNLOAD, 0)
+    def download(self, mission_type: int = _MISSION) -> int:
+        """Read the vehicle's mission into ``/vehicle/mission_home`` and ``/vehicle/mission_items`` (its fence or rally points into
+        ``/vehicle/fence_items``, ``/vehicle/rally_items``); returns the ticket."""
+        ticket = self._start(TransferOperation.DOWNLOAD, 0, mission_type)
         self._request_list()
         return ticket
 
@@ -451,7 +472,7 @@ class MissionTransfer:
             self._request_item(len(self._received))
             return
         # the spec's closing ack: the vehicle sends nothing back, so it is sent once, without retries
-        self._outbox.append(self._mav.mission_ack_encode(self.target_system, self.target_component, _M.MAV_MISSION_ACCEPTED, _MISSION))
+        self._outbox.append(self._mav.mission_ack_encode(self.target_system, self.target_component, _M.MAV_MISSION_ACCEPTED, self._type))
         self._downloaded(now)
 
     def on_current(self, msg: MAVLinkMessage, now: float) -> None:
@@ -470,22 +491,24 @@ class MissionTransfer:
 
     # -- internals ---------------------------------------------------------------------------
     def _for_us(self, msg: MAVLinkMessage) -> bool:
-        """Addressed to us (or to everyone) and about the mission, not the fence or rally points."""
+        """Addressed to us (or to everyone) and about the mission type of the transfer in progress."""
         return (
             getattr(msg, "target_system", 0) in (0, self._system_id)
             and getattr(msg, "target_component", 0) in (0, self._component_id)
-            and getattr(msg, "mission_type", _MISSION) == _MISSION
+            and getattr(msg, "mission_type", _MISSION) == self._type
         )
 
-    def _start(self, operation: TransferOperation, total: int) -> int:
+    def _start(self, operation: TransferOperation, total: int, mission_type: int = _MISSION) -> int:
         now = self._clock.now()
         if self._step is not _Step.IDLE:
             self._fail(f"superseded by a {operation.lower().replace('_', '-')} request", now)
-        self._outbox.clear()
+        self._type = mission_type
+        # a download's closing MISSION_ACK still goes: PX4 stays busy with the list it sent until it comes (mavlink_mission.cpp)
+        self._outbox[:] = [msg for msg in self._outbox if msg.get_type() == "MISSION_ACK"]
         self._timeouts = 0
         self._deadline = math.inf
         ticket = next(self._tickets)
-        self._status = MissionTransferStatus(ticket, operation, TransferState.IN_PROGRESS, 0, total, "", None, 0, False, now)
+        self._status = MissionTransferStatus(ticket, operation, TransferState.IN_PROGRESS, 0, total, "", None, 0, False, now, self._type)
         self._bb.set("/link/mission_transfer", self._status)
         return ticket
 
@@ -496,10 +519,10 @@ class MissionTransfer:
 
     def _request_list(self) -> None:
         self._step = _Step.REQUEST_LIST
-        self._send(self._mav.mission_request_list_encode(self.target_system, self.target_component, _MISSION), "MISSION_COUNT")
+        self._send(self._mav.mission_request_list_encode(self.target_system, self.target_component, self._type), "MISSION_COUNT")
 
     def _request_item(self, seq: int) -> None:
-        self._send(self._mav.mission_request_int_encode(self.target_system, self.target_component, seq, _MISSION), f"MISSION_ITEM_INT {seq}")
+        self._send(self._mav.mission_request_int_encode(self.target_system, self.target_component, seq, self._type), f"MISSION_ITEM_INT {seq}")
 
     def _written(self, now: float) -> None:
         """The vehicle took the last item sent: the next partial write of an append, or the upload is done."""
@@ -510,14 +533,14 @@ class MissionTransfer:
 
     def _uploaded(self, now: float) -> None:
         if not self._verify_upload:
-            self._hold(self.home if self.home_slot else None, self._upload[self._first :])
+            self._hold(self.home if self._home_slot else None, self._upload[self._first :])
             self._finish(now, _M.MAV_MISSION_ACCEPTED)
             return
         self._publish(now, verifying=True, progress=0)
         self._request_list()
 
     def _downloaded(self, now: float) -> None:
-        if self.home_slot:
+        if self._home_slot:
             home, items = (self._received[0] if self._received else None), tuple(self._received[1:])
         else:
             home, items = None, tuple(self._received)
@@ -530,13 +553,21 @@ class MissionTransfer:
         self._finish(now, None)
 
     @property
+    def _home_slot(self) -> bool:
+        """The transfer in progress has a home item 0: the flight plan on a firmware with a home slot (never the fence or rally points)."""
+        return self.home_slot and self._type == _MISSION
+
+    @property
     def _first(self) -> int:
         """The seq of the first mission item: 1 after a home slot, else 0."""
-        return 1 if self.home_slot else 0
+        return 1 if self._home_slot else 0
 
     def _hold(self, home: MissionItem | None, items: tuple[MissionItem, ...]) -> None:
         """What the vehicle holds, as far as we know; another mission's reports of items reached say nothing about this one
         (the same mission with items appended is this one)."""
+        if self._type != _MISSION:
+            self._bb.set(_HELD_KEY[self._type], items)
+            return
         if self.items is None or first_mismatch(self.items, items[: len(self.items)]) is not None:
             self._reached = None
             self._bb.set("/vehicle/mission_reached", None)
@@ -554,7 +585,7 @@ class MissionTransfer:
         self._step = _Step.IDLE
         self._deadline = math.inf
         if self._status is not None:
-            log.warning("mission %s failed: %s", self._status.operation.lower(), reason)
+            log.warning("%s %s failed: %s", MISSION_TYPE_NAMES.get(self._type, "mission"), self._status.operation.lower(), reason)
             self._publish(now, state=TransferState.FAILED, reason=reason, result=result, verifying=False)
 
     def _publish(self, now: float, **changes: Any) -> None:

@@ -33,6 +33,7 @@ from executive.state import (
     BatteryStatus,
     EkfFlags,
     EkfStatus,
+    FenceStatus,
     GlobalPosition,
     GpsFix,
     HomePosition,
@@ -174,6 +175,7 @@ class MavlinkReader:
             "DISTANCE_SENSOR": self._on_distance_sensor,
             "RANGEFINDER": self._on_rangefinder,
             "PARAM_VALUE": self._on_param_value,
+            "FENCE_STATUS": self._on_fence_status,
         }
         if mission is not None:  # the mission protocol's replies go to the transfer, as COMMAND_ACK goes to the commander
             self._handlers |= {
@@ -400,6 +402,9 @@ class MavlinkReader:
             value = float(struct.unpack("<i", struct.pack("<f", value))[0])
         if name and _finite(value):
             self._bb.set("/vehicle/params", {**(self._bb.get("/vehicle/params") or {}), name: value})
+
+    def _on_fence_status(self, msg: MAVLinkMessage, now: float) -> None:
+        self._bb.set("/vehicle/fence_status", FenceStatus(bool(msg.breach_status), msg.breach_count, msg.breach_type, now))
 
     def _on_command_ack(self, msg: MAVLinkMessage, now: float) -> None:
         self._commander.on_ack(msg)

@@ -22,6 +22,7 @@ from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavli
 from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 from executive.sim.firmware import DEFAULT_HOME, EPSILON_S, Command, CommandHandler, FirmwareSim, Home, e7
 from executive.sim.mission_store import MissionStore
+from executive.sim.zone_stores import ArduPilotFenceStore, ArduPilotRallyStore
 from executive.vehicles import VehicleProfile
 
 #: ArduPilot's magic param2 values for MAV_CMD_COMPONENT_ARM_DISARM (GCS_MAVLink/GCS.h).
@@ -89,6 +90,7 @@ class ArduPilotSim(FirmwareSim):
     #: ekf_check runs at 10 Hz and latches after EKF_CHECK_ITERATIONS_MAX (10) bad checks in a row; it clears 10 good ones later.
     EKF_CHECK_ITERATIONS_MAX: ClassVar[int] = 10
     MISSION_STORE: ClassVar[type[MissionStore]] = ArduPilotMissionStore  # the firmware's side of the mission protocol
+    ZONE_STORES: ClassVar[tuple[type[MissionStore], ...]] = (ArduPilotFenceStore, ArduPilotRallyStore)
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset({"MODE_CH", "FLTMODE_CH"})  # answered as integers (MAV_PARAM_TYPE_INT8), the rest REAL32
     BATTERY_CAPACITY_PARAM = "BATT_CAPACITY"
 

@@ -93,7 +93,7 @@ class ArduPilotMissionStore(MissionStore):
         emit: Callable[[MAVLinkMessage], None],
         text: Callable[[int, str], None],
         *,
-        max_items: int = MissionStore.MAX_ITEMS,
+        max_items: int | None = None,
     ) -> None:
         super().__init__(owner, emit, text, max_items=max_items)
         self._handlers["MISSION_WRITE_PARTIAL_LIST"] = self._on_write_partial_list
@@ -119,7 +119,7 @@ class ArduPilotMissionStore(MissionStore):
 
     def _request(self) -> None:
         self._last_request_at = self._owner.clock.now()
-        self._emit(self._mav.mission_request_encode(*self._uploader, self._request_i, _MISSION))
+        self._emit(self._mav.mission_request_encode(*self._uploader, self._request_i, self.MISSION_TYPE))
 
     def _received(self) -> None:
         """An upload completed (ArduPilot says so in a STATUSTEXT)."""

@@ -12,6 +12,7 @@ from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS, RoverMotion
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import ACC_BITS, GLOBAL_FRAMES, NAVIGATION, POS_BITS, RATE_ATTITUDE, ArduPilotSim
 from executive.sim.ardupilot.mission_change import MissionChangeDetector
+from executive.sim.ardupilot.rover_fence import FENCE_ACTIONS, FENCE_DEFAULTS, breaches
 from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import StoredCommand
@@ -56,10 +57,11 @@ class ArduRoverSim(ArduPilotSim):
     #: MIS_DONE_BEHAVE 0: stop in AUTO at the mission's end (Rover/Parameters.cpp).
     PARAMS: ClassVar[Mapping[str, float]] = {
         "MODE_CH": 8, "CRUISE_SPEED": 2.0, "MIS_DONE_BEHAVE": 0.0, "FRAME_CLASS": 1.0, "SERVO1_FUNCTION": 26.0, "SERVO3_FUNCTION": 70.0,
-        **FIRMWARE_DEFAULTS,
+        **FIRMWARE_DEFAULTS, **FENCE_DEFAULTS,
     }  # fmt: skip
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset({
         "MODE_CH", "FRAME_CLASS", "MIS_DONE_BEHAVE", "WP_PIVOT_ANGLE", "WP_PIVOT_RATE", "SERVO1_FUNCTION", "SERVO3_FUNCTION",
+        "FENCE_ENABLE", "FENCE_TYPE", "FENCE_ACTION", "FENCE_OPTIONS",
     })  # fmt: skip
     SKID_STEERING: ClassVar[bool] = False  # SERVO1/3_FUNCTION ThrottleLeft/Right: pivot turns (Rover.cpp set_turn_params)
     MANUAL_INPUT_MODES = frozenset({"MANUAL", "ACRO", "STEERING", "INITIALISING"})
@@ -118,6 +120,43 @@ class ArduRoverSim(ArduPilotSim):
         assert isinstance(self.vehicle, SurfaceVehicle)
         self.vehicle.follow(self._nav)
         return self._nav
+
+    _fence_breaches = 0  # the fence types breached at the last check (AC_Fence's _breached_fences)
+    _fence_breach_count = 0
+    _fence_breach_ms = 0
+
+    def _check_health(self) -> None:
+        super()._check_health()
+        self._check_fence()
+
+    def _check_fence(self) -> None:
+        """Rover/fence.cpp fence_check, at 10 Hz: a new breach sends FENCE_STATUS (no STATUSTEXT: AC_Fence::record_breach) and, armed,
+        takes FENCE_ACTION once (see rover_fence)."""
+        if not self.ekf_ready:
+            return
+        fence = self.zone_stores[_M.MAV_MISSION_TYPE_FENCE].commands
+        found = breaches(self.params, fence, self.home, self.vehicle.lat, self.vehicle.lon)
+        new = found & ~self._fence_breaches
+        if found != self._fence_breaches:
+            if new:
+                self._fence_breach_count += 1
+                self._fence_breach_ms = self._ms()
+            self._fence_breaches = found
+            self._emit(self._msg_fence_status())
+        if not new or not self.armed:
+            return
+        for action in FENCE_ACTIONS.get(int(self.params.get("FENCE_ACTION", 1)), ("HOLD",)):
+            if action == "DISARM":
+                self.disarm()
+                break
+            self._force_mode(action)
+            if self.mode == action:
+                break
+
+    def _msg_fence_status(self) -> MAVLinkMessage:
+        """FENCE_STATUS (GCS_MAVLink/GCS_Fence.cpp send_fence_status): breach_type 3 (boundary) for the circle and polygon."""
+        breach_type = _M.FENCE_BREACH_BOUNDARY if self._fence_breaches else _M.FENCE_BREACH_NONE
+        return self._mav.fence_status_encode(int(bool(self._fence_breaches)), self._fence_breach_count, breach_type, self._fence_breach_ms, 0)
 
     def _message_handlers(self) -> dict[str, Callable[[MAVLinkMessage], None]]:
         return {**super()._message_handlers(), "SET_POSITION_TARGET_GLOBAL_INT": self._on_position_target}

@@ -39,6 +39,7 @@ from executive.sim.px4.parameters import (
     WANT_TAKEOFF_M_S,
 )
 from executive.sim.px4.streams import Px4Streams
+from executive.sim.zone_stores import Px4FenceStore, Px4RallyStore
 from executive.vehicles import VehicleProfile
 
 _M = mavlink
@@ -67,6 +68,11 @@ class Px4Sim(Px4Streams):
     VERSION = "V1.16.0-dev"
     BOOT_MODE = INITIAL_MODE = "AUTO.LOITER"
     MISSION_STORE = Px4MissionStore
+    ZONE_STORES = (Px4FenceStore, Px4RallyStore)
+    PARAM_SET_BYTEWISE = True
+    #: navigator/geofence_params.c: GF_ACTION 2 (Hold mode), GF_MAX_HOR_DIST 0 (off).
+    PARAMS: ClassVar[Mapping[str, float]] = {"GF_ACTION": 2.0, "GF_MAX_HOR_DIST": 0.0}
+    INT_PARAMS: ClassVar[frozenset[str]] = frozenset({"GF_ACTION"})
     AUTOPILOT_MODES = frozenset({"AUTO.LOITER", "AUTO.MISSION", "AUTO.RTL", "AUTO.LAND", "AUTO.TAKEOFF", "OFFBOARD"})
     MAV_TYPE: ClassVar[int]
     FLIES: ClassVar[bool]  # takes off and lands (mission take-off and landing items are passed over otherwise)

@@ -47,4 +47,4 @@ class Px4MissionStore(MissionStore):
 
     def _request(self) -> None:
         self._last_request_at = self._owner.clock.now()
-        self._emit(self._mav.mission_request_int_encode(*self._uploader, self._request_i, _M.MAV_MISSION_TYPE_MISSION))
+        self._emit(self._mav.mission_request_int_encode(*self._uploader, self._request_i, self.MISSION_TYPE))

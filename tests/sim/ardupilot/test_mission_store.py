@@ -129,7 +129,7 @@ def test_uploads_refused_whole(make_gcs: MakeGcs) -> None:
     gcs = make_gcs(ekf_ready=True)
     replies = gcs.send(gcs.mav.mission_count_encode(1, 1, 701, 0))
     assert (replies[0].type, gcs.texts(replies)) == (m.MAV_MISSION_NO_SPACE, ["Only 700 items are supported"])
-    assert gcs.send(gcs.mav.mission_count_encode(1, 1, 2, m.MAV_MISSION_TYPE_FENCE))[0].type == m.MAV_MISSION_UNSUPPORTED
+    assert gcs.send(gcs.mav.mission_count_encode(1, 1, 2, m.MAV_MISSION_TYPE_ALL))[0].type == m.MAV_MISSION_UNSUPPORTED
     gcs.send(gcs.mav.mission_count_encode(1, 1, 2, 0))
     other = gcs.mav.mission_count_encode(1, 1, 2, 0)
     other.pack(m.MAVLink(None, srcSystem=254, srcComponent=190))  # another ground station, while we upload
