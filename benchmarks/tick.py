@@ -368,6 +368,22 @@ def breakdown_rows(waypoints: int, result: dict[str, Any], on: str) -> list[Row]
     return rows
 
 
+def mcap_row(waypoints: int, lines: dict[str, Any], ticks: int, warmup_ticks: int) -> Row:
+    """The recording part with ``--snapshots FILE.mcap`` (issue 35: no slower than JSON lines), on the same mission and ticks."""
+    mcap = breakdown(waypoints, ticks, warmup_ticks, snapshots_file="snapshots.mcap")
+    spent, floor = median(mcap["parts"]["recording"]) / 1e3, median(lines["parts"]["recording"]) / 1e3
+    return Row(
+        "tick",
+        f"tick part: recording as MCAP, {waypoints} waypoints",
+        round(spent, 1),
+        "µs median",
+        "<= JSON lines'",
+        spent <= floor,
+        f"JSON lines {floor:.1f} µs; MCAP records more: the MAVLink channels, poses; p99 {percentile(mcap['parts']['recording'], 99) / 1e3:.0f} µs",
+        {"median_us": spent, "json_lines_median_us": floor},
+    )
+
+
 def run(
     ticks: int = 1500, sizes: Sequence[int] = (10, 100, 1000), warmup_ticks: int = 50, autopilot: AutopilotName = "ardupilot",
     missions: Sequence[Path] | None = None,
@@ -378,6 +394,8 @@ def run(
     results = {n: breakdown(n, ticks if n == sizes[len(sizes) // 2] else max(ticks // 3, 1), warmup_ticks, autopilot) for n in sizes}
     middle = sizes[len(sizes) // 2]
     rows += breakdown_rows(middle, results[middle], on)
+    if autopilot == "ardupilot":
+        rows.append(mcap_row(middle, results[middle], ticks, warmup_ticks))
     first, last = median(results[sizes[0]]["full"]) / 1e3, median(results[sizes[-1]]["full"]) / 1e3
     growth = last / first
     rows.append(

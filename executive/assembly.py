@@ -290,7 +290,7 @@ class _SnapshotRuns:
 
     def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
         self._recorder.attach(root)
-        self._recorder.route([(w.lat, w.lon) for w in mission.waypoints])
+        self._recorder.run_started(mission, resumed_from)
 
     def ticked(self, tick: int, now: float) -> None:
         self._recorder.record(tick, now)
@@ -305,6 +305,8 @@ def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
     def plug(w: Wiring) -> None:
         w.mission_state.listeners.append(recorder.event)
         w.observers.append(_SnapshotRuns(recorder))
+        if recorder.mavlink is not None:
+            w.link.watch.listeners.append(recorder.mavlink)
 
     return plug
 

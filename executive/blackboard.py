@@ -259,6 +259,11 @@ def value(key: str) -> Any:
     return PyTreesBoard.value(key)
 
 
+def documented_values() -> list[tuple[str, Any]]:
+    """Every documented key and its value now, in :data:`KEYS`' order: for recorders, never for behaviours."""
+    return PyTreesBoard.values(KEYS)
+
+
 def keys_under(*prefixes: str) -> list[str]:
     """Documented keys whose names start with one of ``prefixes`` (e.g. ``"/vehicle/"``)."""
     return [name for name in KEYS if name.startswith(prefixes)]
@@ -280,6 +285,11 @@ class PyTreesBoard:
     @staticmethod
     def value(key: str) -> Any:
         return Blackboard.storage.get(key)
+
+    @staticmethod
+    def values(keys: Iterable[str]) -> list[tuple[str, Any]]:
+        get = Blackboard.storage.get
+        return [(key, get(key)) for key in keys]
 
     @staticmethod
     def client(name: str, keys: Iterable[str], access: Access) -> Client:

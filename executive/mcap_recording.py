@@ -1,9 +1,10 @@
-"""The snapshot recorder's MCAP back end (``run --snapshots FILE.mcap``): a run as Foxglove and the MCAP tools read it.
+"""The snapshot recorder's Foxglove back end: a run as MCAP (``run --snapshots FILE.mcap``) and live (``run --foxglove PORT``).
 
-MCAP is the container Foxglove, PlotJuggler and rosbag2 share: chunked (zstd), indexed for seeking.
-It is written with the ``mcap`` library (pure Python, what Foxglove's SDK writes on top of), every
-message JSON with a JSON schema, timed in vehicle time (the injected clock, nanoseconds), so a run
-recorded at ``--speedup 20`` draws true speeds. The channels:
+:class:`ChannelFeed` turns each tick (and what happened between two) into messages on the channels
+of :mod:`executive.mcap_messages`, timed in vehicle time (the injected clock, nanoseconds), so a run
+recorded at ``--speedup 20`` draws true speeds; its sinks take them: :class:`McapSink` (a file,
+through the ``mcap`` library: pure Python, chunked, compressed, indexed) and the live server. The
+channels:
 
 - ``/tree`` (``executive.Tree``): the tree's nodes in pre-order (id, name, type, parent id), when a
   run's tree starts (and again at the top of each rotated file);
@@ -11,10 +12,15 @@ recorded at ``--speedup 20`` draws true speeds. The channels:
   ``end`` (the run's end), ``s`` (node id -> status S/F/R/-, changed ones) and ``f`` (node id ->
   feedback, changed ones), as the JSON-lines snapshot file holds them;
 - ``/blackboard`` (``executive.Blackboard``): ``tick``, ``key``, ``bb`` (key -> value as short text), the changed keys;
+- ``/mission/run`` (``executive.Run``): each run's mission, vehicle, run it resumes, wall-clock start, waypoints (lat, lon, name);
 - ``/mission/state`` (``executive.MissionState``): state, leg_index, leg_count, reason, when one changes;
 - ``/mission/events`` (``executive.MissionEvent``): each mission transition: before, after, reason;
 - ``/mission/route`` (``foxglove.GeoJSON``): the route each run starts on, a line through its waypoints (edits are not);
-- ``/vehicle/location`` (``foxglove.LocationFix``): each new GLOBAL_POSITION_INT, for the Map panel;
+- ``/vehicle/location`` (``foxglove.LocationFix``): each new GLOBAL_POSITION_INT: the Map panel draws the track from them;
+- ``/vehicle/pose`` (``foxglove.PoseInFrame``) and ``/tf`` (``foxglove.FrameTransforms``, home -> vehicle): attitude and
+  position in the frame ``home`` (east, north, up from HOME_POSITION), at each new fix or attitude once home is known;
+- ``/mavlink/in/KIND``, ``/mavlink/out/KIND``: every MAVLink message the autopilot link received (of the kinds the
+  reader decodes) and sent, its fields as JSON;
 - ``/log`` (``foxglove.Log``): the executive's log lines (what its logger lets through), for the Log panel.
 
 Past ``max_bytes`` the file is finished (its index written) and rotated to ``FILE.1`` (the one
@@ -29,101 +35,38 @@ import collections
 import json
 import logging
 import os
-from collections.abc import Iterator
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
-
-from mcap.writer import CompressionType, Writer
+from typing import Any, Protocol
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.storage import AppendFile, Storage
+from executive.mavlink_dialect import MAVLinkMessage
+from executive.mcap_messages import CHANNELS, MavlinkJson, location_fix, log_line, mavlink_schema, ns, pose, route_geojson, schema_bytes
+from executive.mcap_writer import ChunkedWriter
 
 #: Small enough that a crash loses little (a chunk is written whole, when full), large enough that zstd compresses well.
 CHUNK_BYTES = 256 << 10
 MISSION_KEYS = ("/mission/state", "/mission/leg_index", "/mission/leg_count", "/mission/reason")
-
-_TIME = {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}}
-_BY_NODE = {"type": "object", "additionalProperties": {"type": "string"}, "description": "node id (pre-order) -> text"}
-#: Our schemas, and the two well-known Foxglove ones (their JSON encoding, https://docs.foxglove.dev/docs/sdk/schemas).
-SCHEMAS: dict[str, dict[str, Any]] = {
-    "executive.Tree": {
-        "type": "object",
-        "properties": {"nodes": {"type": "array", "items": {"type": "object", "properties": {
-            "id": {"type": "integer"}, "name": {"type": "string"}, "type": {"type": "string"}, "parent": {"type": ["integer", "null"]}}}}},
-    },
-    "executive.TreeTick": {
-        "type": "object",
-        "properties": {"tick": {"type": "integer"}, "key": {"type": "boolean"}, "end": {"type": "boolean"}, "s": _BY_NODE, "f": _BY_NODE},
-    },
-    "executive.Blackboard": {
-        "type": "object",
-        "properties": {"tick": {"type": "integer"}, "key": {"type": "boolean"}, "bb": {"type": "object", "additionalProperties": {"type": "string"}}},
-    },
-    "executive.MissionState": {
-        "type": "object",
-        "properties": {"state": {"type": "string"}, "leg_index": {"type": "integer"}, "leg_count": {"type": "integer"}, "reason": {"type": "string"}},
-    },
-    "executive.MissionEvent": {
-        "type": "object", "properties": {"before": {"type": "string"}, "after": {"type": "string"}, "reason": {"type": "string"}},
-    },
-    "foxglove.LocationFix": {
-        "type": "object",
-        "properties": {
-            "timestamp": _TIME, "frame_id": {"type": "string"}, "latitude": {"type": "number"}, "longitude": {"type": "number"},
-            "altitude": {"type": "number"}, "position_covariance": {"type": "array", "items": {"type": "number"}, "minItems": 9, "maxItems": 9},
-            "position_covariance_type": {"type": "integer"},
-        },
-    },
-    "foxglove.GeoJSON": {"type": "object", "properties": {"geojson": {"type": "string"}}},
-    "foxglove.Log": {
-        "type": "object",
-        "properties": {
-            "timestamp": _TIME, "level": {"type": "integer"}, "message": {"type": "string"}, "name": {"type": "string"},
-            "file": {"type": "string"}, "line": {"type": "integer"},
-        },
-    },
-}  # fmt: skip
-CHANNELS = {
-    "/tree": "executive.Tree",
-    "/tree/tick": "executive.TreeTick",
-    "/blackboard": "executive.Blackboard",
-    "/mission/state": "executive.MissionState",
-    "/mission/events": "executive.MissionEvent",
-    "/mission/route": "foxglove.GeoJSON",
-    "/vehicle/location": "foxglove.LocationFix",
-    "/log": "foxglove.Log",
-}
-#: Python's levels as foxglove.Log's (DEBUG 1, INFO 2, WARNING 3, ERROR 4, FATAL 5).
-LOG_LEVELS = {logging.DEBUG: 1, logging.INFO: 2, logging.WARNING: 3, logging.ERROR: 4, logging.CRITICAL: 5}
+#: What a file (or a client joining late) needs whatever the time: written again at the top of each rotated file.
+LATCHED = ("/tree", "/mission/run", "/mission/route", "/mission/state")
+_DUMPS = json.JSONEncoder(ensure_ascii=False, separators=(",", ":")).encode
 
 
-def _ns(t: float) -> int:
-    return max(0, round(t * 1e9))
+class Sink(Protocol):
+    """Where a :class:`ChannelFeed`'s messages go."""
 
+    def put(self, topic: str, schema: tuple[str, bytes], log_ns: int, data: bytes) -> None:
+        """One message on ``topic`` (its channel made on the first, with ``schema``: its name and JSON schema)."""
 
-def _stamp(t: float) -> dict[str, int]:
-    ns = _ns(t)
-    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+    def keyframe(self, tick: int, log_ns: int) -> None:
+        """The message at ``log_ns`` was a keyframe of tick ``tick``."""
 
+    def ticked(self) -> bool:
+        """A tick's messages are in; False when a new file began (what follows must be a keyframe)."""
 
-class _Stream:
-    """The writer's output: whole writes through :class:`AppendFile` (a full disk is said once, as for the other recordings)."""
-
-    def __init__(self, file: AppendFile) -> None:
-        self._file = file
-        self._at = 0
-
-    def write(self, data: bytes) -> int:
-        self._file.write(bytes(data))  # a chunk the disk refused is lost; the index still counts it (say so in the README)
-        self._at += len(data)
-        return len(data)
-
-    def tell(self) -> int:
-        return self._at
-
-    def flush(self) -> None:
-        pass
+    def close(self) -> None: ...
 
 
 class _LogLines(logging.Handler):
@@ -138,160 +81,181 @@ class _LogLines(logging.Handler):
         self.lines.append((self._clock.now() if self._clock else None, record))
 
 
-class McapFile:
-    """A snapshot recording as one MCAP file (see the module's doc for its channels)."""
+class ChannelFeed:
+    """A snapshot recorder's :class:`~executive.snapshots.TickFile` as Foxglove channels, into ``sinks``.
 
-    def __init__(self, path: Path, max_bytes: int, storage: Storage | None, clock: Clock | None) -> None:
-        self.path, self.max_bytes, self.storage, self._clock = path, max_bytes, storage, clock
-        self._nodes: list[dict[str, Any]] = []
+    ``values``: where the vehicle and the mission are read after each tick (the blackboard; a recorded one for ``convert``).
+    """
+
+    def __init__(self, sinks: Sequence[Sink], clock: Clock | None, values: Callable[[str], Any] = blackboard.value) -> None:
+        self.sinks, self._clock, self._value = list(sinks), clock, values
         self._t = 0.0  # vehicle time of the last tick: what a line without a clock is timed by
         self._mission: tuple[Any, ...] | None = None
         self._fix_time: float | None = None
+        self._pose_times: tuple[float | None, float | None] = (None, None)
         self._logs = _LogLines(clock)
-        self._tree_ns = 0
-        self._start()
+        self._mavlink: collections.deque[tuple[float, str, MAVLinkMessage]] = collections.deque(maxlen=10_000)
+        self._mavlink_schemas: dict[str, tuple[str, bytes]] = {}
+        self._mavlink_json = MavlinkJson()
+        self._schemas = {topic: (name, schema_bytes(name)) for topic, name in CHANNELS.items()}
         logging.getLogger("executive").addHandler(self._logs)
 
     def write_tree(self, nodes: list[dict[str, Any]]) -> None:
-        self._nodes = nodes
-        self._tree_ns = self._put("/tree", self._now(), {"nodes": nodes})
+        self._put("/tree", self._now(), {"nodes": nodes})
 
     def write_tick(self, line: dict[str, Any]) -> bool:
         t = self._t = line["t"]
         self._write_logs()
+        self._write_mavlink()
         marks = {k: line[k] for k in ("key", "end") if k in line}
-        ns = self._put("/tree/tick", t, {"tick": line["tick"], **marks, **{k: line[k] for k in ("s", "f") if k in line}})
+        log_ns = self._put("/tree/tick", t, {"tick": line["tick"], **marks, **{k: line[k] for k in ("s", "f") if k in line}})
         if line.get("key"):
-            self._keyframes.append((line["tick"], ns, self._tree_ns))
+            for sink in self.sinks:
+                sink.keyframe(line["tick"], log_ns)
         if "bb" in line:
             self._put("/blackboard", t, {"tick": line["tick"], **marks, "bb": line["bb"]})
-        mission = tuple(blackboard.value(k) for k in MISSION_KEYS)
+        mission = tuple(self._value(k) for k in MISSION_KEYS)
         if mission != self._mission:
             self._mission = mission
             self._put("/mission/state", t, dict(zip(("state", "leg_index", "leg_count", "reason"), mission, strict=True)))
-        self._write_fix()
-        if self._stream.tell() > self.max_bytes:
-            self._rotate()
-            return False
-        return True
+        self._write_vehicle(t)
+        return all([sink.ticked() for sink in self.sinks])  # every sink told, whichever began a new file
 
     def write_event(self, before: str, after: str, reason: str) -> None:
         self._put("/mission/events", self._now(), {"before": before, "after": after, "reason": reason})
 
-    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
-        line = [[lon, lat] for lat, lon in waypoints]  # GeoJSON: longitude first
-        points = [
-            {"type": "Feature", "geometry": {"type": "Point", "coordinates": p}, "properties": {"name": f"waypoint {i}"}}
-            for i, p in enumerate(line, 1)
-        ]
-        route = {"type": "Feature", "geometry": {"type": "LineString", "coordinates": line}, "properties": {"name": "route"}}
-        self._put("/mission/route", self._now(), {"geojson": json.dumps({"type": "FeatureCollection", "features": [route, *points]})})
+    def write_run(self, run: dict[str, Any]) -> None:
+        t = self._now()
+        self._put("/mission/run", t, run)
+        self._put("/mission/route", t, route_geojson([(w["lat"], w["lon"]) for w in run["waypoints"]]))
+
+    def mavlink(self, direction: str, msg: MAVLinkMessage) -> None:
+        """A MAVLink message received (``in``) or sent (``out``) on the autopilot's link: kept until the tick writes it."""
+        self._mavlink.append((self._now(), direction, msg))
 
     def close(self) -> None:
         logging.getLogger("executive").removeHandler(self._logs)
         self._write_logs()
+        self._write_mavlink()
+        for sink in self.sinks:
+            sink.close()
+
+    def _now(self) -> float:
+        return self._clock.now() if self._clock else self._t
+
+    def _put(self, topic: str, t: float, message: dict[str, Any]) -> int:
+        """Write ``message`` at time ``t`` to every sink; its log time, ns."""
+        log_ns, data = ns(t), _DUMPS(message).encode()
+        for sink in self.sinks:
+            sink.put(topic, self._schemas[topic], log_ns, data)
+        return log_ns
+
+    def _write_vehicle(self, t: float) -> None:
+        fix = self._value("/vehicle/position")
+        if fix is None:
+            return
+        if fix.time != self._fix_time:
+            self._fix_time = fix.time
+            self._put("/vehicle/location", fix.time, location_fix(fix))
+        home, attitude = self._value("/vehicle/home"), self._value("/vehicle/attitude")
+        times = (fix.time, attitude.time if attitude is not None else None)
+        if home is None or times == self._pose_times:
+            return
+        self._pose_times = times
+        in_frame, transforms = pose(home, fix, attitude, t)
+        self._put("/vehicle/pose", t, in_frame)
+        self._put("/tf", t, transforms)
+
+    def _write_mavlink(self) -> None:
+        while self._mavlink:
+            t, direction, msg = self._mavlink.popleft()
+            if not msg.fieldnames:
+                continue  # a kind the reader skims (header only, never decoded): the tlog has its bytes
+            kind = msg.get_type()
+            topic = f"/mavlink/{direction}/{kind}"
+            schema = self._mavlink_schemas.get(kind)
+            if schema is None:
+                schema = self._mavlink_schemas[kind] = mavlink_schema(msg)
+            log_ns, data = ns(t), self._mavlink_json.encode(msg)
+            for sink in self.sinks:
+                sink.put(topic, schema, log_ns, data)
+
+    def _write_logs(self) -> None:
+        while self._logs.lines:
+            t, record = self._logs.lines.popleft()
+            t = self._t if t is None else t
+            self._put("/log", t, log_line(record, t))
+
+
+class _Stream:
+    """The writer's output: whole writes through :class:`AppendFile` (a full disk is said once, as for the other recordings)."""
+
+    def __init__(self, file: AppendFile) -> None:
+        self._file = file
+        self._at = 0
+
+    def write(self, data: bytes) -> int:
+        self._file.write(bytes(data))  # a chunk the disk refused is lost; the index still counts it (said in the README)
+        self._at += len(data)
+        return len(data)
+
+    def tell(self) -> int:
+        return self._at
+
+    def flush(self) -> None:
+        pass
+
+
+class McapSink:
+    """One MCAP file, chunked and zstd-compressed, rotated to ``FILE.1`` past ``max_bytes``; each file seekable alone."""
+
+    def __init__(self, path: Path, max_bytes: int, storage: Storage | None) -> None:
+        self.path, self.max_bytes, self.storage = path, max_bytes, storage
+        self._latched: dict[str, tuple[tuple[str, bytes], int, bytes]] = {}
+        self._start()
+
+    def put(self, topic: str, schema: tuple[str, bytes], log_ns: int, data: bytes) -> None:
+        channel = self._channels.get(topic)
+        if channel is None:
+            schema_id = self._schema_ids.get(schema[0])
+            if schema_id is None:
+                schema_id = self._schema_ids[schema[0]] = self._writer.register_schema(schema[0], "jsonschema", schema[1])
+            channel = self._channels[topic] = self._writer.register_channel(topic, "json", schema_id)
+        self._sequence += 1
+        self._writer.add_message(channel, log_ns, data, self._sequence)
+        if topic in LATCHED:
+            self._latched[topic] = (schema, log_ns, data)
+            if topic == "/tree":
+                self._tree_ns = log_ns
+
+    def keyframe(self, tick: int, log_ns: int) -> None:
+        self._keyframes.append((tick, log_ns, self._tree_ns))
+
+    def ticked(self) -> bool:
+        if self._stream.tell() <= self.max_bytes:
+            return True
+        self._finish()
+        os.replace(self.path, self.path.with_name(self.path.name + ".1"))
+        self._start()
+        for topic, (schema, log_ns, data) in list(self._latched.items()):
+            self.put(topic, schema, log_ns, data)
+        return False
+
+    def close(self) -> None:
         self._finish()
 
     def _start(self) -> None:
         self._file = AppendFile(self.path, "snapshots", "ticks are not recorded for replay", self.storage, append=False)
         self._stream = _Stream(self._file)
-        self._writer = Writer(self._stream, chunk_size=CHUNK_BYTES, compression=CompressionType.ZSTD)
-        self._writer.start(profile="", library="executive")
-        schemas = {name: self._writer.register_schema(name, "jsonschema", json.dumps(body).encode()) for name, body in SCHEMAS.items()}
-        self._channels = {topic: self._writer.register_channel(topic, "json", schemas[name]) for topic, name in CHANNELS.items()}
+        chunk = min(CHUNK_BYTES, max(4096, self.max_bytes))  # a file rotated at less than a chunk would be one chunk, over its size
+        self._writer = ChunkedWriter(self._stream, chunk)
+        self._schema_ids: dict[str, int] = {}
+        self._channels: dict[str, int] = {}
         self._sequence = 0
+        self._tree_ns = 0
         self._keyframes: list[tuple[int, int, int]] = []
 
     def _finish(self) -> None:
         self._writer.add_metadata("executive.keyframes", {"ticks": json.dumps(self._keyframes, separators=(",", ":"))})
         self._writer.finish()
         self._file.close()
-
-    def _rotate(self) -> None:
-        self._finish()
-        os.replace(self.path, self.path.with_name(self.path.name + ".1"))
-        self._start()
-        self._mission = None
-        if self._nodes:
-            self._tree_ns = self._put("/tree", self._t, {"nodes": self._nodes})
-
-    def _now(self) -> float:
-        return self._clock.now() if self._clock else self._t
-
-    def _put(self, topic: str, t: float, message: dict[str, Any]) -> int:
-        """Write ``message`` at time ``t``; its log time, ns."""
-        self._sequence += 1
-        ns = _ns(t)
-        data = json.dumps(message, ensure_ascii=False, separators=(",", ":")).encode()
-        self._writer.add_message(self._channels[topic], log_time=ns, data=data, publish_time=ns, sequence=self._sequence)
-        return ns
-
-    def _write_fix(self) -> None:
-        fix = blackboard.value("/vehicle/position")
-        if fix is None or fix.time == self._fix_time:
-            return
-        self._fix_time = fix.time
-        message = {
-            "timestamp": _stamp(fix.time), "frame_id": "wgs84", "latitude": fix.lat, "longitude": fix.lon, "altitude": fix.alt_rel_m,
-            "position_covariance": [0.0] * 9, "position_covariance_type": 0,
-        }  # fmt: skip
-        self._put("/vehicle/location", fix.time, message)
-
-    def _write_logs(self) -> None:
-        while self._logs.lines:
-            t, record = self._logs.lines.popleft()
-            t = self._t if t is None else t
-            level = LOG_LEVELS.get(record.levelno, 3 if record.levelno < logging.ERROR else 4)
-            message = {"timestamp": _stamp(t), "level": level, "message": record.getMessage(), "name": record.name,
-                       "file": record.pathname, "line": record.lineno}  # fmt: skip
-            self._put("/log", t, message)
-
-
-MAGIC = b"\x89MCAP0\r\n"
-
-
-def _seek(reader: Any, tick: int) -> tuple[int, dict[str, Any]] | None:
-    """The time of the last keyframe before ``tick`` and the tree line it belongs to; None without (an unfinished file).
-
-    Before, not at: a keyframe's own changes are told against the tick before it.
-    """
-    try:
-        keyframes = [k for record in reader.iter_metadata() if record.name == "executive.keyframes" for k in json.loads(record.metadata["ticks"])]
-    except Exception:  # no summary (a file cut by a crash): read from the start
-        return None
-    before = [(ns, tree_ns) for key, ns, tree_ns in keyframes if key < tick]
-    if not before:
-        return None
-    ns, tree_ns = before[-1]
-    trees = [json.loads(m.data) for _, _, m in reader.iter_messages(topics=["/tree"], starting_at=tree_ns, ending_at=tree_ns)]
-    return (ns, {"tree": trees[-1]["nodes"]}) if trees else None
-
-
-def tick_lines(part: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
-    """An MCAP recording as the JSON-lines file's lines (``tree``, then each tick's with its ``bb``), in the order written.
-
-    With ``near``: from the last keyframe before tick ``near`` (its tree line first), found through the index.
-    """
-    from mcap.reader import make_reader
-
-    pending: dict[str, Any] | None = None
-    with part.open("rb") as f:
-        reader = make_reader(f)
-        start = _seek(reader, near) if near is not None else None
-        if start is not None:
-            yield start[1]
-        window = {"starting_at": start[0]} if start is not None else {}
-        for _, channel, message in reader.iter_messages(topics=["/tree", "/tree/tick", "/blackboard"], log_time_order=False, **window):
-            body = json.loads(message.data)
-            if channel.topic == "/blackboard" and pending is not None:
-                pending["bb"] = body["bb"]  # a tick's blackboard follows its /tree/tick message
-                continue
-            if pending is not None:
-                yield pending
-            if channel.topic == "/tree":
-                pending = None
-                yield {"tree": body["nodes"]}
-            else:
-                pending = {**body, "t": round(message.log_time / 1e9, 3)}
-    if pending is not None:
-        yield pending

@@ -13,19 +13,28 @@ twice ``max_bytes`` however long the run.
 
 from __future__ import annotations
 
+import ast
 import bisect
+import itertools
 import json
 import os
+import re
+import time
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
+from enum import Enum
 from pathlib import Path
-from typing import Any, Protocol
+from types import SimpleNamespace
+from typing import TYPE_CHECKING, Any, Protocol
 
 import py_trees
 
 from executive import blackboard
 from executive.clock import Clock
 from executive.io.storage import AppendFile, Storage
+
+if TYPE_CHECKING:
+    from executive.mavlink_dialect import MAVLinkMessage  # pymavlink: not imported to replay a file
 
 STATUS_CODES = {py_trees.common.Status.SUCCESS: "S", py_trees.common.Status.FAILURE: "F", py_trees.common.Status.RUNNING: "R"}
 MAX_VALUE_CHARS = 160
@@ -35,6 +44,60 @@ def show_value(value: Any) -> str:
     """A blackboard value as short text (its repr, cut to MAX_VALUE_CHARS)."""
     text = repr(value)
     return text if len(text) <= MAX_VALUE_CHARS else text[: MAX_VALUE_CHARS - 3] + "..."
+
+
+def _immutable(kind: type) -> bool:
+    """Values of ``kind`` are never changed in place (the blackboard's values are replaced whole): their text can be kept."""
+    if kind in (str, int, float, bool, tuple, type(None)) or issubclass(kind, Enum):
+        return True
+    params = getattr(kind, "__dataclass_params__", None)
+    if params is not None:
+        return bool(params.frozen)
+    config = getattr(kind, "model_config", None)  # a pydantic model: frozen (the mission's waypoints)
+    return isinstance(config, dict) and bool(config.get("frozen"))
+
+
+class ShownValues:
+    """The blackboard as short text (:func:`show_value`), an immutable value's repr made again only once it is replaced.
+
+    Most values stay the same object from tick to tick; their repr is most of what recording a tick costs.
+    """
+
+    def __init__(self) -> None:
+        self._seen: dict[str, tuple[Any, str, bool]] = {}  # key -> the value, its text, whether it is kept while the same object
+        self._kinds: dict[type, bool] = {}
+
+    def read(self) -> dict[str, str]:
+        shown: dict[str, str] = {}
+        seen, kinds = self._seen, self._kinds
+        for key, value in blackboard.documented_values():
+            last = seen.get(key)
+            if last is not None and last[2] and last[0] is value:
+                shown[key] = last[1]
+                continue
+            kind = type(value)
+            keep = kinds.get(kind)
+            if keep is None:
+                keep = kinds[kind] = _immutable(kind)
+            text = shown[key] = show_value(value)
+            seen[key] = (value, text, keep)
+        return shown
+
+
+_FIELD = re.compile(r"""(\w+)=('(?:[^'\\]|\\.)*'|"(?:[^"\\]|\\.)*"|[^,)]+)""")
+
+
+def literal(text: str | None) -> Any:
+    """A value shown as its repr, back (None when it is not a plain literal)."""
+    try:
+        return ast.literal_eval(text) if text is not None else None
+    except (ValueError, SyntaxError, MemoryError, RecursionError):
+        return None
+
+
+def shown_fields(text: str | None) -> dict[str, Any]:
+    """The fields of a value shown as ``Name(field=value, ...)`` (a dataclass's repr), each back as a literal; those cut off are missing."""
+    return {name: literal(value) for name, value in _FIELD.findall(text or "") if not value.endswith("...")}
 
 
 def _preorder(node: py_trees.behaviour.Behaviour) -> Iterator[py_trees.behaviour.Behaviour]:
@@ -67,8 +130,8 @@ class TickFile(Protocol):
     def write_event(self, before: str, after: str, reason: str) -> None:
         """A mission transition, as it happened."""
 
-    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
-        """The route a run starts on: its waypoints' (lat, lon)."""
+    def write_run(self, run: dict[str, Any]) -> None:
+        """A run begins: ``mission``, ``vehicle``, ``resumed_from``, ``started`` (wall time) and its ``waypoints`` (lat, lon, name)."""
 
     def close(self) -> None: ...
 
@@ -91,8 +154,8 @@ class JsonLinesFile:
     def write_event(self, before: str, after: str, reason: str) -> None:
         """Nothing to add: the transition is in the tick's blackboard (/mission/state, /mission/reason)."""
 
-    def write_route(self, waypoints: list[tuple[float, float]]) -> None:
-        """Nothing to add: the mission file holds the route (and the journal its edits)."""
+    def write_run(self, run: dict[str, Any]) -> None:
+        """Nothing to add: the mission file holds the route (and the journal the run)."""
 
     def close(self) -> None:
         self._file.close()
@@ -112,12 +175,16 @@ class JsonLinesFile:
         return True
 
 
-def open_tick_file(path: Path, max_bytes: int, storage: Storage | None, clock: Clock | None) -> TickFile:
-    """The back end for ``path``: MCAP for ``.mcap`` (Foxglove and the MCAP tools read it), JSON lines otherwise."""
-    if path.suffix.lower() == ".mcap":
-        from executive.mcap_recording import McapFile
+def open_tick_file(path: Path | None, max_bytes: int, storage: Storage | None, clock: Clock | None, live: Any = None) -> TickFile:
+    """The back end for ``path``: MCAP for ``.mcap`` (Foxglove and the MCAP tools read it), JSON lines otherwise.
 
-        return McapFile(path, max_bytes, storage, clock)
+    ``live`` (a :class:`~executive.foxglove_live.FoxgloveSink`) is given the MCAP file's messages too; with no ``path``, only it.
+    """
+    if path is None or path.suffix.lower() == ".mcap":
+        from executive.mcap_recording import ChannelFeed, McapSink
+
+        sinks = [McapSink(path, max_bytes, storage)] if path is not None else []
+        return ChannelFeed([*sinks, *([live] if live is not None else [])], clock)
     return JsonLinesFile(path, max_bytes, storage)
 
 
@@ -126,24 +193,27 @@ class SnapshotRecorder:
 
     ``FILE.mcap`` is written as MCAP (:mod:`executive.mcap_recording`), anything else as JSON lines;
     ``clock`` times what happens between ticks (mission transitions, log lines) in an MCAP file.
+    ``live``: a Foxglove server given what an MCAP file is (``path`` None: the server alone).
     """
 
     def __init__(
         self,
-        path: str | Path,
+        path: str | Path | None,
         *,
         max_bytes: int = 50 << 20,
         keyframe_every: int = 100,
         storage: Storage | None = None,
         clock: Clock | None = None,
+        live: Any = None,
     ) -> None:
-        self.path = Path(path)
+        self.path = Path(path) if path is not None else None
         self.keyframe_every = keyframe_every
-        self._file = open_tick_file(self.path, max_bytes, storage, clock)
+        self._file = open_tick_file(self.path, max_bytes, storage, clock, live)
         self._nodes: list[py_trees.behaviour.Behaviour] = []
         self._status: list[str] = []
         self._feedback: list[str] = []
         self._values: dict[str, str] = {}
+        self._shown = ShownValues()
         self._since_keyframe = 0
         self._last: tuple[int, float] | None = None  # the last tick recorded of this tree, and its time
 
@@ -155,9 +225,19 @@ class SnapshotRecorder:
         self._since_keyframe = self.keyframe_every
         self._last = None
 
-    def route(self, waypoints: list[tuple[float, float]]) -> None:
-        """The route the run starts on: its waypoints' (lat, lon)."""
-        self._file.write_route(waypoints)
+    def run_started(self, mission: Any, resumed_from: int | None) -> None:
+        """A run of ``mission`` (a :class:`~executive.mission.model.Mission`) begins: what it is, and the route it starts on."""
+        waypoints = [{"lat": w.lat, "lon": w.lon, "name": w.name} for w in mission.waypoints]
+        info = {"mission": mission.name, "vehicle": str(mission.vehicle), "resumed_from": resumed_from, "started": time.time()}
+        self._file.write_run({**info, "waypoints": waypoints})
+
+    @property
+    def mavlink(self) -> Callable[[str, MAVLinkMessage], object] | None:
+        """What hears each MAVLink message received (``in``) or sent (``out``) on the autopilot's link; None: the file takes none.
+
+        Only the Foxglove back end records them (one channel per kind); ``run --tlog`` records the link's bytes.
+        """
+        return getattr(self._file, "mavlink", None)
 
     def event(self, before: object, after: object, reason: str) -> None:
         """A mission transition (a MissionState listener)."""
@@ -169,7 +249,7 @@ class SnapshotRecorder:
         self._since_keyframe = 0 if keyframe else self._since_keyframe + 1
         status = status_codes(self._nodes)
         feedback = [n.feedback_message or "" for n in self._nodes]
-        values = {key: show_value(blackboard.value(key)) for key in blackboard.KEYS}
+        values = self._shown.read()
         line: dict[str, Any] = {"tick": tick, "t": round(t, 3)}
         if keyframe:
             line["key"] = True
@@ -191,7 +271,7 @@ class SnapshotRecorder:
         if self._last is None:
             return  # no tick of this tree was recorded (a mission refused before its tree ran)
         tick, t = self._last
-        values = {key: show_value(blackboard.value(key)) for key in blackboard.KEYS}
+        values = self._shown.read()
         line: dict[str, Any] = {"tick": tick, "t": t, "end": True}
         keys = {k: v for k, v in values.items() if self._values.get(k) != v}
         if keys:
@@ -257,13 +337,13 @@ def _is_mcap(part: Path) -> bool:
         return f.read(len(MCAP_MAGIC)) == MCAP_MAGIC
 
 
-def _lines(path: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
+def read_lines(path: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
     """The recording's lines, oldest first; with ``near``, an MCAP file's from its last keyframe before that tick."""
     for part in (path.with_name(path.name + ".1"), path):
         if part.exists():
             _check_kind(part)
             if _is_mcap(part):
-                from executive.mcap_recording import tick_lines
+                from executive.mcap_reading import tick_lines
 
                 yield from tick_lines(part, near)
                 continue
@@ -280,7 +360,7 @@ def _lines(path: Path, near: int | None = None) -> Iterator[dict[str, Any]]:
 def recorded_ticks(path: str | Path) -> list[tuple[int, int]]:
     """The ticks a recording holds, as (first, last) runs of consecutive ticks."""
     spans: list[tuple[int, int]] = []
-    for line in _lines(Path(path)):
+    for line in read_lines(Path(path)):
         if "tick" not in line:
             continue
         tick = line["tick"]
@@ -321,7 +401,7 @@ def replay(path: str | Path, tick: int | None = None) -> TickState:
     _parts(path)
     state: TickState | None = None
     nodes: list[dict[str, Any]] = []
-    for line in _lines(path, tick):
+    for line in read_lines(path, tick):
         if "tree" in line:
             nodes = line["tree"]
             state = None
@@ -336,9 +416,59 @@ def replay(path: str | Path, tick: int | None = None) -> TickState:
     return state
 
 
+class _RecordedBoard:
+    """A recorded blackboard (values as text) read back as :mod:`executive.mcap_recording` reads the live one."""
+
+    def __init__(self) -> None:
+        self.text: dict[str, str] = {}
+        self._t = 0.0
+        self._fix: tuple[str | None, Any] = (None, None)
+
+    def update(self, line: dict[str, Any]) -> None:
+        self.text.update(line.get("bb", {}))
+        self._t = line["t"]
+
+    def value(self, key: str) -> Any:
+        text = self.text.get(key)
+        if key != "/vehicle/position":
+            return literal(text)
+        if text != self._fix[0]:  # a new fix: timed by the tick that saw it when its time was cut off the text
+            fields = shown_fields(text)
+            whole = "lat" in fields and "lon" in fields
+            self._fix = (text, SimpleNamespace(**{"alt_rel_m": 0.0, **fields, "time": fields.get("time", self._t)}) if whole else None)
+        return self._fix[1]
+
+
+def convert(old: Path, new: Path) -> int:
+    """The JSON-lines recording ``old`` (and ``old.1``) written as the MCAP recording ``new``; how many tick lines."""
+    from executive.mcap_recording import ChannelFeed, McapSink
+
+    for part in _parts(old):
+        if _is_mcap(part):
+            raise NotSnapshots(f"{part}:1:1: (snapshot): already an MCAP recording")
+    board = _RecordedBoard()
+    out = ChannelFeed([McapSink(new, 1 << 62, None)], None, values=board.value)  # one file, however long: nothing is rotated away
+    ticks = 0
+    try:
+        for line in read_lines(old):
+            if "tree" in line:
+                out.write_tree(line["tree"])
+                continue
+            before = board.value("/mission/state")
+            board.update(line)
+            after = board.value("/mission/state")
+            if before is not None and after != before:
+                out.write_event(str(before), str(after), str(board.value("/mission/reason") or ""))
+            out.write_tick(line)
+            ticks += 1
+    finally:
+        out.close()
+    return ticks
+
+
 @dataclass(frozen=True)
 class _Entry:
-    """Where a tick's line is: its file, its byte offset, the tree it belongs to, whether it is a keyframe."""
+    """Where a tick's line is: its file, its byte offset (MCAP: its log time, ns), the tree it belongs to, whether it is a keyframe."""
 
     tick: int
     part: Path
@@ -360,21 +490,13 @@ class Recording:
         self._entries: list[_Entry] = []
         for part in _parts(self.path):
             _check_kind(part)
-            if _is_mcap(part):
-                raise NotSnapshots(
-                    f"{part}:1:1: (snapshot): an MCAP recording: `replay FILE --tick N` shows it; --web and --groot2 read JSON lines only"
-                )
-            with part.open("rb") as f:
-                offset = 0
-                for number, raw in enumerate(f, 1):
-                    line = _parse(raw, part, number)
-                    if "tree" in line:
-                        self.trees.append(line["tree"])
-                    elif self.trees:
-                        self._entries.append(_Entry(line["tick"], part, offset, len(self.trees) - 1, bool(line.get("key"))))
-                        if watch is not None:
-                            watch(line)
-                    offset += len(raw)
+            for offset, line in _offset_lines(part):
+                if "tree" in line:
+                    self.trees.append(line["tree"])
+                elif self.trees:
+                    self._entries.append(_Entry(line["tick"], part, offset, len(self.trees) - 1, bool(line.get("key"))))
+                    if watch is not None:
+                        watch(line)
         if not self._entries:
             raise LookupError(f"{self.path}: no tick recorded")
         self._ticks = [entry.tick for entry in self._entries]
@@ -407,12 +529,15 @@ class Recording:
         while not self._entries[k].key:  # each file of a recording starts each tree with a keyframe
             k -= 1
         start = self._entries[k]
-        state: TickState | None = None
-        with start.part.open("rb") as f:
-            f.seek(start.offset)
-            for n in range(i - k + 1):
-                state = _apply(state, self.trees[start.tree], _parse(f.readline(), start.part, n))
-        assert state is not None
+        lines = _offset_lines(start.part, start.offset)
+        for _, line in lines:
+            if line.get("tick") == start.tick and line.get("key"):
+                break  # an MCAP file's seek may start a message early: at its keyframe's tree
+        else:
+            raise ValueError(f"{start.part}: the keyframe of tick {start.tick} is no longer there")
+        state = _apply(None, self.trees[start.tree], line)
+        for _, line in itertools.islice((entry for entry in lines if "tree" not in entry[1]), i - k):
+            state = _apply(state, self.trees[start.tree], line)
         return state
 
     def _index(self, tick: int) -> int:
@@ -421,6 +546,20 @@ class Recording:
         if i < 0 or self._ticks[i] != tick:
             raise LookupError(f"{self.path}: tick {tick} is not in the recording (ticks {self.first} to {self.last})")
         return i
+
+
+def _offset_lines(part: Path, offset: int = 0) -> Iterator[tuple[int, dict[str, Any]]]:
+    """Each line of one file with where it is: a JSON-lines file's byte offset, an MCAP file's log time (ns, found through its index)."""
+    if _is_mcap(part):
+        from executive.mcap_reading import timed_lines
+
+        yield from timed_lines(part, offset)
+        return
+    with part.open("rb") as f:
+        f.seek(offset)
+        for number, raw in enumerate(f, 1):
+            yield offset, _parse(raw, part, number)
+            offset += len(raw)
 
 
 def _parse(raw: bytes, part: Path, number: int) -> dict[str, Any]:

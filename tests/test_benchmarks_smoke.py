@@ -26,7 +26,8 @@ def _check(rows: list[Row], count: int) -> None:
 def test_tick(autopilot: str) -> None:
     rows = tick.run(ticks=10, sizes=(2, 3), warmup_ticks=1, autopilot=autopilot, missions=[tick.MISSIONS / "rover_square.yaml"])  # type: ignore[arg-type]
     cpu = 1 if autopilot == "ardupilot" else 0  # the seed missions' CPU share: ArduPilot's
-    _check(rows, cpu + 1 + len(tick.PARTS) + 1)  # the full tick, its parts beside their floors, the growth
+    mcap = 1 if autopilot == "ardupilot" else 0  # the recording as MCAP beside JSON lines' (ArduPilot's rows alone)
+    _check(rows, cpu + 1 + len(tick.PARTS) + mcap + 1)  # the full tick, its parts beside their floors, the growth
     assert all(row.name.endswith(", px4") == (autopilot == "px4") for row in rows if not row.name.startswith("CPU share"))
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import logging
+import math
+import subprocess
 from pathlib import Path
 from typing import Any
 
@@ -11,15 +13,18 @@ import py_trees
 import pytest
 from mcap.reader import make_reader
 
-from executive.assembly import Wiring, snapshot_recorder
+from executive.assembly import Wiring, journal_recorder, snapshot_recorder
 from executive.behaviours import LinkAlive
 from executive.cli import main
 from executive.clock import Clock
-from executive.mcap_recording import tick_lines
+from executive.frames import global_to_local
+from executive.journal import Journal, JournalLogHandler
+from executive.mcap_reading import tick_lines
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.snapshots import SnapshotRecorder, render, replay
+from executive.snapshots import Recording, SnapshotRecorder, render, replay
+from tests_support import foxglove_js
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 
@@ -57,10 +62,15 @@ def square(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks,
     where = tmp_path_factory.mktemp("square")
     ticks = Ticks()
     recorders: list[SnapshotRecorder] = []
+    closers: list[Any] = []
 
     def plugs(clock: Clock) -> dict[str, Any]:
         recorders.extend([SnapshotRecorder(where / "run.mcap", clock=clock), SnapshotRecorder(where / "run.jsonl", clock=clock)])
-        return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders)]}
+        journal = Journal(where / "journal.db", clock)
+        closers.append(journal.close)
+        logging.getLogger("executive").addHandler(handler := JournalLogHandler(journal))
+        closers.append(lambda: logging.getLogger("executive").removeHandler(handler))
+        return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders), journal_recorder(journal)]}
 
     logging.getLogger("executive").setLevel(logging.INFO)  # as `executive run` logs: the mission's transitions are INFO lines
     try:
@@ -68,8 +78,8 @@ def square(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks,
             outcome = sim.run_to_end(limit_s=400)
     finally:
         logging.getLogger("executive").setLevel(logging.NOTSET)
-    for recorder in recorders:
-        recorder.close()
+    for close in [*(r.close for r in recorders), *closers]:
+        close()
     return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
 
 
@@ -80,14 +90,20 @@ def test_the_file_is_chunked_compressed_and_indexed_with_a_schema_per_channel(sq
         summary = make_reader(f).get_summary()
     assert summary is not None and summary.chunk_indexes and {c.compression for c in summary.chunk_indexes} == {"zstd"}
     schemas = {c.topic: summary.schemas[c.schema_id] for c in summary.channels.values()}
-    assert {topic: schema.name for topic, schema in schemas.items()} == {
+    mavlink = {topic: schema.name for topic, schema in schemas.items() if topic.startswith("/mavlink/")}
+    assert {"/mavlink/in/HEARTBEAT", "/mavlink/in/GLOBAL_POSITION_INT", "/mavlink/out/HEARTBEAT", "/mavlink/out/COMMAND_LONG"} <= set(mavlink)
+    assert all(name == "mavlink." + topic.rsplit("/", 1)[1] for topic, name in mavlink.items())
+    assert {topic: schema.name for topic, schema in schemas.items() if topic not in mavlink} == {
         "/tree": "executive.Tree",
         "/tree/tick": "executive.TreeTick",
         "/blackboard": "executive.Blackboard",
+        "/mission/run": "executive.Run",
         "/mission/state": "executive.MissionState",
         "/mission/events": "executive.MissionEvent",
         "/mission/route": "foxglove.GeoJSON",
         "/vehicle/location": "foxglove.LocationFix",
+        "/vehicle/pose": "foxglove.PoseInFrame",
+        "/tf": "foxglove.FrameTransforms",
         "/log": "foxglove.Log",
     }
     assert all(s.encoding == "jsonschema" and json.loads(s.data)["type"] == "object" for s in schemas.values())
@@ -130,6 +146,39 @@ def test_the_track_is_a_location_fix_at_the_time_it_was_received(square) -> None
     for t, fix in fixes:
         assert fix["timestamp"]["sec"] * 10**9 + fix["timestamp"]["nsec"] == t
         assert -35.37 < fix["latitude"] < -35.35 and 149.15 < fix["longitude"] < 149.18 and len(fix["position_covariance"]) == 9
+
+
+def test_each_mavlink_message_on_its_own_channel_with_its_fields(square) -> None:
+    path, _, _, _ = square
+    received, fixes = messages(path, "/mavlink/in/GLOBAL_POSITION_INT"), messages(path, "/vehicle/location")
+    by_time = dict(received)
+    assert len(received) >= len(fixes) and all(by_time[t]["lat"] / 1e7 == pytest.approx(f["latitude"]) for t, f in fixes)  # as received
+    sent = [m for _, m in messages(path, "/mavlink/out/COMMAND_LONG")]
+    assert any(m["command"] == 400 and m["param1"] == 1 for m in sent)  # MAV_CMD_COMPONENT_ARM_DISARM: the arming we asked
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    schema = next(summary.schemas[c.schema_id] for c in summary.channels.values() if c.topic == "/mavlink/in/GLOBAL_POSITION_INT")
+    assert json.loads(schema.data)["properties"]["lat"] == {"type": "integer"} and json.loads(schema.data)["properties"]["hdg"]
+
+
+def test_the_pose_is_in_the_home_frame_east_north_up(square) -> None:
+    path, _, _, _ = square
+    poses, transforms = messages(path, "/vehicle/pose"), messages(path, "/tf")
+    assert len(poses) > 100 and [t for t, _ in poses] == [t for t, _ in transforms]
+    attitude = {round(t, -8): m for t, m in messages(path, "/mavlink/in/ATTITUDE")}
+    fixes = {round(t, -8): m for t, m in messages(path, "/vehicle/location")}
+    home = load_mission(MISSIONS / "rover_square.yaml").home
+    for t, message in poses[::50]:
+        (tf,) = dict(transforms)[t]["transforms"]
+        assert message["frame_id"] == tf["parent_frame_id"] == "home" and tf["child_frame_id"] == "vehicle"
+        assert message["pose"]["position"] == tf["translation"] and message["pose"]["orientation"] == tf["rotation"]
+        q = message["pose"]["orientation"]
+        yaw_enu = math.atan2(2 * (q["w"] * q["z"] + q["x"] * q["y"]), 1 - 2 * (q["y"] ** 2 + q["z"] ** 2))
+        heading = attitude[max(k for k in attitude if k <= t)]["yaw"]  # ATTITUDE's yaw: from north, clockwise
+        assert math.cos(yaw_enu - (math.pi / 2 - heading)) == pytest.approx(1.0)
+        fix = fixes[max(k for k in fixes if k <= t)]
+        north, east = global_to_local(home.lat, home.lon, fix["latitude"], fix["longitude"])
+        assert (message["pose"]["position"]["x"], message["pose"]["position"]["y"]) == (pytest.approx(east, abs=0.05), pytest.approx(north, abs=0.05))
 
 
 def test_the_route_is_geojson_for_the_map(square) -> None:
@@ -185,11 +234,146 @@ def test_cli_replay_of_an_mcap_file(square, capsys: pytest.CaptureFixture[str]) 
     assert main(["replay", str(path)]) == 0
     last = capsys.readouterr().out.splitlines()
     assert last[1] == "✓ Mission" and "  /mission/state: 'COMPLETED'" in last and "  /mission/reason: 'every waypoint reached'" in last
-    assert main(["replay", str(path), "--web", "127.0.0.1:0"]) == 2  # the slider reads JSON lines only (yet): said, not served
-    assert "an MCAP recording" in capsys.readouterr().err
 
 
 def test_a_replay_of_a_tick_seeks_to_the_keyframe_before_it(square) -> None:
     path, _, _, _ = square
     tree, first, *_ = tick_lines(path, near=500)
     assert "tree" in tree and first.get("key") is True and 400 <= first["tick"] < 500  # keyframes every 100 ticks
+
+
+def test_the_slider_s_index_of_an_mcap_file_is_the_json_lines_file_s(square) -> None:
+    path, jsonl, _, _ = square
+    mcap, lines = Recording(path), Recording(jsonl)
+    assert (mcap.trees, mcap.ticks) == (lines.trees, lines.ticks)
+    for tick in (mcap.first, 99, 100, 101, 555, mcap.last):
+        a, b = mcap.state_at(tick), lines.state_at(tick)
+        assert (a.tick, a.status, a.feedback, a.blackboard, a.changed) == (b.tick, b.status, b.feedback, b.blackboard, b.changed)
+        assert a.t == round(b.t, 3)  # the JSON-lines end line keeps the clock's unrounded time
+
+
+def test_replay_web_shows_an_mcap_file_as_the_json_lines_file(square) -> None:
+    from executive.web.feed import Seen
+    from executive.web.replay import ReplaySource
+
+    path, jsonl, _, _ = square
+    mcap, lines = ReplaySource(str(path)), ReplaySource(str(jsonl))
+    assert mcap.hello() == lines.hello()
+    for tick in (300, None):
+        shown, expected = mcap.frame(tick).message(Seen()), lines.frame(tick).message(Seen())
+        assert shown["tree"]["nodes"] == expected["tree"]["nodes"]  # its id is the page's, new for each source
+        assert {k: v for k, v in shown.items() if k not in ("tree", "t")} == {k: v for k, v in expected.items() if k not in ("tree", "t")}
+
+
+def test_replay_groot2_plays_an_mcap_file(square) -> None:
+    from executive.groot2.replay import ReplayFeed
+    from executive.groot2.view import MonitorView
+
+    path, _, _, _ = square
+    view = MonitorView()
+    feed = ReplayFeed(Recording(path), view, start=500)
+    waits: list[float] = []
+    feed._play(lambda seconds: waits.append(seconds) or len(waits) >= 3)  # three ticks played, no wall clock
+    assert feed.position == 502 and waits[:2] == [pytest.approx(0.1, abs=0.002)] * 2
+
+
+def test_convert_writes_an_old_snapshot_file_as_mcap(square, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path, jsonl, _, _ = square
+    new = tmp_path / "old.mcap"
+    assert main(["convert", str(jsonl), str(new)]) == 0
+    assert "tick lines written" in capsys.readouterr().err
+    for tick in (0, 101, 555, None):
+        assert list(render(replay(new, tick))) == list(render(replay(jsonl, tick)))
+    assert [m["nodes"] for _, m in messages(new, "/tree")] == [m["nodes"] for _, m in messages(path, "/tree")]
+    events = [(m["before"], m["after"], m["reason"]) for _, m in messages(new, "/mission/events")]
+    assert events == [("RUNNING", "COMPLETED", "every waypoint reached")]  # the recorded blackboard's: READY was before the first tick
+    assert [m["state"] for _, m in messages(new, "/mission/state")] == [m["state"] for _, m in messages(path, "/mission/state")]
+    fixes, recorded = messages(new, "/vehicle/location"), messages(path, "/vehicle/location")
+    assert len(fixes) > 100 and all(-35.37 < m["latitude"] < -35.35 for _, m in fixes)
+    assert fixes[-1][1]["latitude"] == pytest.approx(recorded[-1][1]["latitude"], abs=1e-7)
+
+
+def test_convert_refuses_what_it_cannot_convert(square, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path, jsonl, _, _ = square
+    assert main(["convert", str(path), str(tmp_path / "again.mcap")]) == 2
+    assert "already an MCAP recording" in capsys.readouterr().err
+    assert main(["convert", str(jsonl), str(tmp_path / "new.jsonl")]) == 2
+    assert main(["convert", str(tmp_path / "none"), str(tmp_path / "new.mcap")]) == 2
+    assert "no such snapshot file" in capsys.readouterr().err
+
+
+def test_report_from_the_mcap_file_tells_what_the_journal_tells(square, capsys: pytest.CaptureFixture[str]) -> None:
+    path, _, _, _ = square
+    journal = path.with_name("journal.db")
+    assert main(["report", str(journal), "--json"]) == 0
+    expected = json.loads(capsys.readouterr().out)
+    assert main(["report", str(path), "--json"]) == 0
+    told = json.loads(capsys.readouterr().out)
+    for row in (*expected["transitions"], *expected["legs"], *expected["events"]):
+        row["t"] = round(row["t"], 3)  # vehicle time, as MCAP keeps it (ns)
+    same = ("mission", "vehicle", "outcome", "reason", "resumed_from", "transitions")
+    assert {k: told[k] for k in same} == {k: expected[k] for k in same}
+    assert told["started"] == pytest.approx(expected["started"], abs=5.0) and told["ended"] is None  # wall clock: the journal's alone
+    strip = ("lat", "lon")
+    assert [{k: v for k, v in leg.items() if k not in strip} for leg in told["legs"]] == [
+        {k: v for k, v in leg.items() if k not in strip} for leg in expected["legs"]
+    ]
+    assert all(a["lat"] == pytest.approx(b["lat"], abs=1e-5) for a, b in zip(told["legs"], expected["legs"], strict=True))
+    assert told["events"] == expected["events"]
+    assert main(["report", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("run 1: mission 'rover-square' (rover)") and "RUNNING -> COMPLETED: every waypoint reached" in text
+    assert main(["report", str(path), "--run", "2"]) == 2
+    assert "no run 2 (runs 1 to 1)" in capsys.readouterr().err
+
+
+def test_every_message_is_strict_json_of_the_type_its_schema_says(square) -> None:
+    path, _, _, _ = square
+    kinds = {"integer": int, "number": (int, float), "string": str, "array": list, "object": dict, "boolean": bool}
+
+    def no_constant(name: str) -> None:
+        raise AssertionError(f"{name} is not JSON")
+
+    with path.open("rb") as f:
+        for schema, channel, message in make_reader(f).iter_messages():
+            body = json.loads(message.data, parse_constant=no_constant)
+            for field, spec in json.loads(schema.data)["properties"].items():
+                allowed = spec["type"] if isinstance(spec["type"], list) else [spec["type"]]
+                value = body.get(field)
+                assert value is None or any(isinstance(value, kinds[k]) for k in allowed if k != "null"), (channel.topic, field, value)
+
+
+def test_foxglove_s_own_mcap_reader_reads_the_file(square) -> None:
+    """@mcap/core (TypeScript, another implementation than the `mcap` library's) reads every message, CRCs checked, and seeks."""
+    path, _, ticks, _ = square
+    middle = round(ticks.times[len(ticks.times) // 2][1], 3)
+    told = json.loads(subprocess.run(foxglove_js("read_mcap.js", str(path), str(round(middle * 1e9))), capture_output=True, text=True,
+                                     check=True, timeout=120).stdout)  # fmt: skip
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    counts = summary.statistics.channel_message_counts
+    assert {topic: c["count"] for topic, c in told["channels"].items()} == {c.topic: counts[i] for i, c in summary.channels.items()}
+    assert told["messageCount"] == summary.statistics.message_count and told["compression"] == ["zstd"]
+    assert told["library"] == "executive" and told["metadata"] == ["executive.keyframes"]
+    assert told["channels"]["/vehicle/location"]["schema"] == "foxglove.LocationFix"
+    assert told["channels"]["/tree"]["first"]["nodes"][0]["name"] == "Mission"
+    assert told["seek"] == [tick for tick, now in ticks.times if middle <= round(now, 3) < middle + 1]
+
+
+def test_the_shipped_foxglove_layout_reads_only_what_the_recording_holds(square, tmp_path: Path) -> None:
+    from executive.foxglove_layout import paths
+
+    path, _, _, _ = square
+    assert main(["foxglove-layout", "-o", str(tmp_path / "layout.json")]) == 0
+    layout = json.loads((tmp_path / "layout.json").read_text())
+    assert {"map!route", "RosOut!log", "RawMessages!tree"} <= set(layout["configById"])
+    with path.open("rb") as f:
+        summary = make_reader(f).get_summary()
+    schemas = {c.topic: json.loads(summary.schemas[c.schema_id].data) for c in summary.channels.values()}
+    for wanted in paths(layout):
+        topic, _, field = wanted.partition(".")
+        if topic == "vehicle":  # the 3D panel's frame, not a topic
+            continue
+        assert topic in schemas, wanted
+        name = field.split("[", 1)[0]
+        assert not name or name in schemas[topic]["properties"], wanted

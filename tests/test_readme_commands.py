@@ -40,6 +40,7 @@ COMMAND_WORDS = ("executive", "python", "python3", "pytest", "pip", "sudo", "sys
 #: Commands README shows that are not run here: exact text (after a ``$ ``, ``sudo`` and a comment are taken off) -> why.
 NOT_RUN_HERE: dict[str, str] = {
     "python3 -m venv .venv": "makes a virtual environment (this suite runs in one)",
+    "pip install 'executive[foxglove]'": "installs the Foxglove SDK (the test extra, this suite's, has it)",
     ". .venv/bin/activate": "a shell's own command",
     "pip install .": "installs the package from the network or a cache (this suite runs installed)",
     "pip install '.[test]'": "installs the package from the network or a cache (this suite runs installed)",
@@ -71,9 +72,10 @@ NOT_RUN_HERE: dict[str, str] = {
     "python -m benchmarks --only tick ingest": "a minute (tests/test_benchmarks_smoke.py)",
     "python -m benchmarks --only efficiency": "a minute (tests/test_benchmarks_smoke.py)",
     "python -m benchmarks --only route": "seconds (tests/test_benchmarks_smoke.py)",
+    "python -m benchmarks --only tick": "minutes (tests/test_benchmarks_smoke.py runs it small)",
 }
 #: Commands that need nothing but files: run in-process, in a scratch directory.
-IN_PROCESS = frozenset({"validate", "show", "schema", "behaviours", "export", "import", "service", "examples"})
+IN_PROCESS = frozenset({"validate", "show", "schema", "behaviours", "export", "import", "service", "examples", "foxglove-layout"})
 #: README's first command: run for real, as shown, its simulator lock-step with it (its pace is the reader's, not the suite's).
 RUN_FOR_REAL = {"executive run missions/rover_square.yaml --speedup 20": []}
 _PLACEHOLDER = re.compile(r"^\[|[|<>\[\]]|\.\.\.|^[A-Z][A-Z0-9_]*(\.[a-z]+)?$|^[A-Z]+:|:[A-Z]+$|^\d+\.\d+\.\d+\.\d+:[A-Z]+$")

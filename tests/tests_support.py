@@ -3,7 +3,11 @@ a mission out of reach run to its refusal, the time a thread waited for a CPU, `
 
 from __future__ import annotations
 
+import fcntl
 import os
+import shutil
+import subprocess
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -164,3 +168,23 @@ def runqueue_wait_s(native_id: int | None = None) -> float:
         return int(os.read(fd, 256).split()[1]) / 1e9
     finally:
         os.close(fd)
+
+
+FOXGLOVE_JS = Path(__file__).resolve().parent / "foxglove"
+
+
+def foxglove_js(script: str, *args: str) -> list[str]:
+    """``node tests/foxglove/SCRIPT ARGS``: Foxglove's own npm packages driven by node; the test fails (not skips) without them.
+
+    The packages are installed from the lock file at first use (one xdist worker at a time), so README's test command needs
+    no step of its own; `.ci/run` installs node and npm where the machine has none."""
+    if shutil.which("node") is None or shutil.which("npm") is None:
+        pytest.fail("needs node and npm (Debian: apt-get install nodejs npm, as .ci/run does)")
+    with open(FOXGLOVE_JS / "package-lock.json", encoding="utf-8") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (FOXGLOVE_JS / "node_modules" / "@mcap" / "core").is_dir():
+            npm = ["npm", "ci", "--prefix", str(FOXGLOVE_JS), "--no-audit", "--no-fund", "--loglevel=error"]
+            done = subprocess.run(npm, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=600, check=False)
+            if done.returncode != 0:
+                pytest.fail(f"npm ci --prefix tests/foxglove failed: {done.stderr.strip()}")
+    return ["node", str(FOXGLOVE_JS / script), *args]

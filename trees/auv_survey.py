@@ -10,6 +10,7 @@
     ├── Guarded survey or hold (reactive selector)
     │   ├── Guarded survey: link alive? EKF ok? armed? RC not taking over? speed, depth and (altitude legs) altitude within limits?
     │   │   -> for each leg: set GUIDED, change speed, reach the depth or the altitude above the seabed, go to the waypoint at it
+    │   │   (drive: auto: the horizon on ArduSub, its depths under the seabed floor; its mission at the leg, AUTO, the leg followed)
     │   └── Wait for guards: the failing guard's failsafe (by default hold in POSHOLD; a limit: hold) until it recovers, within a limit
     ├── Surface: ArduSub's SURFACE mode (it hands over to ALT_HOLD by itself at the surface)
     └── Hold at the surface: POSHOLD
@@ -48,7 +49,7 @@ from executive.behaviours import (
     Surface,
 )
 from executive.mission.model import Mission
-from executive.trees.parts import failsafe_guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
+from executive.trees.parts import auto_leg, failsafe_guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
 from executive.vehicles import PROFILES
 
 
@@ -73,7 +74,12 @@ def survey_guards(mission: Mission) -> list[Guard]:
 
 
 def leg(mission: Mission) -> py_trees.behaviour.Behaviour:
-    """One leg: GUIDED, the leg's speed, its depth or altitude where the vehicle is, then the waypoint at that depth or altitude."""
+    """One leg: GUIDED, the leg's speed, its depth or altitude where the vehicle is, then the waypoint at that depth or altitude.
+
+    ``drive: auto``: the leg in ArduSub's AUTO (:func:`executive.trees.parts.auto_leg`): straight to the waypoint at its
+    depth (no altitude legs), at the autopilot's WPNAV_SPEED, not the waypoint's speed."""
+    if mission.drive == "auto":
+        return auto_leg(mission)
     limits = mission.limits
     return py_trees.composites.Sequence(
         "Leg",

@@ -12,6 +12,7 @@ from executive.behaviours import (
     Armed,
     AutopilotAtLeg,
     BatteryAbove,
+    DepthsOnAutopilot,
     EkfOk,
     EnergyEnough,
     EnergyFits,
@@ -46,6 +47,8 @@ from executive.mission.rules import failsafe_policy, height_tolerance, rc_switch
 from executive.vehicles import PROFILES
 
 ARM_RETRY_S = 2.0
+#: A sub's last waypoint in AUTO is reached within this of its depth (GUIDED's ChangeDepth tolerance).
+SUB_DEPTH_TOLERANCE_M = 0.5
 #: Where a VTOL flying as a plane is held: it cannot hover, and QLOITER (the vtol's safe mode) would make it
 #: stop on its lift motors from cruise speed; LOITER circles where it is, as ArduPlane's own short failsafe does.
 FIXED_WING_HOLD_MODE = "LOITER"
@@ -136,8 +139,12 @@ MISSION_END_STOPS = ("MIS_DONE_BEHAVE", (0.0, 1.0), "drive: auto needs the vehic
 
 
 def mission_end_checks(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
-    """drive: auto: the check that the autopilot stops the vehicle at the end of its mission (else the mission is refused)."""
-    if mission.drive != "auto":
+    """drive: auto: the check that the autopilot stops the vehicle at the end of its mission (else the mission is refused).
+
+    ArduSub has no parameter for it: Sub::exit_mission (ArduSub/commands_logic.cpp) always holds, in AUTO at the
+    stopping point, position and depth (ModeAuto::auto_loiter_start), or, without a position, in ALT_HOLD (depth only).
+    """
+    if mission.drive != "auto" or mission.vehicle == "sub":
         return []
     name, allowed, why = MISSION_END_STOPS
     return [ParameterIs(name, allowed, why)]
@@ -245,11 +252,14 @@ def auto_leg(mission: Mission) -> py_trees.behaviour.Behaviour:
     asking left it; a mode a person set pauses the mission (executive.intervention).
     """
     limits = mission.limits
+    sub = mission.vehicle == "sub"  # its depths under the seabed floor, its last waypoint reached at its depth too
+    horizon_legs = limits.auto_horizon_legs
+    horizon = DepthsOnAutopilot(horizon_legs, limits.altitude_m.min, limits.seabed_floor) if sub else HorizonOnAutopilot(horizon_legs)
     steps = [
-        HorizonOnAutopilot(limits.auto_horizon_legs),
+        horizon,
         AutopilotAtLeg(),
         SetMode("AUTO", confirm_by_ack=True),  # the port names it per firmware (mode_name)
-        FollowAutoLeg(limits.acceptance_radius_m, limits.leg_timeout_s),
+        FollowAutoLeg(limits.acceptance_radius_m, limits.leg_timeout_s, depth_tolerance_m=SUB_DEPTH_TOLERANCE_M if sub else None),
     ]
     return py_trees.composites.Sequence("Leg in AUTO", memory=False, children=steps)
 

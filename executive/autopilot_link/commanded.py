@@ -7,6 +7,8 @@ own (real ArduPlane, on the ground and disarmed, was put in QLOITER by a pre-fli
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from executive.io.mavlink.link import Link
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
 
@@ -29,20 +31,31 @@ def commands_the_vehicle(msg: MAVLinkMessage) -> bool:
 
 
 class CommandWatch:
-    """A link that notes the first message sent that commands the vehicle (:attr:`commanded`), and passes everything on."""
+    """A link that notes the first message sent that commands the vehicle (:attr:`commanded`), and passes everything on.
+
+    Every message received and sent on the autopilot's link passes here: :attr:`listeners` hear each
+    (``in`` or ``out``, the message), on the thread that received or sent it (the MCAP recording's MAVLink channels).
+    """
 
     def __init__(self, link: Link) -> None:
         self.link = link
         #: The first message sent that could change the vehicle (its type); None: none yet.
         self.commanded: str | None = None
+        self.listeners: list[Callable[[str, MAVLinkMessage], object]] = []
 
     def recv(self) -> MAVLinkMessage | None:
-        return self.link.recv()
+        msg = self.link.recv()
+        if msg is not None and self.listeners:
+            for listener in self.listeners:
+                listener("in", msg)
+        return msg
 
     def send(self, msg: MAVLinkMessage) -> None:
         if self.commanded is None and commands_the_vehicle(msg):
             self.commanded = msg.get_type()
         self.link.send(msg)
+        for listener in self.listeners:
+            listener("out", msg)
 
     def close(self) -> None:
         self.link.close()

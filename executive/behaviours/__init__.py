@@ -1,5 +1,6 @@
 """Behaviours the trees are built from: guards (conditions), actions and flow control."""
 
+from executive.behaviours.auto_depth import DepthsOnAutopilot
 from executive.behaviours.auto_legs import AutopilotAtLeg, FollowAutoLeg, HorizonOnAutopilot
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
 from executive.behaviours.commands import Arm, ChangeSpeed, CommandAction, Disarm, HoldFor, SetMode
@@ -41,6 +42,7 @@ __all__ = [
     "ChangeSpeed",
     "CommandAction",
     "DepthWithin",
+    "DepthsOnAutopilot",
     "Disarm",
     "DriveRouteInAuto",
     "EkfOk",

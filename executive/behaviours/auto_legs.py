@@ -13,6 +13,8 @@ whole-route AUTO (Rover/mode_auto.cpp do_nav_wp reads the next navigation comman
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from py_trees.common import Status
 
 from executive import geo
@@ -20,6 +22,7 @@ from executive.autopilot import AutopilotPort
 from executive.behaviours.auto_route import AUTO, MissionTransferFollower
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.lifecycle import MissionState
+from executive.mission.model import Waypoint
 from executive.state import (
     MISSION_STATE_COMPLETE,
     GlobalPosition,
@@ -50,9 +53,13 @@ class HorizonOnAutopilot(MissionTransferFollower):
         super().__init__(name, retry_s)
         self.horizon_legs = horizon_legs
 
+    def given_route(self) -> Sequence[Waypoint]:
+        """The route as the autopilot is to hold it (a sub's depths bounded by the seabed floor: :mod:`executive.behaviours.auto_depth`)."""
+        return self.mission_state.route.waypoints
+
     def update(self) -> Status:
         busy = self._settle()
-        route, leg = self.mission_state.route.waypoints, self.mission_state.leg_index
+        route, leg = self.given_route(), self.mission_state.leg_index
         least, most = min(len(route), leg + 1), min(len(route), leg + 1 + self.horizon_legs)
         held = self.get("/vehicle/mission_items")
         n_held = len(held) if held is not None else 0
@@ -174,29 +181,42 @@ class FollowAutoLeg(TimedBehaviour):
     holds more than it should. Where the vehicle must be at the point, the last waypoint and a sample
     point (a stop in the autopilot's mission, which it never reports reached: see
     :func:`~executive.io.mavlink.mission_protocol.route_items`), it is reached on the position (within the
-    acceptance radius), as in GUIDED, not on the autopilot's word.
+    acceptance radius), as in GUIDED, not on the autopilot's word; a sub's (``depth_tolerance_m``) at the depth
+    its item gives too.
     """
 
-    reads = ("/vehicle/position", "/vehicle/mission_current", "/vehicle/mission_reached", "/mission/leg_index", "/mission/leg_count")
+    reads = (
+        "/vehicle/position", "/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/mission_items",
+        "/mission/leg_index", "/mission/leg_count",
+    )  # fmt: skip
     needs = ("clock", "mission_state", "autopilot")
     from_mission = {"acceptance_radius_m": "limits.acceptance_radius_m", "leg_timeout_s": "limits.leg_timeout_s"}
     mission_state: MissionState
     autopilot: AutopilotPort
 
-    def __init__(self, acceptance_radius_m: float, leg_timeout_s: float, name: str = "Follow the leg in AUTO") -> None:
+    param_docs = {"depth_tolerance_m": "sub: the last waypoint is reached within this of the depth its mission item gives (null: not a sub)"}
+
+    def __init__(
+        self, acceptance_radius_m: float, leg_timeout_s: float, name: str = "Follow the leg in AUTO", depth_tolerance_m: float | None = None
+    ) -> None:
         super().__init__(name)
         self.acceptance_radius_m = acceptance_radius_m
         self.leg_timeout_s = leg_timeout_s
+        self.depth_tolerance_m = depth_tolerance_m
         self._run_started: float | None = None  # reports before this run's first leg are another run's
+        self._leg = 0  # the leg whose timeout runs
 
     def initialise(self) -> None:
         super().initialise()
+        self._leg = self.mission_state.leg_index
         if self._run_started is None:
             self._run_started = self.started
 
     def update(self) -> Status:
         state = self.mission_state
         target, leg, n = state.target, state.leg_index, state.leg_count
+        if leg != self._leg:  # caught up under it (AutopilotAtLeg, on the autopilot's report): that leg's own timeout
+            self._leg, self.started = leg, self.clock.now()
         if target is None:
             self.feedback_message = "no active leg"
             return Status.FAILURE
@@ -205,7 +225,9 @@ class FollowAutoLeg(TimedBehaviour):
         if position is not None:
             distance, bearing = geo.distance_bearing(position.lat, position.lon, target.lat, target.lon)
             where = f"{distance:.1f} m at {bearing:03.0f}°"
-        within = distance is not None and distance <= self.acceptance_radius_m
+        depth_off = self._depth_off(leg, position)
+        within = distance is not None and distance <= self.acceptance_radius_m and depth_off is None
+        where = f"{where}{depth_off or ''}" if where else where
         said = self._autopilot_passed(self.autopilot.capabilities.first_item_seq + leg)
         stop = leg + 1 == n or target.sample  # the vehicle must be there: judged on the position
         if said and not stop:
@@ -220,6 +242,16 @@ class FollowAutoLeg(TimedBehaviour):
         stopped_short = " (the autopilot says reached: short of the acceptance radius)" if said else ""
         self.feedback_message = f"leg {leg + 1}/{n} in AUTO: {where or 'no position'}{stopped_short}"
         return Status.RUNNING
+
+    def _depth_off(self, leg: int, position: GlobalPosition | None) -> str | None:
+        """A sub away from the depth the autopilot's item ``leg`` gives (beyond ``depth_tolerance_m``): how far; else None."""
+        held = self.get("/vehicle/mission_items")
+        if self.depth_tolerance_m is None or position is None or held is None or leg >= len(held):
+            return None
+        depth, item_depth = -position.alt_rel_m, -held[leg].z
+        if abs(depth - item_depth) <= self.depth_tolerance_m:
+            return None
+        return f", at {depth:.1f} m, its depth {item_depth:.2f} m"
 
     def _autopilot_passed(self, seq: int) -> bool:
         """The autopilot reported item ``seq`` reached, or its mission moved past it, in this run (this leg, for MISSION_CURRENT)."""

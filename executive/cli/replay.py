@@ -22,6 +22,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--speed", type=float, default=1.0, metavar="X", help="with --groot2: play the recording X times faster than it ran (default 1)")
     p.set_defaults(func=main)
+    c = sub.add_parser("convert", help="a snapshot file of JSON lines (FILE and FILE.1) rewritten as one MCAP recording, for Foxglove")
+    c.add_argument("old", metavar="OLD", help="the snapshot file of JSON lines (its rotated FILE.1 is read first)")
+    c.add_argument("new", metavar="NEW.mcap", help="the MCAP file to write")
+    c.set_defaults(func=convert_main)
+    f = sub.add_parser("foxglove-layout", help="the Foxglove layout for a run's recording or live server: map, tree, log, plots")
+    f.add_argument("-o", "--output", metavar="FILE", help="write it to FILE (default: print it)")
+    f.set_defaults(func=layout_main)
 
 
 def _until_stopped() -> None:
@@ -123,4 +130,49 @@ def main(args: argparse.Namespace) -> int:
         print(f"executive: replay: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print("\n".join(render(state, all_keys=args.all_keys)))
+    return EXIT_OK
+
+
+def convert_main(args: argparse.Namespace) -> int:
+    """``executive convert OLD NEW.mcap``: exit 2 for a file that is not a snapshot file of JSON lines (said where)."""
+    from pathlib import Path
+
+    from executive.snapshots import convert
+
+    old, new = Path(args.old), Path(args.new)
+    if new.suffix.lower() != ".mcap":
+        print(f"{args.new}:1:1: (file): the new file must end in .mcap", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        ticks = convert(old, new)
+    except FileNotFoundError:
+        print(f"{args.old}:1:1: (file): no such snapshot file", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except ValueError as exc:
+        print(exc, file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:
+        print(f"{args.new}:1:1: (file): cannot be written: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(f"executive: {args.old}: {ticks} tick lines written to {args.new}", file=sys.stderr)
+    return EXIT_OK
+
+
+def layout_main(args: argparse.Namespace) -> int:
+    """``executive foxglove-layout [-o layout.json]``: Foxglove's layout JSON, to import in Foxglove (Layouts, Import from file)."""
+    import json
+
+    from executive.foxglove_layout import layout
+
+    text = json.dumps(layout(), indent=2) + "\n"
+    if args.output is None:
+        sys.stdout.write(text)
+        return EXIT_OK
+    try:
+        with open(args.output, "w", encoding="utf-8") as f:
+            f.write(text)
+    except OSError as exc:
+        print(f"{args.output}:1:1: (file): cannot be written: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(f"executive: wrote {args.output}: import it in Foxglove (Layouts, Import from file)", file=sys.stderr)
     return EXIT_OK

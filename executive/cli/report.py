@@ -19,7 +19,9 @@ from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("report", help="what a recorded run did: state changes, legs, samples, events")
-    p.add_argument("journal", metavar="DB", help="the journal written by `executive run --journal DB`")
+    p.add_argument(
+        "journal", metavar="DB", help="the journal written by `executive run --journal DB` (or an MCAP recording, `--snapshots FILE.mcap`)"
+    )
     p.add_argument("--run", type=int, help="which run (default: the last)")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=main)
@@ -82,6 +84,9 @@ def main(args: argparse.Namespace) -> int:
     if not Path(args.journal).is_file():
         print(f"executive: report: {args.journal}: no such journal", file=sys.stderr)
         return EXIT_BAD_INPUT
+    with open(args.journal, "rb") as f:
+        if f.read(8) == b"\x89MCAP0\r\n":
+            return _from_mcap(args)
     try:
         journal = Journal(args.journal, ScaledClock())
         try:
@@ -95,4 +100,17 @@ def main(args: argparse.Namespace) -> int:
         print(f"executive: report: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print(json.dumps(report, indent=2) if args.json else render(report))
+    return EXIT_OK
+
+
+def _from_mcap(args: argparse.Namespace) -> int:
+    """The report of a run recorded with ``run --snapshots FILE.mcap`` (no samples nor route edits: the journal has them)."""
+    from executive.mcap_report import report
+
+    try:
+        found = report(Path(args.journal), args.run)
+    except LookupError as exc:
+        print(f"executive: report: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(json.dumps(found, indent=2) if args.json else render(found))
     return EXIT_OK

@@ -24,7 +24,7 @@ from executive.assembly import (
     snapshot_recorder,
 )
 from executive.autopilot_link import SURVEY_S, SeveralAutopilots
-from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle
+from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle, number
 from executive.cli.common import load_or_report, mavlink_id
 from executive.cli.examples import fault_file, mission_file
 from executive.cli.run_checks import check_run
@@ -48,6 +48,7 @@ if TYPE_CHECKING:
 
     import can
 
+    from executive.foxglove_live import FoxgloveSink
     from executive.sim.faults import FaultInjector
     from executive.web.server import WebServer
 
@@ -96,6 +97,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--journal", metavar="DB", help="record the run (transitions, legs, samples, events) in this SQLite journal")
     p.add_argument("--resume", action="store_true", help="continue the last unfinished run of this mission in --journal (after a crash)")
     p.add_argument("--snapshots", metavar="FILE", help="record every tick (statuses, blackboard) for `executive replay`; FILE.mcap: MCAP (Foxglove)")
+    p.add_argument(
+        "--snapshots-rotate-mb",
+        type=number(at_least=0.01),
+        default=50.0,
+        metavar="MB",
+        help="past MB MiB the --snapshots file is finished (an MCAP file indexed) and moved to FILE.1, the one before dropped; default 50",
+    )
     p.add_argument("--can", metavar="IFACE:CHANNEL", help="the AgileX base's CAN bus (socketcan:can0, slcan:/dev/ttyACM0@115200, virtual:x...)")
     p.add_argument("--can-log", metavar="FILE", help="record the CAN bus (candump .log format) while running")
     p.add_argument("--obstacles", metavar="URL", help="a camera's obstacle distances (JSON over UDP, udpin:HOST:PORT), sent on as OBSTACLE_DISTANCE")
@@ -108,6 +116,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--groot2",
         metavar="[HOST:]PORT",
         help="serve the running tree to Groot2 (BehaviorTree.CPP's monitor protocol, ZeroMQ) on PORT and PORT+1 (127.0.0.1 unless HOST is given)",
+    )
+    p.add_argument(
+        "--foxglove",
+        metavar="[HOST:]PORT",
+        help="serve the run live to Foxglove (its WebSocket protocol) on PORT, the channels of --snapshots FILE.mcap (127.0.0.1 unless HOST)",
     )
     p.add_argument("--web-token-file", metavar="FILE", help="the live view's token (its first line, >= 16 characters), instead of a new one")
     p.add_argument(
@@ -206,7 +219,7 @@ def _control_socket_path(asked: str | None) -> str | None:
 
 
 def _recorders(
-    args: argparse.Namespace, clock: ScaledClock, stack: contextlib.ExitStack, storage: Storage
+    args: argparse.Namespace, clock: ScaledClock, stack: contextlib.ExitStack, storage: Storage, live: FoxgloveSink | None = None
 ) -> tuple[Journal | None, SnapshotRecorder | None]:
     """The journal (with the log's warnings as its events) and the snapshot recorder asked for, closed with ``stack``.
 
@@ -230,7 +243,8 @@ def _recorders(
         stack.callback(logging.getLogger("executive").removeHandler, handler)
     if args.snapshots:
         try:
-            snapshots = SnapshotRecorder(args.snapshots, storage=storage, clock=clock)
+            size = round(args.snapshots_rotate_mb * (1 << 20))
+            snapshots = SnapshotRecorder(args.snapshots, storage=storage, clock=clock, max_bytes=size, live=live)
         except OSError as exc:
             raise BadInput(f"--snapshots {args.snapshots}: cannot be created: {exc.strerror or exc}") from exc
         stack.callback(snapshots.close)
@@ -303,6 +317,26 @@ def _web_server(args: argparse.Namespace, stack: contextlib.ExitStack) -> WebSer
     stack.callback(server.close)
     print(f"executive: {told}", file=sys.stderr, flush=True)
     return server
+
+
+def _foxglove(args: argparse.Namespace, stack: contextlib.ExitStack) -> FoxgloveSink | None:
+    """The Foxglove server of --foxglove, listening (BadInput: a bad address, no SDK; NoVehicle: the port cannot be had), closed with ``stack``."""
+    if args.foxglove is None:
+        return None
+    from executive.foxglove_live import FoxgloveAddressError, FoxgloveSink, parse_address
+
+    try:
+        host, port = parse_address(args.foxglove)
+        live = FoxgloveSink(host, port)
+    except FoxgloveAddressError as exc:
+        raise BadInput(f"--foxglove: {exc}") from exc
+    except ImportError as exc:
+        raise BadInput(f"--foxglove: the Foxglove SDK is not installed ({exc}): pip install foxglove-sdk") from exc
+    except RuntimeError as exc:  # the SDK's: the port taken, an address not of this machine
+        raise NoVehicle(f"--foxglove: cannot listen on {args.foxglove}: {exc}") from exc
+    stack.callback(live.close)
+    print(f"executive: Foxglove can connect to {live.url} (open connection, Foxglove WebSocket)", file=sys.stderr, flush=True)
+    return live
 
 
 def _groot2(args: argparse.Namespace, stack: contextlib.ExitStack) -> list[Plug]:
@@ -426,8 +460,9 @@ def main(args: argparse.Namespace) -> int:
         obstacle_socket = _obstacle_socket(args.obstacles, stack)  # before the vehicle: a port in use stops us first
         web = _web_server(args, stack)
         groot2 = _groot2(args, stack)
+        live = _foxglove(args, stack)
         storage = Storage()  # the journal, snapshots and tlog on a disk that may fill up: said once, retried
-        journal, snapshots = _recorders(args, clock, stack, storage)  # before the vehicle: one that cannot be created is refused first
+        journal, snapshots = _recorders(args, clock, stack, storage, live)  # before the vehicle: one that cannot be created is refused first
         link = stack.enter_context(_vehicle_link(args, mission, clock, faults, signing_key, storage))
         gcs_link = stack.enter_context(_gcs_link(args.gcs, args.sysid))
         can_bus = _can_bus(args, stack)
@@ -442,6 +477,10 @@ def main(args: argparse.Namespace) -> int:
         attach_live_line(progress)  # a log record clears the live line first
         stack.callback(attach_live_line, None)
         plugs = _plugs(args, journal, snapshots, can_bus, obstacle_socket, gcs_link, socket_path, web) + groot2
+        if live is not None and (snapshots is None or snapshots.mavlink is None):  # not served with the MCAP file's messages
+            served = SnapshotRecorder(None, clock=clock, live=live)
+            stack.callback(served.close)
+            plugs.append(snapshot_recorder(served))
         runtime = build_runtime(
             mission,
             link,

@@ -47,6 +47,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     install.add_argument("mission", type=mission_file, help="mission YAML file (checked now; the unit names it by its absolute path)")
     install.add_argument("--mavlink", metavar="URL", help="the autopilot link (/dev/ttyACM0,921600, udpin:0.0.0.0:14550...); none: the simulator")
     install.add_argument("--journal", metavar="DB", help=f"the run's journal, for --resume (default {STATE_DIR}/NAME.db)")
+    install.add_argument(
+        "--record",
+        metavar="FILE",
+        help="record every tick as `run --snapshots FILE` does (FILE.mcap: MCAP, for Foxglove); rotated past --record-rotate-mb",
+    )
+    install.add_argument("--record-rotate-mb", type=number(at_least=0.01), metavar="MB", help="as `run --snapshots-rotate-mb` (default 50)")
     install.add_argument("--name", help="the unit is executive-NAME.service (default: the mission file's name)")
     install.add_argument("--user", help="run as this user (in group dialout for a serial autopilot); default root")
     install.add_argument("--watchdog-sec", type=number(at_least=2.0), default=20.0, metavar="S", help="WatchdogSec (default 20; pinged every S/2)")
@@ -83,6 +89,10 @@ def run_arguments(args: argparse.Namespace, mission: Path, unit: str) -> list[st
     run = [str(mission), "--journal", journal, "--resume", "--socket", f"/run/{unit}/control.sock"]
     if args.mavlink:
         run += ["--mavlink", args.mavlink]
+    if args.record:
+        run += ["--snapshots", str(Path(args.record).absolute())]
+        if args.record_rotate_mb is not None:
+            run += ["--snapshots-rotate-mb", f"{args.record_rotate_mb:g}"]
     if not args.start_at_boot:  # a reboot, or the last run's end, must not set the vehicle off on its own
         run.append("--wait")
     return [*run, *args.run_options]
@@ -143,6 +153,8 @@ def main(args: argparse.Namespace) -> int:
     from executive.cli import build_parser
     from executive.cli.run_checks import check_run
 
+    if args.record_rotate_mb is not None and not args.record:
+        raise BadInput("--record-rotate-mb: there is no --record to rotate")
     path = Path(args.mission).resolve()
     unit = unit_name(path, args.name)
     try:  # the very command line the unit runs, checked now as `run` checks it, not at the vehicle's next boot

@@ -61,11 +61,16 @@ ARDUPILOT_ONLY_TREES: dict[str, str] = {
 }
 
 
-#: drive: auto: the trees that can be driven by the autopilot's own AUTO, and the vehicle kinds (ArduRover: rover, boat).
-AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {"waypoints": frozenset({"rover", "boat"}), "goto_sample": frozenset({"rover", "boat"})}
+#: drive: auto: the trees that can be driven by the autopilot's own AUTO, and the vehicle kinds (ArduRover: rover, boat;
+#: ArduSub: sub, its waypoints at their depths).
+AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {
+    "waypoints": frozenset({"rover", "boat"}),
+    "goto_sample": frozenset({"rover", "boat"}),
+    "auv_survey": frozenset({"sub"}),
+}
+AUTO_DRIVE_FIRMWARE = {"waypoints": "ArduRover", "goto_sample": "ArduRover", "auv_survey": "ArduSub"}
 #: drive: auto refused, per tree, until it can be flown so: why.
 AUTO_DRIVE_REFUSED: dict[str, str] = {
-    "auv_survey": "ArduSub's AUTO with depth is not done yet",
     "vtol_transit": "its take-off, transitions and landing are the executive's",
     "ugv_rc_route": "its operator puts the route in AUTO already",
 }
@@ -84,8 +89,26 @@ def drive_errors(mission: Mission) -> list[str]:
     if kinds is None:
         return [f"tree {name} is not known to be driven in AUTO; use drive: guided"]
     if mission.vehicle not in kinds:
-        return [f"tree {name} is driven in AUTO on a {' or '.join(sorted(kinds))} (ArduRover) so far, not a {mission.vehicle}; use drive: guided"]
+        kinds_here = f"{' or '.join(sorted(kinds))} ({AUTO_DRIVE_FIRMWARE[name]})"
+        return [f"tree {name} is driven in AUTO on a {kinds_here} so far, not a {mission.vehicle}; use drive: guided"]
     return []
+
+
+#: drive: auto on a sub: why an altitude leg cannot be a mission item. ArduSub's AUTO takes a height above the seabed
+#: (the terrain frame) only from a good sonar reading at the leg's start, else its terrain failsafe
+#: (ArduSub/mode_auto.cpp auto_wp_start: "Terrain data (rangefinder) not available", failsafe_terrain_on_event), and the
+#: executive's depth from the sonar, re-sent as the seabed changes (executive.seabed), cannot be put in one item.
+AUTO_ALTITUDE_LEG = (
+    "drive: auto flies a sub's waypoints at their depths: ArduSub's AUTO holds a height above the seabed only with the sonar "
+    "reading it when the leg starts (else its terrain failsafe); use control_mode depth, or drive: guided"
+)
+
+
+def _auto_depth_errors(mission: Mission) -> list[tuple[Path, str]]:
+    """drive: auto on a sub: every leg a depth leg."""
+    if mission.drive != "auto" or mission.vehicle != "sub":
+        return []
+    return [(("waypoints", i, "control_mode"), AUTO_ALTITUDE_LEG) for i, wp in enumerate(mission.waypoints) if wp.control_mode == "altitude"]
 
 
 def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
@@ -155,7 +178,7 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
                 why = f"{d:.0f} m from home, over limits.max_goal_distance_m ({limit:g} m): refused at start with the vehicle at home"
                 errors.append((("waypoints", i), why))
     errors += _leg_time_errors(mission)
-    errors += [(("drive",), why) for why in drive_errors(mission)]
+    errors += [(("drive",), why) for why in drive_errors(mission)] + _auto_depth_errors(mission)
     if mission.vehicle == "vtol":
         errors += _vtol_errors(mission) + _height_errors(mission)
     if mission.simulator is not None and mission.simulator.q_guided_mode and (mission.simulator.model or mission.vehicle) != "vtol":

@@ -7,18 +7,16 @@ the targets the mission headed for (``/mission/target``), in the order they came
 
 from __future__ import annotations
 
-import ast
 import bisect
 import re
 from typing import Any
 
 from executive import frames
-from executive.snapshots import Recording
+from executive.snapshots import Recording, literal, shown_fields
 from executive.web.feed import Frame, Plan, TrackView, new_tree
 
 _LAT_LON = re.compile(r"\blat=(-?[0-9.]+(?:e-?[0-9]+)?), lon=(-?[0-9.]+(?:e-?[0-9]+)?)")
 _BATTERY = re.compile(r"\bremaining_pct=(-?[0-9]+)")
-_FIELD = re.compile(r"""(\w+)=('(?:[^'\\]|\\.)*'|"(?:[^"\\]|\\.)*"|[^,)]+)""")
 
 
 def _lat_lon(text: str | None) -> tuple[float, float] | None:
@@ -26,19 +24,11 @@ def _lat_lon(text: str | None) -> tuple[float, float] | None:
     return (float(found[1]), float(found[2])) if found else None
 
 
-def _literal(text: str | None) -> Any:
-    """A value shown as its repr, back (None when it is not a plain literal)."""
-    try:
-        return ast.literal_eval(text) if text is not None else None
-    except (ValueError, SyntaxError):
-        return None
-
-
 def _waiting(text: str | None, t: float) -> dict[str, Any] | None:
     """``/mission/waiting`` as recorded (a ``Waiting(...)`` repr) as the live status has it: node, path, feedback, since, for_s."""
     if not text or not text.startswith("Waiting("):
         return None
-    fields = {name: _literal(value) for name, value in _FIELD.findall(text)}
+    fields = shown_fields(text)
     since = fields.get("since")
     for_s = round(t - since, 1) if isinstance(since, int | float) else None
     return {"node": fields.get("node"), "path": fields.get("path"), "feedback": fields.get("feedback") or "", "since": since, "for_s": for_s}
@@ -46,16 +36,16 @@ def _waiting(text: str | None, t: float) -> dict[str, Any] | None:
 
 def status_of(values: dict[str, str], t: float) -> dict[str, Any]:
     """The status bar's fields, read from a recorded blackboard at clock time ``t``."""
-    leg, legs = _literal(values.get("/mission/leg_index")) or 0, _literal(values.get("/mission/leg_count")) or 0
+    leg, legs = literal(values.get("/mission/leg_index")) or 0, literal(values.get("/mission/leg_count")) or 0
     battery = _BATTERY.search(values.get("/vehicle/battery") or "")
     return {
-        "state": _literal(values.get("/mission/state")),
-        "reason": _literal(values.get("/mission/reason")),
+        "state": literal(values.get("/mission/state")),
+        "reason": literal(values.get("/mission/reason")),
         "leg": min(leg + 1, legs),
         "legs": legs,
-        "mode": _literal(values.get("/vehicle/mode")),
-        "armed": bool(_literal(values.get("/vehicle/armed"))),
-        "link_up": bool(_literal(values.get("/link/up"))),
+        "mode": literal(values.get("/vehicle/mode")),
+        "armed": bool(literal(values.get("/vehicle/armed"))),
+        "link_up": bool(literal(values.get("/link/up"))),
         "battery_pct": int(battery[1]) if battery else None,
         "battery_v": None,
         "yaw_deg": None,

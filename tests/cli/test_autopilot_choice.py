@@ -64,12 +64,15 @@ def test_run_with_autopilot_px4_refuses_drive_auto_before_starting_a_vehicle(tmp
     assert "simulated" not in err  # no vehicle was started
 
 
-def test_run_refuses_drive_auto_of_a_tree_it_cannot_drive_yet(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_run_refuses_drive_auto_of_a_leg_it_cannot_drive(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """auv_survey's altitude leg: ArduSub's AUTO holds a height above the seabed only from the sonar (its terrain failsafe)."""
     text = (Path(__file__).parents[2] / "missions" / "auv_survey.yaml").read_text(encoding="utf-8")
     path = tmp_path / "auv.yaml"
     path.write_text(text.replace("tree: auv_survey\n", "tree: auv_survey\ndrive: auto\n"), encoding="utf-8")
     assert main(["run", str(path), "--socket", "none"]) == 2
-    assert "drive: tree auv_survey: ArduSub's AUTO with depth is not done yet; use drive: guided" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "auv.yaml:36:78: waypoints[2].control_mode: drive: auto flies a sub's waypoints at their depths" in err
+    assert "use control_mode depth, or drive: guided (waypoint 3, 'north-over-seabed')" in err and "simulated" not in err
 
 
 def test_run_with_autopilot_px4_flies_the_simulated_px4_and_ctrl_c_in_the_take_off_lands_it() -> None:

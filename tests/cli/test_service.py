@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shlex
@@ -135,3 +136,33 @@ def test_a_crash_exits_70_with_its_traceback_so_the_service_restarts_on_it_and_n
     assert main(["run", str(mission), "--socket", "none"]) == 70
     err = capsys.readouterr().err
     assert "Traceback" in err and "RuntimeError: a bug" in err and "executive: run: crashed (a bug, traceback above): exit 70" in err
+
+
+def test_record_takes_an_mcap_file_rotated_at_the_size_asked(capsys, mission, tmp_path, monkeypatch):
+    """``--record FILE.mcap``: the unit's run records every tick as MCAP; rotated past ``--record-rotate-mb``, each file seekable alone."""
+    from mcap.reader import make_reader
+
+    from executive.snapshots import replay
+    from tests_support import run_in_lockstep
+
+    record = tmp_path / "run.mcap"
+    run = shlex.split(unit_of(capsys, str(mission), "--record", str(record), "--record-rotate-mb", "0.01")["ExecStart"][0])
+    assert run[run.index("--snapshots") :][:4] == ["--snapshots", str(record), "--snapshots-rotate-mb", "0.01"]
+    assert main(["service", "install", str(mission), "--record-rotate-mb", "1", "--print"]) == 2
+    assert "--record-rotate-mb: there is no --record to rotate" in capsys.readouterr().err
+    run_in_lockstep(monkeypatch)
+    argv = ["run", str(mission), "--snapshots", str(record), "--snapshots-rotate-mb", "0.01", "--speedup", "50", "--socket", "none"]
+    assert main(argv) == 0, capsys.readouterr().err
+    older, newer = tmp_path / "run.mcap.1", record
+    assert older.stat().st_size > 10_485
+    for part in (older, newer):
+        with part.open("rb") as f:
+            summary = make_reader(f).get_summary()
+        assert summary is not None and part.stat().st_size < 40_000  # 0.01 MiB: 10 KiB chunks, a file a chunk and its index over
+
+        assert {"/tree", "/tree/tick", "/mission/state"} <= {c.topic for c in summary.channels.values()}
+    last = replay(newer)
+    assert last.blackboard["/mission/state"] == "'COMPLETED'"
+    with older.open("rb") as f:
+        first_tick = next(json.loads(m.data)["tick"] for _, _, m in make_reader(f).iter_messages(topics=["/tree/tick"]))
+    assert replay(older, first_tick + 5).tick == first_tick + 5  # the older file reads alone, from its own keyframe

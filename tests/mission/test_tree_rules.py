@@ -67,9 +67,14 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
         ),
         ("vehicle: boat\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
         ("vehicle: rover\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
+        ("vehicle: sub\ntree: auv_survey\ndrive: auto\nwaypoints:\n  - {lat: 1.0, lon: 2.0, control_mode: depth, depth_m: 5}\n", []),
         (
-            "vehicle: sub\ntree: auv_survey\ndrive: auto\n" + WP,
-            ["m.yaml:5:8: drive: tree auv_survey: ArduSub's AUTO with depth is not done yet; use drive: guided"],
+            "vehicle: sub\ntree: auv_survey\ndrive: auto\nwaypoints:\n  - {lat: 1.0, lon: 2.0, control_mode: altitude, altitude_m: 5}\n",
+            [
+                "m.yaml:7:40: waypoints[0].control_mode: drive: auto flies a sub's waypoints at their depths: ArduSub's AUTO holds a "
+                "height above the seabed only with the sonar reading it when the leg starts (else its terrain failsafe); "
+                "use control_mode depth, or drive: guided (waypoint 1)"
+            ],
         ),
         (
             "vehicle: rover\ntree: ugv_rc_route\ndrive: auto\nwaypoints: []\n",

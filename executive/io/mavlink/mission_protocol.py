@@ -156,8 +156,22 @@ def first_mismatch(sent: Sequence[MissionItem], held: Sequence[MissionItem]) -> 
     return None
 
 
+#: A sub's waypoint at the surface is given this far under it: ArduSub's do_nav_wp (ArduSub/commands_logic.cpp) takes an
+#: altitude of 0 for "stay at the current depth", and an altitude above home must not be positive (start_command).
+SURFACE_ITEM_DEPTH_M = 0.01
+
+
+def item_altitude(wp: Waypoint) -> float:
+    """A waypoint's altitude in its mission item (relative to home): a sub's depth leg at minus its depth (the surface just
+    under it, :data:`SURFACE_ITEM_DEPTH_M`), else ``alt_m``."""
+    if wp.depth_m is None and wp.control_mode != "depth":
+        return wp.alt_m
+    return -max(wp.depth_m or 0.0, SURFACE_ITEM_DEPTH_M)
+
+
 def route_items(waypoints: Sequence[Waypoint]) -> tuple[MissionItem, ...]:
-    """The mission items 1..n a route is uploaded as: a NAV_WAYPOINT per waypoint, a NAV_LOITER_UNLIM per sample point.
+    """The mission items 1..n a route is uploaded as: a NAV_WAYPOINT per waypoint, a NAV_LOITER_UNLIM per sample point;
+    a sub's at its depth (:func:`item_altitude`).
 
     A sample point is a stop that lasts as long as the sample: ArduRover drives to a NAV_LOITER_UNLIM and stops
     there (ModeAuto::do_nav_wp with always_stop_at_destination, so the waypoint before it is driven through toward it,
@@ -167,7 +181,7 @@ def route_items(waypoints: Sequence[Waypoint]) -> tuple[MissionItem, ...]:
     likewise, and it has no location to stop at.
     """
     return tuple(
-        (MissionItem.stop if wp.sample else MissionItem.waypoint)(seq, wp.lat, wp.lon, wp.alt_m) for seq, wp in enumerate(waypoints, start=1)
+        (MissionItem.stop if wp.sample else MissionItem.waypoint)(seq, wp.lat, wp.lon, item_altitude(wp)) for seq, wp in enumerate(waypoints, start=1)
     )
 
 

@@ -39,8 +39,10 @@ from executive.sim.ardupilot.base import (
     TARGET_REPORT_MASK,
     ArduPilotSim,
 )
+from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 from executive.sim.firmware import DEFAULT_HOME, Command, Home, e7, valid_latlon
-from executive.sim.physics.underwater import SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
+from executive.sim.mission_store import StoredCommand
+from executive.sim.physics.underwater import SUB_HORIZONTAL_LIMITS, SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
 from executive.sim.physics.vehicle import VehicleModel
 from executive.vehicles import SUB_MODES, VehicleProfile
 
@@ -52,13 +54,32 @@ RANGEFINDER_MIN_M, RANGEFINDER_MAX_M = 0.5, 30.0  # RNGFND1_MIN/RNGFND1_MAX of A
 RANGEFINDER_REACH_M = 655.35  # DISTANCE_SENSOR's current_distance is 16 bits of cm
 
 
+#: WPNAV_SPEED and WPNAV_RADIUS as ArduSub sets them (ArduSub/Parameters.h: WPNAV_SPEED 100 cm/s; AC_WPNav.cpp: WPNAV_RADIUS 200 cm).
+WPNAV_SPEED_M_S, WPNAV_RADIUS_M = 1.0, 2.0
+
+
+class ArduSubMissionStore(ArduPilotMissionStore):
+    """ArduSub's mission: ArduPilot's store, silent at the mission's end (Sub::exit_mission says nothing, unlike ArduRover), and
+    counting MISSION_SET_CURRENTs, which start the item again in AUTO (AP_Mission::set_current_cmd)."""
+
+    starts = 0  # set-currents so far: AUTO starts its item again at each
+
+    def set_current(self, seq: int) -> bool:
+        done = super().set_current(seq)
+        self.starts += int(done)
+        return done
+
+    def _completed(self) -> None:
+        """ArduSub announces no mission end."""
+
+
 class ArduSubSim(ArduPilotSim):
     """ArduSub on a vectored ROV/AUV frame, over a seabed; the seabed and the limits are options.
 
     MANUAL, STABILIZE and ACRO have no pilot here: the vehicle stops and its buoyancy takes it up.
     ALT_HOLD holds the depth it had when entered (or when armed), POSHOLD the position too. GUIDED
     holds where it can stop until given a target; a target reached is held. SURFTRAK holds the
-    height above the seabed it had when entered. AUTO waits for the mission protocol; CIRCLE and
+    height above the seabed it had when entered. AUTO flies the mission (:meth:`_update_auto`); CIRCLE and
     MOTOR_DETECT are not simulated.
     """
 
@@ -71,7 +92,8 @@ class ArduSubSim(ArduPilotSim):
     AUTOPILOT_MODES = frozenset({"AUTO", "GUIDED", "CIRCLE", "POSHOLD"})
     POSITION_MODES = frozenset({"GUIDED", "AUTO", "POSHOLD", "CIRCLE"})  # Mode::requires_GPS()
     DEPTH_HOLD_MODES = frozenset({"ALT_HOLD", "POSHOLD", "GUIDED", "SURFTRAK"})
-    NOT_SIMULATED = frozenset({"AUTO", "CIRCLE", "MOTOR_DETECT"})
+    NOT_SIMULATED = frozenset({"CIRCLE", "MOTOR_DETECT"})
+    MISSION_STORE = ArduSubMissionStore
     STREAMS: ClassVar[Mapping[int, float]] = MappingProxyType({**DEFAULT_INTERVALS, _M.MAVLINK_MSG_ID_DISTANCE_SENSOR: 0.25})
 
     vehicle: UnderwaterVehicle
@@ -96,6 +118,8 @@ class ArduSubSim(ArduPilotSim):
         self._limits = limits
         self._destination: tuple[float, float] | None = None  # GUIDED's horizontal target
         self._guided_speed: float | None = None
+        self._auto_item: tuple[int | None, int, StoredCommand] | None = None  # AUTO's command: (seq, the set-current it began at, item)
+        self._auto_reached_at: float | None = None  # when AUTO's waypoint was reached (its hold time counts from there)
         super().__init__(profile, clock, home, **options)
         self.params.update(RNGFND1_MIN=RANGEFINDER_MIN_M, RNGFND1_MAX=rangefinder_max_m)  # answered to PARAM_REQUEST_READ
 
@@ -160,6 +184,8 @@ class ArduSubSim(ArduPilotSim):
         v = self.vehicle
         if mode in self.NOT_SIMULATED:
             return False
+        if mode == "AUTO" and not self.mission.present:  # ModeAuto::init: a position and a mission
+            return False
         self._destination = None
         v.hold()
         if mode == "SURFTRAK" and self.rangefinder_m is None:
@@ -173,12 +199,17 @@ class ArduSubSim(ArduPilotSim):
             v.hold_depth()
         else:
             v.release_depth()
-        if mode == "GUIDED":
-            self._guided_speed = None
+        if mode in ("GUIDED", "AUTO"):
+            self._guided_speed = None  # AUTO: wp_and_spline_init_cm, back to WPNAV_SPEED
+        if mode == "AUTO":
+            self._auto_item = None
+            self.mission.start_or_resume()  # MIS_RESTART 0
         return True
 
     def _update_mode(self) -> None:
         v = self.vehicle
+        if self.mode == "AUTO" and self.armed:
+            self._update_auto()
         if not self.armed and self.mode in self.DEPTH_HOLD_MODES | {"SURFACE"}:
             # disarmed, the controllers relax: once armed the vehicle holds where it then is
             if v.holding_altitude:
@@ -191,6 +222,62 @@ class ArduSubSim(ArduPilotSim):
             self.set_mode(self.profile.modes["ALT_HOLD"])  # ModeReason::SURFACE_COMPLETE
         elif self.mode == "ALT_HOLD" and self.at_surface and (v.depth_target_m or 0.0) < SURFACE_DEPTH_M + 0.05:
             v.hold_depth_at(SURFACE_DEPTH_M + 0.05)  # ArduSub keeps its depth target 5 cm under SURFACE_DEPTH
+
+    def _update_auto(self) -> None:
+        """AUTO flies the mission as ArduSub does (ArduSub/mode_auto.cpp, commands_logic.cpp, AP_Mission).
+
+        A NAV_WAYPOINT: straight to the point at its altitude above home (a depth: an altitude of 0 keeps the
+        current depth, do_nav_wp), at WPNAV_SPEED (or DO_CHANGE_SPEED's), every waypoint a stop; reached within
+        WPNAV_RADIUS in 3-D (AC_WPNav), then its hold time, "Reached command #N" and MISSION_ITEM_REACHED. Other items
+        are passed over. An item rewritten while flown is flown as it began (AP_Mission runs its cached command: no
+        mission change detection in ArduSub); MISSION_SET_CURRENT starts it again. After the last: ModeAuto::auto_loiter_start,
+        holding the stopping point and its depth in AUTO (Sub::exit_mission), said by no message.
+        """
+        v, mission = self.vehicle, self.mission
+        assert isinstance(mission, ArduSubMissionStore)
+        item = mission.current
+        if item is None:  # complete (or cleared): hold where it stops
+            if self._auto_item is not None:
+                self._auto_item = self._destination = None
+                v.hold()
+                v.hold_depth()
+            return
+        seq = mission.current_seq
+        if self._auto_item is not None and self._auto_item[:2] == (seq, mission.starts):
+            item = self._auto_item[2]  # the command as it began
+            if item.command == _M.MAV_CMD_NAV_WAYPOINT and not self._waypoint_reached(item):
+                return
+            if item.command == _M.MAV_CMD_NAV_WAYPOINT and self.elapsed_s < (self._auto_reached_at or 0.0) + item.params[0]:
+                return
+            if item.command == _M.MAV_CMD_NAV_WAYPOINT:
+                self._text(_M.MAV_SEVERITY_INFO, f"Reached command #{seq}")
+            item = mission.advance()
+            if item is None:
+                self._update_auto()
+                return
+        self._auto_item, self._auto_reached_at = (mission.current_seq, mission.starts, item), None
+        if item.command != _M.MAV_CMD_NAV_WAYPOINT:
+            return
+        depth = v.depth_m if item.alt_cm == 0 else -item.alt_cm / 100
+        self._destination = (item.lat, item.lon)
+        v.drive_to(item.lat, item.lon, self._guided_speed or float(self.params.get("WPNAV_SPEED", WPNAV_SPEED_M_S * 100)) / 100)
+        v.hold_depth_at(depth)
+
+    def _waypoint_reached(self, item: StoredCommand) -> bool:
+        """AC_WPNav: the leg finished and the vehicle within WPNAV_RADIUS of the point, in 3-D; when, remembered.
+
+        Its leg is one 3-D track, finished when its target is at the point in depth too: here, arrived horizontally and
+        within the horizontal arrival distance of the depth."""
+        if self._auto_reached_at is not None:
+            return True
+        v = self.vehicle
+        depth = v.depth_target_m if v.depth_target_m is not None else v.depth_m
+        off = math.hypot(v.distance_to(item.lat, item.lon), v.depth_m - depth)
+        finished = v.arrived and abs(v.depth_m - depth) <= SUB_HORIZONTAL_LIMITS.arrive_m
+        if finished and off <= float(self.params.get("WPNAV_RADIUS", WPNAV_RADIUS_M * 100)) / 100:
+            self._auto_reached_at = self.elapsed_s
+            return True
+        return False
 
     def _desired_location(self) -> tuple[float, float] | None:
         if self.mode in ("GUIDED", "POSHOLD") and self.vehicle.target is not None:

@@ -6,6 +6,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import pytest
+from test_mission_store import item, upload
 
 from executive.clock import ScaledClock
 from executive.mavlink_dialect import mavlink as m
@@ -223,3 +224,37 @@ def test_a_sub_over_tcp(client_for: Callable[[str], Client]) -> None:
         client.wait("GLOBAL_POSITION_INT", lambda msg: msg.relative_alt < -2900)
         sensor = client.wait("DISTANCE_SENSOR")
         assert 2650 < sensor.current_distance < 2750
+
+
+def test_auto_flies_each_waypoint_at_its_depth_and_holds_the_last_in_auto(make_gcs: MakeGcs) -> None:
+    """ArduSub's AUTO (mode_auto.cpp, commands_logic.cpp): each NAV_WAYPOINT at its altitude above home (minus the depth), reached
+    within WPNAV_RADIUS in 3-D ("Reached command #N", MISSION_ITEM_REACHED); after the last, the point and its depth held in AUTO,
+    its end said only by MISSION_CURRENT (COMPLETE)."""
+    gcs = armed_in(make_gcs, "ALT_HOLD")
+    lat, lon = gcs.north(10.0)
+    assert upload(gcs, [item(gcs, 0), item(gcs, 1, lat, lon, -3.0), item(gcs, 2, *gcs.north(20.0), -6.0)])[-1].type == m.MAV_MISSION_ACCEPTED
+    assert gcs.set_mode("AUTO") == m.MAV_RESULT_ACCEPTED
+    gcs.run(120.0, step=0.5)
+    said = gcs.log
+    assert [r.seq for r in said if r.get_type() == "MISSION_ITEM_REACHED"] == [1, 2]
+    assert [t for t in gcs.texts(said) if "command" in t or "Complete" in t] == ["Reached command #1", "Reached command #2"]
+    current = gcs.last("MISSION_CURRENT")
+    assert (current.seq, current.mission_state, gcs.ap.mode) == (2, m.MISSION_STATE_COMPLETE, "AUTO")
+    assert abs(depth(gcs) - 6.0) < 0.2 and gcs.ap.vehicle.distance_to(*gcs.north(20.0)) < 1.0 and gcs.ap.vehicle.speed_m_s < 0.05
+
+
+def test_an_item_rewritten_in_auto_is_flown_as_it_began_until_mission_set_current(make_gcs: MakeGcs) -> None:
+    """ArduSub has no mission change detection: AP_Mission runs its cached command, so a partial write of the item being flown
+    changes nothing until MISSION_SET_CURRENT starts it again (AP_Mission::set_current_cmd)."""
+    gcs = armed_in(make_gcs, "ALT_HOLD")
+    far = gcs.north(60.0)
+    assert upload(gcs, [item(gcs, 0), item(gcs, 1, *far, -10.0)])[-1].type == m.MAV_MISSION_ACCEPTED
+    assert gcs.set_mode("AUTO") == m.MAV_RESULT_ACCEPTED
+    gcs.run(5.0, step=0.5)
+    gcs.send(gcs.mav.mission_write_partial_list_encode(1, 1, 1, 1, 0))
+    gcs.send(item(gcs, 1, *far, -4.0))
+    gcs.run(30.0, step=0.5)
+    assert depth(gcs) > 8.0  # still diving to the 10 m it began with
+    gcs.send(gcs.mav.mission_set_current_encode(1, 1, 1))
+    gcs.run(30.0, step=0.5)
+    assert abs(depth(gcs) - 4.0) < 0.3

@@ -1,0 +1,106 @@
+"""`run --foxglove PORT`: the run served live to Foxglove's own WebSocket client (@foxglove/ws-protocol, driven by node).
+
+The client is Foxglove's npm package, installed by `.ci/run` (`npm ci --prefix tests/foxglove`): these tests fail, not skip,
+without it. The mission runs lock-step; the client reads on its own (node's) time.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import subprocess
+from pathlib import Path
+from typing import Any
+
+import pytest
+from mcap.reader import make_reader
+
+from executive.assembly import snapshot_recorder
+from executive.cli import main
+from executive.clock import Clock
+from executive.foxglove_live import FoxgloveSink
+from executive.mission.lifecycle import MissionStatus
+from executive.snapshots import SnapshotRecorder
+from executive.testing import Lockstep
+from tests_support import foxglove_js, line_mission
+
+
+class NodeClient:
+    """``node client.js URL``: Foxglove's client subscribed to every channel; its JSON lines read back."""
+
+    def __init__(self, url: str, *flags: str) -> None:
+        self.proc = subprocess.Popen(foxglove_js("client.js", url, *flags), stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+        assert self.proc.stdout is not None
+        self.first = json.loads(self.proc.stdout.readline())  # subscribed to what the server advertised when it connected
+
+    def done(self) -> list[dict[str, Any]]:
+        """Every line it printed, once it ended (at the mission's end, or now)."""
+        out, _ = self.proc.communicate(timeout=60)  # stdin closed: it ends at once if it has not already
+        return [self.first, *(json.loads(line) for line in out.splitlines())]
+
+    def kill(self) -> None:
+        self.proc.kill()
+        self.proc.wait()
+
+
+def run(path: Path | None, live: FoxgloveSink | None, waypoints: int = 4) -> MissionStatus:
+    """The line mission, lock-step, recorded to ``path`` (and served on ``live``)."""
+    recorders: list[SnapshotRecorder] = []
+
+    def plugs(clock: Clock) -> dict[str, Any]:
+        recorders.append(SnapshotRecorder(path, clock=clock, live=live))
+        return {"plugs": [snapshot_recorder(recorders[0])]}
+
+    mission = line_mission("live")
+    with Lockstep(line_mission("live", waypoints=mission.waypoints[:waypoints]), options_for_clock=plugs) as sim:
+        status = sim.run_to_end(300.0).status
+    recorders[0].close()
+    return status
+
+
+def test_foxglove_s_own_client_reads_the_channels_of_the_file_live(tmp_path: Path) -> None:
+    live = FoxgloveSink("127.0.0.1", 0)
+    client = NodeClient(live.url)
+    try:
+        assert run(tmp_path / "run.mcap", live) is MissionStatus.COMPLETED
+        lines = client.done()
+    finally:
+        client.kill()
+        live.close()
+    (done,) = [line for line in lines if line["event"] == "done"]
+    advertised = {topic for line in lines if line["event"] == "subscribed" for topic in line["topics"]}
+    with (tmp_path / "run.mcap").open("rb") as f:
+        summary = make_reader(f).get_summary()
+    assert advertised == {c.topic for c in summary.channels.values()}  # the same channels as the file
+    received = done["received"]
+    assert done["serverName"] == "executive"
+    assert received["/vehicle/location"]["schemaName"] == "foxglove.LocationFix" and received["/vehicle/location"]["count"] > 100
+    ticks = received["/tree/tick"]
+    assert ticks["encoding"] == "json" and ticks["count"] > 300 and ticks["last"]["body"].get("end") is True
+    assert ticks["last"]["timestamp"] == round(ticks["last"]["body"]["tick"] * 0.1 * 1e9, -6) or ticks["last"]["timestamp"] > 0
+    assert received["/mission/state"]["last"]["body"]["state"] == "COMPLETED"
+    assert received["/tree"]["first"]["body"]["nodes"][0]["name"] == "Mission"
+    assert received["/mavlink/in/GLOBAL_POSITION_INT"]["count"] > 100
+
+
+def test_a_client_that_never_reads_changes_no_recording_byte(tmp_path: Path) -> None:
+    """The same run recorded alone, then served to Foxglove's client stalled after subscribing to everything: the same bytes."""
+    assert run(tmp_path / "alone.jsonl", None) is MissionStatus.COMPLETED
+    live = FoxgloveSink("127.0.0.1", 0)
+    stalled = NodeClient(live.url, "--stall")
+    served = SnapshotRecorder(None, live=live)
+    try:
+        assert run(tmp_path / "served.jsonl", None) is MissionStatus.COMPLETED  # recorded as before...
+        assert run(None, live) is MissionStatus.COMPLETED  # ...and the same mission served to a client that reads nothing
+        assert stalled.proc.poll() is None  # still connected, never reading
+    finally:
+        served.close()
+        stalled.kill()
+        live.close()
+    digests = {hashlib.sha256((tmp_path / name).read_bytes()).hexdigest() for name in ("alone.jsonl", "served.jsonl")}
+    assert len(digests) == 1
+
+
+def test_run_foxglove_refuses_a_bad_address(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", "missions/rover_square.yaml", "--foxglove", "127.0.0.1:http", "--socket", "none"]) == 2
+    assert "--foxglove: '127.0.0.1:http' is not [HOST:]PORT" in capsys.readouterr().err
