@@ -102,8 +102,9 @@ def readings_in(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
 
 
 def energy_fits(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
-    """With an ``energy:`` block: the whole route and the way home must fit the battery above the reserve, else refused unarmed."""
-    return [EnergyFits()] if mission.energy is not None else []
+    """The whole route and the way home must fit the battery above the reserve, else refused unarmed (every mission, but
+    ``energy: {check: off}``; a battery that cannot tell the energy of a mission without ``energy:``: warned, run unjudged)."""
+    return [EnergyFits()] if mission.energy_rule() is not None else []
 
 
 def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
@@ -185,7 +186,7 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
         ("battery_low", BatteryAbove(limits.battery_min_pct, limits.battery_min_v) if battery_checked else None),
         ("rc_loss", RcNotLost(mission.rc.source)),
         ("geofence_breach", inside_geofence(mission)),
-        ("energy", EnergyEnough() if mission.energy is not None else None),
+        ("energy", EnergyEnough(required=mission.energy is not None) if mission.energy_rule() is not None else None),
         ("keep_out", outside_keep_out(mission)),
     ]
     extra = [guard for condition, guard in candidates if condition not in covered and guard is not None]

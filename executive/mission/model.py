@@ -264,6 +264,9 @@ class EnergyConfig(BaseModel):
     """energy: will the rest of the route and the way home fit the battery, above a reserve (executive.sensing.energy)."""
 
     model_config = _STRICT
+    check: bool = Field(
+        True, description="off: no energy rule for this mission (it runs on every mission whose vehicle reports its battery, energy: or not)"
+    )
     capacity_wh: float | None = Field(
         None, gt=0.0, le=1_000_000.0, description="the pack's energy, Wh (else the autopilot's capacity in mAh times nominal_v)"
     )
@@ -440,8 +443,16 @@ class Mission(BaseModel):
     vtol: VtolOptions | None = Field(None, description="vtol_transit options")
     rc_route: RcRouteOptions | None = Field(None, description="ugv_rc_route options")
     simulator: SimulatorOptions | None = Field(None, description="the built-in simulated vehicle for `executive run` without --mavlink")
-    energy: EnergyConfig | None = Field(None, description="the battery's energy and reserve: the route and the way home must fit")
+    energy: EnergyConfig | None = Field(
+        None, description="the battery's energy and reserve: the route and the way home must fit (said or not; check: off to opt out)"
+    )
     waypoints: list[Waypoint] = Field(max_length=100_000, description="the route; only ugv_rc_route may start empty (the operator records it)")
+
+    def energy_rule(self) -> EnergyConfig | None:
+        """The energy rule's settings: the ``energy:`` block, else its defaults (every mission has the rule); None with ``check: off``."""
+        if self.energy is None:
+            return EnergyConfig()
+        return self.energy if self.energy.check else None
 
     @model_validator(mode="before")
     @classmethod

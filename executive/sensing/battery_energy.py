@@ -5,7 +5,9 @@ From what the autopilot reports and the mission's ``energy:`` block, never a gue
 - **capacity**, Wh: ``energy.capacity_wh``; else the autopilot's capacity in mAh (ArduPilot BATT_CAPACITY,
   ``libraries/AP_BattMonitor/AP_BattMonitor_Params.cpp``; PX4 BAT1_CAPACITY, ``src/lib/battery/module.yaml``,
   -1 = unknown) times the pack's nominal voltage: ``energy.nominal_v``, or PX4's BAT1_N_CELLS x 3.7 V (a
-  Li-ion/LiPo cell's nominal). ArduPilot has no cell count: without ``nominal_v`` its mAh are not Wh.
+  Li-ion/LiPo cell's nominal). ArduPilot has no cell count: without ``nominal_v`` the cells are counted from the
+  pack's voltage at rest before arming, where only one count puts each cell within 3.65-4.25 V (a Li-ion/LiPo
+  pack charged enough to start: 12.6 V is 3 cells); else its mAh are not Wh, and the rule says to set ``nominal_v``.
 - **drawn**, Wh: BATTERY_STATUS ``energy_consumed`` (hJ; ArduPilot sends consumed_wh * 36, ``GCS_Common.cpp``
   send_battery_status); else ``current_consumed`` mAh times the pack's voltage (PX4 sends energy_consumed -1,
   ``src/modules/mavlink/streams/BATTERY_STATUS.hpp``). A monitor that measures no current (ArduPilot
@@ -39,11 +41,34 @@ class Capacity:
     source: str
 
 
-def capacity(config: EnergyConfig, params: Mapping[str, float], autopilot: str) -> Capacity | str:
-    """The pack's capacity in Wh, or why it cannot be told (naming what to set)."""
+#: A resting Li-ion/LiPo cell charged enough to start a mission: the band the cells are counted by (3.65 V is ~15 % left).
+CELL_AT_REST_V = (3.65, 4.25)
+
+
+@dataclass(frozen=True, slots=True)
+class NotJudged:
+    """A vehicle whose battery cannot tell its energy, on a mission that did not ask for the rule: it runs, warned, unjudged."""
+
+    why: str
+
+
+def cells_at_rest(volts: float) -> int | None:
+    """The pack's cells in series, from its voltage at rest: the one count that puts each cell in :data:`CELL_AT_REST_V`."""
+    low, high = CELL_AT_REST_V
+    counts = [n for n in range(1, 31) if low <= volts / n <= high]
+    return counts[0] if len(counts) == 1 else None
+
+
+def capacity_param(autopilot: str) -> str:
+    """The autopilot's parameter holding the pack's capacity in mAh."""
+    return "BAT1_CAPACITY" if autopilot == "px4" else "BATT_CAPACITY"
+
+
+def capacity(config: EnergyConfig, params: Mapping[str, float], autopilot: str, rest_v: float | None = None) -> Capacity | str:
+    """The pack's capacity in Wh, or why it cannot be told (naming what to set); ``rest_v``: the pack's voltage before arming."""
     if config.capacity_wh is not None:
         return Capacity(config.capacity_wh, f"energy.capacity_wh {config.capacity_wh:g} Wh")
-    name = "BAT1_CAPACITY" if autopilot == "px4" else "BATT_CAPACITY"
+    name = capacity_param(autopilot)
     mah = params.get(name)
     if mah is None:
         return f"{name} not read from the autopilot: set energy.capacity_wh"
@@ -52,8 +77,11 @@ def capacity(config: EnergyConfig, params: Mapping[str, float], autopilot: str) 
     volts, said = config.nominal_v, "energy.nominal_v"
     if volts is None and autopilot == "px4" and params.get("BAT1_N_CELLS", 0) > 0:
         volts, said = params["BAT1_N_CELLS"] * CELL_NOMINAL_V, f"BAT1_N_CELLS {params['BAT1_N_CELLS']:g} x {CELL_NOMINAL_V} V"
+    if volts is None and rest_v and (cells := cells_at_rest(rest_v)) is not None:
+        volts, said = cells * CELL_NOMINAL_V, f"{cells} cells: {rest_v:.1f} V at rest; energy.nominal_v if not Li-ion/LiPo"
     if volts is None:
-        return f"{name} {mah:g} mAh, but not the pack's voltage: set energy.nominal_v (11.1 for a 3S pack) or energy.capacity_wh"
+        seen = f" ({rest_v:.1f} V at rest: no one cell count)" if rest_v else ""
+        return f"{name} {mah:g} mAh, but not the pack's voltage{seen}: set energy.nominal_v (11.1 for a 3S pack) or energy.capacity_wh"
     return Capacity(mah / 1000.0 * volts, f"{name} {mah:g} mAh x {volts:g} V ({said})")
 
 
@@ -77,9 +105,31 @@ def unknown_reading(status: BatteryStatus | None, battery: Battery | None, param
         if drawn_wh(status, battery) is None:
             monitor = params.get("BATT_MONITOR")
             kind = f" (BATT_MONITOR {monitor:g}: {MONITOR_KINDS.get(int(monitor), 'see AP_BattMonitor.h')})" if monitor is not None else ""
-            return f"the battery monitor counts no energy drawn{kind}: fit a current sensor (BATT_MONITOR 4) or remove energy:"
+            return f"the battery monitor counts no energy drawn{kind}: fit a current sensor (BATT_MONITOR 4) or set energy: {{check: off}}"
         return "the autopilot does not estimate the remaining charge (battery_remaining -1): set its battery capacity"
     return None
+
+
+def judgeable(
+    config: EnergyConfig,
+    said: bool,
+    status: BatteryStatus,
+    battery: Battery | None,
+    params: Mapping[str, float],
+    autopilot: str,
+    rest_v: float | None,
+) -> Capacity | NotJudged | str:
+    """The capacity when the battery can tell the mission's energy; else why: a :class:`NotJudged` when the mission did not ``said``
+    the rule and the monitor measures no current (a voltage-only monitor: the energy is neither counted nor told by a capacity);
+    else the refusal naming what to set (a current measured but no capacity, a mission's ``energy:`` the battery cannot serve)."""
+    pack = capacity(config, params, autopilot, rest_v)
+    unknown = unknown_reading(status, battery, params)
+    measured = status.current_a is not None and status.current_a >= 0.0
+    if not said and not measured and (unknown is not None or isinstance(pack, str)):
+        return NotJudged(unknown or f"the battery monitor measures no current, and {pack}")
+    if isinstance(pack, str):
+        return pack + ("; or energy: {check: off}" if not said else "")
+    return unknown if unknown is not None else pack
 
 
 def counts_current(status: BatteryStatus) -> bool:

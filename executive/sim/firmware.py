@@ -479,9 +479,17 @@ class FirmwareSim(ABC):
 
     # -- outgoing messages -----------------------------------------------------------------------
 
+    @property
+    def voltage_only(self) -> bool:
+        """ArduPilot's BATT_MONITOR 3 (AP_BattMonitor_Analog, no current pin): the current, the charge drawn and the remaining
+        charge reported unknown (-1, GCS_Common.cpp send_battery_status / battery_remaining_pct)."""
+        return self.BATTERY_CAPACITY_PARAM == "BATT_CAPACITY" and self.params.get("BATT_MONITOR") == 3
+
     def _msg_sys_status(self) -> MAVLinkMessage:
         b = self.battery
         battery = (round(b.voltage_v * 1000), round(b.current_a * 100), b.remaining_pct(self.BATTERY_COUNTED_FROM_FULL))
+        if self.voltage_only:
+            battery = (battery[0], -1, -1)
         return self._mav.sys_status_encode(*self.sensor_status(), 150, *battery, 0, 0, 0, 0, 0, 0)
 
     def _msg_battery_status(self) -> MAVLinkMessage:
@@ -489,9 +497,10 @@ class FirmwareSim(ABC):
         b = self.battery
         cells = [min(round(b.voltage_v * 1000), 65534)] + [65535] * 9  # no cell voltages: the pack's in cell 0
         energy_hj = round(b.consumed_wh * 36) if self.BATTERY_REPORTS_ENERGY else -1
+        counted = (round(b.current_a * 100), round(b.consumed_mah), energy_hj, b.remaining_pct(self.BATTERY_COUNTED_FROM_FULL))
         return self._mav.battery_status_encode(
-            0, _M.MAV_BATTERY_FUNCTION_UNKNOWN, _M.MAV_BATTERY_TYPE_UNKNOWN, 32767, cells, round(b.current_a * 100), round(b.consumed_mah),
-            energy_hj, b.remaining_pct(self.BATTERY_COUNTED_FROM_FULL), 0, _M.MAV_BATTERY_CHARGE_STATE_OK,
+            0, _M.MAV_BATTERY_FUNCTION_UNKNOWN, _M.MAV_BATTERY_TYPE_UNKNOWN, 32767, cells,
+            *((-1, -1, -1, -1) if self.voltage_only else counted), 0, _M.MAV_BATTERY_CHARGE_STATE_OK,
         )  # fmt: skip
 
     def _msg_gps_raw_int(self) -> MAVLinkMessage:

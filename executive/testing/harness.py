@@ -26,6 +26,8 @@ START_S = 100.0
 EKF_READY = EkfStatus(EkfFlags(831), 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 #: A full battery as SYS_STATUS reports it (12.6 V, 100 %): what :meth:`Harness.build`'s vehicle reports until a test says otherwise.
 BATTERY_FULL = Battery(12.6, 1.0, 100, 0.0)
+#: What the energy rule makes of a test vehicle's battery (no energy watch runs here): not judged, so the rule passes.
+ENERGY_UNJUDGED = "a test vehicle (executive.testing) tells no battery energy"
 
 
 def mode_switch_channel(mission: Mission | None) -> float:
@@ -134,8 +136,9 @@ class Harness:
 
         The blackboard is reset first (every documented key at its default), so build it before scripting inputs. The vehicle
         then reports what a healthy one has told by the time a mission starts and the guards need: a full battery
-        (:data:`BATTERY_FULL`) and its firmware's default mode-switch channel (``/vehicle/params``: MODE_CH 8 on ArduRover,
-        FLTMODE_CH 8 on ArduPlane); ``h.vehicle.set(vehicle__battery=None)`` (or ``vehicle__params=None``) for one that has not.
+        (:data:`BATTERY_FULL`), its firmware's default mode-switch channel (``/vehicle/params``: MODE_CH 8 on ArduRover,
+        FLTMODE_CH 8 on ArduPlane) and an energy rule that cannot judge it (:data:`ENERGY_UNJUDGED`); ``h.vehicle.set(vehicle__battery=None)``
+        (or ``vehicle__params=None``, ``energy__not_judged=""``) for one that has not.
         """
         from executive import mission_tree
 
@@ -151,7 +154,7 @@ class Harness:
         harness = cls(root if root is not None else mission_tree.build(mission), clock, link, commander, state, transfer=missions, **setup)
         param = harness.autopilot.capabilities.mode_switch_param
         params = {param: mode_switch_channel(mission)} if param else None
-        harness.vehicle.set(vehicle__battery=BATTERY_FULL, vehicle__params=params)
+        harness.vehicle.set(vehicle__battery=BATTERY_FULL, vehicle__params=params, energy__not_judged=ENERGY_UNJUDGED)
         return harness
 
     # -- ticking --------------------------------------------------------------------------

@@ -13,7 +13,7 @@ from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
 from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.state import GlobalPosition
-from executive.testing.harness import BATTERY_FULL, Harness, Vehicle, mode_switch_channel
+from executive.testing.harness import BATTERY_FULL, ENERGY_UNJUDGED, Harness, Vehicle, mode_switch_channel
 from executive.testing.links import AUTOPILOT
 from executive.vehicles import PROFILES
 
@@ -60,8 +60,9 @@ class ScriptedAutopilot:
 
     def report_health(self) -> None:
         """What a healthy autopilot has told by now, where the test has not said otherwise (the key unset): a full battery
-        (:data:`~executive.testing.BATTERY_FULL`) and the firmware's mode-switch channel (MODE_CH or FLTMODE_CH: the mission's
-        ``simulator.params``, else 8), which the guards and pre-flight need. Once, when it is made: a test's ``vehicle.set`` wins."""
+        (:data:`~executive.testing.BATTERY_FULL`), an energy rule that cannot judge it, the firmware's mode-switch channel
+        (MODE_CH or FLTMODE_CH: the mission's ``simulator.params``, else 8), which the guards and pre-flight need. Once, when it
+        is made: a test's ``vehicle.set`` wins."""
         from executive.autopilot.ardupilot import MODE_SWITCH_PARAMS
 
         profile = self.commander.profile if self.commander is not None else getattr(self, "profile", None)
@@ -70,6 +71,8 @@ class ScriptedAutopilot:
         facts: dict[str, object] = {}
         if blackboard.value("/vehicle/battery") is None:
             facts["vehicle__battery"] = BATTERY_FULL
+        if blackboard.value("/energy/estimate") is None and not blackboard.value("/energy/unknown"):
+            facts["energy__not_judged"] = ENERGY_UNJUDGED
         known = blackboard.value("/vehicle/params") or {}
         if param is not None and param not in known:
             facts["vehicle__params"] = {**known, param: mode_switch_channel(mission)}

@@ -20,14 +20,22 @@ from executive.io.mavlink.reader import MavlinkReader
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
-from executive.sensing.energy import EnergyEstimate, EnergyWatch
+from executive.sensing.energy import EnergyEstimate, EnergyWatch, Held, held_s, planned
 from executive.sensing.heading import wait_for_filterpy
 from executive.state import BatteryStatus
 from executive.testing import FakeLink
 from executive.vehicles import PROFILES
 
 DATA = Path(__file__).parents[1] / "data" / "energy"
+PX4 = Path(__file__).parents[1] / "data" / "px4"
 ROOT = Path(__file__).parents[2]
+
+
+def example(name: str) -> Mission:
+    """An example mission as shipped: no ``energy:`` block, the rule's defaults."""
+    import yaml
+
+    return Mission.model_validate(yaml.safe_load((ROOT / "missions" / name).read_text(encoding="utf-8")))
 
 
 def vtol_transit(**energy: Any) -> Mission:
@@ -46,7 +54,7 @@ class Played:
     armed_s: float = 0.0
 
 
-def play(name: str, mission: Mission, autopilot: str, speedup: float, until_pct: int = 0) -> Played:
+def play(name: str, mission: Mission, autopilot: str, speedup: float, until_pct: int = 0, folder: Path = DATA) -> Played:
     """The recording at its recorded times times ``speedup`` (its run's --speedup: the vehicle's time), until battery_remaining
     falls to ``until_pct``."""
     assert wait_for_filterpy()
@@ -59,7 +67,7 @@ def play(name: str, mission: Mission, autopilot: str, speedup: float, until_pct:
     watch = EnergyWatch(clock, state, lambda: autopilot)
     bb = blackboard.reader("energy replay", ["/energy/estimate", "/energy/unknown", "/vehicle/battery_status", "/vehicle/params", "/vehicle/armed"])
     played, t0 = Played(), None
-    for t, msg in records(DATA / name):
+    for t, msg in records(folder / name):
         t0 = t if t0 is None else t0
         now = (t - t0) * speedup
         if now > clock.now():
@@ -142,3 +150,66 @@ def test_real_ardurover_sitl_draws_current_by_its_throttle() -> None:
         if status is not None and (not seen or seen[-1] is not status):
             seen.append(status)
     assert max(s.current_a or 0.0 for s in seen) > 10.0 and seen[-1].consumed_mah > 50.0 and seen[-1].consumed_wh > 0.5
+
+
+# PX4 fills BATTERY_STATUS so (src/modules/mavlink/streams/BATTERY_STATUS.hpp at a70a558393): id = battery 1 - 1,
+# current_consumed = discharged_mah, energy_consumed = -1 always, current_battery = current_a * 100,
+# battery_remaining = round(remaining * 100), time_remaining = max(time_remaining_s, 1) or 0 when not finite. SIH has no current
+# sensor (BatterySimulator.cpp: ibatt -1), so -100 cA and 0 mAh; SIM_BAT_DRAIN drains the charge by the armed time alone
+# (100 % to SIM_BAT_MIN_PCT in SIM_BAT_DRAIN s; full again when disarmed): the remaining % falls, the counters do not move.
+
+
+def test_real_px4_refuses_vtol_transit_on_a_300_mah_pack_before_arming_with_the_default_rule() -> None:
+    """BAT1_CAPACITY 300 x BAT1_N_CELLS 4 x 3.7 V = 4.44 Wh; the shipped mission, no energy: block."""
+    played = play("vtol_transit-energy-300mah-refused.tlog", example("vtol_transit.yaml"), "px4", 2.0, folder=PX4)
+    assert (played.params["BAT1_CAPACITY"], played.params["BAT1_N_CELLS"]) == (300.0, 4.0)
+    last = played.last
+    assert last is not None and (last.consumed_mah, last.consumed_wh, last.current_a) == (0.0, None, -1.0)
+    assert last.remaining_pct == 99 and last.voltage_v == pytest.approx(16.2)  # 4 x BAT1_V_CHARGED 4.05 V
+    estimate = played.estimates[-1][1]
+    assert estimate.capacity_wh == pytest.approx(4.44) and not estimate.fits and played.armed_s == 0.0
+    assert estimate.figures() == "needs 12 Wh + 14 Wh home (+/- 11), has 4 Wh above the 20 % reserve"
+
+
+def test_real_px4_draining_in_150_s_fits_at_the_start_and_is_short_by_the_second_leg_as_the_flight_teaches_it() -> None:
+    """SIM_BAT_DRAIN 150 on BAT1_CAPACITY 5000 (74 Wh): 29.6 Wh/min whatever the aircraft does; the seeds say 16 Wh/min
+    hovering, 5 Wh/km as a plane. The run turned back at 72 s (the executive's recording ends at its abort)."""
+    played = play("vtol_transit-energy-drain150-turned-back.tlog", example("vtol_transit.yaml"), "px4", 2.0, folder=PX4)
+    first, last = played.estimates[0][1], played.estimates[-1][1]
+    assert first.capacity_wh == pytest.approx(74.0) and first.fits
+    assert not last.fits and last.wh_per_min > 1.25 * 16.0  # learned from the remaining % alone: the hover costs more than seeded
+    assert played.last is not None and played.last.current_a == -1.0 and played.last.consumed_mah == 0.0
+    drawn_per_min = last.drawn_wh / (played.armed_s / 60.0)
+    assert drawn_per_min == pytest.approx(74.0 / 150.0 * 60.0, rel=0.1)  # the fall of the remaining % is SIM_BAT_DRAIN's rate
+
+
+def test_real_ardurover_rover_square_with_the_default_rule_estimate_against_the_energy_drawn() -> None:
+    """rover.parm's BATT_MONITOR 4, BATT_CAPACITY 3300 mAh; the pack's voltage unsaid: 12.6 V at rest is 3 cells (11.1 V)."""
+    played = play("rover_square-ardurover-default-rule.tlog", example("rover_square.yaml"), "ardupilot", 2.0)
+    first, last = played.estimates[0][1], played.estimates[-1][1]
+    assert first.capacity_wh == pytest.approx(36.63) and first.fits
+    used = last.drawn_wh
+    assert used == pytest.approx(0.97, abs=0.01)  # BATTERY_STATUS energy_consumed
+    assert abs(first.route_wh + first.home_wh - used) <= 0.15 * used  # 0.90 Wh estimated at the start
+
+
+def test_the_seconds_held_ahead_cost_a_vtols_hover_phases_and_every_sample_hold() -> None:
+    """vtol_transit: climb 30 m at 2.5 m/s (12 s), the hover point 36.1 m away at 5 m/s (7.2 s), the transition to FW (15 s);
+    home: the transition back (10 s), 34 m down at 1.5 m/s and the last 6 m at 0.5 m/s (34.7 s)."""
+    vtol = example("vtol_transit.yaml")
+    held = held_s(vtol, 0, take_off=True, to_fw_ahead=True)
+    assert (round(held.route_s, 1), round(held.home_s, 1)) == (34.2, 44.7)
+    assert held_s(vtol, 1, take_off=False, to_fw_ahead=False).route_s == 0.0
+    assert held_s(vtol, 2, take_off=False, to_fw_ahead=False, hovering_at_m=12.0).home_s == pytest.approx(6 / 1.5 + 12.0)
+    boat = example("asv_sampling.yaml")  # two sample points of sampling.duration_s 10 s
+    assert [held_s(boat, leg, take_off=leg == 0, to_fw_ahead=False) for leg in (0, 2, 4)] == [Held(20.0, 0.0), Held(10.0, 0.0), Held(0.0, 0.0)]
+
+
+def test_the_real_quadplane_flight_costed_at_its_own_learned_rates_matches_what_it_drew() -> None:
+    """The 5000 mAh flight drew 12.97 Wh; its hover seconds (take-off, hover point, transitions, landing) and its plane metres,
+    costed at the rates it taught the model, come to within 10 % of it (climb and descent alone, as before: about 9 Wh)."""
+    played = play("vtol_transit-quadplane-5000mah.tlog", vtol_transit(nominal_v=11.1), "ardupilot", 3.0)
+    learned = played.estimates[-1][1]
+    costed = planned(vtol_transit(capacity_wh=55.5, wh_per_km=learned.wh_per_km, wh_per_min=learned.wh_per_min))
+    assert isinstance(costed, EnergyEstimate)
+    assert costed.route_wh + costed.home_wh == pytest.approx(learned.drawn_wh, rel=0.1)

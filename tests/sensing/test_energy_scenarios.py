@@ -42,12 +42,26 @@ def test_a_route_too_long_for_the_battery_is_refused_before_arming_with_its_figu
     assert not sim.autopilot.armed and sim.autopilot.battery.consumed_mah < 1.0  # nothing armed, nothing drawn but the idle
 
 
-def test_a_battery_whose_capacity_is_not_known_in_wh_is_refused_naming_what_to_set(lockstep) -> None:
-    mission = energy_line(1000.0).model_copy(update={"energy": energy_line(1000.0).energy.model_copy(update={"nominal_v": None})})
-    sim = lockstep(mission, home=(*LINE_HOME, 0.0))
-    outcome = sim.run_to_end(limit_s=60)
+def without_energy(mission: Mission, **update: Any) -> Mission:
+    return Mission.model_validate({**mission.model_dump(exclude_none=True, exclude={"energy"}), **update})
+
+
+def test_a_mission_that_says_nothing_of_energy_is_judged_too_its_pack_in_wh_from_the_cells_counted_at_rest(lockstep) -> None:
+    sim = lockstep(without_energy(energy_line(500.0)), home=(*LINE_HOME, 0.0))
+    outcome = sim.run_to_end(limit_s=60)  # 500 mAh x 3 cells x 3.7 V = 5.55 Wh: the 4 x 60 m does not fit
     assert outcome.status is MissionStatus.ABORTED and not sim.autopilot.armed
-    assert "BATT_CAPACITY 1000 mAh, but not the pack's voltage: set energy.nominal_v" in outcome.reason
+    assert "does not fit the battery: needs 2.4 Wh + 2.4 Wh home (+/- 2.4), has 4.4 Wh above the 20 % reserve" in outcome.reason
+
+
+def test_a_voltage_only_monitor_runs_a_mission_that_says_nothing_unjudged_and_warned_but_refuses_one_that_asks(lockstep, caplog) -> None:
+    params = {"BATT_CAPACITY": 1000.0, "BATT_MONITOR": 3.0}
+    limits = {"acceptance_radius_m": 1.5, "leg_timeout_s": 120, "battery_min_pct": None, "battery_min_v": 10.5}
+    quiet = without_energy(energy_line(1000.0, legs=1), simulator={"ekf_ready_after_s": 2, "params": params}, limits=limits)
+    assert lockstep(quiet, home=(*LINE_HOME, 0.0)).run_to_end(limit_s=120).status is MissionStatus.COMPLETED
+    assert "energy not judged on this vehicle: the battery monitor counts no energy drawn (BATT_MONITOR 3: voltage only" in caplog.text
+    asks = quiet.model_copy(update={"energy": energy_line(1000.0).energy})
+    outcome = lockstep(asks, home=(*LINE_HOME, 0.0)).run_to_end(limit_s=60)
+    assert outcome.status is MissionStatus.ABORTED and "fit a current sensor (BATT_MONITOR 4)" in outcome.reason
 
 
 def test_a_route_that_fits_is_driven_to_the_end_its_energy_shown_on_the_way(lockstep) -> None:
