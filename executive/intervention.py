@@ -117,6 +117,8 @@ class InterventionWatch:
         if mode is None or not self._bb.get("/link/up"):
             return
         previous, self._shown = self._shown, mode
+        if mode == previous:
+            self._change_seen_at = None  # a change waiting for its facts that went back before they came
         cause: AutopilotCause | None = None
         set_by: str | None = None
         ours = self._our_ask(mode, now)
