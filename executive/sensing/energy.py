@@ -45,6 +45,21 @@ HOVER_M_S = 5.0
 # PX4 VT_F_TRANS_DUR 5 s once VT_ARSP_TRANS is reached. To MC: PX4 VT_B_TRANS_DUR 10 s
 # (src/modules/vtol_att_control/vtol_att_control_params.c); ArduPlane slows to a hover on them in QLOITER/QRTL.
 TO_FW_S, TO_MC_S = 15.0, 10.0
+# PX4's RTL climbs to RTL_RETURN_ALT above home (default 60 m) before it flies home, unless higher already
+# (src/modules/navigator/rtl_params.c, rtl.cpp: rtl_alt = max(alt, destination + RTL_RETURN_ALT), upstream a70a558393).
+PX4_RTL_RETURN_ALT_M = 60.0
+# A VTOL climbing as a plane: a metre of height costs what GLIDE_RATIO metres of cruise do (energy m g h against the cruise's
+# drag m g / (L/D) per metre, at the same propulsive efficiency); 10, a small fixed-wing VTOL's lift-to-drag with its lift motors.
+GLIDE_RATIO = 10.0
+
+
+def return_climb_m(mission: Mission, autopilot: str, params: dict[str, float]) -> float:
+    """Metres of height a VTOL's return climbs before it flies home: PX4's to RTL_RETURN_ALT (read at pre-flight, else its
+    default) from the route's last height."""
+    if mission.vehicle != "vtol" or autopilot != "px4" or not mission.waypoints:
+        return 0.0
+    return_alt = params.get("RTL_RETURN_ALT", PX4_RTL_RETURN_ALT_M)
+    return max(0.0, return_alt - mission.waypoints[-1].alt_m)
 
 
 @dataclass(frozen=True, slots=True)
@@ -361,6 +376,7 @@ class EnergyWatch:
         route_m = path_length(ahead, here)
         end = ahead[-1] if ahead else here
         home_m = home_metres(mission, config, [(w.lat, w.lon) for w in self._state.route.waypoints], home, end)
+        home_m += GLIDE_RATIO * return_climb_m(mission, self._autopilot(), self._in.get("/vehicle/params") or {})
         take_off = not self._in.get("/vehicle/armed") and self._state.leg_index == 0
         legs = len(self._state.route.waypoints)
         done = self._state.leg_index >= legs
