@@ -21,6 +21,7 @@ from executive import blackboard, geo
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import EnergyConfig, Mission, Waypoint
+from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
 from executive.sensing import battery_energy
 from executive.sensing.consumption import HELD_BELOW_M_S, SEEDS, VERTICAL_SEEDS, ConsumptionModel
 from executive.sensing.heading import filterpy_ready, load_filterpy
@@ -209,9 +210,15 @@ def home_metres(
     mission: Mission, config: EnergyConfig, points: list[tuple[float, float]], home: tuple[float, float], end: tuple[float, float]
 ) -> float:
     """Metres of the way home from ``end``: the straight line, or the route back (``return_by: route``); none for a sub
-    (it surfaces where it is: :func:`depth_changes`)."""
+    (it surfaces where it is: :func:`depth_changes`); for a rover or a boat on a mission with keep-out zones or rally points,
+    the way the executive's own return drives (behaviours.returning): around the zones to the nearest rally point or home."""
     if mission.vehicle == "sub" and config.return_by == "straight":
         return 0.0
+    if config.return_by == "straight" and mission.vehicle in DRIVEN_KINDS:
+        planner = ReturnPlanner(mission)
+        way = planner.plan(end[0], end[1], home) if planner.needed else None
+        if way is not None:
+            return way.length_m
     back = list(reversed(points[:-1])) if config.return_by == "route" else []
     return path_length([*back, home], end)
 
@@ -253,6 +260,7 @@ class EnergyWatch:
         self._window: tuple[float, float, float, float, float] | None = None  # (time, Wh, metres, held s, vertical m) at its start
         self._metres = 0.0
         self._vertical_m = 0.0  # a sub's depth changed, armed
+        self._home_way: tuple[object, float] | None = None  # ((route end, home, route), metres home): the last planned
         self._held_s = 0.0  # armed and slower than HELD_BELOW_M_S
         self._ticked_at: float | None = None
         self._last_position: GlobalPosition | None = None
@@ -375,7 +383,7 @@ class EnergyWatch:
         here = (self._last_position.lat, self._last_position.lon) if self._last_position else (ahead[0][0], ahead[0][1]) if ahead else home
         route_m = path_length(ahead, here)
         end = ahead[-1] if ahead else here
-        home_m = home_metres(mission, config, [(w.lat, w.lon) for w in self._state.route.waypoints], home, end)
+        home_m = self._home_metres(mission, config, home, end)
         home_m += GLIDE_RATIO * return_climb_m(mission, self._autopilot(), self._in.get("/vehicle/params") or {})
         take_off = not self._in.get("/vehicle/armed") and self._state.leg_index == 0
         legs = len(self._state.route.waypoints)
@@ -400,6 +408,14 @@ class EnergyWatch:
         self._out.set("/energy/unknown", "")
         self._out.set("/energy/not_judged", "")
         self._journal(estimate)
+
+    def _home_metres(self, mission: Mission, config: EnergyConfig, home: tuple[float, float], end: tuple[float, float]) -> float:
+        """:func:`home_metres`, planned once per route end and home (a return around zones is an A* search: not every report)."""
+        points = [(w.lat, w.lon) for w in self._state.route.waypoints]
+        key = (end, home, tuple(points))
+        if self._home_way is None or self._home_way[0] != key:
+            self._home_way = (key, home_metres(mission, config, points, home, end))
+        return self._home_way[1]
 
     def _journal(self, estimate: EnergyEstimate) -> None:
         said = self._said
