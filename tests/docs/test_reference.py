@@ -78,3 +78,21 @@ def test_each_reference_page_holds_its_marker_and_the_build_replaces_it(page):
     text = (DOCS / "reference" / f"{page}.md").read_text(encoding="utf-8")
     assert f"<!-- generated: {page} -->" in text
     assert reference.MARKER.search(text) and not reference.MARKER.search(reference.expand(text))
+
+
+def test_the_running_pages_list_of_commands_is_generated_each_linked_to_its_reference():
+    """Issue 36: the command tables were written by hand in docs/running.md beside the generated reference; now made from the parsers."""
+    commands = {name for action in build_parser()._actions if isinstance(action, argparse._SubParsersAction) for name in action.choices}
+    table = reference.commands_table()
+    anchors = dict(re.findall(r"\[`executive ([\w-]+)`\]\(reference/cli\.md#([\w-]+)\)", table))
+    assert set(anchors) == commands
+    headings = {re.sub(r"[^\w-]", "", h.replace(" ", "-")) for h in re.findall(r"^#+ `(executive[^`]*)`$", reference.cli_reference(), re.M)}
+    assert set(anchors.values()) <= headings, "a command links to no heading of the command line reference"
+    assert "\n<!-- generated: commands -->\n" in (DOCS / "running.md").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("page", sorted(p.name for p in DOCS.glob("*.md")))
+def test_no_page_lists_commands_or_options_by_hand(page):
+    """A table of commands or options outside the generated reference would be a second copy to keep up to date."""
+    text = (DOCS / page).read_text(encoding="utf-8")
+    assert not re.search(r"^\| (command|option) \| what it does \|", text, re.M)
