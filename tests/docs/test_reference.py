@@ -96,3 +96,16 @@ def test_no_page_lists_commands_or_options_by_hand(page):
     """A table of commands or options outside the generated reference would be a second copy to keep up to date."""
     text = (DOCS / page).read_text(encoding="utf-8")
     assert not re.search(r"^\| (command|option) \| what it does \|", text, re.M)
+
+
+def test_the_guards_figures_on_the_failsafes_page_are_the_catalogues():
+    """Issue 36: the failsafes page wrote each guard's hold/resume figures and its unknown-or-stale rule by hand; now generated."""
+    nodes = reference.catalogue()
+    page = reference.guards_table(nodes)
+    rows = {re.search(r"`(\w+)`", row)[1]: row for row in page.splitlines()[2:]}
+    for node in (n for n in nodes if n["kind"] == "guard"):
+        defaults = {p["name"]: p.get("default") for p in node["params"]}
+        assert f"| {defaults['hold_after_s']:g} s | {defaults['resume_after_s']:g} s |" in rows[node["name"]]
+        assert node["unknown_or_stale"] and node["unknown_or_stale"].split(":")[0].replace("_", "\\_") in rows[node["name"]]
+    text = (DOCS / "failsafes.md").read_text(encoding="utf-8")
+    assert "\n<!-- generated: guards -->\n" in text and not re.search(r"^\| guard\b", text, re.M)
