@@ -366,7 +366,7 @@ class AutopilotLink:
         we watched (``/vehicle/mode_set_by``): the RC or a ground station, or we at a person's request
         (``ctl mode``, the UGV's switch C). The mode the vehicle was in when we found it (its boot mode)
         is nobody's choice: a pilot mode there is no person driving, and the safe mode is commanded
-        (said so, as README's "When a person intervenes" has it).
+        (said so, as the manual's "When a person intervenes" (docs/failsafes.md) has it).
         """
         takeover = rc_takeover(self.mission.rc, self._bb.get)
         if takeover is not None:

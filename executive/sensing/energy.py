@@ -335,7 +335,7 @@ class EnergyWatch:
             self._held_s += now - self._ticked_at  # hover, loiter, station keeping, a stop: its seconds cost, not its metres
         self._ticked_at = now
         ekf: EkfStatus | None = self._in.get("/vehicle/ekf")
-        # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (README)
+        # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (docs/autopilots.md)
         if position is None or position is self._last_position or ekf is None or not ekf.position_ok():
             return
         if self._last_position is not None and self._in.get("/vehicle/armed") and not hovering:
