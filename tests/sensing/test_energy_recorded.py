@@ -174,6 +174,13 @@ def test_real_px4_refuses_vtol_transit_on_a_300_mah_pack_before_arming_with_the_
     assert estimate.figures() == "needs 12 Wh + 15 Wh home (+/- 11), has 4 Wh above the 20 % reserve"
 
 
+def test_real_px4_read_rtl_return_alt_80_at_pre_flight_and_the_way_home_costs_its_climb() -> None:
+    """Real PX4 SIH with RTL_RETURN_ALT 80 and the same 300 mAh pack: 40 m of climb from the last waypoint, 2 Wh more home."""
+    played = play("vtol_transit-energy-300mah-rtl80-refused.tlog", example("vtol_transit.yaml"), "px4", 2.0, folder=PX4)
+    assert played.params["RTL_RETURN_ALT"] == 80.0 and played.armed_s == 0.0
+    assert played.estimates[-1][1].figures() == "needs 12 Wh + 16 Wh home (+/- 11), has 4 Wh above the 20 % reserve"
+
+
 def test_px4s_return_climbs_to_rtl_return_alt_first_which_the_way_home_costs() -> None:
     vtol = example("vtol_transit.yaml")  # its last waypoint at 40 m
     assert return_climb_m(vtol, "px4", {}) == 20.0  # PX4's default RTL_RETURN_ALT, 60 m
