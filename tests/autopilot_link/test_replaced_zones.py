@@ -19,10 +19,12 @@ from tests.test_runtime_reload import pause_on_leg, run_for, text
 from tests_support import line_mission
 
 
-def replace_with(sim: Lockstep, new: Mission) -> None:
+def replace_with(sim: Lockstep, new: Mission) -> str:
+    """``ctl upload`` of ``new`` while paused: replaced, still PAUSED; the reply's reason."""
     reply = sim.runtime.operator.request("upload", source="ctl", filename="v2.yaml", text=text(new))
     assert (reply.ok, reply.state) == (True, "PAUSED"), reply.reason
     assert sim.runtime.mission_state.mission.name == new.name
+    return reply.reason
 
 
 def test_the_new_zones_are_uploaded_read_back_and_enforced_before_the_replacing_mission_may_resume(lockstep) -> None:
@@ -32,7 +34,9 @@ def test_the_new_zones_are_uploaded_read_back_and_enforced_before_the_replacing_
     assert len(ap.zone_stores[FENCE].commands) == 9 and ap.params["FENCE_ENABLE"] == 0  # the old mission's, not enforced
     geofence = {"keep_out": [{"name": "moorings", "polygon": box(70, 80, 8, 16)}], "autopilot": "enforce"}
     new = line_mission("zones-v2", geofence=geofence, rally_points=[{"name": "beach", **at(30, -15)}])
-    replace_with(sim, new)
+    said = replace_with(sim, new)
+    waits = "the new mission's zones are not yet on the autopilot (waiting for another mission transfer to end)"  # the route goes first
+    assert said.endswith(f"paused until resumed; {waits}: resume once they are read back")
     refused = sim.runtime.operator.request("resume", source="ctl")
     assert (refused.ok, refused.state) == (False, "PAUSED")  # at once: nothing of the new mission runs before its zones are up
     assert refused.reason.startswith("cannot resume: the new mission's zones are not yet on the autopilot")
