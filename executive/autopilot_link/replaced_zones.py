@@ -36,8 +36,11 @@ class ReplacedZones:
         self._mission_state = mission_state
         self._autopilot = autopilot
         self._clock = clock
-        self._mission = mission_state.mission  # the mission whose zones the autopilot was last given (by its pre-flight, or here)
+        #: Whether the executive may have put a fence, rally points on the autopilot (a started mission's pre-flight, a replacement):
+        #: what a replacing mission without them clears. Only ever widened, but to exactly a replacement's once it is read back.
+        self._put = (False, False)
         self._zones: ZonesOnAutopilot | None = None
+        self._zones_put = (False, False)
         mission_state.listeners.append(self._on_transition)
         mission_state.replace_listeners.append(self._on_replace)
         mission_state.resume_checks.append(self.why_not_resume)
@@ -45,22 +48,22 @@ class ReplacedZones:
     def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
         if after is not MissionStatus.PAUSED:  # resumed (done here by then), or another mission: its pre-flight takes over
             self._stop()
-            self._mission = self._mission_state.mission
+        mission = self._mission_state.mission
+        if after is MissionStatus.RUNNING and before is not MissionStatus.PAUSED and mission is not None:
+            self._put = _either(self._put, _puts(mission))
 
     def _on_replace(self, mission: Mission, reason: str) -> None:
-        old, self._mission = self._mission, mission
         self._stop()
         sends = puts_zones_on_autopilot(mission)
         geofence = mission.geofence if sends and mission.geofence is not None and mission.geofence.autopilot != "off" else None
         rally = mission.rally_points if sends else []
-        had = old is not None and puts_zones_on_autopilot(old)
-        clear_fence = had and old is not None and _has_fence(old) and not _has_fence(mission)
-        clear_rally = had and old is not None and bool(old.rally_points) and not rally
+        clear_fence, clear_rally = self._put[0] and not _has_fence(mission), self._put[1] and not rally
         if not (sends or clear_fence or clear_rally):
             return
         zones = ZonesOnAutopilot(geofence, rally, clear_fence=clear_fence, clear_rally=clear_rally, name="Zones of the replacing mission")
         zones.setup(clock=self._clock, autopilot=self._autopilot, mission_state=self._mission_state)
-        self._zones = zones
+        self._zones, self._zones_put = zones, _puts(mission)
+        self._put = _either(self._put, self._zones_put)  # a refusal part-way may leave the fence new and the rally points old
         self.service()
 
     def service(self) -> None:
@@ -71,8 +74,11 @@ class ReplacedZones:
         zones.tick_once()
         if zones.status is Status.FAILURE:
             log.error("the replacing mission cannot resume: its zones are not on the autopilot: %s", zones.feedback_message)
-            self._mission_state.announce("zones refused: mission stays paused")
+            state = self._mission_state
+            state.explain(f"{state.reason}; cannot resume: {self.why_not_resume()}")  # what ctl status says
+            state.announce("zones refused: mission stays paused")
         elif zones.status is Status.SUCCESS:
+            self._put = self._zones_put
             log.info("the replacing mission's zones: %s", zones.feedback_message)
 
     def why_not_resume(self) -> str | None:
@@ -88,6 +94,15 @@ class ReplacedZones:
         if self._zones is not None and self._zones.status is Status.RUNNING:
             self._zones.stop(Status.INVALID)
         self._zones = None
+
+
+def _puts(mission: Mission) -> tuple[bool, bool]:
+    """(a fence, rally points): what the mission puts on the autopilot."""
+    return _has_fence(mission), puts_zones_on_autopilot(mission) and bool(mission.rally_points)
+
+
+def _either(a: tuple[bool, bool], b: tuple[bool, bool]) -> tuple[bool, bool]:
+    return a[0] or b[0], a[1] or b[1]
 
 
 def _has_fence(mission: Mission) -> bool:

@@ -380,6 +380,11 @@ class MissionState:
                 self.samples = (*self.samples, sample)
         self._publish()
 
+    def explain(self, reason: str) -> None:
+        """Say why the mission stays as it is (a replacing mission's zones refused: it stays PAUSED) as its reason; no transition."""
+        self.reason = reason
+        self._bb.set("/mission/reason", reason)
+
     # -- internals ---------------------------------------------------------------------------
     def _check(self, request: str) -> None:
         allowed, _ = TRANSITIONS[request]

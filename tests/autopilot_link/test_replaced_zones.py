@@ -65,6 +65,8 @@ def test_a_fence_the_autopilot_refuses_keeps_the_mission_paused_with_the_reason_
     assert reply.reason.startswith("cannot resume: the new mission's zones are not on the autopilot: the autopilot did not take the fence")
     assert "MAV_MISSION_NO_SPACE" in reply.reason and "Only 84 items are supported" in reply.reason
     assert ap.zone_stores[FENCE].commands == old_fence  # refused whole: the autopilot keeps the fence it had
+    status = sim.runtime.operator.request("status", source="ctl")
+    assert status.reason.startswith("mission replaced: 'zones' -> 'ring'") and reply.reason in status.reason
     run_for(sim, 5.0)
     assert sim.status is MissionStatus.PAUSED and ap.mode == "HOLD"
     assert (ap.vehicle.lat, ap.vehicle.lon) == here  # held: nothing of the new mission ran
