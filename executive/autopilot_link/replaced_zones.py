@@ -78,8 +78,7 @@ class ReplacedZones:
             state.explain(f"{state.reason}; cannot resume: {self.why_not_resume()}")  # what ctl status says
             state.announce("zones refused: mission stays paused")
         elif zones.status is Status.SUCCESS:
-            self._put = self._zones_put
-            log.info("the replacing mission's zones: %s", zones.feedback_message)
+            self._put = self._zones_put  # (the behaviour logs what is held)
 
     def why_not_resume(self) -> str | None:
         """None when the replacing mission's zones are on the autopilot (or there was nothing to send); else why it may not resume."""
