@@ -188,3 +188,17 @@ def foxglove_js(script: str, *args: str) -> list[str]:
             if done.returncode != 0:
                 pytest.fail(f"npm ci --prefix tests/foxglove failed: {done.stderr.strip()}")
     return ["node", str(FOXGLOVE_JS / script), *args]
+
+
+def set_currents(sim: Lockstep) -> list[int]:
+    """The MISSION_SET_CURRENT items the executive sends from now on (the list grows as the run goes)."""
+    sent: list[int] = []
+    send = sim.link.send
+
+    def spy(msg: Any) -> None:
+        if msg.get_type() == "MISSION_SET_CURRENT":
+            sent.append(msg.seq)
+        send(msg)
+
+    sim.link.send = spy  # type: ignore[method-assign]
+    return sent

@@ -48,6 +48,23 @@ def records(path: Path) -> Iterator[tuple[float, MAVLinkMessage]]:
         conn.close()
 
 
+def through_reader(path: Path, vehicle: str) -> Iterator[MAVLinkMessage]:
+    """The recording's vehicle side fed to a fresh reader and mission transfer at its recorded times: each autopilot message is
+    yielded once the reader has put it on the blackboard (reset it before)."""
+    clock, link = ManualClock(), FakeLink()
+    reader = MavlinkReader(link, clock, Commander(link, clock, PROFILES[vehicle]), mission=MissionTransfer(link, clock), link_timeout_s=5.0)
+    t0: float | None = None
+    for t, msg in records(path):
+        if msg.get_srcComponent() != AUTOPILOT_COMPONENT:
+            continue
+        t0 = t if t0 is None else t0
+        if t - t0 > clock.now():
+            clock.advance(t - t0 - clock.now())
+        link.incoming.append(msg)
+        reader.drain()
+        yield msg
+
+
 @dataclass
 class Replay:
     """The executive's reading side (its mission transfer too: MISSION_CURRENT, MISSION_ITEM_REACHED), fed a recording;

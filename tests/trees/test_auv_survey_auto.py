@@ -20,6 +20,7 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.sim.physics.underwater import Seabed
 from executive.testing import Lockstep
+from tests_support import set_currents
 
 ROOT = Path(__file__).parents[2]
 
@@ -155,15 +156,7 @@ def test_a_seabed_rising_under_the_leg_raises_its_depth_and_starts_it_again(lock
     mission = auto_survey()
     mission = mission.model_copy(update={"limits": mission.limits.model_copy(update={"water_depth_m": None})})
     sim = lockstep(mission, firmware={"seabed": Seabed(depth_m=18.0, slope=0.15, downhill_deg=180.0)})
-    sets: list[int] = []
-    send = sim.link.send
-
-    def spy(msg: Any) -> None:
-        if msg.get_type() == "MISSION_SET_CURRENT":
-            sets.append(msg.seq)
-        send(msg)
-
-    sim.link.send = spy  # type: ignore[method-assign]
+    sets = set_currents(sim)
     clearance: list[float] = []
     sim.observers.append(lambda s: clearance.append(s.autopilot.vehicle.altitude_m))
     outcome = sim.run_to_end()
@@ -177,15 +170,7 @@ def test_pause_holds_in_poshold_and_resume_goes_on_with_the_leg_at_its_depth(loc
     mission = auto_survey()
     sim = lockstep(mission)
     state, ap = sim.runtime.mission_state, sim.autopilot
-    sets: list[int] = []
-    send = sim.link.send
-
-    def spy(msg: Any) -> None:
-        if msg.get_type() == "MISSION_SET_CURRENT":
-            sets.append(msg.seq)
-        send(msg)
-
-    sim.link.send = spy  # type: ignore[method-assign]
+    sets = set_currents(sim)
     assert sim.run(until=lambda: state.leg_index == 2 and ap.vehicle.depth_m > 7.0) is None
     assert sim.runtime.operator.request("pause", source="ctl").ok
     sim.run(until=lambda: ap.mode == "POSHOLD" and ap.vehicle.speed_m_s < 0.05)
@@ -242,15 +227,7 @@ def test_a_cut_link_leaves_the_sub_at_the_end_of_its_horizon_and_the_failsafe_ac
 def test_a_run_resumed_after_a_crash_starts_arduSubs_mission_at_the_journals_leg(lockstep) -> None:
     """`executive run --resume` at leg 3: the horizon uploaded, MISSION_SET_CURRENT 3, then AUTO; items 1-2 never flown to."""
     sim = lockstep(auto_survey())
-    sets: list[int] = []
-    send = sim.link.send
-
-    def spy(msg: Any) -> None:
-        if msg.get_type() == "MISSION_SET_CURRENT":
-            sets.append(msg.seq)
-        send(msg)
-
-    sim.link.send = spy  # type: ignore[method-assign]
+    sets = set_currents(sim)
     flown: set[int] = set()
     sim.observers.append(lambda s: flown.add(s.autopilot.mission.current_seq) if s.autopilot.mission.running else None)
     outcome = sim.run(400, resume=ResumePoint(run=1, leg_index=2, samples=()))

@@ -15,6 +15,7 @@ from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, SimulatorOptions
 from executive.testing import Lockstep
+from tests_support import set_currents
 
 ROOT = Path(__file__).parents[2]
 LOITER_UNLIM, WAYPOINT = mavlink.MAV_CMD_NAV_LOITER_UNLIM, mavlink.MAV_CMD_NAV_WAYPOINT
@@ -23,20 +24,6 @@ LOITER_UNLIM, WAYPOINT = mavlink.MAV_CMD_NAV_LOITER_UNLIM, mavlink.MAV_CMD_NAV_W
 def example(**changes: Any) -> Mission:
     """missions/asv_sampling.yaml (its EKF dropout on the way included) with ``drive: auto``."""
     return load_mission(ROOT / "missions/asv_sampling.yaml").model_copy(update={"drive": "auto", **changes})
-
-
-def set_currents(sim: Lockstep) -> list[int]:
-    """The MISSION_SET_CURRENT items the executive sends from now on."""
-    sent: list[int] = []
-    send = sim.link.send
-
-    def spy(msg: Any) -> None:
-        if msg.get_type() == "MISSION_SET_CURRENT":
-            sent.append(msg.seq)
-        send(msg)
-
-    sim.link.send = spy  # type: ignore[method-assign]
-    return sent
 
 
 class Watch:

@@ -16,7 +16,7 @@ from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.sim.faults import FaultInjector
 from executive.testing import Lockstep
-from tests_support import line_mission
+from tests_support import line_mission, set_currents
 
 #: drive: auto against the autopilot's own AUTO over the whole route (issue 32's target on the real firmware).
 AUTO_RATIO = 1.02
@@ -122,15 +122,7 @@ def test_pause_holds_and_resume_continues_at_the_current_leg(lockstep) -> None:
     mission = line_mission("auto pause", drive="auto")
     sim = lockstep(mission)
     state = sim.runtime.mission_state
-    sets: list[int] = []
-    send = sim.link.send
-
-    def spy(msg: Any) -> None:
-        if msg.get_type() == "MISSION_SET_CURRENT":
-            sets.append(msg.seq)
-        send(msg)
-
-    sim.link.send = spy  # type: ignore[method-assign]
+    sets = set_currents(sim)
     assert sim.run(until=lambda: state.leg_index == 2) is None
     assert sim.runtime.operator.request("pause", source="ctl").ok
     sim.run(until=lambda: sim.autopilot.mode == "HOLD" and sim.autopilot.vehicle.speed_m_s < 0.05)

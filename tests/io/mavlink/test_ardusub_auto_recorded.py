@@ -11,18 +11,12 @@ import math
 from pathlib import Path
 
 from tlog_replay import Replay as ModeReplay
-from tlog_replay import records
+from tlog_replay import records, through_reader
 
 from executive import blackboard
-from executive.clock import ManualClock
 from executive.geo import distance
-from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.io.mavlink.reader import MavlinkReader
 from executive.mavlink_dialect import mavlink
 from executive.state import MISSION_STATE_COMPLETE
-from executive.testing import FakeLink
-from executive.vehicles import PROFILES
 
 DATA = Path(__file__).parents[2] / "data" / "ardusub"
 COMPLETED = DATA / "auv_survey-auto.tlog"
@@ -38,23 +32,13 @@ class Replay:
     new highest item reached with where the sub was (metres from the point, depth), and the vehicle's last position and mode."""
 
     def __init__(self, path: Path) -> None:
-        blackboard.reset()
-        clock, link = ManualClock(), FakeLink()
-        reader = MavlinkReader(link, clock, Commander(link, clock, PROFILES["sub"]), mission=MissionTransfer(link, clock), link_timeout_s=5.0)
         keys = ["/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/mode", "/vehicle/position"]
+        blackboard.reset()
         bb = blackboard.reader("ardusub replay", keys)
         self.currents: list[tuple[int, int]] = []
         self.reached: list[tuple[int, float, float]] = []
         self.texts: list[str] = []
-        t0: float | None = None
-        for t, msg in records(path):
-            if msg.get_srcComponent() != 1:
-                continue
-            t0 = t if t0 is None else t0
-            if t - t0 > clock.now():
-                clock.advance(t - t0 - clock.now())
-            link.incoming.append(msg)
-            reader.drain()
+        for msg in through_reader(path, "sub"):
             if msg.get_type() == "STATUSTEXT":
                 self.texts.append(msg.text)
             current, reached, position = bb.get("/vehicle/mission_current"), bb.get("/vehicle/mission_reached"), bb.get("/vehicle/position")

@@ -12,21 +12,15 @@ from __future__ import annotations
 
 import pytest
 from test_against_ardurover import from_recorded_start
-from tlog_replay import records
+from tlog_replay import records, through_reader
 
 from benchmarks import recorded
 from benchmarks.efficiency import MISSIONS, time_supervised_auto
 from executive import blackboard
-from executive.clock import ManualClock
 from executive.geo import distance
-from executive.io.mavlink.commander import Commander
-from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.io.mavlink.reader import MavlinkReader
 from executive.mavlink_dialect import mavlink
 from executive.mission.loader import load_mission
 from executive.state import MISSION_STATE_COMPLETE
-from executive.testing import FakeLink
-from executive.vehicles import PROFILES
 
 SUPERVISED = {
     "rover_square": recorded.DATA / "rover_square-rover-supervised.tlog",
@@ -44,21 +38,10 @@ def read_through_the_executive(path, vehicle: str) -> tuple[list[tuple[int, int,
     """The recording's vehicle side through our reader and mission transfer: each change of (MISSION_CURRENT seq, state, in AUTO),
     each new highest item reached, and the last mode."""
     blackboard.reset()
-    clock, link = ManualClock(), FakeLink()
-    transfer = MissionTransfer(link, clock)
-    reader = MavlinkReader(link, clock, Commander(link, clock, PROFILES[vehicle]), mission=transfer, link_timeout_s=5.0)
     bb = blackboard.reader("supervised replay", ["/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/mode"])
     currents: list[tuple[int, int, bool]] = []
     highest: list[int] = []
-    t0: float | None = None
-    for t, msg in records(path):
-        if msg.get_srcComponent() != 1:
-            continue
-        t0 = t if t0 is None else t0
-        if t - t0 > clock.now():
-            clock.advance(t - t0 - clock.now())
-        link.incoming.append(msg)
-        reader.drain()
+    for _ in through_reader(path, vehicle):
         current, reached = bb.get("/vehicle/mission_current"), bb.get("/vehicle/mission_reached")
         if current is not None and (not currents or currents[-1] != (current.seq, current.state, current.in_mission_mode)):
             currents.append((current.seq, current.state, current.in_mission_mode))
