@@ -50,7 +50,7 @@ from executive.mcap_writer import ChunkedWriter
 CHUNK_BYTES = 256 << 10
 MISSION_KEYS = ("/mission/state", "/mission/leg_index", "/mission/leg_count", "/mission/reason")
 #: What a file (or a client joining late) needs whatever the time: written again at the top of each rotated file.
-LATCHED = ("/tree", "/mission/run", "/mission/route", "/mission/state")
+LATCHED = frozenset(("/tree", "/mission/run", "/mission/route", "/mission/state"))
 _DUMPS = json.JSONEncoder(ensure_ascii=False, separators=(",", ":")).encode
 
 
@@ -96,6 +96,7 @@ class ChannelFeed:
         self._logs = _LogLines(clock)
         self._mavlink: collections.deque[tuple[float, str, MAVLinkMessage]] = collections.deque(maxlen=10_000)
         self._mavlink_schemas: dict[str, tuple[str, bytes]] = {}
+        self._mavlink_channels: dict[tuple[str, str], tuple[str, tuple[str, bytes]]] = {}  # topic, schema
         self._mavlink_json = MavlinkJson()
         self._schemas = {topic: (name, schema_bytes(name)) for topic, name in CHANNELS.items()}
         logging.getLogger("executive").addHandler(self._logs)
@@ -167,18 +168,21 @@ class ChannelFeed:
         self._put("/tf", t, transforms)
 
     def _write_mavlink(self) -> None:
+        channels, sinks, encode = self._mavlink_channels, self.sinks, self._mavlink_json.encode
         while self._mavlink:
             t, direction, msg = self._mavlink.popleft()
             if not msg.fieldnames:
                 continue  # a kind the reader skims (header only, never decoded): the tlog has its bytes
             kind = msg.get_type()
-            topic = f"/mavlink/{direction}/{kind}"
-            schema = self._mavlink_schemas.get(kind)
-            if schema is None:
-                schema = self._mavlink_schemas[kind] = mavlink_schema(msg)
-            log_ns, data = ns(t), self._mavlink_json.encode(msg)
-            for sink in self.sinks:
-                sink.put(topic, schema, log_ns, data)
+            channel = channels.get((direction, kind))
+            if channel is None:
+                schema = self._mavlink_schemas.get(kind)
+                if schema is None:
+                    schema = self._mavlink_schemas[kind] = mavlink_schema(msg)
+                channel = channels[direction, kind] = (f"/mavlink/{direction}/{kind}", schema)
+            log_ns, data = ns(t), encode(msg)
+            for sink in sinks:
+                sink.put(channel[0], channel[1], log_ns, data)
 
     def _write_logs(self) -> None:
         while self._logs.lines:
