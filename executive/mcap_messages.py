@@ -202,12 +202,13 @@ class MavlinkJson:
     def __init__(self) -> None:
         self._kinds: dict[str, _KindEncoder] = {}
 
-    def encode(self, msg: MAVLinkMessage) -> bytes:
+    def encode(self, msg: MAVLinkMessage, source: tuple[int, int] | None = None) -> bytes:
+        """``msg`` as JSON; ``source``: its sysid and compid as they were when it was heard (default: as the message holds them now)."""
         kind = msg.get_type()
         encoder = self._kinds.get(kind)
         if encoder is None:
             encoder = self._kinds[kind] = _KindEncoder(msg)
-        return encoder.encode(msg)
+        return encoder.encode(msg, source or (msg.get_srcSystem(), msg.get_srcComponent()))
 
 
 class _KindEncoder:
@@ -219,7 +220,7 @@ class _KindEncoder:
         self._values = _getter(self.fieldnames)
         self._floats = _getter([name for name, kind, _ in _definition(msg) if kind in ("float", "double")])
 
-    def encode(self, msg: MAVLinkMessage) -> bytes:
+    def encode(self, msg: MAVLinkMessage, source: tuple[int, int]) -> bytes:
         if self.template is not None:
             text, arrays = self.template
             floats = self._floats(msg)
@@ -229,9 +230,9 @@ class _KindEncoder:
                     values = list(values)
                     for i in arrays:
                         values[i] = list(values[i])  # pymavlink may hold an array as a tuple: "(0, 0)" is no JSON
-                return (text % (*values, msg.get_srcSystem(), msg.get_srcComponent())).encode()
+                return (text % (*values, *source)).encode()
         fields = dict(zip(self.fieldnames, self._values(msg), strict=True))
-        fields["sysid"], fields["compid"] = msg.get_srcSystem(), msg.get_srcComponent()
+        fields["sysid"], fields["compid"] = source
         try:
             return _STRICT_JSON(fields).encode()
         except (ValueError, TypeError):
