@@ -23,6 +23,12 @@ channels:
   reader decodes) and sent, its fields as JSON;
 - ``/log`` (``foxglove.Log``): the executive's log lines (what its logger lets through), for the Log panel.
 
+The tick writes the tree, blackboard and mission channels itself (a keyframe and the file's rotation stay in
+step with the ticks); the MAVLink messages and the vehicle's fixes and poses, most of what a tick costs as MCAP,
+are encoded and written by an encoder thread woken every :data:`ENCODE_EVERY` ticks (the values it reads are
+frozen: the messages as heard, with their source ids as heard; the blackboard's frozen fixes and attitudes), so
+they reach a file or a live client up to that many ticks late, each at its own time.
+
 Past ``max_bytes`` the file is finished (its index written) and rotated to ``FILE.1`` (the one
 before is dropped), as the JSON-lines file is. A finished file's metadata ``executive.keyframes``
 lists each keyframe (tick, its time, its tree's time): a replay of tick N seeks to the keyframe
