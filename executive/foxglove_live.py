@@ -37,12 +37,13 @@ def parse_address(text: str) -> tuple[str, int]:
 class FoxgloveSink:
     """A :class:`~executive.mcap_recording.Sink` serving every message to Foxglove clients, live, on ``host``:``port``."""
 
-    def __init__(self, host: str, port: int) -> None:
+    def __init__(self, host: str, port: int, backlog: int = BACKLOG) -> None:
+        """``backlog``: messages kept for each client that has not read them yet (past it the SDK drops them)."""
         import foxglove
 
         self._foxglove = foxglove
         self._context = foxglove.Context()  # its own: nothing else logged in this process reaches the clients
-        self._server = foxglove.start_server(name="executive", host=host, port=port, context=self._context, message_backlog_size=BACKLOG)
+        self._server = foxglove.start_server(name="executive", host=host, port=port, context=self._context, message_backlog_size=backlog)
         self.host, self.port = host, self._server.port
         self._channels: dict[str, Any] = {}
         self._latched: dict[str, tuple[tuple[str, bytes], int, bytes]] = {}

@@ -35,7 +35,7 @@ from collections.abc import Callable
 from executive import blackboard
 from executive.autopilot.port import AutopilotPort
 from executive.clock import Clock
-from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.model import RcConfig
 from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause
 from executive.sensing.rc import RcReading
@@ -132,7 +132,10 @@ class InterventionWatch:
             if mode == self.expected and not self._target_paused:
                 self._paused_here = False
                 log.warning("the vehicle is back in %s -> resume", mode)
-                self.mission_state.resume(f"{mode} set again")
+                try:
+                    self.mission_state.resume(f"{mode} set again")
+                except Refused as exc:  # a replacing mission's zones not on the autopilot: it stays paused, said
+                    log.error("%s: not resumed: %s", mode, exc)
             return
         if status is MissionStatus.RUNNING and persons_target is not None:
             self._pause_for_target(persons_target)

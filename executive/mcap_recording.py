@@ -247,7 +247,7 @@ class _Stream:
         self._at = 0
 
     def write(self, data: bytes) -> int:
-        self._file.write(bytes(data))  # a chunk the disk refused is lost; the index still counts it (said in the README)
+        self._file.write(bytes(data))  # a chunk the disk refused is lost; the index still counts it (docs/live-view.md says so)
         self._at += len(data)
         return len(data)
 

@@ -39,7 +39,7 @@ from executive.behaviours import (
 from executive.behaviours.failsafe import condition_of
 from executive.behaviours.returning import NoReturnUnderWay
 from executive.behaviours.zone_guards import outside_keep_out
-from executive.behaviours.zones import ZonesOnAutopilot
+from executive.behaviours.zones import ZonesOnAutopilot, puts_zones_on_autopilot
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.model import Mission
 from executive.mission.return_path import ReturnPlanner
@@ -152,12 +152,9 @@ def mission_end_checks(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
 
 def zones_on_autopilot(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
     """The zones and rally points sent to the autopilot and read back (``geofence.autopilot``, default upload), if the mission has any."""
-    geofence = mission.geofence
-    shapes = geofence is not None and (geofence.polygon is not None or geofence.inclusion or geofence.keep_out)
-    enforce = geofence is not None and geofence.autopilot == "enforce"  # max_distance_from_home_m alone is the fence's circle
-    if (geofence is not None and geofence.autopilot == "off") or not (shapes or mission.rally_points or enforce):
+    if not puts_zones_on_autopilot(mission):
         return []
-    return [ZonesOnAutopilot(geofence, mission.rally_points)]
+    return [ZonesOnAutopilot(mission.geofence, mission.rally_points)]
 
 
 def how_to_arm(mission: Mission) -> str:

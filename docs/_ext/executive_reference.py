@@ -4,6 +4,9 @@ A reference page holds a marker, ``<!-- generated: NAME -->``, on a line of its 
 hands the page's Markdown here and the marker is replaced by what :data:`GENERATORS` makes of the code:
 
 - ``cli``: every command and subcommand from the argparse parsers ``executive`` itself builds (``executive.cli.build_parser``);
+- ``commands``: the commands, one line each, linked to their part of ``cli`` (for a page at the top of docs/);
+- ``exit_codes``: the exit codes every command shares (``executive.cli.EXIT_CODES``);
+- ``guards``: each guard's debounce and what it does with no reading or a stale one, from the node catalogue;
 - ``mission``: every field of the mission file from its JSON schema, as ``executive schema`` prints it (the pydantic model's);
 - ``nodes``: the node catalogue, as ``executive behaviours --json`` prints it;
 - ``blackboard``: the documented blackboard keys (``executive.blackboard.KEYS``) by namespace.
@@ -99,6 +102,8 @@ def cli_reference() -> str:
         if about:
             yield about.strip() + "\n"
         yield f"```text\n{parser.format_usage().strip()}\n```\n"
+        if level == 2:  # the root's epilog, as a table
+            yield "Exit codes, the same for every command:\n\n" + exit_codes_table()
         rows = _arguments(parser)
         if rows:
             yield table(("argument", "what it does", "default"), rows)
@@ -110,6 +115,24 @@ def cli_reference() -> str:
 
     root = build_parser()
     return "\n".join(page(["executive"], "", root, 2))
+
+
+def commands_table() -> str:
+    """Each command of ``executive``, its one-line help and a link to its part of the command line reference (for pages in docs/)."""
+    from executive.cli import build_parser
+
+    rows = []
+    for name, help_, _ in _subcommands(build_parser()):
+        rows.append((f"[`executive {name}`](reference/cli.md#executive-{name})", help_))
+    header = "| command | what it does |\n|---|---|\n"
+    return header + "".join(f"| {link} | {cell(help_)} |\n" for link, help_ in rows)
+
+
+def exit_codes_table() -> str:
+    """The exit codes every command shares (``executive.cli.EXIT_CODES``)."""
+    from executive.cli import EXIT_CODES
+
+    return table(("code", "meaning"), [(code_, meaning) for code_, meaning in EXIT_CODES.items()])
 
 
 # -- the mission file -------------------------------------------------------------------------------------------------------------------
@@ -219,6 +242,18 @@ def nodes_reference(nodes: list[dict[str, Any]] | None = None) -> str:
     return "\n".join(parts)
 
 
+def guards_table(nodes: list[dict[str, Any]] | None = None) -> str:
+    """Each guard of the catalogue: its debounce (hold after, resume after, the defaults) and what it does unknown or stale."""
+    nodes = catalogue() if nodes is None else nodes
+    rows = []
+    for node in (n for n in nodes if n["kind"] == "guard"):
+        defaults = {p["name"]: p.get("default") for p in node.get("params", ())}
+        title = f"{defaults['name']} ({code(node['name'])})" if defaults.get("name") else code(node["name"])
+        seconds = [f"{defaults[k]:g} s" if isinstance(defaults.get(k), int | float) else "" for k in ("hold_after_s", "resume_after_s")]
+        rows.append((title, *seconds, node.get("unknown_or_stale", "")))
+    return table(("guard", "hold after", "resume after", "no reading yet, or one older than its limit"), rows)
+
+
 # -- the blackboard ---------------------------------------------------------------------------------------------------------------------
 
 
@@ -241,6 +276,9 @@ def blackboard_reference() -> str:
 
 GENERATORS: dict[str, Callable[[], str]] = {
     "cli": cli_reference,
+    "commands": commands_table,
+    "exit_codes": exit_codes_table,
+    "guards": guards_table,
     "mission": mission_reference,
     "nodes": nodes_reference,
     "blackboard": blackboard_reference,

@@ -20,6 +20,7 @@ from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.autopilot_link.commanded import CommandWatch
 from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
+from executive.autopilot_link.replaced_zones import ReplacedZones
 from executive.autopilot_link.route_keeper import RouteKeeper
 from executive.autopilot_link.safe_state import SURFACE_COMPLETE_MODE, SafePlan, Until, progress, settled, where
 from executive.autopilot_link.safe_state import plan as safe_plan
@@ -126,6 +127,8 @@ class AutopilotLink:
             self.watch.link.skim(self.reader.kinds_read)  # what the reader does not read is counted from its header, never decoded
         #: After each edit of the route (any tree, any source), the autopilot is given it: uploaded, read back, retried.
         self.route_keeper = RouteKeeper(mission_state, self.mission_transfer, self.commander, clock)
+        #: A mission replaced while paused: its zones and rally points on the autopilot before it may resume.
+        self.replaced_zones = ReplacedZones(mission_state, self.autopilot, clock)
         self.parameters = ParameterWatch(self.autopilot, clock)
         keys = {"/vehicle/mode", "/vehicle/mode_set_by", "/rc/channels", "/rc/switches", "/vehicle/position", "/vehicle/landed_state", *READS}
         self._bb = blackboard.reader("autopilot link", keys)
@@ -201,6 +204,7 @@ class AutopilotLink:
         """Send what the tick asked of the autopilot, after the link's own upkeep: stream set-up, route uploads, parameter asks."""
         self.streams.service()
         self.route_keeper.service()
+        self.replaced_zones.service()
         self.parameters.service()
         self.autopilot.service()  # the back end's own traffic (PX4's offboard setpoint stream), before the commands
         self.commander.flush()
@@ -366,7 +370,7 @@ class AutopilotLink:
         we watched (``/vehicle/mode_set_by``): the RC or a ground station, or we at a person's request
         (``ctl mode``, the UGV's switch C). The mode the vehicle was in when we found it (its boot mode)
         is nobody's choice: a pilot mode there is no person driving, and the safe mode is commanded
-        (said so, as README's "When a person intervenes" has it).
+        (said so, as the manual's "When a person intervenes" (docs/failsafes.md) has it).
         """
         takeover = rc_takeover(self.mission.rc, self._bb.get)
         if takeover is not None:

@@ -3,7 +3,7 @@
 Guards read the blackboard and nothing else; they never return RUNNING.
 
 Unknown and stale are not healthy. Every guard says (:attr:`Guard.unknown_or_stale`, shown by the
-catalogue and README's guard table) what it does with no reading yet and with a reading older than
+catalogue and the guard table of docs/failsafes.md) what it does with no reading yet and with a reading older than
 its limit. A reading is *stale* when the autopilot has been heard (its HEARTBEAT) for longer than
 the limit since it arrived, counted from when the link last came up if that is later
 (:meth:`Guard.stale`): the autopilot talks but no longer says it. While no heartbeat arrives at
@@ -18,7 +18,7 @@ says so in its feedback, and its ``unknown_or_stale`` says why that is safe.
 Every guard is debounced in vehicle time (the injected clock), so that its failsafe never flaps:
 once it has passed, a condition must fail for ``hold_after_s`` before the guard fails (a shorter
 bad spell passes, with a note), and once failed it must hold again for ``resume_after_s`` before
-the guard passes. Each guard documents its two figures and why (the README's failsafe table lists
+the guard passes. Each guard documents its two figures and why (docs/failsafes.md's failsafe table lists
 them). A guard that has never passed fails at once: there is nothing to hold yet (the EKF before
 pre-flight, a first reading). Without a clock (a guard ticked on its own) the verdict is the raw one.
 """
@@ -52,7 +52,7 @@ class Guard(ExecutiveBehaviour):
     #: Vehicle seconds the condition must hold again, once the guard failed, before it passes.
     resume_after_s: float = 0.0
 
-    #: What the guard does with no reading yet, and with a reading older than its limit (the catalogue and README say it).
+    #: What the guard does with no reading yet, and with a reading older than its limit (the catalogue and docs/failsafes.md say it).
     unknown_or_stale: str = ""
 
     def __init__(self, name: str) -> None:

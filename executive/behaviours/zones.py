@@ -22,7 +22,7 @@ from executive.autopilot.fence import ZoneItems, fence_items, inclusion_shapes, 
 from executive.behaviours.auto_route import MissionTransferFollower
 from executive.clock import Clock
 from executive.mavlink_dialect import mavlink
-from executive.mission.model import GeofenceConfig, RallyPoint
+from executive.mission.model import GeofenceConfig, Mission, RallyPoint
 from executive.state import MissionTransferStatus
 
 log = logging.getLogger(__name__)
@@ -36,8 +36,19 @@ def _same(a: float, b: float) -> bool:
     return math.isclose(a, b, rel_tol=_PARAM_TOLERANCE, abs_tol=_PARAM_TOLERANCE)
 
 
+def puts_zones_on_autopilot(mission: Mission) -> bool:
+    """Whether the mission's pre-flight puts zones or rally points on the autopilot (``geofence.autopilot`` not ``off``, and it has some)."""
+    geofence = mission.geofence
+    shapes = geofence is not None and (geofence.polygon is not None or bool(geofence.inclusion) or bool(geofence.keep_out))
+    enforce = geofence is not None and geofence.autopilot == "enforce"  # max_distance_from_home_m alone is the fence's circle
+    return not (geofence is not None and geofence.autopilot == "off") and (shapes or bool(mission.rally_points) or enforce)
+
+
 class ZonesOnAutopilot(MissionTransferFollower):
     """SUCCESS once the fence and the rally points are on the autopilot, read back (and, with ``enforce``, its fence switched on).
+
+    ``clear_fence``, ``clear_rally``: an empty fence or rally list is sent too (a replacing mission without
+    what the mission before it put there, :mod:`executive.autopilot_link.replaced_zones`).
 
     FAILURE, nothing armed, when the autopilot refuses an item (naming the zone it belongs to, and
     what the autopilot said), reads back something else, will not take a parameter, or it is not all
@@ -52,6 +63,8 @@ class ZonesOnAutopilot(MissionTransferFollower):
         geofence: GeofenceConfig | None,
         rally_points: list[RallyPoint],
         *,
+        clear_fence: bool = False,
+        clear_rally: bool = False,
         timeout_s: float = 60.0,
         ask_every_s: float = 1.0,
         name: str = "Zones and rally points on the autopilot",
@@ -62,11 +75,11 @@ class ZonesOnAutopilot(MissionTransferFollower):
         self.inclusions = inclusion_shapes(geofence)
         self.uploads: list[tuple[str, int, ZoneItems]] = [
             (what, mission_type, zone_items)
-            for what, mission_type, zone_items in (
-                ("fence", mavlink.MAV_MISSION_TYPE_FENCE, fence_items(geofence)),
-                ("rally points", mavlink.MAV_MISSION_TYPE_RALLY, rally_items(rally_points)),
+            for what, mission_type, zone_items, clear in (
+                ("fence", mavlink.MAV_MISSION_TYPE_FENCE, fence_items(geofence), clear_fence),
+                ("rally points", mavlink.MAV_MISSION_TYPE_RALLY, rally_items(rally_points), clear_rally),
             )
-            if zone_items.items
+            if zone_items.items or clear
         ]
         self.timeout_s, self.ask_every_s = timeout_s, ask_every_s
 

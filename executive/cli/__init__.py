@@ -20,6 +20,20 @@ EXIT_NO_VEHICLE = 3  # could not reach the vehicle
 EXIT_INTERRUPTED = 130  # Ctrl-C before anything was commanded (128 + SIGINT, as a shell reports it)
 EXIT_CRASHED = 70  # a bug: an exception nothing expected (sysexits' EX_SOFTWARE); a service restarts on it, not on 1
 
+#: What each exit code means, for every subcommand: ``executive --help`` and the manual's table are made from it.
+EXIT_CODES = {
+    EXIT_OK: "success: the mission COMPLETED, or the command did what it was asked",
+    EXIT_FAILED: "it ran and failed: a mission aborted or failed at run time; `ctl` refused (by the executive or the autopilot); "
+    "`can decode` skipped lines it could not read",
+    EXIT_BAD_INPUT: "bad input, nothing sent: usage, an invalid mission file, a malformed `--mavlink`/`--gcs`/`--can`, a user's tree or "
+    "plugin that fails as it is built or set up, a journal that cannot be created or read",
+    EXIT_NO_VEHICLE: "could not reach the vehicle or a port: no heartbeat, nothing listening at a `tcp:` endpoint, no such serial device "
+    "or CAN bus, one another process holds or that sends no MAVLink, an address that cannot be listened on (a port in use); "
+    "`ctl`: no executive answers",
+    EXIT_CRASHED: "a crash (a bug of ours: the traceback is printed)",
+    EXIT_INTERRUPTED: "Ctrl-C before anything was commanded (while waiting for the autopilot's first heartbeat)",
+}
+
 
 class BadInput(Exception):
     """Input a subcommand cannot use; ``main`` prints it and exits 2."""
@@ -62,7 +76,11 @@ COMMANDS = {
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The command line; with ``only`` (a command), just its module is imported: ``ctl`` starts fast."""
-    parser = argparse.ArgumentParser(prog="executive", description="Onboard behaviour-tree mission executive.")
+    parser = argparse.ArgumentParser(
+        prog="executive",
+        description="Onboard behaviour-tree mission executive.",
+        epilog="exit codes, the same for every command: " + "; ".join(f"{code}: {meaning}" for code, meaning in EXIT_CODES.items()),
+    )
     parser.add_argument("--version", action="version", version=f"executive {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for module in dict.fromkeys(COMMANDS.values()) if only is None else (COMMANDS[only],):

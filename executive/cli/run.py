@@ -88,8 +88,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--socket",
         metavar="PATH",
-        help=f"control socket for `executive ctl` (default {default_socket_path()}; when another executive serves that one, a socket of "
-        "its own, named at start-up); 'none': no control socket",
+        help="control socket for `executive ctl`, owner-only (default `$XDG_RUNTIME_DIR/executive.sock`, else `/tmp/executive-UID.sock`: "
+        f"here {default_socket_path()}; when another executive serves the default, one with this one's process id beside it, "
+        "`executive-PID.sock` under `$XDG_RUNTIME_DIR`, else `executive-UID-PID.sock`, said at start-up; a --socket another executive "
+        "serves is refused, exit 2); 'none': no control socket",
     )
     p.add_argument("--wait", action="store_true", help="load the mission READY, wait for `ctl start`, and keep serving after it ends")
     p.add_argument("--gcs", metavar="URL", help="a MAVLink endpoint for ground stations (e.g. udpin:0.0.0.0:14551)")

@@ -182,7 +182,7 @@ def _check_other_inputs(args: argparse.Namespace) -> None:
 
 
 def vehicle_option_refusal(args: argparse.Namespace, mission: Mission) -> str | None:
-    """Why an option of ``run`` does not fit the mission's vehicle, if one does not (README lists them under the run options).
+    """Why an option of ``run`` does not fit the mission's vehicle, if one does not (docs/running.md lists them under the run options).
 
     ``--can`` is the AgileX tracked base's bus, driven from ArduRover's skid-steer outputs: SERVO1 the left track, SERVO3
     the right (``libraries/AR_Motors/AP_MotorsUGV.cpp`` output_skid_steering; SERVO1_FUNCTION 73 and SERVO3_FUNCTION 74,

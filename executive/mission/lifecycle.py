@@ -119,6 +119,8 @@ class MissionState:
         self.route_listeners: list[RouteListener] = []
         self.replace_checks: list[ReplaceCheck] = []
         self.replace_listeners: list[ReplaceListener] = []
+        #: Asked before a resume: each says why the mission may not resume yet (a replacing mission's zones not on the autopilot), or None.
+        self.resume_checks: list[Callable[[], str | None]] = []
         self.announce_listeners: list[AnnounceListener] = []
         #: While PAUSED, the tree holds the vehicle in its safe mode; False when a person paused it by taking the vehicle: hands off.
         self.hold_while_paused = True
@@ -201,6 +203,9 @@ class MissionState:
 
     def resume(self, reason: str = "") -> None:
         self._check("resume")
+        problems = [why for check in self.resume_checks if (why := check()) is not None]
+        if problems:
+            raise Refused("cannot resume: " + "; ".join(problems))
         self.hold_while_paused = True
         self._transition("resume", f"resumed at leg {self.leg_number}" + (f": {reason}" if reason else ""))
 
@@ -374,6 +379,11 @@ class MissionState:
             if not self.sampled(sample.leg_index):
                 self.samples = (*self.samples, sample)
         self._publish()
+
+    def explain(self, reason: str) -> None:
+        """Say why the mission stays as it is (a replacing mission's zones refused: it stays PAUSED) as its reason; no transition."""
+        self.reason = reason
+        self._bb.set("/mission/reason", reason)
 
     # -- internals ---------------------------------------------------------------------------
     def _check(self, request: str) -> None:

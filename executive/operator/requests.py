@@ -180,7 +180,8 @@ class Operator:
             return self._reply(False, f"{filename}: cannot replace {old.name!r}: {exc}")
         reason = f"{plan.describe(old)} ({source}: {filename}); paused until resumed"
         state.replace(plan.mission, plan.leg_index, plan.samples, reason, vehicle_at=here)
-        return self._reply(True, reason, route=self._route_view())
+        waits = [why for check in state.resume_checks if (why := check()) is not None]  # its zones going to the autopilot
+        return self._reply(True, "; ".join([reason, *waits]), route=self._route_view())
 
     def _route(self, args: dict[str, Any], source: str) -> Reply:
         """Edit the route (refused with the reason, changing nothing), or show it."""

@@ -29,7 +29,7 @@ from executive.state import Battery, BatteryStatus
 #: A Li-ion/LiPo cell's nominal voltage: PX4's BAT1_N_CELLS turned into a pack voltage.
 CELL_NOMINAL_V = 3.7
 
-#: What each ArduPilot BATT_MONITOR kind can tell (AP_BattMonitor.h Type): README's table says the same.
+#: What each ArduPilot BATT_MONITOR kind can tell (AP_BattMonitor.h Type): the manual's table (docs/missions.md, Energy) says the same.
 MONITOR_KINDS: dict[int, str] = {0: "none", 3: "voltage only (no current: nothing counted)", 4: "voltage and current"}
 
 

@@ -262,7 +262,7 @@ class EnergyWatch:
         self._ticked_at = now
         position: GlobalPosition | None = self._in.get("/vehicle/position")
         ekf: EkfStatus | None = self._in.get("/vehicle/ekf")
-        # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (README)
+        # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (docs/autopilots.md)
         if position is None or position is self._last_position or ekf is None or not ekf.position_ok():
             return
         if self._last_position is not None and self._in.get("/vehicle/armed") and not hovering:

@@ -340,7 +340,7 @@ class Lockstep:
         self._scheduled.sort(key=lambda entry: entry[0])
 
     def send_obstacles(self, scan: dict[str, Any] | bytes) -> None:
-        """The camera sends one datagram: a scan (the JSON object of README's ``--obstacles``), or raw bytes; needs ``obstacles=True``."""
+        """The camera sends one datagram: a scan (the JSON object of docs/running.md's ``--obstacles``), or raw bytes; needs ``obstacles=True``."""
         if self._camera is None:
             raise RuntimeError("this simulation has no camera: Lockstep(..., obstacles=True)")
         self._camera.send(scan if isinstance(scan, bytes) else json.dumps(scan).encode())

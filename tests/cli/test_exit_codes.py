@@ -1,9 +1,10 @@
-"""One table of exit codes and one message prefix for every subcommand: README's table is the code's, and a port in use is 3 for all."""
+"""One table of exit codes and one message prefix for every subcommand: the manual's table is the code's, and a port in use is 3 for all."""
 
 from __future__ import annotations
 
 import re
 import socket
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -12,15 +13,24 @@ import pytest
 from executive import cli
 from executive.cli import main
 
-README = Path(__file__).parents[2] / "docs" / "running.md"  # README's "The command line", in the manual
+DOCS = Path(__file__).parents[2] / "docs"
+RUNNING = DOCS / "running.md"  # README's "The command line", in the manual
+sys.path.insert(0, str(DOCS / "_ext"))
+import executive_reference as reference  # noqa: E402
 
 
-def test_readmes_table_of_exit_codes_is_the_codes():
-    table = re.search(r"\| code \| meaning \|\n\|---\|---\|\n((?:\|.*\n)+)", README.read_text(encoding="utf-8"))
-    assert table, "README has no table of exit codes"
-    documented = [int(row.split("|")[1]) for row in table.group(1).splitlines()]
-    constants = sorted(value for name, value in vars(cli).items() if name.startswith("EXIT_"))
+def test_the_manuals_table_of_exit_codes_is_the_codes():
+    """The running page's table is generated (``exit_codes``) at each build: it has every EXIT_ constant, each with its meaning."""
+    assert "\n<!-- generated: exit_codes -->\n" in RUNNING.read_text(encoding="utf-8")
+    page = reference.expand("<!-- generated: exit_codes -->")
+    table = re.search(r"\| code \| meaning \|\n\|---\|---\|\n((?:\|.*\n)+)", page)
+    assert table, "the generated page has no table of exit codes"
+    rows = [row.split(" | ") for row in table.group(1).splitlines()]
+    documented = [int(row[0].strip("| ")) for row in rows]
+    constants = sorted(value for name, value in vars(cli).items() if name.startswith("EXIT_") and isinstance(value, int))
     assert documented == constants
+    assert all(len(row[1].strip("| ")) > 10 for row in rows), "an exit code without its meaning"
+    assert "exit codes, the same for every command: 0: success" in cli.build_parser().format_help().replace("\n", " ").replace("  ", " ")
 
 
 @pytest.fixture
@@ -55,11 +65,13 @@ def test_sims_refusals_carry_the_common_prefix_and_code(argv, code, message, cap
     assert capsys.readouterr().err.startswith(message)
 
 
-def test_readme_names_the_socket_a_second_executive_takes(monkeypatch):
-    """Issue 43: README said `executive-PID.sock`; without $XDG_RUNTIME_DIR it is `executive-UID-PID.sock` (executive-0-PID.sock as root)."""
+def test_the_manual_names_the_socket_a_second_executive_takes(monkeypatch):
+    """Issue 43: README said `executive-PID.sock`; without $XDG_RUNTIME_DIR it is `executive-UID-PID.sock` (executive-0-PID.sock as root).
+
+    The names are in `run --socket`'s help, which the manual's command line reference is generated from."""
     from executive.io.control import default_socket_path
 
-    text = README.read_text(encoding="utf-8")
+    text = reference.cli_reference()
     monkeypatch.delenv("XDG_RUNTIME_DIR", raising=False)
     assert default_socket_path(1234).endswith("/executive-" + str(__import__("os").getuid()) + "-1234.sock")
     assert "`executive-UID-PID.sock`" in text

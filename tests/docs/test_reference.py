@@ -78,3 +78,34 @@ def test_each_reference_page_holds_its_marker_and_the_build_replaces_it(page):
     text = (DOCS / "reference" / f"{page}.md").read_text(encoding="utf-8")
     assert f"<!-- generated: {page} -->" in text
     assert reference.MARKER.search(text) and not reference.MARKER.search(reference.expand(text))
+
+
+def test_the_running_pages_list_of_commands_is_generated_each_linked_to_its_reference():
+    """Issue 36: the command tables were written by hand in docs/running.md beside the generated reference; now made from the parsers."""
+    commands = {name for action in build_parser()._actions if isinstance(action, argparse._SubParsersAction) for name in action.choices}
+    table = reference.commands_table()
+    anchors = dict(re.findall(r"\[`executive ([\w-]+)`\]\(reference/cli\.md#([\w-]+)\)", table))
+    assert set(anchors) == commands
+    headings = {re.sub(r"[^\w-]", "", h.replace(" ", "-")) for h in re.findall(r"^#+ `(executive[^`]*)`$", reference.cli_reference(), re.M)}
+    assert set(anchors.values()) <= headings, "a command links to no heading of the command line reference"
+    assert "\n<!-- generated: commands -->\n" in (DOCS / "running.md").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("page", sorted(p.name for p in DOCS.glob("*.md")))
+def test_no_page_lists_commands_or_options_by_hand(page):
+    """A table of commands or options outside the generated reference would be a second copy to keep up to date."""
+    text = (DOCS / page).read_text(encoding="utf-8")
+    assert not re.search(r"^\| (command|option) \| what it does \|", text, re.M)
+
+
+def test_the_guards_figures_on_the_failsafes_page_are_the_catalogues():
+    """Issue 36: the failsafes page wrote each guard's hold/resume figures and its unknown-or-stale rule by hand; now generated."""
+    nodes = reference.catalogue()
+    page = reference.guards_table(nodes)
+    rows = {re.search(r"`(\w+)`", row)[1]: row for row in page.splitlines()[2:]}
+    for node in (n for n in nodes if n["kind"] == "guard"):
+        defaults = {p["name"]: p.get("default") for p in node["params"]}
+        assert f"| {defaults['hold_after_s']:g} s | {defaults['resume_after_s']:g} s |" in rows[node["name"]]
+        assert node["unknown_or_stale"] and node["unknown_or_stale"].split(":")[0].replace("_", "\\_") in rows[node["name"]]
+    text = (DOCS / "failsafes.md").read_text(encoding="utf-8")
+    assert "\n<!-- generated: guards -->\n" in text and not re.search(r"^\| guard\b", text, re.M)

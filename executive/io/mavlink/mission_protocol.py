@@ -296,7 +296,9 @@ class MissionTransfer:
         else:  # no home slot: the items from 0 (``home`` is the autopilot's own business)
             self._upload = tuple(replace(item, seq=seq) for seq, item in enumerate(items))
         self._verify_upload = self.verify if verify is None else verify
-        self._final_item_sent = False
+        # an empty list is its count alone: ArduPilot answers a MISSION_COUNT of 0 with MISSION_ACK ACCEPTED at once
+        # (GCS_MAVLink/MissionItemProtocol.cpp handle_mission_count: "if (packet.count == 0) ... send_mission_ack")
+        self._final_item_sent = not self._upload
         self._partial_end = None
         ticket = self._start(TransferOperation.UPLOAD, len(self._upload), mission_type)
         self._step = _Step.SEND_COUNT

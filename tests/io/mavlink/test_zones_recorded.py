@@ -15,6 +15,7 @@ from tlog_replay import DATA, Replay, records
 from executive import blackboard
 from executive.autopilot.fence import fence_items, rally_items
 from executive.clock import ManualClock
+from executive.geo import distance
 from executive.io.mavlink.mission_protocol import MissionTransfer, first_mismatch
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.loader import load_mission
@@ -122,3 +123,51 @@ def test_ardurovers_avoidance_kept_a_go_to_off_the_pier_and_a_manual_drive_in_br
     hold_t = next(t for t, k, mode in replay.seen if k == "/vehicle/mode" and mode == "HOLD" and t >= breach_t)
     assert hold_t - breach_t < 0.5  # FENCE_ACTION 2 within a heartbeat of the breach report
     assert ("/vehicle/mode_set_by", "autopilot") in [(k, v) for t, k, v in replay.seen if t >= hold_t - 0.01]
+
+
+def _after(path: Path, text: str) -> list[tuple[float, MAVLinkMessage]]:
+    """The recording from the executive's STATUSTEXT starting with ``text`` on, with times."""
+    messages = list(records(path))
+    start = next(i for i, (_, m) in enumerate(messages) if m.get_type() == "STATUSTEXT" and m.text.startswith(text))
+    return messages[start:]
+
+
+def test_ardurover_took_and_read_back_the_replacing_missions_zones_before_its_route_was_driven() -> None:
+    path = ZONES / "ardurover-replaced-zones.tlog"
+    new = load_mission(ZONES / "zones-v2.yaml")
+    for mission_type, items, key, count in (
+        (FENCE, fence_items(new.geofence).items, "/vehicle/fence_items", 8),  # the inclusion polygon and 'moorings': 'pier' and 'buoy' gone
+        (RALLY, rally_items(new.rally_points).items, "/vehicle/rally_items", 1),
+    ):
+        transfer, _ = replay_transfer(path, mission_type, items)
+        assert transfer.status is not None and transfer.status.state is TransferState.DONE, transfer.status
+        held = blackboard.reader("t", [key]).get(key)
+        assert len(held) == count and first_mismatch(items, held) is None
+    ours = [(t, m) for t, m in _after(path, "mission replaced: zones-v2") if m.get_srcComponent() == EXECUTIVE_COMPONENT]
+    read_back = max(t for t, m in ours if m.get_type() == "MISSION_ACK" and m.mission_type in (FENCE, RALLY))
+    resumed = next(t for t, m in ours if m.get_type() == "STATUSTEXT" and m.text.startswith("mission RUNNING"))
+    driven = next(t for t, m in ours if m.get_type() in ("COMMAND_LONG", "SET_POSITION_TARGET_GLOBAL_INT"))
+    assert read_back < resumed <= driven  # nothing commanded of the new mission before its zones were read back
+
+
+def test_ardurover_took_an_empty_fence_and_rally_list_from_a_replacing_mission_without_zones() -> None:
+    path = ZONES / "ardurover-replaced-without-zones.tlog"
+    for mission_type, key in ((FENCE, "/vehicle/fence_items"), (RALLY, "/vehicle/rally_items")):
+        transfer, sent = replay_transfer(path, mission_type, ())
+        assert transfer.status is not None and transfer.status.state is TransferState.DONE, transfer.status
+        assert [m.count for m in sent if m.get_type() == "MISSION_COUNT"] == [0]  # the count alone: ArduPilot ACCEPTED it
+        assert blackboard.reader("t", [key]).get(key) == ()
+
+
+def test_ardurover_refused_the_replacing_missions_fence_kept_the_old_one_and_nothing_was_commanded() -> None:
+    path = ZONES / "ardurover-replaced-fence-refused.tlog"
+    transfer, _ = replay_transfer(path, FENCE, fence_items(load_mission(ZONES / "ring.yaml").geofence).items)  # 95 items
+    assert transfer.status is not None and transfer.status.state is TransferState.FAILED
+    assert transfer.status.reason == "the vehicle refused the upload: MAV_MISSION_NO_SPACE"
+    after = _after(path, "mission replaced: ring")
+    said = [m.text for _, m in after if m.get_type() == "STATUSTEXT"]
+    assert said[-2:] == ["Only 84 items are supported", "zones refused: mission stays paused"]
+    commanded = [m for _, m in after if m.get_srcComponent() == EXECUTIVE_COMPONENT and m.get_type().startswith(("COMMAND_", "SET_POSITION"))]
+    assert commanded == []  # paused, held in HOLD: nothing of the new mission sent
+    fixes = [(m.lat / 1e7, m.lon / 1e7) for _, m in after if m.get_type() == "GLOBAL_POSITION_INT"]
+    assert len(fixes) > 10 and max(distance(*fixes[0], *fix) for fix in fixes) < 0.05  # the rover did not move (1e-7 deg of jitter)
