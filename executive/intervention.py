@@ -37,9 +37,9 @@ from executive.autopilot.port import AutopilotPort
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.model import RcConfig
-from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause
+from executive.mode_cause import AutopilotCause, ModeChange, autopilot_cause, facts_may_lag
 from executive.sensing.rc import RcReading
-from executive.state import MISSION_STATE_COMPLETE, FenceStatus, GlobalPosition, MissionCurrent
+from executive.state import MISSION_STATE_COMPLETE, EkfStatus, FenceStatus, GlobalPosition, MissionCurrent, MissionItemReached
 from executive.target_watch import PersonsTarget, TargetWatch
 from executive.vehicles import AutopilotName, VehicleProfile
 
@@ -49,6 +49,8 @@ log = logging.getLogger(__name__)
 SWITCH_JUMP_US = 300
 #: A STATUSTEXT or a switch this recent explains a mode change.
 EXPLAINS_WITHIN_S = 2.0
+#: A change that facts streamed after the heartbeat may explain waits this long for them at most (MISSION_CURRENT comes at 1 Hz).
+FACTS_WAIT_S = 1.5
 
 
 def rc_takeover(rc: RcConfig, read: Callable[[str], object]) -> str | None:
@@ -82,8 +84,8 @@ class InterventionWatch:
             "intervention watch",
             [
                 "/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected", "/vehicle/armed",
-                "/vehicle/landed_state", "/vehicle/mission_current", "/vehicle/system_status", "/vehicle/position",
-                "/vehicle/position_target", "/vehicle/fence_status",
+                "/vehicle/landed_state", "/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/ekf", "/vehicle/system_status",
+                "/vehicle/position", "/vehicle/position_target", "/vehicle/fence_status",
             ],
         )  # fmt: skip
         self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by", "/vehicle/target_set_by"])
@@ -102,6 +104,7 @@ class InterventionWatch:
         self._asks_seen: dict[str, float] = {}  # mode -> the time of our ask of it that the heartbeat has shown done
         self._disarmed_at = float("-inf")
         self._fence_breaches = 0  # FENCE_STATUS breach_count last said
+        self._change_seen_at: float | None = None  # when a change still waiting for its facts (_facts_to_come) was first seen
         mission_state.listeners.append(self._on_transition)
 
     def service(self) -> None:
@@ -114,6 +117,8 @@ class InterventionWatch:
         if mode is None or not self._bb.get("/link/up"):
             return
         previous, self._shown = self._shown, mode
+        if mode == previous:
+            self._change_seen_at = None  # a change waiting for its facts that went back before they came
         cause: AutopilotCause | None = None
         set_by: str | None = None
         ours = self._our_ask(mode, now)
@@ -121,7 +126,11 @@ class InterventionWatch:
             if ours:
                 set_by = "us"
             else:
-                cause = autopilot_cause(self.firmware(), self.profile.kind, self._change(previous, mode, now, disarmed_just_now))
+                change = self._change(previous, mode, now, disarmed_just_now)
+                cause = autopilot_cause(self.firmware(), self.profile.kind, change)
+                if cause is None and self._facts_to_come(change, now):
+                    self._shown = previous  # judged again at the next tick
+                    return
                 set_by = "others" if cause is None else "autopilot"
             self._out.set("/vehicle/mode_set_by", set_by)
         report, position = self._bb.get("/vehicle/position_target"), self._bb.get("/vehicle/position")
@@ -165,6 +174,22 @@ class InterventionWatch:
         self._paused_here = True
         self.mission_state.pause(reason, hold=False)
 
+    def _facts_to_come(self, change: ModeChange, now: float) -> bool:
+        """Whether to judge ``change`` later: it may be the autopilot's by facts it streams after its heartbeat
+        (:func:`~executive.mode_cause.facts_may_lag`), and MISSION_CURRENT or EKF_STATUS_REPORT has not come since the change was
+        first seen, for :data:`FACTS_WAIT_S` at most."""
+        if not facts_may_lag(self.firmware(), self.profile.kind, change):
+            self._change_seen_at = None
+            return False
+        seen_at = self._change_seen_at = now if self._change_seen_at is None else self._change_seen_at
+        current: MissionCurrent | None = self._bb.get("/vehicle/mission_current")
+        ekf: EkfStatus | None = self._bb.get("/vehicle/ekf")
+        fresh = current is not None and current.time > seen_at and ekf is not None and ekf.time > seen_at
+        if fresh or now - seen_at >= FACTS_WAIT_S:
+            self._change_seen_at = None
+            return False
+        return True
+
     def _pause_for_target(self, target: PersonsTarget) -> None:
         """A target the autopilot reports that we did not ask for, in the leg's mode: a person's; pause, hands off."""
         if self.expected is None or rc_takeover(self.rc, self._bb.get) is not None:
@@ -197,6 +222,8 @@ class InterventionWatch:
     def _change(self, previous: str, mode: str, now: float, disarmed_just_now: bool) -> ModeChange:
         current: MissionCurrent | None = self._bb.get("/vehicle/mission_current")
         position: GlobalPosition | None = self._bb.get("/vehicle/position")
+        reached: MissionItemReached | None = self._bb.get("/vehicle/mission_reached")
+        ekf: EkfStatus | None = self._bb.get("/vehicle/ekf")
         return ModeChange(
             previous=previous,
             mode=mode,
@@ -209,6 +236,8 @@ class InterventionWatch:
             alt_rel_m=position.alt_rel_m if position is not None else None,
             takeoff_height_m=self._autopilot.takeoff_height_m,
             fence_breached=self._fence_breached(now),
+            mission_end_reached=current is not None and current.total > 0 and reached is not None and reached.highest >= current.total,
+            position_ok=ekf.position_ok() if ekf is not None else None,
         )
 
     def _note_fence(self) -> None:

@@ -2,7 +2,7 @@
 
 An autopilot changes mode by itself in a few documented states: PX4 loiters once a take-off or a
 mission is done, goes back to the user's mode once disarmed, and its failsafe picks a mode; ArduSub
-holds its depth once SURFACE reaches the surface; ArduPilot's failsafes announce themselves. A mode
+holds its depth once SURFACE reaches the surface, and at its mission's end without a position; ArduPilot's failsafes announce themselves. A mode
 change is the autopilot's only when the firmware's cause for it shows in what the executive sees
 (the landed state, the armed flag, the mission's state, the heartbeat's system status, the
 autopilot's STATUSTEXT, the RC); anything else is a person's. Each rule cites the firmware source
@@ -52,6 +52,10 @@ class ModeChange:
     alt_rel_m: float | None  # GLOBAL_POSITION_INT relative altitude (minus the depth under water)
     takeoff_height_m: float | None = None  # the height above home our latest take-off climbs to (None: unknown)
     fence_breached: bool = False  # FENCE_STATUS said the autopilot's own fence is breached, just before or with the change
+    #: The autopilot's mission ended: MISSION_ITEM_REACHED of the last item MISSION_CURRENT counts, or MISSION_CURRENT COMPLETE
+    #: (ArduPilot sends the first at once, in the loop that ends the mission; the second only at its next stream)
+    mission_end_reached: bool = False
+    position_ok: bool | None = None  # the EKF's last word (EKF_STATUS_REPORT): a horizontal position; None: not reported
 
 
 def autopilot_cause(firmware: AutopilotName, vehicle: str, change: ModeChange) -> AutopilotCause | None:
@@ -64,6 +68,13 @@ def autopilot_cause(firmware: AutopilotName, vehicle: str, change: ModeChange) -
     if firmware == "px4":
         return _px4_cause(change)
     return _ardupilot_cause(vehicle, change)
+
+
+def facts_may_lag(firmware: AutopilotName, vehicle: str, change: ModeChange) -> bool:
+    """Whether ``change``, unexplained, may yet be explained by facts that the autopilot streams after its heartbeat: then they are
+    waited for. ArduSub's mission end in ALT_HOLD shows in MISSION_CURRENT (1 Hz) and EKF_STATUS_REPORT (2 Hz), and a link back
+    after a cut brings the heartbeat first, with the facts before the cut still on the blackboard."""
+    return firmware == "ardupilot" and vehicle == "sub" and change.previous == "AUTO" and change.mode == "ALT_HOLD" and change.armed
 
 
 def _px4_cause(c: ModeChange) -> AutopilotCause | None:
@@ -94,6 +105,17 @@ def _ardupilot_cause(vehicle: str, c: ModeChange) -> AutopilotCause | None:
         # Rover/fence.cpp fence_check: a new breach sets FENCE_ACTION's mode (reason FENCE_BREACHED); AC_Fence::record_breach sends
         # FENCE_STATUS at once, and no STATUSTEXT
         return AutopilotCause(f"its own fence breached (FENCE_STATUS), FENCE_ACTION -> {c.mode}, Rover/fence.cpp", pauses=True)
+    if (
+        vehicle == "sub"
+        and c.previous == "AUTO"
+        and c.mode == "ALT_HOLD"
+        and c.armed
+        and c.position_ok is False
+        and (c.mission_end_reached or c.mission_complete)
+    ):
+        # ArduSub/commands_logic.cpp Sub::exit_mission: ModeAuto::auto_loiter_start fails without sub.position_ok(), then
+        # set_mode(ALT_HOLD, ModeReason::MISSION_END), said by no STATUSTEXT; with a position it holds in AUTO instead
+        return AutopilotCause("its mission ended without a position: ALT_HOLD, ArduSub Sub::exit_mission (commands_logic.cpp)")
     if vehicle == "sub" and c.previous == "SURFACE" and c.mode == "ALT_HOLD" and c.alt_rel_m is not None and c.alt_rel_m >= SUB_AT_SURFACE_M:
         return AutopilotCause("at the surface, ArduSub mode_surface.cpp SURFACE_COMPLETE")
     return None

@@ -21,7 +21,7 @@ from executive.behaviours import SetMode, TakeOff
 from executive.clock import Clock
 from executive.mavlink_dialect import mavlink
 from executive.mission.model import Mission
-from executive.mode_cause import ModeChange, autopilot_cause
+from executive.mode_cause import ModeChange, autopilot_cause, facts_may_lag
 from executive.sim.faults import Fault, FaultInjector, LinkLoss
 from executive.sim.firmware import FirmwareSim
 from executive.testing import Lockstep
@@ -83,6 +83,25 @@ def test_ardusub_holds_its_depth_once_surface_reaches_the_surface_but_not_below_
     assert "surface" in why("ardupilot", "sub", change("SURFACE", "ALT_HOLD", alt_rel_m=-0.1, landed_state=None))
     assert why("ardupilot", "sub", change("SURFACE", "ALT_HOLD", alt_rel_m=-8.0, landed_state=None)) is PERSON
     assert why("ardupilot", "rover", change("SURFACE", "ALT_HOLD", alt_rel_m=0.0)) is PERSON
+
+
+def test_ardusub_ends_its_mission_in_alt_hold_only_without_a_position() -> None:
+    """Sub::exit_mission: AUTO loiters at the end unless auto_loiter_start fails (no position): then ALT_HOLD, said by nothing."""
+    end = {"armed": True, "landed_state": None, "position_ok": False}
+    assert "mission ended without a position" in why("ardupilot", "sub", change("AUTO", "ALT_HOLD", mission_end_reached=True, **end))
+    assert "mission ended without a position" in why("ardupilot", "sub", change("AUTO", "ALT_HOLD", mission_complete=True, **end))
+    assert why("ardupilot", "sub", change("AUTO", "ALT_HOLD", **end)) is PERSON  # mid-mission
+    assert why("ardupilot", "sub", change("AUTO", "ALT_HOLD", mission_end_reached=True, **(end | {"position_ok": True}))) is PERSON
+    assert why("ardupilot", "sub", change("AUTO", "ALT_HOLD", mission_end_reached=True, **(end | {"position_ok": None}))) is PERSON
+    assert why("ardupilot", "rover", change("AUTO", "ALT_HOLD", mission_end_reached=True, **end)) is PERSON
+    assert why("ardupilot", "sub", change("AUTO", "MANUAL", mission_end_reached=True, **end)) is PERSON
+
+
+def test_only_arduSubs_auto_to_alt_hold_waits_for_the_facts_streamed_after_the_heartbeat() -> None:
+    assert facts_may_lag("ardupilot", "sub", change("AUTO", "ALT_HOLD"))
+    assert not facts_may_lag("ardupilot", "sub", change("AUTO", "POSHOLD"))
+    assert not facts_may_lag("ardupilot", "rover", change("AUTO", "ALT_HOLD"))
+    assert not facts_may_lag("px4", "sub", change("AUTO", "ALT_HOLD"))
 
 
 def test_ardupilot_has_no_disarm_or_take_off_rule() -> None:

@@ -20,6 +20,7 @@ from executive.autopilot.selection import Autopilot
 from executive.clock import ManualClock
 from executive.intervention import InterventionWatch
 from executive.io.mavlink.commander import Commander
+from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
@@ -49,7 +50,8 @@ def records(path: Path) -> Iterator[tuple[float, MAVLinkMessage]]:
 
 @dataclass
 class Replay:
-    """The executive's reading side, fed a recording; ``seen`` keeps each change of a watched blackboard key, with its time."""
+    """The executive's reading side (its mission transfer too: MISSION_CURRENT, MISSION_ITEM_REACHED), fed a recording;
+    ``seen`` keeps each change of a watched blackboard key, with its time."""
 
     vehicle: str = "vtol"
     clock: ManualClock = field(default_factory=ManualClock)
@@ -68,7 +70,7 @@ class Replay:
         profile = PROFILES[self.vehicle]
         self.commander = Commander(self.link, self.clock, profile)
         self.port = Autopilot(self.commander, None, profile)
-        self.reader = MavlinkReader(self.link, self.clock, self.commander, link_timeout_s=5.0)
+        self.reader = MavlinkReader(self.link, self.clock, self.commander, mission=MissionTransfer(self.link, self.clock), link_timeout_s=5.0)
         self.reader.on_autopilot = self.port.adopt
         self.state = MissionState()
         fields = {

@@ -105,8 +105,9 @@ class Px4Port(MavlinkPort):
             takeoff_alt_amsl=True,
             first_item_seq=0,  # PX4's mission has no home slot: src/modules/mavlink/mavlink_mission.cpp stores item 0 as the first item
             # src/lib/battery/module.yaml: BAT1_CAPACITY mAh (-1: unknown, the default), BAT1_N_CELLS (0: unknown), per-cell
-            # BAT1_V_EMPTY (3.6 V) and BAT1_V_CHARGED (4.05 V)
-            battery_params=("BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED"),
+            # BAT1_V_EMPTY (3.6 V) and BAT1_V_CHARGED (4.05 V); the height RTL climbs to first (navigator/rtl_params.c, 60 m): the
+            # way home's cost (executive.sensing.energy)
+            battery_params=("BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED", "RTL_RETURN_ALT"),
             fence_params=("GF_ACTION", "GF_MAX_HOR_DIST"),
         )
         self.stream = OffboardStream(commander)

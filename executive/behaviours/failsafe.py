@@ -47,11 +47,11 @@ from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitch
 from executive.behaviours.position_guards import InsideGeofence
 from executive.behaviours.rc_guards import RcAutoMode, RcFresh, RcNotLost, RcNotTakingOver
 from executive.behaviours.reacting import READS, Reacting
-from executive.behaviours.returning import DRIVEN_KINDS, ReturningDrive, why_not_rtl
+from executive.behaviours.returning import ReturningDrive, why_not_rtl
 from executive.behaviours.zone_guards import OutsideKeepOut
 from executive.mission.failsafes import JUDGED_AFTER_PERSON, REACTION_MODES, FailsafeCondition, FailsafePolicy
 from executive.mission.lifecycle import MissionState
-from executive.mission.return_path import ReturnPlanner
+from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
 from executive.sensing.vtol_flight import flies_as_plane
 from executive.vehicles import PROFILES
 

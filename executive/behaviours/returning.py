@@ -35,8 +35,6 @@ from executive.vehicles import PROFILES
 
 log = logging.getLogger("executive.behaviours.failsafe")  # the journal's event kind: "failsafe"
 
-#: The kinds whose return the executive drives itself: they move in the plane the zones are drawn in.
-DRIVEN_KINDS = frozenset({"rover", "boat"})
 #: Standing: slower than this (m/s) the vehicle has stopped in its hold, and the way is planned from where it is.
 STANDING_M_S = 0.3
 #: The hold is waited for at most this long (vehicle seconds) before the way is planned from where the vehicle is.

@@ -36,6 +36,8 @@ MARGIN_M = 2.0
 _QUAD_SEGS = 2
 
 LatLon = tuple[float, float]
+#: The kinds whose return the executive drives itself (behaviours.returning): they move in the plane the zones are drawn in.
+DRIVEN_KINDS = frozenset({"rover", "boat"})
 
 
 @dataclass(frozen=True)

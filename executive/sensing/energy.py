@@ -20,9 +20,10 @@ from dataclasses import dataclass
 from executive import blackboard, geo
 from executive.clock import Clock
 from executive.mission.lifecycle import MissionState
-from executive.mission.model import EnergyConfig, Mission
+from executive.mission.model import EnergyConfig, Mission, Waypoint
+from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
 from executive.sensing import battery_energy
-from executive.sensing.consumption import HELD_BELOW_M_S, SEEDS, ConsumptionModel
+from executive.sensing.consumption import HELD_BELOW_M_S, SEEDS, VERTICAL_SEEDS, ConsumptionModel
 from executive.sensing.heading import filterpy_ready, load_filterpy
 from executive.sensing.vtol_flight import flies_as_plane
 from executive.state import Battery, BatteryStatus, EkfStatus, GlobalPosition
@@ -45,6 +46,21 @@ HOVER_M_S = 5.0
 # PX4 VT_F_TRANS_DUR 5 s once VT_ARSP_TRANS is reached. To MC: PX4 VT_B_TRANS_DUR 10 s
 # (src/modules/vtol_att_control/vtol_att_control_params.c); ArduPlane slows to a hover on them in QLOITER/QRTL.
 TO_FW_S, TO_MC_S = 15.0, 10.0
+# PX4's RTL climbs to RTL_RETURN_ALT above home (default 60 m) before it flies home, unless higher already
+# (src/modules/navigator/rtl_params.c, rtl.cpp: rtl_alt = max(alt, destination + RTL_RETURN_ALT), upstream a70a558393).
+PX4_RTL_RETURN_ALT_M = 60.0
+# A VTOL climbing as a plane: a metre of height costs what GLIDE_RATIO metres of cruise do (energy m g h against the cruise's
+# drag m g / (L/D) per metre, at the same propulsive efficiency); 10, a small fixed-wing VTOL's lift-to-drag with its lift motors.
+GLIDE_RATIO = 10.0
+
+
+def return_climb_m(mission: Mission, autopilot: str, params: dict[str, float]) -> float:
+    """Metres of height a VTOL's return climbs before it flies home: PX4's to RTL_RETURN_ALT (read at pre-flight, else its
+    default) from the route's last height."""
+    if mission.vehicle != "vtol" or autopilot != "px4" or not mission.waypoints:
+        return 0.0
+    return_alt = params.get("RTL_RETURN_ALT", PX4_RTL_RETURN_ALT_M)
+    return max(0.0, return_alt - mission.waypoints[-1].alt_m)
 
 
 @dataclass(frozen=True, slots=True)
@@ -77,6 +93,36 @@ def held_s(mission: Mission, leg_index: int, take_off: bool, to_fw_ahead: bool, 
     alt = max([w.alt_m for w in mission.waypoints] + [takeoff_alt]) if hovering_at_m is None else max(0.0, hovering_at_m)
     back = TO_MC_S if hovering_at_m is None else 0.0
     return Held(route, back + max(0.0, alt - FINAL_ALT_M) / DESCENT_M_S + min(alt, FINAL_ALT_M) / FINAL_M_S)
+
+
+def waypoint_depth(waypoint: Waypoint, mission: Mission, seabed_m: float | None) -> float | None:
+    """How deep a sub goes for ``waypoint``, m; None: it keeps its depth. An altitude above the seabed is a depth under the
+    chart's ``limits.water_depth_m``, else the seabed the sonar reads now (``seabed_m``), else the deepest the mission allows
+    (the estimate errs deep); never closer to the seabed than ``limits.altitude_m.min`` (the floor, executive.seabed)."""
+    limits = mission.limits
+    seabed = limits.water_depth_m or seabed_m
+    if waypoint.control_mode == "altitude" and waypoint.altitude_m is not None:
+        depth = (seabed if seabed is not None else limits.depth_m.max) - waypoint.altitude_m
+    elif waypoint.depth_m is not None:
+        depth = waypoint.depth_m
+    else:
+        return None
+    floor = seabed - limits.altitude_m.min if seabed is not None else depth
+    return max(0.0, min(depth, floor, limits.depth_m.max))
+
+
+def depth_changes(mission: Mission, ahead: list[Waypoint], depth_m: float, seabed_m: float | None = None) -> tuple[float, float]:
+    """A sub's metres of depth changed on the legs ``ahead`` from ``depth_m``, and on its way home: the surfacing from the route's
+    end. A sub comes home by surfacing where it is (ArduSub has no RTL: the failsafe's ``surface``; the make-safe's SURFACE
+    then POSHOLD, autopilot_link/safe_state.py), so its way home is that climb, no horizontal leg. (0, 0) for other kinds."""
+    if mission.vehicle != "sub":
+        return 0.0, 0.0
+    route = 0.0
+    for waypoint in ahead:
+        target = waypoint_depth(waypoint, mission, seabed_m)
+        if target is not None:
+            route, depth_m = route + abs(target - depth_m), target
+    return route, depth_m
 
 
 @dataclass(frozen=True, slots=True)
@@ -138,20 +184,43 @@ def planned(mission: Mission) -> EnergyEstimate | str | None:
         return None
     if config.capacity_wh is None or not mission.waypoints:
         return "judged on the vehicle (its capacity from the autopilot's BATT_CAPACITY or BAT1_CAPACITY)"
-    seed_km, seed_min = SEEDS[mission.vehicle]
-    model = ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min)
+    model = seeded(mission, config)
     points = [(w.lat, w.lon) for w in mission.waypoints]
     home = (mission.home.lat, mission.home.lon) if mission.home is not None else points[0]
     route_m = path_length(points, home)
-    back = list(reversed(points[:-1])) if config.return_by == "route" else []
-    home_m = path_length([*back, home], points[-1])
+    home_m = home_metres(mission, config, points, home, points[-1])
     held = held_s(mission, 0, take_off=True, to_fw_ahead=True)
     route_s, home_s = held.route_s, held.home_s
+    route_z, home_z = depth_changes(mission, mission.waypoints, 0.0)
     kept = config.capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
     return EnergyEstimate(
-        config.capacity_wh - kept, model.need(route_m, route_s)[0], model.need(home_m, home_s)[0],
-        model.need(route_m + home_m, route_s + home_s)[1], config.capacity_wh, config.reserve_pct, 0.0, seed_km, seed_min, 0, 0.0,
+        config.capacity_wh - kept, model.need(route_m, route_s, route_z)[0], model.need(home_m, home_s, home_z)[0],
+        model.need(route_m + home_m, route_s + home_s, route_z + home_z)[1], config.capacity_wh, config.reserve_pct, 0.0,
+        model.wh_per_m * 1000.0, model.wh_per_s * 60.0, 0, 0.0,
     )  # fmt: skip
+
+
+def seeded(mission: Mission, config: EnergyConfig) -> ConsumptionModel:
+    """The consumption model at the mission's seeds, else its kind's."""
+    seed_km, seed_min = SEEDS[mission.vehicle]
+    return ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min, VERTICAL_SEEDS.get(mission.vehicle, 0.0))
+
+
+def home_metres(
+    mission: Mission, config: EnergyConfig, points: list[tuple[float, float]], home: tuple[float, float], end: tuple[float, float]
+) -> float:
+    """Metres of the way home from ``end``: the straight line, or the route back (``return_by: route``); none for a sub
+    (it surfaces where it is: :func:`depth_changes`); for a rover or a boat on a mission with keep-out zones or rally points,
+    the way the executive's own return drives (behaviours.returning): around the zones to the nearest rally point or home."""
+    if mission.vehicle == "sub" and config.return_by == "straight":
+        return 0.0
+    if config.return_by == "straight" and mission.vehicle in DRIVEN_KINDS:
+        planner = ReturnPlanner(mission)
+        way = planner.plan(end[0], end[1], home) if planner.needed else None
+        if way is not None:
+            return way.length_m
+    back = list(reversed(points[:-1])) if config.return_by == "route" else []
+    return path_length([*back, home], end)
 
 
 class EnergyWatch:
@@ -174,6 +243,7 @@ class EnergyWatch:
                 "/vehicle/ekf",
                 "/vehicle/ground_speed_m_s",
                 "/vehicle/vtol_state",
+                "/vehicle/altitude_above_bottom_m",
             ],
         )
         self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
@@ -187,8 +257,10 @@ class EnergyWatch:
         self._mission = mission
         self._model: ConsumptionModel | None = None
         self._start: tuple[float, int] | None = None  # (drawn Wh, remaining %) when the mission's energy was first counted
-        self._window: tuple[float, float, float, float] | None = None  # (time, drawn Wh, metres, held s) at the window's start
+        self._window: tuple[float, float, float, float, float] | None = None  # (time, Wh, metres, held s, vertical m) at its start
         self._metres = 0.0
+        self._vertical_m = 0.0  # a sub's depth changed, armed
+        self._home_way: tuple[object, float] | None = None  # ((route end, home, route), metres home): the last planned
         self._held_s = 0.0  # armed and slower than HELD_BELOW_M_S
         self._ticked_at: float | None = None
         self._last_position: GlobalPosition | None = None
@@ -209,8 +281,7 @@ class EnergyWatch:
             if not filterpy_ready():
                 self._unknown("")  # the consumption model is loading (filterpy, in the background): nothing to say yet
                 return
-            seed_km, seed_min = SEEDS[mission.vehicle]
-            self._model = ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min)
+            self._model = seeded(mission, config)
             self._since = self._clock.now()
         self._vtol = mission.vehicle == "vtol"
         status: BatteryStatus | None = self._in.get("/vehicle/battery_status")
@@ -256,17 +327,21 @@ class EnergyWatch:
         hovering = self._vtol and not flies_as_plane(self._in.get("/vehicle/vtol_state"), speed)
         self._wing_borne = self._wing_borne or (self._vtol and not hovering)
         self._hovering = hovering and bool(self._in.get("/vehicle/armed"))
-        held = speed is None or speed < HELD_BELOW_M_S or hovering
+        position: GlobalPosition | None = self._in.get("/vehicle/position")
+        # a sub diving or climbing in place pays by the metre of depth (consumption.py), not by the second
+        diving = self._mission is not None and self._mission.vehicle == "sub" and position is not None and abs(position.vd_m_s) >= HELD_BELOW_M_S
+        held = (speed is None or speed < HELD_BELOW_M_S or hovering) and not diving
         if self._in.get("/vehicle/armed") and self._ticked_at is not None and held:
             self._held_s += now - self._ticked_at  # hover, loiter, station keeping, a stop: its seconds cost, not its metres
         self._ticked_at = now
-        position: GlobalPosition | None = self._in.get("/vehicle/position")
         ekf: EkfStatus | None = self._in.get("/vehicle/ekf")
         # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (docs/autopilots.md)
         if position is None or position is self._last_position or ekf is None or not ekf.position_ok():
             return
         if self._last_position is not None and self._in.get("/vehicle/armed") and not hovering:
             self._metres += geo.distance(self._last_position.lat, self._last_position.lon, position.lat, position.lon)
+            if self._mission is not None and self._mission.vehicle == "sub":
+                self._vertical_m += abs(position.alt_rel_m - self._last_position.alt_rel_m)
         self._last_position = position
 
     def _learn(self, drawn: float, resolution_wh: float) -> None:
@@ -275,16 +350,16 @@ class EnergyWatch:
             self._window = None
             return
         if self._window is None:
-            self._window = (now, drawn, self._metres, self._held_s)
+            self._window = (now, drawn, self._metres, self._held_s, self._vertical_m)
             return
-        t0, wh0, m0, h0 = self._window
+        t0, wh0, m0, h0, z0 = self._window
         if now - t0 < WINDOW_S:
             return
-        used, metres, held = drawn - wh0, self._metres - m0, self._held_s - h0
+        used, metres, held, vertical = drawn - wh0, self._metres - m0, self._held_s - h0, self._vertical_m - z0
         assert self._model is not None
         # the counter's resolution (0.1 Wh in hJ, 1 mAh) and the current's noise averaged over the window
-        self._model.update(used, metres, held, noise_wh=0.05 + 0.1 * abs(used) + resolution_wh)
-        self._window = (now, drawn, self._metres, self._held_s)
+        self._model.update(used, metres, held, noise_wh=0.05 + 0.1 * abs(used) + resolution_wh, vertical_m=vertical)
+        self._window = (now, drawn, self._metres, self._held_s, self._vertical_m)
 
     # -- the estimate --------------------------------------------------------------------------
     def _legs_ahead(self, mission: Mission) -> tuple[list[tuple[float, float]], tuple[float, float]]:
@@ -308,17 +383,21 @@ class EnergyWatch:
         here = (self._last_position.lat, self._last_position.lon) if self._last_position else (ahead[0][0], ahead[0][1]) if ahead else home
         route_m = path_length(ahead, here)
         end = ahead[-1] if ahead else here
-        back = list(reversed([(w.lat, w.lon) for w in self._state.route.waypoints[:-1]])) if config.return_by == "route" else []
-        home_m = path_length([*back, home], end)
+        home_m = self._home_metres(mission, config, home, end)
+        home_m += GLIDE_RATIO * return_climb_m(mission, self._autopilot(), self._in.get("/vehicle/params") or {})
         take_off = not self._in.get("/vehicle/armed") and self._state.leg_index == 0
         legs = len(self._state.route.waypoints)
         done = self._state.leg_index >= legs
         landing = self._last_position.alt_rel_m if done and self._hovering and self._last_position is not None else None
         held = held_s(mission, self._state.leg_index, take_off, not self._wing_borne and not done, landing)
         route_s, home_s = held.route_s, held.home_s
-        route_wh = self._model.need(route_m, route_s)[0]
-        home_wh = self._model.need(home_m, home_s)[0]
-        _, sigma = self._model.need(route_m + home_m, route_s + home_s)
+        depth = max(0.0, -self._last_position.alt_rel_m) if self._last_position is not None else 0.0
+        below: float | None = self._in.get("/vehicle/altitude_above_bottom_m")
+        seabed = None if below is None else depth + below
+        route_z, home_z = depth_changes(mission, self._state.route.waypoints[self._state.leg_index :], depth, seabed)
+        route_wh = self._model.need(route_m, route_s, route_z)[0]
+        home_wh = self._model.need(home_m, home_s, home_z)[0]
+        _, sigma = self._model.need(route_m + home_m, route_s + home_s, route_z + home_z)
         kept = capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
         has = capacity_wh * self._start[1] / 100.0 - drawn_since_start - kept
         estimate = EnergyEstimate(
@@ -329,6 +408,14 @@ class EnergyWatch:
         self._out.set("/energy/unknown", "")
         self._out.set("/energy/not_judged", "")
         self._journal(estimate)
+
+    def _home_metres(self, mission: Mission, config: EnergyConfig, home: tuple[float, float], end: tuple[float, float]) -> float:
+        """:func:`home_metres`, planned once per route end and home (a return around zones is an A* search: not every report)."""
+        points = [(w.lat, w.lon) for w in self._state.route.waypoints]
+        key = (end, home, tuple(points))
+        if self._home_way is None or self._home_way[0] != key:
+            self._home_way = (key, home_metres(mission, config, points, home, end))
+        return self._home_way[1]
 
     def _journal(self, estimate: EnergyEstimate) -> None:
         said = self._said

@@ -52,7 +52,7 @@ def test_an_autopilot_whose_driving_is_not_modelled_is_asked_only_its_mode_chann
     h = Harness.build(square_mission)
     h.autopilot.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_GROUND_ROVER)
     assert vehicle_motion(h.autopilot.capabilities, {"WP_SPEED": 5.0}) is None
-    assert set(wanted_parameters(h.autopilot)) <= {"MODE_CH", "BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED"}
+    assert set(wanted_parameters(h.autopilot)) <= {"MODE_CH", "BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED", "RTL_RETURN_ALT"}
 
 
 def test_the_simulated_ardurover_answers_them_as_the_firmware_types_them() -> None:

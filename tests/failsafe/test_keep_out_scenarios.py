@@ -175,3 +175,26 @@ def test_on_the_real_ardurover_the_battery_return_went_round_the_pier_and_home()
     assert clearance >= 3.5  # the track's closest to the pier: 4.0 m (the way's edges keep the 2 m acceptance radius off it)
     assert modes[-4:] == ["GUIDED", "HOLD", "GUIDED", "HOLD"]  # the legs; the hold; the executive's return; held at home
     assert geo.distance(*positions[-1], *LINE_HOME) <= 2.0 + 1.5  # the acceptance radius, and the coast in HOLD
+
+
+def behind_a_breakwater(capacity_mah: float) -> Mission:
+    """Out 220 m east, 240 m north, back west to home's meridian: home lies 240 m due south, but a breakwater 40 m thick
+    runs from 400 m west to 200 m east between them, so the way home goes round its east end: about 500 m."""
+    wall = [point(100, -400), point(100, 200), point(140, 200), point(140, -400)]
+    fields: dict[str, Any] = {
+        "waypoints": [point(0, 220, name="east"), point(240, 220, name="north-east"), point(240, 0, name="north")],
+        "geofence": {"keep_out": [{"name": "breakwater", "polygon": wall}]},
+        "limits": {**line_mission("x").limits.model_dump(), "leg_timeout_s": 400},
+        "simulator": {"ekf_ready_after_s": 2, "params": {"BATT_CAPACITY": capacity_mah}},
+        "energy": {"nominal_v": 11.1},
+    }
+    return line_mission("behind a breakwater", **fields)
+
+
+def test_the_way_home_is_priced_round_the_zones_so_a_pack_that_fits_the_straight_line_home_is_refused(lockstep) -> None:
+    """1800 mAh x 11.1 V = 20 Wh, 16 above the 20 % reserve: the straight line home (2.4 Wh, 14 with the route and the
+    uncertainty) would fit, the way round the breakwater (the executive's own return, mission/return_path.py) does not."""
+    sim = lockstep(behind_a_breakwater(1800.0))
+    outcome = sim.run_to_end(limit_s=60)
+    assert outcome.status is MissionStatus.ABORTED and not sim.autopilot.armed
+    assert "does not fit the battery: needs 7 Wh + 5 Wh home (+/- 6), has 16 Wh above the 20 % reserve" in outcome.reason

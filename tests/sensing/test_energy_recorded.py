@@ -20,7 +20,7 @@ from executive.io.mavlink.reader import MavlinkReader
 from executive.mavlink_dialect import AUTOPILOT_COMPONENT
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
-from executive.sensing.energy import EnergyEstimate, EnergyWatch, Held, held_s, planned
+from executive.sensing.energy import EnergyEstimate, EnergyWatch, Held, held_s, planned, return_climb_m
 from executive.sensing.heading import wait_for_filterpy
 from executive.state import BatteryStatus
 from executive.testing import FakeLink
@@ -168,7 +168,25 @@ def test_real_px4_refuses_vtol_transit_on_a_300_mah_pack_before_arming_with_the_
     assert last.remaining_pct == 99 and last.voltage_v == pytest.approx(16.2)  # 4 x BAT1_V_CHARGED 4.05 V
     estimate = played.estimates[-1][1]
     assert estimate.capacity_wh == pytest.approx(4.44) and not estimate.fits and played.armed_s == 0.0
-    assert estimate.figures() == "needs 12 Wh + 14 Wh home (+/- 11), has 4 Wh above the 20 % reserve"
+    # home: 750 m and 45 s of hover landing, and RTL's climb from the last waypoint's 40 m to RTL_RETURN_ALT: the recording
+    # predates reading it, so PX4's default 60 m, 20 m costed as 200 m of cruise (was 14 Wh without the climb)
+    assert "RTL_RETURN_ALT" not in played.params
+    assert estimate.figures() == "needs 12 Wh + 15 Wh home (+/- 11), has 4 Wh above the 20 % reserve"
+
+
+def test_real_px4_read_rtl_return_alt_80_at_pre_flight_and_the_way_home_costs_its_climb() -> None:
+    """Real PX4 SIH with RTL_RETURN_ALT 80 and the same 300 mAh pack: 40 m of climb from the last waypoint, 2 Wh more home."""
+    played = play("vtol_transit-energy-300mah-rtl80-refused.tlog", example("vtol_transit.yaml"), "px4", 2.0, folder=PX4)
+    assert played.params["RTL_RETURN_ALT"] == 80.0 and played.armed_s == 0.0
+    assert played.estimates[-1][1].figures() == "needs 12 Wh + 16 Wh home (+/- 11), has 4 Wh above the 20 % reserve"
+
+
+def test_px4s_return_climbs_to_rtl_return_alt_first_which_the_way_home_costs() -> None:
+    vtol = example("vtol_transit.yaml")  # its last waypoint at 40 m
+    assert return_climb_m(vtol, "px4", {}) == 20.0  # PX4's default RTL_RETURN_ALT, 60 m
+    assert return_climb_m(vtol, "px4", {"RTL_RETURN_ALT": 100.0}) == 60.0
+    assert return_climb_m(vtol, "px4", {"RTL_RETURN_ALT": 30.0}) == 0.0  # higher already: RTL flies home at its height
+    assert return_climb_m(vtol, "ardupilot", {}) == 0.0
 
 
 def test_real_px4_draining_in_150_s_fits_at_the_start_and_is_short_by_the_second_leg_as_the_flight_teaches_it() -> None:

@@ -12,6 +12,7 @@ from typing import Any
 
 from test_waypoints_auto import LinkCut
 
+from executive import blackboard
 from executive.journal import ResumePoint
 from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
@@ -130,6 +131,23 @@ def test_a_person_changing_the_mode_pauses_and_auto_again_resumes_at_the_leg(loc
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
 
 
+def test_a_persons_alt_hold_mid_leg_still_pauses_after_the_wait_for_the_autopilots_facts(lockstep) -> None:
+    """AUTO -> ALT_HOLD may be ArduSub's mission end, judged once MISSION_CURRENT and EKF_STATUS_REPORT came after it: a ground
+    station's, its position good, its mission running, pauses all the same, within FACTS_WAIT_S, AUTO never asked meanwhile."""
+    mission = auto_survey()
+    sim = lockstep(mission)
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    assert sim.run(until=lambda: state.leg_index == 1 and ap.mode == "AUTO") is None
+    assert ap.set_mode(ap.profile.modes["ALT_HOLD"])
+    t_set = sim.clock.now()
+    modes: list[str] = []
+    sim.observers.append(lambda s: modes.append(s.autopilot.mode))
+    sim.run(until=lambda: state.status is MissionStatus.PAUSED)
+    assert state.reason == "ALT_HOLD set by the ground station"
+    assert sim.clock.now() - t_set <= 2.6  # the heartbeat (1 Hz), then FACTS_WAIT_S at most
+    assert set(modes) == {"ALT_HOLD"}
+
+
 def test_a_seabed_rising_under_the_leg_raises_its_depth_and_starts_it_again(lockstep) -> None:
     """The seabed rises 0.15 m per metre north (12.8 m under waypoint 3): as the sonar reads it rising under leg 3 (12 m), the
     item is written shallower and the leg started again (MISSION_SET_CURRENT): ArduSub flies the item it began with (no
@@ -238,3 +256,35 @@ def test_a_run_resumed_after_a_crash_starts_arduSubs_mission_at_the_journals_leg
     outcome = sim.run(400, resume=ResumePoint(run=1, leg_index=2, samples=()))
     assert outcome is not None and outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert sets[0] == 3 and flown == {3, 4}
+
+
+def test_arduSubs_alt_hold_at_the_end_of_its_horizon_without_a_position_is_the_autopilots_and_the_sub_is_taken_on(lockstep) -> None:
+    """The link cut on leg 2 (horizon 1: items 1-3) and the position lost short of waypoint 3: ArduSub ends its mission in
+    ALT_HOLD, not AUTO (Sub::exit_mission: auto_loiter_start fails without a position). When the link is back, that ALT_HOLD
+    is the autopilot's (its last item reached, no position), not a person's: no pause; once the position is back the
+    executive appends waypoint 4, sets the leg and AUTO again, to COMPLETED."""
+    mission = auto_survey(auto_horizon_legs=1, recovery_timeout_s=180)
+    sim = lockstep(mission, injector=lambda faults, clock: LinkCut(faults, clock))
+    cut = sim.faults
+    assert isinstance(cut, LinkCut)
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    third = mission.waypoints[2]
+    assert sim.run(until=lambda: state.leg_index == 1 and ap.mission.count - 1 == 3) is None
+    cut.cut = True
+    assert sim.run(until=lambda: ap.vehicle.distance_to(third.lat, third.lon) < 4.0) is None
+    ap.ekf_position_lost = True
+    assert sim.run(until=lambda: ap.mode == "ALT_HOLD") is None
+    assert not ap.mission.running and ap.mission.current_seq == 3  # ended at item 3 of 4
+    bb = blackboard.reader("mission end test", ["/vehicle/mode_set_by"])
+    reasons: list[str | None] = []
+    sim.observers.append(lambda s: reasons.append(bb.get("/vehicle/mode_set_by")))
+    cut.cut = False
+    t_back = sim.clock.now()
+    assert sim.run(until=lambda: sim.clock.now() > t_back + 5.0) is None
+    assert state.status is MissionStatus.RUNNING, state.reason  # not paused: the autopilot's own end
+    assert "autopilot" in reasons and "others" not in reasons
+    ap.ekf_position_lost = False
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    fourth = mission.waypoints[3]
+    assert ap.mission.count - 1 == 4 and ap.vehicle.distance_to(fourth.lat, fourth.lon) < 30.0

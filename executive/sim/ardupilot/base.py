@@ -321,6 +321,8 @@ class ArduPilotSim(FirmwareSim):
         return self._mav.rc_channels_encode(self._ms(), len(self.rc_channels), *self.rc_channels, 0, 0, 255)
 
     def _msg_ekf_status_report(self) -> MAVLinkMessage:
+        if self.ekf_ready and self.ekf_position_lost:  # as an injected loss rewrites it (executive.sim.faults): said by the EKF itself
+            return self._mav.ekf_status_report_encode((EKF_FLAGS_READY & ~_M.EKF_POS_HORIZ_ABS) | _M.EKF_CONST_POS_MODE, 0.02, 0.01, 0.01, 0.03, 0.0)
         if self.ekf_ready:
             return self._mav.ekf_status_report_encode(EKF_FLAGS_READY, 0.02, 0.01, 0.01, 0.03, 0.0)
         return self._mav.ekf_status_report_encode(EKF_FLAGS_WAITING, 0.0, 0.0, 0.0, 0.0, 0.0)

@@ -41,7 +41,7 @@ from executive.sim.ardupilot.base import (
 )
 from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 from executive.sim.firmware import DEFAULT_HOME, Command, Home, e7, valid_latlon
-from executive.sim.mission_store import StoredCommand
+from executive.sim.mission_store import MissionState, StoredCommand
 from executive.sim.physics.underwater import SUB_HORIZONTAL_LIMITS, SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
 from executive.sim.physics.vehicle import VehicleModel
 from executive.vehicles import SUB_MODES, VehicleProfile
@@ -231,7 +231,8 @@ class ArduSubSim(ArduPilotSim):
         WPNAV_RADIUS in 3-D (AC_WPNav), then its hold time, "Reached command #N" and MISSION_ITEM_REACHED. Other items
         are passed over. An item rewritten while flown is flown as it began (AP_Mission runs its cached command: no
         mission change detection in ArduSub); MISSION_SET_CURRENT starts it again. After the last: ModeAuto::auto_loiter_start,
-        holding the stopping point and its depth in AUTO (Sub::exit_mission), said by no message.
+        holding the stopping point and its depth in AUTO (Sub::exit_mission), said by no message; without a position,
+        ALT_HOLD instead.
         """
         v, mission = self.vehicle, self.mission
         assert isinstance(mission, ArduSubMissionStore)
@@ -241,6 +242,10 @@ class ArduSubSim(ArduPilotSim):
                 self._auto_item = self._destination = None
                 v.hold()
                 v.hold_depth()
+                if mission.state is MissionState.COMPLETE and not self.position_ok:
+                    # Sub::exit_mission (commands_logic.cpp): ModeAuto::auto_loiter_start fails without a position, then
+                    # ALT_HOLD (ModeReason::MISSION_END), said by no message
+                    self._force_mode("ALT_HOLD")
             return
         seq = mission.current_seq
         if self._auto_item is not None and self._auto_item[:2] == (seq, mission.starts):

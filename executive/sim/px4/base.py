@@ -84,8 +84,10 @@ class Px4Sim(Px4Streams):
     BATTERY_CAPACITY_PARAM = "BAT1_CAPACITY"
 
     def battery_params(self, capacity_mah: float) -> dict[str, float]:
-        """The pack as src/lib/battery/module.yaml names it: BAT1_CAPACITY mAh, BAT1_N_CELLS, per-cell V_EMPTY and V_CHARGED (defaults)."""
-        return {"BAT1_CAPACITY": capacity_mah, "BAT1_N_CELLS": float(self.battery.spec.cells), "BAT1_V_EMPTY": 3.6, "BAT1_V_CHARGED": 4.05}
+        """The pack as src/lib/battery/module.yaml names it: BAT1_CAPACITY mAh, BAT1_N_CELLS, per-cell V_EMPTY and V_CHARGED
+        (defaults); and RTL_RETURN_ALT, read with them (the way home's climb)."""
+        cells = float(self.battery.spec.cells)
+        return {"BAT1_CAPACITY": capacity_mah, "BAT1_N_CELLS": cells, "BAT1_V_EMPTY": 3.6, "BAT1_V_CHARGED": 4.05, "RTL_RETURN_ALT": RTL_RETURN_ALT}
 
     def __init__(
         self,

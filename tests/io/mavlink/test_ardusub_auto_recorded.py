@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from tlog_replay import Replay as ModeReplay
 from tlog_replay import records
 
 from executive import blackboard
@@ -27,6 +28,7 @@ DATA = Path(__file__).parents[2] / "data" / "ardusub"
 COMPLETED = DATA / "auv_survey-auto.tlog"
 KILLED = DATA / "auv_survey-auto-killed.tlog"
 DEEP = DATA / "auv_survey-auto-deep-paused.tlog"
+END_WITHOUT_POSITION = DATA / "mission-end-without-position.tlog"
 #: missions/auv_survey.yaml's waypoints, the altitude leg flown at 12 m: (lat, lon, depth)
 ROUTE = [(44.0951350, 9.8630000, 0.0), (44.0951350, 9.8633122, 5.0), (44.0953150, 9.8633122, 12.0), (44.0953150, 9.8630000, 8.0)]
 
@@ -122,3 +124,19 @@ def test_paused_and_resumed_the_real_sub_goes_on_with_the_leg_and_dives_past_its
     assert third[0][0] == 28.0 and max(given for given, _ in third) == 45.0
     # the depth as recorded (GLOBAL_POSITION_INT at up to 10 Hz) a little after the executive's reading, the sub going down at 1.1 m/s
     assert all(given <= sub + 30.0 - 2.0 + 0.2 for given, sub in third), third
+
+
+def test_arduSub_ends_its_mission_in_alt_hold_without_a_position_and_the_executive_judges_it_the_autopilots() -> None:
+    """Sub::exit_mission on the real ArduSub: its GPS off during a 60 s hold at its last item, the EKF lost its position (flags
+    0xa7: CONST_POS_MODE) 8.7 s before the hold ended; then ALT_HOLD. Its heartbeat showed ALT_HOLD first, MISSION_ITEM_REACHED
+    with it, MISSION_CURRENT COMPLETE 0.35 s later: judged once those came, the autopilot's (a person's before this work)."""
+    replay = ModeReplay(vehicle="sub").play(END_WITHOUT_POSITION)
+    assert replay.values("/vehicle/mode")[-2:] == ["AUTO", "ALT_HOLD"]
+    assert replay.values("/vehicle/mode_set_by")[-1] == "autopilot"
+    kinds = [msg.get_type() for _, msg in records(END_WITHOUT_POSITION)]
+    first_alt_hold = next(
+        i
+        for i, (_, msg) in enumerate(records(END_WITHOUT_POSITION))
+        if msg.get_type() == "HEARTBEAT" and msg.custom_mode == 2 and msg.base_mode & 128
+    )
+    assert kinds[first_alt_hold + 1] == "MISSION_ITEM_REACHED"  # after the heartbeat: judging at the heartbeat alone would miss it

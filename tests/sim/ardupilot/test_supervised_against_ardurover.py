@@ -142,12 +142,28 @@ def test_killed_mid_leg_2_the_real_boat_stops_at_the_end_of_the_horizon_and_goes
 
 
 def test_a_cut_link_on_the_real_boat_the_mission_completed_at_the_horizon_and_the_route_resumed_after_it() -> None:
-    """The link cut for 20 s (40 s of the vehicle's time) mid leg 2, the executive alive: the firmware drove to waypoint 4 and
-    said its mission COMPLETED there (MISSION_CURRENT 4, state 5, in AUTO); with the link back the executive loitered, caught
-    legs 2-4 up from that, and set the mission to item 5, not back to 2."""
+    """Horizon 3 (items 1-4 held on leg 2), the link cut both ways for 34 s of the vehicle's time from 3.2 s into leg 2, the
+    executive alive: the firmware drove to waypoint 4, stopped there and said its mission COMPLETED (MISSION_CURRENT 4,
+    state 5, in AUTO); with the link back the executive's link-loss failsafe loitered, caught legs 2-4 up from that,
+    appended waypoints 5-8 and set the mission to item 5, not back to 2; the run COMPLETED."""
     path = recorded.DATA / "boat_survey-motorboat-supervised-link-cut.tlog"
+    mission = load_mission(MISSIONS / "boat_survey.yaml")
     currents, highest, _ = read_through_the_executive(path, "boat")
     assert (4, MISSION_STATE_COMPLETE, True) in currents
     assert highest[:2] == [1, 5]  # items 2-4 reached unheard: their MISSION_ITEM_REACHED were lost in the cut
-    sets = [msg.seq for _, msg in records(path) if msg.get_type() == "MISSION_SET_CURRENT"]
-    assert sets == [1, 5]
+    sent = [(msg.get_type(), msg) for _, msg in records(path) if msg.get_srcComponent() == 191]
+    assert [m.count for kind, m in sent if kind == "MISSION_COUNT" and m.target_component == 1] == [5]  # home + waypoints 1-4
+    assert [m.seq for kind, m in sent if kind == "MISSION_SET_CURRENT"] == [1, 5]
+    appended = [(m.start_index, m.end_index) for kind, m in sent if kind == "MISSION_WRITE_PARTIAL_LIST"]
+    assert appended == [(5, 5), (6, 6), (7, 7), (8, 8)]  # only after the link was back: the autopilot never held past item 4 alone
+    positions = [msg for _, msg in records(path) if msg.get_type() == "GLOBAL_POSITION_INT"]
+    gap = max(range(1, len(positions)), key=lambda i: positions[i].time_boot_ms - positions[i - 1].time_boot_ms)
+    before, back = positions[gap - 1], positions[gap]
+    assert 30_000 < back.time_boot_ms - before.time_boot_ms < 40_000  # the cut, in the vehicle's time
+    fourth, fifth = mission.waypoints[3], mission.waypoints[4]
+    assert distance(back.lat * 1e-7, back.lon * 1e-7, fourth.lat, fourth.lon) < 1.0  # stopped at the end of its horizon
+    assert (back.vx**2 + back.vy**2) ** 0.5 / 100.0 < 0.2
+    assert distance(back.lat * 1e-7, back.lon * 1e-7, fifth.lat, fifth.lon) > 10.0
+    said = [msg.text for _, msg in records(path) if msg.get_type() == "STATUSTEXT" and msg.get_srcComponent() == 191]
+    assert said[-2:] == ["link_loss: in LOITER, confirmed", "failsafe link_loss recovered: leg 2/8"]
+    assert "Mission: 8 WP" in texts(path)
