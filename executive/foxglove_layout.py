@@ -2,7 +2,7 @@
 
 Import it in Foxglove (Layouts, Import from file) and open a recording (``--snapshots FILE.mcap``) or
 the live server (``--foxglove PORT``): the map with the route and the track, the tree's ticks and
-the mission's state, the log, plots of speed, battery and the EKF's variances. Every topic and
+the mission's state, the log, plots of speed, distance to the target, battery and the EKF's variances. Every topic and
 field named here is one the recording holds (tests/test_mcap_recording.py checks them against a run).
 """
 
@@ -13,6 +13,9 @@ from typing import Any
 #: (panel title, message paths): Foxglove's Plot panel, one line per path (``/topic.field``).
 PLOTS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("speed (m/s)", ("/mavlink/in/VFR_HUD.groundspeed", "/mavlink/in/VFR_HUD.airspeed")),
+    # The autopilot's distance to its current target (ArduRover Rover/GCS_MAVLink_Rover.cpp send_nav_controller_output:
+    # MIN(get_distance_to_destination(), UINT16_MAX), in its autopilot modes): the blackboard holds our target as text only.
+    ("distance to the target (m)", ("/mavlink/in/NAV_CONTROLLER_OUTPUT.wp_dist",)),
     ("battery (%)", ("/mavlink/in/SYS_STATUS.battery_remaining", "/mavlink/in/BATTERY_STATUS.battery_remaining")),
     ("EKF variances", (
         "/mavlink/in/EKF_STATUS_REPORT.velocity_variance", "/mavlink/in/EKF_STATUS_REPORT.pos_horiz_variance",

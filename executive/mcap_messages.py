@@ -13,6 +13,8 @@ from __future__ import annotations
 import json
 import logging
 import math
+import operator
+from collections.abc import Callable
 from typing import Any
 
 from executive import frames
@@ -198,25 +200,51 @@ class MavlinkJson:
     """
 
     def __init__(self) -> None:
-        self._templates: dict[str, tuple[str, tuple[int, ...]] | None] = {}
+        self._kinds: dict[str, _KindEncoder] = {}
 
-    def encode(self, msg: MAVLinkMessage) -> bytes:
+    def encode(self, msg: MAVLinkMessage, source: tuple[int, int] | None = None) -> bytes:
+        """``msg`` as JSON; ``source``: its sysid and compid as they were when it was heard (default: as the message holds them now)."""
         kind = msg.get_type()
-        template = self._templates.get(kind, False)
-        if template is False:
-            template = self._templates[kind] = _template(msg)
-        values = [getattr(msg, name) for name in msg.fieldnames]
-        if template is not None and _finite(values):
-            text, arrays = template
-            for i in arrays:
-                values[i] = list(values[i])  # pymavlink may hold an array as a tuple: "(0, 0)" is no JSON
-            return (text % (*values, msg.get_srcSystem(), msg.get_srcComponent())).encode()
-        fields = dict(zip(msg.fieldnames, values, strict=True))
-        fields["sysid"], fields["compid"] = msg.get_srcSystem(), msg.get_srcComponent()
+        encoder = self._kinds.get(kind)
+        if encoder is None:
+            encoder = self._kinds[kind] = _KindEncoder(msg)
+        return encoder.encode(msg, source or (msg.get_srcSystem(), msg.get_srcComponent()))
+
+
+class _KindEncoder:
+    """One kind's template, and getters of its fields (all of them; its floats, checked finite) made once."""
+
+    def __init__(self, msg: MAVLinkMessage) -> None:
+        self.fieldnames = list(msg.fieldnames)
+        self.template = _template(msg)
+        self._values = _getter(self.fieldnames)
+        self._floats = _getter([name for name, kind, _ in _definition(msg) if kind in ("float", "double")])
+
+    def encode(self, msg: MAVLinkMessage, source: tuple[int, int]) -> bytes:
+        if self.template is not None:
+            text, arrays = self.template
+            floats = self._floats(msg)
+            if all(map(math.isfinite, floats)):
+                values = self._values(msg)
+                if arrays:
+                    values = list(values)
+                    for i in arrays:
+                        values[i] = list(values[i])  # pymavlink may hold an array as a tuple: "(0, 0)" is no JSON
+                return (text % (*values, *source)).encode()
+        fields = dict(zip(self.fieldnames, self._values(msg), strict=True))
+        fields["sysid"], fields["compid"] = source
         try:
             return _STRICT_JSON(fields).encode()
         except (ValueError, TypeError):
             return _STRICT_JSON({k: _plain(v) for k, v in fields.items()}).encode()
+
+
+def _getter(names: list[str]) -> Callable[[Any], tuple[Any, ...]]:
+    """The values of ``names`` as a tuple (``attrgetter`` gives a lone value bare)."""
+    if len(names) == 1:
+        one = operator.attrgetter(names[0])
+        return lambda msg: (one(msg),)
+    return operator.attrgetter(*names) if names else lambda msg: ()
 
 
 def _template(msg: MAVLinkMessage) -> tuple[str, tuple[int, ...]] | None:
@@ -238,10 +266,6 @@ def _definition(msg: MAVLinkMessage) -> list[tuple[str, str, int]]:
     """
     lengths = dict(zip(msg.ordered_fieldnames, msg.array_lengths, strict=True))
     return [(name, kind, lengths[name]) for name, kind in zip(msg.fieldnames, msg.fieldtypes, strict=True)]
-
-
-def _finite(values: list[Any]) -> bool:
-    return all(math.isfinite(v) for v in values if isinstance(v, float))
 
 
 def _plain(value: Any) -> Any:

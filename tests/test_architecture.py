@@ -137,6 +137,18 @@ def test_behaviours_import_no_io() -> None:
     assert {(a, b) for a, targets in GRAPH.items() if a.startswith("executive.behaviours") for b in targets if b.startswith("executive.io")} == set()
 
 
+def test_the_package_imports_no_test_only_library() -> None:
+    """matplotlib draws the manual's pictures in tests (the [test] extra): an installed executive never needs it."""
+    found = set()
+    for name, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                found |= {(name, alias.name.split(".")[0]) for alias in node.names}
+            elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+                found.add((name, node.module.split(".")[0]))
+    assert {(name, lib) for name, lib in found if lib in ("matplotlib", "playwright")} == set()
+
+
 @pytest.mark.parametrize("name", sorted(MODULES))
 def test_no_module_over_600_lines(name: str) -> None:
     assert len(MODULES[name].read_text(encoding="utf-8").splitlines()) <= 600

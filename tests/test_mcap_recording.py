@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import collections
 import json
 import logging
 import math
 import subprocess
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -377,3 +379,45 @@ def test_the_shipped_foxglove_layout_reads_only_what_the_recording_holds(square,
         assert topic in schemas, wanted
         name = field.split("[", 1)[0]
         assert not name or name in schemas[topic]["properties"], wanted
+
+
+class ThreadedSink:
+    """A sink noting which thread put each message, and telling when a topic has come."""
+
+    def __init__(self) -> None:
+        self.put_by: list[tuple[str, str, bytes]] = []
+        self.came: dict[str, threading.Event] = collections.defaultdict(threading.Event)
+
+    def put(self, topic: str, schema: tuple[str, bytes], log_ns: int, data: bytes) -> None:
+        self.put_by.append((topic, threading.current_thread().name, data))
+        self.came[topic].set()
+
+    def keyframe(self, tick: int, log_ns: int) -> None:
+        pass
+
+    def ticked(self) -> bool:
+        return True
+
+    def close(self) -> None:
+        pass
+
+
+def test_the_tick_leaves_the_mavlink_messages_to_the_encoder_thread_with_their_source_as_heard() -> None:
+    from executive.mavlink_dialect import mavlink
+    from executive.mcap_recording import ENCODE_EVERY, ChannelFeed
+
+    sink = ThreadedSink()
+    feed = ChannelFeed([sink], None, values=lambda key: None)
+    sent = mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3)
+    feed.mavlink("out", sent)  # heard before the link packed it: no source yet
+    sent.get_header().srcSystem, sent.get_header().srcComponent = 1, 191  # packed afterwards, before the encoder ran
+    feed.write_tick({"tick": ENCODE_EVERY, "t": 1.0})
+    assert sink.came["/mavlink/out/HEARTBEAT"].wait(30)  # a deadline for a thread to run, not a timing assumption
+    feed.mavlink("in", mavlink.MAVLink_heartbeat_message(10, 3, 0, 0, 4, 3))
+    feed.close()  # what the thread had not taken yet: written at close
+    by = {topic: thread for topic, thread, _ in sink.put_by}
+    assert by["/tree/tick"] == threading.current_thread().name
+    assert by["/mavlink/out/HEARTBEAT"] == "mcap-encoder"
+    assert "/mavlink/in/HEARTBEAT" in by
+    data = next(d for topic, _, d in sink.put_by if topic == "/mavlink/out/HEARTBEAT")
+    assert json.loads(data)["sysid"] == 0 and json.loads(data)["compid"] == 0  # as heard, whatever happened to it later
