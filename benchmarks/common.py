@@ -71,6 +71,10 @@ def serpentine(count: int, leg_m: float, row_m: float = 100.0) -> list[tuple[flo
     return points
 
 
+#: Wh of the benchmark rover's pack (``energy.capacity_wh``).
+BENCH_PACK_WH = 2000.0
+
+
 def rover_mission(
     points: Sequence[tuple[float, float]],
     *,
@@ -91,6 +95,9 @@ def rover_mission(
             "home": {"lat": HOME[0], "lon": HOME[1], "heading_deg": 0.0},
             "limits": {"acceptance_radius_m": 1.5, "leg_timeout_s": 600.0, "recovery_timeout_s": 600.0, **limits},
             "simulator": {"ekf_ready_after_s": ekf_ready_after_s},
+            # the energy rule runs (its cost is part of the tick) on a pack for the longest route here (50 km at the rover's
+            # 10 Wh/km): the simulator's own 111 Wh pack would refuse it before arming
+            "energy": {"capacity_wh": BENCH_PACK_WH},
             "waypoints": [{"lat": lat, "lon": lon} for lat, lon in points],
         }
     )

@@ -71,6 +71,17 @@ class Held:
     home_s: float
 
 
+@dataclass(frozen=True, slots=True)
+class Ahead:
+    """The route still to go from leg ``leg`` of ``waypoints``: its next and last points (lat, lon), the metres between them."""
+
+    waypoints: list[Waypoint]
+    leg: int
+    next: tuple[float, float] | None
+    last: tuple[float, float] | None
+    along_m: float
+
+
 def held_s(mission: Mission, leg_index: int, take_off: bool, to_fw_ahead: bool, hovering_at_m: float | None = None) -> Held:
     """The seconds held ahead from leg ``leg_index``: a VTOL's take-off climb and hover point (``take_off``), its transition
     to FW (``to_fw_ahead``), the transition back and the landing descent home (``hovering_at_m``: the route flown and the
@@ -260,7 +271,7 @@ class EnergyWatch:
         self._window: tuple[float, float, float, float, float] | None = None  # (time, Wh, metres, held s, vertical m) at its start
         self._metres = 0.0
         self._vertical_m = 0.0  # a sub's depth changed, armed
-        self._home_way: tuple[object, float] | None = None  # ((route end, home, route), metres home): the last planned
+        self._home_way: tuple[object, list[Waypoint], float] | None = None  # ((route end, home), route, metres home): the last planned
         self._held_s = 0.0  # armed and slower than HELD_BELOW_M_S
         self._ticked_at: float | None = None
         self._last_position: GlobalPosition | None = None
@@ -269,6 +280,7 @@ class EnergyWatch:
         self._wing_borne = False  # a VTOL has flown as a plane: its transition to FW is behind it
         self._hovering = False  # a VTOL armed on its lift motors now
         self._since = 0.0  # when the mission's energy was first looked at
+        self._ahead: Ahead | None = None
 
     def service(self) -> None:
         mission = self._state.mission
@@ -362,31 +374,37 @@ class EnergyWatch:
         self._window = (now, drawn, self._metres, self._held_s, self._vertical_m)
 
     # -- the estimate --------------------------------------------------------------------------
-    def _legs_ahead(self, mission: Mission) -> tuple[list[tuple[float, float]], tuple[float, float]]:
-        """The points still to go (lat, lon) from the current leg on, and home."""
-        route = self._state.route
-        ahead = [(w.lat, w.lon) for w in route.waypoints[self._state.leg_index :]]
+    def _legs_ahead(self, mission: Mission) -> Ahead:
+        """The waypoints still to go from the current leg on: walked once per route and leg, not every tick (a long route's
+        geodesics cost milliseconds; an edited route is a new list, MissionState.set_route)."""
+        waypoints, leg = mission.waypoints, self._state.leg_index
+        if self._ahead is None or self._ahead.waypoints is not waypoints or self._ahead.leg != leg:
+            points = [(w.lat, w.lon) for w in waypoints[leg:]]
+            along = path_length(points[1:], points[0]) if points else 0.0
+            self._ahead = Ahead(waypoints, leg, points[0] if points else None, points[-1] if points else None, along)
+        return self._ahead
+
+    def _home(self, mission: Mission, ahead: Ahead) -> tuple[float, float]:
         home = self._in.get("/vehicle/home")
         if home is not None:
-            where = (home.lat, home.lon)
-        elif mission.home is not None:
-            where = (mission.home.lat, mission.home.lon)
-        elif self._last_position is not None and self._start is not None:
-            where = (self._last_position.lat, self._last_position.lon)
-        else:
-            where = (ahead[0][0], ahead[0][1]) if ahead else (0.0, 0.0)
-        return ahead, where
+            return (home.lat, home.lon)
+        if mission.home is not None:
+            return (mission.home.lat, mission.home.lon)
+        if self._last_position is not None and self._start is not None:
+            return (self._last_position.lat, self._last_position.lon)
+        return ahead.next if ahead.next is not None else (0.0, 0.0)
 
     def _publish(self, mission: Mission, config: EnergyConfig, capacity_wh: float, drawn_since_start: float) -> None:
         assert self._model is not None and self._start is not None
-        ahead, home = self._legs_ahead(mission)
-        here = (self._last_position.lat, self._last_position.lon) if self._last_position else (ahead[0][0], ahead[0][1]) if ahead else home
-        route_m = path_length(ahead, here)
-        end = ahead[-1] if ahead else here
+        ahead = self._legs_ahead(mission)
+        home = self._home(mission, ahead)
+        here = (self._last_position.lat, self._last_position.lon) if self._last_position else ahead.next or home
+        route_m = path_length([ahead.next], here) + ahead.along_m if ahead.next is not None else 0.0
+        end = ahead.last or here
         home_m = self._home_metres(mission, config, home, end)
         home_m += GLIDE_RATIO * return_climb_m(mission, self._autopilot(), self._in.get("/vehicle/params") or {})
         take_off = not self._in.get("/vehicle/armed") and self._state.leg_index == 0
-        legs = len(self._state.route.waypoints)
+        legs = len(mission.waypoints)
         done = self._state.leg_index >= legs
         landing = self._last_position.alt_rel_m if done and self._hovering and self._last_position is not None else None
         held = held_s(mission, self._state.leg_index, take_off, not self._wing_borne and not done, landing)
@@ -394,7 +412,7 @@ class EnergyWatch:
         depth = max(0.0, -self._last_position.alt_rel_m) if self._last_position is not None else 0.0
         below: float | None = self._in.get("/vehicle/altitude_above_bottom_m")
         seabed = None if below is None else depth + below
-        route_z, home_z = depth_changes(mission, self._state.route.waypoints[self._state.leg_index :], depth, seabed)
+        route_z, home_z = depth_changes(mission, mission.waypoints[self._state.leg_index :], depth, seabed)
         route_wh = self._model.need(route_m, route_s, route_z)[0]
         home_wh = self._model.need(home_m, home_s, home_z)[0]
         _, sigma = self._model.need(route_m + home_m, route_s + home_s, route_z + home_z)
@@ -411,18 +429,18 @@ class EnergyWatch:
 
     def _home_metres(self, mission: Mission, config: EnergyConfig, home: tuple[float, float], end: tuple[float, float]) -> float:
         """:func:`home_metres`, planned once per route end and home (a return around zones is an A* search: not every report)."""
-        points = [(w.lat, w.lon) for w in self._state.route.waypoints]
-        key = (end, home, tuple(points))
-        if self._home_way is None or self._home_way[0] != key:
-            self._home_way = (key, home_metres(mission, config, points, home, end))
-        return self._home_way[1]
+        waypoints = mission.waypoints
+        key = (end, home)
+        if self._home_way is None or self._home_way[0] != key or self._home_way[1] is not waypoints:
+            self._home_way = (key, waypoints, home_metres(mission, config, [(w.lat, w.lon) for w in waypoints], home, end))
+        return self._home_way[2]
 
     def _journal(self, estimate: EnergyEstimate) -> None:
         said = self._said
         if said is not None and said[0] == estimate.leg_index and abs(said[1] - estimate.margin_wh) < 0.05 * estimate.capacity_wh:
             return
         self._said = (estimate.leg_index, estimate.margin_wh)
-        legs = len(self._state.route.waypoints)
+        legs = self._state.leg_count
         where = f"leg {estimate.leg_index + 1}/{legs}" if estimate.leg_index < legs else "the end of the route"
         log.info(
             "energy at %s: %s: margin %s Wh; drawn %.1f Wh so far; %.1f Wh/km + %.2f Wh/min",
