@@ -114,7 +114,7 @@ class ChannelFeed:
         self._lines: collections.deque[dict[str, Any] | tuple[str, float, dict[str, Any]]] = collections.deque()
         self._state: dict[str, dict[Any, Any]] = {"s": {}, "f": {}, "bb": {}}  # the tree and blackboard so far: a keyframe's
         self._new_file = False  # a sink began a new file: the next tick line is written as a keyframe
-        self._sinks_lock = threading.Lock()  # the sinks are written by the tick and by the encoder thread
+        self._sinks_lock = threading.Lock()  # the sinks are written by the encoder thread, and by close after it
         self._work = threading.Event()
         self._closing = False
         #: CPU the encoder thread has spent (ns): the benchmark adds it to the tick's recording cost.
