@@ -393,7 +393,7 @@ def mcap_row(waypoints: int, lines: dict[str, Any], ticks: int, warmup_ticks: in
         "<= JSON lines'",
         spent <= floor,
         f"JSON lines {floor:.1f} µs; p99 {percentile(mcap['parts']['recording'], 99) / 1e3:.0f} µs; the encoder thread {encoder:.0f} µs "
-        f"a tick (mean; MAVLink channels, fixes, poses): tick + encoder {mean_mcap + encoder:.0f} µs vs JSON lines {mean_lines:.0f} (means)",
+        f"a tick (mean; tick lines, MAVLink, fixes, poses): tick + encoder {mean_mcap + encoder:.0f} µs vs JSON lines {mean_lines:.0f} (means)",
         {"median_us": spent, "json_lines_median_us": floor, "encoder_mean_us": encoder, "total_mean_us": mean_mcap + encoder},
     )
 

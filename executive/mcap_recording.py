@@ -23,11 +23,11 @@ channels:
   reader decodes) and sent, its fields as JSON;
 - ``/log`` (``foxglove.Log``): the executive's log lines (what its logger lets through), for the Log panel.
 
-The tick writes the tree, blackboard and mission channels itself (a keyframe and the file's rotation stay in
-step with the ticks); the MAVLink messages and the vehicle's fixes and poses, most of what a tick costs as MCAP,
-are encoded and written by an encoder thread woken every :data:`ENCODE_EVERY` ticks (the values it reads are
-frozen: the messages as heard, with their source ids as heard; the blackboard's frozen fixes and attitudes), so
-they reach a file or a live client up to that many ticks late, each at its own time.
+The tick only queues what it saw (its line as the snapshot recorder built it, the mission's changes, the log lines) and
+notes the vehicle's frozen values; an encoder thread woken every :data:`ENCODE_EVERY` ticks encodes and writes them all,
+in order, with the MAVLink messages (as heard, with their source ids as heard) and the vehicle's fixes and poses, so
+they reach a file or a live client up to that many ticks late, each at its own time. When a file is rotated the
+thread writes the next tick line as a keyframe (the tree and blackboard so far): each file is readable alone.
 
 Past ``max_bytes`` the file is finished (its index written) and rotated to ``FILE.1`` (the one
 before is dropped), as the JSON-lines file is. A finished file's metadata ``executive.keyframes``
@@ -110,7 +110,11 @@ class ChannelFeed:
         self._mavlink_json = MavlinkJson()
         self._schemas = {topic: (name, schema_bytes(name)) for topic, name in CHANNELS.items()}
         self._vehicle: collections.deque[tuple[float, Any, Any, Any, bool]] = collections.deque()  # t, fix, home, attitude, new fix
-        self._sinks_lock = threading.Lock()  # the sinks are written by the tick and by the encoder thread
+        #: The tick lines and the channels written in order with them (topic, t, message), until the encoder thread writes them.
+        self._lines: collections.deque[dict[str, Any] | tuple[str, float, dict[str, Any]]] = collections.deque()
+        self._state: dict[str, dict[Any, Any]] = {"s": {}, "f": {}, "bb": {}}  # the tree and blackboard so far: a keyframe's
+        self._new_file = False  # a sink began a new file: the next tick line is written as a keyframe
+        self._sinks_lock = threading.Lock()  # the sinks are written by the encoder thread, and by close after it
         self._work = threading.Event()
         self._closing = False
         #: CPU the encoder thread has spent (ns): the benchmark adds it to the tick's recording cost.
@@ -125,23 +129,15 @@ class ChannelFeed:
     def write_tick(self, line: dict[str, Any]) -> bool:
         t = self._t = line["t"]
         self._write_logs()
-        marks = {k: line[k] for k in ("key", "end") if k in line}
-        log_ns = self._put("/tree/tick", t, {"tick": line["tick"], **marks, **{k: line[k] for k in ("s", "f") if k in line}})
-        if line.get("key"):
-            with self._sinks_lock:
-                for sink in self.sinks:
-                    sink.keyframe(line["tick"], log_ns)
-        if "bb" in line:
-            self._put("/blackboard", t, {"tick": line["tick"], **marks, "bb": line["bb"]})
+        self._lines.append(line)  # the tick's /tree/tick and /blackboard: built from the line by the encoder thread
         mission = tuple(self._value(k) for k in MISSION_KEYS)
         if mission != self._mission:
             self._mission = mission
-            self._put("/mission/state", t, dict(zip(("state", "leg_index", "leg_count", "reason"), mission, strict=True)))
+            self._lines.append(("/mission/state", t, dict(zip(("state", "leg_index", "leg_count", "reason"), mission, strict=True))))
         self._note_vehicle(t)
         if line["tick"] % ENCODE_EVERY == 0:
-            self._work.set()  # the MAVLink messages and the vehicle's channels: encoded and written by the encoder thread
-        with self._sinks_lock:
-            return all([sink.ticked() for sink in self.sinks])  # every sink told, whichever began a new file
+            self._work.set()  # the tick's channels, the MAVLink messages and the vehicle's: encoded and written by the encoder thread
+        return True  # a new file begins with a keyframe made by the encoder thread (:meth:`_write_line`)
 
     def write_event(self, before: str, after: str, reason: str) -> None:
         self._put("/mission/events", self._now(), {"before": before, "after": after, "reason": reason})
@@ -171,13 +167,40 @@ class ChannelFeed:
     def _now(self) -> float:
         return self._clock.now() if self._clock else self._t
 
-    def _put(self, topic: str, t: float, message: dict[str, Any]) -> int:
+    def _put(self, topic: str, t: float, message: dict[str, Any]) -> None:
+        """``message`` on ``topic`` at time ``t``: written by the encoder thread, in order with the tick lines."""
+        self._lines.append((topic, t, message))
+
+    def _write(self, topic: str, t: float, message: dict[str, Any]) -> int:
         """Write ``message`` at time ``t`` to every sink; its log time, ns."""
         log_ns, data = ns(t), _DUMPS(message).encode()
         with self._sinks_lock:
             for sink in self.sinks:
                 sink.put(topic, self._schemas[topic], log_ns, data)
         return log_ns
+
+    def _write_line(self, line: dict[str, Any]) -> None:
+        """A tick line as /tree/tick and /blackboard; the first after a new file began made a keyframe (the state so far)."""
+        state = self._state
+        if line.get("key"):
+            self._state = state = {"s": dict(line.get("s", {})), "f": dict(line.get("f", {})), "bb": dict(line.get("bb", {}))}
+        else:
+            for part in ("s", "f", "bb"):
+                if part in line:
+                    state[part].update(line[part])
+            if self._new_file:
+                line = {**line, "key": True, **{part: dict(values) for part, values in state.items()}}
+        self._new_file = False
+        t, marks = line["t"], {k: line[k] for k in ("key", "end") if k in line}
+        log_ns = self._write("/tree/tick", t, {"tick": line["tick"], **marks, **{k: line[k] for k in ("s", "f") if k in line}})
+        with self._sinks_lock:
+            if line.get("key"):
+                for sink in self.sinks:
+                    sink.keyframe(line["tick"], log_ns)
+        if "bb" in line:
+            self._write("/blackboard", t, {"tick": line["tick"], **marks, "bb": line["bb"]})
+        with self._sinks_lock:
+            self._new_file = not all([sink.ticked() for sink in self.sinks])  # every sink told, whichever began a new file
 
     def _note_vehicle(self, t: float) -> None:
         """The vehicle's values after the tick, when a fix or the attitude is new (frozen values: the encoder reads them later)."""
@@ -204,15 +227,21 @@ class ChannelFeed:
             self.encoder_ns += time.thread_time_ns() - start
 
     def _encode(self) -> None:
+        while self._lines:
+            item = self._lines.popleft()
+            if isinstance(item, dict):
+                self._write_line(item)
+            else:
+                self._write(*item)
         self._write_mavlink()
         while self._vehicle:
             t, fix, home, attitude, new_fix = self._vehicle.popleft()
             if new_fix:
-                self._put("/vehicle/location", fix.time, location_fix(fix))
+                self._write("/vehicle/location", fix.time, location_fix(fix))
             if home is not None:
                 in_frame, transforms = pose(home, fix, attitude, t)
-                self._put("/vehicle/pose", t, in_frame)
-                self._put("/tf", t, transforms)
+                self._write("/vehicle/pose", t, in_frame)
+                self._write("/tf", t, transforms)
 
     def _write_mavlink(self) -> None:
         channels, sinks, encode = self._mavlink_channels, self.sinks, self._mavlink_json.encode

@@ -225,6 +225,26 @@ def test_a_long_run_is_rotated_and_each_file_stands_alone(tmp_path: Path, vehicl
     assert messages(path, "/tree/tick")[-1][1]["tick"] == 5999
 
 
+def test_a_rotated_file_starts_with_the_state_so_far_whatever_the_recorder_s_keyframes(tmp_path: Path, vehicle) -> None:
+    root = py_trees.composites.Sequence("Mission", memory=False, children=[LinkAlive()])
+    tree = py_trees.trees.BehaviourTree(root)
+    mcap, jsonl = tmp_path / "run.mcap", tmp_path / "run.jsonl"
+    recorders = [SnapshotRecorder(mcap, max_bytes=4096, keyframe_every=10_000), SnapshotRecorder(jsonl, keyframe_every=10_000)]
+    for recorder in recorders:
+        recorder.attach(root)
+    for tick in range(400):
+        vehicle.set(link__up=tick % 3 != 0, link__messages=tick)
+        tree.tick()
+        for recorder in recorders:
+            recorder.record(tick, tick * 0.1)
+    for recorder in recorders:
+        recorder.close()
+    (_, first), (_, board) = messages(mcap, "/tree/tick")[0], messages(mcap, "/blackboard")[0]
+    assert first["tick"] > 0 and first.get("key") is True  # made by the encoder thread: the recorder's next is tick 10000
+    whole = replay(jsonl, first["tick"])
+    assert {int(i): s for i, s in first["s"].items()} == whole.status and board["bb"] == whole.blackboard
+
+
 @pytest.mark.parametrize("tick", [0, 1, 99, 100, 101, 102, 500, 987, None])
 def test_replay_shows_the_same_tick_from_either_file(square, tick: int | None) -> None:
     path, jsonl, _, _ = square
@@ -402,7 +422,7 @@ class ThreadedSink:
         pass
 
 
-def test_the_tick_leaves_the_mavlink_messages_to_the_encoder_thread_with_their_source_as_heard() -> None:
+def test_the_tick_leaves_its_line_and_the_mavlink_messages_to_the_encoder_thread_with_their_source_as_heard() -> None:
     from executive.mavlink_dialect import mavlink
     from executive.mcap_recording import ENCODE_EVERY, ChannelFeed
 
@@ -416,7 +436,7 @@ def test_the_tick_leaves_the_mavlink_messages_to_the_encoder_thread_with_their_s
     feed.mavlink("in", mavlink.MAVLink_heartbeat_message(10, 3, 0, 0, 4, 3))
     feed.close()  # what the thread had not taken yet: written at close
     by = {topic: thread for topic, thread, _ in sink.put_by}
-    assert by["/tree/tick"] == threading.current_thread().name
+    assert by["/tree/tick"] == "mcap-encoder"  # the tick line too: the tick only queues it
     assert by["/mavlink/out/HEARTBEAT"] == "mcap-encoder"
     assert "/mavlink/in/HEARTBEAT" in by
     data = next(d for topic, _, d in sink.put_by if topic == "/mavlink/out/HEARTBEAT")
