@@ -97,8 +97,11 @@ class ChannelFeed:
     ``values``: where the vehicle and the mission are read after each tick (the blackboard; a recorded one for ``convert``).
     """
 
-    def __init__(self, sinks: Sequence[Sink], clock: Clock | None, values: Callable[[str], Any] = blackboard.value) -> None:
-        self.sinks, self._clock, self._value = list(sinks), clock, values
+    def __init__(
+        self, sinks: Sequence[Sink], clock: Clock | None, values: Callable[[str], Any] = blackboard.value, storage: Storage | None = None
+    ) -> None:
+        """``storage``: where the sinks' disk losses are said; the encoder thread's are told at the next tick (Storage.deliver)."""
+        self.sinks, self._clock, self._value, self._storage = list(sinks), clock, values, storage
         self._t = 0.0  # vehicle time of the last tick: what a line without a clock is timed by
         self._mission: tuple[Any, ...] | None = None
         self._fix_time: float | None = None
@@ -128,6 +131,8 @@ class ChannelFeed:
 
     def write_tick(self, line: dict[str, Any]) -> bool:
         t = self._t = line["t"]
+        if self._storage is not None:
+            self._storage.deliver()
         self._write_logs()
         self._lines.append(line)  # the tick's /tree/tick and /blackboard: built from the line by the encoder thread
         mission = tuple(self._value(k) for k in MISSION_KEYS)

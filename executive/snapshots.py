@@ -184,7 +184,7 @@ def open_tick_file(path: Path | None, max_bytes: int, storage: Storage | None, c
         from executive.mcap_recording import ChannelFeed, McapSink
 
         sinks = [McapSink(path, max_bytes, storage)] if path is not None else []
-        return ChannelFeed([*sinks, *([live] if live is not None else [])], clock)
+        return ChannelFeed([*sinks, *([live] if live is not None else [])], clock, storage=storage)
     return JsonLinesFile(path, max_bytes, storage)
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import os
+import threading
 from collections.abc import Callable
 from pathlib import Path
 
@@ -32,13 +33,49 @@ class Storage:
         self._announced: set[str] = set()
         self.listeners: list[Callable[[str], object]] = []
         self._bb = blackboard.writer("storage", ["/runtime/storage_lost"])
+        self._owner = threading.get_ident()  # the thread that ticks: the blackboard and the listeners are its alone
+        #: Said by other threads, not yet told: for each recording, its loss (if any) and whether it wrote again after it.
+        self._from_threads: dict[str, tuple[tuple[str, BaseException] | None, bool]] = {}
+        self._lock = threading.Lock()
 
     def failed(self, what: str, consequence: str, error: BaseException) -> None:
         """A write of ``what`` failed with ``error``: announced the first time (``what cannot write: consequence``), then kept quiet.
 
         A disk that is nearly full takes a small record and refuses the next: after the first loss,
-        the next ones (and the writes in between) are only logged at INFO.
+        the next ones (and the writes in between) are only logged at INFO. Said by another thread (the
+        MCAP encoder's), it waits for :meth:`deliver` on the ticking thread.
         """
+        if threading.get_ident() != self._owner:
+            with self._lock:
+                self._from_threads[what] = ((consequence, error), False)
+            return
+        self.deliver()
+        self._failed(what, consequence, error)
+
+    def wrote(self, what: str) -> None:
+        """A write of ``what`` went through: a loss, if there was one, is over."""
+        if threading.get_ident() != self._owner:
+            with self._lock:
+                loss, _ = self._from_threads.get(what, (None, False))
+                if loss is not None or what in self.lost:
+                    self._from_threads[what] = (loss, True)
+            return
+        self.deliver()
+        self._wrote(what)
+
+    def deliver(self) -> None:
+        """What other threads' writes said (a loss, then writing again), told on this (the ticking) thread."""
+        if not self._from_threads:
+            return
+        with self._lock:
+            said, self._from_threads = self._from_threads, {}
+        for what, (loss, wrote_after) in said.items():
+            if loss is not None:
+                self._failed(what, *loss)
+            if wrote_after:
+                self._wrote(what)
+
+    def _failed(self, what: str, consequence: str, error: BaseException) -> None:
         if what in self.lost:
             return
         text = f"{what} cannot write: {consequence}"
@@ -52,8 +89,7 @@ class Storage:
         for listener in self.listeners:
             listener(text)
 
-    def wrote(self, what: str) -> None:
-        """A write of ``what`` went through: a loss, if there was one, is over."""
+    def _wrote(self, what: str) -> None:
         if self.lost.pop(what, None) is not None:
             log.info("%s writes again", what)
             self._publish()

@@ -14,6 +14,7 @@ import resource
 import sqlite3
 import subprocess
 import sys
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -140,3 +141,40 @@ def test_a_journal_that_cannot_be_created_is_refused_before_the_run(tmp_path: Pa
     err = capsys.readouterr().err
     assert f"--journal {tmp_path}/no/such/dir/j.db: cannot be created or written: unable to open database file" in err
     assert "simulated rover" not in err  # refused before the vehicle (here the simulator) was opened
+
+
+def test_a_loss_another_thread_meets_is_told_on_the_ticking_thread_in_its_order() -> None:
+    """The MCAP encoder thread writes the snapshot file: its loss reaches the blackboard and the listeners (the ground station)
+    only when the ticking thread delivers it, and a loss then a write again both arrive."""
+    from executive import blackboard
+
+    blackboard.reset()
+    storage = Storage()
+    heard: list[tuple[str, int]] = []
+    storage.listeners.append(lambda text: heard.append((text, threading.get_ident())))
+    lost = blackboard.reader("test storage", ["/runtime/storage_lost"])
+
+    def encoder_thread(*calls: tuple[str, ...]) -> None:
+        def run() -> None:
+            for kind, what in calls:
+                if kind == "failed":
+                    storage.failed(what, "ticks are not recorded for replay", OSError(28, "No space left"))
+                else:
+                    storage.wrote(what)
+
+        thread = threading.Thread(target=run)
+        thread.start()
+        thread.join()
+
+    encoder_thread(("failed", "snapshots"))
+    assert heard == [] and lost.get("/runtime/storage_lost") is None  # nothing told from the encoder thread
+    storage.deliver()
+    assert heard == [("snapshots cannot write: ticks are not recorded for replay", threading.get_ident())]
+    assert "snapshots cannot write" in lost.get("/runtime/storage_lost")
+    encoder_thread(*[("wrote", "snapshots")] * 500)  # writes again: one pending note, however many writes
+    assert len(storage._from_threads) == 1
+    storage.deliver()
+    assert lost.get("/runtime/storage_lost") is None
+    encoder_thread(("failed", "snapshots"), ("wrote", "snapshots"))  # lost and back between two ticks: both told, in order
+    storage.deliver()
+    assert lost.get("/runtime/storage_lost") is None and "snapshots" not in storage.lost
