@@ -18,13 +18,13 @@ import py_trees
 import pytest
 
 from executive.cli import main
-from executive.clock import ManualClock
 from executive.io.control import ControlServer, default_socket_path, request
-from executive.journal import Journal
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
-from executive.progress import Progress
-from executive.snapshots import SnapshotRecorder
+from executive.observers.journal import Journal
+from executive.observers.snapshots import SnapshotRecorder
+from executive.operator.progress import Progress
+from executive.world.clock import ManualClock
+from executive.world.dialect import mavlink
 from tests_support import executive_process
 
 ROOT = Path(__file__).parents[2]
