@@ -398,11 +398,24 @@ class Asker:
 
     def _ask(self, asking: Step) -> bool:
         """Send one ask of ``asking``; False when the autopilot has no such mode."""
+        if asking.send is not None:
+            request = asking.send()  # a command's own ask: a KeyError (no such mode) is its owner's to meet
+        else:
+            named = self._ask_by_name(asking)
+            if named is None:
+                return False
+            request = named
+        again = asking.asks > 0
+        self.tickets.append(request)
+        asking.request, asking.asked_at, asking.asks, asking.judged = request, self.host.clock.now(), asking.asks + 1, False
+        self.voice.asked(asking, again)
+        return True
+
+    def _ask_by_name(self, asking: Step) -> Request | None:
+        """Ask a disarm, an arm or a mode; None when the autopilot has no such mode."""
         autopilot = self.host.autopilot
         try:
-            if asking.send is not None:
-                request = asking.send()
-            elif asking.step == DISARM:
+            if asking.step == DISARM:
                 request = autopilot.disarm()
                 if self.on_disarm is not None:
                     self.on_disarm()
@@ -413,12 +426,8 @@ class Asker:
                 self.mode_in_force = asking.step
         except KeyError:
             self.voice.no_such_mode(asking.cause, asking.step)
-            return False
-        again = asking.asks > 0
-        self.tickets.append(request)
-        asking.request, asking.asked_at, asking.asks, asking.judged = request, self.host.clock.now(), asking.asks + 1, False
-        self.voice.asked(asking, again)
-        return True
+            return None
+        return request
 
     def _outcome(self, asking: Step, status: CommandStatus | None, now: float) -> str | None:
         """What became of the latest ask, once known: refused, no answer, or accepted with the vehicle not seen in it."""
@@ -426,6 +435,8 @@ class Asker:
             return f"refused ({status.result_name})"
         if status is not None and status.state is CommandState.TIMED_OUT:
             return "no answer"
+        if status is not None and status.state is CommandState.RETRYING:
+            return None  # the port asks again by itself, and ends it with the refusal at its own bound
         if not now - max(asking.asked_at, asking.retried_at) > self.rules.judge_after_s:
             return None
         if status is not None and status.state is CommandState.ACCEPTED:

@@ -9,8 +9,9 @@ from py_trees.common import Status
 
 from executive import blackboard, frames
 from executive.autopilot import AutopilotPort, Request, VtolState
+from executive.autopilot.asking import refusal_reason
 from executive.behaviours.base import TimedBehaviour
-from executive.behaviours.commands import CommandAction, refusal_reason
+from executive.behaviours.commands import CommandAction
 from executive.state import GlobalPosition, HomePosition, Outcome
 
 
