@@ -253,7 +253,7 @@ class Asker:
     def due(self, now: float) -> bool:
         """The latest ask failed and the next may go now (by the rules)."""
         asking = self.asking
-        if asking is None or asking.confirmed or not asking.judged:
+        if asking is None or asking.confirmed or not asking.judged or asking.gave_up:
             return False
         return now - asking.asked_at >= self.rules.again_after_s and now - asking.judged_at >= self.rules.rest_s
 
