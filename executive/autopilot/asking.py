@@ -27,11 +27,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from executive import blackboard
 from executive.autopilot.fallbacks import DISARM, Fallback, chain, fallback
 from executive.autopilot.port import AutopilotPort, Request
-from executive.clock import Clock
-from executive.state import CommandState, CommandStatus, EkfStatus, Outcome
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import CommandState, CommandStatus, EkfStatus, Outcome
 
 log = logging.getLogger("executive.behaviours.failsafe")  # the journal's event kind: "failsafe"
 

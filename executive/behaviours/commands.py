@@ -16,12 +16,12 @@ from dataclasses import replace
 
 from py_trees.common import Status
 
-from executive import blackboard
 from executive.autopilot import AutopilotPort, Request
 from executive.autopilot.asking import Asker, Rules, Step, Voice, accepted, refusal_reason, retry_reason
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
-from executive.state import CommandStatus, Outcome
+from executive.world import blackboard
+from executive.world.state import CommandStatus, Outcome
 
 #: A command's asking: one ask (the commander resends it unacked), confirmed by the vehicle's state alone, judged failed when
 #: refused, unanswered or not confirmed after the action's ``confirm_timeout_s``; never asked again nor replaced.

@@ -13,8 +13,8 @@ from executive.autopilot import AutopilotPort, Request
 from executive.autopilot.asking import READS, Announce, Asker
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
-from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.world.clock import Clock
 
 log = logging.getLogger(__name__)
 

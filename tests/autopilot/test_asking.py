@@ -11,12 +11,12 @@ from typing import Any
 
 import pytest
 
-from executive import blackboard
 from executive.autopilot import Request
 from executive.autopilot.asking import ARM, ASK_AGAIN_S, REACTION, Asker, Rules, Step, Voice
 from executive.autopilot.fallbacks import DISARM
-from executive.clock import ManualClock
-from executive.state import CommandState, CommandStatus, Outcome
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.state import CommandState, CommandStatus, Outcome
 
 MODE_KEY, ARMING_KEY = blackboard.command_key(Outcome.MODE), blackboard.command_key(Outcome.ARMING)
 
