@@ -37,6 +37,8 @@ TREES = "executive.trees"
 BEHAVIOURS = "executive.behaviours"
 INSTRUMENTS = "executive.instruments"
 T = TypeVar("T")
+#: The tree a mission runs when it names none.
+DEFAULT_TREE = "waypoints"
 #: The attribute of a tree's module that holds what the tree declares of itself.
 DECLARATION = "DECLARATION"
 

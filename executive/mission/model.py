@@ -16,6 +16,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, model_validator
 from pydantic_core import PydanticCustomError
 
+from executive import registry
 from executive.geofence import Geofence
 from executive.mission.declaration import BUILT_IN_KINDS, declared, kind_spec, plugin_kinds
 from executive.mission.failsafes import FailsafeReaction, FailsafeRecovery
@@ -58,7 +59,7 @@ TREE_SCHEMA = {
         {"type": "string", "pattern": TREE_NAME, "description": "a tree by name: built in, a plugin's, or module:function"},
         {"type": "object", "description": "a tree composed in the file: node: or use:, with parameters (executive behaviours)"},
     ],
-    "default": "waypoints",
+    "default": registry.DEFAULT_TREE,
     "description": "the tree the mission runs",
 }
 #: ``tree:``: a name, or a mapping composing the node catalogue (:mod:`executive.composition`).
@@ -429,7 +430,7 @@ class Mission(BaseModel):
         None, description="the autopilot firmware (default: the one the HEARTBEAT names); px4 starts a simulated PX4 without --mavlink"
     )
     tree: TreeSpec = Field(
-        "waypoints",
+        registry.DEFAULT_TREE,
         description="the tree: a built-in one (a module of trees/), a plugin's (entry point group executive.trees), "
         "module:function of a module on the Python path (module alone: its build), or a tree composed in the file (a mapping)",
     )
