@@ -1,7 +1,9 @@
 """Tree builders, one module per mission kind (installed as ``executive.trees``); a mission file names its tree in ``tree:``.
 
-Each tree module exposes ``build(mission: Mission) -> py_trees.behaviour.Behaviour`` and is listed in
-the registry's table of built-in trees (:data:`executive.registry.BUILT_IN`); :mod:`.parts` holds the
+Each tree module exposes ``build(mission: Mission) -> py_trees.behaviour.Behaviour`` and, beside it,
+``DECLARATION`` (:class:`executive.mission.declaration.TreeDeclaration`: the vehicles it drives, the firmware
+it needs, the section it reads, its RC switches and failsafe defaults), and is listed in the registry's
+table of built-in trees (:data:`executive.registry.BUILT_IN`); :mod:`.parts` holds the
 subtrees they share. A mission may also name a plugin's tree (entry-point group ``executive.trees``)
 or ``module:function`` on the Python path: :func:`resolve` finds each.
 """

@@ -149,8 +149,8 @@ def trees_with(predicate: Callable[[TreeDeclaration], bool]) -> list[str]:
 def plugin_kinds() -> dict[str, VehicleKindSpec]:
     """The vehicle kinds the plugins' trees bring, by name (a built-in kind's name is not taken)."""
     found: dict[str, VehicleKindSpec] = {}
-    for name in registry.named(registry.TREES):
-        for spec in declared(name).vehicle_kinds:
+    for point in registry.named(registry.TREES).values():
+        for spec in declared(point.value).vehicle_kinds:  # by its module:function: the entry points are read once
             if spec.kind not in BUILT_IN_KINDS:
                 found.setdefault(spec.kind, spec)
     return found
