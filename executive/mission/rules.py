@@ -52,7 +52,7 @@ def rc_switch_channels(mission: Mission) -> dict[int, str]:
     if rc.source != "mavlink":
         return {}
     switches = declared(tree_name(mission)).rc_switches
-    found = switches(mission) if switches is not None else {rc.takeover_channel: "the take-over switch"}
+    found = dict(switches(mission)) if switches is not None else {rc.takeover_channel: "the take-over switch"}
     if rc.arm_channel is not None:
         found.setdefault(rc.arm_channel, "the arm switch")
     return dict(sorted(found.items()))
