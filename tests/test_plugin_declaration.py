@@ -110,3 +110,19 @@ def test_behaviours_trees_lists_the_plugin_tree_with_its_declaration(glider: Non
     listed = {tree["name"]: tree for tree in json.loads(capsys.readouterr().out)}
     assert sorted(listed) == ["auv_survey", "glider_survey", "goto_sample", "ugv_rc_route", "vtol_transit", "waypoints"]
     assert listed["glider_survey"]["vehicle_kinds"] == ["glider"] and listed["glider_survey"]["needs"]["autopilot"] == "ardupilot"
+
+
+def test_a_declaration_that_is_not_one_is_said_at_the_tree_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "site").mkdir()
+    (tmp_path / "site" / "loosetree.py").write_text(
+        'from executive.trees.waypoints import build\n\nDECLARATION = {"vehicles": ["rover"]}\n', encoding="utf-8"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path / "site"))
+    monkeypatch.delitem(sys.modules, "loosetree", raising=False)
+    path = write(tmp_path, GLIDER.replace("vehicle: glider", "vehicle: rover").replace("tree: glider_survey", "tree: loosetree:build"))
+    assert main(["validate", path]) == 2
+    assert capsys.readouterr().err.splitlines()[-1] == (
+        f"{path}:4:7: tree: plugin 'loosetree:build': DECLARATION {{'vehicles': ['rover']}} is not a TreeDeclaration (executive.mission.declaration)"
+    )

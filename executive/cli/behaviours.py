@@ -10,7 +10,7 @@ import sys
 from executive import registry
 from executive.catalogue import KINDS, Catalogue, NodeSpec, ParamSpec, load_behaviours
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
-from executive.mission.declaration import FIRMWARE_NAMES, UNDECLARED, TreeDeclaration
+from executive.mission.declaration import FIRMWARE_NAMES, TreeDeclaration, declaration_of
 from executive.registry import PluginError
 
 
@@ -62,12 +62,10 @@ def _trees(args: argparse.Namespace) -> int:
     broken = False
     for name in args.names or known:
         try:
-            declaration = registry.tree_declaration(name)
+            found[name] = declaration_of(name)
         except PluginError as exc:  # said, the others listed all the same
             print(f"executive: behaviours: {exc}", file=sys.stderr)
             broken = True
-            continue
-        found[name] = declaration if isinstance(declaration, TreeDeclaration) else UNDECLARED
     if args.json:
         json.dump([{"name": name, "kind": "tree", **d.to_json()} for name, d in found.items()], sys.stdout, indent=2, ensure_ascii=False)
         sys.stdout.write("\n")

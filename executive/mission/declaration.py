@@ -130,10 +130,20 @@ def declared(name: str | None) -> TreeDeclaration:
     if name is None:
         return UNDECLARED
     try:
-        found = registry.tree_declaration(name)
+        return declaration_of(name)
     except (registry.PluginError, LookupError):
         return UNDECLARED
-    return found if isinstance(found, TreeDeclaration) else UNDECLARED
+
+
+def declaration_of(name: str, plugin: str | None = None) -> TreeDeclaration:
+    """What tree ``name`` declares (:data:`UNDECLARED`: its module has no ``DECLARATION``); LookupError: no such tree.
+
+    PluginError, naming ``plugin`` (by default ``name``), if its module cannot be loaded or its ``DECLARATION`` is no TreeDeclaration.
+    """
+    found = registry.tree_declaration(name)
+    if found is not None and not isinstance(found, TreeDeclaration):
+        raise registry.PluginError(plugin or repr(name), f"{registry.DECLARATION} {found!r} is not a TreeDeclaration (executive.mission.declaration)")
+    return found or UNDECLARED
 
 
 def declarations() -> dict[str, TreeDeclaration]:
