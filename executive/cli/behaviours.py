@@ -8,10 +8,10 @@ import json
 import sys
 
 from executive import registry
-from executive.catalogue import KINDS, Catalogue, NodeSpec, ParamSpec, load_behaviours
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.mission.declaration import FIRMWARE_NAMES, TreeDeclaration, declaration_of
 from executive.registry import PluginError
+from executive.tree.catalogue import KINDS, Catalogue, NodeSpec, ParamSpec, load_behaviours
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

@@ -4,7 +4,7 @@ A tree module (built in, a plugin's, or ``module:function``) holds, beside its `
 ``DECLARATION = TreeDeclaration(...)``; the registry finds it (:func:`executive.registry.tree_declaration`)
 and the rules of :mod:`executive.mission.rules` read it, so no rule names a tree. A tree that
 declares nothing drives any vehicle kind, on any firmware, guided only, and reads no section.
-A plugin may bring a vehicle kind of its own in ``vehicle_kinds`` (:class:`executive.vehicles.VehicleProfile`).
+A plugin may bring a vehicle kind of its own in ``vehicle_kinds`` (:class:`executive.world.vehicles.VehicleProfile`).
 """
 
 from __future__ import annotations
@@ -16,12 +16,12 @@ from typing import TYPE_CHECKING, Any, get_args
 
 from executive import registry
 from executive.mission.failsafes import NO_REACTION, REACTION_MODES, VEHICLE_FAILSAFES
-from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES, VehicleKind
+from executive.world.vehicles import AUTOPILOT_VEHICLES, PROFILES, VehicleKind
 
 if TYPE_CHECKING:
-    from executive.vehicles import VehicleProfile
+    from executive.world.vehicles import VehicleProfile
 
-#: The vehicle kinds of the executive's own (:data:`executive.vehicles.PROFILES`).
+#: The vehicle kinds of the executive's own (:data:`executive.world.vehicles.PROFILES`).
 BUILT_IN_KINDS: tuple[str, ...] = get_args(VehicleKind)
 #: How a firmware a tree needs is said in messages.
 FIRMWARE_NAMES = MappingProxyType({"ardupilot": "ArduPilot", "px4": "PX4"})
@@ -94,7 +94,7 @@ class TreeDeclaration:
 class VehicleKindSpec:
     """A vehicle kind a plugin brings: its profile (MAV_TYPE, modes, safe mode), the firmware that drives it, its failsafes.
 
-    The built-in kinds' are :data:`executive.vehicles.PROFILES`, :data:`~executive.vehicles.AUTOPILOT_VEHICLES` and
+    The built-in kinds' are :data:`executive.world.vehicles.PROFILES`, :data:`~executive.world.vehicles.AUTOPILOT_VEHICLES` and
     :mod:`executive.mission.failsafes`' tables.
     """
 

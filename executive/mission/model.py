@@ -17,10 +17,10 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSche
 from pydantic_core import PydanticCustomError
 
 from executive import registry
-from executive.geofence import Geofence
 from executive.mission.declaration import BUILT_IN_KINDS, declared, kind_spec, plugin_kinds
 from executive.mission.failsafes import FailsafeReaction, FailsafeRecovery
-from executive.vehicles import AutopilotName
+from executive.world.geofence import Geofence
+from executive.world.vehicles import AutopilotName
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
 ControlMode = Literal["depth", "altitude"]
@@ -33,7 +33,7 @@ _TREE_NAME_RE = re.compile(TREE_NAME)
 
 
 def _tree_value(value: object) -> object:
-    """``tree:`` is a tree's name or a tree composed in the file (a mapping, checked by :mod:`executive.composition`)."""
+    """``tree:`` is a tree's name or a tree composed in the file (a mapping, checked by :mod:`executive.tree.composition`)."""
     if isinstance(value, str) and not _TREE_NAME_RE.match(value):
         raise ValueError("not a tree name (a name, module.path or module.path:function) nor a composed tree (a mapping)")
     if not isinstance(value, str | dict):
@@ -53,7 +53,7 @@ def _vehicle_kind(value: object) -> object:
 VehicleName = Annotated[str, BeforeValidator(_vehicle_kind), WithJsonSchema({"enum": list(BUILT_IN_KINDS), "type": "string"})]
 #: The mission's options sections, each read by the tree that declares it (:attr:`TreeDeclaration.section`).
 OPTION_SECTIONS = ("sampling", "vtol", "rc_route")
-#: ``tree:``'s JSON schema; ``executive.mission_schema`` puts the node catalogue's in place of the composed tree's.
+#: ``tree:``'s JSON schema; ``executive.tree.schema`` puts the node catalogue's in place of the composed tree's.
 TREE_SCHEMA = {
     "anyOf": [
         {"type": "string", "pattern": TREE_NAME, "description": "a tree by name: built in, a plugin's, or module:function"},
@@ -62,7 +62,7 @@ TREE_SCHEMA = {
     "default": registry.DEFAULT_TREE,
     "description": "the tree the mission runs",
 }
-#: ``tree:``: a name, or a mapping composing the node catalogue (:mod:`executive.composition`).
+#: ``tree:``: a name, or a mapping composing the node catalogue (:mod:`executive.tree.composition`).
 TreeSpec = Annotated[str | dict[str, Any], BeforeValidator(_tree_value), WithJsonSchema(TREE_SCHEMA)]
 
 

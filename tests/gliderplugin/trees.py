@@ -8,10 +8,10 @@ failsafe defaults.
 from __future__ import annotations
 
 from executive.behaviours import ForEachLeg, SetMode
-from executive.mavlink_dialect import mavlink
 from executive.mission.declaration import TreeDeclaration, VehicleKindSpec
 from executive.trees.parts import failsafe_guarded, guided_leg, mission_root, preflight, safe_mode, standard_guards
-from executive.vehicles import PLANE_MODES, VehicleProfile
+from executive.world.dialect import mavlink
+from executive.world.vehicles import PLANE_MODES, VehicleProfile
 
 _R, _A = "resume", "abort"
 GLIDER = VehicleKindSpec(
