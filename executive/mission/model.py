@@ -14,7 +14,6 @@ import re
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, model_validator
-from pydantic_core import PydanticCustomError
 
 from executive import registry
 from executive.mission.declaration import BUILT_IN_KINDS, declared, kind_spec, plugin_kinds
@@ -46,7 +45,7 @@ def _vehicle_kind(value: object) -> object:
     if isinstance(value, str) and (value in BUILT_IN_KINDS or kind_spec(value) is not None):
         return value
     kinds = [*BUILT_IN_KINDS, *plugin_kinds()]
-    raise PydanticCustomError("literal_error", "Input should be {expected}", {"expected": f"{', '.join(map(repr, kinds[:-1]))} or {kinds[-1]!r}"})
+    raise ValueError(f"Input should be {', '.join(map(repr, kinds[:-1]))} or {kinds[-1]!r}")  # as pydantic says it of a Literal
 
 
 #: ``vehicle:``: a kind of ours (the schema's enum) or one a plugin's tree brings.
