@@ -16,8 +16,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks.common import Row
-
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "ardurover"
 #: The SITL frame each example mission was recorded on.
 FRAMES = {"rover_square": "rover", "boat_survey": "motorboat"}
@@ -120,31 +118,3 @@ def leg_times(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]],
 def available(mission: str) -> bool:
     """Whether GUIDED and AUTO runs of ``mission`` were recorded."""
     return mission in FRAMES and all(path_of(mission, mode).exists() for mode in ("GUIDED", "AUTO"))
-
-
-def rows(missions: Sequence[str]) -> list[Row]:
-    """For each mission recorded in both modes: the real firmware's GUIDED / AUTO time, and the corners each cut."""
-    from benchmarks.efficiency import MISSIONS, Timing, ratio_row, route_of
-    from executive.mission.loader import load_mission
-
-    out = []
-    for name in missions:
-        if not available(name):
-            continue
-        mission = load_mission(MISSIONS / f"{name}.yaml")
-        waypoints = [(w.lat, w.lon) for w in mission.waypoints]
-        recordings = {
-            drive: read(path_of(name, mode), "AUTO" if drive == "auto" else mode) for drive, mode in DRIVES.items() if path_of(name, mode).exists()
-        }
-        timings = {}
-        for drive, recording in recordings.items():
-            seconds = arrival_s(recording.track, waypoints, mission.limits.acceptance_radius_m)
-            if seconds is None:
-                raise ValueError(f"{recording.path}: the vehicle never reached the last waypoint")
-            timings[drive] = Timing(recording.mode, seconds, tuple(sample for sample in recording.track if sample[0] <= seconds))
-        vehicle = f"{mission.vehicle}, SITL frame {FRAMES[name]}"
-        for drive in ("guided", "auto"):
-            if drive in timings:
-                against = f"a recorded real ArduRover SITL AUTO run ({path_of(name, 'AUTO').name}; {path_of(name, DRIVES[drive]).name})"
-                out.append(ratio_row(name, timings[drive], timings["whole"], route_of(mission), against, vehicle, drive))
-    return out
