@@ -9,12 +9,11 @@ import pytest
 from py_trees.common import Status
 
 from executive import blackboard
-from executive.behaviours import NothingToSample, RcNotTakingOver, Sample
+from executive.behaviours import NothingToSample, RcNotTakingOver, TakeSample
 from executive.instruments.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
-from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
-from executive.state import Sample as SampleRecord
+from executive.state import GlobalPosition, Sample, SampleRead, SamplerState, SamplerStatus
 from executive.testing import Harness, port_for
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
@@ -74,7 +73,7 @@ def status() -> SamplerStatus | None:
 
 
 def test_samples_and_records_the_sample(make, running, vehicle):
-    node = Sample()
+    node = TakeSample()
     h = make(node)
     statuses = [h.tick(0.5) for _ in range(6)]  # started at 100.5; reads at 101.5 and 102.5, done at 102.5, seen at 103.0
     assert statuses == [R, R, R, R, R, S]
@@ -88,7 +87,7 @@ def test_samples_and_records_the_sample(make, running, vehicle):
 
 
 def test_feedback_while_sampling(make, running):
-    node = Sample()
+    node = TakeSample()
     h = make(node)
     for _ in range(3):
         h.tick(0.5)
@@ -98,7 +97,7 @@ def test_feedback_while_sampling(make, running):
 
 
 def test_the_position_recorded_is_the_last_seen_while_sampling(make, running, vehicle):
-    h = make(Sample())
+    h = make(TakeSample())
     h.tick(0.5)
     vehicle.set(vehicle__position=at(47.5, 8.5))
     while h.tick(0.5) == R:
@@ -108,16 +107,16 @@ def test_the_position_recorded_is_the_last_seen_while_sampling(make, running, ve
 
 def test_no_position_at_all_records_nan(make, running, vehicle):
     vehicle.set(vehicle__position=None)
-    h = make(Sample())
+    h = make(TakeSample())
     while h.tick(0.5) == R:
         pass
     assert math.isnan(running.samples[0].lat) and math.isnan(running.samples[0].lon)
 
 
 def test_a_leg_already_sampled_is_skipped_without_sampling(make, running):
-    running.record_sample(SampleRecord(0, 1.0, 2.0, (), 0.0, 1.0))
+    running.record_sample(Sample(0, 1.0, 2.0, (), 0.0, 1.0))
     sampler = FakeSampler()
-    node = Sample()
+    node = TakeSample()
     h = make(node, sampler)
     assert h.tick(0.5) == S
     assert sampler.calls == [] and len(running.samples) == 1
@@ -126,7 +125,7 @@ def test_a_leg_already_sampled_is_skipped_without_sampling(make, running):
 
 def test_sampler_failure_fails_and_records_nothing(make, running):
     sampler = FakeSampler()
-    node = Sample()
+    node = TakeSample()
     h = make(node, sampler)
     assert h.tick(0.5) == R
     sampler.publish(1, SamplerState.FAILED, reason="pump jammed")
@@ -139,7 +138,7 @@ def test_only_its_own_ticket_counts(make, running):
     sampler = FakeSampler()
     sampler.tickets = 6  # an earlier request's DONE is still on the blackboard
     sampler.publish(6, SamplerState.DONE, (SampleRead("ph", 8.0, "pH", 1.0),))
-    h = make(Sample(), sampler)
+    h = make(TakeSample(), sampler)
     assert h.tick(0.5) == R
     sampler.publish(7, SamplerState.SAMPLING)
     assert h.tick(0.5) == R
@@ -149,7 +148,7 @@ def test_only_its_own_ticket_counts(make, running):
 
 
 def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, running, vehicle):
-    node = Sample()
+    node = TakeSample()
     guarded = py_trees.composites.Sequence("Guarded", memory=False, children=[RcNotTakingOver(6, 1700), node])
     h = make(guarded)
     assert [h.tick(0.5), h.tick(0.5), h.tick(0.5)] == [R, R, R]
@@ -168,14 +167,14 @@ def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, run
 
 def test_no_active_leg_fails(make, mission_state):
     sampler = FakeSampler()
-    node = Sample()
+    node = TakeSample()
     assert make(node, sampler).tick(0.5) == F
     assert node.feedback_message == "no active leg" and sampler.calls == []
 
 
 def test_a_timeout_cancels_the_sampler(make, running):
     sampler = FakeSampler()
-    node = Sample(timeout_s=2.0)
+    node = TakeSample(timeout_s=2.0)
     h = make(node, sampler)
     statuses = [h.tick(1.0) for _ in range(4)]  # started at 101: elapsed 0 ... 3 s
     assert statuses == [R, R, R, F]
@@ -184,7 +183,7 @@ def test_a_timeout_cancels_the_sampler(make, running):
 
 
 def test_setup_needs_a_sampler(clock, commander, mission_state):
-    tree = py_trees.trees.BehaviourTree(Sample())
+    tree = py_trees.trees.BehaviourTree(TakeSample())
     with pytest.raises(RuntimeError, match="needs sampler"):
         tree.setup(clock=clock, autopilot=port_for(commander), mission_state=mission_state)
 
@@ -204,9 +203,18 @@ def test_nothing_to_sample_here_unless_a_sample_point_is_not_sampled_yet(leg, re
     state = MissionState()
     state.upload(Mission.model_validate({"version": 1, "name": "s", "vehicle": "boat", "tree": "goto_sample", "waypoints": points}))
     state.start()
-    state.restore_samples(SampleRecord(i, 1.0, 2.0, (), 0.0, 1.0) for i in recorded)
+    state.restore_samples(Sample(i, 1.0, 2.0, (), 0.0, 1.0) for i in recorded)
     for _ in range(leg):
         state.advance_leg()
     node = NothingToSample()
     py_trees.trees.BehaviourTree(node).tick()
     assert (node.status, node.feedback_message) == (expected, feedback)
+
+
+def test_the_action_is_take_sample_named_sample_in_mission_files_and_its_old_name_still_works_with_a_warning() -> None:
+    import executive.behaviours
+    from executive.catalogue import node_name
+
+    assert node_name(TakeSample) == "sample"
+    with pytest.warns(DeprecationWarning, match="executive.behaviours.Sample is now executive.behaviours.TakeSample"):
+        assert executive.behaviours.Sample is TakeSample
