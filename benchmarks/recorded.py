@@ -23,7 +23,7 @@ FRAMES = {"rover_square": "rover", "boat_survey": "motorboat"}
 DRIVES = {"guided": "GUIDED", "auto": "SUPERVISED", "whole": "AUTO"}
 PASS_M = 5.0  # an intermediate waypoint counts as passed within this (as benchmarks.efficiency._Route)
 
-Sample = tuple[float, float, float]  # vehicle seconds since the mode was entered, lat, lon
+TrackPoint = tuple[float, float, float]  # vehicle seconds since the mode was entered, lat, lon
 
 
 @dataclass(frozen=True)
@@ -33,7 +33,7 @@ class Recording:
     path: Path
     mode: str
     entered_s: float
-    track: tuple[Sample, ...]
+    track: tuple[TrackPoint, ...]
     #: Where the vehicle was, and its heading (degrees), when it entered the mode: where a simulation of the run starts.
     start: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
@@ -86,7 +86,7 @@ def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
     return distance(a[0], a[1], b[0], b[1])
 
 
-def arrival_s(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]], radius_m: float) -> float | None:
+def arrival_s(track: Sequence[TrackPoint], waypoints: Sequence[tuple[float, float]], radius_m: float) -> float | None:
     """When the vehicle was within ``radius_m`` of the last waypoint, having passed the others within 5 m in turn."""
     k = 0
     for t, lat, lon in track:
@@ -97,7 +97,7 @@ def arrival_s(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]],
     return None
 
 
-def leg_times(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]], radius_m: float) -> list[float]:
+def leg_times(track: Sequence[TrackPoint], waypoints: Sequence[tuple[float, float]], radius_m: float) -> list[float]:
     """How long each leg took: an intermediate waypoint is passed where the vehicle came nearest it (before it was half-way
     along the next leg), the last one when the vehicle was within ``radius_m`` of it."""
     times, start, begin = [], 0.0, 0
