@@ -7,7 +7,6 @@ exception inside a behaviour all end with the vehicle commanded into its safe mo
 from __future__ import annotations
 
 import logging
-import types
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -18,6 +17,7 @@ from executive import mission_tree, registry
 from executive.autopilot_link import AutopilotLink
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import Clock, TickClock
+from executive.crash_site import CrashSite
 from executive.instruments.backends import open_sampler
 from executive.instruments.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
@@ -69,17 +69,6 @@ def behaviour_path(node: py_trees.behaviour.Behaviour) -> str:
         names.append(current.name)
         current = current.parent
     return "/".join(reversed(names))
-
-
-def _crashed_behaviour(tb: types.TracebackType | None) -> py_trees.behaviour.Behaviour | None:
-    """The innermost behaviour whose method is on the traceback."""
-    found = None
-    while tb is not None:
-        candidate = tb.tb_frame.f_locals.get("self")
-        if isinstance(candidate, py_trees.behaviour.Behaviour):
-            found = candidate
-        tb = tb.tb_next
-    return found
 
 
 def explain_failure(root: py_trees.behaviour.Behaviour) -> str:
@@ -160,6 +149,7 @@ class Runtime:
         self._next_root = root
         self._built: tuple[Mission, py_trees.behaviour.Behaviour] | None = None  # a replacement's tree, built when it was checked
         self.tree: py_trees.trees.BehaviourTree | None = None
+        self._crash_site: CrashSite | None = None  # with the tree
         #: A mission replaced while PAUSED: its tree waits for the resume (nothing commanded meanwhile).
         self._tree_waits_for_resume = False
         #: The distance rule, judged before a mission's tree first ticks, whatever the tree (a user's may leave it out).
@@ -212,11 +202,15 @@ class Runtime:
             self.tree_clock.latch()
             tree.tick()
         except Exception as exc:
-            node = _crashed_behaviour(exc.__traceback__)
+            node = self._node_that_raised(exc)
             raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
         for observer in self.observers:
             observer.ticked(self.ticks, self.clock.now())
         return tree.root.status
+
+    def _node_that_raised(self, error: BaseException) -> py_trees.behaviour.Behaviour | None:
+        """The tree's node ``error`` came out of (None: from no node's own code)."""
+        return self._crash_site.node_of(error) if self._crash_site is not None else None
 
     def request_stop(self, reason: str) -> None:
         """Ask the loop to stop at the next tick (safe from a signal handler)."""
@@ -298,7 +292,7 @@ class Runtime:
             try:
                 self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
             except Exception as exc:  # a behaviour's terminate() that raises: the vehicle is made safe all the same
-                node = _crashed_behaviour(exc.__traceback__)
+                node = self._node_that_raised(exc)
                 log.error("stopping the tree: %s", BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc), exc_info=exc)
         for paced in self.paced:  # the base stops at once; the autopilot is told below
             paced.stop()
@@ -407,6 +401,7 @@ class Runtime:
             self.sampler = UnavailableSampler(self.clock, mission.sampling or SamplingOptions(), str(exc))
         self._run_writers = [self.sampler] if self.sampler is not None else []
         self.tree = py_trees.trees.BehaviourTree(root)
+        self._crash_site = CrashSite(root)  # names the node an exception comes out of, below
         self.reach.close()  # the tree waits for the distance rule
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
@@ -414,7 +409,7 @@ class Runtime:
         try:
             self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=self.mission_state, sampler=self.sampler)
         except Exception as exc:
-            node = _crashed_behaviour(exc.__traceback__)
+            node = self._node_that_raised(exc)
             named = f"{type(node).__module__}.{type(node).__qualname__} ({node.name!r})" if node else "(tree)"
             error = registry.PluginError(named, exc, doing="setup()")
             if error.where is None:

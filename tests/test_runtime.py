@@ -97,6 +97,23 @@ def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mis
     assert runtime.mission_state.status is MissionStatus.ABORTED
 
 
+def test_a_crash_is_told_of_the_node_ticked_even_when_another_node_s_method_raised_it(square_mission, link, clock):
+    """Named by the node whose update the error came out of (a traceback's innermost ``self`` was the other node)."""
+
+    class Asks(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            return elsewhere.update()
+
+    elsewhere = Explodes("Elsewhere")
+    runtime = make_runtime(square_mission, link, clock, root=py_trees.composites.Sequence("Mission", memory=True, children=[Asks("Ask")]))
+    autopilot_at(square_mission, link).beat()
+    assert runtime.link.connect(1.0)
+    runtime.mission_state.start()
+    with pytest.raises(BehaviourCrashed) as crash:
+        runtime.tick()
+    assert crash.value.path == "Mission/Ask"
+
+
 def test_a_stop_request_makes_the_vehicle_safe(square_mission, link, clock):
     runtime = make_runtime(square_mission, link, clock, root=py_trees.behaviours.Running("forever"))
     autopilot = ObedientAutopilot(link)
