@@ -12,7 +12,7 @@ from py_trees.common import ParallelPolicy, Status
 
 from executive import mission_tree
 from executive.admission import load_mission_text
-from executive.behaviours import EkfOk, FailsafeNote, SetMode, TakeSample, Timeout
+from executive.behaviours import EkfOk, FailsafeNote, Sample, SetMode, Timeout
 from executive.cli import main
 from executive.mission.errors import MissionError
 from executive.mission_schema import mission_json_schema
@@ -171,7 +171,7 @@ def test_the_schema_completes_a_composed_tree_and_refuses_what_the_loader_refuse
     assert "sample" in schema["$defs"]["TreeNode"]["anyOf"][0]["enum"]
     assert {"$ref": "#/$defs/TreeNode_ekf_ok"} in schema["$defs"]["TreeGuard"]["anyOf"]
     assert {"$ref": "#/$defs/TreeNode_go_to"} not in schema["$defs"]["TreeGuard"]["anyOf"]
-    assert TakeSample  # the sample action is in the catalogue the schema was made from
+    assert Sample  # the sample action is in the catalogue the schema was made from
 
 
 def test_the_readme_s_example_loads_and_its_errors_are_the_readme_s() -> None:

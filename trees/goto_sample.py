@@ -56,8 +56,8 @@ from executive.behaviours import (
     LinkAlive,
     ModeIs,
     NothingToSample,
+    Sample,
     SetMode,
-    TakeSample,
     WaitUntil,
     rc_auto_mode,
 )
@@ -131,7 +131,7 @@ def go_to_point(mission: Mission) -> py_trees.behaviour.Behaviour:
 def point(mission: Mission) -> py_trees.behaviour.Behaviour:
     """One point of the path: go there; at a sample point not sampled yet, hold in LOITER and sample."""
     hold, go = _sample_hold_mode(mission), go_to_point(mission)
-    sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), TakeSample()])
+    sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), Sample()])
     due = py_trees.composites.Selector("Sample if due", memory=False, children=[NothingToSample(), sample])
     return py_trees.composites.Sequence("Point", memory=True, children=[go, due])
 

@@ -1,8 +1,5 @@
 """Behaviours the trees are built from: guards (conditions), actions and flow control."""
 
-import warnings
-from typing import Any
-
 from executive.behaviours.auto_depth import DepthsOnAutopilot
 from executive.behaviours.auto_legs import AutopilotAtLeg, FollowAutoLeg, HorizonOnAutopilot
 from executive.behaviours.auto_route import DriveRouteInAuto, KeepRouteOnAutopilot
@@ -29,7 +26,7 @@ from executive.behaviours.position_guards import (
 from executive.behaviours.rc_guards import RcAutoMode, RcChannelHigh, RcFresh, RcNotLost, RcNotTakingOver, rc_auto_mode
 from executive.behaviours.rc_switches import ArmSwitch, ModeSwitch, RouteEditSwitch
 from executive.behaviours.readiness import ReadingsIn
-from executive.behaviours.sampling import NothingToSample, TakeSample
+from executive.behaviours.sampling import NothingToSample, Sample
 from executive.behaviours.vtol import GoToLocal, Land, TakeOff, VtolTransition
 
 __all__ = [
@@ -80,11 +77,11 @@ __all__ = [
     "RcNotTakingOver",
     "ReadingsIn",
     "RouteEditSwitch",
+    "Sample",
     "SetMode",
     "SpeedWithin",
     "Surface",
     "TakeOff",
-    "TakeSample",
     "TargetWithin",
     "Timeout",
     "UnlessPaused",
@@ -94,11 +91,3 @@ __all__ = [
     "inside_geofence",
     "rc_auto_mode",
 ]
-
-
-def __getattr__(name: str) -> Any:
-    """``Sample``, the sample-taking action's name before it was :class:`TakeSample` (``executive.state.Sample`` is a recorded sample)."""
-    if name == "Sample":
-        warnings.warn("executive.behaviours.Sample is now executive.behaviours.TakeSample", DeprecationWarning, stacklevel=2)
-        return TakeSample
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

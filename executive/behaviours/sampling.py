@@ -11,10 +11,11 @@ from executive.behaviours.guards import Guard
 from executive.instruments.sampler import Sampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, Sample, SamplerState, SamplerStatus
+from executive.state import GlobalPosition, SamplerState, SamplerStatus
+from executive.state import Sample as SampleRecord
 
 
-class TakeSample(TimedBehaviour):
+class Sample(TimedBehaviour):
     """Take the current leg's sample: start the sampler, SUCCESS when it is DONE (the sample recorded).
 
     Needs ``clock``, ``mission_state`` and ``sampler`` from ``tree.setup``. The sample is recorded
@@ -28,7 +29,6 @@ class TakeSample(TimedBehaviour):
     take-over, a cancel, a pause: the guards above stop it), it cancels the sampler; nothing is recorded.
     """
 
-    node_name = "sample"  # its name in mission files since before the class was TakeSample
     reads = ("/sampler/status", "/vehicle/position", "/mission/leg_count")
     needs = ("clock", "mission_state", "sampler")
     mission_state: MissionState
@@ -70,7 +70,7 @@ class TakeSample(TimedBehaviour):
             self._finished = True
             partial = status.state is SamplerState.PARTIAL
             lat, lon = (self._position.lat, self._position.lon) if self._position is not None else (math.nan, math.nan)
-            record = Sample(self.leg_index, lat, lon, status.reads, self.started, status.time, status.instrument, status.missing, partial)
+            record = SampleRecord(self.leg_index, lat, lon, status.reads, self.started, status.time, status.instrument, status.missing, partial)
             self.mission_state.record_sample(record)
             if partial:
                 self.feedback_message = f"{leg}: partial sample, {len(status.reads)} reads: {status.reason}"
@@ -117,7 +117,7 @@ class NothingToSample(Guard):
             self.note = "no active leg"
             return None
         leg: int = self.get("/mission/leg_index")
-        samples: tuple[Sample, ...] = self.get("/mission/samples")
+        samples: tuple[SampleRecord, ...] = self.get("/mission/samples")
         if not target.sample:
             self.note = f"leg {leg + 1} is not a sample point"
             return None

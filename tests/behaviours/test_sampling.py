@@ -9,11 +9,12 @@ import pytest
 from py_trees.common import Status
 
 from executive import blackboard
-from executive.behaviours import NothingToSample, RcNotTakingOver, TakeSample
+from executive.behaviours import NothingToSample, RcNotTakingOver, Sample
 from executive.instruments.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
-from executive.state import GlobalPosition, Sample, SampleRead, SamplerState, SamplerStatus
+from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
+from executive.state import Sample as SampleRecord
 from executive.testing import Harness, port_for
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
@@ -73,7 +74,7 @@ def status() -> SamplerStatus | None:
 
 
 def test_samples_and_records_the_sample(make, running, vehicle):
-    node = TakeSample()
+    node = Sample()
     h = make(node)
     statuses = [h.tick(0.5) for _ in range(6)]  # started at 100.5; reads at 101.5 and 102.5, done at 102.5, seen at 103.0
     assert statuses == [R, R, R, R, R, S]
@@ -87,7 +88,7 @@ def test_samples_and_records_the_sample(make, running, vehicle):
 
 
 def test_feedback_while_sampling(make, running):
-    node = TakeSample()
+    node = Sample()
     h = make(node)
     for _ in range(3):
         h.tick(0.5)
@@ -97,7 +98,7 @@ def test_feedback_while_sampling(make, running):
 
 
 def test_the_position_recorded_is_the_last_seen_while_sampling(make, running, vehicle):
-    h = make(TakeSample())
+    h = make(Sample())
     h.tick(0.5)
     vehicle.set(vehicle__position=at(47.5, 8.5))
     while h.tick(0.5) == R:
@@ -107,16 +108,16 @@ def test_the_position_recorded_is_the_last_seen_while_sampling(make, running, ve
 
 def test_no_position_at_all_records_nan(make, running, vehicle):
     vehicle.set(vehicle__position=None)
-    h = make(TakeSample())
+    h = make(Sample())
     while h.tick(0.5) == R:
         pass
     assert math.isnan(running.samples[0].lat) and math.isnan(running.samples[0].lon)
 
 
 def test_a_leg_already_sampled_is_skipped_without_sampling(make, running):
-    running.record_sample(Sample(0, 1.0, 2.0, (), 0.0, 1.0))
+    running.record_sample(SampleRecord(0, 1.0, 2.0, (), 0.0, 1.0))
     sampler = FakeSampler()
-    node = TakeSample()
+    node = Sample()
     h = make(node, sampler)
     assert h.tick(0.5) == S
     assert sampler.calls == [] and len(running.samples) == 1
@@ -125,7 +126,7 @@ def test_a_leg_already_sampled_is_skipped_without_sampling(make, running):
 
 def test_sampler_failure_fails_and_records_nothing(make, running):
     sampler = FakeSampler()
-    node = TakeSample()
+    node = Sample()
     h = make(node, sampler)
     assert h.tick(0.5) == R
     sampler.publish(1, SamplerState.FAILED, reason="pump jammed")
@@ -138,7 +139,7 @@ def test_only_its_own_ticket_counts(make, running):
     sampler = FakeSampler()
     sampler.tickets = 6  # an earlier request's DONE is still on the blackboard
     sampler.publish(6, SamplerState.DONE, (SampleRead("ph", 8.0, "pH", 1.0),))
-    h = make(TakeSample(), sampler)
+    h = make(Sample(), sampler)
     assert h.tick(0.5) == R
     sampler.publish(7, SamplerState.SAMPLING)
     assert h.tick(0.5) == R
@@ -148,7 +149,7 @@ def test_only_its_own_ticket_counts(make, running):
 
 
 def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, running, vehicle):
-    node = TakeSample()
+    node = Sample()
     guarded = py_trees.composites.Sequence("Guarded", memory=False, children=[RcNotTakingOver(6, 1700), node])
     h = make(guarded)
     assert [h.tick(0.5), h.tick(0.5), h.tick(0.5)] == [R, R, R]
@@ -167,14 +168,14 @@ def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, run
 
 def test_no_active_leg_fails(make, mission_state):
     sampler = FakeSampler()
-    node = TakeSample()
+    node = Sample()
     assert make(node, sampler).tick(0.5) == F
     assert node.feedback_message == "no active leg" and sampler.calls == []
 
 
 def test_a_timeout_cancels_the_sampler(make, running):
     sampler = FakeSampler()
-    node = TakeSample(timeout_s=2.0)
+    node = Sample(timeout_s=2.0)
     h = make(node, sampler)
     statuses = [h.tick(1.0) for _ in range(4)]  # started at 101: elapsed 0 ... 3 s
     assert statuses == [R, R, R, F]
@@ -183,7 +184,7 @@ def test_a_timeout_cancels_the_sampler(make, running):
 
 
 def test_setup_needs_a_sampler(clock, commander, mission_state):
-    tree = py_trees.trees.BehaviourTree(TakeSample())
+    tree = py_trees.trees.BehaviourTree(Sample())
     with pytest.raises(RuntimeError, match="needs sampler"):
         tree.setup(clock=clock, autopilot=port_for(commander), mission_state=mission_state)
 
@@ -203,18 +204,9 @@ def test_nothing_to_sample_here_unless_a_sample_point_is_not_sampled_yet(leg, re
     state = MissionState()
     state.upload(Mission.model_validate({"version": 1, "name": "s", "vehicle": "boat", "tree": "goto_sample", "waypoints": points}))
     state.start()
-    state.restore_samples(Sample(i, 1.0, 2.0, (), 0.0, 1.0) for i in recorded)
+    state.restore_samples(SampleRecord(i, 1.0, 2.0, (), 0.0, 1.0) for i in recorded)
     for _ in range(leg):
         state.advance_leg()
     node = NothingToSample()
     py_trees.trees.BehaviourTree(node).tick()
     assert (node.status, node.feedback_message) == (expected, feedback)
-
-
-def test_the_action_is_take_sample_named_sample_in_mission_files_and_its_old_name_still_works_with_a_warning() -> None:
-    import executive.behaviours
-    from executive.catalogue import node_name
-
-    assert node_name(TakeSample) == "sample"
-    with pytest.warns(DeprecationWarning, match="executive.behaviours.Sample is now executive.behaviours.TakeSample"):
-        assert executive.behaviours.Sample is TakeSample

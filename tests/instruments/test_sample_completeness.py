@@ -15,7 +15,7 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from executive.behaviours import NothingToSample, TakeSample
+from executive.behaviours import NothingToSample, Sample
 from executive.cli import main
 from executive.clock import ManualClock
 from executive.instruments.sampler import InstrumentSampler
@@ -23,7 +23,8 @@ from executive.journal import Journal
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission_text
 from executive.mission.model import SamplingOptions
-from executive.state import GlobalPosition, Sample, SampleRead, SamplerState, SamplerStatus
+from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
+from executive.state import Sample as SampleRecord
 from executive.testing import Harness, mission_errors
 
 SENSORS = ["temperature", "conductivity", "ph"]
@@ -125,7 +126,7 @@ waypoints:
 
 
 def test_the_sample_action_records_a_partial_sample_and_fails_its_point_not_done(sampling_mission, clock):
-    node = TakeSample()
+    node = Sample()
     instrument = QueuedInstrument(clock, sampling_mission.sampling)
     h = Harness.build(sampling_mission, root=node, clock=clock, sampler=instrument)
     state = h.mission_state
@@ -157,8 +158,8 @@ def test_the_journal_and_the_report_say_a_sample_is_partial_and_what_it_lacked(s
     journal.begin_run(sampling_mission)
     state.start()
     reads = (SampleRead("temperature", 17.5, "degC", 101.0), SampleRead("conductivity", 44.0, "mS/cm", 101.0))
-    state.record_sample(Sample(0, 47.0, 8.0, reads, 100.0, 103.0, "queued", ("ph",), True))
-    state.record_sample(Sample(1, 47.0, 8.001, (*reads, SampleRead("ph", 8.1, "pH", 101.0)), 110.0, 113.0, "queued"))
+    state.record_sample(SampleRecord(0, 47.0, 8.0, reads, 100.0, 103.0, "queued", ("ph",), True))
+    state.record_sample(SampleRecord(1, 47.0, 8.001, (*reads, SampleRead("ph", 8.1, "pH", 101.0)), 110.0, 113.0, "queued"))
     resume = journal.resume_point(sampling_mission)
     journal.close()
     assert resume is not None

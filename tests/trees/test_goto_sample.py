@@ -21,7 +21,8 @@ from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.runtime import Runtime, explain_failure
-from executive.state import EkfFlags, EkfStatus, Sample, SamplerState
+from executive.state import EkfFlags, EkfStatus, SamplerState
+from executive.state import Sample as SampleRecord
 from executive.testing import EKF_READY, ScriptedAutopilot, Vehicle, ack, port_for
 from executive.vehicles import PROFILES
 
@@ -437,7 +438,7 @@ def test_a_pause_during_a_sample_cancels_it_and_the_resumed_go_to_takes_it_again
 
 
 def test_a_sample_point_already_sampled_is_not_sampled_again(run):
-    run.state.restore_samples([Sample(1, *S1, (), 0.0, 1.0)])  # a restarted executive got it back from its journal
+    run.state.restore_samples([SampleRecord(1, *S1, (), 0.0, 1.0)])  # a restarted executive got it back from its journal
     assert run.tick(400)[-1] == S
     assert run.boat.commands == [ARM, mode("LOITER"), mode("GUIDED"), mode("LOITER")]  # no LOITER at s1: only at s2
     assert run.sampler.status.ticket == 1
