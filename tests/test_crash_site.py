@@ -6,7 +6,7 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from executive.crash_site import CrashSite
+from executive.tree.crash_site import CrashSite
 
 
 class Explodes(py_trees.behaviour.Behaviour):

@@ -12,8 +12,8 @@ from executive.autopilot.px4 import Px4Port
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
-from executive.mavlink_dialect import mavlink
-from executive.vehicles import VehicleProfile
+from executive.world.dialect import mavlink
+from executive.world.vehicles import VehicleProfile
 
 log = logging.getLogger(__name__)
 

@@ -40,7 +40,7 @@ from typing import Any, ClassVar, Self
 
 import can
 
-from executive.state import SwitchPosition
+from executive.world.state import SwitchPosition
 
 log = logging.getLogger(__name__)
 
