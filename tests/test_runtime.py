@@ -12,7 +12,7 @@ from py_trees.common import Status
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.runtime.assembly import build_runtime
-from executive.runtime.loop import BehaviourCrashed, Runtime, explain_failure
+from executive.runtime.loop import BehaviourCrashed, RunOutcome, Runtime, explain_failure
 from executive.testing import ObedientAutopilot
 from executive.world.dialect import mavlink
 
@@ -206,3 +206,11 @@ def test_a_tree_that_ends_with_a_sample_point_unsampled_does_not_complete(link, 
     outcome = runtime.run()
     assert outcome.status is MissionStatus.ABORTED
     assert outcome.reason.startswith("the tree ended, but no sample was recorded at leg ")
+
+
+def test_a_run_s_outcome_is_a_run_outcome_and_its_old_name_still_imports_with_a_warning():
+    """Two things were called Outcome: how a run ended (RunOutcome) and what an acked command asks (executive.world.state.Outcome)."""
+    from executive.runtime import loop
+
+    with pytest.warns(DeprecationWarning, match="executive.runtime.loop.Outcome is now RunOutcome"):
+        assert loop.Outcome is RunOutcome
