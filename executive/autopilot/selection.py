@@ -72,7 +72,7 @@ class Autopilot(_Port):
         """Every tick, before the commands are sent: the back end's own traffic (PX4's offboard setpoint stream)."""
         self.backend.service()
 
-    if not TYPE_CHECKING:  # a type checker sees the port's own signatures, from the Protocol this class stands for
+    if not TYPE_CHECKING:  # a type checker sees the back end's own signatures (MavlinkPort's) instead
 
         def __getattr__(self, name: str) -> Any:
             """Every intent and capability of the port, the back end's: one forwarding, whatever the port grows."""
