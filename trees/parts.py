@@ -194,14 +194,17 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
     return [*guards, *extra]
 
 
-def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for guards") -> Failsafe:
-    """The mission's failsafe for ``guards``; a guard of no failsafe condition (a limit) holds and resumes within ``limits.recovery_timeout_s``."""
+def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for guards", work: py_trees.behaviour.Behaviour | None = None) -> Failsafe:
+    """The mission's failsafe for ``guards``, standing behind ``work`` (None: a guard alone).
+
+    A guard of no failsafe condition (a limit) holds and resumes within ``limits.recovery_timeout_s``.
+    """
     fallback = FailsafePolicy("limit", "hold", "resume", mission.limits.recovery_timeout_s)
     returns = ReturnPlanner(mission)
     return Failsafe(
         guards, failsafe_policy(mission), mission.vehicle, fallback, name=name,
         returns=returns if returns.needed else None, reach_m=mission.limits.acceptance_radius_m,
-        leg_timeout_s=mission.limits.leg_timeout_s,
+        leg_timeout_s=mission.limits.leg_timeout_s, work=work,
     )  # fmt: skip
 
 
@@ -215,7 +218,7 @@ def failsafe_guarded(
     so the work resumes where it was when the guard recovers.
     """
     guards = failsafe_guards(mission, guards)
-    react = failsafe(guards, mission)
+    react = failsafe(guards, mission, work=work)
     gate = [NoReturnUnderWay(react)] if react.returns is not None else []  # a return that ends the mission is not resumed from
     route = py_trees.composites.Sequence(name, memory=False, children=[*gate, *guards, work])
     return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, react])
