@@ -65,7 +65,7 @@ class HorizonOnAutopilot(MissionTransferFollower):
         n_held = len(held) if held is not None else 0
         prefix = held is not None and n_held <= most and self.autopilot.route_differs(route[:n_held], held) is None
         if prefix and not busy and n_held < most and n_held - least <= 1 and self._may_start():
-            self._started(self.autopilot.extend_route(route[n_held:most]))
+            self._started(self._extend(route, n_held, most))
             busy = True
         if prefix and n_held >= least:
             extra = f"; appending up to waypoint {most}" if busy else ""
@@ -79,6 +79,14 @@ class HorizonOnAutopilot(MissionTransferFollower):
         failed = f" (the last try failed: {self.failure})" if self.failure else ""
         self.feedback_message = f"putting waypoints 1-{most} of {len(route)} on the autopilot: {why}{failed}"
         return Status.RUNNING
+
+
+    def _extend(self, route: Sequence[Waypoint], held: int, most: int) -> int:
+        """Waypoints ``held``..``most`` after those held: appended, or (an autopilot without partial writes: PX4) the window uploaded again."""
+        if self.autopilot.capabilities.partial_mission_writes:
+            return self.autopilot.extend_route(route[held:most])
+        home: HomePosition | None = self.get("/vehicle/home")
+        return self.autopilot.upload_route(route[:most], home)
 
 
 class AutopilotAtLeg(MissionTransferFollower):

@@ -62,17 +62,24 @@ ARDUPILOT_ONLY_TREES: dict[str, str] = {
 
 
 #: drive: auto: the trees that can be driven by the autopilot's own AUTO, and the vehicle kinds (ArduRover: rover, boat;
-#: ArduSub: sub, its waypoints at their depths).
+#: ArduSub: sub, its waypoints at their depths; PX4: a vtol's waypoints in AUTO.MISSION, flown as a multicopter).
 AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {
-    "waypoints": frozenset({"rover", "boat"}),
+    "waypoints": frozenset({"rover", "boat", "vtol"}),
     "goto_sample": frozenset({"rover", "boat"}),
     "auv_survey": frozenset({"sub"}),
 }
-AUTO_DRIVE_FIRMWARE = {"waypoints": "ArduRover", "goto_sample": "ArduRover", "auv_survey": "ArduSub"}
+AUTO_DRIVE_FIRMWARE = {"waypoints": "ArduRover; a vtol PX4", "goto_sample": "ArduRover", "auv_survey": "ArduSub"}
 #: drive: auto refused, per tree, until it can be flown so: why.
 AUTO_DRIVE_REFUSED: dict[str, str] = {
     "vtol_transit": "its take-off, transitions and landing are the executive's",
     "ugv_rc_route": "its operator puts the route in AUTO already",
+}
+
+
+#: drive: auto refused, per autopilot and whether the vehicle is a vtol, until it can be flown so: why.
+AUTO_DRIVE_AUTOPILOT_REFUSED: dict[tuple[str, bool], str] = {
+    ("px4", False): "drive: auto on PX4 flies a vtol's waypoints so far (PX4's SIH has no rover to prove its AUTO.MISSION on)",
+    ("ardupilot", True): "drive: auto on a vtol needs PX4 so far (ArduPlane's QuadPlane AUTO is not done yet)",
 }
 
 
@@ -120,8 +127,8 @@ def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
     name = tree_name(mission)
     if autopilot != "ardupilot" and name in ARDUPILOT_ONLY_TREES:
         errors.append(f"tree {name} needs ArduPilot: {ARDUPILOT_ONLY_TREES[name]}")
-    if autopilot != "ardupilot" and mission.drive == "auto":
-        errors.append("drive: auto needs ArduPilot so far (its partial mission writes hold the horizon; PX4's AUTO.MISSION is not done yet)")
+    if mission.drive == "auto" and (why := AUTO_DRIVE_AUTOPILOT_REFUSED.get((autopilot, mission.vehicle == "vtol"))):
+        errors.append(why)
     return errors
 
 

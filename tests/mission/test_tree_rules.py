@@ -63,7 +63,10 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
         ("vehicle: boat\ntree: waypoints\ndrive: auto\nlimits: {auto_horizon_legs: 3}\n" + WP, []),
         (
             "vehicle: sub\ntree: waypoints\ndrive: auto\n" + WP,
-            ["m.yaml:5:8: drive: tree waypoints is driven in AUTO on a boat or rover (ArduRover) so far, not a sub; use drive: guided"],
+            [
+                "m.yaml:5:8: drive: tree waypoints is driven in AUTO on a boat or rover or vtol (ArduRover; a vtol PX4) so far, "
+                "not a sub; use drive: guided"
+            ],
         ),
         ("vehicle: boat\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
         ("vehicle: rover\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
@@ -87,10 +90,12 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
         ),
         (
             "vehicle: rover\nautopilot: px4\ndrive: auto\n" + WP,
-            [
-                "m.yaml:4:12: autopilot: drive: auto needs ArduPilot so far "
-                "(its partial mission writes hold the horizon; PX4's AUTO.MISSION is not done yet)"
-            ],
+            ["m.yaml:4:12: autopilot: drive: auto on PX4 flies a vtol's waypoints so far (PX4's SIH has no rover to prove its AUTO.MISSION on)"],
+        ),
+        ("vehicle: vtol\nautopilot: px4\ndrive: auto\nlimits: {acceptance_radius_m: 70}\n" + WP, []),
+        (
+            "vehicle: vtol\nautopilot: ardupilot\ndrive: auto\nlimits: {acceptance_radius_m: 70}\n" + WP,
+            ["m.yaml:4:12: autopilot: drive: auto on a vtol needs PX4 so far (ArduPlane's QuadPlane AUTO is not done yet)"],
         ),
     ],
 )

@@ -45,6 +45,12 @@ class Px4MissionStore(MissionStore):
         frame = _M.MAV_FRAME_GLOBAL if msg.frame in (_M.MAV_FRAME_GLOBAL, _M.MAV_FRAME_GLOBAL_INT) else _M.MAV_FRAME_GLOBAL_RELATIVE_ALT
         return StoredCommand(msg.command, (msg.param1, msg.param2, msg.param3, msg.param4), msg.x, msg.y, round(msg.z * 100), frame)
 
+    def _received(self) -> None:
+        """An upload flagging no item current keeps the navigator's item, constrained to the new count (mission_base.cpp
+        updateMavlinkMission: current_seq < 0), in AUTO.MISSION too: it flies on to the same item (real SIH, tests/data/px4)."""
+        if self.current_seq is not None and self.current_seq >= self.count:
+            self.current_seq = max(self.count - 1, 0)
+
     def _request(self) -> None:
         self._last_request_at = self._owner.clock.now()
         self._emit(self._mav.mission_request_int_encode(*self._uploader, self._request_i, self.MISSION_TYPE))

@@ -24,6 +24,9 @@ class Px4VtolSim(Px4Sim):
 
     MAV_TYPE = MAV_TYPE_VTOL_FIXEDROTOR
     FLIES = True
+    #: ROMFS init.d/rc.vtol_defaults: a mission must end in a landing (2) (the real SIH standard_vtol reads 2).
+    PARAMS = {**Px4Sim.PARAMS, "MIS_TKO_LAND_REQ": 2.0}
+    INT_PARAMS = Px4Sim.INT_PARAMS | {"MIS_TKO_LAND_REQ"}
 
     vehicle: QuadPlaneModel
 
