@@ -1,0 +1,90 @@
+"""drive: auto on the waypoints tree of a PX4 vtol: AUTO.MISSION flies (a multicopter), the executive supervises, PX4 holds only the horizon.
+
+Lock-step against the simulated PX4 standard VTOL. PX4 takes no partial writes: the horizon grows by the window uploaded again,
+and PX4 keeps the item it flies to (tests/sim/px4/test_px4.py); at the end of what it holds it hovers in AUTO.LOITER.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.model import Mission
+from executive.testing import Lockstep
+from tests_support import LINE_HOME
+
+#: 4 waypoints 100 m apart due north; PX4 flies them at MPC_XY_CRUISE (5 m/s) as a multicopter, 30 m up.
+STEP_DEG = 0.000899
+
+
+def vtol_mission(name: str, simulator: dict[str, Any] | None = None) -> Mission:
+    fields: dict[str, Any] = {
+        "version": 1,
+        "name": name,
+        "vehicle": "vtol",
+        "autopilot": "px4",
+        "tree": "waypoints",
+        "drive": "auto",
+        "auto_arm": True,
+        "home": {"lat": LINE_HOME[0], "lon": LINE_HOME[1], "heading_deg": 0.0},
+        "limits": {"acceptance_radius_m": 70, "leg_timeout_s": 120, "auto_horizon_legs": 1},
+        "simulator": {"ekf_ready_after_s": 2.0, "params": {"MIS_TKO_LAND_REQ": 0.0}} | (simulator or {}),
+        "waypoints": [{"lat": LINE_HOME[0] + STEP_DEG * n, "lon": LINE_HOME[1], "alt_m": 30.0} for n in range(1, 5)],
+    }
+    return Mission.model_validate(fields)
+
+
+def test_auto_mission_flies_the_route_holding_only_the_horizon(lockstep) -> None:
+    mission = vtol_mission("px4 auto")
+    sim = lockstep(mission, autopilot="px4")
+    state = sim.runtime.mission_state
+    most_ahead = [0]
+    uploads: list[int] = []
+
+    def watch(s: Lockstep) -> None:
+        store = s.autopilot.mission
+        if store.running and store.current_seq is not None:
+            most_ahead[0] = max(most_ahead[0], store.count - 1 - store.current_seq)
+        if not uploads or uploads[-1] != store.count:
+            uploads.append(store.count)
+
+    sim.observers.append(watch)
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert most_ahead[0] <= 1  # never more than the horizon beyond the item flown to
+    assert uploads == sorted(uploads) and uploads[-1] == 4  # the window uploaded again as legs are reached, never cut
+    last = mission.waypoints[-1]
+    assert sim.autopilot.vehicle.distance_to(last.lat, last.lon) <= mission.limits.acceptance_radius_m
+    assert state.leg_index == len(mission.waypoints) and sim.autopilot.mode == "AUTO.LOITER"  # the vtol's safe mode at the end
+
+
+def test_a_dead_executive_leaves_the_vtol_hovering_at_the_end_of_the_horizon(lockstep) -> None:
+    """The executive stops ticking on leg 2: PX4 flies what it holds, then hovers in AUTO.LOITER (Commander.cpp), never flying on."""
+    mission = vtol_mission("px4 auto killed")
+    sim = lockstep(mission, autopilot="px4")
+    state = sim.runtime.mission_state
+    second = mission.waypoints[1]
+    assert sim.run(until=lambda: state.leg_index == 1 and sim.autopilot.vehicle.distance_to(second.lat, second.lon) < 60.0) is None
+    held = sim.autopilot.mission.count
+    assert held == 3  # legs 1 and 2, and one beyond
+    last_held, beyond = mission.waypoints[held - 1], mission.waypoints[held]
+    nearest_beyond = [float("inf")]
+
+    def watch(s: Lockstep) -> None:
+        nearest_beyond[0] = min(nearest_beyond[0], s.autopilot.vehicle.distance_to(beyond.lat, beyond.lon))
+
+    sim.observers.append(watch)
+    for _ in range(900):  # 90 s of the vehicle's time, nobody ticking
+        sim.step(0.1)
+    vehicle = sim.autopilot.vehicle
+    assert sim.autopilot.mode == "AUTO.LOITER" and vehicle.speed_m_s < 0.2
+    assert vehicle.distance_to(last_held.lat, last_held.lon) < 12.0 and nearest_beyond[0] > 80.0
+
+
+def test_the_vtol_default_mis_tko_land_req_is_refused_at_preflight(lockstep) -> None:
+    """MIS_TKO_LAND_REQ 2 (ROMFS rc.vtol_defaults) would reject every horizon: refused before anything is sent or armed."""
+    sim = lockstep(vtol_mission("px4 auto refused", simulator={"params": {"MIS_TKO_LAND_REQ": 2.0}}), autopilot="px4")
+    outcome = sim.run_to_end()
+    assert outcome.status is not MissionStatus.COMPLETED
+    assert "MIS_TKO_LAND_REQ is 2: set it to 0 or 4" in outcome.reason
+    assert sim.autopilot.mission.count == 0 and not sim.autopilot.armed
