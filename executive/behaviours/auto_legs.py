@@ -80,7 +80,6 @@ class HorizonOnAutopilot(MissionTransferFollower):
         self.feedback_message = f"putting waypoints 1-{most} of {len(route)} on the autopilot: {why}{failed}"
         return Status.RUNNING
 
-
     def _extend(self, route: Sequence[Waypoint], held: int, most: int) -> int:
         """Waypoints ``held``..``most`` after those held: appended, or (an autopilot without partial writes: PX4) the window uploaded again."""
         if self.autopilot.capabilities.partial_mission_writes:
