@@ -32,6 +32,7 @@ class Px4MissionStore(MissionStore):
 
     HOME_SLOT: ClassVar[bool] = False
     AUTO_MODE: ClassVar[str] = "AUTO.MISSION"
+    _no_current = False  # an upload ended and the navigator has not answered with its item yet
 
     def _to_stored(self, msg: MAVLinkMessage) -> StoredCommand | int:
         if msg.command not in PX4_MISSION_COMMANDS:
@@ -47,9 +48,18 @@ class Px4MissionStore(MissionStore):
 
     def _received(self) -> None:
         """An upload flagging no item current keeps the navigator's item, constrained to the new count (mission_base.cpp
-        updateMavlinkMission: current_seq < 0), in AUTO.MISSION too: it flies on to the same item (real SIH, tests/data/px4)."""
+        updateMavlinkMission: current_seq < 0), in AUTO.MISSION too: it flies on to the same item (real SIH, tests/data/px4).
+        Until the navigator answers, MISSION_CURRENT says item 65535: the upload's -1 as a uint16 (mavlink_mission.cpp
+        update_active_mission, send_mission_current)."""
         if self.current_seq is not None and self.current_seq >= self.count:
             self.current_seq = max(self.count - 1, 0)
+        self._no_current = True
+
+    def current_message(self, seq: int | None = None) -> MAVLinkMessage:
+        if seq is None and self._no_current:
+            self._no_current = False
+            return super().current_message(0xFFFF)
+        return super().current_message(seq)
 
     def _request(self) -> None:
         self._last_request_at = self._owner.clock.now()
