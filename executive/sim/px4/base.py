@@ -116,7 +116,6 @@ class Px4Sim(Px4Streams):
         self._landed_at: float | None = None
         self._moved_at = -math.inf  # the last time the land detector saw the vehicle move (or in the air)
         self._mission_item: tuple[int | None, object] | None = None
-        self._mission_climb: float | None = None  # the altitude of the climb before a mission's first item (started on the ground)
         # Commander::dataLinkCheck: HEARTBEAT type -> (last seen, lost), for a ground station and a mission computer
         self._links: dict[int, tuple[float, bool]] = {}
         modes = MappingProxyType(dict(PX4_MODE_NUMBERS))
@@ -175,7 +174,7 @@ class Px4Sim(Px4Streams):
             return self.offboard_signal
         if mode == "AUTO.MISSION":
             checked = self.mission.uploaded_at is None or self.clock.now() - self.mission.uploaded_at >= MISSION_CHECK_S
-            return self.mission.present and checked and self._mission_feasible()
+            return self.mission.present and checked and self.mission.feasible(int(self.params.get("MIS_TKO_LAND_REQ", 0)), self._landed)
         return mode != "AUTO.RTL" or self.home is not None
 
     @property
@@ -195,16 +194,6 @@ class Px4Sim(Px4Streams):
         self._user_intends(mode)
         self._switch(mode)
         return True
-
-    def _mission_feasible(self) -> bool:
-        """MIS_TKO_LAND_REQ's rule (FeasibilityChecker::checkTakeoffLandAvailable, navigator/MissionFeasibility/FeasibilityChecker.cpp):
-        a mission without the take-off or landing it asks for is invalid, and AUTO.MISSION with it is refused (real SIH
-        standard_vtol, its default 2: a 2-waypoint mission, TEMPORARILY_REJECTED, tests/data/px4/README.md)."""
-        commands = {c.command for c in self.mission.commands}
-        takeoff = bool(commands & {_M.MAV_CMD_NAV_TAKEOFF, _M.MAV_CMD_NAV_VTOL_TAKEOFF})
-        landing = bool(commands & {_M.MAV_CMD_NAV_LAND, _M.MAV_CMD_NAV_VTOL_LAND})
-        rule = {1: takeoff, 2: landing, 3: takeoff and landing, 4: takeoff == landing, 5: takeoff == landing if self._landed else landing}
-        return rule.get(int(self.params.get("MIS_TKO_LAND_REQ", 0)), True)
 
     def _user_intends(self, mode: str) -> None:
         """UserModeIntention::change: the user's mode, kept for after disarming unless it prevents arming."""
@@ -243,7 +232,7 @@ class Px4Sim(Px4Streams):
             else:
                 self._hold_here()
         elif mode == "AUTO.MISSION":
-            self._mission_item = self._mission_climb = None
+            self._mission_item = None
             self.mission.start_or_resume()
         return True
 
@@ -298,6 +287,10 @@ class Px4Sim(Px4Streams):
     @abstractmethod
     def _reached(self, lat: float, lon: float, alt: float) -> bool:
         """A mission waypoint is reached."""
+
+    def _climbing_first(self, alt: float) -> bool:
+        """A mission's item started on the ground: True (the item not started yet) while the airframe climbs to ``alt`` first."""
+        return False
 
     def _update_airframe(self) -> None:
         """What the airframe does on its own each step (transitions)."""
@@ -391,9 +384,7 @@ class Px4Sim(Px4Streams):
             elif v.alt_m >= alt - 0.5:
                 self.mission.advance()
         elif cmd == _M.MAV_CMD_NAV_WAYPOINT or cmd == _M.MAV_CMD_NAV_LOITER_UNLIM:
-            if not started and self._climbing_first(alt):
-                self._mission_item = None  # the item starts once the climb is done
-            elif not started:
+            if not started and not self._climbing_first(alt):
                 self._fly_to(lat, lon, alt)
             elif cmd == _M.MAV_CMD_NAV_WAYPOINT and self._reached(lat, lon, alt):
                 self.mission.advance()
@@ -411,19 +402,6 @@ class Px4Sim(Px4Streams):
                 self.mission.advance()
         else:  # not simulated: passed over
             self.mission.advance()
-
-    def _climbing_first(self, alt: float) -> bool:
-        """Mission::handleTakeoff (navigator/mission.cpp): a position item started on the ground is preceded by a take-off
-        straight up to its altitude ("Climb to N meters above home"), then flown to; True while that climb lasts."""
-        v = self.vehicle
-        if self._mission_climb is None and self.FLIES and self._landed:
-            self._mission_climb = alt
-            self._goal = (v.lat, v.lon, alt)
-            self._steer()
-        if self._mission_climb is not None and v.alt_m < self._mission_climb - 0.5:
-            return True
-        self._mission_climb = None
-        return False
 
     # -- time-driven behaviour -------------------------------------------------------------------
 

@@ -55,6 +55,16 @@ class Px4MissionStore(MissionStore):
             self.current_seq = max(self.count - 1, 0)
         self._no_current = True
 
+    def feasible(self, required: int, landed: bool) -> bool:
+        """MIS_TKO_LAND_REQ ``required``'s rule (navigator/MissionFeasibility/FeasibilityChecker.cpp checkTakeoffLandAvailable): a
+        mission without the take-off or landing it asks for is invalid, and AUTO.MISSION refused (real SIH standard_vtol, its
+        default 2: two waypoints TEMPORARILY_REJECTED, tests/data/px4/README.md)."""
+        commands = {c.command for c in self.commands}
+        takeoff = bool(commands & {_M.MAV_CMD_NAV_TAKEOFF, _M.MAV_CMD_NAV_VTOL_TAKEOFF})
+        landing = bool(commands & {_M.MAV_CMD_NAV_LAND, _M.MAV_CMD_NAV_VTOL_LAND})
+        rule = {1: takeoff, 2: landing, 3: takeoff and landing, 4: takeoff == landing, 5: takeoff == landing if landed else landing}
+        return rule.get(required, True)
+
     def current_message(self, seq: int | None = None) -> MAVLinkMessage:
         if seq is None and self._no_current:
             self._no_current = False
