@@ -11,7 +11,7 @@ from typing import Any
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.testing import Lockstep
-from tests_support import LINE_HOME
+from tests_support import LINE_HOME, set_currents
 
 #: 4 waypoints 100 m apart due north; PX4 flies them at MPC_XY_CRUISE (5 m/s) as a multicopter, 30 m up.
 STEP_DEG = 0.000899
@@ -88,3 +88,32 @@ def test_the_vtol_default_mis_tko_land_req_is_refused_at_preflight(lockstep) -> 
     assert outcome.status is not MissionStatus.COMPLETED
     assert "MIS_TKO_LAND_REQ is 2: set it to 0 or 4" in outcome.reason
     assert sim.autopilot.mission.count == 0 and not sim.autopilot.armed
+
+
+def test_pause_hovers_in_auto_loiter_and_resume_sets_the_leg_then_auto_mission(lockstep) -> None:
+    """ctl pause: the vtol's safe mode (AUTO.LOITER, a hover); ctl resume: MISSION_SET_CURRENT to the leg's item (PX4 takes it,
+    tests/data/px4/auto-mission-window.tlog), then AUTO.MISSION: the route goes on at leg 3, not at the first waypoint."""
+    mission = vtol_mission("px4 auto pause")
+    sim = lockstep(mission, autopilot="px4")
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    sets = set_currents(sim)
+    assert sim.run(until=lambda: state.leg_index == 2) is None
+    assert sim.runtime.operator.request("pause", source="ctl").ok
+    sim.run(until=lambda: ap.mode == "AUTO.LOITER" and ap.vehicle.speed_m_s < 0.2)
+    assert state.status is MissionStatus.PAUSED
+    ap.mission.set_current(0)  # a ground station moved the mission while paused: resume puts it back
+    assert sim.runtime.operator.request("resume", source="ctl").ok
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert sets == [0, 2]  # the first leg's item at the start, the third leg's at the resume
+
+
+def test_a_person_changing_the_mode_pauses_the_mission(lockstep) -> None:
+    mission = vtol_mission("px4 auto person")
+    sim = lockstep(mission, autopilot="px4")
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    assert sim.run(until=lambda: state.leg_index == 1 and ap.mode == "AUTO.MISSION") is None
+    assert ap.request_mode("AUTO.RTL")  # a ground station's Return
+    sim.run(until=lambda: state.status is MissionStatus.PAUSED)
+    sim.step(5.0)
+    assert ap.mode == "AUTO.RTL" and state.status is MissionStatus.PAUSED  # a person wins: nothing undone
