@@ -17,6 +17,7 @@ from executive.state import MISSION_STATE_COMPLETE
 AUTO = PX4 / "vtol-waypoints-auto.tlog"
 FIRST_RUN = PX4 / "vtol-waypoints-auto-first-run.tlog"  # before the reader's fix: legs 2 and 4 counted done on an upload
 KILLED = PX4 / "vtol-waypoints-auto-killed.tlog"
+PAUSED = PX4 / "vtol-waypoints-auto-paused.tlog"
 REFUSED = PX4 / "vtol-waypoints-auto-refused.tlog"
 WINDOW = PX4 / "auto-mission-window.tlog"
 LANDING_REQUIRED = PX4 / "auto-mission-landing-required.tlog"
@@ -37,7 +38,7 @@ def ours(path: Path, kind: str) -> list[tuple[float, object]]:
 
 
 def test_the_recordings_are_small() -> None:
-    assert all(path.stat().st_size < 40_000 for path in (AUTO, FIRST_RUN, KILLED, REFUSED, WINDOW, LANDING_REQUIRED))
+    assert all(path.stat().st_size < 40_000 for path in (AUTO, FIRST_RUN, KILLED, PAUSED, REFUSED, WINDOW, LANDING_REQUIRED))
 
 
 def test_each_item_is_followed_in_order_and_an_uploads_item_65535_is_not_read_as_past_the_leg() -> None:
@@ -148,3 +149,14 @@ def test_drive_auto_is_as_fast_as_px4s_own_auto_mission_over_the_route() -> None
     guided = route_time(PX4 / "vtol-waypoints-guided.tlog", (6, 0))
     assert supervised / own <= 1.02, (supervised, own)
     assert guided < supervised, (guided, supervised)
+
+
+def test_paused_px4_hovers_and_resumed_goes_on_with_the_leg() -> None:
+    """ctl pause on leg 3: AUTO.LOITER (a hover, 35 s); ctl resume: MISSION_SET_CURRENT 2, AUTO.MISSION 1 s later, item 2 next."""
+    replay = Replay(vehicle="vtol").play(PAUSED)
+    assert replay.values("/vehicle/mode")[-4:] == ["AUTO.MISSION", "AUTO.LOITER", "AUTO.MISSION", "AUTO.LOITER"]
+    assert set(replay.values("/vehicle/mode_set_by")) <= {None, "us", "autopilot"}  # no mode change a person's
+    resumed = ours(PAUSED, "MISSION_SET_CURRENT")[-1]
+    assert resumed[1].seq == 2
+    after = [msg.seq for t, msg in px4_side(PAUSED, "MISSION_ITEM_REACHED") if t > resumed[0]]
+    assert after[0] == 2
