@@ -21,6 +21,7 @@ from executive.mission.model import Mission, Waypoint
 from executive.pacing import SpeedGovernor
 from executive.runtime import Outcome, Runtime
 from executive.sim import SimServer
+from executive.sim.faults import FaultInjector
 from executive.testing import Lockstep
 
 #: Home of the line missions: ArduPilot SITL's default location.
@@ -202,3 +203,17 @@ def set_currents(sim: Lockstep) -> list[int]:
 
     sim.link.send = spy  # type: ignore[method-assign]
     return sent
+
+
+class LinkCut(FaultInjector):
+    """The link silent both ways while ``cut`` (the executive alive, its messages lost): a cable pulled and put back."""
+
+    cut = False
+
+    @property
+    def receiving(self) -> bool:
+        return not self.cut and super().receiving
+
+    @property
+    def sending(self) -> bool:
+        return not self.cut and super().sending

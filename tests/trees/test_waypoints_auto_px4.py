@@ -11,7 +11,7 @@ from typing import Any
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.testing import Lockstep
-from tests_support import LINE_HOME, set_currents
+from tests_support import LINE_HOME, LinkCut, set_currents
 
 #: 4 waypoints 100 m apart due north; PX4 flies them at MPC_XY_CRUISE (5 m/s) as a multicopter, 30 m up.
 STEP_DEG = 0.000899
@@ -117,3 +117,25 @@ def test_a_person_changing_the_mode_pauses_the_mission(lockstep) -> None:
     sim.run(until=lambda: state.status is MissionStatus.PAUSED)
     sim.step(5.0)
     assert ap.mode == "AUTO.RTL" and state.status is MissionStatus.PAUSED  # a person wins: nothing undone
+
+
+def test_a_cut_link_leaves_the_vtol_hovering_at_the_end_of_the_horizon_and_the_route_goes_on_when_it_is_back(lockstep) -> None:
+    """The link silent 60 s from leg 2 (horizon 1: waypoints 1-3 held): PX4 flies to waypoint 3 and hovers in AUTO.LOITER; back,
+    the legs it flew unheard are caught up from MISSION_CURRENT (COMPLETE at item 2), the route goes on at waypoint 4."""
+    mission = vtol_mission("px4 auto link cut")
+    sim = lockstep(mission, autopilot="px4", injector=lambda faults, clock: LinkCut(faults, clock))
+    cut = sim.faults
+    assert isinstance(cut, LinkCut)
+    state, ap = sim.runtime.mission_state, sim.autopilot
+    second, third = mission.waypoints[1], mission.waypoints[2]
+    assert sim.run(until=lambda: state.leg_index == 1 and ap.vehicle.distance_to(second.lat, second.lon) < 60.0) is None
+    cut.cut = True
+    t_cut = sim.clock.now()
+    assert sim.run(until=lambda: sim.clock.now() > t_cut + 60.0) is None
+    assert ap.mode == "AUTO.LOITER" and ap.vehicle.speed_m_s < 0.2 and ap.vehicle.distance_to(third.lat, third.lon) < 12.0
+    back_to_second: list[float] = []
+    sim.observers.append(lambda s: back_to_second.append(s.autopilot.vehicle.distance_to(second.lat, second.lon)))
+    cut.cut = False
+    outcome = sim.run_to_end()
+    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
+    assert min(back_to_second) > 80.0  # not sent back along the horizon it flew unheard
