@@ -79,7 +79,9 @@ AUTO_DRIVE_REFUSED: dict[str, str] = {
 #: drive: auto refused, per autopilot and whether the vehicle is a vtol, until it can be flown so: why.
 AUTO_DRIVE_AUTOPILOT_REFUSED: dict[tuple[str, bool], str] = {
     ("px4", False): "drive: auto on PX4 flies a vtol's waypoints so far (PX4's SIH has no rover to prove its AUTO.MISSION on)",
-    ("ardupilot", True): "drive: auto on a vtol needs PX4 so far (ArduPlane's QuadPlane AUTO is not done yet)",
+    # ArduPlane/commands_logic.cpp Plane::exit_mission_callback: set_mode(mode_rtl, ModeReason::MISSION_END)
+    ("ardupilot", True): "drive: auto on a vtol needs PX4: ArduPlane ends its mission in RTL, flying home from the end of the horizon "
+    "instead of holding there (Plane::exit_mission_callback)",
 }
 
 

@@ -95,7 +95,10 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
         ("vehicle: vtol\nautopilot: px4\ndrive: auto\nlimits: {acceptance_radius_m: 70}\n" + WP, []),
         (
             "vehicle: vtol\nautopilot: ardupilot\ndrive: auto\nlimits: {acceptance_radius_m: 70}\n" + WP,
-            ["m.yaml:4:12: autopilot: drive: auto on a vtol needs PX4 so far (ArduPlane's QuadPlane AUTO is not done yet)"],
+            [
+                "m.yaml:4:12: autopilot: drive: auto on a vtol needs PX4: ArduPlane ends its mission in RTL, flying home from the end "
+                "of the horizon instead of holding there (Plane::exit_mission_callback)"
+            ],
         ),
     ],
 )
