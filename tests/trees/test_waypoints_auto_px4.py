@@ -13,8 +13,9 @@ from executive.mission.model import Mission
 from executive.testing import Lockstep
 from tests_support import LINE_HOME, LinkCut, set_currents
 
-#: 4 waypoints 100 m apart due north; PX4 flies them at MPC_XY_CRUISE (5 m/s) as a multicopter, 30 m up.
+#: 4 waypoints zig-zagging north, 100 m apart (north, east, north, west); PX4 flies them at MPC_XY_CRUISE (5 m/s) as a multicopter, 30 m up.
 STEP_DEG = 0.000899
+ZIGZAG = ((1, 0), (1, 1), (2, 1), (2, 0))
 
 
 def vtol_mission(name: str, simulator: dict[str, Any] | None = None) -> Mission:
@@ -29,7 +30,7 @@ def vtol_mission(name: str, simulator: dict[str, Any] | None = None) -> Mission:
         "home": {"lat": LINE_HOME[0], "lon": LINE_HOME[1], "heading_deg": 0.0},
         "limits": {"acceptance_radius_m": 70, "leg_timeout_s": 120, "auto_horizon_legs": 1},
         "simulator": {"ekf_ready_after_s": 2.0, "params": {"MIS_TKO_LAND_REQ": 0.0}} | (simulator or {}),
-        "waypoints": [{"lat": LINE_HOME[0] + STEP_DEG * n, "lon": LINE_HOME[1], "alt_m": 30.0} for n in range(1, 5)],
+        "waypoints": [{"lat": LINE_HOME[0] + STEP_DEG * n, "lon": LINE_HOME[1] + STEP_DEG * e / 0.8155, "alt_m": 30.0} for n, e in ZIGZAG],
     }
     return Mission.model_validate(fields)
 
@@ -120,22 +121,26 @@ def test_a_person_changing_the_mode_pauses_the_mission(lockstep) -> None:
 
 
 def test_a_cut_link_leaves_the_vtol_hovering_at_the_end_of_the_horizon_and_the_route_goes_on_when_it_is_back(lockstep) -> None:
-    """The link silent 60 s from leg 2 (horizon 1: waypoints 1-3 held): PX4 flies to waypoint 3 and hovers in AUTO.LOITER; back,
-    the legs it flew unheard are caught up from MISSION_CURRENT (COMPLETE at item 2), the route goes on at waypoint 4."""
+    """The link silent 60 s from leg 1 (horizon 1: waypoints 1-2 held): PX4 flies to waypoint 2 and hovers in AUTO.LOITER. Back,
+    the legs it flew unheard are caught up from MISSION_CURRENT (COMPLETE at item 1) and the route goes on at waypoint 3: flown
+    to, not skipped, although PX4 says COMPLETE with the item set until AUTO.MISSION runs (real SIH)."""
     mission = vtol_mission("px4 auto link cut")
     sim = lockstep(mission, autopilot="px4", injector=lambda faults, clock: LinkCut(faults, clock))
     cut = sim.faults
     assert isinstance(cut, LinkCut)
-    state, ap = sim.runtime.mission_state, sim.autopilot
-    second, third = mission.waypoints[1], mission.waypoints[2]
-    assert sim.run(until=lambda: state.leg_index == 1 and ap.vehicle.distance_to(second.lat, second.lon) < 60.0) is None
+    ap = sim.autopilot
+    first, second, third = mission.waypoints[:3]
+    assert sim.run(until=lambda: ap.vehicle.alt_m > 25.0 and ap.vehicle.distance_to(first.lat, first.lon) < 60.0) is None
     cut.cut = True
     t_cut = sim.clock.now()
     assert sim.run(until=lambda: sim.clock.now() > t_cut + 60.0) is None
-    assert ap.mode == "AUTO.LOITER" and ap.vehicle.speed_m_s < 0.2 and ap.vehicle.distance_to(third.lat, third.lon) < 12.0
-    back_to_second: list[float] = []
-    sim.observers.append(lambda s: back_to_second.append(s.autopilot.vehicle.distance_to(second.lat, second.lon)))
+    assert ap.mode == "AUTO.LOITER" and ap.vehicle.speed_m_s < 0.2 and ap.vehicle.distance_to(second.lat, second.lon) < 12.0
+    back_to_first: list[float] = []
+    to_third: list[float] = []
+    sim.observers.append(lambda s: (back_to_first.append(s.autopilot.vehicle.distance_to(first.lat, first.lon)),
+                                    to_third.append(s.autopilot.vehicle.distance_to(third.lat, third.lon))))  # fmt: skip
     cut.cut = False
     outcome = sim.run_to_end()
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
-    assert min(back_to_second) > 80.0  # not sent back along the horizon it flew unheard
+    assert min(back_to_first) > 80.0  # not sent back along the horizon it flew unheard
+    assert min(to_third) < 12.0  # waypoint 3 flown to (PX4's NAV_ACC_RAD 10 m), not skipped

@@ -6,7 +6,7 @@ import math
 from typing import ClassVar
 
 from executive.mavlink_dialect import MAVLinkMessage, mavlink
-from executive.sim.mission_store import MissionStore, StoredCommand
+from executive.sim.mission_store import MissionState, MissionStore, StoredCommand
 
 _M = mavlink
 
@@ -54,6 +54,26 @@ class Px4MissionStore(MissionStore):
         if self.current_seq is not None and self.current_seq >= self.count:
             self.current_seq = max(self.count - 1, 0)
         self._no_current = True
+
+    def set_current(self, seq: int) -> bool:
+        """A finished mission stays COMPLETE with the item set until AUTO.MISSION runs it again (mission_result.finished,
+        cleared by mission_base.cpp set_mission_result on activation; real SIH: MISSION_CURRENT (4, COMPLETE) after
+        MISSION_SET_CURRENT 4, tests/data/px4/README.md)."""
+        complete = self.state is MissionState.COMPLETE
+        if not super().set_current(seq):
+            return False
+        if complete:
+            self.state = MissionState.COMPLETE
+        return True
+
+    def start_or_resume(self) -> None:
+        """AUTO.MISSION goes on at the current item, a finished mission's too (MissionBase::on_activation; the restart at
+        item 0 of checkMissionRestart, after a disarm at the last item, is not modelled)."""
+        if not self.present:
+            return
+        if self.current_seq is None or self.current_seq >= self.count:
+            self.current_seq = self.first_item
+        self.state = MissionState.RUNNING
 
     def feasible(self, required: int, landed: bool) -> bool:
         """MIS_TKO_LAND_REQ ``required``'s rule (navigator/MissionFeasibility/FeasibilityChecker.cpp checkTakeoffLandAvailable): a
