@@ -5,10 +5,10 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from executive.assembly import Wiring, build_runtime
-from executive.mavlink_dialect import mavlink
-from executive.services import Step, service_name
+from executive.runtime.assembly import Wiring, build_runtime
+from executive.runtime.services import Step, service_name
 from executive.testing import ObedientAutopilot
+from executive.world.dialect import mavlink
 
 
 class Paced:

@@ -39,14 +39,14 @@ import logging
 from collections.abc import Callable, Iterable, Sequence
 from enum import StrEnum
 
-from executive import blackboard
-from executive.geo import distance
 from executive.mission.errors import format_path
 from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.route import Route
 from executive.mission.rules import cross_field_errors
 from executive.mission.zones import first_leg_problems
-from executive.state import Sample
+from executive.world import blackboard
+from executive.world.geo import distance
+from executive.world.state import Sample
 
 log = logging.getLogger(__name__)
 
@@ -183,7 +183,7 @@ class MissionState:
     def start(self, vehicle_at: tuple[float, float] | None = None, reason: str = "started from the first waypoint") -> None:
         """READY (or ended) -> RUNNING from the first waypoint; refused (nothing changes) when a waypoint is out of reach of ``vehicle_at``.
 
-        Without a position the runtime checks the distances before the tree first ticks (:mod:`executive.reach`).
+        Without a position the runtime checks the distances before the tree first ticks (:mod:`executive.admission.reach`).
         ``reason``: what the transition says (a run resumed from the journal says where it resumes).
         """
         self._check("start")

@@ -6,7 +6,7 @@ import py_trees
 import pytest
 
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
-from executive.state import Sample, SampleRead
+from executive.world.state import Sample, SampleRead
 
 
 def sample(leg: int, t: float = 10.0) -> Sample:

@@ -9,10 +9,10 @@ from pathlib import Path
 
 from tlog_replay import PX4, Replay, records, through_reader
 
-from executive import blackboard
-from executive.geo import distance
-from executive.mavlink_dialect import mavlink
-from executive.state import MISSION_STATE_COMPLETE
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.geo import distance
+from executive.world.state import MISSION_STATE_COMPLETE
 
 AUTO = PX4 / "vtol-waypoints-auto.tlog"
 FIRST_RUN = PX4 / "vtol-waypoints-auto-first-run.tlog"  # before the reader's fix: legs 2 and 4 counted done on an upload
