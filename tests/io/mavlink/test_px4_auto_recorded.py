@@ -18,6 +18,7 @@ AUTO = PX4 / "vtol-waypoints-auto.tlog"
 FIRST_RUN = PX4 / "vtol-waypoints-auto-first-run.tlog"  # before the reader's fix: legs 2 and 4 counted done on an upload
 KILLED = PX4 / "vtol-waypoints-auto-killed.tlog"
 PAUSED = PX4 / "vtol-waypoints-auto-paused.tlog"
+LINK_CUT = PX4 / "vtol-waypoints-auto-link-cut.tlog"
 REFUSED = PX4 / "vtol-waypoints-auto-refused.tlog"
 WINDOW = PX4 / "auto-mission-window.tlog"
 LANDING_REQUIRED = PX4 / "auto-mission-landing-required.tlog"
@@ -38,7 +39,7 @@ def ours(path: Path, kind: str) -> list[tuple[float, object]]:
 
 
 def test_the_recordings_are_small() -> None:
-    assert all(path.stat().st_size < 40_000 for path in (AUTO, FIRST_RUN, KILLED, PAUSED, REFUSED, WINDOW, LANDING_REQUIRED))
+    assert all(path.stat().st_size < 40_000 for path in (AUTO, FIRST_RUN, KILLED, PAUSED, LINK_CUT, REFUSED, WINDOW, LANDING_REQUIRED))
 
 
 def test_each_item_is_followed_in_order_and_an_uploads_item_65535_is_not_read_as_past_the_leg() -> None:
@@ -160,3 +161,14 @@ def test_paused_px4_hovers_and_resumed_goes_on_with_the_leg() -> None:
     assert resumed[1].seq == 2
     after = [msg.seq for t, msg in px4_side(PAUSED, "MISSION_ITEM_REACHED") if t > resumed[0]]
     assert after[0] == 2
+
+
+def test_after_a_link_cut_px4_says_complete_with_the_item_set_until_auto_mission_runs_and_the_route_goes_on_there() -> None:
+    """Back from a 67 s cut on leg 2: PX4 had finished its horizon (COMPLETE at item 3, hovering 9 m from waypoint 4); the
+    window uploaded, MISSION_SET_CURRENT 4 answered (4, COMPLETE) (mission_result.finished stays until AUTO.MISSION runs),
+    then (4, ACTIVE) in AUTO.MISSION, and item 4 was flown to, not skipped (it was, before the fix: the simulated PX4 models it)."""
+    set_at, seq = ours(LINK_CUT, "MISSION_SET_CURRENT")[-1][0], ours(LINK_CUT, "MISSION_SET_CURRENT")[-1][1].seq
+    assert seq == 4
+    after = [(msg.seq, msg.mission_state) for t, msg in px4_side(LINK_CUT, "MISSION_CURRENT") if t > set_at]
+    assert after[0] == (4, MISSION_STATE_COMPLETE) and (4, mavlink.MISSION_STATE_ACTIVE) in after
+    assert [msg.seq for t, msg in px4_side(LINK_CUT, "MISSION_ITEM_REACHED") if t > set_at][0] == 4
