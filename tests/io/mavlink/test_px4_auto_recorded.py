@@ -171,4 +171,4 @@ def test_after_a_link_cut_px4_says_complete_with_the_item_set_until_auto_mission
     assert seq == 4
     after = [(msg.seq, msg.mission_state) for t, msg in px4_side(LINK_CUT, "MISSION_CURRENT") if t > set_at]
     assert after[0] == (4, MISSION_STATE_COMPLETE) and (4, mavlink.MISSION_STATE_ACTIVE) in after
-    assert [msg.seq for t, msg in px4_side(LINK_CUT, "MISSION_ITEM_REACHED") if t > set_at][0] == 4
+    assert next(msg.seq for t, msg in px4_side(LINK_CUT, "MISSION_ITEM_REACHED") if t > set_at) == 4
