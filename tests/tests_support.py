@@ -20,6 +20,7 @@ from executive.runtime.assembly import build_runtime
 from executive.runtime.loop import RunOutcome, Runtime
 from executive.runtime.pacing import SpeedGovernor
 from executive.sim import SimServer
+from executive.sim.faults import FaultInjector
 from executive.testing import Lockstep
 from executive.world.clock import ManualClock, ScaledClock
 from executive.world.dialect import MAVLinkMessage, mavlink
@@ -219,3 +220,17 @@ def set_currents(sim: Lockstep) -> list[int]:
 
     sim.link.send = spy  # type: ignore[method-assign]
     return sent
+
+
+class LinkCut(FaultInjector):
+    """The link silent both ways while ``cut`` (the executive alive, its messages lost): a cable pulled and put back."""
+
+    cut = False
+
+    @property
+    def receiving(self) -> bool:
+        return not self.cut and super().receiving
+
+    @property
+    def sending(self) -> bool:
+        return not self.cut and super().sending

@@ -136,6 +136,18 @@ def preflight(mission: Mission) -> py_trees.behaviour.Behaviour:
 #: (Rover/mode_auto.cpp): MIS_DONE_BEHAVE 0 stops in AUTO, 1 loiters in AUTO; 2 (ACRO) and 3 (MANUAL) change mode and
 #: drive on as the sticks say (Rover/Parameters.cpp: "0:Hold in Auto Mode,1:Loiter in Auto Mode,2:Acro Mode,3:Manual Mode").
 MISSION_END_STOPS = ("MIS_DONE_BEHAVE", (0.0, 1.0), "drive: auto needs the vehicle stopped at the end of the horizon it holds (0 Hold, 1 Loiter)")
+#: drive: auto on PX4: the horizon is a mission with neither take-off nor landing, which PX4's feasibility check rejects (and
+#: AUTO.MISSION with it: TEMPORARILY_REJECTED, MISSION_CURRENT NO_MISSION) unless MIS_TKO_LAND_REQ is 0 or 4
+#: (navigator/MissionFeasibility/FeasibilityChecker.cpp checkTakeoffLandAvailable; 5 asks a landing in the air). Its
+#: VTOL and fixed-wing defaults set 2 (ROMFS init.d/rc.vtol_defaults). The end of the horizon stops the vehicle without a
+#: parameter: the finished mission loiters where it is (mission_base.cpp setEndOfMissionItems), then Commander switches
+#: to AUTO.LOITER (Commander.cpp, "Transition to loiter when the mission is cleared and/or finished").
+PX4_HORIZON_ACCEPTED = (
+    "MIS_TKO_LAND_REQ",
+    (0.0, 4.0),
+    "drive: auto gives PX4 a horizon of waypoints with neither take-off nor landing, which PX4 rejects unless it is 0 or 4 "
+    "(its VTOL default 2 requires a landing)",
+)
 
 
 def mission_end_checks(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
@@ -147,7 +159,8 @@ def mission_end_checks(mission: Mission) -> list[py_trees.behaviour.Behaviour]:
     if mission.drive != "auto" or mission.vehicle == "sub":
         return []
     name, allowed, why = MISSION_END_STOPS
-    return [ParameterIs(name, allowed, why)]
+    px4_name, px4_allowed, px4_why = PX4_HORIZON_ACCEPTED
+    return [ParameterIs(name, allowed, why), ParameterIs(px4_name, px4_allowed, px4_why, autopilot="px4")]
 
 
 def zones_on_autopilot(mission: Mission) -> list[py_trees.behaviour.Behaviour]:

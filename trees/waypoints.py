@@ -25,7 +25,7 @@ from executive.trees.parts import failsafe_guarded, leg, mission_root, preflight
 DECLARATION = TreeDeclaration(
     doc="the generic guarded route: pre-flight, then every waypoint under guards, then hold",
     vehicles=frozenset({"rover", "boat", "sub", "vtol"}),
-    auto_drive={"rover": "ArduRover", "boat": "ArduRover"},
+    auto_drive={"rover": "ArduRover", "boat": "ArduRover", "vtol": "PX4"},
     timed_legs=True,
 )
 

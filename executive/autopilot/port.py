@@ -53,6 +53,8 @@ class Capabilities:
     transition_anywhere: bool  # a VTOL transition is taken by command in any mode in flight
     takeoff_alt_amsl: bool  # NAV_TAKEOFF's altitude is above sea level (else above home)
     first_item_seq: int  # the seq of the route's first waypoint on the autopilot: 1 after ArduPilot's home item 0, 0 on PX4
+    #: The autopilot takes MISSION_WRITE_PARTIAL_LIST (ArduPilot), so a horizon grows by appends; else (PX4) by the whole window again.
+    partial_mission_writes: bool = True
     #: The parameter naming the RC channel whose position sets the mode by itself (ArduRover MODE_CH); None: no such channel.
     mode_switch_param: str | None = None
     #: Parameters that say how the vehicle drives to a point, read at pre-flight for GoTo's look-ahead (ArduRover:

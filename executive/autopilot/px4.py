@@ -104,6 +104,10 @@ class Px4Port(MavlinkPort):
             transition_anywhere=True,
             takeoff_alt_amsl=True,
             first_item_seq=0,  # PX4's mission has no home slot: src/modules/mavlink/mavlink_mission.cpp stores item 0 as the first item
+            # mavlink_mission.cpp handle_message has no MISSION_WRITE_PARTIAL_LIST (ignored: no answer, tests/data/px4/README.md); a
+            # whole upload keeps the navigator's item when no item is flagged current (mission_base.cpp updateMavlinkMission:
+            # current_seq < 0 -> the old one, constrained to the new count), in AUTO.MISSION too
+            partial_mission_writes=False,
             # src/lib/battery/module.yaml: BAT1_CAPACITY mAh (-1: unknown, the default), BAT1_N_CELLS (0: unknown), per-cell
             # BAT1_V_EMPTY (3.6 V) and BAT1_V_CHARGED (4.05 V); the height RTL climbs to first (navigator/rtl_params.c, 60 m): the
             # way home's cost (executive.sensing.energy)

@@ -65,7 +65,7 @@ class HorizonOnAutopilot(MissionTransferFollower):
         n_held = len(held) if held is not None else 0
         prefix = held is not None and n_held <= most and self.autopilot.route_differs(route[:n_held], held) is None
         if prefix and not busy and n_held < most and n_held - least <= 1 and self._may_start():
-            self._started(self.autopilot.extend_route(route[n_held:most]))
+            self._started(self._extend(route, n_held, most))
             busy = True
         if prefix and n_held >= least:
             extra = f"; appending up to waypoint {most}" if busy else ""
@@ -79,6 +79,13 @@ class HorizonOnAutopilot(MissionTransferFollower):
         failed = f" (the last try failed: {self.failure})" if self.failure else ""
         self.feedback_message = f"putting waypoints 1-{most} of {len(route)} on the autopilot: {why}{failed}"
         return Status.RUNNING
+
+    def _extend(self, route: Sequence[Waypoint], held: int, most: int) -> int:
+        """Waypoints ``held``..``most`` after those held: appended, or (an autopilot without partial writes: PX4) the window uploaded again."""
+        if self.autopilot.capabilities.partial_mission_writes:
+            return self.autopilot.extend_route(route[held:most])
+        home: HomePosition | None = self.get("/vehicle/home")
+        return self.autopilot.upload_route(route[:most], home)
 
 
 class AutopilotAtLeg(MissionTransferFollower):
@@ -114,6 +121,7 @@ class AutopilotAtLeg(MissionTransferFollower):
         self._out_since: float | None = None  # since when the vehicle is out of AUTO with this leg to start
         self._set_for: int | None = None  # the leg the autopilot's mission was set to since it last drove in AUTO
         self._asking: int | None = None
+        self._set_item: int | None = None  # the item we set, while the autopilot has not run its mission since
         self._first_auto: float | None = None  # when this run first saw the vehicle in AUTO: reports before are another run's
 
     def update(self) -> Status:
@@ -146,7 +154,7 @@ class AutopilotAtLeg(MissionTransferFollower):
             self.feedback_message = "waiting for the autopilot's MISSION_CURRENT (what it did meanwhile)"
             return Status.RUNNING
         if self._asking is None and self._may_start():
-            self._asking = leg
+            self._asking, self._set_item = leg, seq
             self._started(self.autopilot.set_route_leg(leg))
         failed = f" (the last try failed: {self.failure})" if self.failure else ""
         self.feedback_message = f"setting the autopilot's mission to item {seq}{failed}"
@@ -157,7 +165,10 @@ class AutopilotAtLeg(MissionTransferFollower):
 
         Not before: ArduPilot keeps a completed mission's state and item through uploads until it is
         started again (AP_Mission::truncate and replace_cmd leave the state), so the report of a mission
-        run before this one (the same route driven again without a reboot) would pass for this run's."""
+        run before this one (the same route driven again without a reboot) would pass for this run's.
+        Nor a COMPLETE at the item we set: PX4 says COMPLETE with the item MISSION_SET_CURRENT gave until AUTO.MISSION
+        runs again (mission_result.finished, cleared by mission_base.cpp set_mission_result on activation; real SIH:
+        (4, COMPLETE) after setting 4, tests/data/px4/README.md): that item is not done."""
         if self._first_auto is None:
             return
         done = -1
@@ -165,7 +176,9 @@ class AutopilotAtLeg(MissionTransferFollower):
         if reached is not None and reached.time >= self._first_auto:
             done = reached.highest
         current: MissionCurrent | None = self.get("/vehicle/mission_current")
-        if current is not None and current.time >= self._first_auto and current.state == MISSION_STATE_COMPLETE:
+        if current is not None and current.state != MISSION_STATE_COMPLETE:
+            self._set_item = None
+        elif current is not None and current.time >= self._first_auto and current.seq != self._set_item:
             done = max(done, current.seq)
         first, state = self.autopilot.capabilities.first_item_seq, self.mission_state
         while state.leg_index < state.leg_count - 1 and first + state.leg_index <= done:

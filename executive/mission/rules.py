@@ -58,6 +58,15 @@ def rc_switch_channels(mission: Mission) -> dict[int, str]:
     return dict(sorted(found.items()))
 
 
+#: drive: auto refused, per autopilot and whether the vehicle is a vtol, until it can be flown so: why.
+AUTO_DRIVE_AUTOPILOT_REFUSED: dict[tuple[str, bool], str] = {
+    ("px4", False): "drive: auto on PX4 flies a vtol's waypoints so far (proven on PX4's SIH, which has no rover or boat)",
+    # ArduPlane/commands_logic.cpp Plane::exit_mission_callback: set_mode(mode_rtl, ModeReason::MISSION_END)
+    ("ardupilot", True): "drive: auto on a vtol needs PX4: ArduPlane ends its mission in RTL, flying home from the end of the horizon "
+    "instead of holding there (Plane::exit_mission_callback)",
+}
+
+
 def drive_errors(mission: Mission) -> list[str]:
     """Why ``drive: auto`` cannot drive this mission's tree and vehicle (empty: it can, or the drive is guided)."""
     if mission.drive != "auto":
@@ -103,8 +112,8 @@ def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
     name, needs = tree_name(mission), declared(tree_name(mission)).needs
     if needs is not None and autopilot != needs[0]:
         errors.append(f"tree {name} needs {FIRMWARE_NAMES.get(needs[0], needs[0])}: {needs[1]}")
-    if autopilot != "ardupilot" and mission.drive == "auto":
-        errors.append("drive: auto needs ArduPilot so far (its partial mission writes hold the horizon; PX4's AUTO.MISSION is not done yet)")
+    if mission.drive == "auto" and (why := AUTO_DRIVE_AUTOPILOT_REFUSED.get((autopilot, mission.vehicle == "vtol"))):
+        errors.append(why)
     return errors
 
 

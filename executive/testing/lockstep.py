@@ -72,6 +72,12 @@ class Overload:
         return lateness, lambda: rng.uniform(self.min_step_s, self.max_step_s)
 
 
+def _firmware_options(mission: Mission, autopilot: str) -> dict[str, Any]:
+    """The simulated firmware's options the mission sets: all of them on ArduPilot, only its parameters on PX4 (q_guided_mode is ArduPlane's)."""
+    options = firmware_options(mission)
+    return options if autopilot == "ardupilot" else {k: v for k, v in options.items() if k == "params"}
+
+
 class LockstepClock(ManualClock):
     """A manual clock whose :meth:`sleep_until` steps the simulated world to that instant (at most ``max_step_s`` at a time).
 
@@ -209,7 +215,7 @@ class Lockstep:
             home or simulated_home(mission),
             autopilot=autopilot,
             ekf_ready_after_s=sim.ekf_ready_after_s if ekf_ready_after_s is None else ekf_ready_after_s,
-            **{**(firmware_options(mission) if autopilot == "ardupilot" else {}), **(firmware or {})},  # q_guided_mode is ArduPlane's
+            **{**_firmware_options(mission, autopilot), **(firmware or {})},
         )
         self.faults = self._injector(mission, events, mission_dir, injector)
         if self.faults is not None:

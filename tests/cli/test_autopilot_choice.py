@@ -57,10 +57,10 @@ def test_run_with_autopilot_px4_refuses_drive_auto_before_starting_a_vehicle(tmp
     path.write_text("version: 1\nname: r\nvehicle: rover\ndrive: auto\nwaypoints:\n  - {lat: 47.0, lon: 8.0}\n", encoding="utf-8")
     assert main(["validate", str(path)]) == 0
     assert main(["validate", "--autopilot", "px4", str(path)]) == 2
-    assert "drive: auto needs ArduPilot so far" in capsys.readouterr().err
+    assert "drive: auto on PX4 flies a vtol's waypoints so far" in capsys.readouterr().err
     assert main(["run", str(path), "--autopilot", "px4", "--socket", "none"]) == 2
     err = capsys.readouterr().err
-    assert "--autopilot px4: drive: auto needs ArduPilot so far" in err
+    assert "--autopilot px4: drive: auto on PX4 flies a vtol's waypoints so far" in err
     assert "simulated" not in err  # no vehicle was started
 
 

@@ -63,7 +63,10 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
         ("vehicle: boat\ntree: waypoints\ndrive: auto\nlimits: {auto_horizon_legs: 3}\n" + WP, []),
         (
             "vehicle: sub\ntree: waypoints\ndrive: auto\n" + WP,
-            ["m.yaml:5:8: drive: tree waypoints is driven in AUTO on a boat or rover (ArduRover) so far, not a sub; use drive: guided"],
+            [
+                "m.yaml:5:8: drive: tree waypoints is driven in AUTO on a boat or rover or vtol (ArduRover or PX4) so far, "
+                "not a sub; use drive: guided"
+            ],
         ),
         ("vehicle: boat\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
         ("vehicle: rover\ntree: goto_sample\ndrive: auto\n" + SAMPLE_WP, []),
@@ -87,9 +90,14 @@ def test_rc_source_and_switch_channels_are_validated() -> None:
         ),
         (
             "vehicle: rover\nautopilot: px4\ndrive: auto\n" + WP,
+            ["m.yaml:4:12: autopilot: drive: auto on PX4 flies a vtol's waypoints so far (proven on PX4's SIH, which has no rover or boat)"],
+        ),
+        ("vehicle: vtol\nautopilot: px4\ndrive: auto\nlimits: {acceptance_radius_m: 70}\n" + WP, []),
+        (
+            "vehicle: vtol\nautopilot: ardupilot\ndrive: auto\nlimits: {acceptance_radius_m: 70}\n" + WP,
             [
-                "m.yaml:4:12: autopilot: drive: auto needs ArduPilot so far "
-                "(its partial mission writes hold the horizon; PX4's AUTO.MISSION is not done yet)"
+                "m.yaml:4:12: autopilot: drive: auto on a vtol needs PX4: ArduPlane ends its mission in RTL, flying home from the end "
+                "of the horizon instead of holding there (Plane::exit_mission_callback)"
             ],
         ),
     ],

@@ -14,9 +14,8 @@ from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.mission.resume import ResumePoint
-from executive.sim.faults import FaultInjector
 from executive.testing import Lockstep
-from tests_support import line_mission, set_currents
+from tests_support import LinkCut, line_mission, set_currents
 
 #: drive: auto against the autopilot's own AUTO over the whole route (issue 32's target on the real firmware).
 AUTO_RATIO = 1.02
@@ -162,20 +161,6 @@ def test_a_mission_end_that_would_not_stop_the_vehicle_is_refused_at_preflight(l
     if not completes:
         assert f"MIS_DONE_BEHAVE is {value}: set it to 0 or 1" in outcome.reason
         assert sim.autopilot.mission.count <= 1 and not sim.autopilot.armed  # refused before anything was sent or armed
-
-
-class LinkCut(FaultInjector):
-    """The link silent both ways while ``cut`` (the executive alive, its messages lost): a cable pulled and put back."""
-
-    cut = False
-
-    @property
-    def receiving(self) -> bool:
-        return not self.cut and super().receiving
-
-    @property
-    def sending(self) -> bool:
-        return not self.cut and super().sending
 
 
 def test_a_cut_link_leaves_the_vehicle_stopped_at_the_end_of_the_horizon_and_the_failsafe_acts_when_it_is_back(lockstep) -> None:

@@ -478,7 +478,10 @@ class MissionTransfer:
         self._downloaded(now)
 
     def on_current(self, msg: MAVLinkMessage, now: float) -> None:
-        """MISSION_CURRENT (streamed, and the reply to MISSION_SET_CURRENT)."""
+        """MISSION_CURRENT (streamed, and the reply to MISSION_SET_CURRENT); seq 65535 (no item) is not news: PX4's -1 as a uint16
+        between an upload's end and its navigator's item (mavlink_mission.cpp update_active_mission; tests/data/px4/README.md)."""
+        if msg.seq == 0xFFFF:
+            return
         # total, mission_state and mission_mode are MAVLink 2 extensions: 0 from firmware that predates them
         current = MissionCurrent(msg.seq, getattr(msg, "total", 0), getattr(msg, "mission_state", 0), bool(getattr(msg, "mission_mode", 0)), now)
         self._bb.set("/vehicle/mission_current", current)

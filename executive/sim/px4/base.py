@@ -174,7 +174,7 @@ class Px4Sim(Px4Streams):
             return self.offboard_signal
         if mode == "AUTO.MISSION":
             checked = self.mission.uploaded_at is None or self.clock.now() - self.mission.uploaded_at >= MISSION_CHECK_S
-            return self.mission.present and checked
+            return self.mission.present and checked and self.mission.feasible(int(self.params.get("MIS_TKO_LAND_REQ", 0)), self._landed)
         return mode != "AUTO.RTL" or self.home is not None
 
     @property
@@ -288,6 +288,10 @@ class Px4Sim(Px4Streams):
     def _reached(self, lat: float, lon: float, alt: float) -> bool:
         """A mission waypoint is reached."""
 
+    def _climbing_first(self, alt: float) -> bool:
+        """A mission's item started on the ground: True (the item not started yet) while the airframe climbs to ``alt`` first."""
+        return False
+
     def _update_airframe(self) -> None:
         """What the airframe does on its own each step (transitions)."""
 
@@ -380,7 +384,7 @@ class Px4Sim(Px4Streams):
             elif v.alt_m >= alt - 0.5:
                 self.mission.advance()
         elif cmd == _M.MAV_CMD_NAV_WAYPOINT or cmd == _M.MAV_CMD_NAV_LOITER_UNLIM:
-            if not started:
+            if not started and not self._climbing_first(alt):
                 self._fly_to(lat, lon, alt)
             elif cmd == _M.MAV_CMD_NAV_WAYPOINT and self._reached(lat, lon, alt):
                 self.mission.advance()

@@ -24,6 +24,9 @@ class Px4VtolSim(Px4Sim):
 
     MAV_TYPE = MAV_TYPE_VTOL_FIXEDROTOR
     FLIES = True
+    #: ROMFS init.d/rc.vtol_defaults: a mission must end in a landing (2) (the real SIH standard_vtol reads 2).
+    PARAMS = {**Px4Sim.PARAMS, "MIS_TKO_LAND_REQ": 2.0}
+    INT_PARAMS = Px4Sim.INT_PARAMS | {"MIS_TKO_LAND_REQ"}
 
     vehicle: QuadPlaneModel
 
@@ -33,6 +36,7 @@ class Px4VtolSim(Px4Sim):
         self._limits = limits
         self._vtol = _M.MAV_VTOL_STATE_MC
         self._back_started = 0.0
+        self._mission_climb: float | None = None  # a mission started on the ground: the altitude it climbs to first
         super().__init__(profile, clock, home, **options)
 
     def _make_vehicle(self, home: Home) -> VehicleModel:
@@ -120,6 +124,19 @@ class Px4VtolSim(Px4Sim):
             self._vtol, self._back_started = _M.MAV_VTOL_STATE_TRANSITION_TO_MC, self.elapsed_s
             self._text(_M.MAV_SEVERITY_INFO, "Transition to multicopter")
             self._steer()
+
+    def _climbing_first(self, alt: float) -> bool:
+        """navigator/mission.cpp handleTakeoff: a mission item started on the ground is preceded by a climb straight up to its
+        altitude ("Climb to 30.0 meters above home" on the real SIH standard_vtol, tests/data/px4/README.md)."""
+        v = self.vehicle
+        if self._mission_climb is None and self._landed:
+            self._mission_climb, self._goal = alt, (v.lat, v.lon, alt)
+            self._steer()
+        if self._mission_climb is not None and v.alt_m < self._mission_climb - 0.5:
+            self._mission_item = None  # the item starts once the climb is done
+            return True
+        self._mission_climb = None
+        return False
 
     def _update_airframe(self) -> None:
         if self._landed:

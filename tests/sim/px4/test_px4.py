@@ -322,6 +322,7 @@ def upload(gcs: Px4Gcs, items: list[tuple[int, float, float, float]]) -> list[MA
 
 def test_mission_upload_requests_int_items_from_zero_and_auto_mission_waits_for_the_check(px4: MakePx4) -> None:
     gcs = airborne(px4)
+    gcs.ap.params["MIS_TKO_LAND_REQ"] = 0.0  # no landing asked of a mission (the VTOL default 2 refuses this one: test below)
     items = [(m.MAV_CMD_NAV_WAYPOINT, *gcs.north(40.0), 20.0), (m.MAV_CMD_NAV_WAYPOINT, *gcs.east(40.0), 20.0)]
     replies = upload(gcs, items)
     assert [msg.seq for msg in gcs.of_type(replies, "MISSION_REQUEST_INT")] == [0, 1]
@@ -335,6 +336,39 @@ def test_mission_upload_requests_int_items_from_zero_and_auto_mission_waits_for_
     current = gcs.last("MISSION_CURRENT")
     assert (current.mission_state, current.total) == (m.MISSION_STATE_COMPLETE, 2)
     assert gcs.last("HEARTBEAT").custom_mode == LOITER and gcs.ap.armed
+
+
+@pytest.mark.parametrize(("required", "flies"), [(2, False), (4, True), (0, True)])
+def test_a_mission_without_the_landing_mis_tko_land_req_asks_for_is_refused(px4: MakePx4, required: int, flies: bool) -> None:
+    """The real SIH standard_vtol (MIS_TKO_LAND_REQ 2) refused AUTO.MISSION for two waypoints; 0 flew them."""
+    gcs = airborne(px4)
+    assert gcs.ap.params["MIS_TKO_LAND_REQ"] == 2.0  # the VTOL default
+    gcs.ap.params["MIS_TKO_LAND_REQ"] = float(required)
+    upload(gcs, [(m.MAV_CMD_NAV_WAYPOINT, *gcs.north(40.0), 20.0), (m.MAV_CMD_NAV_WAYPOINT, *gcs.east(40.0), 20.0)])
+    gcs.run(MISSION_CHECK_S)
+    expected = m.MAV_RESULT_ACCEPTED if flies else m.MAV_RESULT_TEMPORARILY_REJECTED
+    assert gcs.px4_mode(MISSION) == [m.MAV_RESULT_ACCEPTED, expected]
+
+
+def test_a_window_uploaded_again_in_auto_mission_keeps_the_item_flown_to(px4: MakePx4) -> None:
+    """mission_base.cpp updateMavlinkMission: no item flagged current, the navigator keeps its item (real SIH: item 1 kept
+    through a 4-item upload, item 3 through a 5-item one, tests/data/px4/auto-mission-window.tlog); the end loiters."""
+    gcs = px4()
+    gcs.ap.params["MIS_TKO_LAND_REQ"] = 0.0
+    points = [gcs.north(40.0), gcs.east(40.0), gcs.north(80.0)]
+    upload(gcs, [(m.MAV_CMD_NAV_WAYPOINT, *points[0], 20.0), (m.MAV_CMD_NAV_WAYPOINT, *points[1], 20.0)])
+    gcs.run(MISSION_CHECK_S)
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    assert gcs.px4_mode(MISSION) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.run(5.0)
+    assert gcs.ap.mission.current_seq == 0 and not gcs.ap.landed  # climbing first (Mission::handleTakeoff)
+    while gcs.ap.mission.current_seq == 0:
+        gcs.run(1.0)
+    upload(gcs, [(m.MAV_CMD_NAV_WAYPOINT, *p, 20.0) for p in points])
+    assert gcs.ap.mission.current_seq == 1 and gcs.ap.mode == "AUTO.MISSION"
+    out = gcs.run(60.0)
+    assert [msg.seq for msg in gcs.of_type(out, "MISSION_ITEM_REACHED")] == [1, 2]
+    assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.distance_to(*points[2]) < 12.0
 
 
 # -- VTOL ----------------------------------------------------------------------------------------
