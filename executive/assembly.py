@@ -26,6 +26,7 @@ from executive.mission.rules import rc_switch_channels
 from executive.operator import Operator
 from executive.operator.ground_station import GroundStationControl
 from executive.operator.persons_commands import PersonsCommands
+from executive.reach import ReachGate
 from executive.runtime import Runtime
 from executive.sensing.energy import EnergyWatch
 from executive.sensing.heading import HeadingFilter
@@ -99,7 +100,7 @@ def build_runtime(
     tree; the writers: the ground station's reports, the plugs' writers; the link flushed (stream
     set-up, route uploads, parameter asks, then the commands the tick asked for).
     """
-    blackboard.reset()
+    blackboard.for_runtime(f"{mission.vehicle} {mission.name!r}")  # its own: two runtimes in one process share no key
     state = MissionState()
     status = StatusSource("runtime status", clock)
     tree_watch = TreeWatch()
@@ -150,6 +151,7 @@ def build_runtime(
         safe_timeout_s=safe_timeout_s,
         root=root,
         progress=progress,
+        reach=ReachGate(clock, show=tree_watch.hold),  # the tree watch: the one writer of /mission/waiting
     )
 
 

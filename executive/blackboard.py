@@ -22,7 +22,8 @@ never trips over a missing key.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -165,7 +166,7 @@ _KEYS: tuple[Key, ...] = (
         None,
         "tree watch",
         "Waiting: the tree's deepest running node, its feedback, since when (executive.waiting); before the tree's first tick, "
-        "the distance rule waiting for a position (reach gate, executive.reach); None = no tree runs",
+        "the distance rule waiting for a position (told by the reach gate, executive.reach); None = no tree runs",
     ),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
@@ -243,25 +244,44 @@ def declare(key: Key) -> str:
     return key.name
 
 
-def reset(*, activity_stream: bool = False) -> None:
-    """Empty the (process-global) blackboard and set every documented key to its default.
+def reset(*, activity_stream: bool = False) -> Board:
+    """The blackboard emptied, every documented key at its default: the current board, or a new one if a runtime has the current one.
 
-    The activity stream (every read and write, for debugging displays) costs time on each
-    access, so it is off unless asked for.
+    A runtime's board stays its own (:func:`for_runtime`): a test that resets after one ran, or
+    builds a second, gets a board of its own. The activity stream (every read and write, for
+    debugging displays) costs time on each access, so it is off unless asked for.
     """
-    PyTreesBoard.clear(activity_stream=activity_stream)
-    for key in KEYS.values():
-        PyTreesBoard.set(key.name, key.default)
+    board = _current if _current.runtime is None else Board()
+    board.install()
+    board.clear(activity_stream=activity_stream)
+    return board
+
+
+def for_runtime(name: str) -> Board:
+    """A board for one runtime (``name``: what it drives), made current: the current one emptied (:func:`reset`), or a new one if taken.
+
+    So two runtimes in one process (two vehicles in one test) never share keys, while what a test
+    made before building its runtime (a tree, a client that scripts inputs) is on the runtime's board.
+    """
+    board = reset()
+    board.runtime = name
+    return board
+
+
+def current() -> Board:
+    """The board py_trees' process-wide :class:`~py_trees.blackboard.Blackboard` stands for now."""
+    return _current
 
 
 def value(key: str) -> Any:
-    """The value of ``key`` now (None if it is not there), read without a client: for recorders, never for behaviours."""
-    return PyTreesBoard.value(key)
+    """The value of ``key`` now on the current board (None if it is not there), read without a client: for recorders, never for behaviours."""
+    return _current.storage.get(key)
 
 
 def documented_values() -> list[tuple[str, Any]]:
-    """Every documented key and its value now, in :data:`KEYS`' order: for recorders, never for behaviours."""
-    return PyTreesBoard.values(KEYS)
+    """Every documented key and its value now on the current board, in :data:`KEYS`' order: for recorders, never for behaviours."""
+    get = _current.storage.get
+    return [(key, get(key)) for key in KEYS]
 
 
 def keys_under(*prefixes: str) -> list[str]:
@@ -269,27 +289,53 @@ def keys_under(*prefixes: str) -> list[str]:
     return [name for name in KEYS if name.startswith(prefixes)]
 
 
-class PyTreesBoard:
-    """The one place the blackboard meets py_trees: its process-global storage, and the clients below."""
+class Board:
+    """One runtime's blackboard: its keys' values, py_trees' metadata of who reads and writes them, its clients.
 
-    @staticmethod
-    def clear(*, activity_stream: bool) -> None:
+    py_trees keeps these at class level, one set a process (``Blackboard.storage``, ``metadata``,
+    ``clients``, ``activity_stream``); :meth:`install` points them at this board's, so py_trees'
+    own code (a client's checked access, the activity stream, its displays) works on it. A client
+    keeps the board current when it was made (:class:`Client`): its reads and writes go to that
+    board whichever is installed, so a runtime's services and tree never see another's keys.
+    """
+
+    def __init__(self) -> None:
+        self.storage: dict[str, Any] = {key.name: key.default for key in KEYS.values()}
+        self.metadata: dict[str, Any] = {}
+        self.clients: dict[Any, str] = {}
+        self.activity_stream: Any = None
+        #: The runtime that has this board (:func:`for_runtime`); None: free for the next reset.
+        self.runtime: str | None = None
+
+    def install(self) -> None:
+        """Make this the board py_trees' class-level blackboard stands for (and :func:`value` reads)."""
+        global _current
+        if _current is not self:
+            _current.activity_stream = Blackboard.activity_stream  # py_trees may have switched it on or off
+        Blackboard.storage, Blackboard.metadata, Blackboard.clients = self.storage, self.metadata, self.clients
+        Blackboard.activity_stream = self.activity_stream
+        _current = self
+
+    def clear(self, *, activity_stream: bool) -> None:
+        """Empty it, every documented key at its default (it must be installed)."""
         Blackboard.clear()
         if activity_stream:
             Blackboard.enable_activity_stream()
+        self.activity_stream = Blackboard.activity_stream
+        for key in KEYS.values():
+            self.storage[key.name] = key.default
+
+    def value(self, key: str) -> Any:
+        """The value of ``key`` on this board (None if it is not there), read without a client: for tests and recorders."""
+        return self.storage.get(key)
+
+
+class PyTreesBoard:
+    """The one place the blackboard meets py_trees: the current board, and the clients below."""
 
     @staticmethod
     def set(key: str, value: Any) -> None:
-        Blackboard.set(key, value)
-
-    @staticmethod
-    def value(key: str) -> Any:
-        return Blackboard.storage.get(key)
-
-    @staticmethod
-    def values(keys: Iterable[str]) -> list[tuple[str, Any]]:
-        get = Blackboard.storage.get
-        return [(key, get(key)) for key in keys]
+        _current.storage[key] = value
 
     @staticmethod
     def client(name: str, keys: Iterable[str], access: Access) -> Client:
@@ -303,29 +349,57 @@ class PyTreesBoard:
 
 
 class Client(py_trees.blackboard.Client):
-    """A py_trees blackboard client whose ``get`` and ``set`` of its registered keys go straight to the storage.
+    """A py_trees blackboard client of the board current when it is made, whose ``get`` and ``set`` of its registered keys go straight to it.
 
     py_trees' own ``get`` and ``set`` resolve the name again, split it for nested attributes and go
     through ``__getattr__``/``__setattr__``: a few microseconds an access, and a tick makes dozens.
     The access rules are the same (read: any registered key; write: keys registered for writing).
     With the activity stream on (debugging displays), and for anything else (nested or relative
-    names, unregistered keys: the errors, ``overwrite=False``), py_trees does the work.
+    names, unregistered keys: the errors, ``overwrite=False``), py_trees does the work, on this
+    client's board.
     """
 
+    def __init__(self, *, name: str | None = None, namespace: str | None = None) -> None:
+        super().__init__(name=name, namespace=namespace)
+        object.__setattr__(self, "board", _current)
+
     def get(self, name: str) -> Any:
+        board: Board = self.board
         remapped = self.remappings.get(name)
-        if remapped is not None and Blackboard.activity_stream is None and "." not in name:
+        if remapped is not None and board.activity_stream is None and Blackboard.activity_stream is None and "." not in name:
             try:
-                return Blackboard.storage[remapped]
+                return board.storage[remapped]
             except KeyError:
                 pass  # py_trees raises its own error
-        return super().get(name)
+        with _installed(board):
+            return super().get(name)
 
     def set(self, name: str, value: Any, overwrite: bool = True) -> bool:
-        if overwrite and Blackboard.activity_stream is None and "." not in name and (name in self.write or name in self.exclusive):
-            Blackboard.storage[self.remappings[name]] = value
+        board: Board = self.board
+        direct = overwrite and board.activity_stream is None and Blackboard.activity_stream is None and "." not in name
+        if direct and (name in self.write or name in self.exclusive):
+            board.storage[self.remappings[name]] = value
             return True
-        return super().set(name, value, overwrite)
+        with _installed(board):
+            return super().set(name, value, overwrite)
+
+    def register_key(self, key: str, access: Access, required: bool = False, remap_to: str | None = None) -> None:
+        with _installed(self.board):
+            super().register_key(key, access, required, remap_to)
+
+
+@contextmanager
+def _installed(board: Board) -> Iterator[None]:
+    """``board`` installed for py_trees' own code, the current one back after."""
+    before = _current
+    if before is board:
+        yield
+        return
+    board.install()
+    try:
+        yield
+    finally:
+        before.install()
 
 
 def writer(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
@@ -336,3 +410,7 @@ def writer(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
 def reader(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
     """A read-only client (what a behaviour holds)."""
     return PyTreesBoard.client(name, keys, Access.READ)
+
+
+_current = Board()
+_current.install()

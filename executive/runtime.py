@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 import py_trees
 from py_trees.common import Status
 
-from executive import mission_tree, registry
+from executive import blackboard, mission_tree, registry
 from executive.autopilot_link import AutopilotLink
 from executive.behaviours.failsafe import failsafe_mode
 from executive.clock import Clock, TickClock
@@ -126,16 +126,20 @@ class Runtime:
         safe_timeout_s: float | None = None,
         root: py_trees.behaviour.Behaviour | None = None,
         progress: Progress | None = None,
+        reach: ReachGate | None = None,
     ) -> None:
         """Built by :func:`executive.assembly.build_runtime`; ``root`` replaces the tree the first mission selects (for tests and tools).
 
         ``reporters`` are serviced while the vehicle is made safe too (the ground station: its commands, the steps' reports).
+        ``reach``: the distance rule's gate (it tells the tree watch what it holds the tree back for).
         """
         self.mission = mission
         self.clock = clock
         self.period_s = 1.0 / rate_hz
         #: The autopilot: pumped before the tree ticks, flushed after; it connects and makes the vehicle safe.
         self.link = link
+        #: This runtime's blackboard (the one current as it is built): installed whenever it ticks or builds a tree.
+        self.board = blackboard.current()
         self.mission_state = mission_state
         # first: the tree (and the journal's run) exist before any other listener hears of the start
         self.mission_state.listeners.insert(0, self._on_transition)
@@ -163,7 +167,7 @@ class Runtime:
         #: A mission replaced while PAUSED: its tree waits for the resume (nothing commanded meanwhile).
         self._tree_waits_for_resume = False
         #: The distance rule, judged before a mission's tree first ticks, whatever the tree (a user's may leave it out).
-        self.reach = ReachGate(self.clock)
+        self.reach = reach or ReachGate(self.clock)
         self._refused: str | None = None  # the distance rule (or a user's code) refused the starting mission: it ends, nothing commanded
         self._refused_users_code = False
         self.mission_state.upload(self.mission)
@@ -188,6 +192,7 @@ class Runtime:
 
         Returns the tree's status (INVALID when no mission is active).
         """
+        self.board.install()
         self.link.pump()
         for reader in self.readers:
             reader.service()
@@ -371,6 +376,7 @@ class Runtime:
 
     def _check_tree(self, mission: Mission) -> str | None:
         """Before a replacement: the new mission's tree can be built (kept for :meth:`_on_replace`)."""
+        self.board.install()  # its behaviours' blackboard clients are this runtime's
         try:
             self._built = (mission, mission_tree.build(mission))
         except Exception as exc:  # a tree builder's error must refuse the replacement, not take the executive down
@@ -390,6 +396,7 @@ class Runtime:
 
     def _install_tree(self) -> None:
         """Build the tree (and its sampler) of the mission that is starting, or replacing a paused one."""
+        self.board.install()  # its behaviours' blackboard clients are this runtime's
         mission = self._running = self.mission_state.mission
         assert mission is not None
         built, self._built = self._built, None

@@ -7,6 +7,8 @@ from py_trees.common import Status
 
 from executive.assembly import Wiring, build_runtime
 from executive.mavlink_dialect import mavlink
+from executive.mission.lifecycle import MissionStatus
+from executive.runtime import Outcome
 from executive.services import Step, service_name
 from executive.testing import ObedientAutopilot
 
@@ -114,3 +116,25 @@ def test_the_link_is_pumped_before_the_readers_and_flushed_after_the_writers(squ
     assert seen == [("read", "MANUAL", 0), ("write", None, 0)]  # the heartbeat pumped in before the readers; nothing sent yet
     sent = [m.command for m in link.take("COMMAND_LONG")]
     assert sent == [mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL]  # sent after the writers, with the first stream's request
+
+
+def test_two_runtimes_in_one_process_each_have_their_own_blackboard_and_both_complete(lockstep, square_mission) -> None:
+    east = square_mission.model_copy(  # another rover 750 m east, on a two-leg route
+        update={"name": "east", "waypoints": [wp.model_copy(update={"lon": wp.lon + 0.01}) for wp in square_mission.waypoints[:2]]}
+    )
+    square, other = lockstep(square_mission, ekf_ready_after_s=1.0), lockstep(east, ekf_ready_after_s=1.0)
+    assert square.runtime.board is not other.runtime.board
+    outcomes: dict[str, Outcome] = {}
+    while len(outcomes) < 2:  # lock-step, interleaved: a second of vehicle time each in turn
+        for sim in (s for s in (square, other) if s.mission.name not in outcomes):
+            stop_at = sim.clock.now() + 1.0
+            outcome = sim.run(limit_s=300, until=lambda sim=sim, stop_at=stop_at: sim.clock.now() >= stop_at)
+            if outcome is not None:
+                outcomes[sim.mission.name] = outcome
+            for each, them in ((square, other), (other, square)):
+                board = each.runtime.board
+                assert board.value("/mission/leg_count") == len(each.mission.waypoints)  # its own mission, never the other's
+                position = board.value("/vehicle/position")
+                if position is not None:  # where its own vehicle is, 750 m from the other
+                    assert abs(position.lon - each.autopilot.vehicle.lon) < 1e-4 and abs(position.lon - them.autopilot.vehicle.lon) > 5e-3
+    assert {name: outcome.status for name, outcome in outcomes.items()} == {"square": MissionStatus.COMPLETED, "east": MissionStatus.COMPLETED}
