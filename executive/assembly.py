@@ -19,6 +19,7 @@ from executive.clock import Clock
 from executive.intervention import InterventionWatch
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
+from executive.mission.events import Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.mission.reload import REPLACED
@@ -305,7 +306,7 @@ def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
     """Record every tick of the tree (node statuses, blackboard changes) and the mission's transitions for ``executive replay``."""
 
     def plug(w: Wiring) -> None:
-        w.mission_state.listeners.append(recorder.event)
+        w.mission_state.events.subscribe(Transition, recorder.event, Stage.SNAPSHOTS)
         w.observers.append(_SnapshotRuns(recorder))
         if recorder.mavlink is not None:
             w.link.watch.listeners.append(recorder.mavlink)

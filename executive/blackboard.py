@@ -9,7 +9,7 @@ Namespaces:
 - ``/heading``: the heading sanity filter's verdict (heading filter).
 - ``/obstacles``: a camera's obstacle distances (obstacle receiver) and their forwarding to the autopilot (obstacle forwarder).
 - ``/runtime``: the loop itself: late and skipped ticks, the rate it achieves (tick pacer).
-- ``/mission``: the mission lifecycle and progress (mission state code), and what the running tree waits for (tree watch).
+- ``/mission``: the mission lifecycle, route progress and sample log (executive.mission), and what the running tree waits for (tree watch).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
 - ``/sampler``: the sample-taking instrument (sampler).
 - ``/command``: the latest command of each outcome asked of the autopilot (mode, arming, reposition...) and its ack (commander).
@@ -154,13 +154,13 @@ _KEYS: tuple[Key, ...] = (
     Key("/runtime/skipped_ticks", 0, "tick pacer", "ticks never run: the loop fell more than a period behind and restarted its schedule"),
     Key("/runtime/rate_hz", None, "tick pacer", "ticks per second of clock time over the last window (5 s); None until the first"),
     Key("/runtime/storage_lost", None, "storage", "the recordings that cannot write to the disk now, and why (None: all write)"),
-    Key("/mission/state", "IDLE", "mission state", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
-    Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
-    Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),
-    Key("/mission/target", None, "mission state", "the Waypoint of the current leg; None when no leg is active"),
-    Key("/mission/next_target", None, "mission state", "the Waypoint of the leg after the current one; None on the last leg"),
-    Key("/mission/reason", "", "mission state", "why the last request was refused or the mission ended"),
-    Key("/mission/samples", (), "mission state", "Samples recorded in this run, oldest first"),
+    Key("/mission/state", "IDLE", "mission lifecycle", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
+    Key("/mission/leg_index", 0, "route progress", "index of the waypoint the vehicle is heading for"),
+    Key("/mission/leg_count", 0, "route progress", "number of legs (waypoints) in the mission"),
+    Key("/mission/target", None, "route progress", "the Waypoint of the current leg; None when no leg is active"),
+    Key("/mission/next_target", None, "route progress", "the Waypoint of the leg after the current one; None on the last leg"),
+    Key("/mission/reason", "", "mission lifecycle", "why the last request was refused or the mission ended"),
+    Key("/mission/samples", (), "sample log", "Samples recorded in this run, oldest first"),
     Key(
         "/mission/waiting",
         None,

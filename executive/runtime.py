@@ -21,8 +21,10 @@ from executive.clock import Clock, TickClock
 from executive.instruments.backends import open_sampler
 from executive.instruments.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
 from executive.journal import ResumePoint
+from executive.mission.events import Replaced, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SamplingOptions
+from executive.mission.port import MissionPort
 from executive.mission.reload import REPLACED
 from executive.operator import Operator
 from executive.pacing import TickPacer
@@ -141,10 +143,10 @@ class Runtime:
         #: This runtime's blackboard (the one current as it is built): installed whenever it ticks or builds a tree.
         self.board = blackboard.current()
         self.mission_state = mission_state
-        # first: the tree (and the journal's run) exist before any other listener hears of the start
-        self.mission_state.listeners.insert(0, self._on_transition)
+        # the first stage: the tree (and the journal's run) exist before any other subscriber hears of the start
+        self.mission_state.events.subscribe(Transition, self._on_transition, Stage.TREE)
+        self.mission_state.events.subscribe(Replaced, self._on_replace, Stage.TREE)
         self.mission_state.replace_checks.append(self._check_tree)
-        self.mission_state.replace_listeners.insert(0, self._on_replace)
         #: A person's requests (``ctl``, the live view, a ground station) and the status snapshot they are answered with.
         self.operator, self.status = operator, status
         #: Drained after the link is pumped, before the tree ticks, in order.
@@ -419,7 +421,7 @@ class Runtime:
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)
         try:
-            self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=self.mission_state, sampler=self.sampler)
+            self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=MissionPort(self.mission_state), sampler=self.sampler)
         except Exception as exc:
             node = _crashed_behaviour(exc.__traceback__)
             named = f"{type(node).__module__}.{type(node).__qualname__} ({node.name!r})" if node else "(tree)"
