@@ -17,7 +17,8 @@ Namespaces:
 
 Our behaviours only read; a plugin's behaviour may write the keys of its own ``/plugin/<name>/``
 namespace it declares. Every key exists from :func:`reset` on, holding its default, so a guard
-never trips over a missing key.
+never trips over a missing key. Each runtime has a board of its own (:class:`Board`,
+:func:`for_runtime`): py_trees' blackboard is one per process.
 """
 
 from __future__ import annotations
