@@ -306,7 +306,7 @@ def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
     """Record every tick of the tree (node statuses, blackboard changes) and the mission's transitions for ``executive replay``."""
 
     def plug(w: Wiring) -> None:
-        w.mission_state.events.subscribe(Transition, recorder.event, Stage.SNAPSHOTS)
+        w.mission_state.events.subscribe(Transition, recorder.event, Stage.RECORDING)
         w.observers.append(_SnapshotRuns(recorder))
         if recorder.mavlink is not None:
             w.link.watch.listeners.append(recorder.mavlink)

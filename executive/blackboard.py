@@ -246,24 +246,26 @@ def declare(key: Key) -> str:
 
 
 def reset(*, activity_stream: bool = False) -> Board:
-    """The blackboard emptied, every documented key at its default: the current board, or a new one if a runtime has the current one.
+    """The current board emptied, every documented key at its default, and no runtime's any more (the next one may take it).
 
-    A runtime's board stays its own (:func:`for_runtime`): a test that resets after one ran, or
-    builds a second, gets a board of its own. The activity stream (every read and write, for
-    debugging displays) costs time on each access, so it is off unless asked for.
+    The activity stream (every read and write, for debugging displays) costs time on each
+    access, so it is off unless asked for.
     """
-    board = _current if _current.runtime is None else Board()
-    board.install()
-    board.clear(activity_stream=activity_stream)
-    return board
+    _current.clear(activity_stream=activity_stream)
+    _current.runtime = None
+    return _current
 
 
 def for_runtime(name: str) -> Board:
-    """A board for one runtime (``name``: what it drives), made current: the current one emptied (:func:`reset`), or a new one if taken.
+    """A board for one runtime (``name``: what it drives), made current: the current one emptied, or a new one if a runtime has it.
 
     So two runtimes in one process (two vehicles in one test) never share keys, while what a test
-    made before building its runtime (a tree, a client that scripts inputs) is on the runtime's board.
+    made before building its first runtime (a tree, a client that scripts inputs) is on that
+    runtime's board. What is made while another runtime's board is current stays on that one: a
+    second runtime's tree is built by the runtime (or after it).
     """
+    if _current.runtime is not None:
+        Board().install()
     board = reset()
     board.runtime = name
     return board
@@ -305,7 +307,7 @@ class Board:
         self.metadata: dict[str, Any] = {}
         self.clients: dict[Any, str] = {}
         self.activity_stream: Any = None
-        #: The runtime that has this board (:func:`for_runtime`); None: free for the next reset.
+        #: The runtime that has this board (:func:`for_runtime`) until it is closed; None: the next runtime may take it.
         self.runtime: str | None = None
 
     def install(self) -> None:

@@ -122,9 +122,9 @@ class Journal:
 
     def attach(self, state: MissionState) -> None:
         """Record the state's transitions, samples and route edits as they happen."""
-        state.events.subscribe(Transition, self._on_transition, Stage.JOURNAL)
-        state.events.subscribe(SampleTaken, self._on_sample, Stage.JOURNAL)
-        state.events.subscribe(RouteChanged, self._on_route, Stage.JOURNAL)
+        state.events.subscribe(Transition, self._on_transition, Stage.RECORDING)
+        state.events.subscribe(SampleTaken, self._on_sample, Stage.RECORDING)
+        state.events.subscribe(RouteChanged, self._on_route, Stage.RECORDING)
 
     def carry_samples(self, samples: tuple[Sample, ...]) -> None:
         """Record in this run the samples a run it continues had taken (a replaced mission's, renumbered to this one's legs)."""

@@ -282,10 +282,11 @@ class Runtime:
             self.clock.sleep_until(min(t, *(paced.next_due for paced in self.paced)))
 
     def close(self) -> None:
-        """Release what the services hold (the control socket) and the instrument."""
+        """Release what the services hold (the control socket) and the instrument, and the board (the next runtime may take it)."""
         self._close_sampler()
         for close in self._closers:
             close()
+        self.board.runtime = None
 
     def _close_sampler(self) -> None:
         if self.sampler is not None:

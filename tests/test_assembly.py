@@ -138,3 +138,14 @@ def test_two_runtimes_in_one_process_each_have_their_own_blackboard_and_both_com
                 if position is not None:  # where its own vehicle is, 750 m from the other
                     assert abs(position.lon - each.autopilot.vehicle.lon) < 1e-4 and abs(position.lon - them.autopilot.vehicle.lon) > 5e-3
     assert {name: outcome.status for name, outcome in outcomes.items()} == {"square": MissionStatus.COMPLETED, "east": MissionStatus.COMPLETED}
+
+
+def test_a_closed_runtime_leaves_its_board_to_the_next_and_its_tree_built_before(lockstep, square_mission) -> None:
+    from executive import mission_tree
+
+    first = lockstep(square_mission, ekf_ready_after_s=1.0)
+    first.close()
+    tree = mission_tree.build(square_mission)  # as a test builds its own tree, before its simulation
+    second = lockstep(square_mission, ekf_ready_after_s=1.0, root=tree)
+    assert second.runtime.board is first.runtime.board
+    assert second.run_to_end(limit_s=300).status is MissionStatus.COMPLETED

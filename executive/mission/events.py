@@ -5,8 +5,8 @@ The mission's state (:mod:`executive.mission.lifecycle`) says what happened as a
 :class:`Announcement`. Who hears it first is not who subscribed first: each subscriber declares
 its :class:`Stage`, and every event goes to the stages in their order (the runtime's tree exists
 before the autopilot is told, the autopilot before the ground station and the recordings hear of it).
-A stage has one subscriber of a kind, except :attr:`Stage.OBSERVER`: observers only take note, so
-their order among themselves changes nothing.
+A stage has one subscriber of a kind, except :attr:`Stage.RECORDING` and :attr:`Stage.OBSERVER`:
+they only take note, so their order among themselves changes nothing.
 """
 
 from __future__ import annotations
@@ -73,12 +73,16 @@ class Stage(IntEnum):
     AUTOPILOT_LINK = 3
     #: The ground stations: the mission reported, announcements as STATUSTEXT.
     GROUND_STATION = 4
-    JOURNAL = 5
-    SNAPSHOTS = 6
+    #: The recordings (the journal, the snapshot files): any number, in any order.
+    RECORDING = 5
     #: The watch on a person's intervention.
-    INTERVENTION = 7
-    #: Anyone else that only takes note (a test, a plugin's display): after all, in any order.
-    OBSERVER = 8
+    INTERVENTION = 6
+    #: Anyone else that only takes note (a test, a plugin's display): after all, any number, in any order.
+    OBSERVER = 7
+
+
+#: Stages whose subscribers only take note: any number of them.
+_MANY = frozenset({Stage.RECORDING, Stage.OBSERVER})
 
 
 class MissionEvents:
@@ -90,7 +94,7 @@ class MissionEvents:
     def subscribe(self, kind: type[Event], handler: Callable[..., Any], stage: Stage = Stage.OBSERVER) -> None:
         """``handler(*event)`` hears each event of ``kind`` at ``stage``; ValueError if another holds that stage for that kind."""
         heard = self._subscribers.setdefault(kind, [])
-        if stage is not Stage.OBSERVER and any(s is stage for s, _ in heard):
+        if stage not in _MANY and any(s is stage for s, _ in heard):
             raise ValueError(f"{kind.__name__} at stage {stage.name} already has a subscriber")
         heard.append((stage, handler))
         heard.sort(key=lambda entry: entry[0])  # stable: observers stay among themselves as they came

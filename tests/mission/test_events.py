@@ -12,7 +12,7 @@ from executive.state import Sample
 
 
 def test_subscribers_hear_by_stage_in_every_order_of_subscription() -> None:
-    stages = [Stage.OBSERVER, Stage.JOURNAL, Stage.TREE, Stage.GROUND_STATION, Stage.ROUTE_KEEPER]
+    stages = [Stage.OBSERVER, Stage.RECORDING, Stage.TREE, Stage.GROUND_STATION, Stage.ROUTE_KEEPER]
     for order in itertools.permutations(stages):
         events, heard = MissionEvents(), []
         for stage in order:
@@ -21,14 +21,15 @@ def test_subscribers_hear_by_stage_in_every_order_of_subscription() -> None:
         assert heard == sorted(stages)
 
 
-def test_a_stage_holds_one_subscriber_of_a_kind_but_observers_are_many() -> None:
+def test_a_stage_holds_one_subscriber_of_a_kind_but_recordings_and_observers_are_many() -> None:
     events = MissionEvents()
-    events.subscribe(Transition, lambda *e: None, Stage.JOURNAL)
-    with pytest.raises(ValueError, match="Transition at stage JOURNAL already has a subscriber"):
-        events.subscribe(Transition, lambda *e: None, Stage.JOURNAL)
-    events.subscribe(SampleTaken, lambda *e: None, Stage.JOURNAL)  # another kind
-    events.subscribe(Transition, lambda *e: None)
-    events.subscribe(Transition, lambda *e: None)
+    events.subscribe(Transition, lambda *e: None, Stage.GROUND_STATION)
+    with pytest.raises(ValueError, match="Transition at stage GROUND_STATION already has a subscriber"):
+        events.subscribe(Transition, lambda *e: None, Stage.GROUND_STATION)
+    events.subscribe(SampleTaken, lambda *e: None, Stage.GROUND_STATION)  # another kind
+    for _ in range(2):  # recordings and observers only take note: any number
+        events.subscribe(Transition, lambda *e: None, Stage.RECORDING)
+        events.subscribe(Transition, lambda *e: None)
 
 
 def test_the_lifecycle_tells_each_change_once_as_its_kind_of_event(square_mission) -> None:
