@@ -387,6 +387,7 @@ class Client(py_trees.blackboard.Client):
             return super().set(name, value, overwrite)
 
     def register_key(self, key: str, access: Access, required: bool = False, remap_to: str | None = None) -> None:
+        """Register ``key`` with ``access`` (py_trees' own), noted on this client's board."""
         with _installed(self.board):
             super().register_key(key, access, required, remap_to)
 
