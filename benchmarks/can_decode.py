@@ -9,11 +9,11 @@ import uuid
 import can
 
 from benchmarks.common import Row
-from executive import blackboard
-from executive.clock import ManualClock
 from executive.io.can.agilex import MotionState, Odometry, RcState, SystemState, decode
 from executive.io.can.reader import CanReader
-from executive.state import SwitchPosition
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.state import SwitchPosition
 
 #: 8-byte standard frames a fully loaded 500 kbit/s bus carries per second (~125 bits each with stuffing).
 LINE_RATE_FPS = 4000.0

@@ -9,14 +9,14 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
-from executive.assembly import build_runtime
-from executive.clock import ManualClock
 from executive.io.mavlink.link import Link, MemoryLink, PymavlinkLink
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink, mavutil
 from executive.mission.model import Mission
+from executive.runtime.assembly import build_runtime
 from executive.sim import FirmwareSim, make_autopilot
 from executive.testing.lockstep import Wire
-from executive.vehicles import AutopilotName
+from executive.world.clock import ManualClock
+from executive.world.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink, mavutil
+from executive.world.vehicles import AutopilotName
 
 #: Where the benchmark missions start (ArduPilot SITL's home field).
 HOME = (-35.363261, 149.165230, 0.0)

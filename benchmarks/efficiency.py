@@ -28,15 +28,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from benchmarks.common import Row
-from executive.clock import ManualClock
-from executive.geo import distance_bearing
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, SimulatorOptions
 from executive.sim import FirmwareSim, make_autopilot
 from executive.sim.ardupilot.rover import SITL_PARAMS
 from executive.sim.options import firmware_options, simulated_home
 from executive.testing import Lockstep
+from executive.world.clock import ManualClock
+from executive.world.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
+from executive.world.geo import distance_bearing
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 TARGET_RATIO = 1.10

@@ -14,14 +14,14 @@ import time
 from collections import deque
 
 from benchmarks.common import Row, SimLoop, rover_mission, serpentine
-from executive import blackboard
-from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.link import PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, mavlink, mavutil
-from executive.vehicles import PROFILES
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.dialect import EXECUTIVE_COMPONENT, mavlink, mavutil
+from executive.world.vehicles import PROFILES
 
 MIN_RATIO = 0.8
 

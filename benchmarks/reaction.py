@@ -15,15 +15,15 @@ import threading
 import time
 
 from benchmarks.common import Row, median, offset, rover_mission
-from executive.assembly import build_runtime
-from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
-from executive.runtime import Runtime
+from executive.runtime.assembly import build_runtime
+from executive.runtime.loop import Runtime
 from executive.sim import SimServer
 from executive.sim.ardupilot.base import EKF_FLAGS_READY
-from executive.vehicles import PROFILES
+from executive.world.clock import ScaledClock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.vehicles import PROFILES
 
 RATE_HZ = 10.0
 SLACK_S = 0.010

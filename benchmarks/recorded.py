@@ -49,7 +49,7 @@ def read(path: str | os.PathLike[str], mode: str) -> Recording:
     os.environ.setdefault("MAVLINK20", "1")
     from pymavlink import mavutil
 
-    from executive.vehicles import PROFILES
+    from executive.world.vehicles import PROFILES
 
     conn = mavutil.mavlink_connection(os.fspath(path), dialect="ardupilotmega", robust_parsing=True)
     positions: list[tuple[float, float, float, float]] = []  # tlog time, boot s, lat, lon
@@ -83,7 +83,7 @@ def read(path: str | os.PathLike[str], mode: str) -> Recording:
 
 
 def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
-    from executive.geo import distance
+    from executive.world.geo import distance
 
     return distance(a[0], a[1], b[0], b[1])
 

@@ -10,11 +10,11 @@ import math
 import time
 
 from benchmarks.common import HOME, Row
-from executive.geo import destination
 from executive.mission.model import Mission
 from executive.mission.return_path import ReturnPlanner
 from executive.mission.rules import cross_field_errors
 from executive.mission.zones import route_errors
+from executive.world.geo import destination
 
 TARGET_S = 0.050
 #: A return is planned once, in the tick its failsafe starts: one tick at the executive's 10 Hz.

@@ -17,12 +17,12 @@ import time
 from collections.abc import Sequence
 
 from benchmarks.common import HOME, Row, offset, rover_mission
-from executive.assembly import build_runtime
-from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.lifecycle import MissionStatus
-from executive.pacing import keeping_time
+from executive.runtime.assembly import build_runtime
+from executive.runtime.pacing import keeping_time
 from executive.sim import SimServer
+from executive.world.clock import ScaledClock
 
 MIN_SPEEDUP = 50.0
 MIN_TICK_FRACTION = 0.9

@@ -31,7 +31,7 @@ import yaml
 from benchmarks.common import Row, SimLoop, median, rover_mission, serpentine
 from benchmarks.startup import ROOT, _status_kb
 from executive.mission.lifecycle import MissionStatus
-from executive.pacing import caps_logged
+from executive.runtime.pacing import caps_logged
 from executive.sensing.heading import wait_for_filterpy
 
 #: The last quarter's tick may cost this much more than the first's: "no growth", with noise.

@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 from benchmarks.common import Row, median
-from executive.vehicles import AutopilotName
+from executive.world.vehicles import AutopilotName
 
 ROOT = Path(__file__).resolve().parent.parent
 MISSION = ROOT / "missions" / "rover_square.yaml"

@@ -36,16 +36,15 @@ import py_trees
 from py_trees.common import Status
 
 from benchmarks.common import Row, SimLoop, median, percentile, rover_mission, serpentine
-from executive.assembly import journal_recorder, snapshot_recorder
-from executive.journal import Journal
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.progress import Progress
+from executive.observers.journal import Journal, journal_recorder
+from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
+from executive.operator.progress import Progress
 from executive.sensing.heading import HeadingFilter, wait_for_filterpy
-from executive.snapshots import SnapshotRecorder
 from executive.testing import Lockstep
-from executive.vehicles import AutopilotName
+from executive.world.dialect import mavlink
+from executive.world.vehicles import AutopilotName
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 #: The executive may take this share of one core at 10 Hz.
@@ -232,8 +231,8 @@ def breakdown(
 
     ``snapshots_file``'s suffix chooses the recorder's back end (``.mcap``: MCAP; its floor stays the JSON lines').
     """
-    import executive.progress as progress_module
-    import executive.snapshots as snapshots_module
+    import executive.observers.snapshots as snapshots_module
+    import executive.operator.progress as progress_module
 
     wait_for_filterpy()
     with tempfile.TemporaryDirectory() as tmp:

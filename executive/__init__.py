@@ -4,7 +4,9 @@ import importlib.abc
 import importlib.machinery
 import importlib.util
 import sys
+import warnings
 from pathlib import Path
+from types import MappingProxyType, ModuleType
 
 __version__ = "0.1.0"
 
@@ -25,3 +27,100 @@ class _CheckoutTrees(importlib.abc.MetaPathFinder):
 
 if not (_HERE / "trees").is_dir() and (_CHECKOUT_TREES / "__init__.py").is_file():
     sys.meta_path.append(_CheckoutTrees())
+
+
+#: Modules moved into the packages of their layer in 0.2 (issue 41), old name -> new, below ``executive``. The old names
+#: still import, with a DeprecationWarning, for one release; ``executive.runtime`` and ``executive.admission`` became
+#: packages of the same name, whose old names are forwarded by :func:`moved_attribute`.
+MOVED: MappingProxyType[str, str] = MappingProxyType(
+    {
+        "blackboard": "world.blackboard",
+        "state": "world.state",
+        "vehicles": "world.vehicles",
+        "geo": "world.geo",
+        "frames": "world.frames",
+        "geofence": "world.geofence",
+        "seabed": "world.seabed",
+        "clock": "world.clock",
+        "mavlink_dialect": "world.dialect",
+        "mission.plan_files": "mission.formats.plan_files",
+        "mission.plan_reading": "mission.formats.plan_reading",
+        "mission.plan_items": "mission.formats.plan_items",
+        "mission.mp_zone_files": "mission.formats.mp_zone_files",
+        "mode_cause": "autopilot.mode_cause",
+        "target_watch": "autopilot.target_watch",
+        "io.serial_sampler": "instruments.serial",
+        "intervention": "operator.intervention",
+        "status": "operator.status",
+        "progress": "operator.progress",
+        "logs": "operator.logs",
+        "composition": "tree.composition",
+        "catalogue": "tree.catalogue",
+        "waiting": "tree.waiting",
+        "mission_tree": "tree.select",
+        "tree_drawing": "tree.drawing",
+        "mission_schema": "tree.schema",
+        "btcpp": "tree.formats.btcpp",
+        "recompose": "tree.formats.recompose",
+        "reach": "admission.reach",
+        "assembly": "runtime.assembly",
+        "services": "runtime.services",
+        "pacing": "runtime.pacing",
+        "journal": "observers.journal",
+        "snapshots": "observers.snapshots",
+        "groot2": "observers.groot2",
+        "web": "observers.web",
+        "mcap_messages": "observers.mcap.messages",
+        "mcap_reading": "observers.mcap.reading",
+        "mcap_recording": "observers.mcap.recording",
+        "mcap_writer": "observers.mcap.writer",
+        "mcap_report": "observers.mcap.report",
+        "foxglove_live": "observers.foxglove.live",
+        "foxglove_layout": "observers.foxglove.layout",
+    }
+)
+#: The two modules that became packages of their own name: their names forwarded from the package (PEP 562).
+MOVED_INTO_PACKAGE = MappingProxyType({"runtime": "runtime.loop", "admission": "admission.checks"})
+
+
+def _warn_moved(old: str, new: str) -> None:
+    warnings.warn(f"{old} moved to {new} (0.2); the old name goes in 0.3", DeprecationWarning, stacklevel=3)
+
+
+class _MovedModule(importlib.abc.Loader):
+    """Loads an old module name as the module now at its new name (the same module object)."""
+
+    def __init__(self, new: str) -> None:
+        self._new = new
+        self._spec: importlib.machinery.ModuleSpec | None = None
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType:
+        module = importlib.import_module(self._new)
+        self._spec = module.__spec__
+        return module
+
+    def exec_module(self, module: ModuleType) -> None:
+        module.__spec__ = self._spec  # the import system set the old name's spec on it
+
+
+class _MovedModules(importlib.abc.MetaPathFinder):
+    def find_spec(self, fullname: str, path: object = None, target: object = None) -> importlib.machinery.ModuleSpec | None:
+        old = fullname.removeprefix("executive.")
+        if fullname == old or old not in MOVED:
+            return None
+        new = f"executive.{MOVED[old]}"
+        _warn_moved(fullname, new)
+        return importlib.machinery.ModuleSpec(fullname, _MovedModule(new))
+
+
+def moved_attribute(package: str, name: str) -> object:
+    """A name of the module that became ``package`` (``executive.runtime``'s ``Runtime``), with a DeprecationWarning."""
+    new = f"executive.{MOVED_INTO_PACKAGE[package.removeprefix('executive.')]}"
+    module = importlib.import_module(new)
+    if name.startswith("__") or not hasattr(module, name):
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+    _warn_moved(f"{package}.{name}", f"{new}.{name}")
+    return getattr(module, name)
+
+
+sys.meta_path.append(_MovedModules())

@@ -49,7 +49,7 @@ BUILT_IN: MappingProxyType[str, MappingProxyType[str, str]] = MappingProxyType({
     }),
     BEHAVIOURS: MappingProxyType({}),
     INSTRUMENTS: MappingProxyType({
-        "serial": "executive.io.serial_sampler:SerialSampler",
+        "serial": "executive.instruments.serial:SerialSampler",
         "simulated": "executive.instruments.sampler:SimulatedSampler",
     }),
 })  # fmt: skip

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from executive.logs import OPERATOR_LOGGERS
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
+from executive.operator.logs import OPERATOR_LOGGERS
 from executive.sensing.heading import wait_for_filterpy
 
 # The suite starts ~150 `python -m executive` processes and each xdist worker rewrites ~130 test modules'

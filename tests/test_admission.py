@@ -1,4 +1,4 @@
-"""Reading a mission (executive.mission) apart from checking it can run: its tree, plugins, instrument (executive.admission).
+"""Reading a mission (executive.mission) apart from checking it can run: its tree, plugins, instrument (executive.admission.checks).
 
 ``executive validate`` refuses what ``executive run`` refuses of a mission, in the same words.
 """
@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from executive import admission, trees
+from executive import trees
+from executive.admission import checks as admission
 from executive.cli import main
 from executive.mission import loader
 from executive.mission.errors import MissionError

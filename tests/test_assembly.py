@@ -5,12 +5,12 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
-from executive.assembly import Wiring, build_runtime
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
-from executive.runtime import Outcome
-from executive.services import Step, service_name
+from executive.runtime.assembly import Wiring, build_runtime
+from executive.runtime.loop import Outcome
+from executive.runtime.services import Step, service_name
 from executive.testing import ObedientAutopilot
+from executive.world.dialect import mavlink
 
 
 class Paced:
@@ -141,7 +141,7 @@ def test_two_runtimes_in_one_process_each_have_their_own_blackboard_and_both_com
 
 
 def test_a_closed_runtime_leaves_its_board_to_the_next_and_its_tree_built_before(lockstep, square_mission) -> None:
-    from executive import mission_tree
+    from executive.tree import select as mission_tree
 
     first = lockstep(square_mission, ekf_ready_after_s=1.0)
     first.close()

@@ -10,11 +10,11 @@ import py_trees
 import pytest
 import yaml
 
-from executive import mission_tree
-from executive.btcpp import NodeType, Port, Slot, from_yaml, read_xml, to_yaml, write_xml
 from executive.cli import main
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission
+from executive.tree import select as mission_tree
+from executive.tree.formats.btcpp import NodeType, Port, Slot, from_yaml, read_xml, to_yaml, write_xml
 
 #: BehaviorTree.CPP's built-in node IDs an export writes.
 BUILT_INS = {"Sequence", "ReactiveSequence", "Fallback", "ReactiveFallback", "Parallel", "Inverter", "RetryUntilSuccessful", "Repeat", "Timeout"}

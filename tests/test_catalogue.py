@@ -6,8 +6,8 @@ import pytest
 
 from executive.behaviours import Guard
 from executive.behaviours.base import TimedBehaviour
-from executive.catalogue import KINDS, PARAM_TYPES, Catalogue, CatalogueError, catalogue, mission_value, node_name
-from executive.geofence import Geofence
+from executive.tree.catalogue import KINDS, PARAM_TYPES, Catalogue, CatalogueError, catalogue, mission_value, node_name
+from executive.world.geofence import Geofence
 
 
 def test_every_node_and_parameter_says_what_it_is():

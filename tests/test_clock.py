@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from executive.clock import ManualClock, TickClock
+from executive.world.clock import ManualClock, TickClock
 
 
 def test_a_tick_clock_stands_still_between_latches():

@@ -10,13 +10,13 @@ import pytest
 import yaml
 from py_trees.common import ParallelPolicy, Status
 
-from executive import mission_tree
-from executive.admission import load_mission_text
+from executive.admission.checks import load_mission_text
 from executive.behaviours import EkfOk, FailsafeNote, Sample, SetMode, Timeout
 from executive.cli import main
 from executive.mission.errors import MissionError
-from executive.mission_schema import mission_json_schema
 from executive.testing import Harness
+from executive.tree import select as mission_tree
+from executive.tree.schema import mission_json_schema
 
 HEAD = "version: 1\nname: m\nvehicle: rover\nauto_arm: true\nwaypoints: [{lat: 47.397742, lon: 8.545594}]\ntree:\n"  # the tree on line 7
 

@@ -15,13 +15,12 @@ from typing import Any
 import pytest
 from mcap.reader import make_reader
 
-from executive.assembly import snapshot_recorder
 from executive.cli import main
-from executive.clock import Clock
-from executive.foxglove_live import FoxgloveSink
 from executive.mission.lifecycle import MissionStatus
-from executive.snapshots import SnapshotRecorder
+from executive.observers.foxglove.live import FoxgloveSink
+from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
 from executive.testing import Lockstep
+from executive.world.clock import Clock
 from tests_support import foxglove_js, line_mission
 
 

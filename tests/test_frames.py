@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from executive import geo
-from executive.frames import Enu, Ned, enu_to_ned, global_to_local, local_to_global, ned_to_enu, yaw_enu_to_ned, yaw_ned_to_enu
+from executive.world import geo
+from executive.world.frames import Enu, Ned, enu_to_ned, global_to_local, local_to_global, ned_to_enu, yaw_enu_to_ned, yaw_ned_to_enu
 
 metres = st.floats(min_value=-1e4, max_value=1e4, allow_nan=False)
 angles = st.floats(min_value=-10.0, max_value=10.0, allow_nan=False)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from executive.geo import destination, distance_bearing
-from executive.geofence import Geofence, polygon_problems
+from executive.world.geo import destination, distance_bearing
+from executive.world.geofence import Geofence, polygon_problems
 
 ORIGIN = (47.397742, 8.545594)
 

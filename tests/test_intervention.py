@@ -6,11 +6,11 @@ import py_trees
 import pytest
 
 from executive.behaviours import SetMode
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.testing import AUTOPILOT, GCS, RuntimeOnLink
 from executive.trees.parts import mission_root
+from executive.world.dialect import EXECUTIVE_COMPONENT, mavlink
 
 MANUAL, HOLD, LOITER, GUIDED = "MANUAL", "HOLD", "LOITER", "GUIDED"
 

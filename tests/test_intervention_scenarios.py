@@ -13,16 +13,16 @@ from typing import Any
 
 import pytest
 
-from executive import blackboard
 from executive.autopilot_link.link import NOTHING_TO_MAKE_SAFE
-from executive.clock import Clock
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.operator import Reply
-from executive.runtime import Outcome
+from executive.runtime.loop import Outcome
 from executive.sim.faults import EkfDegradation, Fault, FaultInjector
 from executive.sim.firmware import FirmwareSim
 from executive.testing import Lockstep
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import MAVLinkMessage, mavlink
 from tests_support import line_mission
 
 

@@ -7,11 +7,11 @@ import sqlite3
 import pytest
 
 from executive.cli.report import render
-from executive.journal import Journal, mission_hash
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.route import Route
-from executive.state import Sample, SampleRead
+from executive.observers.journal import Journal, mission_hash
+from executive.world.state import Sample, SampleRead
 
 
 @pytest.fixture

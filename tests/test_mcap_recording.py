@@ -15,17 +15,17 @@ import py_trees
 import pytest
 from mcap.reader import make_reader
 
-from executive.assembly import Wiring, journal_recorder, snapshot_recorder
 from executive.behaviours import LinkAlive
 from executive.cli import main
-from executive.clock import Clock
-from executive.frames import global_to_local
-from executive.journal import Journal, JournalLogHandler
-from executive.mcap_reading import tick_lines
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.snapshots import Recording, SnapshotRecorder, render, replay
+from executive.observers.journal import Journal, JournalLogHandler, journal_recorder
+from executive.observers.mcap.reading import tick_lines
+from executive.observers.snapshots import Recording, SnapshotRecorder, render, replay, snapshot_recorder
+from executive.runtime.assembly import Wiring
+from executive.world.clock import Clock
+from executive.world.frames import global_to_local
 from tests_support import foxglove_js
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
@@ -275,8 +275,8 @@ def test_the_slider_s_index_of_an_mcap_file_is_the_json_lines_file_s(square) -> 
 
 
 def test_replay_web_shows_an_mcap_file_as_the_json_lines_file(square) -> None:
-    from executive.web.feed import Seen
-    from executive.web.replay import ReplaySource
+    from executive.observers.web.feed import Seen
+    from executive.observers.web.replay import ReplaySource
 
     path, jsonl, _, _ = square
     mcap, lines = ReplaySource(str(path)), ReplaySource(str(jsonl))
@@ -288,8 +288,8 @@ def test_replay_web_shows_an_mcap_file_as_the_json_lines_file(square) -> None:
 
 
 def test_replay_groot2_plays_an_mcap_file(square) -> None:
-    from executive.groot2.replay import ReplayFeed
-    from executive.groot2.view import MonitorView
+    from executive.observers.groot2.replay import ReplayFeed
+    from executive.observers.groot2.view import MonitorView
 
     path, _, _, _ = square
     view = MonitorView()
@@ -383,7 +383,7 @@ def test_foxglove_s_own_mcap_reader_reads_the_file(square) -> None:
 
 
 def test_the_shipped_foxglove_layout_reads_only_what_the_recording_holds(square, tmp_path: Path) -> None:
-    from executive.foxglove_layout import paths
+    from executive.observers.foxglove.layout import paths
 
     path, _, _, _ = square
     assert main(["foxglove-layout", "-o", str(tmp_path / "layout.json")]) == 0
@@ -423,8 +423,8 @@ class ThreadedSink:
 
 
 def test_the_tick_leaves_its_line_and_the_mavlink_messages_to_the_encoder_thread_with_their_source_as_heard() -> None:
-    from executive.mavlink_dialect import mavlink
-    from executive.mcap_recording import ENCODE_EVERY, ChannelFeed
+    from executive.observers.mcap.recording import ENCODE_EVERY, ChannelFeed
+    from executive.world.dialect import mavlink
 
     sink = ThreadedSink()
     feed = ChannelFeed([sink], None, values=lambda key: None)

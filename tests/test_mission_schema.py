@@ -15,7 +15,7 @@ from pydantic import ValidationError
 from executive.cli import main
 from executive.mission.model import Mission
 from executive.mission.rules import cross_field_errors
-from executive.mission_schema import SHIPPED, mission_json_schema, mission_json_schema_text
+from executive.tree.schema import SHIPPED, mission_json_schema, mission_json_schema_text
 
 ROOT = Path(__file__).parents[1]
 ANNOTATIONS = {"$defs", "$schema", "default", "description", "title"}

@@ -16,16 +16,16 @@ from typing import Any
 import py_trees
 import pytest
 
-from executive import blackboard
+from executive.autopilot.mode_cause import ModeChange, autopilot_cause, facts_may_lag
 from executive.behaviours import SetMode, TakeOff
-from executive.clock import Clock
-from executive.mavlink_dialect import mavlink
 from executive.mission.model import Mission
-from executive.mode_cause import ModeChange, autopilot_cause, facts_may_lag
 from executive.sim.faults import Fault, FaultInjector, LinkLoss
 from executive.sim.firmware import FirmwareSim
 from executive.testing import Lockstep
 from executive.trees.parts import failsafe_guarded, mission_root, preflight, standard_guards
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import mavlink
 
 PERSON = None  # autopilot_cause's answer for a person's change
 

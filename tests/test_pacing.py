@@ -10,13 +10,13 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from executive.assembly import Wiring, build_runtime
 from executive.cli import main
-from executive.clock import ManualClock, ScaledClock
-from executive.pacing import MIN_SWITCH_INTERVAL_S, Behind, SpeedGovernor, TickPacer, caps_logged, keeping_time
-from executive.services import Step
-from executive.status import StatusSource
+from executive.operator.status import StatusSource
+from executive.runtime.assembly import Wiring, build_runtime
+from executive.runtime.pacing import MIN_SWITCH_INTERVAL_S, Behind, SpeedGovernor, TickPacer, caps_logged, keeping_time
+from executive.runtime.services import Step
 from executive.testing import ObedientAutopilot
+from executive.world.clock import ManualClock, ScaledClock
 
 
 def slow_ticks(cost_s: float):

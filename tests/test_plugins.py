@@ -13,13 +13,15 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from executive import admission, blackboard, trees
+from executive import trees
+from executive.admission import checks as admission
 from executive.behaviours.base import ExecutiveBehaviour
-from executive.catalogue import Catalogue, catalogue, load_behaviours
 from executive.cli import main
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.testing import Lockstep
+from executive.tree.catalogue import Catalogue, catalogue, load_behaviours
+from executive.world import blackboard
 from tests_support import acting, line_mission, run_recording, with_far_waypoint
 
 ROOT = Path(__file__).parents[1]
@@ -29,7 +31,7 @@ GUARDS = '''
 
     import py_trees
 
-    from executive import blackboard
+    from executive.world import blackboard
     from executive.behaviours import Guard
     from executive.behaviours.base import ExecutiveBehaviour
 

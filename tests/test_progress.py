@@ -6,9 +6,9 @@ import io
 import json
 import re
 
-from executive import blackboard
-from executive.clock import ManualClock
-from executive.progress import Progress
+from executive.operator.progress import Progress
+from executive.world import blackboard
+from executive.world.clock import ManualClock
 
 
 def _set_mode(mode: str) -> None:
@@ -65,7 +65,7 @@ def test_a_log_record_from_another_thread_is_written_apart_from_the_live_line() 
     import logging
     import threading
 
-    from executive.logs import LiveLineHandler, UtcFormatter
+    from executive.operator.logs import LiveLineHandler, UtcFormatter
 
     clock, terminal = ManualClock(), Terminal()
     progress = Progress(terminal, clock)
@@ -93,8 +93,8 @@ def test_a_log_record_from_another_thread_is_written_apart_from_the_live_line() 
 def _long_status() -> None:
     """A status whose full line is far wider than 80 columns: every field present, a long wait."""
     from executive.mission.model import Waypoint
-    from executive.state import Battery, GlobalPosition
-    from executive.waiting import Waiting
+    from executive.tree.waiting import Waiting
+    from executive.world.state import Battery, GlobalPosition
 
     here = GlobalPosition(-35.3632, 149.1652, 0.0, 0.0, 0.0, 0.0, None, 0.0)
     values = {
@@ -114,7 +114,7 @@ def test_the_live_line_fits_an_80_column_terminal_leaving_out_the_least_importan
     _long_status()
     progress.update()
     full = progress._source.snapshot()
-    from executive.status import status_line
+    from executive.operator.status import status_line
 
     assert len(f"[     0.0 s] {status_line(full)}") > 80  # what the line would be, unfitted
     shown = terminal.getvalue().removeprefix("\r\x1b[K")
@@ -127,7 +127,7 @@ def test_the_live_line_fits_an_80_column_terminal_leaving_out_the_least_importan
 
 
 def test_fields_are_left_out_from_the_least_important_and_the_first_is_cut_only_when_alone_too_wide() -> None:
-    from executive.status import fit
+    from executive.operator.status import fit
 
     fields = ["RUNNING   leg 2/8", "GUIDED armed", "batt 87%", "waiting: Go to waypoint (14 s): leg 2/8: 123.4 m at 090°"]
     assert fit(fields, 41) == "RUNNING   leg 2/8  GUIDED armed  batt 87%"

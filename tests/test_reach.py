@@ -14,15 +14,15 @@ from pathlib import Path
 
 import pytest
 
-from executive.geo import destination
-from executive.journal import ResumePoint
-from executive.mavlink_dialect import MAVLinkMessage
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, Waypoint
+from executive.mission.resume import ResumePoint
 from executive.operator import Operator
-from executive.state import EkfFlags, EkfStatus, GlobalPosition
 from executive.testing import Lockstep
+from executive.world.dialect import MAVLinkMessage
+from executive.world.geo import destination
+from executive.world.state import EkfFlags, EkfStatus, GlobalPosition
 from tests_support import HARMLESS, LINE_HOME, acting, line_mission, run_recording, with_far_waypoint
 
 ROOT = Path(__file__).parents[1]

@@ -9,12 +9,12 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from executive.assembly import build_runtime
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.runtime import BehaviourCrashed, Runtime, explain_failure
+from executive.runtime.assembly import build_runtime
+from executive.runtime.loop import BehaviourCrashed, Runtime, explain_failure
 from executive.testing import ObedientAutopilot
+from executive.world.dialect import mavlink
 
 HOLD, GUIDED = 4, 15
 

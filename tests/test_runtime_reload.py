@@ -9,14 +9,13 @@ from typing import Any
 import pytest
 import yaml
 
-from executive import blackboard, geo
-from executive.assembly import journal_recorder
-from executive.clock import Clock
 from executive.io.mavlink.mission_protocol import route_not_on_autopilot
-from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
+from executive.observers.journal import Journal, journal_recorder
 from executive.testing import Lockstep
+from executive.world import blackboard, geo
+from executive.world.clock import Clock
 from tests.tests_support import LINE_HOME, line_mission
 
 #: 25 m east of the line's second waypoint, and of its fourth.

@@ -8,7 +8,7 @@ from py_trees.common import Status
 
 from executive.behaviours import LinkAlive
 from executive.cli import main
-from executive.snapshots import SnapshotRecorder, render, replay
+from executive.observers.snapshots import SnapshotRecorder, render, replay
 
 
 class Counter(py_trees.behaviour.Behaviour):

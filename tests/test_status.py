@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from executive import blackboard
-from executive.mavlink_dialect import mavlink
-from executive.state import GlobalPosition, Rangefinder
-from executive.status import StatusSource, status_line
+from executive.operator.status import StatusSource, status_line
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.state import GlobalPosition, Rangefinder
 
 
 def _vehicle(mav_type: int, alt_rel_m: float, reading: Rangefinder | None = None) -> None:

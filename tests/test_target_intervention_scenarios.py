@@ -14,14 +14,13 @@ from pathlib import Path
 
 import pytest
 
-from executive import blackboard, geo
-from executive.assembly import journal_recorder
-from executive.clock import Clock
-from executive.journal import Journal
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
+from executive.observers.journal import Journal, journal_recorder
 from executive.testing import Lockstep
+from executive.world import blackboard, geo
+from executive.world.clock import Clock
+from executive.world.dialect import MAVLinkMessage, mavlink
 from tests_support import line_mission
 
 ROOT = Path(__file__).resolve().parent.parent

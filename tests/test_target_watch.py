@@ -1,14 +1,14 @@
-"""Whose is the target the autopilot reports (executive.target_watch): ours once reported, a person's after that, the mode unchanged."""
+"""Whose is the target the autopilot reports (executive.autopilot.target_watch): ours once reported, a person's after that, the mode unchanged."""
 
 from __future__ import annotations
 
-from executive import geo
-from executive.clock import ManualClock
+from executive.autopilot.target_watch import TargetWatch
 from executive.io.mavlink.commander import Commander
-from executive.state import GlobalPosition, PositionTarget, TargetAsk
-from executive.target_watch import TargetWatch
 from executive.testing import FakeLink
-from executive.vehicles import PROFILES
+from executive.world import geo
+from executive.world.clock import ManualClock
+from executive.world.state import GlobalPosition, PositionTarget, TargetAsk
+from executive.world.vehicles import PROFILES
 
 OURS = (-35.3605570, 149.1679807)
 HERE = (-35.3611875, 149.1654574)

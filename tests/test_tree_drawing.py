@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import py_trees
 
-from executive.tree_drawing import dot_graph, unicode_tree
+from executive.tree.drawing import dot_graph, unicode_tree
 
 
 def ticked_tree() -> py_trees.behaviour.Behaviour:
@@ -20,10 +20,10 @@ def ticked_tree() -> py_trees.behaviour.Behaviour:
 def test_unicode_shows_the_statuses_and_the_feedback_of_a_ticked_tree() -> None:
     root = ticked_tree()
     assert unicode_tree(root, show_status=True).splitlines() == [
-        "▶ → Run",
-        "├─ ✔ • Arm — success",
-        "├─ ▶ • Wait: EKF — no EKF status yet",
-        "└─   • Arm",
+        "* → Run",
+        "├─ ✓ • Arm — success",
+        "├─ * • Wait: EKF — no EKF status yet",
+        "└─ - • Arm",
     ]
     assert unicode_tree(root).splitlines()[1] == "├─ • Arm"  # without statuses: the tree alone
 

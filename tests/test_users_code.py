@@ -15,13 +15,12 @@ from pathlib import Path
 
 import pytest
 
-from executive import blackboard
-from executive.assembly import journal_recorder
 from executive.cli import main
 from executive.cli.run import exit_code
-from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
+from executive.observers.journal import Journal, journal_recorder
 from executive.testing import Lockstep
+from executive.world import blackboard
 from tests_support import LINE_HOME, acting, line_mission, mission_text, run_recording
 
 USERS = '''

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from executive.snapshots import TickState, render_tree
-from executive.status import status_line
+from executive.operator.status import status_line
 from executive.testing import Lockstep
-from executive.waiting import WaitingWatch, deepest_running, waiting_text
+from executive.tree.ticks import TickState, render_tree
+from executive.tree.waiting import WaitingWatch, deepest_running, waiting_text
 
 #: Mission > Run > (Pre-flight > Wait until EKF ok? > EKF ok?), (Route > Go to waypoint), and a parallel's second branch.
 NODES = [

@@ -12,16 +12,16 @@ from typing import Any
 
 import pytest
 
-from executive.assembly import build_runtime
-from executive.clock import ManualClock, ScaledClock
-from executive.geo import destination
 from executive.io.mavlink.link import PymavlinkLink
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.model import Mission, Waypoint
-from executive.pacing import SpeedGovernor
-from executive.runtime import Outcome, Runtime
+from executive.runtime.assembly import build_runtime
+from executive.runtime.loop import Outcome, Runtime
+from executive.runtime.pacing import SpeedGovernor
 from executive.sim import SimServer
 from executive.testing import Lockstep
+from executive.world.clock import ManualClock, ScaledClock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.geo import destination
 
 #: Home of the line missions: ArduPilot SITL's default location.
 LINE_HOME = (-35.363261, 149.165230)
@@ -94,7 +94,7 @@ def mission_text(name: str, *waypoints: str, simulator: str = "{ekf_ready_after_
 def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> tuple[Runtime, Outcome]:
     """A runtime on a real link to ``url`` (a simulator), connected and run to the mission's end; the link closed after.
 
-    ``options`` go to :func:`~executive.assembly.build_runtime` (progress, plugs...).
+    ``options`` go to :func:`~executive.runtime.assembly.build_runtime` (progress, plugs...).
     """
     link = PymavlinkLink(url)
     try:

@@ -14,20 +14,20 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from executive import blackboard
 from executive.autopilot.port import Target
 from executive.autopilot.selection import Autopilot
-from executive.clock import ManualClock
-from executive.intervention import InterventionWatch
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, RcConfig
-from executive.state import HomePosition
+from executive.operator.intervention import InterventionWatch
 from executive.testing import FakeLink
-from executive.vehicles import PROFILES, AutopilotName
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
+from executive.world.state import HomePosition
+from executive.world.vehicles import PROFILES, AutopilotName
 
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil

@@ -23,7 +23,7 @@ Surfacing is not guarded: holding would stop the one manoeuvre that makes a sub 
 A leg follows the waypoint's control mode: ``depth`` dives (or rises) to ``depth_m`` where the
 vehicle is, then goes to the waypoint at that depth; ``altitude`` does the same at ``altitude_m``
 above the seabed, flown as depth targets from the measured depth and the downward sonar, re-sent as
-the seabed changes (ArduSub drops terrain-frame targets: executive/seabed.py); with the seabed
+the seabed changes (ArduSub drops terrain-frame targets: executive/world/seabed.py); with the seabed
 beyond the sonar's reach the sub first dives, without overshooting, until the sonar reads it. A depth leg without
 ``depth_m`` runs at the surface (depth 0, as the Zeno vehicle is run). The 1 km rule is checked
 once, at the start: pausing and resuming a mission does not accept it again.
@@ -50,7 +50,7 @@ from executive.behaviours import (
 )
 from executive.mission.model import Mission
 from executive.trees.parts import auto_leg, failsafe_guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
-from executive.vehicles import PROFILES
+from executive.world.vehicles import PROFILES
 
 
 def acceptance(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -65,7 +65,7 @@ from executive.behaviours.failsafe import FailsafeNote
 from executive.mission.model import Mission, SamplingOptions
 from executive.mission.rules import failsafe_policy
 from executive.trees.parts import ARM_RETRY_S, auto_leg, checked, failsafe_guarded, mission_root, preflight, safe_mode, within_reach
-from executive.vehicles import PROFILES
+from executive.world.vehicles import PROFILES
 
 
 def _sample_hold_mode(mission: Mission) -> str:

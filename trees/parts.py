@@ -44,7 +44,7 @@ from executive.mission.failsafes import FailsafePolicy
 from executive.mission.model import Mission
 from executive.mission.return_path import ReturnPlanner
 from executive.mission.rules import failsafe_policy, height_tolerance, rc_switch_channels, seabed_clearance
-from executive.vehicles import PROFILES
+from executive.world.vehicles import PROFILES
 
 ARM_RETRY_S = 2.0
 #: A sub's last waypoint in AUTO is reached within this of its depth (GUIDED's ChangeDepth tolerance).
@@ -228,7 +228,7 @@ def guided_leg(mission: Mission) -> py_trees.behaviour.Behaviour:
     silently outside GUIDED, so a vehicle that left it in a mode of our own asking (a failsafe's
     LOITER delivered late by a lagging link) would sit out the leg's timeout while the setpoints
     went nowhere. It is asked for again, and the leg goes on from where the vehicle is. A mode a
-    person set is an intervention: the mission pauses before the tree ticks (executive.intervention).
+    person set is an intervention: the mission pauses before the tree ticks (executive.operator.intervention).
     """
     limits = mission.limits
     go = GoTo(
@@ -246,7 +246,7 @@ def auto_leg(mission: Mission) -> py_trees.behaviour.Behaviour:
     """One leg in AUTO (drive: auto): the horizon on the autopilot, its mission at this leg, AUTO, then the leg as AUTO drives it.
 
     AUTO is checked every tick as GUIDED is in :func:`guided_leg`: asked again if a mode of our own
-    asking left it; a mode a person set pauses the mission (executive.intervention).
+    asking left it; a mode a person set pauses the mission (executive.operator.intervention).
     """
     limits = mission.limits
     sub = mission.vehicle == "sub"  # its depths under the seabed floor, its last waypoint reached at its depth too

@@ -47,11 +47,11 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import OneShotPolicy
 
-from executive import frames
 from executive.behaviours import ForEachLeg, GoTo, GoToLocal, Land, ParameterIs, SetMode, TakeOff, VtolTransition
 from executive.mission.model import Mission, VtolOptions
 from executive.trees.parts import failsafe_guarded, mission_root, preflight, standard_guards
-from executive.vehicles import PROFILES
+from executive.world import frames
+from executive.world.vehicles import PROFILES
 
 #: How close to the hover point (3-D) counts as there: a multicopter stops on a point.
 HOVER_ACCEPTANCE_M = 2.0

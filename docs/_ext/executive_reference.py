@@ -9,7 +9,7 @@ hands the page's Markdown here and the marker is replaced by what :data:`GENERAT
 - ``guards``: each guard's debounce and what it does with no reading or a stale one, from the node catalogue;
 - ``mission``: every field of the mission file from its JSON schema, as ``executive schema`` prints it (the pydantic model's);
 - ``nodes``: the node catalogue, as ``executive behaviours --json`` prints it;
-- ``blackboard``: the documented blackboard keys (``executive.blackboard.KEYS``) by namespace.
+- ``blackboard``: the documented blackboard keys (``executive.world.blackboard.KEYS``) by namespace.
 
 Each generator returns MyST Markdown, so a test can call it without Sphinx (tests/docs/test_reference.py).
 """
@@ -259,7 +259,7 @@ def guards_table(nodes: list[dict[str, Any]] | None = None) -> str:
 
 def blackboard_reference() -> str:
     """Every documented blackboard key by namespace (the module's docstring says what each namespace is)."""
-    from executive import blackboard
+    from executive.world import blackboard
 
     namespaces = dict(re.findall(r"^- ``(/[^`]+)``: (.+)$", blackboard.__doc__ or "", re.M))
     by_space: dict[str, list[blackboard.Key]] = {}

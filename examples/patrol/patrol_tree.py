@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import py_trees
 
-from executive import blackboard
 from executive.autopilot.port import Request
 from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, GoTo, Guard, LinkAlive, SetMode, WaitForGuards, WaitUntil
 from executive.behaviours.actions import CommandAction
-from executive.mavlink_dialect import mavlink
 from executive.mission.model import Mission
-from executive.state import CommandState, GpsFix
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.state import CommandState, GpsFix
 
 
 class EnoughSatellites(Guard):

@@ -13,8 +13,8 @@ from py_trees.common import Status
 
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.state import GpsFix
 from executive.testing import EKF_READY, Harness, ScriptedAutopilot
+from executive.world.state import GpsFix
 from patrol_tree import build
 
 MISSION = load_mission(Path(__file__).with_name("patrol.yaml"))

@@ -9,9 +9,9 @@ from executive.autopilot.port import Capabilities, FenceSettings, Request, VtolS
 from executive.autopilot.rover_motion import MOTION_PARAMS
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.mavlink_dialect import mavlink
-from executive.state import GlobalPosition, HomePosition
-from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
+from executive.world.dialect import mavlink
+from executive.world.state import GlobalPosition, HomePosition
+from executive.world.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 
 #: The RC channel that sets the mode by itself, per firmware (0 disables it): ArduRover MODE_CH (Rover/Parameters.cpp,
 #: default MODE_CHANNEL 8 in Rover/config.h), ArduPlane FLTMODE_CH (ArduPlane/Parameters.cpp, default 8). ArduSub has

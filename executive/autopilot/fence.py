@@ -21,8 +21,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from executive.io.mavlink.mission_protocol import MissionItem
-from executive.mavlink_dialect import mavlink
 from executive.mission.model import GeofenceConfig, RallyPoint, Vertex, Zone
+from executive.world.dialect import mavlink
 
 _M = mavlink
 _FENCE, _RALLY = _M.MAV_MISSION_TYPE_FENCE, _M.MAV_MISSION_TYPE_RALLY

@@ -5,7 +5,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import ClassVar
 
-from executive import geo
 from executive.autopilot.port import Capabilities, FenceSettings, Request, Target, VtolState
 from executive.io.mavlink.commander import Commander, command_outcome
 from executive.io.mavlink.mission_protocol import (
@@ -16,10 +15,11 @@ from executive.io.mavlink.mission_protocol import (
     route_items,
     route_not_on_autopilot,
 )
-from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, HomePosition, TargetAsk
-from executive.vehicles import VehicleProfile
+from executive.world import geo
+from executive.world.dialect import mavlink
+from executive.world.state import GlobalPosition, HomePosition, TargetAsk
+from executive.world.vehicles import VehicleProfile
 
 
 class MavlinkPort:

@@ -4,7 +4,7 @@ Behaviours ask for *intents* (hold, go to a point, take off, land, return, trans
 speed, start the autopilot's route, arm, disarm, a named mode where a tree really needs one) and
 read *capabilities*; a back end (ArduPilot, PX4) turns them into that firmware's messages. Acked
 intents return a :class:`Request`: its ticket and the outcome whose ack answers it
-(``/command/<outcome>`` on the blackboard, :class:`~executive.state.Outcome`). Setpoints have no ack and return nothing. Nothing here
+(``/command/<outcome>`` on the blackboard, :class:`~executive.world.state.Outcome`). Setpoints have no ack and return nothing. Nothing here
 blocks: requests are sent after the tick, as the commander always did.
 """
 
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 from typing import Literal, Protocol
 
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, HomePosition, TargetAsk
-from executive.vehicles import AutopilotName
+from executive.world.state import GlobalPosition, HomePosition, TargetAsk
+from executive.world.vehicles import AutopilotName
 
 VtolState = Literal["FW", "MC"]
 
@@ -49,7 +49,7 @@ class Capabilities:
     safe_mode: str  # where Ctrl-C, a crash or the end of a mission leaves the vehicle
     guided_mode: str  # the mode that follows the executive's targets
     route_mode: str  # the mode that flies the autopilot's own route
-    vehicles: frozenset[str]  # vehicle kinds (executive.vehicles) this firmware drives
+    vehicles: frozenset[str]  # vehicle kinds (executive.world.vehicles) this firmware drives
     transition_anywhere: bool  # a VTOL transition is taken by command in any mode in flight
     takeoff_alt_amsl: bool  # NAV_TAKEOFF's altitude is above sea level (else above home)
     first_item_seq: int  # the seq of the route's first waypoint on the autopilot: 1 after ArduPilot's home item 0, 0 on PX4

@@ -26,14 +26,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 
-from executive import blackboard
 from executive.autopilot.mavlink_port import MavlinkPort
 from executive.autopilot.port import Capabilities, FenceSettings, Request, Target
 from executive.io.mavlink.commander import FORCE_DISARM_MAGIC, Commander, RefusalRetry
 from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.mavlink_dialect import mavlink
-from executive.state import GlobalPosition, HomePosition, MissionTransferStatus, TransferOperation, TransferState
-from executive.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.state import GlobalPosition, HomePosition, MissionTransferStatus, TransferOperation, TransferState
+from executive.world.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 
 OFFBOARD = "OFFBOARD"
 #: Setpoints go out this often while OFFBOARD is wanted or shown: PX4 needs > 2 Hz.

@@ -12,10 +12,10 @@ from executive.autopilot.px4 import Px4Port
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
-from executive.mavlink_dialect import mavlink
 from executive.mission.model import Waypoint
-from executive.state import GlobalPosition, HomePosition, TargetAsk
-from executive.vehicles import VehicleProfile
+from executive.world.dialect import mavlink
+from executive.world.state import GlobalPosition, HomePosition, TargetAsk
+from executive.world.vehicles import VehicleProfile
 
 log = logging.getLogger(__name__)
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from executive.io.mavlink.link import Link
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 #: What the executive says that changes nothing on the vehicle: who it is, what to stream, the parameters it reads, its
 #: reports, acks of a ground station's commands, the obstacle distances it forwards. Anything else counts as commanding.

@@ -15,7 +15,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from executive import blackboard
 from executive.autopilot import AutopilotName
 from executive.autopilot.selection import Autopilot
 from executive.autopilot_link.commanded import CommandWatch
@@ -25,19 +24,20 @@ from executive.autopilot_link.route_keeper import RouteKeeper
 from executive.autopilot_link.safe_state import SURFACE_COMPLETE_MODE, SafePlan, Until, progress, settled, where
 from executive.autopilot_link.safe_state import plan as safe_plan
 from executive.behaviours.reacting import READS, Announce, Reacting
-from executive.clock import Clock
-from executive.intervention import rc_takeover
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link, PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.events import Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
-from executive.vehicles import PROFILES
+from executive.operator.intervention import rc_takeover
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
+from executive.world.vehicles import PROFILES
 
 log = logging.getLogger("executive.runtime")  # the make-safe's lines, as the log and the journal (event kind "runtime") have them
 
@@ -384,7 +384,7 @@ class AutopilotLink:
             found = (
                 "the mode it was in when the executive found it (its boot mode, or one set before; nobody changed it while the executive watched)"
                 if set_by is None
-                else "set by the autopilot itself (its own transition, executive.mode_cause)"
+                else "set by the autopilot itself (its own transition, executive.autopilot.mode_cause)"
             )
             log.info("commanding %s: the vehicle is in %s, %s", ours, mode, found)
             return None

@@ -5,10 +5,10 @@ from __future__ import annotations
 import logging
 import math
 
-from executive import blackboard
 from executive.autopilot.port import AutopilotPort
 from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS
-from executive.clock import Clock
+from executive.world import blackboard
+from executive.world.clock import Clock
 
 log = logging.getLogger(__name__)
 

@@ -22,11 +22,11 @@ from py_trees.common import Status
 
 from executive.autopilot.port import AutopilotPort
 from executive.behaviours.zones import ZonesOnAutopilot, puts_zones_on_autopilot
-from executive.clock import Clock
 from executive.mission.events import Replaced, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.mission.port import MissionPort
+from executive.world.clock import Clock
 
 log = logging.getLogger(__name__)
 

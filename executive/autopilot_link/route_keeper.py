@@ -35,8 +35,6 @@ import logging
 from dataclasses import dataclass
 from enum import StrEnum
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import (
     MissionTransfer,
@@ -47,12 +45,14 @@ from executive.io.mavlink.mission_protocol import (
     route_items,
     route_not_on_autopilot,
 )
-from executive.mavlink_dialect import mavlink
 from executive.mission.events import Replaced, RouteChanged, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.mission.route import Route
-from executive.state import CommandState, CommandStatus, HomePosition, Outcome
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import mavlink
+from executive.world.state import CommandState, CommandStatus, HomePosition, Outcome
 
 log = logging.getLogger(__name__)
 

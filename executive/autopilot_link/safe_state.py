@@ -24,8 +24,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
 
-from executive.mode_cause import SUB_AT_SURFACE_M
-from executive.state import GlobalPosition
+from executive.autopilot.mode_cause import SUB_AT_SURFACE_M
+from executive.world.state import GlobalPosition
 
 Read = Callable[[str], object]
 

@@ -6,7 +6,7 @@ be negative"), straight to the point in 3-D, and counts it reached within WPNAV_
 3-D, position and depth (libraries/AC_WPNav/AC_WPNav.cpp advance_wp_target_along_track; ArduSub gives
 its waypoint navigation no next waypoint, so every waypoint is a stop). It does not guard the seabed
 under a depth item: so the executive bounds every depth it gives by the seabed floor
-(:func:`executive.seabed.depth_floor`), as GUIDED bounds its depth targets.
+(:func:`executive.world.seabed.depth_floor`), as GUIDED bounds its depth targets.
 
 ArduSub has no mission change detection (ArduRover's AP_Mission_ChangeDetector is not used): an item
 rewritten while AUTO flies it is flown as it was read when it started (AP_Mission::update runs the
@@ -26,8 +26,8 @@ from executive.behaviours.auto_legs import HorizonOnAutopilot
 from executive.behaviours.auto_route import AUTO
 from executive.behaviours.motion import seabed_log
 from executive.mission.model import Waypoint
-from executive.seabed import Floor, depth_floor
-from executive.state import GlobalPosition
+from executive.world.seabed import Floor, depth_floor
+from executive.world.state import GlobalPosition
 
 #: A depth given is kept while it is no deeper than the floor and at most this much shallower than the floor now allows:
 #: the floor moves with every sonar reading, a mission write does not.

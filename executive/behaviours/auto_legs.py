@@ -17,13 +17,13 @@ from collections.abc import Sequence
 
 from py_trees.common import Status
 
-from executive import geo
 from executive.autopilot import AutopilotPort
 from executive.behaviours.auto_route import AUTO, MissionTransferFollower
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
 from executive.mission.port import MissionPort
-from executive.state import (
+from executive.world import geo
+from executive.world.state import (
     MISSION_STATE_COMPLETE,
     GlobalPosition,
     HomePosition,

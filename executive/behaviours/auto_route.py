@@ -18,13 +18,13 @@ from __future__ import annotations
 
 from py_trees.common import Status
 
-from executive import geo
 from executive.autopilot import AutopilotPort
 from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
-from executive.clock import Clock
 from executive.mission.port import MissionPort
 from executive.mission.route import Route
-from executive.state import (
+from executive.world import geo
+from executive.world.clock import Clock
+from executive.world.state import (
     MISSION_STATE_COMPLETE,
     GlobalPosition,
     HomePosition,

@@ -33,8 +33,8 @@ from typing import Any
 import py_trees
 from py_trees.common import Access
 
-from executive import blackboard
-from executive.clock import Clock
+from executive.world import blackboard
+from executive.world.clock import Clock
 
 
 class ExecutiveBehaviour(py_trees.behaviour.Behaviour):

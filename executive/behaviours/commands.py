@@ -13,11 +13,11 @@ from __future__ import annotations
 
 from py_trees.common import Status
 
-from executive import blackboard
 from executive.autopilot import AutopilotPort, Request
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
-from executive.state import CommandState, CommandStatus, Outcome
+from executive.world import blackboard
+from executive.world.state import CommandState, CommandStatus, Outcome
 
 
 def refusal_reason(status: CommandStatus | None, request: Request | None, statustext: tuple[int, str] | None) -> str | None:

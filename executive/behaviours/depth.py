@@ -15,8 +15,8 @@ from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.commands import CommandAction
 from executive.behaviours.motion import seabed_log
 from executive.mission.model import Waypoint
-from executive.seabed import depth_floor, depth_for_altitude
-from executive.state import GlobalPosition, Outcome
+from executive.world.seabed import depth_floor, depth_for_altitude
+from executive.world.state import GlobalPosition, Outcome
 
 
 class _VerticalSetpoint(TimedBehaviour):
@@ -100,7 +100,7 @@ class ChangeDepth(_VerticalSetpoint):
     ALT_HOLD (the depth alone). A leg with control_mode ``altitude`` or no depth: SUCCESS at once
     (ChangeAltitude's job, or nothing to do), so one tree can put both in every leg.
 
-    The seabed floor (:func:`executive.seabed.depth_floor`): never deeper than ``clearance_m`` above
+    The seabed floor (:func:`executive.world.seabed.depth_floor`): never deeper than ``clearance_m`` above
     the seabed as the sonar reads it. A depth the water cannot hold is, by ``too_deep``: ``hold``,
     held at the floor and the leg judged reached there (a warning with the figures, a journal event);
     ``fail``, FAILURE once the sonar shows it. With the sonar lost the descent stops where the sub
@@ -185,11 +185,11 @@ class ChangeAltitude(_VerticalSetpoint):
     """Sub: reach the current leg's ``altitude_m`` above the seabed (control_mode ``altitude``), where the vehicle is.
 
     Flown as depth targets computed from the measured depth and the downward rangefinder
-    (:func:`executive.seabed.depth_for_altitude`), re-sent every ``resend_s`` as the reading
+    (:func:`executive.world.seabed.depth_for_altitude`), re-sent every ``resend_s`` as the reading
     changes: ArduSub silently drops a terrain-frame target. With the seabed beyond the
     rangefinder's reach it dives, without overshooting, until the reading is good. Confirmed by the
     rangefinder (``/vehicle/altitude_above_bottom_m``). Other legs: SUCCESS at once. A reading
-    that is invalid or silent (:func:`executive.seabed.depth_floor`: the sonar lost) holds the depth
+    that is invalid or silent (:func:`executive.world.seabed.depth_floor`: the sonar lost) holds the depth
     the sub is at: no descent on a sonar that says nothing.
     """
 

@@ -53,7 +53,7 @@ from executive.mission.failsafes import JUDGED_AFTER_PERSON, REACTION_MODES, Fai
 from executive.mission.port import MissionPort
 from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
 from executive.sensing.vtol_flight import flies_as_plane
-from executive.vehicles import PROFILES
+from executive.world.vehicles import PROFILES
 
 log = logging.getLogger(__name__)
 

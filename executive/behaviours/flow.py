@@ -13,9 +13,9 @@ from executive.autopilot import AutopilotPort, Request
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
 from executive.behaviours.reacting import READS, Announce, Reacting
-from executive.clock import Clock
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.port import MissionPort
+from executive.world.clock import Clock
 
 log = logging.getLogger(__name__)
 

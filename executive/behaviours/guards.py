@@ -30,8 +30,8 @@ from typing import Any
 from py_trees.common import Status
 
 from executive.behaviours.base import ExecutiveBehaviour
-from executive.clock import Clock
-from executive.state import Battery, EkfFlags, EkfStatus
+from executive.world.clock import Clock
+from executive.world.state import Battery, EkfFlags, EkfStatus
 
 _EPSILON_S = 1e-6  # ten ticks of 0.1 s add up to a hair under 1 s
 

@@ -13,14 +13,14 @@ from typing import Literal
 
 from py_trees.common import Status
 
-from executive import blackboard, geo
 from executive.autopilot import AutopilotPort, Request, Target
 from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.commands import refusal_reason
 from executive.mission.model import Waypoint
-from executive.seabed import depth_floor, depth_for_altitude
-from executive.state import GlobalPosition, Outcome
+from executive.world import blackboard, geo
+from executive.world.seabed import depth_floor, depth_for_altitude
+from executive.world.state import GlobalPosition, Outcome
 
 #: The seabed floor's warnings: the journal's event kind "seabed".
 seabed_log = logging.getLogger("executive.behaviours.seabed")
@@ -69,7 +69,7 @@ class GoTo(TimedBehaviour):
       reports it as its target (``/vehicle/target_set_by`` ``us``): ArduPilot gives no ack for it and
       drops it silently outside GUIDED. Once reported it is sent again only while the vehicle stands
       (stopped short of the acceptance radius: a new target drives it on): a ground station's Go-to
-      that replaced it must be seen first (a person's, :mod:`executive.target_watch`), never overwritten
+      that replaced it must be seen first (a person's, :mod:`executive.autopilot.target_watch`), never overwritten
       under way. A sub's waypoint goes with its depth (an
       altitude leg: the depth that keeps its height above the seabed, from the measured depth and
       rangefinder, re-sent as the seabed changes), so a leg never brings the sub up.
@@ -345,9 +345,9 @@ class GoTo(TimedBehaviour):
         return ours and self.get("/vehicle/target_set_by") == "us"
 
     def _as_depth(self, target: Waypoint, position: GlobalPosition | None) -> Waypoint | None:
-        """A sub's altitude leg as a depth target from the measured depth and rangefinder (executive.seabed: ArduSub drops
+        """A sub's altitude leg as a depth target from the measured depth and rangefinder (executive.world.seabed: ArduSub drops
         terrain-frame targets); the last one again while the reading says nothing, the current depth before any. Any
-        sub's depth no deeper than the seabed floor (``seabed_clearance_m``: :func:`executive.seabed.depth_floor`)."""
+        sub's depth no deeper than the seabed floor (``seabed_clearance_m``: :func:`executive.world.seabed.depth_floor`)."""
         if target.control_mode != "altitude" or target.altitude_m is None:
             return self._above_floor(target, position)
         if position is None:

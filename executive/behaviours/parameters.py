@@ -29,7 +29,7 @@ class ParameterIs(TimedBehaviour):
         "ask_every_s": "how often the value is asked for until it comes",
         "label": "the node's name (name is the parameter's)",
     }
-    #: Parameters kept under other attribute names (read back by executive.recompose); label is the node's name.
+    #: Parameters kept under other attribute names (read back by executive.tree.formats.recompose); label is the node's name.
     param_attributes = {"name": "parameter", "autopilot": "firmware", "label": "name"}
     autopilot: AutopilotPort
 

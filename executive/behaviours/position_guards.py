@@ -10,10 +10,10 @@ from collections.abc import Sequence
 from typing import Protocol
 
 from executive.behaviours.guards import Guard
-from executive.geo import distance
-from executive.geofence import Geofence
 from executive.mission.model import Mission, Range, Waypoint, waypoint_label
-from executive.state import GlobalPosition, HomePosition, Rangefinder
+from executive.world.geo import distance
+from executive.world.geofence import Geofence
+from executive.world.state import GlobalPosition, HomePosition, Rangefinder
 
 #: What a guard of the vehicle's position does without one, or with an old one (its ``unknown_or_stale``).
 POSITION_RULE = (
@@ -115,7 +115,7 @@ class RangefinderReaches(Guard):
 
     Its range is what the autopilot reports in DISTANCE_SENSOR (min/max_distance: ArduPilot's
     RNGFND1_MIN and RNGFND1_MAX). An altitude leg is flown from the measured height
-    (:mod:`executive.seabed`), so each ``altitude_m`` must lie ``margin_m`` inside that range;
+    (:mod:`executive.world.seabed`), so each ``altitude_m`` must lie ``margin_m`` inside that range;
     otherwise it fails naming the waypoint, the parameter and the value it needs. No downward
     rangefinder reported fails too. A route without altitude legs passes.
 

@@ -24,17 +24,17 @@ from dataclasses import dataclass
 
 from py_trees.common import Status
 
-from executive import blackboard
 from executive.autopilot import AutopilotPort, Request
 from executive.behaviours.auto_route import AUTO
 from executive.behaviours.base import ExecutiveBehaviour
 from executive.behaviours.commands import refusal_reason
-from executive.clock import Clock
 from executive.mission.lifecycle import Refused
 from executive.mission.model import Waypoint
 from executive.mission.port import MissionPort
 from executive.mission.route import RouteError, add_at_end, clear, current_index, remove_current
-from executive.state import EkfStatus, GlobalPosition, Outcome, RcSwitches, SwitchPosition
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import EkfStatus, GlobalPosition, Outcome, RcSwitches, SwitchPosition
 
 log = logging.getLogger(__name__)
 

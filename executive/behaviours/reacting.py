@@ -22,11 +22,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from executive import blackboard
 from executive.autopilot import AutopilotPort, Request
 from executive.autopilot.fallbacks import DISARM, Fallback, chain, fallback
-from executive.clock import Clock
-from executive.state import CommandState, CommandStatus, EkfStatus, Outcome
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import CommandState, CommandStatus, EkfStatus, Outcome
 
 log = logging.getLogger("executive.behaviours.failsafe")  # the journal's event kind: "failsafe"
 
@@ -262,7 +262,7 @@ class Reacting:
             if asking is not None:
                 asking.was_shown = True
             return True
-        # the autopilot went on from it by itself, by the firmware's own cause (executive.mode_cause: a sub at the surface)
+        # the autopilot went on from it by itself, by the firmware's own cause (executive.autopilot.mode_cause: a sub at the surface)
         return asking is not None and asking.was_shown and self.host.get("/vehicle/mode_set_by") == "autopilot"
 
     # -- internals ---------------------------------------------------------------------------

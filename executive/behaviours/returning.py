@@ -26,12 +26,12 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from executive import geo
 from executive.autopilot import Target
 from executive.behaviours.reacting import Announce, Host, Reacting
 from executive.mission.return_path import ReturnPath, ReturnPlanner
-from executive.state import GlobalPosition, HomePosition
-from executive.vehicles import PROFILES
+from executive.world import geo
+from executive.world.state import GlobalPosition, HomePosition
+from executive.world.vehicles import PROFILES
 
 log = logging.getLogger("executive.behaviours.failsafe")  # the journal's event kind: "failsafe"
 

@@ -11,8 +11,8 @@ from executive.behaviours.guards import Guard
 from executive.instruments.sampler import Sampler
 from executive.mission.model import Waypoint
 from executive.mission.port import MissionPort
-from executive.state import GlobalPosition, SamplerState, SamplerStatus
-from executive.state import Sample as SampleRecord
+from executive.world.state import GlobalPosition, SamplerState, SamplerStatus
+from executive.world.state import Sample as SampleRecord
 
 
 class Sample(TimedBehaviour):

@@ -7,11 +7,11 @@ from typing import Literal
 
 from py_trees.common import Status
 
-from executive import blackboard, frames
 from executive.autopilot import AutopilotPort, Request, VtolState
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.commands import CommandAction, refusal_reason
-from executive.state import GlobalPosition, HomePosition, Outcome
+from executive.world import blackboard, frames
+from executive.world.state import GlobalPosition, HomePosition, Outcome
 
 
 class TakeOff(CommandAction):

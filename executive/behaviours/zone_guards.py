@@ -20,7 +20,7 @@ from executive.behaviours.guards import Guard
 from executive.behaviours.position_guards import POSITION_RULE
 from executive.mission.model import Mission
 from executive.mission.zones import Plane, Zones
-from executive.state import GlobalPosition
+from executive.world.state import GlobalPosition
 
 if TYPE_CHECKING:
     import shapely

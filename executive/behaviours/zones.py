@@ -20,10 +20,10 @@ from py_trees.common import Status
 
 from executive.autopilot.fence import ZoneItems, fence_items, inclusion_shapes, rally_items
 from executive.behaviours.auto_route import MissionTransferFollower
-from executive.clock import Clock
-from executive.mavlink_dialect import mavlink
 from executive.mission.model import GeofenceConfig, Mission, RallyPoint
-from executive.state import MissionTransferStatus
+from executive.world.clock import Clock
+from executive.world.dialect import mavlink
+from executive.world.state import MissionTransferStatus
 
 log = logging.getLogger(__name__)
 

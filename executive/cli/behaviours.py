@@ -7,9 +7,9 @@ import difflib
 import json
 import sys
 
-from executive.catalogue import KINDS, Catalogue, NodeSpec, ParamSpec, load_behaviours
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.registry import PluginError
+from executive.tree.catalogue import KINDS, Catalogue, NodeSpec, ParamSpec, load_behaviours
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

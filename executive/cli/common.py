@@ -5,12 +5,12 @@ from __future__ import annotations
 import sys
 from typing import TYPE_CHECKING
 
-from executive.admission import load_mission
+from executive.admission.checks import load_mission
 from executive.cli import BadInput, number
-from executive.clock import Clock
 from executive.io.mavlink.link import load_signing_key
 from executive.mission.errors import MissionError
 from executive.mission.model import Mission
+from executive.world.clock import Clock
 
 if TYPE_CHECKING:
     from executive.sim.faults import FaultInjector

@@ -19,8 +19,8 @@ from typing import Any
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, number
 from executive.io.control import default_socket_path, request
-from executive.snapshots import TickState, render_tree
-from executive.status import status_line
+from executive.operator.status import status_line
+from executive.tree.ticks import TickState, render_tree
 
 REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode")
 #: How long (wall clock) to wait for the autopilot's answer to arm, disarm or mode.

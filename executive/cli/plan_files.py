@@ -1,8 +1,8 @@
 """``executive import FILE -o MISSION.yaml`` and ``executive export MISSION --format plan|waypoints|btcpp``: other tools' files.
 
 Both subcommands live here (``register`` adds the two): QGroundControl ``.plan`` and Mission Planner
-``.waypoints`` files in and out, through :mod:`executive.mission.plan_files`; a mission's tree as
-BehaviorTree.CPP v4 XML (Groot2) in and out, through :mod:`executive.btcpp`.
+``.waypoints`` files in and out, through :mod:`executive.mission.formats.plan_files`; a mission's tree as
+BehaviorTree.CPP v4 XML (Groot2) in and out, through :mod:`executive.tree.formats.btcpp`.
 """
 
 from __future__ import annotations
@@ -16,14 +16,14 @@ from typing import Any
 
 import yaml
 
-from executive import btcpp, recompose
-from executive.admission import load_mission_text
+from executive.admission.checks import load_mission_text
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report, print_errors
 from executive.cli.examples import mission_file
 from executive.mission.errors import MissionError, format_path
 from executive.mission.errors import Path as MissionPath
-from executive.mission.plan_files import WAITS_FOR_ARMING, WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
+from executive.mission.formats.plan_files import WAITS_FOR_ARMING, WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
+from executive.tree.formats import btcpp, recompose
 
 KINDS = ("rover", "boat", "sub", "vtol")
 
@@ -115,7 +115,7 @@ def _format_from_suffix(output: str | None) -> str | None:
 
 def _catalogue() -> Any:
     """The node catalogue (imported only for a tree: it imports every behaviour)."""
-    from executive.catalogue import catalogue
+    from executive.tree.catalogue import catalogue
 
     return catalogue()
 

@@ -49,10 +49,10 @@ def _until_stopped() -> None:
 
 def _serve_groot2(args: argparse.Namespace) -> int:
     """The recording played to Groot2 clients until Ctrl-C or SIGTERM."""
-    from executive.groot2.replay import ReplayFeed
-    from executive.groot2.server import Groot2AddressError, Groot2Server, parse_address
-    from executive.groot2.view import MonitorView
-    from executive.snapshots import Recording
+    from executive.observers.groot2.replay import ReplayFeed
+    from executive.observers.groot2.server import Groot2AddressError, Groot2Server, parse_address
+    from executive.observers.groot2.view import MonitorView
+    from executive.observers.snapshots import Recording
 
     try:
         address = parse_address(args.groot2)
@@ -87,8 +87,8 @@ def _serve_groot2(args: argparse.Namespace) -> int:
 
 def _serve(args: argparse.Namespace) -> int:
     """The recording on the live view's page until Ctrl-C or SIGTERM."""
-    from executive.web.replay import ReplaySource
-    from executive.web.server import WebAddressError, WebServer, parse_address
+    from executive.observers.web.replay import ReplaySource
+    from executive.observers.web.server import WebAddressError, WebServer, parse_address
 
     try:
         address = parse_address(args.web)
@@ -110,7 +110,7 @@ def _serve(args: argparse.Namespace) -> int:
 
 
 def main(args: argparse.Namespace) -> int:
-    from executive.snapshots import render, replay
+    from executive.observers.snapshots import render, replay
 
     try:
         if args.web is not None and args.groot2 is not None:
@@ -137,7 +137,7 @@ def convert_main(args: argparse.Namespace) -> int:
     """``executive convert OLD NEW.mcap``: exit 2 for a file that is not a snapshot file of JSON lines (said where)."""
     from pathlib import Path
 
-    from executive.snapshots import convert
+    from executive.observers.snapshots import convert
 
     old, new = Path(args.old), Path(args.new)
     if new.suffix.lower() != ".mcap":
@@ -162,7 +162,7 @@ def layout_main(args: argparse.Namespace) -> int:
     """``executive foxglove-layout [-o layout.json]``: Foxglove's layout JSON, to import in Foxglove (Layouts, Import from file)."""
     import json
 
-    from executive.foxglove_layout import layout
+    from executive.observers.foxglove.layout import layout
 
     text = json.dumps(layout(), indent=2) + "\n"
     if args.output is None:

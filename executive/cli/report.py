@@ -77,8 +77,8 @@ def render(report: dict[str, Any]) -> str:
 
 
 def main(args: argparse.Namespace) -> int:
-    from executive.clock import ScaledClock
-    from executive.journal import Journal
+    from executive.observers.journal import Journal
+    from executive.world.clock import ScaledClock
 
     # a database has no line and column to point at: the file and why, as the other commands say of what is not a text file
     if not Path(args.journal).is_file():
@@ -105,7 +105,7 @@ def main(args: argparse.Namespace) -> int:
 
 def _from_mcap(args: argparse.Namespace) -> int:
     """The report of a run recorded with ``run --snapshots FILE.mcap`` (no samples nor route edits: the journal has them)."""
-    from executive.mcap_report import report
+    from executive.observers.mcap.report import report
 
     try:
         found = report(Path(args.journal), args.run)

@@ -12,45 +12,36 @@ import sys
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, Any
 
-from executive.assembly import (
-    Plug,
-    build_runtime,
-    can_base,
-    control_socket,
-    ground_stations,
-    journal_recorder,
-    obstacle_camera,
-    service_manager,
-    snapshot_recorder,
-)
 from executive.autopilot_link import SURVEY_S, SeveralAutopilots
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_INTERRUPTED, EXIT_NO_VEHICLE, EXIT_OK, BadInput, NoVehicle, number
 from executive.cli.common import load_or_report, mavlink_id
 from executive.cli.examples import fault_file, mission_file
 from executive.cli.run_checks import check_run
-from executive.clock import ScaledClock
 from executive.io.control import default_socket_path, socket_alive
 from executive.io.mavlink.endpoint import Unreachable
 from executive.io.mavlink.link import PymavlinkLink
 from executive.io.storage import Storage
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
-from executive.journal import Journal, JournalLogHandler, ResumePoint
-from executive.logs import attach_live_line, setup_logging, use_clock
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
-from executive.pacing import SpeedGovernor, keeping_time
-from executive.progress import Progress
-from executive.runtime import Outcome
-from executive.snapshots import SnapshotRecorder
+from executive.mission.resume import ResumePoint
+from executive.observers.journal import Journal, JournalLogHandler, journal_recorder
+from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
+from executive.operator.logs import attach_live_line, setup_logging, use_clock
+from executive.operator.progress import Progress
+from executive.runtime.assembly import Plug, build_runtime, can_base, control_socket, ground_stations, obstacle_camera, service_manager
+from executive.runtime.loop import Outcome
+from executive.runtime.pacing import SpeedGovernor, keeping_time
+from executive.world.clock import ScaledClock
 
 if TYPE_CHECKING:
     import socket
 
     import can
 
-    from executive.foxglove_live import FoxgloveSink
+    from executive.observers.foxglove.live import FoxgloveSink
+    from executive.observers.web.server import WebServer
     from executive.sim.faults import FaultInjector
-    from executive.web.server import WebServer
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -308,7 +299,7 @@ def _web_server(args: argparse.Namespace, stack: contextlib.ExitStack) -> WebSer
         if args.web_token_file:
             raise BadInput("--web-token-file needs --web [HOST:]PORT")
         return None
-    from executive.web.server import WebAddressError, open_server
+    from executive.observers.web.server import WebAddressError, open_server
 
     try:
         server, told = open_server(args.web, args.web_token_file)
@@ -325,7 +316,7 @@ def _foxglove(args: argparse.Namespace, stack: contextlib.ExitStack) -> Foxglove
     """The Foxglove server of --foxglove, listening (BadInput: a bad address, no SDK; NoVehicle: the port cannot be had), closed with ``stack``."""
     if args.foxglove is None:
         return None
-    from executive.foxglove_live import FoxgloveAddressError, FoxgloveSink, parse_address
+    from executive.observers.foxglove.live import FoxgloveAddressError, FoxgloveSink, parse_address
 
     try:
         host, port = parse_address(args.foxglove)
@@ -345,9 +336,9 @@ def _groot2(args: argparse.Namespace, stack: contextlib.ExitStack) -> list[Plug]
     """The Groot2 publisher of --groot2, listening (BadInput: a bad address; NoVehicle: the ports cannot be had), closed with ``stack``."""
     if args.groot2 is None:
         return []
-    from executive.groot2.live import groot2_monitor
-    from executive.groot2.server import Groot2AddressError, Groot2Server, parse_address
-    from executive.groot2.view import MonitorView
+    from executive.observers.groot2.live import groot2_monitor
+    from executive.observers.groot2.server import Groot2AddressError, Groot2Server, parse_address
+    from executive.observers.groot2.view import MonitorView
 
     try:
         address = parse_address(args.groot2)
@@ -419,7 +410,7 @@ def _plugs(
     if obstacle_socket is not None:
         plugs.append(obstacle_camera(obstacle_socket))
     if web is not None:
-        from executive.web.plug import live_view  # the live view's modules only with --web
+        from executive.observers.web.plug import live_view  # the live view's modules only with --web
 
         plugs.append(live_view(web))
     return plugs

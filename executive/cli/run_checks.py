@@ -3,9 +3,9 @@
 ``executive run`` and ``run --wait`` call :func:`check_run` first thing; ``executive service install``
 calls it on the very command line its unit will run (so a service is never installed to fail at
 boot with exit 2, which its ``RestartPreventExitStatus`` would then never retry); ``executive
-validate`` calls the mission's part of it (:func:`check_mission`: :func:`executive.admission.refusals`
+validate`` calls the mission's part of it (:func:`check_mission`: :func:`executive.admission.checks.refusals`
 and the mission's simulator event file), and a running executive checks each mission ``ctl upload``
-brings with :func:`executive.admission.refusals`. A refusal is :class:`~executive.cli.BadInput`
+brings with :func:`executive.admission.checks.refusals`. A refusal is :class:`~executive.cli.BadInput`
 (exit 2) naming the option or the mission field and why. What only the moment of starting can tell (an
 instrument that does not open, a control socket another executive serves, a port in use) is
 ``run``'s alone.
@@ -18,13 +18,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from executive import admission
+from executive.admission import checks as admission
 from executive.cli import BadInput
 from executive.cli.common import print_errors, signing_key_arg
 from executive.io.mavlink.endpoint import BadEndpoint, check_endpoint
 from executive.mission.errors import MissionError
 from executive.mission.model import Mission
-from executive.pacing import MAX_TICKS_PER_WALL_S
+from executive.runtime.pacing import MAX_TICKS_PER_WALL_S
 
 if TYPE_CHECKING:
     from executive.sim.faults import Fault
@@ -63,7 +63,7 @@ def refusal(mission: Mission, *, autopilot: str | None, simulator: bool) -> str 
 def check_mission(mission_file: str, mission: Mission, *, autopilot: str | None, simulator: bool) -> None:
     """What ``run`` refuses of the mission itself, with ``--autopilot`` ``autopilot``, on the built-in ``simulator`` (else ``--mavlink``).
 
-    BadInput with the first refusal (:func:`executive.admission.refusals`); MissionError with every
+    BadInput with the first refusal (:func:`executive.admission.checks.refusals`); MissionError with every
     located error of the mission's simulator event file (read with the simulator only). The same
     checks and words as :func:`check_run`'s.
     """
@@ -76,7 +76,7 @@ def check_mission(mission_file: str, mission: Mission, *, autopilot: str | None,
 def speedup_refusal(rate_hz: float, speedup: float) -> str | None:
     """Why the built-in simulator cannot run ``speedup`` times faster at ``rate_hz`` ticks a second, if it cannot.
 
-    ``rate_hz * speedup`` ticks per wall second at :data:`~executive.pacing.MAX_TICKS_PER_WALL_S` or more
+    ``rate_hz * speedup`` ticks per wall second at :data:`~executive.runtime.pacing.MAX_TICKS_PER_WALL_S` or more
     is refused: ``--speedup 200`` at 10 Hz is 2000.
     """
     asked = rate_hz * speedup
@@ -171,7 +171,7 @@ def _check_other_inputs(args: argparse.Namespace) -> None:
     if args.web is None and args.web_token_file:
         raise BadInput("--web-token-file needs --web [HOST:]PORT")
     if args.web is not None:
-        from executive.web.server import WebAddressError, parse_address, read_token
+        from executive.observers.web.server import WebAddressError, parse_address, read_token
 
         try:
             parse_address(args.web)

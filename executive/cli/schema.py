@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
-from executive.mission_schema import mission_json_schema_text
+from executive.tree.schema import mission_json_schema_text
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

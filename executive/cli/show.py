@@ -10,11 +10,11 @@ from pathlib import Path
 
 import py_trees
 
-from executive import mission_tree
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report
 from executive.cli.examples import mission_file
-from executive.tree_drawing import dot_graph, unicode_tree
+from executive.tree import select as mission_tree
+from executive.tree.drawing import dot_graph, unicode_tree
 
 FORMATS = ("ascii", "unicode", "dot", "svg", "png")
 #: The format an output file's suffix names (without --format).

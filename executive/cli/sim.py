@@ -13,13 +13,13 @@ from typing import TYPE_CHECKING
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput, NoVehicle, number
 from executive.cli.common import faults_or_report, mavlink_id, signing_key_arg
 from executive.cli.examples import fault_file
-from executive.clock import ScaledClock
 from executive.io.mavlink.endpoint import unreachable
-from executive.logs import setup_logging
+from executive.operator.logs import setup_logging
 from executive.sim.clients import ClientAddressError
 from executive.sim.firmware import DEFAULT_HOME, Home
 from executive.sim.registry import AUTOPILOTS, FIRMWARES, firmwares_for
 from executive.sim.server import SimServer
+from executive.world.clock import ScaledClock
 
 if TYPE_CHECKING:
     import can

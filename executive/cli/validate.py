@@ -1,7 +1,7 @@
 """``executive validate MISSION...``: check mission files without running them; a directory stands for its ``*.yaml`` files.
 
 A file is refused as ``executive run`` would refuse it, in the same words: the file itself and
-its tree, instrument and plugins (:func:`executive.admission.load_mission`), then what run refuses
+its tree, instrument and plugins (:func:`executive.admission.checks.load_mission`), then what run refuses
 of the mission on the built-in simulator (``--real-vehicle``: as with ``run --mavlink``) and, with
 ``--autopilot``, that firmware (:func:`executive.cli.run_checks.check_mission`). The installed
 plugins (trees, behaviours, instruments) are checked too: one that cannot be loaded is named with
@@ -18,7 +18,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from executive.admission import load_mission, plugin_problems
+from executive.admission.checks import load_mission, plugin_problems
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput
 from executive.cli.examples import mission_file
 from executive.cli.run_checks import check_mission

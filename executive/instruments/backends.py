@@ -3,7 +3,7 @@
 A back end is an :class:`~executive.instruments.sampler.InstrumentSampler` subclass, named by the
 mission's ``sampling.instrument.type`` and found through :mod:`executive.registry`: ``simulated``
 (made-up readings, the built-in simulator only) and ``serial`` (a line-protocol instrument,
-:mod:`executive.io.serial_sampler`) are built in; a package adds one with an entry point, as
+:mod:`executive.instruments.serial`) are built in; a package adds one with an entry point, as
 python-can's interfaces are added::
 
     [project.entry-points."executive.instruments"]
@@ -21,10 +21,10 @@ from importlib.metadata import EntryPoint
 from pydantic import BaseModel, ValidationError
 
 from executive import registry
-from executive.clock import Clock
 from executive.instruments.sampler import InstrumentError, InstrumentSampler
 from executive.mission.errors import Path
 from executive.mission.model import InstrumentConfig, Mission, SamplingOptions
+from executive.world.clock import Clock
 
 GROUP = registry.INSTRUMENTS
 

@@ -2,7 +2,7 @@
 
 A sampler never blocks. :meth:`Sampler.start` asks for a sample and returns a ticket;
 :meth:`Sampler.service` (called by the runtime once per tick, after the tree) takes the reads that
-are due and writes a :class:`~executive.state.SamplerStatus` carrying that ticket; the action
+are due and writes a :class:`~executive.world.state.SamplerStatus` carrying that ticket; the action
 watches for its ticket reaching DONE or FAILED.
 """
 
@@ -19,10 +19,10 @@ from typing import ClassVar, Protocol
 
 from pydantic import BaseModel, ConfigDict
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.mission.model import SamplingOptions
-from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
 
 log = logging.getLogger(__name__)
 

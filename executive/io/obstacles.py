@@ -28,10 +28,10 @@ import socket
 from dataclasses import dataclass
 from typing import Any
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.io.mavlink.link import Link
-from executive.mavlink_dialect import mavlink
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import mavlink
 
 log = logging.getLogger(__name__)
 

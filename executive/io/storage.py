@@ -15,7 +15,7 @@ import threading
 from collections.abc import Callable
 from pathlib import Path
 
-from executive import blackboard
+from executive.world import blackboard
 
 log = logging.getLogger("executive.storage")
 

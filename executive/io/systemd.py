@@ -18,7 +18,7 @@ import os
 import socket
 from collections.abc import Callable, Mapping
 
-from executive.clock import Clock
+from executive.world.clock import Clock
 
 
 class Notifier:

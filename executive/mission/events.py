@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from executive.mission.model import Mission
     from executive.mission.route import Route
     from executive.mission.status import MissionStatus
-    from executive.state import Sample
+    from executive.world.state import Sample
 
 
 class Transition(NamedTuple):

@@ -7,9 +7,9 @@ change or a leg end, and who hears of it; this holds the mission's waypoints and
 
 from __future__ import annotations
 
-from executive import blackboard
 from executive.mission.model import Mission, Waypoint
 from executive.mission.route import Route
+from executive.world import blackboard
 
 
 class RouteProgress:

@@ -47,8 +47,6 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Iterable, Sequence
 
-from executive import blackboard
-from executive.geo import distance
 from executive.mission.errors import format_path
 from executive.mission.events import Announcement, MissionEvents, Replaced, RouteChanged, SampleTaken, Transition
 from executive.mission.legs import RouteProgress
@@ -58,7 +56,9 @@ from executive.mission.rules import cross_field_errors
 from executive.mission.samples import SampleLog
 from executive.mission.status import MissionStatus
 from executive.mission.zones import first_leg_problems
-from executive.state import Sample
+from executive.world import blackboard
+from executive.world.geo import distance
+from executive.world.state import Sample
 
 log = logging.getLogger(__name__)
 
@@ -171,7 +171,7 @@ class MissionState:
     def start(self, vehicle_at: tuple[float, float] | None = None, reason: str = "started from the first waypoint") -> None:
         """READY (or ended) -> RUNNING from the first waypoint; refused (nothing changes) when a waypoint is out of reach of ``vehicle_at``.
 
-        Without a position the runtime checks the distances before the tree first ticks (:mod:`executive.reach`).
+        Without a position the runtime checks the distances before the tree first ticks (:mod:`executive.admission.reach`).
         ``reason``: what the transition says (a run resumed from the journal says where it resumes).
         """
         self._check("start")

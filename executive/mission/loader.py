@@ -153,7 +153,7 @@ def _merged_pairs(node: yaml.MappingNode) -> Iterator[tuple[yaml.Node, yaml.Node
 def load_mission(path: str | os.PathLike[str], checks: Checks[Mission] = cross_field_errors) -> Mission:
     """Read and validate a mission file (its schema, then ``checks``: the rules between fields); raises :class:`MissionError` listing every problem.
 
-    Whether it can run here (its tree, plugins, instrument) is :func:`executive.admission.load_mission`'s to check.
+    Whether it can run here (its tree, plugins, instrument) is :func:`executive.admission.checks.load_mission`'s to check.
     """
     return load_model(path, Mission, checks)
 

@@ -15,9 +15,9 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, model_validator
 
-from executive.geofence import Geofence
 from executive.mission.failsafes import FailsafeReaction, FailsafeRecovery
-from executive.vehicles import AutopilotName
+from executive.world.geofence import Geofence
+from executive.world.vehicles import AutopilotName
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
 ControlMode = Literal["depth", "altitude"]
@@ -30,7 +30,7 @@ _TREE_NAME_RE = re.compile(TREE_NAME)
 
 
 def _tree_value(value: object) -> object:
-    """``tree:`` is a tree's name or a tree composed in the file (a mapping, checked by :mod:`executive.composition`)."""
+    """``tree:`` is a tree's name or a tree composed in the file (a mapping, checked by :mod:`executive.tree.composition`)."""
     if isinstance(value, str) and not _TREE_NAME_RE.match(value):
         raise ValueError("not a tree name (a name, module.path or module.path:function) nor a composed tree (a mapping)")
     if not isinstance(value, str | dict):
@@ -38,7 +38,7 @@ def _tree_value(value: object) -> object:
     return value
 
 
-#: ``tree:``'s JSON schema; ``executive.mission_schema`` puts the node catalogue's in place of the composed tree's.
+#: ``tree:``'s JSON schema; ``executive.tree.schema`` puts the node catalogue's in place of the composed tree's.
 TREE_SCHEMA = {
     "anyOf": [
         {"type": "string", "pattern": TREE_NAME, "description": "a tree by name: built in, a plugin's, or module:function"},
@@ -47,7 +47,7 @@ TREE_SCHEMA = {
     "default": "waypoints",
     "description": "the tree the mission runs",
 }
-#: ``tree:``: a name, or a mapping composing the node catalogue (:mod:`executive.composition`).
+#: ``tree:``: a name, or a mapping composing the node catalogue (:mod:`executive.tree.composition`).
 TreeSpec = Annotated[str | dict[str, Any], BeforeValidator(_tree_value), WithJsonSchema(TREE_SCHEMA)]
 
 

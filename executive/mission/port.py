@@ -16,7 +16,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, Waypoint
 from executive.mission.route import Route
 from executive.mission.status import MissionStatus
-from executive.state import Sample
+from executive.world.state import Sample
 
 
 class MissionPort:

@@ -24,10 +24,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-from executive.geo import distance
 from executive.mission.model import Mission, Waypoint, waypoint_label
 from executive.mission.rules import autopilot_errors
-from executive.state import Sample
+from executive.world.geo import distance
+from executive.world.state import Sample
 
 #: The outcome a journal gives the run of a mission that another replaced (the run of the new one continues it).
 REPLACED = "REPLACED"

@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from executive.geofence import open_ring
 from executive.mission.model import Mission
 from executive.mission.zones import Plane, has_zones
+from executive.world.geofence import open_ring
 
 #: How far beyond the acceptance radius the path's corners keep off a keep-out zone, metres: a rover following a straight
 #: GUIDED leg keeps within about a metre of the line (ArduRover's L1/position controller; the simulated rover within 0.5 m),

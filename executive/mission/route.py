@@ -37,8 +37,8 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from executive import geo
 from executive.mission.model import Home, Waypoint
+from executive.world import geo
 
 #: A waypoint may not end up farther than this from the centre, or be offset farther (a route edit is for a site, not a continent).
 MAX_REACH_M = 1_000_000.0

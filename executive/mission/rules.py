@@ -1,7 +1,7 @@
 """The rules between a mission's fields, each error located at the offending value; the failsafe policy a mission gets.
 
 A rule that needs more than the file (its tree found, its instrument's options) is
-:mod:`executive.admission`'s.
+:mod:`executive.admission.checks`'s.
 """
 
 from __future__ import annotations
@@ -9,8 +9,6 @@ from __future__ import annotations
 import math
 import re
 
-from executive.geo import distance
-from executive.geofence import Geofence, open_ring, polygon_problems
 from executive.mission.errors import Path
 from executive.mission.failsafes import (
     FAILSAFE_CONDITIONS,
@@ -23,7 +21,9 @@ from executive.mission.failsafes import (
 )
 from executive.mission.model import VTOL_HOVER_RADIUS_M, VTOL_MIN_ACCEPTANCE_RADIUS_M, FailsafeRule, Mission, Vertex, VtolOptions, tree_name
 from executive.mission.zones import chord_m, route_errors, zone_shape_errors
-from executive.vehicles import AUTOPILOT_VEHICLES, PROFILES
+from executive.world.geo import distance
+from executive.world.geofence import Geofence, open_ring, polygon_problems
+from executive.world.vehicles import AUTOPILOT_VEHICLES, PROFILES
 
 _PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,15}")
 
@@ -97,7 +97,7 @@ def drive_errors(mission: Mission) -> list[str]:
 #: drive: auto on a sub: why an altitude leg cannot be a mission item. ArduSub's AUTO takes a height above the seabed
 #: (the terrain frame) only from a good sonar reading at the leg's start, else its terrain failsafe
 #: (ArduSub/mode_auto.cpp auto_wp_start: "Terrain data (rangefinder) not available", failsafe_terrain_on_event), and the
-#: executive's depth from the sonar, re-sent as the seabed changes (executive.seabed), cannot be put in one item.
+#: executive's depth from the sonar, re-sent as the seabed changes (executive.world.seabed), cannot be put in one item.
 AUTO_ALTITUDE_LEG = (
     "drive: auto flies a sub's waypoints at their depths: ArduSub's AUTO holds a height above the seabed only with the sonar "
     "reading it when the leg starts (else its terrain failsafe); use control_mode depth, or drive: guided"
@@ -144,7 +144,7 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
         errors.append((("waypoints",), "at least one waypoint is needed"))
     if mission.tree == "goto_sample" and not any(wp.sample for wp in mission.waypoints):
         errors.append((("waypoints",), "goto_sample needs at least one waypoint with sample: true"))
-    if mission.tree != "goto_sample" and name is not None:  # a composed tree: its sample node (executive.composition)
+    if mission.tree != "goto_sample" and name is not None:  # a composed tree: its sample node (executive.tree.composition)
         errors += [(("waypoints", i, "sample"), "only goto_sample takes samples") for i, wp in enumerate(mission.waypoints) if wp.sample]
     for i, wp in enumerate(mission.waypoints):
         here: Path = ("waypoints", i)
@@ -169,7 +169,7 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
             errors.append(((*here, "altitude_m"), "control_mode altitude needs altitude_m"))
         if wp.control_mode != "altitude" and wp.altitude_m is not None:
             errors.append(((*here, "altitude_m"), "altitude_m is only used with control_mode altitude"))
-    if mission.home is not None:  # the distance rule, as the vehicle will judge it at start (executive.reach) if it starts at home
+    if mission.home is not None:  # the distance rule, as the vehicle will judge it at start (executive.admission.reach) if it starts at home
         limit = limits.max_goal_distance_m
         wps = mission.waypoints
         far = chord_m([mission.home.lat] * len(wps), [mission.home.lon] * len(wps), [w.lat for w in wps], [w.lon for w in wps])
@@ -257,7 +257,7 @@ def _vtol_errors(mission: Mission) -> list[tuple[Path, str]]:
 
 def _water_depth_errors(mission: Mission, i: int) -> list[tuple[Path, str]]:
     """Waypoint ``i`` of a sub within the water ``limits.water_depth_m`` states: no deeper than ``limits.altitude_m.min`` above
-    the seabed (the floor the sub is held at in flight, executive.seabed), no higher above the seabed than the water is deep."""
+    the seabed (the floor the sub is held at in flight, executive.world.seabed), no higher above the seabed than the water is deep."""
     limits, wp = mission.limits, mission.waypoints[i]
     water, clearance = limits.water_depth_m, limits.altitude_m.min
     assert water is not None

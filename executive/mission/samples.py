@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from executive import blackboard
 from executive.mission.model import Mission
-from executive.state import Sample
+from executive.world import blackboard
+from executive.world.state import Sample
 
 
 class SampleLog:

@@ -24,9 +24,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from executive.geofence import open_ring
 from executive.mission.errors import Path
 from executive.mission.model import Mission, Zone
+from executive.world.geofence import open_ring
 
 if TYPE_CHECKING:  # shapely is imported where zones are checked: only a mission with zones pays its ~3 MB
     import shapely

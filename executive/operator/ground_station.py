@@ -13,14 +13,14 @@ from __future__ import annotations
 import logging
 from collections.abc import Iterable
 
-from executive.clock import Clock
 from executive.io.mavlink.link import Link
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.mission.events import Announcement, Replaced, Stage, Transition
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.operator.requests import Operator
-from executive.status import StatusSource
+from executive.operator.status import StatusSource
+from executive.world.clock import Clock
+from executive.world.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 
 log = logging.getLogger("executive.operator.gcs")  # the journal's event kind: "gcs", as ever
 

@@ -1,7 +1,7 @@
 """A person's arm, disarm and mode sent through the executive (``ctl``, the web view), followed to what the vehicle did.
 
 A person's command changes the mission only by what it did to the vehicle, as a ground station's does
-(:mod:`executive.intervention`): the mission pauses, hands off, in the tick the heartbeat shows the
+(:mod:`executive.operator.intervention`): the mission pauses, hands off, in the tick the heartbeat shows the
 vehicle in the mode a person asked for (named as the heartbeat shows it: a FOLLOW refused then a SIMPLE
 accepted pauses on SIMPLE), or disarmed after a person's disarm. A command the autopilot refuses,
 leaves unanswered, or accepts and never shows within :data:`FOLLOWED_FOR_S`, changes nothing: a
@@ -16,11 +16,11 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 
-from executive import blackboard
 from executive.autopilot.port import Request
-from executive.clock import Clock
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.state import CommandState, CommandStatus, Outcome
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import CommandState, CommandStatus, Outcome
 
 log = logging.getLogger("executive.operator")  # as the log and the journal (event kind "operator") have it
 

@@ -27,16 +27,16 @@ from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
-from executive import blackboard
-from executive.admission import load_mission_text
-from executive.clock import Clock
+from executive.admission.checks import load_mission_text
 from executive.io.mavlink.mission_protocol import route_not_on_autopilot
 from executive.mission import reload
 from executive.mission import route as routes
 from executive.mission.errors import MissionError
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.model import Mission
-from executive.state import CommandStatus, EkfStatus, GlobalPosition, Outcome
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import CommandStatus, EkfStatus, GlobalPosition, Outcome
 
 if TYPE_CHECKING:
     from executive.autopilot.port import AutopilotPort
@@ -75,7 +75,7 @@ class Operator:
     (checked with ``clock``, when given). ``refuse`` says why a mission cannot run on this vehicle
     (its samples could not be real), if it cannot. ``autopilot`` takes a person's arm, disarm and
     mode (None: refused), followed by ``persons`` to what they did. ``tree`` supplies the running tree for ``tree`` requests
-    (:meth:`executive.waiting.TreeWatch.view`). ``autopilot_name`` names the firmware driven (a
+    (:meth:`executive.tree.waiting.TreeWatch.view`). ``autopilot_name`` names the firmware driven (a
     replacement mission for another is refused).
     """
 

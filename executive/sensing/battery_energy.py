@@ -24,7 +24,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from executive.mission.model import EnergyConfig
-from executive.state import Battery, BatteryStatus
+from executive.world.state import Battery, BatteryStatus
 
 #: A Li-ion/LiPo cell's nominal voltage: PX4's BAT1_N_CELLS turned into a pack voltage.
 CELL_NOMINAL_V = 3.7

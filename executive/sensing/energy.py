@@ -17,8 +17,6 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from executive import blackboard, geo
-from executive.clock import Clock
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import EnergyConfig, Mission, Waypoint
 from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
@@ -26,7 +24,9 @@ from executive.sensing import battery_energy
 from executive.sensing.consumption import HELD_BELOW_M_S, SEEDS, VERTICAL_SEEDS, ConsumptionModel
 from executive.sensing.heading import filterpy_ready, load_filterpy
 from executive.sensing.vtol_flight import flies_as_plane
-from executive.state import Battery, BatteryStatus, EkfStatus, GlobalPosition
+from executive.world import blackboard, geo
+from executive.world.clock import Clock
+from executive.world.state import Battery, BatteryStatus, EkfStatus, GlobalPosition
 
 log = logging.getLogger("executive.energy")  # the journal's event kind: "energy"
 
@@ -109,7 +109,7 @@ def held_s(mission: Mission, leg_index: int, take_off: bool, to_fw_ahead: bool, 
 def waypoint_depth(waypoint: Waypoint, mission: Mission, seabed_m: float | None) -> float | None:
     """How deep a sub goes for ``waypoint``, m; None: it keeps its depth. An altitude above the seabed is a depth under the
     chart's ``limits.water_depth_m``, else the seabed the sonar reads now (``seabed_m``), else the deepest the mission allows
-    (the estimate errs deep); never closer to the seabed than ``limits.altitude_m.min`` (the floor, executive.seabed)."""
+    (the estimate errs deep); never closer to the seabed than ``limits.altitude_m.min`` (the floor, executive.world.seabed)."""
     limits = mission.limits
     seabed = limits.water_depth_m or seabed_m
     if waypoint.control_mode == "altitude" and waypoint.altitude_m is not None:

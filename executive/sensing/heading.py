@@ -46,9 +46,9 @@ from pathlib import Path
 
 import numpy as np
 
-from executive import blackboard
-from executive.clock import Clock
-from executive.state import Attitude, GlobalPosition
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import Attitude, GlobalPosition
 
 log = logging.getLogger(__name__)
 

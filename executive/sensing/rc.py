@@ -22,10 +22,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Literal
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.mission.model import RcConfig
-from executive.state import RcSwitches, SwitchPosition
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import RcSwitches, SwitchPosition
 
 log = logging.getLogger(__name__)
 

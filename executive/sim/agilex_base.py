@@ -26,7 +26,6 @@ from collections import Counter
 
 import can
 
-from executive.clock import Clock
 from executive.io.can.agilex import (
     CONTROL_MODE_CAN,
     CONTROL_MODE_RC,
@@ -45,7 +44,8 @@ from executive.sensing.rc import knob_value, switch_position
 from executive.sim.ardupilot.bunker import BunkerSim
 from executive.sim.faults import BatterySag, FaultInjector, RcLoss
 from executive.sim.firmware import FirmwareSim
-from executive.state import SwitchPosition
+from executive.world.clock import Clock
+from executive.world.state import SwitchPosition
 
 log = logging.getLogger(__name__)
 

@@ -20,7 +20,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 log = logging.getLogger(__name__)
 

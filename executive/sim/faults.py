@@ -25,14 +25,14 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from executive import geo
-from executive.clock import Clock
 from executive.io.mavlink.modes import PX4_MODES
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.errors import MissionError, Path
 from executive.mission.loader import load_model
 from executive.sim.firmware import FirmwareSim
-from executive.vehicles import PROFILES
+from executive.world import geo
+from executive.world.clock import Clock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.vehicles import PROFILES
 
 log = logging.getLogger(__name__)
 

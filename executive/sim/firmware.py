@@ -21,13 +21,13 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import ClassVar
 
-from executive.clock import Clock
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.sim.battery import SPECS, SimBattery
 from executive.sim.mission_store import MissionStore
 from executive.sim.physics.vehicle import VehicleModel
 from executive.sim.proximity import Proximity
-from executive.vehicles import VehicleProfile
+from executive.world.clock import Clock
+from executive.world.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.world.vehicles import VehicleProfile
 
 Home = tuple[float, float, float]  # latitude, longitude (degrees), heading (degrees)
 

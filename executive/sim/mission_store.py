@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import ClassVar, Protocol
 
-from executive.clock import Clock
-from executive.mavlink_dialect import MAVLinkMessage, encoder, mavlink
+from executive.world.clock import Clock
+from executive.world.dialect import MAVLinkMessage, encoder, mavlink
 
 _M = mavlink
 _MISSION = _M.MAV_MISSION_TYPE_MISSION

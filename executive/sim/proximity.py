@@ -10,7 +10,7 @@ the nose), updated only by valid readings. With no message for 0.5 s the sensor 
 
 from __future__ import annotations
 
-from executive.mavlink_dialect import MAVLinkMessage
+from executive.world.dialect import MAVLinkMessage
 
 FACES = 8
 FACE_WIDTH_DEG = 360.0 / FACES

@@ -17,11 +17,11 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 from executive.sim.firmware import DEFAULT_HOME, Home
-from executive.vehicles import PROFILES
+from executive.world.vehicles import PROFILES
 
 if TYPE_CHECKING:
-    from executive.clock import Clock
     from executive.sim.firmware import FirmwareSim
+    from executive.world.clock import Clock
 
 #: The entry-point group installed packages add simulators in (names ``<firmware>.<kind>``, values ``module:Class``).
 ENTRY_POINT_GROUP = "executive.simulators"

@@ -7,11 +7,11 @@ import threading
 from types import TracebackType
 from typing import TYPE_CHECKING
 
-from executive.clock import Clock, ScaledClock
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT
 from executive.sim.clients import Clients
 from executive.sim.firmware import DEFAULT_HOME, FirmwareSim, Home
 from executive.sim.registry import make_autopilot
+from executive.world.clock import Clock, ScaledClock
+from executive.world.dialect import AUTOPILOT_COMPONENT
 
 if TYPE_CHECKING:
     import can

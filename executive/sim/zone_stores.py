@@ -23,10 +23,10 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 from executive.sim.mission_store import StoredCommand
 from executive.sim.px4.mission_store import Px4MissionStore
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink
 _POLYGONS = frozenset({_M.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION, _M.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION})

@@ -5,7 +5,7 @@ to any project that installs ``executive``. Nothing here touches a socket or the
 
 Tick by tick (:class:`Harness`)
     ``h = Harness.build(mission, root=my_tree)`` sets a tree up as the runtime does, on a
-    :class:`~executive.clock.ManualClock`, with the mission started. Script the inputs between
+    :class:`~executive.world.clock.ManualClock`, with the mission started. Script the inputs between
     ticks with ``h.vehicle.set(vehicle__mode="GUIDED", link__up=True, vehicle__ekf=...)`` (any
     documented blackboard key under ``/vehicle/``, ``/link/``, ``/rc/``, ``/heading/``), tick
     with ``h.tick(dt)``, answer commands with ``h.ack(MAV_CMD_...)`` and assert on
@@ -31,7 +31,7 @@ A whole mission (:class:`Lockstep`)
 A whole runtime, by hand (:class:`RuntimeOnLink`)
     ``r = RuntimeOnLink(mission, root=..., beat=True)``: the runtime over a :class:`FakeLink`, an
     :class:`ObedientAutopilot` answering, its position (the mission's home) with its heartbeat: the
-    runtime ticks no tree before it knows where the vehicle is (the distance rule, :mod:`executive.reach`);
+    runtime ticks no tree before it knows where the vehicle is (the distance rule, :mod:`executive.admission.reach`);
     ``r.tick(n)`` on its manual clock, ``r.modes_sent()``, ``r.texts()``, ``r.status``: for what
     lies around the tree (operator, intervention, plugs).
 

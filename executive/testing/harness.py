@@ -8,18 +8,18 @@ from typing import Any
 import py_trees
 from py_trees.common import Status
 
-from executive import blackboard
 from executive.autopilot.selection import Autopilot
-from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander, command_name
 from executive.io.mavlink.mission_protocol import MissionTransfer
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.mission.port import MissionPort
-from executive.state import Battery, EkfFlags, EkfStatus
 from executive.testing.links import FakeLink, ack
-from executive.vehicles import PROFILES
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.state import Battery, EkfFlags, EkfStatus
+from executive.world.vehicles import PROFILES
 
 #: Where a tick test's clock starts (any positive time: the executive never assumes 0).
 START_S = 100.0
@@ -141,7 +141,7 @@ class Harness:
         FLTMODE_CH 8 on ArduPlane) and an energy rule that cannot judge it (:data:`ENERGY_UNJUDGED`); ``h.vehicle.set(vehicle__battery=None)``
         (or ``vehicle__params=None``, ``energy__not_judged=""``) for one that has not.
         """
-        from executive import mission_tree
+        from executive.tree import select as mission_tree
 
         blackboard.reset()
         clock = clock or ManualClock(START_S)
@@ -224,6 +224,6 @@ class Harness:
 
 
 def _path(node: py_trees.behaviour.Behaviour) -> str:
-    from executive.runtime import behaviour_path
+    from executive.runtime.loop import behaviour_path
 
     return behaviour_path(node)

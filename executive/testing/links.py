@@ -6,7 +6,7 @@ from collections.abc import Callable
 from typing import Any
 
 from executive.io.mavlink.link import MemoryLink
-from executive.mavlink_dialect import MAVLinkMessage, encoder, mavlink
+from executive.world.dialect import MAVLinkMessage, encoder, mavlink
 
 
 class Peer:

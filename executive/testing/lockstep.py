@@ -16,23 +16,23 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from executive.assembly import build_runtime, can_base, obstacle_camera
-from executive.clock import ManualClock
 from executive.io.mavlink.link import MemoryLink
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
-from executive.runtime import Outcome
+from executive.runtime.assembly import build_runtime, can_base, obstacle_camera
+from executive.runtime.loop import Outcome
 from executive.sensing.heading import wait_for_filterpy
 from executive.sim import FirmwareSim, make_autopilot
 from executive.sim.firmware import Home
 from executive.sim.options import firmware_options, simulated_home
 from executive.testing.canbus import VirtualCan
+from executive.world.clock import ManualClock
+from executive.world.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 
 if TYPE_CHECKING:
     import can
 
-    from executive.journal import ResumePoint
+    from executive.mission.resume import ResumePoint
     from executive.sim.agilex_base import SimulatedBase
     from executive.sim.faults import Fault, FaultInjector
 
@@ -163,7 +163,7 @@ class Lockstep:
     the mission's own ``simulator.events`` (a path relative to ``mission_dir``). ``can=True`` puts
     the simulated AgileX base (bunker only) and the runtime on an in-process CAN bus;
     ``obstacles=True`` gives the runtime a camera (:meth:`send_obstacles`). Other keyword arguments
-    go to :func:`~executive.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=``...);
+    go to :func:`~executive.runtime.assembly.build_runtime` (``root=``, ``progress=``, ``plugs=``...);
     ``options_for_clock(clock)`` returns more of them, made with the simulation's clock (a journal's
     plug); ``injector(faults, clock)`` makes the fault injector (a subclass that watches the vehicle).
     ``firmware`` options go to the simulated autopilot; ``autopilot="px4"`` simulates PX4

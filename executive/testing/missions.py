@@ -5,7 +5,7 @@ from __future__ import annotations
 
 def mission_errors(text: str, filename: str = "m.yaml") -> list[str]:
     """Every located error of a mission text (``FILE:LINE:COL: field: why``; none when it is valid)."""
-    from executive.admission import load_mission_text
+    from executive.admission.checks import load_mission_text
     from executive.mission.errors import MissionError
 
     try:

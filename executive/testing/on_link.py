@@ -4,22 +4,22 @@ from __future__ import annotations
 
 from typing import Any
 
-from executive.assembly import build_runtime
-from executive.clock import ManualClock
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
+from executive.runtime.assembly import build_runtime
 from executive.sim.options import simulated_home
 from executive.testing.harness import START_S
 from executive.testing.links import FakeLink
 from executive.testing.scripted import ObedientAutopilot
+from executive.world.clock import ManualClock
+from executive.world.dialect import mavlink
 
 
 class RuntimeOnLink:
     """The runtime of ``mission`` (its readers, tree, operator, plugs) on a :class:`FakeLink`, ticked by hand on a manual clock.
 
     ``r = RuntimeOnLink(mission, root=my_tree, safe_timeout_s=1.0)``: keyword arguments go to
-    :func:`~executive.assembly.build_runtime` (``plugs=``...). :attr:`autopilot`, an
+    :func:`~executive.runtime.assembly.build_runtime` (``plugs=``...). :attr:`autopilot`, an
     :class:`ObedientAutopilot` of the mission's vehicle in ``mode`` (``armed``) where its simulated
     vehicle would start (the mission's home, else its first waypoint), answers each command and
     heartbeat as it is sent, its position with each heartbeat; with ``beat`` its heartbeat also

@@ -11,9 +11,7 @@ from typing import Any
 import py_trees
 import pytest
 
-from executive import blackboard
 from executive.autopilot.selection import Autopilot
-from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
@@ -22,7 +20,9 @@ from executive.testing.harness import START_S, Harness, Vehicle, port_for
 from executive.testing.links import FakeLink
 from executive.testing.lockstep import Lockstep
 from executive.testing.on_link import RuntimeOnLink
-from executive.vehicles import PROFILES
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.vehicles import PROFILES
 
 
 @pytest.fixture

@@ -7,15 +7,15 @@ from typing import Any
 
 from py_trees.common import Status
 
-from executive import blackboard
-from executive.geo import destination, distance_bearing
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
-from executive.state import GlobalPosition
 from executive.testing.harness import BATTERY_FULL, ENERGY_UNJUDGED, Harness, Vehicle, mode_switch_channel
 from executive.testing.links import AUTOPILOT
-from executive.vehicles import PROFILES
+from executive.world import blackboard
+from executive.world.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
+from executive.world.geo import destination, distance_bearing
+from executive.world.state import GlobalPosition
+from executive.world.vehicles import PROFILES
 
 _M = mavlink
 
@@ -278,7 +278,7 @@ class ObedientAutopilot(ScriptedAutopilot):
     :attr:`armed`), each command with a COMMAND_ACK queued on the link, as the reader would receive
     them; :meth:`beat` sends a heartbeat now, and where the vehicle is (``start``, a
     GLOBAL_POSITION_INT: the runtime runs no tree before it knows the position, see
-    :mod:`executive.reach`; none at the default 0, 0, which autopilots send for "no fix"). Other
+    :mod:`executive.admission.reach`; none at the default 0, 0, which autopilots send for "no fix"). Other
     facts (the EKF) are the test's to write.
     """
 

@@ -16,9 +16,9 @@ import pytest
 
 from executive.autopilot.selection import Autopilot
 from executive.io.mavlink.streams import StreamRequester
-from executive.mavlink_dialect import mavlink
-from executive.state import GlobalPosition, HomePosition
-from executive.vehicles import PROFILES
+from executive.world.dialect import mavlink
+from executive.world.state import GlobalPosition, HomePosition
+from executive.world.vehicles import PROFILES
 
 _M = mavlink
 NAN = math.nan

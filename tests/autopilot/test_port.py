@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from executive.autopilot.selection import Autopilot
-from executive.mavlink_dialect import mavlink
-from executive.vehicles import PROFILES
+from executive.world.dialect import mavlink
+from executive.world.vehicles import PROFILES
 
 ROOT = Path(__file__).resolve().parents[2]
 FORBIDDEN = ("executive.io.mavlink", "pymavlink", "executive.io.mavlink.modes", "executive.autopilot.selection")

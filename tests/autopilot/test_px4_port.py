@@ -8,19 +8,27 @@ import math
 import pytest
 from py_trees.common import Status
 
-from executive import blackboard
 from executive.behaviours import Arm, DriveRouteInAuto, EkfOk, GpsNotGlitching, SetMode, TakeOff, VtolTransition, WaitUntil
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.mission_protocol import route_items
 from executive.io.mavlink.modes import Px4Modes
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import rates_for
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.mission.rules import autopilot_errors
-from executive.state import GlobalPosition, HomePosition, MissionCurrent, MissionItemReached, MissionTransferStatus, TransferOperation, TransferState
 from executive.testing import AUTOPILOT, Harness, Peer
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.state import (
+    GlobalPosition,
+    HomePosition,
+    MissionCurrent,
+    MissionItemReached,
+    MissionTransferStatus,
+    TransferOperation,
+    TransferState,
+)
 
 _M = mavlink
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE

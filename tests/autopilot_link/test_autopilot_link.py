@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from executive import blackboard
 from executive.autopilot_link import AutopilotLink, SeveralAutopilots
 from executive.io.mavlink.streams import rates_for
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.testing import ObedientAutopilot, Peer
+from executive.world import blackboard
+from executive.world.dialect import mavlink
 
 
 def make_link(mission, link, clock, **options) -> AutopilotLink:

@@ -5,11 +5,11 @@ from __future__ import annotations
 import py_trees
 import pytest
 
-from executive.assembly import build_runtime
-from executive.clock import ScaledClock
 from executive.io.mavlink.link import PymavlinkLink
-from executive.runtime import Runtime
+from executive.runtime.assembly import build_runtime
+from executive.runtime.loop import Runtime
 from executive.sim import SimServer
+from executive.world.clock import ScaledClock
 
 HOME = (-35.363261, 149.165230, 0.0)
 

@@ -14,10 +14,10 @@ import py_trees
 import pytest
 
 from executive.cli.run import last_words
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.testing import RuntimeOnLink
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 
 def asked_when(r: RuntimeOnLink) -> list[tuple[float, tuple[Any, ...]]]:
@@ -170,7 +170,7 @@ def test_a_person_taking_the_vehicle_while_it_is_made_safe_is_left_alone(square_
 
 @pytest.mark.parametrize(("set_by", "commanded"), [("autopilot", True), ("others", False)])
 def test_a_pilot_mode_the_autopilot_chose_itself_is_nobodys_and_is_made_safe(square_mission: Mission, runtime_on_link, set_by, commanded) -> None:
-    """As the failsafes judge it: MANUAL set by the autopilot's own transition (executive.mode_cause) is no person driving;
+    """As the failsafes judge it: MANUAL set by the autopilot's own transition (executive.autopilot.mode_cause) is no person driving;
     MANUAL set by the RC or a ground station is, and is left alone."""
     r = runtime_on_link(square_mission)
     r.autopilot.mode = "MANUAL"

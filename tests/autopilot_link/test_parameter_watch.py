@@ -8,8 +8,8 @@ import pytest
 
 from executive.autopilot.rover_motion import MOTION_PARAMS, vehicle_motion
 from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
-from executive.mavlink_dialect import mavlink
 from executive.testing import Harness
+from executive.world.dialect import mavlink
 
 
 def run(watch: ParameterWatch, h: Harness, seconds: float) -> list[str]:
@@ -56,9 +56,9 @@ def test_an_autopilot_whose_driving_is_not_modelled_is_asked_only_its_mode_chann
 
 
 def test_the_simulated_ardurover_answers_them_as_the_firmware_types_them() -> None:
-    from executive.clock import ManualClock
-    from executive.mavlink_dialect import encoder
     from executive.sim import make_autopilot
+    from executive.world.clock import ManualClock
+    from executive.world.dialect import encoder
 
     ap = make_autopilot("bunker", ManualClock(), ekf_ready_after_s=1.0)
     ap.update()

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import math
 
-from executive import blackboard
 from executive.autopilot.fence import fence_items, rally_items
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.testing import Lockstep
+from executive.world import blackboard
 from tests.behaviours.test_zones_on_autopilot import FENCE, RALLY, at, box, held, wanted, zoned_mission
 from tests.test_runtime_reload import pause_on_leg, run_for, text
 from tests_support import line_mission

@@ -8,16 +8,16 @@ from collections.abc import Callable
 import py_trees
 import pytest
 
-from executive import geo
 from executive.autopilot_link.route_keeper import RouteKeeper, RouteUpload, RouteUploadState
 from executive.behaviours import KeepRouteOnAutopilot
 from executive.io.mavlink.mission_protocol import TransferState
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Home, Mission
 from executive.mission.route import offset
-from executive.state import HomePosition
 from executive.testing import Harness, MissionAutopilot, ack
+from executive.world import geo
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.state import HomePosition
 
 _M = mavlink
 AUTOPILOT_HOME = (47.397742, 8.545594, 488.0)

@@ -16,12 +16,12 @@ import py_trees
 import pytest
 
 from executive.autopilot_link.safe_state import Until, plan
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.runtime import Outcome
-from executive.state import GlobalPosition
+from executive.runtime.loop import Outcome
 from executive.testing import Lockstep
+from executive.world.dialect import mavlink
+from executive.world.state import GlobalPosition
 
 MISSIONS = Path(__file__).parents[2] / "missions"
 

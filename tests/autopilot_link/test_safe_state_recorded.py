@@ -44,7 +44,7 @@ def test_ardusub_holds_the_surface_in_alt_hold_itself_the_autopilots_change_then
     changes = [(key, value) for _, key, value in replay.seen if key in ("/vehicle/mode", "/vehicle/mode_set_by")]
     assert changes[-4:] == [
         ("/vehicle/mode", "ALT_HOLD"),
-        ("/vehicle/mode_set_by", "autopilot"),  # SURFACE_COMPLETE (ArduSub/mode_surface.cpp), judged by executive.mode_cause
+        ("/vehicle/mode_set_by", "autopilot"),  # SURFACE_COMPLETE (ArduSub/mode_surface.cpp), judged by executive.autopilot.mode_cause
         ("/vehicle/mode", "POSHOLD"),
         ("/vehicle/mode_set_by", "us"),
     ]

@@ -7,14 +7,14 @@ import math
 import pytest
 from py_trees.common import Status
 
-from executive import geo
 from executive.autopilot.rover_motion import RoverMotion, TargetEstimate
 from executive.behaviours import Arm, Disarm, GoTo, SetMode
 from executive.behaviours.motion import CUT_SHARE
-from executive.geo import destination
-from executive.mavlink_dialect import mavlink
-from executive.state import GlobalPosition
 from executive.testing.links import ack
+from executive.world import geo
+from executive.world.dialect import mavlink
+from executive.world.geo import destination
+from executive.world.state import GlobalPosition
 
 DO_SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 ARM_DISARM = mavlink.MAV_CMD_COMPONENT_ARM_DISARM

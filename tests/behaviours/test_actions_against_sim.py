@@ -29,19 +29,19 @@ from executive.behaviours import (
     TakeOff,
     VtolTransition,
 )
-from executive.clock import ManualClock
-from executive.geo import destination, distance
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Mission
 from executive.mission.port import MissionPort
 from executive.sim import make_autopilot
 from executive.sim.ardupilot.plane import LOITER_RADIUS_M
 from executive.sim.physics.aircraft import QUADPLANE_LIMITS
-from executive.vehicles import PROFILES
+from executive.world.clock import ManualClock
+from executive.world.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.world.geo import destination, distance
+from executive.world.vehicles import PROFILES
 
 HOME = (47.397742, 8.545594, 0.0)
 EKF_READY_S = 5.0

@@ -12,15 +12,15 @@ import pytest
 from py_trees.common import Status
 
 from executive.behaviours import ChangeAltitude, ChangeDepth, ChangeSpeed, GoTo, GoToLocal, HoldFor, Land, TakeOff, VtolTransition
-from executive.frames import Enu, local_to_global
-from executive.geo import destination
 from executive.io.mavlink.modes import ArduPilotModes
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
-from executive.state import GlobalPosition, HomePosition, Rangefinder
 from executive.testing import START_S
-from executive.vehicles import PLANE_MODES, SUB_MODES
+from executive.world.dialect import mavlink
+from executive.world.frames import Enu, local_to_global
+from executive.world.geo import destination
+from executive.world.state import GlobalPosition, HomePosition, Rangefinder
+from executive.world.vehicles import PLANE_MODES, SUB_MODES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 M = mavlink

@@ -6,9 +6,9 @@ import pytest
 from py_trees.common import Status
 
 from executive.behaviours import AutopilotAtLeg, FollowAutoLeg
-from executive.mavlink_dialect import mavlink
-from executive.state import MISSION_STATE_COMPLETE, GlobalPosition, MissionCurrent, MissionItemReached
 from executive.testing import AUTOPILOT, Harness
+from executive.world.dialect import mavlink
+from executive.world.state import MISSION_STATE_COMPLETE, GlobalPosition, MissionCurrent, MissionItemReached
 
 
 @pytest.fixture

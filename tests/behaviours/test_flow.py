@@ -8,7 +8,7 @@ import py_trees
 from py_trees.common import Status
 
 from executive.behaviours import Arm, Armed, EkfOk, ForEachLeg, LinkAlive, RcNotTakingOver, Timeout, UnlessPaused, WaitForGuards, WaitUntil
-from executive.mavlink_dialect import mavlink
+from executive.world.dialect import mavlink
 
 
 def test_wait_until_succeeds_when_the_condition_holds(harness, vehicle):

@@ -6,9 +6,9 @@ import pytest
 from py_trees.common import Status
 
 from executive.behaviours import GoToLocal
-from executive.frames import Enu, global_to_local, local_to_global
-from executive.mavlink_dialect import mavlink
-from executive.state import GlobalPosition, HomePosition
+from executive.world.dialect import mavlink
+from executive.world.frames import Enu, global_to_local, local_to_global
+from executive.world.state import GlobalPosition, HomePosition
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 M = mavlink

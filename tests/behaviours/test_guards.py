@@ -7,7 +7,7 @@ from py_trees.common import Status
 
 from executive.behaviours import Armed, DepthWithin, EkfOk, LinkAlive, ModeIs, RcNotTakingOver
 from executive.mission.model import Range
-from executive.state import EkfFlags, EkfStatus, GlobalPosition
+from executive.world.state import EkfFlags, EkfStatus, GlobalPosition
 
 READY = EkfFlags(831)  # what ArduRover reports once its EKF uses GPS
 CONST_POS = EkfFlags.ATTITUDE | EkfFlags.VELOCITY_HORIZ | EkfFlags.CONST_POS_MODE

@@ -5,7 +5,6 @@ from __future__ import annotations
 import pytest
 from py_trees.common import Status
 
-from executive import blackboard
 from executive.behaviours import (
     AllWaypointsWithin,
     AltitudeWithin,
@@ -22,10 +21,11 @@ from executive.behaviours import (
     position_guards,
     rc_auto_mode,
 )
-from executive.geo import destination
-from executive.geofence import Geofence
 from executive.mission.model import Mission, Range, RcConfig, Waypoint
-from executive.state import Battery, GlobalPosition, HomePosition, RcSwitches, SwitchPosition
+from executive.world import blackboard
+from executive.world.geo import destination
+from executive.world.geofence import Geofence
+from executive.world.state import Battery, GlobalPosition, HomePosition, RcSwitches, SwitchPosition
 
 HOME = (47.397742, 8.545594)
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN

@@ -8,12 +8,12 @@ import pytest
 from py_trees.common import Status
 
 from executive.autopilot_link.parameters import ParameterWatch
-from executive.clock import ManualClock
-from executive.mavlink_dialect import mavlink
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.mission.rules import rc_switch_channels
 from executive.testing import EKF_READY, Harness
+from executive.world.clock import ManualClock
+from executive.world.dialect import mavlink
 
 UGV = Path(__file__).parents[2] / "missions" / "ugv_rc_route.yaml"
 

@@ -8,15 +8,15 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from executive import blackboard
 from executive.behaviours import NothingToSample, RcNotTakingOver, Sample
 from executive.instruments.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
 from executive.mission.port import MissionPort
-from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
-from executive.state import Sample as SampleRecord
 from executive.testing import Harness, port_for
+from executive.world import blackboard
+from executive.world.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
+from executive.world.state import Sample as SampleRecord
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 OPTIONS = SamplingOptions(duration_s=2.0, rate_hz=1.0, sensors=["ph", "temperature"])

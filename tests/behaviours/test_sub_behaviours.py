@@ -9,11 +9,11 @@ from py_trees.common import Status
 
 from executive.behaviours import AltitudeWithin, ChangeSpeed, ForEachLeg, PositionKnown, Surface
 from executive.io.mavlink.commander import Commander
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, Range
-from executive.state import GlobalPosition
-from executive.vehicles import PROFILES, SUB_MODES
+from executive.world.dialect import mavlink
+from executive.world.state import GlobalPosition
+from executive.world.vehicles import PROFILES, SUB_MODES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 M = mavlink

@@ -13,7 +13,6 @@ from dataclasses import replace
 import pytest
 from py_trees.common import Status
 
-from executive import blackboard
 from executive.behaviours import (
     AltitudeWithin,
     BatteryAbove,
@@ -24,15 +23,16 @@ from executive.behaviours import (
     RcNotLost,
     SpeedWithin,
 )
-from executive.catalogue import catalogue
 from executive.cli import main
 from executive.io.mavlink.reader import MavlinkReader
-from executive.journal import ResumePoint
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Range
-from executive.state import Battery, Rangefinder
+from executive.mission.resume import ResumePoint
 from executive.testing import AUTOPILOT, EKF_READY, Harness
+from executive.tree.catalogue import catalogue
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.state import Battery, Rangefinder
 
 EKF_FLAGS = int(EKF_READY.flags)
 

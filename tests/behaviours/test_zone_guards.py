@@ -5,10 +5,10 @@ from __future__ import annotations
 import pytest
 from py_trees.common import Status
 
-from executive import geo
 from executive.behaviours.zone_guards import OutsideKeepOut, stopping_m
 from executive.mission.model import Mission
-from executive.state import GlobalPosition
+from executive.world import geo
+from executive.world.state import GlobalPosition
 
 HOME = (44.0, 9.0)
 PIER = geo.destination(*HOME, 0.0, 20.0)  # a 5 m circle 20 m north of home

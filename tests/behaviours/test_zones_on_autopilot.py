@@ -10,14 +10,14 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from executive import blackboard, geo
 from executive.autopilot.fence import fence_items, rally_items
-from executive.frames import local_to_global
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.sim.mission_store import StoredCommand
 from executive.testing import Lockstep
+from executive.world import blackboard, geo
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.frames import local_to_global
 from tests_support import LINE_HOME, line_mission
 
 _M = mavlink

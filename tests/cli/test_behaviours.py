@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
-from executive.catalogue import catalogue
 from executive.cli import main
+from executive.tree.catalogue import catalogue
 
 
 def test_json_lists_the_whole_catalogue(capsys):

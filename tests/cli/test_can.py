@@ -13,7 +13,7 @@ import pytest
 
 from executive.cli import main
 from executive.io.can.agilex import RcState, SystemState
-from executive.state import SwitchPosition
+from executive.world.state import SwitchPosition
 
 LOG = Path(__file__).parents[1] / "data" / "can" / "bunker_rc.log"
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN

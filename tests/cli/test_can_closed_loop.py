@@ -14,15 +14,15 @@ import can
 import py_trees
 import pytest
 
-from executive import geo
 from executive.cli import main
 from executive.io.can.agilex import RC_STATE_ID, SYSTEM_STATE_ID, MotionCommand
 from executive.io.can.drive import DriveBridge
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
-from executive.runtime import Outcome, Runtime
+from executive.runtime.loop import Outcome, Runtime
 from executive.sim.faults import FaultPlan
 from executive.testing import Lockstep
+from executive.world import geo
 
 START = (-35.363261, 149.165230)
 TARGET = geo.destination(*geo.destination(*START, 0.0, 6.0), 90.0, 3.0)  # 6 m north, 3 m east: a turn and a drive

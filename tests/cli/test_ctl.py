@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from executive import geo
 from executive.cli import main
 from executive.io.control import request
-from executive.mavlink_dialect import mavlink, mavutil
-from executive.status import status_line
+from executive.operator.status import status_line
+from executive.world import geo
+from executive.world.dialect import mavlink, mavutil
 from tests_support import mission_text
 
 ROOT = Path(__file__).parents[2]

@@ -19,14 +19,13 @@ from typing import Any
 
 import pytest
 
-from executive import geo
-from executive.assembly import journal_recorder
 from executive.cli import main
-from executive.clock import Clock
 from executive.io.control import ControlServer
-from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission_text
+from executive.observers.journal import Journal, journal_recorder
+from executive.world import geo
+from executive.world.clock import Clock
 
 HOME = (-35.363261, 149.165230)
 WP1 = geo.destination(*HOME, 0.0, 30.0)

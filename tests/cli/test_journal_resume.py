@@ -11,16 +11,15 @@ from typing import Any
 
 import pytest
 
-from executive import blackboard
-from executive.assembly import journal_recorder, snapshot_recorder
 from executive.cli import main
 from executive.cli.run import _resume_text
-from executive.clock import Clock, ManualClock
-from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.snapshots import SnapshotRecorder
-from executive.state import SamplerState
+from executive.observers.journal import Journal, journal_recorder
+from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
+from executive.world import blackboard
+from executive.world.clock import Clock, ManualClock
+from executive.world.state import SamplerState
 from tests_support import run_in_lockstep
 
 ROOT = Path(__file__).parents[2]

@@ -13,13 +13,12 @@ from typing import Any
 
 import pytest
 
-from executive.assembly import journal_recorder
 from executive.autopilot_link.link import NOTHING_TO_MAKE_SAFE
 from executive.cli import EXIT_OK, main
 from executive.cli.run import exit_code, last_words
-from executive.clock import Clock
-from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
+from executive.observers.journal import Journal, journal_recorder
+from executive.world.clock import Clock
 from tests_support import line_mission, mission_text
 
 YARD = mission_text("yard-loop", "{lat: -35.3629906, lon: 149.1652300}")

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from executive.assembly import build_runtime
 from executive.cli import main
 from executive.cli.run_checks import speedup_refusal
-from executive.clock import ManualClock
 from executive.mission.loader import load_mission
+from executive.runtime.assembly import build_runtime
 from executive.testing import FakeLink
+from executive.world.clock import ManualClock
 
 ROOT = Path(__file__).parents[2]
 MISSIONS = ROOT / "missions"

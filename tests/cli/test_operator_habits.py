@@ -19,12 +19,12 @@ import py_trees
 import pytest
 
 from executive.cli import main
-from executive.clock import ManualClock
 from executive.io.control import ControlServer, default_socket_path, request
-from executive.journal import Journal
 from executive.mission.lifecycle import MissionState
-from executive.progress import Progress
-from executive.snapshots import SnapshotRecorder
+from executive.observers.journal import Journal
+from executive.observers.snapshots import SnapshotRecorder
+from executive.operator.progress import Progress
+from executive.world.clock import ManualClock
 
 ROOT = Path(__file__).parents[2]
 SQUARE = str(ROOT / "missions" / "rover_square.yaml")

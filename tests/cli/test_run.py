@@ -19,10 +19,10 @@ from pathlib import Path
 import pytest
 
 from executive.cli import main
-from executive.clock import ScaledClock
 from executive.io.mavlink.link import load_signing_key
-from executive.mavlink_dialect import mavutil
 from executive.sim import SimServer
+from executive.world.clock import ScaledClock
+from executive.world.dialect import mavutil
 from tests_support import SteppedClock, run_in_lockstep, run_over
 
 ROOT = Path(__file__).parents[2]

@@ -142,7 +142,7 @@ def test_record_takes_an_mcap_file_rotated_at_the_size_asked(capsys, mission, tm
     """``--record FILE.mcap``: the unit's run records every tick as MCAP; rotated past ``--record-rotate-mb``, each file seekable alone."""
     from mcap.reader import make_reader
 
-    from executive.snapshots import replay
+    from executive.observers.snapshots import replay
     from tests_support import run_in_lockstep
 
     record = tmp_path / "run.mcap"

@@ -7,9 +7,9 @@ from pathlib import Path
 import pydot
 import pytest
 
-from executive import mission_tree
 from executive.cli import main
 from executive.mission.loader import load_mission
+from executive.tree import select as mission_tree
 
 MISSIONS = Path(__file__).parents[2] / "missions"
 SQUARE = str(MISSIONS / "rover_square.yaml")

@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from executive.cli import main
-from executive.clock import ScaledClock
-from executive.mavlink_dialect import MAVLinkMessage
 from executive.sim import SimServer
 from executive.sim.firmware import DEFAULT_HOME
+from executive.world.clock import ScaledClock
+from executive.world.dialect import MAVLinkMessage
 from mavlink_hub import UdpHub
 
 ROOT = Path(__file__).parents[2]

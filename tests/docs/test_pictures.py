@@ -49,9 +49,8 @@ def test_the_tree_picture_is_what_executive_show_draws_now(tmp_path):
 
 def recorded_mcap(where: Path) -> Path:
     """rover_square to its end, lock-step, recorded as ``run --snapshots run.mcap`` records it."""
-    from executive.assembly import snapshot_recorder
     from executive.mission.loader import load_mission
-    from executive.snapshots import SnapshotRecorder
+    from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
     from executive.testing import Lockstep
 
     recorders: list[SnapshotRecorder] = []
@@ -86,7 +85,7 @@ def draw_layout(path: Path, out: Path) -> dict[str, Any]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from executive.foxglove_layout import PLOTS
+    from executive.observers.foxglove.layout import PLOTS
 
     plotted = [(title, [(p.partition(".")[0], p.partition(".")[2]) for p in paths]) for title, paths in PLOTS]
     data = series(path, {"/mission/route", "/vehicle/location"} | {topic for _, fields in plotted for topic, _ in fields})

@@ -10,9 +10,10 @@ from pathlib import Path
 import pytest
 from pydantic import Field
 
-from executive import blackboard, mission_schema
 from executive.cli import build_parser
 from executive.mission.model import Mission
+from executive.tree import schema as mission_schema
+from executive.world import blackboard
 
 DOCS = Path(__file__).parents[2] / "docs"
 sys.path.insert(0, str(DOCS / "_ext"))

@@ -22,8 +22,6 @@ from typing import Any
 import pytest
 import yaml
 
-from executive import blackboard
-from executive.assembly import journal_recorder
 from executive.behaviours import (
     BatteryAbove,
     EkfOk,
@@ -35,15 +33,16 @@ from executive.behaviours import (
     RcNotTakingOver,
 )
 from executive.cli import main
-from executive.clock import Clock
-from executive.geofence import Geofence
-from executive.journal import Journal, JournalLogHandler
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
-from executive.runtime import Runtime
+from executive.observers.journal import Journal, JournalLogHandler, journal_recorder
+from executive.runtime.loop import Runtime
 from executive.sim.faults import load_faults
-from executive.state import EkfFlags
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.geofence import Geofence
+from executive.world.state import EkfFlags
 from tests_support import LINE_EKF_READY_S, LINE_HOME, line_mission, run_in_lockstep
 
 ROOT = Path(__file__).parents[2]

@@ -13,22 +13,22 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from executive import mission_tree
 from executive.behaviours import Failsafe, SetMode
 from executive.behaviours.failsafe import failsafe_mode
-from executive.clock import ManualClock
-from executive.geo import destination
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.modes import PX4_MODES
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.events import Announcement
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
-from executive.state import Battery, EkfFlags, EkfStatus, GlobalPosition
 from executive.testing import EKF_READY, FakeLink, Harness, ScriptedAutopilot, Vehicle
+from executive.tree import select as mission_tree
 from executive.trees.parts import failsafe_guarded, mission_root, standard_guards
-from executive.vehicles import PROFILES
+from executive.world.clock import ManualClock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.geo import destination
+from executive.world.state import Battery, EkfFlags, EkfStatus, GlobalPosition
+from executive.world.vehicles import PROFILES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 HOME = (47.397742, 8.545594)
@@ -642,7 +642,7 @@ def test_on_px4_a_rovers_refused_hold_is_followed_by_a_disarm(rig) -> None:
 def test_each_step_reaches_the_operator_statustext_status_json_and_line(runtime_on_link, vehicle: Vehicle) -> None:
     """A whole runtime, the autopilot refusing HOLD: the ground station's STATUSTEXTs, ``ctl status``'s JSON and the status line say
     what the reaction waits for, then what replaced it."""
-    from executive.status import StatusSource, status_line
+    from executive.operator.status import StatusSource, status_line
 
     mission = make_mission()
     root = mission_root(mission, failsafe_guarded(py_trees.behaviours.Running("Work"), standard_guards(mission), mission))

@@ -12,13 +12,13 @@ import shapely
 from tlog_replay import DATA as RECORDINGS
 from tlog_replay import records
 
-from executive import geo
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.mission.zones import Plane, Zones
 from executive.sim.faults import BatterySag, RcInput, RcTakeover
-from executive.vehicles import ROVER_MODES
+from executive.world import geo
+from executive.world.vehicles import ROVER_MODES
 from tests_support import LINE_HOME, line_mission
 
 DATA = RECORDINGS / "ardurover"

@@ -21,12 +21,11 @@ from btview.protocol.groot2 import ProtocolError as ClientProtocolError
 from btview.protocol.groot2 import RequestType as ClientRequestType
 from test_groot2_monitor import free_port_pair
 
-from executive.assembly import snapshot_recorder
-from executive.groot2.model import CODES, behaviours_in_order, from_tree
-from executive.groot2.server import Groot2Address, Groot2Server
-from executive.groot2.view import MonitorView
 from executive.mission.loader import load_mission
-from executive.snapshots import SnapshotRecorder
+from executive.observers.groot2.model import CODES, behaviours_in_order, from_tree
+from executive.observers.groot2.server import Groot2Address, Groot2Server
+from executive.observers.groot2.view import MonitorView
+from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
 from executive.testing.lockstep import Lockstep
 
 bt = pytest.importorskip("behaviortreepy", reason="BehaviorTree.CPP's Python bindings are a test dependency ('.[test]')")

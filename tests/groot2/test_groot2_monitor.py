@@ -16,15 +16,14 @@ from btview.model import NodeKind, NodeStatus
 from btview.protocol.groot2 import ProtocolError as ClientProtocolError
 from btview.protocol.groot2 import RequestType as ClientRequestType
 
-from executive.assembly import snapshot_recorder
 from executive.behaviours.flow import Timeout
-from executive.groot2.live import groot2_monitor
-from executive.groot2.model import from_tree, to_xml
-from executive.groot2.protocol import RequestHeader, RequestType
-from executive.groot2.server import Groot2Address, Groot2Server
-from executive.groot2.view import MonitorView
 from executive.mission.loader import load_mission
-from executive.snapshots import SnapshotRecorder
+from executive.observers.groot2.live import groot2_monitor
+from executive.observers.groot2.model import from_tree, to_xml
+from executive.observers.groot2.protocol import RequestHeader, RequestType
+from executive.observers.groot2.server import Groot2Address, Groot2Server
+from executive.observers.groot2.view import MonitorView
+from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
 from executive.testing.lockstep import Lockstep
 
 ROOT = Path(__file__).parents[2]
@@ -230,8 +229,8 @@ def test_a_node_no_longer_ticked_is_idle_after_what_it_was(served) -> None:
 
 def test_a_replay_shows_each_tick_once_its_recorded_time_has_passed(tmp_path: Path) -> None:
     """The pace of replay --groot2, on an injected wait (no wall clock): the tick before is shown during each gap."""
-    from executive.groot2.replay import ReplayFeed
-    from executive.snapshots import Recording
+    from executive.observers.groot2.replay import ReplayFeed
+    from executive.observers.snapshots import Recording
 
     path = tmp_path / "run.jsonl"
     recorder = SnapshotRecorder(path)

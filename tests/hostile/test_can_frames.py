@@ -17,12 +17,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from executive import blackboard
-from executive.clock import ManualClock
 from executive.io.can.agilex import CONTROL_MODES, FAULT_BITS, KNOWN_IDS, STICK_MAX, STICK_MIN, VEHICLE_STATES, RcState
 from executive.io.can.reader import CanReader
-from executive.state import SwitchPosition
 from executive.testing import VirtualCan
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.state import SwitchPosition
 
 FUZZ = settings(derandomize=True, deadline=None, max_examples=100, suppress_health_check=[HealthCheck.too_slow])
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN

@@ -20,13 +20,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from executive import blackboard
-from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.mission_protocol import MissionTransfer, waypoint_items
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import MAVLinkMessage, encoder, mavlink, mavutil
-from executive.vehicles import PROFILES
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.dialect import MAVLinkMessage, encoder, mavlink, mavutil
+from executive.world.vehicles import PROFILES
 
 FUZZ = settings(derandomize=True, deadline=None, max_examples=60, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 AUTOPILOT = (1, 1)

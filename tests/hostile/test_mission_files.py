@@ -25,11 +25,11 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from executive.admission import load_mission, load_mission_text  # the file, its tree and instrument: what run and validate read
+from executive.admission.checks import load_mission, load_mission_text  # the file, its tree and instrument: what run and validate read
 from executive.cli import main
 from executive.mission.errors import MissionError
+from executive.mission.formats.plan_files import import_file
 from executive.mission.model import Mission
-from executive.mission.plan_files import import_file
 from executive.sim.faults import FaultPlan, load_faults
 
 ROOT = Path(__file__).parents[2]

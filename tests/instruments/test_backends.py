@@ -6,15 +6,15 @@ import pytest
 from pydantic import BaseModel, ConfigDict
 
 from executive import registry
-from executive.clock import ManualClock
 from executive.instruments import backends as instruments
 from executive.instruments.sampler import InstrumentError, InstrumentSampler, SimulatedSampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
 from executive.operator import Operator
-from executive.state import SampleRead
 from executive.testing.missions import mission_errors
+from executive.world.clock import ManualClock
+from executive.world.state import SampleRead
 
 HEAD = "version: 1\nname: s\nvehicle: boat\ntree: goto_sample\n"
 POINT = "waypoints:\n  - {lat: 1.0, lon: 1.0, sample: true}\n"

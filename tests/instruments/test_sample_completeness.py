@@ -17,15 +17,15 @@ from py_trees.common import Status
 
 from executive.behaviours import NothingToSample, Sample
 from executive.cli import main
-from executive.clock import ManualClock
 from executive.instruments.sampler import InstrumentSampler
-from executive.journal import Journal
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission_text
 from executive.mission.model import SamplingOptions
-from executive.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
-from executive.state import Sample as SampleRecord
+from executive.observers.journal import Journal
 from executive.testing import Harness, mission_errors
+from executive.world.clock import ManualClock
+from executive.world.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
+from executive.world.state import Sample as SampleRecord
 
 SENSORS = ["temperature", "conductivity", "ph"]
 

@@ -5,14 +5,14 @@ from __future__ import annotations
 import py_trees
 import pytest
 
-from executive.assembly import build_runtime
 from executive.behaviours import Sample
-from executive.clock import ManualClock
-from executive.geo import destination
 from executive.instruments.sampler import SENSOR_MODELS, SimulatedSampler
 from executive.mission.model import Mission, SamplingOptions
-from executive.state import GlobalPosition, SamplerState, SamplerStatus
+from executive.runtime.assembly import build_runtime
 from executive.testing import ObedientAutopilot
+from executive.world.clock import ManualClock
+from executive.world.geo import destination
+from executive.world.state import GlobalPosition, SamplerState, SamplerStatus
 
 HERE = GlobalPosition(47.397742, 8.545594, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 SENSORS = ["temperature", "conductivity", "ph", "dissolved_oxygen"]

@@ -11,8 +11,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from executive import blackboard
-from executive.clock import ManualClock
 from executive.io.mavlink.link import MemoryLink
 from executive.io.obstacles import (
     STALE_S,
@@ -27,7 +25,9 @@ from executive.io.obstacles import (
     parse_endpoint,
     parse_scan,
 )
-from executive.mavlink_dialect import mavlink
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.dialect import mavlink
 
 
 def scan_bytes(**fields: object) -> bytes:

@@ -9,11 +9,11 @@ from collections.abc import Iterator
 import py_trees
 import pytest
 
-from executive.clock import ManualClock
 from executive.instruments.sampler import InstrumentError
-from executive.io.serial_sampler import SerialOptions, SerialSampler
+from executive.instruments.serial import SerialOptions, SerialSampler
 from executive.mission.model import SamplingOptions
-from executive.state import SamplerState, SamplerStatus
+from executive.world.clock import ManualClock
+from executive.world.state import SamplerState, SamplerStatus
 
 
 class Ctd:

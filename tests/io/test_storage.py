@@ -21,11 +21,11 @@ from pathlib import Path
 import pytest
 
 from executive.cli import main
-from executive.clock import ManualClock
 from executive.io.storage import Storage
-from executive.journal import RETRY_EVERY_S, Journal
-from executive.mavlink_dialect import mavutil
 from executive.mission.lifecycle import MissionState
+from executive.observers.journal import RETRY_EVERY_S, Journal
+from executive.world.clock import ManualClock
+from executive.world.dialect import mavutil
 from tests_support import line_mission, mission_text
 
 ROOT = Path(__file__).parents[2]
@@ -146,7 +146,7 @@ def test_a_journal_that_cannot_be_created_is_refused_before_the_run(tmp_path: Pa
 def test_a_loss_another_thread_meets_is_told_on_the_ticking_thread_in_its_order() -> None:
     """The MCAP encoder thread writes the snapshot file: its loss reaches the blackboard and the listeners (the ground station)
     only when the ticking thread delivers it, and a loss then a write again both arrive."""
-    from executive import blackboard
+    from executive.world import blackboard
 
     blackboard.reset()
     storage = Storage()

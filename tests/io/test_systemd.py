@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from executive.assembly import service_manager
-from executive.clock import ManualClock
 from executive.io.systemd import Notifier, Watchdog, watchdog_period_s
+from executive.runtime.assembly import service_manager
 from executive.testing import RuntimeOnLink
+from executive.world.clock import ManualClock
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ import pytest
 
 from executive.mission.events import Announcement, MissionEvents, RouteChanged, SampleTaken, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.state import Sample
+from executive.world.state import Sample
 
 
 def test_subscribers_hear_by_stage_in_every_order_of_subscription() -> None:

@@ -84,7 +84,7 @@ def test_without_a_water_depth_an_80_m_leg_is_left_to_the_seabed_floor_in_flight
 
 
 def test_a_route_edit_to_a_height_outside_the_limits_is_refused_and_changes_nothing() -> None:
-    from executive.admission import load_mission_text
+    from executive.admission.checks import load_mission_text
 
     state = MissionState()
     state.upload(load_mission_text(VTOL + "waypoints:\n  - {lat: 1.0, lon: 2.0, alt_m: 40}\n", "m.yaml"))

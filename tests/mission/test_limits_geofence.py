@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import pytest
 
-from executive.geo import destination
-from executive.geofence import Geofence
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
+from executive.world.geo import destination
+from executive.world.geofence import Geofence
 
 HOME = (47.397742, 8.545594)
 HEAD = f"version: 1\nname: m\nvehicle: rover\nhome: {{lat: {HOME[0]}, lon: {HOME[1]}}}\n"  # the body starts on line 5

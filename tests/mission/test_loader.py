@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from executive import admission, trees
+from executive import trees
+from executive.admission import checks as admission
 from executive.mission import loader
 from executive.mission.errors import FieldError, MissionError, format_path
 from executive.mission.loader import load_mission, load_mission_text

@@ -8,7 +8,7 @@ import pytest
 
 from executive.cli import main
 from executive.mission.errors import MissionError
-from executive.mission.plan_files import import_file
+from executive.mission.formats.plan_files import import_file
 
 CMAC = Path(__file__).parents[1] / "data" / "plans" / "cmac_rover.waypoints"  # a 25 m square north-east of home -35.363262, 149.165237
 

@@ -12,9 +12,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from executive.mission.errors import MissionError
+from executive.mission.formats.plan_files import export_plan, export_waypoints, import_file, import_plan, import_text, import_waypoints
 from executive.mission.loader import load_mission_text
 from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Mission
-from executive.mission.plan_files import export_plan, export_waypoints, import_file, import_plan, import_text, import_waypoints
 from executive.mission.rules import cross_field_errors
 
 PLANS = Path(__file__).parents[1] / "data" / "plans"

@@ -6,7 +6,7 @@ import pytest
 
 from executive.mission.model import Mission
 from executive.mission.reload import Incompatible, plan
-from executive.state import Sample
+from executive.world.state import Sample
 
 #: About 11 m north of the square's first corner: not the same place as any corner (radius 1.5 m).
 ELSEWHERE = {"lat": 47.397842, "lon": 8.545594}

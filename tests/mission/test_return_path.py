@@ -8,11 +8,11 @@ import shapely
 
 from benchmarks.route_check import at as bench_at
 from benchmarks.route_check import scattered_mission
-from executive.geo import destination, distance
 from executive.mission.loader import load_mission_text
 from executive.mission.model import Mission
 from executive.mission.return_path import MARGIN_M, ReturnPlanner
 from executive.mission.zones import Plane, Zones
+from executive.world.geo import destination, distance
 
 HOME = (47.3977, 8.5456)
 

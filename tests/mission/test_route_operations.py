@@ -9,7 +9,6 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from executive import geo
 from executive.mission.model import Home, Waypoint
 from executive.mission.route import (
     Route,
@@ -28,6 +27,7 @@ from executive.mission.route import (
     scale_rotate,
     set_home,
 )
+from executive.world import geo
 
 EXACT_M = 1e-6  # "returns the route": within a micrometre
 C = (-35.363261, 149.165230)

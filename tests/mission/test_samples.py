@@ -7,7 +7,7 @@ import pytest
 
 from executive.mission.events import SampleTaken
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
-from executive.state import Sample, SampleRead
+from executive.world.state import Sample, SampleRead
 
 
 def sample(leg: int, t: float = 10.0) -> Sample:

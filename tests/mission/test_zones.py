@@ -7,12 +7,12 @@ import time
 import pytest
 
 from benchmarks.route_check import grid_mission
-from executive.geo import destination, distance
 from executive.mission.errors import MissionError
 from executive.mission.lifecycle import MissionState, Refused
 from executive.mission.loader import load_mission_text
 from executive.mission.rules import cross_field_errors, waits_for_the_vehicle
 from executive.mission.zones import Plane, first_leg_problems, route_errors
+from executive.world.geo import destination, distance
 
 HOME = (47.3977, 8.5456)
 

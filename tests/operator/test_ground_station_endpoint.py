@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import pytest
 
-from executive.assembly import build_runtime, ground_stations
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.operator import Operator
 from executive.operator.ground_station import STATE_CODES, GroundStationControl
+from executive.runtime.assembly import build_runtime, ground_stations
 from executive.testing import GCS, FakeLink, ObedientAutopilot, Peer
+from executive.world.dialect import mavlink
 
 US = (1, 191)
 

@@ -84,7 +84,7 @@ AUV = (MISSIONS / "auv_survey.yaml").read_text()
 
 def test_an_auv_mission_out_of_reach_is_refused_at_upload(vehicle):
     """Issue 13: the AUV's 1 km rule was checked at start; the Zeno vehicle refuses such a mission at upload, READY never reached."""
-    from executive.state import EkfFlags, EkfStatus, GlobalPosition
+    from executive.world.state import EkfFlags, EkfStatus, GlobalPosition
 
     state = MissionState()
     operator = Operator(state, "sub")

@@ -11,7 +11,7 @@ from executive.mission.events import Replaced
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.operator import Operator
-from executive.state import Sample
+from executive.world.state import Sample
 
 ELSEWHERE = {"lat": 47.397842, "lon": 8.545594}
 

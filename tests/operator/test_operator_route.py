@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import pytest
 
-from executive import geo
-from executive.clock import ManualClock
 from executive.mission.events import RouteChanged
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import GeofenceConfig, Home, Mission
 from executive.operator import Operator
-from executive.state import EkfFlags, EkfStatus, GlobalPosition
 from executive.testing import EKF_READY
+from executive.world import geo
+from executive.world.clock import ManualClock
+from executive.world.state import EkfFlags, EkfStatus, GlobalPosition
 
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 HERE = (47.3979, 8.5457)

@@ -13,12 +13,11 @@ from typing import Any
 
 import pytest
 
-from executive.assembly import journal_recorder
-from executive.clock import Clock
-from executive.journal import Journal, JournalLogHandler
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
+from executive.observers.journal import Journal, JournalLogHandler, journal_recorder
 from executive.testing import GCS, Lockstep
+from executive.world.clock import Clock
+from executive.world.dialect import mavlink
 from tests_support import line_mission
 
 

@@ -6,7 +6,7 @@ import pytest
 
 from executive.mission.model import EnergyConfig
 from executive.sensing.battery_energy import NotJudged, capacity, cells_at_rest, counts_current, drawn_wh, judgeable, unknown_reading
-from executive.state import Battery, BatteryStatus
+from executive.world.state import Battery, BatteryStatus
 
 
 def status(mah: float | None = 100.0, wh: float | None = None, pct: int | None = 90, volts: float = 12.0) -> BatteryStatus:

@@ -13,18 +13,18 @@ from typing import Any
 import pytest
 from tlog_replay import records
 
-from executive import blackboard
-from executive.clock import ManualClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.sensing.energy import EnergyEstimate, EnergyWatch, Held, held_s, planned, return_climb_m
 from executive.sensing.heading import wait_for_filterpy
-from executive.state import BatteryStatus
 from executive.testing import FakeLink
-from executive.vehicles import PROFILES
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.dialect import AUTOPILOT_COMPONENT
+from executive.world.state import BatteryStatus
+from executive.world.vehicles import PROFILES
 
 DATA = Path(__file__).parents[1] / "data" / "energy"
 PX4 = Path(__file__).parents[1] / "data" / "px4"

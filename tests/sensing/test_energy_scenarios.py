@@ -12,11 +12,11 @@ from typing import Any
 
 import pytest
 
-from executive import blackboard, geo
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
+from executive.operator.status import status_line
 from executive.sim.faults import Headwind
-from executive.status import status_line
+from executive.world import blackboard, geo
 from tests_support import LINE_HOME
 
 LEG_DEG = 0.0002248 * 60.0 / 25.0  # 60 m of latitude

@@ -9,10 +9,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from executive import blackboard
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
+from executive.world import blackboard
 
 SURVEY = load_mission(Path(__file__).parents[2] / "missions" / "auv_survey.yaml")
 

@@ -15,10 +15,10 @@ from pathlib import Path
 import py_trees
 import pytest
 
-from executive import blackboard
-from executive.clock import ManualClock
 from executive.sensing.heading import HeadingFilter, circular_mean, import_long_lived, wrap180
-from executive.state import Attitude, GlobalPosition
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.state import Attitude, GlobalPosition
 
 ROOT = Path(__file__).resolve().parents[2]
 

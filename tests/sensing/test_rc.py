@@ -5,12 +5,12 @@ from __future__ import annotations
 import py_trees
 import pytest
 
-from executive import blackboard
-from executive.assembly import build_runtime
 from executive.mission.model import RcConfig, SwitchChannels
+from executive.runtime.assembly import build_runtime
 from executive.sensing.rc import RcReader, knob_value, switch_position
-from executive.state import RcSwitches, SwitchPosition
 from executive.testing import AUTOPILOT
+from executive.world import blackboard
+from executive.world.state import RcSwitches, SwitchPosition
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 

@@ -6,7 +6,7 @@ import pytest
 
 from executive.mission.model import RcConfig
 from executive.sensing.rc import RcReading
-from executive.state import RcSwitches, SwitchPosition
+from executive.world.state import RcSwitches, SwitchPosition
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 

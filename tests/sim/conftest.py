@@ -6,8 +6,8 @@ from collections.abc import Callable, Iterator
 
 import pytest
 
-from executive.clock import ManualClock
 from executive.sim import make_autopilot
+from executive.world.clock import ManualClock
 from sim_support import EKF_READY_S, HOME, Client, Gcs
 
 

@@ -10,9 +10,9 @@ import math
 import time
 from collections.abc import Callable
 
-from executive.clock import ManualClock
-from executive.mavlink_dialect import MAVLinkMessage, encoder, mavlink, mavutil
 from executive.sim import FirmwareSim
+from executive.world.clock import ManualClock
+from executive.world.dialect import MAVLinkMessage, encoder, mavlink, mavutil
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 HOME = (47.397742, 8.545594, 0.0)

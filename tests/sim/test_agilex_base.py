@@ -7,7 +7,6 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from executive.clock import ManualClock
 from executive.io.can.agilex import (
     CONTROL_MODE_CAN,
     CONTROL_MODE_RC,
@@ -20,12 +19,13 @@ from executive.io.can.agilex import (
     decode,
 )
 from executive.io.can.drive import DriveConfig, motion_from_tracks, track_throttle
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
 from executive.sim.agilex_base import SimulatedBase
 from executive.sim.faults import FaultInjector, FaultPlan
-from executive.state import SwitchPosition
 from executive.testing import VirtualCan
+from executive.world.clock import ManualClock
+from executive.world.dialect import mavlink as m
+from executive.world.state import SwitchPosition
 
 if TYPE_CHECKING:
     from sim_support import Gcs

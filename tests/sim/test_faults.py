@@ -11,15 +11,15 @@ from typing import Any
 
 import pytest
 
-from executive import geo
 from executive.cli import main
 from executive.cli import sim as sim_cli
-from executive.clock import ManualClock, ScaledClock
-from executive.mavlink_dialect import MAVLinkMessage, encoder, mavutil
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer, make_autopilot
 from executive.sim.faults import FaultFileError, FaultInjector, FaultPlan, GpsGlitch, LinkLoss, RcTakeover, load_faults
 from executive.sim.firmware import FirmwareSim
+from executive.world import geo
+from executive.world.clock import ManualClock, ScaledClock
+from executive.world.dialect import MAVLinkMessage, encoder, mavutil
+from executive.world.dialect import mavlink as m
 from tests_support import SteppedClock
 
 ROOT = Path(__file__).parents[2]
@@ -518,9 +518,9 @@ def test_sim_injects_a_good_fault_file(capsys: pytest.CaptureFixture[str]) -> No
 
 
 def test_rc_input_moves_sticks_and_switches_then_puts_them_back(tmp_path):
-    from executive.clock import ManualClock
     from executive.sim.faults import FaultInjector, load_faults
     from executive.sim.registry import make_autopilot
+    from executive.world.clock import ManualClock
 
     path = tmp_path / "operator.yaml"
     events = ["{kind: rc_input, at_s: 5, for_s: 3, channels: {3: 1900, 7: 1000}}", "{kind: rc_input, at_s: 6, channels: {8: 2000}}"]

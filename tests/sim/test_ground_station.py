@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from pymavlink import mavwp
 
-from executive.mavlink_dialect import mavlink, mavutil
+from executive.world.dialect import mavlink, mavutil
 
 ROOT = Path(__file__).parents[2]
 HOME = (-35.363261, 149.165230)

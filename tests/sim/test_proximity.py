@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.mavlink_dialect import mavlink as m
 from executive.sim.proximity import TIMEOUT_S, face_of
+from executive.world.dialect import mavlink as m
 
 if TYPE_CHECKING:
     from sim_support import Gcs

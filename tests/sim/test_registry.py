@@ -7,7 +7,6 @@ from importlib.metadata import EntryPoint
 
 import pytest
 
-from executive.clock import ManualClock
 from executive.sim import registry
 from executive.sim.ardupilot.base import ArduPilotSim
 from executive.sim.ardupilot.bunker import BunkerSim
@@ -19,6 +18,7 @@ from executive.sim.px4.base import Px4Sim
 from executive.sim.px4.rover import Px4RoverSim
 from executive.sim.px4.vtol import Px4VtolSim
 from executive.sim.registry import ENTRY_POINT_GROUP, firmwares_for, make_autopilot, register_autopilot
+from executive.world.clock import ManualClock
 
 
 class BoatOnPx4(Px4RoverSim):

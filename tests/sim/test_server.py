@@ -15,10 +15,10 @@ import pytest
 
 from executive.cli import EXIT_BAD_INPUT, main
 from executive.cli import sim as sim_cli
-from executive.clock import ScaledClock
-from executive.mavlink_dialect import MAVLinkMessage
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
+from executive.world.clock import ScaledClock
+from executive.world.dialect import MAVLinkMessage
+from executive.world.dialect import mavlink as m
 
 if TYPE_CHECKING:
     from sim_support import Client

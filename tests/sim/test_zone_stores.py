@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from executive.clock import ManualClock
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.registry import make_autopilot
+from executive.world.clock import ManualClock
+from executive.world.dialect import MAVLinkMessage, mavlink
 from sim_support import Gcs
 
 M = mavlink

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 from py_trees.common import Status
 
-from executive import mission_tree
-from executive.mavlink_dialect import mavlink
 from executive.testing import EKF_READY, Harness, ScriptedAutopilot
+from executive.tree import select as mission_tree
+from executive.world.dialect import mavlink
 
 
 @pytest.fixture

@@ -10,19 +10,19 @@ from typing import Any
 import pytest
 from py_trees.common import Status
 
-from executive import mission_tree
-from executive.clock import ManualClock
-from executive.geo import destination, distance
 from executive.io.mavlink.commander import Commander
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.runtime import explain_failure
-from executive.state import EkfFlags, EkfStatus, GlobalPosition, Rangefinder
-from executive.status import status_line
+from executive.operator.status import status_line
+from executive.runtime.loop import explain_failure
 from executive.testing import EKF_READY, Lockstep, ScriptedAutopilot
-from executive.vehicles import PROFILES
+from executive.tree import select as mission_tree
+from executive.world.clock import ManualClock
+from executive.world.dialect import mavlink
+from executive.world.geo import destination, distance
+from executive.world.state import EkfFlags, EkfStatus, GlobalPosition, Rangefinder
+from executive.world.vehicles import PROFILES
 
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 START = (44.0950000, 9.8630000)

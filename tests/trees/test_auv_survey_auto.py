@@ -12,14 +12,14 @@ from typing import Any
 
 from test_waypoints_auto import LinkCut
 
-from executive import blackboard
-from executive.journal import ResumePoint
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
+from executive.mission.resume import ResumePoint
 from executive.sim.physics.underwater import Seabed
 from executive.testing import Lockstep
+from executive.world import blackboard
+from executive.world.dialect import mavlink
 from tests_support import set_currents
 
 ROOT = Path(__file__).parents[2]

@@ -11,21 +11,21 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from executive import mission_tree
-from executive.assembly import build_runtime
-from executive.clock import ManualClock
-from executive.geo import destination, distance_bearing
 from executive.instruments.sampler import SimulatedSampler
 from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.mission.port import MissionPort
-from executive.runtime import Runtime, explain_failure
-from executive.state import EkfFlags, EkfStatus, SamplerState
-from executive.state import Sample as SampleRecord
+from executive.runtime.assembly import build_runtime
+from executive.runtime.loop import Runtime, explain_failure
 from executive.testing import EKF_READY, ScriptedAutopilot, Vehicle, ack, port_for
-from executive.vehicles import PROFILES
+from executive.tree import select as mission_tree
+from executive.world.clock import ManualClock
+from executive.world.geo import destination, distance_bearing
+from executive.world.state import EkfFlags, EkfStatus, SamplerState
+from executive.world.state import Sample as SampleRecord
+from executive.world.vehicles import PROFILES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 ROOT = Path(__file__).parents[2]

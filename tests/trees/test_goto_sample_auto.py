@@ -9,12 +9,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from executive.geo import distance
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, SimulatorOptions
 from executive.testing import Lockstep
+from executive.world.dialect import mavlink
+from executive.world.geo import distance
 from tests_support import set_currents
 
 ROOT = Path(__file__).parents[2]

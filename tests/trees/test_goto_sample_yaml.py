@@ -14,16 +14,16 @@ from typing import Any
 import py_trees
 import pytest
 
-from executive.assembly import Wiring, journal_recorder, snapshot_recorder
-from executive.clock import Clock, ManualClock
-from executive.journal import Journal
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.runtime import behaviour_path
+from executive.observers.journal import Journal, journal_recorder
+from executive.observers.snapshots import SnapshotRecorder, render, replay, snapshot_recorder
+from executive.runtime.assembly import Wiring
+from executive.runtime.loop import behaviour_path
 from executive.sim.faults import Fault, LinkLoss, RcTakeover
-from executive.snapshots import SnapshotRecorder, render, replay
 from executive.testing import Lockstep
+from executive.world.clock import Clock, ManualClock
 
 MISSIONS = Path(__file__).parents[2] / "missions"
 EXAMPLE = MISSIONS / "asv_sampling_yaml_tree.yaml"
@@ -119,7 +119,7 @@ def test_the_yaml_tree_and_the_python_builder_tick_and_command_alike(composed: M
 
 
 def test_the_example_s_tree_is_the_python_builder_s_node_for_node(composed: Mission) -> None:
-    from executive import mission_tree
+    from executive.tree import select as mission_tree
 
     def shape(node: py_trees.behaviour.Behaviour) -> list[tuple[str, str, Any]]:
         return [(behaviour_path(n), type(n).__name__, getattr(n, "memory", None)) for n in node.iterate()]

@@ -16,18 +16,19 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
-from executive import geo, mission_tree
 from executive.behaviours.auto_route import MISSION_STATE_COMPLETE
 from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemReached
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission, RcConfig
-from executive.runtime import Outcome, Runtime
+from executive.runtime.loop import Outcome, Runtime
 from executive.sensing.rc import RcReader
 from executive.sim.faults import FaultInjector, RcInput, RcLoss
-from executive.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
 from executive.testing import EKF_READY, Harness, Lockstep, MissionAutopilot
+from executive.tree import select as mission_tree
+from executive.world import geo
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.state import EkfFlags, EkfStatus, GlobalPosition, SwitchPosition
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 PWM = {UP: 1000, MIDDLE: 1500, DOWN: 2000}

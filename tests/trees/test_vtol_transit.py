@@ -11,19 +11,20 @@ from typing import Any
 import pytest
 from py_trees.common import Status
 
-from executive import blackboard, mission_tree
-from executive.clock import ManualClock
-from executive.frames import global_to_local, local_to_global
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.modes import ArduPilotModes
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.runtime import Outcome, explain_failure
-from executive.state import EkfFlags, EkfStatus, GlobalPosition, HomePosition
+from executive.runtime.loop import Outcome, explain_failure
 from executive.testing import EKF_READY, Lockstep, ScriptedAutopilot
-from executive.vehicles import PLANE_MODES, PROFILES
+from executive.tree import select as mission_tree
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.dialect import mavlink
+from executive.world.frames import global_to_local, local_to_global
+from executive.world.state import EkfFlags, EkfStatus, GlobalPosition, HomePosition
+from executive.world.vehicles import PLANE_MODES, PROFILES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 _M = mavlink

@@ -7,12 +7,12 @@ from pathlib import Path
 import pytest
 from py_trees.common import Status
 
-from executive import mission_tree
-from executive.geo import destination
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.state import EkfFlags, EkfStatus
 from executive.testing import EKF_READY, ScriptedAutopilot
+from executive.tree import select as mission_tree
+from executive.world.geo import destination
+from executive.world.state import EkfFlags, EkfStatus
 
 MISSIONS = Path(__file__).parents[2] / "missions"
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)

@@ -10,10 +10,10 @@ from typing import Any
 import pytest
 
 from benchmarks.efficiency import MISSIONS, time_auto, time_supervised_auto, with_sitl_parameters
-from executive.journal import ResumePoint
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
+from executive.mission.resume import ResumePoint
 from executive.sim.faults import FaultInjector
 from executive.testing import Lockstep
 from tests_support import line_mission, set_currents

@@ -7,11 +7,11 @@ import math
 import socket
 import time
 
-from executive import frames
 from executive.mission.lifecycle import MissionStatus
-from executive.web.feed import TRACK_SPACING_M, Frame, Seen
-from executive.web.plug import live_view
-from executive.web.server import LiveSource, WebAddress, WebServer
+from executive.observers.web.feed import TRACK_SPACING_M, Frame, Seen
+from executive.observers.web.plug import live_view
+from executive.observers.web.server import LiveSource, WebAddress, WebServer
+from executive.world import frames
 from tests_support import LINE_HOME, line_mission
 
 

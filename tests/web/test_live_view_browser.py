@@ -18,11 +18,10 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.assembly import snapshot_recorder
 from executive.io import control
-from executive.snapshots import SnapshotRecorder, replay
-from executive.web.replay import ReplaySource
-from executive.web.server import WebAddress, WebServer
+from executive.observers.snapshots import SnapshotRecorder, replay, snapshot_recorder
+from executive.observers.web.replay import ReplaySource
+from executive.observers.web.server import WebAddress, WebServer
 from tests_support import line_mission, mission_text
 
 if TYPE_CHECKING:

@@ -7,21 +7,20 @@ import json
 
 import pytest
 
-from executive.assembly import snapshot_recorder
 from executive.cli import main
 from executive.mission.lifecycle import MissionStatus
-from executive.snapshots import Recording, SnapshotRecorder, replay
-from executive.web.feed import Seen
-from executive.web.replay import ReplaySource
-from executive.web.server import WebAddress, WebServer
+from executive.observers.snapshots import Recording, SnapshotRecorder, replay, snapshot_recorder
+from executive.observers.web.feed import Seen
+from executive.observers.web.replay import ReplaySource
+from executive.observers.web.server import WebAddress, WebServer
 from tests_support import line_mission
 
 
 @pytest.fixture(scope="module")
 def recorded(tmp_path_factory):
     """A whole line mission recorded tick by tick (keyframes every 50 ticks, as a long run has them every 100)."""
-    from executive import blackboard
     from executive.testing import Lockstep
+    from executive.world import blackboard
 
     blackboard.reset()
     path = tmp_path_factory.mktemp("replay") / "run.snap"
@@ -66,7 +65,7 @@ def test_a_frame_shows_that_tick_the_track_so_far_and_the_targets(recorded):
     assert middle.tick == 200 and 0 < middle.track.length < end.track.length
     assert middle.here == middle.track.points[middle.track.length - 1]
     assert middle.status["mode"] == "GUIDED" and middle.status["armed"] and middle.status["link_up"]
-    waiting = middle.status["waiting"]  # as the run published it (executive.waiting; the recorded text is cut at 160 characters)
+    waiting = middle.status["waiting"]  # as the run published it (executive.tree.waiting; the recorded text is cut at 160 characters)
     assert (waiting["node"], waiting["path"]) == ("Go to waypoint", "Mission/Run/Guarded route or hold/Guarded route/For each leg/Leg/Go to waypoint")
     assert waiting["feedback"].startswith("leg 2/4: ")
     seen = Seen()

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from executive.cli import main
-from executive.web.server import TOKEN_HEADER, WebAddress, WebAddressError, WebServer, open_server, parse_address, read_token
+from executive.observers.web.server import TOKEN_HEADER, WebAddress, WebAddressError, WebServer, open_server, parse_address, read_token
 
 TOKEN = "a-token-of-twenty-chars"
 SQUARE = str(Path(__file__).parents[2] / "missions" / "rover_square.yaml")

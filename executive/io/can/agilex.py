@@ -39,7 +39,7 @@ from typing import Any, ClassVar, Self
 
 import can
 
-from executive.state import SwitchPosition
+from executive.world.state import SwitchPosition
 
 MOTION_COMMAND_ID = 0x111
 SYSTEM_STATE_ID = 0x211

@@ -28,10 +28,10 @@ from dataclasses import dataclass
 
 import can
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.io.can.agilex import INT16_MAX, ControlModeSelect, MotionCommand
 from executive.io.can.state import DriveStatus
+from executive.world import blackboard
+from executive.world.clock import Clock
 
 log = logging.getLogger(__name__)
 

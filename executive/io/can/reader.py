@@ -19,11 +19,11 @@ from typing import Any
 
 import can
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.io.can.agilex import CONTROL_MODES, VEHICLE_STATES, FrameStats, MotionState, Odometry, RcState, SystemState, decode
 from executive.io.can.state import BaseMotion, BaseOdometry, BaseSystem, RcSticks
-from executive.state import RcSwitches
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.state import RcSwitches
 
 log = logging.getLogger(__name__)
 

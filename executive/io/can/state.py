@@ -1,6 +1,6 @@
 """Immutable values the CAN reader and the drive bridge put on the blackboard (``/base/*``, ``/rc/sticks``).
 
-Like :mod:`executive.state`: replaced whole, stamped with the executive clock time they were received at.
+Like :mod:`executive.world.state`: replaced whole, stamped with the executive clock time they were received at.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 Requests never block. A COMMAND_LONG / COMMAND_INT is queued, sent at :meth:`Commander.flush`,
 matched to its COMMAND_ACK on ``command`` (MAVLink allows one command of a kind in flight), retried
 with ``confirmation + 1`` when no ack comes, and its fate is written to ``/command/<outcome>`` (the
-outcome the MAV_CMD carries, :data:`COMMAND_OUTCOMES`) as a :class:`~executive.state.CommandStatus`.
+outcome the MAV_CMD carries, :data:`COMMAND_OUTCOMES`) as a :class:`~executive.world.state.CommandStatus`.
 Setpoints (no ack exists) are just queued and sent.
 """
 
@@ -16,13 +16,13 @@ from dataclasses import dataclass, replace
 
 from py_trees.common import Access
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
-from executive.state import CommandState, CommandStatus, Outcome, TargetAsk
-from executive.vehicles import VehicleProfile
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.world.state import CommandState, CommandStatus, Outcome, TargetAsk
+from executive.world.vehicles import VehicleProfile
 
 #: SET_POSITION_TARGET_GLOBAL_INT type_mask: use position only (ignore velocity, acceleration, yaw).
 POSITION_ONLY_MASK = 0x0DF8

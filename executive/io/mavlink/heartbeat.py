@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from executive.clock import Clock
 from executive.io.mavlink.link import Link
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, encoder, mavlink
+from executive.world.clock import Clock
+from executive.world.dialect import EXECUTIVE_COMPONENT, encoder, mavlink
 
 
 class Heartbeat:

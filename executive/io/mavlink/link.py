@@ -14,11 +14,11 @@ from collections.abc import Collection
 from pathlib import Path
 from typing import Any, Protocol
 
-from executive.clock import Clock, ScaledClock
 from executive.io.mavlink.endpoint import Unreachable, is_serial, unreachable
 from executive.io.mavlink.skim import Skimmer
 from executive.io.storage import AppendFile, Storage
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
+from executive.world.clock import Clock, ScaledClock
+from executive.world.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavutil
 
 log = logging.getLogger(__name__)
 

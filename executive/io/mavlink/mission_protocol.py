@@ -33,11 +33,11 @@ from dataclasses import dataclass, replace
 from enum import Enum
 from typing import TYPE_CHECKING, Any
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.io.mavlink.link import Link
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
-from executive.state import MissionCurrent, MissionItemReached, MissionTransferStatus, TransferOperation, TransferState
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, encoder, mavlink
+from executive.world.state import MissionCurrent, MissionItemReached, MissionTransferStatus, TransferOperation, TransferState
 
 if TYPE_CHECKING:
     from executive.mission.model import Waypoint
@@ -119,7 +119,7 @@ class MissionItem:
         )  # fmt: skip
 
     def encode(self, mav: mavlink.MAVLink, target_system: int, target_component: int) -> MAVLinkMessage:
-        """As a MISSION_ITEM_INT from ``mav`` (an :func:`~executive.mavlink_dialect.encoder`)."""
+        """As a MISSION_ITEM_INT from ``mav`` (an :func:`~executive.world.dialect.encoder`)."""
         return mav.mission_item_int_encode(
             target_system, target_component, self.seq, self.frame, self.command, self.current, self.autocontinue,
             self.param1, self.param2, self.param3, self.param4, round(self.x * 1e7), round(self.y * 1e7), self.z, self.mission_type,

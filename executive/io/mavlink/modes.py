@@ -10,8 +10,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Protocol
 
-from executive.mavlink_dialect import mavlink
-from executive.vehicles import profile_for_mav_type
+from executive.world.dialect import mavlink
+from executive.world.vehicles import profile_for_mav_type
 
 
 class ModeTable(Protocol):

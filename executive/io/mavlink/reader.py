@@ -18,16 +18,16 @@ import struct
 from collections import deque
 from collections.abc import Callable
 
-from executive import blackboard
-from executive.clock import Clock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.link import Link
 from executive.io.mavlink.link_health import LinkHealth
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.modes import mode_table
 from executive.io.mavlink.vehicle_clock import VehicleClockWatch
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
-from executive.state import (
+from executive.world import blackboard
+from executive.world.clock import Clock
+from executive.world.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
+from executive.world.state import (
     Attitude,
     Battery,
     BatteryStatus,

@@ -16,7 +16,7 @@ import re
 import struct
 from collections.abc import Callable, Collection
 
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 _HEADER_LEN = 10  # MAVLink 2: magic, len, incompat, compat, seq, sysid, compid, msgid (3 bytes)
 _CRC_LEN = 2

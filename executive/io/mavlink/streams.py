@@ -9,10 +9,10 @@ from __future__ import annotations
 import logging
 from collections import deque
 
-from executive import blackboard
 from executive.io.mavlink.commander import Commander
-from executive.mavlink_dialect import mavlink
-from executive.state import Outcome
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.state import Outcome
 
 log = logging.getLogger(__name__)
 
@@ -29,7 +29,7 @@ DEFAULT_RATES: dict[str, float] = {
     "EXTENDED_SYS_STATE": 1.0,
     "MISSION_CURRENT": 1.0,
     "HOME_POSITION": 0.2,
-    # the point the autopilot steers to: a target we did not ask for is a person's (executive.target_watch)
+    # the point the autopilot steers to: a target we did not ask for is a person's (executive.autopilot.target_watch)
     "POSITION_TARGET_GLOBAL_INT": 5.0,
     "BATTERY_STATUS": 1.0,  # last: the energy rule's, asked once the guards' streams are set
 }

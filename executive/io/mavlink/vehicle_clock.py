@@ -20,7 +20,7 @@ from __future__ import annotations
 import logging
 import math
 
-from executive.clock import Clock
+from executive.world.clock import Clock
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +47,7 @@ def speedup_flag(rate: float) -> str:
 class VehicleClockWatch:
     """Fed the autopilot's boot time at our clock's time (:meth:`sample`), it judges each window and warns when the clocks run apart.
 
-    ``clock`` is the executive's: its ``speedup`` (a :class:`~executive.clock.ScaledClock`'s; 1 for
+    ``clock`` is the executive's: its ``speedup`` (a :class:`~executive.world.clock.ScaledClock`'s; 1 for
     another) turns the measured ratio into rates against real time.
     """
 

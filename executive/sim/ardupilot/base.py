@@ -17,13 +17,13 @@ from collections.abc import Callable, Mapping
 from types import MappingProxyType
 from typing import ClassVar
 
-from executive.clock import Clock
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
 from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 from executive.sim.firmware import DEFAULT_HOME, EPSILON_S, Command, CommandHandler, FirmwareSim, Home, e7
 from executive.sim.mission_store import MissionStore
 from executive.sim.zone_stores import ArduPilotFenceStore, ArduPilotRallyStore
-from executive.vehicles import VehicleProfile
+from executive.world.clock import Clock
+from executive.world.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
+from executive.world.vehicles import VehicleProfile
 
 #: ArduPilot's magic param2 values for MAV_CMD_COMPONENT_ARM_DISARM (GCS_MAVLink/GCS.h).
 #: 2989 skips the pre-arm checks; 21196 only forces a *disarm* (an arm with it is checked as usual).

@@ -30,8 +30,8 @@ import math
 from collections.abc import Callable
 from typing import ClassVar
 
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.mission_store import MissionOwner, MissionStore, StoredCommand
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink
 _MISSION = _M.MAV_MISSION_TYPE_MISSION

@@ -53,8 +53,6 @@ from collections.abc import Callable, Mapping, Sequence
 from enum import Enum
 from typing import ClassVar
 
-from executive.clock import Clock
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import (
     GLOBAL_FRAMES,
     NAVIGATION,
@@ -65,7 +63,9 @@ from executive.sim.ardupilot.base import (
 from executive.sim.firmware import DEFAULT_HOME, Command, Home, e7, valid_latlon
 from executive.sim.physics.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
 from executive.sim.physics.vehicle import VehicleModel
-from executive.vehicles import PLANE_MODES, VehicleProfile
+from executive.world.clock import Clock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.vehicles import PLANE_MODES, VehicleProfile
 
 _M = mavlink
 

@@ -9,7 +9,6 @@ from types import MappingProxyType
 from typing import ClassVar
 
 from executive.autopilot.rover_motion import FIRMWARE_DEFAULTS, RoverMotion
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import ACC_BITS, GLOBAL_FRAMES, NAVIGATION, POS_BITS, RATE_ATTITUDE, ArduPilotSim
 from executive.sim.ardupilot.mission_change import MissionChangeDetector
 from executive.sim.ardupilot.rover_fence import FENCE_ACTIONS, FENCE_DEFAULTS, breaches
@@ -17,6 +16,7 @@ from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import StoredCommand
 from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink
 

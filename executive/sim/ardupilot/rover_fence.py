@@ -15,9 +15,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from types import MappingProxyType
 
-from executive import geo
-from executive.mavlink_dialect import mavlink
 from executive.sim.mission_store import StoredCommand
+from executive.world import geo
+from executive.world.dialect import mavlink
 
 _M = mavlink
 #: AC_Fence.cpp's defaults on Rover: off, circle and polygon types, RTL or Hold, a 300 m circle, no options.

@@ -28,8 +28,6 @@ from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
 from typing import ClassVar
 
-from executive.clock import Clock
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.ardupilot.base import (
     ACC_BITS,
     DEFAULT_INTERVALS,
@@ -44,7 +42,9 @@ from executive.sim.firmware import DEFAULT_HOME, Command, Home, e7, valid_latlon
 from executive.sim.mission_store import AutopilotMissionState, StoredCommand
 from executive.sim.physics.underwater import SUB_HORIZONTAL_LIMITS, SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
 from executive.sim.physics.vehicle import VehicleModel
-from executive.vehicles import SUB_MODES, VehicleProfile
+from executive.world.clock import Clock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.vehicles import SUB_MODES, VehicleProfile
 
 _M = mavlink
 RELATIVE_FRAMES = frozenset({_M.MAV_FRAME_GLOBAL_RELATIVE_ALT, _M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT})

@@ -13,8 +13,6 @@ from collections.abc import Callable, Mapping
 from types import MappingProxyType
 from typing import ClassVar
 
-from executive.clock import Clock
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.firmware import DEFAULT_HOME, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import AutopilotMissionState
 from executive.sim.px4.mission_store import Px4MissionStore
@@ -40,7 +38,9 @@ from executive.sim.px4.parameters import (
 )
 from executive.sim.px4.streams import Px4Streams
 from executive.sim.zone_stores import Px4FenceStore, Px4RallyStore
-from executive.vehicles import VehicleProfile
+from executive.world.clock import Clock
+from executive.world.dialect import MAVLinkMessage, mavlink
+from executive.world.vehicles import VehicleProfile
 
 _M = mavlink
 

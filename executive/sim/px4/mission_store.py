@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.mission_store import MissionStore, StoredCommand
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink
 

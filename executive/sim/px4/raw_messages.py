@@ -5,7 +5,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Sequence
 
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 # Messages of MAVLink's common set that pymavlink's ardupilotmega dialect lacks: id, name, wire fields (type, name).
 CURRENT_EVENT_SEQUENCE = (411, "CURRENT_EVENT_SEQUENCE", (("uint16_t", "sequence"), ("uint8_t", "flags")))

@@ -5,13 +5,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from executive.clock import Clock
-from executive.mavlink_dialect import mavlink
 from executive.sim.firmware import DEFAULT_HOME, Command, CommandHandler, Home
 from executive.sim.physics.vehicle import ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
 from executive.sim.px4.base import Px4Sim
 from executive.sim.px4.parameters import ROVER_NAV_ACC_RAD
-from executive.vehicles import VehicleProfile
+from executive.world.clock import Clock
+from executive.world.dialect import mavlink
+from executive.world.vehicles import VehicleProfile
 
 _M = mavlink
 

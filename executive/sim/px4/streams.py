@@ -11,10 +11,10 @@ from collections.abc import Callable, Mapping
 from types import MappingProxyType
 from typing import ClassVar
 
-from executive.mavlink_dialect import MAVLinkMessage, mavlink
 from executive.sim.firmware import FirmwareSim, e7
 from executive.sim.px4.modes import PILOT_MODES
 from executive.sim.px4.raw_messages import CURRENT_EVENT_SEQUENCE, TIME_ESTIMATE_TO_TARGET, RawMessage
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink
 

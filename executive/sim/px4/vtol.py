@@ -5,14 +5,14 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 
-from executive.clock import Clock
-from executive.mavlink_dialect import mavlink
 from executive.sim.firmware import DEFAULT_HOME, Command, CommandHandler, Home
 from executive.sim.physics.aircraft import QUADPLANE_LIMITS, AircraftLimits, QuadPlaneModel, Regime
 from executive.sim.physics.vehicle import VehicleModel
 from executive.sim.px4.base import Px4Sim
 from executive.sim.px4.parameters import NAV_ACC_RAD, TRANSITION_AIRSPEED_M_S, VT_B_TRANS_DUR
-from executive.vehicles import VehicleProfile
+from executive.world.clock import Clock
+from executive.world.dialect import mavlink
+from executive.world.vehicles import VehicleProfile
 
 _M = mavlink
 

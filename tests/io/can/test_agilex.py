@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from executive.io.can.agilex import KNOWN_IDS, ControlModeSelect, FrameStats, MotionCommand, MotionState, Odometry, RcState, SystemState, decode
-from executive.state import SwitchPosition
+from executive.world.state import SwitchPosition
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 

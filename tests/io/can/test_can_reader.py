@@ -6,13 +6,13 @@ import can
 import py_trees
 import pytest
 
-from executive.clock import ManualClock
 from executive.io.can.agilex import MotionState, Odometry, RcState, SystemState
 from executive.io.can.reader import CanReader
 from executive.io.can.state import BaseMotion, BaseOdometry, BaseSystem, RcSticks
 from executive.mission.model import RcConfig
 from executive.sensing.rc import RcReader
-from executive.state import RcSwitches, SwitchPosition
+from executive.world.clock import ManualClock
+from executive.world.state import RcSwitches, SwitchPosition
 
 UP, MIDDLE, DOWN = SwitchPosition.UP, SwitchPosition.MIDDLE, SwitchPosition.DOWN
 
@@ -172,7 +172,7 @@ def test_the_base_found_and_lost_is_said_and_its_state_is_in_the_status(can_buse
     """Issue 43: `run --can` said nothing of the base it found, and the status had nothing of it."""
     import logging
 
-    from executive.status import StatusSource, status_line
+    from executive.operator.status import StatusSource, status_line
 
     caplog.set_level(logging.INFO, logger="executive.io.can.reader")
     base, executive = can_buses

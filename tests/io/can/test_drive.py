@@ -11,11 +11,11 @@ import can
 import py_trees
 import pytest
 
-from executive.clock import ManualClock, ScaledClock
 from executive.io.can.agilex import ControlModeSelect, MotionCommand, decode
 from executive.io.can.drive import DriveBridge, DriveConfig, motion_from_tracks, track_throttle
 from executive.io.can.state import DriveStatus
 from executive.testing import Vehicle
+from executive.world.clock import ManualClock, ScaledClock
 from tests_support import runqueue_wait_s
 
 

@@ -13,10 +13,10 @@ from pathlib import Path
 from tlog_replay import Replay as ModeReplay
 from tlog_replay import records, through_reader
 
-from executive import blackboard
-from executive.geo import distance
-from executive.mavlink_dialect import mavlink
-from executive.state import MISSION_STATE_COMPLETE
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.geo import distance
+from executive.world.state import MISSION_STATE_COMPLETE
 
 DATA = Path(__file__).parents[2] / "data" / "ardusub"
 COMPLETED = DATA / "auv_survey-auto.tlog"

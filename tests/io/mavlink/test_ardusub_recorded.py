@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 from tlog_replay import DATA, Replay, records
 
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT
-from executive.seabed import depth_floor
-from executive.state import GlobalPosition, Rangefinder
+from executive.world.dialect import EXECUTIVE_COMPONENT
+from executive.world.seabed import depth_floor
+from executive.world.state import GlobalPosition, Rangefinder
 
 LAST_LEG = DATA / "ardusub" / "auv_too_deep_last_leg.tlog"
 CLEARANCE_M = 2.0  # the mission's limits.altitude_m.min

@@ -5,11 +5,11 @@ from __future__ import annotations
 import py_trees
 import pytest
 
-from executive import blackboard
 from executive.io.mavlink.commander import COMMAND_OUTCOMES
-from executive.mavlink_dialect import mavlink
-from executive.state import CommandState, Outcome
 from executive.testing import ack
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.state import CommandState, Outcome
 
 DO_SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
 

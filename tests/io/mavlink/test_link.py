@@ -8,7 +8,7 @@ import time
 import pytest
 
 from executive.io.mavlink.link import PymavlinkLink, load_signing_key
-from executive.mavlink_dialect import encoder, mavlink, mavutil
+from executive.world.dialect import encoder, mavlink, mavutil
 
 KEY = bytes(range(32))
 

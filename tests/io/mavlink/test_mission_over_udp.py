@@ -14,16 +14,16 @@ from collections.abc import Callable, Iterator
 import py_trees
 import pytest
 
-from executive.clock import Clock, ScaledClock
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionItem, MissionTransfer, TransferState, first_mismatch, waypoint_items
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import MAVLinkMessage
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
-from executive.vehicles import PROFILES
+from executive.world.clock import Clock, ScaledClock
+from executive.world.dialect import MAVLinkMessage
+from executive.world.dialect import mavlink as m
+from executive.world.vehicles import PROFILES
 from lossy_udp import LossyUdpProxy
 from tests_support import SteppedClock
 

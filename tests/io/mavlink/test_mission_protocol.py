@@ -22,10 +22,10 @@ from executive.io.mavlink.mission_protocol import (
     waypoint_items,
 )
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import MAVLinkMessage
-from executive.mavlink_dialect import mavlink as m
 from executive.mission.model import Waypoint
 from executive.testing import AUTOPILOT, GCS
+from executive.world.dialect import MAVLinkMessage
+from executive.world.dialect import mavlink as m
 
 HOME = (47.397742, 8.545594)
 POINTS = [(47.3979220, 8.5455940, 0.0), (47.3979220, 8.5458600, 2.5)]

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from executive.io.mavlink.modes import PX4_MODES, ArduPilotModes, Px4Modes, mode_table
-from executive.mavlink_dialect import mavlink
-from executive.vehicles import PLANE_MODES, ROVER_MODES, SUB_MODES
+from executive.world.dialect import mavlink
+from executive.world.vehicles import PLANE_MODES, ROVER_MODES, SUB_MODES
 
 
 @pytest.mark.parametrize(

@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 from tlog_replay import DATA, PX4, Replay, records
 
-from executive.mavlink_dialect import EXECUTIVE_COMPONENT, MAVLinkMessage
 from executive.mission.lifecycle import MissionStatus
+from executive.world.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage
 
 HELD = "a ground station held the vehicle (reposition to its position)"
 OUR_COMMANDS = ("COMMAND_LONG", "COMMAND_INT", "SET_POSITION_TARGET_GLOBAL_INT")

@@ -15,8 +15,8 @@ import pytest
 from tlog_replay import PX4, Replay, records
 
 from executive.behaviours import EkfOk
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
+from executive.world.dialect import mavlink
 
 
 def test_at_rest_before_arming_px4_reports_constant_position_mode_with_its_gnss_position_and_the_ekf_guard_passes() -> None:

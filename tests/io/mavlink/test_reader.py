@@ -8,9 +8,9 @@ import py_trees
 import pytest
 
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import mavlink
-from executive.state import CommandState, EkfFlags
 from executive.testing import AUTOPILOT, GCS, Peer, ack
+from executive.world.dialect import mavlink
+from executive.world.state import CommandState, EkfFlags
 
 ARMED = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED
 

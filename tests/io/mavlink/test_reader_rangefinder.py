@@ -7,8 +7,8 @@ import py_trees
 import pytest
 
 from executive.io.mavlink.reader import MavlinkReader
-from executive.mavlink_dialect import mavlink
 from executive.testing import AUTOPILOT, Peer
+from executive.world.dialect import mavlink
 
 DOWN, FORWARD = mavlink.MAV_SENSOR_ROTATION_PITCH_270, mavlink.MAV_SENSOR_ROTATION_NONE
 KEY = "/vehicle/altitude_above_bottom_m"

@@ -14,16 +14,16 @@ from pathlib import Path
 import pytest
 from pty_bridge import PtyBridge
 
-from executive.assembly import build_runtime
 from executive.cli import main
-from executive.clock import ManualClock, ScaledClock
 from executive.io.mavlink.endpoint import Unreachable
 from executive.io.mavlink.link import REOPEN_EVERY_S, PymavlinkLink
-from executive.mavlink_dialect import encoder, mavlink
 from executive.mission.lifecycle import MissionStatus
-from executive.pacing import SpeedGovernor
+from executive.runtime.assembly import build_runtime
+from executive.runtime.pacing import SpeedGovernor
 from executive.sim import SimServer
 from executive.sim.options import simulated_home
+from executive.world.clock import ManualClock, ScaledClock
+from executive.world.dialect import encoder, mavlink
 from tests_support import line_mission, mission_text
 
 

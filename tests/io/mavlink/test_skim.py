@@ -6,7 +6,7 @@ import pytest
 
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.skim import BOOT_TIME_OFFSETS, Skimmer, UnreadMessage
-from executive.mavlink_dialect import encoder, mavlink
+from executive.world.dialect import encoder, mavlink
 
 BOOT_MS = 123_456_789
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from executive.io.mavlink.streams import StreamRequester
-from executive.mavlink_dialect import mavlink
 from executive.testing import ack
+from executive.world.dialect import mavlink
 
 RATES = {"GLOBAL_POSITION_INT": 5.0, "ATTITUDE": 10.0, "HOME_POSITION": 0.2}
 

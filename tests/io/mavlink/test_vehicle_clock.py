@@ -13,12 +13,12 @@ import re
 
 import pytest
 
-from executive.assembly import build_runtime
-from executive.clock import ManualClock, ScaledClock
 from executive.io.mavlink.vehicle_clock import VehicleClockWatch, speedup_flag
+from executive.runtime.assembly import build_runtime
 from executive.sim import make_autopilot
 from executive.testing import FakeLink
 from executive.testing.lockstep import Wire
+from executive.world.clock import ManualClock, ScaledClock
 from tests_support import LINE_HOME, line_mission
 
 LOGGER = "executive.io.mavlink.vehicle_clock"

@@ -12,15 +12,15 @@ from pathlib import Path
 import pytest
 from tlog_replay import DATA, Replay, records
 
-from executive import blackboard
 from executive.autopilot.fence import fence_items, rally_items
-from executive.clock import ManualClock
-from executive.geo import distance
 from executive.io.mavlink.mission_protocol import MissionTransfer, first_mismatch
-from executive.mavlink_dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.mission.loader import load_mission
-from executive.state import TransferState
 from executive.testing import FakeLink
+from executive.world import blackboard
+from executive.world.clock import ManualClock
+from executive.world.dialect import AUTOPILOT_COMPONENT, EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
+from executive.world.geo import distance
+from executive.world.state import TransferState
 
 ZONES = DATA / "zones"
 _M = mavlink

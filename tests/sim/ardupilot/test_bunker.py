@@ -7,11 +7,11 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.clock import ScaledClock
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
 from executive.sim.ardupilot.bunker import BunkerSim
 from executive.sim.physics.vehicle import BUNKER_LIMITS, SkidSteerVehicle, skid_steer_mix
+from executive.world.clock import ScaledClock
+from executive.world.dialect import mavlink as m
 
 if TYPE_CHECKING:
     from sim_support import Client, Gcs

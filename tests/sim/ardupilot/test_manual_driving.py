@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from executive.mavlink_dialect import mavlink
+from executive.world.dialect import mavlink
 
 
 @pytest.fixture

@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.mavlink_dialect import MAVLinkMessage
-from executive.mavlink_dialect import mavlink as m
+from executive.world.dialect import MAVLinkMessage
+from executive.world.dialect import mavlink as m
 
 if TYPE_CHECKING:
     from sim_support import Gcs

@@ -7,12 +7,12 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.clock import ScaledClock
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
 from executive.sim.ardupilot.plane import AIRSPEED_MIN_M_S, ASSIST_SPEED_M_S, LOITER_RADIUS_M, TRANSITION_MS, VTOL_APPROACH_M
 from executive.sim.physics.aircraft import QUADPLANE_LIMITS
-from executive.vehicles import profile_for_mav_type
+from executive.world.clock import ScaledClock
+from executive.world.dialect import mavlink as m
+from executive.world.vehicles import profile_for_mav_type
 
 if TYPE_CHECKING:
     from sim_support import Client, Gcs

@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.mavlink_dialect import mavlink as m
 from executive.sim.ardupilot.base import EKF_FLAGS_READY
+from executive.world.dialect import mavlink as m
 
 if TYPE_CHECKING:
     from sim_support import Gcs
@@ -291,8 +291,8 @@ def test_the_mode_switch_channel_is_answered_as_the_firmware_does(make_gcs: Make
 
 
 def test_a_parameter_set_for_the_simulator_is_answered() -> None:
-    from executive.clock import ManualClock
     from executive.sim.registry import make_autopilot
+    from executive.world.clock import ManualClock
 
     ap = make_autopilot("rover", ManualClock(), params={"MODE_CH": 0, "WP_SPEED": 3.5})
     assert (ap.params["MODE_CH"], ap.params["WP_SPEED"], ap.params["ATC_ACCEL_MAX"]) == (0, 3.5, 1.0)  # the rest: the firmware's defaults

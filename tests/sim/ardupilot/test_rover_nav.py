@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING
 import pytest
 
 from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, auto_corner_cut_m, sqrt_controller, stopping_distance
-from executive.mavlink_dialect import MAVLinkMessage
-from executive.mavlink_dialect import mavlink as m
 from executive.sim.ardupilot.rover import SITL_PARAMS
+from executive.world.dialect import MAVLinkMessage
+from executive.world.dialect import mavlink as m
 
 if TYPE_CHECKING:
     from sim_support import Gcs

@@ -16,14 +16,14 @@ from tlog_replay import records
 
 from benchmarks import recorded
 from benchmarks.efficiency import MISSIONS, with_sitl_parameters
-from executive import blackboard
-from executive.geo import distance
 from executive.io.mavlink.mission_protocol import MissionItem, route_not_on_autopilot
-from executive.mavlink_dialect import mavlink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import SimulatorOptions
 from executive.testing import Lockstep
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.geo import distance
 
 SAMPLED = recorded.DATA / "asv_sampling-motorboat-supervised.tlog"
 PAUSED = recorded.DATA / "asv_sampling-motorboat-supervised-pause.tlog"

@@ -8,11 +8,11 @@ from typing import TYPE_CHECKING
 import pytest
 from test_mission_store import item, upload
 
-from executive.clock import ScaledClock
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer
 from executive.sim.physics.underwater import SUB_LIMITS, Seabed, UnderwaterVehicle
-from executive.vehicles import profile_for_mav_type
+from executive.world.clock import ScaledClock
+from executive.world.dialect import mavlink as m
+from executive.world.vehicles import profile_for_mav_type
 
 if TYPE_CHECKING:
     from sim_support import Client, Gcs

@@ -16,11 +16,11 @@ from tlog_replay import records, through_reader
 
 from benchmarks import recorded
 from benchmarks.efficiency import MISSIONS, time_supervised_auto
-from executive import blackboard
-from executive.geo import distance
-from executive.mavlink_dialect import mavlink
 from executive.mission.loader import load_mission
-from executive.state import MISSION_STATE_COMPLETE
+from executive.world import blackboard
+from executive.world.dialect import mavlink
+from executive.world.geo import distance
+from executive.world.state import MISSION_STATE_COMPLETE
 
 SUPERVISED = {
     "rover_square": recorded.DATA / "rover_square-rover-supervised.tlog",

@@ -7,11 +7,11 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.clock import ManualClock
-from executive.mavlink_dialect import MAVLinkMessage
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import make_autopilot
 from executive.sim.faults import EkfDegradation, FaultInjector
+from executive.world.clock import ManualClock
+from executive.world.dialect import MAVLinkMessage
+from executive.world.dialect import mavlink as m
 from sim_support import EKF_READY_S, HOME, Gcs
 
 if TYPE_CHECKING:

@@ -8,10 +8,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from executive.clock import ManualClock
 from executive.io.mavlink.modes import PX4_MODES
-from executive.mavlink_dialect import MAVLinkMessage
-from executive.mavlink_dialect import mavlink as m
 from executive.sim import SimServer, make_autopilot
 from executive.sim.faults import EkfDegradation, FaultInjector, GpsGlitch
 from executive.sim.px4.base import Px4Sim
@@ -26,6 +23,9 @@ from executive.sim.px4.parameters import (
     TRANSITION_AIRSPEED_M_S,
 )
 from executive.sim.px4.streams import ESTIMATOR_AT_REST, ESTIMATOR_OK
+from executive.world.clock import ManualClock
+from executive.world.dialect import MAVLinkMessage
+from executive.world.dialect import mavlink as m
 from sim_support import HOME, Gcs
 
 if TYPE_CHECKING:

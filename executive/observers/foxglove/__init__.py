@@ -1,0 +1,1 @@
+"""Foxglove: a run served live, and the layout shipped with the package."""
