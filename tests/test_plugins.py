@@ -22,7 +22,7 @@ from executive.mission.loader import load_mission
 from executive.testing import Lockstep
 from executive.tree.catalogue import Catalogue, catalogue, load_behaviours
 from executive.world import blackboard
-from tests_support import acting, line_mission, run_recording, with_far_waypoint
+from tests_support import acting, executive_process, line_mission, run_recording, with_far_waypoint
 
 ROOT = Path(__file__).parents[1]
 
@@ -244,12 +244,14 @@ def test_validate_names_a_broken_plugin_and_its_error(broken: Path, tmp_path: Pa
 
 
 def test_from_the_command_line_a_plugin_on_the_path_is_validated_and_shown(ranger: Path, tmp_path: Path) -> None:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ranger), str(ROOT)])}
+    env = {"PYTHONPATH": os.pathsep.join([str(ranger), str(ROOT)])}
     path = mission_file(tmp_path, "ranger")
-    validate = subprocess.run([sys.executable, "-m", "executive", "validate", path], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
-    assert validate.returncode == 0 and "tree ranger" in validate.stdout, validate.stderr
-    show = subprocess.run([sys.executable, "-m", "executive", "show", path], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
-    assert show.returncode == 0 and "Enough satellites?" in show.stdout, show.stderr
+    validate = executive_process("validate", path, stdout=subprocess.PIPE, env=env)
+    out, err = validate.communicate(timeout=60)
+    assert validate.returncode == 0 and "tree ranger" in out, err
+    show = executive_process("show", path, stdout=subprocess.PIPE, env=env)
+    out, err = show.communicate(timeout=60)
+    assert show.returncode == 0 and "Enough satellites?" in out, err
 
 
 class Plain(ExecutiveBehaviour):

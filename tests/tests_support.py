@@ -1,5 +1,6 @@
 """Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket, a line mission,
-a mission out of reach run to its refusal, the time a thread waited for a CPU, ``executive run`` in lock-step with its built-in simulator."""
+a mission out of reach run to its refusal, the time a thread waited for a CPU, ``executive run`` in lock-step with its built-in simulator,
+``executive`` as a process of its own."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import fcntl
 import os
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +25,7 @@ from executive.world.clock import ManualClock, ScaledClock
 from executive.world.dialect import MAVLinkMessage, mavlink
 from executive.world.geo import destination
 
+ROOT = Path(__file__).resolve().parents[1]
 #: Home of the line missions: ArduPilot SITL's default location.
 LINE_HOME = (-35.363261, 149.165230)
 #: EKF ready 2 s after boot in the line missions' simulator.
@@ -66,6 +69,20 @@ def run_in_lockstep(monkeypatch: pytest.MonkeyPatch) -> None:
 
     monkeypatch.setattr("executive.cli.run.ScaledClock", SteppedClock)
     monkeypatch.setattr(SimServer, "start", serve_in_step)
+
+
+def executive_process(
+    *args: str, stdout: int | None = subprocess.DEVNULL, cwd: Path = ROOT, env: dict[str, str] | None = None, **popen: Any
+) -> subprocess.Popen[str]:
+    """``python -m executive ARGS`` in a process of its own, from the checkout, text pipes: its stderr kept (a pipe), its stdout
+    dropped unless ``stdout`` says otherwise (``subprocess.PIPE`` for the status lines); ``env`` is added to this environment.
+
+    For what only a process shows (signals, exit codes, a second process on the same socket, an interpreter's start): where the
+    process boundary is not what a test checks, run ``main([...])`` in the test's own process (an interpreter's start is ~1 s of CPU).
+    """
+    command = [sys.executable, "-m", "executive", *args]
+    environment = None if env is None else {**os.environ, **env}
+    return subprocess.Popen(command, cwd=cwd, stdout=stdout, stderr=popen.pop("stderr", subprocess.PIPE), env=environment, text=True, **popen)
 
 
 def line_mission(name: str, **changes: Any) -> Mission:

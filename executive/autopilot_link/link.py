@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from executive.autopilot import AutopilotName
+from executive.autopilot.asking import READS, Announce, Asker
 from executive.autopilot.selection import Autopilot
 from executive.autopilot_link.commanded import CommandWatch
 from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
@@ -23,7 +24,6 @@ from executive.autopilot_link.replaced_zones import ReplacedZones
 from executive.autopilot_link.route_keeper import RouteKeeper
 from executive.autopilot_link.safe_state import SURFACE_COMPLETE_MODE, SafePlan, Until, progress, settled, where
 from executive.autopilot_link.safe_state import plan as safe_plan
-from executive.behaviours.reacting import READS, Announce, Reacting
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link, PymavlinkLink
@@ -156,7 +156,7 @@ class AutopilotLink:
         self.reader.link_timeout_s = mission.limits.link_timeout_s
 
     def get(self, key: str) -> Any:
-        """A blackboard key the link reads (what its make-safe's :class:`~executive.behaviours.reacting.Reacting` reads)."""
+        """A blackboard key the link reads (what its make-safe's :class:`~executive.autopilot.asking.Asker` reads)."""
         return self._bb.get(key)
 
     # -- the phases ------------------------------------------------------------------------------
@@ -218,7 +218,7 @@ class AutopilotLink:
 
         Where depends on the kind and what the vehicle is doing (:mod:`executive.autopilot_link.safe_state`): a sub surfaces,
         a VTOL low down or landing lands and disarms, the others hold. The mode is asked by the failsafe reactions' rules
-        (:mod:`executive.behaviours.reacting`): again every 1.5 s of vehicle time until the autopilot accepts it and the
+        (:mod:`executive.autopilot.asking`): again every 1.5 s of vehicle time until the autopilot accepts it and the
         heartbeat shows it; after 3 failed asks the next reaction of the firmware's table (ArduRover: HOLD, then a disarm).
         Bounded: by ``timeout_s`` if given, else by the time the table's chain takes (3 asks 1.5 s apart for each reaction: 9 s
         for a rover's HOLD then disarm); the safe state after it by :meth:`SafePlan.bound_s`. Never against a person: a
@@ -269,11 +269,11 @@ class AutopilotLink:
         ALT_HOLD after it in one drain). _PersonTookOver when a person takes the vehicle meanwhile (nothing more is asked).
         """
         own = self._own_follow_on(plan)
-        reacting = Reacting(self, self.mission.vehicle, announce=announce, bounded=True, logger=log, prefix="")
-        if self._bb.get("/link/up") and reacting.seen(safe):
+        asker = Asker(self, self.mission.vehicle, announce=announce, bounded=True, logger=log, prefix="")
+        if self._bb.get("/link/up") and asker.seen(safe):
             return True, f"{self.autopilot.mode_name(safe)} (already in it)"
-        reacting.start(safe, MAKE_SAFE)
-        deadline = self.clock.now() + (timeout_s if timeout_s is not None else reacting.time_to_exhaust(safe))
+        asker.start(safe, MAKE_SAFE)
+        deadline = self.clock.now() + (timeout_s if timeout_s is not None else asker.time_to_exhaust(safe))
         while True:
             self.autopilot.service()  # PX4: the offboard stream goes on until the heartbeat shows we left OFFBOARD
             self.commander.flush()
@@ -281,19 +281,19 @@ class AutopilotLink:
             self.clock.sleep_until(min(deadline, self.clock.now() + self.period_s / 2))
             self.reader.drain()
             self.heartbeat.service()
-            if person := self._person_took_over(found_in, reacting.mode_in_force, own):
-                reacting.cancel()
+            if person := self._person_took_over(found_in, asker.mode_in_force, own):
+                asker.cancel()
                 raise _PersonTookOver(person)
             if plan is not None and plan.until is not Until.SHOWN and settled(plan, self._bb.get):
-                reacting.cancel()
+                asker.cancel()
                 return True, f"{self.autopilot.mode_name(safe)} ({plan.until})"
             time_up = self.clock.now() >= deadline - 1e-6  # as the reactions' 1.5 s: a sum of half periods lands a hair short
-            reacting.follow_up(self.clock.now(), ask=not time_up)
-            if reacting.done or reacting.exhausted or time_up:
+            asker.follow_up(self.clock.now(), ask=not time_up)
+            if asker.done or asker.exhausted or time_up:
                 break
-        if not reacting.done:
-            reacting.cancel()  # nothing asked goes on being retried after the make-safe gave up (with --wait the executive stays up)
-        return reacting.done, reacting.account()
+        if not asker.done:
+            asker.cancel()  # nothing asked goes on being retried after the make-safe gave up (with --wait the executive stays up)
+        return asker.done, asker.account()
 
     def _settle(
         self,

@@ -3,7 +3,8 @@
 An action never waits inside a tick. It asks in ``initialise`` (the command goes out after the
 tick) and each ``update`` looks at what came back: the ack in ``/command/<outcome>`` and, for the
 effect itself, the vehicle state (ArduPilot can ack a mode change that the heartbeat never shows).
-Here: the framework (:class:`CommandAction`, :func:`refusal`...) and the commands of modes, arming and speed.
+The asking is the one mechanism's (:class:`~executive.autopilot.asking.Asker`, with :data:`ONE_ASK`'s
+rules). Here: the framework (:class:`CommandAction`) and the commands of modes, arming and speed.
 
 Every action needs the ``clock`` and the ``autopilot`` (an :class:`~executive.autopilot.AutopilotPort`)
 from ``tree.setup``.
@@ -11,36 +12,20 @@ from ``tree.setup``.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request
+from executive.autopilot.asking import Asker, Rules, Step, Voice, accepted, refusal_reason, retry_reason
 from executive.behaviours.base import TimedBehaviour
 from executive.mission.model import Waypoint
 from executive.world import blackboard
-from executive.world.state import CommandState, CommandStatus, Outcome
+from executive.world.state import CommandStatus, Outcome
 
-
-def refusal_reason(status: CommandStatus | None, request: Request | None, statustext: tuple[int, str] | None) -> str | None:
-    """Why the command of ``request`` failed (refused, or no ack after every retry); None if it has not."""
-    if status is None or request is None or status.ticket != request.ticket:
-        return None
-    if status.state is CommandState.TIMED_OUT:
-        return f"no ack after {status.attempts} attempts"
-    if status.state is CommandState.REJECTED:
-        return f"refused: {status.result_name}" + (f" ({statustext[1]})" if statustext else "")
-    return None
-
-
-def retry_reason(status: CommandStatus | None, request: Request | None, statustext: tuple[int, str] | None) -> str | None:
-    """The refusal the autopilot port answers by asking again (PX4's AUTO.MISSION while it checks a new mission); None if not."""
-    if status is None or request is None or status.ticket != request.ticket or status.state is not CommandState.RETRYING:
-        return None
-    return f"refused: {status.result_name}" + (f" ({statustext[1]})" if statustext else "") + "; asked again"
-
-
-def accepted(status: CommandStatus | None, request: Request | None) -> bool:
-    """The command of ``request`` was accepted."""
-    return status is not None and request is not None and status.ticket == request.ticket and status.state is CommandState.ACCEPTED
+#: A command's asking: one ask (the commander resends it unacked), confirmed by the vehicle's state alone, judged failed when
+#: refused, unanswered or not confirmed after the action's ``confirm_timeout_s``; never asked again nor replaced.
+ONE_ASK = Rules(asks_before_next=1, needs_ack=False, link_down_counts=True)
 
 
 class CommandAction(TimedBehaviour):
@@ -48,6 +33,7 @@ class CommandAction(TimedBehaviour):
 
     A refusal the autopilot port asks again by itself (RETRYING) is waited out: the confirmation
     timeout counts from the last refusal, and the port's own bound ends it with the refusal.
+    Asked by an :class:`~executive.autopilot.asking.Asker` (:data:`ONE_ASK`); its outcome is the feedback.
     """
 
     needs = ("clock", "autopilot")
@@ -59,8 +45,13 @@ class CommandAction(TimedBehaviour):
         self.reads = (*self.reads, blackboard.command_key(self.outcome), "/vehicle/statustext")
         super().__init__(name)
         self.confirm_timeout_s = confirm_timeout_s
-        self._ticket: Request | None = None
-        self._refused_at = float("-inf")  # the last refusal the port answered by asking again
+        self._asker = Asker(self, None, rules=ONE_ASK, voice=_CommandVoice(self), escalate=False, bounded=True)
+
+    @property
+    def _ticket(self) -> Request | None:
+        """The request of this run (None: nothing asked)."""
+        asking = self._asker.asking
+        return asking.request if asking is not None else None
 
     def request(self) -> Request:
         """Ask the autopilot for the command; returns its request."""
@@ -76,10 +67,10 @@ class CommandAction(TimedBehaviour):
 
     def initialise(self) -> None:
         super().initialise()
-        self._ticket = None  # a new run: the ack of the previous one (ChangeSpeed's confirmation) says nothing about it
-        self._refused_at = float("-inf")
+        self._asker.forget()  # a new run: the ack of the previous one (ChangeSpeed's confirmation) says nothing about it
+        self._asker.rules = replace(ONE_ASK, judge_after_s=self.confirm_timeout_s)
         if not self.confirmed():
-            self._ticket = self.request()
+            self._asker.start_command(self.name, self.request, self.confirmed, self.name)
 
     def terminate(self, new_status: Status) -> None:
         if new_status == Status.INVALID:  # interrupted: what it asked for no longer matters
@@ -89,22 +80,32 @@ class CommandAction(TimedBehaviour):
         if self.confirmed():
             self.feedback_message = "confirmed"
             return Status.SUCCESS
-        status, statustext = self.get(blackboard.command_key(self.outcome)), self.get("/vehicle/statustext")
-        refusal = refusal_reason(status, self._ticket, statustext)
-        if refusal is not None:
-            self.feedback_message = refusal
+        asking = self._asker.asking
+        if asking is None:  # confirmed when it started, not since: nothing was asked to make it so
+            self.feedback_message = "no longer confirmed"
             return Status.FAILURE
-        retrying = retry_reason(status, self._ticket, statustext)
-        if retrying is not None:
-            self._refused_at = status.time
-            self.feedback_message = retrying
-            return Status.RUNNING
-        seen = self.progress()
-        if self.clock.now() - max(self.started, self._refused_at) > self.confirm_timeout_s:
-            self.feedback_message = f"not confirmed after {self.confirm_timeout_s:g} s" + (f": {seen}" if seen else "")
+        self._asker.follow_up(self.clock.now(), ask=False)
+        if asking.judged:  # refused, unanswered or not confirmed in time: the voice said which
             return Status.FAILURE
-        self.feedback_message = seen or "waiting for the autopilot"
+        status: CommandStatus | None = self.get(blackboard.command_key(self.outcome))
+        retrying = retry_reason(status, asking.request, self.get("/vehicle/statustext"))
+        self.feedback_message = retrying or self.progress() or "waiting for the autopilot"
         return Status.RUNNING
+
+
+class _CommandVoice(Voice):
+    """A command's failed ask, as its feedback: the refusal, or what the vehicle shows after the time allowed."""
+
+    def __init__(self, action: CommandAction) -> None:
+        self.action = action
+
+    def failed(self, step: Step, outcome: str, *, first: bool, counted: bool) -> None:
+        action = self.action
+        refusal = refusal_reason(step.status, step.request, action.get("/vehicle/statustext"))
+        if refusal is None:
+            seen = action.progress()
+            refusal = f"not confirmed after {action.confirm_timeout_s:g} s" + (f": {seen}" if seen else "")
+        action.feedback_message = refusal
 
 
 class SetMode(CommandAction):

@@ -13,12 +13,12 @@ sends it when that tick ends: zero ticks of delay.
 A reaction is done only when the autopilot has accepted it (its COMMAND_ACK, on the blackboard)
 and the heartbeat shows the vehicle in the mode (or disarmed) asked for. Until then the feedback
 says what it waits for (``asking HOLD: refused (FAILED) x2``), and it is asked again every
-:data:`~executive.behaviours.reacting.ASK_AGAIN_S` of vehicle time. After three failed asks (refused; accepted
+:data:`~executive.autopilot.asking.ASK_AGAIN_S` of vehicle time. After three failed asks (refused; accepted
 but not seen; unanswered while heartbeats arrive), or at once when the firmware's source says the
 vehicle cannot enter it in its present state (a position mode without a position estimate), the
 next reaction the firmware allows is asked instead (:mod:`executive.autopilot.fallbacks`). Each
 such step is a warning and an announcement to the ground station (a STATUSTEXT): see
-:mod:`executive.behaviours.reacting`.
+:mod:`executive.autopilot.asking`.
 
 While it runs, every guard is judged each tick (not only the first that failed), so a condition
 that becomes true during another one's reaction gets its own. A person who has the vehicle (a
@@ -39,6 +39,7 @@ import py_trees
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort
+from executive.autopilot.asking import READS, Asker
 from executive.autopilot.fallbacks import DISARM
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.commands import SetMode
@@ -46,7 +47,6 @@ from executive.behaviours.energy import EnergyEnough
 from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive
 from executive.behaviours.position_guards import InsideGeofence
 from executive.behaviours.rc_guards import RcAutoMode, RcFresh, RcNotLost, RcNotTakingOver
-from executive.behaviours.reacting import READS, Reacting
 from executive.behaviours.returning import ReturningDrive, why_not_rtl
 from executive.behaviours.zone_guards import OutsideKeepOut
 from executive.mission.failsafes import JUDGED_AFTER_PERSON, REACTION_MODES, FailsafeCondition, FailsafePolicy
@@ -150,7 +150,7 @@ class Failsafe(TimedBehaviour):
     def _reset(self) -> None:
         self._since: dict[Guard, float] = {}
         self._in_force: _Reaction | None = None
-        self._reacting = Reacting(self, self.vehicle, announce=self._announce, on_disarm=self._disarming)
+        self._reacting = Asker(self, self.vehicle, announce=self._announce, on_disarm=self._disarming)
         self._rearm_from: float | None = None
         self._rearm_at = float("-inf")
         self._return: ReturningDrive | None = None  # the executive's own return, when the firmware's RTL will not do

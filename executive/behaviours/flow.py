@@ -10,9 +10,9 @@ import py_trees
 from py_trees.common import Access, Status
 
 from executive.autopilot import AutopilotPort, Request
+from executive.autopilot.asking import READS, Announce, Asker
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
-from executive.behaviours.reacting import READS, Announce, Reacting
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.port import MissionPort
 from executive.world.clock import Clock
@@ -123,7 +123,7 @@ class WaitForGuards(TimedBehaviour):
     ``hold_mode`` unless a failing guard says a person has the vehicle; a VTOL in fixed-wing
     flight (``/vehicle/vtol_state`` FW) is held in ``fixed_wing_hold_mode`` instead, when given.
     The hold is asked again until the autopilot accepts it and the heartbeat shows it
-    (:class:`~executive.behaviours.reacting.Reacting`, without its next reactions: the mission's
+    (:class:`~executive.autopilot.asking.Asker`, without its next reactions: the mission's
     ``Failsafe`` has those); the feedback says what it waits for (``asking HOLD: refused (FAILED) x2``).
     """
 
@@ -146,7 +146,7 @@ class WaitForGuards(TimedBehaviour):
         self.hold_mode = hold_mode
         self.fixed_wing_hold_mode = fixed_wing_hold_mode
         self._announce: Announce | None = None
-        self._reacting = Reacting(self, None, escalate=False)
+        self._reacting = Asker(self, None, escalate=False)
 
     def setup(self, **services: Any) -> None:
         super().setup(**services)
@@ -155,7 +155,7 @@ class WaitForGuards(TimedBehaviour):
 
     def initialise(self) -> None:
         super().initialise()
-        self._reacting = Reacting(self, None, escalate=False, announce=self._announce)
+        self._reacting = Asker(self, None, escalate=False, announce=self._announce)
 
     def terminate(self, new_status: Status) -> None:
         # The guards recovered (or the mission ended): a hold still being retried must not reach the vehicle now.

@@ -14,9 +14,9 @@ from typing import Literal
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request, Target
+from executive.autopilot.asking import refusal_reason
 from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
 from executive.behaviours.base import TimedBehaviour
-from executive.behaviours.commands import refusal_reason
 from executive.mission.model import Waypoint
 from executive.world import blackboard, geo
 from executive.world.seabed import depth_floor, depth_for_altitude

@@ -20,14 +20,14 @@ pass for a switch held still.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass
 
 from py_trees.common import Status
 
-from executive.autopilot import AutopilotPort, Request
+from executive.autopilot import AutopilotPort
+from executive.autopilot.asking import ARM, Asker, Rules, Step, Voice, refusal_reason
+from executive.autopilot.fallbacks import DISARM
 from executive.behaviours.auto_route import AUTO
 from executive.behaviours.base import ExecutiveBehaviour
-from executive.behaviours.commands import refusal_reason
 from executive.mission.lifecycle import Refused
 from executive.mission.model import Waypoint
 from executive.mission.port import MissionPort
@@ -84,15 +84,6 @@ class SwitchWatcher(ExecutiveBehaviour):
         """Watch what the last move asked for (every tick)."""
 
 
-@dataclass(frozen=True, slots=True)
-class _Asking:
-    """A command a switch move asked for: what, its ticket, and when it was asked."""
-
-    what: str
-    ticket: Request
-    at: float
-
-
 class ModeSwitch(SwitchWatcher):
     """Switch C sets the mode by its position: up MANUAL, middle AUTO, down ``aux_mode`` (none: ignored).
 
@@ -104,9 +95,10 @@ class ModeSwitch(SwitchWatcher):
     AUTO is asked only with a route recorded, and only once the autopilot holds it (an upload in
     progress is waited for; a later move replaces the wait). A mode already shown by the heartbeat
     is not asked again. Confirmed by the heartbeat. Refused or not shown within
-    ``confirm_timeout_s``: asked again every ``retry_s`` (the firmware's own failsafe may still be
+    ``confirm_timeout_s``: asked again ``retry_s`` later (the firmware's own failsafe may still be
     latched: ArduRover refuses AUTO while its EKF failsafe is) until ``give_up_after_s`` from the
-    wish, then said in the feedback and left to the operator.
+    wish, then said in the feedback and left to the operator. Asked by an
+    :class:`~executive.autopilot.asking.Asker`; each step is reported (the feedback and the log).
     """
 
     reads = ("/vehicle/mode", "/vehicle/statustext", "/vehicle/mission_items", blackboard.command_key(Outcome.MODE))
@@ -131,9 +123,17 @@ class ModeSwitch(SwitchWatcher):
         self.give_up_after_s = give_up_after_s
         self._wanted: str | None = None
         self._wished_at = 0.0
-        self._asking: _Asking | None = None
-        self._refused_at = float("-inf")
         self._entered = False
+        rules = Rules(
+            judge_after_s=confirm_timeout_s,
+            again_after_s=0.0,
+            rest_s=retry_s,
+            asks_before_next=None,
+            needs_ack=False,
+            link_down_counts=True,
+            give_up_after_s=give_up_after_s,
+        )
+        self._asker = Asker(self, None, rules=rules, voice=_ModeVoice(self), escalate=False, bounded=True)
 
     def initialise(self) -> None:
         self._entered = True  # act on the position the switch is in, once it is known
@@ -151,8 +151,7 @@ class ModeSwitch(SwitchWatcher):
         return Status.RUNNING
 
     def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
-        self._asking = None
-        self._refused_at = float("-inf")
+        self._asker.forget()
         self._wanted = self.modes[position]
         self._wished_at = self.clock.now()
         if self._wanted is None:
@@ -164,38 +163,58 @@ class ModeSwitch(SwitchWatcher):
             return
         now = self.clock.now()
         said = f"{self.label} {self.position}: {mode}"
-        shown = self.get("/vehicle/mode")
-        if shown == self.autopilot.mode_name(mode):
-            self.report(said if self._asking or self._refused_at > float("-inf") else f"{said} (already)")
-            self._wanted = self._asking = None
-            return
-        if self._asking is None:
-            if now - self._refused_at < self.retry_s:
-                return
-            if mode == AUTO and not self.mission_state.route.waypoints:
-                self.report(f"{said} not asked: no route recorded")
+        asker = self._asker
+        if asker.asking is None:
+            if self.get("/vehicle/mode") == self.autopilot.mode_name(mode):
+                self.report(f"{said} (already)")
                 self._wanted = None
-                return
-            waiting = self.autopilot.route_differs(self.mission_state.route.waypoints, self.get("/vehicle/mission_items")) if mode == AUTO else None
-            if waiting is not None:
-                self.feedback_message = f"{said} waits for the route upload: {waiting}"
-                return
-            self._asking = _Asking(mode, self.autopilot.set_mode(mode), now)
-            self.report(f"{said}: asked" + (" again" if self._refused_at > float("-inf") else ""))
+            elif self._may_ask(mode, said):
+                asker.start(mode, said, since=self._wished_at)
             return
-        refusal = refusal_reason(self.get(blackboard.command_key(Outcome.MODE)), self._asking.ticket, self.get("/vehicle/statustext"))
-        waited = now - self._asking.at
-        if refusal is None and waited <= self.confirm_timeout_s:
-            self.feedback_message = f"{said}: asked, mode is {shown}"
-            return
-        why = refusal or f"not shown after {self.confirm_timeout_s:g} s (mode is {shown})"
-        self._asking = None
-        if now - self._wished_at + self.retry_s <= self.give_up_after_s:
-            self._refused_at = now
-            self.report(f"{said} {why}; asking again in {self.retry_s:g} s")
-            return
-        self.report(f"{said} {why}")
-        self._wanted = None
+        asker.follow_up(now, ask=False)
+        if asker.done or asker.exhausted:
+            self._wanted = None
+        elif asker.due(now):
+            if self._may_ask(mode, said):
+                asker.ask_again()
+        elif not asker.asking.judged:
+            self.feedback_message = f"{said}: asked, mode is {self.get('/vehicle/mode')}"
+
+    def _may_ask(self, mode: str, said: str) -> bool:
+        """AUTO only with a route recorded (else the wish is dropped), and once the autopilot holds it (an upload is waited for)."""
+        if mode != AUTO:
+            return True
+        if not self.mission_state.route.waypoints:
+            self.report(f"{said} not asked: no route recorded")
+            self._wanted = None
+            return False
+        waiting = self.autopilot.route_differs(self.mission_state.route.waypoints, self.get("/vehicle/mission_items"))
+        if waiting is not None:
+            self.feedback_message = f"{said} waits for the route upload: {waiting}"
+            return False
+        return True
+
+
+class _ModeVoice(Voice):
+    """Switch C's asks, as the operator hears of them: the behaviour's feedback and the log."""
+
+    def __init__(self, switch: ModeSwitch) -> None:
+        self.switch = switch
+
+    def asked(self, step: Step, again: bool) -> None:
+        self.switch.report(f"{step.cause}: asked" + (" again" if again else ""))
+
+    def failed(self, step: Step, outcome: str, *, first: bool, counted: bool) -> None:
+        switch = self.switch
+        refusal = refusal_reason(step.status, step.request, switch.get("/vehicle/statustext"))
+        why = refusal or f"not shown after {switch.confirm_timeout_s:g} s (mode is {switch.get('/vehicle/mode')})"
+        switch.report(f"{step.cause} {why}" + ("" if step.gave_up else f"; asking again in {switch.retry_s:g} s"))
+
+    def no_such_mode(self, cause: str, step: str) -> None:
+        self.switch.report(f"{cause}: the autopilot has no such mode")
+
+    def confirmed(self, step: Step, took_s: float) -> None:
+        self.switch.report(step.cause)
 
 
 class ArmSwitch(SwitchWatcher):
@@ -216,11 +235,13 @@ class ArmSwitch(SwitchWatcher):
     def __init__(self, name: str = "Switch D: arm", confirm_timeout_s: float = 5.0) -> None:
         super().__init__("swd", name)
         self.confirm_timeout_s = confirm_timeout_s
-        self._asking: _Asking | None = None
+        rules = Rules(judge_after_s=confirm_timeout_s, asks_before_next=1, needs_ack=False, link_down_counts=True)
+        self._asker = Asker(self, None, rules=rules, voice=_ArmVoice(self), escalate=False, bounded=True)
         self._manual_awaited_since: float | None = None  # switch D down with switch C up: arming once MANUAL shows
 
     def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
-        self._asking = self._manual_awaited_since = None
+        self._asker.forget()
+        self._manual_awaited_since = None
         said = f"{self.label} {position}"
         if position is MIDDLE:
             self.report(f"{said}: a two-position switch has no middle: ignored")
@@ -241,25 +262,13 @@ class ArmSwitch(SwitchWatcher):
         self._ask(arm)
 
     def _ask(self, arm: bool) -> None:
-        what = "armed" if arm else "disarmed"
-        self._asking = _Asking(what, self.autopilot.arm() if arm else self.autopilot.disarm(), self.clock.now())
-        self.report(f"{self.label} {self.position}: asked to be {what}")
+        self._asker.start(ARM if arm else DISARM, f"{self.label} {self.position}")
 
     def follow(self) -> None:
         if self._manual_awaited_since is not None:
             self._await_manual(self._manual_awaited_since)
-        if self._asking is None:
-            return
-        said, what = f"{self.label} {self.position}", self._asking.what
-        if bool(self.get("/vehicle/armed")) == (what == "armed"):
-            self.report(f"{said}: {what}")
-            self._asking = None
-            return
-        refusal = refusal_reason(self.get(blackboard.command_key(Outcome.ARMING)), self._asking.ticket, self.get("/vehicle/statustext"))
-        if refusal is None and self.clock.now() - self._asking.at <= self.confirm_timeout_s:
-            return
-        self.report(f"{said}: not {what}: {refusal or f'not shown after {self.confirm_timeout_s:g} s'}")
-        self._asking = None
+        if self._asker.asking is not None and not self._asker.done and not self._asker.exhausted:
+            self._asker.follow_up(self.clock.now(), ask=False)
 
     def _await_manual(self, since: float) -> None:
         mode = self.get("/vehicle/mode")
@@ -274,6 +283,28 @@ class ArmSwitch(SwitchWatcher):
         elif self.clock.now() - since > self.confirm_timeout_s:
             self._manual_awaited_since = None
             self.report(f"{said}: arming refused: the mode is {mode}, not {ARMABLE_MODE} after {self.confirm_timeout_s:g} s (switch C up)")
+
+
+class _ArmVoice(Voice):
+    """Switch D's one ask, as the operator hears of it: the behaviour's feedback and the log."""
+
+    def __init__(self, switch: ArmSwitch) -> None:
+        self.switch = switch
+
+    def asked(self, step: Step, again: bool) -> None:
+        self.switch.report(f"{step.cause}: asked to be {_what(step)}")
+
+    def failed(self, step: Step, outcome: str, *, first: bool, counted: bool) -> None:
+        switch = self.switch
+        refusal = refusal_reason(step.status, step.request, switch.get("/vehicle/statustext"))
+        switch.report(f"{step.cause}: not {_what(step)}: {refusal or f'not shown after {switch.confirm_timeout_s:g} s'}")
+
+    def confirmed(self, step: Step, took_s: float) -> None:
+        self.switch.report(f"{step.cause}: {_what(step)}")
+
+
+def _what(step: Step) -> str:
+    return "armed" if step.step == ARM else "disarmed"
 
 
 class RouteEditSwitch(SwitchWatcher):

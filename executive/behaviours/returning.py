@@ -27,7 +27,7 @@ import py_trees
 from py_trees.common import Status
 
 from executive.autopilot import Target
-from executive.behaviours.reacting import Announce, Host, Reacting
+from executive.autopilot.asking import Announce, Asker, Host
 from executive.mission.return_path import ReturnPath, ReturnPlanner
 from executive.world import geo
 from executive.world.state import GlobalPosition, HomePosition
@@ -92,7 +92,7 @@ class ReturningDrive:
         self.mission_home = (planner.mission.home.lat, planner.mission.home.lon) if planner.mission.home else None
         self.path: ReturnPath | None = None
         self.started = host.clock.now()
-        self._guided = Reacting(host, vehicle, announce=announce, escalate=False)
+        self._guided = Asker(host, vehicle, announce=announce, escalate=False)
         self._leg: _Leg | None = None
         self.arrived = False
         self.failed: str | None = None  # no way found, or a leg not reached in time: the vehicle is left in its hold

@@ -8,8 +8,9 @@ from typing import Literal
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request, VtolState
+from executive.autopilot.asking import refusal_reason
 from executive.behaviours.base import TimedBehaviour
-from executive.behaviours.commands import CommandAction, refusal_reason
+from executive.behaviours.commands import CommandAction
 from executive.world import blackboard, frames
 from executive.world.state import GlobalPosition, HomePosition, Outcome
 

@@ -5,13 +5,13 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
 from executive.cli import main
+from tests_support import executive_process
 
 SUB_ON = """version: 1
 name: sub
@@ -80,9 +80,9 @@ def test_run_with_autopilot_px4_flies_the_simulated_px4_and_ctrl_c_in_the_take_o
 
     Ctrl-C as the take-off begins (low, under MPC_LAND_ALT2): made safe in AUTO.LAND, landed and disarmed (issue 44; it hovered
     in AUTO.LOITER before)."""
-    root = Path(__file__).parents[2]
-    command = [sys.executable, "-m", "executive", "run", "missions/vtol_transit.yaml", "--autopilot", "px4", "--speedup", "20", "--socket", "none"]
-    proc = subprocess.Popen([*command, "-v"], cwd=root, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = executive_process(
+        "run", "missions/vtol_transit.yaml", "--autopilot", "px4", "--speedup", "20", "--socket", "none", "-v", stdout=subprocess.PIPE
+    )
     modes: list[str] = []
     deadline = time.monotonic() + 300
     assert proc.stdout is not None

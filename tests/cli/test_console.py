@@ -8,9 +8,10 @@ import re
 import select
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
+
+from tests_support import executive_process
 
 ROOT = Path(__file__).parents[2]
 MINIMAL = ROOT / "tests/data/minimal_mission.yaml"  # one waypoint, no auto-arm: it runs, waiting for the operator to arm
@@ -34,12 +35,8 @@ def read_terminal(fd: int, until: callable, timeout_s: float) -> str:
 
 def test_on_a_terminal_each_log_record_starts_its_own_line_with_a_utc_timestamp(tmp_path):
     main_fd, terminal = pty.openpty()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "executive", "run", str(MINIMAL), "--speedup", "40", "--socket", str(tmp_path / "s.sock")],
-        cwd=ROOT,
-        stdout=terminal,
-        stderr=terminal,
-        stdin=subprocess.DEVNULL,
+    proc = executive_process(
+        "run", str(MINIMAL), "--speedup", "40", "--socket", str(tmp_path / "s.sock"), stdout=terminal, stderr=terminal, stdin=subprocess.DEVNULL
     )
     os.close(terminal)
     try:

@@ -7,7 +7,6 @@ import re
 import signal
 import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -18,9 +17,8 @@ from executive.io.control import request
 from executive.operator.status import status_line
 from executive.world import geo
 from executive.world.dialect import mavlink, mavutil
-from tests_support import mission_text
+from tests_support import executive_process, mission_text
 
-ROOT = Path(__file__).parents[2]
 MISSION = mission_text(
     "two-legs",
     "{lat: -35.3629906, lon: 149.1652300}",
@@ -36,8 +34,7 @@ def mission(tmp_path) -> Path:
 
 
 def run_executive(mission: Path, sock: Path, *extra: str, speedup: float = 10.0) -> subprocess.Popen:
-    args = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", str(speedup), "--socket", str(sock), "-v", *extra]
-    return subprocess.Popen(args, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    return executive_process("run", str(mission), "--speedup", str(speedup), "--socket", str(sock), "-v", *extra)
 
 
 def ctl(capsys, sock: Path, *args: str) -> dict:
@@ -209,11 +206,10 @@ def test_a_paused_mission_is_replaced_from_the_command_line_and_completes_on_the
         wait_status(sock, lambda s: s["state"] == "RUNNING" and s["leg"] == 2 and s["mode"] == "GUIDED")
         assert ctl(capsys, sock, "pause")["state"] == "PAUSED"
         wait_status(sock, lambda s: s["mode"] == "HOLD")
-        upload = subprocess.run(
-            [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "upload", str(north)], cwd=ROOT, capture_output=True, text=True
-        )
-        assert upload.returncode == 0, upload.stderr
-        first, *route = upload.stdout.splitlines()
+        upload = executive_process("ctl", "--socket", str(sock), "upload", str(north), stdout=subprocess.PIPE)
+        out, err = upload.communicate(timeout=120)
+        assert upload.returncode == 0, err
+        first, *route = out.splitlines()
         assert first.startswith("PAUSED: mission replaced: 'two-legs' -> 'two-legs-north', at leg 2/3 (the waypoint of old leg 2)")
         assert route[0].startswith("3 waypoints; on the autopilot:") and route[2].startswith(">   2  -35.3629906, 149.1665504")
         status = wait_status(sock, lambda s: s["state"] == "PAUSED" and s["legs"] == 3)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -12,7 +11,7 @@ import pytest
 
 from executive.cli import main
 from executive.io.control import request
-from tests_support import mission_text
+from tests_support import executive_process, mission_text
 
 ROOT = Path(__file__).parents[2]
 MISSION = mission_text(
@@ -46,8 +45,7 @@ def wait_for_ekf_wait(sock: Path, timeout_s: float = 30.0) -> None:
 def test_ctl_tree_and_status_show_the_wait_and_sigterm_ends_the_run_aborted_in_the_journal(tmp_path, capsys):
     mission, sock, db = tmp_path / "slow_ekf.yaml", tmp_path / "ctl.sock", tmp_path / "journal.db"
     mission.write_text(MISSION)
-    args = ["run", str(mission), "--speedup", "2", "--socket", str(sock), "--journal", str(db)]
-    run = subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    run = executive_process("run", str(mission), "--speedup", "2", "--socket", str(sock), "--journal", str(db))
     try:
         wait_for_ekf_wait(sock)
         code, out, err = ctl(capsys, sock, "tree")
@@ -61,13 +59,7 @@ def test_ctl_tree_and_status_show_the_wait_and_sigterm_ends_the_run_aborted_in_t
         _, status, _ = ctl(capsys, sock, "status")
         assert "waiting: EKF ok? (" in status and ": EKF has no position estimate" in status, status
 
-        watch = subprocess.Popen(
-            [sys.executable, "-m", "executive", "ctl", "--socket", str(sock), "tree", "--watch", "--interval", "0.1"],
-            cwd=ROOT,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
+        watch = executive_process("ctl", "--socket", str(sock), "tree", "--watch", "--interval", "0.1", stdout=subprocess.PIPE)
         assert watch.stdout is not None
         prints = 0
         while prints < 2:  # two prints of the tree, a tick or more apart

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +19,7 @@ from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
 from executive.world import blackboard
 from executive.world.clock import Clock, ManualClock
 from executive.world.state import SamplerState
-from tests_support import run_in_lockstep
+from tests_support import executive_process, run_in_lockstep
 
 ROOT = Path(__file__).parents[2]
 MISSION = ROOT / "missions" / "asv_sampling.yaml"
@@ -42,8 +41,7 @@ waypoints:
 def run(mission: Path, *args: str) -> subprocess.Popen:
     """``executive run`` at 10x: after the first sample the run has ~50 s of vehicle time left, 5 s of wall time (more when the
     governor slows it) for this test to read that status line and kill it; at 40x, 1.2 s was too little beside two busy loops."""
-    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "10", "--socket", "none", *args]
-    return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return executive_process("run", str(mission), "--speedup", "10", "--socket", "none", *args, stdout=subprocess.PIPE)
 
 
 def report(db: Path, run_id: int, capsys) -> dict:

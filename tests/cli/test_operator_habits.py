@@ -11,7 +11,6 @@ import os
 import signal
 import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -25,21 +24,12 @@ from executive.observers.journal import Journal
 from executive.observers.snapshots import SnapshotRecorder
 from executive.operator.progress import Progress
 from executive.world.clock import ManualClock
+from executive.world.dialect import mavlink
+from tests_support import executive_process
 
 ROOT = Path(__file__).parents[2]
 SQUARE = str(ROOT / "missions" / "rover_square.yaml")
 CAN_LOG = ROOT / "tests" / "data" / "can" / "bunker_rc.log"
-
-
-def executive(*args: str, env: dict[str, str] | None = None) -> subprocess.Popen:
-    return subprocess.Popen(
-        [sys.executable, "-m", "executive", *args],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=None if env is None else {**os.environ, **env},
-    )
 
 
 def free_port() -> int:
@@ -47,6 +37,32 @@ def free_port() -> int:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         return probe.getsockname()[1]
+
+
+def free_udp_port() -> int:
+    """A UDP port nothing listens on (bound by the OS, then let go)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def heartbeat_back(gcs: socket.socket, port: int, timeout_s: float = 120.0) -> bool:
+    """A ground station's HEARTBEAT from ``gcs`` to an executive listening on ``port`` (again, until it is up), until one of its own
+    comes back; False if none in ``timeout_s`` (wall time bounds only a hung process)."""
+    mav = mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
+    hello = mav.heartbeat_encode(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0).pack(mav)
+    parser = mavlink.MAVLink(None)
+    deadline = time.monotonic() + timeout_s
+    gcs.settimeout(0.2)  # how often it speaks again while the executive starts, not a margin: it waits for the answer
+    while time.monotonic() < deadline:
+        gcs.sendto(hello, ("127.0.0.1", port))
+        try:
+            datagram = gcs.recv(2048)
+        except (TimeoutError, ConnectionRefusedError):  # not listening yet (the port refused the last one), or not answered yet
+            continue
+        if any(msg.get_type() == "HEARTBEAT" for msg in parser.parse_buffer(datagram) or []):
+            return True
+    return False
 
 
 # -- --mavlink / --gcs -----------------------------------------------------------------------------
@@ -101,7 +117,7 @@ def test_an_explicit_socket_another_executive_serves_is_an_error(tmp_path, capsy
 def test_a_busy_default_socket_makes_the_second_executive_take_its_own_and_say_which(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
     first = ControlServer(default_socket_path(), lambda _request: {"ok": True, "first": True})
-    second = executive("run", SQUARE, "--wait", "--speedup", "5", env={"XDG_RUNTIME_DIR": str(tmp_path)})
+    second = executive_process("run", SQUARE, "--wait", "--speedup", "5", stdout=subprocess.PIPE, env={"XDG_RUNTIME_DIR": str(tmp_path)})
     try:
         own = default_socket_path(second.pid)
         assert second.stderr is not None
@@ -125,16 +141,25 @@ def test_a_busy_default_socket_makes_the_second_executive_take_its_own_and_say_w
 
 
 def test_ctrl_c_while_waiting_for_the_first_heartbeat_exits_130_with_a_message():
-    run = executive("run", SQUARE, "--mavlink", "udpin:127.0.0.1:0", "--socket", "none", "-v")
-    assert run.stderr is not None
-    for line in run.stderr:
-        if "IDLE -> READY" in line:  # the last word before it listens for the autopilot
-            break
-    time.sleep(0.3)
-    run.send_signal(signal.SIGINT)
-    _, err = run.communicate(timeout=30)
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as gcs:
+        gcs.bind(("127.0.0.1", 0))
+        port = free_udp_port()
+        run = executive_process("run", SQUARE, "--mavlink", f"udpin:127.0.0.1:{port}", "--socket", "none", "-v", stdout=subprocess.PIPE)
+        try:
+            # its HEARTBEAT comes back to whoever spoke to it only from the wait for the autopilot: then Ctrl-C lands in that wait
+            assert heartbeat_back(gcs, port), "the executive never announced itself while waiting for the autopilot"
+            run.send_signal(signal.SIGINT)
+            _, err = run.communicate(timeout=30)
+        finally:
+            run.kill()
+            run.communicate()
     assert run.returncode == 130
-    assert err == "executive: run: interrupted while waiting for the autopilot's first heartbeat on udpin:127.0.0.1:0: nothing was commanded\n"
+    _, loaded, waited = err.partition("IDLE -> READY")  # the last word before it listens for the autopilot; then only this
+    assert (
+        loaded
+        and waited.split("\n", 1)[1]
+        == f"executive: run: interrupted while waiting for the autopilot's first heartbeat on udpin:127.0.0.1:{port}: nothing was commanded\n"
+    )
 
 
 @pytest.fixture
@@ -158,7 +183,7 @@ def long_can_log(tmp_path) -> Path:
 
 @pytest.mark.parametrize(("command", "long_file"), [("report", "long_journal"), ("report --json", "long_journal"), ("can decode", "long_can_log")])
 def test_a_reader_that_stops_reading_ends_the_output_quietly(command, long_file, request):
-    proc = executive(*command.split(), str(request.getfixturevalue(long_file)))
+    proc = executive_process(*command.split(), str(request.getfixturevalue(long_file)), stdout=subprocess.PIPE)
     assert proc.stdout is not None and proc.stderr is not None
     assert proc.stdout.read(200)  # `| head`: a little, then the pipe is closed
     proc.stdout.close()

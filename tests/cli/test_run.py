@@ -12,7 +12,6 @@ import re
 import signal
 import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -23,21 +22,17 @@ from executive.io.mavlink.link import load_signing_key
 from executive.sim import SimServer
 from executive.world.clock import ScaledClock
 from executive.world.dialect import mavutil
-from tests_support import SteppedClock, run_in_lockstep, run_over
+from tests_support import SteppedClock, executive_process, run_in_lockstep, run_over
 
 ROOT = Path(__file__).parents[2]
 #: The in-process simulators' EKF is ready after 2 s, not the firmware's 40: what those tests check comes once the rover drives.
 EKF_READY_S = 2.0
 
 
-def executive(*args: str, **popen) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stderr=subprocess.PIPE, text=True, **popen)
-
-
 def test_ctrl_c_leaves_the_vehicle_in_its_safe_mode(tmp_path):
     square = tmp_path / "square.yaml"  # README's square with the EKF ready after 2 s (not 40): the test is about leg 2
     square.write_text((ROOT / "missions/rover_square.yaml").read_text() + "simulator: {ekf_ready_after_s: 2}\n")
-    proc = executive("run", str(square), "--speedup", "20", "-v", stdout=subprocess.PIPE)
+    proc = executive_process("run", str(square), "--speedup", "20", "-v", stdout=subprocess.PIPE)
     lines = []
     deadline = time.monotonic() + 300
     assert proc.stdout is not None
@@ -96,7 +91,7 @@ def test_with_mavlink_the_speedup_is_the_vehicles_and_ticks_keep_to_its_time(tmp
         "waypoints:\n  - {lat: -35.3629906, lon: 149.1652300}\n"  # 30 m north of the simulator's home: 15 s and more of driving
     )
     with SimServer("rover", clock=ScaledClock(8.0), home=(-35.363261, 149.165230, 0.0), ekf_ready_after_s=0.5) as sim:
-        run = executive("run", str(mission), "--mavlink", sim.url_for_client, "--speedup", "8", "--socket", "none", "--connect-timeout", "40")
+        run = executive_process("run", str(mission), "--mavlink", sim.url_for_client, "--speedup", "8", "--socket", "none", "--connect-timeout", "40")
         try:
             _, err = run.communicate(timeout=300)
         finally:
@@ -236,7 +231,9 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
     # the EKF ready after 2 s, not ArduPilot's 40 (the mission's simulator options are the built-in one's): armed in seconds
     sim = SimServer("rover", clock=ScaledClock(), home=(-35.363261, 149.165230, 0.0), ekf_ready_after_s=EKF_READY_S).start()
     try:
-        proc = executive("run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--socket", "none", stdout=subprocess.PIPE)
+        proc = executive_process(
+            "run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--socket", "none", stdout=subprocess.PIPE
+        )
         assert proc.stdout is not None and proc.stderr is not None
         for line in proc.stdout:
             if json.loads(line)["armed"]:  # armed by this run: there is something to make safe (issue 34: else nothing is commanded)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -14,6 +13,7 @@ from executive.sim.firmware import DEFAULT_HOME
 from executive.world.clock import ScaledClock
 from executive.world.dialect import MAVLinkMessage
 from mavlink_hub import UdpHub
+from tests_support import executive_process
 
 ROOT = Path(__file__).parents[2]
 SPEEDUP = 4.0  # the simulated vehicles; an executive on --mavlink runs in real time
@@ -52,8 +52,7 @@ def _run_args(mission: Path, hub: UdpHub, *args: str) -> list[str]:
 
 
 def _executive(mission: Path, hub: UdpHub, *args: str) -> subprocess.Popen[str]:
-    command = [sys.executable, "-m", "executive", *_run_args(mission, hub, *args)]
-    return subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    return executive_process(*_run_args(mission, hub, *args))
 
 
 @pytest.fixture

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from tests_support import LINE_HOME, line_mission, mission_text, run_recording
+from tests_support import LINE_HOME, executive_process, line_mission, mission_text, run_recording
 
 ROOT = Path(__file__).parents[2]
 YEARS_40_S = 40 * 365.25 * 86400
@@ -54,8 +54,8 @@ def test_a_computer_booted_in_1970_gets_its_time_mid_run_and_the_journal_and_log
     assert [leg for _, _, leg in legs] == [0, 1, 2, 3] and [t for t, _, _ in legs] == sorted(t for t, _, _ in legs)
     walls = [wall for _, wall, _ in legs]
     assert abs(walls[2] - walls[0]) > 30 * 365 * 86400  # the journal's UTC jumped between them; its t did not
-    report = subprocess.run([sys.executable, "-m", "executive", "report", str(tmp_path / "j.db")], env=env, capture_output=True, text=True)
-    said = [line.strip() for line in report.stdout.splitlines() if "heading for waypoint" in line]
+    out, _ = executive_process("report", str(tmp_path / "j.db"), stdout=subprocess.PIPE, env=env).communicate(timeout=120)
+    said = [line.strip() for line in out.splitlines() if "heading for waypoint" in line]
     assert [line.split("] ")[1] for line in said] == [f"heading for waypoint {n} of 3" for n in (1, 2, 3)]
 
 

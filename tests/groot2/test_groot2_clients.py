@@ -8,8 +8,6 @@ compared with BehaviorTree.CPP's source in test_groot2_monitor.py, not with this
 from __future__ import annotations
 
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -27,6 +25,7 @@ from executive.observers.groot2.server import Groot2Address, Groot2Server
 from executive.observers.groot2.view import MonitorView
 from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
 from executive.testing.lockstep import Lockstep
+from tests_support import executive_process
 
 bt = pytest.importorskip("behaviortreepy", reason="BehaviorTree.CPP's Python bindings are a test dependency ('.[test]')")
 ROOT = Path(__file__).parents[2]
@@ -97,11 +96,6 @@ def test_btview_reads_the_same_kinds_of_answers_from_behaviortree_cpp_and_from_u
     }
 
 
-def executive(*args: str) -> subprocess.Popen:
-    """``executive ARGS`` in a process of its own, its stderr kept."""
-    return subprocess.Popen([sys.executable, "-m", "executive", *args], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-
-
 def poll_until(client: Groot2Client, predicate, timeout_s: float = 120.0):
     """Ask again until ``predicate(answer)`` holds (wall time bounds only a hung process; what is waited for is what the client reads)."""
     deadline = time.monotonic() + timeout_s
@@ -118,7 +112,7 @@ def poll_until(client: Groot2Client, predicate, timeout_s: float = 120.0):
 
 def test_btview_watches_a_real_run_of_executive_run_groot2(tmp_path) -> None:
     port = free_port_pair()
-    run = executive("run", "missions/rover_square.yaml", "--speedup", "20", "--socket", "none", "--groot2", str(port))
+    run = executive_process("run", "missions/rover_square.yaml", "--speedup", "20", "--socket", "none", "--groot2", str(port))
     client = Groot2Client("127.0.0.1", port, timeout_ms=2000)
     try:
         tree = poll_until(client, client.fetch_tree)
@@ -147,7 +141,7 @@ def test_replay_groot2_plays_a_recording_to_btview(tmp_path) -> None:
     Lockstep(mission, mission_dir=ROOT / "missions", plugs=[snapshot_recorder(recorder)]).run_to_end(600)
     recorder.close()
     port = free_port_pair()
-    replay = executive("replay", str(path), "--groot2", str(port), "--speed", "20")
+    replay = executive_process("replay", str(path), "--groot2", str(port), "--speed", "20")
     client = Groot2Client("127.0.0.1", port, timeout_ms=2000)
     try:
         tree = poll_until(client, client.fetch_tree)
@@ -171,12 +165,7 @@ def test_replay_groot2_plays_a_recording_to_btview(tmp_path) -> None:
 
 @pytest.mark.parametrize(("value", "why"), [("x:y", "'y' is not a port number"), ("65535", "the port must be 1 to 65534")])
 def test_a_bad_groot2_address_is_refused_before_anything_starts(value: str, why: str) -> None:
-    done = subprocess.run(
-        [sys.executable, "-m", "executive", "run", "missions/rover_square.yaml", "--groot2", value],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    done = executive_process("run", "missions/rover_square.yaml", "--groot2", value)
+    _, err = done.communicate(timeout=120)
     assert done.returncode == 2
-    assert why in done.stderr and "--groot2" in done.stderr
+    assert why in err and "--groot2" in err

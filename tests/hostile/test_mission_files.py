@@ -14,8 +14,6 @@ import json
 import math
 import re
 import shutil
-import subprocess
-import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -31,6 +29,7 @@ from executive.mission.errors import MissionError
 from executive.mission.formats.plan_files import import_file
 from executive.mission.model import Mission
 from executive.sim.faults import FaultPlan, load_faults
+from tests_support import executive_process
 
 ROOT = Path(__file__).parents[2]
 MINIMAL = (ROOT / "tests" / "data" / "minimal_mission.yaml").read_text(encoding="utf-8")
@@ -207,10 +206,11 @@ def test_the_real_command_exits_2_without_a_traceback(tmp_path: Path) -> None:
     for name in names:
         paths.append(path := tmp_path / f"{name}.yaml")
         path.write_bytes(HOSTILE[name][0]())
-    done = subprocess.run([sys.executable, "-m", "executive", "validate", *map(str, paths)], capture_output=True, text=True, cwd=ROOT, timeout=60)
-    assert done.returncode == 2, done.stderr
-    assert "Traceback" not in done.stderr
-    firsts = [next(line for line in done.stderr.splitlines() if line.startswith(f"{path}:")) for path in paths]
+    done = executive_process("validate", *map(str, paths))
+    _, err = done.communicate(timeout=60)
+    assert done.returncode == 2, err
+    assert "Traceback" not in err
+    firsts = [next(line for line in err.splitlines() if line.startswith(f"{path}:")) for path in paths]
     assert [line.split(": ")[0].removeprefix(f"{path}:") for line, path in zip(firsts, paths, strict=True)] == [
         f"{HOSTILE[n][1][0]}:{HOSTILE[n][1][1]}" for n in names
     ]

@@ -9,11 +9,9 @@ from __future__ import annotations
 
 import contextlib
 import json
-import os
 import resource
 import sqlite3
 import subprocess
-import sys
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -26,7 +24,7 @@ from executive.mission.lifecycle import MissionState
 from executive.observers.journal import RETRY_EVERY_S, Journal
 from executive.world.clock import ManualClock
 from executive.world.dialect import mavutil
-from tests_support import line_mission, mission_text
+from tests_support import executive_process, line_mission, mission_text
 
 ROOT = Path(__file__).parents[2]
 
@@ -41,20 +39,15 @@ def test_a_run_on_a_disk_that_fills_up_completes_and_keeps_what_was_written(tmp_
         resource.setrlimit(resource.RLIMIT_FSIZE, (64_000, 64_000))  # Python ignores SIGXFSZ: a write past it fails with EFBIG
 
     files = ["--journal", "j.db", "--snapshots", "s.snap", "--tlog", "t.tlog"]
-    run = subprocess.run(
-        [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "20", "--socket", "none", *files],
-        cwd=tmp_path,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
-        preexec_fn=limit,  # a limit of the child's own
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert run.returncode == 0, run.stderr
-    assert run.stderr.splitlines()[-1].startswith("executive: mission 'full-disk' COMPLETED: every waypoint reached")
+    run = executive_process(
+        "run", str(mission), "--speedup", "20", "--socket", "none", *files, cwd=tmp_path, env={"PYTHONPATH": str(ROOT)}, preexec_fn=limit
+    )  # preexec_fn: a limit of the child's own
+    stderr = run.communicate(timeout=120)[1]
+    assert run.returncode == 0, stderr
+    assert stderr.splitlines()[-1].startswith("executive: mission 'full-disk' COMPLETED: every waypoint reached")
     for said in ("journal cannot write: progress will not survive a restart", "snapshots cannot write:", "tlog cannot write:"):
-        assert run.stderr.count(said) == 1, (said, run.stderr)  # said once, however many writes failed
-    assert "Traceback" not in run.stderr
+        assert stderr.count(said) == 1, (said, stderr)  # said once, however many writes failed
+    assert "Traceback" not in stderr
     db = sqlite3.connect(tmp_path / "j.db")
     assert db.execute("PRAGMA integrity_check").fetchone() == ("ok",)
     assert db.execute("SELECT after FROM transitions WHERE run = 1").fetchone() == ("RUNNING",)  # what was written before is kept

@@ -10,7 +10,6 @@ import queue
 import re
 import shutil
 import subprocess
-import sys
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -22,7 +21,7 @@ from executive.io import control
 from executive.observers.snapshots import SnapshotRecorder, replay, snapshot_recorder
 from executive.observers.web.replay import ReplaySource
 from executive.observers.web.server import WebAddress, WebServer
-from tests_support import line_mission, mission_text
+from tests_support import executive_process, line_mission, mission_text
 
 if TYPE_CHECKING:
     from playwright.sync_api import Browser
@@ -63,9 +62,7 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
     mission, sock, token = tmp_path / "live.yaml", tmp_path / "ctl.sock", tmp_path / "token"
     mission.write_text(MISSION)
     token.write_text("a-token-of-twenty-chars\n")  # its buttons need it, as beyond the loopback interface; the page takes it from its address
-    command = [sys.executable, "-m", "executive", "run", str(mission), "--speedup", "20", "--socket", str(sock), "--web", "127.0.0.1:0"]
-    command += ["--web-token-file", str(token)]
-    proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    proc = executive_process("run", str(mission), "--speedup", "20", "--socket", str(sock), "--web", "127.0.0.1:0", "--web-token-file", str(token))
     try:
         chromium = request.getfixturevalue("chromium")  # started while the executive starts
         url = announced_url(proc)
