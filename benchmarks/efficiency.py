@@ -27,6 +27,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from benchmarks import recorded
 from benchmarks.common import Row
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission, SimulatorOptions
@@ -240,6 +241,32 @@ def simulated_rows(name: str) -> list[Row]:
 
 def run(missions: tuple[str, ...] = ("rover_square", "boat_survey")) -> list[Row]:
     """One row per example mission on our simulator; one more per mission recorded on the real firmware, if any."""
-    from benchmarks import recorded
+    return [row for name in missions for row in simulated_rows(name)] + recorded_rows(missions)
 
-    return [row for name in missions for row in simulated_rows(name)] + recorded.rows(missions)
+
+def recorded_rows(missions: Sequence[str]) -> list[Row]:
+    """For each mission recorded in both modes: the real firmware's GUIDED / AUTO time, and the corners each cut."""
+    out = []
+    for name in missions:
+        if not recorded.available(name):
+            continue
+        mission = load_mission(MISSIONS / f"{name}.yaml")
+        waypoints = [(w.lat, w.lon) for w in mission.waypoints]
+        recordings = {
+            drive: recorded.read(recorded.path_of(name, mode), "AUTO" if drive == "auto" else mode)
+            for drive, mode in recorded.DRIVES.items()
+            if recorded.path_of(name, mode).exists()
+        }
+        timings = {}
+        for drive, recording in recordings.items():
+            seconds = recorded.arrival_s(recording.track, waypoints, mission.limits.acceptance_radius_m)
+            if seconds is None:
+                raise ValueError(f"{recording.path}: the vehicle never reached the last waypoint")
+            timings[drive] = Timing(recording.mode, seconds, tuple(sample for sample in recording.track if sample[0] <= seconds))
+        vehicle = f"{mission.vehicle}, SITL frame {recorded.FRAMES[name]}"
+        for drive in ("guided", "auto"):
+            if drive in timings:
+                runs = f"{recorded.path_of(name, 'AUTO').name}; {recorded.path_of(name, recorded.DRIVES[drive]).name}"
+                against = f"a recorded real ArduRover SITL AUTO run ({runs})"
+                out.append(ratio_row(name, timings[drive], timings["whole"], route_of(mission), against, vehicle, drive))
+    return out

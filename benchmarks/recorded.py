@@ -16,8 +16,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from benchmarks.common import Row
-
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "ardurover"
 #: The SITL frame each example mission was recorded on.
 FRAMES = {"rover_square": "rover", "boat_survey": "motorboat"}
@@ -25,7 +23,7 @@ FRAMES = {"rover_square": "rover", "boat_survey": "motorboat"}
 DRIVES = {"guided": "GUIDED", "auto": "SUPERVISED", "whole": "AUTO"}
 PASS_M = 5.0  # an intermediate waypoint counts as passed within this (as benchmarks.efficiency._Route)
 
-Sample = tuple[float, float, float]  # vehicle seconds since the mode was entered, lat, lon
+TrackPoint = tuple[float, float, float]  # vehicle seconds since the mode was entered, lat, lon
 
 
 @dataclass(frozen=True)
@@ -35,7 +33,7 @@ class Recording:
     path: Path
     mode: str
     entered_s: float
-    track: tuple[Sample, ...]
+    track: tuple[TrackPoint, ...]
     #: Where the vehicle was, and its heading (degrees), when it entered the mode: where a simulation of the run starts.
     start: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
@@ -88,7 +86,7 @@ def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
     return distance(a[0], a[1], b[0], b[1])
 
 
-def arrival_s(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]], radius_m: float) -> float | None:
+def arrival_s(track: Sequence[TrackPoint], waypoints: Sequence[tuple[float, float]], radius_m: float) -> float | None:
     """When the vehicle was within ``radius_m`` of the last waypoint, having passed the others within 5 m in turn."""
     k = 0
     for t, lat, lon in track:
@@ -99,7 +97,7 @@ def arrival_s(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]],
     return None
 
 
-def leg_times(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]], radius_m: float) -> list[float]:
+def leg_times(track: Sequence[TrackPoint], waypoints: Sequence[tuple[float, float]], radius_m: float) -> list[float]:
     """How long each leg took: an intermediate waypoint is passed where the vehicle came nearest it (before it was half-way
     along the next leg), the last one when the vehicle was within ``radius_m`` of it."""
     times, start, begin = [], 0.0, 0
@@ -120,31 +118,3 @@ def leg_times(track: Sequence[Sample], waypoints: Sequence[tuple[float, float]],
 def available(mission: str) -> bool:
     """Whether GUIDED and AUTO runs of ``mission`` were recorded."""
     return mission in FRAMES and all(path_of(mission, mode).exists() for mode in ("GUIDED", "AUTO"))
-
-
-def rows(missions: Sequence[str]) -> list[Row]:
-    """For each mission recorded in both modes: the real firmware's GUIDED / AUTO time, and the corners each cut."""
-    from benchmarks.efficiency import MISSIONS, Timing, ratio_row, route_of
-    from executive.mission.loader import load_mission
-
-    out = []
-    for name in missions:
-        if not available(name):
-            continue
-        mission = load_mission(MISSIONS / f"{name}.yaml")
-        waypoints = [(w.lat, w.lon) for w in mission.waypoints]
-        recordings = {
-            drive: read(path_of(name, mode), "AUTO" if drive == "auto" else mode) for drive, mode in DRIVES.items() if path_of(name, mode).exists()
-        }
-        timings = {}
-        for drive, recording in recordings.items():
-            seconds = arrival_s(recording.track, waypoints, mission.limits.acceptance_radius_m)
-            if seconds is None:
-                raise ValueError(f"{recording.path}: the vehicle never reached the last waypoint")
-            timings[drive] = Timing(recording.mode, seconds, tuple(sample for sample in recording.track if sample[0] <= seconds))
-        vehicle = f"{mission.vehicle}, SITL frame {FRAMES[name]}"
-        for drive in ("guided", "auto"):
-            if drive in timings:
-                against = f"a recorded real ArduRover SITL AUTO run ({path_of(name, 'AUTO').name}; {path_of(name, DRIVES[drive]).name})"
-                out.append(ratio_row(name, timings[drive], timings["whole"], route_of(mission), against, vehicle, drive))
-    return out

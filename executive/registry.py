@@ -13,7 +13,8 @@ package adds to the executive with no change to it by naming objects in entry-po
     [project.entry-points."executive.instruments"]       # sample-taking instruments: executive.instruments
     mysonde = "mypkg.sonde:SondeSampler"
 
-A tree is ``build(mission) -> py_trees.behaviour.Behaviour``; a behaviour is a class, an
+A tree is ``build(mission) -> py_trees.behaviour.Behaviour``, its module's ``DECLARATION`` what it declares
+of itself (:func:`tree_declaration`, :class:`executive.mission.declaration.TreeDeclaration`); a behaviour is a class, an
 :class:`~executive.behaviours.base.ExecutiveBehaviour` subclass for the services ours get; an
 instrument an :class:`~executive.instruments.sampler.InstrumentSampler` subclass. The built-in ones
 are named here as strings (``module:attribute``) and imported when first asked for, so this module
@@ -36,6 +37,10 @@ TREES = "executive.trees"
 BEHAVIOURS = "executive.behaviours"
 INSTRUMENTS = "executive.instruments"
 T = TypeVar("T")
+#: The tree a mission runs when it names none.
+DEFAULT_TREE = "waypoints"
+#: The attribute of a tree's module that holds what the tree declares of itself.
+DECLARATION = "DECLARATION"
 
 #: group -> name -> ``module:attribute`` of each built-in one. Our behaviours are not listed: the node catalogue reads them
 #: from :mod:`executive.behaviours` itself (its ``__all__``).
@@ -157,6 +162,26 @@ def load_object(reference: str, default: str) -> Any:
 def load_built_in(group: str, name: str) -> Any:
     """The built-in object ``name`` of ``group`` (KeyError for a name that is not built in)."""
     return load_object(BUILT_IN[group][name], "")
+
+
+def tree_declaration(name: str) -> Any:
+    """What tree ``name`` (built in, a plugin's or ``module:function``) declares of itself: its module's ``DECLARATION`` (None: none).
+
+    KeyError for a name that is none of these; PluginError for a module that cannot be loaded. The
+    declaration's type is :class:`executive.mission.declaration.TreeDeclaration`.
+    """
+    if ":" in name or "." in name:
+        reference = name
+    elif name in BUILT_IN[TREES]:
+        reference = BUILT_IN[TREES][name]
+    else:
+        reference = named(TREES)[name].value
+    module = reference.partition(":")[0]
+    try:
+        found = importlib.import_module(module)
+    except Exception as exc:  # an import runs the plugin's code: anything may be raised
+        raise PluginError(repr(reference), exc) from exc
+    return getattr(found, DECLARATION, None)
 
 
 def load_class(point: EntryPoint, base: type[T], what: str) -> type[T]:

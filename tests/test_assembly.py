@@ -7,7 +7,7 @@ from py_trees.common import Status
 
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime.assembly import Wiring, build_runtime
-from executive.runtime.loop import Outcome
+from executive.runtime.loop import RunOutcome
 from executive.runtime.services import Step, service_name
 from executive.testing import ObedientAutopilot
 from executive.world.dialect import mavlink
@@ -124,7 +124,7 @@ def test_two_runtimes_in_one_process_each_have_their_own_blackboard_and_both_com
     )
     square, other = lockstep(square_mission, ekf_ready_after_s=1.0), lockstep(east, ekf_ready_after_s=1.0)
     assert square.runtime.board is not other.runtime.board
-    outcomes: dict[str, Outcome] = {}
+    outcomes: dict[str, RunOutcome] = {}
     while len(outcomes) < 2:  # lock-step, interleaved: a second of vehicle time each in turn
         for sim in (s for s in (square, other) if s.mission.name not in outcomes):
             stop_at = sim.clock.now() + 1.0

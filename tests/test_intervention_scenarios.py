@@ -16,7 +16,7 @@ import pytest
 from executive.autopilot_link.link import NOTHING_TO_MAKE_SAFE
 from executive.mission.lifecycle import MissionStatus
 from executive.operator import Reply
-from executive.runtime.loop import Outcome
+from executive.runtime.loop import RunOutcome
 from executive.sim.faults import EkfDegradation, Fault, FaultInjector
 from executive.sim.firmware import FirmwareSim
 from executive.testing import Lockstep
@@ -61,7 +61,7 @@ def run(
     actions: dict[float, str] | None = None,
     faults: list[Fault] | None = None,
     operator: Callable[[Lockstep], object] | None = None,
-) -> tuple[Outcome, Record]:
+) -> tuple[RunOutcome, Record]:
     """The line mission against the simulated rover with a ground station's ``actions`` and ``faults``; ``operator`` watches each step."""
     record = Record()
     sim = lockstep(line_mission("intervention line"), injector=lambda _, clock: GroundStation(clock, actions, faults), as_bytes=True)

@@ -264,8 +264,9 @@ def test_a_behaviour_writes_only_the_plugin_keys_it_declares(site: Path) -> None
         declares = (blackboard.Key("/plugin/mine/count", 0, "Writer", "a count"),)
         writes = ("/plugin/mine/count",)
 
-    assert blackboard.value("/plugin/mine/count") == 0
+    assert "/plugin/mine/count" not in blackboard.KEYS  # defining the class documents nothing
     writer = Writer("w")
+    assert blackboard.value("/plugin/mine/count") == 0 and blackboard.KEYS["/plugin/mine/count"] == Writer.declared_keys()[0]
     writer.set("/plugin/mine/count", 3)
     assert blackboard.value("/plugin/mine/count") == 3 == writer.get("/plugin/mine/count")
 

@@ -12,7 +12,7 @@ from py_trees.common import Status
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.runtime.assembly import build_runtime
-from executive.runtime.loop import BehaviourCrashed, Runtime, explain_failure
+from executive.runtime.loop import BehaviourCrashed, RunOutcome, Runtime, explain_failure
 from executive.testing import ObedientAutopilot
 from executive.world.dialect import mavlink
 
@@ -95,6 +95,23 @@ def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mis
     assert "behaviour crashed: Mission/Divide: tests/test_runtime.py:24: ZeroDivisionError: boom" in outcome.reason
     assert autopilot.mode == "HOLD"
     assert runtime.mission_state.status is MissionStatus.ABORTED
+
+
+def test_a_crash_is_told_of_the_node_ticked_even_when_another_node_s_method_raised_it(square_mission, link, clock):
+    """Named by the node whose update the error came out of (a traceback's innermost ``self`` was the other node)."""
+
+    class Asks(py_trees.behaviour.Behaviour):
+        def update(self) -> Status:
+            return elsewhere.update()
+
+    elsewhere = Explodes("Elsewhere")
+    runtime = make_runtime(square_mission, link, clock, root=py_trees.composites.Sequence("Mission", memory=True, children=[Asks("Ask")]))
+    autopilot_at(square_mission, link).beat()
+    assert runtime.link.connect(1.0)
+    runtime.mission_state.start()
+    with pytest.raises(BehaviourCrashed) as crash:
+        runtime.tick()
+    assert crash.value.path == "Mission/Ask"
 
 
 def test_a_stop_request_makes_the_vehicle_safe(square_mission, link, clock):
@@ -189,3 +206,11 @@ def test_a_tree_that_ends_with_a_sample_point_unsampled_does_not_complete(link, 
     outcome = runtime.run()
     assert outcome.status is MissionStatus.ABORTED
     assert outcome.reason.startswith("the tree ended, but no sample was recorded at leg ")
+
+
+def test_a_run_s_outcome_is_a_run_outcome_and_its_old_name_still_imports_with_a_warning():
+    """Two things were called Outcome: how a run ended (RunOutcome) and what an acked command asks (executive.world.state.Outcome)."""
+    from executive.runtime import loop
+
+    with pytest.warns(DeprecationWarning, match="executive.runtime.loop.Outcome is now RunOutcome"):
+        assert loop.Outcome is RunOutcome

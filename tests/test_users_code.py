@@ -159,13 +159,14 @@ def test_a_behaviour_that_raises_mid_mission_aborts_it_with_the_vehicle_made_saf
     assert report["outcome"] == "ABORTED" and report["reason"] == outcome.reason
 
 
-def test_a_terminate_that_raises_does_not_stop_the_vehicle_being_made_safe(field_team: Path) -> None:
+def test_a_terminate_that_raises_does_not_stop_the_vehicle_being_made_safe(field_team: Path, caplog: pytest.LogCaptureFixture) -> None:
     with Lockstep(line_mission("field", tree="field_team_trees:sonar_terminate"), home=(*LINE_HOME, 0.0)) as sim:
         assert sim.run(120, until=lambda: sim.runtime.mission_state.leg_index >= 1) is None
         sim.runtime.request_stop("SIGTERM")
         outcome = sim.run_to_end(limit_s=60)
     assert outcome.status is MissionStatus.ABORTED and outcome.reason == "stopped: SIGTERM"
     assert outcome.safe == "the vehicle made safe: HOLD (confirmed)" and sim.autopilot.mode == "HOLD"
+    assert "stopping the tree: Route and sonar/Sonar (terminate): " in caplog.text  # the node whose terminate() raised, named
 
 
 def test_a_tree_that_succeeds_short_of_the_waypoints_says_how_many_it_reached(field_team: Path) -> None:

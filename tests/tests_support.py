@@ -17,7 +17,7 @@ import pytest
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.model import Mission, Waypoint
 from executive.runtime.assembly import build_runtime
-from executive.runtime.loop import Outcome, Runtime
+from executive.runtime.loop import RunOutcome, Runtime
 from executive.runtime.pacing import SpeedGovernor
 from executive.sim import SimServer
 from executive.testing import Lockstep
@@ -108,7 +108,7 @@ def mission_text(name: str, *waypoints: str, simulator: str = "{ekf_ready_after_
     return "\n".join(lines) + "\n"
 
 
-def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> tuple[Runtime, Outcome]:
+def run_over(url: str, mission: Mission, clock: ScaledClock, **options: Any) -> tuple[Runtime, RunOutcome]:
     """A runtime on a real link to ``url`` (a simulator), connected and run to the mission's end; the link closed after.
 
     ``options`` go to :func:`~executive.runtime.assembly.build_runtime` (progress, plugs...).
@@ -142,7 +142,7 @@ def with_far_waypoint(mission: Mission, metres: float, **changes: object) -> tup
     return edited, (start.lat, start.lon, 0.0)
 
 
-def run_recording(mission: Mission, boots_at: tuple[float, float, float], **options: Any) -> tuple[Outcome, Lockstep, list[MAVLinkMessage]]:
+def run_recording(mission: Mission, boots_at: tuple[float, float, float], **options: Any) -> tuple[RunOutcome, Lockstep, list[MAVLinkMessage]]:
     """The mission on the lock-step simulator (vehicle booted at ``boots_at``) until it ends: how, the simulation, what its autopilot received.
 
     ``options`` go to :class:`~executive.testing.Lockstep` (``mission_dir=`` for the mission's own event file...).

@@ -1,7 +1,9 @@
 """Tree builders, one module per mission kind (installed as ``executive.trees``); a mission file names its tree in ``tree:``.
 
-Each tree module exposes ``build(mission: Mission) -> py_trees.behaviour.Behaviour`` and is listed in
-the registry's table of built-in trees (:data:`executive.registry.BUILT_IN`); :mod:`.parts` holds the
+Each tree module exposes ``build(mission: Mission) -> py_trees.behaviour.Behaviour`` and, beside it,
+``DECLARATION`` (:class:`executive.mission.declaration.TreeDeclaration`: the vehicles it drives, the firmware
+it needs, the section it reads, its RC switches and failsafe defaults), and is listed in the registry's
+table of built-in trees (:data:`executive.registry.BUILT_IN`); :mod:`.parts` holds the
 subtrees they share. A mission may also name a plugin's tree (entry-point group ``executive.trees``)
 or ``module:function`` on the Python path: :func:`resolve` finds each.
 """
@@ -13,6 +15,7 @@ from importlib.metadata import EntryPoint
 from typing import TYPE_CHECKING, Literal
 
 from executive import registry
+from executive.mission.declaration import declaration_of
 
 if TYPE_CHECKING:
     import py_trees
@@ -68,7 +71,9 @@ def plugin_tree(point: EntryPoint) -> TreeBuilder:
     """The builder an ``executive.trees`` entry point names; PluginError if it cannot be loaded, is no function or takes a built-in name."""
     if point.name in available():
         raise registry.PluginError(registry.describe(point), f"a built-in tree is named {point.name!r}")
-    return _checked(registry.describe(point), registry.load(point))
+    builder = _checked(registry.describe(point), registry.load(point))
+    declaration_of(point.value, registry.describe(point))  # what it declares must be a declaration
+    return builder
 
 
 def resolve(name: str) -> TreeBuilder:
@@ -77,7 +82,9 @@ def resolve(name: str) -> TreeBuilder:
     Raises UnknownTree for a name that is none of these, PluginError for one that cannot be loaded.
     """
     if ":" in name or "." in name:
-        return _checked(repr(name), registry.load_object(name, "build"))
+        builder = _checked(repr(name), registry.load_object(name, "build"))
+        declaration_of(name)
+        return builder
     if name in available():
         return _built_in(name)
     points = registry.named(registry.TREES)

@@ -48,6 +48,7 @@ from executive.behaviours import (
     SpeedWithin,
     Surface,
 )
+from executive.mission.declaration import TreeDeclaration
 from executive.mission.model import Mission
 from executive.trees.parts import auto_leg, failsafe_guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
 from executive.world.vehicles import PROFILES
@@ -92,6 +93,16 @@ def leg(mission: Mission) -> py_trees.behaviour.Behaviour:
             GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, seabed_clearance_m=limits.altitude_m.min),
         ],
     )
+
+
+#: A sub; drive: auto on ArduSub (its waypoints at their depths); a lost link holds the survey in POSHOLD.
+DECLARATION = TreeDeclaration(
+    doc="the AUV survey: accept the route, dive and run it leg by leg under guards, surface, hold",
+    vehicles=frozenset({"sub"}),
+    auto_drive={"sub": "ArduSub"},
+    failsafes={"link_loss": ("hold", "resume")},
+    timed_legs=True,
+)
 
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -62,6 +62,7 @@ from executive.behaviours import (
     rc_auto_mode,
 )
 from executive.behaviours.failsafe import FailsafeNote
+from executive.mission.declaration import TreeDeclaration
 from executive.mission.model import Mission, SamplingOptions
 from executive.mission.rules import failsafe_policy
 from executive.trees.parts import ARM_RETRY_S, auto_leg, checked, failsafe_guarded, mission_root, preflight, safe_mode, within_reach
@@ -134,6 +135,20 @@ def point(mission: Mission) -> py_trees.behaviour.Behaviour:
     sample = py_trees.composites.Sequence("Sample here", memory=False, children=[SetMode(hold, name=f"{hold} (else set it)"), Sample()])
     due = py_trees.composites.Selector("Sample if due", memory=False, children=[NothingToSample(), sample])
     return py_trees.composites.Sequence("Point", memory=True, children=[go, due])
+
+
+#: The ASV seed: a rover or a boat, its ``sampling:`` options, RC channel 5 high arms it (where the file says nothing else);
+#: an EKF loss disarms it in MANUAL until the EKF recovers (then re-armed), and the RC leaving auto ends the go-to.
+DECLARATION = TreeDeclaration(
+    doc="the ASV go-to-and-sample node: drive the path under guards, sample at the sample points",
+    vehicles=frozenset({"rover", "boat"}),
+    auto_drive={"rover": "ArduRover", "boat": "ArduRover"},
+    section="sampling",
+    rc_defaults={"arm_channel": 5},
+    failsafes={"ekf_loss": ("disarm", "resume"), "rc_takeover": ("wait", "abort")},
+    samples=True,
+    timed_legs=True,
+)
 
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -40,11 +40,11 @@ from executive.behaviours.failsafe import condition_of
 from executive.behaviours.returning import NoReturnUnderWay
 from executive.behaviours.zone_guards import outside_keep_out
 from executive.behaviours.zones import ZonesOnAutopilot, puts_zones_on_autopilot
+from executive.mission.declaration import vehicle_profile
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.model import Mission
 from executive.mission.return_path import ReturnPlanner
 from executive.mission.rules import failsafe_policy, height_tolerance, rc_switch_channels, seabed_clearance
-from executive.world.vehicles import PROFILES
 
 ARM_RETRY_S = 2.0
 #: A sub's last waypoint in AUTO is reached within this of its depth (GUIDED's ChangeDepth tolerance).
@@ -56,7 +56,7 @@ FIXED_WING_HOLD_MODE = "LOITER"
 
 def safe_mode(mission: Mission) -> str:
     """Where this vehicle is held: HOLD for a rover, LOITER for a boat..."""
-    return PROFILES[mission.vehicle].safe_mode
+    return vehicle_profile(mission.vehicle).safe_mode
 
 
 def fixed_wing_hold_mode(mission: Mission) -> str | None:
@@ -179,7 +179,7 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
     battery_checked = limits.battery_min_pct is not None or limits.battery_min_v is not None
     candidates: list[tuple[str, Guard | None]] = [
         ("gps_glitch", GpsNotGlitching()),
-        ("heading_insane", HeadingSane() if PROFILES[mission.vehicle].surface else None),
+        ("heading_insane", HeadingSane() if vehicle_profile(mission.vehicle).surface else None),
         ("battery_low", BatteryAbove(limits.battery_min_pct, limits.battery_min_v) if battery_checked else None),
         ("rc_loss", RcNotLost(mission.rc.source)),
         ("geofence_breach", inside_geofence(mission)),
@@ -194,14 +194,17 @@ def failsafe_guards(mission: Mission, guards: Sequence[Guard]) -> list[Guard]:
     return [*guards, *extra]
 
 
-def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for guards") -> Failsafe:
-    """The mission's failsafe for ``guards``; a guard of no failsafe condition (a limit) holds and resumes within ``limits.recovery_timeout_s``."""
+def failsafe(guards: Sequence[Guard], mission: Mission, name: str = "Wait for guards", work: py_trees.behaviour.Behaviour | None = None) -> Failsafe:
+    """The mission's failsafe for ``guards``, standing behind ``work`` (None: a guard alone).
+
+    A guard of no failsafe condition (a limit) holds and resumes within ``limits.recovery_timeout_s``.
+    """
     fallback = FailsafePolicy("limit", "hold", "resume", mission.limits.recovery_timeout_s)
     returns = ReturnPlanner(mission)
     return Failsafe(
         guards, failsafe_policy(mission), mission.vehicle, fallback, name=name,
         returns=returns if returns.needed else None, reach_m=mission.limits.acceptance_radius_m,
-        leg_timeout_s=mission.limits.leg_timeout_s,
+        leg_timeout_s=mission.limits.leg_timeout_s, work=work,
     )  # fmt: skip
 
 
@@ -215,7 +218,7 @@ def failsafe_guarded(
     so the work resumes where it was when the guard recovers.
     """
     guards = failsafe_guards(mission, guards)
-    react = failsafe(guards, mission)
+    react = failsafe(guards, mission, work=work)
     gate = [NoReturnUnderWay(react)] if react.returns is not None else []  # a return that ends the mission is not resumed from
     route = py_trees.composites.Sequence(name, memory=False, children=[*gate, *guards, work])
     return py_trees.composites.Selector(f"{name} or hold", memory=False, children=[route, react])
@@ -238,7 +241,7 @@ def guided_leg(mission: Mission) -> py_trees.behaviour.Behaviour:
         seabed_clearance_m=seabed_clearance(mission),
         height_tolerance_m=height_tolerance(mission),
     )
-    guided = SetMode(PROFILES[mission.vehicle].guided_mode, confirm_by_ack=True)  # moving a tick after the ack, not at the next heartbeat
+    guided = SetMode(vehicle_profile(mission.vehicle).guided_mode, confirm_by_ack=True)  # moving a tick after the ack, not at the next heartbeat
     return py_trees.composites.Sequence("Leg", memory=False, children=[guided, go])
 
 

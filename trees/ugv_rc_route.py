@@ -39,6 +39,7 @@ from executive.behaviours import (
     RouteEditSwitch,
     SetMode,
 )
+from executive.mission.declaration import TreeDeclaration
 from executive.mission.model import Mission, RcRouteOptions
 from executive.trees.parts import failsafe_guarded, mission_root, mode_switch_clear, safe_mode, wait_for_ekf
 
@@ -57,6 +58,28 @@ def operator_and_route(mission: Mission) -> py_trees.behaviour.Behaviour:
             DriveRouteInAuto(options.operator_timeout_s, leg_timeout_s=mission.limits.leg_timeout_s),
         ],
     )
+
+
+def switch_channels(mission: Mission) -> dict[int, str]:
+    """The transmitter's switches and knob this tree reads (switch C is the person's: the take-over channel is not read)."""
+    c = mission.rc.switch_channels
+    return {c.knob: "knob VRA", c.swd: "switch D", c.swc: "switch C", c.swb: "switch B", c.swa: "switch A"}
+
+
+#: The tracked UGV on ArduRover: its operator records the route (it may start empty) and drives it with ArduRover's modes
+#: and switches. The operator drives it (MANUAL) or ArduRover does (AUTO), and skidding tracks take the course off the
+#: heading in every turn: a bad compass is flagged and journalled, the vehicle left as it is (a mission may say hold).
+DECLARATION = TreeDeclaration(
+    doc="the tracked UGV's RC route: the operator records a route with the transmitter's switches, the autopilot drives it in AUTO",
+    vehicles=frozenset({"rover"}),
+    needs=("ardupilot", "its operator drives it with ArduRover's modes and switches (arming only in MANUAL, switch C to AUTO)"),
+    auto_refused="its operator puts the route in AUTO already",
+    section="rc_route",
+    rc_switches=switch_channels,
+    failsafes={"heading_insane": ("wait", "resume")},
+    refused_reactions={"disarm": "the operator arms and disarms with switch D"},
+    empty_route=True,
+)
 
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -48,6 +48,7 @@ import py_trees
 from py_trees.common import OneShotPolicy
 
 from executive.behaviours import ForEachLeg, GoTo, GoToLocal, Land, ParameterIs, SetMode, TakeOff, VtolTransition
+from executive.mission.declaration import TreeDeclaration
 from executive.mission.model import Mission, VtolOptions
 from executive.trees.parts import failsafe_guarded, mission_root, preflight, standard_guards
 from executive.world import frames
@@ -110,6 +111,16 @@ def firmware_check(options: VtolOptions) -> py_trees.behaviour.Behaviour | None:
     )
     once_checked = ParameterIs("Q_GUIDED_MODE", (1.0,), why)
     return py_trees.decorators.OneShot("Firmware check (once)", once_checked, OneShotPolicy.ON_SUCCESSFUL_COMPLETION)
+
+
+#: A vtol, its ``vtol:`` options (their defaults flown where the file has none); guided only. Its legs are flown at the
+#: vtol's airspeed, not timed against limits.speed_m_s.
+DECLARATION = TreeDeclaration(
+    doc="VTOL transit: take off as a multicopter, fly the route as a plane, come back a multicopter and land",
+    vehicles=frozenset({"vtol"}),
+    auto_refused="its take-off, transitions and landing are the executive's",
+    section="vtol",
+)
 
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -17,8 +17,17 @@ from __future__ import annotations
 import py_trees
 
 from executive.behaviours import ForEachLeg, SetMode
+from executive.mission.declaration import TreeDeclaration
 from executive.mission.model import Mission
 from executive.trees.parts import failsafe_guarded, leg, mission_root, preflight, safe_mode, standard_guards
+
+#: Any vehicle kind; drive: auto on ArduRover's rover and boat.
+DECLARATION = TreeDeclaration(
+    doc="the generic guarded route: pre-flight, then every waypoint under guards, then hold",
+    vehicles=frozenset({"rover", "boat", "sub", "vtol"}),
+    auto_drive={"rover": "ArduRover", "boat": "ArduRover"},
+    timed_legs=True,
+)
 
 
 def build(mission: Mission) -> py_trees.behaviour.Behaviour:

@@ -203,11 +203,6 @@ class RoverMotion:
         gain = 0.5 * self.jerk_m_s3 / a
         return min(sqrt_controller(distance_m, gain, 0.5 * a), self.speed_m_s if speed_max_m_s is None else speed_max_m_s)
 
-    def approach_distance_m(self, speed_m_s: float) -> float:
-        """Where GUIDED's shaped target still has ``speed_m_s`` on its way to a stop point (the inverse of :meth:`approach_speed_m_s`)."""
-        a = self.shaping_accel_m_s2
-        return stopping_distance(speed_m_s, 0.5 * self.jerk_m_s3 / a, 0.5 * a)
-
 
 def vehicle_motion(capabilities: Capabilities, params: Mapping[str, float] | None) -> RoverMotion | None:
     """The vehicle's driving as its parameters say (:data:`MOTION_PARAMS`; the firmware's default for any not read,
@@ -547,24 +542,3 @@ def guided_switch_cut_m(
             break  # round the corner, on the next leg's course, closing on its line: the worst is behind
         last = here
     return worst
-
-
-def guided_switch_distance_m(
-    motion: RoverMotion, outbound_m: float, turn_rad: float, allowed_cut_m: float, speed_m_s: float, speed_max_m_s: float | None = None,
-    longest_m: float = math.inf,
-) -> float:  # fmt: skip
-    """The farthest from a corner GUIDED can switch to the next waypoint, coming at ``speed_m_s``, and cut it by no more
-    than ``allowed_cut_m`` (at most ``longest_m``; 0 when even a switch at the corner would cut more)."""
-
-    def cut(d: float) -> float:
-        return guided_switch_cut_m(motion, d, speed_m_s, turn_rad, outbound_m, speed_max_m_s)
-
-    low, high = 0.0, min(longest_m, 4.0 * allowed_cut_m + 2.0 * speed_m_s * speed_m_s / motion.shaping_accel_m_s2)
-    if cut(high) <= allowed_cut_m:
-        return high
-    if cut(low) > allowed_cut_m:
-        return 0.0
-    for _ in range(10):
-        mid = (low + high) / 2.0
-        low, high = (mid, high) if cut(mid) <= allowed_cut_m else (low, mid)
-    return low

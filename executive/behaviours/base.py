@@ -22,8 +22,8 @@ attributes, which documented keys it ``reads``, which new keys of its own it ``d
 The vehicle's state, the link and the mission are written by the executive's readers and the
 mission's lifecycle only: a behaviour never writes them (it asks the autopilot port for a command,
 whose ack comes back on the blackboard; it reports a leg done or a sample taken through the mission
-port, :class:`~executive.mission.port.MissionPort`, and the lifecycle applies it). Keys are checked
-when the behaviour is made: an undocumented key is a KeyError.
+port, :class:`~executive.mission.port.MissionPort`, and the lifecycle applies it). When a node is
+made its declared keys are documented and its keys checked: an undocumented key is a KeyError.
 """
 
 from __future__ import annotations
@@ -42,20 +42,22 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
 
     #: Blackboard keys this behaviour reads.
     reads: tuple[str, ...] = ()
-    #: New keys (a plugin's own, under ``/plugin/<plugin name>/``) documented when the class is defined.
+    #: New keys (a plugin's own, under ``/plugin/<plugin name>/``), documented when a node of the class is made.
     declares: tuple[blackboard.Key, ...] = ()
     #: Keys this behaviour writes: only keys under ``/plugin/`` (it may read them too).
     writes: tuple[str, ...] = ()
     #: Names of the services ``setup`` must receive (``clock``, ``autopilot``, ``mission_state``).
     needs: tuple[str, ...] = ()
 
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        for key in cls.__dict__.get("declares", ()):
-            blackboard.declare(key)
+    @classmethod
+    def declared_keys(cls) -> tuple[blackboard.Key, ...]:
+        """The keys this class and its bases declare (read from their ``declares``, nothing documented by reading them)."""
+        return tuple(key for klass in reversed(cls.__mro__) for key in vars(klass).get("declares", ()))
 
     def __init__(self, name: str) -> None:
         super().__init__(name)
+        for key in self.declared_keys():
+            blackboard.declare(key)
         self.bb = blackboard.Client(name=name)  # attach_blackboard_client(), with the fast get
         self.blackboards.append(self.bb)
         for key in self.reads:

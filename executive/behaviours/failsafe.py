@@ -124,8 +124,11 @@ class Failsafe(TimedBehaviour):
         returns: ReturnPlanner | None = None,
         reach_m: float = 2.0,
         leg_timeout_s: float = 120.0,
+        work: py_trees.behaviour.Behaviour | None = None,
     ) -> None:
         super().__init__(name)
+        #: The guarded work this failsafe stands behind (None: a guard alone), whose refused mode change is asked again after a recovery.
+        self.work = work
         #: The mission's return around its keep-out zones to a rally point or home (None: the firmware's RTL always).
         self.returns = returns
         self.reach_m, self.leg_timeout_s = reach_m, leg_timeout_s
@@ -414,10 +417,10 @@ class Failsafe(TimedBehaviour):
         return Status.RUNNING
 
     def _refused_mode_change(self) -> str | None:
-        """Why the guarded work failed on a mode change (the branch this failsafe stands behind), if it did."""
-        if self.parent is None or not self.parent.children or self.parent.children[0] is self:
+        """Why the guarded work failed on a mode change, if it did."""
+        if self.work is None:
             return None
-        for node in self.parent.children[0].iterate():
+        for node in self.work.iterate():
             if isinstance(node, SetMode) and node.status == Status.FAILURE:
                 return f"{node.name}: {node.feedback_message}"
         return None

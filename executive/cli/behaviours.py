@@ -7,7 +7,9 @@ import difflib
 import json
 import sys
 
+from executive import registry
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
+from executive.mission.declaration import FIRMWARE_NAMES, TreeDeclaration, declaration_of
 from executive.registry import PluginError
 from executive.tree.catalogue import KINDS, Catalogue, NodeSpec, ParamSpec, load_behaviours
 
@@ -21,12 +23,15 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     parser.add_argument("names", nargs="*", metavar="NAME", help="only these nodes")
     parser.add_argument("--kind", choices=KINDS, help="only nodes of this kind")
-    parser.add_argument("--json", action="store_true", help="a JSON list of nodes on stdout")
+    parser.add_argument("--json", action="store_true", help="a JSON list of nodes (with --trees: of trees) on stdout")
+    parser.add_argument("--trees", action="store_true", help="list the named trees (ours and plugins') and what each declares instead")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Print the catalogue (or the nodes named); exit 2 naming a node that does not exist, or a plugin that cannot be loaded."""
+    if args.trees:
+        return _trees(args)
     broken: list[PluginError] = []
     found = Catalogue.build(load_behaviours(broken))  # a broken plugin is said, the others listed all the same
     for exc in broken:
@@ -43,6 +48,54 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT if broken else EXIT_OK
     sys.stdout.write("".join(describe(s) for s in specs))
     return EXIT_BAD_INPUT if broken else EXIT_OK
+
+
+def _trees(args: argparse.Namespace) -> int:
+    """Print each named tree's declaration (or the trees named); exit 2 naming a tree that does not exist or cannot be loaded."""
+    known = registry.names(registry.TREES)
+    unknown = [n for n in args.names if n not in known]
+    if unknown:
+        said = ", ".join(f"no tree {name!r}{_did_you_mean(name, known)}" for name in unknown)
+        print(f"executive: behaviours: {said}; executive behaviours --trees lists them", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    found: dict[str, TreeDeclaration] = {}
+    broken = False
+    for name in args.names or known:
+        try:
+            found[name] = declaration_of(name)
+        except PluginError as exc:  # said, the others listed all the same
+            print(f"executive: behaviours: {exc}", file=sys.stderr)
+            broken = True
+    if args.json:
+        json.dump([{"name": name, "kind": "tree", **d.to_json()} for name, d in found.items()], sys.stdout, indent=2, ensure_ascii=False)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write("".join(describe_tree(name, d) for name, d in found.items()))
+    return EXIT_BAD_INPUT if broken else EXIT_OK
+
+
+def describe_tree(name: str, d: TreeDeclaration) -> str:
+    """A tree's declaration as text: ``name (tree): doc``, then a line per thing it declares."""
+    lines = [f"{name} (tree): {d.doc or '(declares nothing: any vehicle, any autopilot, guided only)'}"]
+    lines.append(f"    vehicles: {', '.join(sorted(d.vehicles)) if d.vehicles is not None else 'any'}")
+    if d.needs is not None:
+        lines.append(f"    needs: {FIRMWARE_NAMES.get(d.needs[0], d.needs[0])}: {d.needs[1]}")
+    if d.auto_refused is not None:
+        lines.append(f"    drive: auto: refused: {d.auto_refused}")
+    elif d.auto_drive:
+        lines.append(f"    drive: auto: {', '.join(f'{kind} ({firmware})' for kind, firmware in sorted(d.auto_drive.items()))}")
+    if d.section is not None:
+        lines.append(f"    reads: {d.section}:")
+    if d.rc_switches is not None or d.rc_defaults:
+        defaults = ", ".join(f"rc.{key}: {value}" for key, value in d.rc_defaults.items())
+        lines.append(f"    rc: {'its own switches' if d.rc_switches is not None else 'the take-over switch'}{f'; {defaults}' if defaults else ''}")
+    lines += [f"    failsafe {condition}: {reaction}, {recovery}" for condition, (reaction, recovery) in d.failsafes.items()]
+    lines += [f"    refuses failsafe reaction {reaction}: {why}" for reaction, why in d.refused_reactions.items()]
+    said = [("its route may start empty", d.empty_route), ("takes samples", d.samples), ("legs timed", d.timed_legs)]
+    if any(on for _, on in said):
+        lines.append(f"    {'; '.join(what for what, on in said if on)}")
+    lines += [f"    vehicle kind {k.kind}: {', '.join(sorted(k.autopilots))}, safe mode {k.profile.safe_mode}" for k in d.vehicle_kinds]
+    return "\n".join(lines) + "\n"
 
 
 def _did_you_mean(name: str, names: list[str]) -> str:

@@ -30,7 +30,7 @@ from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
 from executive.operator.logs import attach_live_line, setup_logging, use_clock
 from executive.operator.progress import Progress
 from executive.runtime.assembly import Plug, build_runtime, can_base, control_socket, ground_stations, obstacle_camera, service_manager
-from executive.runtime.loop import Outcome
+from executive.runtime.loop import RunOutcome
 from executive.runtime.pacing import SpeedGovernor, keeping_time
 from executive.world.clock import ScaledClock
 
@@ -563,7 +563,7 @@ class StopSignals:
         os.write(2, note.encode())
 
 
-def exit_code(outcome: Outcome) -> int:
+def exit_code(outcome: RunOutcome) -> int:
     """0 when the mission that ran COMPLETED, or none ran (``--wait``, stopped before any start); 1 when it ended otherwise.
 
     2 when a user's code (a plugin's tree or behaviour) failed as it started, before anything was commanded: bad input.
@@ -573,7 +573,7 @@ def exit_code(outcome: Outcome) -> int:
     return EXIT_OK if outcome.mission is None or outcome.status is MissionStatus.COMPLETED else EXIT_FAILED
 
 
-def last_words(outcome: Outcome, state: MissionState) -> list[str]:
+def last_words(outcome: RunOutcome, state: MissionState) -> list[str]:
     """The run's last lines: a mission left loaded and never started, if one was; then the mission that ran, with its own outcome.
 
     With ``--wait`` the last mission that ran may not be the one loaded when the process stops (an

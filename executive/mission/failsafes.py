@@ -1,11 +1,12 @@
-"""The failsafe policy tables: per condition, the reaction and the recovery of each vehicle kind and seed tree.
+"""The failsafe policy tables: per condition, the reaction and the recovery of each vehicle kind.
 
 The ``failsafe:`` section says, per condition, what the executive does when it becomes true during
 the guarded part of a mission: a *reaction* commanded in the same tick, then a *recovery* (resume
 the same leg once the condition clears, within ``timeout_s``, default ``limits.recovery_timeout_s``;
 or abort the mission at once, the vehicle left in the reaction's mode). An entry, or a field of
-one, left out takes the default of the vehicle kind, or of the tree where a seed system has its
-own rule (:func:`failsafe_policy`). Defaults (reaction, recovery):
+one, left out takes the default of the tree where it declares one (its ``DECLARATION``'s ``failsafes``,
+:mod:`executive.mission.declaration`), else of the vehicle kind (:func:`executive.mission.rules.failsafe_policy`).
+The vehicle kinds' defaults (reaction, recovery):
 
 ================  ==============  ==============  =================  ============================
 condition         rover           boat            sub                vtol
@@ -27,9 +28,7 @@ rc_takeover and disarmed are a person's acts (or the autopilot's own failsafe's)
 their reaction is ``wait`` (hands off) and nothing else; any other is refused at load
 (:data:`PERSON_CONDITIONS`). Their recovery is the mission's to choose.
 
-Seed rules, the defaults of their trees: ``goto_sample`` (the ASV) ekf_loss disarm, resume (MANUAL,
-disarmed until the EKF recovers, then re-armed) and rc_takeover wait, abort (the RC leaving auto
-ends the go-to); ``auv_survey`` link_loss hold, resume (the survey holds in POSHOLD).
+A tree's own defaults are in its declaration (``executive behaviours --trees`` lists them): the seed systems' differ.
 
 Reactions (:data:`REACTION_MODES`): ``hold`` rover/boat HOLD, sub POSHOLD, vtol QLOITER; ``loiter``
 rover/boat LOITER, sub POSHOLD, vtol QLOITER; ``rtl`` rover/boat RTL, vtol QRTL (no sub); ``surface``
@@ -39,7 +38,7 @@ from the moment a transition to fixed-wing flight starts, or at a wing-borne gro
 (QRTL asked then would hover the whole way home: :mod:`executive.sensing.vtol_flight`).
 heading_insane is judged on rovers and boats only (the heading filter checks the compass against
 the course over ground, which a sub or a vtol does not follow); geofence_breach only with a
-``geofence:`` section; rc_loss once an RC transmitter has been seen (or, ugv_rc_route, stale RC); keep_out with
+``geofence:`` section; rc_loss once an RC transmitter has been seen (or, a tree guarding fresh RC, stale RC); keep_out with
 ``geofence.keep_out`` zones, and never while a person has the vehicle (:data:`JUDGED_AFTER_PERSON`).
 
 A return (``rtl``) of a rover or a boat on a mission with keep-out zones or rally points is the executive's own
@@ -104,14 +103,6 @@ for _kind, _rule in _ENERGY.items():
 #: Conditions not judged while a person has the vehicle (a take-over, a mode a person drives in): a person who drives near a
 #: pier does it on purpose. They act in the tick the person hands back, if still true then.
 JUDGED_AFTER_PERSON = frozenset({"keep_out"})
-#: Seed systems' rules that differ from their vehicle's defaults: the defaults of their trees.
-TREE_FAILSAFES: dict[str, dict[str, tuple[str, str]]] = {
-    "goto_sample": {"ekf_loss": ("disarm", _R), "rc_takeover": (_W, _A)},
-    "auv_survey": {"link_loss": ("hold", _R)},
-    # The operator drives the tracked UGV (MANUAL) or ArduRover does (AUTO), and skidding tracks take the course off the
-    # heading in every turn: a bad compass is flagged and journalled, the vehicle left as it is (a mission may say hold).
-    "ugv_rc_route": {"heading_insane": (_W, _R)},
-}
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,8 @@ from collections.abc import Callable, Iterator
 from typing import Any, Literal, NoReturn, TypeVar, get_args, get_origin
 
 import yaml
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel, ValidationError, WithJsonSchema
+from pydantic.fields import FieldInfo
 
 from executive.mission.errors import FieldError, MissionError, Path, format_path
 from executive.mission.model import Mission
@@ -276,7 +277,7 @@ def _whatever_it_is(data: dict[str, Any], model: type[M], checks: Checks[M], fie
     found with every one of them (``tree: unknown tree 'waypoint'``) is the file's. Nothing for any other field.
     """
     name = field[0] if len(field) == 1 and isinstance(field[0], str) else None
-    choices = _literal_choices(model.model_fields[name].annotation) if name in model.model_fields else ()
+    choices = _field_choices(model.model_fields[name]) if name in model.model_fields else ()
     if not choices or name not in data:
         return []
     common: list[tuple[Path, str]] | None = None
@@ -284,6 +285,13 @@ def _whatever_it_is(data: dict[str, Any], model: type[M], checks: Checks[M], fie
         found = _checks_on_the_valid_part({**data, name: choice}, model, checks)
         common = found if common is None else [error for error in common if error in found]
     return common or []
+
+
+def _field_choices(field: FieldInfo) -> tuple[Any, ...]:
+    """A field's few choices: its ``Literal[...]``'s values, or the ``enum`` its schema says (``vehicle:``: a plugin may add kinds)."""
+    schemas = [meta.json_schema for meta in field.metadata if isinstance(meta, WithJsonSchema) and isinstance(meta.json_schema, dict)]
+    enum = next((tuple(schema["enum"]) for schema in schemas if 0 < len(schema.get("enum", ())) <= 8), ())
+    return _literal_choices(field.annotation) or enum
 
 
 def _literal_choices(annotation: Any) -> tuple[Any, ...]:

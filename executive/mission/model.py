@@ -15,6 +15,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, model_validator
 
+from executive import registry
+from executive.mission.declaration import BUILT_IN_KINDS, declared, kind_spec, plugin_kinds
 from executive.mission.failsafes import FailsafeReaction, FailsafeRecovery
 from executive.world.geofence import Geofence
 from executive.world.vehicles import AutopilotName
@@ -38,13 +40,25 @@ def _tree_value(value: object) -> object:
     return value
 
 
+def _vehicle_kind(value: object) -> object:
+    """A vehicle kind: built in, or a plugin's tree's own (:attr:`TreeDeclaration.vehicle_kinds`); said as a Literal's error."""
+    if isinstance(value, str) and (value in BUILT_IN_KINDS or kind_spec(value) is not None):
+        return value
+    kinds = [*BUILT_IN_KINDS, *plugin_kinds()]
+    raise ValueError(f"Input should be {', '.join(map(repr, kinds[:-1]))} or {kinds[-1]!r}")  # as pydantic says it of a Literal
+
+
+#: ``vehicle:``: a kind of ours (the schema's enum) or one a plugin's tree brings.
+VehicleName = Annotated[str, BeforeValidator(_vehicle_kind), WithJsonSchema({"enum": list(BUILT_IN_KINDS), "type": "string"})]
+#: The mission's options sections, each read by the tree that declares it (:attr:`TreeDeclaration.section`).
+OPTION_SECTIONS = ("sampling", "vtol", "rc_route")
 #: ``tree:``'s JSON schema; ``executive.tree.schema`` puts the node catalogue's in place of the composed tree's.
 TREE_SCHEMA = {
     "anyOf": [
         {"type": "string", "pattern": TREE_NAME, "description": "a tree by name: built in, a plugin's, or module:function"},
         {"type": "object", "description": "a tree composed in the file: node: or use:, with parameters (executive behaviours)"},
     ],
-    "default": "waypoints",
+    "default": registry.DEFAULT_TREE,
     "description": "the tree the mission runs",
 }
 #: ``tree:``: a name, or a mapping composing the node catalogue (:mod:`executive.tree.composition`).
@@ -407,22 +421,15 @@ class Mission(BaseModel):
         extra="forbid",
         frozen=True,
         allow_inf_nan=False,
-        # for editors: an empty route only for ugv_rc_route, whose operator records it (cross_field_errors says so too)
-        json_schema_extra={
-            "anyOf": [
-                {"type": "object", "required": ["tree"], "properties": {"tree": {"const": "ugv_rc_route"}}},
-                {"type": "object", "properties": {"waypoints": {"minItems": 1}}},
-            ]
-        },
     )
     version: Literal[1] = Field(description="mission file format version")
     name: str = Field(min_length=1, max_length=128)
-    vehicle: VehicleKind
+    vehicle: VehicleName
     autopilot: AutopilotName | None = Field(
         None, description="the autopilot firmware (default: the one the HEARTBEAT names); px4 starts a simulated PX4 without --mavlink"
     )
     tree: TreeSpec = Field(
-        "waypoints",
+        registry.DEFAULT_TREE,
         description="the tree: a built-in one (a module of trees/), a plugin's (entry point group executive.trees), "
         "module:function of a module on the Python path (module alone: its build), or a tree composed in the file (a mapping)",
     )
@@ -468,10 +475,11 @@ class Mission(BaseModel):
     @model_validator(mode="before")
     @classmethod
     def _tree_rc(cls, data: object) -> object:
-        """The ASV seed's RC: channel 5 high arms the vehicle (goto_sample, where the file says nothing else)."""
-        if not isinstance(data, dict) or data.get("tree") != "goto_sample":
+        """The ``rc:`` settings the tree declares (:attr:`TreeDeclaration.rc_defaults`) where the file says nothing else."""
+        if not isinstance(data, dict) or not isinstance(data.get("tree"), str):
             return data
         rc = data.get("rc", {})
-        if not isinstance(rc, dict) or "arm_channel" in rc or rc.get("source", "mavlink") != "mavlink":
+        if not isinstance(rc, dict) or rc.get("source", "mavlink") != "mavlink":
             return data
-        return {**data, "rc": {**rc, "arm_channel": 5}}
+        defaults = declared(data["tree"]).rc_defaults
+        return {**data, "rc": {**defaults, **rc}} if any(key not in rc for key in defaults) else data

@@ -1,7 +1,7 @@
 """The rules between a mission's fields, each error located at the offending value; the failsafe policy a mission gets.
 
-A rule that needs more than the file (its tree found, its instrument's options) is
-:mod:`executive.admission.checks`'s.
+What a rule knows of a named tree is what the tree declares (:mod:`executive.mission.declaration`). A rule that
+needs more than the file (its tree found, its instrument's options) is :mod:`executive.admission.checks`'s.
 """
 
 from __future__ import annotations
@@ -9,71 +9,53 @@ from __future__ import annotations
 import math
 import re
 
+from executive.mission.declaration import (
+    FIRMWARE_NAMES,
+    declared,
+    drives,
+    kind_failsafes,
+    reaction_refused,
+    trees_with,
+    vehicle_profile,
+)
 from executive.mission.errors import Path
 from executive.mission.failsafes import (
     FAILSAFE_CONDITIONS,
-    NO_REACTION,
     PERSON_CONDITIONS,
-    REACTION_MODES,
-    TREE_FAILSAFES,
-    VEHICLE_FAILSAFES,
     FailsafePolicy,
 )
-from executive.mission.model import VTOL_HOVER_RADIUS_M, VTOL_MIN_ACCEPTANCE_RADIUS_M, FailsafeRule, Mission, Vertex, VtolOptions, tree_name
+from executive.mission.model import (
+    OPTION_SECTIONS,
+    VTOL_HOVER_RADIUS_M,
+    VTOL_MIN_ACCEPTANCE_RADIUS_M,
+    FailsafeRule,
+    Mission,
+    Vertex,
+    VtolOptions,
+    tree_name,
+)
 from executive.mission.zones import chord_m, route_errors, zone_shape_errors
 from executive.world.geo import distance
 from executive.world.geofence import Geofence, open_ring, polygon_problems
-from executive.world.vehicles import AUTOPILOT_VEHICLES, PROFILES
+from executive.world.vehicles import AUTOPILOT_VEHICLES
 
 _PARAM_NAME = re.compile(r"[A-Z][A-Z0-9_]{0,15}")
-
-#: Tree -> the vehicle kinds it can drive and the options section it reads.
-TREE_RULES: dict[str, tuple[frozenset[str], str | None]] = {
-    "waypoints": (frozenset({"rover", "boat", "sub", "vtol"}), None),
-    "goto_sample": (frozenset({"rover", "boat"}), "sampling"),
-    "auv_survey": (frozenset({"sub"}), None),
-    "vtol_transit": (frozenset({"vtol"}), "vtol"),
-    "ugv_rc_route": (frozenset({"rover"}), "rc_route"),
-}
 
 
 def rc_switch_channels(mission: Mission) -> dict[int, str]:
     """The RC channels whose positions this mission reads from the autopilot (``rc.source: mavlink``), each with what it is.
 
-    Empty with RC from CAN: then the autopilot's own RC channels are not the mission's switches.
+    The tree's declared switches (:attr:`TreeDeclaration.rc_switches`), else the take-over switch; and the arm switch. Empty
+    with RC from CAN: then the autopilot's own RC channels are not the mission's switches.
     """
     rc = mission.rc
     if rc.source != "mavlink":
         return {}
-    if mission.tree == "ugv_rc_route":  # switch C is the person's: the take-over channel is not read
-        c = rc.switch_channels
-        found = {c.knob: "knob VRA", c.swd: "switch D", c.swc: "switch C", c.swb: "switch B", c.swa: "switch A"}
-    else:
-        found = {rc.takeover_channel: "the take-over switch"}
+    switches = declared(tree_name(mission)).rc_switches
+    found = dict(switches(mission)) if switches is not None else {rc.takeover_channel: "the take-over switch"}
     if rc.arm_channel is not None:
         found.setdefault(rc.arm_channel, "the arm switch")
     return dict(sorted(found.items()))
-
-
-#: Trees that need what only ArduPilot does, and why.
-ARDUPILOT_ONLY_TREES: dict[str, str] = {
-    "ugv_rc_route": "its operator drives it with ArduRover's modes and switches (arming only in MANUAL, switch C to AUTO)",
-}
-
-
-#: drive: auto: the trees that can be driven by the autopilot's own AUTO, and the vehicle kinds (ArduRover: rover, boat;
-#: ArduSub: sub, its waypoints at their depths).
-AUTO_DRIVE_TREES: dict[str, frozenset[str]] = {
-    "waypoints": frozenset({"rover", "boat"}),
-    "goto_sample": frozenset({"rover", "boat"}),
-    "auv_survey": frozenset({"sub"}),
-}
-AUTO_DRIVE_FIRMWARE = {"waypoints": "ArduRover", "goto_sample": "ArduRover", "auv_survey": "ArduSub"}
-#: drive: auto refused, per tree, until it can be flown so: why.
-AUTO_DRIVE_REFUSED: dict[str, str] = {
-    "vtol_transit": "its take-off, transitions and landing are the executive's",
-    "ugv_rc_route": "its operator puts the route in AUTO already",
-}
 
 
 def drive_errors(mission: Mission) -> list[str]:
@@ -83,13 +65,14 @@ def drive_errors(mission: Mission) -> list[str]:
     name = tree_name(mission)
     if name is None:
         return ["a tree composed in the file is not driven in AUTO: use drive: guided"]
-    if name in AUTO_DRIVE_REFUSED:
-        return [f"tree {name}: {AUTO_DRIVE_REFUSED[name]}; use drive: guided"]
-    kinds = AUTO_DRIVE_TREES.get(name)
-    if kinds is None:
+    declaration = declared(name)
+    if declaration.auto_refused is not None:
+        return [f"tree {name}: {declaration.auto_refused}; use drive: guided"]
+    kinds = declaration.auto_drive
+    if not kinds:
         return [f"tree {name} is not known to be driven in AUTO; use drive: guided"]
     if mission.vehicle not in kinds:
-        kinds_here = f"{' or '.join(sorted(kinds))} ({AUTO_DRIVE_FIRMWARE[name]})"
+        kinds_here = f"{' or '.join(sorted(kinds))} ({' or '.join(sorted(set(kinds.values())))})"
         return [f"tree {name} is driven in AUTO on a {kinds_here} so far, not a {mission.vehicle}; use drive: guided"]
     return []
 
@@ -115,11 +98,11 @@ def autopilot_errors(mission: Mission, autopilot: str) -> list[str]:
     """Why ``autopilot`` cannot fly ``mission`` (empty when it can)."""
     errors = []
     kinds = AUTOPILOT_VEHICLES[autopilot]
-    if mission.vehicle not in kinds:
+    if not drives(autopilot, mission.vehicle):
         errors.append(f"{autopilot} drives {', '.join(sorted(kinds))} here, not a {mission.vehicle}")
-    name = tree_name(mission)
-    if autopilot != "ardupilot" and name in ARDUPILOT_ONLY_TREES:
-        errors.append(f"tree {name} needs ArduPilot: {ARDUPILOT_ONLY_TREES[name]}")
+    name, needs = tree_name(mission), declared(tree_name(mission)).needs
+    if needs is not None and autopilot != needs[0]:
+        errors.append(f"tree {name} needs {FIRMWARE_NAMES.get(needs[0], needs[0])}: {needs[1]}")
     if autopilot != "ardupilot" and mission.drive == "auto":
         errors.append("drive: auto needs ArduPilot so far (its partial mission writes hold the horizon; PX4's AUTO.MISSION is not done yet)")
     return errors
@@ -130,22 +113,26 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
     errors: list[tuple[Path, str]] = []
     limits = mission.limits
     name = tree_name(mission)
-    kinds, section = TREE_RULES.get(name or "", (frozenset({mission.vehicle}), None))
-    if mission.vehicle not in kinds:
+    declaration = declared(name)
+    kinds = declaration.vehicles
+    if kinds is not None and mission.vehicle not in kinds:
         errors.append((("tree",), f"tree {mission.tree} drives {', '.join(sorted(kinds))}, not a {mission.vehicle}"))
-    for other in ("sampling", "vtol", "rc_route") if name is not None else ():  # a composed tree's nodes read what they need
-        if other != section and getattr(mission, other) is not None:
-            errors.append(((other,), f"only used by tree {next(t for t, (_, s) in TREE_RULES.items() if s == other)} (tree is {mission.tree})"))
+    for other in OPTION_SECTIONS if name is not None else ():  # a composed tree's nodes read what they need
+        if other != declaration.section and getattr(mission, other) is not None:
+            readers = " or ".join(trees_with(lambda d, other=other: d.section == other))
+            errors.append(((other,), f"only used by tree {readers} (tree is {mission.tree})"))
     aux_mode = mission.rc_route.aux_mode if mission.rc_route is not None else None
-    if aux_mode is not None and aux_mode.upper() not in PROFILES[mission.vehicle].modes:
-        known = ", ".join(m for m in PROFILES[mission.vehicle].modes if m != "INITIALISING")
+    modes = vehicle_profile(mission.vehicle).modes
+    if aux_mode is not None and aux_mode.upper() not in modes:
+        known = ", ".join(m for m in modes if m != "INITIALISING")
         errors.append((("rc_route", "aux_mode"), f"{aux_mode!r}: not a {mission.vehicle} mode (known: {known})"))
-    if not mission.waypoints and mission.tree != "ugv_rc_route":
+    if not mission.waypoints and not declaration.empty_route:
         errors.append((("waypoints",), "at least one waypoint is needed"))
-    if mission.tree == "goto_sample" and not any(wp.sample for wp in mission.waypoints):
-        errors.append((("waypoints",), "goto_sample needs at least one waypoint with sample: true"))
-    if mission.tree != "goto_sample" and name is not None:  # a composed tree: its sample node (executive.tree.composition)
-        errors += [(("waypoints", i, "sample"), "only goto_sample takes samples") for i, wp in enumerate(mission.waypoints) if wp.sample]
+    if declaration.samples and not any(wp.sample for wp in mission.waypoints):
+        errors.append((("waypoints",), f"{name} needs at least one waypoint with sample: true"))
+    if not declaration.samples and name is not None and any(wp.sample for wp in mission.waypoints):  # composed: its sample node
+        why = f"only {' or '.join(trees_with(lambda d: d.samples))} takes samples"
+        errors += [(("waypoints", i, "sample"), why) for i, wp in enumerate(mission.waypoints) if wp.sample]
     for i, wp in enumerate(mission.waypoints):
         here: Path = ("waypoints", i)
         if wp.speed_m_s is not None and wp.speed_m_s not in limits.speed_m_s:
@@ -201,7 +188,7 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
 
 def failsafe_policy(mission: Mission) -> dict[str, FailsafePolicy]:
     """Every condition's failsafe for this mission: its ``failsafe:`` entry, else the tree's default, else the vehicle kind's."""
-    defaults = VEHICLE_FAILSAFES[mission.vehicle] | TREE_FAILSAFES.get(tree_name(mission) or "", {})
+    defaults = kind_failsafes(mission.vehicle) | dict(declared(tree_name(mission)).failsafes)
     policy = {}
     for condition in FAILSAFE_CONDITIONS:
         rule: FailsafeRule = getattr(mission.failsafe, condition) or FailsafeRule()
@@ -223,10 +210,10 @@ def _failsafe_errors(mission: Mission) -> list[tuple[Path, str]]:
         reaction = policy[condition].reaction
         if reaction != "wait" and condition in PERSON_CONDITIONS:
             errors.append(((*here, "reaction"), f"{reaction}: {PERSON_CONDITIONS[condition]}"))
-        elif reaction != "wait" and mission.vehicle not in REACTION_MODES[reaction]:
-            errors.append(((*here, "reaction"), f"{reaction}: not for a {mission.vehicle} ({NO_REACTION[reaction]})"))
-        elif reaction == "disarm" and mission.tree == "ugv_rc_route":
-            errors.append(((*here, "reaction"), "disarm: not in tree ugv_rc_route (the operator arms and disarms with switch D)"))
+        elif reaction != "wait" and (why := reaction_refused(mission.vehicle, reaction)) is not None:
+            errors.append(((*here, "reaction"), f"{reaction}: not for a {mission.vehicle} ({why})"))
+        elif reaction in (refused := declared(tree_name(mission)).refused_reactions):
+            errors.append(((*here, "reaction"), f"{reaction}: not in tree {mission.tree} ({refused[reaction]})"))
         if condition == "geofence_breach" and policy[condition].recovery == "resume" and reaction != "rtl":
             # a recovery that cannot happen from where the reaction leaves the vehicle: held outside, it stays outside
             errors.append(
@@ -288,7 +275,7 @@ def _height_errors(mission: Mission) -> list[tuple[Path, str]]:
         heights.append((("vtol", "takeoff_alt_m"), mission.vtol.takeoff_alt_m))
         if mission.vtol.hover_enu is not None:
             heights.append((("vtol", "hover_enu", "up_m"), mission.vtol.hover_enu.up_m))
-    elif mission.tree == "vtol_transit":  # the options' defaults are flown too
+    elif declared(tree_name(mission)).section == "vtol":  # the options' defaults are flown too
         heights.append((("vtol",), VtolOptions().takeoff_alt_m))
     return [(path, f"{alt:g} m above home is outside limits.alt_m [{allowed.min:g}, {allowed.max:g}]") for path, alt in heights if alt not in allowed]
 
@@ -322,15 +309,10 @@ def _geofence_errors(mission: Mission) -> list[tuple[Path, str]]:
     return errors + route_errors(mission)
 
 
-#: Built-in trees whose legs each end after ``limits.leg_timeout_s`` at speeds within ``limits.speed_m_s`` (a vtol flies its
-#: legs at its airspeed; ugv_rc_route's timeout is for progress, not a leg).
-TIMED_LEG_TREES = frozenset({"waypoints", "goto_sample", "auv_survey"})
-
-
 def _leg_time_errors(mission: Mission) -> list[tuple[Path, str]]:
     """Each leg (from home where known) drivable within ``limits.leg_timeout_s``: its length less the acceptance radius at its speed
     (the waypoint's ``speed_m_s``, else the cap ``limits.speed_m_s.max``, a vehicle kind's default limits included)."""
-    if tree_name(mission) not in TIMED_LEG_TREES or mission.vehicle == "vtol":  # a vtol flies its legs at its airspeed
+    if not declared(tree_name(mission)).timed_legs or mission.vehicle == "vtol":  # a vtol flies its legs at its airspeed
         return []
     limits, wps = mission.limits, mission.waypoints
     points = [("home", mission.home.lat, mission.home.lon)] if mission.home else []

@@ -20,8 +20,6 @@ import logging
 import sqlite3
 import time
 from collections import deque
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -311,15 +309,6 @@ class Journal:
         cursor = self._db.execute(sql, (run,))
         names = [column[0] for column in cursor.description]
         return [dict(zip(names, r, strict=True)) for r in cursor]
-
-
-@contextmanager
-def open_journal(path: str | Path, clock: Clock) -> Iterator[Journal]:
-    journal = Journal(path, clock)
-    try:
-        yield journal
-    finally:
-        journal.close()
 
 
 class JournalLogHandler(logging.Handler):

@@ -7,7 +7,7 @@ exception inside a behaviour all end with the vehicle commanded into its safe mo
 from __future__ import annotations
 
 import logging
-import types
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -32,6 +32,7 @@ from executive.operator.status import StatusSource
 from executive.runtime.pacing import TickPacer
 from executive.runtime.services import PacedService, RunObserver, Service
 from executive.tree import select as mission_tree
+from executive.tree.crash_site import CrashSite
 from executive.world import blackboard
 from executive.world.clock import Clock, TickClock
 
@@ -49,7 +50,7 @@ class BehaviourCrashed(RuntimeError):
 
 
 @dataclass(frozen=True)
-class Outcome:
+class RunOutcome:
     """How a run ended: ``mission`` names the mission that ran (None: none did), ``samples`` how many it recorded.
 
     ``safe``: what making the vehicle safe at its end came to (None: it was not made safe, as after a COMPLETED mission).
@@ -73,17 +74,6 @@ def behaviour_path(node: py_trees.behaviour.Behaviour) -> str:
         names.append(current.name)
         current = current.parent
     return "/".join(reversed(names))
-
-
-def _crashed_behaviour(tb: types.TracebackType | None) -> py_trees.behaviour.Behaviour | None:
-    """The innermost behaviour whose method is on the traceback."""
-    found = None
-    while tb is not None:
-        candidate = tb.tb_frame.f_locals.get("self")
-        if isinstance(candidate, py_trees.behaviour.Behaviour):
-            found = candidate
-        tb = tb.tb_next
-    return found
 
 
 def explain_failure(root: py_trees.behaviour.Behaviour) -> str:
@@ -168,6 +158,7 @@ class Runtime:
         self._next_root = root
         self._built: tuple[Mission, py_trees.behaviour.Behaviour] | None = None  # a replacement's tree, built when it was checked
         self.tree: py_trees.trees.BehaviourTree | None = None
+        self._crash_site: CrashSite | None = None  # with the tree
         #: A mission replaced while PAUSED: its tree waits for the resume (nothing commanded meanwhile).
         self._tree_waits_for_resume = False
         #: The distance rule, judged before a mission's tree first ticks, whatever the tree (a user's may leave it out).
@@ -187,7 +178,7 @@ class Runtime:
         self.tree_clock = TickClock(self.clock)
         self._stop_reason: str | None = None
         #: How the last mission that ran ended (None: none has): what ``run`` returns when stopped between missions.
-        self.last_outcome: Outcome | None = None
+        self.last_outcome: RunOutcome | None = None
         self._running: Mission | None = None  # the mission whose tree was installed last (a deleted one keeps its name here)
 
     # -- phases ------------------------------------------------------------------------------
@@ -221,17 +212,21 @@ class Runtime:
             self.tree_clock.latch()
             tree.tick()
         except Exception as exc:
-            node = _crashed_behaviour(exc.__traceback__)
+            node = self._node_that_raised(exc)
             raise BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc) from exc
         for observer in self.observers:
             observer.ticked(self.ticks, self.clock.now())
         return tree.root.status
 
+    def _node_that_raised(self, error: BaseException) -> py_trees.behaviour.Behaviour | None:
+        """The tree's node ``error`` came out of (None: from no node's own code)."""
+        return self._crash_site.node_of(error) if self._crash_site is not None else None
+
     def request_stop(self, reason: str) -> None:
         """Ask the loop to stop at the next tick (safe from a signal handler)."""
         self._stop_reason = reason
 
-    def run(self, *, start: bool = True, serve: bool = False, resume: ResumePoint | None = None) -> Outcome:
+    def run(self, *, start: bool = True, serve: bool = False, resume: ResumePoint | None = None) -> RunOutcome:
         """Tick at the fixed rate: start the mission (or wait for the operator to), until it ends or, with ``serve``, until stopped.
 
         ``resume`` (from the journal of a run that never ended) continues at its first unfinished
@@ -259,7 +254,7 @@ class Runtime:
                         return self._end(self._abort(f"stopped: {self._stop_reason}"))  # the journal records it ABORTED
                     self.make_safe()
                     # between missions: the last one that ran, with its own outcome (not the one loaded since, never started)
-                    ended = self.last_outcome or Outcome(self.mission_state.status, self.mission_state.reason, self.ticks)
+                    ended = self.last_outcome or RunOutcome(self.mission_state.status, self.mission_state.reason, self.ticks)
                     return replace(ended, safe=self.safe_report)
                 self.pacer.tick_started()
                 ended = self._tick_once()
@@ -308,7 +303,7 @@ class Runtime:
             try:
                 self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
             except Exception as exc:  # a behaviour's terminate() that raises: the vehicle is made safe all the same
-                node = _crashed_behaviour(exc.__traceback__)
+                node = self._node_that_raised(exc)
                 log.error("stopping the tree: %s", BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc), exc_info=exc)
         for paced in self.paced:  # the base stops at once; the autopilot is told below
             paced.stop()
@@ -321,21 +316,21 @@ class Runtime:
         for reporter in self._reporters:
             reporter.service()
 
-    def _refuse(self, why: str) -> Outcome:
+    def _refuse(self, why: str) -> RunOutcome:
         """The distance rule refused the starting mission: it ends ABORTED, and as nothing was commanded nothing is undone."""
         users_code, self._refused, self._refused_users_code = self._refused_users_code, None, False
         reason = f"refused before anything was commanded: {why}"
         log.warning("mission %r %s", self.mission_state.mission.name if self.mission_state.mission else "", reason)
         self.mission_state.abort(reason)
-        return Outcome(MissionStatus.ABORTED, reason, self.ticks, users_code=users_code)
+        return RunOutcome(MissionStatus.ABORTED, reason, self.ticks, users_code=users_code)
 
-    def _abort(self, reason: str) -> Outcome:
+    def _abort(self, reason: str) -> RunOutcome:
         log.warning("mission aborted: %s", reason)
         self.make_safe()
         self.mission_state.abort(reason)
-        return Outcome(MissionStatus.ABORTED, reason, self.ticks)
+        return RunOutcome(MissionStatus.ABORTED, reason, self.ticks)
 
-    def _tick_once(self) -> Outcome | None:
+    def _tick_once(self) -> RunOutcome | None:
         """Tick, and end the active mission if it is over; returns how it ended, if it did."""
         active = self.tree is not None
         try:
@@ -352,17 +347,17 @@ class Runtime:
             return None
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
-            return self._end(Outcome(self.mission_state.status, self.mission_state.reason, self.ticks))
+            return self._end(RunOutcome(self.mission_state.status, self.mission_state.reason, self.ticks))
         if status == Status.SUCCESS and (undone := self.mission_state.work_left()) is not None:
             return self._end(self._abort(f"the tree ended, but {undone}"))  # never report success for work not done
         if status == Status.SUCCESS:
             self.mission_state.complete()  # its reason says how many waypoints were reached
-            return self._end(Outcome(MissionStatus.COMPLETED, self.mission_state.reason, self.ticks))
+            return self._end(RunOutcome(MissionStatus.COMPLETED, self.mission_state.reason, self.ticks))
         if status == Status.FAILURE:
             return self._end(self._abort(explain_failure(self.tree.root)))  # type: ignore[union-attr]
         return None
 
-    def _end(self, outcome: Outcome) -> Outcome:
+    def _end(self, outcome: RunOutcome) -> RunOutcome:
         """The running mission's end: the observers told; the outcome names the mission and its samples, and is kept as the last."""
         self.tree = None
         ran = self._running
@@ -419,6 +414,7 @@ class Runtime:
             self.sampler = UnavailableSampler(self.clock, mission.sampling or SamplingOptions(), str(exc))
         self._run_writers = [self.sampler] if self.sampler is not None else []
         self.tree = py_trees.trees.BehaviourTree(root)
+        self._crash_site = CrashSite(root)  # names the node an exception comes out of, below
         self.reach.close()  # the tree waits for the distance rule
         resumed_from, self._resume = (self._resume.run if self._resume else None), None
         for observer in self.observers:
@@ -426,7 +422,7 @@ class Runtime:
         try:
             self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=MissionPort(self.mission_state), sampler=self.sampler)
         except Exception as exc:
-            node = _crashed_behaviour(exc.__traceback__)
+            node = self._node_that_raised(exc)
             named = f"{type(node).__module__}.{type(node).__qualname__} ({node.name!r})" if node else "(tree)"
             error = registry.PluginError(named, exc, doing="setup()")
             if error.where is None:
@@ -437,3 +433,11 @@ class Runtime:
         """A user's tree or behaviour failed as the mission starts: it is refused before its tree ticks, nothing commanded (exit 2)."""
         log.error("%s", why)
         self._refused, self._refused_users_code = why, True
+
+
+def __getattr__(name: str) -> object:
+    """``Outcome``, :class:`RunOutcome`'s name until 0.2 (``executive.world.state.Outcome`` is what an acked command asks)."""
+    if name == "Outcome":
+        warnings.warn("executive.runtime.loop.Outcome is now RunOutcome", DeprecationWarning, stacklevel=2)
+        return RunOutcome
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -308,11 +308,6 @@ class HeadingFilter:
         return (self._kf.heading - (self._bias if self.bias_judged else 0.0)) % 360.0
 
     @property
-    def bias_estimate_deg(self) -> float | None:
-        """The compass bias estimate so far (judged or not); None before the first sample."""
-        return self._bias if self.bias_samples else None
-
-    @property
     def bias_judged(self) -> bool:
         """Enough straight driving to trust the bias estimate."""
         cfg = self.config

@@ -57,10 +57,6 @@ class _Fault(BaseModel):
         """When the fault ends (infinity if it never does)."""
         return math.inf if self.for_s is None else self.at_s + self.for_s
 
-    def active_at(self, t: float) -> bool:
-        """Whether the fault is in force ``t`` seconds after boot."""
-        return self.at_s <= t < self.end_s
-
 
 class LinkLoss(_Fault):
     """The vehicle's MAVLink link goes silent: uplink = the vehicle hears nothing, downlink = it sends nothing."""
@@ -247,7 +243,7 @@ class FaultInjector:
         """The faults in force ``t`` seconds after boot (default: now)."""
         t = self.elapsed_s if t is None else t
         if t != self._active[0]:
-            self._active = (t, tuple(f for f, start, end in self._spans if start <= t < end))  # Fault.active_at, without a property a fault
+            self._active = (t, tuple(f for f, start, end in self._spans if start <= t < end))  # each fault's [at_s, end_s)
         return list(self._active[1])
 
     @property

@@ -20,7 +20,7 @@ from executive.io.mavlink.link import MemoryLink
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission, SimulatorOptions
 from executive.runtime.assembly import build_runtime, can_base, obstacle_camera
-from executive.runtime.loop import Outcome
+from executive.runtime.loop import RunOutcome
 from executive.sensing.heading import wait_for_filterpy
 from executive.sim import FirmwareSim, make_autopilot
 from executive.sim.firmware import Home
@@ -353,10 +353,10 @@ class Lockstep:
 
     def run(
         self, limit_s: float = 600.0, *, until: Callable[[], bool] | None = None, serve: bool = False, resume: ResumePoint | None = None
-    ) -> Outcome | None:
+    ) -> RunOutcome | None:
         """Connect, start the mission (the first time) and run the runtime's own loop until the mission ends.
 
-        Returns its :class:`Outcome`; or None as soon as ``until()`` is true after a step (call
+        Returns its :class:`RunOutcome`; or None as soon as ``until()`` is true after a step (call
         :meth:`run` again to go on). VehicleTimeLimit when ``limit_s`` more seconds of vehicle time
         pass first. ``serve``: the runtime's ``--wait`` loop (ends only when stopped). ``resume``:
         a journal's unfinished run to continue (as ``executive run --resume``).
@@ -373,7 +373,7 @@ class Lockstep:
             self.clock.deadline = None
             self._stop_when = None
 
-    def run_to_end(self, limit_s: float = 600.0) -> Outcome:
+    def run_to_end(self, limit_s: float = 600.0) -> RunOutcome:
         """:meth:`run`, asserting the mission ended (COMPLETED or not) within ``limit_s`` of vehicle time."""
         outcome = self.run(limit_s)
         assert outcome is not None

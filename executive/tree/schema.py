@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from executive.mission.declaration import trees_with
 from executive.mission.model import Mission
 from executive.tree.composition import tree_json_schema
 
@@ -24,6 +25,9 @@ def mission_json_schema() -> dict[str, Any]:
     tree = schema["properties"]["tree"]
     tree["anyOf"] = [option if option.get("type") != "object" else {**composed, "description": option["description"]} for option in tree["anyOf"]]
     schema["$defs"] |= defs
+    # for editors: an empty route only for a tree that declares one (its operator records it; cross_field_errors says so too)
+    empty = [{"type": "object", "required": ["tree"], "properties": {"tree": {"const": name}}} for name in trees_with(lambda d: d.empty_route)]
+    schema["anyOf"] = [*empty, {"type": "object", "properties": {"waypoints": {"minItems": 1}}}]
     return {**schema, "$schema": DIALECT, "title": "executive mission file (version 1)"}
 
 

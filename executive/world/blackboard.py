@@ -218,7 +218,7 @@ def document_command(name: str) -> str:
     key = command_key(name)
     if key not in KEYS:
         KEYS[key] = Key(key, None, "commander", f"CommandStatus of the latest MAV_CMD_{name}")
-        PyTreesBoard.set(key, None)
+    _current.storage.setdefault(key, None)
     return key
 
 
@@ -241,7 +241,7 @@ def declare(key: Key) -> str:
         raise ValueError(f"blackboard key {key.name!r} is already declared differently (by {known.writer})")
     if known is None:
         KEYS[key.name] = key
-        PyTreesBoard.set(key.name, key.default)
+    _current.storage.setdefault(key.name, key.default)  # on the current board: another runtime's was made before it was documented
     return key.name
 
 
@@ -335,10 +335,6 @@ class Board:
 
 class PyTreesBoard:
     """The one place the blackboard meets py_trees: the current board, and the clients below."""
-
-    @staticmethod
-    def set(key: str, value: Any) -> None:
-        _current.storage[key] = value
 
     @staticmethod
     def client(name: str, keys: Iterable[str], access: Access) -> Client:

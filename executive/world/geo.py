@@ -29,8 +29,9 @@ def distance_bearing(lat1: float, lon1: float, lat2: float, lon2: float) -> tupl
     return g["s12"], g["azi1"] % 360.0
 
 
+@functools.lru_cache(maxsize=256)
 def distance(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
-    """Metres between two points."""
+    """Metres between two points (remembered for the last few pairs, as :func:`distance_bearing`: a tick asks again)."""
     return _WGS84.Inverse(lat1, lon1, lat2, lon2, Geodesic.DISTANCE)["s12"]
 
 

@@ -2,33 +2,36 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Literal
 
-from executive.world.dialect import mavlink
+from executive.world.dialect import mavlink, mavutil
 
 VehicleKind = Literal["rover", "boat", "sub", "vtol"]
 
-#: ArduRover (rover and boat frames) custom modes.
-ROVER_MODES = MappingProxyType({
-    "MANUAL": 0, "ACRO": 1, "STEERING": 3, "HOLD": 4, "LOITER": 5, "FOLLOW": 6, "SIMPLE": 7,
-    "DOCK": 8, "CIRCLE": 9, "AUTO": 10, "RTL": 11, "SMART_RTL": 12, "GUIDED": 15, "INITIALISING": 16,
-})  # fmt: skip
 
-#: ArduSub custom modes.
-SUB_MODES = MappingProxyType({
-    "STABILIZE": 0, "ACRO": 1, "ALT_HOLD": 2, "AUTO": 3, "GUIDED": 4, "CIRCLE": 7, "SURFACE": 9,
-    "POSHOLD": 16, "MANUAL": 19, "MOTOR_DETECT": 20, "SURFTRAK": 21,
-})  # fmt: skip
+def _ardupilot_modes(
+    mav_type: int, *, dropped: frozenset[str] = frozenset(), renamed: Mapping[str, str] | None = None, added: Mapping[str, int] | None = None
+) -> MappingProxyType[str, int]:
+    """pymavlink's table of an ArduPilot vehicle's custom modes, where the firmware's source differs corrected.
 
-#: ArduPlane (QuadPlane) custom modes.
-PLANE_MODES = MappingProxyType({
-    "MANUAL": 0, "CIRCLE": 1, "STABILIZE": 2, "TRAINING": 3, "ACRO": 4, "FBWA": 5, "FBWB": 6,
-    "CRUISE": 7, "AUTOTUNE": 8, "AUTO": 10, "RTL": 11, "LOITER": 12, "TAKEOFF": 13, "AVOID_ADSB": 14,
-    "GUIDED": 15, "INITIALISING": 16, "QSTABILIZE": 17, "QHOVER": 18, "QLOITER": 19, "QLAND": 20,
-    "QRTL": 21, "QAUTOTUNE": 22, "QACRO": 23, "THERMAL": 24, "LOITER_ALT_QLAND": 25,
-})  # fmt: skip
+    pymavlink's built-in tables (what ``mavutil.mode_mapping_byname`` returns), not a ``~/.pymavlink/custom_mode_map.json``
+    that function would take in: a file in someone's home directory does not change the number HOLD is asked by.
+    """
+    table = {(renamed or {}).get(name, name): number for number, name in mavutil.AP_MAV_TYPE_MODE_MAP_DEFAULT[mav_type].items()}
+    return MappingProxyType({name: number for name, number in table.items() if name not in dropped} | dict(added or {}))
+
+
+#: ArduRover (rover and boat frames) custom modes: pymavlink's, but LEARNING (2), gone from the firmware (Rover/mode.h Mode::Number).
+ROVER_MODES = _ardupilot_modes(mavlink.MAV_TYPE_GROUND_ROVER, dropped=frozenset({"LEARNING"}))
+
+#: ArduSub custom modes: pymavlink's, and the two it lacks (ArduSub/mode.h Mode::Number: MOTOR_DETECT 20, SURFTRAK 21).
+SUB_MODES = _ardupilot_modes(mavlink.MAV_TYPE_SUBMARINE, added={"MOTOR_DETECT": 20, "SURFTRAK": 21})
+
+#: ArduPlane (QuadPlane) custom modes: pymavlink's, mode 25 by the firmware's name (ArduPlane/mode.h LOITER_ALT_QLAND).
+PLANE_MODES = _ardupilot_modes(mavlink.MAV_TYPE_VTOL_QUADROTOR, renamed={"LOITERALTQLAND": "LOITER_ALT_QLAND"})
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from executive.autopilot.port import AutopilotPort
 from executive.autopilot.selection import Autopilot
 from executive.world.dialect import mavlink
 from executive.world.vehicles import PROFILES
@@ -52,3 +53,16 @@ def test_a_forced_back_end_stays_whatever_the_heartbeat_says(commander) -> None:
     port.adopt(mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, mavlink.MAV_TYPE_VTOL_QUADROTOR)
     assert port.capabilities.autopilot == "px4"
     assert port.mode_name("GUIDED") == "OFFBOARD"
+
+
+def test_every_intent_of_the_port_is_the_back_end_s_before_and_after_the_heartbeat_swaps_it(commander) -> None:
+    port = Autopilot(commander, None, PROFILES["vtol"])
+    members = [name for name in vars(AutopilotPort) if not name.startswith("_")]
+    for backend in ("ardupilot", "px4"):
+        if backend == "px4":
+            port.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_VTOL_QUADROTOR)
+        assert port.backend.name == backend
+        for name in members:
+            assert getattr(port, name) == getattr(port.backend, name), name  # the back end's own bound method or value, not a copy
+    with pytest.raises(AttributeError, match="'Autopilot' object has no attribute '_transfer_state'"):
+        port._transfer_state  # noqa: B018  # a back end's own state is not reached through the selection

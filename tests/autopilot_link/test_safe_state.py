@@ -18,7 +18,7 @@ import pytest
 from executive.autopilot_link.safe_state import Until, plan
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.runtime.loop import Outcome
+from executive.runtime.loop import RunOutcome
 from executive.testing import Lockstep
 from executive.world.dialect import mavlink
 from executive.world.state import GlobalPosition
@@ -49,7 +49,7 @@ def modes_asked(sim: Lockstep) -> list[str]:
     return asked
 
 
-def stopped(sim: Lockstep, *, abort: bool = False) -> tuple[Outcome, float]:
+def stopped(sim: Lockstep, *, abort: bool = False) -> tuple[RunOutcome, float]:
     """SIGTERM (or `ctl abort`) now: how the run ended and how long (vehicle time) the make-safe took."""
     start = sim.clock.now()
     if abort:

@@ -19,7 +19,7 @@ from executive.io.can.agilex import RC_STATE_ID, SYSTEM_STATE_ID, MotionCommand
 from executive.io.can.drive import DriveBridge
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
-from executive.runtime.loop import Outcome, Runtime
+from executive.runtime.loop import RunOutcome, Runtime
 from executive.sim.faults import FaultPlan
 from executive.testing import Lockstep
 from executive.world import geo
@@ -71,7 +71,7 @@ class Watch:
 
 
 class Run(NamedTuple):
-    outcome: Outcome
+    outcome: RunOutcome
     sim: Lockstep
     watch: Watch
 

@@ -21,7 +21,7 @@ from executive.io.mavlink.mission_protocol import MissionCurrent, MissionItemRea
 from executive.mission.errors import MissionError
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.model import Mission, RcConfig
-from executive.runtime.loop import Outcome, Runtime
+from executive.runtime.loop import RunOutcome, Runtime
 from executive.sensing.rc import RcReader
 from executive.sim.faults import FaultInjector, RcInput, RcLoss
 from executive.testing import EKF_READY, Harness, Lockstep, MissionAutopilot
@@ -760,7 +760,7 @@ class Observer(FaultInjector):
 
 
 @pytest.fixture
-def scenario(lockstep) -> tuple[Observer, Runtime, Outcome, Lockstep]:
+def scenario(lockstep) -> tuple[Observer, Runtime, RunOutcome, Lockstep]:
     mission = load_mission(ROOT / "missions/ugv_rc_route.yaml")
     assert mission.simulator is not None and mission.simulator.events is not None and mission.home is not None
     observers: list[Observer] = []

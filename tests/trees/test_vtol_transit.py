@@ -16,7 +16,7 @@ from executive.io.mavlink.modes import ArduPilotModes
 from executive.mission.lifecycle import MissionState
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.runtime.loop import Outcome, explain_failure
+from executive.runtime.loop import RunOutcome, explain_failure
 from executive.testing import EKF_READY, Lockstep, ScriptedAutopilot
 from executive.tree import select as mission_tree
 from executive.world import blackboard
@@ -565,7 +565,7 @@ class Flight:
     """How the example transit went on the simulated QuadPlane."""
 
     mission: Mission
-    outcome: Outcome
+    outcome: RunOutcome
     recorder: Recorder
     end: dict[str, Any]
     vehicle_s: float

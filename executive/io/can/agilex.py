@@ -32,6 +32,7 @@ count both with :class:`FrameStats`.
 
 from __future__ import annotations
 
+import logging
 import struct
 from collections import Counter
 from dataclasses import dataclass, field
@@ -40,6 +41,8 @@ from typing import Any, ClassVar, Self
 import can
 
 from executive.world.state import SwitchPosition
+
+log = logging.getLogger(__name__)
 
 MOTION_COMMAND_ID = 0x111
 SYSTEM_STATE_ID = 0x211
@@ -335,14 +338,23 @@ _BY_ID: dict[int, Any] = {cls.ID: cls for cls in (RcState, SystemState, MotionSt
 KNOWN_IDS: frozenset[int] = frozenset(_BY_ID)
 
 
+#: Decoder failures already logged, by frame id and exception: each kind is said once, then only counted as bad frames.
+_FAILURES_SAID: set[tuple[object, type[BaseException]]] = set()
+
+
 def decode(msg: can.Message) -> Frame | None:
-    """The AgileX frame ``msg`` carries; None for anything else. Never raises."""
+    """The AgileX frame ``msg`` carries; None for anything else. Never raises; a decoder that does is logged once per kind."""
     try:
         if msg.is_extended_id or msg.is_remote_frame or msg.is_error_frame:
             return None
         cls = _BY_ID.get(msg.arbitration_id)
         return None if cls is None else cls.from_data(bytes(msg.data))
-    except Exception:  # a boundary: nothing a bus delivers may crash the executive
+    except Exception as exc:  # a boundary: nothing a bus delivers may crash the executive, and a decoder bug is not a bad frame
+        frame_id = getattr(msg, "arbitration_id", None)
+        if (frame_id, type(exc)) not in _FAILURES_SAID:
+            _FAILURES_SAID.add((frame_id, type(exc)))
+            where = f"0x{frame_id:03X}" if isinstance(frame_id, int) else repr(frame_id)
+            log.error("CAN frame %s: the AgileX decoder raised %s (counted as a bad frame; said once)", where, type(exc).__name__, exc_info=exc)
         return None
 
 

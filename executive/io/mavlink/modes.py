@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Protocol
 
-from executive.world.dialect import mavlink
+from executive.world.dialect import mavlink, mavutil
 from executive.world.vehicles import profile_for_mav_type
 
 
@@ -55,12 +55,25 @@ def _px4(main: int, sub: int = 0) -> int:
     return (main << 16) | (sub << 24)
 
 
+#: AUTO's precision landing, which pymavlink does not name (PX4 src/modules/commander/px4_custom_mode.h PX4_CUSTOM_SUB_MODE_AUTO_PRECLAND).
+_AUTO_PRECLAND = 9
+
+
+def _px4_number(name: str) -> int:
+    """``POSCTL`` -> its main mode's ``custom_mode``; ``AUTO.LOITER`` -> AUTO's with its sub mode (pymavlink's PX4_CUSTOM_* numbers)."""
+    main, _, sub = name.partition(".")
+    if not sub:
+        return _px4(getattr(mavutil, f"PX4_CUSTOM_MAIN_MODE_{main}"))
+    return _px4(mavutil.PX4_CUSTOM_MAIN_MODE_AUTO, _AUTO_PRECLAND if sub == "PRECLAND" else getattr(mavutil, f"PX4_CUSTOM_SUB_MODE_AUTO_{sub}"))
+
+
 #: PX4 modes, by the names QGroundControl shows (main mode, or main.sub for AUTO).
 PX4_MODES: dict[str, int] = {
-    "MANUAL": _px4(1), "ALTCTL": _px4(2), "POSCTL": _px4(3), "AUTO.READY": _px4(4, 1), "AUTO.TAKEOFF": _px4(4, 2),
-    "AUTO.LOITER": _px4(4, 3), "AUTO.MISSION": _px4(4, 4), "AUTO.RTL": _px4(4, 5), "AUTO.LAND": _px4(4, 6),
-    "AUTO.FOLLOW_TARGET": _px4(4, 8), "AUTO.PRECLAND": _px4(4, 9), "ACRO": _px4(5), "OFFBOARD": _px4(6),
-    "STABILIZED": _px4(7), "RATTITUDE": _px4(8),
+    name: _px4_number(name)
+    for name in (
+        "MANUAL", "ALTCTL", "POSCTL", "AUTO.READY", "AUTO.TAKEOFF", "AUTO.LOITER", "AUTO.MISSION", "AUTO.RTL", "AUTO.LAND",
+        "AUTO.FOLLOW_TARGET", "AUTO.PRECLAND", "ACRO", "OFFBOARD", "STABILIZED", "RATTITUDE",
+    )
 }  # fmt: skip
 
 #: ArduPilot mode names the trees use -> the PX4 mode that does the same job.

@@ -28,7 +28,6 @@ from executive.world.vehicles import VehicleProfile
 #: ArduPilot's magic param2 values for MAV_CMD_COMPONENT_ARM_DISARM (GCS_MAVLink/GCS.h).
 #: 2989 skips the pre-arm checks; 21196 only forces a *disarm* (an arm with it is checked as usual).
 FORCE_ARM = 2989.0
-FORCE_DISARM = 21196.0
 
 EKF_FLAGS_READY = 0x33F  # 831, as read on the real firmware once the EKF uses GPS
 EKF_FLAGS_WAITING = 0xA7  # attitude, velocities, vertical position, constant-position mode: no GPS yet

@@ -70,8 +70,6 @@ from executive.world.vehicles import PLANE_MODES, VehicleProfile
 _M = mavlink
 
 Q_MODES = frozenset({"QSTABILIZE", "QHOVER", "QLOITER", "QLAND", "QRTL", "QACRO", "QAUTOTUNE", "LOITER_ALT_QLAND"})
-#: Fixed-wing modes with the pilot in control: without one, the aircraft flies straight on at its altitude.
-PILOT_FW_MODES = frozenset({"MANUAL", "STABILIZE", "TRAINING", "ACRO", "FBWA", "FBWB", "CRUISE"})
 #: Modes that stop the lift motors at once (QuadPlane::update: transition forced complete).
 MOTORS_OFF_MODES = frozenset({"MANUAL", "ACRO", "TRAINING"})
 TRANSITION_MS = 5000  # Q_TRANSITION_MS (ArduPlane/quadplane.cpp default)

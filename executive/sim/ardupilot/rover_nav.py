@@ -80,7 +80,6 @@ class RoverNavigator:
         self.fast_waypoint = False
         self._pivot_at_next = False
         self.pivoting = False
-        self._pivot_bearing = 0.0
         self._shaped: ShapedTarget | None = None
         self._this: SCurveLeg | None = None
         self._prev: SCurveLeg | None = None
@@ -162,11 +161,6 @@ class RoverNavigator:
             self._advance_scurve(vehicle, dt)
         return self._position_control(vehicle, dt)
 
-    @property
-    def target_ne(self) -> tuple[float, float] | None:
-        """Where the position controller's target is now (north, east)."""
-        return None if self._target is None else self._target[0]
-
     # -- internals -------------------------------------------------------------------------------
 
     def _stopping_point(self, vehicle: Driven) -> tuple[float, float]:
@@ -190,7 +184,7 @@ class RoverNavigator:
             return
         error = math.degrees(abs(_wrap_pi(bearing - vehicle.yaw_rad)))
         if error > motion.pivot_angle_deg or force:
-            self.pivoting, self._pivot_bearing = True, bearing
+            self.pivoting = True
 
     def _pivot_rate(self, vehicle: Driven) -> float:
         """AR_PivotTurn::get_turn_rate_rads: toward the bearing at up to WP_PIVOT_RATE; done within 5 degrees."""

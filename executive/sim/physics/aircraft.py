@@ -133,10 +133,6 @@ class QuadPlaneModel(LocalFrame):
         return 0.0 if self._landing else self._target_h
 
     @property
-    def orbit_radius_m(self) -> float:
-        return self._radius
-
-    @property
     def arrived(self) -> bool:
         """At the hover point (multicopter), or on the circle (fixed wing orbit)."""
         distance = math.hypot(self._target[0] - self._n, self._target[1] - self._e)

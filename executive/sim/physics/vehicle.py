@@ -390,11 +390,6 @@ class SkidSteerVehicle(SurfaceVehicle):
         return self._left, self._right
 
     @property
-    def track_speeds_m_s(self) -> tuple[float, float]:
-        """How fast the left and right tracks run now (positive = forward)."""
-        return self._track_speeds
-
-    @property
     def odometry_m(self) -> tuple[float, float]:
         """Distance the left and right tracks have run since the start (backwards counts down)."""
         return self._odometry

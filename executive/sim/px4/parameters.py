@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 FORCE_ARM_DISARM = 21196  # Commander.cpp: param2 that forces a disarm (and an internal arm)
 ESTIMATOR_READY_S = 3.0  # the SIH estimator's position came 2-4 s after boot (issue 12)
 HOME_AMSL_M = 584.0  # the start point's altitude above sea level (ArduPilot SITL's CMAC field)
@@ -24,6 +22,5 @@ VT_B_TRANS_DUR = 4.0  # back transition: at most this long
 MISSION_CHECK_S = 1.0  # after an upload, AUTO.MISSION is refused this long (issue 12)
 COM_DL_LOSS_T = 10.0  # no ground-station HEARTBEAT this long: "Connection to ground station lost"
 COM_OBC_LOSS_T = 5.0  # no onboard-computer HEARTBEAT this long: "Connection to mission computer lost"
-DISARMED_TIMEOUT_S = math.inf
 #: LandDetector::UpdateVehicleAtRest: at rest once no movement for this long (and landed).
 AT_REST_AFTER_S = 1.0

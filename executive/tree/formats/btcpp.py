@@ -26,14 +26,11 @@ import math
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 from xml.parsers import expat
 
 from executive.mission.errors import FieldError, MissionError
 from executive.tree.composition import NODE, USE
-
-if TYPE_CHECKING:
-    pass
 
 #: The catalogue's parameter types -> the port types BehaviorTree.CPP writes (``BT::demangle`` of the C++ type).
 PORT_TYPES = {

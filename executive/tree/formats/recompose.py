@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 import yaml
 
+from executive import registry
 from executive.behaviours.failsafe import Failsafe
 from executive.behaviours.guards import Guard
 from executive.tree import select as mission_tree
@@ -184,7 +185,7 @@ def export_tree(mission_file: str, mission: Mission, catalogue: Any) -> tuple[st
     would run it otherwise, or needs C++ of ours to load it (:func:`executive.tree.formats.btcpp.differences`).
     """
     with open(mission_file, encoding="utf-8") as stream:
-        tree = (yaml.safe_load(stream) or {}).get("tree", "waypoints")
+        tree = (yaml.safe_load(stream) or {}).get("tree", registry.DEFAULT_TREE)
     types = node_types(catalogue)
     if isinstance(tree, Mapping):
         root = from_yaml(tree, types)

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import logging
+
 import can
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from executive.io.can import agilex
 from executive.io.can.agilex import KNOWN_IDS, ControlModeSelect, FrameStats, MotionCommand, MotionState, Odometry, RcState, SystemState, decode
 from executive.world.state import SwitchPosition
 
@@ -171,3 +174,24 @@ def test_every_8_byte_payload_of_a_known_id_decodes(data: bytes, arbitration_id:
     assert decoded is not None
     if decoded.valid:  # a valid frame re-encodes to the same meaning
         assert decode(decoded.encode()) == decoded
+
+
+def test_a_decoder_bug_is_logged_once_per_kind_with_the_frame_id_and_still_counted_bad(monkeypatch, caplog) -> None:
+    monkeypatch.setattr(agilex, "_FAILURES_SAID", set())
+
+    def broken(data: bytes) -> None:
+        raise IndexError("a decoder bug")
+
+    monkeypatch.setattr(RcState, "from_data", broken)
+    monkeypatch.setattr(SystemState, "from_data", broken)
+    stats = FrameStats()
+    with caplog.at_level(logging.ERROR, logger="executive.io.can.agilex"):
+        for msg in (frame(0x241, "A6 00 00 B0 00 00 00 7E"), frame(0x241, "00" * 8), frame(0x211, "00" * 8), frame(0x221, "00" * 8)):
+            stats.record(msg, decode(msg))
+    said = [r.getMessage() for r in caplog.records]
+    assert said == [
+        "CAN frame 0x241: the AgileX decoder raised IndexError (counted as a bad frame; said once)",
+        "CAN frame 0x211: the AgileX decoder raised IndexError (counted as a bad frame; said once)",
+    ]
+    assert caplog.records[0].exc_info is not None  # with the decoder's traceback
+    assert (stats.frames, stats.bad) == (4, 3)  # the motion state (0x221) decoded

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from executive.io.mavlink.modes import PX4_MODES, ArduPilotModes, Px4Modes, mode_table
-from executive.world.dialect import mavlink
+from executive.world.dialect import mavlink, mavutil
 from executive.world.vehicles import PLANE_MODES, ROVER_MODES, SUB_MODES
 
 
@@ -72,3 +72,19 @@ def test_set_mode_on_px4_sends_main_and_sub(commander, link):
     commander.flush()
     (msg,) = link.take()
     assert (msg.command, msg.param1, msg.param2, msg.param3) == (mavlink.MAV_CMD_DO_SET_MODE, 1.0, 4.0, 3.0)
+
+
+def test_the_ardupilot_tables_are_pymavlink_s_but_where_the_firmware_s_source_differs():
+    """pymavlink's mode_mapping_byname, corrected by Rover/mode.h (no LEARNING), ArduSub/mode.h (+2) and ArduPlane/mode.h (a name)."""
+    rover = mavutil.mode_mapping_byname(mavlink.MAV_TYPE_GROUND_ROVER)
+    assert dict(ROVER_MODES) == {name: n for name, n in rover.items() if name != "LEARNING"}
+    assert dict(SUB_MODES) == mavutil.mode_mapping_byname(mavlink.MAV_TYPE_SUBMARINE) | {"MOTOR_DETECT": 20, "SURFTRAK": 21}
+    plane = mavutil.mode_mapping_byname(mavlink.MAV_TYPE_VTOL_QUADROTOR)
+    assert dict(PLANE_MODES) == {("LOITER_ALT_QLAND" if name == "LOITERALTQLAND" else name): n for name, n in plane.items()}
+    assert PLANE_MODES["AUTOLAND"] == 26
+
+
+def test_the_px4_numbers_are_pymavlink_s_px4_custom_modes():
+    assert PX4_MODES["AUTO.RTL"] == mavutil.PX4_CUSTOM_MAIN_MODE_AUTO << 16 | mavutil.PX4_CUSTOM_SUB_MODE_AUTO_RTL << 24
+    assert PX4_MODES["OFFBOARD"] == mavutil.PX4_CUSTOM_MAIN_MODE_OFFBOARD << 16
+    assert PX4_MODES["AUTO.PRECLAND"] == 4 << 16 | 9 << 24  # pymavlink names no PRECLAND

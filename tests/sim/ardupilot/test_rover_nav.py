@@ -26,7 +26,7 @@ MakeGcs = Callable[..., "Gcs"]
 STEP_S = 0.1
 
 
-class Sample:
+class VehicleAt:
     def __init__(self, t: float, gcs: Gcs, out: list[MAVLinkMessage]) -> None:
         self.t = t
         self.ne = gcs.ap.vehicle.north_east_m  # type: ignore[attr-defined]
@@ -37,10 +37,10 @@ class Sample:
         self.reached = bool(gcs.of_type(out, "MISSION_ITEM_REACHED"))
 
 
-def drive(gcs: Gcs, seconds: float) -> list[Sample]:
+def drive(gcs: Gcs, seconds: float) -> list[VehicleAt]:
     samples = []
     for i in range(round(seconds / STEP_S)):
-        samples.append(Sample((i + 1) * STEP_S, gcs, gcs.run(STEP_S)))
+        samples.append(VehicleAt((i + 1) * STEP_S, gcs, gcs.run(STEP_S)))
     return samples
 
 
@@ -71,7 +71,7 @@ def at(gcs: Gcs, north: float, east: float) -> tuple[float, float]:
     return lat, lon
 
 
-def decelerations(samples: list[Sample], window_s: float = 1.0) -> list[float]:
+def decelerations(samples: list[VehicleAt], window_s: float = 1.0) -> list[float]:
     """Speed lost per second over each window of ``window_s``."""
     n = round(window_s / STEP_S)
     return [(a.speed - b.speed) / window_s for a, b in zip(samples, samples[n:], strict=False)]

@@ -1,0 +1,45 @@
+"""Which node of a tree raised an exception: the node whose own code (setup, initialise, update, terminate) raised it.
+
+py_trees calls each node's hooks from its parent's tick and says nothing of where an exception came
+from; the runtime names a crashed behaviour by its path from the root. :class:`CrashSite` wraps the
+hooks of every node of a tree when it is built, and notes the first node an exception leaves: the
+innermost one, whose own code (or a function it called) raised it.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+from typing import Any
+
+import py_trees
+
+#: The hooks py_trees calls on a node (Behaviour.tick: initialise, update; Behaviour.stop: terminate; the tree's setup).
+HOOKS = ("setup", "initialise", "update", "terminate")
+
+
+class CrashSite:
+    """The node each exception came out of, for the tree of ``root`` (its nodes' hooks wrapped once, here)."""
+
+    def __init__(self, root: py_trees.behaviour.Behaviour) -> None:
+        self._error: BaseException | None = None
+        self._node: py_trees.behaviour.Behaviour | None = None
+        for node in root.iterate():
+            for hook in HOOKS:
+                setattr(node, hook, self._noting(node, getattr(node, hook)))
+
+    def node_of(self, error: BaseException) -> py_trees.behaviour.Behaviour | None:
+        """The node whose hook ``error`` came out of first (None: it came from no node's hook, the tree's own code)."""
+        return self._node if error is self._error else None
+
+    def _noting(self, node: py_trees.behaviour.Behaviour, hook: Callable[..., Any]) -> Callable[..., Any]:
+        @functools.wraps(hook)
+        def run(*args: Any, **kwargs: Any) -> Any:
+            try:
+                return hook(*args, **kwargs)
+            except BaseException as error:
+                if error is not self._error:  # raised here, not passed up from a node below
+                    self._error, self._node = error, node
+                raise
+
+        return run

@@ -1,0 +1,55 @@
+"""The glider survey: a sailplane flown by ArduPlane from waypoint to waypoint under guards, then loitering.
+
+Its module declares, beside ``build``, what the executive checks a mission against: the vehicle kind it
+brings (``glider``: ArduPlane's modes, LOITER its safe mode), the firmware it needs, its RC switches and its
+failsafe defaults.
+"""
+
+from __future__ import annotations
+
+from executive.behaviours import ForEachLeg, SetMode
+from executive.mission.declaration import TreeDeclaration, VehicleKindSpec
+from executive.trees.parts import failsafe_guarded, guided_leg, mission_root, preflight, safe_mode, standard_guards
+from executive.world.dialect import mavlink
+from executive.world.vehicles import PLANE_MODES, VehicleProfile
+
+_R, _A = "resume", "abort"
+GLIDER = VehicleKindSpec(
+    profile=VehicleProfile(
+        "glider",  # type: ignore[arg-type]  # a kind of the plugin's own
+        mavlink.MAV_TYPE_FIXED_WING,  # ArduPlane says it is a fixed wing
+        PLANE_MODES,
+        safe_mode="LOITER",
+        guided_mode="GUIDED",
+        manual_mode="MANUAL",
+        surface=False,
+        pilot_modes=frozenset({"MANUAL", "STABILIZE", "FBWA"}),
+    ),
+    autopilots=frozenset({"ardupilot"}),
+    failsafes={"link_loss": ("loiter", _R), "rc_takeover": ("wait", _R), "disarmed": ("wait", _R), "rc_loss": ("loiter", _R)}
+    | {"ekf_loss": ("hold", _R), "gps_glitch": ("hold", _R), "heading_insane": ("hold", _R)}
+    | {"battery_low": ("rtl", _A), "geofence_breach": ("rtl", _A), "energy": ("rtl", _A), "keep_out": ("rtl", _A)},
+    reactions={"hold": ("LOITER", "LOITER"), "loiter": ("LOITER", "LOITER"), "rtl": ("RTL", "RTL")},
+    no_reaction={"surface": "a glider cannot surface", "disarm": "disarming a glider in flight would drop it"},
+)
+
+
+def switches(mission):
+    """The take-over switch, and channel 8: the pilot's thermal switch."""
+    return {mission.rc.takeover_channel: "the take-over switch", 8: "the thermal switch"}
+
+
+DECLARATION = TreeDeclaration(
+    doc="a sailplane's survey: each waypoint in GUIDED under guards, then loiter",
+    vehicles=frozenset({"glider"}),
+    needs=("ardupilot", "it soars in ArduPlane's THERMAL mode"),
+    rc_switches=switches,
+    failsafes={"link_loss": ("rtl", _A)},
+    timed_legs=True,
+    vehicle_kinds=(GLIDER,),
+)
+
+
+def build(mission):
+    route = failsafe_guarded(ForEachLeg(guided_leg(mission)), standard_guards(mission), mission)
+    return mission_root(mission, preflight(mission), route, SetMode(safe_mode(mission), name="Loiter at the end"))
