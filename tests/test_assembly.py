@@ -149,3 +149,19 @@ def test_a_closed_runtime_leaves_its_board_to_the_next_and_its_tree_built_before
     second = lockstep(square_mission, ekf_ready_after_s=1.0, root=tree)
     assert second.runtime.board is first.runtime.board
     assert second.run_to_end(limit_s=300).status is MissionStatus.COMPLETED
+
+
+def test_a_plugin_key_documented_after_a_second_board_was_made_is_on_that_board_when_its_node_is_made(lockstep, square_mission) -> None:
+    from executive.world import blackboard
+
+    first = lockstep(square_mission, ekf_ready_after_s=1.0)
+    second = lockstep(square_mission, ekf_ready_after_s=1.0)  # a board of its own, made before the key is known
+    key = blackboard.Key("/plugin/test_two_boards/count", 7, "test", "a count")
+    try:
+        first.runtime.board.install()
+        blackboard.declare(key)  # as a node of the first runtime's tree does
+        second.runtime.board.install()
+        blackboard.declare(key)  # as a node of the second's does
+        assert blackboard.reader("test", [key.name]).get(key.name) == 7
+    finally:
+        del blackboard.KEYS[key.name]
