@@ -5,7 +5,9 @@ from __future__ import annotations
 import py_trees
 from py_trees.common import Status
 
+from executive.mission.lifecycle import MissionStatus
 from executive.runtime.assembly import Wiring, build_runtime
+from executive.runtime.loop import RunOutcome
 from executive.runtime.services import Step, service_name
 from executive.testing import ObedientAutopilot
 from executive.world.dialect import mavlink
@@ -114,3 +116,52 @@ def test_the_link_is_pumped_before_the_readers_and_flushed_after_the_writers(squ
     assert seen == [("read", "MANUAL", 0), ("write", None, 0)]  # the heartbeat pumped in before the readers; nothing sent yet
     sent = [m.command for m in link.take("COMMAND_LONG")]
     assert sent == [mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL]  # sent after the writers, with the first stream's request
+
+
+def test_two_runtimes_in_one_process_each_have_their_own_blackboard_and_both_complete(lockstep, square_mission) -> None:
+    east = square_mission.model_copy(  # another rover 750 m east, on a two-leg route
+        update={"name": "east", "waypoints": [wp.model_copy(update={"lon": wp.lon + 0.01}) for wp in square_mission.waypoints[:2]]}
+    )
+    square, other = lockstep(square_mission, ekf_ready_after_s=1.0), lockstep(east, ekf_ready_after_s=1.0)
+    assert square.runtime.board is not other.runtime.board
+    outcomes: dict[str, RunOutcome] = {}
+    while len(outcomes) < 2:  # lock-step, interleaved: a second of vehicle time each in turn
+        for sim in (s for s in (square, other) if s.mission.name not in outcomes):
+            stop_at = sim.clock.now() + 1.0
+            outcome = sim.run(limit_s=300, until=lambda sim=sim, stop_at=stop_at: sim.clock.now() >= stop_at)
+            if outcome is not None:
+                outcomes[sim.mission.name] = outcome
+            for each, them in ((square, other), (other, square)):
+                board = each.runtime.board
+                assert board.value("/mission/leg_count") == len(each.mission.waypoints)  # its own mission, never the other's
+                position = board.value("/vehicle/position")
+                if position is not None:  # where its own vehicle is, 750 m from the other
+                    assert abs(position.lon - each.autopilot.vehicle.lon) < 1e-4 and abs(position.lon - them.autopilot.vehicle.lon) > 5e-3
+    assert {name: outcome.status for name, outcome in outcomes.items()} == {"square": MissionStatus.COMPLETED, "east": MissionStatus.COMPLETED}
+
+
+def test_a_closed_runtime_leaves_its_board_to_the_next_and_its_tree_built_before(lockstep, square_mission) -> None:
+    from executive.tree import select as mission_tree
+
+    first = lockstep(square_mission, ekf_ready_after_s=1.0)
+    first.close()
+    tree = mission_tree.build(square_mission)  # as a test builds its own tree, before its simulation
+    second = lockstep(square_mission, ekf_ready_after_s=1.0, root=tree)
+    assert second.runtime.board is first.runtime.board
+    assert second.run_to_end(limit_s=300).status is MissionStatus.COMPLETED
+
+
+def test_a_plugin_key_documented_after_a_second_board_was_made_is_on_that_board_when_its_node_is_made(lockstep, square_mission) -> None:
+    from executive.world import blackboard
+
+    first = lockstep(square_mission, ekf_ready_after_s=1.0)
+    second = lockstep(square_mission, ekf_ready_after_s=1.0)  # a board of its own, made before the key is known
+    key = blackboard.Key("/plugin/test_two_boards/count", 7, "test", "a count")
+    try:
+        first.runtime.board.install()
+        blackboard.declare(key)  # as a node of the first runtime's tree does
+        second.runtime.board.install()
+        blackboard.declare(key)  # as a node of the second's does
+        assert blackboard.reader("test", [key.name]).get(key.name) == 7
+    finally:
+        del blackboard.KEYS[key.name]

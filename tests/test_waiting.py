@@ -102,3 +102,20 @@ def test_the_tree_is_refused_before_any_mission_has_run(square_mission):
     with Lockstep(square_mission) as sim:
         reply = sim.runtime.operator.request("tree")
     assert (reply.ok, reply.reason) == (False, "no mission has run yet (READY)")
+
+
+def test_the_tree_watch_is_the_one_writer_of_the_mission_keys_it_publishes(slow_ekf):
+    sim = slow_ekf
+    sim.run(until=lambda: sim.clock.now() >= 2.0)  # the tree built, the reach gate judged
+    board = sim.runtime.board
+    writers = {key: {board.clients[c] for c in meta.write | meta.exclusive} for key, meta in board.metadata.items() if key.startswith("/mission/")}
+    assert writers == {
+        "/mission/waiting": {"tree watch"},
+        "/mission/state": {"mission lifecycle"},
+        "/mission/reason": {"mission lifecycle"},
+        "/mission/leg_index": {"route progress"},
+        "/mission/leg_count": {"route progress"},
+        "/mission/target": {"route progress"},
+        "/mission/next_target": {"route progress"},
+        "/mission/samples": {"sample log"},
+    }

@@ -14,6 +14,7 @@ so nothing is undone either; a position that never comes within ``limits.ekf_wai
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from executive.mission.lifecycle import MissionState, out_of_reach
@@ -42,14 +43,17 @@ class ReachGate:
     :meth:`close` when a tree is installed (a mission starting, or replacing a paused one);
     :meth:`judge` each tick until it opens (None: open, the tree may tick; ``WAIT``: not yet, the
     tree must not tick; a :class:`Refusal`: the mission must end, nothing commanded).
+
+    What it waits for goes to ``show`` (the tree watch, the one writer of ``/mission/waiting``): a
+    :class:`~executive.tree.waiting.Waiting` while it holds the tree back, None once it opens.
     """
 
     WAIT = "wait"
 
-    def __init__(self, clock: Clock) -> None:
+    def __init__(self, clock: Clock, show: Callable[[Waiting | None], object] = lambda waiting: None) -> None:
         self._clock = clock
         self._bb = blackboard.reader("reach gate", ["/vehicle/position", "/vehicle/ekf"])
-        self._waiting = blackboard.writer("reach gate", ["/mission/waiting"])
+        self._show = show
         self._closed_at: float | None = None
 
     @property
@@ -88,9 +92,7 @@ class ReachGate:
             why = "no position yet"
             if position is not None and ekf is not None:
                 why += f": EKF has no position estimate (flags {int(ekf.flags):#x})"
-            shown: Waiting | None = self._waiting.get("/mission/waiting")
-            if shown is None or shown.feedback != f"{why}: {rule}":  # no tree ticks yet: the gate says what the mission waits for
-                self._waiting.set("/mission/waiting", Waiting(NAME, NAME, f"{why}: {rule}", self._closed_at))
+            self._show(Waiting(NAME, NAME, f"{why}: {rule}", self._closed_at))  # no tree ticks yet: the gate says what the mission waits for
             return self.WAIT
         if far or crossing:  # the leg from where the vehicle is to its first waypoint, against the keep-out zones (executive.mission.zones)
             return Refusal(f"{NAME}: " + "; ".join(far + crossing))
@@ -98,5 +100,4 @@ class ReachGate:
 
     def _pass(self) -> None:
         self._closed_at = None
-        if self._waiting.get("/mission/waiting") is not None:
-            self._waiting.set("/mission/waiting", None)
+        self._show(None)

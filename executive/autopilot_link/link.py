@@ -30,6 +30,7 @@ from executive.io.mavlink.link import Link, PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
+from executive.mission.events import Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.operator.intervention import rc_takeover
@@ -134,7 +135,7 @@ class AutopilotLink:
         self._bb = blackboard.reader("autopilot link", keys)
         #: Why a person holds the vehicle: the mission paused hands off (a person's mode or disarm), until it runs again.
         self._hands_off: str | None = None
-        mission_state.listeners.append(self._on_transition)
+        mission_state.events.subscribe(Transition, self._on_transition, Stage.AUTOPILOT_LINK)
 
     def _found(self, heartbeat_autopilot: int, mav_type: int) -> None:
         """The reader found the autopilot: the port takes its back end; the streams and our heartbeat follow the firmware."""

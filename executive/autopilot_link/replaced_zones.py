@@ -22,8 +22,10 @@ from py_trees.common import Status
 
 from executive.autopilot.port import AutopilotPort
 from executive.behaviours.zones import ZonesOnAutopilot, puts_zones_on_autopilot
+from executive.mission.events import Replaced, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
+from executive.mission.port import MissionPort
 from executive.world.clock import Clock
 
 log = logging.getLogger(__name__)
@@ -41,8 +43,8 @@ class ReplacedZones:
         self._put = (False, False)
         self._zones: ZonesOnAutopilot | None = None
         self._zones_put = (False, False)
-        mission_state.listeners.append(self._on_transition)
-        mission_state.replace_listeners.append(self._on_replace)
+        mission_state.events.subscribe(Transition, self._on_transition, Stage.ZONES)
+        mission_state.events.subscribe(Replaced, self._on_replace, Stage.ZONES)
         mission_state.resume_checks.append(self.why_not_resume)
 
     def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
@@ -61,7 +63,7 @@ class ReplacedZones:
         if not (sends or clear_fence or clear_rally):
             return
         zones = ZonesOnAutopilot(geofence, rally, clear_fence=clear_fence, clear_rally=clear_rally, name="Zones of the replacing mission")
-        zones.setup(clock=self._clock, autopilot=self._autopilot, mission_state=self._mission_state)
+        zones.setup(clock=self._clock, autopilot=self._autopilot, mission_state=MissionPort(self._mission_state))
         self._zones, self._zones_put = zones, _puts(mission)
         self._put = _either(self._put, self._zones_put)  # a refusal part-way may leave the fence new and the rally points old
         self.service()

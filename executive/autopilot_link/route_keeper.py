@@ -45,6 +45,7 @@ from executive.io.mavlink.mission_protocol import (
     route_items,
     route_not_on_autopilot,
 )
+from executive.mission.events import Replaced, RouteChanged, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.mission.route import Route
@@ -103,9 +104,9 @@ class RouteKeeper:
         self._superseded: int | None = None
         self._last_failure = ""
         self._home_ticket: int | None = None
-        mission_state.route_listeners.append(self._on_route)
-        mission_state.listeners.append(self._on_transition)
-        mission_state.replace_listeners.append(self._on_replace)
+        mission_state.events.subscribe(RouteChanged, self._on_route, Stage.ROUTE_KEEPER)
+        mission_state.events.subscribe(Transition, self._on_transition, Stage.ROUTE_KEEPER)
+        mission_state.events.subscribe(Replaced, self._on_replace, Stage.ROUTE_KEEPER)
 
     @property
     def status(self) -> RouteUpload | None:

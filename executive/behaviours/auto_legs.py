@@ -20,8 +20,8 @@ from py_trees.common import Status
 from executive.autopilot import AutopilotPort
 from executive.behaviours.auto_route import AUTO, MissionTransferFollower
 from executive.behaviours.base import TimedBehaviour
-from executive.mission.lifecycle import MissionState
 from executive.mission.model import Waypoint
+from executive.mission.port import MissionPort
 from executive.world import geo
 from executive.world.state import (
     MISSION_STATE_COMPLETE,
@@ -182,7 +182,7 @@ class AutopilotAtLeg(MissionTransferFollower):
             done = max(done, current.seq)
         first, state = self.autopilot.capabilities.first_item_seq, self.mission_state
         while state.leg_index < state.leg_count - 1 and first + state.leg_index <= done:
-            state.advance_leg()
+            state.leg_done()
 
 
 class FollowAutoLeg(TimedBehaviour):
@@ -204,7 +204,7 @@ class FollowAutoLeg(TimedBehaviour):
     )  # fmt: skip
     needs = ("clock", "mission_state", "autopilot")
     from_mission = {"acceptance_radius_m": "limits.acceptance_radius_m", "leg_timeout_s": "limits.leg_timeout_s"}
-    mission_state: MissionState
+    mission_state: MissionPort
     autopilot: AutopilotPort
 
     param_docs = {"depth_tolerance_m": "sub: the last waypoint is reached within this of the depth its mission item gives (null: not a sub)"}

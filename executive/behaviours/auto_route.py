@@ -20,7 +20,7 @@ from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort
 from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
-from executive.mission.lifecycle import MissionState
+from executive.mission.port import MissionPort
 from executive.mission.route import Route
 from executive.world import geo
 from executive.world.clock import Clock
@@ -42,7 +42,7 @@ class MissionTransferFollower(ExecutiveBehaviour):
     """Follows one mission transfer of its own at a time (``/link/mission_transfer``); a failed one is tried again ``retry_s`` later."""
 
     needs = ("clock", "mission_state", "autopilot")
-    mission_state: MissionState
+    mission_state: MissionPort
     autopilot: AutopilotPort
 
     def __init__(self, name: str, retry_s: float = 2.0) -> None:
@@ -143,7 +143,7 @@ class DriveRouteInAuto(TimedBehaviour):
     reads = ("/vehicle/mode", "/vehicle/armed", "/vehicle/mission_items", "/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/position")
     needs = ("clock", "mission_state", "autopilot")
     from_mission = {"operator_timeout_s": "rc_route.operator_timeout_s", "leg_timeout_s": "limits.leg_timeout_s"}
-    mission_state: MissionState
+    mission_state: MissionPort
     autopilot: AutopilotPort
 
     def __init__(self, operator_timeout_s: float, name: str = "Drive the route in AUTO", leg_timeout_s: float = 600.0) -> None:
@@ -238,4 +238,4 @@ class DriveRouteInAuto(TimedBehaviour):
         if reached is not None and reached.time >= self._run_started:
             done = max(done, reached.highest + 1 - first)
         while self.mission_state.leg_index < min(done, n):
-            self.mission_state.advance_leg()
+            self.mission_state.leg_done()

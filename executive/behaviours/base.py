@@ -1,7 +1,7 @@
 """What every executive behaviour shares, ours and plugins': declared blackboard keys and injected services.
 
-Services (the clock, the autopilot port, the mission state) are handed to ``tree.setup(**services)``,
-which passes them to every behaviour's ``setup``; a behaviour takes what it ``needs``.
+Services (the clock, the autopilot port, the mission port: ``mission_state``) are handed to
+``tree.setup(**services)``, which passes them to every behaviour's ``setup``; a behaviour takes what it ``needs``.
 
 A plugin's behaviour (a guard, an action, a decorator of its own) subclasses
 :class:`ExecutiveBehaviour` (or :class:`~executive.behaviours.guards.Guard`,
@@ -19,9 +19,11 @@ attributes, which documented keys it ``reads``, which new keys of its own it ``d
             self.set("/plugin/mypkg/ticks", self.get("/plugin/mypkg/ticks") + 1)
             return py_trees.common.Status.SUCCESS
 
-The vehicle's state, the link and the mission are written by the executive's readers only: a
-behaviour never writes them (it asks the autopilot port for a command, whose ack comes back on
-the blackboard). When a node is made its declared keys are documented and its keys checked: an undocumented key is a KeyError.
+The vehicle's state, the link and the mission are written by the executive's readers and the
+mission's lifecycle only: a behaviour never writes them (it asks the autopilot port for a command,
+whose ack comes back on the blackboard; it reports a leg done or a sample taken through the mission
+port, :class:`~executive.mission.port.MissionPort`, and the lifecycle applies it). When a node is
+made its declared keys are documented and its keys checked: an undocumented key is a KeyError.
 """
 
 from __future__ import annotations

@@ -50,7 +50,7 @@ from executive.behaviours.rc_guards import RcAutoMode, RcFresh, RcNotLost, RcNot
 from executive.behaviours.returning import ReturningDrive, why_not_rtl
 from executive.behaviours.zone_guards import OutsideKeepOut
 from executive.mission.failsafes import JUDGED_AFTER_PERSON, REACTION_MODES, FailsafeCondition, FailsafePolicy
-from executive.mission.lifecycle import MissionState
+from executive.mission.port import MissionPort
 from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
 from executive.sensing.vtol_flight import flies_as_plane
 from executive.world.vehicles import PROFILES
@@ -110,7 +110,7 @@ class Failsafe(TimedBehaviour):
     needs = ("clock", "autopilot")
     autopilot: AutopilotPort
     #: Where its steps are announced to a person (the ground station's STATUSTEXT); from ``setup(mission_state=...)`` when given.
-    mission_state: MissionState | None = None
+    mission_state: MissionPort | None = None
     catalogued = False  # made with the mission's policy by failsafe_guarded and checked
 
     def __init__(

@@ -13,7 +13,8 @@ from executive.autopilot import AutopilotPort, Request
 from executive.autopilot.asking import READS, Announce, Asker
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
-from executive.mission.lifecycle import MissionState, MissionStatus
+from executive.mission.lifecycle import MissionStatus
+from executive.mission.port import MissionPort
 from executive.world.clock import Clock
 
 log = logging.getLogger(__name__)
@@ -149,7 +150,7 @@ class WaitForGuards(TimedBehaviour):
 
     def setup(self, **services: Any) -> None:
         super().setup(**services)
-        mission_state: MissionState | None = services.get("mission_state")
+        mission_state: MissionPort | None = services.get("mission_state")
         self._announce = mission_state.announce if mission_state is not None else None
 
     def initialise(self) -> None:
@@ -192,7 +193,7 @@ class ForEachLeg(py_trees.decorators.Decorator):
 
     def __init__(self, child: py_trees.behaviour.Behaviour, name: str = "For each leg") -> None:
         super().__init__(name=name, child=child)
-        self.mission_state: MissionState | None = None
+        self.mission_state: MissionPort | None = None
 
     def setup(self, **services: object) -> None:
         state = services.get("mission_state")
@@ -216,7 +217,7 @@ class ForEachLeg(py_trees.decorators.Decorator):
         assert self.mission_state is not None
         state = self.mission_state
         if state.target is not None and self.decorated.status == Status.SUCCESS:
-            state.advance_leg()
+            state.leg_done()
         if state.target is None:
             self.feedback_message = f"{state.leg_index}/{state.leg_count} legs done"
             return Status.SUCCESS
@@ -238,7 +239,7 @@ def _why_failed(node: py_trees.behaviour.Behaviour) -> str:
 class UnlessPaused(py_trees.decorators.Decorator):
     """Runs the mission body, except while the mission is PAUSED: then the body is stopped and the vehicle held.
 
-    A pause by a person who took the vehicle (``MissionState.hold_while_paused`` false) commands nothing.
+    A pause by a person who took the vehicle (``MissionPort.hold_while_paused`` false) commands nothing.
 
     The body keeps no progress of its own (the leg is in the mission state), so on resume it
     starts again from its first child and carries on with the same leg: back to GUIDED, same target.
@@ -253,7 +254,7 @@ class UnlessPaused(py_trees.decorators.Decorator):
         super().__init__(name=name, child=child)
         self.hold_mode = hold_mode
         self.fixed_wing_hold_mode = fixed_wing_hold_mode
-        self.mission_state: MissionState | None = None
+        self.mission_state: MissionPort | None = None
         self.autopilot: AutopilotPort | None = None
         self._holding: str | None = None  # the mode asked for while paused
         self._hold_ticket: Request | None = None

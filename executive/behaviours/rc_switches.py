@@ -28,8 +28,9 @@ from executive.autopilot.asking import ARM, Asker, Rules, Step, Voice, refusal_r
 from executive.autopilot.fallbacks import DISARM
 from executive.behaviours.auto_route import AUTO
 from executive.behaviours.base import ExecutiveBehaviour
-from executive.mission.lifecycle import MissionState, Refused
+from executive.mission.lifecycle import Refused
 from executive.mission.model import Waypoint
+from executive.mission.port import MissionPort
 from executive.mission.route import RouteError, add_at_end, clear, current_index, remove_current
 from executive.world import blackboard
 from executive.world.clock import Clock
@@ -104,7 +105,7 @@ class ModeSwitch(SwitchWatcher):
     needs = ("clock", "autopilot", "mission_state")
     clock: Clock
     autopilot: AutopilotPort
-    mission_state: MissionState
+    mission_state: MissionPort
     from_mission = {"aux_mode": "rc_route.aux_mode"}
 
     def __init__(
@@ -320,7 +321,7 @@ class RouteEditSwitch(SwitchWatcher):
     reads = ("/vehicle/position", "/vehicle/ekf")
     needs = ("clock", "mission_state")
     clock: Clock
-    mission_state: MissionState
+    mission_state: MissionPort
 
     def __init__(self, name: str = "Switch A: edit the route", max_position_age_s: float = 1.0) -> None:
         super().__init__("swa", name)
@@ -349,7 +350,7 @@ class RouteEditSwitch(SwitchWatcher):
                 new, done = add_at_end(route, here), f"waypoint {len(route) + 1} added at {here.lat:.7f}, {here.lon:.7f}"
             position: GlobalPosition | None = self.get("/vehicle/position")
             at = (position.lat, position.lon) if position is not None else None
-            self.mission_state.set_route(new.waypoints, f"{said}: {done}", leg_index=new.current, vehicle_at=at)
+            self.mission_state.route_edited(new.waypoints, f"{said}: {done}", leg_index=new.current, vehicle_at=at)
         except (RouteError, Refused) as exc:
             self.report(f"{said}: {edit} refused: {exc}")
             return

@@ -9,8 +9,8 @@ from py_trees.common import Status
 from executive.behaviours.base import TimedBehaviour
 from executive.behaviours.guards import Guard
 from executive.instruments.sampler import Sampler
-from executive.mission.lifecycle import MissionState
 from executive.mission.model import Waypoint
+from executive.mission.port import MissionPort
 from executive.world.state import GlobalPosition, SamplerState, SamplerStatus
 from executive.world.state import Sample as SampleRecord
 
@@ -19,7 +19,7 @@ class Sample(TimedBehaviour):
     """Take the current leg's sample: start the sampler, SUCCESS when it is DONE (the sample recorded).
 
     Needs ``clock``, ``mission_state`` and ``sampler`` from ``tree.setup``. The sample is recorded
-    through ``mission_state.record_sample`` with the reads, the start and end times, the last
+    through the mission port (``mission_state.sample_taken``) with the reads, the start and end times, the last
     position seen while sampling (NaN if none was) and the sensors named that gave no reading. A
     leg already sampled in this run (the action re-entered after a guard recovered, a resume, a
     restart that restored the samples) is SUCCESS at once, without sampling again. A partial sample
@@ -31,7 +31,7 @@ class Sample(TimedBehaviour):
 
     reads = ("/sampler/status", "/vehicle/position", "/mission/leg_count")
     needs = ("clock", "mission_state", "sampler")
-    mission_state: MissionState
+    mission_state: MissionPort
     sampler: Sampler
     param_docs = {"timeout_s": "FAILURE when no sample by then (null: the sampler's own duration bounds it)"}
 
@@ -71,7 +71,7 @@ class Sample(TimedBehaviour):
             partial = status.state is SamplerState.PARTIAL
             lat, lon = (self._position.lat, self._position.lon) if self._position is not None else (math.nan, math.nan)
             record = SampleRecord(self.leg_index, lat, lon, status.reads, self.started, status.time, status.instrument, status.missing, partial)
-            self.mission_state.record_sample(record)
+            self.mission_state.sample_taken(record)
             if partial:
                 self.feedback_message = f"{leg}: partial sample, {len(status.reads)} reads: {status.reason}"
                 return Status.FAILURE

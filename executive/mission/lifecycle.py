@@ -1,4 +1,13 @@
-"""The mission lifecycle and progress: the only writer of ``/mission``.
+"""The mission lifecycle: the one place the mission changes, apart from what is told of it.
+
+The mission's state is three small objects, each the one writer of its keys of ``/mission``: the
+lifecycle here (``/mission/state``, ``/mission/reason``), the route and the leg the vehicle is on
+(:class:`~executive.mission.legs.RouteProgress`) and the samples taken
+(:class:`~executive.mission.samples.SampleLog`); :class:`MissionState` alone changes them, on a
+request (the operator's, the runtime's) or an outcome a behaviour reports through its port
+(:class:`~executive.mission.port.MissionPort`, over this: a behaviour never writes the mission). What happens
+is told as events on one stream (:class:`~executive.mission.events.MissionEvents`), whose
+subscribers hear it in the order of their declared stage, not of who subscribed first.
 
 States and requests follow the AUV mission manager: upload (IDLE/READY/COMPLETED -> READY, refused
 while RUNNING or PAUSED; while PAUSED a mission is *replaced* instead, see below), start (READY ->
@@ -19,45 +28,39 @@ sample twice either: whoever restores its progress (the journal) hands the sampl
 
 The route itself may change while the mission is loaded (an operator records or edits it):
 :meth:`MissionState.set_route` keeps the new route here, so a guard failure or a pause does not lose
-it, and tells the route listeners. The operations that make new routes are in
+it, and tells the stream (:class:`~executive.mission.events.RouteChanged`). The operations that make new routes are in
 :mod:`executive.mission.route`. The route carries the mission's home (``Mission.home``, not a
-waypoint): SET_HOME changes it through ``set_route(..., home=...)``, and the route listeners (the
-route keeper) take it to the autopilot. An edit that would break the mission's rules (a waypoint
+waypoint): SET_HOME changes it through ``set_route(..., home=...)``, and the route keeper (a
+subscriber) takes it to the autopilot. An edit that would break the mission's rules (a waypoint
 outside the geofence, no waypoint left for a tree that needs one) is refused.
 
 While PAUSED the whole mission may be replaced (hot reload: :meth:`MissionState.replace`, planned
 by :mod:`executive.mission.reload`): the state stays PAUSED, at the leg and with the samples the
 plan gives. The replace checks are asked first (the runtime builds the new tree there: a tree that
-cannot be built refuses the replacement, nothing changed); then the replace listeners are told
-(the runtime swaps the tree, the journal continues the run on the new mission, the route keeper
-takes the new route to the autopilot).
+cannot be built refuses the replacement, nothing changed); then the stream tells
+(:class:`~executive.mission.events.Replaced`: the runtime swaps the tree, the journal continues the
+run on the new mission, the route keeper takes the new route to the autopilot).
 """
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Iterable, Sequence
-from enum import StrEnum
 
 from executive.mission.errors import format_path
+from executive.mission.events import Announcement, MissionEvents, Replaced, RouteChanged, SampleTaken, Transition
+from executive.mission.legs import RouteProgress
 from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.route import Route
 from executive.mission.rules import cross_field_errors
+from executive.mission.samples import SampleLog
+from executive.mission.status import MissionStatus
 from executive.mission.zones import first_leg_problems
 from executive.world import blackboard
 from executive.world.geo import distance
 from executive.world.state import Sample
 
 log = logging.getLogger(__name__)
-
-
-class MissionStatus(StrEnum):
-    IDLE = "IDLE"
-    READY = "READY"
-    RUNNING = "RUNNING"
-    PAUSED = "PAUSED"
-    COMPLETED = "COMPLETED"
-    ABORTED = "ABORTED"
 
 
 _S = MissionStatus
@@ -72,16 +75,6 @@ TRANSITIONS: dict[str, tuple[frozenset[MissionStatus], MissionStatus]] = {
     "abort": (frozenset({_S.RUNNING, _S.PAUSED}), _S.ABORTED),
 }
 
-Listener = Callable[[MissionStatus, MissionStatus, str], None]
-#: Told of every sample recorded (a journal keeps them).
-SampleListener = Callable[[Sample], None]
-#: Told of every change of the route: the new route and why (a journal keeps it).
-RouteListener = Callable[[Route, str], None]
-#: Told of a mission replaced while PAUSED: the new mission and why (the runtime's tree, the journal, the route keeper).
-ReplaceListener = Callable[[Mission, str], None]
-#: Told of what a person must hear as the mission runs (a failsafe's reaction refused, another asked instead): the text, and
-#: whether it is a warning (else a notice). The ground station sends it as a STATUSTEXT.
-AnnounceListener = Callable[[str, bool], None]
 #: Asked before a replacement: why this mission cannot replace the paused one (None: it can).
 ReplaceCheck = Callable[[Mission], "str | None"]
 #: States in which the route may be changed.
@@ -105,30 +98,28 @@ class Refused(Exception):
 
 
 class MissionState:
-    """The loaded mission, its lifecycle state and the current leg."""
+    """The loaded mission's lifecycle; it alone changes the mission, its route and leg, and its samples."""
 
     def __init__(self) -> None:
-        self._bb = blackboard.writer("mission state", blackboard.keys_under("/mission/"))
-        self.mission: Mission | None = None
+        self._bb = blackboard.writer("mission lifecycle", ["/mission/state", "/mission/reason"])
         self.status = MissionStatus.IDLE
-        self.leg_index = 0
         self.reason = ""
-        self.samples: tuple[Sample, ...] = ()
-        self.listeners: list[Listener] = []
-        self.sample_listeners: list[SampleListener] = []
-        self.route_listeners: list[RouteListener] = []
+        #: The route and the leg the vehicle is on.
+        self.legs = RouteProgress()
+        #: The samples taken in this run.
+        self.sample_log = SampleLog()
+        #: What happens to the mission, told to its subscribers stage by stage.
+        self.events = MissionEvents()
+        #: Asked before a replacement: why this mission cannot replace the paused one (None: it can); all are asked.
         self.replace_checks: list[ReplaceCheck] = []
-        self.replace_listeners: list[ReplaceListener] = []
         #: Asked before a resume: each says why the mission may not resume yet (a replacing mission's zones not on the autopilot), or None.
         self.resume_checks: list[Callable[[], str | None]] = []
-        self.announce_listeners: list[AnnounceListener] = []
         #: While PAUSED, the tree holds the vehicle in its safe mode; False when a person paused it by taking the vehicle: hands off.
         self.hold_while_paused = True
 
     def announce(self, text: str, warning: bool = True) -> None:
-        """Tell the announce listeners (the ground station) what a person must hear now; short: a STATUSTEXT holds 50 characters."""
-        for listener in self.announce_listeners:
-            listener(text, warning)
+        """Tell the stream (the ground station) what a person must hear now; short: a STATUSTEXT holds 50 characters."""
+        self.events.tell(Announcement(text, warning))
 
     # -- requests ----------------------------------------------------------------------------
     def upload(self, mission: Mission, vehicle_at: tuple[float, float] | None = None) -> None:
@@ -145,9 +136,8 @@ class MissionState:
             problems += out_of_reach(mission, *vehicle_at) + first_leg_problems(mission, *vehicle_at)
         if problems:
             raise Refused(f"mission {mission.name!r} refused: " + "; ".join(problems))
-        self.mission = mission
-        self.leg_index = 0
-        self.samples = ()
+        self.legs.load(mission)
+        self.sample_log.clear()
         self._transition("upload", f"mission {mission.name!r} loaded, {len(mission.waypoints)} waypoints")
 
     def replace(
@@ -157,7 +147,7 @@ class MissionState:
 
         Refused (nothing changes) in another state, for a leg outside the new route, when the
         mission breaks a rule or, with the vehicle's position, a waypoint is out of reach (as
-        :meth:`upload`), or when a replace check says why not. The listeners are told after.
+        :meth:`upload`), or when a replace check says why not. The stream is told after.
         """
         if self.status is not MissionStatus.PAUSED:
             raise Refused(f"cannot replace the mission while {self.status} (only while PAUSED)")
@@ -169,16 +159,14 @@ class MissionState:
         problems += [why for check in self.replace_checks if (why := check(mission)) is not None]
         if problems:
             raise Refused(f"mission {mission.name!r} refused: " + "; ".join(problems))
-        self.mission = mission
-        self.leg_index = leg_index
-        self.samples = ()
-        self.restore_samples(samples)
+        self.legs.load(mission, leg_index)
+        self.sample_log.clear()
+        self.sample_log.restore(samples)
         self.reason = reason
         self._bb.set("/mission/reason", reason)
         self._publish()
         log.info("%s", reason)
-        for listener in self.replace_listeners:
-            listener(mission, reason)
+        self.events.tell(Replaced(mission, reason))
 
     def start(self, vehicle_at: tuple[float, float] | None = None, reason: str = "started from the first waypoint") -> None:
         """READY (or ended) -> RUNNING from the first waypoint; refused (nothing changes) when a waypoint is out of reach of ``vehicle_at``.
@@ -191,8 +179,8 @@ class MissionState:
         far = out_of_reach(self.mission, *vehicle_at) if vehicle_at is not None else []
         if far:
             raise Refused(f"mission {self.mission.name!r} refused: " + "; ".join(far))
-        self.leg_index = 0
-        self.samples = ()
+        self.legs.load(self.mission)
+        self.sample_log.clear()
         self._transition("start", reason)
 
     def pause(self, reason: str = "pause requested", *, hold: bool = True) -> None:
@@ -213,9 +201,8 @@ class MissionState:
         self._check("delete")
         if self.status is MissionStatus.RUNNING:
             self._transition("pause", "paused before delete")
-        self.mission = None
-        self.leg_index = 0
-        self.samples = ()
+        self.legs.load(None)
+        self.sample_log.clear()
         self._transition("delete", "mission deleted")
 
     def complete(self) -> None:
@@ -229,43 +216,55 @@ class MissionState:
         self._check("abort")
         self._transition("abort", reason)
 
-    # -- progress ----------------------------------------------------------------------------
+    def explain(self, reason: str) -> None:
+        """Say why the mission stays as it is (a replacing mission's zones refused: it stays PAUSED) as its reason; no transition."""
+        self.reason = reason
+        self._bb.set("/mission/reason", reason)
+
+    # -- the route and the leg (held by self.legs) --------------------------------------------
+    @property
+    def mission(self) -> Mission | None:
+        return self.legs.mission
+
+    @property
+    def leg_index(self) -> int:
+        return self.legs.leg_index
+
     @property
     def leg_count(self) -> int:
-        return len(self.mission.waypoints) if self.mission else 0
+        return self.legs.leg_count
 
     @property
     def leg_number(self) -> int:
         """The leg as a person counts it, as the status shows it (``leg 2/2``): from 1, the last one once past it (a VTOL landing)."""
-        return min(self.leg_index + 1, self.leg_count)
+        return self.legs.leg_number
 
     @property
     def target(self) -> Waypoint | None:
         """The waypoint of the current leg, if a leg is active."""
-        if self.mission is None or self.status not in (MissionStatus.RUNNING, MissionStatus.PAUSED) or self.leg_index >= self.leg_count:
-            return None
-        return self.mission.waypoints[self.leg_index]
+        return self.legs.target(self._active)
 
     @property
     def next_target(self) -> Waypoint | None:
         """The waypoint after the current leg's, if there is one (the leg may be driven through toward it)."""
-        target = self.target
-        if target is None or self.leg_index + 1 >= self.leg_count:
-            return None
-        assert self.mission is not None
-        return self.mission.waypoints[self.leg_index + 1]
+        return self.legs.next_target(self._active)
+
+    @property
+    def route(self) -> Route:
+        """The mission's waypoints and the current leg (the input of a route operation)."""
+        return self.legs.route
 
     def continue_from(self, leg_index: int, samples: Iterable[Sample] = ()) -> None:
         """After a restart (crash, kill -9, power cut): carry on the running mission at ``leg_index`` with the samples already taken.
 
         Called right after :meth:`start` and before the first tick, by whoever restores progress
-        (the journal); the listeners are not told about the samples: they recorded them.
+        (the journal); the stream is not told about the samples: the journal recorded them.
         """
         if self.status is not MissionStatus.RUNNING:
             raise Refused(f"cannot continue a mission while {self.status}")
         if not 0 <= leg_index <= self.leg_count:
             raise Refused(f"leg {leg_index + 1} is outside a route of {self.leg_count} waypoints")
-        self.leg_index = leg_index
+        self.legs.leg_index = leg_index
         self.restore_samples(samples)
         self.reason = f"continued at leg {leg_index + 1} after a restart"
         log.info("mission continues at leg %d/%d with %d sample(s) already taken", leg_index + 1, self.leg_count, len(self.samples))
@@ -275,16 +274,9 @@ class MissionState:
         """The current leg is done: head for the next waypoint."""
         if self.status is not MissionStatus.RUNNING:
             raise Refused(f"cannot advance a leg while {self.status}")
-        self.leg_index = min(self.leg_index + 1, self.leg_count)
+        self.legs.advance()
         log.info("leg %d/%d done", self.leg_index, self.leg_count)
         self._publish()
-
-    # -- the route ---------------------------------------------------------------------------
-    @property
-    def route(self) -> Route:
-        """The mission's waypoints and the current leg (the input of a route operation)."""
-        waypoints = tuple(self.mission.waypoints) if self.mission else ()
-        return Route(waypoints, min(self.leg_index, len(waypoints)), self.mission.home if self.mission else None)
 
     def route_refusal(self) -> str | None:
         """Why the route cannot be changed now; None when it can."""
@@ -303,7 +295,7 @@ class MissionState:
         home: Home | None = None,
         vehicle_at: tuple[float, float] | None = None,
     ) -> None:
-        """Replace the mission's waypoints (an operator's edit), and its home if given: publish the new route and tell the route listeners.
+        """Replace the mission's waypoints (an operator's edit), and its home if given: publish the new route and tell the stream.
 
         Allowed while READY, RUNNING or PAUSED. ``leg_index`` (the waypoint the vehicle heads for)
         defaults to the current one, kept inside the new route. Samples keep the legs they were
@@ -324,36 +316,27 @@ class MissionState:
             problems += first_leg_problems(edited, *vehicle_at, first=leg)  # the leg it is on is from where it is, not from a waypoint
         if problems:
             raise Refused("the edited mission breaks its rules: " + "; ".join(problems))
-        self.mission = edited
-        self.leg_index = leg
+        self.legs.load(edited, leg)
         self._publish()
         log.info("route changed: %s (%d waypoints, heading for %d)", reason, len(waypoints), leg + 1)
-        route = self.route
-        for listener in self.route_listeners:
-            listener(route, reason)
+        self.events.tell(RouteChanged(self.route, reason))
+
+    # -- samples (held by self.sample_log) ------------------------------------------------------
+    @property
+    def samples(self) -> tuple[Sample, ...]:
+        """The samples taken in this run, oldest first."""
+        return self.sample_log.taken
+
+    def sampled(self, leg_index: int) -> bool:
+        """A complete sample of this leg is already recorded in this run: do not take it again (a partial one does not count)."""
+        return self.sample_log.sampled(leg_index)
 
     def work_left(self) -> str | None:
         """What of the mission's work is not done (a sample point not sampled), if any: then it is not COMPLETED."""
-        if self.mission is None:
-            return None
-        unsampled = [i for i, wp in enumerate(self.mission.waypoints) if wp.sample and not self.sampled(i)]
-        partial = [i for i in unsampled if any(s.leg_index == i for s in self.samples)]
-        missing = [i for i in unsampled if i not in partial]
-        said = []
-        if missing:
-            said.append(f"no sample was recorded at leg {', '.join(str(i + 1) for i in missing)}")
-        for i in partial:
-            lacked = sorted({sensor for s in self.samples if s.leg_index == i for sensor in s.missing})
-            said.append(f"the sample of leg {i + 1} is partial (no reading of {', '.join(lacked)})")
-        return "; ".join(said) or None
-
-    # -- samples -----------------------------------------------------------------------------
-    def sampled(self, leg_index: int) -> bool:
-        """A complete sample of this leg is already recorded in this run: do not take it again (a partial one does not count)."""
-        return any(s.leg_index == leg_index and s.complete for s in self.samples)
+        return None if self.mission is None else self.sample_log.work_left(self.mission)
 
     def record_sample(self, sample: Sample) -> None:
-        """Keep a finished sample: publish ``/mission/samples`` and tell the sample listeners.
+        """Keep a finished sample: publish ``/mission/samples`` and tell the stream.
 
         Refused (nothing changes) without a mission, for a leg the mission does not have, or for a
         leg already sampled.
@@ -364,28 +347,24 @@ class MissionState:
             raise Refused(f"cannot record a sample of leg {sample.leg_index + 1}: the mission has {self.leg_count}")
         if self.sampled(sample.leg_index):
             raise Refused(f"leg {sample.leg_index + 1} is already sampled")
-        self.samples = (*self.samples, sample)
+        self.sample_log.keep(sample)
         self._publish()
         if sample.partial:
             log.warning("partial sample of leg %d recorded: %d reads, none of %s", sample.leg_index + 1, len(sample.reads), ", ".join(sample.missing))
         else:
             log.info("sample of leg %d recorded: %d reads", sample.leg_index + 1, len(sample.reads))
-        for listener in self.sample_listeners:
-            listener(sample)
+        self.events.tell(SampleTaken(sample))
 
     def restore_samples(self, samples: Iterable[Sample]) -> None:
-        """Put back the samples a previous process recorded (listeners are not told: they already know)."""
-        for sample in samples:
-            if not self.sampled(sample.leg_index):
-                self.samples = (*self.samples, sample)
+        """Put back the samples a previous process recorded (the stream is not told: its journal already knows)."""
+        self.sample_log.restore(samples)
         self._publish()
 
-    def explain(self, reason: str) -> None:
-        """Say why the mission stays as it is (a replacing mission's zones refused: it stays PAUSED) as its reason; no transition."""
-        self.reason = reason
-        self._bb.set("/mission/reason", reason)
-
     # -- internals ---------------------------------------------------------------------------
+    @property
+    def _active(self) -> bool:
+        return self.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
+
     def _check(self, request: str) -> None:
         allowed, _ = TRANSITIONS[request]
         if self.status not in allowed:
@@ -400,13 +379,9 @@ class MissionState:
         self._bb.set("/mission/reason", reason)
         self._publish()
         log.info("mission %s -> %s: %s", before, after, reason)
-        for listener in self.listeners:
-            listener(before, after, reason)
+        self.events.tell(Transition(before, after, reason))
 
     def _publish(self) -> None:
         self._bb.set("/mission/state", str(self.status))
-        self._bb.set("/mission/leg_index", self.leg_index)
-        self._bb.set("/mission/leg_count", self.leg_count)
-        self._bb.set("/mission/target", self.target)
-        self._bb.set("/mission/next_target", self.next_target)
-        self._bb.set("/mission/samples", self.samples)
+        self.legs.publish(self._active)
+        self.sample_log.publish()

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from executive.io.storage import Storage
+from executive.mission.events import RouteChanged, SampleTaken, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.reload import REPLACED
@@ -112,9 +113,9 @@ class Journal:
 
     def attach(self, state: MissionState) -> None:
         """Record the state's transitions, samples and route edits as they happen."""
-        state.listeners.append(self._on_transition)
-        state.sample_listeners.append(self._on_sample)
-        state.route_listeners.append(self._on_route)
+        state.events.subscribe(Transition, self._on_transition, Stage.RECORDING)
+        state.events.subscribe(SampleTaken, self._on_sample, Stage.RECORDING)
+        state.events.subscribe(RouteChanged, self._on_route, Stage.RECORDING)
 
     def carry_samples(self, samples: tuple[Sample, ...]) -> None:
         """Record in this run the samples a run it continues had taken (a replaced mission's, renumbered to this one's legs)."""

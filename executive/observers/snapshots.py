@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import py_trees
 
 from executive.io.storage import AppendFile, Storage
+from executive.mission.events import Stage, Transition
 from executive.tree.ticks import TickState, describe, render_tree, status_codes
 from executive.world import blackboard
 from executive.world.clock import Clock
@@ -561,7 +562,7 @@ def snapshot_recorder(recorder: SnapshotRecorder) -> Plug:
     """Record every tick of the tree (node statuses, blackboard changes) and the mission's transitions for ``executive replay``."""
 
     def plug(w: Wiring) -> None:
-        w.mission_state.listeners.append(recorder.event)
+        w.mission_state.events.subscribe(Transition, recorder.event, Stage.RECORDING)
         w.observers.append(_SnapshotRuns(recorder))
         if recorder.mavlink is not None:
             w.link.watch.listeners.append(recorder.mavlink)

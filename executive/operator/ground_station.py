@@ -14,6 +14,7 @@ import logging
 from collections.abc import Iterable
 
 from executive.io.mavlink.link import Link
+from executive.mission.events import Announcement, Replaced, Stage, Transition
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.operator.requests import Operator
@@ -51,9 +52,10 @@ class GroundStationControl:
         self._period_s = period_s
         self._next = float("-inf")
         self._outbox: list[MAVLinkMessage] = []
-        operator.mission_state.listeners.append(self._on_transition)
-        operator.mission_state.replace_listeners.append(self._on_replace)
-        operator.mission_state.announce_listeners.append(self._on_announce)
+        events = operator.mission_state.events
+        events.subscribe(Transition, self._on_transition, Stage.GROUND_STATION)
+        events.subscribe(Replaced, self._on_replace, Stage.GROUND_STATION)
+        events.subscribe(Announcement, self._on_announce, Stage.GROUND_STATION)
 
     def on_command(self, msg: MAVLinkMessage, reply_to: Link) -> bool:
         """A COMMAND_LONG from someone other than the autopilot; returns whether it was ours to answer."""

@@ -35,6 +35,7 @@ from collections.abc import Callable
 from executive.autopilot.mode_cause import AutopilotCause, ModeChange, autopilot_cause, facts_may_lag
 from executive.autopilot.port import AutopilotPort
 from executive.autopilot.target_watch import PersonsTarget, TargetWatch
+from executive.mission.events import Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.model import RcConfig
 from executive.sensing.rc import RcReading
@@ -105,7 +106,7 @@ class InterventionWatch:
         self._disarmed_at = float("-inf")
         self._fence_breaches = 0  # FENCE_STATUS breach_count last said
         self._change_seen_at: float | None = None  # when a change still waiting for its facts (_facts_to_come) was first seen
-        mission_state.listeners.append(self._on_transition)
+        mission_state.events.subscribe(Transition, self._on_transition, Stage.INTERVENTION)
 
     def service(self) -> None:
         now = self._clock.now()

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from executive.admission import checks as admission
+from executive.admission.reach import ReachGate
 from executive.autopilot import AutopilotName
 from executive.autopilot_link import AutopilotLink
 from executive.io.mavlink.heartbeat import Heartbeat
@@ -97,7 +98,7 @@ def build_runtime(
     tree; the writers: the ground station's reports, the plugs' writers; the link flushed (stream
     set-up, route uploads, parameter asks, then the commands the tick asked for).
     """
-    blackboard.reset()
+    blackboard.for_runtime(f"{mission.vehicle} {mission.name!r}")  # its own: two runtimes in one process share no key
     state = MissionState()
     status = StatusSource("runtime status", clock)
     tree_watch = TreeWatch()
@@ -148,6 +149,7 @@ def build_runtime(
         safe_timeout_s=safe_timeout_s,
         root=root,
         progress=progress,
+        reach=ReachGate(clock, show=tree_watch.hold),  # the tree watch: the one writer of /mission/waiting
     )
 
 

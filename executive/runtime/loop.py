@@ -20,8 +20,10 @@ from executive.autopilot_link import AutopilotLink
 from executive.behaviours.failsafe import failsafe_mode
 from executive.instruments.backends import open_sampler
 from executive.instruments.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
+from executive.mission.events import Replaced, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission, SamplingOptions
+from executive.mission.port import MissionPort
 from executive.mission.reload import REPLACED
 from executive.mission.resume import ResumePoint
 from executive.operator import Operator
@@ -31,6 +33,7 @@ from executive.runtime.pacing import TickPacer
 from executive.runtime.services import PacedService, RunObserver, Service
 from executive.tree import select as mission_tree
 from executive.tree.crash_site import CrashSite
+from executive.world import blackboard
 from executive.world.clock import Clock, TickClock
 
 log = logging.getLogger("executive.runtime")  # the name the log and the journal show, kept since 0.1
@@ -117,21 +120,25 @@ class Runtime:
         safe_timeout_s: float | None = None,
         root: py_trees.behaviour.Behaviour | None = None,
         progress: Progress | None = None,
+        reach: ReachGate | None = None,
     ) -> None:
         """Built by :func:`executive.runtime.assembly.build_runtime`; ``root`` replaces the tree the first mission selects (for tests and tools).
 
         ``reporters`` are serviced while the vehicle is made safe too (the ground station: its commands, the steps' reports).
+        ``reach``: the distance rule's gate (it tells the tree watch what it holds the tree back for).
         """
         self.mission = mission
         self.clock = clock
         self.period_s = 1.0 / rate_hz
         #: The autopilot: pumped before the tree ticks, flushed after; it connects and makes the vehicle safe.
         self.link = link
+        #: This runtime's blackboard (the one current as it is built): installed whenever it ticks or builds a tree.
+        self.board = blackboard.current()
         self.mission_state = mission_state
-        # first: the tree (and the journal's run) exist before any other listener hears of the start
-        self.mission_state.listeners.insert(0, self._on_transition)
+        # the first stage: the tree (and the journal's run) exist before any other subscriber hears of the start
+        self.mission_state.events.subscribe(Transition, self._on_transition, Stage.TREE)
+        self.mission_state.events.subscribe(Replaced, self._on_replace, Stage.TREE)
         self.mission_state.replace_checks.append(self._check_tree)
-        self.mission_state.replace_listeners.insert(0, self._on_replace)
         #: A person's requests (``ctl``, the live view, a ground station) and the status snapshot they are answered with.
         self.operator, self.status = operator, status
         #: Drained after the link is pumped, before the tree ticks, in order.
@@ -155,7 +162,7 @@ class Runtime:
         #: A mission replaced while PAUSED: its tree waits for the resume (nothing commanded meanwhile).
         self._tree_waits_for_resume = False
         #: The distance rule, judged before a mission's tree first ticks, whatever the tree (a user's may leave it out).
-        self.reach = ReachGate(self.clock)
+        self.reach = reach or ReachGate(self.clock)
         self._refused: str | None = None  # the distance rule (or a user's code) refused the starting mission: it ends, nothing commanded
         self._refused_users_code = False
         self.mission_state.upload(self.mission)
@@ -180,6 +187,7 @@ class Runtime:
 
         Returns the tree's status (INVALID when no mission is active).
         """
+        self.board.install()
         self.link.pump()
         for reader in self.readers:
             reader.service()
@@ -271,10 +279,11 @@ class Runtime:
             self.clock.sleep_until(min(t, *(paced.next_due for paced in self.paced)))
 
     def close(self) -> None:
-        """Release what the services hold (the control socket) and the instrument."""
+        """Release what the services hold (the control socket) and the instrument, and the board (the next runtime may take it)."""
         self._close_sampler()
         for close in self._closers:
             close()
+        self.board.runtime = None
 
     def _close_sampler(self) -> None:
         if self.sampler is not None:
@@ -367,6 +376,7 @@ class Runtime:
 
     def _check_tree(self, mission: Mission) -> str | None:
         """Before a replacement: the new mission's tree can be built (kept for :meth:`_on_replace`)."""
+        self.board.install()  # its behaviours' blackboard clients are this runtime's
         try:
             self._built = (mission, mission_tree.build(mission))
         except Exception as exc:  # a tree builder's error must refuse the replacement, not take the executive down
@@ -386,6 +396,7 @@ class Runtime:
 
     def _install_tree(self) -> None:
         """Build the tree (and its sampler) of the mission that is starting, or replacing a paused one."""
+        self.board.install()  # its behaviours' blackboard clients are this runtime's
         mission = self._running = self.mission_state.mission
         assert mission is not None
         built, self._built = self._built, None
@@ -409,7 +420,7 @@ class Runtime:
         for observer in self.observers:
             observer.begin(mission, root, resumed_from)
         try:
-            self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=self.mission_state, sampler=self.sampler)
+            self.tree.setup(clock=self.tree_clock, autopilot=self.link.autopilot, mission_state=MissionPort(self.mission_state), sampler=self.sampler)
         except Exception as exc:
             node = self._node_that_raised(exc)
             named = f"{type(node).__module__}.{type(node).__qualname__} ({node.name!r})" if node else "(tree)"

@@ -44,8 +44,11 @@ class StoredCommand:
         return self.lon_e7 * 1e-7
 
 
-class MissionState(Enum):
-    """AP_Mission's state."""
+class AutopilotMissionState(Enum):
+    """The simulated autopilot's own mission run (AP_Mission's state, MISSION_CURRENT ``mission_state``).
+
+    Not the executive's mission lifecycle (:class:`executive.mission.lifecycle.MissionState`).
+    """
 
     STOPPED = "stopped"
     RUNNING = "running"
@@ -92,7 +95,7 @@ class MissionStore(ABC):
         self._mav = encoder(owner.system_id, owner.component_id)
         self.max_items = self.MAX_ITEMS if max_items is None else max_items  # a store's own class limit by default
         self._commands: list[StoredCommand] = []  # [0] is the home slot, read back as the current home
-        self.state = MissionState.STOPPED
+        self.state = AutopilotMissionState.STOPPED
         self.current_seq: int | None = None  # the item AUTO is on (or starts from); None = from the first
         self.receiving = False  # an upload is under way
         self._request_i = self._request_last = 0
@@ -128,7 +131,7 @@ class MissionStore(ABC):
 
     @property
     def running(self) -> bool:
-        return self.state is MissionState.RUNNING
+        return self.state is AutopilotMissionState.RUNNING
 
     def command(self, seq: int) -> StoredCommand:
         """Item ``seq`` as it would be read back (item 0: the current home)."""
@@ -266,7 +269,7 @@ class MissionStore(ABC):
             return
         self._commands.clear()
         self.changes += 1
-        self.state, self.current_seq = MissionState.STOPPED, None
+        self.state, self.current_seq = AutopilotMissionState.STOPPED, None
         self._ack(msg, _M.MAV_MISSION_ACCEPTED)
 
     def _on_set_current(self, msg: MAVLinkMessage) -> None:
@@ -276,8 +279,8 @@ class MissionStore(ABC):
 
     def command_set_current(self, seq: float, reset: float) -> int:
         """MAV_CMD_DO_SET_MISSION_CURRENT: param1 the item, param2 1 to reset a completed mission too; a MAV_RESULT."""
-        if reset == 1.0 and self.state is MissionState.COMPLETE:
-            self.state = MissionState.STOPPED
+        if reset == 1.0 and self.state is AutopilotMissionState.COMPLETE:
+            self.state = AutopilotMissionState.STOPPED
         if not self.set_current(int(seq)):
             return _M.MAV_RESULT_FAILED
         self._emit(self.current_message())
@@ -290,22 +293,22 @@ class MissionStore(ABC):
         if not self.present or seq >= self.count:
             return False
         self.current_seq = max(seq, self.first_item)
-        if self.state is MissionState.COMPLETE:
-            self.state = MissionState.STOPPED
+        if self.state is AutopilotMissionState.COMPLETE:
+            self.state = AutopilotMissionState.STOPPED
         return True
 
     def start_or_resume(self) -> None:
         """AUTO runs the mission from its current item (MIS_RESTART=0); a completed one starts over."""
         if not self.present:
             return
-        if self.state is MissionState.COMPLETE or self.current_seq is None or self.current_seq >= self.count:
+        if self.state is AutopilotMissionState.COMPLETE or self.current_seq is None or self.current_seq >= self.count:
             self.current_seq = self.first_item
-        self.state = MissionState.RUNNING
+        self.state = AutopilotMissionState.RUNNING
 
     def stop(self) -> None:
         """Leaving AUTO: the mission stops where it is, to resume there."""
         if self.running:
-            self.state = MissionState.STOPPED
+            self.state = AutopilotMissionState.STOPPED
 
     @property
     def current(self) -> StoredCommand | None:
@@ -322,7 +325,7 @@ class MissionStore(ABC):
         if self.current_seq + 1 < self.count:
             self.current_seq += 1
             return self._commands[self.current_seq]
-        self.state = MissionState.COMPLETE
+        self.state = AutopilotMissionState.COMPLETE
         self._completed()
         return None
 
@@ -332,9 +335,9 @@ class MissionStore(ABC):
             state = _M.MISSION_STATE_NO_MISSION
         else:
             state = {
-                MissionState.STOPPED: _M.MISSION_STATE_NOT_STARTED,
-                MissionState.RUNNING: _M.MISSION_STATE_ACTIVE,
-                MissionState.COMPLETE: _M.MISSION_STATE_COMPLETE,
+                AutopilotMissionState.STOPPED: _M.MISSION_STATE_NOT_STARTED,
+                AutopilotMissionState.RUNNING: _M.MISSION_STATE_ACTIVE,
+                AutopilotMissionState.COMPLETE: _M.MISSION_STATE_COMPLETE,
             }[self.state]
         seq = (self.current_seq or 0) if seq is None else seq
         total = max(self.count - self.first_item, 0)

@@ -13,6 +13,7 @@ from executive.io.mavlink.commander import Commander, command_name
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
+from executive.mission.port import MissionPort
 from executive.testing.links import FakeLink, ack
 from executive.world import blackboard
 from executive.world.clock import ManualClock
@@ -117,7 +118,7 @@ class Harness:
         #: Called each tick after the tree, before the commands are sent: what the runtime services then (a RouteKeeper's ``service``).
         self.writers: list[Callable[[], object]] = []
         self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup(clock=clock, autopilot=self.autopilot, mission_state=mission_state, **setup)
+        self.tree.setup(clock=clock, autopilot=self.autopilot, mission_state=MissionPort(mission_state), **setup)
 
     @classmethod
     def build(

@@ -27,7 +27,7 @@ from executive.world.vehicles import PROFILES
 
 @pytest.fixture
 def clean_blackboard() -> Iterator[None]:
-    """The (process-global) blackboard reset before the test, every documented key at its default, and cleared after."""
+    """The blackboard reset before the test (a board no runtime has), every documented key at its default, and cleared after."""
     blackboard.reset()
     yield
     py_trees.blackboard.Blackboard.clear()

@@ -131,7 +131,7 @@ class WaitingWatch:
 
 
 class TreeWatch:
-    """A run observer: after each tick of the tree, publishes what it waits for (``/mission/waiting``) and keeps its statuses.
+    """A run observer: after each tick of the tree, publishes what it waits for (``/mission/waiting``: its one writer) and keeps its statuses.
 
     :meth:`view` is the tree at its latest tick (the last run's, as it was at its last tick, once
     it is over), for ``executive ctl tree`` and other viewers; None before any mission has run.
@@ -169,6 +169,15 @@ class TreeWatch:
     def end(self, status: str, reason: str) -> None:
         self._live = False
         self._bb.set("/mission/waiting", None)
+
+    def hold(self, waiting: Waiting | None) -> None:
+        """Before the tree first ticks: what holds it back (the distance rule, :mod:`executive.admission.reach`); None once nothing does."""
+        shown: Waiting | None = self._bb.get("/mission/waiting")
+        if waiting is None:
+            if shown is not None:
+                self._bb.set("/mission/waiting", None)
+        elif shown is None or shown.feedback != waiting.feedback:
+            self._bb.set("/mission/waiting", waiting)
 
     def view(self) -> dict[str, Any] | None:
         """The tree at its latest tick (:meth:`TickState.tree_dict`) with ``live`` (False: the run is over); None if none ran."""

@@ -9,7 +9,7 @@ Namespaces:
 - ``/heading``: the heading sanity filter's verdict (heading filter).
 - ``/obstacles``: a camera's obstacle distances (obstacle receiver) and their forwarding to the autopilot (obstacle forwarder).
 - ``/runtime``: the loop itself: late and skipped ticks, the rate it achieves (tick pacer).
-- ``/mission``: the mission lifecycle and progress (mission state code), and what the running tree waits for (tree watch).
+- ``/mission``: the mission lifecycle, route progress and sample log (executive.mission), and what the running tree waits for (tree watch).
 - ``/operator``: requests from the operator (control socket, RC switches, ground station).
 - ``/sampler``: the sample-taking instrument (sampler).
 - ``/command``: the latest command of each outcome asked of the autopilot (mode, arming, reposition...) and its ack (commander).
@@ -17,12 +17,14 @@ Namespaces:
 
 Our behaviours only read; a plugin's behaviour may write the keys of its own ``/plugin/<name>/``
 namespace it declares. Every key exists from :func:`reset` on, holding its default, so a guard
-never trips over a missing key.
+never trips over a missing key. Each runtime has a board of its own (:class:`Board`,
+:func:`for_runtime`): py_trees' blackboard is one per process.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -153,19 +155,19 @@ _KEYS: tuple[Key, ...] = (
     Key("/runtime/skipped_ticks", 0, "tick pacer", "ticks never run: the loop fell more than a period behind and restarted its schedule"),
     Key("/runtime/rate_hz", None, "tick pacer", "ticks per second of clock time over the last window (5 s); None until the first"),
     Key("/runtime/storage_lost", None, "storage", "the recordings that cannot write to the disk now, and why (None: all write)"),
-    Key("/mission/state", "IDLE", "mission state", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
-    Key("/mission/leg_index", 0, "mission state", "index of the waypoint the vehicle is heading for"),
-    Key("/mission/leg_count", 0, "mission state", "number of legs (waypoints) in the mission"),
-    Key("/mission/target", None, "mission state", "the Waypoint of the current leg; None when no leg is active"),
-    Key("/mission/next_target", None, "mission state", "the Waypoint of the leg after the current one; None on the last leg"),
-    Key("/mission/reason", "", "mission state", "why the last request was refused or the mission ended"),
-    Key("/mission/samples", (), "mission state", "Samples recorded in this run, oldest first"),
+    Key("/mission/state", "IDLE", "mission lifecycle", "IDLE, READY, RUNNING, PAUSED, COMPLETED or ABORTED"),
+    Key("/mission/leg_index", 0, "route progress", "index of the waypoint the vehicle is heading for"),
+    Key("/mission/leg_count", 0, "route progress", "number of legs (waypoints) in the mission"),
+    Key("/mission/target", None, "route progress", "the Waypoint of the current leg; None when no leg is active"),
+    Key("/mission/next_target", None, "route progress", "the Waypoint of the leg after the current one; None on the last leg"),
+    Key("/mission/reason", "", "mission lifecycle", "why the last request was refused or the mission ended"),
+    Key("/mission/samples", (), "sample log", "Samples recorded in this run, oldest first"),
     Key(
         "/mission/waiting",
         None,
         "tree watch",
         "Waiting: the tree's deepest running node, its feedback, since when (executive.tree.waiting); before the tree's first tick, "
-        "the distance rule waiting for a position (reach gate, executive.admission.reach); None = no tree runs",
+        "the distance rule waiting for a position (told by the reach gate, executive.admission.reach); None = no tree runs",
     ),
     Key("/sampler/status", None, "sampler", "SamplerStatus of the latest sample request"),
     Key("/operator/request", None, "operator control", "the operator's latest request (start, pause, ...)"),
@@ -216,7 +218,7 @@ def document_command(name: str) -> str:
     key = command_key(name)
     if key not in KEYS:
         KEYS[key] = Key(key, None, "commander", f"CommandStatus of the latest MAV_CMD_{name}")
-        PyTreesBoard.set(key, None)
+    _current.storage.setdefault(key, None)
     return key
 
 
@@ -239,29 +241,50 @@ def declare(key: Key) -> str:
         raise ValueError(f"blackboard key {key.name!r} is already declared differently (by {known.writer})")
     if known is None:
         KEYS[key.name] = key
-        PyTreesBoard.set(key.name, key.default)
+    _current.storage.setdefault(key.name, key.default)  # on the current board: another runtime's was made before it was documented
     return key.name
 
 
-def reset(*, activity_stream: bool = False) -> None:
-    """Empty the (process-global) blackboard and set every documented key to its default.
+def reset(*, activity_stream: bool = False) -> Board:
+    """The current board emptied, every documented key at its default, and no runtime's any more (the next one may take it).
 
     The activity stream (every read and write, for debugging displays) costs time on each
     access, so it is off unless asked for.
     """
-    PyTreesBoard.clear(activity_stream=activity_stream)
-    for key in KEYS.values():
-        PyTreesBoard.set(key.name, key.default)
+    _current.clear(activity_stream=activity_stream)
+    _current.runtime = None
+    return _current
+
+
+def for_runtime(name: str) -> Board:
+    """A board for one runtime (``name``: what it drives), made current: the current one emptied, or a new one if a runtime has it.
+
+    So two runtimes in one process (two vehicles in one test) never share keys, while what a test
+    made before building its first runtime (a tree, a client that scripts inputs) is on that
+    runtime's board. What is made while another runtime's board is current stays on that one: a
+    second runtime's tree is built by the runtime (or after it).
+    """
+    if _current.runtime is not None:
+        Board().install()
+    board = reset()
+    board.runtime = name
+    return board
+
+
+def current() -> Board:
+    """The board py_trees' process-wide :class:`~py_trees.blackboard.Blackboard` stands for now."""
+    return _current
 
 
 def value(key: str) -> Any:
-    """The value of ``key`` now (None if it is not there), read without a client: for recorders, never for behaviours."""
-    return PyTreesBoard.value(key)
+    """The value of ``key`` now on the current board (None if it is not there), read without a client: for recorders, never for behaviours."""
+    return _current.storage.get(key)
 
 
 def documented_values() -> list[tuple[str, Any]]:
-    """Every documented key and its value now, in :data:`KEYS`' order: for recorders, never for behaviours."""
-    return PyTreesBoard.values(KEYS)
+    """Every documented key and its value now on the current board, in :data:`KEYS`' order: for recorders, never for behaviours."""
+    get = _current.storage.get
+    return [(key, get(key)) for key in KEYS]
 
 
 def keys_under(*prefixes: str) -> list[str]:
@@ -269,27 +292,49 @@ def keys_under(*prefixes: str) -> list[str]:
     return [name for name in KEYS if name.startswith(prefixes)]
 
 
-class PyTreesBoard:
-    """The one place the blackboard meets py_trees: its process-global storage, and the clients below."""
+class Board:
+    """One runtime's blackboard: its keys' values, py_trees' metadata of who reads and writes them, its clients.
 
-    @staticmethod
-    def clear(*, activity_stream: bool) -> None:
+    py_trees keeps these at class level, one set a process (``Blackboard.storage``, ``metadata``,
+    ``clients``, ``activity_stream``); :meth:`install` points them at this board's, so py_trees'
+    own code (a client's checked access, the activity stream, its displays) works on it. A client
+    keeps the board current when it was made (:class:`Client`): its reads and writes go to that
+    board whichever is installed, so a runtime's services and tree never see another's keys.
+    """
+
+    def __init__(self) -> None:
+        self.storage: dict[str, Any] = {key.name: key.default for key in KEYS.values()}
+        self.metadata: dict[str, Any] = {}
+        self.clients: dict[Any, str] = {}
+        self.activity_stream: Any = None
+        #: The runtime that has this board (:func:`for_runtime`) until it is closed; None: the next runtime may take it.
+        self.runtime: str | None = None
+
+    def install(self) -> None:
+        """Make this the board py_trees' class-level blackboard stands for (and :func:`value` reads)."""
+        global _current
+        if _current is not self:
+            _current.activity_stream = Blackboard.activity_stream  # py_trees may have switched it on or off
+        Blackboard.storage, Blackboard.metadata, Blackboard.clients = self.storage, self.metadata, self.clients
+        Blackboard.activity_stream = self.activity_stream
+        _current = self
+
+    def clear(self, *, activity_stream: bool) -> None:
+        """Empty it, every documented key at its default (it must be installed)."""
         Blackboard.clear()
         if activity_stream:
             Blackboard.enable_activity_stream()
+        self.activity_stream = Blackboard.activity_stream
+        for key in KEYS.values():
+            self.storage[key.name] = key.default
 
-    @staticmethod
-    def set(key: str, value: Any) -> None:
-        Blackboard.set(key, value)
+    def value(self, key: str) -> Any:
+        """The value of ``key`` on this board (None if it is not there), read without a client: for tests and recorders."""
+        return self.storage.get(key)
 
-    @staticmethod
-    def value(key: str) -> Any:
-        return Blackboard.storage.get(key)
 
-    @staticmethod
-    def values(keys: Iterable[str]) -> list[tuple[str, Any]]:
-        get = Blackboard.storage.get
-        return [(key, get(key)) for key in keys]
+class PyTreesBoard:
+    """The one place the blackboard meets py_trees: the current board, and the clients below."""
 
     @staticmethod
     def client(name: str, keys: Iterable[str], access: Access) -> Client:
@@ -303,29 +348,58 @@ class PyTreesBoard:
 
 
 class Client(py_trees.blackboard.Client):
-    """A py_trees blackboard client whose ``get`` and ``set`` of its registered keys go straight to the storage.
+    """A py_trees blackboard client of the board current when it is made, whose ``get`` and ``set`` of its registered keys go straight to it.
 
     py_trees' own ``get`` and ``set`` resolve the name again, split it for nested attributes and go
     through ``__getattr__``/``__setattr__``: a few microseconds an access, and a tick makes dozens.
     The access rules are the same (read: any registered key; write: keys registered for writing).
     With the activity stream on (debugging displays), and for anything else (nested or relative
-    names, unregistered keys: the errors, ``overwrite=False``), py_trees does the work.
+    names, unregistered keys: the errors, ``overwrite=False``), py_trees does the work, on this
+    client's board.
     """
 
+    def __init__(self, *, name: str | None = None, namespace: str | None = None) -> None:
+        super().__init__(name=name, namespace=namespace)
+        object.__setattr__(self, "board", _current)
+
     def get(self, name: str) -> Any:
+        board: Board = self.board
         remapped = self.remappings.get(name)
-        if remapped is not None and Blackboard.activity_stream is None and "." not in name:
+        if remapped is not None and board.activity_stream is None and Blackboard.activity_stream is None and "." not in name:
             try:
-                return Blackboard.storage[remapped]
+                return board.storage[remapped]
             except KeyError:
                 pass  # py_trees raises its own error
-        return super().get(name)
+        with _installed(board):
+            return super().get(name)
 
     def set(self, name: str, value: Any, overwrite: bool = True) -> bool:
-        if overwrite and Blackboard.activity_stream is None and "." not in name and (name in self.write or name in self.exclusive):
-            Blackboard.storage[self.remappings[name]] = value
+        board: Board = self.board
+        direct = overwrite and board.activity_stream is None and Blackboard.activity_stream is None and "." not in name
+        if direct and (name in self.write or name in self.exclusive):
+            board.storage[self.remappings[name]] = value
             return True
-        return super().set(name, value, overwrite)
+        with _installed(board):
+            return super().set(name, value, overwrite)
+
+    def register_key(self, key: str, access: Access, required: bool = False, remap_to: str | None = None) -> None:
+        """Register ``key`` with ``access`` (py_trees' own), noted on this client's board."""
+        with _installed(self.board):
+            super().register_key(key, access, required, remap_to)
+
+
+@contextmanager
+def _installed(board: Board) -> Iterator[None]:
+    """``board`` installed for py_trees' own code, the current one back after."""
+    before = _current
+    if before is board:
+        yield
+        return
+    board.install()
+    try:
+        yield
+    finally:
+        before.install()
 
 
 def writer(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
@@ -336,3 +410,7 @@ def writer(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
 def reader(name: str, keys: Iterable[str]) -> py_trees.blackboard.Client:
     """A read-only client (what a behaviour holds)."""
     return PyTreesBoard.client(name, keys, Access.READ)
+
+
+_current = Board()
+_current.install()

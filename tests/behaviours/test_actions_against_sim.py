@@ -34,6 +34,7 @@ from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import VTOL_MIN_ACCEPTANCE_RADIUS_M, Mission
+from executive.mission.port import MissionPort
 from executive.sim import make_autopilot
 from executive.sim.ardupilot.plane import LOITER_RADIUS_M
 from executive.sim.physics.aircraft import QUADPLANE_LIMITS
@@ -117,7 +118,7 @@ class Bench:
     def run(self, root: py_trees.behaviour.Behaviour, limit_s: float, dt: float = 0.1) -> tuple[Status, float]:
         """Tick ``root`` until it finishes or ``limit_s`` passes; returns its status and the time it took."""
         self.tree = py_trees.trees.BehaviourTree(root)
-        self.tree.setup(clock=self.clock, autopilot=self.port, mission_state=self.mission_state)
+        self.tree.setup(clock=self.clock, autopilot=self.port, mission_state=MissionPort(self.mission_state))
         start = self.clock.now()
         while self.clock.now() - start < limit_s:
             self._io(dt)
@@ -211,7 +212,7 @@ class TestVtol:
 def _run_watching(bench: Bench, root, limit_s: float, seen: list[str]) -> tuple[Status, float]:
     """As Bench.run, noting each new /vehicle/vtol_state."""
     tree = py_trees.trees.BehaviourTree(root)
-    tree.setup(clock=bench.clock, autopilot=bench.port, mission_state=bench.mission_state)
+    tree.setup(clock=bench.clock, autopilot=bench.port, mission_state=MissionPort(bench.mission_state))
     start = bench.clock.now()
     while bench.clock.now() - start < limit_s:
         bench._io(0.1)

@@ -12,6 +12,7 @@ from executive.behaviours import NothingToSample, RcNotTakingOver, Sample
 from executive.instruments.sampler import SimulatedSampler
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, SamplingOptions
+from executive.mission.port import MissionPort
 from executive.testing import Harness, port_for
 from executive.world import blackboard
 from executive.world.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
@@ -186,7 +187,7 @@ def test_a_timeout_cancels_the_sampler(make, running):
 def test_setup_needs_a_sampler(clock, commander, mission_state):
     tree = py_trees.trees.BehaviourTree(Sample())
     with pytest.raises(RuntimeError, match="needs sampler"):
-        tree.setup(clock=clock, autopilot=port_for(commander), mission_state=mission_state)
+        tree.setup(clock=clock, autopilot=port_for(commander), mission_state=MissionPort(mission_state))
 
 
 @pytest.mark.parametrize(

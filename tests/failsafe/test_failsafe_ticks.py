@@ -17,6 +17,7 @@ from executive.behaviours import Failsafe, SetMode
 from executive.behaviours.failsafe import failsafe_mode
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.modes import PX4_MODES
+from executive.mission.events import Announcement
 from executive.mission.failsafes import FailsafePolicy
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
@@ -462,7 +463,7 @@ def play(r: Obeying, ticks: int) -> tuple[list[tuple[float, tuple[str, Any]]], l
 def announced(r: Obeying) -> list[str]:
     """The STATUSTEXTs the ground station will send (the mission state's announcements), gathered from now on."""
     texts: list[str] = []
-    r.h.mission_state.announce_listeners.append(lambda text, warning: texts.append(text))
+    r.h.mission_state.events.subscribe(Announcement, lambda text, warning: texts.append(text))
     return texts
 
 

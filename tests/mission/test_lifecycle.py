@@ -5,6 +5,7 @@ from __future__ import annotations
 import py_trees
 import pytest
 
+from executive.mission.events import Transition
 from executive.mission.lifecycle import TRANSITIONS, MissionState, MissionStatus, Refused
 
 S = MissionStatus
@@ -107,7 +108,7 @@ def test_pause_and_resume_keep_the_leg(state_in, square_mission):
 def test_delete_while_running_pauses_first(state_in):
     state = state_in(S.RUNNING)
     seen = []
-    state.listeners.append(lambda before, after, reason: seen.append((before, after)))
+    state.events.subscribe(Transition, lambda before, after, reason: seen.append((before, after)))
     state.delete()
     assert seen == [(S.RUNNING, S.PAUSED), (S.PAUSED, S.IDLE)]
     assert state.mission is None and bb("/mission/leg_count") == 0

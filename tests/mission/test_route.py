@@ -5,6 +5,7 @@ from __future__ import annotations
 import py_trees
 import pytest
 
+from executive.mission.events import RouteChanged
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.model import Mission, Waypoint
 from executive.mission.route import Route, RouteError, add_at_end, clear, current_index, remove, remove_current
@@ -94,7 +95,7 @@ def state_in(status: MissionStatus, mission: Mission) -> MissionState:
 def test_set_route_is_allowed_while_ready_running_or_paused(mission: Mission, status: MissionStatus, allowed: bool) -> None:
     state = state_in(status, mission)
     heard: list[tuple[Route, str]] = []
-    state.route_listeners.append(lambda route, reason: heard.append((route, reason)))
+    state.events.subscribe(RouteChanged, lambda route, reason: heard.append((route, reason)))
     if not allowed:
         with pytest.raises(Refused, match="cannot change the route"):
             state.set_route([A, B], "test")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import py_trees
 import pytest
 
+from executive.mission.events import SampleTaken
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.world.state import Sample, SampleRead
 
@@ -36,14 +37,14 @@ def test_recorded_samples_are_published_oldest_first(running):
 
 def test_listeners_hear_each_sample_once(running):
     heard: list[Sample] = []
-    running.sample_listeners.append(heard.append)
+    running.events.subscribe(SampleTaken, heard.append)
     running.record_sample(sample(2))
     assert heard == [sample(2)]
 
 
 def test_a_leg_is_never_sampled_twice(running):
     heard: list[Sample] = []
-    running.sample_listeners.append(heard.append)
+    running.events.subscribe(SampleTaken, heard.append)
     running.record_sample(sample(0, 10.0))
     with pytest.raises(Refused, match="leg 1 is already sampled"):
         running.record_sample(sample(0, 30.0))
@@ -96,7 +97,7 @@ def test_a_restarted_executive_restores_samples_without_telling_listeners_and_do
     after.upload(square_mission)
     after.start()
     heard: list[Sample] = []
-    after.sample_listeners.append(heard.append)
+    after.events.subscribe(SampleTaken, heard.append)
     after.restore_samples(journal)
     assert after.sampled(1) and published() == journal and heard == []
     with pytest.raises(Refused):

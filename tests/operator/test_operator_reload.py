@@ -7,6 +7,7 @@ from typing import Any
 import pytest
 import yaml
 
+from executive.mission.events import Replaced
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.operator import Operator
@@ -48,7 +49,7 @@ def unchanged(state: MissionState, mission: Mission) -> bool:
 def test_a_paused_mission_is_replaced_at_the_same_waypoint_with_its_samples_and_stays_paused(operator, state, square_mission):
     wps = corners(square_mission)
     told: list[tuple[str, str]] = []
-    state.replace_listeners.append(lambda mission, reason: told.append((mission.name, reason)))
+    state.events.subscribe(Replaced, lambda mission, reason: told.append((mission.name, reason)))
     text = mission_text(square_mission, name="detour", waypoints=[wps[0], ELSEWHERE, wps[1], wps[2], wps[3]])
     reply = operator.request("upload", source="ctl", filename="detour.yaml", text=text)
     assert (reply.ok, reply.state) == (True, "PAUSED")
@@ -84,7 +85,7 @@ def test_the_operator_may_choose_the_leg(operator, state, square_mission):
 )
 def test_an_incompatible_or_bad_mission_is_refused_and_nothing_changes(operator, state, square_mission, fields, why):
     told: list[str] = []
-    state.replace_listeners.append(lambda mission, reason: told.append(reason))
+    state.events.subscribe(Replaced, lambda mission, reason: told.append(reason))
     reply = operator.request("upload", filename="short.yaml", text=mission_text(square_mission, **fields))
     assert not reply.ok and reply.reason.startswith(why)
     assert unchanged(state, square_mission) and told == []

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from executive.mission.events import RouteChanged
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import GeofenceConfig, Home, Mission
 from executive.operator import Operator
@@ -33,7 +34,7 @@ def operator(state: MissionState, clock: ManualClock, vehicle) -> Operator:
 def test_an_offset_moves_the_route_tells_the_listeners_and_replies_with_the_route(operator: Operator, state: MissionState) -> None:
     before = state.route
     heard = []
-    state.route_listeners.append(lambda route, reason: heard.append(reason))
+    state.events.subscribe(RouteChanged, lambda route, reason: heard.append(reason))
     reply = operator.request("route", source="ctl", operation="offset", distance_m=5, bearing_deg=90)
     assert (reply.ok, reply.state) == (True, "RUNNING")
     assert reply.reason == heard[0] == "ctl: 4 waypoints offset 5 m toward 090.0°"
@@ -93,8 +94,9 @@ def test_an_edit_breaking_the_mission_rules_is_refused_and_changes_nothing(opera
     reply = operator.request("route", operation="clear")
     assert not reply.ok and reply.reason == "route clear: the edited mission breaks its rules: waypoints: at least one waypoint is needed"
     assert state.mission is not None
-    state.mission = state.mission.model_copy(
-        update={"geofence": GeofenceConfig(max_distance_from_home_m=500.0), "home": Home(lat=47.3977, lon=8.5456)}
+    state.legs.load(
+        state.mission.model_copy(update={"geofence": GeofenceConfig(max_distance_from_home_m=500.0), "home": Home(lat=47.3977, lon=8.5456)}),
+        state.leg_index,
     )
     reply = operator.request("route", operation="offset", distance_m=600, bearing_deg=0, waypoint=2)
     assert not reply.ok and "waypoints[1]: outside the geofence" in reply.reason

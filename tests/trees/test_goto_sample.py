@@ -16,6 +16,7 @@ from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
+from executive.mission.port import MissionPort
 from executive.runtime.assembly import build_runtime
 from executive.runtime.loop import Runtime, explain_failure
 from executive.testing import EKF_READY, ScriptedAutopilot, Vehicle, ack, port_for
@@ -114,7 +115,7 @@ class Run:
             self.state.upload(mission)
             self.sampler = SimulatedSampler(clock, mission.sampling, seed=1)
             self.tree = py_trees.trees.BehaviourTree(mission_tree.build(mission))
-            self.tree.setup(clock=clock, autopilot=port_for(self.commander), mission_state=self.state, sampler=self.sampler)
+            self.tree.setup(clock=clock, autopilot=port_for(self.commander), mission_state=MissionPort(self.state), sampler=self.sampler)
             self.state.start()
         else:
             runtime.mission_state.start()  # builds the tree and its sampler

@@ -39,7 +39,7 @@ from executive.sim.ardupilot.base import (
 )
 from executive.sim.ardupilot.mission_store import ArduPilotMissionStore
 from executive.sim.firmware import DEFAULT_HOME, Command, Home, e7, valid_latlon
-from executive.sim.mission_store import MissionState, StoredCommand
+from executive.sim.mission_store import AutopilotMissionState, StoredCommand
 from executive.sim.physics.underwater import SUB_HORIZONTAL_LIMITS, SUB_LIMITS, Seabed, SubLimits, UnderwaterVehicle
 from executive.sim.physics.vehicle import VehicleModel
 from executive.world.clock import Clock
@@ -242,7 +242,7 @@ class ArduSubSim(ArduPilotSim):
                 self._auto_item = self._destination = None
                 v.hold()
                 v.hold_depth()
-                if mission.state is MissionState.COMPLETE and not self.position_ok:
+                if mission.state is AutopilotMissionState.COMPLETE and not self.position_ok:
                     # Sub::exit_mission (commands_logic.cpp): ModeAuto::auto_loiter_start fails without a position, then
                     # ALT_HOLD (ModeReason::MISSION_END), said by no message
                     self._force_mode("ALT_HOLD")

@@ -14,7 +14,7 @@ from types import MappingProxyType
 from typing import ClassVar
 
 from executive.sim.firmware import DEFAULT_HOME, Command, CommandHandler, Home, valid_latlon
-from executive.sim.mission_store import MissionState
+from executive.sim.mission_store import AutopilotMissionState
 from executive.sim.px4.mission_store import Px4MissionStore
 from executive.sim.px4.modes import NAV_STATE_NAMES, NOT_SIMULATED, PILOT_MODES, PREVENT_ARMING_MODES, PX4_MODE_NUMBERS
 from executive.sim.px4.parameters import (
@@ -366,7 +366,7 @@ class Px4Sim(Px4Streams):
         v = self.vehicle
         item = self.mission.current
         if item is None:
-            if self.mission.state is MissionState.COMPLETE and not self._landed and self._goal is not None:
+            if self.mission.state is AutopilotMissionState.COMPLETE and not self._landed and self._goal is not None:
                 self._user_intends("AUTO.LOITER")
                 self._switch("AUTO.LOITER")  # Commander::checkForMissionUpdate: a finished mission loiters
             return
