@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from executive.sim.mission_store import MissionState, MissionStore, StoredCommand
+from executive.sim.mission_store import AutopilotMissionState, MissionStore, StoredCommand
 from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink
@@ -59,11 +59,11 @@ class Px4MissionStore(MissionStore):
         """A finished mission stays COMPLETE with the item set until AUTO.MISSION runs it again (mission_result.finished,
         cleared by mission_base.cpp set_mission_result on activation; real SIH: MISSION_CURRENT (4, COMPLETE) after
         MISSION_SET_CURRENT 4, tests/data/px4/README.md)."""
-        complete = self.state is MissionState.COMPLETE
+        complete = self.state is AutopilotMissionState.COMPLETE
         if not super().set_current(seq):
             return False
         if complete:
-            self.state = MissionState.COMPLETE
+            self.state = AutopilotMissionState.COMPLETE
         return True
 
     def start_or_resume(self) -> None:
@@ -73,7 +73,7 @@ class Px4MissionStore(MissionStore):
             return
         if self.current_seq is None or self.current_seq >= self.count:
             self.current_seq = self.first_item
-        self.state = MissionState.RUNNING
+        self.state = AutopilotMissionState.RUNNING
 
     def feasible(self, required: int, landed: bool) -> bool:
         """MIS_TKO_LAND_REQ ``required``'s rule (navigator/MissionFeasibility/FeasibilityChecker.cpp checkTakeoffLandAvailable): a
