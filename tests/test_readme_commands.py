@@ -61,8 +61,8 @@ NOT_RUN_HERE: dict[str, str] = {
     "executive ctl resume": "needs a running executive (tests/cli/test_ctl.py)",
     "executive ctl status": "needs a running executive (tests/cli/test_ctl.py)",
     "executive report j.db | head": "needs the journal of a run (tests/cli/test_console.py: a reader that goes away)",
-    "executive replay run.snap --web 8080": "needs a recorded run, and serves a browser until Ctrl-C (tests/web/test_replay_web.py)",
-    "executive replay run.jsonl --groot2 1667 --speed 10": "a recorded run, served to Groot2 until Ctrl-C (tests/groot2/test_groot2_clients.py)",
+    "executive replay run.snap --web 8080": "needs a recorded run, and serves a browser until Ctrl-C (tests/observers/web/test_replay_web.py)",
+    "executive replay run.jsonl --groot2 1667 --speed 10": "served to Groot2 until Ctrl-C (tests/observers/groot2/test_groot2_clients.py)",
     "executive sim --vehicle boat --mavlink tcpin:0.0.0.0:5760": "serves a ground station until Ctrl-C (tests/sim/test_server.py)",
     "executive sim": "serves a simulated vehicle until Ctrl-C (tests/sim/test_server.py)",
     "executive import cmac.waypoints --vehicle rover --zones fence.waypoints --zones points.rally -o m.yaml": "needs Mission Planner's "

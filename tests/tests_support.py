@@ -188,11 +188,11 @@ def runqueue_wait_s(native_id: int | None = None) -> float:
         os.close(fd)
 
 
-FOXGLOVE_JS = Path(__file__).resolve().parent / "foxglove"
+FOXGLOVE_JS = Path(__file__).resolve().parent / "observers" / "foxglove"
 
 
 def foxglove_js(script: str, *args: str) -> list[str]:
-    """``node tests/foxglove/SCRIPT ARGS``: Foxglove's own npm packages driven by node; the test fails (not skips) without them.
+    """``node tests/observers/foxglove/SCRIPT ARGS``: Foxglove's own npm packages driven by node; the test fails (not skips) without them.
 
     The packages are installed from the lock file at first use (one xdist worker at a time), so README's test command needs
     no step of its own; `.ci/run` installs node and npm where the machine has none."""
@@ -204,7 +204,7 @@ def foxglove_js(script: str, *args: str) -> list[str]:
             npm = ["npm", "ci", "--prefix", str(FOXGLOVE_JS), "--no-audit", "--no-fund", "--loglevel=error"]
             done = subprocess.run(npm, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=600, check=False)
             if done.returncode != 0:
-                pytest.fail(f"npm ci --prefix tests/foxglove failed: {done.stderr.strip()}")
+                pytest.fail(f"npm ci --prefix tests/observers/foxglove failed: {done.stderr.strip()}")
     return ["node", str(FOXGLOVE_JS / script), *args]
 
 

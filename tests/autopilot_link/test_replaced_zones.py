@@ -15,7 +15,7 @@ from executive.mission.model import Mission
 from executive.testing import Lockstep
 from executive.world import blackboard
 from tests.behaviours.test_zones_on_autopilot import FENCE, RALLY, at, box, held, wanted, zoned_mission
-from tests.test_runtime_reload import pause_on_leg, run_for, text
+from tests.runtime.test_runtime_reload import pause_on_leg, run_for, text
 from tests_support import line_mission
 
 

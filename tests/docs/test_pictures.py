@@ -5,7 +5,7 @@
 - ``docs/foxglove-rover_square.svg`` (README, the live view page's Foxglove section): the shipped Foxglove layout's map and plots,
   drawn with matplotlib from the MCAP file of a lock-step rover_square run (the route, the track, each plot's series as
   the file holds them); checked label by label; ``EXECUTIVE_DOCS_PICTURES=1`` writes it again.
-- ``docs/live-view.png`` (README, the live view page): the screenshot tests/web/test_live_view_browser.py takes in headless
+- ``docs/live-view.png`` (README, the live view page): the screenshot tests/observers/web/test_live_view_browser.py takes in headless
   Chromium during a real run; ``EXECUTIVE_LIVE_VIEW_PNG=docs/live-view.png`` keeps it.
 """
 

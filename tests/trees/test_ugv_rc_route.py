@@ -247,7 +247,7 @@ def test_switch_c_does_not_fight_a_ground_station(rover: ScriptedRover) -> None:
     rover.rc(swc=DOWN)
     rover.tick()
     assert rover.take() == [("mode", "HOLD")]
-    rover.mode = "GUIDED"  # a ground station takes the vehicle (the runtime pauses the mission: see tests/test_intervention.py)
+    rover.mode = "GUIDED"  # a ground station takes the vehicle (the runtime pauses the mission: see tests/operator/test_intervention.py)
     assert rover.run(20) == [Status.RUNNING] * 20
     assert rover.take() == []
 

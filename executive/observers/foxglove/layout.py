@@ -3,7 +3,7 @@
 Import it in Foxglove (Layouts, Import from file) and open a recording (``--snapshots FILE.mcap``) or
 the live server (``--foxglove PORT``): the map with the route and the track, the tree's ticks and
 the mission's state, the log, plots of speed, distance to the target, battery and the EKF's variances. Every topic and
-field named here is one the recording holds (tests/test_mcap_recording.py checks them against a run).
+field named here is one the recording holds (tests/observers/test_mcap_recording.py checks them against a run).
 """
 
 from __future__ import annotations

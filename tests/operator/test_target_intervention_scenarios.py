@@ -23,7 +23,7 @@ from executive.world.clock import Clock
 from executive.world.dialect import MAVLinkMessage, mavlink
 from tests_support import line_mission
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 _M = mavlink
 _ENCODER = mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
 HELD = "a ground station held the vehicle (reposition to its position)"

@@ -16,7 +16,7 @@ from executive.cli import main
 from executive.mission import loader
 from executive.mission.errors import MissionError
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 WAYPOINT = "{lat: 47.397742, lon: 8.545594}"
 
 

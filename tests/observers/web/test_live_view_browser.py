@@ -26,7 +26,7 @@ from tests_support import executive_process, line_mission, mission_text
 if TYPE_CHECKING:
     from playwright.sync_api import Browser
 
-ROOT = Path(__file__).parents[2]
+ROOT = Path(__file__).parents[3]
 CHROMIUM = "/usr/bin/chromium"
 MISSION = mission_text(
     "live-view",

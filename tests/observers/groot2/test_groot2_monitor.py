@@ -26,7 +26,7 @@ from executive.observers.groot2.view import MonitorView
 from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
 from executive.testing.lockstep import Lockstep
 
-ROOT = Path(__file__).parents[2]
+ROOT = Path(__file__).parents[3]
 
 
 def free_port_pair() -> int:

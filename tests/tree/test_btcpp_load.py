@@ -19,7 +19,7 @@ from executive.cli import main
 behaviortreepy = pytest.importorskip("behaviortreepy")
 Status = behaviortreepy.NodeStatus
 
-MISSIONS = Path(__file__).parents[1] / "missions"
+MISSIONS = Path(__file__).parents[2] / "missions"
 NAMES = ["rover_square", "boat_survey", "asv_sampling", "asv_sampling_yaml_tree", "auv_survey", "vtol_transit", "ugv_rc_route"]
 #: BehaviorTree.CPP's built-ins an export writes (registered by the factory itself).
 BUILT_INS = {"Sequence", "ReactiveSequence", "Fallback", "ReactiveFallback", "Parallel", "Inverter", "RetryUntilSuccessful", "Repeat", "Timeout"}

@@ -28,7 +28,7 @@ from executive.testing.lockstep import Lockstep
 from tests_support import executive_process
 
 bt = pytest.importorskip("behaviortreepy", reason="BehaviorTree.CPP's Python bindings are a test dependency ('.[test]')")
-ROOT = Path(__file__).parents[2]
+ROOT = Path(__file__).parents[3]
 
 # The same shape on both sides: a reactive sequence of a fallback (a failing and a running action) and an action never reached.
 BTCPP_XML = """<root BTCPP_format="4" main_tree_to_execute="MainTree"><BehaviorTree ID="MainTree">

@@ -1,6 +1,6 @@
 """`run --foxglove PORT`: the run served live to Foxglove's own WebSocket client (@foxglove/ws-protocol, driven by node).
 
-The client is Foxglove's npm package, installed by `.ci/run` (`npm ci --prefix tests/foxglove`): these tests fail, not skip,
+The client is Foxglove's npm package, installed by `.ci/run` (`npm ci --prefix tests/observers/foxglove`): these tests fail, not skip,
 without it. The mission runs lock-step; the client reads on its own (node's) time.
 """
 

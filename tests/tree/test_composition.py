@@ -157,7 +157,7 @@ def test_a_composed_tree_runs_tick_by_tick_like_any_other(harness, vehicle) -> N
 
 
 def test_the_schema_completes_a_composed_tree_and_refuses_what_the_loader_refuses() -> None:
-    from tests.test_mission_schema import violations
+    from tests.tree.test_mission_schema import violations
 
     schema = mission_json_schema()
     good = yaml.safe_load(HEAD + "  {use: mission_root, steps: [{use: preflight}, {node: go_to, look_ahead: true}, armed]}\n")
@@ -175,7 +175,7 @@ def test_the_schema_completes_a_composed_tree_and_refuses_what_the_loader_refuse
 
 
 def test_the_readme_s_example_loads_and_its_errors_are_the_readme_s() -> None:
-    readme = (Path(__file__).parents[1] / "docs" / "own-trees.md").read_text(encoding="utf-8")  # README's section, in the manual
+    readme = (Path(__file__).parents[2] / "docs" / "own-trees.md").read_text(encoding="utf-8")  # README's section, in the manual
     section = readme.split("### A tree written in the mission file")[1]
     example, shown = section.split("```yaml\n")[1].split("```")[0], "m.yaml" + section.split("```\nm.yaml")[1].split("```")[0]
     head = HEAD.removesuffix("tree:\n")

@@ -15,7 +15,7 @@ from executive.cli import main
 from executive.observers.web.server import TOKEN_HEADER, WebAddress, WebAddressError, WebServer, open_server, parse_address, read_token
 
 TOKEN = "a-token-of-twenty-chars"
-SQUARE = str(Path(__file__).parents[2] / "missions" / "rover_square.yaml")
+SQUARE = str(Path(__file__).parents[3] / "missions" / "rover_square.yaml")
 
 
 @pytest.mark.parametrize(

@@ -92,7 +92,7 @@ def test_a_crashing_behaviour_makes_the_vehicle_safe_and_names_itself(square_mis
     outcome = runtime.run(start=False)
     assert outcome.status is MissionStatus.ABORTED
     # a behaviour not of ours (here, this file's): named by its file and line
-    assert "behaviour crashed: Mission/Divide: tests/test_runtime.py:24: ZeroDivisionError: boom" in outcome.reason
+    assert "behaviour crashed: Mission/Divide: tests/runtime/test_runtime.py:24: ZeroDivisionError: boom" in outcome.reason
     assert autopilot.mode == "HOLD"
     assert runtime.mission_state.status is MissionStatus.ABORTED
 
@@ -200,7 +200,7 @@ def test_hands_off_when_a_person_has_the_vehicle(square_mission, link, clock, ve
 
 def test_a_tree_that_ends_with_a_sample_point_unsampled_does_not_complete(link, clock):
     """No fake success: a tree that returns SUCCESS with a sample not taken (a refused sample skipped) ends ABORTED, saying which."""
-    mission = load_mission(Path(__file__).parents[1] / "missions" / "asv_sampling.yaml")
+    mission = load_mission(Path(__file__).parents[2] / "missions" / "asv_sampling.yaml")
     runtime = build_runtime(mission, link, clock, root=py_trees.behaviours.Success("done"), safe_timeout_s=0.5, simulated_vehicle=True)
     autopilot_at(mission, link, "boat").beat()
     outcome = runtime.run()

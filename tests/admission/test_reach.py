@@ -25,7 +25,7 @@ from executive.world.geo import destination
 from executive.world.state import EkfFlags, EkfStatus, GlobalPosition
 from tests_support import HARMLESS, LINE_HOME, acting, line_mission, run_recording, with_far_waypoint
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 MISSIONS = ROOT / "missions"
 
 

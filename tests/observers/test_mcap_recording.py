@@ -28,7 +28,7 @@ from executive.world.clock import Clock
 from executive.world.frames import global_to_local
 from tests_support import foxglove_js
 
-MISSIONS = Path(__file__).resolve().parent.parent / "missions"
+MISSIONS = Path(__file__).resolve().parents[2] / "missions"
 
 
 class Ticks:

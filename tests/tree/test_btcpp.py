@@ -175,7 +175,7 @@ def test_import_names_unknown_node_types_with_their_line(tmp_path: Path, capsys:
     assert not (tmp_path / "tree.yaml").exists()
 
 
-MISSIONS = Path(__file__).parents[1] / "missions"
+MISSIONS = Path(__file__).parents[2] / "missions"
 
 
 def described(root: py_trees.behaviour.Behaviour) -> list[tuple[str, str, dict[str, Any]]]:
@@ -271,9 +271,9 @@ def test_behaviortree_cpp_built_in_nodes_groot2_offers_are_read_as_ours(tmp_path
 def test_a_tree_with_nodes_the_catalogue_lacks_exports_them_said_and_import_refuses_them(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.syspath_prepend(str(Path(__file__).parents[1] / "examples" / "patrol"))  # the patrol example: a guard and an action of its own
+    monkeypatch.syspath_prepend(str(Path(__file__).parents[2] / "examples" / "patrol"))  # the patrol example: a guard and an action of its own
     mission = tmp_path / "patrol.yaml"
-    text = (Path(__file__).parents[1] / "examples" / "patrol" / "patrol.yaml").read_text(encoding="utf-8")
+    text = (Path(__file__).parents[2] / "examples" / "patrol" / "patrol.yaml").read_text(encoding="utf-8")
     mission.write_text(text.replace("tree: waypoints ", "tree: patrol_tree:build "), encoding="utf-8")
     assert main(["export", str(mission), "-o", str(tmp_path / "tree.xml")]) == 0
     warnings = capsys.readouterr().err

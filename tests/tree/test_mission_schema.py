@@ -17,7 +17,7 @@ from executive.mission.model import Mission
 from executive.mission.rules import cross_field_errors
 from executive.tree.schema import SHIPPED, mission_json_schema, mission_json_schema_text
 
-ROOT = Path(__file__).parents[1]
+ROOT = Path(__file__).parents[2]
 ANNOTATIONS = {"$defs", "$schema", "default", "description", "title"}
 TYPES: dict[str, type | tuple[type, ...]] = {
     "object": dict,
