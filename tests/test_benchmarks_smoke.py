@@ -63,10 +63,13 @@ def test_startup_and_memory(autopilot: str) -> None:
 def test_efficiency() -> None:
     from benchmarks import recorded
 
-    rows = efficiency.run(missions=("rover_square",))
-    # both drives, on our simulator and on the recorded firmware; the PX4 vtol's recorded on the real PX4
-    _check(rows, 2 + 2 * recorded.available("rover_square") + 2 * recorded.px4_available())
+    rows = efficiency.run(missions=("rover_square",), px4_legs=2)
+    # both drives, on our simulator and on the recorded firmware; the PX4 vtol's (2 legs) on our simulated PX4 and on the real one
+    _check(rows, 2 + 2 * recorded.available("rover_square") + 2 + 2 * recorded.px4_available())
     assert [row.name.split(" / ")[0] for row in rows[:2]] == ["GUIDED", "drive: auto"]
+    px4 = rows[2 + 2 * recorded.available("rover_square") :][:2]
+    assert [(row.name.split(" / ")[0], row.passed is None) for row in px4] == [("drive: auto", False), ("GUIDED", True)]
+    assert all("our simulated PX4's AUTO.MISSION" in row.name for row in px4)
 
 
 def test_the_command_writes_json(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
