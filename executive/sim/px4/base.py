@@ -255,11 +255,8 @@ class Px4Sim(Px4Streams):
     def _fly_to(self, lat: float, lon: float, alt: float, radius: float = NAV_LOITER_RAD) -> None:
         """Go to a point and hold there: hover over it (multicopter) or circle it (fixed wing)."""
         self._goal, self._goal_radius = (lat, lon, max(0.0, alt)), radius
-        # the navigator does not take off to go somewhere; an OFFBOARD setpoint above the aircraft does (MulticopterPositionControl.cpp
-        # want_takeoff: armed and the setpoint's z above the vehicle's; real SIH standard_vtol: "Takeoff detected" in OFFBOARD,
-        # tests/data/px4/vtol-waypoints-guided.tlog)
         if self._landed and self.mode not in ("AUTO.TAKEOFF", "OFFBOARD"):
-            return
+            return  # the navigator does not take off to go somewhere; OFFBOARD to a point above does (MulticopterPositionControl want_takeoff)
         self._steer()
 
     # -- transitions (vtol_att_control) ----------------------------------------------------------
