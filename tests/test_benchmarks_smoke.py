@@ -63,9 +63,13 @@ def test_startup_and_memory(autopilot: str) -> None:
 def test_efficiency() -> None:
     from benchmarks import recorded
 
-    rows = efficiency.run(missions=("rover_square",))
-    _check(rows, 2 + 2 * recorded.available("rover_square"))  # both drives, on our simulator and on the recorded firmware
+    rows = efficiency.run(missions=("rover_square",), px4_legs=2)
+    # both drives, on our simulator and on the recorded firmware; the PX4 vtol's (2 legs) on our simulated PX4 and on the real one
+    _check(rows, 2 + 2 * recorded.available("rover_square") + 2 + 2 * recorded.px4_available())
     assert [row.name.split(" / ")[0] for row in rows[:2]] == ["GUIDED", "drive: auto"]
+    px4 = rows[2 + 2 * recorded.available("rover_square") :][:2]
+    assert [(row.name.split(" / ")[0], row.passed is None) for row in px4] == [("drive: auto", False), ("GUIDED", True)]
+    assert all("our simulated PX4's AUTO.MISSION" in row.name for row in px4)
 
 
 def test_the_command_writes_json(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
@@ -74,3 +78,13 @@ def test_the_command_writes_json(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
     assert bench.main(["--only", "can", "--json", str(out)]) == 0
     assert "CAN decode" in capsys.readouterr().out
     assert [row["group"] for row in json.loads(out.read_text())["rows"]] == ["can", "can"]
+
+
+def test_efficiency_on_the_recorded_px4_names_what_it_compared_against_and_judges_only_drive_auto() -> None:
+    """drive: auto against PX4's own AUTO.MISSION over the whole route, pass/fail; GUIDED (OFFBOARD) information only: a vtol's 70 m
+    acceptance radius ends each leg short, so the two are not like for like."""
+    auto, guided = efficiency.px4_recorded_rows()
+    assert "vtol-waypoints-px4-own-auto.tlog" in auto.name and "vtol-waypoints-auto.tlog" in auto.name
+    assert auto.passed is True and 0.98 <= auto.value <= 1.02  # 134.4 s / 135.0 s
+    assert "vtol-waypoints-guided.tlog" in guided.name and guided.passed is None and not guided.target
+    assert guided.detail.startswith("information, not like for like")

@@ -255,8 +255,8 @@ class Px4Sim(Px4Streams):
     def _fly_to(self, lat: float, lon: float, alt: float, radius: float = NAV_LOITER_RAD) -> None:
         """Go to a point and hold there: hover over it (multicopter) or circle it (fixed wing)."""
         self._goal, self._goal_radius = (lat, lon, max(0.0, alt)), radius
-        if self._landed and self.mode != "AUTO.TAKEOFF":
-            return  # the navigator does not take off to go somewhere
+        if self._landed and self.mode not in ("AUTO.TAKEOFF", "OFFBOARD"):
+            return  # the navigator does not take off to go somewhere; OFFBOARD to a point above does (MulticopterPositionControl want_takeoff)
         self._steer()
 
     # -- transitions (vtol_att_control) ----------------------------------------------------------

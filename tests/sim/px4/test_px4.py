@@ -293,6 +293,19 @@ def test_a_gap_shorter_than_the_loss_time_keeps_offboard(px4: MakePx4) -> None:
     assert gcs.ap.mode == "OFFBOARD" and not gcs.ap.in_failsafe
 
 
+def test_offboard_on_the_ground_takes_off_to_a_setpoint_above(px4: MakePx4) -> None:
+    """MulticopterPositionControl.cpp want_takeoff (armed, the setpoint above the vehicle): the real SIH standard_vtol armed on the
+    ground took off in OFFBOARD ("Takeoff detected", tests/data/px4/vtol-waypoints-guided.tlog)."""
+    gcs = px4()
+    assert gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1) == m.MAV_RESULT_ACCEPTED
+    goal = (*gcs.north(30.0), 20.0)
+    gcs.stream(1.0, goal)
+    assert gcs.px4_mode(OFFBOARD) == [m.MAV_RESULT_ACCEPTED, m.MAV_RESULT_ACCEPTED]
+    gcs.stream(20.0, goal)
+    assert "Takeoff detected" in gcs.texts(gcs.log) and gcs.ap.armed
+    assert gcs.ap.vehicle.distance_to(*goal[:2]) < 1.5 and gcs.ap.vehicle.alt_m == pytest.approx(20.0, abs=0.6)
+
+
 def test_leaving_offboard_before_stopping_the_stream_is_no_failsafe(px4: MakePx4) -> None:
     gcs = airborne(px4)
     goal = (*gcs.north(10.0), 20.0)
