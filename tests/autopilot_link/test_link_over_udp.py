@@ -9,13 +9,27 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.runtime.assembly import build_runtime
 from executive.runtime.loop import Runtime
 from executive.sim import SimServer
-from executive.world.clock import ScaledClock
+from executive.world.clock import ManualClock
 
 HOME = (-35.363261, 149.165230, 0.0)
 
 
 def bb(key: str):
     return py_trees.blackboard.Blackboard.get(key)
+
+
+class SteppedVehicles(ManualClock):
+    """Vehicle time in lock-step over real UDP: it moves only when the executive waits, and each wait steps the
+    simulated vehicles once (their serving threads are not started), so a fault lasts the same ticks on any machine."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.sims: list[SimServer] = []
+
+    def sleep_until(self, t: float) -> None:
+        super().sleep_until(t)
+        for sim in self.sims:
+            sim.step()
 
 
 def tick_until(runtime: Runtime, condition, max_ticks: int = 400) -> int:
@@ -33,7 +47,7 @@ def idle_runtime(square_mission):
 
     links: list[PymavlinkLink] = []
 
-    def make(url: str, clock: ScaledClock) -> Runtime:
+    def make(url: str, clock: ManualClock) -> Runtime:
         links.append(PymavlinkLink(url))
         return build_runtime(square_mission, links[-1], clock, root=py_trees.behaviours.Running("idle"))
 
@@ -43,8 +57,9 @@ def idle_runtime(square_mission):
 
 
 def test_streams_are_set_up_and_set_up_again_after_an_autopilot_reboot(idle_runtime):
-    clock = ScaledClock(20.0)
-    first = SimServer("rover", clock=clock, home=HOME).start()
+    clock = SteppedVehicles()
+    first = SimServer("rover", clock=clock, home=HOME)
+    clock.sims.append(first)
     port = first.port
     runtime = idle_runtime(first.url_for_client, clock)
     try:
@@ -53,7 +68,8 @@ def test_streams_are_set_up_and_set_up_again_after_an_autopilot_reboot(idle_runt
         assert not runtime.link.streams.refused
         requested = bb("/command/message_rate").ticket
         first.stop()  # the autopilot reboots: a new one on the same port, its boot clock from zero
-        second = SimServer("rover", url=f"udpin:127.0.0.1:{port}", clock=clock, home=HOME).start()
+        second = SimServer("rover", url=f"udpin:127.0.0.1:{port}", clock=clock, home=HOME)
+        clock.sims[:] = [second]
         try:
             tick_until(runtime, lambda: bb("/link/reboots") >= 1)
             tick_until(
@@ -72,8 +88,9 @@ def test_link_loss_is_seen_and_recovery_re_requests_streams(idle_runtime, tmp_pa
 
     faults = tmp_path / "loss.yaml"
     faults.write_text("version: 1\nfaults:\n  - {kind: link_loss, at_s: 10, for_s: 6}\n")
-    clock = ScaledClock(20.0)
-    sim = SimServer("rover", clock=clock, home=HOME, faults=FaultInjector(load_faults(faults), clock)).start()
+    clock = SteppedVehicles()
+    sim = SimServer("rover", clock=clock, home=HOME, faults=FaultInjector(load_faults(faults), clock))
+    clock.sims.append(sim)
     runtime = idle_runtime(sim.url_for_client, clock)
     try:
         assert runtime.link.connect(200.0)
