@@ -38,4 +38,5 @@ def test_the_old_names_are_the_ones_that_moved() -> None:
     here = executive._HERE
     for old, new in executive.MOVED.items():
         assert not (here / f"{old.replace('.', '/')}.py").exists()
+        assert not (here / old.replace(".", "/") / "__init__.py").exists()
         assert importlib.util.find_spec(f"executive.{new}") is not None

@@ -9,6 +9,7 @@ from executive.io.mavlink.link import PymavlinkLink
 from executive.runtime.assembly import build_runtime
 from executive.runtime.loop import Runtime
 from executive.sim import SimServer
+from executive.testing.lockstep import LockstepClock
 from executive.world.clock import ManualClock
 
 HOME = (-35.363261, 149.165230, 0.0)
@@ -18,18 +19,17 @@ def bb(key: str):
     return py_trees.blackboard.Blackboard.get(key)
 
 
-class SteppedVehicles(ManualClock):
-    """Vehicle time in lock-step over real UDP: it moves only when the executive waits, and each wait steps the
-    simulated vehicles once (their serving threads are not started), so a fault lasts the same ticks on any machine."""
+def lockstep_over_udp(sims: list[SimServer]) -> LockstepClock:
+    """The kit's lock-step clock over real UDP: vehicle time moves only when the executive waits, and each step moves
+    the simulated vehicles ``sims`` (their serving threads not started), so a fault lasts the same ticks on any machine."""
 
-    def __init__(self) -> None:
-        super().__init__()
-        self.sims: list[SimServer] = []
-
-    def sleep_until(self, t: float) -> None:
-        super().sleep_until(t)
-        for sim in self.sims:
+    def step_to(t: float) -> None:
+        ManualClock.sleep_until(clock, t)
+        for sim in sims:
             sim.step()
+
+    clock = LockstepClock(step_to)
+    return clock
 
 
 def tick_until(runtime: Runtime, condition, max_ticks: int = 400) -> int:
@@ -57,9 +57,10 @@ def idle_runtime(square_mission):
 
 
 def test_streams_are_set_up_and_set_up_again_after_an_autopilot_reboot(idle_runtime):
-    clock = SteppedVehicles()
+    sims: list[SimServer] = []
+    clock = lockstep_over_udp(sims)
     first = SimServer("rover", clock=clock, home=HOME)
-    clock.sims.append(first)
+    sims.append(first)
     port = first.port
     runtime = idle_runtime(first.url_for_client, clock)
     try:
@@ -69,7 +70,7 @@ def test_streams_are_set_up_and_set_up_again_after_an_autopilot_reboot(idle_runt
         requested = bb("/command/message_rate").ticket
         first.stop()  # the autopilot reboots: a new one on the same port, its boot clock from zero
         second = SimServer("rover", url=f"udpin:127.0.0.1:{port}", clock=clock, home=HOME)
-        clock.sims[:] = [second]
+        sims[:] = [second]
         try:
             tick_until(runtime, lambda: bb("/link/reboots") >= 1)
             tick_until(
@@ -88,9 +89,10 @@ def test_link_loss_is_seen_and_recovery_re_requests_streams(idle_runtime, tmp_pa
 
     faults = tmp_path / "loss.yaml"
     faults.write_text("version: 1\nfaults:\n  - {kind: link_loss, at_s: 10, for_s: 6}\n")
-    clock = SteppedVehicles()
+    sims: list[SimServer] = []
+    clock = lockstep_over_udp(sims)
     sim = SimServer("rover", clock=clock, home=HOME, faults=FaultInjector(load_faults(faults), clock))
-    clock.sims.append(sim)
+    sims.append(sim)
     runtime = idle_runtime(sim.url_for_client, clock)
     try:
         assert runtime.link.connect(200.0)
