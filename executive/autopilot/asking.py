@@ -1,7 +1,8 @@
 """Asking the autopilot until the vehicle shows it is done: ask, confirm by what the vehicle reports, ask again, the next step or give up.
 
 The one mechanism every place that asks the autopilot for something uses (the failsafes' reactions,
-the mission's holds, the return's GUIDED, the make-safe, the RC switches, the commands of the trees).
+the mission's holds, the return's GUIDED, the make-safe, the RC switches, the commands of the trees, the
+VTOL transitions, the repositions of :mod:`executive.behaviours.repositioning`).
 An :class:`Asker` asks a step (a mode, an arm or a disarm, or any command with its own confirmation)
 and, each time its owner calls :meth:`Asker.follow_up`, looks at what came back: the ack on
 ``/command/<outcome>`` and the vehicle's own report (the heartbeat's mode, armed state). An ask
