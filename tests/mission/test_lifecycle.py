@@ -70,11 +70,11 @@ TABLE = {
 def test_transition_table(state_in, square_mission, start, request_, expected):
     state = state_in(start)
     action = (lambda: state.upload(square_mission)) if request_ == "upload" else getattr(state, request_)
-    before = (state.status, state.leg_index, state.mission, bb("/mission/state"))
+    before = (state.status, state.legs.leg_index, state.mission, bb("/mission/state"))
     if expected is None:
         with pytest.raises(Refused, match=f"cannot {request_} while {start}"):
             action()
-        assert (state.status, state.leg_index, state.mission, bb("/mission/state")) == before  # nothing half-applied
+        assert (state.status, state.legs.leg_index, state.mission, bb("/mission/state")) == before  # nothing half-applied
     else:
         action()
         assert state.status is expected
@@ -91,17 +91,17 @@ def test_start_after_completion_runs_again_from_the_first_waypoint(state_in, squ
         state.advance_leg()
     state.complete()
     state.start()
-    assert state.leg_index == 0
-    assert state.target == square_mission.waypoints[0]
+    assert state.legs.leg_index == 0
+    assert state.legs.target == square_mission.waypoints[0]
 
 
 def test_pause_and_resume_keep_the_leg(state_in, square_mission):
     state = state_in(S.RUNNING)
     state.advance_leg()
     state.pause()
-    assert state.target == square_mission.waypoints[1]
+    assert state.legs.target == square_mission.waypoints[1]
     state.resume()
-    assert state.leg_index == 1
+    assert state.legs.leg_index == 1
     assert bb("/mission/target") == square_mission.waypoints[1]
 
 
@@ -137,7 +137,7 @@ def test_past_the_last_waypoint_the_leg_a_person_reads_is_the_last_as_the_status
     state = state_in(S.RUNNING)
     for _ in square_mission.waypoints:
         state.advance_leg()  # every waypoint reached: a VTOL lands now, still RUNNING
-    assert (state.leg_index, state.leg_number) == (4, 4)
+    assert (state.legs.leg_index, state.legs.leg_number) == (4, 4)
     state.pause()
     state.resume()
     assert state.reason == "resumed at leg 4"
