@@ -89,8 +89,13 @@ MOVED_INTO_PACKAGE = MappingProxyType({"runtime": "runtime.loop", "admission": "
 #: :func:`moved_attribute`. A class's member that moved to another object is a :class:`MovedMember`.
 RENAMED: MappingProxyType[str, str] = MappingProxyType(
     {
-        "runtime.loop.Outcome": "RunOutcome",
-        "world.state.Sample": "SampleRecord",
+        "runtime.loop.Outcome": "RunOutcome",  # how a run ended; world.state.Outcome is what an acked command asks
+        "world.state.Sample": "SampleRecord",  # a finished sample; behaviours.sampling.Sample is the action taking it
+        "sim.Limits": "MotionLimits",  # how a simulated vehicle moves; mission.model.Limits are the mission's
+        "sim.physics.vehicle.Limits": "MotionLimits",
+        "mission.formats.plan_items.Source": "FileContents",  # what a plan file says; observers.web.server.Source feeds the page
+        "runtime.services.Step": "FunctionService",  # a service made of a function; autopilot.asking.Step is a step asked
+        "sim.ardupilot.plane.Transition": "TransitionState",  # SLT_Transition's state; mission.events.Transition is the lifecycle's
     }
 )
 
