@@ -260,8 +260,15 @@ class EnergyWatch:
         self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
         self._mission: Mission | None = None
         self._rest_v: float | None = None  # the pack's voltage before arming (kept from mission to mission: the same pack)
+        self._rule: tuple[Mission, EnergyConfig | None, EnergyConfig | None] | None = None  # (mission, its energy block, its rule)
         self._begin(None)
         load_filterpy()
+
+    def _rule_of(self, mission: Mission) -> EnergyConfig | None:
+        """The mission's energy rule, asked again only when its ``energy:`` block is another (its defaults are a new model each time)."""
+        if self._rule is None or self._rule[0] is not mission or self._rule[1] is not mission.energy:
+            self._rule = (mission, mission.energy, mission.energy_rule())
+        return self._rule[2]
 
     def _begin(self, mission: Mission | None) -> None:
         """A mission's own count: its seeds, its start, its windows (a mission uploaded in ``--wait`` starts afresh)."""
@@ -284,7 +291,7 @@ class EnergyWatch:
 
     def service(self) -> None:
         mission = self._state.mission
-        config = mission.energy_rule() if mission is not None else None
+        config = self._rule_of(mission) if mission is not None else None
         if mission is None or config is None:
             return
         if mission is not self._mission:

@@ -15,6 +15,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.mission.port import MissionPort
 from executive.testing.links import FakeLink, ack
+from executive.tree.ticking import BehaviourTree
 from executive.world import blackboard
 from executive.world.clock import ManualClock
 from executive.world.dialect import MAVLinkMessage, mavlink
@@ -117,7 +118,7 @@ class Harness:
         self.readers: list[Callable[[], object]] = []
         #: Called each tick after the tree, before the commands are sent: what the runtime services then (a RouteKeeper's ``service``).
         self.writers: list[Callable[[], object]] = []
-        self.tree = py_trees.trees.BehaviourTree(root)
+        self.tree = BehaviourTree(root)
         self.tree.setup(clock=clock, autopilot=self.autopilot, mission_state=MissionPort(mission_state), **setup)
 
     @classmethod
