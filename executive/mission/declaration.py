@@ -103,10 +103,15 @@ class VehicleKindSpec:
     autopilots: frozenset[str]
     #: The default failsafe of every condition: condition -> (reaction, recovery).
     failsafes: Mapping[str, tuple[str, str]]
+    #: The energy rule's seeds where ``energy:`` gives none: (Wh per km, Wh per minute) (:mod:`executive.sensing.consumption`).
+    energy_seeds: tuple[float, float]
     #: reaction -> the mode it commands (flying as a plane: the second); a reaction left out is not for this kind.
     reactions: Mapping[str, tuple[str, str]] = field(default_factory=dict)
     #: Why a reaction left out is not for this kind (the loader's error), e.g. ``{"surface": "a glider cannot surface"}``.
     no_reaction: Mapping[str, str] = field(default_factory=dict)
+    #: The built-in simulated vehicle it rides in ``executive run`` without ``--mavlink`` (a name of ``simulator.model``,
+    #: e.g. ``vtol``: the simulated ArduPlane), given this kind's profile; None: none (it runs with ``--mavlink`` only).
+    simulator: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("failsafes", "reactions", "no_reaction"):
@@ -187,6 +192,12 @@ def kind_failsafes(kind: str) -> dict[str, tuple[str, str]]:
         return dict(VEHICLE_FAILSAFES[kind])
     spec = kind_spec(kind)
     return dict(spec.failsafes) if spec is not None else {}
+
+
+def reaction_modes(kind: str, reaction: str) -> tuple[str, str]:
+    """The modes ``reaction`` commands a vehicle of ``kind``: (in general, flying as a plane); KeyError: none for this kind."""
+    spec = kind_spec(kind)
+    return REACTION_MODES[reaction][kind] if spec is None else spec.reactions[reaction]
 
 
 def reaction_refused(kind: str, reaction: str) -> str | None:
