@@ -19,6 +19,8 @@ from executive.mission.failsafes import NO_REACTION, REACTION_MODES, VEHICLE_FAI
 from executive.world.vehicles import AUTOPILOT_VEHICLES, PROFILES, VehicleKind
 
 if TYPE_CHECKING:
+    from pydantic import BaseModel
+
     from executive.world.vehicles import VehicleProfile
 
 #: The vehicle kinds of the executive's own (:data:`executive.world.vehicles.PROFILES`).
@@ -47,6 +49,8 @@ class TreeDeclaration:
     auto_refused: str | None = None
     #: The mission's options section the tree reads (a field of the mission, e.g. ``sampling``); None: none.
     section: str | None = None
+    #: A section of the plugin's own: its pydantic model (strict, as ours: ``extra="forbid"``), the mission's field ``section``.
+    options: type[BaseModel] | None = None
     #: RC channels the tree reads from the autopilot (``rc.source: mavlink``), each with what it is; None: the take-over switch.
     rc_switches: Callable[[Any], dict[int, str]] | None = None  # takes the Mission (whose module imports this one)
     #: The ``rc:`` settings the tree takes where the file says nothing (``rc.source: mavlink`` only), e.g. ``{"arm_channel": 5}``.
@@ -69,6 +73,12 @@ class TreeDeclaration:
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if self.vehicles is not None:
             object.__setattr__(self, "vehicles", frozenset(self.vehicles))
+
+    def options_of(self, mission: Any) -> Any:
+        """The tree's own options section of ``mission`` as the file gives it, else its defaults (the ``options`` model's)."""
+        assert self.section is not None and self.options is not None, "the tree declares no options section of its own"
+        given = getattr(mission, self.section, None)
+        return given if given is not None else self.options()
 
     def to_json(self) -> dict[str, Any]:
         """The declaration as ``executive behaviours --trees --json`` lists it."""

@@ -9,6 +9,7 @@ failsafe defaults.
 from __future__ import annotations
 
 import py_trees
+from pydantic import BaseModel, ConfigDict, Field
 
 from executive.behaviours import ForEachLeg, GoTo, SetMode, TakeOff
 from executive.mission.declaration import TreeDeclaration, VehicleKindSpec
@@ -38,19 +39,27 @@ GLIDER = VehicleKindSpec(
     no_reaction={"surface": "a glider cannot surface", "disarm": "disarming a glider in flight would drop it"},
     simulator="vtol",  # the simulated ArduPlane (a QuadPlane): it launches on the lift motors, then flies the wing
 )
-#: How high the lift motors take it before it flies the route on the wing.
-LAUNCH_ALT_M = 40.0
+
+
+class GliderOptions(BaseModel):
+    """The mission's ``glider:`` section, the tree's own."""
+
+    model_config = ConfigDict(strict=True, extra="forbid", frozen=True)
+    launch_alt_m: float = Field(40.0, ge=20.0, le=120.0, description="how high the lift motors take it before it flies the wing")
+    thermal_channel: int = Field(8, ge=5, le=16, description="the pilot's thermal switch")
 
 
 def switches(mission):
-    """The take-over switch, and channel 8: the pilot's thermal switch."""
-    return {mission.rc.takeover_channel: "the take-over switch", 8: "the thermal switch"}
+    """The take-over switch, and the pilot's thermal switch (``glider.thermal_channel``)."""
+    return {mission.rc.takeover_channel: "the take-over switch", DECLARATION.options_of(mission).thermal_channel: "the thermal switch"}
 
 
 DECLARATION = TreeDeclaration(
     doc="a sailplane's survey: each waypoint in GUIDED under guards, then loiter",
     vehicles=frozenset({"glider"}),
     needs=("ardupilot", "it soars in ArduPlane's THERMAL mode"),
+    section="glider",
+    options=GliderOptions,
     rc_switches=switches,
     failsafes={"link_loss": ("rtl", _A)},
     timed_legs=True,
@@ -59,8 +68,8 @@ DECLARATION = TreeDeclaration(
 
 
 def build(mission):
-    limits = mission.limits
-    launch = once("Launch", SetMode("GUIDED"), TakeOff(LAUNCH_ALT_M, confirm_timeout_s=limits.leg_timeout_s))
+    limits, options = mission.limits, DECLARATION.options_of(mission)
+    launch = once("Launch", SetMode("GUIDED"), TakeOff(options.launch_alt_m, confirm_timeout_s=limits.leg_timeout_s))
     leg = GoTo(limits.acceptance_radius_m, limits.leg_timeout_s, method="reposition")  # ArduPlane flies GUIDED to a DO_REPOSITION
     route = failsafe_guarded(
         py_trees.composites.Sequence("Flight", memory=True, children=[launch, ForEachLeg(leg)]), standard_guards(mission), mission
