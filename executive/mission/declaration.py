@@ -97,6 +97,7 @@ class TreeDeclaration:
             "samples": self.samples,
             "timed_legs": self.timed_legs,
             "vehicle_kinds": [k.kind for k in self.vehicle_kinds],
+            **({"options": sorted(self.options.model_fields)} if self.options is not None else {}),
         }
 
 

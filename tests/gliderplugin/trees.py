@@ -55,7 +55,7 @@ def switches(mission):
 
 
 DECLARATION = TreeDeclaration(
-    doc="a sailplane's survey: each waypoint in GUIDED under guards, then loiter",
+    doc="a sailplane's survey: launched on its lift motors, then each waypoint in GUIDED under guards, then loiter",
     vehicles=frozenset({"glider"}),
     needs=("ardupilot", "it soars in ArduPlane's THERMAL mode"),
     section="glider",
