@@ -91,7 +91,7 @@ def test_a_glider_mission_is_valid_with_the_plugin_and_its_declaration_is_what_t
     assert main(["validate", path]) == 0, capsys.readouterr().err
     assert capsys.readouterr().out == f"{path}: ok (2 waypoints, vehicle glider, tree glider_survey)\n"
     mission = load_mission(path)
-    assert rc_switch_channels(mission) == {6: "the take-over switch", 8: "the thermal switch"}
+    assert rc_switch_channels(mission) == {6: "the take-over switch", 7: "the thermal switch"}
     policy = failsafe_policy(mission)
     assert (policy["link_loss"].reaction, policy["link_loss"].recovery) == ("rtl", "abort")  # the tree's default
     assert (policy["rc_loss"].reaction, policy["rc_loss"].recovery) == ("loiter", "resume")  # the glider kind's
@@ -195,8 +195,8 @@ def test_a_plugin_trees_own_options_section_is_validated_with_located_errors_and
         f"{path}:10:17: glider.launch_alt_m: 5: Input should be greater than or equal to 20",
         f"{path}:11:3: glider.thermal: unknown field (did you mean thermal_channel? allowed: launch_alt_m, thermal_channel)",
     ]
-    mission = load_mission(write(tmp_path, GLIDER + "glider: {thermal_channel: 7}\n"))
-    assert rc_switch_channels(mission) == {6: "the take-over switch", 7: "the thermal switch"}
+    mission = load_mission(write(tmp_path, GLIDER + "glider: {thermal_channel: 9}\n"))
+    assert rc_switch_channels(mission) == {6: "the take-over switch", 9: "the thermal switch"}
     assert declared("glider_survey").options_of(mission).launch_alt_m == 40.0  # the section's default
     path = write(tmp_path, GLIDER.replace("vehicle: glider", "vehicle: rover").replace("glider_survey", "waypoints") + "glider: {}\n")
     assert main(["validate", path]) == 2
@@ -230,3 +230,11 @@ def test_entry_points_are_read_once_until_the_path_changes_and_a_plugin_installe
         assert "glider" in plugin_kinds()
         assert reads == [registry.TREES]  # read again once: the path changed
     assert "glider" not in plugin_kinds()  # uninstalled: the path changed back
+
+
+def test_a_glider_switch_on_arduplanes_mode_switch_channel_is_refused_before_arming(glider: None) -> None:
+    mission = load_mission_text(FLIGHT.replace("glider: {launch_alt_m: 20}", "glider: {launch_alt_m: 20, thermal_channel: 8}"), "ridge.yaml")
+    with Lockstep(mission) as sim:
+        outcome = sim.run_to_end(limit_s=60)
+        assert not sim.autopilot.armed
+    assert str(outcome.status) == "ABORTED" and "FLTMODE_CH" in outcome.reason, outcome.reason

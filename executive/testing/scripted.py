@@ -66,7 +66,7 @@ class ScriptedAutopilot:
         from executive.autopilot.ardupilot import MODE_SWITCH_PARAMS
 
         profile = self.commander.profile if self.commander is not None else getattr(self, "profile", None)
-        param = MODE_SWITCH_PARAMS.get(profile.kind) if profile is not None else None
+        param = MODE_SWITCH_PARAMS.get(profile.mav_type) if profile is not None else None
         mission = self.h.mission_state.mission if self.h is not None else None
         facts: dict[str, object] = {}
         if blackboard.value("/vehicle/battery") is None:

@@ -46,7 +46,7 @@ class GliderOptions(BaseModel):
 
     model_config = ConfigDict(strict=True, extra="forbid", frozen=True)
     launch_alt_m: float = Field(40.0, ge=20.0, le=120.0, description="how high the lift motors take it before it flies the wing")
-    thermal_channel: int = Field(8, ge=5, le=16, description="the pilot's thermal switch")
+    thermal_channel: int = Field(7, ge=5, le=16, description="the pilot's thermal switch (ArduPlane's FLTMODE_CH is 8)")
 
 
 def switches(mission):
