@@ -16,10 +16,12 @@ from pathlib import Path
 import pytest
 
 from executive import registry
+from executive.autopilot.fallbacks import chain
 from executive.cli import main
 from executive.mission.declaration import declared, plugin_kinds
 from executive.mission.loader import load_mission, load_mission_text
 from executive.mission.rules import failsafe_policy, rc_switch_channels
+from executive.sim.battery import SPECS
 from executive.sim.faults import FaultPlan
 from executive.testing import Lockstep
 from executive.tree.schema import SHIPPED, mission_json_schema, mission_json_schema_text
@@ -238,3 +240,11 @@ def test_a_glider_switch_on_arduplanes_mode_switch_channel_is_refused_before_arm
         outcome = sim.run_to_end(limit_s=60)
         assert not sim.autopilot.armed
     assert str(outcome.status) == "ABORTED" and "FLTMODE_CH" in outcome.reason, outcome.reason
+
+
+def test_a_glider_is_known_by_the_firmware_it_flies_on_the_simulated_arduplane(glider: None) -> None:
+    mission = load_mission_text(FLIGHT, "ridge.yaml")
+    with Lockstep(mission) as sim:
+        assert sim.autopilot.battery.spec == SPECS["vtol"]  # the simulated QuadPlane's pack, not a rover's
+    assert list(chain("ardupilot", "glider", "LOITER")) == ["LOITER", "CIRCLE"]  # ArduPlane's own failsafe's next step
+    assert list(chain("ardupilot", "glider", "RTL")) == ["RTL", "CIRCLE"]
