@@ -69,6 +69,8 @@ class TreeDeclaration:
     vehicle_kinds: tuple[VehicleKindSpec, ...] = ()
 
     def __post_init__(self) -> None:
+        if self.options is not None and self.section is None:
+            raise ValueError("options (the model of an options section of the tree's own) needs section: the mission's field it is")
         for name in ("auto_drive", "rc_defaults", "failsafes", "refused_reactions"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if self.vehicles is not None:
