@@ -248,3 +248,8 @@ def test_a_glider_is_known_by_the_firmware_it_flies_on_the_simulated_arduplane(g
         assert sim.autopilot.battery.spec == SPECS["vtol"]  # the simulated QuadPlane's pack, not a rover's
     assert list(chain("ardupilot", "glider", "LOITER")) == ["LOITER", "CIRCLE"]  # ArduPlane's own failsafe's next step
     assert list(chain("ardupilot", "glider", "RTL")) == ["RTL", "CIRCLE"]
+
+
+def test_executive_sim_serves_the_simulated_vehicle_a_plugin_kind_rides(glider: None, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["sim", "--help"]) == 0
+    assert "{boat,bunker,rover,sub,vtol,glider}" in capsys.readouterr().out
