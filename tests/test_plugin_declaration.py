@@ -253,3 +253,22 @@ def test_a_glider_is_known_by_the_firmware_it_flies_on_the_simulated_arduplane(g
 def test_executive_sim_serves_the_simulated_vehicle_a_plugin_kind_rides(glider: None, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["sim", "--help"]) == 0
     assert "{boat,bunker,rover,sub,vtol,glider}" in capsys.readouterr().out
+
+
+def test_a_plugin_section_named_as_a_field_of_every_mission_is_refused_at_the_tree_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "site").mkdir()
+    (tmp_path / "site" / "vtoltree.py").write_text(
+        "from pydantic import BaseModel\n\nfrom executive.mission.declaration import TreeDeclaration\n"
+        "from executive.trees.waypoints import build\n\n\nclass Mine(BaseModel):\n    speed: float = 1.0\n\n\n"
+        'DECLARATION = TreeDeclaration(section="vtol", options=Mine)\n',
+        encoding="utf-8",
+    )
+    monkeypatch.syspath_prepend(str(tmp_path / "site"))
+    monkeypatch.delitem(sys.modules, "vtoltree", raising=False)
+    path = write(tmp_path, GLIDER.replace("vehicle: glider", "vehicle: rover").replace("tree: glider_survey", "tree: vtoltree:build"))
+    assert main(["validate", path]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"{path}:4:7: tree: tree vtoltree:build declares an options section of its own named vtol, a field of every mission"
+    ]
