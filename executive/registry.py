@@ -134,15 +134,16 @@ def installed_key() -> tuple[tuple[str, int], ...]:
     return tuple(key)
 
 
-_named: dict[str, tuple[tuple[tuple[str, int], ...], dict[str, EntryPoint]]] = {}
+_named: dict[str, tuple[tuple[Any, tuple[tuple[str, int], ...]], dict[str, EntryPoint]]] = {}
 
 
 def named(group: str) -> dict[str, EntryPoint]:
     """The entry points of ``group`` by name (of two with one name, the first found on the path).
 
-    Read once per :func:`installed_key` (reading them all takes ~13 ms): a package installed later is found.
+    Read once per :func:`installed_key` (reading them all takes ~13 ms): a package installed later is found. The key
+    holds the reader too: one put in its place (a test's) is read afresh.
     """
-    key = installed_key()
+    key = (entry_points, installed_key())
     cached = _named.get(group)
     if cached is None or cached[0] != key:
         found: dict[str, EntryPoint] = {}

@@ -497,16 +497,16 @@ def _plugin_sections(trees: list[str]) -> dict[str, tuple[str, type[BaseModel]]]
 
 
 @cache
-def _with_sections(sections: tuple[tuple[str, str, type[BaseModel]], ...]) -> type[Mission]:
+def _with_sections(base: type[Mission], sections: tuple[tuple[str, str, type[BaseModel]], ...]) -> type[Mission]:
     fields: dict[str, Any] = {
         section: (options | None, Field(None, description=f"{tree} options (a plugin's)")) for section, tree, options in sections
     }
-    extended: type[Mission] = create_model("Mission", __base__=Mission, __module__=__name__, __doc__=Mission.__doc__, **fields)
+    extended: type[Mission] = create_model("Mission", __base__=base, __module__=__name__, __doc__=base.__doc__, **fields)
     return extended
 
 
-def mission_model(data: object = None) -> type[Mission]:
-    """The model a mission file is validated as: :class:`Mission`, with the options section its plugin tree declares as its own.
+def mission_model(data: object = None, base: type[Mission] = Mission) -> type[Mission]:
+    """The model a mission file is validated as: ``base``, with the options section its plugin tree declares as its own.
 
     None: with every installed plugin tree's section (the JSON schema's).
     """
@@ -515,6 +515,6 @@ def mission_model(data: object = None) -> type[Mission]:
     elif isinstance(data, dict) and isinstance(data.get("tree"), str):
         trees = [data["tree"]]
     else:
-        return Mission
+        return base
     sections = _plugin_sections(trees)
-    return _with_sections(tuple((s, tree, model) for s, (tree, model) in sorted(sections.items()))) if sections else Mission
+    return _with_sections(base, tuple((s, tree, model) for s, (tree, model) in sorted(sections.items()))) if sections else base

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from executive.mission.declaration import BUILT_IN_KINDS, plugin_kinds, trees_with
-from executive.mission.model import mission_model
+from executive.mission.model import Mission, mission_model
 from executive.tree.composition import tree_json_schema
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
@@ -23,7 +23,7 @@ def mission_json_schema() -> dict[str, Any]:
 
     With plugins installed: their trees' own options sections, and their vehicle kinds in ``vehicle``'s enum.
     """
-    schema = mission_model().model_json_schema()
+    schema = mission_model(base=Mission).model_json_schema()
     if kinds := plugin_kinds():
         schema["properties"]["vehicle"]["enum"] = [*BUILT_IN_KINDS, *kinds]
     composed, defs = tree_json_schema()
