@@ -173,7 +173,7 @@ def test_a_glider_flies_its_mission_to_completed_on_the_simulated_arduplane_it_r
         assert str(outcome.status) == "COMPLETED", outcome.reason
         assert (type(sim.autopilot).__name__, sim.autopilot.profile.kind) == ("QuadPlaneSim", "glider")
         assert sim.autopilot.profile.mav_type == mavlink.MAV_TYPE_FIXED_WING  # ArduPlane's HEARTBEAT
-        assert sim.runtime.mission_state.leg_index == 2
+        assert sim.runtime.mission_state.legs.leg_index == 2
     assert modes[-2:] == ["GUIDED", "LOITER"]  # flown in GUIDED, left in the glider's safe mode
 
 
