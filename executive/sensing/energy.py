@@ -17,6 +17,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from executive.mission.declaration import kind_spec
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import EnergyConfig, Mission, Waypoint
 from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
@@ -213,7 +214,8 @@ def planned(mission: Mission) -> EnergyEstimate | str | None:
 
 def seeded(mission: Mission, config: EnergyConfig) -> ConsumptionModel:
     """The consumption model at the mission's seeds, else its kind's."""
-    seed_km, seed_min = SEEDS[mission.vehicle]
+    spec = kind_spec(mission.vehicle)
+    seed_km, seed_min = SEEDS[mission.vehicle] if spec is None else spec.energy_seeds
     return ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min, VERTICAL_SEEDS.get(mission.vehicle, 0.0))
 
 
