@@ -84,7 +84,7 @@ def executive_process(
     """``python -m executive ARGS`` in a process of its own, from the checkout, text pipes: its stderr kept (a pipe), its stdout
     dropped unless ``stdout`` says otherwise (``subprocess.PIPE`` for the status lines); ``env`` is added to this environment.
     ``via`` names a script of tests/ and its own arguments, run in place of ``-m executive`` (``python tests/SCRIPT VIA... -- ARGS``):
-    the executive under a test's clock (``stepped_wall_clock.py``, ``held_after_stop.py``).
+    the executive under a test's clock (``stepped_wall_clock.py``, ``held_clock.py``).
 
     For what only a process shows (signals, exit codes, a second process on the same socket, an interpreter's start): where the
     process boundary is not what a test checks, run ``main([...])`` in the test's own process (an interpreter's start is ~1 s of CPU).

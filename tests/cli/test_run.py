@@ -225,7 +225,7 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
     the handler was put back and raised KeyboardInterrupt in the shutdown. Here the vehicle goes silent as the operator presses
     Ctrl-C: making it safe asks HOLD every 1.5 s until its bound (9 s: 3 asks each for HOLD and the disarm after it), the second
     Ctrl-C comes meanwhile (sent once the first was acted on; the executive's clock held from that moment until it arrives,
-    tests/held_after_stop.py, so it lands there at 10x however busy the machine), and a third as the run ends ABORTED (where the
+    tests/held_clock.py, so it lands there at 10x however busy the machine), and a third as the run ends ABORTED (where the
     handler used to be put back)."""
     square = tmp_path / "square.yaml"
     square.write_text((ROOT / "missions/rover_square.yaml").read_text() + "simulator: {ekf_ready_after_s: 2}\n")
@@ -234,7 +234,7 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
     try:
         proc = executive_process(
             *("run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--speedup", "10", "--socket", "none"),
-            via=("held_after_stop.py",),
+            via=("held_clock.py", "stopped"),
             stdout=subprocess.PIPE,
         )
         assert proc.stdout is not None and proc.stderr is not None
