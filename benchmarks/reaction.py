@@ -123,7 +123,7 @@ def run(trials: int = 8, seed: int = 1, settle_s: float = 3.0, speedup: float = 
                 runtime.tick()
                 if runtime.mission_state.status is not MissionStatus.RUNNING:
                     raise RuntimeError(f"mission {runtime.mission_state.status}: {runtime.mission_state.reason}")
-                driving = runtime.link.get("/vehicle/mode") == "GUIDED" and runtime.mission_state.leg_index == 0 and runtime.tree is not None
+                driving = runtime.link.get("/vehicle/mode") == "GUIDED" and runtime.mission_state.legs.leg_index == 0 and runtime.tree is not None
                 if state == "drive" and driving and clock.now() >= settle_until:
                     threading.Timer(rng.random() * period / speedup, _break, (sim, probe)).start()  # a wall-clock timer
                     state = "broken"

@@ -63,7 +63,7 @@ def measure(legs: int, leg_m: float = 200.0, rate_hz: float = 10.0, sample_every
     rt = loop.runtime
     loop.connect()
     rt.mission_state.start()
-    loop.run_until(lambda: rt.mission_state.leg_index >= 1, LEG_TIMEOUT_S)
+    loop.run_until(lambda: rt.mission_state.legs.leg_index >= 1, LEG_TIMEOUT_S)
     capacity = int(legs * LEG_TIMEOUT_S * rate_hz) + 1  # the leg timeout ends the mission before this
     ticks = array("d", bytes(8 * capacity))
     blocks = array("q", bytes(8 * (capacity // sample_every + 1)))

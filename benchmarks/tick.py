@@ -257,7 +257,7 @@ def breakdown(
             rt.tick()
             progress.update()
 
-        loop.run_until(lambda: rt.mission_state.leg_index >= 1 and rt.link.get("/vehicle/mode") == guided, 120.0, tick=tick)
+        loop.run_until(lambda: rt.mission_state.legs.leg_index >= 1 and rt.link.get("/vehicle/mode") == guided, 120.0, tick=tick)
         for _ in range(warmup_ticks):
             loop.step()
             tick()
@@ -323,7 +323,7 @@ def breakdown(
             for recorder in journal_snapshots:
                 recorder.close()
         encoder_ns = sum(f.encoder_ns for f in feeds) - encoder_ns
-        if rt.mission_state.status is not MissionStatus.RUNNING or rt.mission_state.leg_index >= waypoints:
+        if rt.mission_state.status is not MissionStatus.RUNNING or rt.mission_state.legs.leg_index >= waypoints:
             raise RuntimeError(f"the mission left its route during the benchmark: {rt.mission_state.status} {rt.mission_state.reason}")
         return {
             "parts": parts, "floors": floors, "full": full, "messages_per_tick": (loop.messages - messages) / ticks,

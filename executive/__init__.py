@@ -3,10 +3,13 @@
 import importlib.abc
 import importlib.machinery
 import importlib.util
+import operator
 import sys
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from types import MappingProxyType, ModuleType
+from typing import Any
 
 __version__ = "0.1.0"
 
@@ -81,10 +84,24 @@ MOVED: MappingProxyType[str, str] = MappingProxyType(
 )
 #: The two modules that became packages of their own name: their names forwarded from the package (PEP 562).
 MOVED_INTO_PACKAGE = MappingProxyType({"runtime": "runtime.loop", "admission": "admission.checks"})
+#: Names renamed in 0.2 (issue 41: one name for one thing), module and old name below ``executive`` -> the new name in the same
+#: module. The old name still works, with a DeprecationWarning, for one release: the module's ``__getattr__`` asks
+#: :func:`moved_attribute`. A class's member that moved to another object is a :class:`MovedMember`.
+RENAMED: MappingProxyType[str, str] = MappingProxyType(
+    {
+        "runtime.loop.Outcome": "RunOutcome",  # how a run ended; world.state.Outcome is what an acked command asks
+        "world.state.Sample": "SampleRecord",  # a finished sample; behaviours.sampling.Sample is the action taking it
+        "sim.Limits": "MotionLimits",  # how a simulated vehicle moves; mission.model.Limits are the mission's
+        "sim.physics.vehicle.Limits": "MotionLimits",
+        "mission.formats.plan_items.Source": "FileContents",  # what a plan file says; observers.web.server.Source feeds the page
+        "runtime.services.Step": "FunctionService",  # a service made of a function; autopilot.asking.Step is a step asked
+        "sim.ardupilot.plane.Transition": "TransitionState",  # SLT_Transition's state; mission.events.Transition is the lifecycle's
+    }
+)
 
 
-def _warn_moved(old: str, new: str) -> None:
-    warnings.warn(f"{old} moved to {new} (0.2); the old name goes in 0.3", DeprecationWarning, stacklevel=3)
+def _warn_moved(old: str, new: str, stacklevel: int = 3) -> None:
+    warnings.warn(f"{old} moved to {new} (0.2); the old name goes in 0.3", DeprecationWarning, stacklevel=stacklevel)
 
 
 class _MovedModule(importlib.abc.Loader):
@@ -114,13 +131,44 @@ class _MovedModules(importlib.abc.MetaPathFinder):
 
 
 def moved_attribute(package: str, name: str) -> object:
-    """A name of the module that became ``package`` (``executive.runtime``'s ``Runtime``), with a DeprecationWarning."""
-    new = f"executive.{MOVED_INTO_PACKAGE[package.removeprefix('executive.')]}"
+    """An old name of module ``package``, with a DeprecationWarning: called by the module's ``__getattr__`` (PEP 562).
+
+    A name in :data:`RENAMED` is the module's new name (``executive.world.state.Sample``: ``SampleRecord``); a module that
+    became a package forwards the names of the module it was (``executive.runtime``'s ``Runtime``).
+    """
+    old = package.removeprefix("executive.")
+    if f"{old}.{name}" in RENAMED:
+        new_name = RENAMED[f"{old}.{name}"]
+        _warn_moved(f"{package}.{name}", f"{package}.{new_name}", stacklevel=4)
+        return getattr(sys.modules[package], new_name)
+    if old not in MOVED_INTO_PACKAGE:
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+    new = f"executive.{MOVED_INTO_PACKAGE[old]}"
     module = importlib.import_module(new)
     if name.startswith("__") or not hasattr(module, name):
         raise AttributeError(f"module {package!r} has no attribute {name!r}")
     _warn_moved(f"{package}.{name}", f"{new}.{name}")
     return getattr(module, name)
+
+
+class MovedMember:
+    """A class's member that moved in 0.2 to another object: read at ``new``, a path from the instance (``legs.leg_index``),
+    with a DeprecationWarning, for one release. ``read`` reads it when a path alone cannot (a method that now takes an argument).
+    """
+
+    def __init__(self, new: str, read: Callable[[Any], object] | None = None) -> None:
+        self.new = new
+        self._read = read or operator.attrgetter(new)
+        self.old = self._owner = ""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.old, self._owner = f"{owner.__module__}.{owner.__qualname__}.{name}", owner.__qualname__
+
+    def __get__(self, instance: object, owner: type | None = None) -> object:
+        if instance is None:
+            return self
+        _warn_moved(self.old, f"{self._owner}.{self.new}")
+        return self._read(instance)
 
 
 sys.meta_path.append(_MovedModules())

@@ -40,3 +40,25 @@ def test_the_old_names_are_the_ones_that_moved() -> None:
         assert not (here / f"{old.replace('.', '/')}.py").exists()
         assert not (here / old.replace(".", "/") / "__init__.py").exists()
         assert importlib.util.find_spec(f"executive.{new}") is not None
+
+
+@pytest.mark.parametrize("old", sorted(executive.RENAMED))
+def test_a_renamed_name_is_the_new_one_with_a_warning(old: str) -> None:
+    """One name for one thing (0.2): ``executive.world.state.Sample`` (a finished sample) is ``SampleRecord``, apart from the Sample action."""
+    module, _, name = old.rpartition(".")
+    new = executive.RENAMED[old]
+    with pytest.warns(DeprecationWarning, match=rf"executive\.{old} moved to executive\.{module}\.{new} \(0\.2\)"):
+        found = getattr(importlib.import_module(f"executive.{module}"), name)
+    assert found is getattr(importlib.import_module(f"executive.{module}"), new)
+    assert found.__name__ == new  # the class itself, under its new name
+
+
+def test_the_old_name_of_a_sample_record_imports_with_a_warning_and_a_typo_still_fails() -> None:
+    from executive.behaviours.sampling import Sample as SampleAction
+    from executive.world.state import SampleRecord
+
+    with pytest.warns(DeprecationWarning, match="executive.world.state.Sample moved to executive.world.state.SampleRecord"):
+        from executive.world.state import Sample
+    assert Sample is SampleRecord and Sample is not SampleAction
+    with pytest.raises(ImportError):
+        from executive.world.state import Sampel  # noqa: F401

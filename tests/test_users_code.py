@@ -161,7 +161,7 @@ def test_a_behaviour_that_raises_mid_mission_aborts_it_with_the_vehicle_made_saf
 
 def test_a_terminate_that_raises_does_not_stop_the_vehicle_being_made_safe(field_team: Path, caplog: pytest.LogCaptureFixture) -> None:
     with Lockstep(line_mission("field", tree="field_team_trees:sonar_terminate"), home=(*LINE_HOME, 0.0)) as sim:
-        assert sim.run(120, until=lambda: sim.runtime.mission_state.leg_index >= 1) is None
+        assert sim.run(120, until=lambda: sim.runtime.mission_state.legs.leg_index >= 1) is None
         sim.runtime.request_stop("SIGTERM")
         outcome = sim.run_to_end(limit_s=60)
     assert outcome.status is MissionStatus.ABORTED and outcome.reason == "stopped: SIGTERM"

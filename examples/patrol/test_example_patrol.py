@@ -54,7 +54,7 @@ def test_a_refused_beacon_ends_the_patrol_before_it_moves(rover: Rover) -> None:
 
 
 def test_too_few_satellites_hold_the_rover_until_they_come_back(rover: Rover) -> None:
-    rover.run(400, until=lambda: rover.h.mission_state.leg_index == 1)  # on the second leg
+    rover.run(400, until=lambda: rover.h.mission_state.legs.leg_index == 1)  # on the second leg
     rover.satellites = 5
     rover.publish()  # the GPS reports it before the next tick
     rover.commands.clear()
@@ -66,11 +66,11 @@ def test_too_few_satellites_hold_the_rover_until_they_come_back(rover: Rover) ->
     rover.satellites = 9
     rover.publish()
     assert rover.run(400)[-1] == Status.SUCCESS
-    assert rover.h.mission_state.leg_index == 4
+    assert rover.h.mission_state.legs.leg_index == 4
 
 
 def test_without_satellites_for_longer_than_the_recovery_limit_the_patrol_fails(rover: Rover) -> None:
-    rover.run(400, until=lambda: rover.h.mission_state.leg_index == 1)
+    rover.run(400, until=lambda: rover.h.mission_state.legs.leg_index == 1)
     rover.satellites = 3
     rover.publish()
     statuses = rover.run(400)

@@ -72,7 +72,7 @@ class ReachGate:
         mission = state.mission
         assert mission is not None
         limits = mission.limits
-        ahead = state.leg_index  # the waypoints already reached are goals no more (a run resumed after a crash)
+        ahead = state.legs.leg_index  # the waypoints already reached are goals no more (a run resumed after a crash)
         if ahead >= len(mission.waypoints):
             return self._pass()
         position: GlobalPosition | None = self._bb.get("/vehicle/position")

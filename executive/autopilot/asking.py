@@ -1,7 +1,8 @@
 """Asking the autopilot until the vehicle shows it is done: ask, confirm by what the vehicle reports, ask again, the next step or give up.
 
 The one mechanism every place that asks the autopilot for something uses (the failsafes' reactions,
-the mission's holds, the return's GUIDED, the make-safe, the RC switches, the commands of the trees).
+the mission's holds, the return's GUIDED, the make-safe, the RC switches, the commands of the trees, the
+VTOL transitions, the repositions of :mod:`executive.behaviours.repositioning`).
 An :class:`Asker` asks a step (a mode, an arm or a disarm, or any command with its own confirmation)
 and, each time its owner calls :meth:`Asker.follow_up`, looks at what came back: the ack on
 ``/command/<outcome>`` and the vehicle's own report (the heartbeat's mode, armed state). An ask
@@ -89,7 +90,7 @@ class Step:
     instead_of: str | None  # the step it replaces (refused, or impossible now)
     since: float  # the wish: what the rules' give-up bound counts from
     path: tuple[str, ...] = ()  # the steps asked (or passed over) to get here, this one last
-    send: Callable[[], Request] | None = None  # a command's own ask (None: by the step's name)
+    send: Callable[[], Request | None] | None = None  # a command's own ask (None: by the step's name)
     seen_by: Callable[[], bool] | None = None  # a command's own confirmation (None: by the step's name)
     request: Request | None = None  # the latest ask
     asked_at: float = -math.inf
@@ -306,10 +307,14 @@ class Asker:
             instead_of = shown  # the firmware has no such mode: the next one
         self.asking = None
 
-    def start_command(self, name: str, send: Callable[[], Request], seen: Callable[[], bool], cause: str) -> None:
-        """Ask a command of the owner's (``send``), done when ``seen`` says so; no fallback chain."""
+    def start_command(self, name: str, send: Callable[[], Request | None], seen: Callable[[], bool], cause: str) -> None:
+        """Ask a command of the owner's (``send``), done when ``seen`` says so; no fallback chain.
+
+        ``send`` returning None asks nothing (the owner knows why: no position to aim from): nothing is being asked.
+        """
         self.asking = Step(name, name, cause, None, self.host.clock.now(), (name,), send=send, seen_by=seen)
-        self._ask(self.asking)
+        if not self._ask(self.asking):
+            self.asking = None
 
     def ask_again(self) -> None:
         """Ask the current step again now (the owner's choice: :meth:`due`, after its own conditions)."""
@@ -397,9 +402,12 @@ class Asker:
     # -- internals ---------------------------------------------------------------------------
 
     def _ask(self, asking: Step) -> bool:
-        """Send one ask of ``asking``; False when the autopilot has no such mode."""
+        """Send one ask of ``asking``; False when the autopilot has no such mode, or the owner's command could not be asked."""
         if asking.send is not None:
-            request = asking.send()  # a command's own ask: a KeyError (no such mode) is its owner's to meet
+            sent = asking.send()  # a command's own ask: a KeyError (no such mode) is its owner's to meet
+            if sent is None:
+                return False
+            request = sent
         else:
             named = self._ask_by_name(asking)
             if named is None:

@@ -95,7 +95,7 @@ class RouteKeeper:
         self._bb = blackboard.writer("route keeper", ["/link/route_upload"])
         self._vehicle = blackboard.reader("route keeper", ["/vehicle/mission_items", "/vehicle/home", _SET_HOME_KEY])
         self._mission_state = mission_state
-        self._home = mission_state.route.home  # the home the autopilot was last given or found with
+        self._home = mission_state.legs.route.home  # the home the autopilot was last given or found with
         self._route: Route | None = None  # the edit being taken to the autopilot; None when there is none
         self._edit = ""
         self._attempt = 0
@@ -169,13 +169,13 @@ class RouteKeeper:
         extends it as legs are reached (executive.behaviours.auto_legs).
 
         A mission replaced while paused: its route goes to the autopilot now; its home is not an edit."""
-        route = self._mission_state.route
+        route = self._mission_state.legs.route
         self._home = route.home
         self._on_route(route, reason)
 
     def _on_transition(self, before: MissionStatus, after: MissionStatus, reason: str) -> None:
         if after is MissionStatus.READY:  # another mission: its home is not an edit
-            self._home = self._mission_state.route.home
+            self._home = self._mission_state.legs.route.home
 
     # -- internals ---------------------------------------------------------------------------
     def _horizon(self) -> tuple[int, int] | None:
@@ -183,7 +183,7 @@ class RouteKeeper:
         mission = self._mission_state.mission
         if mission is None or mission.drive != "auto":
             return None
-        return self._mission_state.leg_index, mission.limits.auto_horizon_legs
+        return self._mission_state.legs.leg_index, mission.limits.auto_horizon_legs
 
     def _held(self, route: Route, horizon: tuple[int, int] | None) -> str | None:
         """Why the autopilot does not hold the edit (its horizon, with drive: auto); None when it does."""

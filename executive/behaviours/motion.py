@@ -14,9 +14,9 @@ from typing import Literal
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request, Target
-from executive.autopilot.asking import refusal_reason
 from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
 from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.repositioning import Repositioning
 from executive.mission.model import Waypoint
 from executive.world import blackboard, geo
 from executive.world.seabed import depth_floor, depth_for_altitude
@@ -74,7 +74,8 @@ class GoTo(TimedBehaviour):
       altitude leg: the depth that keeps its height above the seabed, from the measured depth and
       rangefinder, re-sent as the seabed changes), so a leg never brings the sub up.
     - ``"reposition"``: MAV_CMD_DO_REPOSITION (acked; switches to GUIDED), sent once and again only
-      when refused or unanswered, at most every ``resend_s``. ArduPlane needs it: it takes only the
+      when refused or unanswered, at most every ``resend_s`` (:mod:`executive.behaviours.repositioning`,
+      the one asking mechanism). ArduPlane needs it: it takes only the
       altitude from a setpoint. A waypoint without an altitude (``alt_m`` 0, which ArduPlane refuses)
       is flown at the vehicle's current height. A plane circles the point at WP_LOITER_RAD
       (60 m by default): give it an acceptance radius larger than that.
@@ -136,7 +137,7 @@ class GoTo(TimedBehaviour):
         self.height_tolerance_m = height_tolerance_m
         self.distance_m: float | None = None
         self.bearing_deg: float | None = None
-        self._ticket: Request | None = None
+        self._repositioning = Repositioning(self, resend_s)
         # the autopilot's shaped target, and the point it heads for: kept from one leg to the next (the firmware keeps it)
         self._estimate: TargetEstimate | None = None
         self._estimate_goal: tuple[float, float] | None = None
@@ -147,8 +148,7 @@ class GoTo(TimedBehaviour):
         self.target = self.get("/mission/target")
         self.distance_m = self.bearing_deg = None
         self._last_sent = float("-inf")
-        self._ticket = None
-        self._refusal: str | None = None
+        self._repositioning.restart()
         self._seabed_depth: float | None = None  # an altitude leg's last depth target
         self._setpoint: Waypoint | None = None  # the setpoint sent last
         self._floor_told: str | None = None  # the seabed floor's kind last warned of
@@ -160,7 +160,8 @@ class GoTo(TimedBehaviour):
     def update(self) -> Status:
         target = self.get("/mission/target")
         if target is not None and target != self.target:  # an operator edited the route during the leg: head for the waypoint as it is now
-            self.target, self._last_sent, self._ticket = target, float("-inf"), None
+            self.target, self._last_sent = target, float("-inf")
+            self._repositioning.aim()
         if self.target is None:
             self.feedback_message = "no active leg"
             return Status.FAILURE
@@ -182,7 +183,8 @@ class GoTo(TimedBehaviour):
                 return Status.SUCCESS
         if self.elapsed > self.leg_timeout_s:
             short = f", {self.distance_m:.1f} m short" if self.distance_m is not None else ""
-            why = f" (DO_REPOSITION {self._refusal})" if self._refusal else ""
+            refusal = self._repositioning.refusal
+            why = f" (DO_REPOSITION {refusal})" if refusal else ""
             off = f", {height}" if height else ""
             self.feedback_message = f"{leg}: timed out after {self.leg_timeout_s:g} s{short}{off}{why}"
             return Status.FAILURE
@@ -316,27 +318,28 @@ class GoTo(TimedBehaviour):
 
     def _send(self, position: GlobalPosition | None) -> None:
         assert self.target is not None
+        if self.method == "reposition":
+            self._repositioning.follow_up(self._reposition)
+            return
         now = self.clock.now()
         if now - self._last_sent < self.resend_s:
             return
-        if self.method == "setpoint":
-            target = self._as_depth(self.target, position)
-            if target is not None and not (target == self._setpoint and self._reported(target) and not _standing(position)):
-                self.autopilot.go_to(leg_target(target))
-                self._setpoint = target
-            self._last_sent = now
-            return
-        if self._ticket is not None:
-            self._refusal = refusal_reason(self.get(blackboard.command_key(Outcome.REPOSITION)), self._ticket, self.get("/vehicle/statustext"))
-            if self._refusal is None:
-                return  # accepted or still waiting for the ack: the autopilot has the target
+        target = self._as_depth(self.target, position)
+        if target is not None and not (target == self._setpoint and self._reported(target) and not _standing(position)):
+            self.autopilot.go_to(leg_target(target))
+            self._setpoint = target
+        self._last_sent = now
+
+    def _reposition(self) -> Request:
+        """Ask for the waypoint (a waypoint without an altitude at the vehicle's height; a sub's at its depth)."""
+        assert self.target is not None
+        position: GlobalPosition | None = self.get("/vehicle/position")
         alt = self.target.alt_m
         if self.target.depth_m is not None:
             alt = -self.target.depth_m
         elif alt == 0.0 and position is not None:
             alt = position.alt_rel_m
-        self._ticket = self.autopilot.reposition(self.target.lat, self.target.lon, alt)
-        self._last_sent = now
+        return self.autopilot.reposition(self.target.lat, self.target.lon, alt)
 
     def _reported(self, target: Waypoint) -> bool:
         """The autopilot reports steering to ``target``, our latest ask (POSITION_TARGET_GLOBAL_INT)."""

@@ -11,8 +11,7 @@ from executive.behaviours.guards import Guard
 from executive.instruments.sampler import Sampler
 from executive.mission.model import Waypoint
 from executive.mission.port import MissionPort
-from executive.world.state import GlobalPosition, SamplerState, SamplerStatus
-from executive.world.state import Sample as SampleRecord
+from executive.world.state import GlobalPosition, SampleRecord, SamplerState, SamplerStatus
 
 
 class Sample(TimedBehaviour):

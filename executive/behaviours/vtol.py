@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Literal
 
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request, VtolState
-from executive.autopilot.asking import refusal_reason
+from executive.autopilot.asking import Asker, Step, Voice, refusal_reason
 from executive.behaviours.base import TimedBehaviour
-from executive.behaviours.commands import CommandAction
+from executive.behaviours.commands import ONE_ASK, CommandAction
+from executive.behaviours.repositioning import Repositioning
 from executive.world import blackboard, frames
 from executive.world.state import GlobalPosition, HomePosition, Outcome
 
@@ -104,6 +106,9 @@ class VtolTransition(TimedBehaviour):
     The autopilot port chooses (:meth:`~executive.autopilot.AutopilotPort.transition`).
 
     FAILURE when the request is refused or unanswered, or after ``timeout_s`` with the last state seen.
+    Asked once by an :class:`~executive.autopilot.asking.Asker` (a command's rules,
+    :data:`~executive.behaviours.commands.ONE_ASK`, judged at ``timeout_s``); an interruption leaves the
+    ask to the commander (not cancelled).
     """
 
     reads = (
@@ -129,23 +134,30 @@ class VtolTransition(TimedBehaviour):
         self.ahead_m = ahead_m
         self.last_state: str | None = None
         self.how = ""
-        self._ticket: Request | None = None
+        self._asker = Asker(self, None, rules=ONE_ASK, voice=_TransitionVoice(self), escalate=False, bounded=True)
 
     def initialise(self) -> None:
         super().initialise()
         self.last_state = self.get("/vehicle/vtol_state")
-        self._ticket, self.how = None, ""
+        self.how = ""
+        self._asker.forget()
+        self._asker.rules = replace(ONE_ASK, judge_after_s=self.timeout_s)
         if self.last_state != self.to:
-            self._request()
+            self._asker.start_command(self.name, self._request, self._there, self.name)
 
-    def _request(self) -> None:
+    def _request(self) -> Request | None:
+        """The port's ask for the transition; None without a position to aim ahead from (ArduPilot, to FW)."""
         position: GlobalPosition | None = self.get("/vehicle/position")
         heading = position.heading_deg if position is not None and position.heading_deg is not None else self.get("/vehicle/heading_deg") or 0.0
-        self._ticket = self.autopilot.transition(
+        request = self.autopilot.transition(
             self.to, mode=self.get("/vehicle/mode"), position=position, heading_deg=heading, mc_mode=self.mc_mode, ahead_m=self.ahead_m
         )
-        if self._ticket is not None:  # None: update() fails, there is no "ahead" without a position
-            self.how = self._ticket.how or self._ticket.outcome
+        if request is not None:
+            self.how = request.how or request.outcome
+        return request
+
+    def _there(self) -> bool:
+        return self.get("/vehicle/vtol_state") == self.to
 
     def update(self) -> Status:
         state = self.get("/vehicle/vtol_state")
@@ -154,18 +166,30 @@ class VtolTransition(TimedBehaviour):
         if state == self.to:
             self.feedback_message = f"{self.to}" + (f" (by {self.how})" if self.how else "")
             return Status.SUCCESS
-        if self._ticket is None:
+        asking = self._asker.asking
+        if asking is None:  # there when it began, or nothing could be asked: there is no "ahead" without a position
             self.feedback_message = "no position to transition from"
             return Status.FAILURE
-        refusal = refusal_reason(self.get(blackboard.command_key(self._ticket.outcome)), self._ticket, self.get("/vehicle/statustext"))
-        if refusal is not None:
-            self.feedback_message = f"{self.how} {refusal}; still {self.last_state}"
-            return Status.FAILURE
-        if self.elapsed > self.timeout_s:
-            self.feedback_message = f"still {self.last_state} after {self.timeout_s:g} s (by {self.how})"
+        self._asker.follow_up(self.clock.now(), ask=False)
+        if asking.judged:  # refused, unanswered or not there in time: the voice said which
             return Status.FAILURE
         self.feedback_message = f"{self.last_state} -> {self.to} (by {self.how})"
         return Status.RUNNING
+
+
+class _TransitionVoice(Voice):
+    """A transition's failed ask, as its feedback: the refusal, or the last state seen when its time is up."""
+
+    def __init__(self, node: VtolTransition) -> None:
+        self.node = node
+
+    def failed(self, step: Step, outcome: str, *, first: bool, counted: bool) -> None:
+        node = self.node
+        refusal = refusal_reason(step.status, step.request, node.get("/vehicle/statustext"))
+        if refusal is not None:
+            node.feedback_message = f"{node.how} {refusal}; still {node.last_state}"
+        else:
+            node.feedback_message = f"still {node.last_state} after {node.timeout_s:g} s (by {node.how})"
 
 
 class GoToLocal(TimedBehaviour):
@@ -182,7 +206,8 @@ class GoToLocal(TimedBehaviour):
       (MAV_FRAME_LOCAL_OFFSET_NED, in GUIDED; any other frame or mode is ignored), so the NED point
       is taken to latitude and longitude from home (the local origin), at ``up`` metres above home,
       and sent as MAV_CMD_DO_REPOSITION (acked; switches to GUIDED): once, and again only when
-      refused or unanswered, at most every ``resend_s``. Nothing is sent before home is known. A
+      refused or unanswered, at most every ``resend_s`` (:mod:`executive.behaviours.repositioning`,
+      the one asking mechanism). Nothing is sent before home is known. A
       QuadPlane with Q_GUIDED_MODE=1 flies a point within WP_LOITER_RAD on its lift motors and
       hovers there; otherwise it flies there as a plane and circles the point.
     """
@@ -212,12 +237,12 @@ class GoToLocal(TimedBehaviour):
         self.resend_s = resend_s
         self.method = method
         self.distance_m: float | None = None
+        self._repositioning = Repositioning(self, resend_s)
 
     def initialise(self) -> None:
         super().initialise()
         self._last_sent = float("-inf")
-        self._ticket: Request | None = None
-        self._refusal: str | None = None
+        self._repositioning.restart()
         self.distance_m = None
 
     def update(self) -> Status:
@@ -228,7 +253,7 @@ class GoToLocal(TimedBehaviour):
             self.autopilot.go_to_local(*self.ned)
             self._last_sent = now
         elif self.method == "reposition" and home is not None:
-            self._reposition(home, now)
+            self._repositioning.follow_up(self._reposition)
         if position is not None and home is not None:
             north, east = frames.global_to_local(home.lat, home.lon, position.lat, position.lon)
             self.distance_m = math.dist((north, east, -position.alt_rel_m), self.ned)
@@ -237,19 +262,15 @@ class GoToLocal(TimedBehaviour):
                 return Status.SUCCESS
         left = f"{self.distance_m:.1f} m" if self.distance_m is not None else "no position or home"
         if self.elapsed > self.timeout_s:
-            why = f" (DO_REPOSITION {self._refusal})" if self._refusal else ""
+            refusal = self._repositioning.refusal
+            why = f" (DO_REPOSITION {refusal})" if refusal else ""
             self.feedback_message = f"timed out after {self.timeout_s:g} s: {left}{why}"
             return Status.FAILURE
         self.feedback_message = left
         return Status.RUNNING
 
-    def _reposition(self, home: HomePosition, now: float) -> None:
-        if now - self._last_sent < self.resend_s:
-            return
-        if self._ticket is not None:
-            self._refusal = refusal_reason(self.get(blackboard.command_key(Outcome.REPOSITION)), self._ticket, self.get("/vehicle/statustext"))
-            if self._refusal is None:
-                return  # accepted or still waiting for the ack: the autopilot has the target
+    def _reposition(self) -> Request:
+        """Ask for the point: north and east of home (the local origin, known: asked only then), ``up`` metres above it."""
+        home: HomePosition = self.get("/vehicle/home")
         lat, lon = frames.local_to_global(home.lat, home.lon, self.ned.north, self.ned.east)
-        self._ticket = self.autopilot.reposition(lat, lon, -self.ned.down)
-        self._last_sent = now
+        return self.autopilot.reposition(lat, lon, -self.ned.down)

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from executive.mission.model import Mission
     from executive.mission.route import Route
     from executive.mission.status import MissionStatus
-    from executive.world.state import Sample
+    from executive.world.state import SampleRecord
 
 
 class Transition(NamedTuple):
@@ -33,7 +33,7 @@ class Transition(NamedTuple):
 class SampleTaken(NamedTuple):
     """A sample was recorded (a journal keeps it)."""
 
-    sample: Sample
+    sample: SampleRecord
 
 
 class RouteChanged(NamedTuple):

@@ -19,6 +19,8 @@ class RouteProgress:
         self._bb = blackboard.writer("route progress", ["/mission/leg_index", "/mission/leg_count", "/mission/target", "/mission/next_target"])
         self.mission: Mission | None = None
         self.leg_index = 0
+        #: A leg is being driven (the mission RUNNING or PAUSED): only then is there a target. The lifecycle says so.
+        self.active = False
 
     def load(self, mission: Mission | None, leg_index: int = 0) -> None:
         self.mission, self.leg_index = mission, leg_index
@@ -38,15 +40,17 @@ class RouteProgress:
         waypoints = tuple(self.mission.waypoints) if self.mission else ()
         return Route(waypoints, min(self.leg_index, len(waypoints)), self.mission.home if self.mission else None)
 
-    def target(self, active: bool) -> Waypoint | None:
-        """The waypoint of the current leg while a leg is ``active`` (the mission running or paused)."""
-        if self.mission is None or not active or self.leg_index >= self.leg_count:
+    @property
+    def target(self) -> Waypoint | None:
+        """The waypoint of the current leg, while a leg is :attr:`active`."""
+        if self.mission is None or not self.active or self.leg_index >= self.leg_count:
             return None
         return self.mission.waypoints[self.leg_index]
 
-    def next_target(self, active: bool) -> Waypoint | None:
+    @property
+    def next_target(self) -> Waypoint | None:
         """The waypoint after the current leg's, if there is one (the leg may be driven through toward it)."""
-        if self.target(active) is None or self.leg_index + 1 >= self.leg_count:
+        if self.target is None or self.leg_index + 1 >= self.leg_count:
             return None
         assert self.mission is not None
         return self.mission.waypoints[self.leg_index + 1]
@@ -55,8 +59,8 @@ class RouteProgress:
         """The current leg is done: head for the next waypoint (the last index once past the end)."""
         self.leg_index = min(self.leg_index + 1, self.leg_count)
 
-    def publish(self, active: bool) -> None:
+    def publish(self) -> None:
         self._bb.set("/mission/leg_index", self.leg_index)
         self._bb.set("/mission/leg_count", self.leg_count)
-        self._bb.set("/mission/target", self.target(active))
-        self._bb.set("/mission/next_target", self.next_target(active))
+        self._bb.set("/mission/target", self.target)
+        self._bb.set("/mission/next_target", self.next_target)

@@ -16,15 +16,19 @@ pause (RUNNING -> PAUSED), resume (PAUSED -> RUNNING), delete (READY/PAUSED/COMP
 running mission is paused first). We add ABORTED, where a failed or interrupted mission ends; it
 behaves like COMPLETED. A refused request raises :class:`Refused` and changes nothing.
 
-Progress (the current leg) lives here, not in the tree: a guard that fails and recovers resumes
-the same leg.
+The route and the current leg are kept by :class:`~executive.mission.legs.RouteProgress` (``state.legs``),
+not by the tree: a guard that fails and recovers resumes the same leg.
 
-So do the samples taken: :meth:`MissionState.record_sample` is the one way a sample is kept, and
-:meth:`MissionState.sampled` tells whether a leg's sample is already taken, so that a Sample action
-re-entered (a guard recovered, the mission resumed) never takes it twice. Samples belong to a run:
-``upload`` and ``start`` begin with none. A restarted executive (after a crash) must not take a
-sample twice either: whoever restores its progress (the journal) hands the samples it recorded to
+The samples taken are kept by :class:`~executive.mission.samples.SampleLog` (``state.sample_log``):
+:meth:`MissionState.record_sample` is the one way a sample is kept, and ``state.sample_log.sampled(leg)``
+tells whether a leg's sample is already taken, so that a Sample action re-entered (a guard recovered,
+the mission resumed) never takes it twice. Samples belong to a run: ``upload`` and ``start`` begin
+with none. A restarted executive (after a crash) must not take a sample twice either: whoever
+restores its progress (the journal) hands the samples it recorded to
 :meth:`MissionState.restore_samples` after ``start`` and before the first tick.
+
+Readers read the route, the leg and the samples there (or on the blackboard); the lifecycle's own
+``leg_index``, ``target``, ``samples``... of 0.1 warn (:class:`executive.MovedMember`) for one release.
 
 The route itself may change while the mission is loaded (an operator records or edits it):
 :meth:`MissionState.set_route` keeps the new route here, so a guard failure or a pause does not lose
@@ -47,18 +51,18 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Iterable, Sequence
 
+import executive
 from executive.mission.errors import format_path
 from executive.mission.events import Announcement, MissionEvents, Replaced, RouteChanged, SampleTaken, Transition
 from executive.mission.legs import RouteProgress
 from executive.mission.model import Home, Mission, Waypoint
-from executive.mission.route import Route
 from executive.mission.rules import cross_field_errors
 from executive.mission.samples import SampleLog
 from executive.mission.status import MissionStatus
 from executive.mission.zones import first_leg_problems
 from executive.world import blackboard
 from executive.world.geo import distance
-from executive.world.state import Sample
+from executive.world.state import SampleRecord
 
 log = logging.getLogger(__name__)
 
@@ -98,7 +102,7 @@ class Refused(Exception):
 
 
 class MissionState:
-    """The loaded mission's lifecycle; it alone changes the mission, its route and leg, and its samples."""
+    """The loaded mission's lifecycle; it alone changes the mission, its route and leg (:attr:`legs`), and its samples (:attr:`sample_log`)."""
 
     def __init__(self) -> None:
         self._bb = blackboard.writer("mission lifecycle", ["/mission/state", "/mission/reason"])
@@ -141,7 +145,7 @@ class MissionState:
         self._transition("upload", f"mission {mission.name!r} loaded, {len(mission.waypoints)} waypoints")
 
     def replace(
-        self, mission: Mission, leg_index: int, samples: Iterable[Sample], reason: str, vehicle_at: tuple[float, float] | None = None
+        self, mission: Mission, leg_index: int, samples: Iterable[SampleRecord], reason: str, vehicle_at: tuple[float, float] | None = None
     ) -> None:
         """While PAUSED: make ``mission`` the mission, heading for ``leg_index``, with ``samples`` already taken; it stays PAUSED.
 
@@ -195,7 +199,7 @@ class MissionState:
         if problems:
             raise Refused("cannot resume: " + "; ".join(problems))
         self.hold_while_paused = True
-        self._transition("resume", f"resumed at leg {self.leg_number}" + (f": {reason}" if reason else ""))
+        self._transition("resume", f"resumed at leg {self.legs.leg_number}" + (f": {reason}" if reason else ""))
 
     def delete(self) -> None:
         self._check("delete")
@@ -208,8 +212,12 @@ class MissionState:
     def complete(self) -> None:
         """RUNNING -> COMPLETED, said as what was done: every waypoint reached, or how many were (a user's tree may succeed short of them)."""
         self._check("complete")
-        reached = min(self.leg_index, self.leg_count)
-        said = "every waypoint reached" if reached >= self.leg_count else f"the tree succeeded; {reached} of {self.leg_count} waypoints reached"
+        reached = min(self.legs.leg_index, self.legs.leg_count)
+        said = (
+            "every waypoint reached"
+            if reached >= self.legs.leg_count
+            else f"the tree succeeded; {reached} of {self.legs.leg_count} waypoints reached"
+        )
         self._transition("complete", said)
 
     def abort(self, reason: str) -> None:
@@ -221,40 +229,24 @@ class MissionState:
         self.reason = reason
         self._bb.set("/mission/reason", reason)
 
-    # -- the route and the leg (held by self.legs) --------------------------------------------
+    # -- the loaded mission; its route and leg are read at self.legs, its samples at self.sample_log ---------------------
     @property
     def mission(self) -> Mission | None:
+        """The mission loaded (None while IDLE), as its route now is (an operator's edits in it)."""
         return self.legs.mission
 
-    @property
-    def leg_index(self) -> int:
-        return self.legs.leg_index
+    #: Read at ``legs`` and ``sample_log`` since 0.2 (issue 41); the old names warn, for one release.
+    leg_index = executive.MovedMember("legs.leg_index")
+    leg_count = executive.MovedMember("legs.leg_count")
+    leg_number = executive.MovedMember("legs.leg_number")
+    target = executive.MovedMember("legs.target")
+    next_target = executive.MovedMember("legs.next_target")
+    route = executive.MovedMember("legs.route")
+    samples = executive.MovedMember("sample_log.taken")
+    sampled = executive.MovedMember("sample_log.sampled")
+    work_left = executive.MovedMember("sample_log.work_left(mission)", lambda state: lambda: state.sample_log.work_left(state.mission))
 
-    @property
-    def leg_count(self) -> int:
-        return self.legs.leg_count
-
-    @property
-    def leg_number(self) -> int:
-        """The leg as a person counts it, as the status shows it (``leg 2/2``): from 1, the last one once past it (a VTOL landing)."""
-        return self.legs.leg_number
-
-    @property
-    def target(self) -> Waypoint | None:
-        """The waypoint of the current leg, if a leg is active."""
-        return self.legs.target(self._active)
-
-    @property
-    def next_target(self) -> Waypoint | None:
-        """The waypoint after the current leg's, if there is one (the leg may be driven through toward it)."""
-        return self.legs.next_target(self._active)
-
-    @property
-    def route(self) -> Route:
-        """The mission's waypoints and the current leg (the input of a route operation)."""
-        return self.legs.route
-
-    def continue_from(self, leg_index: int, samples: Iterable[Sample] = ()) -> None:
+    def continue_from(self, leg_index: int, samples: Iterable[SampleRecord] = ()) -> None:
         """After a restart (crash, kill -9, power cut): carry on the running mission at ``leg_index`` with the samples already taken.
 
         Called right after :meth:`start` and before the first tick, by whoever restores progress
@@ -262,12 +254,12 @@ class MissionState:
         """
         if self.status is not MissionStatus.RUNNING:
             raise Refused(f"cannot continue a mission while {self.status}")
-        if not 0 <= leg_index <= self.leg_count:
-            raise Refused(f"leg {leg_index + 1} is outside a route of {self.leg_count} waypoints")
+        if not 0 <= leg_index <= self.legs.leg_count:
+            raise Refused(f"leg {leg_index + 1} is outside a route of {self.legs.leg_count} waypoints")
         self.legs.leg_index = leg_index
         self.restore_samples(samples)
         self.reason = f"continued at leg {leg_index + 1} after a restart"
-        log.info("mission continues at leg %d/%d with %d sample(s) already taken", leg_index + 1, self.leg_count, len(self.samples))
+        log.info("mission continues at leg %d/%d with %d sample(s) already taken", leg_index + 1, self.legs.leg_count, len(self.sample_log.taken))
         self._publish()
 
     def advance_leg(self) -> None:
@@ -275,7 +267,7 @@ class MissionState:
         if self.status is not MissionStatus.RUNNING:
             raise Refused(f"cannot advance a leg while {self.status}")
         self.legs.advance()
-        log.info("leg %d/%d done", self.leg_index, self.leg_count)
+        log.info("leg %d/%d done", self.legs.leg_index, self.legs.leg_count)
         self._publish()
 
     def route_refusal(self) -> str | None:
@@ -307,7 +299,7 @@ class MissionState:
         if refusal is not None:
             raise Refused(refusal)
         assert self.mission is not None
-        leg = min(self.leg_index, len(waypoints)) if leg_index is None else leg_index
+        leg = min(self.legs.leg_index, len(waypoints)) if leg_index is None else leg_index
         if not 0 <= leg <= len(waypoints):
             raise Refused(f"leg {leg + 1} is outside a route of {len(waypoints)} waypoints")
         edited = self.mission.model_copy(update={"waypoints": list(waypoints), "home": self.mission.home if home is None else home})
@@ -319,23 +311,10 @@ class MissionState:
         self.legs.load(edited, leg)
         self._publish()
         log.info("route changed: %s (%d waypoints, heading for %d)", reason, len(waypoints), leg + 1)
-        self.events.tell(RouteChanged(self.route, reason))
+        self.events.tell(RouteChanged(self.legs.route, reason))
 
-    # -- samples (held by self.sample_log) ------------------------------------------------------
-    @property
-    def samples(self) -> tuple[Sample, ...]:
-        """The samples taken in this run, oldest first."""
-        return self.sample_log.taken
-
-    def sampled(self, leg_index: int) -> bool:
-        """A complete sample of this leg is already recorded in this run: do not take it again (a partial one does not count)."""
-        return self.sample_log.sampled(leg_index)
-
-    def work_left(self) -> str | None:
-        """What of the mission's work is not done (a sample point not sampled), if any: then it is not COMPLETED."""
-        return None if self.mission is None else self.sample_log.work_left(self.mission)
-
-    def record_sample(self, sample: Sample) -> None:
+    # -- samples (kept by self.sample_log) ---------------------------------------------------------
+    def record_sample(self, sample: SampleRecord) -> None:
         """Keep a finished sample: publish ``/mission/samples`` and tell the stream.
 
         Refused (nothing changes) without a mission, for a leg the mission does not have, or for a
@@ -343,9 +322,9 @@ class MissionState:
         """
         if self.mission is None:
             raise Refused("cannot record a sample: no mission loaded")
-        if not 0 <= sample.leg_index < self.leg_count:
-            raise Refused(f"cannot record a sample of leg {sample.leg_index + 1}: the mission has {self.leg_count}")
-        if self.sampled(sample.leg_index):
+        if not 0 <= sample.leg_index < self.legs.leg_count:
+            raise Refused(f"cannot record a sample of leg {sample.leg_index + 1}: the mission has {self.legs.leg_count}")
+        if self.sample_log.sampled(sample.leg_index):
             raise Refused(f"leg {sample.leg_index + 1} is already sampled")
         self.sample_log.keep(sample)
         self._publish()
@@ -355,16 +334,12 @@ class MissionState:
             log.info("sample of leg %d recorded: %d reads", sample.leg_index + 1, len(sample.reads))
         self.events.tell(SampleTaken(sample))
 
-    def restore_samples(self, samples: Iterable[Sample]) -> None:
+    def restore_samples(self, samples: Iterable[SampleRecord]) -> None:
         """Put back the samples a previous process recorded (the stream is not told: its journal already knows)."""
         self.sample_log.restore(samples)
         self._publish()
 
     # -- internals ---------------------------------------------------------------------------
-    @property
-    def _active(self) -> bool:
-        return self.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
-
     def _check(self, request: str) -> None:
         allowed, _ = TRANSITIONS[request]
         if self.status not in allowed:
@@ -383,5 +358,6 @@ class MissionState:
 
     def _publish(self) -> None:
         self._bb.set("/mission/state", str(self.status))
-        self.legs.publish(self._active)
+        self.legs.active = self.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
+        self.legs.publish()
         self.sample_log.publish()

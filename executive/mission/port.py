@@ -16,7 +16,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission, Waypoint
 from executive.mission.route import Route
 from executive.mission.status import MissionStatus
-from executive.world.state import Sample
+from executive.world.state import SampleRecord
 
 
 class MissionPort:
@@ -45,37 +45,37 @@ class MissionPort:
 
     @property
     def leg_index(self) -> int:
-        return self._state.leg_index
+        return self._state.legs.leg_index
 
     @property
     def leg_count(self) -> int:
-        return self._state.leg_count
+        return self._state.legs.leg_count
 
     @property
     def leg_number(self) -> int:
-        return self._state.leg_number
+        return self._state.legs.leg_number
 
     @property
     def target(self) -> Waypoint | None:
-        return self._state.target
+        return self._state.legs.target
 
     @property
     def next_target(self) -> Waypoint | None:
-        return self._state.next_target
+        return self._state.legs.next_target
 
     @property
     def route(self) -> Route:
-        return self._state.route
+        return self._state.legs.route
 
     def sampled(self, leg_index: int) -> bool:
-        return self._state.sampled(leg_index)
+        return self._state.sample_log.sampled(leg_index)
 
     # -- what it reports ---------------------------------------------------------------------
     def leg_done(self) -> None:
         """The current leg is done (reached, or the autopilot reported it): the mission heads for the next waypoint."""
         self._state.advance_leg()
 
-    def sample_taken(self, sample: Sample) -> None:
+    def sample_taken(self, sample: SampleRecord) -> None:
         """A sample was taken at its leg: the mission keeps it (refused for a leg already sampled)."""
         self._state.record_sample(sample)
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass, replace
 from executive.mission.model import Mission, Waypoint, waypoint_label
 from executive.mission.rules import autopilot_errors
 from executive.world.geo import distance
-from executive.world.state import Sample
+from executive.world.state import SampleRecord
 
 #: The outcome a journal gives the run of a mission that another replaced (the run of the new one continues it).
 REPLACED = "REPLACED"
@@ -43,7 +43,7 @@ class Replacement:
 
     mission: Mission
     leg_index: int  # 0-based, in the new mission
-    samples: tuple[Sample, ...]  # renumbered to the new mission's legs
+    samples: tuple[SampleRecord, ...]  # renumbered to the new mission's legs
     left_out: tuple[int, ...]  # 0-based legs of the old mission whose samples have no place in the new one
     leg_reason: str  # how the leg was chosen, for a person
 
@@ -60,7 +60,9 @@ class Replacement:
         return "; ".join(words)
 
 
-def plan(old: Mission, leg_index: int, samples: Sequence[Sample], new: Mission, *, autopilot: str | None, leg: int | None = None) -> Replacement:
+def plan(
+    old: Mission, leg_index: int, samples: Sequence[SampleRecord], new: Mission, *, autopilot: str | None, leg: int | None = None
+) -> Replacement:
     """How ``new`` would replace ``old`` (paused at ``leg_index`` with ``samples``), driven by ``autopilot``; ``leg``: the 1-based leg chosen.
 
     Raises :class:`Incompatible` with the reason.
@@ -106,8 +108,8 @@ def _same_leg(old: Mission, leg_index: int, new: Mission) -> tuple[int, str]:
     return found, f"the waypoint of old leg {leg_index + 1}" + (f", {target.name!r}" if target.name else "")
 
 
-def _carry_samples(old: Mission, samples: Sequence[Sample], new: Mission) -> tuple[tuple[Sample, ...], tuple[int, ...]]:
-    kept: list[Sample] = []
+def _carry_samples(old: Mission, samples: Sequence[SampleRecord], new: Mission) -> tuple[tuple[SampleRecord, ...], tuple[int, ...]]:
+    kept: list[SampleRecord] = []
     left_out: list[int] = []
     for sample in sorted((s for s in samples if s.complete), key=lambda s: s.leg_index):  # a partial one did not do its point
         taken = {s.leg_index for s in kept}

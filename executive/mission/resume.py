@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from executive.mission.model import Mission
 from executive.mission.route import Route
-from executive.world.state import Sample
+from executive.world.state import SampleRecord
 
 
 @dataclass(frozen=True)
@@ -15,7 +15,7 @@ class ResumePoint:
 
     run: int
     leg_index: int
-    samples: tuple[Sample, ...]
+    samples: tuple[SampleRecord, ...]
     route: Route | None = None  # None: the mission file's own
     mission: Mission | None = None  # the mission that replaced the one asked for (hot reload); None: that one
 

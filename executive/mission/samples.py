@@ -11,7 +11,7 @@ from collections.abc import Iterable
 
 from executive.mission.model import Mission
 from executive.world import blackboard
-from executive.world.state import Sample
+from executive.world.state import SampleRecord
 
 
 class SampleLog:
@@ -19,7 +19,7 @@ class SampleLog:
 
     def __init__(self) -> None:
         self._bb = blackboard.writer("sample log", ["/mission/samples"])
-        self.taken: tuple[Sample, ...] = ()
+        self.taken: tuple[SampleRecord, ...] = ()
 
     def sampled(self, leg_index: int) -> bool:
         """A complete sample of this leg is already kept: do not take it again (a partial one does not count)."""
@@ -28,17 +28,19 @@ class SampleLog:
     def clear(self) -> None:
         self.taken = ()
 
-    def keep(self, sample: Sample) -> None:
+    def keep(self, sample: SampleRecord) -> None:
         self.taken = (*self.taken, sample)
 
-    def restore(self, samples: Iterable[Sample]) -> None:
+    def restore(self, samples: Iterable[SampleRecord]) -> None:
         """Put back the samples a previous process kept, each leg's once."""
         for sample in samples:
             if not self.sampled(sample.leg_index):
                 self.keep(sample)
 
-    def work_left(self, mission: Mission) -> str | None:
-        """What of ``mission``'s sampling is not done (a sample point not sampled, or sampled partially), if any."""
+    def work_left(self, mission: Mission | None) -> str | None:
+        """What of ``mission``'s sampling is not done (a sample point not sampled, or sampled partially), if any: then it is not COMPLETED."""
+        if mission is None:
+            return None
         unsampled = [i for i, wp in enumerate(mission.waypoints) if wp.sample and not self.sampled(i)]
         partial = [i for i in unsampled if any(s.leg_index == i for s in self.taken)]
         missing = [i for i in unsampled if i not in partial]

@@ -33,7 +33,7 @@ from executive.mission.resume import ResumePoint
 from executive.mission.route import Route
 from executive.world import blackboard
 from executive.world.clock import Clock
-from executive.world.state import Sample, SampleRead
+from executive.world.state import SampleRead, SampleRecord
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS runs (
@@ -117,7 +117,7 @@ class Journal:
         state.events.subscribe(SampleTaken, self._on_sample, Stage.RECORDING)
         state.events.subscribe(RouteChanged, self._on_route, Stage.RECORDING)
 
-    def carry_samples(self, samples: tuple[Sample, ...]) -> None:
+    def carry_samples(self, samples: tuple[SampleRecord, ...]) -> None:
         """Record in this run the samples a run it continues had taken (a replaced mission's, renumbered to this one's legs)."""
         for sample in samples:
             self._on_sample(sample)
@@ -126,10 +126,10 @@ class Journal:
         """Called every tick: records the leg when it changes (with where the vehicle is)."""
         if self._pending and self._clock.now() >= self._next_try:
             self._flush()  # the disk may have room again
-        if self.run is None or state.status not in (MissionStatus.RUNNING, MissionStatus.PAUSED) or state.leg_index == self._leg:
+        if self.run is None or state.status not in (MissionStatus.RUNNING, MissionStatus.PAUSED) or state.legs.leg_index == self._leg:
             return
-        self._leg = state.leg_index
-        self._insert("legs", run=self.run, t=self._clock.now(), wall=time.time(), leg=state.leg_index, lat=lat, lon=lon)
+        self._leg = state.legs.leg_index
+        self._insert("legs", run=self.run, t=self._clock.now(), wall=time.time(), leg=state.legs.leg_index, lat=lat, lon=lon)
 
     def event(self, kind: str, text: str) -> None:
         if self.run is not None:
@@ -177,13 +177,13 @@ class Journal:
         leg, home, waypoints = row
         return Route(tuple(Waypoint.model_validate(w) for w in json.loads(waypoints)), leg, Home.model_validate_json(home) if home else None)
 
-    def samples(self, run: int) -> tuple[Sample, ...]:
+    def samples(self, run: int) -> tuple[SampleRecord, ...]:
         """The samples of ``run``, partial ones (a named sensor gave no reading) included, by leg."""
         rows = self._db.execute(
             "SELECT leg, lat, lon, started, finished, reads, instrument, missing, partial FROM samples WHERE run = ? ORDER BY leg", (run,)
         )
         return tuple(
-            Sample(
+            SampleRecord(
                 leg,
                 lat,
                 lon,
@@ -253,7 +253,7 @@ class Journal:
         if self.run is not None:
             self._insert("transitions", run=self.run, t=self._clock.now(), wall=time.time(), before=str(before), after=str(after), reason=reason)
 
-    def _on_sample(self, sample: Sample) -> None:
+    def _on_sample(self, sample: SampleRecord) -> None:
         if self.run is not None:
             reads = json.dumps([asdict(r) for r in sample.reads])
             row = {"run": self.run, "leg": sample.leg_index, "lat": sample.lat, "lon": sample.lon, "started": sample.started}
@@ -352,7 +352,7 @@ class _JournalRuns:
             return
         self._journal.begin_run(mission, resumed_from=replaced[0])
         self._journal.event("mission", replaced[1])
-        self._journal.carry_samples(self._state.samples)
+        self._journal.carry_samples(self._state.sample_log.taken)
         self.ticked(0, 0.0)
 
     def ticked(self, tick: int, now: float) -> None:

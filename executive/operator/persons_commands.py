@@ -92,7 +92,7 @@ class PersonsCommands:
             log.warning("%s: %s: the vehicle %s (the mission %s)", sent.source, sent.what, now, state.status)
             return
         reason = f"{done} by a person ({sent.source}: {sent.what})"
-        log.warning("%s -> mission paused at leg %d, hands off until resumed", reason, state.leg_index + 1)
+        log.warning("%s -> mission paused at leg %d, hands off until resumed", reason, state.legs.leg_index + 1)
         state.pause(reason, hold=False)
 
     def _follow_answer(self, sent: _Sent) -> None:

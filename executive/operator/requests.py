@@ -175,7 +175,7 @@ class Operator:
         old = state.mission
         autopilot = self._autopilot_name() if self._autopilot_name is not None else None
         try:
-            plan = reload.plan(old, state.leg_index, state.samples, mission, autopilot=autopilot, leg=leg)
+            plan = reload.plan(old, state.legs.leg_index, state.sample_log.taken, mission, autopilot=autopilot, leg=leg)
         except reload.Incompatible as exc:
             return self._reply(False, f"{filename}: cannot replace {old.name!r}: {exc}")
         reason = f"{plan.describe(old)} ({source}: {filename}); paused until resumed"
@@ -189,12 +189,12 @@ class Operator:
         operation = args.get("operation")
         params = {k: v for k, v in args.items() if k != "operation"}
         if operation == "show":
-            return self._reply(True, f"{len(state.route)} waypoints", route=self._route_view())
+            return self._reply(True, f"{len(state.legs.route)} waypoints", route=self._route_view())
         refusal = state.route_refusal()
         if refusal is not None:
             return self._reply(False, refusal)
         try:
-            new, done = routes.apply(state.route, operation, params, self._here)
+            new, done = routes.apply(state.legs.route, operation, params, self._here)
             state.set_route(new.waypoints, f"{source}: {done}", leg_index=new.current, home=new.home, vehicle_at=self._here_if_known())
         except (routes.RouteError, Refused) as exc:
             return self._reply(False, f"route {operation}: {exc}")
@@ -262,7 +262,7 @@ class Operator:
 
     def _route_view(self) -> dict[str, Any]:
         """The route as JSON: waypoints (lat, lon, alt_m), names, the one heading for (1-based; legs + 1 when done), home, the autopilot's copy."""
-        route = self.mission_state.route
+        route = self.mission_state.legs.route
         upload = self._bb.get("/link/route_upload")
         upload_view = (
             None if upload is None else {"state": str(upload.state), "edit": upload.edit, "attempt": upload.attempt, "detail": upload.detail}

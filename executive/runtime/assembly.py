@@ -27,7 +27,7 @@ from executive.operator.intervention import InterventionWatch
 from executive.operator.persons_commands import PersonsCommands
 from executive.operator.status import StatusSource
 from executive.runtime.loop import Runtime
-from executive.runtime.services import PacedService, RunObserver, Service, Step
+from executive.runtime.services import FunctionService, PacedService, RunObserver, Service
 from executive.sensing.energy import EnergyWatch
 from executive.sensing.heading import HeadingFilter
 from executive.sensing.rc import RcReader
@@ -120,7 +120,7 @@ def build_runtime(
         persons=persons,
     )
     ground_station = GroundStationControl([link], clock, operator, system_id=system_id)
-    commands = Step("ground-station commands", lambda: ground_station.answer(ap.commands_for_us(), link))
+    commands = FunctionService("ground-station commands", lambda: ground_station.answer(ap.commands_for_us(), link))
     wiring = Wiring(mission, clock, system_id, state, status, operator, ap, ground_station, simulated_vehicle)
     wiring.readers.append(commands)
     wiring.observers.append(tree_watch)  # first: the recorders see what the tree waits for at the tick they record
@@ -185,7 +185,7 @@ def can_base(bus: can.BusABC) -> Plug:
         from executive.io.can import CanReader, DriveBridge
 
         reader = CanReader(bus, w.clock, rc=w.mission.rc.source == "can")
-        w.readers.append(Step("can reader", reader.drain))
+        w.readers.append(FunctionService("can reader", reader.drain))
         drive = _BaseDrive(DriveBridge(bus, w.clock), w.mission_state)
         w.writers.append(drive)
         w.paced.append(drive)
@@ -200,7 +200,7 @@ def obstacle_camera(sock: socket.socket) -> Plug:
         from executive.io.obstacles import ObstacleForwarder, ObstacleReceiver
 
         receiver = ObstacleReceiver(sock, w.clock)
-        w.readers.append(Step("obstacle receiver", receiver.drain))
+        w.readers.append(FunctionService("obstacle receiver", receiver.drain))
         w.writers.append(ObstacleForwarder(w.link.transport, w.clock))
 
     return plug
@@ -217,7 +217,7 @@ def ground_stations(link: Link, allowed_systems: Iterable[int] = (255,)) -> Plug
         gcs = w.ground_station
         gcs.serve(link, allowed_systems)
         w.writers.append(Heartbeat(link, w.clock, system_id=w.system_id))
-        w.readers.append(Step("ground stations", lambda: gcs.answer(iter(link.recv, None), link)))
+        w.readers.append(FunctionService("ground stations", lambda: gcs.answer(iter(link.recv, None), link)))
 
     return plug
 

@@ -7,13 +7,13 @@ exception inside a behaviour all end with the vehicle commanded into its safe mo
 from __future__ import annotations
 
 import logging
-import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import py_trees
 from py_trees.common import Status
 
+import executive
 from executive import registry
 from executive.admission.reach import ReachGate, Refusal
 from executive.autopilot_link import AutopilotLink
@@ -239,7 +239,7 @@ class Runtime:
             if resume is None:
                 self.mission_state.start()
             else:
-                legs = len(resume.route.waypoints) if resume.route is not None else self.mission_state.leg_count
+                legs = len(resume.route.waypoints) if resume.route is not None else self.mission_state.legs.leg_count
                 self.mission_state.start(reason=resume.started_text(legs))
                 if resume.route is not None:  # the operator had edited it: that is the route being driven
                     route = resume.route
@@ -348,7 +348,7 @@ class Runtime:
         if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
             self.make_safe()
             return self._end(RunOutcome(self.mission_state.status, self.mission_state.reason, self.ticks))
-        if status == Status.SUCCESS and (undone := self.mission_state.work_left()) is not None:
+        if status == Status.SUCCESS and (undone := self.mission_state.sample_log.work_left(self.mission_state.mission)) is not None:
             return self._end(self._abort(f"the tree ended, but {undone}"))  # never report success for work not done
         if status == Status.SUCCESS:
             self.mission_state.complete()  # its reason says how many waypoints were reached
@@ -361,7 +361,7 @@ class Runtime:
         """The running mission's end: the observers told; the outcome names the mission and its samples, and is kept as the last."""
         self.tree = None
         ran = self._running
-        outcome = replace(outcome, mission=ran.name if ran else None, samples=len(self.mission_state.samples), safe=self.safe_report)
+        outcome = replace(outcome, mission=ran.name if ran else None, samples=len(self.mission_state.sample_log.taken), safe=self.safe_report)
         self.safe_report = None  # said with this outcome: a later one (a mission completed) is not made safe by it
         self.last_outcome = outcome
         for observer in self.observers:
@@ -435,9 +435,5 @@ class Runtime:
         self._refused, self._refused_users_code = why, True
 
 
-def __getattr__(name: str) -> object:
-    """``Outcome``, :class:`RunOutcome`'s name until 0.2 (``executive.world.state.Outcome`` is what an acked command asks)."""
-    if name == "Outcome":
-        warnings.warn("executive.runtime.loop.Outcome is now RunOutcome", DeprecationWarning, stacklevel=2)
-        return RunOutcome
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+def __getattr__(name: str) -> object:  # old names (0.2), for one release: Outcome is RunOutcome (executive.world.state.Outcome is a command's)
+    return executive.moved_attribute(__name__, name)

@@ -13,6 +13,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
+import executive
+
 if TYPE_CHECKING:
     import py_trees
 
@@ -50,8 +52,8 @@ class RunObserver(Protocol):
 
 
 @dataclass(frozen=True)
-class Step:
-    """A service made of a function: ``Step("mavlink reader", reader.drain)``."""
+class FunctionService:
+    """A service made of a function: ``FunctionService("mavlink reader", reader.drain)``."""
 
     name: str
     run: Callable[[], object]
@@ -61,5 +63,9 @@ class Step:
 
 
 def service_name(service: object) -> str:
-    """A service's name for reports: a Step's own, else its class's."""
-    return service.name if isinstance(service, Step) else type(service).__name__
+    """A service's name for reports: a FunctionService's own, else its class's."""
+    return service.name if isinstance(service, FunctionService) else type(service).__name__
+
+
+def __getattr__(name: str) -> object:  # old names (0.2), for one release: Step is FunctionService
+    return executive.moved_attribute(__name__, name)

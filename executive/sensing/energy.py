@@ -377,7 +377,7 @@ class EnergyWatch:
     def _legs_ahead(self, mission: Mission) -> Ahead:
         """The waypoints still to go from the current leg on: walked once per route and leg, not every tick (a long route's
         geodesics cost milliseconds; an edited route is a new list, MissionState.set_route)."""
-        waypoints, leg = mission.waypoints, self._state.leg_index
+        waypoints, leg = mission.waypoints, self._state.legs.leg_index
         if self._ahead is None or self._ahead.waypoints is not waypoints or self._ahead.leg != leg:
             points = [(w.lat, w.lon) for w in waypoints[leg:]]
             along = path_length(points[1:], points[0]) if points else 0.0
@@ -403,16 +403,16 @@ class EnergyWatch:
         end = ahead.last or here
         home_m = self._home_metres(mission, config, home, end)
         home_m += GLIDE_RATIO * return_climb_m(mission, self._autopilot(), self._in.get("/vehicle/params") or {})
-        take_off = not self._in.get("/vehicle/armed") and self._state.leg_index == 0
+        take_off = not self._in.get("/vehicle/armed") and self._state.legs.leg_index == 0
         legs = len(mission.waypoints)
-        done = self._state.leg_index >= legs
+        done = self._state.legs.leg_index >= legs
         landing = self._last_position.alt_rel_m if done and self._hovering and self._last_position is not None else None
-        held = held_s(mission, self._state.leg_index, take_off, not self._wing_borne and not done, landing)
+        held = held_s(mission, self._state.legs.leg_index, take_off, not self._wing_borne and not done, landing)
         route_s, home_s = held.route_s, held.home_s
         depth = max(0.0, -self._last_position.alt_rel_m) if self._last_position is not None else 0.0
         below: float | None = self._in.get("/vehicle/altitude_above_bottom_m")
         seabed = None if below is None else depth + below
-        route_z, home_z = depth_changes(mission, mission.waypoints[self._state.leg_index :], depth, seabed)
+        route_z, home_z = depth_changes(mission, mission.waypoints[self._state.legs.leg_index :], depth, seabed)
         route_wh = self._model.need(route_m, route_s, route_z)[0]
         home_wh = self._model.need(home_m, home_s, home_z)[0]
         _, sigma = self._model.need(route_m + home_m, route_s + home_s, route_z + home_z)
@@ -420,7 +420,7 @@ class EnergyWatch:
         has = capacity_wh * self._start[1] / 100.0 - drawn_since_start - kept
         estimate = EnergyEstimate(
             has, route_wh, home_wh, sigma, capacity_wh, config.reserve_pct, drawn_since_start,
-            self._model.wh_per_m * 1000.0, self._model.wh_per_s * 60.0, self._state.leg_index, self._clock.now(),
+            self._model.wh_per_m * 1000.0, self._model.wh_per_s * 60.0, self._state.legs.leg_index, self._clock.now(),
         )  # fmt: skip
         self._out.set("/energy/estimate", estimate)
         self._out.set("/energy/unknown", "")
@@ -440,7 +440,7 @@ class EnergyWatch:
         if said is not None and said[0] == estimate.leg_index and abs(said[1] - estimate.margin_wh) < 0.05 * estimate.capacity_wh:
             return
         self._said = (estimate.leg_index, estimate.margin_wh)
-        legs = self._state.leg_count
+        legs = self._state.legs.leg_count
         where = f"leg {estimate.leg_index + 1}/{legs}" if estimate.leg_index < legs else "the end of the route"
         log.info(
             "energy at %s: %s: margin %s Wh; drawn %.1f Wh so far; %.1f Wh/km + %.2f Wh/min",

@@ -5,10 +5,11 @@ firmware, :mod:`.physics` the vehicle models, :mod:`.registry` the simulators by
 :func:`register_autopilot`), :mod:`.server` the MAVLink endpoint, :mod:`.faults` fault injection.
 """
 
+import executive
 from executive.sim.ardupilot.base import ArduPilotSim
 from executive.sim.ardupilot.rover import ArduRoverSim
 from executive.sim.firmware import DEFAULT_HOME, FirmwareSim, Home
-from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, MotionLimits, SurfaceVehicle, VehicleModel
 from executive.sim.registry import AUTOPILOTS, FIRMWARES, firmwares_for, make_autopilot, register_autopilot
 from executive.sim.server import SimServer
 
@@ -22,7 +23,7 @@ __all__ = [
     "ArduRoverSim",
     "FirmwareSim",
     "Home",
-    "Limits",
+    "MotionLimits",
     "SimServer",
     "SurfaceVehicle",
     "VehicleModel",
@@ -30,3 +31,7 @@ __all__ = [
     "make_autopilot",
     "register_autopilot",
 ]
+
+
+def __getattr__(name: str) -> object:  # old names (0.2), for one release: Limits is MotionLimits
+    return executive.moved_attribute(__name__, name)

@@ -34,7 +34,7 @@ class ClientAddressError(ValueError):
 
 
 @dataclass
-class _Client:
+class _Peer:
     """One peer: its address, its own parser, when it was last heard (UDP) and its socket (TCP)."""
 
     address: tuple[str, int]
@@ -66,7 +66,7 @@ class Clients:
             self.socket.close()
             raise
         self.socket.setblocking(False)
-        self._clients: dict[tuple[str, int], _Client] = {}
+        self._clients: dict[tuple[str, int], _Peer] = {}
         self.mav = self._new_mav(self)  # what the vehicle sends: packed once, written to every client
 
     def _new_mav(self, file: object) -> Any:
@@ -134,7 +134,7 @@ class Clients:
                 return
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
             sock.setblocking(False)
-            self._join(_Client(address[:2], self._new_mav(None), time.monotonic(), sock))
+            self._join(_Peer(address[:2], self._new_mav(None), time.monotonic(), sock))
 
     def _read(self) -> MAVLinkMessage | None:
         """Read what has come (a datagram, or every TCP client's bytes) and return the first message it holds."""
@@ -163,7 +163,7 @@ class Clients:
                     continue
                 client = self._clients.get(address[:2])
                 if client is None:
-                    client = self._join(_Client(address[:2], self._new_mav(None), time.monotonic()))
+                    client = self._join(_Peer(address[:2], self._new_mav(None), time.monotonic()))
                 client.heard = time.monotonic()
                 self._parse(client, data)
         for client in self._clients.values():
@@ -171,16 +171,16 @@ class Clients:
                 return client.pending.pop(0)
         return None
 
-    def _parse(self, client: _Client, data: bytes) -> None:
+    def _parse(self, client: _Peer, data: bytes) -> None:
         messages = client.parser.parse_buffer(data) or []
         client.pending += [m for m in messages if m is not None]
 
-    def _join(self, client: _Client) -> _Client:
+    def _join(self, client: _Peer) -> _Peer:
         self._clients[client.address] = client
         log.info("MAVLink client %s connected (%d client%s)", client.name, self.count, "" if self.count == 1 else "s")
         return client
 
-    def _leave(self, client: _Client, why: str) -> None:
+    def _leave(self, client: _Peer, why: str) -> None:
         if self._clients.pop(client.address, None) is None:
             return
         if client.sock is not None:

@@ -40,7 +40,8 @@ A CAN bus (:class:`VirtualCan`)
     ``virtual`` interface): what the base sends, the executive's end receives.
 
 Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``commander``,
-``autopilot`` (the autopilot port over ``commander``), ``vehicle``, ``mission_state``, ``harness`` (``harness(root)``), ``lockstep``
+``autopilot`` (the autopilot port over ``commander``), ``vehicle``, ``mission_state`` (the lifecycle: the leg and route at
+``.legs``, the samples at ``.sample_log``), ``harness`` (``harness(root)``), ``lockstep``
 (``lockstep(mission, ...)``, closed after the test), ``runtime_on_link`` (``runtime_on_link(mission, ...)``),
 ``can_buses`` (a :class:`VirtualCan`, shut after the test).
 """

@@ -6,8 +6,10 @@ and a snapshot of the blackboard shows exactly which facts changed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from enum import IntFlag, StrEnum
+
+import executive
 
 
 @dataclass(frozen=True, slots=True)
@@ -240,12 +242,13 @@ class SamplerStatus:
     missing: tuple[str, ...] = ()  # sensors named that gave no reading in the sample (once it ended)
 
 
-@dataclass(frozen=True, slots=True)
-class Sample:
+@dataclass(frozen=True, slots=True, repr=False)
+class SampleRecord:
     """A finished sample, as recorded: where, when, every read, and the sensors named that gave none.
 
     ``partial``: it lacks a sensor and the mission requires them all (``sampling.require: all``):
-    recorded, but its sample point is not done (:meth:`complete` is False).
+    recorded, but its sample point is not done (:meth:`complete` is False). Named ``Sample`` until 0.2
+    (the Sample action is :class:`executive.behaviours.sampling.Sample`).
     """
 
     leg_index: int
@@ -262,6 +265,10 @@ class Sample:
     def complete(self) -> bool:
         """Its sample point is done."""
         return not self.partial
+
+    def __repr__(self) -> str:
+        """As a dataclass's, under the name the recordings show it by since 0.1 (``/mission/samples`` in snapshot and MCAP files)."""
+        return f"Sample({', '.join(f'{f.name}={getattr(self, f.name)!r}' for f in fields(self))})"
 
 
 class CommandState(StrEnum):
@@ -389,3 +396,7 @@ class MissionItemReached:
     seq: int
     time: float
     highest: int = -1
+
+
+def __getattr__(name: str) -> object:  # old names (0.2), for one release: Sample is SampleRecord
+    return executive.moved_attribute(__name__, name)

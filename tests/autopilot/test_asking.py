@@ -251,3 +251,11 @@ def test_a_person_taking_the_vehicle_drops_the_ask_and_it_goes_again_at_once_whe
 
 def test_reaction_rules_are_the_documented_interval_and_count() -> None:
     assert REACTION.again_after_s == pytest.approx(ASK_AGAIN_S, abs=1e-5) and REACTION.asks_before_next == 3 and REACTION.needs_ack
+
+
+def test_a_command_that_cannot_be_asked_asks_nothing(host: _Host) -> None:
+    told = _Told()
+    asker = Asker(host, None, rules=Rules(judge_after_s=5.0, asks_before_next=1, needs_ack=False), voice=told, escalate=False, bounded=True)
+    asker.start_command("Transition to FW", lambda: None, lambda: False, "Transition to FW")  # no position to aim ahead from
+    host.run(asker, 6.0)
+    assert asker.asking is None and asker.state() is None and times(host) == [] and told.lines == []

@@ -139,7 +139,7 @@ def test_a_goto_in_offboard_streams_its_target(px4, harness, vehicle, link, miss
     mission_state.start()
     vehicle.set(vehicle__mode="OFFBOARD", vehicle__position=pos(10.0))
     h = harness(GoTo(1.5, 60.0, resend_s=1.0))
-    target = mission_state.target
+    target = mission_state.legs.target
     for _ in range(10):
         h.tick()
         sent = link.take("SET_POSITION_TARGET_GLOBAL_INT")
@@ -396,7 +396,7 @@ def test_a_finished_px4_mission_ends_the_drive(px4, vehicle, clock, link, comman
     assert h.tick() == R
     vehicle.set(vehicle__mission_current=MissionCurrent(2, 2, 5, True, clock.now()))  # MISSION_STATE_COMPLETE: PX4 loiters
     assert h.tick() == S
-    assert state.leg_index == 2
+    assert state.legs.leg_index == 2
 
 
 # -- VTOL: DO_VTOL_TRANSITION in flight, vtol_state 3 -> 1 -> 4 ------------------------------------------------------
@@ -483,6 +483,6 @@ def test_on_px4_the_route_s_item_k_is_its_leg_k(px4, vehicle, clock, link, comma
     h, state = driving_in_auto(3, px4, vehicle, clock, link, commander)
     assert h.tick() == R
     vehicle.set(vehicle__mission_current=MissionCurrent(1, 3, 2, True, clock.now() + 0.05))  # heard after the drive began
-    assert (h.tick(), state.leg_index) == (R, 1)
+    assert (h.tick(), state.legs.leg_index) == (R, 1)
     vehicle.set(vehicle__mission_reached=MissionItemReached(1, clock.now(), 1))
-    assert (h.tick(), state.leg_index) == (R, 2)
+    assert (h.tick(), state.legs.leg_index) == (R, 2)

@@ -60,7 +60,7 @@ class Autopilot(MissionAutopilot):
     def holds(self, state: MissionState) -> bool:
         """The store holds the mission state's route (to its 1e-7 degree)."""
         held = [x for point in self.held() for x in point]
-        return held == pytest.approx([x for wp in state.route.waypoints for x in (wp.lat, wp.lon)], abs=1.5e-7)
+        return held == pytest.approx([x for wp in state.legs.route.waypoints for x in (wp.lat, wp.lon)], abs=1.5e-7)
 
 
 class Keeping:
@@ -95,7 +95,7 @@ class Keeping:
         raise AssertionError(f"not done after {limit} ticks: {self.keeper.status}")
 
     def offset_edit(self, distance_m: float = 5.0) -> None:
-        new = offset(self.state.route, distance_m, 90.0)
+        new = offset(self.state.legs.route, distance_m, 90.0)
         self.state.set_route(new.waypoints, f"test: offset {distance_m:g} m")
 
 
@@ -116,7 +116,7 @@ def test_with_drive_auto_an_edit_gives_the_autopilot_only_the_horizon(square_mis
     keeping.tick(keeping.offset_edit)
     done = keeping.until(ended)
     assert (done.state, done.detail) == (RouteUploadState.DONE, "the horizon of leg 2 (drive: auto), read back")
-    edited = keeping.state.route.waypoints
+    edited = keeping.state.legs.route.waypoints
     held = [x for point in keeping.autopilot.held() for x in point]
     assert held == pytest.approx([x for wp in edited[:3] for x in (wp.lat, wp.lon)], abs=1.5e-7)  # legs 1-2, and one beyond
 
@@ -185,7 +185,7 @@ def test_another_components_transfer_is_waited_for_not_superseded(keeping: Keepi
 def test_an_edit_the_autopilot_already_holds_is_not_uploaded_again(keeping: Keeping) -> None:
     keeping.tick(keeping.offset_edit)
     keeping.until(ended)
-    keeping.tick(lambda: keeping.state.set_route(keeping.state.route.waypoints, "test: the same again"))
+    keeping.tick(lambda: keeping.state.set_route(keeping.state.legs.route.waypoints, "test: the same again"))
     done = keeping.until(ended)
     assert (done.state, done.attempt, done.detail) == (RouteUploadState.DONE, 0, "4 waypoints, already held")
     assert keeping.autopilot.count("MISSION_COUNT") == 1
@@ -193,7 +193,7 @@ def test_an_edit_the_autopilot_already_holds_is_not_uploaded_again(keeping: Keep
 
 def test_set_home_sets_the_autopilot_home_keeping_its_altitude(keeping: Keeping) -> None:
     home = Home(lat=47.3978, lon=8.5457)
-    keeping.tick(lambda: keeping.state.set_route(keeping.state.route.waypoints, "test: set home", home=home))
+    keeping.tick(lambda: keeping.state.set_route(keeping.state.legs.route.waypoints, "test: set home", home=home))
     done = keeping.until(ended)
     assert (done.state, done.detail) == (RouteUploadState.DONE, "4 waypoints, read back; home set")
     [(lat, lon, alt)] = keeping.autopilot.homes_set
@@ -202,7 +202,7 @@ def test_set_home_sets_the_autopilot_home_keeping_its_altitude(keeping: Keeping)
 
 def test_a_refused_home_fails_the_edit_with_the_reason(keeping: Keeping) -> None:
     keeping.autopilot.home_result = _M.MAV_RESULT_DENIED
-    keeping.tick(lambda: keeping.state.set_route(keeping.state.route.waypoints, "test: set home", home=Home(lat=47.3978, lon=8.5457)))
+    keeping.tick(lambda: keeping.state.set_route(keeping.state.legs.route.waypoints, "test: set home", home=Home(lat=47.3978, lon=8.5457)))
     done = keeping.until(ended)
     assert done.state is RouteUploadState.FAILED
     assert done.detail == "4 waypoints, read back, but the home was not set: DO_SET_HOME rejected (MAV_RESULT_DENIED)"

@@ -156,7 +156,7 @@ class TestGoTo:
     @pytest.fixture
     def running(self, mission_state, vehicle):
         mission_state.start()
-        return mission_state.target
+        return mission_state.legs.target
 
     def test_sends_guided_target_and_reports_distance(self, harness, vehicle, running):
         lat, lon = destination(running.lat, running.lon, 180.0, 30.0)  # 30 m south of the waypoint
@@ -214,7 +214,7 @@ class TestGoTo:
         h.tick()
         h.link.take()
         moved = running.model_copy(update={"lon": destination(running.lat, running.lon, 90.0, 5.0)[1]})
-        mission_state.set_route([moved, *mission_state.route.waypoints[1:]], "test: offset 5 m east")
+        mission_state.set_route([moved, *mission_state.legs.route.waypoints[1:]], "test: offset 5 m east")
         assert h.tick() == Status.RUNNING
         (sent,) = h.link.take()  # sent now, not at the next resend
         assert (sent.lat_int, sent.lon_int) == (round(moved.lat * 1e7), round(moved.lon * 1e7))
@@ -237,7 +237,7 @@ class TestGoToLookAhead:
         vehicle.set(vehicle__params=dict(self.SITL))
         mission_state.start()
         mission_state.advance_leg()
-        return mission_state.target
+        return mission_state.legs.target
 
     def approach(self, h, vehicle, corner, distances, speed=2.5):
         """Tick once at each distance south of the corner, heading north at ``speed`` (positions fresh), until the leg ends; the statuses."""
@@ -304,7 +304,7 @@ class TestGoToLookAhead:
         assert statuses == [Status.RUNNING] * 4 + [Status.SUCCESS]  # 90° is more than WP_PIVOT_ANGLE (60°): a pivot, as in AUTO
 
     def test_straight_on_is_driven_through_as_soon_as_it_is_worth_predicting(self, harness, vehicle, corner, mission_state):
-        waypoints = list(mission_state.route.waypoints)
+        waypoints = list(mission_state.legs.route.waypoints)
         straight = waypoints[2].model_copy(update={"lat": corner.lat + 0.0003, "lon": corner.lon})
         mission_state.set_route([waypoints[0], corner, straight, waypoints[3]], "test: straight on")
         rows = self.driven(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, corner, self.SITL)
@@ -314,7 +314,7 @@ class TestGoToLookAhead:
         mission_state.start()
         for _ in range(3):
             mission_state.advance_leg()
-        last = mission_state.target
+        last = mission_state.legs.target
         vehicle.set(vehicle__params=dict(self.SITL))
         assert self.approach(harness(GoTo(1.5, 60.0, look_ahead=True)), vehicle, last, (6.0, 1.6, 1.4)) == [Status.RUNNING] * 2 + [Status.SUCCESS]
 
@@ -337,10 +337,10 @@ class TestGoToLookAhead:
         h.link.take()
         for distance in (8.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.4):
             self.approach(h, vehicle, corner, (distance,))
-            if mission_state.leg_index == 2:
+            if mission_state.legs.leg_index == 2:
                 break
-        assert mission_state.leg_index == 2
+        assert mission_state.legs.leg_index == 2
         h.tick()
         (sent,) = h.link.take("SET_POSITION_TARGET_GLOBAL_INT")
-        following = mission_state.target
+        following = mission_state.legs.target
         assert (sent.lat_int, sent.lon_int) == (round(following.lat * 1e7), round(following.lon * 1e7))

@@ -188,7 +188,7 @@ class TestVtol:
         goto = GoTo(LOITER_RADIUS_M + 20.0, 120.0, method="reposition")
         status, _ = bench.run(goto, 120.0)
         assert status == S, goto.feedback_message
-        target = bench.mission_state.target
+        target = bench.mission_state.legs.target
         assert distance(bench.autopilot.vehicle.lat, bench.autopilot.vehicle.lon, target.lat, target.lon) <= LOITER_RADIUS_M + 20.0
         assert bench.link.commands().count("DO_REPOSITION") == 2  # the transition's and the leg's: never re-sent once accepted
         assert bench.bb("/vehicle/vtol_state") == "FW" and bench.autopilot.vehicle.alt_m == pytest.approx(30.0, abs=1.0)

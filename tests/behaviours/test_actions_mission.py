@@ -460,6 +460,51 @@ class TestVtolTransition:
         assert [h.tick(1.0) for _ in range(2)] == [R, F]
         assert node.feedback_message == "still TRANSITION_TO_FW after 3 s (by reposition 300 m ahead)"
 
+    # The transition's asking (the one Asker, a command's rules judged at timeout_s): one ask, confirmed by EXTENDED_SYS_STATE
+    # alone, judged failed at a refusal, at the commander's last resend unanswered, or when timeout_s has passed.
+
+    def test_a_slow_transition_is_confirmed_within_its_time_on_one_ask(self, harness, vehicle, plane):
+        vehicle.set(vehicle__mode="GUIDED", vehicle__vtol_state="MC", vehicle__position=pos(alt=30.0))
+        node = VtolTransition("FW", timeout_s=30.0)
+        h = harness(node)
+        h.tick(1.0)
+        h.ack(M.MAV_CMD_DO_REPOSITION)
+        vehicle.set(vehicle__vtol_state="TRANSITION_TO_FW")
+        assert [h.tick(1.0) for _ in range(29)] == [R] * 29  # 29 s asked, accepted, not there yet: not judged before 30 s
+        vehicle.set(vehicle__vtol_state="FW")
+        assert h.tick(1.0) == S
+        assert len(h.link.take("COMMAND_INT")) == 1
+
+    def test_not_there_is_judged_on_the_first_tick_past_timeout_s(self, harness, vehicle, px4):
+        vehicle.set(vehicle__mode="AUTO.LOITER", vehicle__vtol_state="FW", vehicle__position=pos(alt=30.0))
+        node = VtolTransition("MC", timeout_s=10.0)
+        h = harness(node)
+        h.tick(0.5)
+        h.ack(M.MAV_CMD_DO_VTOL_TRANSITION)
+        vehicle.set(vehicle__vtol_state="TRANSITION_TO_MC")
+        assert [h.tick(0.5) for _ in range(21)] == [R] * 20 + [F]  # RUNNING at 10 s exactly, FAILURE at 10.5 s
+        assert node.feedback_message == "still TRANSITION_TO_MC after 10 s (by DO_VTOL_TRANSITION)"
+        assert len(h.link.take("COMMAND_LONG")) == 1
+
+    def test_a_late_refusal_is_the_refusal(self, harness, vehicle, plane):
+        vehicle.set(vehicle__mode="GUIDED", vehicle__vtol_state="MC", vehicle__position=pos(alt=30.0))
+        node = VtolTransition("FW", timeout_s=30.0)
+        h = harness(node)
+        assert [h.tick(0.5) for _ in range(5)] == [R] * 5  # 2 s without an answer (the commander resends it meanwhile)
+        h.ack(M.MAV_CMD_DO_REPOSITION, M.MAV_RESULT_FAILED)
+        assert h.tick(0.5) == F
+        assert node.feedback_message == "reposition 300 m ahead refused: FAILED; still MC"
+
+    def test_unanswered_fails_once_the_commander_gives_up_before_the_timeout(self, harness, vehicle, plane):
+        vehicle.set(vehicle__mode="GUIDED", vehicle__vtol_state="MC", vehicle__position=pos(alt=30.0))
+        node = VtolTransition("FW", timeout_s=30.0)
+        h = harness(node)
+        statuses = [h.tick(0.5) for _ in range(14)]
+        # the commander sends at 0, 1.5, 3 and 4.5 s (its ack time-out) and gives up at 6 s: judged at the next tick
+        assert statuses == [R] * 13 + [F]
+        assert len(h.link.take("COMMAND_INT")) == 4
+        assert node.feedback_message == "reposition 300 m ahead no ack after 4 attempts; still MC"
+
     def test_no_position_no_fw_transition_on_ardupilot(self, harness, vehicle, plane):
         vehicle.set(vehicle__mode="GUIDED", vehicle__vtol_state="MC")
         node = VtolTransition("FW")
@@ -516,6 +561,34 @@ class TestGoToReposition:
                 confirmations_ticks.append(tick)
         # the commander sends on ticks 1, 13, 25, 37 (1.5 s ack timeout) and gives up on 49; GoTo asks again on 50
         assert confirmations_ticks == [1, 13, 25, 37, 50]
+
+    def test_refused_again_and_again_is_asked_again_each_resend_s_without_end(self, harness, vehicle, mission_state, plane):
+        on_leg(mission_state, 3)
+        vehicle.set(vehicle__position=pos(alt=30.0))
+        node = GoTo(80.0, 120.0, method="reposition")
+        h = harness(node)
+        asked_at = []
+        for tick in range(1, 41):  # 0.25 s ticks, 10 s; each ask refused at once
+            h.tick(0.25)
+            if h.link.take("COMMAND_INT"):
+                asked_at.append(tick * 0.25)
+                h.ack(M.MAV_CMD_DO_REPOSITION, M.MAV_RESULT_DENIED)
+        assert asked_at == [0.25 + n for n in range(10)]  # never given up, replaced or slowed: the leg's timeout ends it
+        assert node.status == R
+
+    def test_a_refusal_is_named_until_an_ask_stands_resend_s_then_not(self, harness, vehicle, mission_state, plane):
+        on_leg(mission_state, 3)
+        vehicle.set(vehicle__position=pos(alt=30.0), vehicle__statustext=(4, "Mode change to GUIDED failed"))
+        node = GoTo(80.0, 2.5, method="reposition")
+        h = harness(node)
+        h.tick(0.5)
+        h.ack(M.MAV_CMD_DO_REPOSITION, M.MAV_RESULT_FAILED)
+        assert [h.tick(0.5) for _ in range(2)] == [R, R]  # asked again 1 s after the first ask
+        assert len(h.link.take("COMMAND_INT")) == 2
+        h.ack(M.MAV_CMD_DO_REPOSITION)  # the second is accepted: the autopilot has the target
+        assert [h.tick(0.5) for _ in range(4)] == [R, R, R, F]
+        assert h.link.take("COMMAND_INT") == []
+        assert node.feedback_message == "leg 3/4: timed out after 2.5 s, 175.6 m short"  # the refusal no longer says why
 
     def test_a_waypoint_without_altitude_is_flown_at_the_current_height(self, harness, vehicle, mission_state, plane):
         on_leg(mission_state, 4)

@@ -71,7 +71,7 @@ def test_legs_the_autopilot_finished_unheard_are_caught_up(at_leg: Harness) -> N
     assert at_leg.link.take("MISSION_SET_CURRENT") == []
     at_leg.vehicle.set(vehicle__mission_current=MissionCurrent(3, 3, MISSION_STATE_COMPLETE, False, at_leg.clock.now() + 0.05))
     assert at_leg.tick() == Status.RUNNING
-    assert at_leg.mission_state.leg_index == 3
+    assert at_leg.mission_state.legs.leg_index == 3
     [sent] = at_leg.link.take("MISSION_SET_CURRENT")
     assert sent.seq == 4
 
@@ -82,6 +82,6 @@ def test_a_mission_completed_before_this_run_drove_in_auto_catches_nothing_up(at
     at_leg.tick()
     at_leg.vehicle.set(vehicle__mission_current=MissionCurrent(4, 4, MISSION_STATE_COMPLETE, False, at_leg.clock.now() + 0.05))
     at_leg.tick()
-    assert at_leg.mission_state.leg_index == 0
+    assert at_leg.mission_state.legs.leg_index == 0
     [sent] = at_leg.link.take("MISSION_SET_CURRENT")
     assert sent.seq == 1

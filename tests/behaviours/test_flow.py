@@ -96,14 +96,14 @@ def test_for_each_leg_runs_the_child_once_per_leg(harness, mission_state):
 
     class Leg(py_trees.behaviour.Behaviour):
         def update(self) -> Status:
-            visits.append(mission_state.leg_index)
+            visits.append(mission_state.legs.leg_index)
             return Status.SUCCESS if len(visits) % 2 == 0 else Status.RUNNING  # two ticks per leg
 
     h = harness(ForEachLeg(Leg("leg")))
     statuses = [h.tick() for _ in range(8)]
     assert visits == [0, 0, 1, 1, 2, 2, 3, 3]
     assert statuses == [Status.RUNNING] * 7 + [Status.SUCCESS]
-    assert mission_state.leg_index == 4 and mission_state.target is None
+    assert mission_state.legs.leg_index == 4 and mission_state.legs.target is None
 
 
 def test_for_each_leg_resumes_the_same_leg_after_an_interruption(harness, mission_state, vehicle):
@@ -115,7 +115,7 @@ def test_for_each_leg_resumes_the_same_leg_after_an_interruption(harness, missio
 
     class Leg(py_trees.behaviour.Behaviour):
         def initialise(self) -> None:
-            seen.append(mission_state.leg_index)
+            seen.append(mission_state.legs.leg_index)
 
         def update(self) -> Status:
             return Status.RUNNING
@@ -134,7 +134,7 @@ def test_for_each_leg_fails_with_the_leg_failure(harness, mission_state):
     node = ForEachLeg(py_trees.behaviours.Failure("leg"))
     assert harness(node).tick() == Status.FAILURE
     assert node.feedback_message.startswith("leg 1/4 failed")
-    assert mission_state.leg_index == 0
+    assert mission_state.legs.leg_index == 0
 
 
 def test_guards_only_read_the_blackboard():

@@ -66,6 +66,31 @@ def test_a_refused_reposition_is_sent_again_each_second_and_named_when_it_times_
     assert node.feedback_message == f"timed out after 3 s: 36.4 m (DO_REPOSITION {why})"
 
 
+def test_unanswered_is_left_to_the_commander_then_asked_again(harness, home) -> None:
+    h = harness(GoToLocal(TARGET, acceptance_radius_m=2.0, timeout_s=60.0, method="reposition"))
+    sent_at = []
+    for tick in range(1, 61):  # 0.125 s ticks, 7.5 s, never an answer
+        h.tick(0.125)
+        if repositions(h):
+            sent_at.append(tick)
+    # the commander resends on ticks 1, 13, 25, 37 (1.5 s ack time-out) and gives up on 49; GoToLocal asks again on 50
+    assert sent_at == [1, 13, 25, 37, 50]
+
+
+def test_refused_then_accepted_is_asked_no_more_and_not_named_at_the_timeout(harness, home) -> None:
+    node = GoToLocal(TARGET, acceptance_radius_m=2.0, timeout_s=3.0, method="reposition")
+    h = harness(node)
+    statuses, sent_at = [], []
+    for i in range(8):
+        statuses.append(h.tick(0.5))
+        if repositions(h):
+            sent_at.append(i)
+            h.ack(M.MAV_CMD_DO_REPOSITION, M.MAV_RESULT_FAILED if not sent_at[:-1] else M.MAV_RESULT_ACCEPTED)
+    assert statuses == [R] * 7 + [F]
+    assert sent_at == [0, 2]
+    assert node.feedback_message == "timed out after 3 s: 36.4 m"
+
+
 def test_nothing_is_sent_before_home_is_known(harness, vehicle) -> None:
     vehicle.set(vehicle__position=pos(alt=30.0))
     node = GoToLocal(TARGET, acceptance_radius_m=2.0, timeout_s=60.0, method="reposition")

@@ -15,8 +15,7 @@ from executive.mission.model import Mission, SamplingOptions
 from executive.mission.port import MissionPort
 from executive.testing import Harness, port_for
 from executive.world import blackboard
-from executive.world.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
-from executive.world.state import Sample as SampleRecord
+from executive.world.state import GlobalPosition, SampleRead, SampleRecord, SamplerState, SamplerStatus
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 OPTIONS = SamplingOptions(duration_s=2.0, rate_hz=1.0, sensors=["ph", "temperature"])
@@ -53,7 +52,7 @@ class FakeSampler:
 @pytest.fixture
 def running(mission_state, vehicle):
     mission_state.start()
-    vehicle.set(vehicle__position=at(mission_state.target.lat, mission_state.target.lon), rc__channels=RC_LOW)
+    vehicle.set(vehicle__position=at(mission_state.legs.target.lat, mission_state.legs.target.lon), rc__channels=RC_LOW)
     return mission_state
 
 
@@ -80,9 +79,9 @@ def test_samples_and_records_the_sample(make, running, vehicle):
     statuses = [h.tick(0.5) for _ in range(6)]  # started at 100.5; reads at 101.5 and 102.5, done at 102.5, seen at 103.0
     assert statuses == [R, R, R, R, R, S]
     assert h.link.take() == []  # the sampler is not the autopilot
-    (recorded,) = running.samples
+    (recorded,) = running.sample_log.taken
     assert (recorded.leg_index, recorded.started, recorded.finished) == (0, 100.5, 102.5)
-    assert (recorded.lat, recorded.lon) == (running.target.lat, running.target.lon)
+    assert (recorded.lat, recorded.lon) == (running.legs.target.lat, running.legs.target.lon)
     assert recorded.reads == status().reads and len(recorded.reads) == 4
     assert py_trees.blackboard.Blackboard.get("/mission/samples") == (recorded,)
     assert node.feedback_message == "leg 1/4: sampled, 4 reads (simulated)"
@@ -104,7 +103,7 @@ def test_the_position_recorded_is_the_last_seen_while_sampling(make, running, ve
     vehicle.set(vehicle__position=at(47.5, 8.5))
     while h.tick(0.5) == R:
         pass
-    assert (running.samples[0].lat, running.samples[0].lon) == (47.5, 8.5)
+    assert (running.sample_log.taken[0].lat, running.sample_log.taken[0].lon) == (47.5, 8.5)
 
 
 def test_no_position_at_all_records_nan(make, running, vehicle):
@@ -112,7 +111,7 @@ def test_no_position_at_all_records_nan(make, running, vehicle):
     h = make(Sample())
     while h.tick(0.5) == R:
         pass
-    assert math.isnan(running.samples[0].lat) and math.isnan(running.samples[0].lon)
+    assert math.isnan(running.sample_log.taken[0].lat) and math.isnan(running.sample_log.taken[0].lon)
 
 
 def test_a_leg_already_sampled_is_skipped_without_sampling(make, running):
@@ -121,7 +120,7 @@ def test_a_leg_already_sampled_is_skipped_without_sampling(make, running):
     node = Sample()
     h = make(node, sampler)
     assert h.tick(0.5) == S
-    assert sampler.calls == [] and len(running.samples) == 1
+    assert sampler.calls == [] and len(running.sample_log.taken) == 1
     assert node.feedback_message == "leg 1: already sampled"
 
 
@@ -133,7 +132,7 @@ def test_sampler_failure_fails_and_records_nothing(make, running):
     sampler.publish(1, SamplerState.FAILED, reason="pump jammed")
     assert h.tick(0.5) == F
     assert node.feedback_message == "leg 1/4: sampler failed: pump jammed"
-    assert running.samples == () and sampler.calls == ["start 0"]  # a finished request is not cancelled
+    assert running.sample_log.taken == () and sampler.calls == ["start 0"]  # a finished request is not cancelled
 
 
 def test_only_its_own_ticket_counts(make, running):
@@ -146,7 +145,7 @@ def test_only_its_own_ticket_counts(make, running):
     assert h.tick(0.5) == R
     sampler.publish(7, SamplerState.DONE, (SampleRead("ph", 8.2, "pH", 101.0),), t=101.0)
     assert h.tick(0.5) == S
-    assert [r.value for r in running.samples[0].reads] == [8.2] and running.samples[0].finished == 101.0
+    assert [r.value for r in running.sample_log.taken[0].reads] == [8.2] and running.sample_log.taken[0].finished == 101.0
 
 
 def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, running, vehicle):
@@ -158,13 +157,13 @@ def test_rc_takeover_ends_the_sample_it_is_cancelled_then_retaken_once(make, run
     vehicle.set(rc__channels=RC_HIGH)
     assert h.tick(0.5) == F
     assert (status().ticket, status().state, status().reason) == (first_ticket, SamplerState.FAILED, "cancelled")
-    assert node.status == Status.INVALID and running.samples == ()
+    assert node.status == Status.INVALID and running.sample_log.taken == ()
     vehicle.set(rc__channels=RC_LOW)
     assert [h.tick(0.5) for _ in range(2)] == [F, F]  # the switch back for 1 s (two ticks of 0.5 s) before the work goes on
     statuses = [h.tick(0.5) for _ in range(6)]
     assert statuses == [R, R, R, R, R, S]
-    assert status().ticket == first_ticket + 1 and len(running.samples) == 1
-    assert h.tick(0.5) == S and len(running.samples) == 1  # ticked again: already sampled, not repeated
+    assert status().ticket == first_ticket + 1 and len(running.sample_log.taken) == 1
+    assert h.tick(0.5) == S and len(running.sample_log.taken) == 1  # ticked again: already sampled, not repeated
 
 
 def test_no_active_leg_fails(make, mission_state):

@@ -141,7 +141,7 @@ def test_a_person_sending_the_rover_into_a_keep_out_zone_is_held_by_ardurovers_o
     sent_at: list[float] = []
 
     def person(s: Lockstep) -> None:  # QGroundControl's Go-to into the pier, mid leg 2 (the autopilot steering to our target)
-        mid_leg = s.runtime.mission_state.leg_index == 1 and geo.distance(*LINE_HOME, s.autopilot.vehicle.lat, LINE_HOME[1]) > 32
+        mid_leg = s.runtime.mission_state.legs.leg_index == 1 and geo.distance(*LINE_HOME, s.autopilot.vehicle.lat, LINE_HOME[1]) > 32
         if not sent_at and mid_leg and bb.get("/vehicle/target_set_by") == "us":
             s.send_from_ground_station(go_to)
             sent_at.append(s.clock.now())
@@ -167,7 +167,7 @@ def test_a_running_mission_held_by_ardurovers_own_fence_pauses_hands_off_and_res
     tightened: list[float] = []
 
     def ground_station(s: Lockstep) -> None:  # mid leg 2, a ground station narrows ArduRover's fence to 20 m around home
-        if not tightened and s.runtime.mission_state.leg_index == 1 and s.autopilot.params.get("FENCE_ENABLE") == 1:
+        if not tightened and s.runtime.mission_state.legs.leg_index == 1 and s.autopilot.params.get("FENCE_ENABLE") == 1:
             for name, value in (("FENCE_RADIUS", 20.0), ("FENCE_TYPE", 6.0)):
                 s.send_from_ground_station(_GCS.param_set_encode(s.autopilot.system_id, 1, name.encode(), value, _M.MAV_PARAM_TYPE_REAL32))
             tightened.append(s.clock.now())

@@ -109,7 +109,7 @@ def test_a_crash_at_any_moment_then_resume_records_every_sample_once(tmp_path, c
     def crash_now() -> bool:
         sampler = blackboard.value("/sampler/status")
         sampling = sampler is not None and sampler.state is SamplerState.SAMPLING
-        reached = len(state.samples) >= samples_before and (samples_before > 0 or sampling)
+        reached = len(state.sample_log.taken) >= samples_before and (samples_before > 0 or sampling)
         if reached and not moment:
             moment.append(first.clock.now())
         return bool(moment) and first.clock.now() >= moment[0] + after_s
@@ -196,7 +196,7 @@ def test_a_route_edited_before_a_crash_is_the_route_resumed(tmp_path, capsys, lo
         return {"plugs": [journal_recorder(journals[-1])]}
 
     first = lockstep(square, options_for_clock=journal_plug, ekf_ready_after_s=EKF_READY_S)
-    assert first.run(limit_s=600, until=lambda: first.runtime.mission_state.leg_index >= 1) is None  # heading for waypoint 2 of 4
+    assert first.run(limit_s=600, until=lambda: first.runtime.mission_state.legs.leg_index >= 1) is None  # heading for waypoint 2 of 4
     assert first.runtime.operator.request("route", source="ctl", operation="remove", waypoint=3).ok  # on the disk before the reply
     # the crash: the first run is never ticked again and never ends
 

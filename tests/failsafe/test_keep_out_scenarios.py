@@ -144,11 +144,11 @@ def test_a_route_edit_that_would_take_the_rover_through_a_buoy_from_where_it_is_
     mission = line_mission("line past a buoy", geofence={"keep_out": [{"name": "buoy", "circle": buoy}]})
     sim = lockstep(mission)
     replies: list[Any] = []
-    sim.run(until=lambda: sim.runtime.mission_state.leg_index == 1 and geo.distance(*LINE_HOME, *_at(sim)) >= 35.0)
+    sim.run(until=lambda: sim.runtime.mission_state.legs.leg_index == 1 and geo.distance(*LINE_HOME, *_at(sim)) >= 35.0)
     replies.append(sim.runtime.operator.request("route", source="ctl", operation="offset", waypoint=2, distance_m=30, bearing_deg=90))
     assert not replies[0].ok
     assert "the vehicle -> waypoints[1] (-): crosses keep-out zone 'buoy'" in replies[0].reason
-    assert list(sim.runtime.mission_state.route.waypoints) == mission.waypoints  # nothing changed, nothing sent
+    assert list(sim.runtime.mission_state.legs.route.waypoints) == mission.waypoints  # nothing changed, nothing sent
     assert sim.run_to_end(limit_s=200).status is MissionStatus.COMPLETED
 
 

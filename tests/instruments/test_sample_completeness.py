@@ -24,8 +24,7 @@ from executive.mission.model import SamplingOptions
 from executive.observers.journal import Journal
 from executive.testing import Harness, mission_errors
 from executive.world.clock import ManualClock
-from executive.world.state import GlobalPosition, SampleRead, SamplerState, SamplerStatus
-from executive.world.state import Sample as SampleRecord
+from executive.world.state import GlobalPosition, SampleRead, SampleRecord, SamplerState, SamplerStatus
 
 SENSORS = ["temperature", "conductivity", "ph"]
 
@@ -140,10 +139,10 @@ def test_the_sample_action_records_a_partial_sample_and_fails_its_point_not_done
             break
     assert statuses[-1] == Status.FAILURE
     assert node.feedback_message == "leg 1/2: partial sample, 62 reads: no reading of ph from queued in 3 s (sampling.require: all)"
-    (recorded,) = state.samples
+    (recorded,) = state.sample_log.taken
     assert (recorded.leg_index, recorded.partial, recorded.missing, len(recorded.reads)) == (0, True, ("ph",), 62)
-    assert not state.sampled(0)  # its point is not done: a resume samples it again
-    assert state.work_left() == "no sample was recorded at leg 2; the sample of leg 1 is partial (no reading of ph)"
+    assert not state.sample_log.sampled(0)  # its point is not done: a resume samples it again
+    assert state.sample_log.work_left(state.mission) == "no sample was recorded at leg 2; the sample of leg 1 is partial (no reading of ph)"
     due = NothingToSample()
     due.tick_once()
     assert (due.status, due.feedback_message) == (Status.FAILURE, "leg 1: sample due")
@@ -167,7 +166,7 @@ def test_the_journal_and_the_report_say_a_sample_is_partial_and_what_it_lacked(s
     restored.upload(sampling_mission)
     restored.start()
     restored.continue_from(resume.leg_index, resume.samples)
-    assert (restored.sampled(0), restored.sampled(1)) == (False, True)  # the partial one is taken again after a crash
+    assert (restored.sample_log.sampled(0), restored.sample_log.sampled(1)) == (False, True)  # the partial one is taken again after a crash
     assert main(["report", str(db)]) == 0
     text = capsys.readouterr().out
     partial = "2 reads, mean temperature (degC) 17.50, conductivity (mS/cm) 44.00 (queued): PARTIAL, no reading of ph"

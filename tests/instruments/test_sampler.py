@@ -191,6 +191,6 @@ def test_the_runtime_services_the_sampler_of_a_sampling_mission(clock, link, squ
         statuses.append(runtime.tick())
     R, S = py_trees.common.Status.RUNNING, py_trees.common.Status.SUCCESS
     assert statuses == [R] * 5 + [S, S]  # started at 100.25; reads at 100.75 and 101.25 (done), seen at 101.5; then already sampled
-    (sample,) = runtime.mission_state.samples
+    (sample,) = runtime.mission_state.sample_log.taken
     assert len(sample.reads) == 8 and sample.finished == 101.25
     assert build_runtime(square_mission, link, clock, root=py_trees.behaviours.Running("idle")).sampler is None  # no sampling section, no sampler

@@ -8,7 +8,7 @@ import pytest
 
 from executive.mission.events import Announcement, MissionEvents, RouteChanged, SampleTaken, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.world.state import Sample
+from executive.world.state import SampleRecord
 
 
 def test_subscribers_hear_by_stage_in_every_order_of_subscription() -> None:
@@ -41,7 +41,7 @@ def test_the_lifecycle_tells_each_change_once_as_its_kind_of_event(square_missio
     state.upload(square_mission)
     state.start()
     state.set_route(square_mission.waypoints[:3], "operator", leg_index=1)
-    state.record_sample(Sample(leg_index=1, lat=0.0, lon=0.0, started=0.0, finished=1.0, reads=()))
+    state.record_sample(SampleRecord(leg_index=1, lat=0.0, lon=0.0, started=0.0, finished=1.0, reads=()))
     state.announce("failsafe cleared")
     S = MissionStatus
     assert heard == [

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import re
+
 import py_trees
 import pytest
 
+import executive
 from executive.mission.events import Transition
 from executive.mission.lifecycle import TRANSITIONS, MissionState, MissionStatus, Refused
 
@@ -70,11 +73,11 @@ TABLE = {
 def test_transition_table(state_in, square_mission, start, request_, expected):
     state = state_in(start)
     action = (lambda: state.upload(square_mission)) if request_ == "upload" else getattr(state, request_)
-    before = (state.status, state.leg_index, state.mission, bb("/mission/state"))
+    before = (state.status, state.legs.leg_index, state.mission, bb("/mission/state"))
     if expected is None:
         with pytest.raises(Refused, match=f"cannot {request_} while {start}"):
             action()
-        assert (state.status, state.leg_index, state.mission, bb("/mission/state")) == before  # nothing half-applied
+        assert (state.status, state.legs.leg_index, state.mission, bb("/mission/state")) == before  # nothing half-applied
     else:
         action()
         assert state.status is expected
@@ -91,17 +94,17 @@ def test_start_after_completion_runs_again_from_the_first_waypoint(state_in, squ
         state.advance_leg()
     state.complete()
     state.start()
-    assert state.leg_index == 0
-    assert state.target == square_mission.waypoints[0]
+    assert state.legs.leg_index == 0
+    assert state.legs.target == square_mission.waypoints[0]
 
 
 def test_pause_and_resume_keep_the_leg(state_in, square_mission):
     state = state_in(S.RUNNING)
     state.advance_leg()
     state.pause()
-    assert state.target == square_mission.waypoints[1]
+    assert state.legs.target == square_mission.waypoints[1]
     state.resume()
-    assert state.leg_index == 1
+    assert state.legs.leg_index == 1
     assert bb("/mission/target") == square_mission.waypoints[1]
 
 
@@ -137,7 +140,49 @@ def test_past_the_last_waypoint_the_leg_a_person_reads_is_the_last_as_the_status
     state = state_in(S.RUNNING)
     for _ in square_mission.waypoints:
         state.advance_leg()  # every waypoint reached: a VTOL lands now, still RUNNING
-    assert (state.leg_index, state.leg_number) == (4, 4)
+    assert (state.legs.leg_index, state.legs.leg_number) == (4, 4)
     state.pause()
     state.resume()
     assert state.reason == "resumed at leg 4"
+
+
+# -- the lifecycle holds only the lifecycle: the route is read at state.legs, the samples at state.sample_log ----------------------
+#: What MissionState is: its state, the mission loaded, its requests, its parts and its checks.
+LIFECYCLE = {
+    *TRANSITIONS, "replace", "continue_from", "advance_leg", "set_route", "route_refusal", "record_sample", "restore_samples",
+    "explain", "announce", "status", "reason", "hold_while_paused", "mission", "legs", "sample_log", "events", "replace_checks",
+    "resume_checks",
+}  # fmt: skip
+#: The pass-throughs of 0.1 and where each is read now (deprecated for one release).
+MOVED = {
+    "leg_index": "legs.leg_index", "leg_count": "legs.leg_count", "leg_number": "legs.leg_number", "target": "legs.target",
+    "next_target": "legs.next_target", "route": "legs.route", "samples": "sample_log.taken", "sampled": "sample_log.sampled",
+    "work_left": "sample_log.work_left(mission)",
+}  # fmt: skip
+
+
+def public(instance: object) -> set[str]:
+    return {name for name in dir(instance) if not name.startswith("_")}
+
+
+def test_the_lifecycle_s_own_surface_has_no_route_or_sample_member_but_the_deprecated_ones(square_mission) -> None:
+    state = MissionState()
+    state.upload(square_mission)
+    deprecated = {name for name in public(MissionState) if isinstance(getattr(MissionState, name), executive.MovedMember)}
+    assert deprecated == set(MOVED)
+    assert public(state) - deprecated == LIFECYCLE
+    # nothing of the route's or the sample log's is the lifecycle's own (the mission loaded is what its states are of)
+    assert (public(state.legs) | public(state.sample_log)) & (public(state) - deprecated) == {"mission"}
+
+
+@pytest.mark.parametrize("old", sorted(MOVED))
+def test_each_old_pass_through_warns_naming_where_it_is_read_now(state_in, old: str) -> None:
+    state = state_in(S.RUNNING)
+    state.advance_leg()
+    new = {
+        "leg_index": 1, "leg_count": 4, "leg_number": 2, "target": state.legs.mission.waypoints[1], "next_target": state.legs.mission.waypoints[2],
+        "route": state.legs.route, "samples": (), "sampled": state.sample_log.sampled, "work_left": None,
+    }[old]  # fmt: skip
+    with pytest.warns(DeprecationWarning, match=rf"MissionState\.{old} moved to MissionState\.{re.escape(MOVED[old])} \(0\.2\)"):
+        value = getattr(state, old)
+    assert (value() if old == "work_left" else value) == new

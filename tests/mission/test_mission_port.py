@@ -42,4 +42,4 @@ def test_a_leg_reported_done_is_applied_by_the_lifecycle_or_refused(square_missi
         port.leg_done()
     state.start()
     port.leg_done()
-    assert (port.leg_index, state.leg_index, port.target) == (1, 1, square_mission.waypoints[1])
+    assert (port.leg_index, state.legs.leg_index, port.target) == (1, 1, square_mission.waypoints[1])

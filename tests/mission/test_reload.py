@@ -6,7 +6,7 @@ import pytest
 
 from executive.mission.model import Mission
 from executive.mission.reload import Incompatible, plan
-from executive.world.state import Sample
+from executive.world.state import SampleRecord
 
 #: About 11 m north of the square's first corner: not the same place as any corner (radius 1.5 m).
 ELSEWHERE = {"lat": 47.397842, "lon": 8.545594}
@@ -20,8 +20,8 @@ def waypoints(mission: Mission) -> list[dict]:
     return [wp.model_dump(mode="json", exclude_none=True) for wp in mission.waypoints]
 
 
-def sample(leg: int) -> Sample:
-    return Sample(leg, 0.0, 0.0, (), 1.0, 2.0)
+def sample(leg: int) -> SampleRecord:
+    return SampleRecord(leg, 0.0, 0.0, (), 1.0, 2.0)
 
 
 def test_the_waypoint_headed_for_is_found_where_the_new_mission_has_it(square_mission):

@@ -113,13 +113,13 @@ def test_set_route_keeps_the_leg_inside_the_route_and_publishes_the_target(missi
     state.set_route([A, B, C], "three")
     state.advance_leg()
     state.advance_leg()
-    assert state.route == Route((A, B, C), 2)
+    assert state.legs.route == Route((A, B, C), 2)
     state.set_route([A], "cut")  # no leg index given: the current one, kept inside the route (finished)
-    assert state.route == Route((A,), 1)
+    assert state.legs.route == Route((A,), 1)
     assert py_trees.blackboard.Blackboard.get("/mission/target") is None
     state.set_route([A, D], "one more, heading for it", leg_index=1)
     assert py_trees.blackboard.Blackboard.get("/mission/target") == D
     assert py_trees.blackboard.Blackboard.get("/mission/leg_index") == 1
     with pytest.raises(Refused, match="outside a route"):
         state.set_route([A], "bad", leg_index=2)
-    assert state.route == Route((A, D), 1)  # a refusal changes nothing
+    assert state.legs.route == Route((A, D), 1)  # a refusal changes nothing

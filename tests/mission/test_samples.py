@@ -7,14 +7,14 @@ import pytest
 
 from executive.mission.events import SampleTaken
 from executive.mission.lifecycle import MissionState, MissionStatus, Refused
-from executive.world.state import Sample, SampleRead
+from executive.world.state import SampleRead, SampleRecord
 
 
-def sample(leg: int, t: float = 10.0) -> Sample:
-    return Sample(leg, 47.0, 8.0, (SampleRead("ph", 8.1, "pH", t),), t - 5.0, t)
+def sample(leg: int, t: float = 10.0) -> SampleRecord:
+    return SampleRecord(leg, 47.0, 8.0, (SampleRead("ph", 8.1, "pH", t),), t - 5.0, t)
 
 
-def published() -> tuple[Sample, ...]:
+def published() -> tuple[SampleRecord, ...]:
     return py_trees.blackboard.Blackboard.get("/mission/samples")
 
 
@@ -27,23 +27,23 @@ def running(square_mission) -> MissionState:
 
 
 def test_recorded_samples_are_published_oldest_first(running):
-    assert published() == () and not running.sampled(0)
+    assert published() == () and not running.sample_log.sampled(0)
     running.record_sample(sample(1, 10.0))
     running.record_sample(sample(0, 20.0))
     assert published() == (sample(1, 10.0), sample(0, 20.0))
-    assert running.samples == published()
-    assert [running.sampled(i) for i in range(4)] == [True, True, False, False]
+    assert running.sample_log.taken == published()
+    assert [running.sample_log.sampled(i) for i in range(4)] == [True, True, False, False]
 
 
 def test_listeners_hear_each_sample_once(running):
-    heard: list[Sample] = []
+    heard: list[SampleRecord] = []
     running.events.subscribe(SampleTaken, heard.append)
     running.record_sample(sample(2))
     assert heard == [sample(2)]
 
 
 def test_a_leg_is_never_sampled_twice(running):
-    heard: list[Sample] = []
+    heard: list[SampleRecord] = []
     running.events.subscribe(SampleTaken, heard.append)
     running.record_sample(sample(0, 10.0))
     with pytest.raises(Refused, match="leg 1 is already sampled"):
@@ -68,15 +68,15 @@ def test_samples_survive_pause_resume_and_leg_changes(running):
     running.advance_leg()
     running.pause()
     running.resume()
-    assert running.sampled(0) and published() == (sample(0),)
+    assert running.sample_log.sampled(0) and published() == (sample(0),)
 
 
 def test_a_new_run_or_a_new_mission_starts_without_samples(running, square_mission):
     running.record_sample(sample(0))
     running.complete()
-    assert running.sampled(0)  # the finished run keeps them until the next starts
+    assert running.sample_log.sampled(0)  # the finished run keeps them until the next starts
     running.start()
-    assert running.samples == () and published() == () and not running.sampled(0)
+    assert running.sample_log.taken == () and published() == () and not running.sample_log.sampled(0)
     running.record_sample(sample(0))
     running.abort("test")
     running.upload(square_mission)
@@ -92,14 +92,14 @@ def test_a_restarted_executive_restores_samples_without_telling_listeners_and_do
     before.upload(square_mission)
     before.start()
     before.record_sample(sample(1))
-    journal = before.samples  # what a journal kept
+    journal = before.sample_log.taken  # what a journal kept
     after = MissionState()  # the process restarted
     after.upload(square_mission)
     after.start()
-    heard: list[Sample] = []
+    heard: list[SampleRecord] = []
     after.events.subscribe(SampleTaken, heard.append)
     after.restore_samples(journal)
-    assert after.sampled(1) and published() == journal and heard == []
+    assert after.sample_log.sampled(1) and published() == journal and heard == []
     with pytest.raises(Refused):
         after.record_sample(sample(1))
     after.restore_samples(journal)  # restoring twice does not duplicate

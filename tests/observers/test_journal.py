@@ -11,7 +11,7 @@ from executive.mission.lifecycle import MissionState
 from executive.mission.model import Home, Mission, Waypoint
 from executive.mission.route import Route
 from executive.observers.journal import Journal, mission_hash
-from executive.world.state import Sample, SampleRead
+from executive.world.state import SampleRead, SampleRecord
 
 
 @pytest.fixture
@@ -21,8 +21,8 @@ def journal(tmp_path, clock):
     j.close()
 
 
-def sample(leg: int) -> Sample:
-    return Sample(leg, 47.0, 8.0, (SampleRead("ph", 7.5, "", 1.0), SampleRead("temperature", 18.2, "°C", 1.0)), 1.0, 11.0)
+def sample(leg: int) -> SampleRecord:
+    return SampleRecord(leg, 47.0, 8.0, (SampleRead("ph", 7.5, "", 1.0), SampleRead("temperature", 18.2, "°C", 1.0)), 1.0, 11.0)
 
 
 def started(journal: Journal, mission: Mission) -> tuple[MissionState, int]:

@@ -28,7 +28,7 @@ def driving(square_mission: Mission, runtime_on_link) -> RuntimeOnLink:
 
 
 def test_a_ground_station_hold_pauses_the_mission_in_that_tick_with_the_reason_and_nothing_is_commanded(driving: RuntimeOnLink) -> None:
-    leg = driving.runtime.mission_state.leg_index
+    leg = driving.runtime.mission_state.legs.leg_index
     driving.autopilot.mode = HOLD  # QGroundControl's Pause on a rover
     driving.tick()
     assert driving.status is MissionStatus.PAUSED
@@ -39,7 +39,7 @@ def test_a_ground_station_hold_pauses_the_mission_in_that_tick_with_the_reason_a
     assert "mission PAUSED: HOLD set by the ground station" in driving.texts()
     driving.autopilot.mode = LOITER  # the person does something else: still theirs
     driving.tick(50)
-    assert driving.modes_sent() == [] and driving.status is MissionStatus.PAUSED and driving.runtime.mission_state.leg_index == leg
+    assert driving.modes_sent() == [] and driving.status is MissionStatus.PAUSED and driving.runtime.mission_state.legs.leg_index == leg
 
 
 def test_ctl_resume_puts_the_vehicle_back_in_the_legs_mode(driving: RuntimeOnLink) -> None:

@@ -11,7 +11,7 @@ from executive.mission.events import Replaced
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.operator import Operator
-from executive.world.state import Sample
+from executive.world.state import SampleRecord
 
 ELSEWHERE = {"lat": 47.397842, "lon": 8.545594}
 
@@ -31,7 +31,7 @@ def state(square_mission: Mission) -> MissionState:
     state.upload(square_mission)
     state.start()
     state.advance_leg()
-    state.record_sample(Sample(1, 47.397922, 8.545594, (), 10.0, 20.0))
+    state.record_sample(SampleRecord(1, 47.397922, 8.545594, (), 10.0, 20.0))
     state.advance_leg()
     state.pause("ctl: pause")
     return state
@@ -43,7 +43,12 @@ def operator(state: MissionState) -> Operator:
 
 
 def unchanged(state: MissionState, mission: Mission) -> bool:
-    return (state.status, state.mission, state.leg_index, [s.leg_index for s in state.samples]) == (MissionStatus.PAUSED, mission, 2, [1])
+    return (state.status, state.mission, state.legs.leg_index, [s.leg_index for s in state.sample_log.taken]) == (
+        MissionStatus.PAUSED,
+        mission,
+        2,
+        [1],
+    )
 
 
 def test_a_paused_mission_is_replaced_at_the_same_waypoint_with_its_samples_and_stays_paused(operator, state, square_mission):
@@ -57,8 +62,8 @@ def test_a_paused_mission_is_replaced_at_the_same_waypoint_with_its_samples_and_
         "mission replaced: 'square' -> 'detour', at leg 4/5 (the waypoint of old leg 3); 1 sample kept (leg 3) "
         "(ctl: detour.yaml); paused until resumed"
     )
-    assert (state.mission.name, state.leg_index, [s.leg_index for s in state.samples]) == ("detour", 3, [2])
-    assert state.sampled(2) and not state.sampled(1)  # corner 2's sample went with corner 2, now waypoint 3
+    assert (state.mission.name, state.legs.leg_index, [s.leg_index for s in state.sample_log.taken]) == ("detour", 3, [2])
+    assert state.sample_log.sampled(2) and not state.sample_log.sampled(1)  # corner 2's sample went with corner 2, now waypoint 3
     assert told == [("detour", reply.reason)]
     assert reply.route is not None and (len(reply.route["waypoints"]), reply.route["current"]) == (5, 4)
 
@@ -71,7 +76,7 @@ def test_the_operator_may_choose_the_leg(operator, state, square_mission):
     assert unchanged(state, square_mission)
     reply = operator.request("upload", filename="short.yaml", text=text, leg=2)
     assert reply.ok and "at leg 2/2 (chosen by the operator)" in reply.reason
-    assert state.leg_index == 1
+    assert state.legs.leg_index == 1
 
 
 @pytest.mark.parametrize(

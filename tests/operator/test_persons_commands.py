@@ -66,11 +66,11 @@ def test_px4_refuses_posctl_the_mission_stays_running_and_completes(journalled) 
     """Before: `ctl mode POSCTL` refused (TEMPORARILY_REJECTED), yet PAUSED "hands off" and the run never ended without `ctl resume`."""
     sim, journal = journalled(line_mission("px4-posctl", autopilot="px4"), autopilot="px4")
     mid_leg(sim)
-    leg = sim.runtime.mission_state.leg_index
+    leg = sim.runtime.mission_state.legs.leg_index
     reply = sim.runtime.operator.request("mode", source="ctl", mode="POSCTL")
     assert reply.ok and reply.state == "RUNNING"
     assert answer(sim, reply)["state"] == "REJECTED"
-    assert sim.status is MissionStatus.RUNNING and sim.runtime.mission_state.leg_index == leg
+    assert sim.status is MissionStatus.RUNNING and sim.runtime.mission_state.legs.leg_index == leg
     status = sim.runtime.status.snapshot()
     assert status["command"] | {"t": None} == {
         "what": "mode POSCTL",

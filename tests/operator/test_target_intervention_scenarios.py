@@ -97,10 +97,10 @@ def play(sim: Lockstep, ground_station: GroundStationPlay) -> tuple[object, Grou
 
 def _leg_and_distance(sim: Lockstep) -> tuple[int, float] | None:
     state = sim.runtime.mission_state
-    target, v = state.target, sim.autopilot.vehicle
+    target, v = state.legs.target, sim.autopilot.vehicle
     if target is None or state.status is not MissionStatus.RUNNING:
         return None
-    return state.leg_index, geo.distance(v.lat, v.lon, target.lat, target.lon)
+    return state.legs.leg_index, geo.distance(v.lat, v.lon, target.lat, target.lon)
 
 
 def _mid_leg(leg_index: int, farther_than_m: float, closer_than_m: float) -> object:
@@ -155,7 +155,7 @@ def test_qgcs_go_to_on_px4_mid_leg_is_reported_with_its_point_and_resume_flies_t
     assert gcs.modes_while_paused == {"AUTO.LOITER"} and gcs.sent_while_paused == []
     assert all(geo.distance(lat, lon, *there[0]) < 1.0 for lat, lon in gcs.targets_while_paused)  # the person's point, kept
     wp = sim.mission.waypoints[1]
-    assert sim.runtime.mission_state.leg_index >= 1 and wp is not None
+    assert sim.runtime.mission_state.legs.leg_index >= 1 and wp is not None
 
 
 def test_qgcs_go_to_on_ardurover_in_guided_mid_leg_the_rover_goes_there_paused_and_resume_completes(lockstep, tmp_path) -> None:

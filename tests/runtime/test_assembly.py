@@ -8,7 +8,7 @@ from py_trees.common import Status
 from executive.mission.lifecycle import MissionStatus
 from executive.runtime.assembly import Wiring, build_runtime
 from executive.runtime.loop import RunOutcome
-from executive.runtime.services import Step, service_name
+from executive.runtime.services import FunctionService, service_name
 from executive.testing import ObedientAutopilot
 from executive.world.dialect import mavlink
 
@@ -54,8 +54,8 @@ def test_a_plug_adds_services_run_around_the_tree(square_mission, link, clock):
             return Status.SUCCESS
 
     def sensor(w: Wiring) -> None:
-        w.readers.append(Step("sensor", lambda: events.append("read")))
-        w.writers.append(Step("viewer", lambda: events.append("write")))
+        w.readers.append(FunctionService("sensor", lambda: events.append("read")))
+        w.writers.append(FunctionService("viewer", lambda: events.append("write")))
         w.observers.append(Observer(events))
         paced.append(Paced(w.clock, events))
         w.paced.append(paced[0])
@@ -107,8 +107,8 @@ def test_the_link_is_pumped_before_the_readers_and_flushed_after_the_writers(squ
             seen.append(("read", w.link.get("/vehicle/mode"), len(link.take("COMMAND_LONG"))))
             w.link.commander.set_mode("HOLD")  # asked during the tick: sent when the link is flushed
 
-        w.readers.append(Step("probe reader", read))
-        w.writers.append(Step("probe writer", lambda: seen.append(("write", None, len(link.take("COMMAND_LONG"))))))
+        w.readers.append(FunctionService("probe reader", read))
+        w.writers.append(FunctionService("probe writer", lambda: seen.append(("write", None, len(link.take("COMMAND_LONG"))))))
 
     runtime = build_runtime(square_mission, link, clock, plugs=[probe])
     ObedientAutopilot(link, mode="MANUAL").beat()

@@ -14,7 +14,7 @@ from executive.cli import main
 from executive.operator.status import StatusSource
 from executive.runtime.assembly import Wiring, build_runtime
 from executive.runtime.pacing import MIN_SWITCH_INTERVAL_S, Behind, SpeedGovernor, TickPacer, caps_logged, keeping_time
-from executive.runtime.services import Step
+from executive.runtime.services import FunctionService
 from executive.testing import ObedientAutopilot
 from executive.world.clock import ManualClock, ScaledClock
 
@@ -23,7 +23,7 @@ def slow_ticks(cost_s: float):
     """A plug whose reader takes ``cost_s`` of clock time each tick (a machine too slow for the rate)."""
 
     def plug(w: Wiring) -> None:
-        w.readers.append(Step("slow", lambda: w.clock.advance(cost_s)))  # type: ignore[attr-defined]
+        w.readers.append(FunctionService("slow", lambda: w.clock.advance(cost_s)))  # type: ignore[attr-defined]
 
     return plug
 

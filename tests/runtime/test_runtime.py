@@ -212,5 +212,5 @@ def test_a_run_s_outcome_is_a_run_outcome_and_its_old_name_still_imports_with_a_
     """Two things were called Outcome: how a run ended (RunOutcome) and what an acked command asks (executive.world.state.Outcome)."""
     from executive.runtime import loop
 
-    with pytest.warns(DeprecationWarning, match="executive.runtime.loop.Outcome is now RunOutcome"):
+    with pytest.warns(DeprecationWarning, match="executive.runtime.loop.Outcome moved to executive.runtime.loop.RunOutcome"):
         assert loop.Outcome is RunOutcome

@@ -51,7 +51,7 @@ class Track:
 def pause_on_leg(sim: Lockstep, leg_index: int, hold: str = "HOLD") -> None:
     """Run until the mission heads for ``leg_index``, pause it (ctl) and run until the vehicle holds."""
     state = sim.runtime.mission_state
-    assert sim.run(limit_s=300, until=lambda: state.leg_index >= leg_index) is None
+    assert sim.run(limit_s=300, until=lambda: state.legs.leg_index >= leg_index) is None
     assert sim.runtime.operator.request("pause", source="ctl").ok
     mode = blackboard.reader("test mode", ["/vehicle/mode"])
     assert sim.run(limit_s=30, until=lambda: mode.get("/vehicle/mode") == hold) is None
@@ -80,9 +80,9 @@ def test_a_paused_rover_holds_takes_the_new_route_on_resume_and_completes_on_it(
     stopped = [fix for fix in held if fix[0] >= replaced_at + 3.0]  # braked to a stop by then
     assert geo.distance(stopped[0][1], stopped[0][2], stopped[-1][1], stopped[-1][2]) < 0.1
     state = sim.runtime.mission_state
-    assert (state.status, state.mission.name, state.leg_index) == (MissionStatus.PAUSED, "bent", 1)
+    assert (state.status, state.mission.name, state.legs.leg_index) == (MissionStatus.PAUSED, "bent", 1)
     items = blackboard.reader("test items", ["/vehicle/mission_items"]).get("/vehicle/mission_items")
-    assert route_not_on_autopilot(state.route.waypoints, items) is None  # uploaded and read back before the resume
+    assert route_not_on_autopilot(state.legs.route.waypoints, items) is None  # uploaded and read back before the resume
     assert sim.runtime.operator.request("resume", source="ctl").ok
     outcome = sim.run_to_end(limit_s=300)
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
@@ -101,7 +101,7 @@ def test_a_person_who_has_the_vehicle_keeps_it_through_a_reload(lockstep, paused
     if paused_by == "ctl":
         pause_on_leg(sim, 1)  # held in HOLD, then a person takes the rover while paused
     else:
-        assert sim.run(limit_s=300, until=lambda: state.leg_index >= 1) is None
+        assert sim.run(limit_s=300, until=lambda: state.legs.leg_index >= 1) is None
     sim.autopilot.set_mode(0)  # a ground station puts the rover in MANUAL (ArduRover mode 0)
     run_for(sim, 2.0)
     assert state.status is MissionStatus.PAUSED  # by ctl, or at once by the person's mode change
@@ -140,7 +140,7 @@ def test_a_sample_taken_is_kept_at_its_place_and_never_taken_again(lockstep):
     wps = points(boat)
     sim = lockstep(boat)
     pause_on_leg(sim, 2, hold="LOITER")  # waypoint 2 sampled, heading for 3
-    (taken,) = sim.runtime.mission_state.samples
+    (taken,) = sim.runtime.mission_state.sample_log.taken
     # waypoint 2 first now (its sample kept, renumbered), then 3 (headed for), a new sample point east, 4 (a sample point)
     new = text(boat, name="boat-more", waypoints=[wps[1], wps[2], {**EAST_4, "sample": True}, wps[3]])
     reply = sim.runtime.operator.request("upload", source="ctl", filename="more.yaml", text=new)
@@ -148,7 +148,7 @@ def test_a_sample_taken_is_kept_at_its_place_and_never_taken_again(lockstep):
     assert sim.runtime.operator.request("resume", source="ctl").ok
     outcome = sim.run_to_end(limit_s=300)
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
-    samples = sim.runtime.mission_state.samples
+    samples = sim.runtime.mission_state.sample_log.taken
     assert [s.leg_index for s in samples] == [0, 2, 3]
     assert (samples[0].started, samples[0].reads) == (taken.started, taken.reads)  # the one taken before, not again
 
@@ -176,7 +176,7 @@ def test_a_crash_after_a_reload_resumes_on_the_new_mission_at_its_leg(tmp_path: 
     second = lockstep(resume.mission, options_for_clock=journal_plug)
     outcome = second.run(limit_s=300, resume=resume)
     assert outcome is not None and outcome.status is MissionStatus.COMPLETED, outcome
-    assert [s.leg_index for s in second.runtime.mission_state.samples] == [0, 2]
+    assert [s.leg_index for s in second.runtime.mission_state.sample_log.taken] == [0, 2]
 
     replaced, continued, resumed = (journals[1].report(run) for run in (1, 2, 3))
     reload_event = [e["text"] for e in replaced["events"] if e["kind"] == "mission"]

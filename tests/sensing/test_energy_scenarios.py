@@ -66,7 +66,7 @@ def test_a_voltage_only_monitor_runs_a_mission_that_says_nothing_unjudged_and_wa
 
 def test_a_route_that_fits_is_driven_to_the_end_its_energy_shown_on_the_way(lockstep) -> None:
     sim = lockstep(energy_line(1000.0), home=(*LINE_HOME, 0.0))
-    sim.run(until=lambda: sim.runtime.mission_state.leg_index == 2)
+    sim.run(until=lambda: sim.runtime.mission_state.legs.leg_index == 2)
     status = sim.runtime.operator.request("tree").to_dict()["status"]  # as `executive ctl status` has it
     energy = status["energy"]
     assert abs(energy["margin_wh"] - (energy["has_wh"] - energy["need_wh"] - energy["sigma_wh"])) <= 0.02  # each rounded to 0.01

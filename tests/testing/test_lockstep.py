@@ -85,7 +85,7 @@ def test_the_bunker_is_driven_over_its_can_base_and_plays_the_missions_event_fil
     outcome = sim.run_to_end(limit_s=600)
     assert outcome.status is MissionStatus.COMPLETED
     assert sim.base is not None and sim.autopilot.vehicle.base_command is not None  # the tracks obeyed the base's motion commands
-    assert sim.runtime.mission_state.route is not None and len(sim.runtime.mission_state.route.waypoints) >= 2  # recorded by RC switches
+    assert sim.runtime.mission_state.legs.route is not None and len(sim.runtime.mission_state.legs.route.waypoints) >= 2  # recorded by RC switches
 
 
 #: The example missions whose tree has no scenario of its own (tests/trees/ runs asv_sampling, asv_sampling_yaml_tree, auv_survey,
@@ -112,7 +112,7 @@ def test_every_example_mission_completes_and_takes_every_sample(lockstep, name: 
     sim = lockstep(mission, mission_dir=MISSIONS)
     outcome = sim.run_to_end(limit_s=900)
     assert (outcome.status, outcome.reason) == (MissionStatus.COMPLETED, "every waypoint reached")
-    assert len(sim.runtime.mission_state.samples) == sum(wp.sample for wp in mission.waypoints)
+    assert len(sim.runtime.mission_state.sample_log.taken) == sum(wp.sample for wp in mission.waypoints)
 
 
 def test_an_operator_pause_at_a_vehicle_time_holds_the_mission_until_resumed(lockstep) -> None:

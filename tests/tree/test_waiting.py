@@ -86,7 +86,7 @@ def test_the_status_and_the_tree_say_what_the_running_mission_waits_for(slow_ekf
     assert "                ✕ EKF ok? -- EKF has no position estimate (flags 0xa7)" in tree
     assert reply["tree"]["live"] is True
 
-    sim.run(until=lambda: sim.runtime.mission_state.leg_index == 1)
+    sim.run(until=lambda: sim.runtime.mission_state.legs.leg_index == 1)
     leg_2 = sim.clock.now()
     sim.run(until=lambda: sim.clock.now() >= leg_2 + 2.0)
     waiting = sim.runtime.operator.request("status").status["waiting"]

@@ -176,8 +176,8 @@ class Survey:
         return self.sub.run(ticks, until)
 
     def run_to_leg(self, index: int) -> None:
-        assert self.run(500, until=lambda: self.state.leg_index >= index)[-1] == Status.RUNNING
-        assert self.state.leg_index == index
+        assert self.run(500, until=lambda: self.state.legs.leg_index >= index)[-1] == Status.RUNNING
+        assert self.state.legs.leg_index == index
 
     def under_way(self, kind: str, value: float, waypoint: str) -> None:
         """Run until the sub is going to ``waypoint`` at its depth or altitude, a step out."""
@@ -229,7 +229,7 @@ def test_each_leg_sets_its_speed_reaches_its_depth_or_altitude_goes_there_then_t
     ]  # fmt: skip
     assert survey.depths_at_leg_end == [(5.0, SEABED_M - 5.0), (SEABED_M - 20.0, 20.0), (3.0, SEABED_M - 3.0)]
     assert (survey.sub.mode, survey.sub.depth, survey.sub.armed) == ("POSHOLD", 0.0, True)  # held at the surface, armed for the pick-up
-    assert survey.state.leg_index == 3
+    assert survey.state.legs.leg_index == 3
 
 
 @pytest.mark.parametrize(
@@ -317,7 +317,7 @@ def test_the_1_km_rule_is_checked_once_so_resuming_far_from_the_first_waypoint_c
     survey.state.resume()
     statuses = survey.run(100)
     assert statuses[-1] == Status.SUCCESS
-    assert survey.state.leg_index == 2
+    assert survey.state.legs.leg_index == 2
 
 
 # -- guards: hold in POSHOLD and wait; the same leg afterwards ------------------------------------
@@ -365,18 +365,18 @@ def test_a_failed_guard_holds_the_sub_until_it_recovers_then_the_same_leg_goes_o
         held = survey.sub.commands.index(("mode", held_in), before)
         assert [c for c in survey.sub.commands[before:] if c[0] == "mode"] == [("mode", held_in)]
         assert survey.sub.commands[held + 1 :] == []  # asked once, then waited
-        assert survey.state.leg_index == leg
+        assert survey.state.legs.leg_index == leg
     else:  # not judged on this leg: the leg goes on to its end
-        assert survey.run(30, until=lambda: survey.state.leg_index > leg)[-1] == Status.RUNNING
+        assert survey.run(30, until=lambda: survey.state.legs.leg_index > leg)[-1] == Status.RUNNING
         assert ("mode", "POSHOLD") not in survey.sub.commands[before:]
-        assert survey.state.leg_index == leg + 1
+        assert survey.state.legs.leg_index == leg + 1
     mend_it(survey)
     survey.sub.step_m, survey.sub.dz_m = step, dz
     survey.sub.publish()
     if holds:
         survey.run(31, until=lambda: len(survey.sub.commands) > held + 1)  # the guard's resume time: up to 3 s of good readings
         assert survey.sub.commands[held + 1] == ("mode", "GUIDED")
-        assert survey.state.leg_index == leg
+        assert survey.state.legs.leg_index == leg
     assert survey.run(400)[-1] == Status.SUCCESS
 
 
@@ -388,11 +388,11 @@ def test_a_take_over_sends_nothing_while_the_pilot_has_the_sub(make_survey: Make
     survey.sub.mode = "MANUAL"
     assert survey.run(30) == [Status.RUNNING] * 30
     assert survey.sub.commands[before:] == []  # no POSHOLD, no GUIDED while the pilot has it
-    assert survey.state.leg_index == 0
+    assert survey.state.legs.leg_index == 0
     survey.vehicle.set(rc__channels=(1500,) * 8)
     survey.run(20, until=lambda: len(survey.sub.commands) == before + 4)  # the switch back for 1 s first
     assert survey.sub.commands[before:] == [("mode", "GUIDED"), ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north")]
-    assert survey.state.leg_index == 0
+    assert survey.state.legs.leg_index == 0
     assert survey.run(400)[-1] == Status.SUCCESS
 
 
@@ -490,7 +490,7 @@ def test_losing_the_sonar_on_the_way_down_stops_the_descent_until_it_is_back(mak
     stopped = survey.sub.depth
     assert 15.0 <= stopped <= 16.0  # 2 s of silence (SONAR_STALE_S) at 5 m/s, then no deeper than where it was
     assert survey.run(100) == [Status.RUNNING] * 100 and survey.sub.depth == stopped
-    assert survey.state.leg_index == 0
+    assert survey.state.legs.leg_index == 0
     survey.sub.sonar_silent = False
     assert survey.run(200)[-1] == Status.SUCCESS
     assert survey.depths_at_leg_end == [(25.0, SEABED_M - 25.0)]
@@ -532,9 +532,9 @@ def test_pausing_mid_leg_holds_and_resuming_continues_the_same_leg_at_the_same_d
     held = (survey.sub.lat, survey.sub.lon, survey.sub.depth)
     survey.run(10)
     assert (survey.sub.lat, survey.sub.lon, survey.sub.depth) == held == (*held[:2], 5.0)
-    assert (survey.state.status, survey.state.leg_index) == (MissionStatus.PAUSED, 0)
+    assert (survey.state.status, survey.state.legs.leg_index) == (MissionStatus.PAUSED, 0)
     survey.state.resume()
-    survey.run(100, until=lambda: survey.state.leg_index == 1)
+    survey.run(100, until=lambda: survey.state.legs.leg_index == 1)
     assert survey.sub.commands[before + 1 :][:4] == [("mode", "GUIDED"), ("speed", 0.5), ("depth", 5.0, "in place"), ("depth", 5.0, "north")]
     assert survey.depths_at_leg_end == [(5.0, SEABED_M - 5.0)]
     assert survey.run(400)[-1] == Status.SUCCESS
@@ -550,7 +550,7 @@ def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) ->
         advance = runtime.mission_state.advance_leg
 
         def note_and_advance() -> None:
-            wp = mission.waypoints[runtime.mission_state.leg_index]
+            wp = mission.waypoints[runtime.mission_state.legs.leg_index]
             v = sim.autopilot.vehicle
             legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": sim.clock.now()})
             legs[-1]["status"] = status_line(runtime.status.snapshot())  # type: ignore[assignment]

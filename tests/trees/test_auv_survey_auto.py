@@ -75,7 +75,7 @@ def test_a_dead_executive_leaves_the_sub_holding_position_and_depth_at_the_end_o
     mission = auto_survey(auto_horizon_legs=1)
     sim = lockstep(mission)
     state = sim.runtime.mission_state
-    assert sim.run(until=lambda: state.leg_index == 1 and sim.autopilot.mission.count - 1 == 3) is None  # legs 1, 2 and one beyond
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and sim.autopilot.mission.count - 1 == 3) is None  # legs 1, 2 and one beyond
     held = 3
     for _ in range(1800):  # three minutes of the vehicle's time, nobody ticking
         sim.step(0.1)
@@ -123,7 +123,7 @@ def test_a_person_changing_the_mode_pauses_and_auto_again_resumes_at_the_leg(loc
     mission = auto_survey()
     sim = lockstep(mission)
     state, ap = sim.runtime.mission_state, sim.autopilot
-    assert sim.run(until=lambda: state.leg_index == 1 and ap.mode == "AUTO") is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and ap.mode == "AUTO") is None
     assert ap.set_mode(ap.profile.modes["POSHOLD"])  # a ground station's POSHOLD
     sim.run(until=lambda: state.status is MissionStatus.PAUSED)
     assert state.reason == "POSHOLD set by the ground station"
@@ -138,7 +138,7 @@ def test_a_persons_alt_hold_mid_leg_still_pauses_after_the_wait_for_the_autopilo
     mission = auto_survey()
     sim = lockstep(mission)
     state, ap = sim.runtime.mission_state, sim.autopilot
-    assert sim.run(until=lambda: state.leg_index == 1 and ap.mode == "AUTO") is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and ap.mode == "AUTO") is None
     assert ap.set_mode(ap.profile.modes["ALT_HOLD"])
     t_set = sim.clock.now()
     modes: list[str] = []
@@ -171,7 +171,7 @@ def test_pause_holds_in_poshold_and_resume_goes_on_with_the_leg_at_its_depth(loc
     sim = lockstep(mission)
     state, ap = sim.runtime.mission_state, sim.autopilot
     sets = set_currents(sim)
-    assert sim.run(until=lambda: state.leg_index == 2 and ap.vehicle.depth_m > 7.0) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 2 and ap.vehicle.depth_m > 7.0) is None
     assert sim.runtime.operator.request("pause", source="ctl").ok
     sim.run(until=lambda: ap.mode == "POSHOLD" and ap.vehicle.speed_m_s < 0.05)
     held_at = ap.vehicle.depth_m
@@ -207,7 +207,7 @@ def test_a_cut_link_leaves_the_sub_at_the_end_of_its_horizon_and_the_failsafe_ac
     assert isinstance(cut, LinkCut)
     state, ap = sim.runtime.mission_state, sim.autopilot
     second, third = mission.waypoints[1], mission.waypoints[2]
-    assert sim.run(until=lambda: state.leg_index == 1 and ap.mission.count - 1 == 3) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and ap.mission.count - 1 == 3) is None
     cut.cut = True
     t_cut = sim.clock.now()
     assert sim.run(until=lambda: sim.clock.now() > t_cut + 120.0) is None
@@ -246,7 +246,7 @@ def test_arduSubs_alt_hold_at_the_end_of_its_horizon_without_a_position_is_the_a
     assert isinstance(cut, LinkCut)
     state, ap = sim.runtime.mission_state, sim.autopilot
     third = mission.waypoints[2]
-    assert sim.run(until=lambda: state.leg_index == 1 and ap.mission.count - 1 == 3) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and ap.mission.count - 1 == 3) is None
     cut.cut = True
     assert sim.run(until=lambda: ap.vehicle.distance_to(third.lat, third.lon) < 4.0) is None
     ap.ekf_position_lost = True

@@ -23,8 +23,7 @@ from executive.testing import EKF_READY, ScriptedAutopilot, Vehicle, ack, port_f
 from executive.tree import select as mission_tree
 from executive.world.clock import ManualClock
 from executive.world.geo import destination, distance_bearing
-from executive.world.state import EkfFlags, EkfStatus, SamplerState
-from executive.world.state import Sample as SampleRecord
+from executive.world.state import EkfFlags, EkfStatus, SampleRecord, SamplerState
 from executive.world.vehicles import PROFILES
 
 R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
@@ -177,10 +176,10 @@ def test_the_path_is_driven_and_every_sample_point_sampled_once(clock, link, veh
     statuses = run.tick(400)
     assert statuses[-1] == S
     assert run.boat.commands == [ARM, mode(hold), mode("GUIDED"), mode("LOITER"), mode("GUIDED"), mode("LOITER"), *end]  # held at the end
-    assert [s.leg_index for s in run.state.samples] == [1, 2]  # the sample points, not the path point
-    for sample in run.state.samples:
+    assert [s.leg_index for s in run.state.sample_log.taken] == [1, 2]  # the sample points, not the path point
+    for sample in run.state.sample_log.taken:
         assert sorted(r.sensor for r in sample.reads) == ["ph", "ph", "temperature", "temperature"]  # 2 s at 1 Hz, both sensors
-    assert run.state.leg_index == 3
+    assert run.state.legs.leg_index == 3
     assert (run.boat.mode, run.boat.armed) == (PROFILES[vehicle].safe_mode, True)
     assert run.boat.distance_to(S2) <= 1.5
 
@@ -193,7 +192,7 @@ def test_without_auto_arm_the_operator_readies_the_boat_and_arming_requests_the_
     run.boat.armed = True  # ...then arms
     assert run.tick(2) == [R, R]
     assert run.boat.commands == [mode("GUIDED")]
-    assert run.state.leg_index == 0 and run.boat.setpoints == 1
+    assert run.state.legs.leg_index == 0 and run.boat.setpoints == 1
 
 
 def test_rc_channel_5_high_arms_the_boat(clock, link):
@@ -252,14 +251,14 @@ def test_a_point_over_5_km_away_is_rejected_before_arming_or_any_mode_change(clo
 
 
 def test_a_go_to_in_progress_refuses_another(run):
-    run.until(lambda: run.state.leg_index == 1)
+    run.until(lambda: run.state.legs.leg_index == 1)
     with pytest.raises(Refused, match="cannot start while RUNNING"):
         run.state.start()
     run.state.pause("operator: pause")
     with pytest.raises(Refused, match="cannot start while PAUSED"):
         run.state.start()
     run.state.resume()
-    assert run.state.leg_index == 1 and run.state.status is MissionStatus.RUNNING
+    assert run.state.legs.leg_index == 1 and run.state.status is MissionStatus.RUNNING
     assert run.tick(400)[-1] == S
 
 
@@ -285,7 +284,7 @@ def test_the_rc_leaving_auto_ends_the_go_to(run, phase):
     assert run.tick(5) == [F]
     assert run.reason == "RC in auto? (else leave): RC channel 6 high (1900 µs): manual take-over"
     assert run.boat.commands == [] and run.link.take() == []  # the tree leaves the boat to the pilot
-    assert run.state.samples == ()
+    assert run.state.sample_log.taken == ()
     if phase == "sampling":
         assert (run.sampler.status.state, run.sampler.status.reason) == (SamplerState.FAILED, "cancelled")
 
@@ -303,9 +302,9 @@ def test_a_bad_ekf_waits_in_manual_disarmed_then_re_arms_and_continues_the_same_
     assert run.tick(3) == [R, R, R]
     assert run.boat.commands == [mode("MANUAL"), DISARM, ARM, mode("GUIDED")]
     assert run.tick() == [R]
-    assert run.state.leg_index == 0 and run.boat.setpoints == setpoints + 1  # the same leg, its target again
+    assert run.state.legs.leg_index == 0 and run.boat.setpoints == setpoints + 1  # the same leg, its target again
     assert run.tick(400)[-1] == S
-    assert len(run.state.samples) == 2
+    assert len(run.state.sample_log.taken) == 2
 
 
 def test_an_ekf_that_never_recovers_fails_the_go_to(run):
@@ -327,7 +326,7 @@ def test_a_bad_ekf_on_a_boat_the_pilot_disarmed_is_left_to_the_pilot(run):
     assert run.boat.commands == []  # no MANUAL, no disarm, and above all no arming: the pilot has the boat
     run.boat.armed = True  # the RC returns to normal
     assert run.tick(2) == [R, R]
-    assert run.boat.commands == [] and run.state.leg_index == 0  # still GUIDED: the same leg goes on
+    assert run.boat.commands == [] and run.state.legs.leg_index == 0  # still GUIDED: the same leg goes on
     assert run.tick(400)[-1] == S
 
 
@@ -337,7 +336,7 @@ def test_a_mode_other_than_guided_is_set_back_to_guided(run, other):
     run.boat.mode = other  # a ground station changed it; the RC is still in auto
     assert run.tick(2) == [R, R]
     assert run.boat.commands == [mode("GUIDED")]
-    assert run.state.leg_index == 0
+    assert run.state.legs.leg_index == 0
     assert run.tick(400)[-1] == S
 
 
@@ -357,7 +356,7 @@ def test_a_failing_guard_is_waited_out_then_the_same_leg_continues(run, fact, ho
     ticks = 22 if fact == "link_up" else 2  # the link back for LinkAlive's 2 s first; re-armed: at once
     assert run.tick(ticks) == [R] * ticks
     assert run.boat.commands == hold + back
-    assert run.state.leg_index == 0
+    assert run.state.legs.leg_index == 0
     assert run.tick(400)[-1] == S
 
 
@@ -379,7 +378,7 @@ def test_a_leg_over_a_minute_is_abandoned(run):
     assert statuses[-1] == F
     assert 60.0 < run.clock.now() - started <= 60.2
     assert "leg 1/3: timed out after 60 s" in run.reason
-    assert run.state.leg_index == 0 and run.state.samples == ()
+    assert run.state.legs.leg_index == 0 and run.state.sample_log.taken == ()
 
 
 @pytest.mark.parametrize(("short_m", "reached"), [(1.4, True), (1.6, False)])
@@ -387,22 +386,22 @@ def test_a_point_counts_as_reached_within_the_acceptance_radius(run, short_m, re
     run.boat.short_m = short_m  # the boat stops this far from each point
     run.until(lambda: run.boat.distance_to(P0) < short_m + 0.01)
     assert run.tick(2) == [R, R]
-    assert run.state.leg_index == (1 if reached else 0)
+    assert run.state.legs.leg_index == (1 if reached else 0)
     if not reached:
-        assert run.tick(100) == [R] * 100 and run.state.leg_index == 0  # until the leg times out
+        assert run.tick(100) == [R] * 100 and run.state.legs.leg_index == 0  # until the leg times out
 
 
 # -- sampling ------------------------------------------------------------------------------------
 
 
 def test_at_a_sample_point_the_boat_loiters_while_the_sampler_reads(run):
-    run.until(lambda: run.state.leg_index == 1)
+    run.until(lambda: run.state.legs.leg_index == 1)
     run.boat.commands.clear()
     run.until(run.sampling)
     assert run.boat.commands == [mode("LOITER")]
     assert run.boat.mode == "LOITER" and run.boat.distance_to(S1) <= 1.5
-    run.until(lambda: run.state.samples != ())
-    (sample,) = run.state.samples
+    run.until(lambda: run.state.sample_log.taken != ())
+    (sample,) = run.state.sample_log.taken
     assert sample.leg_index == 1 and {r.sensor for r in sample.reads} == {"temperature", "ph"}
     assert sample.finished - sample.started == pytest.approx(2.0)
 
@@ -413,15 +412,15 @@ def test_a_disarm_during_a_sample_cancels_it_and_the_sample_is_taken_again(run):
     run.boat.armed = False  # the RC took over mid-sample
     assert run.tick(10) == [R] * 10
     assert (run.sampler.status.state, run.sampler.status.reason) == (SamplerState.FAILED, "cancelled")
-    assert run.state.samples == ()  # nothing recorded
+    assert run.state.sample_log.taken == ()  # nothing recorded
     run.boat.armed = True
     run.boat.commands.clear()
-    run.until(lambda: run.state.samples != ())
+    run.until(lambda: run.state.sample_log.taken != ())
     assert run.boat.commands == [mode("GUIDED"), mode("LOITER")]  # the leg again: already there, held, sampled
     assert run.sampler.status.ticket == first + 1
-    assert [s.leg_index for s in run.state.samples] == [1]
+    assert [s.leg_index for s in run.state.sample_log.taken] == [1]
     assert run.tick(400)[-1] == S
-    assert [s.leg_index for s in run.state.samples] == [1, 2]
+    assert [s.leg_index for s in run.state.sample_log.taken] == [1, 2]
 
 
 def test_a_pause_during_a_sample_cancels_it_and_the_resumed_go_to_takes_it_again(run):
@@ -430,12 +429,12 @@ def test_a_pause_during_a_sample_cancels_it_and_the_resumed_go_to_takes_it_again
     run.state.pause("operator: pause")
     assert run.tick(20) == [R] * 20
     assert (run.sampler.status.state, run.sampler.status.reason) == (SamplerState.FAILED, "cancelled")
-    assert run.boat.commands == [mode("LOITER")] and run.state.samples == ()  # held, asked once
+    assert run.boat.commands == [mode("LOITER")] and run.state.sample_log.taken == ()  # held, asked once
     run.state.resume()  # the go-to is accepted again (armed, in LOITER), then the same leg
-    run.until(lambda: run.state.samples != ())
+    run.until(lambda: run.state.sample_log.taken != ())
     assert run.boat.commands == [mode("LOITER"), mode("GUIDED"), mode("LOITER")]
     assert run.tick(400)[-1] == S
-    assert [s.leg_index for s in run.state.samples] == [1, 2]
+    assert [s.leg_index for s in run.state.sample_log.taken] == [1, 2]
 
 
 def test_a_sample_point_already_sampled_is_not_sampled_again(run):
@@ -443,7 +442,7 @@ def test_a_sample_point_already_sampled_is_not_sampled_again(run):
     assert run.tick(400)[-1] == S
     assert run.boat.commands == [ARM, mode("LOITER"), mode("GUIDED"), mode("LOITER")]  # no LOITER at s1: only at s2
     assert run.sampler.status.ticket == 1
-    assert [s.leg_index for s in run.state.samples] == [1, 2]
+    assert [s.leg_index for s in run.state.sample_log.taken] == [1, 2]
 
 
 def test_a_cancel_during_a_sample_cancels_the_sampler_and_records_nothing(clock, link):
@@ -453,7 +452,7 @@ def test_a_cancel_during_a_sample_cancels_the_sampler_and_records_nothing(clock,
     run.state.abort("operator: cancel")  # what `executive ctl abort` does; the runtime then makes the boat safe
     runtime.make_safe()
     assert (run.sampler.status.state, run.sampler.status.reason) == (SamplerState.FAILED, "cancelled")
-    assert run.state.samples == ()
+    assert run.state.sample_log.taken == ()
 
 
 def test_a_goto_sample_mission_without_a_sampling_section_gets_the_default_sampler(clock, link):
@@ -478,7 +477,7 @@ def test_the_example_mission_samples_every_sample_point_once_in_the_simulator(ca
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert (final_mode, armed) == ("LOITER", True)
     sample_points = [i for i, wp in enumerate(mission.waypoints) if wp.sample]
-    samples = runtime.mission_state.samples
+    samples = runtime.mission_state.sample_log.taken
     assert sorted(s.leg_index for s in samples) == sample_points  # exactly one Sample per sample point
     rounds = math.floor(mission.sampling.duration_s * mission.sampling.rate_hz)
     for sample in samples:

@@ -39,7 +39,7 @@ class Watch:
         if store.running and store.current_seq is not None:
             self.ahead.append(store.count - 1 - store.current_seq)
         sampler = sim.runtime.sampler
-        leg = sim.runtime.mission_state.leg_index
+        leg = sim.runtime.mission_state.legs.leg_index
         if sampler is not None and sampler.sampling and leg not in self.sample_began:
             wp, vehicle = self.mission.waypoints[leg], sim.autopilot.vehicle
             self.sample_began[leg] = (vehicle.distance_to(wp.lat, wp.lon), vehicle.speed_m_s)
@@ -54,7 +54,7 @@ def test_the_example_mission_in_auto_stops_at_each_sample_point_samples_it_once_
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     commands = [item.command for item in sim.autopilot.mission._commands[1:]]
     assert commands == [LOITER_UNLIM if wp.sample else WAYPOINT for wp in mission.waypoints]  # the sample points are stops
-    samples = sim.runtime.mission_state.samples
+    samples = sim.runtime.mission_state.sample_log.taken
     assert sorted(s.leg_index for s in samples) == [1, 3] and all(s.complete for s in samples)
     radius = mission.limits.acceptance_radius_m
     assert all(d <= radius for d, _ in watch.sample_began.values()), watch.sample_began  # there on the position, not on the autopilot's word
@@ -70,7 +70,7 @@ def test_a_dead_executive_leaves_the_vehicle_at_the_sample_point_it_was_driving_
     mission = example(simulator=None)
     sim = lockstep(mission, ekf_ready_after_s=2.0)
     state, inlet, beyond = sim.runtime.mission_state, mission.waypoints[1], mission.waypoints[2]
-    assert sim.run(until=lambda: state.leg_index == 1 and sim.autopilot.vehicle.distance_to(inlet.lat, inlet.lon) < 20.0) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and sim.autopilot.vehicle.distance_to(inlet.lat, inlet.lon) < 20.0) is None
     assert sim.autopilot.mission.count - 1 >= 3  # the autopilot holds waypoint 3 beyond the sample point
     nearest_beyond = float("inf")
     for _ in range(900):  # 90 s of the vehicle's time, nobody ticking
@@ -91,16 +91,16 @@ def test_a_pause_during_a_sample_cancels_it_and_resume_takes_it_again_then_goes_
         return runtime.sampler is not None and runtime.sampler.sampling
 
     assert sim.run(until=sampling) is None
-    assert state.leg_index == 1
+    assert state.legs.leg_index == 1
     assert runtime.operator.request("pause", source="ctl").ok
     sim.run(until=lambda: state.status is MissionStatus.PAUSED)
     sim.run(until=lambda: sim.autopilot.mode == "LOITER" and not sampling())
-    assert not state.samples  # the cancelled sample recorded nothing
+    assert not state.sample_log.taken  # the cancelled sample recorded nothing
     sets = set_currents(sim)
     assert runtime.operator.request("resume", source="ctl").ok
     outcome = sim.run_to_end(limit_s=900)
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
-    assert sorted(s.leg_index for s in state.samples) == [1, 3]  # taken again at the resume, once
+    assert sorted(s.leg_index for s in state.sample_log.taken) == [1, 3]  # taken again at the resume, once
     assert sets[:2] == [2, 3]  # resumed at the sample point's item, then on at the next, never back to the first
 
 

@@ -151,7 +151,7 @@ class ScriptedRover(MissionAutopilot):
 
 def waypoints(r: ScriptedRover) -> list[tuple[float, float]]:
     """The route in the mission state."""
-    return [(wp.lat, wp.lon) for wp in r.h.mission_state.route.waypoints]
+    return [(wp.lat, wp.lon) for wp in r.h.mission_state.legs.route.waypoints]
 
 
 @pytest.fixture
@@ -210,7 +210,7 @@ def test_the_operator_arms_records_a_route_and_auto_drives_it_to_the_end(rover: 
     assert rover.take() == [("mode", "AUTO")]
     legs = []
     while (status := rover.tick()) == Status.RUNNING:
-        legs.append(rover.h.mission_state.leg_index)
+        legs.append(rover.h.mission_state.legs.leg_index)
     assert status == Status.SUCCESS
     assert sorted(set(legs)) == [0, 1, 2, 3]  # the leg index followed the rover through every waypoint
     assert rover.take() == [("mode", "HOLD")]  # held at the end; nothing else was asked on the way
@@ -419,7 +419,7 @@ def test_switch_a_edits_the_route_by_the_knob_and_the_edit_is_uploaded(rover_for
     assert r.take() == [("upload", len(expected)), ("read back",)]
     assert waypoints(r) == expected
     assert flat(r.held()) == pytest.approx(flat(expected), abs=1e-7)
-    assert r.h.mission_state.leg_index == leg_after
+    assert r.h.mission_state.legs.leg_index == leg_after
     assert r.h.feedback("Switch A: edit the route") == f"switch A DOWN, knob {knob:+d}: " + edit.format(here=f"{here[0]:.7f}, {here[1]:.7f}")
 
 
@@ -526,13 +526,13 @@ def test_leaving_auto_keeps_the_leg_restarts_the_wait_and_auto_resumes_there(rov
     rover.armed = True
     record(rover, ahead(10.0), ahead(20.0), ahead(30.0))
     rover.rc(swc=MIDDLE)
-    rover.run_until(lambda: rover.h.mission_state.leg_index == 1)
+    rover.run_until(lambda: rover.h.mission_state.legs.leg_index == 1)
     rover.rc(swc=UP)  # the operator takes the vehicle back for a while
     rover.tick()
-    assert rover.mode == "MANUAL" and rover.h.mission_state.leg_index == 1
+    assert rover.mode == "MANUAL" and rover.h.mission_state.legs.leg_index == 1
     assert rover.run(290) == [Status.RUNNING] * 290  # 29 s: the wait restarted when the drive stopped
     rover.rc(swc=MIDDLE)
-    rover.run_until(lambda: rover.h.mission_state.leg_index == 2)
+    rover.run_until(lambda: rover.h.mission_state.legs.leg_index == 2)
     assert rover.store.current_seq == 3
     assert rover.run(100)[-1] == Status.SUCCESS
 
@@ -545,7 +545,7 @@ def test_a_reached_report_from_before_the_run_does_not_count(rover: ScriptedRove
     rover.rc(swc=MIDDLE)
     rover.step_m = 0.5
     rover.run(3)
-    assert rover.h.mission_state.leg_index == 0
+    assert rover.h.mission_state.legs.leg_index == 0
     assert rover.h.feedback("Drive the route in AUTO").startswith("waypoint 1/2: ")
 
 
@@ -564,7 +564,7 @@ def test_an_item_reached_before_the_heartbeat_shows_auto_is_not_lost(rover: Scri
     auto_asked(rover)
     vehicle.set(vehicle__mission_reached=MissionItemReached(1, rover.clock.now() + 0.05, 1))  # arrives between two ticks
     rover.tick()
-    assert rover.h.mission_state.leg_index == 1
+    assert rover.h.mission_state.legs.leg_index == 1
 
 
 def test_mission_current_complete_ends_the_drive(rover: ScriptedRover, vehicle) -> None:
@@ -573,7 +573,7 @@ def test_mission_current_complete_ends_the_drive(rover: ScriptedRover, vehicle) 
     rover.tick()
     vehicle.set(vehicle__mission_current=MissionCurrent(2, 2, MISSION_STATE_COMPLETE, True, rover.clock.now() + 0.05))
     rover.tick()
-    assert rover.h.mission_state.leg_index == 2
+    assert rover.h.mission_state.legs.leg_index == 2
     assert rover.run(3)[-1] == Status.SUCCESS  # held at the end
     assert rover.h.feedback("Drive the route in AUTO") == "route done: 2/2 waypoints reached"
 
@@ -604,12 +604,12 @@ def test_removing_the_current_waypoint_while_driving_sends_the_rover_to_the_next
     rover.armed, rover.step_m = True, 0.5
     record(rover, ahead(10.0), ahead(20.0), ahead(30.0))
     rover.rc(swc=MIDDLE)
-    rover.run_until(lambda: rover.h.mission_state.leg_index == 1)
+    rover.run_until(lambda: rover.h.mission_state.legs.leg_index == 1)
     rover.take()
     rover.rc(knob=80, swa=DOWN)
     rover.tick()
     assert rover.take() == [("upload", 2), ("read back",)]
-    assert waypoints(rover) == [ahead(10.0), ahead(30.0)] and rover.h.mission_state.leg_index == 1
+    assert waypoints(rover) == [ahead(10.0), ahead(30.0)] and rover.h.mission_state.legs.leg_index == 1
     assert rover.run(100)[-1] == Status.SUCCESS  # the mission ends there
     assert (rover.lat, rover.lon) == pytest.approx(ahead(30.0), abs=1e-6)
 
@@ -778,7 +778,7 @@ def scenario(lockstep) -> tuple[Observer, Runtime, RunOutcome, Lockstep]:
 def test_scenario_the_operator_records_a_route_on_the_simulated_bunker_and_auto_drives_it(scenario) -> None:
     observer, runtime, outcome, sim = scenario
     assert str(outcome.status) == "COMPLETED", outcome.reason
-    recorded = [(wp.lat, wp.lon) for wp in runtime.mission_state.route.waypoints]
+    recorded = [(wp.lat, wp.lon) for wp in runtime.mission_state.legs.route.waypoints]
     assert len(recorded) == len(observer.flips) == 4
     # where the vehicle was at each flip of switch A (the operator stops to record: what the executive hears a few
     # reports later, RC_CHANNELS and GLOBAL_POSITION_INT at 5 Hz, is still that place)
@@ -794,7 +794,7 @@ def test_scenario_the_operator_records_a_route_on_the_simulated_bunker_and_auto_
     radius = sim.autopilot.motion.radius_m
     assert all(d <= radius for _, _, d in observer.reached), observer.reached
     assert observer.armed_in == {"MANUAL"}  # switch D down in HOLD armed nothing
-    assert runtime.mission_state.leg_index == 4
+    assert runtime.mission_state.legs.leg_index == 4
     assert sim.autopilot.mode == "HOLD"
     assert sim.autopilot.elapsed_s < 180.0
 
@@ -811,5 +811,5 @@ def test_scenario_rc_gaps_while_the_operator_drives_in_manual_take_nothing_from_
     outcome = sim.run_to_end(limit_s=600)
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert {mode for t, mode in modes if 14.5 <= t < 48.5} == {"MANUAL"}  # armed in MANUAL at 14 s, AUTO at 49 s: never held
-    recorded = [(wp.lat, wp.lon) for wp in sim.runtime.mission_state.route.waypoints]
+    recorded = [(wp.lat, wp.lon) for wp in sim.runtime.mission_state.legs.route.waypoints]
     assert len(recorded) == 4 and min(geo.distance(*a, *b) for a, b in itertools.pairwise(recorded)) > 5.0

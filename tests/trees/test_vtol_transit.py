@@ -282,7 +282,7 @@ def test_mc_take_off_fw_legs_mc_landing(
     assert statuses[-1] == S, transit.why
     assert transit.plane.commands == commands
     assert transit.vtol_states == ["FW", "MC", "TRANSITION_TO_FW", "FW", "MC"]  # on the ground as a plane, then MC -> FW -> MC
-    assert (transit.plane.armed, transit.plane.landed, transit.state.leg_index) == (False, "ON_GROUND", 2)
+    assert (transit.plane.armed, transit.plane.landed, transit.state.legs.leg_index) == (False, "ON_GROUND", 2)
     landed_at = (0.0, 0.0) if land == "home" else WP2
     limit = 0.5 if land == "home" else 100.0  # QRTL comes down on home; QLAND where the last leg ended
     assert off_m(transit.plane, *landed_at) <= limit
@@ -376,7 +376,7 @@ def test_a_leg_is_reached_within_the_acceptance_radius_though_the_plane_circles_
     transit = make_transit(vtol_mission())
     transit.run_until_command(LEGS[1])
     assert 60.0 <= off_m(transit.plane, *WP1) <= 100.0  # leg 1 counted from 100 m, never closer than its circle
-    assert transit.state.leg_index == 1
+    assert transit.state.legs.leg_index == 1
 
 
 def test_a_leg_that_never_gets_within_the_acceptance_radius_times_out(make_transit: MakeTransit) -> None:
@@ -398,7 +398,7 @@ def test_a_leg_over_its_waypoint_at_a_height_it_never_climbs_to_is_not_reached_a
     transit.run_until_command(("reposition", *WP1, 60.0))
     transit.plane.CLIMB_STEP_M = 0.0
     statuses = transit.run(30 * 10 + 10)
-    assert statuses[-1] == F and transit.state.leg_index == 0
+    assert statuses[-1] == F and transit.state.legs.leg_index == 0
     below = 60.0 - transit.plane.alt
     assert below > 10.0 and transit.why == (
         "For each leg: leg 1/2 failed: leg 1/2: timed out after 30 s, 60.0 m short, "
@@ -411,7 +411,7 @@ def test_a_leg_is_reached_within_its_height_tolerance(make_transit: MakeTransit)
     transit.run_until_command(("reposition", *WP1, 60.0))
     transit.plane.CLIMB_STEP_M = 0.0
     transit.run_until_command(("reposition", *WP2, 60.0))  # over the first waypoint, under 30 m below it: reached
-    assert transit.state.leg_index == 1 and transit.plane.alt < 60.0 - 10.0
+    assert transit.state.legs.leg_index == 1 and transit.plane.alt < 60.0 - 10.0
 
 
 def test_landing_ends_only_disarmed_on_the_ground_and_fails_after_the_leg_timeout(make_transit: MakeTransit) -> None:
@@ -438,7 +438,7 @@ def test_ekf_loss_holds_by_the_vtol_state_then_the_same_phase_goes_on(
     transit = make_transit(vtol_mission(hover=HOVER))
     transit.run_until_command(phase)
     transit.run(3)
-    leg = transit.state.leg_index
+    leg = transit.state.legs.leg_index
     transit.vehicle.set(vehicle__ekf=EKF_LOST)
     before = len(transit.plane.commands)
     assert transit.run(20) == [R] * 20
@@ -446,7 +446,7 @@ def test_ekf_loss_holds_by_the_vtol_state_then_the_same_phase_goes_on(
     transit.vehicle.set(vehicle__ekf=EKF_READY)
     transit.run(33)  # the EKF sane for EkfOk's 3 s first
     assert transit.plane.commands[before + 1 :][:1] == [phase]  # the same point again (taken off and hovered: not again)
-    assert transit.state.leg_index == leg
+    assert transit.state.legs.leg_index == leg
     assert transit.run(3000)[-1] == S
 
 

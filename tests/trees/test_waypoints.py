@@ -31,7 +31,7 @@ def mission_run(harness, vehicle, square_mission, mission_state):
 def test_the_square_completes_and_ends_held(mission_run, mission_state):
     statuses = mission_run.run(200)
     assert statuses[-1] == Status.SUCCESS
-    assert mission_state.leg_index == 4
+    assert mission_state.legs.leg_index == 4
     assert mission_run.commands[0] == ("arm", 1.0)
     assert mission_run.commands[1] == ("mode", "GUIDED")
     assert mission_run.commands[-1] == ("mode", "HOLD")
@@ -58,36 +58,36 @@ def test_preflight_retries_a_refused_arm_then_gives_up(mission_run, square_missi
 
 
 def test_rc_takeover_mid_leg_waits_hands_off_then_resumes_the_same_leg(mission_run, mission_state, vehicle):
-    while mission_state.leg_index < 2:
+    while mission_state.legs.leg_index < 2:
         assert mission_run.run(1) == [Status.RUNNING]
     vehicle.set(rc__channels=(1500,) * 5 + (1900,))  # the pilot flips the take-over switch
     mission_run.mode = "MANUAL"
     commands_before = len(mission_run.commands)
     mission_run.run(30)
     assert mission_run.commands[commands_before:] == []  # no HOLD, no GUIDED while the pilot drives
-    assert mission_state.leg_index == 2
+    assert mission_state.legs.leg_index == 2
     vehicle.set(rc__channels=(1500,) * 6)
     mission_run.run(10)
     assert mission_run.commands[commands_before:] == []  # the switch back for 1 s first
     mission_run.run(2)
     assert mission_run.commands[commands_before:] == [("mode", "GUIDED")]
-    assert mission_state.leg_index == 2
+    assert mission_state.legs.leg_index == 2
     assert mission_run.run(200)[-1] == Status.SUCCESS
 
 
 def test_ekf_loss_holds_the_vehicle_and_resumes_after_recovery(mission_run, mission_state, vehicle):
-    while mission_state.leg_index < 1:
+    while mission_state.legs.leg_index < 1:
         mission_run.run(1)
     vehicle.set(vehicle__ekf=EKF_LOST)
     mission_run.run(5)
     assert mission_run.commands[-1] == ("mode", "HOLD")
-    leg = mission_state.leg_index
+    leg = mission_state.legs.leg_index
     vehicle.set(vehicle__ekf=EKF_READY)
     mission_run.run(28)
     assert mission_run.commands[-1] == ("mode", "HOLD")  # the EKF sane for 3 s first
     mission_run.run(4)
     assert mission_run.commands[-1] == ("mode", "GUIDED")
-    assert mission_state.leg_index == leg
+    assert mission_state.legs.leg_index == leg
 
 
 def test_a_guard_that_never_recovers_fails_the_mission(mission_run, square_mission, vehicle):
@@ -104,7 +104,7 @@ def test_a_leg_that_times_out_fails_the_mission(mission_run, square_mission):
 
 
 def test_pause_holds_the_vehicle_and_resume_continues_the_same_leg(mission_run, mission_state):
-    while mission_state.leg_index < 2:
+    while mission_state.legs.leg_index < 2:
         mission_run.run(1)
     mission_run.run(1)  # under way on leg 3
     mission_state.pause("operator: pause")
@@ -115,13 +115,13 @@ def test_pause_holds_the_vehicle_and_resume_continues_the_same_leg(mission_run, 
     held_at = (mission_run.lat, mission_run.lon)
     mission_run.run(10)
     assert (mission_run.lat, mission_run.lon) == held_at
-    assert mission_state.leg_index == 2
+    assert mission_state.legs.leg_index == 2
     mission_state.resume()
     mission_run.run(2)
     assert mission_run.commands[-1] == ("mode", "GUIDED")  # back to GUIDED, same leg
-    assert mission_state.leg_index == 2
+    assert mission_state.legs.leg_index == 2
     assert mission_run.run(300)[-1] == Status.SUCCESS
-    assert mission_state.leg_index == 4
+    assert mission_state.legs.leg_index == 4
 
 
 def test_a_loiter_of_our_own_delivered_late_mid_leg_is_undone_and_the_survey_completes(lockstep):
@@ -132,10 +132,10 @@ def test_a_loiter_of_our_own_delivered_late_mid_leg_is_undone_and_the_survey_com
     mission = load_mission(MISSIONS / "boat_survey.yaml")
     sim = lockstep(mission, ekf_ready_after_s=2.0)
     leg_6: list[float] = []
-    sim.observers.append(lambda s: leg_6.append(s.clock.now()) if s.runtime.mission_state.leg_index == 5 else None)
+    sim.observers.append(lambda s: leg_6.append(s.clock.now()) if s.runtime.mission_state.legs.leg_index == 5 else None)
     sim.at(100.0, lambda s: s.runtime.link.commander.set_mode("LOITER"))  # leg 6 runs from ~84 s to ~113 s of vehicle time
     modes: list[str] = []
-    sim.observers.append(lambda s: modes.append(s.autopilot.mode) if s.runtime.mission_state.leg_index == 5 else None)
+    sim.observers.append(lambda s: modes.append(s.autopilot.mode) if s.runtime.mission_state.legs.leg_index == 5 else None)
     outcome = sim.run_to_end(limit_s=400)
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
     assert "LOITER" in modes and modes[-1] == "GUIDED"  # it went to LOITER mid-leg and was taken back to GUIDED

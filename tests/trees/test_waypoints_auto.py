@@ -69,7 +69,7 @@ def test_the_horizon_is_filled_in_one_burst_once_the_autopilot_holds_one_waypoin
     def watch(s: Lockstep) -> None:
         count = s.autopilot.mission.count - 1
         if s.autopilot.mission.running and count > held[0]:
-            grown.setdefault(state.leg_index + 1, []).extend(range(held[0] + 1, count + 1))
+            grown.setdefault(state.legs.leg_index + 1, []).extend(range(held[0] + 1, count + 1))
         held[0] = count
 
     sim.observers.append(watch)
@@ -97,7 +97,7 @@ def test_a_dead_executive_leaves_the_vehicle_stopped_at_the_end_of_the_horizon(l
     sim = lockstep(mission, ekf_ready_after_s=2.0)
     state = sim.runtime.mission_state
     second = mission.waypoints[1]
-    assert sim.run(until=lambda: state.leg_index == 1 and sim.autopilot.vehicle.distance_to(second.lat, second.lon) < 30.0) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and sim.autopilot.vehicle.distance_to(second.lat, second.lon) < 30.0) is None
     held = sim.autopilot.mission.count - 1
     assert held == 1 + 1 + 2  # legs 1 and 2, and two beyond
     nearest = [float("inf")] * len(mission.waypoints)
@@ -122,7 +122,7 @@ def test_pause_holds_and_resume_continues_at_the_current_leg(lockstep) -> None:
     sim = lockstep(mission)
     state = sim.runtime.mission_state
     sets = set_currents(sim)
-    assert sim.run(until=lambda: state.leg_index == 2) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 2) is None
     assert sim.runtime.operator.request("pause", source="ctl").ok
     sim.run(until=lambda: sim.autopilot.mode == "HOLD" and sim.autopilot.vehicle.speed_m_s < 0.05)
     assert sim.autopilot.mission.current_seq == 3 and state.status is MissionStatus.PAUSED
@@ -141,7 +141,7 @@ def test_a_person_changing_the_mode_pauses_and_setting_auto_again_resumes(lockst
     sim = lockstep(mission)
     state = sim.runtime.mission_state
     ap = sim.autopilot
-    assert sim.run(until=lambda: state.leg_index == 1 and ap.mode == "AUTO") is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and ap.mode == "AUTO") is None
     assert ap.set_mode(ap.profile.modes["HOLD"])  # a ground station's HOLD
     sim.run(until=lambda: state.status is MissionStatus.PAUSED)
     assert state.reason == "HOLD set by the ground station"
@@ -170,7 +170,7 @@ def test_a_cut_link_leaves_the_vehicle_stopped_at_the_end_of_the_horizon_and_the
     assert isinstance(cut, LinkCut)
     state, ap = sim.runtime.mission_state, sim.autopilot
     second, fourth = mission.waypoints[1], mission.waypoints[3]
-    assert sim.run(until=lambda: state.leg_index == 1 and ap.vehicle.distance_to(second.lat, second.lon) < 30.0) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and ap.vehicle.distance_to(second.lat, second.lon) < 30.0) is None
     cut.cut = True
     t_cut = sim.clock.now()
     assert sim.run(until=lambda: sim.clock.now() > t_cut + 60.0) is None

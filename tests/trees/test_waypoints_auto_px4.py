@@ -56,7 +56,7 @@ def test_auto_mission_flies_the_route_holding_only_the_horizon(lockstep) -> None
     assert uploads == sorted(uploads) and uploads[-1] == 4  # the window uploaded again as legs are reached, never cut
     last = mission.waypoints[-1]
     assert sim.autopilot.vehicle.distance_to(last.lat, last.lon) <= mission.limits.acceptance_radius_m
-    assert state.leg_index == len(mission.waypoints) and sim.autopilot.mode == "AUTO.LOITER"  # the vtol's safe mode at the end
+    assert state.legs.leg_index == len(mission.waypoints) and sim.autopilot.mode == "AUTO.LOITER"  # the vtol's safe mode at the end
 
 
 def test_a_dead_executive_leaves_the_vtol_hovering_at_the_end_of_the_horizon(lockstep) -> None:
@@ -65,7 +65,7 @@ def test_a_dead_executive_leaves_the_vtol_hovering_at_the_end_of_the_horizon(loc
     sim = lockstep(mission, autopilot="px4")
     state = sim.runtime.mission_state
     second = mission.waypoints[1]
-    assert sim.run(until=lambda: state.leg_index == 1 and sim.autopilot.vehicle.distance_to(second.lat, second.lon) < 60.0) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and sim.autopilot.vehicle.distance_to(second.lat, second.lon) < 60.0) is None
     held = sim.autopilot.mission.count
     assert held == 3  # legs 1 and 2, and one beyond
     last_held, beyond = mission.waypoints[held - 1], mission.waypoints[held]
@@ -98,7 +98,7 @@ def test_pause_hovers_in_auto_loiter_and_resume_sets_the_leg_then_auto_mission(l
     sim = lockstep(mission, autopilot="px4")
     state, ap = sim.runtime.mission_state, sim.autopilot
     sets = set_currents(sim)
-    assert sim.run(until=lambda: state.leg_index == 2) is None
+    assert sim.run(until=lambda: state.legs.leg_index == 2) is None
     assert sim.runtime.operator.request("pause", source="ctl").ok
     sim.run(until=lambda: ap.mode == "AUTO.LOITER" and ap.vehicle.speed_m_s < 0.2)
     assert state.status is MissionStatus.PAUSED
@@ -113,7 +113,7 @@ def test_a_person_changing_the_mode_pauses_the_mission(lockstep) -> None:
     mission = vtol_mission("px4 auto person")
     sim = lockstep(mission, autopilot="px4")
     state, ap = sim.runtime.mission_state, sim.autopilot
-    assert sim.run(until=lambda: state.leg_index == 1 and ap.mode == "AUTO.MISSION") is None
+    assert sim.run(until=lambda: state.legs.leg_index == 1 and ap.mode == "AUTO.MISSION") is None
     assert ap.request_mode("AUTO.RTL")  # a ground station's Return
     sim.run(until=lambda: state.status is MissionStatus.PAUSED)
     sim.step(5.0)

@@ -1,4 +1,4 @@
-"""Mission Planner's fence and rally files, read into an import's :class:`~executive.mission.formats.plan_items.Source`.
+"""Mission Planner's fence and rally files, read into an import's :class:`~executive.mission.formats.plan_items.FileContents`.
 
 Three kinds, told apart by content:
 
@@ -19,14 +19,14 @@ from __future__ import annotations
 import math
 import re
 
-from executive.mission.formats.plan_items import At, FencePolygon, Source
+from executive.mission.formats.plan_items import At, FencePolygon, FileContents
 from executive.mission.formats.plan_reading import read_waypoints
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _POINT = re.compile(rf"^\s*({_NUMBER})\s+({_NUMBER})\s*$")
 
 
-def read_zone_file(text: str, filename: str) -> Source:
+def read_zone_file(text: str, filename: str) -> FileContents:
     """A Mission Planner fence or rally file (any of the three kinds), its zones and rally points located in it."""
     text = text.removeprefix("\ufeff")
     if text.startswith("QGC WPL"):
@@ -35,7 +35,7 @@ def read_zone_file(text: str, filename: str) -> Source:
             src.warn(item.at, "not imported: a fence or rally file's route item (the route comes from the imported file)")
         src.items.clear()
         return src
-    src = Source(filename, At(1, 1, "(file)"))
+    src = FileContents(filename, At(1, 1, "(file)"))
     lines = [(n, line) for n, line in enumerate(text.splitlines(), start=1) if line.strip() and not line.lstrip().startswith("#")]
     if lines and lines[0][1].split()[0].upper() == "RALLY":
         _rally_lines(src, lines)
@@ -44,7 +44,7 @@ def read_zone_file(text: str, filename: str) -> Source:
     return src
 
 
-def _rally_lines(src: Source, lines: list[tuple[int, str]]) -> None:
+def _rally_lines(src: FileContents, lines: list[tuple[int, str]]) -> None:
     for n, line in lines:
         fields = line.split()
         name = f"rally[{len(src.rally)}]"
@@ -64,7 +64,7 @@ def _rally_lines(src: Source, lines: list[tuple[int, str]]) -> None:
         src.rally.append((lat, lon, alt, At(n, 1, name)))
 
 
-def _fence_points(src: Source, lines: list[tuple[int, str]], *, return_point: bool) -> None:
+def _fence_points(src: FileContents, lines: list[tuple[int, str]], *, return_point: bool) -> None:
     points: list[tuple[float, float, At]] = []
     for n, line in lines:
         found = _POINT.match(line)

@@ -52,8 +52,8 @@ from executive.mission.formats.plan_items import (
     WPL_HEADER,
     WPL_SUFFIXES,
     At,
+    FileContents,
     Item,
-    Source,
     command_name,
     frame_name,
 )
@@ -106,7 +106,7 @@ class _IndentedDumper(yaml.SafeDumper):
         super().increase_indent(flow, False)
 
 
-def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what: str, zones: Sequence[Source] = ()) -> Imported:
+def _build(src: FileContents, kind_given: str | None, name: str, auto_arm: bool, what: str, zones: Sequence[FileContents] = ()) -> Imported:
     """The mission a source describes (with the zones and rally points of ``zones``), validated; every problem located in its file."""
     for other in zones:
         src.merge(other)
@@ -187,14 +187,14 @@ def _build(src: Source, kind_given: str | None, name: str, auto_arm: bool, what:
     return Imported(mission, text, tuple(sorted(src.warnings, key=lambda w: (w.line, w.column, w.field))))
 
 
-def _relocate(error: FieldError, sources: dict[str, At], src: Source) -> FieldError:
+def _relocate(error: FieldError, sources: dict[str, At], src: FileContents) -> FieldError:
     """An error found in the generated YAML, located at what it came from in the source file."""
     keys = [k for k in sources if error.field == k or error.field.startswith((f"{k}.", f"{k}["))]
     at = sources[max(keys, key=len)] if keys else src.start
     return FieldError(at.filename or src.filename, at.line, at.column, at.field, f"{error.message} (as {error.field} of the mission)")
 
 
-def _speed_change(src: Source, item: Item, speed: tuple[float, At] | None) -> tuple[float, At] | None:
+def _speed_change(src: FileContents, item: Item, speed: tuple[float, At] | None) -> tuple[float, At] | None:
     """The speed in force after a DO_CHANGE_SPEED (param2; -1 = unchanged)."""
     value = item.params[1]
     throttle = item.params[2]
@@ -208,7 +208,7 @@ def _speed_change(src: Source, item: Item, speed: tuple[float, At] | None) -> tu
     return value, item.param_at[1]
 
 
-def _waypoint(src: Source, item: Item, kind: str | None, home_alt: float | None) -> dict[str, Any] | None:
+def _waypoint(src: FileContents, item: Item, kind: str | None, home_alt: float | None) -> dict[str, Any] | None:
     """A NAV_WAYPOINT as a mission waypoint; None (with an error) if it cannot be one."""
     p = item.params
     lat, lon, alt = p[4], p[5], 0.0 if p[6] is None else p[6]
@@ -237,7 +237,7 @@ def _waypoint(src: Source, item: Item, kind: str | None, home_alt: float | None)
     return _waypoint_params(src, item, wp)
 
 
-def _waypoint_params(src: Source, item: Item, wp: dict[str, Any]) -> dict[str, Any]:
+def _waypoint_params(src: FileContents, item: Item, wp: dict[str, Any]) -> dict[str, Any]:
     """Report what a NAV_WAYPOINT says that a mission waypoint cannot."""
     hold, radius, passing, yaw = item.params[:4]
     if hold:
@@ -253,7 +253,7 @@ def _waypoint_params(src: Source, item: Item, wp: dict[str, Any]) -> dict[str, A
     return wp
 
 
-def _fence(src: Source, sources: dict[str, At]) -> dict[str, Any]:
+def _fence(src: FileContents, sources: dict[str, At]) -> dict[str, Any]:
     """The plan's geoFence as a mission's: the first inclusion polygon is ``polygon``, an inclusion circle on home
     ``max_distance_from_home_m``; other inclusion shapes are ``inclusion`` zones, exclusion shapes ``keep_out`` zones."""
     fence: dict[str, Any] = {}
@@ -284,13 +284,18 @@ def _fence(src: Source, sources: dict[str, At]) -> dict[str, Any]:
     return fence
 
 
-def _rally(src: Source, sources: dict[str, At]) -> list[dict[str, Any]]:
+def _rally(src: FileContents, sources: dict[str, At]) -> list[dict[str, Any]]:
     sources |= {f"rally_points[{i}]": at for i, (*_, at) in enumerate(src.rally)}
     return [{"lat": lat, "lon": lon, "alt_m": alt} for lat, lon, alt, _ in src.rally]
 
 
 def _leg_timeout(
-    src: Source, kind: str | None, home: dict[str, float] | None, waypoints: list[dict[str, Any]], limits: dict[str, Any], sources: dict[str, At]
+    src: FileContents,
+    kind: str | None,
+    home: dict[str, float] | None,
+    waypoints: list[dict[str, Any]],
+    limits: dict[str, Any],
+    sources: dict[str, At],
 ) -> float | None:
     """limits.leg_timeout_s widened to twice the longest leg's shortest time, where the default would refuse it (with a warning):
     a plan has no leg time limit, and a slow survey line is not a mistake (the rule: executive.mission.rules)."""
@@ -313,7 +318,7 @@ def _leg_timeout(
     return timeout
 
 
-def _speed_limits(src: Source, waypoints: list[dict[str, Any]], sources: dict[str, At]) -> dict[str, float] | None:
+def _speed_limits(src: FileContents, waypoints: list[dict[str, Any]], sources: dict[str, At]) -> dict[str, float] | None:
     """limits.speed_m_s widened to the speeds the file asks for, if the defaults do not hold them (with a warning)."""
     default = Limits().speed_m_s
     speeds = [(wp["speed_m_s"], i) for i, wp in enumerate(waypoints) if "speed_m_s" in wp]
@@ -333,7 +338,7 @@ def _speed_limits(src: Source, waypoints: list[dict[str, Any]], sources: dict[st
 
 
 def import_plan(
-    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[Source] = ()
+    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[FileContents] = ()
 ) -> Imported:
     """A QGroundControl .plan as a mission; ``vehicle`` overrides the plan's vehicleType. Raises :class:`MissionError`."""
     src = read_plan(text.removeprefix("\ufeff"), filename)
@@ -341,7 +346,7 @@ def import_plan(
 
 
 def import_waypoints(
-    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[Source] = ()
+    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[FileContents] = ()
 ) -> Imported:
     """A Mission Planner ``QGC WPL 110`` file as a mission; it does not name its vehicle, so ``vehicle`` is needed. Raises :class:`MissionError`."""
     src = read_waypoints(text.removeprefix("\ufeff"), filename)
@@ -349,7 +354,7 @@ def import_waypoints(
 
 
 def import_text(
-    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[Source] = ()
+    text: str, filename: str, *, vehicle: str | None = None, name: str | None = None, auto_arm: bool = False, zones: Sequence[FileContents] = ()
 ) -> Imported:
     """Either format, told apart by content (``QGC WPL``) or the file name's suffix (.waypoints, .txt, .mission); ``zones``: Mission
     Planner fence and rally files read (:func:`~executive.mission.formats.mp_zone_files.read_zone_file`), their zones and rally points added."""

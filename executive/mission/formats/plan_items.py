@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+import executive
 from executive.mission.errors import FieldError
 from executive.world.dialect import mavlink
 
@@ -73,7 +74,7 @@ class FenceCircle:
 
 
 @dataclass
-class Source:
+class FileContents:
     """What a file says, before it becomes a mission."""
 
     filename: str
@@ -97,7 +98,7 @@ class Source:
     def warn(self, at: At, message: str) -> None:
         self.warnings.append(FieldError(at.filename or self.filename, at.line, at.column, at.field, message))
 
-    def merge(self, other: Source) -> None:
+    def merge(self, other: FileContents) -> None:
         """Take ``other``'s zones, rally points and problems (a fence or rally file imported with this one), located in its file."""
 
         def there(at: At) -> At:
@@ -144,3 +145,7 @@ def describe_json(value: Any) -> str:
     text = json.dumps(value) if isinstance(value, str) else repr(value)
     kind = "string" if isinstance(value, str) else "number"
     return f"{kind} {text if len(text) <= 40 else text[:37] + '...'}"
+
+
+def __getattr__(name: str) -> object:  # old names (0.2), for one release: Source is FileContents
+    return executive.moved_attribute(__name__, name)

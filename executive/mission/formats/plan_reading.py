@@ -1,4 +1,4 @@
-"""Reading the two formats into a :class:`~executive.mission.formats.plan_items.Source`: QGroundControl ``.plan`` (JSON) and ``QGC WPL 110`` (text).
+"""Reading the two formats into :class:`~executive.mission.formats.plan_items.FileContents`: QGroundControl ``.plan`` (JSON), ``QGC WPL 110`` (text).
 
 Every value is located: JSON at the decoder's position or where the offending value starts, WPL at
 the line and the column of the field.
@@ -20,8 +20,8 @@ from executive.mission.formats.plan_items import (
     At,
     FenceCircle,
     FencePolygon,
+    FileContents,
     Item,
-    Source,
     command_name,
     describe_json,
     finite,
@@ -78,7 +78,7 @@ class _PlanReader:
     """Reads a .plan document, every problem located at the value it is about."""
 
     def __init__(self, text: str, filename: str) -> None:
-        self.src = Source(filename, At(1, 1, "(plan)"))
+        self.src = FileContents(filename, At(1, 1, "(plan)"))
         self._offsets = _json_offsets(text)
         self._newlines = [m.start() for m in re.finditer("\n", text)]
 
@@ -114,7 +114,7 @@ class _PlanReader:
         self.src.error(self.at(path), f"expected {article} {kind}{' or null' if nullable else ''}, got {describe_json(value)}")
         return None
 
-    def read(self, data: Any) -> Source:
+    def read(self, data: Any) -> FileContents:
         src = self.src
         if not isinstance(data, dict):
             src.error(self.at(()), f"expected a JSON object (a QGroundControl plan), got {describe_json(data)}")
@@ -268,7 +268,7 @@ class _PlanReader:
             src.circles.append(FenceCircle(inclusion is not False, lat, lon, radius, self.at(path)))
 
 
-def read_plan(text: str, filename: str) -> Source:
+def read_plan(text: str, filename: str) -> FileContents:
     try:
         data = json.loads(text)
         reader = _PlanReader(text, filename)
@@ -287,10 +287,10 @@ def read_plan(text: str, filename: str) -> Source:
 # -- QGC WPL 110 (text) -----------------------------------------------------------------------
 
 
-def read_waypoints(text: str, filename: str) -> Source:
+def read_waypoints(text: str, filename: str) -> FileContents:
     lines = text.splitlines()
     header = lines[0].strip() if lines else ""
-    src = Source(filename, At(1, 1, "(header)"))
+    src = FileContents(filename, At(1, 1, "(header)"))
     src.items_at = src.start
     src.vehicle_at, src.vehicle_why = src.start, "a .waypoints file does not say which vehicle it is for: pass --vehicle"
     if header != WPL_HEADER:
@@ -340,7 +340,7 @@ _CIRCLE = {mavlink.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION: True, mavlink.MAV_CMD_NAV
 ZONE_COMMANDS = frozenset({*_POLYGON_VERTEX, *_CIRCLE, mavlink.MAV_CMD_NAV_FENCE_RETURN_POINT, mavlink.MAV_CMD_NAV_RALLY_POINT})
 
 
-def _zones(src: Source, items: list[Item]) -> None:
+def _zones(src: FileContents, items: list[Item]) -> None:
     """Fence items as polygons (runs of param1 corners) and circles, rally points as rally points, each located."""
     run: list[Item] = []
 
@@ -378,7 +378,7 @@ def _zones(src: Source, items: list[Item]) -> None:
     close()
 
 
-def _wpl_value(src: Source, at: At, token: str) -> float:
+def _wpl_value(src: FileContents, at: At, token: str) -> float:
     """A WPL field as a number (integral for the integer columns; NaN only for params 1-4, meaning unset); else an error."""
     column = at.field.rsplit(".", 1)[-1]
     try:

@@ -225,7 +225,7 @@ class LiveFeed:
         mission = self._state.mission
         if mission is None:
             return None
-        leg = self._state.leg_index
+        leg = self._state.legs.leg_index
         cached_mission, cached_leg, plan = self._plan_of
         if mission is cached_mission and leg == cached_leg:
             return plan

@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 from executive.observers.web.feed import LiveFeed
 from executive.observers.web.server import LiveSource, WebServer
-from executive.runtime.services import Step
+from executive.runtime.services import FunctionService
 
 if TYPE_CHECKING:
     from executive.runtime.assembly import Plug, Wiring
@@ -17,8 +17,8 @@ def live_view(server: WebServer) -> Plug:
 
     def plug(w: Wiring) -> None:
         feed = LiveFeed(w.mission_state, w.status, w.operator, w.clock.now)
-        w.readers.append(Step("live view requests", feed.answer))
-        w.writers.append(Step("live view", feed.publish))
+        w.readers.append(FunctionService("live view requests", feed.answer))
+        w.writers.append(FunctionService("live view", feed.publish))
         w.observers.append(feed)
         server.start(LiveSource(feed), ask=feed.ask)
         w.closers.append(server.close)

@@ -131,7 +131,7 @@ class LiveSource:
         return self.feed.latest
 
 
-class _Client:
+class _Browser:
     """One browser: the frame it is to be sent next (the latest wins) and what it has been sent."""
 
     def __init__(self, ws: web.WebSocketResponse) -> None:
@@ -184,7 +184,7 @@ class WebServer:
         self.token = token
         self.source: Source | None = None
         self._ask: Ask | None = None
-        self._clients: set[_Client] = set()
+        self._clients: set[_Browser] = set()
         self._loop = asyncio.new_event_loop()
         self._thread: threading.Thread | None = None
         self._socket: socket.socket | None = None
@@ -310,7 +310,7 @@ class WebServer:
             raise web.HTTPServiceUnavailable(text=f"at most {MAX_CLIENTS} live views at once")
         ws = web.WebSocketResponse(heartbeat=20.0)
         await ws.prepare(request)
-        client = _Client(ws)
+        client = _Browser(ws)
         hello = {"hello": source.kind, "token_needed": self.token is not None, **source.hello()}
         await ws.send_str(json.dumps(hello))
         self._clients.add(client)

@@ -16,7 +16,7 @@ from typing import ClassVar
 
 from executive.sim.ardupilot.rover import ArduRoverSim
 from executive.sim.firmware import Home
-from executive.sim.physics.vehicle import BUNKER_LIMITS, Limits, SkidSteerVehicle
+from executive.sim.physics.vehicle import BUNKER_LIMITS, MotionLimits, SkidSteerVehicle
 
 #: The Bunker's tracks respond quickly; it turns on the spot.
 BUNKER_RESPONSE = {"speed_lag_s": 0.2, "min_turn_radius_m": 0.0}
@@ -41,14 +41,14 @@ class BunkerSim(ArduRoverSim):
     }  # fmt: skip
 
     @property
-    def base_limits(self) -> Limits:
+    def base_limits(self) -> MotionLimits:
         return BUNKER_LIMITS
 
     @property
     def response(self) -> Mapping[str, float]:
         return BUNKER_RESPONSE
 
-    def _vehicle_model(self, home: Home, limits: Limits) -> SkidSteerVehicle:
+    def _vehicle_model(self, home: Home, limits: MotionLimits) -> SkidSteerVehicle:
         return SkidSteerVehicle(home[0], home[1], home[2], limits)
 
     @property

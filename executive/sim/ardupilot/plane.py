@@ -53,6 +53,7 @@ from collections.abc import Callable, Mapping, Sequence
 from enum import Enum
 from typing import ClassVar
 
+import executive
 from executive.sim.ardupilot.base import (
     GLOBAL_FRAMES,
     NAVIGATION,
@@ -91,7 +92,7 @@ QUADPLANE_PARM_LIMITS = dataclasses.replace(QUADPLANE_LIMITS, cruise_m_s=AIRSPEE
 LAND_DETECT_S = 4.0  # land_detector(4000)
 
 
-class Transition(Enum):
+class TransitionState(Enum):
     """SLT_Transition's states."""
 
     AIRSPEED_WAIT = 0
@@ -137,7 +138,7 @@ class QuadPlaneSim(ArduPilotSim):
         **options: float,
     ) -> None:
         self._limits = limits
-        self.transition = Transition.DONE
+        self.transition = TransitionState.DONE
         self._transition_started = False  # transition_start_ms set: "Transition airspeed wait" said, or assisting
         self._timer_start = 0.0
         self._guided_vtol = False  # auto_state.vtol_loiter: GUIDED hovers on the lift motors
@@ -173,7 +174,7 @@ class QuadPlaneSim(ArduPilotSim):
         """EXTENDED_SYS_STATE vtol_state (MAV_VTOL_STATE)."""
         if self.in_vtol_mode:  # SLT_Transition::get_mav_vtol_state(): QPOS_AIRBRAKE and QPOS_POSITION1 are TRANSITION_TO_MC
             return _M.MAV_VTOL_STATE_TRANSITION_TO_MC if self._airbrake or self._position1 else _M.MAV_VTOL_STATE_MC
-        if self.transition is Transition.DONE:
+        if self.transition is TransitionState.DONE:
             return _M.MAV_VTOL_STATE_FW
         return _M.MAV_VTOL_STATE_TRANSITION_TO_FW
 
@@ -273,29 +274,29 @@ class QuadPlaneSim(ArduPilotSim):
         """SLT_Transition: VTOL_update() in VTOL modes, update() in the others."""
         if self.in_vtol_mode:
             # ready for the next fixed-wing mode: on the ground none is needed, in the air it starts over
-            self.transition = Transition.AIRSPEED_WAIT if self.flying else Transition.DONE
+            self.transition = TransitionState.AIRSPEED_WAIT if self.flying else TransitionState.DONE
             self._transition_started = False
             return
         if self.mode in MOTORS_OFF_MODES or not self.flying:
-            self.transition = Transition.DONE if self.mode in MOTORS_OFF_MODES else self.transition
+            self.transition = TransitionState.DONE if self.mode in MOTORS_OFF_MODES else self.transition
             return
         speed = self.vehicle.speed_m_s
         assist = self.params["Q_ASSIST_SPEED"]
         assisting = assist > 0 and speed < assist  # QuadPlane::should_assist, by Q_ASSIST_SPEED
         if assisting:
-            if self.transition is not Transition.AIRSPEED_WAIT:
+            if self.transition is not TransitionState.AIRSPEED_WAIT:
                 self._text(_M.MAV_SEVERITY_INFO, f"Transition started airspeed {speed:.1f}")
-            self.transition, self._transition_started = Transition.AIRSPEED_WAIT, True
-        if self.transition is Transition.AIRSPEED_WAIT:
+            self.transition, self._transition_started = TransitionState.AIRSPEED_WAIT, True
+        if self.transition is TransitionState.AIRSPEED_WAIT:
             if not self._transition_started:
                 self._transition_started = True
                 self._text(_M.MAV_SEVERITY_INFO, "Transition airspeed wait")
             self._timer_start = self.elapsed_s  # transition_low_airspeed_ms: the timer runs from the last wait
             if speed > self.params["AIRSPEED_MIN"] and not assisting:
-                self.transition = Transition.TIMER
+                self.transition = TransitionState.TIMER
                 self._text(_M.MAV_SEVERITY_INFO, f"Transition airspeed reached {speed:.1f}")
-        elif self.transition is Transition.TIMER and self.elapsed_s - self._timer_start > self.params["Q_TRANSITION_MS"] / 1000:
-            self.transition, self._transition_started = Transition.DONE, False
+        elif self.transition is TransitionState.TIMER and self.elapsed_s - self._timer_start > self.params["Q_TRANSITION_MS"] / 1000:
+            self.transition, self._transition_started = TransitionState.DONE, False
             self._text(_M.MAV_SEVERITY_INFO, "Transition done")
 
     def _update_guided(self) -> None:
@@ -462,3 +463,7 @@ class QuadPlaneSim(ArduPilotSim):
         return self._mav.position_target_global_int_encode(
             self._ms(), _M.MAV_FRAME_GLOBAL, TARGET_REPORT_MASK, e7(target[0]), e7(target[1]), self.vehicle.target_alt_m, 0, 0, 0, 0, 0, 0, 0, 0
         )
+
+
+def __getattr__(name: str) -> object:  # old names (0.2), for one release: Transition is TransitionState
+    return executive.moved_attribute(__name__, name)

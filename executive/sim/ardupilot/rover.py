@@ -15,7 +15,7 @@ from executive.sim.ardupilot.rover_fence import FENCE_ACTIONS, FENCE_DEFAULTS, b
 from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import StoredCommand
-from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, MotionLimits, SurfaceVehicle, VehicleModel
 from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink
@@ -79,7 +79,7 @@ class ArduRoverSim(ArduPilotSim):
     _driving = False  # on the way to _destination
     _loitering = False  # holding _destination within the loiter radius
     _nav: RoverNavigator | None = None  # AR_WPNav, from the last mode entry that initialised it
-    limits: Limits
+    limits: MotionLimits
     motion: RoverMotion
     _auto_waiting = False  # in AUTO, waiting for an EKF origin to start the mission
     _auto_item: tuple[int | None, StoredCommand] | None = None  # the (seq, item) AUTO is executing
@@ -91,7 +91,7 @@ class ArduRoverSim(ArduPilotSim):
         return self.profile.mav_type == _M.MAV_TYPE_SURFACE_BOAT
 
     @property
-    def base_limits(self) -> Limits:
+    def base_limits(self) -> MotionLimits:
         """The vehicle's own limits, before the firmware's parameters."""
         return BOAT_LIMITS if self.is_boat else ROVER_LIMITS
 
@@ -111,7 +111,7 @@ class ArduRoverSim(ArduPilotSim):
         )  # fmt: skip
         return self._vehicle_model(home, self.limits)
 
-    def _vehicle_model(self, home: Home, limits: Limits) -> SurfaceVehicle:
+    def _vehicle_model(self, home: Home, limits: MotionLimits) -> SurfaceVehicle:
         return SurfaceVehicle(home[0], home[1], home[2], limits)
 
     def _navigator(self, speed_m_s: float | None = None) -> RoverNavigator:

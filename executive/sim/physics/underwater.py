@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from executive.sim.physics.vehicle import Limits, SurfaceVehicle
+from executive.sim.physics.vehicle import MotionLimits, SurfaceVehicle
 
 
 @dataclass(frozen=True)
@@ -28,14 +28,14 @@ class Seabed:
         return max(self.min_depth_m, self.depth_m + self.slope * along)
 
 
-SUB_HORIZONTAL_LIMITS = Limits(cruise_m_s=0.8, max_m_s=1.0, accel_m_s2=0.3, decel_m_s2=0.5, turn_rate_deg_s=30.0, arrive_m=0.3)
+SUB_HORIZONTAL_LIMITS = MotionLimits(cruise_m_s=0.8, max_m_s=1.0, accel_m_s2=0.3, decel_m_s2=0.5, turn_rate_deg_s=30.0, arrive_m=0.3)
 
 
 @dataclass(frozen=True)
 class SubLimits:
     """How an underwater vehicle can move."""
 
-    horizontal: Limits = SUB_HORIZONTAL_LIMITS
+    horizontal: MotionLimits = SUB_HORIZONTAL_LIMITS
     climb_m_s: float = 0.5
     descend_m_s: float = 0.5
     vertical_accel_m_s2: float = 0.3

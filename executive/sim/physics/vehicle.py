@@ -10,6 +10,8 @@ import math
 from dataclasses import dataclass
 from typing import Protocol
 
+import executive
+
 _EARTH_RADIUS_M = 6378137.0
 
 
@@ -60,7 +62,7 @@ class VehicleModel(Protocol):
 
 
 @dataclass(frozen=True)
-class Limits:
+class MotionLimits:
     """How a surface vehicle can move."""
 
     cruise_m_s: float = 2.0
@@ -89,8 +91,8 @@ class Limits:
         return math.sqrt(0.5 * self.lat_accel_m_s2 * self.turn_radius_m)
 
 
-ROVER_LIMITS = Limits(turn_radius_m=0.9)
-BOAT_LIMITS = Limits(accel_m_s2=0.6, decel_m_s2=1.0, turn_rate_deg_s=45.0, drift_m_s=0.03, drift_toward_deg=60.0, turn_radius_m=0.9)
+ROVER_LIMITS = MotionLimits(turn_radius_m=0.9)
+BOAT_LIMITS = MotionLimits(accel_m_s2=0.6, decel_m_s2=1.0, turn_rate_deg_s=45.0, drift_m_s=0.03, drift_toward_deg=60.0, turn_radius_m=0.9)
 
 
 class LocalFrame:
@@ -157,7 +159,7 @@ class SurfaceVehicle(LocalFrame):
     HEADING_GAIN = 2.0  # turn rate (rad/s) asked per radian of heading error
     APPROACH_GAIN = 1.0  # speed (m/s) allowed per metre left, for the last metres
 
-    def __init__(self, lat: float, lon: float, heading_deg: float = 0.0, limits: Limits = ROVER_LIMITS) -> None:
+    def __init__(self, lat: float, lon: float, heading_deg: float = 0.0, limits: MotionLimits = ROVER_LIMITS) -> None:
         self.limits = limits
         self.powered = False
         self.heading_bias_deg = 0.0  # compass error the controller steers by (fault injection): it heads this far off
@@ -356,7 +358,7 @@ class Tracks:
     slip_factor: float = 1.3
 
 
-BUNKER_LIMITS = Limits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0)
+BUNKER_LIMITS = MotionLimits(cruise_m_s=1.0, max_m_s=1.5, accel_m_s2=0.8, decel_m_s2=1.5, turn_rate_deg_s=60.0)
 BUNKER_TRACKS = Tracks()
 
 
@@ -374,7 +376,9 @@ class SkidSteerVehicle(SurfaceVehicle):
     its own). The autopilot then ramps its speed demand on its own, without seeing the base's speed.
     """
 
-    def __init__(self, lat: float, lon: float, heading_deg: float = 0.0, limits: Limits = BUNKER_LIMITS, tracks: Tracks = BUNKER_TRACKS) -> None:
+    def __init__(
+        self, lat: float, lon: float, heading_deg: float = 0.0, limits: MotionLimits = BUNKER_LIMITS, tracks: Tracks = BUNKER_TRACKS
+    ) -> None:
         super().__init__(lat, lon, heading_deg, limits)
         self.tracks = tracks
         #: (linear m/s, angular rad/s, positive counter-clockwise) the base's controller drives at; None: the throttles drive the tracks.
@@ -457,3 +461,7 @@ def skid_steer_mix(throttle: float, steering: float) -> tuple[float, float]:
         steering /= saturation
         throttle = math.copysign(1.0 - abs(steering), throttle)
     return clamp(throttle + steering, 1.0), clamp(throttle - steering, 1.0)
+
+
+def __getattr__(name: str) -> object:  # old names (0.2), for one release: Limits is MotionLimits
+    return executive.moved_attribute(__name__, name)

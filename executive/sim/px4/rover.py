@@ -6,7 +6,7 @@ import math
 from collections.abc import Sequence
 
 from executive.sim.firmware import DEFAULT_HOME, Command, CommandHandler, Home
-from executive.sim.physics.vehicle import ROVER_LIMITS, Limits, SurfaceVehicle, VehicleModel
+from executive.sim.physics.vehicle import ROVER_LIMITS, MotionLimits, SurfaceVehicle, VehicleModel
 from executive.sim.px4.base import Px4Sim
 from executive.sim.px4.parameters import ROVER_NAV_ACC_RAD
 from executive.world.clock import Clock
@@ -34,7 +34,9 @@ class Px4RoverSim(Px4Sim):
 
     vehicle: SurfaceVehicle
 
-    def __init__(self, profile: VehicleProfile, clock: Clock, home: Home = DEFAULT_HOME, *, limits: Limits = ROVER_LIMITS, **options: float) -> None:
+    def __init__(
+        self, profile: VehicleProfile, clock: Clock, home: Home = DEFAULT_HOME, *, limits: MotionLimits = ROVER_LIMITS, **options: float
+    ) -> None:
         self._limits = limits
         self._speed: float | None = None
         super().__init__(profile, clock, home, **options)

@@ -149,7 +149,7 @@ class Cable:
 
     def ticked(self, tick: int, t: float) -> None:
         state = self.runtime.mission_state  # type: ignore[attr-defined]
-        if self.unplugged_at is None and state.leg_index >= self.leg:
+        if self.unplugged_at is None and state.legs.leg_index >= self.leg:
             self.unplugged_at = t
             self.device.unplug()
         elif self.unplugged_at is not None and self.plugged_at is None and t >= self.unplugged_at + self.out_for_s:

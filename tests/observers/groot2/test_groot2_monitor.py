@@ -81,7 +81,7 @@ def transitions(raw: bytes) -> list[tuple[int, int, int]]:
 def test_a_client_sees_the_running_tree_its_statuses_and_the_blackboard(served) -> None:
     view, client, _ = served
     sim = rover_square(view)
-    sim.run(300, until=lambda: sim.runtime.mission_state.leg_index >= 1)
+    sim.run(300, until=lambda: sim.runtime.mission_state.legs.leg_index >= 1)
     t = sim.clock.now()
     sim.run(300, until=lambda: sim.clock.now() >= t + 1.0)  # a second into the second leg
     assert sim.runtime.tree is not None
@@ -112,11 +112,11 @@ def test_a_client_sees_the_running_tree_its_statuses_and_the_blackboard(served) 
 def test_a_recording_client_gets_each_transition_in_vehicle_time(served) -> None:
     view, client, server = served
     sim = rover_square(view)
-    sim.run(300, until=lambda: sim.runtime.mission_state.leg_index >= 1)
+    sim.run(300, until=lambda: sim.runtime.mission_state.legs.leg_index >= 1)
     started = client._exchange(ClientRequestType.TOGGLE_RECORDING, b"start")[1]
     assert started.isdigit()  # the wall time in µs the client counts from
     t0 = sim.clock.now()
-    sim.run(300, until=lambda: sim.runtime.mission_state.leg_index >= 2)
+    sim.run(300, until=lambda: sim.runtime.mission_state.legs.leg_index >= 2)
     elapsed_us = (sim.clock.now() - t0) * 1e6
     kept = transitions(client._exchange(ClientRequestType.GET_TRANSITIONS)[1])
     go = by_name(client.fetch_tree(), "Go to waypoint").uid

@@ -47,7 +47,7 @@ def test_frames_show_the_tree_the_status_and_the_plan_in_local_metres(lockstep):
     sim = lockstep(line_mission("web"), plugs=[live_view(server)])
     try:
         watch = Frames(sim, server.source)
-        assert sim.run(300.0, until=lambda: sim.runtime.mission_state.leg_index == 2) is None
+        assert sim.run(300.0, until=lambda: sim.runtime.mission_state.legs.leg_index == 2) is None
         leg_started = sim.runtime.ticks
         assert sim.run(60.0, until=lambda: sim.runtime.ticks >= leg_started + 5) is None
         first_with_tree = next(m for m in watch.messages if m.get("tree"))
@@ -124,7 +124,7 @@ def test_the_buttons_go_through_the_operator_on_the_tick_thread(lockstep):
     replies: list[dict] = []
     try:
         feed = server.source.feed
-        sim.run(300.0, until=lambda: sim.runtime.mission_state.leg_index == 1)
+        sim.run(300.0, until=lambda: sim.runtime.mission_state.legs.leg_index == 1)
         feed.ask("pause", replies.append)
         feed.ask("delete", replies.append)  # not a button: stays with `executive ctl`
         assert replies == [] and sim.status is MissionStatus.RUNNING  # nothing happens off the tick thread
@@ -135,6 +135,6 @@ def test_the_buttons_go_through_the_operator_on_the_tick_thread(lockstep):
         sim.run(10.0, until=lambda: sim.runtime.status.snapshot()["mode"] == "HOLD")
         feed.ask("resume", replies.append)
         sim.run(60.0, until=lambda: sim.runtime.status.snapshot()["mode"] == "GUIDED")
-        assert replies[2]["state"] == "RUNNING" and sim.runtime.mission_state.leg_index == 1
+        assert replies[2]["state"] == "RUNNING" and sim.runtime.mission_state.legs.leg_index == 1
     finally:
         server.close()

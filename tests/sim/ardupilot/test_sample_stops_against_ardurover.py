@@ -135,7 +135,7 @@ def test_the_simulated_ardurover_says_what_the_real_one_said(lockstep) -> None:
             highest.append(now.highest)
         sampler = s.runtime.sampler
         if sampler is not None and sampler.sampling:
-            wp = MISSION.waypoints[s.runtime.mission_state.leg_index]
+            wp = MISSION.waypoints[s.runtime.mission_state.legs.leg_index]
             held_at_sample.append((s.autopilot.mission.current_seq, s.autopilot.vehicle.distance_to(wp.lat, wp.lon)))
 
     sim.observers.append(watch)

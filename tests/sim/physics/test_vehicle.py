@@ -6,7 +6,7 @@ import itertools
 
 import pytest
 
-from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, Limits, SurfaceVehicle
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, MotionLimits, SurfaceVehicle
 
 HOME = (47.397742, 8.545594)
 
@@ -15,7 +15,7 @@ def north_of(lat: float, lon: float, metres: float) -> tuple[float, float]:
     return lat + metres / 111_319.49, lon
 
 
-def powered(limits: Limits = ROVER_LIMITS, heading_deg: float = 0.0) -> SurfaceVehicle:
+def powered(limits: MotionLimits = ROVER_LIMITS, heading_deg: float = 0.0) -> SurfaceVehicle:
     vehicle = SurfaceVehicle(HOME[0], HOME[1], heading_deg, limits)
     vehicle.powered = True
     return vehicle
@@ -32,7 +32,7 @@ def drive(vehicle: SurfaceVehicle, seconds: float, dt: float = 0.1) -> list[tupl
 
 
 @pytest.mark.parametrize("limits", [ROVER_LIMITS, BOAT_LIMITS], ids=["rover", "boat"])
-def test_reaches_a_target_50_m_ahead_at_cruise_speed_and_stops_without_overshoot(limits: Limits) -> None:
+def test_reaches_a_target_50_m_ahead_at_cruise_speed_and_stops_without_overshoot(limits: MotionLimits) -> None:
     vehicle = powered(limits)
     target = north_of(HOME[0], HOME[1], 50.0)
     vehicle.drive_to(*target)
@@ -75,7 +75,7 @@ def test_speed_is_capped_at_the_maximum() -> None:
 
 
 @pytest.mark.parametrize("limits", [ROVER_LIMITS, BOAT_LIMITS], ids=["rover", "boat"])
-def test_an_unpowered_vehicle_never_moves(limits: Limits) -> None:
+def test_an_unpowered_vehicle_never_moves(limits: MotionLimits) -> None:
     vehicle = SurfaceVehicle(HOME[0], HOME[1], 0.0, limits)
     vehicle.drive_to(*north_of(HOME[0], HOME[1], 50.0))
     drive(vehicle, 60.0)
