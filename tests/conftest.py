@@ -10,6 +10,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
@@ -23,6 +24,11 @@ from executive.sensing.heading import wait_for_filterpy
 # workers and every subprocess inherit the environment.
 os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
 sys.dont_write_bytecode = False
+
+# The property tests draw the same examples in every run (a seed per test), so the suite passes or fails the same way on any
+# machine and day; HYPOTHESIS_PROFILE=default draws new ones (to search further, by hand) and keeps failures in .hypothesis/.
+settings.register_profile("suite", derandomize=True, database=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "suite"))
 
 # A suite started in the background (`pytest ... &` in a script, nohup, a CI step) inherits SIGINT ignored, as
 # does every executive it starts: Ctrl-C's tests (`ctl tree --watch`, an interrupted first-heartbeat wait)

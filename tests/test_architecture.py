@@ -8,6 +8,7 @@ one of the few listed upward ones; nothing in ``behaviours`` imports ``io``; no 
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -68,7 +69,10 @@ def imports_of(name: str, modules: dict[str, Path] = MODULES) -> set[str]:
     return found
 
 
-GRAPH = {name: imports_of(name) for name in MODULES}
+@functools.cache
+def graph_of_ours() -> dict[str, set[str]]:
+    """Each module of ours and the modules of ours it imports: read when a test first asks (not at collection, in every worker)."""
+    return {name: imports_of(name) for name in MODULES}
 
 
 def top_level(name: str) -> str:
@@ -81,8 +85,9 @@ def layer(name: str) -> int:
     return next(i for i, (_, tops) in enumerate(LAYERS) if top_level(name) in tops)
 
 
-def cycles(graph: dict[str, set[str]] = GRAPH) -> list[list[str]]:
-    """The strongly connected groups of more than one module (Tarjan)."""
+def cycles(graph: dict[str, set[str]] | None = None) -> list[list[str]]:
+    """The strongly connected groups of more than one module (Tarjan), of ``graph`` (ours when None)."""
+    graph = graph_of_ours() if graph is None else graph
     index: dict[str, int] = {}
     low: dict[str, int] = {}
     stack: list[str] = []
@@ -133,13 +138,14 @@ def test_no_import_cycle_in_the_benchmarks_or_tools() -> None:
 
 
 def test_imports_run_down_the_layers() -> None:
-    upward = {(a, b) for a, targets in GRAPH.items() for b in targets if layer(b) < layer(a)}
+    upward = {(a, b) for a, targets in graph_of_ours().items() for b in targets if layer(b) < layer(a)}
     assert upward == set(UPWARD), "imports running up a layer (README: Architecture)"
     assert len(UPWARD) <= 3
 
 
 def test_behaviours_import_no_io() -> None:
-    assert {(a, b) for a, targets in GRAPH.items() if a.startswith("executive.behaviours") for b in targets if b.startswith("executive.io")} == set()
+    behaviours = {a: targets for a, targets in graph_of_ours().items() if a.startswith("executive.behaviours")}
+    assert {(a, b) for a, targets in behaviours.items() for b in targets if b.startswith("executive.io")} == set()
 
 
 def test_the_package_imports_no_test_only_library() -> None:
@@ -161,10 +167,10 @@ def test_no_module_over_600_lines(name: str) -> None:
 
 def test_the_contract_reads_the_package_it_guards() -> None:
     """Imports are found at the top and inside functions; every module has a layer."""
-    assert "executive.autopilot" in GRAPH["executive.behaviours.commands"]  # the package: its __init__ imports the port
-    assert "executive.world.dialect" in GRAPH["executive.io.mavlink.link"]
-    assert "executive.tree.select" in GRAPH["executive.runtime.loop"]
-    assert "executive.trees.parts" in GRAPH["executive.trees.waypoints"]  # the trees/ folder read as executive.trees
+    assert "executive.autopilot" in graph_of_ours()["executive.behaviours.commands"]  # the package: its __init__ imports the port
+    assert "executive.world.dialect" in graph_of_ours()["executive.io.mavlink.link"]
+    assert "executive.tree.select" in graph_of_ours()["executive.runtime.loop"]
+    assert "executive.trees.parts" in graph_of_ours()["executive.trees.waypoints"]  # the trees/ folder read as executive.trees
     assert {layer(name) for name in MODULES} == set(range(len(LAYERS)))
 
 

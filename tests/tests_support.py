@@ -9,6 +9,7 @@ import os
 import shutil
 import subprocess
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -73,15 +74,25 @@ def run_in_lockstep(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def executive_process(
-    *args: str, stdout: int | None = subprocess.DEVNULL, cwd: Path = ROOT, env: dict[str, str] | None = None, **popen: Any
+    *args: str,
+    stdout: int | None = subprocess.DEVNULL,
+    cwd: Path = ROOT,
+    env: dict[str, str] | None = None,
+    via: Sequence[str] = (),
+    **popen: Any,
 ) -> subprocess.Popen[str]:
     """``python -m executive ARGS`` in a process of its own, from the checkout, text pipes: its stderr kept (a pipe), its stdout
     dropped unless ``stdout`` says otherwise (``subprocess.PIPE`` for the status lines); ``env`` is added to this environment.
+    ``via`` names a script of tests/ and its own arguments, run in place of ``-m executive`` (``python tests/SCRIPT VIA... -- ARGS``):
+    the executive under a test's clock (``stepped_wall_clock.py``, ``held_clock.py``).
 
     For what only a process shows (signals, exit codes, a second process on the same socket, an interpreter's start): where the
     process boundary is not what a test checks, run ``main([...])`` in the test's own process (an interpreter's start is ~1 s of CPU).
     """
     command = [sys.executable, "-m", "executive", *args]
+    if via:
+        command = [sys.executable, str(ROOT / "tests" / via[0]), *via[1:], "--", *args]
+        env = {"PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "tests")]), **(env or {})}
     environment = None if env is None else {**os.environ, **env}
     return subprocess.Popen(command, cwd=cwd, stdout=stdout, stderr=popen.pop("stderr", subprocess.PIPE), env=environment, text=True, **popen)
 

@@ -48,10 +48,9 @@ from executive.behaviours import (
     SpeedWithin,
     Surface,
 )
-from executive.mission.declaration import TreeDeclaration
+from executive.mission.declaration import TreeDeclaration, vehicle_profile
 from executive.mission.model import Mission
 from executive.trees.parts import auto_leg, failsafe_guarded, mission_root, preflight, safe_mode, standard_guards, within_reach
-from executive.world.vehicles import PROFILES
 
 
 def acceptance(mission: Mission) -> py_trees.behaviour.Behaviour:
@@ -86,7 +85,7 @@ def leg(mission: Mission) -> py_trees.behaviour.Behaviour:
         "Leg",
         memory=True,
         children=[
-            SetMode(PROFILES[mission.vehicle].guided_mode),
+            SetMode(vehicle_profile(mission.vehicle).guided_mode),
             ChangeSpeed(),
             ChangeDepth(timeout_s=limits.leg_timeout_s, clearance_m=limits.altitude_m.min, too_deep=limits.seabed_floor),
             ChangeAltitude(timeout_s=limits.leg_timeout_s),

@@ -62,11 +62,10 @@ from executive.behaviours import (
     rc_auto_mode,
 )
 from executive.behaviours.failsafe import FailsafeNote
-from executive.mission.declaration import TreeDeclaration
+from executive.mission.declaration import TreeDeclaration, vehicle_profile
 from executive.mission.model import Mission, SamplingOptions
 from executive.mission.rules import failsafe_policy
 from executive.trees.parts import ARM_RETRY_S, auto_leg, checked, failsafe_guarded, mission_root, preflight, safe_mode, within_reach
-from executive.world.vehicles import PROFILES
 
 
 def _sample_hold_mode(mission: Mission) -> str:
@@ -95,7 +94,7 @@ def ekf_or_wait_in_manual(mission: Mission) -> py_trees.behaviour.Behaviour:
     itself, which must not read as a pilot's take-over). A vehicle already disarmed belongs to the
     pilot: it is left alone, and the guarded path waits for it to be armed again.
     """
-    manual, limit = PROFILES[mission.vehicle].manual_mode, failsafe_policy(mission)["ekf_loss"].timeout_s
+    manual, limit = vehicle_profile(mission.vehicle).manual_mode, failsafe_policy(mission)["ekf_loss"].timeout_s
     ekf = EkfOk()
     ekf.resume_after_s = 0.0  # its recovery is the wait branch's to judge (a sane EKF for EkfOk.resume_after_s)
     wait = py_trees.composites.Sequence(
@@ -118,7 +117,7 @@ def go_to_point(mission: Mission) -> py_trees.behaviour.Behaviour:
     """To the current point: GUIDED (else set it), go to; drive: auto: the leg in AUTO (:func:`~executive.trees.parts.auto_leg`)."""
     if mission.drive == "auto":
         return auto_leg(mission)
-    limits, guided = mission.limits, PROFILES[mission.vehicle].guided_mode
+    limits, guided = mission.limits, vehicle_profile(mission.vehicle).guided_mode
     return py_trees.composites.Sequence(
         "Go to the point",
         memory=False,  # the mode is checked every tick (someone may change it): set again when it is not GUIDED

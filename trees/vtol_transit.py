@@ -48,11 +48,10 @@ import py_trees
 from py_trees.common import OneShotPolicy
 
 from executive.behaviours import ForEachLeg, GoTo, GoToLocal, Land, ParameterIs, SetMode, TakeOff, VtolTransition
-from executive.mission.declaration import TreeDeclaration
+from executive.mission.declaration import TreeDeclaration, vehicle_profile
 from executive.mission.model import Mission, VtolOptions
 from executive.trees.parts import failsafe_guarded, mission_root, preflight, standard_guards
 from executive.world import frames
-from executive.world.vehicles import PROFILES
 
 #: How close to the hover point (3-D) counts as there: a multicopter stops on a point.
 HOVER_ACCEPTANCE_M = 2.0
@@ -80,7 +79,9 @@ def flight(mission: Mission, options: VtolOptions) -> py_trees.behaviour.Behavio
     """Take-off, hover point, wing-borne route (and return home), back to multicopter."""
     limits = mission.limits
     steps: list[py_trees.behaviour.Behaviour] = [
-        once("Take off", SetMode(PROFILES[mission.vehicle].guided_mode), TakeOff(options.takeoff_alt_m, confirm_timeout_s=limits.leg_timeout_s))
+        once(
+            "Take off", SetMode(vehicle_profile(mission.vehicle).guided_mode), TakeOff(options.takeoff_alt_m, confirm_timeout_s=limits.leg_timeout_s)
+        )
     ]
     if options.hover_enu is not None:
         point = frames.Enu(options.hover_enu.east_m, options.hover_enu.north_m, options.hover_enu.up_m)

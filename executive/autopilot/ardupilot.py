@@ -15,8 +15,11 @@ from executive.world.vehicles import AUTOPILOT_VEHICLES, VehicleProfile
 
 #: The RC channel that sets the mode by itself, per firmware (0 disables it): ArduRover MODE_CH (Rover/Parameters.cpp,
 #: default MODE_CHANNEL 8 in Rover/config.h), ArduPlane FLTMODE_CH (ArduPlane/Parameters.cpp, default 8). ArduSub has
-#: none: its modes come from joystick buttons. RC_Channels::flight_mode_channel() takes no channel for 0 or less.
-MODE_SWITCH_PARAMS = {"rover": "MODE_CH", "boat": "MODE_CH", "vtol": "FLTMODE_CH"}
+#: none: its modes come from joystick buttons. RC_Channels::flight_mode_channel() takes no channel for 0 or less. By the
+#: HEARTBEAT type the firmware reports (a plugin's kind declares its own), so a kind is known by what it is, not its name.
+_ROVER_TYPES = frozenset({mavlink.MAV_TYPE_GROUND_ROVER, mavlink.MAV_TYPE_SURFACE_BOAT})
+_PLANE_TYPES = frozenset({mavlink.MAV_TYPE_FIXED_WING, mavlink.MAV_TYPE_VTOL_QUADROTOR, mavlink.MAV_TYPE_VTOL_TILTROTOR})
+MODE_SWITCH_PARAMS = {**dict.fromkeys(_ROVER_TYPES, "MODE_CH"), **dict.fromkeys(_PLANE_TYPES, "FLTMODE_CH")}
 
 #: libraries/AC_Fence/AC_Fence.cpp: FENCE_TYPE bit 1 the circle centred on home (FENCE_RADIUS), bit 2 the uploaded inclusion and
 #: exclusion polygons and circles; FENCE_OPTIONS bit 1 (2) makes several inclusion shapes a union (AC_PolyFence_loader.cpp
@@ -42,8 +45,8 @@ class ArduPilotPort(MavlinkPort):
             transition_anywhere=False,
             takeoff_alt_amsl=False,
             first_item_seq=1,
-            mode_switch_param=MODE_SWITCH_PARAMS.get(profile.kind),
-            motion_params=MOTION_PARAMS if profile.kind in ("rover", "boat") else (),
+            mode_switch_param=MODE_SWITCH_PARAMS.get(profile.mav_type),
+            motion_params=MOTION_PARAMS if profile.mav_type in _ROVER_TYPES else (),
             # libraries/AP_BattMonitor/AP_BattMonitor_Params.cpp: MONITOR (0 none, 3 voltage only, 4 voltage and current...),
             # CAPACITY (mAh, 3300 by default), ARM_MAH and ARM_VOLT (what arming requires; 0: nothing)
             battery_params=("BATT_MONITOR", "BATT_CAPACITY", "BATT_ARM_MAH", "BATT_ARM_VOLT"),
@@ -53,7 +56,7 @@ class ArduPilotPort(MavlinkPort):
     def fence_settings(self, *, radius_m: float | None, inclusion_shapes: Sequence[str], held: dict[str, float]) -> FenceSettings:
         """ArduRover: FENCE_ENABLE 1, FENCE_TYPE's circle and polygon bits as the mission has them (other bits kept), FENCE_RADIUS
         the mission's max_distance_from_home_m, FENCE_ACTION 2 (Hold), FENCE_OPTIONS' union bit with several inclusion shapes."""
-        if self.profile.kind not in ("rover", "boat"):
+        if self.profile.mav_type not in _ROVER_TYPES:
             why = "ArduPlane's and ArduSub's fence actions (RTL, Land) are not a hold: set FENCE_* on the vehicle yourself"
             return FenceSettings({}, f"geofence.autopilot: enforce is built for ArduRover (FENCE_ACTION 2, Hold); {why}")
         fence_type = (int(held.get("FENCE_TYPE", 0)) & ~(FENCE_TYPE_CIRCLE | FENCE_TYPE_POLYGON)) | FENCE_TYPE_POLYGON

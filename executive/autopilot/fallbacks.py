@@ -13,6 +13,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from types import MappingProxyType
 
+from executive.mission.declaration import kind_spec
+from executive.world.vehicles import profile_for_mav_type
+
 #: Not a mode: disarm the vehicle (its motors stop).
 DISARM = "DISARM"
 
@@ -100,9 +103,17 @@ FALLBACKS: MappingProxyType[tuple[str, str], MappingProxyType[str, Fallback]] = 
 _NONE = Fallback(False, None, "")
 
 
+def _as_built_in(vehicle: str) -> str:
+    """The built-in kind whose firmware a plugin's kind reports by its HEARTBEAT type (a fixed wing: ArduPlane's, the vtol's)."""
+    if (spec := kind_spec(vehicle)) is None:
+        return vehicle
+    built_in = profile_for_mav_type(spec.profile.mav_type)
+    return built_in.kind if built_in is not None else vehicle
+
+
 def fallback(autopilot: str, vehicle: str, reaction: str) -> Fallback:
-    """What ``reaction`` needs and what follows it on this firmware and vehicle kind."""
-    return FALLBACKS.get((autopilot, vehicle), MappingProxyType({})).get(reaction, _NONE)
+    """What ``reaction`` needs and what follows it on this firmware and vehicle kind (a plugin's: as its firmware's vehicle type)."""
+    return FALLBACKS.get((autopilot, _as_built_in(vehicle)), MappingProxyType({})).get(reaction, _NONE)
 
 
 def chain(autopilot: str, vehicle: str, reaction: str) -> Iterator[str]:

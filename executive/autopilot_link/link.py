@@ -30,6 +30,7 @@ from executive.io.mavlink.link import Link, PymavlinkLink
 from executive.io.mavlink.mission_protocol import MissionTransfer
 from executive.io.mavlink.reader import MavlinkReader
 from executive.io.mavlink.streams import StreamRequester, rates_for
+from executive.mission.declaration import vehicle_profile
 from executive.mission.events import Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
@@ -37,7 +38,6 @@ from executive.operator.intervention import rc_takeover
 from executive.world import blackboard
 from executive.world.clock import Clock
 from executive.world.dialect import AUTOPILOT_COMPONENT, MAVLinkMessage, mavlink
-from executive.world.vehicles import PROFILES
 
 log = logging.getLogger("executive.runtime")  # the make-safe's lines, as the log and the journal (event kind "runtime") have them
 
@@ -97,7 +97,7 @@ class AutopilotLink:
         forced: AutopilotName | None = None,
         period_s: float = 0.1,
     ) -> None:
-        profile = PROFILES[mission.vehicle]
+        profile = vehicle_profile(mission.vehicle)
         #: What is sent, watched: the make-safe acts only on a vehicle this run has commanded.
         self.watch = CommandWatch(transport)
         self.transport: Link = self.watch
@@ -359,7 +359,7 @@ class AutopilotLink:
         if takeover is not None:
             return takeover
         mode = self._bb.get("/vehicle/mode")
-        if mode in PROFILES[self.mission.vehicle].pilot_modes and mode not in (found_in, asked, own):
+        if mode in vehicle_profile(self.mission.vehicle).pilot_modes and mode not in (found_in, asked, own):
             return f"the vehicle is in {mode}, set by the RC or a ground station while the executive made it safe: a person drives it"
         return None
 
@@ -377,7 +377,7 @@ class AutopilotLink:
         if takeover is not None:
             return takeover
         mode = self._bb.get("/vehicle/mode")
-        if mode not in PROFILES[self.mission.vehicle].pilot_modes or mode == ours:
+        if mode not in vehicle_profile(self.mission.vehicle).pilot_modes or mode == ours:
             return None
         set_by = self._bb.get("/vehicle/mode_set_by")
         if set_by in (None, "autopilot"):  # as the failsafes judge it (behaviours/failsafe.py): nobody's choice

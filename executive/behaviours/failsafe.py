@@ -49,11 +49,11 @@ from executive.behaviours.position_guards import InsideGeofence
 from executive.behaviours.rc_guards import RcAutoMode, RcFresh, RcNotLost, RcNotTakingOver
 from executive.behaviours.returning import ReturningDrive, why_not_rtl
 from executive.behaviours.zone_guards import OutsideKeepOut
-from executive.mission.failsafes import JUDGED_AFTER_PERSON, REACTION_MODES, FailsafeCondition, FailsafePolicy
+from executive.mission.declaration import reaction_modes, vehicle_profile
+from executive.mission.failsafes import JUDGED_AFTER_PERSON, FailsafeCondition, FailsafePolicy
 from executive.mission.port import MissionPort
 from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
 from executive.sensing.vtol_flight import flies_as_plane
-from executive.world.vehicles import PROFILES
 
 log = logging.getLogger(__name__)
 
@@ -372,7 +372,7 @@ class Failsafe(TimedBehaviour):
         (:mod:`executive.sensing.vtol_flight`). A hold or loiter is the plane's only in FW: mid-transition,
         QLOITER stops it where it is.
         """
-        modes = REACTION_MODES[what][self.vehicle]
+        modes = reaction_modes(self.vehicle, what)
         state = self.get("/vehicle/vtol_state")
         if what == "rtl" and self.vehicle == "vtol":
             return modes[1] if flies_as_plane(state, self.get("/vehicle/ground_speed_m_s")) else modes[0]
@@ -437,7 +437,7 @@ class Failsafe(TimedBehaviour):
         """
         mode = self.get("/vehicle/mode")
         set_by = self.get("/vehicle/mode_set_by")  # None: the boot mode, nobody's choice
-        if mode in PROFILES[self.vehicle].pilot_modes and set_by not in (None, "autopilot") and mode != self._mode_in_force:
+        if mode in vehicle_profile(self.vehicle).pilot_modes and set_by not in (None, "autopilot") and mode != self._mode_in_force:
             return f"the vehicle is in {mode}: a person drives it"
         return None
 

@@ -28,10 +28,10 @@ from py_trees.common import Status
 
 from executive.autopilot import Target
 from executive.autopilot.asking import Announce, Asker, Host
+from executive.mission.declaration import vehicle_profile
 from executive.mission.return_path import ReturnPath, ReturnPlanner
 from executive.world import geo
 from executive.world.state import GlobalPosition, HomePosition
-from executive.world.vehicles import PROFILES
 
 log = logging.getLogger("executive.behaviours.failsafe")  # the journal's event kind: "failsafe"
 
@@ -100,7 +100,7 @@ class ReturningDrive:
 
     @property
     def guided_mode(self) -> str:
-        return PROFILES[self.vehicle].guided_mode
+        return vehicle_profile(self.vehicle).guided_mode
 
     @property
     def tickets(self) -> list[Any]:

@@ -85,7 +85,7 @@ def describe_tree(name: str, d: TreeDeclaration) -> str:
     elif d.auto_drive:
         lines.append(f"    drive: auto: {', '.join(f'{kind} ({firmware})' for kind, firmware in sorted(d.auto_drive.items()))}")
     if d.section is not None:
-        lines.append(f"    reads: {d.section}:")
+        lines.append(f"    reads: {d.section}:{' (its own: ' + ', '.join(d.options.model_fields) + ')' if d.options is not None else ''}")
     if d.rc_switches is not None or d.rc_defaults:
         defaults = ", ".join(f"rc.{key}: {value}" for key, value in d.rc_defaults.items())
         lines.append(f"    rc: {'its own switches' if d.rc_switches is not None else 'the take-over switch'}{f'; {defaults}' if defaults else ''}")
@@ -94,7 +94,9 @@ def describe_tree(name: str, d: TreeDeclaration) -> str:
     said = [("its route may start empty", d.empty_route), ("takes samples", d.samples), ("legs timed", d.timed_legs)]
     if any(on for _, on in said):
         lines.append(f"    {'; '.join(what for what, on in said if on)}")
-    lines += [f"    vehicle kind {k.kind}: {', '.join(sorted(k.autopilots))}, safe mode {k.profile.safe_mode}" for k in d.vehicle_kinds]
+    for k in d.vehicle_kinds:
+        simulated = f", simulated as a {k.simulator}" if k.simulator is not None else ", no simulated vehicle (--mavlink only)"
+        lines.append(f"    vehicle kind {k.kind}: {', '.join(sorted(k.autopilots))}, safe mode {k.profile.safe_mode}{simulated}")
     return "\n".join(lines) + "\n"
 
 

@@ -14,10 +14,11 @@ from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput, NoVehicle, number
 from executive.cli.common import faults_or_report, mavlink_id, signing_key_arg
 from executive.cli.examples import fault_file
 from executive.io.mavlink.endpoint import unreachable
+from executive.mission.declaration import plugin_kinds
 from executive.operator.logs import setup_logging
 from executive.sim.clients import ClientAddressError
 from executive.sim.firmware import DEFAULT_HOME, Home
-from executive.sim.registry import AUTOPILOTS, FIRMWARES, firmwares_for
+from executive.sim.registry import AUTOPILOTS, FIRMWARES, firmwares_for, simulated_model
 from executive.sim.server import SimServer
 from executive.world.clock import ScaledClock
 
@@ -45,7 +46,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     # let "--home -35.36,149.16" through: argparse would take a negative latitude for an option
     parser._negative_number_matcher = re.compile(r"^-\.?\d[\d.,]*$")
-    parser.add_argument("--vehicle", choices=sorted(AUTOPILOTS), default="rover", help="vehicle kind (default: %(default)s)")
+    kinds = sorted(AUTOPILOTS) + sorted(kind for kind, spec in plugin_kinds().items() if spec.simulator is not None)  # a plugin's: on what it rides
+    parser.add_argument("--vehicle", choices=kinds, default="rover", help="vehicle kind (default: %(default)s)")
     firmware = "the simulated autopilot firmware (default: %(default)s; px4 simulates the vtol and the rover)"
     parser.add_argument("--autopilot", choices=FIRMWARES, default="ardupilot", help=firmware)
     where = "where to listen: tcpin:HOST:PORT or udpin:HOST:PORT (default: %(default)s, as SITL)"
@@ -70,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     """Serve the simulated vehicle in the foreground; each MAVLink client that comes and goes is logged."""
     setup_logging()
     logging.getLogger("executive.sim.clients").setLevel(logging.INFO)
-    if args.vehicle not in firmwares_for(args.autopilot):
+    if simulated_model(args.vehicle) not in firmwares_for(args.autopilot):
         known = ", ".join(firmwares_for(args.autopilot))
         raise BadInput(f"no simulated {args.autopilot} {args.vehicle} (known: {known})")
     if args.can is not None and args.vehicle != "bunker":

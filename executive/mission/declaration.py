@@ -19,6 +19,8 @@ from executive.mission.failsafes import NO_REACTION, REACTION_MODES, VEHICLE_FAI
 from executive.world.vehicles import AUTOPILOT_VEHICLES, PROFILES, VehicleKind
 
 if TYPE_CHECKING:
+    from pydantic import BaseModel
+
     from executive.world.vehicles import VehicleProfile
 
 #: The vehicle kinds of the executive's own (:data:`executive.world.vehicles.PROFILES`).
@@ -47,6 +49,8 @@ class TreeDeclaration:
     auto_refused: str | None = None
     #: The mission's options section the tree reads (a field of the mission, e.g. ``sampling``); None: none.
     section: str | None = None
+    #: A section of the plugin's own: its pydantic model (strict, as ours: ``extra="forbid"``), the mission's field ``section``.
+    options: type[BaseModel] | None = None
     #: RC channels the tree reads from the autopilot (``rc.source: mavlink``), each with what it is; None: the take-over switch.
     rc_switches: Callable[[Any], dict[int, str]] | None = None  # takes the Mission (whose module imports this one)
     #: The ``rc:`` settings the tree takes where the file says nothing (``rc.source: mavlink`` only), e.g. ``{"arm_channel": 5}``.
@@ -65,10 +69,18 @@ class TreeDeclaration:
     vehicle_kinds: tuple[VehicleKindSpec, ...] = ()
 
     def __post_init__(self) -> None:
+        if self.options is not None and self.section is None:
+            raise ValueError("options (the model of an options section of the tree's own) needs section: the mission's field it is")
         for name in ("auto_drive", "rc_defaults", "failsafes", "refused_reactions"):
             object.__setattr__(self, name, _frozen(getattr(self, name)))
         if self.vehicles is not None:
             object.__setattr__(self, "vehicles", frozenset(self.vehicles))
+
+    def options_of(self, mission: Any) -> Any:
+        """The tree's own options section of ``mission`` as the file gives it, else its defaults (the ``options`` model's)."""
+        assert self.section is not None and self.options is not None, "the tree declares no options section of its own"
+        given = getattr(mission, self.section, None)
+        return given if given is not None else self.options()
 
     def to_json(self) -> dict[str, Any]:
         """The declaration as ``executive behaviours --trees --json`` lists it."""
@@ -87,6 +99,7 @@ class TreeDeclaration:
             "samples": self.samples,
             "timed_legs": self.timed_legs,
             "vehicle_kinds": [k.kind for k in self.vehicle_kinds],
+            **({"options": sorted(self.options.model_fields)} if self.options is not None else {}),
         }
 
 
@@ -103,10 +116,15 @@ class VehicleKindSpec:
     autopilots: frozenset[str]
     #: The default failsafe of every condition: condition -> (reaction, recovery).
     failsafes: Mapping[str, tuple[str, str]]
+    #: The energy rule's seeds where ``energy:`` gives none: (Wh per km, Wh per minute) (:mod:`executive.sensing.consumption`).
+    energy_seeds: tuple[float, float]
     #: reaction -> the mode it commands (flying as a plane: the second); a reaction left out is not for this kind.
     reactions: Mapping[str, tuple[str, str]] = field(default_factory=dict)
     #: Why a reaction left out is not for this kind (the loader's error), e.g. ``{"surface": "a glider cannot surface"}``.
     no_reaction: Mapping[str, str] = field(default_factory=dict)
+    #: The built-in simulated vehicle it rides in ``executive run`` without ``--mavlink`` (a name of ``simulator.model``,
+    #: e.g. ``vtol``: the simulated ArduPlane), given this kind's profile; None: none (it runs with ``--mavlink`` only).
+    simulator: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("failsafes", "reactions", "no_reaction"):
@@ -187,6 +205,12 @@ def kind_failsafes(kind: str) -> dict[str, tuple[str, str]]:
         return dict(VEHICLE_FAILSAFES[kind])
     spec = kind_spec(kind)
     return dict(spec.failsafes) if spec is not None else {}
+
+
+def reaction_modes(kind: str, reaction: str) -> tuple[str, str]:
+    """The modes ``reaction`` commands a vehicle of ``kind``: (in general, flying as a plane); KeyError: none for this kind."""
+    spec = kind_spec(kind)
+    return REACTION_MODES[reaction][kind] if spec is None else spec.reactions[reaction]
 
 
 def reaction_refused(kind: str, reaction: str) -> str | None:

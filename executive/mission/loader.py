@@ -13,14 +13,14 @@ import math
 import os
 import re
 from collections.abc import Callable, Iterator
-from typing import Any, Literal, NoReturn, TypeVar, get_args, get_origin
+from typing import Any, Literal, NoReturn, TypeVar, cast, get_args, get_origin
 
 import yaml
 from pydantic import BaseModel, ValidationError, WithJsonSchema
 from pydantic.fields import FieldInfo
 
 from executive.mission.errors import FieldError, MissionError, Path, format_path
-from executive.mission.model import Mission
+from executive.mission.model import Mission, mission_model
 from executive.mission.rules import cross_field_errors
 
 MAX_BYTES = 1 << 20  # a mission file is small; refuse anything bigger before parsing
@@ -189,6 +189,8 @@ def load_model_text(text: str, filename: str, model: type[M], checks: Checks[M] 
     """Validate YAML ``text`` as ``model`` (then ``checks``); ``filename`` is only used to locate errors."""
     _check_size(filename, len(text.encode("utf-8", "surrogatepass")), what)
     data, loader = _parse(text, filename, what)
+    if model is Mission:  # with the options section its plugin tree declares
+        model = cast("type[M]", mission_model(data))
 
     def error(path: Path, message: str, node: yaml.Node | None = None) -> FieldError:
         """Located at ``node``, else at the value of ``path`` or of its nearest enclosing value in the file."""

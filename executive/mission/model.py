@@ -11,9 +11,10 @@ The ``failsafe:`` section's defaults and reactions are tables of their own: :mod
 from __future__ import annotations
 
 import re
+from functools import cache
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, WithJsonSchema, create_model, model_validator
 
 from executive import registry
 from executive.mission.declaration import BUILT_IN_KINDS, declared, kind_spec, plugin_kinds
@@ -483,3 +484,37 @@ class Mission(BaseModel):
             return data
         defaults = declared(data["tree"]).rc_defaults
         return {**data, "rc": {**defaults, **rc}} if any(key not in rc for key in defaults) else data
+
+
+def _plugin_sections(trees: list[str]) -> dict[str, tuple[str, type[BaseModel]]]:
+    """The options sections of their own the named trees declare: section -> (tree, its model); a mission's own field is not one."""
+    found: dict[str, tuple[str, type[BaseModel]]] = {}
+    for name in trees:
+        declaration = declared(name)
+        if declaration.section is not None and declaration.options is not None and declaration.section not in Mission.model_fields:
+            found.setdefault(declaration.section, (name, declaration.options))
+    return found
+
+
+@cache
+def _with_sections(base: type[Mission], sections: tuple[tuple[str, str, type[BaseModel]], ...]) -> type[Mission]:
+    fields: dict[str, Any] = {
+        section: (options | None, Field(None, description=f"{tree} options (a plugin's)")) for section, tree, options in sections
+    }
+    extended: type[Mission] = create_model("Mission", __base__=base, __module__=__name__, __doc__=base.__doc__, **fields)
+    return extended
+
+
+def mission_model(data: object = None, base: type[Mission] = Mission) -> type[Mission]:
+    """The model a mission file is validated as: ``base``, with the options section its plugin tree declares as its own.
+
+    None: with every installed plugin tree's section (the JSON schema's).
+    """
+    if data is None:
+        trees = registry.names(registry.TREES)
+    elif isinstance(data, dict) and isinstance(data.get("tree"), str):
+        trees = [data["tree"]]
+    else:
+        return base
+    sections = _plugin_sections(trees)
+    return _with_sections(base, tuple((s, tree, model) for s, (tree, model) in sorted(sections.items()))) if sections else base

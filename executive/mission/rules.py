@@ -126,6 +126,10 @@ def cross_field_errors(mission: Mission) -> list[tuple[Path, str]]:
     kinds = declaration.vehicles
     if kinds is not None and mission.vehicle not in kinds:
         errors.append((("tree",), f"tree {mission.tree} drives {', '.join(sorted(kinds))}, not a {mission.vehicle}"))
+    if declaration.options is not None and declaration.section in Mission.model_fields:  # its own section cannot be one of ours
+        errors.append(
+            (("tree",), f"tree {mission.tree} declares an options section of its own named {declaration.section}, a field of every mission")
+        )
     for other in OPTION_SECTIONS if name is not None else ():  # a composed tree's nodes read what they need
         if other != declaration.section and getattr(mission, other) is not None:
             readers = " or ".join(trees_with(lambda d, other=other: d.section == other))

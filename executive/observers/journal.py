@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 from executive.io.storage import Storage
 from executive.mission.events import RouteChanged, SampleTaken, Stage, Transition
 from executive.mission.lifecycle import MissionState, MissionStatus
-from executive.mission.model import Home, Mission, Waypoint
+from executive.mission.model import Home, Mission, Waypoint, mission_model
 from executive.mission.reload import REPLACED
 from executive.mission.resume import ResumePoint
 from executive.mission.route import Route
@@ -166,7 +166,7 @@ class Journal:
             "UNION ALL SELECT t, leg, 1 AS edit, rowid AS n FROM routes WHERE run = ?) ORDER BY t DESC, edit ASC, n DESC LIMIT 1",
             (run, run),
         ).fetchone()
-        replacement = None if hashed == wanted else Mission.model_validate_json(mission_json)
+        replacement = None if hashed == wanted else mission_model(json.loads(mission_json)).model_validate_json(mission_json)
         return ResumePoint(run, latest[0] if latest else 0, self.samples(run), self.route(run), replacement)
 
     def route(self, run: int) -> Route | None:

@@ -2,6 +2,19 @@
 lifecycle (:mod:`executive.operator.requests`), and the ground-station endpoint that takes MAVLink commands to them and
 reports the mission back (:mod:`executive.operator.ground_station`)."""
 
-from executive.operator.requests import REQUESTS, VEHICLE_REQUESTS, Operator, Reply
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from executive.operator.requests import REQUESTS, VEHICLE_REQUESTS, Operator, Reply
 
 __all__ = ["REQUESTS", "VEHICLE_REQUESTS", "Operator", "Reply"]
+
+
+def __getattr__(name: str) -> object:
+    # imported on first use: ``executive ctl`` needs only this package's status line, not the requests' whole mission (~0.8 s of CPU)
+    if name in __all__:
+        return getattr(importlib.import_module("executive.operator.requests"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -18,6 +18,7 @@ from executive.autopilot import AutopilotName
 from executive.autopilot_link import AutopilotLink
 from executive.io.mavlink.heartbeat import Heartbeat
 from executive.io.mavlink.link import Link
+from executive.mission.declaration import vehicle_profile
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.model import Mission
 from executive.mission.rules import rc_switch_channels
@@ -34,7 +35,6 @@ from executive.sensing.rc import RcReader
 from executive.tree.waiting import TreeWatch
 from executive.world import blackboard
 from executive.world.clock import Clock
-from executive.world.vehicles import PROFILES
 
 if TYPE_CHECKING:
     import can
@@ -128,7 +128,7 @@ def build_runtime(
     for plug in plugs:
         plug(wiring)
     # a mode change we did not ask for, mid-mission, pauses the mission (a person has the vehicle): judged once the RC is read
-    intervention = InterventionWatch(clock, ap.autopilot, state, PROFILES[mission.vehicle], mission.rc)
+    intervention = InterventionWatch(clock, ap.autopilot, state, vehicle_profile(mission.vehicle), mission.rc)
     wiring.readers += [HeadingFilter(clock), RcReader(mission.rc, clock, rc_switch_channels(mission)), persons, intervention]
     wiring.readers.append(EnergyWatch(clock, state, lambda: ap.autopilot.backend.name))
     return Runtime(

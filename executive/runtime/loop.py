@@ -33,6 +33,7 @@ from executive.runtime.pacing import TickPacer
 from executive.runtime.services import PacedService, RunObserver, Service
 from executive.tree import select as mission_tree
 from executive.tree.crash_site import CrashSite
+from executive.tree.ticking import BehaviourTree
 from executive.world import blackboard
 from executive.world.clock import Clock, TickClock
 
@@ -413,7 +414,7 @@ class Runtime:
             log.error("%s", exc)
             self.sampler = UnavailableSampler(self.clock, mission.sampling or SamplingOptions(), str(exc))
         self._run_writers = [self.sampler] if self.sampler is not None else []
-        self.tree = py_trees.trees.BehaviourTree(root)
+        self.tree = BehaviourTree(root)
         self._crash_site = CrashSite(root)  # names the node an exception comes out of, below
         self.reach.close()  # the tree waits for the distance rule
         resumed_from, self._resume = (self._resume.run if self._resume else None), None

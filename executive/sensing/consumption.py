@@ -56,6 +56,7 @@ class ConsumptionModel:
         self.windows = 0
         self.rejected = 0
         self._rejected_run = 0
+        self._needs: dict[tuple[float, float, float], tuple[float, float]] = {}  # asked since the last window (a tick asks again)
 
     @property
     def wh_per_m(self) -> float:
@@ -71,14 +72,23 @@ class ConsumptionModel:
 
     def need(self, metres: float, seconds: float, vertical_m: float = 0.0) -> tuple[float, float]:
         """The energy ``metres`` moved, ``seconds`` held and ``vertical_m`` dived or climbed take, Wh, and its 1-sigma uncertainty."""
+        key = (metres, seconds, vertical_m)
+        known = self._needs.get(key)
+        if known is not None:
+            return known
         h = np.array([[metres, seconds, vertical_m]])
         mean = (h @ self._kf.x).item()
-        return max(0.0, mean), math.sqrt(max(0.0, (h @ self._kf.P @ h.T).item()))
+        need = max(0.0, mean), math.sqrt(max(0.0, (h @ self._kf.P @ h.T).item()))
+        if len(self._needs) >= 16:
+            self._needs.clear()
+        self._needs[key] = need
+        return need
 
     def update(self, drawn_wh: float, metres: float, seconds: float, noise_wh: float, vertical_m: float = 0.0) -> bool:
         """One window: ``drawn_wh`` over ``metres`` moved, ``seconds`` held and ``vertical_m`` dived or climbed, measured to
         ``noise_wh`` (1 sigma); whether it was taken."""
         kf = self._kf
+        self._needs.clear()
         kf.predict()
         h = np.array([[metres, seconds, vertical_m]])
         r = np.array([[noise_wh**2]])

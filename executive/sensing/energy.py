@@ -17,6 +17,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from executive.mission.declaration import kind_spec
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import EnergyConfig, Mission, Waypoint
 from executive.mission.return_path import DRIVEN_KINDS, ReturnPlanner
@@ -213,7 +214,8 @@ def planned(mission: Mission) -> EnergyEstimate | str | None:
 
 def seeded(mission: Mission, config: EnergyConfig) -> ConsumptionModel:
     """The consumption model at the mission's seeds, else its kind's."""
-    seed_km, seed_min = SEEDS[mission.vehicle]
+    spec = kind_spec(mission.vehicle)
+    seed_km, seed_min = SEEDS[mission.vehicle] if spec is None else spec.energy_seeds
     return ConsumptionModel(config.wh_per_km or seed_km, config.wh_per_min or seed_min, VERTICAL_SEEDS.get(mission.vehicle, 0.0))
 
 
@@ -260,8 +262,15 @@ class EnergyWatch:
         self._out = blackboard.writer("energy watch", blackboard.keys_under("/energy/"))
         self._mission: Mission | None = None
         self._rest_v: float | None = None  # the pack's voltage before arming (kept from mission to mission: the same pack)
+        self._rule: tuple[Mission, EnergyConfig | None, EnergyConfig | None] | None = None  # (mission, its energy block, its rule)
         self._begin(None)
         load_filterpy()
+
+    def _rule_of(self, mission: Mission) -> EnergyConfig | None:
+        """The mission's energy rule, asked again only when its ``energy:`` block is another (its defaults are a new model each time)."""
+        if self._rule is None or self._rule[0] is not mission or self._rule[1] is not mission.energy:
+            self._rule = (mission, mission.energy, mission.energy_rule())
+        return self._rule[2]
 
     def _begin(self, mission: Mission | None) -> None:
         """A mission's own count: its seeds, its start, its windows (a mission uploaded in ``--wait`` starts afresh)."""
@@ -284,7 +293,7 @@ class EnergyWatch:
 
     def service(self) -> None:
         mission = self._state.mission
-        config = mission.energy_rule() if mission is not None else None
+        config = self._rule_of(mission) if mission is not None else None
         if mission is None or config is None:
             return
         if mission is not self._mission:

@@ -151,6 +151,16 @@ class _LogpdfOnFirstUse(types.ModuleType):
         return importlib.import_module("filterpy.stats").logpdf(*args, **kwargs)
 
 
+def _module_from_file(name: str, path: Path) -> types.ModuleType:
+    """The module ``name`` run from ``path``, not entered in ``sys.modules``."""
+    spec = importlib.util.spec_from_file_location(name, path)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"no module named {name!r}", name=name)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def _load_kalman_filter_module() -> None:
     """Load filterpy's ``kalman_filter`` module (and ``filterpy.common``, which it uses) without the rest of filterpy.
 
@@ -158,26 +168,27 @@ def _load_kalman_filter_module() -> None:
     Carlo...) and, through ``filterpy.stats``, scipy.stats: 1.5 s of CPU on a desktop core, several
     seconds on a companion computer, at every start, for one class that needs numpy. The module
     takes only ``logpdf`` from ``filterpy.stats`` (for ``KalmanFilter.log_likelihood``, which the
-    heading filter never reads). So it loads from its file under a bare ``filterpy`` package (the
-    real folder, without its ``__init__``) and a ``filterpy.stats`` whose ``logpdf`` imports the real
-    one on first use. Both stand-ins leave ``sys.modules`` afterwards: a later ``import filterpy``
-    (a user's plugin) runs the real package, which reuses this very ``kalman_filter`` module.
+    heading filter never reads) and ``pretty_str`` and ``reshape_z`` from ``filterpy.common``, whose
+    ``__init__`` also imports its discretization helpers and so scipy.linalg (with numpy's f2py:
+    ~0.2 s of CPU). So it loads from its file under a bare ``filterpy`` package (the real folder,
+    without its ``__init__``), a ``filterpy.stats`` whose ``logpdf`` imports the real one on first
+    use, and ``filterpy.common``'s ``helpers`` file (numpy only) as ``filterpy.common``. The stand-ins
+    leave ``sys.modules`` afterwards: a later ``import filterpy`` (a user's plugin) runs the real
+    package, which reuses this very ``kalman_filter`` module.
     """
     package_spec = importlib.util.find_spec("filterpy")  # a top-level name: found, not imported
     if package_spec is None or not package_spec.submodule_search_locations:
         raise ImportError("no module named 'filterpy'", name="filterpy")
     folder = Path(next(iter(package_spec.submodule_search_locations)))
-    spec = importlib.util.spec_from_file_location(KALMAN_FILTER_MODULE, folder / "kalman" / "kalman_filter.py")
-    if spec is None or spec.loader is None:
-        raise ImportError(f"no module named {KALMAN_FILTER_MODULE!r}", name=KALMAN_FILTER_MODULE)
     bare = types.ModuleType("filterpy")
     bare.__path__ = [str(folder)]
     stand_ins = {"filterpy": bare, "filterpy.stats": _LogpdfOnFirstUse("filterpy.stats")}
+    if "filterpy.common" not in sys.modules:
+        stand_ins["filterpy.common"] = _module_from_file("filterpy.common.helpers", folder / "common" / "helpers.py")
     stand_ins = {name: module for name, module in stand_ins.items() if name not in sys.modules}
     sys.modules.update(stand_ins)
     try:
-        kalman_filter = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(kalman_filter)
+        kalman_filter = _module_from_file(KALMAN_FILTER_MODULE, folder / "kalman" / "kalman_filter.py")
     finally:
         for name, stand_in in stand_ins.items():
             if sys.modules.get(name) is stand_in:

@@ -26,6 +26,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from executive.io.mavlink.modes import PX4_MODES
+from executive.mission.declaration import kind_spec, vehicle_profile
 from executive.mission.errors import MissionError, Path
 from executive.mission.loader import load_model
 from executive.sim.firmware import FirmwareSim
@@ -183,8 +184,8 @@ def _mode_errors(plan: FaultPlan, vehicle: str | None, autopilot: str = "ardupil
     """Modes the vehicle's firmware lacks (any vehicle's firmware, when the vehicle is not known)."""
     if autopilot == "px4":
         known, which = list(PX4_MODES), "PX4 mode"
-    elif vehicle in PROFILES:
-        known, which = [m for m in PROFILES[vehicle].modes if m != "INITIALISING"], f"{vehicle} mode"
+    elif vehicle is not None and (vehicle in PROFILES or kind_spec(vehicle) is not None):
+        known, which = [m for m in vehicle_profile(vehicle).modes if m != "INITIALISING"], f"{vehicle} mode"
     else:
         known, which = sorted({m for p in PROFILES.values() for m in p.modes} - {"INITIALISING"}), "mode"
     errors: list[tuple[Path, str]] = []

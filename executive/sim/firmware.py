@@ -94,6 +94,8 @@ class FirmwareSim(ABC):
     BATTERY_REPORTS_ENERGY: ClassVar[bool] = True
     #: The parameter holding the pack's capacity in mAh (set in ``params``, it sizes the simulated pack too).
     BATTERY_CAPACITY_PARAM: ClassVar[str] = ""
+    #: The pack the simulated vehicle carries when its profile's kind has none of its own (a plugin's kind riding it).
+    BATTERY_OF: ClassVar[str] = "rover"
 
     def __init__(
         self,
@@ -123,7 +125,7 @@ class FirmwareSim(ABC):
         self.rc_channels = [1500] * 16
         self.rc_channels[4] = self.rc_channels[5] = 1000  # ch5/ch6 switches low
         self.ekf_position_lost = False  # set by fault injection: the EKF has no horizontal position
-        spec = SPECS.get(profile.kind, SPECS["rover"])
+        spec = SPECS.get(profile.kind, SPECS[self.BATTERY_OF])
         if params and self.BATTERY_CAPACITY_PARAM in params:  # a pack of another size fitted (and the autopilot told so)
             spec = replace(spec, capacity_mah=float(params[self.BATTERY_CAPACITY_PARAM]))
         self.battery = SimBattery(spec)

@@ -6,6 +6,7 @@ from typing import Any
 
 from executive.mission.model import Mission, SimulatorOptions
 from executive.sim.firmware import DEFAULT_HOME, Home
+from executive.sim.registry import simulated_model
 
 
 def simulated_home(mission: Mission) -> Home:
@@ -28,7 +29,7 @@ def where_it_starts(mission: Mission) -> str:
 def firmware_options(mission: Mission) -> dict[str, Any]:
     """The simulated firmware's options a mission sets: ``q_guided_mode`` (ArduPlane), the seabed and rangefinder (ArduSub), parameters."""
     options = mission.simulator or SimulatorOptions()
-    model = options.model or mission.vehicle
+    model = simulated_model(options.model or mission.vehicle)
     found: dict[str, Any] = {}
     if model == "vtol":
         found = {"q_guided_mode": options.q_guided_mode}

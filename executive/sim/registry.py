@@ -16,8 +16,8 @@ from importlib.metadata import entry_points
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
+from executive.mission.declaration import kind_spec, vehicle_profile
 from executive.sim.firmware import DEFAULT_HOME, Home
-from executive.world.vehicles import PROFILES
 
 if TYPE_CHECKING:
     from executive.sim.firmware import FirmwareSim
@@ -111,9 +111,20 @@ def firmwares_for(autopilot: str) -> Mapping[str, type[FirmwareSim]]:
     return AUTOPILOTS if autopilot == "ardupilot" else Simulators(autopilot)
 
 
+def simulated_model(kind: str) -> str:
+    """The simulated vehicle a vehicle kind rides: itself, or the one a plugin's kind names (:attr:`VehicleKindSpec.simulator`)."""
+    spec = kind_spec(kind)
+    return spec.simulator if spec is not None and spec.simulator is not None else kind
+
+
 def make_autopilot(kind: str, clock: Clock, home: Home = DEFAULT_HOME, *, autopilot: str = "ardupilot", **options: float) -> FirmwareSim:
-    """The simulated autopilot for a vehicle kind; ``options`` go to its class (:class:`~.firmware.FirmwareSim` and the firmware's own)."""
-    firmwares = firmwares_for(autopilot)
-    if kind not in firmwares:
+    """The simulated autopilot for a vehicle kind; ``options`` go to its class (:class:`~.firmware.FirmwareSim` and the firmware's own).
+
+    A plugin's kind rides the simulated vehicle it names, which speaks with the kind's own profile (its MAV_TYPE, modes).
+    """
+    firmwares, model = firmwares_for(autopilot), simulated_model(kind)
+    if model not in firmwares:
         raise ValueError(f"no simulated vehicle of kind {kind!r} on {autopilot} (known: {', '.join(firmwares)})")
-    return firmwares[kind](PROFILES[PROFILE_OF.get(kind, kind)], clock, home, **options)
+    spec = kind_spec(kind)
+    profile = spec.profile if spec is not None else vehicle_profile(PROFILE_OF.get(kind, kind))
+    return firmwares[model](profile, clock, home, **options)

@@ -11,15 +11,16 @@ from py_trees.common import Status
 from executive.autopilot.selection import Autopilot
 from executive.io.mavlink.commander import Commander, command_name
 from executive.io.mavlink.mission_protocol import MissionTransfer
+from executive.mission.declaration import vehicle_profile
 from executive.mission.lifecycle import MissionState
 from executive.mission.model import Mission
 from executive.mission.port import MissionPort
 from executive.testing.links import FakeLink, ack
+from executive.tree.ticking import BehaviourTree
 from executive.world import blackboard
 from executive.world.clock import ManualClock
 from executive.world.dialect import MAVLinkMessage, mavlink
 from executive.world.state import Battery, EkfFlags, EkfStatus
-from executive.world.vehicles import PROFILES
 
 #: Where a tick test's clock starts (any positive time: the executive never assumes 0).
 START_S = 100.0
@@ -117,7 +118,7 @@ class Harness:
         self.readers: list[Callable[[], object]] = []
         #: Called each tick after the tree, before the commands are sent: what the runtime services then (a RouteKeeper's ``service``).
         self.writers: list[Callable[[], object]] = []
-        self.tree = py_trees.trees.BehaviourTree(root)
+        self.tree = BehaviourTree(root)
         self.tree.setup(clock=clock, autopilot=self.autopilot, mission_state=MissionPort(mission_state), **setup)
 
     @classmethod
@@ -150,7 +151,7 @@ class Harness:
         state.upload(mission)
         if start:
             state.start()
-        commander = Commander(link, clock, PROFILES[mission.vehicle])
+        commander = Commander(link, clock, vehicle_profile(mission.vehicle))
         missions = MissionTransfer(link, clock) if transfer else None
         harness = cls(root if root is not None else mission_tree.build(mission), clock, link, commander, state, transfer=missions, **setup)
         param = harness.autopilot.capabilities.mode_switch_param

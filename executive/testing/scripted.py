@@ -9,13 +9,13 @@ from py_trees.common import Status
 
 from executive.io.mavlink.commander import Commander
 from executive.io.mavlink.modes import ArduPilotModes, ModeTable
+from executive.mission.declaration import vehicle_profile
 from executive.testing.harness import BATTERY_FULL, ENERGY_UNJUDGED, Harness, Vehicle, mode_switch_channel
 from executive.testing.links import AUTOPILOT
 from executive.world import blackboard
 from executive.world.dialect import EXECUTIVE_COMPONENT, MAVLinkMessage, mavlink
 from executive.world.geo import destination, distance_bearing
 from executive.world.state import GlobalPosition
-from executive.world.vehicles import PROFILES
 
 _M = mavlink
 
@@ -66,7 +66,7 @@ class ScriptedAutopilot:
         from executive.autopilot.ardupilot import MODE_SWITCH_PARAMS
 
         profile = self.commander.profile if self.commander is not None else getattr(self, "profile", None)
-        param = MODE_SWITCH_PARAMS.get(profile.kind) if profile is not None else None
+        param = MODE_SWITCH_PARAMS.get(profile.mav_type) if profile is not None else None
         mission = self.h.mission_state.mission if self.h is not None else None
         facts: dict[str, object] = {}
         if blackboard.value("/vehicle/battery") is None:
@@ -285,7 +285,7 @@ class ObedientAutopilot(ScriptedAutopilot):
     def __init__(
         self, link: Any, vehicle: str = "rover", *, mode: str = "GUIDED", armed: bool = True, start: tuple[float, float] = (0.0, 0.0)
     ) -> None:
-        self.link, self.profile = link, PROFILES[vehicle]
+        self.link, self.profile = link, vehicle_profile(vehicle)
         self._modes = ArduPilotModes(self.profile.modes)
         super().__init__(None, start, mode=mode)
         self.armed = armed

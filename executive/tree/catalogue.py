@@ -37,10 +37,10 @@ import py_trees
 from executive import behaviours, registry, trees
 from executive.behaviours import composites
 from executive.behaviours.guards import Guard
+from executive.mission.declaration import vehicle_profile
 from executive.mission.model import Range, RcRouteOptions, SamplingOptions, VtolOptions
 from executive.mission.rules import height_tolerance, rc_switch_channels, seabed_clearance
 from executive.world import frames
-from executive.world.vehicles import PROFILES
 
 if TYPE_CHECKING:
     from executive.mission.model import Mission
@@ -114,9 +114,9 @@ PARAM_DOCS: dict[str, str] = {
 
 #: Mission values a ``from_mission`` entry may name besides a dotted path of the mission's fields.
 MISSION_VALUES: dict[str, Callable[[Mission], Any]] = {
-    "vehicle.safe_mode": lambda m: PROFILES[m.vehicle].safe_mode,
-    "vehicle.guided_mode": lambda m: PROFILES[m.vehicle].guided_mode,
-    "vehicle.manual_mode": lambda m: PROFILES[m.vehicle].manual_mode,
+    "vehicle.safe_mode": lambda m: vehicle_profile(m.vehicle).safe_mode,
+    "vehicle.guided_mode": lambda m: vehicle_profile(m.vehicle).guided_mode,
+    "vehicle.manual_mode": lambda m: vehicle_profile(m.vehicle).manual_mode,
     "vehicle.fixed_wing_hold_mode": lambda m: "LOITER" if m.vehicle == "vtol" else None,
     "vehicle.seabed_clearance_m": seabed_clearance,
     "vehicle.height_tolerance_m": height_tolerance,

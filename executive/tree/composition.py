@@ -33,12 +33,12 @@ import py_trees
 from pydantic import ValidationError
 
 from executive.behaviours.guards import Guard
+from executive.mission.declaration import vehicle_profile
 from executive.mission.errors import Path, format_path
 from executive.mission.loader import describe_value  # the loader's wording for every other field
 from executive.mission.model import Mission, Range
 from executive.tree.catalogue import ACTION_SLOTS, Catalogue, NodeSpec, ParamSpec, catalogue, mission_value
 from executive.trees.parts import mission_root
-from executive.world.vehicles import PROFILES
 
 NODE, USE = "node", "use"
 #: Roots that hold the vehicle while the mission is PAUSED; any other root is put under ``mission_root`` (a person always wins).
@@ -231,8 +231,8 @@ class _Checker:
                 return _BAD
             if kind == "float":
                 value = float(value)
-            if param.name in MODE_PARAMS and value.upper() not in PROFILES[self.mission.vehicle].modes:
-                known = ", ".join(m for m in PROFILES[self.mission.vehicle].modes if m != "INITIALISING")
+            if param.name in MODE_PARAMS and value.upper() not in vehicle_profile(self.mission.vehicle).modes:
+                known = ", ".join(m for m in vehicle_profile(self.mission.vehicle).modes if m != "INITIALISING")
                 self.fail(path, f"{value!r}: not a {self.mission.vehicle} mode (known: {known})")
                 return _BAD
             return value

@@ -10,8 +10,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from executive.mission.declaration import trees_with
-from executive.mission.model import Mission
+from executive.mission.declaration import BUILT_IN_KINDS, plugin_kinds, trees_with
+from executive.mission.model import Mission, mission_model
 from executive.tree.composition import tree_json_schema
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
@@ -19,8 +19,13 @@ SHIPPED = Path(__file__).parent.parent / "mission" / "mission.schema.json"
 
 
 def mission_json_schema() -> dict[str, Any]:
-    """The JSON schema (draft 2020-12) of a mission file, generated from :class:`Mission` and, for a composed ``tree:``, the node catalogue."""
-    schema = Mission.model_json_schema()
+    """The JSON schema (draft 2020-12) of a mission file, generated from :class:`Mission` and, for a composed ``tree:``, the node catalogue.
+
+    With plugins installed: their trees' own options sections, and their vehicle kinds in ``vehicle``'s enum.
+    """
+    schema = mission_model(base=Mission).model_json_schema()
+    if kinds := plugin_kinds():
+        schema["properties"]["vehicle"]["enum"] = [*BUILT_IN_KINDS, *kinds]
     composed, defs = tree_json_schema()
     tree = schema["properties"]["tree"]
     tree["anyOf"] = [option if option.get("type") != "object" else {**composed, "description": option["description"]} for option in tree["anyOf"]]

@@ -48,6 +48,11 @@ class VehicleProfile:
     #: Modes in which a person drives (sticks steer and set the throttle): no failsafe of the executive changes them.
     pilot_modes: frozenset[str] = frozenset()
 
+    @property
+    def aircraft(self) -> bool:
+        """It flies (its HEARTBEAT type is a fixed wing or a VTOL): it reports a landed state (EXTENDED_SYS_STATE)."""
+        return self.mav_type in _AIRCRAFT
+
 
 #: ArduRover's pilot-driven modes (Rover/mode.h: MANUAL, ACRO, STEERING take the sticks' steering and throttle).
 _ROVER_PILOT = frozenset({"MANUAL", "ACRO", "STEERING"})
@@ -61,6 +66,10 @@ PROFILES: MappingProxyType[str, VehicleProfile] = MappingProxyType({
     "boat": VehicleProfile("boat", mavlink.MAV_TYPE_SURFACE_BOAT, ROVER_MODES, "LOITER", "GUIDED", "MANUAL", True, _ROVER_PILOT),
     "sub": VehicleProfile("sub", mavlink.MAV_TYPE_SUBMARINE, SUB_MODES, "POSHOLD", "GUIDED", "MANUAL", False, _SUB_PILOT),
     "vtol": VehicleProfile("vtol", mavlink.MAV_TYPE_VTOL_QUADROTOR, PLANE_MODES, "QLOITER", "GUIDED", "QSTABILIZE", False, _PLANE_PILOT),
+})  # fmt: skip
+
+_AIRCRAFT = frozenset({
+    mavlink.MAV_TYPE_FIXED_WING, mavlink.MAV_TYPE_VTOL_QUADROTOR, mavlink.MAV_TYPE_VTOL_TILTROTOR, mavlink.MAV_TYPE_VTOL_RESERVED2,
 })  # fmt: skip
 
 _BY_MAV_TYPE = {

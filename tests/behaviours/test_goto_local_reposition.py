@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 from py_trees.common import Status
 
@@ -51,16 +53,21 @@ def test_an_accepted_reposition_is_not_sent_again(harness, home) -> None:
     assert repositions(h) == []  # the autopilot has the target
 
 
-@pytest.mark.parametrize(("result", "why"), [(M.MAV_RESULT_FAILED, "refused: FAILED"), (M.MAV_RESULT_DENIED, "refused: DENIED")])
-def test_a_refused_reposition_is_sent_again_each_second_and_named_when_it_times_out(harness, home, result: int, why: str) -> None:
-    node = GoToLocal(TARGET, acceptance_radius_m=2.0, timeout_s=3.0, method="reposition")
-    h = harness(node)
+def answered_for_4_s(h, answer: Callable[[int], int]) -> tuple[list[object], list[int]]:
+    """Eight ticks of 0.5 s, each reposition sent answered by ``answer(how many asked so far)``: the statuses, the ticks it was sent on."""
     statuses, sent_at = [], []
     for i in range(8):
         statuses.append(h.tick(0.5))
         if repositions(h):
             sent_at.append(i)
-            h.ack(M.MAV_CMD_DO_REPOSITION, result)
+            h.ack(M.MAV_CMD_DO_REPOSITION, answer(len(sent_at)))
+    return statuses, sent_at
+
+
+@pytest.mark.parametrize(("result", "why"), [(M.MAV_RESULT_FAILED, "refused: FAILED"), (M.MAV_RESULT_DENIED, "refused: DENIED")])
+def test_a_refused_reposition_is_sent_again_each_second_and_named_when_it_times_out(harness, home, result: int, why: str) -> None:
+    node = GoToLocal(TARGET, acceptance_radius_m=2.0, timeout_s=3.0, method="reposition")
+    statuses, sent_at = answered_for_4_s(harness(node), lambda _asked: result)
     assert statuses == [R] * 7 + [F]
     assert sent_at == [0, 2, 4, 6]
     assert node.feedback_message == f"timed out after 3 s: 36.4 m (DO_REPOSITION {why})"
@@ -79,13 +86,7 @@ def test_unanswered_is_left_to_the_commander_then_asked_again(harness, home) -> 
 
 def test_refused_then_accepted_is_asked_no_more_and_not_named_at_the_timeout(harness, home) -> None:
     node = GoToLocal(TARGET, acceptance_radius_m=2.0, timeout_s=3.0, method="reposition")
-    h = harness(node)
-    statuses, sent_at = [], []
-    for i in range(8):
-        statuses.append(h.tick(0.5))
-        if repositions(h):
-            sent_at.append(i)
-            h.ack(M.MAV_CMD_DO_REPOSITION, M.MAV_RESULT_FAILED if not sent_at[:-1] else M.MAV_RESULT_ACCEPTED)
+    statuses, sent_at = answered_for_4_s(harness(node), lambda asked: M.MAV_RESULT_FAILED if asked == 1 else M.MAV_RESULT_ACCEPTED)
     assert statuses == [R] * 7 + [F]
     assert sent_at == [0, 2]
     assert node.feedback_message == "timed out after 3 s: 36.4 m"

@@ -39,9 +39,11 @@ waypoints:
 
 
 def run(mission: Path, *args: str) -> subprocess.Popen:
-    """``executive run`` at 10x: after the first sample the run has ~50 s of vehicle time left, 5 s of wall time (more when the
-    governor slows it) for this test to read that status line and kill it; at 40x, 1.2 s was too little beside two busy loops."""
-    return executive_process("run", str(mission), "--speedup", "10", "--socket", "none", *args, stdout=subprocess.PIPE)
+    """``executive run`` at 40x, its clock held once the first sample is recorded (tests/held_clock.py): the run cannot go on
+    before this test has read that status line and killed it, however busy the machine (at 10x unheld, the ~50 s of vehicle time
+    left were 5 s of wall time to do it in; at 40x, 1.2 s was too little beside two busy loops)."""
+    command = ("run", str(mission), "--speedup", "40", "--socket", "none", *args)
+    return executive_process(*command, via=("held_clock.py", "sampled"), stdout=subprocess.PIPE)
 
 
 def report(db: Path, run_id: int, capsys) -> dict:

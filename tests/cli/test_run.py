@@ -224,15 +224,18 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
     """Issue 28: two SIGINTs 10-50 ms apart turned exit 1 (ABORTED, vehicle made safe) into 130 most times: the second landed after
     the handler was put back and raised KeyboardInterrupt in the shutdown. Here the vehicle goes silent as the operator presses
     Ctrl-C: making it safe asks HOLD every 1.5 s until its bound (9 s: 3 asks each for HOLD and the disarm after it), the second
-    Ctrl-C comes meanwhile (sent once the first was acted on), and a third as the run ends ABORTED (where the handler used to be
-    put back)."""
+    Ctrl-C comes meanwhile (sent once the first was acted on; the executive's clock held from that moment until it arrives,
+    tests/held_clock.py, so it lands there at 10x however busy the machine), and a third as the run ends ABORTED (where the
+    handler used to be put back)."""
     square = tmp_path / "square.yaml"
     square.write_text((ROOT / "missions/rover_square.yaml").read_text() + "simulator: {ekf_ready_after_s: 2}\n")
     # the EKF ready after 2 s, not ArduPilot's 40 (the mission's simulator options are the built-in one's): armed in seconds
-    sim = SimServer("rover", clock=ScaledClock(), home=(-35.363261, 149.165230, 0.0), ekf_ready_after_s=EKF_READY_S).start()
+    sim = SimServer("rover", clock=ScaledClock(10.0), home=(-35.363261, 149.165230, 0.0), ekf_ready_after_s=EKF_READY_S).start()
     try:
         proc = executive_process(
-            "run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--socket", "none", stdout=subprocess.PIPE
+            *("run", str(square), "--mavlink", sim.url_for_client, "--target-system", "1", "--speedup", "10", "--socket", "none"),
+            via=("held_clock.py", "stopped"),
+            stdout=subprocess.PIPE,
         )
         assert proc.stdout is not None and proc.stderr is not None
         for line in proc.stdout:
@@ -256,4 +259,5 @@ def test_a_second_ctrl_c_while_stopping_keeps_the_outcomes_exit_code(tmp_path):
     assert proc.returncode == 1, err
     assert "executive: run: SIGINT again: already stopping (the vehicle is made safe all the same; the exit code stays the mission's)" in err
     assert re.search(r"executive: could not make the vehicle safe: HOLD not answered x\d.*\n", err), err  # in the last lines, said so
+    assert err.index("SIGINT again: already stopping") < err.index("could not make the vehicle safe")  # came while making it safe
     assert re.search(r"executive: mission 'rover-square' ABORTED: stopped: SIGINT \(\d+ ticks\)\n$", err), err

@@ -9,11 +9,9 @@ vehicle's second leg, whatever the machine's speed.
 
 from __future__ import annotations
 
-import os
 import re
 import sqlite3
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -33,9 +31,8 @@ def test_a_computer_booted_in_1970_gets_its_time_mid_run_and_the_journal_and_log
     mission.write_text(mission_text("clock-step", *LEGS))
     step = tmp_path / "step"
     args = ["run", str(mission), "--speedup", "20", "--socket", "none", "--journal", str(tmp_path / "j.db"), "-v"]
-    command = [sys.executable, str(ROOT / "tests" / "stepped_wall_clock.py"), str(step), str(booted_offset_s), "--", *args]
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "tests")])}
-    with subprocess.Popen(command, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as run:
+    via = ("stepped_wall_clock.py", str(step), str(booted_offset_s))
+    with executive_process(*args, via=via, cwd=tmp_path, stdout=subprocess.PIPE) as run:
         assert run.stdout is not None
         for line in run.stdout:  # the status lines (JSON): the step on the way to waypoint 2
             if '"leg": 2' in line and '"state": "RUNNING"' in line and not step.exists():
@@ -54,7 +51,7 @@ def test_a_computer_booted_in_1970_gets_its_time_mid_run_and_the_journal_and_log
     assert [leg for _, _, leg in legs] == [0, 1, 2, 3] and [t for t, _, _ in legs] == sorted(t for t, _, _ in legs)
     walls = [wall for _, wall, _ in legs]
     assert abs(walls[2] - walls[0]) > 30 * 365 * 86400  # the journal's UTC jumped between them; its t did not
-    out, _ = executive_process("report", str(tmp_path / "j.db"), stdout=subprocess.PIPE, env=env).communicate(timeout=120)
+    out, _ = executive_process("report", str(tmp_path / "j.db"), stdout=subprocess.PIPE).communicate(timeout=120)
     said = [line.strip() for line in out.splitlines() if "heading for waypoint" in line]
     assert [line.split("] ")[1] for line in said] == [f"heading for waypoint {n} of 3" for n in (1, 2, 3)]
 

@@ -217,7 +217,7 @@ def missions(draw: st.DrawFn) -> Mission:
     """Valid missions of every kind near a random place: waypoints, maybe a home, a geofence, speeds, sub depths and altitudes."""
     kind = draw(st.sampled_from(["rover", "boat", "sub", "vtol"]))
     lat0, lon0 = draw(st.floats(-80.0, 80.0)), draw(st.floats(-179.0, 179.0))
-    near = st.floats(-0.004, 0.004)
+    near = st.floats(-0.003, 0.003)  # any two points under 1000 m apart (limits.max_goal_distance_m from home): 0.006° is 667 m
     waypoints = []
     for _ in range(draw(st.integers(1, 6))):
         wp: dict[str, Any] = {"lat": lat0 + draw(near), "lon": lon0 + draw(near)}

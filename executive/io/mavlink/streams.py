@@ -10,6 +10,7 @@ import logging
 from collections import deque
 
 from executive.io.mavlink.commander import Commander
+from executive.mission.declaration import vehicle_profile
 from executive.world import blackboard
 from executive.world.dialect import mavlink
 from executive.world.state import Outcome
@@ -43,7 +44,8 @@ def rates_for(kind: str, autopilot: str = "ardupilot") -> dict[str, float]:
     PX4 reports its estimator in ESTIMATOR_STATUS (it has no EKF_STATUS_REPORT) and its landed state in
     EXTENDED_SYS_STATE on every vehicle.
     """
-    rates = {name: hz for name, hz in DEFAULT_RATES.items() if kind == "vtol" or autopilot == "px4" or name != "EXTENDED_SYS_STATE"}
+    aircraft = vehicle_profile(kind).aircraft
+    rates = {name: hz for name, hz in DEFAULT_RATES.items() if aircraft or autopilot == "px4" or name != "EXTENDED_SYS_STATE"}
     if kind == "sub":
         rates["DISTANCE_SENSOR"] = 5.0
     if autopilot == "px4":

@@ -36,6 +36,7 @@ from typing import Any
 
 import yaml
 
+from executive.mission.declaration import vehicle_profile
 from executive.mission.errors import FieldError, MissionError, Path
 from executive.mission.formats.mp_zone_files import read_zone_file
 from executive.mission.formats.plan_items import (
@@ -62,7 +63,6 @@ from executive.mission.loader import load_mission_text
 from executive.mission.model import VEHICLE_LIMITS, VTOL_MIN_ACCEPTANCE_RADIUS_M, Limits, Mission
 from executive.world.dialect import mavlink
 from executive.world.geo import distance
-from executive.world.vehicles import PROFILES
 
 MAX_BYTES = 16 * 1024 * 1024  # a survey of a large area makes a big .plan
 
@@ -494,7 +494,7 @@ def export_plan(mission: Mission) -> Exported:
             "hoverSpeed": 5.0,
             "items": items,
             "plannedHomePosition": home,
-            "vehicleType": PROFILES[mission.vehicle].mav_type,
+            "vehicleType": vehicle_profile(mission.vehicle).mav_type,
             "version": 2,
         },
         "rallyPoints": {"points": rally, "version": 2},

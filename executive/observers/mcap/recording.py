@@ -74,7 +74,7 @@ class Sink(Protocol):
         """The message at ``log_ns`` was a keyframe of tick ``tick``."""
 
     def ticked(self) -> bool:
-        """A tick's messages are in; False when a new file began (what follows must be a keyframe)."""
+        """The messages so far are in and a tick line comes next; False when a new file began (that line must be a keyframe)."""
 
     def close(self) -> None: ...
 
@@ -186,6 +186,8 @@ class ChannelFeed:
 
     def _write_line(self, line: dict[str, Any]) -> None:
         """A tick line as /tree/tick and /blackboard; the first after a new file began made a keyframe (the state so far)."""
+        with self._sinks_lock:  # a full file is rotated as the next tick comes, not after the last: a run never ends on a file without one
+            self._new_file = not all([sink.ticked() for sink in self.sinks])  # every sink told, whichever began a new file
         state = self._state
         if line.get("key"):
             self._state = state = {"s": dict(line.get("s", {})), "f": dict(line.get("f", {})), "bb": dict(line.get("bb", {}))}
@@ -204,8 +206,6 @@ class ChannelFeed:
                     sink.keyframe(line["tick"], log_ns)
         if "bb" in line:
             self._write("/blackboard", t, {"tick": line["tick"], **marks, "bb": line["bb"]})
-        with self._sinks_lock:
-            self._new_file = not all([sink.ticked() for sink in self.sinks])  # every sink told, whichever began a new file
 
     def _note_vehicle(self, t: float) -> None:
         """The vehicle's values after the tick, when a fix or the attitude is new (frozen values: the encoder reads them later)."""

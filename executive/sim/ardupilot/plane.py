@@ -104,6 +104,7 @@ class QuadPlaneSim(ArduPilotSim):
     """ArduPlane on a QuadPlane; ``q_guided_mode`` is Q_GUIDED_MODE (0: GUIDED targets are circled as a plane)."""
 
     FIRMWARE = "ArduPlane"
+    BATTERY_OF = "vtol"
     READY_TEXT = "Ready to FLY"
     #: ArduPlane/Parameters.cpp, FLIGHT_MODE_CHANNEL 8; WP_LOITER_RAD; Q_GUIDED_MODE (its option: the mission's simulator section)
     PARAMS: ClassVar[Mapping[str, float]] = {

@@ -84,6 +84,7 @@ class ArduSubSim(ArduPilotSim):
     """
 
     FIRMWARE = "ArduSub"
+    BATTERY_OF = "sub"
     READY_TEXT = "Frame: VECTORED_6DOF"
     BOOT_MODE = "MANUAL"  # ArduSub has no INITIALISING mode: it reports its initial mode while booting
     INITIAL_MODE = "MANUAL"

@@ -22,6 +22,8 @@ MAV_TYPE_VTOL_FIXEDROTOR = 22  # a standard VTOL ("VTOL_RESERVED2" in pymavlink'
 class Px4VtolSim(Px4Sim):
     """PX4 on a standard VTOL, flying the simulated QuadPlane airframe (the ArduPilot VTOL's, for like-for-like runs)."""
 
+    BATTERY_OF = "vtol"
+
     MAV_TYPE = MAV_TYPE_VTOL_FIXEDROTOR
     FLIES = True
     #: ROMFS init.d/rc.vtol_defaults: a mission must end in a landing (2) (the real SIH standard_vtol reads 2).
