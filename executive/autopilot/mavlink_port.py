@@ -97,8 +97,8 @@ class MavlinkPort:
         return self.commander.target_asked
 
     @property
-    def takeoff_height_m(self) -> float | None:
-        return self.commander.takeoff_height_m
+    def takeoff_alt_msl_m(self) -> float | None:
+        return self.commander.takeoff_alt_msl_m
 
     # -- setpoints -----------------------------------------------------------------------------
     def go_to(self, target: Target) -> None:

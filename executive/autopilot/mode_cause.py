@@ -22,9 +22,14 @@ PX4_PREVENT_ARMING_MODES = frozenset({"AUTO.RTL", "AUTO.LAND", "AUTO.PRECLAND", 
 #: ArduSub's SURFACE is done above SURFACE_DEPTH (-10 cm, ArduSub/Parameters.cpp); GLOBAL_POSITION_INT's relative altitude
 #: is minus the depth. A little margin for the report's rounding and the waves.
 SUB_AT_SURFACE_M = -0.5
-#: PX4's take-off is done within NAV_MC_ALT_RAD (0.8 m, navigator/navigator_params.c) of its altitude
-#: (MissionBlock::is_mission_item_reached_or_completed); the rest: GLOBAL_POSITION_INT's age (5 Hz) at a slowing climb.
-PX4_TAKEOFF_DONE_WITHIN_M = 1.5
+#: PX4's multicopter take-off (a VTOL's too: it takes off as one, vehicle_type ROTARY_WING) is reached once its global
+#: position estimate is above the take-off item's altitude (above sea level, as NAV_TAKEOFF sent it) less NAV_MC_ALT_RAD,
+#: 0.8 m by default (navigator/navigator_params.c; Navigator::get_altitude_acceptance_radius in navigator_main.cpp: the
+#: take-off setpoint has no radius of its own; MissionBlock::is_mission_item_reached_or_completed in mission_block.cpp: no
+#: yaw to wait for, set_takeoff_item leaves it NaN); navigator/takeoff.cpp then says it finished, with no message sent.
+PX4_TAKEOFF_ALT_RAD_M = 0.8
+#: A position report older than this cannot tell where the climb was when PX4 ended it (GLOBAL_POSITION_INT comes at 5 Hz).
+PX4_POSITION_JUDGES_S = 1.0
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,7 +55,11 @@ class ModeChange:
     system_status: int | None  # HEARTBEAT system_status (MAV_STATE) of the heartbeat that shows the change
     failsafe_text: str | None  # the autopilot's failsafe notice just before ("EKF failsafe"), or its RC failsafe
     alt_rel_m: float | None  # GLOBAL_POSITION_INT relative altitude (minus the depth under water)
-    takeoff_height_m: float | None = None  # the height above home our latest take-off climbs to (None: unknown)
+    takeoff_alt_msl_m: float | None = None  # the altitude above sea level our latest take-off climbs to, as sent (None: unknown)
+    #: GLOBAL_POSITION_INT's altitude above sea level, its climb rate (m/s, up) and age (s) when the change is judged
+    alt_msl_m: float | None = None
+    climb_m_s: float = 0.0
+    position_age_s: float = 0.0
     fence_breached: bool = False  # FENCE_STATUS said the autopilot's own fence is breached, just before or with the change
     #: The autopilot's mission ended: MISSION_ITEM_REACHED of the last item MISSION_CURRENT counts, or MISSION_CURRENT COMPLETE
     #: (ArduPilot sends the first at once, in the loop that ends the mission; the second only at its next stream)
@@ -85,19 +94,25 @@ def _px4_cause(c: ModeChange) -> AutopilotCause | None:
     if c.system_status == mavlink.MAV_STATE_CRITICAL:
         # mavlink/streams/HEARTBEAT.hpp: armed with vehicle_status.failsafe set; a person's mode change ends the failsafe first
         return AutopilotCause("PX4's failsafe: HEARTBEAT system_status CRITICAL, commander/failsafe/failsafe.cpp", failsafe=True)
-    if c.previous == "AUTO.TAKEOFF" and c.mode in ("AUTO.LOITER", "AUTO.MISSION") and _at_takeoff_height(c):
+    if c.previous == "AUTO.TAKEOFF" and c.mode in ("AUTO.LOITER", "AUTO.MISSION") and _takeoff_reached(c):
         # navigator/takeoff.cpp reports the take-off finished at its altitude; the commander then loiters (or flies the mission,
-        # COM_TAKEOFF_ACT 1). EXTENDED_SYS_STATE's TAKEOFF cannot tell: it turns IN_AIR with any other setpoint, a person's Hold too
+        # COM_TAKEOFF_ACT 1). EXTENDED_SYS_STATE's TAKEOFF cannot tell: it turns IN_AIR with any other setpoint, a person's Hold too;
+        # no STATUSTEXT, MISSION_ITEM_REACHED or MISSION_CURRENT says it (none on the real SIH, tests/data/px4/README.md)
         return AutopilotCause("the take-off is done, PX4 Commander::checkForMissionUpdate, navigator/takeoff.cpp")
     if c.previous == "AUTO.MISSION" and c.mode == "AUTO.LOITER" and c.mission_complete and c.landed_state != "ON_GROUND":
         return AutopilotCause("the mission is finished, PX4 Commander::checkForMissionUpdate")
     return None
 
 
-def _at_takeoff_height(c: ModeChange) -> bool:
-    if c.landed_state == "ON_GROUND" or c.alt_rel_m is None or c.takeoff_height_m is None:
+def _takeoff_reached(c: ModeChange) -> bool:
+    """PX4's own test, on its own estimate: GLOBAL_POSITION_INT's ``alt`` is the navigator's global position altitude
+    (mavlink/streams/GLOBAL_POSITION_INT.hpp), the latest report climbed on for its age at most. Its relative altitude is not:
+    it counts from home, whose altitude PX4 corrects in the first seconds of flight (commander/HomePosition.cpp, by ~1 m steps
+    on the SIH), and the take-off's altitude was sent above sea level from the home known before."""
+    if c.landed_state == "ON_GROUND" or c.alt_msl_m is None or c.takeoff_alt_msl_m is None or c.position_age_s > PX4_POSITION_JUDGES_S:
         return False
-    return c.alt_rel_m >= c.takeoff_height_m - PX4_TAKEOFF_DONE_WITHIN_M
+    climbed_since = max(0.0, c.climb_m_s) * max(0.0, c.position_age_s)  # the switch came at most now
+    return c.alt_msl_m + climbed_since >= c.takeoff_alt_msl_m - PX4_TAKEOFF_ALT_RAD_M
 
 
 def _ardupilot_cause(vehicle: str, c: ModeChange) -> AutopilotCause | None:

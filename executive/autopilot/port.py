@@ -146,8 +146,9 @@ class AutopilotPort(Protocol):
         ...
 
     @property
-    def takeoff_height_m(self) -> float | None:
-        """The height above home the latest take-off of ours climbs to; None: none asked, or the autopilot's default height."""
+    def takeoff_alt_msl_m(self) -> float | None:
+        """The altitude above mean sea level the latest take-off of ours climbs to, as sent; None: none asked, or the
+        autopilot's default height."""
         ...
 
     # -- setpoints (no ack; re-sent by the behaviour) ------------------------------------------

@@ -181,7 +181,7 @@ class Px4Port(MavlinkPort):
         self._leaving_offboard()  # NAV_TAKEOFF: AUTO.TAKEOFF, then AUTO.LOITER (a follow-on mode)
         self.commander.note_mode_asked("AUTO.TAKEOFF")
         amsl = home.alt_m + alt_m if home is not None else math.nan
-        self.commander.takeoff_height_m = alt_m if home is not None else None  # how the end of the climb is told (mode_cause)
+        self.commander.takeoff_alt_msl_m = amsl if home is not None else None  # how the end of the climb is told (mode_cause)
         return self._request(self.commander.takeoff(amsl), mavlink.MAV_CMD_NAV_TAKEOFF)
 
     def arm(self, *, force: bool = False) -> Request:

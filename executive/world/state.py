@@ -6,7 +6,7 @@ and a snapshot of the blackboard shows exactly which facts changed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from enum import IntFlag, StrEnum
 
 import executive
@@ -25,6 +25,10 @@ class GlobalPosition:
     heading_deg: float | None  # None when the autopilot does not know it
     time: float  # executive clock time of reception
     boot_s: float | None = None  # when the autopilot measured it (its boot clock): exact intervals, whatever the link's jitter
+    #: Its altitude above mean sea level (GLOBAL_POSITION_INT alt): the estimate itself, where ``alt_rel_m`` also moves with
+    #: the autopilot's home (PX4 corrects home's altitude in the air, commander/HomePosition.cpp); None: not reported. Out of
+    #: the repr, the blackboard's text in the snapshot recordings: those of every mission stay as they were.
+    alt_msl_m: float | None = field(default=None, repr=False)
 
     @property
     def ground_speed_m_s(self) -> float:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import operator
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import py_trees
@@ -25,14 +25,16 @@ from executive.testing import Lockstep
 from executive.trees.parts import failsafe_guarded, mission_root, preflight, standard_guards
 from executive.world import blackboard
 from executive.world.clock import Clock
-from executive.world.dialect import mavlink
+from executive.world.dialect import MAVLinkMessage, mavlink
 
 PERSON = None  # autopilot_cause's answer for a person's change
 
 
 def change(previous: str, mode: str, **facts: Any) -> ModeChange:
     """A change while armed in the air, ACTIVE, nothing else going on; ``facts`` override."""
-    base = ModeChange(previous, mode, True, False, "IN_AIR", False, mavlink.MAV_STATE_ACTIVE, None, 20.0, takeoff_height_m=20.0)
+    base = ModeChange(
+        previous, mode, True, False, "IN_AIR", False, mavlink.MAV_STATE_ACTIVE, None, 20.0, takeoff_alt_msl_m=604.0, alt_msl_m=604.0
+    )  # home 584 m above sea level, our take-off to 20 m above it
     return dataclasses.replace(base, **facts)
 
 
@@ -45,11 +47,29 @@ def why(firmware: str, vehicle: str, c: ModeChange) -> str | None:
 
 
 def test_px4_loiters_once_the_take_off_is_done_at_its_height_but_a_loiter_during_the_climb_is_a_persons() -> None:
-    assert "take-off is done" in why("px4", "vtol", change("AUTO.TAKEOFF", "AUTO.LOITER", alt_rel_m=19.2))
+    assert "take-off is done" in why("px4", "vtol", change("AUTO.TAKEOFF", "AUTO.LOITER", alt_msl_m=603.25))  # NAV_MC_ALT_RAD 0.8
     assert "take-off is done" in why("px4", "vtol", change("AUTO.TAKEOFF", "AUTO.MISSION"))  # COM_TAKEOFF_ACT 1
-    assert why("px4", "vtol", change("AUTO.TAKEOFF", "AUTO.LOITER", alt_rel_m=8.0)) is PERSON  # IN_AIR all the same
-    assert why("px4", "vtol", change("AUTO.TAKEOFF", "AUTO.LOITER", takeoff_height_m=None)) is PERSON  # not our take-off
+    assert why("px4", "vtol", change("AUTO.TAKEOFF", "AUTO.LOITER", alt_msl_m=592.0, alt_rel_m=8.0)) is PERSON  # IN_AIR all the same
+    assert why("px4", "vtol", change("AUTO.TAKEOFF", "AUTO.LOITER", takeoff_alt_msl_m=None)) is PERSON  # not our take-off
     assert why("px4", "vtol", change("AUTO.TAKEOFF", "AUTO.RTL")) is PERSON
+
+
+def test_px4s_take_off_end_is_judged_on_its_altitude_above_sea_level_not_on_the_height_above_its_moving_home() -> None:
+    """The real SIH (tests/data/px4/vtol_takeoff_end_home_moved.tlog): NAV_TAKEOFF to 613.686 m (home 583.686 + 30), PX4
+    loitered with GLOBAL_POSITION_INT at 612.984 m but 28.22 m above home: PX4 had moved its home up by 1.07 m in the air."""
+    real = change("AUTO.TAKEOFF", "AUTO.LOITER", takeoff_alt_msl_m=613.686, alt_msl_m=612.984, alt_rel_m=28.22, climb_m_s=0.49, position_age_s=0.1)
+    assert "take-off is done" in why("px4", "vtol", real)
+    assert why("px4", "vtol", dataclasses.replace(real, alt_msl_m=609.0, alt_rel_m=29.9)) is PERSON  # 4.7 m under: a person's Hold
+
+
+def test_px4s_take_off_end_counts_the_climb_since_the_last_position_report_but_no_more() -> None:
+    """PX4 tests its estimate of the moment; the report is up to 200 ms older: it may have climbed on that long, no more."""
+    under = change("AUTO.TAKEOFF", "AUTO.LOITER", takeoff_alt_msl_m=613.686, alt_msl_m=612.80, climb_m_s=0.5)
+    assert why("px4", "vtol", dataclasses.replace(under, position_age_s=0.0)) is PERSON  # 0.086 m short of 612.886 at the switch
+    assert "take-off is done" in why("px4", "vtol", dataclasses.replace(under, position_age_s=0.2))  # 0.1 m climbed since
+    assert why("px4", "vtol", dataclasses.replace(under, position_age_s=0.2, climb_m_s=-0.5)) is PERSON  # sinking: not since
+    assert why("px4", "vtol", dataclasses.replace(under, alt_msl_m=613.5, position_age_s=2.0)) is PERSON  # too old to tell
+    assert why("px4", "vtol", dataclasses.replace(under, alt_msl_m=None)) is PERSON  # no altitude above sea level reported
 
 
 def test_px4_loiters_once_the_mission_is_finished_but_not_while_it_runs() -> None:
@@ -135,6 +155,30 @@ class GroundStation(FaultInjector):
             assert autopilot.set_mode(autopilot.profile.modes[mode])
 
 
+class MovingHome(GroundStation):
+    """PX4's home altitude corrected in the air (commander/HomePosition.cpp), as on the real SIH during the take-off
+    (tests/data/px4/vtol_takeoff_end_home_moved.tlog): GLOBAL_POSITION_INT's relative altitude moves by ``STEPS`` (home's
+    rise over the one known before arming, from the height climbed), its altitude above sea level not. The take-off is asked
+    from the home known before arming, as on the SIH (its next HOME_POSITION came 3 s after NAV_TAKEOFF)."""
+
+    #: (climbed m, home's rise m): the real SIH's HOME_POSITION altitudes during its climb (583.686 before arming, then
+    #: 584.002, 584.097, 584.069, 584.760, 585.110), its relative altitude jumping by up to 1 m each time.
+    STEPS = ((0.0, 0.316), (4.0, 0.411), (8.0, 0.383), (12.0, 1.074), (16.0, 1.424))
+    rise = 0.0
+
+    def update(self, autopilot: FirmwareSim) -> None:
+        super().update(autopilot)
+        self.rise = 0.0
+        if autopilot.armed:
+            self.rise = next(rise for climbed, rise in reversed(self.STEPS) if autopilot.vehicle.alt_m >= climbed)
+
+    def transform(self, messages: Sequence[MAVLinkMessage]) -> list[MAVLinkMessage]:
+        for msg in messages:
+            if msg.get_type() == "GLOBAL_POSITION_INT":
+                msg.relative_alt -= round(self.rise * 1000)
+        return super().transform(messages)
+
+
 class Changes:
     """Each change of the heartbeat's mode the runtime saw: (mode, whose, the mission's state at that tick)."""
 
@@ -160,10 +204,11 @@ def simulate(
     action: tuple[Callable[[FirmwareSim], bool], str] | None = None,
     until: Callable[[Lockstep], bool],
     limit_s: float = 120.0,
+    station: type[GroundStation] = GroundStation,
 ) -> tuple[Lockstep, Changes]:
     """``work`` guarded after the pre-flight, on the simulated ``autopilot``, until ``until(sim)``."""
     root = mission_root(mission, preflight(mission), failsafe_guarded(work, standard_guards(mission), mission, name="Work"))
-    sim = Lockstep(mission, root=root, autopilot=autopilot, injector=lambda _, clock: GroundStation(clock, faults or [], action))
+    sim = Lockstep(mission, root=root, autopilot=autopilot, injector=lambda _, clock: station(clock, faults or [], action))
     _OPEN.append(sim)
     changes = Changes()
     sim.observers.append(changes)
@@ -214,6 +259,20 @@ def test_px4_vtol_a_ground_stations_loiter_during_the_climb_is_a_persons(clean: 
     assert changes.seen[-1] == ("AUTO.LOITER", "others", "PAUSED")
     assert sim.runtime.mission_state.reason == "AUTO.LOITER set by the ground station"
     assert sim.autopilot.vehicle.alt_m < 11.0  # it held where the person stopped it
+
+
+def test_px4_vtol_take_off_done_while_home_moves_up_is_still_the_autopilots(clean: None) -> None:
+    """The real SIH's case: its take-off ended under 20 m, reported 1.4 m lower still (home moved up): not a person's."""
+    sim, changes = simulate(vtol(), take_off_and_stay(), autopilot="px4", station=MovingHome, until=lambda s: s.clock.now() > 40.0)
+    assert changes.seen[-1] == ("AUTO.LOITER", "autopilot", "RUNNING")
+    assert sim.autopilot.vehicle.alt_m == pytest.approx(20.0, abs=1.0)
+
+
+def test_px4_vtol_a_ground_stations_loiter_during_the_climb_is_a_persons_while_home_moves_too(clean: None) -> None:
+    climbing = (lambda ap: ap.mode == "AUTO.TAKEOFF" and 13.0 < ap.vehicle.alt_m < 15.0, "AUTO.LOITER")
+    sim, changes = simulate(vtol(), take_off_and_stay(), autopilot="px4", station=MovingHome, action=climbing, until=lambda s: s.clock.now() > 40.0)
+    assert changes.seen[-1] == ("AUTO.LOITER", "others", "PAUSED")
+    assert sim.autopilot.vehicle.alt_m < 16.0  # it held where the person stopped it
 
 
 def test_px4_vtol_offboard_failsafe_is_the_autopilots_and_pauses_nothing(clean: None) -> None:

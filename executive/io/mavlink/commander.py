@@ -130,8 +130,9 @@ class Commander:
         self.last_mode_asked: str | None = None
         #: The point we asked the autopilot to steer to last (a setpoint or a DO_REPOSITION): its report of another is someone else's.
         self.target_asked: TargetAsk | None = None
-        #: The height above home the latest take-off of ours climbs to (None: none asked, or the autopilot's default height).
-        self.takeoff_height_m: float | None = None
+        #: The altitude above mean sea level the latest take-off of ours climbs to, as sent (None: none asked, or the autopilot's
+        #: default height).
+        self.takeoff_alt_msl_m: float | None = None
         #: Commands the autopilot acks twice, the first ACCEPTED saying only "received": PX4's MAVLink receiver
         #: acks DO_SET_MODE at once, its commander the real result after (issue 12). The first ACCEPTED is not final.
         self.double_acked: frozenset[int] = frozenset()

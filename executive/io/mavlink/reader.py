@@ -307,9 +307,8 @@ class MavlinkReader:
         if not _on_the_globe(lat, lon):
             return  # no fix yet, or nonsense
         heading = msg.hdg / 100.0 if msg.hdg < 36000 else None  # 0..35999 cdeg; UINT16_MAX = unknown, the rest nonsense
-        position = GlobalPosition(
-            lat, lon, msg.relative_alt / 1000.0, msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0, heading, now, msg.time_boot_ms / 1000.0
-        )
+        speeds = msg.vx / 100.0, msg.vy / 100.0, msg.vz / 100.0
+        position = GlobalPosition(lat, lon, msg.relative_alt / 1000.0, *speeds, heading, now, msg.time_boot_ms / 1000.0, msg.alt / 1000.0)
         self._bb.set("/vehicle/position", position)
 
     def _on_attitude(self, msg: MAVLinkMessage, now: float) -> None:

@@ -56,6 +56,24 @@ def test_without_our_reposition_the_loiter_after_the_take_off_is_the_autopilots_
     assert replay.values("/vehicle/mode_set_by")[-1] == "autopilot" and replay.state.status is MissionStatus.RUNNING
 
 
+def test_px4s_own_end_of_the_take_off_is_told_by_its_altitude_above_sea_level_though_its_home_moved_up() -> None:
+    """Issue 41: the real SIH ended its take-off by itself (no DO_REPOSITION of ours in that run) with GLOBAL_POSITION_INT
+    28.22 m above home for a 30 m take-off: PX4 had corrected home's altitude 1.07 m up in the air (HomePosition.cpp). Its
+    own test passed on its estimate above sea level (612.888 m > 613.686 - NAV_MC_ALT_RAD 0.8): the autopilot's, no pause."""
+    path = PX4 / "vtol_takeoff_end_home_moved.tlog"
+    homes = [msg.altitude / 1000 for _, msg in records(path) if msg.get_type() == "HOME_POSITION"]
+    assert homes[0] == pytest.approx(583.686) and max(homes) - homes[0] > 1.0  # home moved in the air
+    texts = [msg.text for _, msg in records(path) if msg.get_type() == "STATUSTEXT"]
+    assert not any("akeoff" in text and "etected" not in text for text in texts)  # PX4 says nothing when its take-off ends
+    replay = Replay().play(path)
+    assert replay.values("/vehicle/mode") == [None, "AUTO.LOITER", "OFFBOARD", "AUTO.TAKEOFF", "AUTO.LOITER"]
+    switched = replay.last_when("/vehicle/mode", "AUTO.LOITER")
+    t0 = min(t for t, _ in records(path))
+    judged = [msg for t, msg in records(path) if msg.get_type() == "GLOBAL_POSITION_INT" and t - t0 <= switched][-1]
+    assert judged.relative_alt < 28_500 and judged.alt > 612_886  # the report the change was judged on (the one after: 29.60 m)
+    assert replay.values("/vehicle/mode_set_by")[-1] == "autopilot" and replay.state.status is MissionStatus.RUNNING
+
+
 def test_the_transitions_show_in_extended_sys_state_both_ways() -> None:
     replay = Replay().play(PX4 / "vtol_transitions.tlog")
     assert replay.values("/vehicle/vtol_state") == [None, "TRANSITION_TO_FW", "FW", "TRANSITION_TO_MC", "MC"]
