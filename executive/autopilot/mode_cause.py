@@ -27,7 +27,9 @@ SUB_AT_SURFACE_M = -0.5
 #: 0.8 m by default (navigator/navigator_params.c; Navigator::get_altitude_acceptance_radius in navigator_main.cpp: the
 #: take-off setpoint has no radius of its own; MissionBlock::is_mission_item_reached_or_completed in mission_block.cpp: no
 #: yaw to wait for, set_takeoff_item leaves it NaN); navigator/takeoff.cpp then says it finished, with no message sent.
+#: The vehicle's own NAV_MC_ALT_RAD is read (PARAM_REQUEST_READ, ``ModeChange.takeoff_alt_rad_m``); its default until it answers.
 PX4_TAKEOFF_ALT_RAD_M = 0.8
+PX4_TAKEOFF_ALT_RAD_PARAM = "NAV_MC_ALT_RAD"
 #: A position report older than this cannot tell where the climb was when PX4 ended it (GLOBAL_POSITION_INT comes at 5 Hz).
 PX4_POSITION_JUDGES_S = 1.0
 
@@ -65,6 +67,7 @@ class ModeChange:
     #: (ArduPilot sends the first at once, in the loop that ends the mission; the second only at its next stream)
     mission_end_reached: bool = False
     position_ok: bool | None = None  # the EKF's last word (EKF_STATUS_REPORT): a horizontal position; None: not reported
+    takeoff_alt_rad_m: float | None = None  # the take-off's altitude acceptance the vehicle holds (PX4 NAV_MC_ALT_RAD); None: unread
 
 
 def autopilot_cause(firmware: AutopilotName, vehicle: str, change: ModeChange) -> AutopilotCause | None:
@@ -112,7 +115,8 @@ def _takeoff_reached(c: ModeChange) -> bool:
     if c.landed_state == "ON_GROUND" or c.alt_msl_m is None or c.takeoff_alt_msl_m is None or c.position_age_s > PX4_POSITION_JUDGES_S:
         return False
     climbed_since = max(0.0, c.climb_m_s) * max(0.0, c.position_age_s)  # the switch came at most now
-    return c.alt_msl_m + climbed_since >= c.takeoff_alt_msl_m - PX4_TAKEOFF_ALT_RAD_M
+    alt_rad_m = PX4_TAKEOFF_ALT_RAD_M if c.takeoff_alt_rad_m is None else c.takeoff_alt_rad_m
+    return c.alt_msl_m + climbed_since >= c.takeoff_alt_msl_m - alt_rad_m
 
 
 def _ardupilot_cause(vehicle: str, c: ModeChange) -> AutopilotCause | None:

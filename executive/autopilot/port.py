@@ -66,6 +66,9 @@ class Capabilities:
     #: The fence's parameters read at pre-flight (logged, and what ``geofence.autopilot: enforce`` changes): ArduPilot
     #: FENCE_ENABLE, FENCE_TYPE, FENCE_ACTION, FENCE_RADIUS, FENCE_OPTIONS; PX4 GF_ACTION, GF_MAX_HOR_DIST.
     fence_params: tuple[str, ...] = ()
+    #: Parameters that say where the autopilot itself ends a take-off (executive.autopilot.mode_cause judges whose the mode
+    #: change after it is): PX4 NAV_MC_ALT_RAD.
+    takeoff_params: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

@@ -27,6 +27,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from executive.autopilot.mavlink_port import MavlinkPort
+from executive.autopilot.mode_cause import PX4_TAKEOFF_ALT_RAD_PARAM
 from executive.autopilot.port import Capabilities, FenceSettings, Request, Target
 from executive.io.mavlink.commander import FORCE_DISARM_MAGIC, Commander, RefusalRetry
 from executive.io.mavlink.mission_protocol import MissionTransfer
@@ -113,6 +114,8 @@ class Px4Port(MavlinkPort):
             # way home's cost (executive.sensing.energy)
             battery_params=("BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED", "RTL_RETURN_ALT"),
             fence_params=("GF_ACTION", "GF_MAX_HOR_DIST"),
+            # the altitude acceptance of a multicopter's (a VTOL's) take-off (navigator/navigator_params.c); a rover takes none
+            takeoff_params=(PX4_TAKEOFF_ALT_RAD_PARAM,) if profile.aircraft else (),
         )
         self.stream = OffboardStream(commander)
         self._bb = blackboard.reader("px4 port", ["/link/mission_transfer", "/vehicle/home"])

@@ -15,10 +15,11 @@ log = logging.getLogger(__name__)
 
 def wanted_parameters(port: AutopilotPort) -> tuple[str, ...]:
     """The parameters the executive reads from this autopilot: its mode-switch channel (ArduRover MODE_CH...), those of
-    its driving (``capabilities.motion_params``) and its battery's (``capabilities.battery_params``: the energy rule)."""
+    its driving (``capabilities.motion_params``), its battery's (``capabilities.battery_params``: the energy rule) and its
+    take-off's end (``capabilities.takeoff_params``: whose mode change follows it)."""
     capabilities = port.capabilities
     switch = (capabilities.mode_switch_param,) if capabilities.mode_switch_param else ()
-    return switch + tuple(capabilities.motion_params) + tuple(capabilities.battery_params)
+    return switch + tuple(capabilities.motion_params) + tuple(capabilities.battery_params) + tuple(capabilities.takeoff_params)
 
 
 class ParameterWatch:

@@ -32,7 +32,7 @@ import logging
 from collections import deque
 from collections.abc import Callable
 
-from executive.autopilot.mode_cause import AutopilotCause, ModeChange, autopilot_cause, facts_may_lag
+from executive.autopilot.mode_cause import PX4_TAKEOFF_ALT_RAD_PARAM, AutopilotCause, ModeChange, autopilot_cause, facts_may_lag
 from executive.autopilot.port import AutopilotPort
 from executive.autopilot.target_watch import PersonsTarget, TargetWatch
 from executive.mission.events import Stage, Transition
@@ -86,7 +86,7 @@ class InterventionWatch:
             [
                 "/vehicle/mode", "/link/up", "/vehicle/statustext", "/rc/channels", "/rc/switches", "/rc/connected", "/vehicle/armed",
                 "/vehicle/landed_state", "/vehicle/mission_current", "/vehicle/mission_reached", "/vehicle/ekf", "/vehicle/system_status",
-                "/vehicle/position", "/vehicle/position_target", "/vehicle/fence_status",
+                "/vehicle/position", "/vehicle/position_target", "/vehicle/fence_status", "/vehicle/params",
             ],
         )  # fmt: skip
         self._out = blackboard.writer("intervention watch", ["/vehicle/mode_set_by", "/vehicle/target_set_by"])
@@ -242,6 +242,7 @@ class InterventionWatch:
             fence_breached=self._fence_breached(now),
             mission_end_reached=current is not None and current.total > 0 and reached is not None and reached.highest >= current.total,
             position_ok=ekf.position_ok() if ekf is not None else None,
+            takeoff_alt_rad_m=(self._bb.get("/vehicle/params") or {}).get(PX4_TAKEOFF_ALT_RAD_PARAM),
         )
 
     def _note_fence(self) -> None:

@@ -62,6 +62,14 @@ def test_px4s_take_off_end_is_judged_on_its_altitude_above_sea_level_not_on_the_
     assert why("px4", "vtol", dataclasses.replace(real, alt_msl_m=609.0, alt_rel_m=29.9)) is PERSON  # 4.7 m under: a person's Hold
 
 
+def test_px4s_take_off_end_is_judged_by_the_vehicles_own_altitude_acceptance() -> None:
+    """NAV_MC_ALT_RAD as the vehicle answered it (None: not yet, its default 0.8 m, navigator/navigator_params.c)."""
+    under = change("AUTO.TAKEOFF", "AUTO.LOITER", alt_msl_m=602.5)  # 1.5 m under the 604 m asked
+    assert "take-off is done" in why("px4", "vtol", dataclasses.replace(under, takeoff_alt_rad_m=2.0))
+    assert why("px4", "vtol", dataclasses.replace(under, takeoff_alt_rad_m=0.8)) is PERSON
+    assert why("px4", "vtol", under) is PERSON  # not answered: its default
+
+
 def test_px4s_take_off_end_counts_the_climb_since_the_last_position_report_but_no_more() -> None:
     """PX4 tests its estimate of the moment; the report is up to 200 ms older: it may have climbed on that long, no more."""
     under = change("AUTO.TAKEOFF", "AUTO.LOITER", takeoff_alt_msl_m=613.686, alt_msl_m=612.80, climb_m_s=0.5)

@@ -6,10 +6,13 @@ import logging
 
 import pytest
 
+from executive.autopilot.ardupilot import ArduPilotPort
+from executive.autopilot.px4 import Px4Port
 from executive.autopilot.rover_motion import MOTION_PARAMS, vehicle_motion
 from executive.autopilot_link.parameters import ParameterWatch, wanted_parameters
 from executive.testing import Harness
 from executive.world.dialect import mavlink
+from executive.world.vehicles import PROFILES
 
 
 def run(watch: ParameterWatch, h: Harness, seconds: float) -> list[str]:
@@ -53,6 +56,15 @@ def test_an_autopilot_whose_driving_is_not_modelled_is_asked_only_its_mode_chann
     h.autopilot.adopt(mavlink.MAV_AUTOPILOT_PX4, mavlink.MAV_TYPE_GROUND_ROVER)
     assert vehicle_motion(h.autopilot.capabilities, {"WP_SPEED": 5.0}) is None
     assert set(wanted_parameters(h.autopilot)) <= {"MODE_CH", "BAT1_CAPACITY", "BAT1_N_CELLS", "BAT1_V_EMPTY", "BAT1_V_CHARGED", "RTL_RETURN_ALT"}
+
+
+@pytest.mark.parametrize(("port", "asked"), [(Px4Port, ["NAV_MC_ALT_RAD"]), (ArduPilotPort, [])])
+def test_a_px4_vtol_is_asked_its_take_off_altitude_acceptance_and_an_ardupilot_one_is_not(square_mission, port, asked) -> None:
+    """NAV_MC_ALT_RAD judges whose the loiter after PX4's take-off is (executive.autopilot.mode_cause); ArduPilot has none."""
+    h = Harness.build(square_mission)
+    vtol = port(h.commander, None, PROFILES["vtol"])
+    h.vehicle.set(link__up=True, vehicle__params=None)
+    assert [name for name in run(ParameterWatch(vtol, h.clock), h, 1.0) if name.startswith("NAV_")] == asked
 
 
 def test_the_simulated_ardurover_answers_them_as_the_firmware_types_them() -> None:

@@ -70,8 +70,8 @@ class Px4Sim(Px4Streams):
     MISSION_STORE = Px4MissionStore
     ZONE_STORES = (Px4FenceStore, Px4RallyStore)
     PARAM_SET_BYTEWISE = True
-    #: navigator/geofence_params.c: GF_ACTION 2 (Hold mode), GF_MAX_HOR_DIST 0 (off).
-    PARAMS: ClassVar[Mapping[str, float]] = {"GF_ACTION": 2.0, "GF_MAX_HOR_DIST": 0.0}
+    #: navigator/geofence_params.c: GF_ACTION 2 (Hold mode), GF_MAX_HOR_DIST 0 (off); navigator_params.c: NAV_MC_ALT_RAD 0.8 m.
+    PARAMS: ClassVar[Mapping[str, float]] = {"GF_ACTION": 2.0, "GF_MAX_HOR_DIST": 0.0, "NAV_MC_ALT_RAD": 0.8}
     INT_PARAMS: ClassVar[frozenset[str]] = frozenset({"GF_ACTION"})
     AUTOPILOT_MODES = frozenset({"AUTO.LOITER", "AUTO.MISSION", "AUTO.RTL", "AUTO.LAND", "AUTO.TAKEOFF", "OFFBOARD"})
     MAV_TYPE: ClassVar[int]

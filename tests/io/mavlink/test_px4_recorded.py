@@ -16,6 +16,7 @@ from tlog_replay import PX4, Replay, records
 
 from executive.behaviours import EkfOk
 from executive.mission.lifecycle import MissionStatus
+from executive.world import blackboard
 from executive.world.dialect import mavlink
 
 
@@ -72,6 +73,15 @@ def test_px4s_own_end_of_the_take_off_is_told_by_its_altitude_above_sea_level_th
     judged = [msg for t, msg in records(path) if msg.get_type() == "GLOBAL_POSITION_INT" and t - t0 <= switched][-1]
     assert judged.relative_alt < 28_500 and judged.alt > 612_886  # the report the change was judged on (the one after: 29.60 m)
     assert replay.values("/vehicle/mode_set_by")[-1] == "autopilot" and replay.state.status is MissionStatus.RUNNING
+
+
+def test_the_same_loiter_is_a_persons_on_a_vehicle_whose_nav_mc_alt_rad_it_could_not_have_passed() -> None:
+    """The take-off's end is judged by the NAV_MC_ALT_RAD the vehicle answered (here 0.1 m): 0.70 m under the altitude asked,
+    PX4 would still have been climbing, so the loiter is a person's and the mission pauses."""
+    replay = Replay()
+    blackboard.writer("test", ["/vehicle/params"]).set("/vehicle/params", {"NAV_MC_ALT_RAD": 0.1})
+    replay.play(PX4 / "vtol_takeoff_end_home_moved.tlog")
+    assert replay.values("/vehicle/mode_set_by")[-1] == "others" and replay.state.status is MissionStatus.PAUSED
 
 
 def test_the_transitions_show_in_extended_sys_state_both_ways() -> None:

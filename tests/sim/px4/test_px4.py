@@ -245,6 +245,14 @@ def test_takeoff_without_an_altitude_climbs_to_the_default_height(px4: MakePx4) 
     assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(MIS_TAKEOFF_ALT, abs=0.6)
 
 
+def test_the_take_offs_altitude_acceptance_is_read_at_its_default(px4: MakePx4) -> None:
+    """NAV_MC_ALT_RAD, 0.8 m (navigator/navigator_params.c), a float: the executive judges PX4's end of take-off by it."""
+    gcs = px4()
+    (value,) = gcs.send(gcs.mav.param_request_read_encode(1, 1, b"NAV_MC_ALT_RAD", -1))
+    assert (value.get_type(), value.param_id, value.param_type) == ("PARAM_VALUE", "NAV_MC_ALT_RAD", m.MAV_PARAM_TYPE_REAL32)
+    assert value.param_value == pytest.approx(0.8)
+
+
 def test_reposition_as_command_int_flies_there_in_auto_loiter(px4: MakePx4) -> None:
     gcs = airborne(px4)
     lat, lon = gcs.north(60.0)
