@@ -8,6 +8,7 @@ import pytest
 from py_trees.common import Status
 
 from executive.behaviours import GoToLocal
+from executive.testing import Harness
 from executive.world.dialect import mavlink
 from executive.world.frames import Enu, global_to_local, local_to_global
 from executive.world.state import GlobalPosition, HomePosition
@@ -53,9 +54,10 @@ def test_an_accepted_reposition_is_not_sent_again(harness, home) -> None:
     assert repositions(h) == []  # the autopilot has the target
 
 
-def answered_for_4_s(h, answer: Callable[[int], int]) -> tuple[list[object], list[int]]:
+def answered_for_4_s(h: Harness, answer: Callable[[int], int]) -> tuple[list[Status], list[int]]:
     """Eight ticks of 0.5 s, each reposition sent answered by ``answer(how many asked so far)``: the statuses, the ticks it was sent on."""
-    statuses, sent_at = [], []
+    statuses: list[Status] = []
+    sent_at: list[int] = []
     for i in range(8):
         statuses.append(h.tick(0.5))
         if repositions(h):
