@@ -27,12 +27,13 @@ from dataclasses import dataclass
 
 #: A cell's open-circuit voltage over its state of charge (0..1), a LiPo's typical curve (4.2 V full, 3.3 V empty).
 _OCV_CURVE = ((0.0, 3.30), (0.05, 3.50), (0.10, 3.60), (0.20, 3.68), (0.50, 3.80), (0.80, 3.98), (0.95, 4.13), (1.0, 4.20))
+_OCV_SPANS = tuple(itertools.pairwise(_OCV_CURVE))  # read at every step of the simulated firmware
 
 
 def cell_voltage(charge: float) -> float:
     """A cell's open-circuit voltage at ``charge`` (0..1 of its capacity)."""
     charge = min(1.0, max(0.0, charge))
-    for (c0, v0), (c1, v1) in itertools.pairwise(_OCV_CURVE):
+    for (c0, v0), (c1, v1) in _OCV_SPANS:
         if charge <= c1:
             return v0 + (v1 - v0) * (charge - c0) / (c1 - c0)
     return _OCV_CURVE[-1][1]
