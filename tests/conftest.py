@@ -8,14 +8,17 @@ import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 from hypothesis import settings
 
-from executive.mission.lifecycle import MissionState
-from executive.mission.model import Mission
-from executive.operator.logs import OPERATOR_LOGGERS
-from executive.sensing.heading import wait_for_filterpy
+if TYPE_CHECKING:
+    from executive.mission.lifecycle import MissionState
+    from executive.mission.model import Mission
+
+# The fixtures import the package themselves: xdist's controller loads this file too and runs no test (with the kit's
+# plugin, 0.6 s of CPU before it started its workers); a worker has the package from the test modules it collects.
 
 # The suite starts ~150 `python -m executive` processes and each xdist worker rewrites ~130 test modules'
 # asserts: without cached bytecode every one of them compiles the package and the tests from source
@@ -61,6 +64,8 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
 @pytest.fixture(scope="session", autouse=True)
 def filterpy_loaded() -> None:
     """The heading filter loads filterpy in the background; tests want it judging from the first reading."""
+    from executive.sensing.heading import wait_for_filterpy
+
     assert wait_for_filterpy()
 
 
@@ -73,6 +78,8 @@ def every_test_on_a_clean_blackboard(clean_blackboard: None) -> None:
 def logging_as_it_was() -> Iterator[None]:
     """A command run in a test (``setup_logging``) points the root logger at that test's captured stderr, closed after it, and sets
     the operator's loggers to INFO (a later test's caplog would see their records): put both back."""
+    from executive.operator.logs import OPERATOR_LOGGERS
+
     root = logging.getLogger()
     handlers, level = root.handlers[:], root.level
     operator_levels = {name: logging.getLogger(name).level for name in OPERATOR_LOGGERS}
@@ -86,6 +93,8 @@ def logging_as_it_was() -> Iterator[None]:
 @pytest.fixture
 def square_mission() -> Mission:
     """Four waypoints on a 20 m square (the rover square), radius 1.5 m, leg timeout 60 s."""
+    from executive.mission.model import Mission
+
     corners = [(47.397742, 8.545594), (47.397922, 8.545594), (47.397922, 8.545860), (47.397742, 8.545860)]
     return Mission.model_validate(
         {
@@ -101,6 +110,8 @@ def square_mission() -> Mission:
 
 @pytest.fixture
 def mission_state(square_mission: Mission) -> MissionState:
+    from executive.mission.lifecycle import MissionState
+
     state = MissionState()
     state.upload(square_mission)
     return state
