@@ -13,6 +13,11 @@ from typing import TYPE_CHECKING
 import pytest
 from hypothesis import settings
 
+try:
+    from _pytest.nodeid import NodeId  # pytest >= 9.2: see _groups_in_node_ids
+except ImportError:  # an older pytest reads item._nodeid, which xdist writes itself
+    NodeId = None  # type: ignore[assignment,misc]
+
 if TYPE_CHECKING:
     from executive.mission.lifecycle import MissionState
     from executive.mission.model import Mission
@@ -54,11 +59,29 @@ def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
     return cores + max(1, cores // 4)
 
 
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """The tests marked ``slow`` first (collection order kept otherwise): xdist hands tests out in this order, so the longest
     starts at once and the short ones fill the other workers around it, instead of it starting late and running on alone
-    (tests/test_wheel.py was collected 2,928th of 3,187: its 25 s could be the run's last, on one worker)."""
+    (tests/test_wheel.py was collected 2,928th of 3,187: its 25 s could be the run's last, on one worker). In an xdist
+    worker under ``--dist loadgroup``, each test marked ``xdist_group`` gets its group in its node id (below)."""
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+    if getattr(config.option, "loadgroup", False):
+        _groups_in_node_ids(items)
+
+
+def _groups_in_node_ids(items: list[pytest.Item]) -> None:
+    """``test_x@GROUP``, the node id by which xdist's loadgroup scheduler sends every test of GROUP to one worker.
+
+    xdist (3.8) writes it to ``item._nodeid``, which pytest 9.2 no longer reads (``nodeid`` is made from ``item._id``): the
+    groups were ignored, each test went to any worker and paid its group's module fixture again (the import contract's
+    parse, 0.8 s, three times). Written here where pytest reads it, as xdist would; an id xdist has marked already is kept.
+    """
+    if NodeId is None:
+        return
+    for item in items:
+        names = sorted({str(mark.args[0] if mark.args else mark.kwargs.get("name", "default")) for mark in item.iter_markers("xdist_group")})
+        if names and "@" not in item.nodeid:
+            item._id = NodeId.parse(f"{item.nodeid}@{'_'.join(names)}")
 
 
 @pytest.fixture(scope="session", autouse=True)
