@@ -133,6 +133,14 @@ def cycles(graph: dict[str, set[str]] | None = None) -> list[list[str]]:
 
 
 @reads_the_package
+def test_the_tests_that_read_the_package_go_to_one_worker(request: pytest.FixtureRequest) -> None:
+    """xdist's loadgroup scheduler groups by the ``@GROUP`` end of a node id (tests/conftest.py writes it where pytest 9.2 reads it)."""
+    if not getattr(request.config.option, "loadgroup", False):
+        pytest.skip("not in an xdist worker under --dist loadgroup (README's `pytest -n auto` is)")
+    assert request.node.nodeid.endswith("@import_graph")
+
+
+@reads_the_package
 def test_no_import_cycle() -> None:
     assert cycles() == []
 
