@@ -75,6 +75,7 @@ def _groups_in_node_ids(items: list[pytest.Item]) -> None:
     xdist (3.8) writes it to ``item._nodeid``, which pytest 9.2 no longer reads (``nodeid`` is made from ``item._id``): the
     groups were ignored, each test went to any worker and paid its group's module fixture again (the import contract's
     parse, 0.8 s, three times). Written here where pytest reads it, as xdist would; an id xdist has marked already is kept.
+    Upstream: pytest-dev/pytest-xdist#1386 (open; the fix proposed in #1388 writes the same structured id).
     """
     if NodeId is None:
         return
