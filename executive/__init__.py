@@ -3,10 +3,10 @@
 import importlib.abc
 import importlib.machinery
 import importlib.util
-import operator
 import sys
 import warnings
 from collections.abc import Callable
+from operator import attrgetter  # not `import operator`: the subpackage executive.operator, once imported, is this module's `operator`
 from pathlib import Path
 from types import MappingProxyType, ModuleType
 from typing import Any
@@ -158,7 +158,7 @@ class MovedMember:
 
     def __init__(self, new: str, read: Callable[[Any], object] | None = None) -> None:
         self.new = new
-        self._read = read or operator.attrgetter(new)
+        self._read = read or attrgetter(new)
         self.old = self._owner = ""
 
     def __set_name__(self, owner: type, name: str) -> None:

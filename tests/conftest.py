@@ -2,20 +2,29 @@
 
 from __future__ import annotations
 
+import gc
 import logging
 import os
 import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 from hypothesis import settings
 
-from executive.mission.lifecycle import MissionState
-from executive.mission.model import Mission
-from executive.operator.logs import OPERATOR_LOGGERS
-from executive.sensing.heading import wait_for_filterpy
+try:
+    from _pytest.nodeid import NodeId  # pytest >= 9.2: see _groups_in_node_ids
+except ImportError:  # an older pytest reads item._nodeid, which xdist writes itself
+    NodeId = None  # type: ignore[assignment,misc]
+
+if TYPE_CHECKING:
+    from executive.mission.lifecycle import MissionState
+    from executive.mission.model import Mission
+
+# The fixtures import the package themselves: xdist's controller loads this file too and runs no test (with the kit's
+# plugin, 0.6 s of CPU before it started its workers); a worker has the package from the test modules it collects.
 
 # The suite starts ~150 `python -m executive` processes and each xdist worker rewrites ~130 test modules'
 # asserts: without cached bytecode every one of them compiles the package and the tests from source
@@ -51,16 +60,44 @@ def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
     return cores + max(1, cores // 4)
 
 
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """What collection made (the package, the test modules, ~3,400 items) is kept to the end: frozen out of the collector's
+    full passes, which would otherwise walk it again and again between the tests (gc.freeze, as a forking server does)."""
+    gc.collect()
+    gc.freeze()
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """The tests marked ``slow`` first (collection order kept otherwise): xdist hands tests out in this order, so the longest
     starts at once and the short ones fill the other workers around it, instead of it starting late and running on alone
-    (tests/test_wheel.py was collected 2,928th of 3,187: its 25 s could be the run's last, on one worker)."""
+    (tests/test_wheel.py was collected 2,928th of 3,187: its 25 s could be the run's last, on one worker). In an xdist
+    worker under ``--dist loadgroup``, each test marked ``xdist_group`` gets its group in its node id (below)."""
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+    if getattr(config.option, "loadgroup", False):
+        _groups_in_node_ids(items)
+
+
+def _groups_in_node_ids(items: list[pytest.Item]) -> None:
+    """``test_x@GROUP``, the node id by which xdist's loadgroup scheduler sends every test of GROUP to one worker.
+
+    xdist (3.8) writes it to ``item._nodeid``, which pytest 9.2 no longer reads (``nodeid`` is made from ``item._id``): the
+    groups were ignored, each test went to any worker and paid its group's module fixture again (the import contract's
+    parse, 0.8 s, three times). Written here where pytest reads it, as xdist would; an id xdist has marked already is kept.
+    Upstream: pytest-dev/pytest-xdist#1386 (open; the fix proposed in #1388 writes the same structured id).
+    """
+    if NodeId is None:
+        return
+    for item in items:
+        names = sorted({str(mark.args[0] if mark.args else mark.kwargs.get("name", "default")) for mark in item.iter_markers("xdist_group")})
+        if names and "@" not in item.nodeid:
+            item._id = NodeId.parse(f"{item.nodeid}@{'_'.join(names)}")
 
 
 @pytest.fixture(scope="session", autouse=True)
 def filterpy_loaded() -> None:
     """The heading filter loads filterpy in the background; tests want it judging from the first reading."""
+    from executive.sensing.heading import wait_for_filterpy
+
     assert wait_for_filterpy()
 
 
@@ -73,6 +110,8 @@ def every_test_on_a_clean_blackboard(clean_blackboard: None) -> None:
 def logging_as_it_was() -> Iterator[None]:
     """A command run in a test (``setup_logging``) points the root logger at that test's captured stderr, closed after it, and sets
     the operator's loggers to INFO (a later test's caplog would see their records): put both back."""
+    from executive.operator.logs import OPERATOR_LOGGERS
+
     root = logging.getLogger()
     handlers, level = root.handlers[:], root.level
     operator_levels = {name: logging.getLogger(name).level for name in OPERATOR_LOGGERS}
@@ -86,6 +125,8 @@ def logging_as_it_was() -> Iterator[None]:
 @pytest.fixture
 def square_mission() -> Mission:
     """Four waypoints on a 20 m square (the rover square), radius 1.5 m, leg timeout 60 s."""
+    from executive.mission.model import Mission
+
     corners = [(47.397742, 8.545594), (47.397922, 8.545594), (47.397922, 8.545860), (47.397742, 8.545860)]
     return Mission.model_validate(
         {
@@ -101,6 +142,8 @@ def square_mission() -> Mission:
 
 @pytest.fixture
 def mission_state(square_mission: Mission) -> MissionState:
+    from executive.mission.lifecycle import MissionState
+
     state = MissionState()
     state.upload(square_mission)
     return state

@@ -46,12 +46,19 @@ SOURCES = [*sorted(PACKAGE.rglob("*.py")), *sorted((PACKAGE.parent / "trees").rg
 MODULES = {module_name(p): p for p in SOURCES if "__pycache__" not in p.parts}
 
 
+@functools.cache
+def import_statements(path: Path) -> list[ast.Import | ast.ImportFrom]:
+    """Every import statement of ``path``, at its top or inside functions: parsed once in a worker for all the checks below (parsing
+    the package is 0.8 s of CPU). Only the statements are kept: the whole trees, kept, slowed every later garbage collection."""
+    return [node for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))) if isinstance(node, ast.Import | ast.ImportFrom)]
+
+
 def imports_of(name: str, modules: dict[str, Path] = MODULES) -> set[str]:
     """The modules of ours (of ``modules``) ``name`` imports (``from a import b`` names module ``a.b`` when there is one)."""
     path = modules[name]
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     found: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in import_statements(path):
         targets: list[str] = []
         if isinstance(node, ast.Import):
             targets = [alias.name for alias in node.names]
@@ -73,6 +80,10 @@ def imports_of(name: str, modules: dict[str, Path] = MODULES) -> set[str]:
 def graph_of_ours() -> dict[str, set[str]]:
     """Each module of ours and the modules of ours it imports: read when a test first asks (not at collection, in every worker)."""
     return {name: imports_of(name) for name in MODULES}
+
+
+#: The tests that read every module: on one xdist worker (``--dist loadgroup``), which parses the package once for all of them.
+reads_the_package = pytest.mark.xdist_group("import_graph")
 
 
 def top_level(name: str) -> str:
@@ -121,6 +132,15 @@ def cycles(graph: dict[str, set[str]] | None = None) -> list[list[str]]:
     return groups
 
 
+@reads_the_package
+def test_the_tests_that_read_the_package_go_to_one_worker(request: pytest.FixtureRequest) -> None:
+    """xdist's loadgroup scheduler groups by the ``@GROUP`` end of a node id (tests/conftest.py writes it where pytest 9.2 reads it)."""
+    if not getattr(request.config.option, "loadgroup", False):
+        pytest.skip("not in an xdist worker under --dist loadgroup (README's `pytest -n auto` is)")
+    assert request.node.nodeid.endswith("@import_graph")
+
+
+@reads_the_package
 def test_no_import_cycle() -> None:
     assert cycles() == []
 
@@ -137,22 +157,25 @@ def test_no_import_cycle_in_the_benchmarks_or_tools() -> None:
     assert cycles(graph) == []
 
 
+@reads_the_package
 def test_imports_run_down_the_layers() -> None:
     upward = {(a, b) for a, targets in graph_of_ours().items() for b in targets if layer(b) < layer(a)}
     assert upward == set(UPWARD), "imports running up a layer (README: Architecture)"
     assert len(UPWARD) <= 3
 
 
+@reads_the_package
 def test_behaviours_import_no_io() -> None:
     behaviours = {a: targets for a, targets in graph_of_ours().items() if a.startswith("executive.behaviours")}
     assert {(a, b) for a, targets in behaviours.items() for b in targets if b.startswith("executive.io")} == set()
 
 
+@reads_the_package
 def test_the_package_imports_no_test_only_library() -> None:
     """matplotlib draws the manual's pictures in tests (the [test] extra): an installed executive never needs it."""
     found = set()
     for name, path in MODULES.items():
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in import_statements(path):
             if isinstance(node, ast.Import):
                 found |= {(name, alias.name.split(".")[0]) for alias in node.names}
             elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
@@ -165,6 +188,7 @@ def test_no_module_over_600_lines(name: str) -> None:
     assert len(MODULES[name].read_text(encoding="utf-8").splitlines()) <= 600
 
 
+@reads_the_package
 def test_the_contract_reads_the_package_it_guards() -> None:
     """Imports are found at the top and inside functions; every module has a layer."""
     assert "executive.autopilot" in graph_of_ours()["executive.behaviours.commands"]  # the package: its __init__ imports the port

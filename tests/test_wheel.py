@@ -1,14 +1,18 @@
-"""The package as a user gets it: ``python -m build`` (an sdist, then the wheel from it), ``twine check``, the wheel in a
+"""The package as a user gets it: built as ``python -m build`` builds it (an sdist, then the wheel from the extracted sdist,
+each in an isolated environment holding only what pyproject's ``build-system`` asks for), ``twine check``, the wheel in a
 fresh virtualenv outside the checkout, and an example run by name there.
 
 Slow (two isolated builds, a run): marked ``slow``, so ``pytest -m 'not slow'`` leaves it out while working; README's test
-command runs it. No network beyond the suite's own install: the build's isolated environment takes setuptools from pip's
-cache. What it does NOT prove: that pip resolves the wheel's dependencies from the index. The fresh virtualenv gets the
-wheel alone (``--no-deps``) and borrows this environment's packages through a ``.pth`` file, behind its own site-packages
-(``executive`` itself comes from the wheel, never from the checkout): installing the dependencies into it took 58 s on the
-2-core machine, too much for the suite. What stands in for it: ``pip check`` in the fresh virtualenv (every requirement the
-wheel declares is there, at a version it accepts), and every third-party package the wheel's modules import is one its
-Requires-Dist names (read from the wheel's own files), so a dependency the wheel forgets to declare fails here.
+command runs it. The two builds run build's own steps through its API (``ProjectBuilder`` in a ``DefaultIsolatedEnv``) in one
+isolated environment: ``python -m build`` makes one per build, and installing setuptools into it was 2.4 of the test's 10 s of
+CPU. No network beyond the suite's own install: the build's isolated environment takes setuptools from pip's cache.
+
+What it does NOT prove: that pip resolves the wheel's dependencies from the index. The fresh virtualenv gets the wheel alone
+(``--no-deps``) and borrows this environment's packages through a ``.pth`` file, behind its own site-packages (``executive``
+itself comes from the wheel, never from the checkout): installing the dependencies into it took 58 s on the 2-core machine, too
+much for the suite. What stands in for it: ``pip check`` in the fresh virtualenv (every requirement the wheel declares is there,
+at a version it accepts), and every third-party package the wheel's modules import is one its Requires-Dist names (read from the
+wheel's own files), so a dependency the wheel forgets to declare fails here.
 """
 
 from __future__ import annotations
@@ -21,11 +25,14 @@ import shutil
 import subprocess
 import sys
 import sysconfig
+import tarfile
 import venv
 import zipfile
 from pathlib import Path
 
 import pytest
+from build import ProjectBuilder
+from build.env import DefaultIsolatedEnv
 
 ROOT = Path(__file__).parents[1]
 #: What the sdist is made of (the rest of the repository is not the package's).
@@ -67,7 +74,27 @@ def _run(command: list[str], **kwargs) -> subprocess.CompletedProcess[str]:
     return done
 
 
+def _build_sdist_then_wheel(source: Path, dist: Path) -> tuple[Path, Path]:
+    """``python -m build``'s steps: the sdist of ``source``, then the wheel from the extracted sdist, each with the backend's own
+    build requirements installed first; one isolated environment (only setuptools, as pyproject asks) for both."""
+    with DefaultIsolatedEnv() as env:
+        builder = ProjectBuilder.from_isolated_env(env, source)
+        env.install(builder.build_system_requires)
+        env.install(builder.get_requires_for_build("sdist"))
+        sdist = Path(builder.build("sdist", dist))
+        with tarfile.open(sdist) as archive:
+            archive.extractall(dist.with_name("unpacked"), filter="data")
+        (unpacked,) = dist.with_name("unpacked").iterdir()  # one top-level directory, as build requires of an sdist
+        assert (unpacked / "PKG-INFO").is_file()
+        from_sdist = ProjectBuilder.from_isolated_env(env, unpacked)
+        assert from_sdist.build_system_requires == builder.build_system_requires  # installed already (pip again: 1 s for nothing)
+        env.install(from_sdist.get_requires_for_build("wheel"))
+        wheel = Path(from_sdist.build("wheel", dist))
+    return sdist, wheel
+
+
 @pytest.mark.slow
+@pytest.mark.filterwarnings("ignore::pyproject_hooks.BuildBackendWarning")  # setuptools' advice, which `python -m build` prints and we never read
 def test_the_wheel_alone_in_a_fresh_virtualenv_lists_and_runs_the_examples_by_name_with_only_the_packages_it_declares(tmp_path: Path) -> None:
     source = tmp_path / "source"  # a copy: the build's egg-info and build/ stay out of the checkout
     for name in SOURCES:
@@ -75,9 +102,7 @@ def test_the_wheel_alone_in_a_fresh_virtualenv_lists_and_runs_the_examples_by_na
             shutil.copytree(ROOT / name, source / name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
         else:
             shutil.copy(ROOT / name, source / name)
-    dist = tmp_path / "dist"
-    _run([sys.executable, "-m", "build", "--outdir", str(dist), str(source)])
-    wheel, sdist = next(dist.glob("uxv_executive-*.whl")), next(dist.glob("uxv_executive-*.tar.gz"))
+    sdist, wheel = _build_sdist_then_wheel(source, tmp_path / "dist")
     _run([sys.executable, "-m", "twine", "check", "--strict", str(wheel), str(sdist)])
     names = zipfile.ZipFile(wheel).namelist()
     examples = {"rover_square.yaml", "faults/rc_loss.yaml", "events/ugv_operator.yaml", "mission.schema.json"}
@@ -102,7 +127,7 @@ def test_the_wheel_alone_in_a_fresh_virtualenv_lists_and_runs_the_examples_by_na
     assert all(Path(m["file"]).is_relative_to(purelib) for m in listed["missions"])
     assert "rc_loss" in listed["faults"]
 
-    _run([sys.executable, "-m", "pip", "--python", str(python), "check"], env=env)  # every declared requirement is there
+    _run([str(python), "-m", "pip", "check"], env=env)  # every declared requirement is there (pip through the .pth: one start, not two)
     assert _undeclared_imports(wheel) == {}, "the wheel's code imports packages it does not declare"
 
     ran = subprocess.run([executive, "run", "rover_square", "--speedup", "50", "--socket", str(home / "ctl.sock")], cwd=home, env=env,

@@ -48,10 +48,13 @@ def keeping_time(late_after_wall_s: float) -> Iterator[float]:
     faster). The interval is cut to a tenth of the loop's lateness margin (``late_after_wall_s``, wall seconds), never
     lengthened, and restored after. A full pass of the collector over start-up's objects (modules, the mission, the
     tree) held the interpreter 20-50 ms: they are collected once here and frozen out of later passes, until the loop
-    ends (a process that goes on, a test session, can collect them again). Yields the switch interval set.
+    ends. The collector is left as it was found: unfrozen if nothing was frozen before (a process that goes on can collect
+    start-up's objects again); what was frozen before (filterpy's import, a test session's collected tests) stays frozen.
+    Yields the switch interval set.
     """
     before = sys.getswitchinterval()
     interval = min(before, max(MIN_SWITCH_INTERVAL_S, late_after_wall_s / 10.0))
+    frozen_before = gc.get_freeze_count()
     gc.collect()
     gc.freeze()
     sys.setswitchinterval(interval)
@@ -59,7 +62,8 @@ def keeping_time(late_after_wall_s: float) -> Iterator[float]:
         yield interval
     finally:
         sys.setswitchinterval(before)
-        gc.unfreeze()
+        if not frozen_before:  # CPython unfreezes all or nothing
+            gc.unfreeze()
 
 
 def caps_logged(text: str) -> list[float]:

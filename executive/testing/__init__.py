@@ -46,13 +46,31 @@ Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``comman
 ``can_buses`` (a :class:`VirtualCan`, shut after the test).
 """
 
-from executive.testing.canbus import VirtualCan
-from executive.testing.harness import BATTERY_FULL, EKF_READY, START_S, Harness, Vehicle, describe, port_for
-from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
-from executive.testing.lockstep import Lockstep, LockstepClock, Overload, VehicleTimeLimit, Wire
-from executive.testing.missions import mission_errors
-from executive.testing.on_link import RuntimeOnLink
-from executive.testing.scripted import MissionAutopilot, ObedientAutopilot, ScriptedAutopilot
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from executive.testing.canbus import VirtualCan
+    from executive.testing.harness import BATTERY_FULL, EKF_READY, START_S, Harness, Vehicle, describe, port_for
+    from executive.testing.links import AUTOPILOT, GCS, FakeLink, Peer, ack
+    from executive.testing.lockstep import Lockstep, LockstepClock, Overload, VehicleTimeLimit, Wire
+    from executive.testing.missions import mission_errors
+    from executive.testing.on_link import RuntimeOnLink
+    from executive.testing.scripted import MissionAutopilot, ObedientAutopilot, ScriptedAutopilot
+
+#: The module of the kit each name is in, imported on first use: pytest loads the plugin, and so this package, in every
+#: process it starts, xdist's controller too, which runs no test (the whole kit cost it 0.6 s of CPU before its workers started).
+_MODULE_OF = {
+    **dict.fromkeys(("VirtualCan",), "canbus"),
+    **dict.fromkeys(("BATTERY_FULL", "EKF_READY", "START_S", "Harness", "Vehicle", "describe", "port_for"), "harness"),
+    **dict.fromkeys(("AUTOPILOT", "GCS", "FakeLink", "Peer", "ack"), "links"),
+    **dict.fromkeys(("Lockstep", "LockstepClock", "Overload", "VehicleTimeLimit", "Wire"), "lockstep"),
+    **dict.fromkeys(("mission_errors",), "missions"),
+    **dict.fromkeys(("RuntimeOnLink",), "on_link"),
+    **dict.fromkeys(("MissionAutopilot", "ObedientAutopilot", "ScriptedAutopilot"), "scripted"),
+}
 
 __all__ = [
     "AUTOPILOT",
@@ -79,3 +97,13 @@ __all__ = [
     "mission_errors",
     "port_for",
 ]
+
+
+def __getattr__(name: str) -> object:
+    if name in _MODULE_OF:
+        return getattr(importlib.import_module(f"executive.testing.{_MODULE_OF[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})  # the names not imported yet too (autodoc lists the members dir() names)

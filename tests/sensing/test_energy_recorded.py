@@ -91,9 +91,16 @@ def play(name: str, mission: Mission, autopilot: str, speedup: float, until_pct:
     return played
 
 
-def test_arduplane_reports_the_energy_drawn_in_hj_and_the_flight_teaches_its_consumption() -> None:
+@pytest.fixture(scope="module")
+def quadplane_5000mah() -> Played:
+    """The real QuadPlane's whole vtol_transit on 5000 mAh, played once per module (its tests: ``xdist_group("quadplane_5000mah")``)."""
+    return play("vtol_transit-quadplane-5000mah.tlog", vtol_transit(nominal_v=11.1), "ardupilot", 3.0)
+
+
+@pytest.mark.xdist_group("quadplane_5000mah")
+def test_arduplane_reports_the_energy_drawn_in_hj_and_the_flight_teaches_its_consumption(quadplane_5000mah: Played) -> None:
     """5000 mAh: the whole of vtol_transit drew 1030 mAh, 12.97 Wh (energy_consumed 467 hJ) in 128 s armed (42.6 s at speed-up 3)."""
-    played = play("vtol_transit-quadplane-5000mah.tlog", vtol_transit(nominal_v=11.1), "ardupilot", 3.0)
+    played = quadplane_5000mah
     last = played.last
     assert last is not None and (last.consumed_mah, round(last.consumed_wh, 2), last.remaining_pct) == (1030.0, 12.97, 79)
     assert played.params["BATT_CAPACITY"] == 5000.0 and played.params["BATT_MONITOR"] == 4.0
@@ -223,10 +230,11 @@ def test_the_seconds_held_ahead_cost_a_vtols_hover_phases_and_every_sample_hold(
     assert [held_s(boat, leg, take_off=leg == 0, to_fw_ahead=False) for leg in (0, 2, 4)] == [Held(20.0, 0.0), Held(10.0, 0.0), Held(0.0, 0.0)]
 
 
-def test_the_real_quadplane_flight_costed_at_its_own_learned_rates_matches_what_it_drew() -> None:
+@pytest.mark.xdist_group("quadplane_5000mah")
+def test_the_real_quadplane_flight_costed_at_its_own_learned_rates_matches_what_it_drew(quadplane_5000mah: Played) -> None:
     """The 5000 mAh flight drew 12.97 Wh; its hover seconds (take-off, hover point, transitions, landing) and its plane metres,
     costed at the rates it taught the model, come to within 10 % of it (climb and descent alone, as before: about 9 Wh)."""
-    played = play("vtol_transit-quadplane-5000mah.tlog", vtol_transit(nominal_v=11.1), "ardupilot", 3.0)
+    played = quadplane_5000mah
     learned = played.estimates[-1][1]
     costed = planned(vtol_transit(capacity_wh=55.5, wh_per_km=learned.wh_per_km, wh_per_min=learned.wh_per_min))
     assert isinstance(costed, EnergyEstimate)

@@ -145,9 +145,11 @@ def test_a_loiter_of_our_own_delivered_late_mid_leg_is_undone_and_the_survey_com
 def test_a_loiter_set_by_a_ground_station_mid_leg_is_a_person_s_and_guided_is_not_asked_for_again(lockstep):
     mission = load_mission(MISSIONS / "boat_survey.yaml")
     sim = lockstep(mission, ekf_ready_after_s=2.0)
-    sim.at(100.0, lambda s: s.autopilot.set_mode(s.autopilot.profile.modes["LOITER"]))  # not asked for by the executive
+    at_s = 25.0  # mid leg 2 (~12 s to ~43 s of vehicle time)
+    sim.at(at_s, lambda s: s.autopilot.set_mode(s.autopilot.profile.modes["LOITER"]))  # not asked for by the executive
     modes: set[str] = set()
-    sim.observers.append(lambda s: modes.add(s.autopilot.mode) if s.clock.now() > 100.0 else None)
-    assert sim.run(limit_s=300, until=lambda: sim.clock.now() > 130.0) is None
+    sim.observers.append(lambda s: modes.add(s.autopilot.mode) if s.clock.now() > at_s else None)
+    assert sim.run(limit_s=300, until=lambda: sim.clock.now() > at_s + 30.0) is None
     assert sim.status is MissionStatus.PAUSED and "ground station" in sim.runtime.mission_state.reason
     assert modes == {"LOITER"}  # the leg checks GUIDED every tick, but a person's mode wins
+    assert sim.runtime.mission_state.legs.leg_index == 1  # set mid leg 2, paused there

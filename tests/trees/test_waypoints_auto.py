@@ -5,6 +5,8 @@ Lock-step (manual clock) against the simulated ArduRover, rover and motorboat.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import pytest
@@ -14,6 +16,7 @@ from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
 from executive.mission.resume import ResumePoint
+from executive.runtime.loop import RunOutcome
 from executive.testing import Lockstep
 from tests_support import LinkCut, line_mission, set_currents
 
@@ -57,38 +60,65 @@ def test_each_burst_of_appends_restarts_the_leg_as_the_real_firmware_does(caplog
     assert 1.03 < supervised.seconds / own.seconds < 1.09, (supervised, own)
 
 
-def test_the_horizon_is_filled_in_one_burst_once_the_autopilot_holds_one_waypoint_past_the_current_one(lockstep) -> None:
+@dataclass
+class HorizonRun:
+    """boat_survey driven to its end in drive: auto with a horizon: its outcome, what the autopilot held after each step, the
+    waypoints appended on each leg (leg number -> items), the items held after the last step and after the run."""
+
+    mission: Mission
+    outcome: RunOutcome
+    watch: HorizonWatch
+    grown: dict[int, list[int]]
+    held: int
+    items_at_end: int
+
+
+@pytest.fixture(scope="module")
+def boat_survey_in_auto() -> Callable[[int], HorizonRun]:
+    """``boat_survey_in_auto(horizon)``: each horizon's run once per module (the tests asking for the same horizon watch the
+    same lock-step run, so they run on one xdist worker: ``xdist_group("boat_survey_in_auto")``)."""
+    runs: dict[int, HorizonRun] = {}
+
+    def run(horizon: int) -> HorizonRun:
+        if horizon not in runs:
+            mission = auto_mission("boat_survey", auto_horizon_legs=horizon)
+            with Lockstep(mission, ekf_ready_after_s=2.0) as sim:
+                state = sim.runtime.mission_state
+                watch = HorizonWatch()
+                grown: dict[int, list[int]] = {}
+                held = [0]
+
+                def appended(s: Lockstep) -> None:
+                    count = s.autopilot.mission.count - 1
+                    if s.autopilot.mission.running and count > held[0]:
+                        grown.setdefault(state.legs.leg_index + 1, []).extend(range(held[0] + 1, count + 1))
+                    held[0] = count
+
+                sim.observers += [watch, appended]
+                outcome = sim.run_to_end()
+                runs[horizon] = HorizonRun(mission, outcome, watch, grown, held[0], sim.autopilot.mission.count - 1)
+        return runs[horizon]
+
+    return run
+
+
+@pytest.mark.xdist_group("boat_survey_in_auto")
+def test_the_horizon_is_filled_in_one_burst_once_the_autopilot_holds_one_waypoint_past_the_current_one(boat_survey_in_auto) -> None:
     """Horizon 3 on boat_survey's 8 waypoints: 1-4 uploaded; nothing appended while two are held past the current one; 5-6
     appended back to back on leg 3, 7-8 on leg 5: two bursts where one append a leg would restart four legs."""
-    mission = auto_mission("boat_survey")
-    sim = lockstep(mission, ekf_ready_after_s=2.0)
-    state = sim.runtime.mission_state
-    grown: dict[int, list[int]] = {}
-    held = [0]
-
-    def watch(s: Lockstep) -> None:
-        count = s.autopilot.mission.count - 1
-        if s.autopilot.mission.running and count > held[0]:
-            grown.setdefault(state.legs.leg_index + 1, []).extend(range(held[0] + 1, count + 1))
-        held[0] = count
-
-    sim.observers.append(watch)
-    outcome = sim.run_to_end()
-    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
-    assert held[0] == 8 and grown == {3: [5, 6], 5: [7, 8]}  # 1-4 uploaded before AUTO
+    run = boat_survey_in_auto(3)  # limits.auto_horizon_legs' default
+    assert run.outcome.status is MissionStatus.COMPLETED, run.outcome.reason
+    assert run.held == 8 and run.grown == {3: [5, 6], 5: [7, 8]}  # 1-4 uploaded before AUTO
 
 
+@pytest.mark.xdist_group("boat_survey_in_auto")
 @pytest.mark.parametrize("horizon", [1, 2, 3])
-def test_the_autopilot_never_holds_more_than_the_horizon_and_the_run_completes(lockstep, horizon: int) -> None:
-    mission = auto_mission("boat_survey", auto_horizon_legs=horizon)
-    sim = lockstep(mission, ekf_ready_after_s=2.0)
-    watch = HorizonWatch()
-    sim.observers.append(watch)
-    outcome = sim.run_to_end()
-    assert outcome.status is MissionStatus.COMPLETED, outcome.reason
-    assert max(watch.ahead) == horizon  # the waypoint after the next held (horizon 2 or more): AUTO plans its corners
-    assert sim.autopilot.mission.count - 1 == len(mission.waypoints)  # extended to the end as legs were reached
-    assert watch.modes[-1] == "LOITER"  # the boat held at the end
+def test_the_autopilot_never_holds_more_than_the_horizon_and_the_run_completes(boat_survey_in_auto, horizon: int) -> None:
+    run = boat_survey_in_auto(horizon)
+    assert run.outcome.status is MissionStatus.COMPLETED, run.outcome.reason
+    assert max(run.watch.ahead) == horizon  # the waypoint after the next held (horizon 2 or more): AUTO plans its corners
+    assert run.items_at_end == len(run.mission.waypoints)  # extended to the end as legs were reached
+    assert run.watch.modes[-1] == "LOITER"  # the boat held at the end
 
 
 def test_a_dead_executive_leaves_the_vehicle_stopped_at_the_end_of_the_horizon(lockstep) -> None:
