@@ -77,7 +77,7 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
     # ``list(Status)`` built to check the status. A leaf guard is ticked and stopped every tick.
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """Tick once: ``initialise`` when not RUNNING, ``update``, ``stop`` when it ends (py_trees' own with its debug log on)."""
-        if py_trees.logging.level is py_trees.logging.Level.DEBUG:
+        if py_trees.logging.level < py_trees.logging.Level.INFO:  # as py_trees.logging.Logger.debug decides
             yield from super().tick()
             return
         if self.status != Status.RUNNING:
@@ -93,7 +93,7 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
 
     def stop(self, new_status: Status) -> None:
         """``terminate``, then the new status (py_trees' own with its debug log on)."""
-        if py_trees.logging.level is py_trees.logging.Level.DEBUG:
+        if py_trees.logging.level < py_trees.logging.Level.INFO:  # as py_trees.logging.Logger.debug decides
             super().stop(new_status)
             return
         self.terminate(new_status)
