@@ -10,7 +10,7 @@ import pytest
 
 from benchmarks import __main__ as bench
 from benchmarks import can_decode, efficiency, ingest, reaction, route_check, simspeed, soak, startup, tick
-from benchmarks.common import Row
+from benchmarks.common import Row, serpentine
 
 
 def _check(rows: list[Row], count: int) -> None:
@@ -23,8 +23,14 @@ def _check(rows: list[Row], count: int) -> None:
 
 
 @pytest.mark.parametrize("autopilot", ["ardupilot", "px4"])
-def test_tick(autopilot: str) -> None:
-    rows = tick.run(ticks=10, sizes=(2, 3), warmup_ticks=1, autopilot=autopilot, missions=[tick.MISSIONS / "rover_square.yaml"])  # type: ignore[arg-type]
+def test_tick(autopilot: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # smaller sizes than the command's: the CPU share of rover_square's first two legs, the breakdown's legs 10 m, not 50 m
+    square = (tick.MISSIONS / "rover_square.yaml").read_text()
+    (tmp_path / "two_legs.yaml").write_text(
+        "\n".join(line for line in square.splitlines() if "name: east}" not in line and "name: home}" not in line)
+    )
+    monkeypatch.setattr(tick, "serpentine", lambda count, leg_m, row_m: serpentine(count, 10.0, row_m=100.0))
+    rows = tick.run(ticks=10, sizes=(2, 3), warmup_ticks=1, autopilot=autopilot, missions=[tmp_path / "two_legs.yaml"])  # type: ignore[arg-type]
     cpu = 1 if autopilot == "ardupilot" else 0  # the seed missions' CPU share: ArduPilot's
     mcap = 1 if autopilot == "ardupilot" else 0  # the recording as MCAP beside JSON lines' (ArduPilot's rows alone)
     _check(rows, cpu + 1 + len(tick.PARTS) + mcap + 1)  # the full tick, its parts beside their floors, the growth

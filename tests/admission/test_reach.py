@@ -69,7 +69,7 @@ def test_a_resumed_run_checks_only_the_waypoints_ahead() -> None:
     """A run continued after a crash at leg 2: the waypoint behind is a goal no more, however far it is now."""
     mission = line_mission("behind")
     far_behind, _ = with_far_waypoint(mission, 6_000.0)
-    reordered = far_behind.model_copy(update={"waypoints": [far_behind.waypoints[-1], *mission.waypoints]})
+    reordered = far_behind.model_copy(update={"waypoints": [far_behind.waypoints[-1], *mission.waypoints[:2]]})  # two ahead
     with Lockstep(reordered, home=(*LINE_HOME, 0.0)) as sim:
         outcome = sim.run(300, resume=ResumePoint(run=1, leg_index=1, samples=()))  # the far waypoint was reached before the crash
     assert outcome is not None and outcome.status is MissionStatus.COMPLETED, outcome
@@ -99,7 +99,8 @@ def test_no_position_refuses_the_mission_after_the_ekf_wait_with_nothing_command
 def test_a_position_the_ekf_does_not_vouch_for_is_waited_out_not_judged() -> None:
     """Real ArduPlane SITL before its GPS fix: GLOBAL_POSITION_INT 25 m from 0, 0 (DCM dead-reckoning on airspeed noise) with the
     EKF not initialised; the mission was refused as 14960 km out of reach. It waits for the EKF, then runs from home."""
-    mission = line_mission("before-the-fix")
+    line = line_mission("before-the-fix")
+    mission = line_mission("before-the-fix", waypoints=line.waypoints[:2])  # two legs: from home, run
     with Lockstep(mission, home=(*LINE_HOME, 0.0)) as sim:
         sim.autopilot.start = (0.0002246, -0.000037)  # what the aircraft reported before its EKF had an origin
         sim.autopilot.ekf_ready_after_s = 8.0

@@ -106,6 +106,7 @@ def rc_loss_run() -> Run:
     return run_against_the_base(faults=[{"kind": "rc_loss", "at_s": 4.0, "for_s": 3.0}])
 
 
+@pytest.mark.xdist_group("can_rc_loss_run")
 def test_the_vehicle_reaches_its_waypoint_because_the_bridge_forwards_the_outputs(rc_loss_run: Run) -> None:
     outcome, sim, watch = rc_loss_run
     assert outcome.status is MissionStatus.COMPLETED, outcome.reason
@@ -115,6 +116,7 @@ def test_the_vehicle_reaches_its_waypoint_because_the_bridge_forwards_the_output
     assert {tick.system.control_mode for tick in watch.ticks if tick.system} == {"RC", "CAN"}  # RC until the bridge's first 0x421
 
 
+@pytest.mark.xdist_group("can_rc_loss_run")
 def test_the_base_gets_50_motion_commands_per_second_of_vehicle_time(rc_loss_run: Run) -> None:
     _, sim, watch = rc_loss_run
     assert sim.base is not None
@@ -122,6 +124,7 @@ def test_the_base_gets_50_motion_commands_per_second_of_vehicle_time(rc_loss_run
     assert abs(sim.base.received[0x111] - expected) <= 5  # a tick's worth at either end
 
 
+@pytest.mark.xdist_group("can_rc_loss_run")
 def test_during_the_rc_loss_the_base_repeats_its_last_frame_and_reports_nothing(rc_loss_run: Run) -> None:
     lost = [tick for tick in rc_loss_run.watch.ticks if 4.1 < tick.t < 6.9]
     assert lost and {(tick.system.control_mode, tick.system.faults) for tick in lost} == {("CAN", ())}
@@ -129,6 +132,7 @@ def test_during_the_rc_loss_the_base_repeats_its_last_frame_and_reports_nothing(
     assert repeats_per_s > 20.0  # the 0x241 frames keep coming (50 Hz at most; the loop is slower at this speed-up), every one a repeat
 
 
+@pytest.mark.xdist_group("can_rc_loss_run")
 def test_a_frozen_counter_makes_rc_stale(rc_loss_run: Run) -> None:
     ticks = rc_loss_run.watch.ticks
     stale = [tick for tick in ticks if tick.fresh is False]

@@ -27,10 +27,23 @@ def _names_a_tree(node: ast.Constant, parents: list[ast.AST], named: set[str]) -
     return any("tree" in text.lower() for text in near)
 
 
-def _constants(tree: ast.AST, parents: list[ast.AST]) -> list[tuple[ast.Constant, list[ast.AST]]]:
-    if isinstance(tree, ast.Constant):
-        return [(tree, parents)]
-    return [found for child in ast.iter_child_nodes(tree) for found in _constants(child, [*parents, tree])]
+def _constants(tree: ast.AST, named: set[str]) -> list[tuple[ast.Constant, list[ast.AST]]]:
+    """Each constant of ``tree`` whose value is in ``named``, with its parents (outermost first)."""
+    found: list[tuple[ast.Constant, list[ast.AST]]] = []
+    parents: list[ast.AST] = []
+
+    def visit(node: ast.AST) -> None:  # one list of parents, copied only for a constant that names a tree
+        if isinstance(node, ast.Constant):
+            if isinstance(node.value, str) and node.value in named:
+                found.append((node, list(parents)))
+            return
+        parents.append(node)
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+        parents.pop()
+
+    visit(tree)
+    return found
 
 
 def test_no_module_below_the_trees_names_a_built_in_tree() -> None:
@@ -40,7 +53,7 @@ def test_no_module_below_the_trees_names_a_built_in_tree() -> None:
     for path in sorted(EXECUTIVE.rglob("*.py")):
         if path == EXECUTIVE / "registry.py":
             continue
-        for node, parents in _constants(ast.parse(path.read_text(encoding="utf-8")), []):
+        for node, parents in _constants(ast.parse(path.read_text(encoding="utf-8")), named):
             if _names_a_tree(node, parents, named):
                 found.append(f"{path.relative_to(EXECUTIVE.parent)}:{node.lineno}: {node.value}")
     assert found == []

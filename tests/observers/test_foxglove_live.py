@@ -42,18 +42,22 @@ class NodeClient:
         self.proc.wait()
 
 
-def run(path: Path | None, live: FoxgloveSink | None, waypoints: int = 4) -> MissionStatus:
-    """The line mission, lock-step, recorded to ``path`` (and served on ``live``)."""
+def run(path: Path | None, live: FoxgloveSink | None, waypoints: int = 4, served_by: FoxgloveSink | None = None) -> MissionStatus:
+    """The line mission, lock-step, recorded to ``path`` (and served on ``live``); ``served_by``: also served by a recorder of its
+    own, as ``run --snapshots FILE.jsonl --foxglove PORT`` serves it beside a JSON-lines file."""
     recorders: list[SnapshotRecorder] = []
 
     def plugs(clock: Clock) -> dict[str, Any]:
         recorders.append(SnapshotRecorder(path, clock=clock, live=live))
-        return {"plugs": [snapshot_recorder(recorders[0])]}
+        if served_by is not None:
+            recorders.append(SnapshotRecorder(None, clock=clock, live=served_by))
+        return {"plugs": [snapshot_recorder(recorder) for recorder in recorders]}
 
     mission = line_mission("live")
     with Lockstep(line_mission("live", waypoints=mission.waypoints[:waypoints]), options_for_clock=plugs) as sim:
         status = sim.run_to_end(300.0).status
-    recorders[0].close()
+    for recorder in recorders:
+        recorder.close()
     return status
 
 
@@ -85,19 +89,21 @@ def test_foxglove_s_own_client_reads_the_channels_of_the_file_live(tmp_path: Pat
 
 
 def test_a_client_that_never_reads_changes_no_recording_byte(tmp_path: Path) -> None:
-    """The same run recorded alone, then served to Foxglove's client stalled after subscribing to everything: the same bytes."""
+    """The same run recorded alone, then recorded while served (as ``run --snapshots FILE.jsonl --foxglove PORT`` does) to
+    Foxglove's client stalled after subscribing to everything: the same bytes."""
     assert run(tmp_path / "alone.jsonl", None) is MissionStatus.COMPLETED
     live = FoxgloveSink("127.0.0.1", 0)
+    served: list[str] = []
+    put = live.put
+    live.put = lambda topic, *rest: (served.append(topic), put(topic, *rest))[1]  # type: ignore[method-assign]
     stalled = NodeClient(live.url, "--stall")
-    served = SnapshotRecorder(None, live=live)
     try:
-        assert run(tmp_path / "served.jsonl", None) is MissionStatus.COMPLETED  # recorded as before...
-        assert run(None, live) is MissionStatus.COMPLETED  # ...and the same mission served to a client that reads nothing
+        assert run(tmp_path / "served.jsonl", None, served_by=live) is MissionStatus.COMPLETED  # recorded and served
         assert stalled.proc.poll() is None  # still connected, never reading
     finally:
-        served.close()
         stalled.kill()
         live.close()
+    assert served.count("/tree/tick") > 300 and "/mavlink/in/GLOBAL_POSITION_INT" in served  # the whole run was served
     digests = {hashlib.sha256((tmp_path / name).read_bytes()).hexdigest() for name in ("alone.jsonl", "served.jsonl")}
     assert len(digests) == 1
 

@@ -85,6 +85,7 @@ def square(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks,
     return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_the_file_is_chunked_compressed_and_indexed_with_a_schema_per_channel(square) -> None:
     path, _, _, status = square
     assert status is MissionStatus.COMPLETED
@@ -112,6 +113,7 @@ def test_the_file_is_chunked_compressed_and_indexed_with_a_schema_per_channel(sq
     assert all(c.message_encoding == "json" for c in summary.channels.values())
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_every_tick_is_there_at_its_vehicle_time(square) -> None:
     path, _, ticks, _ = square
     recorded = messages(path, "/tree/tick")
@@ -119,6 +121,7 @@ def test_every_tick_is_there_at_its_vehicle_time(square) -> None:
     assert recorded[-1][1]["end"] is True
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_the_mcap_file_holds_what_the_json_lines_file_holds(square) -> None:
     path, jsonl, _, _ = square
     lines = [json.loads(line) for line in jsonl.read_text().splitlines()]
@@ -130,6 +133,7 @@ def test_the_mcap_file_holds_what_the_json_lines_file_holds(square) -> None:
         assert boards.get("end" if line.get("end") else line["tick"]) == line.get("bb")
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_the_mission_s_transitions_and_state(square) -> None:
     path, _, _, _ = square
     events = [(m["before"], m["after"]) for _, m in messages(path, "/mission/events")]
@@ -139,6 +143,7 @@ def test_the_mission_s_transitions_and_state(square) -> None:
     assert [leg for state, leg in states if state == "RUNNING"] == [0, 1, 2, 3, 4]  # 4: the last waypoint reached, ending
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_the_track_is_a_location_fix_at_the_time_it_was_received(square) -> None:
     path, _, _, _ = square
     fixes = messages(path, "/vehicle/location")
@@ -150,6 +155,7 @@ def test_the_track_is_a_location_fix_at_the_time_it_was_received(square) -> None
         assert -35.37 < fix["latitude"] < -35.35 and 149.15 < fix["longitude"] < 149.18 and len(fix["position_covariance"]) == 9
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_each_mavlink_message_on_its_own_channel_with_its_fields(square) -> None:
     path, _, _, _ = square
     received, fixes = messages(path, "/mavlink/in/GLOBAL_POSITION_INT"), messages(path, "/vehicle/location")
@@ -163,6 +169,7 @@ def test_each_mavlink_message_on_its_own_channel_with_its_fields(square) -> None
     assert json.loads(schema.data)["properties"]["lat"] == {"type": "integer"} and json.loads(schema.data)["properties"]["hdg"]
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_the_pose_is_in_the_home_frame_east_north_up(square) -> None:
     path, _, _, _ = square
     poses, transforms = messages(path, "/vehicle/pose"), messages(path, "/tf")
@@ -183,6 +190,7 @@ def test_the_pose_is_in_the_home_frame_east_north_up(square) -> None:
         assert (message["pose"]["position"]["x"], message["pose"]["position"]["y"]) == (pytest.approx(east, abs=0.05), pytest.approx(north, abs=0.05))
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_the_route_is_geojson_for_the_map(square) -> None:
     path, _, _, _ = square
     ((_, message),) = messages(path, "/mission/route")
@@ -192,6 +200,7 @@ def test_the_route_is_geojson_for_the_map(square) -> None:
     assert [p["geometry"]["coordinates"] for p in points] == [[w.lon, w.lat] for w in waypoints]
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_log_lines_are_foxglove_logs(square) -> None:
     path, _, _, _ = square
     logs = {m["message"]: m for _, m in messages(path, "/log")}
@@ -199,6 +208,7 @@ def test_log_lines_are_foxglove_logs(square) -> None:
     assert (done["level"], done["name"]) == (2, "executive.mission.lifecycle")  # foxglove.Log: INFO is 2
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_a_time_window_is_read_through_the_index(square) -> None:
     path, _, ticks, _ = square
     middle = round(ticks.times[len(ticks.times) // 2][1], 3)
@@ -245,12 +255,14 @@ def test_a_rotated_file_starts_with_the_state_so_far_whatever_the_recorder_s_key
     assert {int(i): s for i, s in first["s"].items()} == whole.status and board["bb"] == whole.blackboard
 
 
+@pytest.mark.xdist_group("mcap_square")
 @pytest.mark.parametrize("tick", [0, 1, 99, 100, 101, 102, 500, 987, None])
 def test_replay_shows_the_same_tick_from_either_file(square, tick: int | None) -> None:
     path, jsonl, _, _ = square
     assert list(render(replay(path, tick))) == list(render(replay(jsonl, tick)))  # None: the last tick, as the run's end left it
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_cli_replay_of_an_mcap_file(square, capsys: pytest.CaptureFixture[str]) -> None:
     path, _, _, _ = square
     assert main(["replay", str(path)]) == 0
@@ -258,12 +270,14 @@ def test_cli_replay_of_an_mcap_file(square, capsys: pytest.CaptureFixture[str]) 
     assert last[1] == "✓ Mission" and "  /mission/state: 'COMPLETED'" in last and "  /mission/reason: 'every waypoint reached'" in last
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_a_replay_of_a_tick_seeks_to_the_keyframe_before_it(square) -> None:
     path, _, _, _ = square
     tree, first, *_ = tick_lines(path, near=500)
     assert "tree" in tree and first.get("key") is True and 400 <= first["tick"] < 500  # keyframes every 100 ticks
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_the_slider_s_index_of_an_mcap_file_is_the_json_lines_file_s(square) -> None:
     path, jsonl, _, _ = square
     mcap, lines = Recording(path), Recording(jsonl)
@@ -274,6 +288,7 @@ def test_the_slider_s_index_of_an_mcap_file_is_the_json_lines_file_s(square) -> 
         assert a.t == round(b.t, 3)  # the JSON-lines end line keeps the clock's unrounded time
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_replay_web_shows_an_mcap_file_as_the_json_lines_file(square) -> None:
     from executive.observers.web.feed import Seen
     from executive.observers.web.replay import ReplaySource
@@ -287,6 +302,7 @@ def test_replay_web_shows_an_mcap_file_as_the_json_lines_file(square) -> None:
         assert {k: v for k, v in shown.items() if k not in ("tree", "t")} == {k: v for k, v in expected.items() if k not in ("tree", "t")}
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_replay_groot2_plays_an_mcap_file(square) -> None:
     from executive.observers.groot2.replay import ReplayFeed
     from executive.observers.groot2.view import MonitorView
@@ -299,6 +315,7 @@ def test_replay_groot2_plays_an_mcap_file(square) -> None:
     assert feed.position == 502 and waits[:2] == [pytest.approx(0.1, abs=0.002)] * 2
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_convert_writes_an_old_snapshot_file_as_mcap(square, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path, jsonl, _, _ = square
     new = tmp_path / "old.mcap"
@@ -315,6 +332,7 @@ def test_convert_writes_an_old_snapshot_file_as_mcap(square, tmp_path: Path, cap
     assert fixes[-1][1]["latitude"] == pytest.approx(recorded[-1][1]["latitude"], abs=1e-7)
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_convert_refuses_what_it_cannot_convert(square, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path, jsonl, _, _ = square
     assert main(["convert", str(path), str(tmp_path / "again.mcap")]) == 2
@@ -324,6 +342,7 @@ def test_convert_refuses_what_it_cannot_convert(square, tmp_path: Path, capsys: 
     assert "no such snapshot file" in capsys.readouterr().err
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_report_from_the_mcap_file_tells_what_the_journal_tells(square, capsys: pytest.CaptureFixture[str]) -> None:
     path, _, _, _ = square
     journal = path.with_name("journal.db")
@@ -349,6 +368,7 @@ def test_report_from_the_mcap_file_tells_what_the_journal_tells(square, capsys: 
     assert "no run 2 (runs 1 to 1)" in capsys.readouterr().err
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_every_message_is_strict_json_of_the_type_its_schema_says(square) -> None:
     path, _, _, _ = square
     kinds = {"integer": int, "number": (int, float), "string": str, "array": list, "object": dict, "boolean": bool}
@@ -365,6 +385,7 @@ def test_every_message_is_strict_json_of_the_type_its_schema_says(square) -> Non
                 assert value is None or any(isinstance(value, kinds[k]) for k in allowed if k != "null"), (channel.topic, field, value)
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_foxglove_s_own_mcap_reader_reads_the_file(square) -> None:
     """@mcap/core (TypeScript, another implementation than the `mcap` library's) reads every message, CRCs checked, and seeks."""
     path, _, ticks, _ = square
@@ -382,6 +403,7 @@ def test_foxglove_s_own_mcap_reader_reads_the_file(square) -> None:
     assert told["seek"] == [tick for tick, now in ticks.times if middle <= round(now, 3) < middle + 1]
 
 
+@pytest.mark.xdist_group("mcap_square")
 def test_the_shipped_foxglove_layout_reads_only_what_the_recording_holds(square, tmp_path: Path) -> None:
     from executive.observers.foxglove.layout import paths
 

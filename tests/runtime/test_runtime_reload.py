@@ -116,7 +116,7 @@ def test_a_person_who_has_the_vehicle_keeps_it_through_a_reload(lockstep, paused
 
 
 def test_an_incompatible_mission_is_refused_and_the_old_one_completes_unchanged(lockstep):
-    line = line_mission("line")
+    line = line_mission("line", waypoints=line_mission("line").waypoints[:2])  # paused on its second leg, as the others
     sim = lockstep(line)
     pause_on_leg(sim, 1)
     reply = sim.runtime.operator.request("upload", source="ctl", filename="px4.yaml", text=text(line, name="px4", autopilot="px4"))

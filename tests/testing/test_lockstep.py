@@ -12,6 +12,7 @@ import pytest
 
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
+from executive.mission.model import Mission
 from executive.sensing import heading
 from executive.sim.faults import LinkLoss
 from executive.testing import Lockstep, Overload, VehicleTimeLimit
@@ -19,9 +20,15 @@ from executive.testing import Lockstep, Overload, VehicleTimeLimit
 MISSIONS = Path(__file__).parents[2] / "missions"
 
 
+def first_two_legs() -> Mission:
+    """rover_square's first two legs (north 30 m, then east 30 m): a whole mission with a turn, in half the square's vehicle time."""
+    square = load_mission(MISSIONS / "rover_square.yaml")
+    return square.model_copy(update={"waypoints": square.waypoints[:2]})
+
+
 @pytest.mark.parametrize("as_bytes", [False, True])
 def test_the_same_mission_twice_is_the_same_run_tick_for_tick(lockstep, as_bytes: bool) -> None:
-    mission = load_mission(MISSIONS / "rover_square.yaml")
+    mission = first_two_legs()
     runs = []
     for _ in range(2):
         sim = lockstep(mission, as_bytes=as_bytes, ekf_ready_after_s=2.0)  # the 40 s EKF wait adds nothing to compare
@@ -60,7 +67,7 @@ def test_an_overloaded_run_is_late_and_skips_ticks_as_the_pacer_counts_them_and_
 
 
 def test_a_link_loss_from_a_fault_object_cuts_both_ways_on_the_vehicle_clock(lockstep) -> None:
-    mission = load_mission(MISSIONS / "rover_square.yaml")
+    mission = first_two_legs()  # at 60 s, 20 s after the EKF is ready, the rover drives its second leg
     sim = lockstep(mission, events=[LinkLoss(kind="link_loss", at_s=60.0, for_s=8.0)])
     heard: list[tuple[float, int]] = []
     sim.observers.append(lambda s: heard.append((s.clock.now(), len(s.link.incoming))))
@@ -116,7 +123,7 @@ def test_every_example_mission_completes_and_takes_every_sample(lockstep, name: 
 
 
 def test_an_operator_pause_at_a_vehicle_time_holds_the_mission_until_resumed(lockstep) -> None:
-    mission = load_mission(MISSIONS / "rover_square.yaml")
+    mission = first_two_legs()  # at 60 s, 20 s after the EKF is ready, the rover drives its second leg
     sim = lockstep(mission)
     sim.at(60.0, lambda s: s.runtime.operator.request("pause", source="test"))
     assert sim.run(limit_s=300, until=lambda: sim.clock.now() >= 70.0) is None

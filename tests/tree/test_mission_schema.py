@@ -83,6 +83,12 @@ def good(minimal_yaml: str) -> dict[str, Any]:
     return yaml.safe_load(minimal_yaml)
 
 
+@pytest.fixture(scope="module")
+def schema() -> dict[str, Any]:
+    """The mission schema, made once for the module's validations (the validator only reads it)."""
+    return mission_json_schema()
+
+
 @pytest.mark.parametrize("path", [SHIPPED, ROOT / "missions" / "mission.schema.json"], ids=["package", "missions"])
 def test_shipped_schema_is_current(path: Path) -> None:
     assert path.read_text(encoding="utf-8") == mission_json_schema_text(), f"the model changed: run 'executive schema -o {path}'"
@@ -106,9 +112,9 @@ def test_the_tiny_validator_knows_every_keyword_of_the_schema() -> None:
     assert keywords(mission_json_schema()) <= ANNOTATIONS | STRUCTURE | set(CHECKS)
 
 
-def test_schema_accepts_a_good_mission(good: dict[str, Any]) -> None:
+def test_schema_accepts_a_good_mission(good: dict[str, Any], schema: dict[str, Any]) -> None:
     Mission.model_validate(good)
-    assert violations(good, mission_json_schema(), mission_json_schema()) == []
+    assert violations(good, schema, schema) == []
 
 
 @pytest.mark.parametrize(
@@ -127,14 +133,16 @@ def test_schema_accepts_a_good_mission(good: dict[str, Any]) -> None:
         (lambda m: m.update(limits={"link_timeout_s": 0.0}), "$.limits.link_timeout_s: exclusiveMinimum"),
     ],
 )
-def test_schema_refuses_what_the_model_refuses(good: dict[str, Any], change: Callable[[dict[str, Any]], Any], expected: str) -> None:
+def test_schema_refuses_what_the_model_refuses(
+    good: dict[str, Any], schema: dict[str, Any], change: Callable[[dict[str, Any]], Any], expected: str
+) -> None:
     change(good)
     try:
         refusals = cross_field_errors(Mission.model_validate(good))
     except ValidationError as exc:
         refusals = exc.errors()
     assert refusals
-    assert violations(good, mission_json_schema(), mission_json_schema()) == [expected]
+    assert violations(good, schema, schema) == [expected]
 
 
 def test_schema_command_prints_the_schema(capsys: pytest.CaptureFixture[str]) -> None:

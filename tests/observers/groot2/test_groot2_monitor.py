@@ -59,11 +59,30 @@ def served():
     server.close()
 
 
-def rover_square(view: MonitorView | None, recorder: SnapshotRecorder | None = None) -> Lockstep:
+def rover_square(view: MonitorView | None, recorder: SnapshotRecorder | None = None, legs: int = 4) -> Lockstep:
+    """rover_square, or its first ``legs`` legs, watched by ``view`` and recorded by ``recorder`` if given."""
     mission = load_mission(ROOT / "missions/rover_square.yaml")
+    mission = mission.model_copy(update={"waypoints": mission.waypoints[:legs]})
     plugs = [groot2_monitor(view)] if view is not None else []
     plugs += [snapshot_recorder(recorder)] if recorder is not None else []
     return Lockstep(mission, mission_dir=ROOT / "missions", plugs=plugs)
+
+
+#: A run with a turn (north, then east): what the recorded-bytes and replay tests need, in half the square's vehicle time.
+TWO_LEGS = 2
+
+
+@pytest.fixture(scope="module")
+def unmonitored(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """rover_square's first two legs to their end, recorded with no monitor (the bytes a monitored run must equal; a file to replay)."""
+    path = tmp_path_factory.mktemp("groot2") / "unmonitored.jsonl"
+    recorder = SnapshotRecorder(path)
+    try:
+        with rover_square(None, recorder, legs=TWO_LEGS) as sim:
+            assert sim.run_to_end(600).status.name == "COMPLETED"
+    finally:
+        recorder.close()
+    return path
 
 
 def by_name(tree, name: str):
@@ -131,36 +150,32 @@ def test_a_recording_client_gets_each_transition_in_vehicle_time(served) -> None
     assert view.recording is False
 
 
-def test_a_stalled_client_changes_nothing(tmp_path: Path) -> None:
+@pytest.mark.xdist_group("groot2_unmonitored")
+def test_a_stalled_client_changes_nothing(tmp_path: Path, unmonitored: Path) -> None:
     """The same run with a monitor whose clients never read their replies, or send garbage, records the same bytes."""
     port = free_port_pair()
-    digests = []
-    for monitored in (False, True):
-        path = tmp_path / f"monitored-{monitored}.jsonl"
-        recorder = SnapshotRecorder(path)
-        view = MonitorView() if monitored else None
-        server = Groot2Server(Groot2Address("127.0.0.1", port), view) if view is not None else None
-        context = zmq.Context()
-        try:
-            if server is not None:
-                server.start()
-                stalled = context.socket(zmq.REQ)
-                stalled.connect(f"tcp://127.0.0.1:{port}")
-                stalled.send(RequestHeader(2, RequestType.STATUS, 7).encode())  # ...and never reads the answer
-                garbage = socket.create_connection(("127.0.0.1", port))
-                garbage.sendall(b"\xff" * 4096)  # not ZeroMQ at all
-                view.start_recording()  # transitions pile up, never taken
-            sim = rover_square(view, recorder)
+    path = tmp_path / "monitored.jsonl"
+    recorder = SnapshotRecorder(path)
+    view = MonitorView()
+    server = Groot2Server(Groot2Address("127.0.0.1", port), view)
+    context = zmq.Context()
+    try:
+        server.start()
+        stalled = context.socket(zmq.REQ)
+        stalled.connect(f"tcp://127.0.0.1:{port}")
+        stalled.send(RequestHeader(2, RequestType.STATUS, 7).encode())  # ...and never reads the answer
+        garbage = socket.create_connection(("127.0.0.1", port))
+        garbage.sendall(b"\xff" * 4096)  # not ZeroMQ at all
+        view.start_recording()  # transitions pile up, never taken
+        with rover_square(view, recorder, legs=TWO_LEGS) as sim:
             outcome = sim.run_to_end(600)
-            assert outcome.status.name == "COMPLETED"
-        finally:
-            recorder.close()
-            if server is not None:
-                garbage.close()
-                server.close()
-            context.destroy(linger=0)
-        digests.append(hashlib.sha256(path.read_bytes()).hexdigest())
-    assert digests[0] == digests[1]
+        assert outcome.status.name == "COMPLETED"
+    finally:
+        recorder.close()
+        garbage.close()
+        server.close()
+        context.destroy(linger=0)
+    assert hashlib.sha256(path.read_bytes()).hexdigest() == hashlib.sha256(unmonitored.read_bytes()).hexdigest()
 
 
 # -- the protocol's edges ----------------------------------------------------------------------------------
@@ -227,16 +242,13 @@ def test_a_node_no_longer_ticked_is_idle_after_what_it_was(served) -> None:
     assert [(s.status, s.previous) for s in states] == [(NodeStatus.IDLE, NodeStatus.SUCCESS)] * 2
 
 
-def test_a_replay_shows_each_tick_once_its_recorded_time_has_passed(tmp_path: Path) -> None:
+@pytest.mark.xdist_group("groot2_unmonitored")
+def test_a_replay_shows_each_tick_once_its_recorded_time_has_passed(unmonitored: Path) -> None:
     """The pace of replay --groot2, on an injected wait (no wall clock): the tick before is shown during each gap."""
     from executive.observers.groot2.replay import ReplayFeed
     from executive.observers.snapshots import Recording
 
-    path = tmp_path / "run.jsonl"
-    recorder = SnapshotRecorder(path)
-    rover_square(None, recorder).run_to_end(600)
-    recorder.close()
-    recording = Recording(path)
+    recording = Recording(unmonitored)
     feed = ReplayFeed(recording, MonitorView(), speed=2.0)
     waits: list[tuple[float, int | None]] = []
     feed._play(wait=lambda s: waits.append((s, feed.position)) is not None)

@@ -58,6 +58,7 @@ def announced_url(proc: subprocess.Popen) -> str:
             return found[1]
 
 
+@pytest.mark.xdist_group("chromium")  # one browser a worker: the module's pages share it
 def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission(tmp_path, request):
     mission, sock, token = tmp_path / "live.yaml", tmp_path / "ctl.sock", tmp_path / "token"
     mission.write_text(MISSION)
@@ -96,6 +97,7 @@ def test_the_page_shows_the_running_tree_and_its_pause_button_pauses_the_mission
         proc.wait(timeout=30)
 
 
+@pytest.mark.xdist_group("chromium")  # one browser a worker: the module's pages share it
 def test_the_replay_page_moves_through_a_recording_with_its_slider(tmp_path, lockstep, chromium):
     path = tmp_path / "run.snap"
     recorder = SnapshotRecorder(path)

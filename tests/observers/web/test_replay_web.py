@@ -34,6 +34,7 @@ def recorded(tmp_path_factory):
     return path, outcome
 
 
+@pytest.mark.xdist_group("replay_web_recorded")
 def test_the_index_gives_every_tick_as_a_replay_from_the_start_does(recorded):
     path, _ = recorded
     recording = Recording(path)
@@ -50,6 +51,7 @@ def test_the_index_gives_every_tick_as_a_replay_from_the_start_does(recorded):
         recording.state_at(recording.last + 1)
 
 
+@pytest.mark.xdist_group("replay_web_recorded")
 def test_a_frame_shows_that_tick_the_track_so_far_and_the_targets(recorded):
     path, outcome = recorded
     assert outcome.status is MissionStatus.COMPLETED
@@ -74,6 +76,7 @@ def test_a_frame_shows_that_tick_the_track_so_far_and_the_targets(recorded):
     assert len(back["track"]["points"]) == middle.track.length
 
 
+@pytest.mark.xdist_group("replay_web_recorded")
 def test_the_slider_asks_for_ticks_over_the_websocket(recorded):
     from aiohttp import ClientSession
 
