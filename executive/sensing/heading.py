@@ -67,7 +67,6 @@ class HeadingKalman:
     def __init__(self) -> None:
         kf = self._kf = kalman_filter_class()(dim_x=2, dim_z=1)
         kf.inv = _inverse_1x1  # filterpy's hook for the innovation's inverse: S is 1x1 here
-        self._z = np.zeros((1, 1))
         self._r = np.zeros((1, 1))
 
     @property
@@ -107,8 +106,10 @@ class HeadingKalman:
 
     def update(self, z: float, r: float, i: int) -> None:
         """Take a measurement ``z`` of state component ``i`` whose variance is ``r``."""
-        self._z[0, 0], self._r[0, 0] = z, r
-        self._kf.update(self._z, R=self._r, H=_H[i])
+        self._r[0, 0] = r
+        # z as a float: filterpy keeps a deepcopy of it (kalman_filter.py update), ten times dearer for an array;
+        # with H given it is not reshaped, and z - Hx is the same 1x1 array of the same number
+        self._kf.update(z, R=self._r, H=_H[i])
 
 
 def _inverse_1x1(s: np.ndarray) -> np.ndarray:

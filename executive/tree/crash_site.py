@@ -16,6 +16,8 @@ import py_trees
 
 #: The hooks py_trees calls on a node (Behaviour.tick: initialise, update; Behaviour.stop: terminate; the tree's setup).
 HOOKS = ("setup", "initialise", "update", "terminate")
+#: The hooks whose py_trees default does nothing (``pass``, py_trees/behaviour.py): no exception comes out of a node that keeps it.
+EMPTY_BY_DEFAULT = ("setup", "initialise", "terminate")
 
 
 class CrashSite:
@@ -26,7 +28,8 @@ class CrashSite:
         self._node: py_trees.behaviour.Behaviour | None = None
         for node in root.iterate():
             for hook in HOOKS:
-                setattr(node, hook, self._noting(node, getattr(node, hook)))
+                if not _empty(node, hook):  # left unwrapped: a guard's default initialise and terminate run every tick
+                    setattr(node, hook, self._noting(node, getattr(node, hook)))
 
     def node_of(self, error: BaseException) -> py_trees.behaviour.Behaviour | None:
         """The node whose hook ``error`` came out of first (None: it came from no node's hook, the tree's own code)."""
@@ -43,3 +46,8 @@ class CrashSite:
                 raise
 
         return run
+
+
+def _empty(node: py_trees.behaviour.Behaviour, hook: str) -> bool:
+    """``hook`` of ``node`` is py_trees' default that does nothing (not one of its class's, nor set on the node)."""
+    return hook in EMPTY_BY_DEFAULT and getattr(getattr(node, hook), "__func__", None) is getattr(py_trees.behaviour.Behaviour, hook)

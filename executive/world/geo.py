@@ -18,21 +18,23 @@ _INVERSE = Geodesic.DISTANCE | Geodesic.AZIMUTH
 _E2 = _WGS84.f * (2.0 - _WGS84.f)  # first eccentricity squared
 
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=256)
 def distance_bearing(lat1: float, lon1: float, lat2: float, lon2: float) -> tuple[float, float]:
     """Metres from point 1 to point 2 and the initial bearing there, degrees [0, 360).
 
-    Remembered for the last few points: a tick asks again for the same position (the position comes
-    at 5 Hz, ticks at 10 Hz; the status asks too), and a geodesic costs ~30 µs.
+    Remembered for the last few pairs: a tick asks again for the same position (the position comes
+    at 5 Hz, ticks at 10 Hz), and different parts ask for the same pair (the energy watch for the
+    distance to the leg's point, the leg's behaviour for its distance and bearing, the status line);
+    a geodesic costs ~30 µs.
     """
     g = _WGS84.Inverse(lat1, lon1, lat2, lon2, _INVERSE)
     return g["s12"], g["azi1"] % 360.0
 
 
-@functools.lru_cache(maxsize=256)
 def distance(lat1: float, lon1: float, lat2: float, lon2: float) -> float:
-    """Metres between two points (remembered for the last few pairs, as :func:`distance_bearing`: a tick asks again)."""
-    return _WGS84.Inverse(lat1, lon1, lat2, lon2, Geodesic.DISTANCE)["s12"]
+    """Metres between two points: :func:`distance_bearing`'s, remembered with it (geographiclib's ``s12`` is the same
+    number whether or not the azimuths are asked for: ``Geodesic._GenInverse`` computes them apart)."""
+    return distance_bearing(lat1, lon1, lat2, lon2)[0]
 
 
 def destination(lat: float, lon: float, bearing_deg: float, distance_m: float) -> tuple[float, float]:

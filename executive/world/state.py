@@ -64,6 +64,10 @@ class EkfFlags(IntFlag):
     GPS_GLITCHING = 32768
 
 
+_HORIZONTAL_POSITION = int(EkfFlags.POS_HORIZ_ABS | EkfFlags.POS_HORIZ_REL)
+_CONST_POS_MODE, _PRED_POS_HORIZ_REL = int(EkfFlags.CONST_POS_MODE), int(EkfFlags.PRED_POS_HORIZ_REL)
+
+
 @dataclass(frozen=True, slots=True)
 class EkfStatus:
     """EKF_STATUS_REPORT: flags and normalised variances (1.0 = at the failsafe threshold scale)."""
@@ -87,10 +91,11 @@ class EkfStatus:
         fake_pos_control.cpp fakes a position only while none is) is the vehicle at rest, position known: 0x3ff on
         the ground before take-off.
         """
-        has_position = bool(self.flags & (EkfFlags.POS_HORIZ_ABS | EkfFlags.POS_HORIZ_REL))
-        if not self.flags & EkfFlags.CONST_POS_MODE:
+        flags = int(self.flags)  # in ints: an IntFlag's ``&`` and ``|`` make a new flag each time, and the guards ask each tick
+        has_position = bool(flags & _HORIZONTAL_POSITION)
+        if not flags & _CONST_POS_MODE:
             return has_position
-        return has_position and self.const_pos_at_rest and bool(self.flags & EkfFlags.PRED_POS_HORIZ_REL)
+        return has_position and self.const_pos_at_rest and bool(flags & _PRED_POS_HORIZ_REL)
 
     def variances_ok(self, threshold: float = 0.8) -> bool:
         """ArduPilot's EKF failsafe trips when two of compass/velocity/position variances exceed FS_EKF_THRESH."""

@@ -92,3 +92,19 @@ def test_setup_and_terminate_are_watched_too() -> None:
     with pytest.raises(RuntimeError) as stop:
         root.stop(Status.INVALID)
     assert site.node_of(stop.value) is bad
+
+
+def test_py_trees_empty_defaults_are_left_alone_and_the_rest_watched() -> None:
+    """A guard's default initialise and terminate (py_trees' ``pass``) run unwrapped; its own hooks, and one set on the node, are watched."""
+
+    def cannot_stop(new_status: Status) -> None:
+        raise OSError("set on the node")
+
+    plain, own = py_trees.behaviours.Success("plain"), Explodes("own")
+    plain.terminate = cannot_stop  # type: ignore[method-assign]
+    root = py_trees.composites.Sequence("Mission", memory=True, children=[plain, own])
+    site = CrashSite(root)
+    assert "initialise" not in vars(plain) and "initialise" not in vars(own) and "update" in vars(own)
+    with pytest.raises(OSError) as raised:
+        py_trees.trees.BehaviourTree(root).tick()
+    assert site.node_of(raised.value) is plain
