@@ -21,8 +21,10 @@ by them, from the parameters the vehicle itself reports (:class:`RoverMotion`).
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -147,14 +149,14 @@ class RoverMotion:
         missing = tuple(name for name in (wanted if wanted is not None else tuple(cls._FIELDS)) if name not in params)
         return cls(**values, skid_steering=skid_steering, defaulted=missing)
 
-    # -- what follows from the parameters ----------------------------------------------------------
+    # -- what follows from the parameters (worked out once: the simulated rover reads them every 20 ms step) --
 
-    @property
+    @cached_property
     def decel_m_s2(self) -> float:
         """AR_AttitudeControl::get_decel_max: ATC_DECEL_MAX, or ATC_ACCEL_MAX when that is 0."""
         return self.decel_max_m_s2 if self.decel_max_m_s2 > 0.0 else self.accel_max_m_s2
 
-    @property
+    @cached_property
     def path_accel_m_s2(self) -> float:
         """AR_WPNav::init: the acceleration along a path (S-curves, and the position controller's limit)."""
         atc = min(self.accel_max_m_s2, self.decel_m_s2)
@@ -162,37 +164,37 @@ class RoverMotion:
             atc = UNLIMITED_ACCEL_M_S2
         return min(self.wp_accel_m_s2, atc) if self.wp_accel_m_s2 > 0.0 else atc
 
-    @property
+    @cached_property
     def jerk_m_s3(self) -> float:
         """AR_WPNav::init: WP_JERK, or the path acceleration's value when 0."""
         return self.wp_jerk_m_s3 if self.wp_jerk_m_s3 > 0.0 else self.path_accel_m_s2
 
-    @property
+    @cached_property
     def lat_accel_m_s2(self) -> float:
         """AR_AttitudeControl::get_turn_lat_accel_max: ATC_TURN_MAX_G in m/s/s."""
         return self.turn_max_g * GRAVITY_M_S2
 
-    @property
+    @cached_property
     def shaping_accel_m_s2(self) -> float:
         """AR_PosControl::input_pos_vel_accel_target: a GUIDED target is shaped within min(path, lateral) acceleration."""
         return min(self.path_accel_m_s2, self.lat_accel_m_s2)
 
-    @property
+    @cached_property
     def turn_radius_m(self) -> float:
         """Rover.cpp set_turn_params: TURN_RADIUS, or 0 for a vehicle that can pivot."""
         return 0.0 if self.skid_steering else self.turn_radius_param_m
 
-    @property
+    @cached_property
     def corner_radius_m(self) -> float:
         """AR_WPNav::advance_wp_target_along_track: a fast waypoint's turn stays within max(WP_RADIUS, turn radius) of it."""
         return max(self.radius_m, self.turn_radius_m)
 
-    @property
+    @cached_property
     def turn_speed_min_m_s(self) -> float:
         """AR_PosControl::update: the least forward speed asked while turning, sqrt(0.5 * lateral accel * turn radius)."""
         return math.sqrt(0.5 * self.lat_accel_m_s2 * self.turn_radius_m)
 
-    @property
+    @cached_property
     def pivots(self) -> bool:
         """AR_PivotTurn: pivot turns happen (a skid-steered vehicle, WP_PIVOT_ANGLE above 5 degrees)."""
         return self.skid_steering and self.pivot_angle_deg > 5.0
@@ -364,6 +366,7 @@ class SCurveLeg:
         self.unit = (dn / self.length_m, de / self.length_m) if self.length_m > 0.0 else (0.0, 0.0)
         self.elapsed_s = 0.0
         self._segments: list[_Segment] = []
+        self._starts: list[float] = []  # the segments' start times, for :meth:`along`'s look-up
         self.accel_end_s = self.decel_start_s = self.end_s = 0.0
         if self.length_m > 0.0 and speed_m_s > 0.0 and accel_m_s2 > 0.0 and jerk_m_s3 > 0.0:
             self._build(speed_m_s, accel_m_s2, jerk_m_s3, snap_m_s4)
@@ -419,6 +422,7 @@ class SCurveLeg:
             if index == 7:
                 self.decel_start_s = t
         self.end_s = t
+        self._starts = [segment.start_s for segment in self._segments]
 
     @property
     def finished(self) -> bool:
@@ -435,11 +439,12 @@ class SCurveLeg:
         if t >= self.end_s:
             return self.length_m, 0.0, 0.0
         t = max(0.0, t)
-        for segment in reversed(self._segments):
-            if t >= segment.start_s:
-                pos, vel, acc = segment.at(t - segment.start_s)
-                return min(max(pos, 0.0), self.length_m), vel, acc
-        return 0.0, 0.0, 0.0
+        index = bisect_right(self._starts, t) - 1  # the last span begun by t (of spans of no time, the last)
+        if index < 0:
+            return 0.0, 0.0, 0.0
+        segment = self._segments[index]
+        pos, vel, acc = segment.at(t - segment.start_s)
+        return min(max(pos, 0.0), self.length_m), vel, acc
 
     def state(self, t: float) -> tuple[tuple[float, float], tuple[float, float], tuple[float, float]]:
         """Offset from the origin, velocity and acceleration (north, east) ``t`` seconds into the leg."""

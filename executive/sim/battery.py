@@ -23,19 +23,24 @@ cannot tell (its counter starts full at boot: ``AP_BattMonitor_Analog``), PX4 re
 from __future__ import annotations
 
 import itertools
+from bisect import bisect_left
 from dataclasses import dataclass
 
 #: A cell's open-circuit voltage over its state of charge (0..1), a LiPo's typical curve (4.2 V full, 3.3 V empty).
 _OCV_CURVE = ((0.0, 3.30), (0.05, 3.50), (0.10, 3.60), (0.20, 3.68), (0.50, 3.80), (0.80, 3.98), (0.95, 4.13), (1.0, 4.20))
+# the curve's spans and their upper ends, for the look-up at every step of the simulated firmware
+_OCV_SPANS = tuple(itertools.pairwise(_OCV_CURVE))
+_OCV_SPAN_ENDS = tuple(c1 for _, (c1, _) in _OCV_SPANS)
 
 
 def cell_voltage(charge: float) -> float:
     """A cell's open-circuit voltage at ``charge`` (0..1 of its capacity)."""
     charge = min(1.0, max(0.0, charge))
-    for (c0, v0), (c1, v1) in itertools.pairwise(_OCV_CURVE):
-        if charge <= c1:
-            return v0 + (v1 - v0) * (charge - c0) / (c1 - c0)
-    return _OCV_CURVE[-1][1]
+    index = bisect_left(_OCV_SPAN_ENDS, charge)  # the first span that reaches the charge
+    if index == len(_OCV_SPANS):
+        return _OCV_CURVE[-1][1]
+    (c0, v0), (c1, v1) = _OCV_SPANS[index]
+    return v0 + (v1 - v0) * (charge - c0) / (c1 - c0)
 
 
 @dataclass(frozen=True, slots=True)

@@ -37,6 +37,7 @@ DEFAULT_HOME: Home = (-35.363261, 149.165230, 353.0)
 RELAYS = 16  # ArduPilot 4.5: RELAY1..RELAY16 (AP_Relay)
 
 _M = mavlink
+_HEARTBEAT = _M.MAVLINK_MSG_ID_HEARTBEAT
 EPSILON_S = 1e-6  # clock times closer than this are the same instant
 
 
@@ -342,14 +343,15 @@ class FirmwareSim(ABC):
     # -- time-driven behaviour -------------------------------------------------------------------
 
     def _telemetry(self) -> None:
+        t, booted, due_at, builders, emit = self._t, self._booted, self._due, self._builders, self._emit  # every update: locals
         for msg_id, interval in self._intervals.items():
-            if interval <= 0 or not (self._booted or msg_id == _M.MAVLINK_MSG_ID_HEARTBEAT):
+            if interval <= 0 or not (booted or msg_id == _HEARTBEAT):
                 continue
-            due = self._due.get(msg_id, self._t)
-            if self._t + EPSILON_S >= due:
-                self._emit(self._builders[msg_id]())
+            due = due_at.get(msg_id, t)
+            if t + EPSILON_S >= due:
+                emit(builders[msg_id]())
                 # at a high speed-up several intervals may pass between updates: send once, no burst
-                self._due[msg_id] = due + interval if due + interval > self._t else self._t + interval
+                due_at[msg_id] = due + interval if due + interval > t else t + interval
 
     def battery_params(self, capacity_mah: float) -> dict[str, float]:
         """The battery monitor's parameters, as the firmware answers them for a pack of ``capacity_mah``."""

@@ -145,12 +145,13 @@ class Wire:
     def carry(self, messages: Iterable[MAVLinkMessage]) -> list[MAVLinkMessage]:
         """``messages`` as the other end receives them."""
         if not self.as_bytes:
-            encoder = self.encoder
+            encoder, packed, header = self.encoder, self.packed, mavlink.MAVLink_header
+            system, component = encoder.srcSystem, encoder.srcComponent
             for msg in messages:
-                if self.packed:
+                if packed:
                     msg.pack(encoder)
                 else:  # the header the receiver reads (sender, sequence), as pack() would set it: packing was a tenth of a run
-                    msg._header = mavlink.MAVLink_header(msg.id, seq=encoder.seq, srcSystem=encoder.srcSystem, srcComponent=encoder.srcComponent)
+                    msg._header = header(msg.id, 0, 0, 0, encoder.seq, system, component)  # (incompat, compat flags, length: 0)
                 encoder.seq = (encoder.seq + 1) % 256
             return list(messages)
         for msg in messages:
@@ -331,9 +332,12 @@ class Lockstep:
 
     def _answer_ground_station(self, messages: list[MAVLinkMessage]) -> list[MAVLinkMessage]:
         """The autopilot's COMMAND_ACKs to the ground station kept for it (:attr:`ground_station_heard`); the rest, for the executive."""
-        ours = [m for m in messages if not (m.get_type() == "COMMAND_ACK" and m.target_system == GROUND_STATION[0])]
-        if len(ours) < len(messages):
-            self.ground_station_heard += [m for m in messages if m not in ours]
+        ours: list[MAVLinkMessage] = []
+        for m in messages:  # one pass: this runs at every step of the world
+            if m.get_type() == "COMMAND_ACK" and m.target_system == GROUND_STATION[0]:
+                self.ground_station_heard.append(m)
+            else:
+                ours.append(m)
         return ours
 
     def step(self, dt: float) -> None:

@@ -42,6 +42,8 @@ STEER_ANGLE_P = 2.0
 STEER_SPEED_MIN_M_S = 1.0
 #: AR_WPNAV_OVERSPEED_RATIO_MAX is not used (overspeed off); the track scaler keeps this much over the vehicle's speed.
 TRACK_SCALER_MARGIN = 0.05
+#: AR_AttitudeControl::get_steering_out_rate's least turn-rate limit at speed.
+ONE_DEGREE_RAD = math.radians(1.0)
 
 
 def _wrap_pi(angle: float) -> float:
@@ -72,6 +74,11 @@ class RoverNavigator:
 
     def __init__(self, motion: RoverMotion, speed_m_s: float | None = None) -> None:
         self.motion = motion
+        # what the parameters fix, worked out once rather than every 20 ms step
+        #: AC_P_2D's limit: the position error's square-root branch within min(accel, lateral accel) and jerk / P.
+        self._accel_limit = min(min(motion.path_accel_m_s2, motion.lat_accel_m_s2), motion.jerk_m_s3 / motion.pos_p)
+        self._steer_accel_rad_s2 = math.radians(motion.steer_accel_max_deg_s2)
+        self._steer_rate_rad_s = math.radians(motion.steer_rate_max_deg_s)
         self.speed_max_m_s = speed_m_s if speed_m_s and speed_m_s > 0.0 else motion.speed_m_s
         self.kind: Literal["stop", "shaping", "scurve"] = "stop"
         self.destination: tuple[float, float] | None = None
@@ -89,6 +96,17 @@ class RoverNavigator:
         self._desired_speed = 0.0  # AR_AttitudeControl's last accel-limited desired speed
         self._desired_rate = 0.0  # its last desired turn rate
         self._active = False  # navigated in the last step (AR_WPNav::is_active)
+
+    @property
+    def speed_max_m_s(self) -> float:
+        """AR_WPNav's speed limit (WP_SPEED, or DO_CHANGE_SPEED's)."""
+        return self._speed_max_m_s
+
+    @speed_max_m_s.setter
+    def speed_max_m_s(self, speed_m_s: float) -> None:
+        self._speed_max_m_s = speed_m_s
+        #: The position error beyond which the position controller asks no more than the speed limit.
+        self._error_max_m = stopping_distance(speed_m_s, self.motion.pos_p, self._accel_limit)
 
     # -- orders ------------------------------------------------------------------------------
 
@@ -274,31 +292,31 @@ class RoverNavigator:
         (tn, te), (tvn, tve), (tan, tae) = self._target
         (n, e), (vn, ve, _) = vehicle.north_east_m, vehicle.velocity_ned
         # position error to velocity (AC_P_2D: square-root limited by min(accel, lateral accel) and jerk / P)
-        accel_limit = min(min(motion.path_accel_m_s2, motion.lat_accel_m_s2), motion.jerk_m_s3 / motion.pos_p)
         en, ee = tn - n, te - e
         error = math.hypot(en, ee)
-        error_max = stopping_distance(self.speed_max_m_s, motion.pos_p, accel_limit)
+        error_max = self._error_max_m
         if error > error_max > 0.0:
             en, ee, error = en * error_max / error, ee * error_max / error, error_max
         want_n = want_e = 0.0
         if error > 0.0:
-            rate = sqrt_controller(error, motion.pos_p, accel_limit)
+            rate = sqrt_controller(error, motion.pos_p, self._accel_limit)
             want_n, want_e = en * rate / error, ee * rate / error
         want_n, want_e = want_n + tvn, want_e + tve
         stopping = tvn == 0.0 and tve == 0.0
         size = math.hypot(want_n, want_e)
-        if size > self.speed_max_m_s > 0.0:
-            want_n, want_e, size = want_n * self.speed_max_m_s / size, want_e * self.speed_max_m_s / size, self.speed_max_m_s
+        speed_max = self._speed_max_m_s
+        if size > speed_max > 0.0:
+            want_n, want_e, size = want_n * speed_max / size, want_e * speed_max / size, speed_max
         accel_n = motion.vel_p * (want_n - vn) + tan
         accel_e = motion.vel_p * (want_e - ve) + tae
         yaw = vehicle.yaw_rad
-        forward, right = (math.cos(yaw), math.sin(yaw)), (-math.sin(yaw), math.cos(yaw))
-        speed = want_n * forward[0] + want_e * forward[1]
+        cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)  # forward (cos, sin), right (-sin, cos)
+        speed = want_n * cos_yaw + want_e * sin_yaw
         if not stopping:
             speed = max(min(size, motion.turn_speed_min_m_s), speed)
         speed = self._speed_limited(speed, dt)
-        lateral = 0.0 if stopping else accel_n * right[0] + accel_e * right[1]
-        if not stopping and abs(lateral) < 1e-6 and accel_n * forward[0] + accel_e * forward[1] < 0.0:
+        lateral = 0.0 if stopping else accel_n * -sin_yaw + accel_e * cos_yaw
+        if not stopping and abs(lateral) < 1e-6 and accel_n * cos_yaw + accel_e * sin_yaw < 0.0:
             lateral = math.hypot(accel_n, accel_e)  # a target dead astern: a real vehicle's noise picks a side; here, the right
         rate = lateral / math.copysign(max(abs(speed), STEER_SPEED_MIN_M_S), speed if speed else 1.0)
         return speed, self._rate_limited(rate, vehicle, dt)
@@ -318,14 +336,14 @@ class RoverNavigator:
         """AR_AttitudeControl::get_steering_out_rate: ATC_STR_ACC_MAX, ATC_STR_RAT_MAX, then the lateral acceleration at this speed."""
         motion = self.motion
         if motion.steer_accel_max_deg_s2 > 0.0:
-            change = math.radians(motion.steer_accel_max_deg_s2) * dt
+            change = self._steer_accel_rad_s2 * dt
             rate = max(self._desired_rate - change, min(self._desired_rate + change, rate))
         if motion.steer_rate_max_deg_s > 0.0:
-            limit = math.radians(motion.steer_rate_max_deg_s)
+            limit = self._steer_rate_rad_s
             rate = max(-limit, min(limit, rate))
         self._desired_rate = rate
         speed = abs(vehicle.speed_m_s)
-        g_limit = max(motion.lat_accel_m_s2 / speed if speed > 0.0 else math.inf, math.radians(1.0))
+        g_limit = max(motion.lat_accel_m_s2 / speed if speed > 0.0 else math.inf, ONE_DEGREE_RAD)
         return max(-g_limit, min(g_limit, rate))
 
     def settle(self) -> None:
