@@ -137,7 +137,8 @@ def test_an_operators_arm_mode_and_disarm_are_obeyed_and_reported(tmp_path, caps
         code, out, err = ctl_text(capsys, sock, "mode", "HOLD")
         assert code == 0, err
         assert out.splitlines()[-1] == "mode HOLD: ACCEPTED by the autopilot"
-        status = wait_status(sock, lambda s: s["mode"] == "HOLD")
+        # the mode is read off the heartbeat before the tick that judges it: a status between the two shows HOLD still RUNNING
+        status = wait_status(sock, lambda s: s["mode"] == "HOLD" and s["state"] != "RUNNING")
         assert (status["state"], status["reason"]) == ("PAUSED", "HOLD set by a person (ctl: mode HOLD)")
         disarmed = ctl(capsys, sock, "disarm")  # mid-mission: allowed
         assert (disarmed["ok"], disarmed["state"], disarmed["command"]["state"]) == (True, "PAUSED", "ACCEPTED")
