@@ -151,6 +151,25 @@ def moved_attribute(package: str, name: str) -> object:
     return getattr(module, name)
 
 
+def lazy_exports(package: str, module_of: dict[str, str]) -> tuple[Callable[[str], object], Callable[[], list[str]]]:
+    """A package's ``__getattr__`` and ``__dir__`` (PEP 562) for names each imported from its module on first use.
+
+    ``module_of`` maps a name to the module of ``package`` it is in. A package imported where little of it is used (pytest's
+    plugin loads :mod:`executive.testing` in xdist's controller, which runs no test; ``executive ctl`` needs only
+    :mod:`executive.operator`'s status line) then costs nothing for the rest; ``dir()`` lists the names all the same.
+    """
+
+    def __getattr__(name: str) -> object:
+        if name in module_of:
+            return getattr(importlib.import_module(f"{package}.{module_of[name]}"), name)
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+
+    def __dir__() -> list[str]:
+        return sorted({*vars(sys.modules[package]), *module_of})
+
+    return __getattr__, __dir__
+
+
 class MovedMember:
     """A class's member that moved in 0.2 to another object: read at ``new``, a path from the instance (``legs.leg_index``),
     with a DeprecationWarning, for one release. ``read`` reads it when a path alone cannot (a method that now takes an argument).

@@ -4,17 +4,14 @@ reports the mission back (:mod:`executive.operator.ground_station`)."""
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from executive import lazy_exports
 
 if TYPE_CHECKING:
     from executive.operator.requests import REQUESTS, VEHICLE_REQUESTS, Operator, Reply
 
 __all__ = ["REQUESTS", "VEHICLE_REQUESTS", "Operator", "Reply"]
 
-
-def __getattr__(name: str) -> object:
-    # imported on first use: ``executive ctl`` needs only this package's status line, not the requests' whole mission (~0.8 s of CPU)
-    if name in __all__:
-        return getattr(importlib.import_module("executive.operator.requests"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# imported on first use: ``executive ctl`` needs only this package's status line, not the requests' whole mission (~0.8 s of CPU)
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "requests"))

@@ -48,8 +48,9 @@ Fixtures (plugin :mod:`executive.testing.plugin`): ``clock``, ``link``, ``comman
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from executive import lazy_exports
 
 if TYPE_CHECKING:
     from executive.testing.canbus import VirtualCan
@@ -98,12 +99,4 @@ __all__ = [
     "port_for",
 ]
 
-
-def __getattr__(name: str) -> object:
-    if name in _MODULE_OF:
-        return getattr(importlib.import_module(f"executive.testing.{_MODULE_OF[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted({*globals(), *__all__})  # the names not imported yet too (autodoc lists the members dir() names)
+__getattr__, __dir__ = lazy_exports(__name__, _MODULE_OF)
