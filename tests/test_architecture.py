@@ -8,6 +8,7 @@ one of the few listed upward ones; nothing in ``behaviours`` imports ``io``; no 
 from __future__ import annotations
 
 import ast
+import copy
 import functools
 from pathlib import Path
 
@@ -135,9 +136,13 @@ def cycles(graph: dict[str, set[str]] | None = None) -> list[list[str]]:
 @reads_the_package
 def test_the_tests_that_read_the_package_go_to_one_worker(request: pytest.FixtureRequest) -> None:
     """xdist's loadgroup scheduler groups by the ``@GROUP`` end of a node id (tests/conftest.py writes it where pytest 9.2 reads it)."""
-    if not getattr(request.config.option, "loadgroup", False):
-        pytest.skip("not in an xdist worker under --dist loadgroup (README's `pytest -n auto` is)")
-    assert request.node.nodeid.endswith("@import_graph")
+    if getattr(request.config.option, "loadgroup", False):  # an xdist worker under --dist loadgroup (README's `pytest -n auto`)
+        assert request.node.nodeid.endswith("@import_graph")
+    else:  # one process: the conftest's marking, on a copy of this test's item
+        conftest = next(p for p in request.config.pluginmanager.get_plugins() if str(getattr(p, "__file__", "")).endswith("tests/conftest.py"))
+        item = copy.copy(request.node)
+        conftest._groups_in_node_ids([item])
+        assert item.nodeid == f"{request.node.nodeid}@import_graph"
 
 
 @reads_the_package
