@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import importlib
 import logging
 import os
 import signal
@@ -38,6 +39,13 @@ sys.dont_write_bytecode = False
 # machine and day; HYPOTHESIS_PROFILE=default draws new ones (to search further, by hand) and keeps failures in .hypothesis/.
 settings.register_profile("suite", derandomize=True, database=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "suite"))
+# Hypothesis (6.131 on) also draws some examples from the literals of the project's modules loaded at that moment
+# (hypothesis/internal/conjecture/providers.py, _get_local_constants), which depends on what the tests before imported:
+# a derandomized test drew other examples in each run. Here it draws from hypothesis's own constants only, the same in
+# every run (tests/test_suite_examples.py fails if this stops working, e.g. when hypothesis renames it).
+_providers = importlib.import_module("hypothesis.internal.conjecture.providers")
+_no_local_constants = _providers.Constants()
+_providers._get_local_constants = lambda: _no_local_constants
 
 # A suite started in the background (`pytest ... &` in a script, nohup, a CI step) inherits SIGINT ignored, as
 # does every executive it starts: Ctrl-C's tests (`ctl tree --watch`, an interrupted first-heartbeat wait)
