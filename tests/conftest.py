@@ -22,6 +22,7 @@ except ImportError:  # an older pytest reads item._nodeid, which xdist writes it
 if TYPE_CHECKING:
     from executive.mission.lifecycle import MissionState
     from executive.mission.model import Mission
+    from tests_support import SubRun
 
 # The fixtures import the package themselves: xdist's controller loads this file too and runs no test (with the kit's
 # plugin, 0.6 s of CPU before it started its workers); a worker has the package from the test modules it collects.
@@ -162,3 +163,22 @@ def minimal_mission() -> Path:
 def minimal_yaml(minimal_mission: Path) -> str:
     """The text of the smallest valid mission."""
     return minimal_mission.read_text(encoding="utf-8")
+
+
+@pytest.fixture(scope="session")
+def auv_survey_run() -> SubRun:
+    """missions/auv_survey.yaml on the lock-step simulated ArduSub, booted at its home, run once for the tests that read it (in two
+    files: the tree's legs and the energy estimate); they are marked ``tests_support.AUV_SURVEY_RUN``, so one worker makes it."""
+    import py_trees
+
+    from executive.mission.loader import load_mission
+    from executive.world import blackboard
+    from tests_support import sub_run
+
+    mission = load_mission(Path(__file__).parents[1] / "missions" / "auv_survey.yaml")
+    assert mission.home is not None
+    blackboard.reset()  # the board each test starts on (clean_blackboard), before and after
+    try:
+        return sub_run(mission, (mission.home.lat, mission.home.lon, mission.home.heading_deg))
+    finally:
+        py_trees.blackboard.Blackboard.clear()

@@ -1,6 +1,6 @@
 """Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket, a line mission,
 a mission out of reach run to its refusal, the time a thread waited for a CPU, ``executive run`` in lock-step with its built-in simulator,
-``executive`` as a process of its own."""
+``executive`` as a process of its own, a sub's survey on the simulated ArduSub leg by leg."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -17,12 +18,14 @@ import pytest
 
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.model import Mission, Waypoint
+from executive.operator.status import status_line
 from executive.runtime.assembly import build_runtime
 from executive.runtime.loop import RunOutcome, Runtime
 from executive.runtime.pacing import SpeedGovernor
 from executive.sim import SimServer
 from executive.sim.faults import FaultInjector
 from executive.testing import Lockstep
+from executive.world import blackboard
 from executive.world.clock import ManualClock, ScaledClock
 from executive.world.dialect import MAVLinkMessage, mavlink
 from executive.world.geo import destination
@@ -245,3 +248,55 @@ class LinkCut(FaultInjector):
     @property
     def sending(self) -> bool:
         return not self.cut and super().sending
+
+
+@dataclass
+class SubRun:
+    """A sub's mission run to its end on the simulated ArduSub (:func:`sub_run`): how it ended, each leg's end, the vehicle at the end,
+    the first energy estimate on the blackboard and the pack's draw (Wh) when it armed and at the end."""
+
+    outcome: RunOutcome
+    legs: list[dict[str, Any]] = field(default_factory=list)
+    end: dict[str, Any] = field(default_factory=dict)
+    first_estimate: Any = None
+    armed_wh: float | None = None
+    end_wh: float = 0.0
+
+
+def sub_run(mission: Mission, home: tuple[float, float, float]) -> SubRun:
+    """``mission`` on the lock-step simulated ArduSub booted at ``home``, to its end (600 s at most); what each leg ended with (depth,
+    altitude, metres off its waypoint, the time, the status line) noted as the leg is advanced. Watching changes nothing in the run."""
+    with Lockstep(mission, home=home) as sim:
+        runtime = sim.runtime
+        run = SubRun(outcome=None)  # type: ignore[arg-type]
+        advance = runtime.mission_state.advance_leg
+
+        def note_and_advance() -> None:
+            wp = mission.waypoints[runtime.mission_state.legs.leg_index]
+            v = sim.autopilot.vehicle
+            run.legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": sim.clock.now()})
+            run.legs[-1]["status"] = status_line(runtime.status.snapshot())
+            advance()
+
+        runtime.mission_state.advance_leg = note_and_advance  # type: ignore[method-assign]
+        energy = blackboard.reader("sub run", ["/energy/estimate"])
+
+        def watch(s: Lockstep) -> None:
+            if run.first_estimate is None and (estimate := energy.get("/energy/estimate")):
+                run.first_estimate = estimate
+            if run.armed_wh is None and s.autopilot.armed:
+                run.armed_wh = s.autopilot.battery.consumed_wh
+
+        sim.observers.append(watch)
+        sim.connect()
+        started = sim.clock.now()
+        run.outcome = sim.run_to_end(limit_s=600)
+        ap = sim.autopilot
+        run.end = {"mode": ap.mode, "armed": ap.armed, "depth": ap.vehicle.depth_m, "moved_m": ap.vehicle.distance_to(home[0], home[1])}
+        run.end["vehicle_s"] = sim.clock.now() - started
+        run.end_wh = ap.battery.consumed_wh
+    return run
+
+
+#: The tests that share the example survey's run (the ``auv_survey_run`` fixture) go to one xdist worker: it is made once there.
+AUV_SURVEY_RUN = pytest.mark.xdist_group("auv_survey_run")
