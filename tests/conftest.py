@@ -182,3 +182,26 @@ def auv_survey_run() -> SubRun:
         return sub_run(mission, (mission.home.lat, mission.home.lon, mission.home.heading_deg))
     finally:
         py_trees.blackboard.Blackboard.clear()
+
+
+@pytest.fixture(scope="session")
+def rover_square_two_legs_jsonl(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """rover_square's first two legs (a turn: north, then east) on the lock-step simulator to their end, recorded as JSON lines and
+    watched by nothing else: the bytes a watched run must equal, a file to replay (tests/observers/groot2: both files' tests are
+    marked ``xdist_group("groot2_unmonitored")``, so one worker records it)."""
+    from executive.mission.loader import load_mission
+    from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
+    from executive.testing.lockstep import Lockstep
+
+    missions = Path(__file__).parents[1] / "missions"
+    square = load_mission(missions / "rover_square.yaml")
+    path = tmp_path_factory.mktemp("rover_square_two_legs") / "unmonitored.jsonl"
+    recorder = SnapshotRecorder(path)
+    try:
+        with Lockstep(
+            square.model_copy(update={"waypoints": square.waypoints[:2]}), mission_dir=missions, plugs=[snapshot_recorder(recorder)]
+        ) as sim:
+            assert sim.run_to_end(600).status.name == "COMPLETED"
+    finally:
+        recorder.close()
+    return path
