@@ -9,7 +9,7 @@ import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pytest
 from hypothesis import settings
@@ -22,7 +22,7 @@ except ImportError:  # an older pytest reads item._nodeid, which xdist writes it
 if TYPE_CHECKING:
     from executive.mission.lifecycle import MissionState
     from executive.mission.model import Mission
-    from tests_support import SubRun
+    from tests_support import SubRun, Ticks
 
 # The fixtures import the package themselves: xdist's controller loads this file too and runs no test (with the kit's
 # plugin, 0.6 s of CPU before it started its workers); a worker has the package from the test modules it collects.
@@ -205,3 +205,13 @@ def rover_square_two_legs_jsonl(tmp_path_factory: pytest.TempPathFactory) -> Pat
     finally:
         recorder.close()
     return path
+
+
+@pytest.fixture(scope="session")
+def rover_square_mcap(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks, Any]:
+    """rover_square to its end, recorded twice from the same ticks, as MCAP and as JSON lines (``tests_support.record_rover_square``),
+    once for the tests that read it: tests/observers/test_mcap_recording.py's and the Foxglove picture's, all marked
+    ``xdist_group("mcap_square")``."""
+    from tests_support import record_rover_square
+
+    return record_rover_square(tmp_path_factory.mktemp("square"))

@@ -14,12 +14,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import py_trees
 import pytest
 
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.model import Mission, Waypoint
 from executive.operator.status import status_line
-from executive.runtime.assembly import build_runtime
+from executive.runtime.assembly import Wiring, build_runtime
 from executive.runtime.loop import RunOutcome, Runtime
 from executive.runtime.pacing import SpeedGovernor
 from executive.sim import SimServer
@@ -300,3 +301,55 @@ def sub_run(mission: Mission, home: tuple[float, float, float]) -> SubRun:
 
 #: The tests that share the example survey's run (the ``auv_survey_run`` fixture) go to one xdist worker: it is made once there.
 AUV_SURVEY_RUN = pytest.mark.xdist_group("auv_survey_run")
+
+
+class Ticks:
+    """Each tick's number and vehicle time, and the position the blackboard held after it, as the runtime reports them."""
+
+    def __init__(self) -> None:
+        self.times: list[tuple[int, float]] = []
+
+    def plug(self, wiring: Wiring) -> None:
+        wiring.observers.append(self)
+
+    def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
+        pass
+
+    def ticked(self, tick: int, now: float) -> None:
+        self.times.append((tick, now))
+
+    def end(self, status: str, reason: str) -> None:
+        pass
+
+
+def record_rover_square(where: Path) -> tuple[Path, Path, Ticks, Any]:
+    """rover_square to its end on the lock-step simulator, recorded twice from the same ticks, as MCAP and as JSON lines (in
+    ``where``), with a journal and the executive's INFO log lines in it; the ticks as the runtime reported them, and how it ended."""
+    import logging
+
+    from executive.mission.loader import load_mission
+    from executive.observers.journal import Journal, JournalLogHandler, journal_recorder
+    from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
+
+    missions = ROOT / "missions"
+    ticks = Ticks()
+    recorders: list[SnapshotRecorder] = []
+    closers: list[Any] = []
+
+    def plugs(clock: ManualClock) -> dict[str, Any]:
+        recorders.extend([SnapshotRecorder(where / "run.mcap", clock=clock), SnapshotRecorder(where / "run.jsonl", clock=clock)])
+        journal = Journal(where / "journal.db", clock)
+        closers.append(journal.close)
+        logging.getLogger("executive").addHandler(handler := JournalLogHandler(journal))
+        closers.append(lambda: logging.getLogger("executive").removeHandler(handler))
+        return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders), journal_recorder(journal)]}
+
+    logging.getLogger("executive").setLevel(logging.INFO)  # as `executive run` logs: the mission's transitions are INFO lines
+    try:
+        with Lockstep(load_mission(missions / "rover_square.yaml"), mission_dir=missions, options_for_clock=plugs) as sim:
+            outcome = sim.run_to_end(limit_s=400)
+    finally:
+        logging.getLogger("executive").setLevel(logging.NOTSET)
+    for close in [*(r.close for r in recorders), *closers]:
+        close()
+    return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
