@@ -22,7 +22,7 @@ except ImportError:  # an older pytest reads item._nodeid, which xdist writes it
 if TYPE_CHECKING:
     from executive.mission.lifecycle import MissionState
     from executive.mission.model import Mission
-    from tests_support import SubRun, Ticks
+    from tests_support import SharedEfficiencyRuns, SubRun, Ticks
 
 # The fixtures import the package themselves: xdist's controller loads this file too and runs no test (with the kit's
 # plugin, 0.6 s of CPU before it started its workers); a worker has the package from the test modules it collects.
@@ -215,3 +215,12 @@ def rover_square_mcap(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, P
     from tests_support import record_rover_square
 
     return record_rover_square(tmp_path_factory.mktemp("square"))
+
+
+@pytest.fixture(scope="session")
+def efficiency_runs() -> SharedEfficiencyRuns:
+    """benchmarks.efficiency's timed runs made once for the tests that read the same one (the leg-efficiency tests, the benchmark's
+    smoke test, the AUTO horizon's), all marked ``xdist_group("leg_efficiency")``."""
+    from tests_support import SharedEfficiencyRuns
+
+    return SharedEfficiencyRuns()

@@ -353,3 +353,35 @@ def record_rover_square(where: Path) -> tuple[Path, Path, Ticks, Any]:
     for close in [*(r.close for r in recorders), *closers]:
         close()
     return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
+
+
+class SharedEfficiencyRuns:
+    """:mod:`benchmarks.efficiency`'s lock-step runs, each made once a process for the tests that share them (conftest's
+    ``efficiency_runs``; its users are in ``xdist_group("leg_efficiency")``): the same mission run the same way is the same run,
+    track and all (:class:`~executive.testing.Lockstep`), so a run is keyed by how it is timed and every field of its mission."""
+
+    SHARED = ("time_executive", "time_auto")  # what the timings are made of: the executive's run, the autopilot's own AUTO
+
+    def __init__(self) -> None:
+        from benchmarks import efficiency
+
+        self._efficiency = efficiency
+        self._made = {name: getattr(efficiency, name) for name in self.SHARED}
+        self._done: dict[tuple[Any, ...], Any] = {}
+
+    def _once(self, name: str, how: Any, mission: Mission, *args: Any) -> Any:
+        key = (name, mission.model_dump_json(), *args)
+        if key not in self._done:
+            self._done[key] = how(mission, *args)
+        return self._done[key]
+
+    def share(self, monkeypatch: pytest.MonkeyPatch) -> None:
+        """From now on in this test, the benchmark's own calls of :data:`SHARED` are shared runs."""
+        for name, how in self._made.items():
+            monkeypatch.setattr(self._efficiency, name, lambda mission, *args, name=name, how=how: self._once(name, how, mission, *args))
+
+    def timed(self, how: Any, mission: Mission) -> Any:
+        """``how(mission)`` (``time_guided``, ``time_auto``, ``time_supervised_auto``...), shared."""
+        with pytest.MonkeyPatch.context() as monkeypatch:
+            self.share(monkeypatch)
+            return self._once(how.__name__, how, mission)
