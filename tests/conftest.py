@@ -1,4 +1,5 @@
-"""Fixtures every test shares: a clean blackboard, the square mission (the kit's clock, link, harness... come from executive.testing)."""
+"""Fixtures every test shares: a clean blackboard, the square mission (the kit's clock, link, harness... come from executive.testing);
+and the runs several files read (session scope, each with one xdist group for its users, so one worker makes it once)."""
 
 from __future__ import annotations
 
