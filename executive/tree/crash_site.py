@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 import py_trees
+from py_trees.common import Status
 
 #: The hooks py_trees calls on a node (Behaviour.tick: initialise, update; Behaviour.stop: terminate; the tree's setup).
 HOOKS = ("setup", "initialise", "update", "terminate")
@@ -29,23 +30,52 @@ class CrashSite:
         for node in root.iterate():
             for hook in HOOKS:
                 if not _empty(node, hook):  # left unwrapped: a guard's default initialise and terminate run every tick
-                    setattr(node, hook, self._noting(node, getattr(node, hook)))
+                    setattr(node, hook, self._noting(node, hook, getattr(node, hook)))
 
     def node_of(self, error: BaseException) -> py_trees.behaviour.Behaviour | None:
         """The node whose hook ``error`` came out of first (None: it came from no node's hook, the tree's own code)."""
         return self._node if error is self._error else None
 
-    def _noting(self, node: py_trees.behaviour.Behaviour, hook: Callable[..., Any]) -> Callable[..., Any]:
+    def _noting(self, node: py_trees.behaviour.Behaviour, name: str, hook: Callable[..., Any]) -> Callable[..., Any]:
+        # Each wrapper takes its hook's arguments as py_trees passes them (Behaviour.tick: initialise(), update();
+        # Behaviour.stop: terminate(new_status); the tree's setup(**kwargs)): update runs every tick, and an unpacked
+        # ``*args, **kwargs`` call costs several times a plain one.
+        def noted(error: BaseException) -> None:
+            if error is not self._error:  # raised here, not passed up from a node below
+                self._error, self._node = error, node
+
+        if name == "terminate":
+
+            @functools.wraps(hook)
+            def terminate(new_status: Status) -> Any:
+                try:
+                    return hook(new_status)
+                except BaseException as error:
+                    noted(error)
+                    raise
+
+            return terminate
+        if name != "setup":
+
+            @functools.wraps(hook)
+            def run() -> Any:
+                try:
+                    return hook()
+                except BaseException as error:
+                    noted(error)
+                    raise
+
+            return run
+
         @functools.wraps(hook)
-        def run(*args: Any, **kwargs: Any) -> Any:
+        def setup(*args: Any, **kwargs: Any) -> Any:
             try:
                 return hook(*args, **kwargs)
             except BaseException as error:
-                if error is not self._error:  # raised here, not passed up from a node below
-                    self._error, self._node = error, node
+                noted(error)
                 raise
 
-        return run
+        return setup
 
 
 def _empty(node: py_trees.behaviour.Behaviour, hook: str) -> bool:

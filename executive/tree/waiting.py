@@ -122,12 +122,24 @@ class WaitingWatch:
             self._last = None
             return None
         # a running node whose child failed waits for that child to succeed (a wait until, a retry)
-        named = next((child for child in self._shape.children[deepest] if failed(child)), deepest)
+        return self._say(next((child for child in self._shape.children[deepest] if failed(child)), deepest), feedback)
+
+    def again(self, feedback: Callable[[int], str | None]) -> Waiting | None:
+        """At a tick where every node has the status it had at the last one (a walk would find the same nodes), with the feedback now."""
+        if self._running is None:
+            return None
+        assert self._named is not None
+        return self._say(self._named, feedback)
+
+    def _say(self, named: int, feedback: Callable[[int], str | None]) -> Waiting:
+        """What the tree waits for: ``named`` (the deepest running node, or its failed child) with its feedback now."""
+        assert self._shape is not None
         note = feedback(named) or ""
-        if self._last is None or (self._named, self._last.since, self._last.feedback) != (named, self._since, note):
+        last = self._last
+        if last is None or (self._named, last.since, last.feedback) != (named, self._since, note):
             names = self._shape.names[named]
-            self._named, self._last = named, Waiting(names[-1], "/".join(names), note, self._since)
-        return self._last
+            self._named, self._last = named, (last := Waiting(names[-1], "/".join(names), note, self._since))
+        return last
 
 
 class TreeWatch:
@@ -135,7 +147,7 @@ class TreeWatch:
 
     :meth:`view` is the tree at its latest tick (the last run's, as it was at its last tick, once
     it is over), for ``executive ctl tree`` and other viewers; None before any mission has run.
-    Each tick costs a walk down the running nodes and a copy of each node's status and feedback.
+    Each tick costs a copy of each node's status and feedback, and a walk down the running nodes when one changed status.
     """
 
     def __init__(self) -> None:
@@ -146,11 +158,13 @@ class TreeWatch:
         self._tick: tuple[int, float] | None = None
         self._statuses: list[Status] = []
         self._feedback: list[str] = []
+        self._followed: list[Status] | None = None  # the statuses the waiting watch last followed (None: none yet, for this tree)
         self._live = False
 
     def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
         self._nodes, self._description = describe(root)
         self._watch = WaitingWatch()
+        self._followed = None
         self._live = True
         # the new tree as it is until its first tick (a mission replaced while paused waits for the resume): never the old one's statuses
         self._statuses = [n.status for n in self._nodes]
@@ -159,10 +173,15 @@ class TreeWatch:
     def ticked(self, tick: int, now: float) -> None:
         # copied: once the run ends the tree is stopped (every status INVALID), and its last tick is what ``view`` shows
         self._tick = (tick, now)
-        statuses = self._statuses = [n.status for n in self._nodes]
+        statuses = [n.status for n in self._nodes]
         feedback = self._feedback = [n.feedback_message for n in self._nodes]
-        running, failure = Status.RUNNING, Status.FAILURE
-        waiting = self._watch.follow(self._description, lambda i: statuses[i] is running, lambda i: statuses[i] is failure, feedback.__getitem__, now)
+        if statuses == self._followed:  # most ticks: no node changed status, and the walk down the running nodes is the same
+            waiting = self._watch.again(feedback.__getitem__)
+        else:
+            running, failure = Status.RUNNING, Status.FAILURE
+            is_running, has_failed = (lambda i: statuses[i] is running), (lambda i: statuses[i] is failure)
+            waiting = self._watch.follow(self._description, is_running, has_failed, feedback.__getitem__, now)
+        self._statuses = self._followed = statuses
         if waiting is not self._bb.get("/mission/waiting"):
             self._bb.set("/mission/waiting", waiting)
 

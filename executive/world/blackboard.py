@@ -23,7 +23,7 @@ never trips over a missing key. Each runtime has a board of its own (:class:`Boa
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -356,36 +356,58 @@ class Client(py_trees.blackboard.Client):
     With the activity stream on (debugging displays), and for anything else (nested or relative
     names, unregistered keys: the errors, ``overwrite=False``), py_trees does the work, on this
     client's board.
+
+    ``get`` and ``set`` are the client's own functions, made with it (:func:`_getter`, :func:`_setter`):
+    py_trees' client class has ``__getattr__`` (its keys read as attributes), which puts every attribute
+    read of a client on Python's slow path. A method would read itself and the client's board and keys
+    that way at each call; these functions hold them.
     """
+
+    get: Callable[[str], Any]
+    set: Callable[..., bool]
 
     def __init__(self, *, name: str | None = None, namespace: str | None = None) -> None:
         super().__init__(name=name, namespace=namespace)
         object.__setattr__(self, "board", _current)
+        object.__setattr__(self, "get", _getter(self, _current))
+        object.__setattr__(self, "set", _setter(self, _current))
 
-    def get(self, name: str) -> Any:
-        board: Board = self.board
-        remapped = self.remappings.get(name)
+    def register_key(self, key: str, access: Access, required: bool = False, remap_to: str | None = None) -> None:
+        """Register ``key`` with ``access`` (py_trees' own), noted on this client's board."""
+        with _installed(self.board):
+            super().register_key(key, access, required, remap_to)
+
+
+def _getter(client: Client, board: Board) -> Callable[[str], Any]:
+    """``client.get``: the value of ``name``, from ``board`` (py_trees' own get when the activity stream is on, or for another name)."""
+    remappings = client.remappings  # py_trees adds and removes keys in place
+
+    def get(name: str) -> Any:
+        remapped = remappings.get(name)
         if remapped is not None and board.activity_stream is None and Blackboard.activity_stream is None and "." not in name:
             try:
                 return board.storage[remapped]
             except KeyError:
                 pass  # py_trees raises its own error
         with _installed(board):
-            return super().get(name)
+            return py_trees.blackboard.Client.get(client, name)
 
-    def set(self, name: str, value: Any, overwrite: bool = True) -> bool:
-        board: Board = self.board
+    return get
+
+
+def _setter(client: Client, board: Board) -> Callable[..., bool]:
+    """``client.set``: write ``value`` to ``name`` on ``board`` (py_trees' own set when the activity stream is on, or for another name)."""
+    remappings, write, exclusive = client.remappings, client.write, client.exclusive  # py_trees changes them in place
+
+    def put(name: str, value: Any, overwrite: bool = True) -> bool:
         direct = overwrite and board.activity_stream is None and Blackboard.activity_stream is None and "." not in name
-        if direct and (name in self.write or name in self.exclusive):
-            board.storage[self.remappings[name]] = value
+        if direct and (name in write or name in exclusive):
+            board.storage[remappings[name]] = value
             return True
         with _installed(board):
-            return super().set(name, value, overwrite)
+            return py_trees.blackboard.Client.set(client, name, value, overwrite)
 
-    def register_key(self, key: str, access: Access, required: bool = False, remap_to: str | None = None) -> None:
-        """Register ``key`` with ``access`` (py_trees' own), noted on this client's board."""
-        with _installed(self.board):
-            super().register_key(key, access, required, remap_to)
+    return put
 
 
 @contextmanager

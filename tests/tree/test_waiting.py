@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import py_trees
 import pytest
+from py_trees.common import Status
 
 from executive.operator.status import status_line
 from executive.testing import Lockstep
 from executive.tree.ticks import TickState, render_tree
-from executive.tree.waiting import WaitingWatch, deepest_running, waiting_text
+from executive.tree.waiting import TreeWatch, WaitingWatch, deepest_running, waiting_text
+from executive.world import blackboard
 
 #: Mission > Run > (Pre-flight > Wait until EKF ok? > EKF ok?), (Route > Go to waypoint), and a parallel's second branch.
 NODES = [
@@ -119,3 +122,28 @@ def test_the_tree_watch_is_the_one_writer_of_the_mission_keys_it_publishes(slow_
         "/mission/next_target": {"route progress"},
         "/mission/samples": {"sample log"},
     }
+
+
+def test_the_live_watch_follows_feedback_and_status_changes_tick_by_tick() -> None:
+    """Between status changes only the feedback is read again; a status change walks the tree again (a new node, its own time)."""
+    ekf = py_trees.behaviours.Running("EKF ok?")
+    leg = py_trees.behaviours.Running("Go to waypoint")
+    root = py_trees.composites.Selector("Mission", memory=False, children=[ekf, leg])
+    watch = TreeWatch()
+    watch.begin(None, root, None)  # type: ignore[arg-type]
+    waited = []
+    for t, note in [(1.0, "no position"), (2.0, "no position"), (3.0, "variances high"), (4.0, "")]:
+        if t == 4.0:
+            ekf.status = Status.FAILURE
+        else:
+            root.tick_once()
+        ekf.feedback_message = note
+        watch.ticked(int(t * 10), t)
+        waiting = blackboard.value("/mission/waiting")
+        waited.append((waiting.node, waiting.feedback, waiting.since))
+    assert waited == [
+        ("EKF ok?", "no position", 1.0),
+        ("EKF ok?", "no position", 1.0),
+        ("EKF ok?", "variances high", 1.0),
+        ("EKF ok?", "", 4.0),  # it failed: Mission runs on and waits for it to succeed, from this tick
+    ]
