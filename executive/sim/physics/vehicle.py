@@ -277,9 +277,10 @@ class SurfaceVehicle(LocalFrame):
     # -- physics -------------------------------------------------------------------------------
 
     def step(self, dt: float) -> None:
-        """Advance ``dt`` seconds, in sub-steps of at most ``SUBSTEP_S``."""
+        """Advance ``dt`` seconds, in sub-steps of at most ``SUBSTEP_S`` (``NAVIGATOR_STEP_S`` driven by a navigator)."""
+        longest = self.SUBSTEP_S if self._navigator is None else self.NAVIGATOR_STEP_S  # no order changes it during a step
         while dt > 1e-9:
-            h = min(dt, self.SUBSTEP_S if self._navigator is None else self.NAVIGATOR_STEP_S)
+            h = dt if dt < longest else longest
             self._substep(h)
             dt -= h
 
@@ -292,11 +293,11 @@ class SurfaceVehicle(LocalFrame):
         self._move(h)
 
     def _move(self, h: float) -> None:
-        """Turn and travel ``h`` seconds at the present speed and turn rate."""
-        self._yaw = wrap_pi(self._yaw + self._yaw_rate * h)
-        vn, ve, _ = self.velocity_ned
-        self._n += vn * h
-        self._e += ve * h
+        """Turn and travel ``h`` seconds at the present speed and turn rate (over ground: :attr:`velocity_ned`, written out)."""
+        yaw = self._yaw = wrap_pi(self._yaw + self._yaw_rate * h)
+        drift_n, drift_e = self._drift if self.powered else (0.0, 0.0)
+        self._n += (self._speed * math.cos(yaw) + drift_n) * h
+        self._e += (self._speed * math.sin(yaw) + drift_e) * h
 
     def _actuate(self, want_speed: float, want_rate: float, h: float) -> tuple[float, float]:
         """The speed and turn rate reached after ``h`` seconds of asking for these (acceleration limited).
