@@ -323,7 +323,7 @@ class RoverNavigator:
         if not stopping and abs(lateral) < 1e-6 and accel_n * cos_yaw + accel_e * sin_yaw < 0.0:
             lateral = math.hypot(accel_n, accel_e)  # a target dead astern: a real vehicle's noise picks a side; here, the right
         steer_speed = abs(speed)
-        steer_speed = STEER_SPEED_MIN_M_S if STEER_SPEED_MIN_M_S > steer_speed else steer_speed
+        steer_speed = STEER_SPEED_MIN_M_S if steer_speed < STEER_SPEED_MIN_M_S else steer_speed
         rate = lateral / math.copysign(steer_speed, speed if speed else 1.0)
         return speed, self._rate_limited(rate, vehicle, dt)
 
