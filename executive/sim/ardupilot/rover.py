@@ -132,8 +132,8 @@ class ArduRoverSim(ArduPilotSim):
     def _check_fence(self) -> None:
         """Rover/fence.cpp fence_check, at 10 Hz: a new breach sends FENCE_STATUS (no STATUSTEXT: AC_Fence::record_breach) and, armed,
         takes FENCE_ACTION once (see rover_fence)."""
-        if not self.ekf_ready:
-            return
+        if not self.ekf_ready or (not self._fence_breaches and not self.params.get("FENCE_ENABLE")):
+            return  # nothing breached, nothing to check (breaches: none while FENCE_ENABLE is 0)
         fence = self.zone_stores[_M.MAV_MISSION_TYPE_FENCE].commands
         found = breaches(self.params, fence, self.home, self.vehicle.lat, self.vehicle.lon)
         new = found & ~self._fence_breaches
