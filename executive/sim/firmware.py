@@ -193,7 +193,7 @@ class FirmwareSim(ABC):
         """Move the world to the clock's now; returns the telemetry and notices now due."""
         now = self.clock.now()
         while now - self._t > EPSILON_S:
-            h = min(self.NAV_PERIOD_S, now - self._t)
+            h = now - self._t if now - self._t < self.NAV_PERIOD_S else self.NAV_PERIOD_S
             self._check_health()
             self._update_mode()
             self.vehicle.step(h)

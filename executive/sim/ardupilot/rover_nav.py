@@ -33,6 +33,7 @@ import math
 from typing import Literal, Protocol
 
 from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, sqrt_controller, stopping_distance
+from executive.sim.physics.vehicle import within
 
 #: AR_PIVOT_ANGLE_ACCURACY: a pivot ends within this many degrees of the bearing.
 PIVOT_ACCURACY_DEG = 5.0
@@ -336,7 +337,7 @@ class RoverNavigator:
         last = self._desired_speed
         slowing = abs(speed) < abs(last) and motion.decel_max_m_s2 > 0.0
         change = (motion.decel_max_m_s2 if slowing else motion.accel_max_m_s2) * dt
-        self._desired_speed = _within(speed, last - change, last + change)
+        self._desired_speed = within(speed, last - change, last + change)
         return self._desired_speed
 
     def _rate_limited(self, rate: float, vehicle: Driven, dt: float) -> float:
@@ -344,26 +345,20 @@ class RoverNavigator:
         accel, limit = self._steer_accel_rad_s2, self._steer_rate_rad_s
         if accel is not None:
             change = accel * dt
-            rate = _within(rate, self._desired_rate - change, self._desired_rate + change)
+            rate = within(rate, self._desired_rate - change, self._desired_rate + change)
         if limit is not None:
-            rate = _within(rate, -limit, limit)
+            rate = within(rate, -limit, limit)
         self._desired_rate = rate
         speed = abs(vehicle.speed_m_s)
         g_limit = self.motion.lat_accel_m_s2 / speed if speed > 0.0 else math.inf
         if g_limit < ONE_DEGREE_RAD:
             g_limit = ONE_DEGREE_RAD
-        return _within(rate, -g_limit, g_limit)
+        return within(rate, -g_limit, g_limit)
 
     def settle(self) -> None:
         """The speed and steering controllers at rest (disarmed, or a mode that does not use them)."""
         self._desired_speed = self._desired_rate = 0.0
         self._active = False
-
-
-def _within(value: float, low: float, high: float) -> float:
-    """``max(low, min(high, value))``, float for float (ties and NaN alike), without two builtin calls: it runs several times a 20 ms step."""
-    value = value if value < high else high
-    return value if value > low else low
 
 
 def _bearing_of(start: tuple[float, float], end: tuple[float, float]) -> float:

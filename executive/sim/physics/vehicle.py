@@ -20,7 +20,16 @@ def wrap_pi(angle: float) -> float:
 
 
 def clamp(value: float, limit: float) -> float:
-    return max(-limit, min(limit, value))
+    """``max(-limit, min(limit, value))``, ties and NaN alike: written out, as the models' other min and max of every step
+    (the builtins cost several times a comparison)."""
+    value = value if value < limit else limit
+    return value if value > -limit else -limit
+
+
+def within(value: float, low: float, high: float) -> float:
+    """``max(low, min(high, value))``, ties and NaN alike, without the builtin calls (see :func:`clamp`)."""
+    value = value if value < high else high
+    return value if value > low else low
 
 
 class VehicleModel(Protocol):
@@ -336,16 +345,24 @@ class SurfaceVehicle(LocalFrame):
         error = wrap_pi(math.atan2(de, dn) - self._yaw - math.radians(self.heading_bias_deg))
         rate_max = math.radians(limits.turn_rate_deg_s)
         if abs(self._speed) > 1e-3:
-            rate_max = min(rate_max, limits.lat_accel_m_s2 / abs(self._speed))  # ATC_TURN_MAX_G
+            turn_max_g = limits.lat_accel_m_s2 / abs(self._speed)  # ATC_TURN_MAX_G
+            rate_max = turn_max_g if turn_max_g < rate_max else rate_max
         rate = clamp(self.HEADING_GAIN * error, rate_max)
         # a braking profile with margin, then a linear approach: never overshoots the target (the shape of ArduPilot's
         # sqrt_controller stopping a shaped target, libraries/AP_Math/control.cpp)
         brake = math.sqrt(2.0 * 0.8 * limits.decel_m_s2 * distance)
-        speed = min(self._target_speed, brake, self.APPROACH_GAIN * distance)
+        approach = self.APPROACH_GAIN * distance
+        speed = self._target_speed  # min(target speed, brake, approach)
+        speed = brake if brake < speed else speed
+        speed = approach if approach < speed else speed
         # turn toward a target behind before driving to it (the forward part of the speed); a vehicle under way that
         # cannot pivot keeps the least turning speed through the turn (AR_PosControl::update,
         # libraries/APM_Control/AR_PosControl.cpp); one at rest turns first (as LOITER does, Rover/mode_loiter.cpp)
-        return max(speed * math.cos(error), min(speed, limits.turn_speed_min_m_s, abs(self._speed))), rate
+        turning = speed  # min(speed, turn_speed_min, |speed now|)
+        turning = limits.turn_speed_min_m_s if limits.turn_speed_min_m_s < turning else turning
+        turning = abs(self._speed) if abs(self._speed) < turning else turning
+        ahead = speed * math.cos(error)
+        return turning if turning > ahead else ahead, rate
 
 
 @dataclass(frozen=True)
