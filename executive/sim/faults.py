@@ -285,9 +285,10 @@ class FaultInjector:
             if isinstance(fault, RcLoss) and start <= t < end and t >= start + RC_FAILSAFE_TIMEOUT_S and i not in self._failsafe_done:
                 self._failsafe_done.add(i)
                 self._rc_failsafe(fault, autopilot)
-        autopilot.load_factor = math.prod(f.factor for f in self.active(t) if isinstance(f, Headwind))
+        active = self.active(t)
+        autopilot.load_factor = math.prod(f.factor for f in active if isinstance(f, Headwind))
         if self._loses_position:
-            autopilot.ekf_position_lost = any(isinstance(f, EkfDegradation) and f.lose_position for f in self.active(t))
+            autopilot.ekf_position_lost = any(isinstance(f, EkfDegradation) and f.lose_position for f in active)
         if self._steers:
             if hasattr(autopilot.vehicle, "heading_bias_deg"):
                 autopilot.vehicle.heading_bias_deg = self.heading_offset_deg(t)

@@ -175,7 +175,7 @@ class FirmwareSim(ABC):
     @property
     def ekf_ready(self) -> bool:
         """The EKF uses GPS: a position estimate, a home, arming possible."""
-        return self.elapsed_s >= self.ekf_ready_after_s - EPSILON_S
+        return self._t - self._t0 >= self.ekf_ready_after_s - EPSILON_S  # elapsed_s, written out: asked many times a step
 
     @property
     def mode_number(self) -> int:
@@ -346,10 +346,10 @@ class FirmwareSim(ABC):
         return out
 
     def _ms(self) -> int:
-        return int(self.elapsed_s * 1000) & 0xFFFFFFFF
+        return int((self._t - self._t0) * 1000) & 0xFFFFFFFF  # elapsed_s, written out: most messages carry it
 
     def _us(self) -> int:
-        return int(self.elapsed_s * 1e6)
+        return int((self._t - self._t0) * 1e6)
 
     # -- time-driven behaviour -------------------------------------------------------------------
 
