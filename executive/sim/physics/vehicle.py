@@ -115,11 +115,11 @@ class LocalFrame:
 
     @property
     def lat(self) -> float:
-        return self._latlon(self._n, self._e)[0]
+        return self._lat0 + self._n / self._m_per_deg_lat  # _latlon's, one coordinate: most messages ask both, one at a time
 
     @property
     def lon(self) -> float:
-        return self._latlon(self._n, self._e)[1]
+        return self._lon0 + self._e / self._m_per_deg_lon
 
     def _init_frame(self, lat: float, lon: float) -> None:
         self._lat0, self._lon0 = lat, lon
