@@ -72,7 +72,7 @@ CommandHandler = Callable[[Command], "int | None"]
 
 
 @dataclass(slots=True)
-class _Stream:
+class _TelemetryStream:
     """A message sent unasked every ``interval`` seconds, built by ``build``; ``due``: when next (None: at once)."""
 
     msg_id: int
@@ -146,7 +146,7 @@ class FirmwareSim(ABC):
         self._t0 = self._t = clock.now()
         self._mode_names = {number: name for name, number in profile.modes.items()}
         self._intervals = dict(self.STREAMS)  # every message's interval (s; 0: not sent unasked), in the order they are sent
-        self._streams: list[_Stream] = []  # those sent now, planned again when an interval changes and at the boot
+        self._streams: list[_TelemetryStream] = []  # those sent now, planned again when an interval changes and at the boot
         self._out: list[MAVLinkMessage] = []
         self._booted = self._origin_set = False
         self._text_id = 0
@@ -373,7 +373,7 @@ class FirmwareSim(ABC):
         due = {stream.msg_id: stream.due for stream in self._streams if stream.msg_id != restart}
         self._streams_booted = booted = self._booted
         self._streams = [
-            _Stream(msg_id, interval, self._builders[msg_id], due.get(msg_id))
+            _TelemetryStream(msg_id, interval, self._builders[msg_id], due.get(msg_id))
             for msg_id, interval in self._intervals.items()
             if interval > 0 and (booted or msg_id == _HEARTBEAT)
         ]
