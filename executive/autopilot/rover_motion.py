@@ -85,8 +85,8 @@ def sqrt_controller(error: float, gain: float, limit: float, dt: float = 0.0) ->
     else:
         linear = limit / (gain * gain)
         rate = gain * size if size <= linear else math.sqrt(2.0 * limit * (size - linear / 2.0))
-    if dt > 0.0:
-        rate = min(rate, size / dt)
+    if dt > 0.0 and size / dt < rate:  # min(rate, size / dt), without the builtin call: this runs several times a 20 ms step
+        rate = size / dt
     return math.copysign(rate, error) if error else 0.0
 
 
@@ -270,6 +270,10 @@ class ShapedTarget:
         self.speed_m_s = speed_m_s
         self.accel_m_s2 = accel_m_s2
         self.jerk_m_s3 = jerk_m_s3
+        # the square-root controllers' gains and limits, worked out once (step runs every 20 ms)
+        self._approach = (0.5 * jerk_m_s3 / accel_m_s2, 0.5 * accel_m_s2)
+        self._accel_gain = jerk_m_s3 / accel_m_s2
+        self._corner_m_s2 = CORNER_ACCELERATION_RATIO * accel_m_s2
         self.pos = (0.0, 0.0)
         self.vel = (0.0, 0.0)
         self.acc = (0.0, 0.0)
@@ -288,14 +292,14 @@ class ShapedTarget:
         size = math.hypot(en, ee)
         want_n = want_e = 0.0
         if size > 0.0:
-            rate = sqrt_controller(size, 0.5 * j / a, 0.5 * a, dt)
+            rate = sqrt_controller(size, *self._approach, dt)
             want_n, want_e = _limit_length(en * rate / size, ee * rate / size, self.speed_m_s)
         # the acceleration that closes the velocity error, with room kept for turning
         dn, de = want_n - vn, want_e - ve
         size = math.hypot(dn, de)
         cn = ce = 0.0
         if size > 0.0:
-            rate = sqrt_controller(size, j / a, j, dt)
+            rate = sqrt_controller(size, self._accel_gain, j, dt)
             cn, ce = dn * rate / size, de * rate / size
         want_speed = math.hypot(want_n, want_e)
         if want_speed == 0.0:
@@ -307,7 +311,7 @@ class ShapedTarget:
             if along * along <= xn * xn + xe * xe:
                 cn, ce = _limit_length(cn, ce, a)
             else:
-                xn, xe = _limit_length(xn, xe, CORNER_ACCELERATION_RATIO * a)
+                xn, xe = _limit_length(xn, xe, self._corner_m_s2)
                 room = math.sqrt(max(0.0, a * a - xn * xn - xe * xe))
                 along = max(-room, min(room, along))
                 cn, ce = xn + along * un, xe + along * ue

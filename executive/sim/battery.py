@@ -35,7 +35,8 @@ _OCV_SPAN_ENDS = tuple(c1 for _, (c1, _) in _OCV_SPANS)
 
 def cell_voltage(charge: float) -> float:
     """A cell's open-circuit voltage at ``charge`` (0..1 of its capacity)."""
-    charge = min(1.0, max(0.0, charge))
+    charge = charge if charge > 0.0 else 0.0  # min(1, max(0, charge)) without the builtins: every step of the simulated firmware
+    charge = charge if charge < 1.0 else 1.0
     index = bisect_left(_OCV_SPAN_ENDS, charge)  # the first span that reaches the charge
     if index == len(_OCV_SPANS):
         return _OCV_CURVE[-1][1]
@@ -89,7 +90,7 @@ class SimBattery:
         spec = self.spec
         if not armed:
             return spec.idle_a
-        return spec.idle_a + (spec.armed_a + spec.full_a * max(0.0, throttle) ** 1.5) * factor
+        return spec.idle_a + (spec.armed_a + spec.full_a * (throttle if throttle > 0.0 else 0.0) ** 1.5) * factor
 
     def draw(self, current_a: float, dt: float) -> None:
         """``current_a`` for ``dt`` seconds."""
@@ -101,12 +102,14 @@ class SimBattery:
     @property
     def charge(self) -> float:
         """The share of its capacity left (0..1)."""
-        return max(0.0, self.start_charge - self.consumed_mah / self.spec.capacity_mah)
+        left = self.start_charge - self.consumed_mah / self.spec.capacity_mah
+        return left if left > 0.0 else 0.0
 
     @property
     def voltage_v(self) -> float:
         """The pack's voltage under the present load."""
-        return max(0.0, self.spec.cells * cell_voltage(self.charge) - self.current_a * self.spec.internal_ohm)
+        volts = self.spec.cells * cell_voltage(self.charge) - self.current_a * self.spec.internal_ohm
+        return volts if volts > 0.0 else 0.0
 
     def remaining_pct(self, counted_from_full: bool) -> int:
         """battery_remaining: ArduPilot counts from a full pack at boot (``counted_from_full``), PX4 knows the charge."""

@@ -227,6 +227,7 @@ class FaultInjector:
         # state the injector owns only if some fault needs it: otherwise left alone
         self._loses_position = any(isinstance(f, EkfDegradation) and f.lose_position for f in self.faults)
         self._steers = any(isinstance(f, CompassBias | CompassGlitch) for f in self.faults)
+        self._cuts_link = any(isinstance(f, LinkLoss) for f in self.faults)  # asked twice a step: no search without one
         self._warned_steering = False
 
     def attach(self, autopilot: FirmwareSim) -> None:
@@ -250,12 +251,12 @@ class FaultInjector:
     @property
     def receiving(self) -> bool:
         """False while a link loss stops the vehicle hearing anything (what is sent meanwhile is lost)."""
-        return not any(isinstance(f, LinkLoss) and f.direction != "downlink" for f in self.active())
+        return not self._cuts_link or not any(isinstance(f, LinkLoss) and f.direction != "downlink" for f in self.active())
 
     @property
     def sending(self) -> bool:
         """False while a link loss stops the vehicle sending anything."""
-        return not any(isinstance(f, LinkLoss) and f.direction != "uplink" for f in self.active())
+        return not self._cuts_link or not any(isinstance(f, LinkLoss) and f.direction != "uplink" for f in self.active())
 
     def heading_offset_deg(self, t: float | None = None) -> float:
         """What the compass faults add to the heading ``t`` seconds after boot (default: now)."""
@@ -285,9 +286,10 @@ class FaultInjector:
             if isinstance(fault, RcLoss) and start <= t < end and t >= start + RC_FAILSAFE_TIMEOUT_S and i not in self._failsafe_done:
                 self._failsafe_done.add(i)
                 self._rc_failsafe(fault, autopilot)
-        autopilot.load_factor = math.prod(f.factor for f in self.active(t) if isinstance(f, Headwind))
+        active = self.active(t)
+        autopilot.load_factor = math.prod(f.factor for f in active if isinstance(f, Headwind))
         if self._loses_position:
-            autopilot.ekf_position_lost = any(isinstance(f, EkfDegradation) and f.lose_position for f in self.active(t))
+            autopilot.ekf_position_lost = any(isinstance(f, EkfDegradation) and f.lose_position for f in active)
         if self._steers:
             if hasattr(autopilot.vehicle, "heading_bias_deg"):
                 autopilot.vehicle.heading_bias_deg = self.heading_offset_deg(t)

@@ -71,6 +71,16 @@ class Command:
 CommandHandler = Callable[[Command], "int | None"]
 
 
+@dataclass(slots=True)
+class _TelemetryStream:
+    """A message sent unasked every ``interval`` seconds, built by ``build``; ``due``: when next (None: at once)."""
+
+    msg_id: int
+    interval: float
+    build: Callable[[], MAVLinkMessage | None]
+    due: float | None = None
+
+
 class FirmwareSim(ABC):
     """The firmware-independent part of a simulated autopilot.
 
@@ -135,8 +145,8 @@ class FirmwareSim(ABC):
         self._mav = encoder(system_id, component_id)
         self._t0 = self._t = clock.now()
         self._mode_names = {number: name for name, number in profile.modes.items()}
-        self._intervals = dict(self.STREAMS)
-        self._due: dict[int, float] = {}
+        self._intervals = dict(self.STREAMS)  # every message's interval (s; 0: not sent unasked), in the order they are sent
+        self._streams: list[_TelemetryStream] = []  # those sent now, planned again when an interval changes and at the boot
         self._out: list[MAVLinkMessage] = []
         self._booted = self._origin_set = False
         self._text_id = 0
@@ -145,6 +155,7 @@ class FirmwareSim(ABC):
         self.proximity = Proximity()  # a MAVLink proximity sensor (PRX1_TYPE 2): what OBSTACLE_DISTANCE tells
         self.relays: dict[int, bool] = {}  # relay instance -> on, as MAV_CMD_DO_SET_RELAY left it
         self._builders = self._message_builders()
+        self._plan_streams()
         self._handlers = self._message_handlers()
         self._commands = self._command_handlers()
         self._text(_M.MAV_SEVERITY_INFO, f"{self.FIRMWARE} {self.VERSION} (sim)")
@@ -164,7 +175,7 @@ class FirmwareSim(ABC):
     @property
     def ekf_ready(self) -> bool:
         """The EKF uses GPS: a position estimate, a home, arming possible."""
-        return self.elapsed_s >= self.ekf_ready_after_s - EPSILON_S
+        return self._t - self._t0 >= self.ekf_ready_after_s - EPSILON_S  # elapsed_s, written out: asked many times a step
 
     @property
     def mode_number(self) -> int:
@@ -182,7 +193,7 @@ class FirmwareSim(ABC):
         """Move the world to the clock's now; returns the telemetry and notices now due."""
         now = self.clock.now()
         while now - self._t > EPSILON_S:
-            h = min(self.NAV_PERIOD_S, now - self._t)
+            h = now - self._t if now - self._t < self.NAV_PERIOD_S else self.NAV_PERIOD_S
             self._check_health()
             self._update_mode()
             self.vehicle.step(h)
@@ -335,23 +346,37 @@ class FirmwareSim(ABC):
         return out
 
     def _ms(self) -> int:
-        return int(self.elapsed_s * 1000) & 0xFFFFFFFF
+        return int((self._t - self._t0) * 1000) & 0xFFFFFFFF  # elapsed_s, written out: most messages carry it
 
     def _us(self) -> int:
-        return int(self.elapsed_s * 1e6)
+        return int((self._t - self._t0) * 1e6)
 
     # -- time-driven behaviour -------------------------------------------------------------------
 
     def _telemetry(self) -> None:
-        t, booted, due_at, builders, emit = self._t, self._booted, self._due, self._builders, self._emit  # every update: locals
-        for msg_id, interval in self._intervals.items():
-            if interval <= 0 or not (booted or msg_id == _HEARTBEAT):
-                continue
-            due = due_at.get(msg_id, t)
-            if t + EPSILON_S >= due:
-                emit(builders[msg_id]())
+        """Each stream's message when it is due (every update: the streams' times are kept with them, nothing else is looked up)."""
+        if self._streams_booted is not self._booted:
+            self._plan_streams()
+        t, emit = self._t, self._emit
+        soon = t + EPSILON_S
+        for stream in self._streams:
+            due = t if stream.due is None else stream.due
+            if soon >= due:
+                emit(stream.build())
                 # at a high speed-up several intervals may pass between updates: send once, no burst
-                due_at[msg_id] = due + interval if due + interval > t else t + interval
+                interval = stream.interval
+                stream.due = due + interval if due + interval > t else t + interval
+
+    def _plan_streams(self, restart: int | None = None) -> None:
+        """The streams sent now, in the order of :attr:`_intervals` (before the boot, the HEARTBEAT only), keeping when each is due;
+        ``restart``'s (its interval just set) is due at once."""
+        due = {stream.msg_id: stream.due for stream in self._streams if stream.msg_id != restart}
+        self._streams_booted = booted = self._booted
+        self._streams = [
+            _TelemetryStream(msg_id, interval, self._builders[msg_id], due.get(msg_id))
+            for msg_id, interval in self._intervals.items()
+            if interval > 0 and (booted or msg_id == _HEARTBEAT)
+        ]
 
     def battery_params(self, capacity_mah: float) -> dict[str, float]:
         """The battery monitor's parameters, as the firmware answers them for a pack of ``capacity_mah``."""
@@ -438,7 +463,7 @@ class FirmwareSim(ABC):
         else:
             interval = min(max(interval_us, 1000), 60_000_000) / 1e6
         self._intervals[msg_id] = interval
-        self._due.pop(msg_id, None)
+        self._plan_streams(restart=msg_id)
         return _M.MAV_RESULT_ACCEPTED
 
     def _cmd_get_message_interval(self, cmd: Command) -> int:

@@ -15,7 +15,7 @@ from executive.sim.ardupilot.rover_fence import FENCE_ACTIONS, FENCE_DEFAULTS, b
 from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import StoredCommand
-from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, MotionLimits, SurfaceVehicle, VehicleModel
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, MotionLimits, SurfaceVehicle, VehicleModel, clamp
 from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink
@@ -132,8 +132,8 @@ class ArduRoverSim(ArduPilotSim):
     def _check_fence(self) -> None:
         """Rover/fence.cpp fence_check, at 10 Hz: a new breach sends FENCE_STATUS (no STATUSTEXT: AC_Fence::record_breach) and, armed,
         takes FENCE_ACTION once (see rover_fence)."""
-        if not self.ekf_ready:
-            return
+        if not self.ekf_ready or (not self._fence_breaches and not self.params.get("FENCE_ENABLE")):
+            return  # nothing breached, nothing to check (breaches: none while FENCE_ENABLE is 0)
         fence = self.zone_stores[_M.MAV_MISSION_TYPE_FENCE].commands
         found = breaches(self.params, fence, self.home, self.vehicle.lat, self.vehicle.lon)
         new = found & ~self._fence_breaches
@@ -363,11 +363,14 @@ class ArduRoverSim(ArduPilotSim):
         return RATE_ATTITUDE | NAVIGATION, enabled
 
     def _throttle(self) -> float:
-        return min(1.0, abs(self.vehicle.speed_m_s) / self.limits.max_m_s) if self.armed else 0.0
+        if not self.armed:
+            return 0.0
+        share = abs(self.vehicle.speed_m_s) / self.limits.max_m_s
+        return share if share < 1.0 else 1.0
 
     def _servo_outputs(self) -> Sequence[int]:
         """ArduRover's default outputs: SERVO1 ground steering, SERVO3 throttle."""
-        steer = max(-1.0, min(1.0, self.vehicle.yaw_rate_rad_s / math.radians(self.limits.turn_rate_deg_s)))
+        steer = clamp(self.vehicle.yaw_rate_rad_s / math.radians(self.limits.turn_rate_deg_s), 1.0)
         outputs = [0] * 16
         outputs[0] = round(1500 + 500 * steer)
         outputs[2] = round(1500 + 500 * self._throttle())

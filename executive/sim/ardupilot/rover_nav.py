@@ -33,6 +33,7 @@ import math
 from typing import Literal, Protocol
 
 from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, sqrt_controller, stopping_distance
+from executive.sim.physics.vehicle import within
 
 #: AR_PIVOT_ANGLE_ACCURACY: a pivot ends within this many degrees of the bearing.
 PIVOT_ACCURACY_DEG = 5.0
@@ -77,8 +78,9 @@ class RoverNavigator:
         # what the parameters fix, worked out once rather than every 20 ms step
         #: AC_P_2D's limit: the position error's square-root branch within min(accel, lateral accel) and jerk / P.
         self._accel_limit = min(min(motion.path_accel_m_s2, motion.lat_accel_m_s2), motion.jerk_m_s3 / motion.pos_p)
-        self._steer_accel_rad_s2 = math.radians(motion.steer_accel_max_deg_s2)
-        self._steer_rate_rad_s = math.radians(motion.steer_rate_max_deg_s)
+        #: ATC_STR_ACC_MAX and ATC_STR_RAT_MAX in rad/s/s and rad/s (None: that limit is off, the parameter 0).
+        self._steer_accel_rad_s2 = math.radians(motion.steer_accel_max_deg_s2) if motion.steer_accel_max_deg_s2 > 0.0 else None
+        self._steer_rate_rad_s = math.radians(motion.steer_rate_max_deg_s) if motion.steer_rate_max_deg_s > 0.0 else None
         self.speed_max_m_s = speed_m_s if speed_m_s and speed_m_s > 0.0 else motion.speed_m_s
         self.kind: Literal["stop", "shaping", "scurve"] = "stop"
         self.destination: tuple[float, float] | None = None
@@ -307,18 +309,23 @@ class RoverNavigator:
         speed_max = self._speed_max_m_s
         if size > speed_max > 0.0:
             want_n, want_e, size = want_n * speed_max / size, want_e * speed_max / size, speed_max
-        accel_n = motion.vel_p * (want_n - vn) + tan
-        accel_e = motion.vel_p * (want_e - ve) + tae
+        vel_p = motion.vel_p
+        accel_n = vel_p * (want_n - vn) + tan
+        accel_e = vel_p * (want_e - ve) + tae
         yaw = vehicle.yaw_rad
         cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)  # forward (cos, sin), right (-sin, cos)
         speed = want_n * cos_yaw + want_e * sin_yaw
-        if not stopping:
-            speed = max(min(size, motion.turn_speed_min_m_s), speed)
+        if not stopping:  # at least the turning speed: max(min(size, turn_speed_min), speed)
+            turning = motion.turn_speed_min_m_s
+            turning = turning if turning < size else size
+            speed = speed if speed > turning else turning
         speed = self._speed_limited(speed, dt)
         lateral = 0.0 if stopping else accel_n * -sin_yaw + accel_e * cos_yaw
         if not stopping and abs(lateral) < 1e-6 and accel_n * cos_yaw + accel_e * sin_yaw < 0.0:
             lateral = math.hypot(accel_n, accel_e)  # a target dead astern: a real vehicle's noise picks a side; here, the right
-        rate = lateral / math.copysign(max(abs(speed), STEER_SPEED_MIN_M_S), speed if speed else 1.0)
+        steer_speed = abs(speed)
+        steer_speed = STEER_SPEED_MIN_M_S if steer_speed < STEER_SPEED_MIN_M_S else steer_speed
+        rate = lateral / math.copysign(steer_speed, speed if speed else 1.0)
         return speed, self._rate_limited(rate, vehicle, dt)
 
     def _speed_limited(self, speed: float, dt: float) -> float:
@@ -327,24 +334,26 @@ class RoverNavigator:
         if motion.accel_max_m_s2 <= 0.0:
             self._desired_speed = speed
             return speed
-        slowing = abs(speed) < abs(self._desired_speed) and motion.decel_max_m_s2 > 0.0
+        last = self._desired_speed
+        slowing = abs(speed) < abs(last) and motion.decel_max_m_s2 > 0.0
         change = (motion.decel_max_m_s2 if slowing else motion.accel_max_m_s2) * dt
-        self._desired_speed = max(self._desired_speed - change, min(self._desired_speed + change, speed))
+        self._desired_speed = within(speed, last - change, last + change)
         return self._desired_speed
 
     def _rate_limited(self, rate: float, vehicle: Driven, dt: float) -> float:
         """AR_AttitudeControl::get_steering_out_rate: ATC_STR_ACC_MAX, ATC_STR_RAT_MAX, then the lateral acceleration at this speed."""
-        motion = self.motion
-        if motion.steer_accel_max_deg_s2 > 0.0:
-            change = self._steer_accel_rad_s2 * dt
-            rate = max(self._desired_rate - change, min(self._desired_rate + change, rate))
-        if motion.steer_rate_max_deg_s > 0.0:
-            limit = self._steer_rate_rad_s
-            rate = max(-limit, min(limit, rate))
+        accel, limit = self._steer_accel_rad_s2, self._steer_rate_rad_s
+        if accel is not None:
+            change = accel * dt
+            rate = within(rate, self._desired_rate - change, self._desired_rate + change)
+        if limit is not None:
+            rate = within(rate, -limit, limit)
         self._desired_rate = rate
         speed = abs(vehicle.speed_m_s)
-        g_limit = max(motion.lat_accel_m_s2 / speed if speed > 0.0 else math.inf, ONE_DEGREE_RAD)
-        return max(-g_limit, min(g_limit, rate))
+        g_limit = self.motion.lat_accel_m_s2 / speed if speed > 0.0 else math.inf
+        if g_limit < ONE_DEGREE_RAD:
+            g_limit = ONE_DEGREE_RAD
+        return within(rate, -g_limit, g_limit)
 
     def settle(self) -> None:
         """The speed and steering controllers at rest (disarmed, or a mode that does not use them)."""

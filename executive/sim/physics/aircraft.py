@@ -200,7 +200,7 @@ class QuadPlaneModel(LocalFrame):
     def step(self, dt: float) -> None:
         """Advance ``dt`` seconds, in sub-steps of at most ``SUBSTEP_S``."""
         while dt > 1e-9:
-            h = min(dt, self.SUBSTEP_S)
+            h = self.SUBSTEP_S if dt > self.SUBSTEP_S else dt  # min(dt, SUBSTEP_S), as the other mins of every step: see clamp
             self._substep(h)
             dt -= h
 
@@ -235,7 +235,10 @@ class QuadPlaneModel(LocalFrame):
         distance = math.hypot(dn, de)
         speed = self.speed_m_s
         decel = limits.trans_decel_m_s2 if speed > limits.mc_speed_m_s + 0.5 else limits.mc_accel_m_s2
-        want = min(limits.mc_speed_m_s, math.sqrt(2.0 * 0.8 * decel * distance), self.POSITION_GAIN * distance)
+        brake, approach = math.sqrt(2.0 * 0.8 * decel * distance), self.POSITION_GAIN * distance
+        want = limits.mc_speed_m_s  # min(the speed, brake, approach)
+        want = brake if brake < want else want
+        want = approach if approach < want else want
         want_n, want_e = (dn / distance * want, de / distance * want) if distance > 1e-6 else (0.0, 0.0)
         change_n, change_e = want_n - self._vn, want_e - self._ve
         change = math.hypot(change_n, change_e)
@@ -248,7 +251,9 @@ class QuadPlaneModel(LocalFrame):
         else:
             error = self._target_h - self._h  # positive: climb
             brake = math.sqrt(2.0 * 0.8 * limits.vertical_accel_m_s2 * abs(error))
-            rate = min(brake, self.HEIGHT_GAIN * abs(error), limits.climb_m_s if error > 0 else limits.descend_m_s)
+            approach, most = self.HEIGHT_GAIN * abs(error), limits.climb_m_s if error > 0 else limits.descend_m_s
+            rate = approach if approach < brake else brake  # min(brake, approach, the most)
+            rate = most if most < rate else rate
             want_down = -math.copysign(rate, error)
         self._vd += clamp(want_down - self._vd, limits.vertical_accel_m_s2 * h)
 
@@ -257,7 +262,7 @@ class QuadPlaneModel(LocalFrame):
         speed = self.speed_m_s
         speed += clamp(limits.cruise_m_s - speed, limits.fw_accel_m_s2 * h)
         course = self._yaw if self._radius <= 0 else self._orbit_course()
-        max_rate = GRAVITY_M_S2 * math.tan(math.radians(limits.bank_deg)) / max(speed, 5.0)
+        max_rate = GRAVITY_M_S2 * math.tan(math.radians(limits.bank_deg)) / (5.0 if speed < 5.0 else speed)
         self._yaw_rate = clamp(self.HEADING_GAIN * wrap_pi(course - self._yaw), max_rate)
         self._yaw = wrap_pi(self._yaw + self._yaw_rate * h)
         self._vn, self._ve = speed * math.cos(self._yaw), speed * math.sin(self._yaw)

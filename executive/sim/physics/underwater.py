@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from executive.sim.physics.vehicle import MotionLimits, SurfaceVehicle
+from executive.sim.physics.vehicle import MotionLimits, SurfaceVehicle, clamp
 
 
 @dataclass(frozen=True)
@@ -25,7 +25,8 @@ class Seabed:
         """Water depth (m) at a point given in metres from the start point."""
         toward = math.radians(self.downhill_deg)
         along = north_m * math.cos(toward) + east_m * math.sin(toward)
-        return max(self.min_depth_m, self.depth_m + self.slope * along)
+        depth = self.depth_m + self.slope * along
+        return depth if depth > self.min_depth_m else self.min_depth_m
 
 
 SUB_HORIZONTAL_LIMITS = MotionLimits(cruise_m_s=0.8, max_m_s=1.0, accel_m_s2=0.3, decel_m_s2=0.5, turn_rate_deg_s=30.0, arrive_m=0.3)
@@ -200,7 +201,7 @@ class UnderwaterVehicle:
     def step(self, dt: float) -> None:
         """Advance ``dt`` seconds, in sub-steps of at most ``SUBSTEP_S``."""
         while dt > 1e-9:
-            h = min(dt, self.SUBSTEP_S)
+            h = self.SUBSTEP_S if dt > self.SUBSTEP_S else dt
             self._horizontal.step(h)
             self._vertical_substep(h)
             dt -= h
@@ -215,9 +216,10 @@ class UnderwaterVehicle:
             brake = math.sqrt(2.0 * 0.8 * limits.vertical_accel_m_s2 * abs(error))
             want = math.copysign(min(brake, self.DEPTH_GAIN * abs(error), limits.descend_m_s if error > 0 else limits.climb_m_s), error)
         step = limits.vertical_accel_m_s2 * h
-        self._vz += max(-step, min(step, want - self._vz))
+        self._vz += clamp(want - self._vz, step)
         self._depth += self._vz * h
-        floor = max(0.0, self.seabed_depth_m - limits.hull_m)
+        floor = self.seabed_depth_m - limits.hull_m
+        floor = floor if floor > 0.0 else 0.0
         if self._depth <= 0.0 or self._depth >= floor:
             self._depth = min(max(self._depth, 0.0), floor)
             self._vz = 0.0

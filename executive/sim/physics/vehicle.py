@@ -20,7 +20,16 @@ def wrap_pi(angle: float) -> float:
 
 
 def clamp(value: float, limit: float) -> float:
-    return max(-limit, min(limit, value))
+    """``max(-limit, min(limit, value))``, ties and NaN alike: written out, as the models' other min and max of every step
+    (the builtins cost several times a comparison)."""
+    value = value if value < limit else limit
+    return value if value > -limit else -limit
+
+
+def within(value: float, low: float, high: float) -> float:
+    """``max(low, min(high, value))``, ties and NaN alike, without the builtin calls (see :func:`clamp`)."""
+    value = value if value < high else high
+    return value if value > low else low
 
 
 class VehicleModel(Protocol):
@@ -106,11 +115,11 @@ class LocalFrame:
 
     @property
     def lat(self) -> float:
-        return self._latlon(self._n, self._e)[0]
+        return self._lat0 + self._n / self._m_per_deg_lat  # _latlon's, one coordinate: most messages ask both, one at a time
 
     @property
     def lon(self) -> float:
-        return self._latlon(self._n, self._e)[1]
+        return self._lon0 + self._e / self._m_per_deg_lon
 
     def _init_frame(self, lat: float, lon: float) -> None:
         self._lat0, self._lon0 = lat, lon
@@ -277,9 +286,10 @@ class SurfaceVehicle(LocalFrame):
     # -- physics -------------------------------------------------------------------------------
 
     def step(self, dt: float) -> None:
-        """Advance ``dt`` seconds, in sub-steps of at most ``SUBSTEP_S``."""
+        """Advance ``dt`` seconds, in sub-steps of at most ``SUBSTEP_S`` (``NAVIGATOR_STEP_S`` driven by a navigator)."""
+        longest = self.SUBSTEP_S if self._navigator is None else self.NAVIGATOR_STEP_S  # no order changes it during a step
         while dt > 1e-9:
-            h = min(dt, self.SUBSTEP_S if self._navigator is None else self.NAVIGATOR_STEP_S)
+            h = dt if dt < longest else longest
             self._substep(h)
             dt -= h
 
@@ -292,11 +302,11 @@ class SurfaceVehicle(LocalFrame):
         self._move(h)
 
     def _move(self, h: float) -> None:
-        """Turn and travel ``h`` seconds at the present speed and turn rate."""
-        self._yaw = wrap_pi(self._yaw + self._yaw_rate * h)
-        vn, ve, _ = self.velocity_ned
-        self._n += vn * h
-        self._e += ve * h
+        """Turn and travel ``h`` seconds at the present speed and turn rate (over ground: :attr:`velocity_ned`, written out)."""
+        yaw = self._yaw = wrap_pi(self._yaw + self._yaw_rate * h)
+        drift_n, drift_e = self._drift if self.powered else (0.0, 0.0)
+        self._n += (self._speed * math.cos(yaw) + drift_n) * h
+        self._e += (self._speed * math.sin(yaw) + drift_e) * h
 
     def _actuate(self, want_speed: float, want_rate: float, h: float) -> tuple[float, float]:
         """The speed and turn rate reached after ``h`` seconds of asking for these (acceleration limited).
@@ -335,16 +345,24 @@ class SurfaceVehicle(LocalFrame):
         error = wrap_pi(math.atan2(de, dn) - self._yaw - math.radians(self.heading_bias_deg))
         rate_max = math.radians(limits.turn_rate_deg_s)
         if abs(self._speed) > 1e-3:
-            rate_max = min(rate_max, limits.lat_accel_m_s2 / abs(self._speed))  # ATC_TURN_MAX_G
+            turn_max_g = limits.lat_accel_m_s2 / abs(self._speed)  # ATC_TURN_MAX_G
+            rate_max = turn_max_g if turn_max_g < rate_max else rate_max
         rate = clamp(self.HEADING_GAIN * error, rate_max)
         # a braking profile with margin, then a linear approach: never overshoots the target (the shape of ArduPilot's
         # sqrt_controller stopping a shaped target, libraries/AP_Math/control.cpp)
         brake = math.sqrt(2.0 * 0.8 * limits.decel_m_s2 * distance)
-        speed = min(self._target_speed, brake, self.APPROACH_GAIN * distance)
+        approach = self.APPROACH_GAIN * distance
+        speed = self._target_speed  # min(target speed, brake, approach)
+        speed = brake if brake < speed else speed
+        speed = approach if approach < speed else speed
         # turn toward a target behind before driving to it (the forward part of the speed); a vehicle under way that
         # cannot pivot keeps the least turning speed through the turn (AR_PosControl::update,
         # libraries/APM_Control/AR_PosControl.cpp); one at rest turns first (as LOITER does, Rover/mode_loiter.cpp)
-        return max(speed * math.cos(error), min(speed, limits.turn_speed_min_m_s, abs(self._speed))), rate
+        turning = speed  # min(speed, turn_speed_min, |speed now|)
+        turning = limits.turn_speed_min_m_s if limits.turn_speed_min_m_s < turning else turning
+        turning = abs(self._speed) if abs(self._speed) < turning else turning
+        ahead = speed * math.cos(error)
+        return turning if turning > ahead else ahead, rate
 
 
 @dataclass(frozen=True)

@@ -249,6 +249,20 @@ def test_message_intervals(make_gcs: MakeGcs) -> None:
     assert (replies[0].result, gcs.texts(replies)) == (m.MAV_RESULT_FAILED, ["No ap_message for mavlink id (9999)"])
 
 
+def test_an_interval_set_restarts_that_message_only_and_the_boot_starts_the_streams(make_gcs: MakeGcs) -> None:
+    """SET_MESSAGE_INTERVAL sends the message at its next update and every interval after; the other streams keep their
+    times (each stream keeps its own schedule). Before the boot only HEARTBEAT goes out."""
+    gcs = make_gcs(run_s=0.0)
+    booting = {msg.get_type() for msg in gcs.run(0.95, step=0.05)}
+    assert booting <= {"HEARTBEAT", "STATUSTEXT"}  # booting: no stream but HEARTBEAT (sent at 0 s, next at 1 s)
+    assert gcs.of_type(gcs.run(1.1, step=0.05), "VFR_HUD")  # booted at 1 s: the streams run, every 0.25 s
+    assert not gcs.of_type(gcs.run(0.05, step=0.05), "VFR_HUD")  # between two of its times
+    gcs.ack(m.MAV_CMD_SET_MESSAGE_INTERVAL, m.MAVLINK_MSG_ID_ATTITUDE, 1_000_000)
+    sent = gcs.run(0.05, step=0.05)
+    assert gcs.of_type(sent, "ATTITUDE") and not gcs.of_type(sent, "VFR_HUD")  # ATTITUDE at once; VFR_HUD kept its time
+    assert len(gcs.of_type(gcs.run(3.0, step=0.05), "ATTITUDE")) == 3  # then once a second
+
+
 def test_request_message_and_home(make_gcs: MakeGcs) -> None:
     gcs = make_gcs()
     replies = gcs.command(m.MAV_CMD_REQUEST_MESSAGE, m.MAVLINK_MSG_ID_HOME_POSITION)
