@@ -1,15 +1,17 @@
-"""Fixtures every test shares: a clean blackboard, the square mission (the kit's clock, link, harness... come from executive.testing)."""
+"""Fixtures every test shares: a clean blackboard, the square mission (the kit's clock, link, harness... come from executive.testing);
+and the runs several files read (session scope, each with one xdist group for its users, so one worker makes it once)."""
 
 from __future__ import annotations
 
 import gc
+import importlib
 import logging
 import os
 import signal
 import sys
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pytest
 from hypothesis import settings
@@ -22,6 +24,7 @@ except ImportError:  # an older pytest reads item._nodeid, which xdist writes it
 if TYPE_CHECKING:
     from executive.mission.lifecycle import MissionState
     from executive.mission.model import Mission
+    from tests_support import SharedEfficiencyRuns, SubRun, Ticks
 
 # The fixtures import the package themselves: xdist's controller loads this file too and runs no test (with the kit's
 # plugin, 0.6 s of CPU before it started its workers); a worker has the package from the test modules it collects.
@@ -38,6 +41,13 @@ sys.dont_write_bytecode = False
 # machine and day; HYPOTHESIS_PROFILE=default draws new ones (to search further, by hand) and keeps failures in .hypothesis/.
 settings.register_profile("suite", derandomize=True, database=None)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "suite"))
+# Hypothesis (6.131 on) also draws some examples from the literals of the project's modules loaded at that moment
+# (hypothesis/internal/conjecture/providers.py, _get_local_constants), which depends on what the tests before imported:
+# a derandomized test drew other examples in each run. Here it draws from hypothesis's own constants only, the same in
+# every run (tests/test_suite_examples.py fails if this stops working, e.g. when hypothesis renames it).
+_providers = importlib.import_module("hypothesis.internal.conjecture.providers")
+_no_local_constants = _providers.Constants()
+_providers._get_local_constants = lambda: _no_local_constants
 
 # A suite started in the background (`pytest ... &` in a script, nohup, a CI step) inherits SIGINT ignored, as
 # does every executive it starts: Ctrl-C's tests (`ctl tree --watch`, an interrupted first-heartbeat wait)
@@ -162,3 +172,64 @@ def minimal_mission() -> Path:
 def minimal_yaml(minimal_mission: Path) -> str:
     """The text of the smallest valid mission."""
     return minimal_mission.read_text(encoding="utf-8")
+
+
+@pytest.fixture(scope="session")
+def auv_survey_run() -> SubRun:
+    """missions/auv_survey.yaml on the lock-step simulated ArduSub, booted at its home, run once for the tests that read it (in two
+    files: the tree's legs and the energy estimate); they are marked ``tests_support.AUV_SURVEY_RUN``, so one worker makes it."""
+    import py_trees
+
+    from executive.mission.loader import load_mission
+    from executive.world import blackboard
+    from tests_support import sub_run
+
+    mission = load_mission(Path(__file__).parents[1] / "missions" / "auv_survey.yaml")
+    assert mission.home is not None
+    blackboard.reset()  # the board each test starts on (clean_blackboard), before and after
+    try:
+        return sub_run(mission, (mission.home.lat, mission.home.lon, mission.home.heading_deg))
+    finally:
+        py_trees.blackboard.Blackboard.clear()
+
+
+@pytest.fixture(scope="session")
+def rover_square_two_legs_jsonl(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """rover_square's first two legs (a turn: north, then east) on the lock-step simulator to their end, recorded as JSON lines and
+    watched by nothing else: the bytes a watched run must equal, a file to replay (tests/observers/groot2: both files' tests are
+    marked ``xdist_group("groot2_unmonitored")``, so one worker records it)."""
+    from executive.mission.loader import load_mission
+    from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
+    from executive.testing.lockstep import Lockstep
+
+    missions = Path(__file__).parents[1] / "missions"
+    square = load_mission(missions / "rover_square.yaml")
+    path = tmp_path_factory.mktemp("rover_square_two_legs") / "unmonitored.jsonl"
+    recorder = SnapshotRecorder(path)
+    try:
+        with Lockstep(
+            square.model_copy(update={"waypoints": square.waypoints[:2]}), mission_dir=missions, plugs=[snapshot_recorder(recorder)]
+        ) as sim:
+            assert sim.run_to_end(600).status.name == "COMPLETED"
+    finally:
+        recorder.close()
+    return path
+
+
+@pytest.fixture(scope="session")
+def rover_square_mcap(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks, Any]:
+    """rover_square to its end, recorded twice from the same ticks, as MCAP and as JSON lines (``tests_support.record_rover_square``),
+    once for the tests that read it: tests/observers/test_mcap_recording.py's and the Foxglove picture's, all marked
+    ``xdist_group("mcap_square")``."""
+    from tests_support import record_rover_square
+
+    return record_rover_square(tmp_path_factory.mktemp("square"))
+
+
+@pytest.fixture(scope="session")
+def efficiency_runs() -> SharedEfficiencyRuns:
+    """benchmarks.efficiency's timed runs made once for the tests that read the same one (the leg-efficiency tests, the benchmark's
+    smoke test, the AUTO horizon's), all marked ``xdist_group("leg_efficiency")``."""
+    from tests_support import SharedEfficiencyRuns
+
+    return SharedEfficiencyRuns()

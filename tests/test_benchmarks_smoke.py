@@ -11,6 +11,7 @@ import pytest
 from benchmarks import __main__ as bench
 from benchmarks import can_decode, efficiency, ingest, reaction, route_check, simspeed, soak, startup, tick
 from benchmarks.common import Row, serpentine
+from tests_support import SharedEfficiencyRuns
 
 
 def _check(rows: list[Row], count: int) -> None:
@@ -66,9 +67,11 @@ def test_startup_and_memory(autopilot: str) -> None:
     _check(startup.run(runs=1, sample_s=0.2, autopilot=autopilot), 2)  # type: ignore[arg-type]
 
 
-def test_efficiency() -> None:
+@pytest.mark.xdist_group("leg_efficiency")
+def test_efficiency(efficiency_runs: SharedEfficiencyRuns, monkeypatch: pytest.MonkeyPatch) -> None:
     from benchmarks import recorded
 
+    efficiency_runs.share(monkeypatch)  # rover_square's runs are tests/trees/test_leg_efficiency.py's and test_waypoints_auto.py's too
     rows = efficiency.run(missions=("rover_square",), px4_legs=2)
     # both drives, on our simulator and on the recorded firmware; the PX4 vtol's (2 legs) on our simulated PX4 and on the real one
     _check(rows, 2 + 2 * recorded.available("rover_square") + 2 + 2 * recorded.px4_available())

@@ -1,6 +1,6 @@
 """Test helpers of our own suite (the rest is the public kit, :mod:`executive.testing`): a runtime over a real socket, a line mission,
 a mission out of reach run to its refusal, the time a thread waited for a CPU, ``executive run`` in lock-step with its built-in simulator,
-``executive`` as a process of its own."""
+``executive`` as a process of its own, a sub's survey on the simulated ArduSub leg by leg."""
 
 from __future__ import annotations
 
@@ -10,19 +10,23 @@ import shutil
 import subprocess
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import py_trees
 import pytest
 
 from executive.io.mavlink.link import PymavlinkLink
 from executive.mission.model import Mission, Waypoint
-from executive.runtime.assembly import build_runtime
+from executive.operator.status import status_line
+from executive.runtime.assembly import Wiring, build_runtime
 from executive.runtime.loop import RunOutcome, Runtime
 from executive.runtime.pacing import SpeedGovernor
 from executive.sim import SimServer
 from executive.sim.faults import FaultInjector
 from executive.testing import Lockstep
+from executive.world import blackboard
 from executive.world.clock import ManualClock, ScaledClock
 from executive.world.dialect import MAVLinkMessage, mavlink
 from executive.world.geo import destination
@@ -245,3 +249,139 @@ class LinkCut(FaultInjector):
     @property
     def sending(self) -> bool:
         return not self.cut and super().sending
+
+
+@dataclass
+class SubRun:
+    """A sub's mission run to its end on the simulated ArduSub (:func:`sub_run`): how it ended, each leg's end, the vehicle at the end,
+    the first energy estimate on the blackboard and the pack's draw (Wh) when it armed and at the end."""
+
+    outcome: RunOutcome
+    legs: list[dict[str, Any]] = field(default_factory=list)
+    end: dict[str, Any] = field(default_factory=dict)
+    first_estimate: Any = None
+    armed_wh: float | None = None
+    end_wh: float = 0.0
+
+
+def sub_run(mission: Mission, home: tuple[float, float, float]) -> SubRun:
+    """``mission`` on the lock-step simulated ArduSub booted at ``home``, to its end (600 s at most); what each leg ended with (depth,
+    altitude, metres off its waypoint, the time, the status line) noted as the leg is advanced. Watching changes nothing in the run."""
+    with Lockstep(mission, home=home) as sim:
+        runtime = sim.runtime
+        run = SubRun(outcome=None)  # type: ignore[arg-type]
+        advance = runtime.mission_state.advance_leg
+
+        def note_and_advance() -> None:
+            wp = mission.waypoints[runtime.mission_state.legs.leg_index]
+            v = sim.autopilot.vehicle
+            run.legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": sim.clock.now()})
+            run.legs[-1]["status"] = status_line(runtime.status.snapshot())
+            advance()
+
+        runtime.mission_state.advance_leg = note_and_advance  # type: ignore[method-assign]
+        energy = blackboard.reader("sub run", ["/energy/estimate"])
+
+        def watch(s: Lockstep) -> None:
+            if run.first_estimate is None and (estimate := energy.get("/energy/estimate")):
+                run.first_estimate = estimate
+            if run.armed_wh is None and s.autopilot.armed:
+                run.armed_wh = s.autopilot.battery.consumed_wh
+
+        sim.observers.append(watch)
+        sim.connect()
+        started = sim.clock.now()
+        run.outcome = sim.run_to_end(limit_s=600)
+        ap = sim.autopilot
+        run.end = {"mode": ap.mode, "armed": ap.armed, "depth": ap.vehicle.depth_m, "moved_m": ap.vehicle.distance_to(home[0], home[1])}
+        run.end["vehicle_s"] = sim.clock.now() - started
+        run.end_wh = ap.battery.consumed_wh
+    return run
+
+
+#: The tests that share the example survey's run (the ``auv_survey_run`` fixture) go to one xdist worker: it is made once there.
+AUV_SURVEY_RUN = pytest.mark.xdist_group("auv_survey_run")
+
+
+class Ticks:
+    """Each tick's number and vehicle time, and the position the blackboard held after it, as the runtime reports them."""
+
+    def __init__(self) -> None:
+        self.times: list[tuple[int, float]] = []
+
+    def plug(self, wiring: Wiring) -> None:
+        wiring.observers.append(self)
+
+    def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
+        pass
+
+    def ticked(self, tick: int, now: float) -> None:
+        self.times.append((tick, now))
+
+    def end(self, status: str, reason: str) -> None:
+        pass
+
+
+def record_rover_square(where: Path) -> tuple[Path, Path, Ticks, Any]:
+    """rover_square to its end on the lock-step simulator, recorded twice from the same ticks, as MCAP and as JSON lines (in
+    ``where``), with a journal and the executive's INFO log lines in it; the ticks as the runtime reported them, and how it ended."""
+    import logging
+
+    from executive.mission.loader import load_mission
+    from executive.observers.journal import Journal, JournalLogHandler, journal_recorder
+    from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
+
+    missions = ROOT / "missions"
+    ticks = Ticks()
+    recorders: list[SnapshotRecorder] = []
+    closers: list[Any] = []
+
+    def plugs(clock: ManualClock) -> dict[str, Any]:
+        recorders.extend([SnapshotRecorder(where / "run.mcap", clock=clock), SnapshotRecorder(where / "run.jsonl", clock=clock)])
+        journal = Journal(where / "journal.db", clock)
+        closers.append(journal.close)
+        logging.getLogger("executive").addHandler(handler := JournalLogHandler(journal))
+        closers.append(lambda: logging.getLogger("executive").removeHandler(handler))
+        return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders), journal_recorder(journal)]}
+
+    logging.getLogger("executive").setLevel(logging.INFO)  # as `executive run` logs: the mission's transitions are INFO lines
+    try:
+        with Lockstep(load_mission(missions / "rover_square.yaml"), mission_dir=missions, options_for_clock=plugs) as sim:
+            outcome = sim.run_to_end(limit_s=400)
+    finally:
+        logging.getLogger("executive").setLevel(logging.NOTSET)
+    for close in [*(r.close for r in recorders), *closers]:
+        close()
+    return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
+
+
+class SharedEfficiencyRuns:
+    """:mod:`benchmarks.efficiency`'s lock-step runs, each made once a process for the tests that share them (conftest's
+    ``efficiency_runs``; its users are in ``xdist_group("leg_efficiency")``): the same mission run the same way is the same run,
+    track and all (:class:`~executive.testing.Lockstep`), so a run is keyed by how it is timed and every field of its mission."""
+
+    SHARED = ("time_executive", "time_auto")  # what the timings are made of: the executive's run, the autopilot's own AUTO
+
+    def __init__(self) -> None:
+        from benchmarks import efficiency
+
+        self._efficiency = efficiency
+        self._made = {name: getattr(efficiency, name) for name in self.SHARED}
+        self._done: dict[tuple[Any, ...], Any] = {}
+
+    def _once(self, name: str, how: Any, mission: Mission, *args: Any) -> Any:
+        key = (name, mission.model_dump_json(), *args)
+        if key not in self._done:
+            self._done[key] = how(mission, *args)
+        return self._done[key]
+
+    def share(self, monkeypatch: pytest.MonkeyPatch) -> None:
+        """From now on in this test, the benchmark's own calls of :data:`SHARED` are shared runs."""
+        for name, how in self._made.items():
+            monkeypatch.setattr(self._efficiency, name, lambda mission, *args, name=name, how=how: self._once(name, how, mission, *args))
+
+    def timed(self, how: Any, mission: Mission) -> Any:
+        """``how(mission)`` (``time_guided``, ``time_auto``, ``time_supervised_auto``...), shared."""
+        with pytest.MonkeyPatch.context() as monkeypatch:
+            self.share(monkeypatch)
+            return self._once(how.__name__, how, mission)

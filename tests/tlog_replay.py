@@ -9,6 +9,7 @@ real firmware honest with the recording alone.
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -39,11 +40,16 @@ AUTOPILOT_COMPONENT = 1
 
 def records(path: Path) -> Iterator[tuple[float, MAVLinkMessage]]:
     """(recorded time in s, message) for each message of a .tlog, both directions, in order."""
+    yield from _parsed(Path(path).resolve())
+
+
+@functools.lru_cache(maxsize=8)
+def _parsed(path: Path) -> tuple[tuple[float, MAVLinkMessage], ...]:
+    """A .tlog's messages, parsed once for the tests of a process that play it (pymavlink's parser took ~4 CPU-s of the recorded
+    tests' for ~200 reads of ~60 files; a file's messages are ~1 kB each). Nothing that reads them changes a message."""
     conn = mavutil.mavlink_connection(str(path), dialect="ardupilotmega", robust_parsing=True)
     try:
-        while (msg := conn.recv_msg()) is not None:
-            if msg.get_type() != "BAD_DATA":
-                yield msg._timestamp, msg
+        return tuple((msg._timestamp, msg) for msg in iter(conn.recv_msg, None) if msg.get_type() != "BAD_DATA")
     finally:
         conn.close()
 

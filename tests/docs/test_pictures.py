@@ -47,25 +47,6 @@ def test_the_tree_picture_is_what_executive_show_draws_now(tmp_path):
     assert labels(TREE.read_text(encoding="utf-8")) == now, "docs/tree-rover_square.svg is out of date: EXECUTIVE_DOCS_PICTURES=1 makes it again"
 
 
-def recorded_mcap(where: Path) -> Path:
-    """rover_square to its end, lock-step, recorded as ``run --snapshots run.mcap`` records it."""
-    from executive.mission.loader import load_mission
-    from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
-    from executive.testing import Lockstep
-
-    recorders: list[SnapshotRecorder] = []
-
-    def plugs(clock: Any) -> dict[str, Any]:
-        recorders.append(SnapshotRecorder(where / "run.mcap", clock=clock))
-        return {"plugs": [snapshot_recorder(recorders[-1])]}
-
-    with Lockstep(load_mission(MISSIONS / "rover_square.yaml"), mission_dir=MISSIONS, options_for_clock=plugs) as sim:
-        assert sim.run_to_end(limit_s=400).status.name == "COMPLETED"
-    for recorder in recorders:
-        recorder.close()
-    return where / "run.mcap"
-
-
 def series(path: Path, topics: set[str]) -> dict[str, list[tuple[float, dict[str, Any]]]]:
     """Each topic's (log time in s, message), as the `mcap` library reads the file."""
     from mcap.reader import make_reader
@@ -122,9 +103,12 @@ def draw_layout(path: Path, out: Path) -> dict[str, Any]:
     return drawn
 
 
-def test_the_foxglove_picture_is_the_layout_drawn_from_a_recorded_run(tmp_path):
+@pytest.mark.xdist_group("mcap_square")
+def test_the_foxglove_picture_is_the_layout_drawn_from_a_recorded_run(tmp_path, rover_square_mcap):
+    """The run: rover_square to its end, lock-step, recorded as ``run --snapshots run.mcap`` records it (conftest's, shared with
+    tests/observers/test_mcap_recording.py)."""
     pytest.importorskip("matplotlib", reason="matplotlib is in the [test] extra")
-    drawn = draw_layout(recorded_mcap(tmp_path), tmp_path / "foxglove.svg")
+    drawn = draw_layout(rover_square_mcap[0], tmp_path / "foxglove.svg")
     if os.environ.get("EXECUTIVE_DOCS_PICTURES"):
         shutil.copy(tmp_path / "foxglove.svg", FOXGLOVE)
     last_lon, last_lat = drawn["route"][-1]

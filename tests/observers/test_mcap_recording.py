@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import collections
 import json
-import logging
 import math
 import subprocess
 import threading
@@ -19,35 +18,12 @@ from executive.behaviours import LinkAlive
 from executive.cli import main
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
-from executive.mission.model import Mission
-from executive.observers.journal import Journal, JournalLogHandler, journal_recorder
 from executive.observers.mcap.reading import tick_lines
-from executive.observers.snapshots import Recording, SnapshotRecorder, render, replay, snapshot_recorder
-from executive.runtime.assembly import Wiring
-from executive.world.clock import Clock
+from executive.observers.snapshots import Recording, SnapshotRecorder, render, replay
 from executive.world.frames import global_to_local
-from tests_support import foxglove_js
+from tests_support import Ticks, foxglove_js
 
 MISSIONS = Path(__file__).resolve().parents[2] / "missions"
-
-
-class Ticks:
-    """Each tick's number and vehicle time, and the position the blackboard held after it, as the runtime reports them."""
-
-    def __init__(self) -> None:
-        self.times: list[tuple[int, float]] = []
-
-    def plug(self, wiring: Wiring) -> None:
-        wiring.observers.append(self)
-
-    def begin(self, mission: Mission, root: py_trees.behaviour.Behaviour, resumed_from: int | None) -> None:
-        pass
-
-    def ticked(self, tick: int, now: float) -> None:
-        self.times.append((tick, now))
-
-    def end(self, status: str, reason: str) -> None:
-        pass
 
 
 def messages(path: Path, topic: str, **window: int) -> list[tuple[int, dict[str, Any]]]:
@@ -57,32 +33,9 @@ def messages(path: Path, topic: str, **window: int) -> list[tuple[int, dict[str,
 
 
 @pytest.fixture(scope="module")
-def square(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Ticks, MissionStatus]:
-    """rover_square to its end, recorded twice from the same ticks: as MCAP and as JSON lines."""
-    from executive.testing import Lockstep
-
-    where = tmp_path_factory.mktemp("square")
-    ticks = Ticks()
-    recorders: list[SnapshotRecorder] = []
-    closers: list[Any] = []
-
-    def plugs(clock: Clock) -> dict[str, Any]:
-        recorders.extend([SnapshotRecorder(where / "run.mcap", clock=clock), SnapshotRecorder(where / "run.jsonl", clock=clock)])
-        journal = Journal(where / "journal.db", clock)
-        closers.append(journal.close)
-        logging.getLogger("executive").addHandler(handler := JournalLogHandler(journal))
-        closers.append(lambda: logging.getLogger("executive").removeHandler(handler))
-        return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders), journal_recorder(journal)]}
-
-    logging.getLogger("executive").setLevel(logging.INFO)  # as `executive run` logs: the mission's transitions are INFO lines
-    try:
-        with Lockstep(load_mission(MISSIONS / "rover_square.yaml"), mission_dir=MISSIONS, options_for_clock=plugs) as sim:
-            outcome = sim.run_to_end(limit_s=400)
-    finally:
-        logging.getLogger("executive").setLevel(logging.NOTSET)
-    for close in [*(r.close for r in recorders), *closers]:
-        close()
-    return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
+def square(rover_square_mcap: tuple[Path, Path, Ticks, MissionStatus]) -> tuple[Path, Path, Ticks, MissionStatus]:
+    """rover_square to its end, recorded twice from the same ticks: as MCAP and as JSON lines (conftest's, made once a worker)."""
+    return rover_square_mcap
 
 
 @pytest.mark.xdist_group("mcap_square")

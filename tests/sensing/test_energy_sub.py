@@ -12,7 +12,7 @@ from typing import Any
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.world import blackboard
+from tests_support import AUV_SURVEY_RUN, SubRun
 
 SURVEY = load_mission(Path(__file__).parents[2] / "missions" / "auv_survey.yaml")
 
@@ -24,17 +24,13 @@ def survey(**simulator: Any) -> tuple[Mission, tuple[float, float, float]]:
     return mission, (home.lat, home.lon, home.heading_deg)
 
 
-def test_the_survey_estimated_at_the_start_within_its_uncertainty_of_what_the_dives_and_legs_drew(lockstep) -> None:
-    mission, home = survey()
-    sim = lockstep(mission, home=home)
-    bb = blackboard.reader("energy test", ["/energy/estimate"])
-    first: list[Any] = []
-    armed_at: list[float] = []
-    sim.observers.append(lambda s: first.append(bb.get("/energy/estimate")) if not first and bb.get("/energy/estimate") else None)
-    sim.observers.append(lambda s: armed_at.append(sim.autopilot.battery.consumed_wh) if not armed_at and sim.autopilot.armed else None)
-    assert sim.run_to_end(limit_s=600).status is MissionStatus.COMPLETED
-    drawn = sim.autopilot.battery.consumed_wh - armed_at[0]  # the route's legs and dives, then SURFACE (its way home)
-    start = first[0]
+@AUV_SURVEY_RUN
+def test_the_survey_estimated_at_the_start_within_its_uncertainty_of_what_the_dives_and_legs_drew(auv_survey_run: SubRun) -> None:
+    """The example survey booted at its home (the run tests/trees/test_auv_survey.py reads too)."""
+    assert auv_survey_run.outcome.status is MissionStatus.COMPLETED
+    assert auv_survey_run.armed_wh is not None
+    drawn = auv_survey_run.end_wh - auv_survey_run.armed_wh  # the route's legs and dives, then SURFACE (its way home)
+    start = auv_survey_run.first_estimate
     print(f"start {start.route_wh:.1f} + {start.home_wh:.1f} +/- {start.sigma_wh:.1f} Wh, drawn {drawn:.1f} Wh")
     assert drawn > 15.0  # the dives at full vertical thrust: most of the draw
     assert abs(start.route_wh + start.home_wh - drawn) <= start.sigma_wh

@@ -14,15 +14,15 @@ from executive.io.mavlink.commander import Commander
 from executive.mission.lifecycle import MissionState, MissionStatus
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
-from executive.operator.status import status_line
 from executive.runtime.loop import explain_failure
-from executive.testing import EKF_READY, Lockstep, ScriptedAutopilot
+from executive.testing import EKF_READY, ScriptedAutopilot
 from executive.tree import select as mission_tree
 from executive.world.clock import ManualClock
 from executive.world.dialect import mavlink
 from executive.world.geo import destination, distance
 from executive.world.state import EkfFlags, EkfStatus, GlobalPosition, Rangefinder
 from executive.world.vehicles import PROFILES
+from tests_support import AUV_SURVEY_RUN, SubRun, sub_run
 
 EKF_LOST = EkfStatus(EkfFlags.ATTITUDE | EkfFlags.CONST_POS_MODE, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0)
 START = (44.0950000, 9.8630000)
@@ -543,33 +543,10 @@ def test_pausing_mid_leg_holds_and_resuming_continues_the_same_leg_at_the_same_d
 # -- the simulator: ArduSub over a modelled seabed, in the lock-step simulation ----------------------
 
 
-def _run_on_the_simulator(mission: Mission, home: tuple[float, float, float]) -> tuple[Any, list[dict[str, float]], dict[str, Any]]:
-    with Lockstep(mission, home=home) as sim:
-        runtime = sim.runtime
-        legs: list[dict[str, float]] = []
-        advance = runtime.mission_state.advance_leg
-
-        def note_and_advance() -> None:
-            wp = mission.waypoints[runtime.mission_state.legs.leg_index]
-            v = sim.autopilot.vehicle
-            legs.append({"depth": v.depth_m, "altitude": v.altitude_m, "off_m": v.distance_to(wp.lat, wp.lon), "t": sim.clock.now()})
-            legs[-1]["status"] = status_line(runtime.status.snapshot())  # type: ignore[assignment]
-            advance()
-
-        runtime.mission_state.advance_leg = note_and_advance  # type: ignore[method-assign]
-        sim.connect()
-        started = sim.clock.now()
-        outcome = sim.run_to_end(limit_s=600)
-        ap = sim.autopilot
-        end = {"mode": ap.mode, "armed": ap.armed, "depth": ap.vehicle.depth_m, "moved_m": ap.vehicle.distance_to(home[0], home[1])}
-        end["vehicle_s"] = sim.clock.now() - started
-    return outcome, legs, end
-
-
-def test_the_example_survey_on_the_simulated_ardusub_reaches_each_waypoint_at_its_depth_or_altitude() -> None:
+@AUV_SURVEY_RUN
+def test_the_example_survey_on_the_simulated_ardusub_reaches_each_waypoint_at_its_depth_or_altitude(auv_survey_run: SubRun) -> None:
     mission = load_mission(ROOT / "missions" / "auv_survey.yaml")
-    assert mission.home is not None
-    outcome, legs, end = _run_on_the_simulator(mission, (mission.home.lat, mission.home.lon, mission.home.heading_deg))
+    outcome, legs, end = auv_survey_run.outcome, auv_survey_run.legs, auv_survey_run.end
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert len(legs) == len(mission.waypoints) == 4
     for wp, leg in zip(mission.waypoints, legs, strict=True):
@@ -588,7 +565,8 @@ def test_on_the_simulator_a_sub_1_km_off_refuses_the_survey_without_arming_or_mo
     mission = load_mission(ROOT / "missions" / "auv_survey.yaml")
     assert mission.home is not None
     home = (*destination(mission.home.lat, mission.home.lon, 270.0, 1200.0), 0.0)
-    outcome, legs, end = _run_on_the_simulator(mission, home)
+    run = sub_run(mission, home)
+    outcome, legs, end = run.outcome, run.legs, run.end
     assert str(outcome.status) == "ABORTED"
     # the runtime's distance rule, before the tree's own (the same rule, repeated at its start) ever ticks
     assert outcome.reason.startswith("refused before anything was commanded: Within reach: waypoints[0] (start): 1200 m from the vehicle")
@@ -602,7 +580,8 @@ def test_on_the_simulated_ardusub_a_leg_deeper_than_the_water_is_held_2_m_above_
     last = example.waypoints[-1].model_copy(update={"depth_m": 80.0})
     limits = example.limits.model_copy(update={"leg_timeout_s": 240.0, "water_depth_m": None})  # validate would refuse it
     mission = example.model_copy(update={"waypoints": [*example.waypoints[:-1], last], "limits": limits})
-    outcome, legs, end = _run_on_the_simulator(mission, (example.home.lat, example.home.lon, example.home.heading_deg))
+    run = sub_run(mission, (example.home.lat, example.home.lon, example.home.heading_deg))
+    outcome, legs, end = run.outcome, run.legs, run.end
     assert str(outcome.status) == "COMPLETED", outcome.reason
     assert legs[3]["altitude"] == pytest.approx(2.0, abs=0.5) and legs[3]["depth"] < 48.6  # the floor, not the 80 m (nor the bottom)
     assert re.search(r"  depth 4[78]\.\d m, seabed [12]\.\d m below  GUIDED armed", str(legs[3]["status"])), legs[3]["status"]

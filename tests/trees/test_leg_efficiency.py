@@ -11,6 +11,7 @@ from benchmarks.efficiency import MISSIONS, TARGET_RATIO, Timing, corner_cuts, r
 from executive.behaviours import GoTo
 from executive.mission.loader import load_mission
 from executive.mission.model import Mission
+from tests_support import SharedEfficiencyRuns
 
 # the module's runs are shared (Timings), so its tests run on one xdist worker
 pytestmark = pytest.mark.xdist_group("leg_efficiency")
@@ -22,16 +23,14 @@ def example(name: str, sitl: bool) -> Mission:
 
 
 class Runs:
-    """Each example timed once per module, GUIDED and AUTO: the lock-step run of the same mission is the same run, track and all."""
+    """Each example timed once, GUIDED and AUTO: the lock-step run of the same mission is the same run, track and all (shared with
+    the other users of conftest's ``efficiency_runs``)."""
 
-    def __init__(self) -> None:
-        self._done: dict[tuple[str, str, bool], Timing] = {}
+    def __init__(self, shared: SharedEfficiencyRuns) -> None:
+        self._shared = shared
 
     def _timed(self, how: Callable[[Mission], Timing], name: str, sitl: bool) -> Timing:
-        key = (how.__name__, name, sitl)
-        if key not in self._done:
-            self._done[key] = how(example(name, sitl))
-        return self._done[key]
+        return self._shared.timed(how, example(name, sitl))
 
     def guided(self, name: str, sitl: bool = False) -> Timing:
         return self._timed(time_guided, name, sitl)
@@ -41,8 +40,8 @@ class Runs:
 
 
 @pytest.fixture(scope="module")
-def runs() -> Runs:
-    return Runs()
+def runs(efficiency_runs: SharedEfficiencyRuns) -> Runs:
+    return Runs(efficiency_runs)
 
 
 @pytest.mark.parametrize("name", ["rover_square", "boat_survey"])

@@ -18,7 +18,7 @@ from executive.mission.model import Mission
 from executive.mission.resume import ResumePoint
 from executive.runtime.loop import RunOutcome
 from executive.testing import Lockstep
-from tests_support import LinkCut, line_mission, set_currents
+from tests_support import LinkCut, SharedEfficiencyRuns, line_mission, set_currents
 
 #: drive: auto against the autopilot's own AUTO over the whole route (issue 32's target on the real firmware).
 AUTO_RATIO = 1.02
@@ -44,9 +44,10 @@ class HorizonWatch:
         self.modes.append(sim.autopilot.mode)
 
 
-def test_a_route_the_horizon_holds_whole_is_driven_as_fast_as_the_autopilots_own_auto() -> None:
+@pytest.mark.xdist_group("leg_efficiency")
+def test_a_route_the_horizon_holds_whole_is_driven_as_fast_as_the_autopilots_own_auto(efficiency_runs: SharedEfficiencyRuns) -> None:
     mission = auto_mission("rover_square", auto_horizon_legs=3)  # 4 waypoints: all held from the start, nothing appended
-    supervised, own = time_supervised_auto(mission), time_auto(mission)
+    supervised, own = efficiency_runs.timed(time_supervised_auto, mission), efficiency_runs.timed(time_auto, mission)  # the benchmark's
     assert supervised.seconds / own.seconds <= AUTO_RATIO, (supervised, own)
 
 

@@ -19,12 +19,11 @@ from btview.protocol.groot2 import ProtocolError as ClientProtocolError
 from btview.protocol.groot2 import RequestType as ClientRequestType
 from test_groot2_monitor import free_port_pair
 
-from executive.mission.loader import load_mission
+from executive.cli import main
 from executive.observers.groot2.model import CODES, behaviours_in_order, from_tree
 from executive.observers.groot2.server import Groot2Address, Groot2Server
 from executive.observers.groot2.view import MonitorView
-from executive.observers.snapshots import SnapshotRecorder, snapshot_recorder
-from executive.testing.lockstep import Lockstep
+from executive.sim import SimServer
 from tests_support import executive_process
 
 bt = pytest.importorskip("behaviortreepy", reason="BehaviorTree.CPP's Python bindings are a test dependency ('.[test]')")
@@ -134,14 +133,9 @@ def test_btview_watches_a_real_run_of_executive_run_groot2(tmp_path) -> None:
     assert f"Groot2 can connect to 127.0.0.1 port {port} (publisher {port + 1})" in err
 
 
-def test_replay_groot2_plays_a_recording_to_btview(tmp_path) -> None:
-    path = tmp_path / "run.jsonl"
-    recorder = SnapshotRecorder(path)
-    square = load_mission(ROOT / "missions/rover_square.yaml")
-    mission = square.model_copy(update={"waypoints": square.waypoints[:2]})  # its first two legs: a recording long enough to play
-    with Lockstep(mission, mission_dir=ROOT / "missions", plugs=[snapshot_recorder(recorder)]) as sim:
-        sim.run_to_end(600)
-    recorder.close()
+@pytest.mark.xdist_group("groot2_unmonitored")
+def test_replay_groot2_plays_a_recording_to_btview(rover_square_two_legs_jsonl: Path) -> None:
+    path = rover_square_two_legs_jsonl  # rover_square's first two legs: a recording long enough to play
     port = free_port_pair()
     replay = executive_process("replay", str(path), "--groot2", str(port), "--speed", "20")
     client = Groot2Client("127.0.0.1", port, timeout_ms=2000)
@@ -166,8 +160,11 @@ def test_replay_groot2_plays_a_recording_to_btview(tmp_path) -> None:
 
 
 @pytest.mark.parametrize(("value", "why"), [("x:y", "'y' is not a port number"), ("65535", "the port must be 1 to 65534")])
-def test_a_bad_groot2_address_is_refused_before_anything_starts(value: str, why: str) -> None:
-    done = executive_process("run", "missions/rover_square.yaml", "--groot2", value)
-    _, err = done.communicate(timeout=120)
-    assert done.returncode == 2
+def test_a_bad_groot2_address_is_refused_before_anything_starts(
+    value: str, why: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # in this process, as test_web_server.py's --web errors (the exit code is main's: test_mission_files.py runs the real command)
+    monkeypatch.setattr(SimServer, "start", lambda server: pytest.fail("the simulator started"))
+    assert main(["run", str(ROOT / "missions" / "rover_square.yaml"), "--groot2", value, "--socket", "none"]) == 2
+    err = capsys.readouterr().err
     assert why in err and "--groot2" in err

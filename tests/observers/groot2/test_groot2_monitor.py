@@ -68,21 +68,9 @@ def rover_square(view: MonitorView | None, recorder: SnapshotRecorder | None = N
     return Lockstep(mission, mission_dir=ROOT / "missions", plugs=plugs)
 
 
-#: A run with a turn (north, then east): what the recorded-bytes and replay tests need, in half the square's vehicle time.
+#: A run with a turn (north, then east): what the recorded-bytes and replay tests need, in half the square's vehicle time (the
+#: unwatched run is conftest's ``rover_square_two_legs_jsonl``).
 TWO_LEGS = 2
-
-
-@pytest.fixture(scope="module")
-def unmonitored(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """rover_square's first two legs to their end, recorded with no monitor (the bytes a monitored run must equal; a file to replay)."""
-    path = tmp_path_factory.mktemp("groot2") / "unmonitored.jsonl"
-    recorder = SnapshotRecorder(path)
-    try:
-        with rover_square(None, recorder, legs=TWO_LEGS) as sim:
-            assert sim.run_to_end(600).status.name == "COMPLETED"
-    finally:
-        recorder.close()
-    return path
 
 
 def by_name(tree, name: str):
@@ -151,7 +139,7 @@ def test_a_recording_client_gets_each_transition_in_vehicle_time(served) -> None
 
 
 @pytest.mark.xdist_group("groot2_unmonitored")
-def test_a_stalled_client_changes_nothing(tmp_path: Path, unmonitored: Path) -> None:
+def test_a_stalled_client_changes_nothing(tmp_path: Path, rover_square_two_legs_jsonl: Path) -> None:
     """The same run with a monitor whose clients never read their replies, or send garbage, records the same bytes."""
     port = free_port_pair()
     path = tmp_path / "monitored.jsonl"
@@ -175,7 +163,7 @@ def test_a_stalled_client_changes_nothing(tmp_path: Path, unmonitored: Path) -> 
         garbage.close()
         server.close()
         context.destroy(linger=0)
-    assert hashlib.sha256(path.read_bytes()).hexdigest() == hashlib.sha256(unmonitored.read_bytes()).hexdigest()
+    assert hashlib.sha256(path.read_bytes()).hexdigest() == hashlib.sha256(rover_square_two_legs_jsonl.read_bytes()).hexdigest()
 
 
 # -- the protocol's edges ----------------------------------------------------------------------------------
@@ -243,12 +231,12 @@ def test_a_node_no_longer_ticked_is_idle_after_what_it_was(served) -> None:
 
 
 @pytest.mark.xdist_group("groot2_unmonitored")
-def test_a_replay_shows_each_tick_once_its_recorded_time_has_passed(unmonitored: Path) -> None:
+def test_a_replay_shows_each_tick_once_its_recorded_time_has_passed(rover_square_two_legs_jsonl: Path) -> None:
     """The pace of replay --groot2, on an injected wait (no wall clock): the tick before is shown during each gap."""
     from executive.observers.groot2.replay import ReplayFeed
     from executive.observers.snapshots import Recording
 
-    recording = Recording(unmonitored)
+    recording = Recording(rover_square_two_legs_jsonl)
     feed = ReplayFeed(recording, MonitorView(), speed=2.0)
     waits: list[tuple[float, int | None]] = []
     feed._play(wait=lambda s: waits.append((s, feed.position)) is not None)
