@@ -60,5 +60,16 @@ class CommandWatch:
     def close(self) -> None:
         self.link.close()
 
-    def __getattr__(self, name: str) -> object:  # the link's own attributes (device_lost, unsigned_dropped, url...)
+    # The reader asks these two every tick, and most links have neither: through __getattr__ each miss raised twice.
+    @property
+    def unsigned_dropped(self) -> int:
+        """The link's unsigned packets dropped while signing is on (0: a link that does not sign)."""
+        return getattr(self.link, "unsigned_dropped", 0)
+
+    @property
+    def device_lost(self) -> str | None:
+        """Why the link's serial device is gone (None: it is there, or the link has none)."""
+        return getattr(self.link, "device_lost", None)
+
+    def __getattr__(self, name: str) -> object:  # the link's own other attributes (url...)
         return getattr(self.link, name)

@@ -38,11 +38,19 @@ class ParameterWatch:
         self._asked = 0
         self._asked_at = -math.inf
         self._bb = blackboard.reader("parameter watch", ["/vehicle/params", "/link/up"])
+        # (the parameters answered, the back end's capabilities, what they leave missing): asked every tick, and
+        # both are replaced, not changed, when they change (a new dict per PARAM_VALUE, a new back end when found)
+        self._missing: tuple[object, object, list[str]] = (None, None, [])
 
     def missing(self) -> list[str]:
         """The wanted parameters the autopilot has not answered (yet)."""
         have = self._bb.get("/vehicle/params") or {}
-        return [name for name in wanted_parameters(self._port) if name not in have]
+        capabilities = self._port.capabilities
+        known_have, known_capabilities, missing = self._missing
+        if have is not known_have or capabilities is not known_capabilities:
+            missing = [name for name in wanted_parameters(self._port) if name not in have]
+            self._missing = (have, capabilities, missing)
+        return list(missing)
 
     def service(self) -> None:
         if self._asked > self.tries or not self._bb.get("/link/up"):

@@ -286,7 +286,7 @@ class InterventionWatch:
         channels: tuple[int, ...] = self._bb.get("/rc/channels")
         if channels is self._channels:
             return
-        if any(a and b and abs(a - b) >= SWITCH_JUMP_US for a, b in zip(channels, self._channels, strict=False)):
+        if channels != self._channels and any(a and b and abs(a - b) >= SWITCH_JUMP_US for a, b in zip(channels, self._channels, strict=False)):
             self._switch_at = now
         self._channels = channels
 

@@ -132,6 +132,35 @@ def judgeable(
     return unknown if unknown is not None else pack
 
 
+class JudgedCapacity:
+    """:func:`judgeable`, judged again only when one of its inputs is another.
+
+    The battery reports come at ~1 Hz and the energy watch asks every tick: between two reports the same
+    objects (the reader writes a new one for each message, and a new parameters dict for each
+    PARAM_VALUE) give the same verdict, whose capacity source is a formatted string.
+    """
+
+    def __init__(self) -> None:
+        self._inputs: tuple[object, ...] = ()
+        self._verdict: Capacity | NotJudged | str = ""
+
+    def get(
+        self,
+        config: EnergyConfig,
+        said: bool,
+        status: BatteryStatus,
+        battery: Battery | None,
+        params: Mapping[str, float],
+        autopilot: str,
+        rest_v: float | None,
+    ) -> Capacity | NotJudged | str:
+        inputs = (config, said, status, battery, params, autopilot, rest_v)
+        if inputs != self._inputs:  # item by item: the same object, else an equal one
+            self._inputs = inputs
+            self._verdict = judgeable(config, said, status, battery, params, autopilot, rest_v)
+        return self._verdict
+
+
 def counts_current(status: BatteryStatus) -> bool:
     """The monitor measures the current (its counters move): PX4's SIH has no current sensor (BatterySimulator.cpp: ibatt -1,
     reported as current_battery -100 with current_consumed stuck at 0); its drawn energy is read from battery_remaining."""

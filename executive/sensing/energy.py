@@ -263,6 +263,7 @@ class EnergyWatch:
         self._mission: Mission | None = None
         self._rest_v: float | None = None  # the pack's voltage before arming (kept from mission to mission: the same pack)
         self._rule: tuple[Mission, EnergyConfig | None, EnergyConfig | None] | None = None  # (mission, its energy block, its rule)
+        self._judged = battery_energy.JudgedCapacity()
         self._begin(None)
         load_filterpy()
 
@@ -290,6 +291,7 @@ class EnergyWatch:
         self._hovering = False  # a VTOL armed on its lift motors now
         self._since = 0.0  # when the mission's energy was first looked at
         self._ahead: Ahead | None = None
+        self._armed = False  # /vehicle/armed at this tick
 
     def service(self) -> None:
         mission = self._state.mission
@@ -308,6 +310,7 @@ class EnergyWatch:
         status: BatteryStatus | None = self._in.get("/vehicle/battery_status")
         battery: Battery | None = self._in.get("/vehicle/battery")
         params = self._in.get("/vehicle/params") or {}
+        self._armed = bool(self._in.get("/vehicle/armed"))  # read once a tick: each step below asks it
         self._track_distance()
         said = mission.energy is not None
         if status is None:
@@ -316,14 +319,15 @@ class EnergyWatch:
             else:
                 self._unknown("no BATTERY_STATUS from the autopilot yet")
             return
-        if status.voltage_v and (not self._in.get("/vehicle/armed") or self._rest_v is None):
+        if status.voltage_v and (not self._armed or self._rest_v is None):
             # the pack at rest (else as first seen: an armed vehicle): its cells counted where the autopilot does not say its voltage
             self._rest_v = status.voltage_v if self._start is None or self._rest_v is None else self._rest_v
-        name = battery_energy.capacity_param(self._autopilot())
+        autopilot = self._autopilot()
+        name = battery_energy.capacity_param(autopilot)
         if config.capacity_wh is None and name not in params and self._clock.now() - self._since < PARAMS_WAIT_S:
             self._unknown("")  # the parameter watch is still asking for it: nothing to say yet (the pre-flight's wait not begun)
             return
-        capacity = battery_energy.judgeable(config, said, status, battery, params, self._autopilot(), self._rest_v)
+        capacity = self._judged.get(config, said, status, battery, params, autopilot, self._rest_v)
         if isinstance(capacity, battery_energy.NotJudged):
             self._not_judged(capacity.why)
             return
@@ -338,7 +342,7 @@ class EnergyWatch:
         if self._start is None:
             self._start = (drawn, remaining)
         self._learn(drawn, 0.0 if counted is not None else capacity.wh / 100.0)
-        self._publish(mission, config, capacity.wh, drawn - self._start[0])
+        self._publish(mission, config, capacity.wh, drawn - self._start[0], autopilot, params)
 
     # -- learning ------------------------------------------------------------------------------
     def _track_distance(self) -> None:
@@ -347,19 +351,19 @@ class EnergyWatch:
         # a VTOL on its lift motors pays by the second however it moves: its metres are the plane's (the way home is flown as one)
         hovering = self._vtol and not flies_as_plane(self._in.get("/vehicle/vtol_state"), speed)
         self._wing_borne = self._wing_borne or (self._vtol and not hovering)
-        self._hovering = hovering and bool(self._in.get("/vehicle/armed"))
+        self._hovering = hovering and self._armed
         position: GlobalPosition | None = self._in.get("/vehicle/position")
         # a sub diving or climbing in place pays by the metre of depth (consumption.py), not by the second
         diving = self._mission is not None and self._mission.vehicle == "sub" and position is not None and abs(position.vd_m_s) >= HELD_BELOW_M_S
         held = (speed is None or speed < HELD_BELOW_M_S or hovering) and not diving
-        if self._in.get("/vehicle/armed") and self._ticked_at is not None and held:
+        if self._armed and self._ticked_at is not None and held:
             self._held_s += now - self._ticked_at  # hover, loiter, station keeping, a stop: its seconds cost, not its metres
         self._ticked_at = now
         ekf: EkfStatus | None = self._in.get("/vehicle/ekf")
         # only a position the EKF vouches for: ArduPlane sends one dead-reckoned from 0, 0 before its GPS fix (docs/autopilots.md)
         if position is None or position is self._last_position or ekf is None or not ekf.position_ok():
             return
-        if self._last_position is not None and self._in.get("/vehicle/armed") and not hovering:
+        if self._last_position is not None and self._armed and not hovering:
             self._metres += geo.distance(self._last_position.lat, self._last_position.lon, position.lat, position.lon)
             if self._mission is not None and self._mission.vehicle == "sub":
                 self._vertical_m += abs(position.alt_rel_m - self._last_position.alt_rel_m)
@@ -367,7 +371,7 @@ class EnergyWatch:
 
     def _learn(self, drawn: float, resolution_wh: float) -> None:
         now = self._clock.now()
-        if not self._in.get("/vehicle/armed"):
+        if not self._armed:
             self._window = None
             return
         if self._window is None:
@@ -403,7 +407,9 @@ class EnergyWatch:
             return (self._last_position.lat, self._last_position.lon)
         return ahead.next if ahead.next is not None else (0.0, 0.0)
 
-    def _publish(self, mission: Mission, config: EnergyConfig, capacity_wh: float, drawn_since_start: float) -> None:
+    def _publish(
+        self, mission: Mission, config: EnergyConfig, capacity_wh: float, drawn_since_start: float, autopilot: str, params: dict[str, float]
+    ) -> None:
         assert self._model is not None and self._start is not None
         ahead = self._legs_ahead(mission)
         home = self._home(mission, ahead)
@@ -411,8 +417,8 @@ class EnergyWatch:
         route_m = path_length([ahead.next], here) + ahead.along_m if ahead.next is not None else 0.0
         end = ahead.last or here
         home_m = self._home_metres(mission, config, home, end)
-        home_m += GLIDE_RATIO * return_climb_m(mission, self._autopilot(), self._in.get("/vehicle/params") or {})
-        take_off = not self._in.get("/vehicle/armed") and self._state.legs.leg_index == 0
+        home_m += GLIDE_RATIO * return_climb_m(mission, autopilot, params)
+        take_off = not self._armed and self._state.legs.leg_index == 0
         legs = len(mission.waypoints)
         done = self._state.legs.leg_index >= legs
         landing = self._last_position.alt_rel_m if done and self._hovering and self._last_position is not None else None

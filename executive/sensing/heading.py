@@ -350,10 +350,11 @@ class HeadingFilter:
         attitude: Attitude | None = self._in.get("/vehicle/attitude")
         position: GlobalPosition | None = self._in.get("/vehicle/position")
         new: list[Attitude | GlobalPosition] = []
-        if attitude is not None and attitude != self._attitude:
+        # the same object at most ticks (a reading comes every few ticks): known without comparing its fields
+        if attitude is not None and attitude is not self._attitude and attitude != self._attitude:
             self._attitude = attitude
             new.append(attitude)
-        if position is not None and position != self._position:
+        if position is not None and position is not self._position and position != self._position:
             self._position = position
             new.append(position)
         # The filter runs on when the autopilot measured (its boot clock): reception times jitter with the link,

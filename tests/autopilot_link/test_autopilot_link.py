@@ -65,3 +65,14 @@ def test_a_replacement_mission_brings_its_link_timeout(square_mission, link, clo
     limits = square_mission.limits.model_copy(update={"link_timeout_s": 7.5})
     ap.use(square_mission.model_copy(update={"limits": limits}))
     assert ap.reader.link_timeout_s == 7.5
+
+
+def test_the_links_signing_and_serial_device_counters_reach_the_blackboard_and_a_link_without_them_reads_as_none_lost(square_mission, link, clock):
+    ap = make_link(square_mission, link, clock)
+    ObedientAutopilot(link).beat()
+    ap.pump()
+    assert blackboard.value("/link/unsigned_dropped") == 0 and blackboard.value("/link/device_lost") is None
+    link.unsigned_dropped, link.device_lost = 3, "serial device /dev/ttyACM0 gone: opening it again every 1 s"
+    ap.pump()
+    assert blackboard.value("/link/unsigned_dropped") == 3
+    assert blackboard.value("/link/device_lost") == "serial device /dev/ttyACM0 gone: opening it again every 1 s"

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from executive.mission.model import EnergyConfig
-from executive.sensing.battery_energy import NotJudged, capacity, cells_at_rest, counts_current, drawn_wh, judgeable, unknown_reading
+from executive.sensing import battery_energy
+from executive.sensing.battery_energy import JudgedCapacity, NotJudged, capacity, cells_at_rest, counts_current, drawn_wh, judgeable, unknown_reading
 from executive.world.state import Battery, BatteryStatus
 
 
@@ -92,3 +93,20 @@ def test_a_current_measured_with_no_capacity_is_refused_naming_what_to_set_and_t
 def test_a_mission_that_asks_for_the_rule_is_refused_where_the_battery_cannot_tell() -> None:
     found = judgeable(EnergyConfig(nominal_v=11.1), True, VOLTAGE_ONLY, None, {"BATT_MONITOR": 3.0, "BATT_CAPACITY": 3300.0}, "ardupilot", 12.4)
     assert isinstance(found, str) and found.startswith("the battery monitor counts no energy drawn (BATT_MONITOR 3")
+
+
+def test_the_verdict_is_judged_again_only_when_an_input_changes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The energy watch asks every tick; the battery reports at ~1 Hz: a tick between two reports reuses the verdict."""
+    judged: list[BatteryStatus] = []
+    real = battery_energy.judgeable
+    monkeypatch.setattr(battery_energy, "judgeable", lambda config, said, report, *rest: judged.append(report) or real(config, said, report, *rest))
+    verdict = JudgedCapacity()
+    first, later = status(), status(mah=120.0)
+    for report, params in ((first, ARDUPILOT), (first, ARDUPILOT), (first, dict(ARDUPILOT)), (later, ARDUPILOT)):
+        found = verdict.get(EnergyConfig(), False, report, None, params, "ardupilot", 12.6)
+        assert found == judgeable(EnergyConfig(), False, report, None, params, "ardupilot", 12.6)
+    assert judged == [first, later]  # an equal parameters dict is the same input
+    # a parameter that changes the capacity is judged again
+    assert verdict.get(EnergyConfig(), False, later, None, {**ARDUPILOT, "BATT_CAPACITY": 0.0}, "ardupilot", 12.6) == (
+        "BATT_CAPACITY is 0 (unknown): set it on the autopilot, or energy.capacity_wh; or energy: {check: off}"
+    )

@@ -91,6 +91,8 @@ _MAX_ANGLE_RAD = math.pi + 0.01
 _MAX_RATE_RAD_S = 100.0
 #: RC PWM a receiver can report, µs; outside it (UINT16_MAX = unused channel, or nonsense) a channel has no signal (0).
 _PWM_MIN_US, _PWM_MAX_US = 500, 2500
+#: Every whole PWM a receiver can report, and 0: a message's channels all in it need no look one by one (the wire's are ints).
+_PWM_OR_NONE = frozenset(range(_PWM_MIN_US, _PWM_MAX_US + 1)) | {0}
 _GPS_FIX_TYPES = frozenset(mavlink.enums["GPS_FIX_TYPE"])
 
 
@@ -382,7 +384,7 @@ class MavlinkReader:
     def _on_rc_channels(self, msg: MAVLinkMessage, now: float) -> None:
         # every field, whatever chancount says: ArduPilot acts on an RC override of a channel past it (chancount 8, chan9_raw 1500)
         channels = _RC_CHANNELS(msg)
-        if not all(_PWM_MIN_US <= c <= _PWM_MAX_US or c == 0 for c in channels):
+        if not _PWM_OR_NONE.issuperset(channels) and not all(_PWM_MIN_US <= c <= _PWM_MAX_US or c == 0 for c in channels):
             channels = tuple(c if _PWM_MIN_US <= c <= _PWM_MAX_US else 0 for c in channels)
         self._bb.set("/rc/channels", channels)
         self._bb.set("/rc/rssi", None if msg.rssi == 255 else msg.rssi)
