@@ -132,6 +132,10 @@ def judgeable(
     return unknown if unknown is not None else pack
 
 
+#: What :func:`judgeable` judges, in the order of its arguments.
+JudgeInputs = tuple[EnergyConfig, bool, BatteryStatus, Battery | None, Mapping[str, float], str, float | None]
+
+
 class JudgedCapacity:
     """:func:`judgeable`, judged again only when one of its inputs is another.
 
@@ -144,20 +148,11 @@ class JudgedCapacity:
         self._inputs: tuple[object, ...] = ()
         self._verdict: Capacity | NotJudged | str = ""
 
-    def get(
-        self,
-        config: EnergyConfig,
-        said: bool,
-        status: BatteryStatus,
-        battery: Battery | None,
-        params: Mapping[str, float],
-        autopilot: str,
-        rest_v: float | None,
-    ) -> Capacity | NotJudged | str:
-        inputs = (config, said, status, battery, params, autopilot, rest_v)
+    def get(self, *inputs: *JudgeInputs) -> Capacity | NotJudged | str:
+        """:func:`judgeable` of ``inputs`` (its arguments, in its order)."""
         if inputs != self._inputs:  # item by item: the same object, else an equal one
             self._inputs = inputs
-            self._verdict = judgeable(config, said, status, battery, params, autopilot, rest_v)
+            self._verdict = judgeable(*inputs)
         return self._verdict
 
 
