@@ -344,12 +344,14 @@ def record_rover_square(where: Path) -> tuple[Path, Path, Ticks, Any]:
         closers.append(lambda: logging.getLogger("executive").removeHandler(handler))
         return {"plugs": [ticks.plug, *(snapshot_recorder(r) for r in recorders), journal_recorder(journal)]}
 
-    logging.getLogger("executive").setLevel(logging.INFO)  # as `executive run` logs: the mission's transitions are INFO lines
+    log = logging.getLogger("executive")
+    level = log.level  # a session fixture's run: the level the tests around it set is theirs again after it
+    log.setLevel(logging.INFO)  # as `executive run` logs: the mission's transitions are INFO lines
     try:
         with Lockstep(load_mission(missions / "rover_square.yaml"), mission_dir=missions, options_for_clock=plugs) as sim:
             outcome = sim.run_to_end(limit_s=400)
     finally:
-        logging.getLogger("executive").setLevel(logging.NOTSET)
+        log.setLevel(level)
     for close in [*(r.close for r in recorders), *closers]:
         close()
     return where / "run.mcap", where / "run.jsonl", ticks, outcome.status
