@@ -67,7 +67,7 @@ class HeadingKalman:
     def __init__(self) -> None:
         kf = self._kf = kalman_filter_class()(dim_x=2, dim_z=1)
         kf.inv = _inverse_1x1  # filterpy's hook for the innovation's inverse: S is 1x1 here
-        self._r = np.zeros((1, 1))
+        self._r = kf.R  # the measurement's variance, set before each update: filterpy reads kf.R when update is given no R
 
     @property
     def heading(self) -> float:
@@ -108,8 +108,9 @@ class HeadingKalman:
         """Take a measurement ``z`` of state component ``i`` whose variance is ``r``."""
         self._r[0, 0] = r
         # z as a float: filterpy keeps a deepcopy of it (kalman_filter.py update), ten times dearer for an array;
-        # with H given it is not reshaped, and z - Hx is the same 1x1 array of the same number
-        self._kf.update(z, R=self._r, H=_H[i])
+        # with H given it is not reshaped, and z - Hx is the same 1x1 array of the same number. R in place rather than
+        # given: a given R is tested with numpy's isscalar (an ABC check) at each update; the arithmetic is the same
+        self._kf.update(z, H=_H[i])
 
 
 def _inverse_1x1(s: np.ndarray) -> np.ndarray:
