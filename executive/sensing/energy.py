@@ -292,7 +292,7 @@ class EnergyWatch:
         self._since = 0.0  # when the mission's energy was first looked at
         self._ahead: Ahead | None = None
         self._armed = False  # /vehicle/armed at this tick
-        self._needs: tuple[tuple[object, ...], tuple[float, float, float, float]] = ((), (0.0, 0.0, 0.0, 0.0))  # (inputs, _estimate's figures)
+        self._needs: tuple[tuple[object, ...], tuple[float, ...]] = ((), ())  # (inputs, _estimate's figures)
 
     def service(self) -> None:
         mission = self._state.mission
@@ -419,10 +419,10 @@ class EnergyWatch:
         )  # fmt: skip
         if inputs != self._needs[0]:
             self._needs = (inputs, self._estimate(mission, config, capacity_wh, drawn_since_start, autopilot, params, below))
-        has, route_wh, home_wh, sigma = self._needs[1]
+        has, route_wh, home_wh, sigma, wh_per_km, wh_per_min = self._needs[1]
         estimate = EnergyEstimate(
             has, route_wh, home_wh, sigma, capacity_wh, config.reserve_pct, drawn_since_start,
-            self._model.wh_per_m * 1000.0, self._model.wh_per_s * 60.0, self._state.legs.leg_index, self._clock.now(),
+            wh_per_km, wh_per_min, self._state.legs.leg_index, self._clock.now(),
         )  # fmt: skip
         self._out.set("/energy/estimate", estimate)
         self._out.set("/energy/unknown", "")
@@ -438,8 +438,9 @@ class EnergyWatch:
         autopilot: str,
         params: dict[str, float],
         below: float | None,
-    ) -> tuple[float, float, float, float]:
-        """(has, route, home, sigma) Wh, from what :meth:`_publish` keys them on: worked out again only when one of those is another.
+    ) -> tuple[float, float, float, float, float, float]:
+        """(has, route, home, sigma) Wh and the model's Wh/km and Wh/min, from what :meth:`_publish` keys them on: worked out
+        again only when one of those is another.
 
         Between two position reports (5 Hz, ticks at 10 Hz) and battery reports (1 Hz) every input is the same object (the
         reader writes a new one for each message; the model's state changes only in its ``update``, which counts its
@@ -466,7 +467,7 @@ class EnergyWatch:
         _, sigma = self._model.need(route_m + home_m, route_s + home_s, route_z + home_z)
         kept = capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
         has = capacity_wh * self._start[1] / 100.0 - drawn_since_start - kept
-        return has, route_wh, home_wh, sigma
+        return has, route_wh, home_wh, sigma, self._model.wh_per_m * 1000.0, self._model.wh_per_s * 60.0
 
     def _home_metres(self, mission: Mission, config: EnergyConfig, home: tuple[float, float], end: tuple[float, float]) -> float:
         """:func:`home_metres`, planned once per route end and home (a return around zones is an A* search: not every report)."""

@@ -519,7 +519,8 @@ class HeadingFilter:
         ok: bool | None = None
         if not stale:
             ok = False if self._rejecting or self._bias_flagged else True if judged else None
-        self._out.set("/heading/deg", None if stale else self.heading_deg)
+        # heading_deg, with the verdict's ``judged``: the same bias taken off (or none), not judged again
+        self._out.set("/heading/deg", None if stale or self._t is None else (self._kf.heading - (self._bias if judged else 0.0)) % 360.0)
         self._out.set("/heading/ok", ok)
         self._out.set("/heading/bias_deg", self._bias if judged else None)
         self._out.set("/heading/reason", self.reason if ok is False else "")
