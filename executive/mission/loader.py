@@ -29,9 +29,11 @@ MAX_BYTES = 1 << 20  # a mission file is small; refuse anything bigger before pa
 MAX_ALIASES = 100
 MAX_DEPTH = 64  # nested mappings/sequences, the root mapping being level 1
 MAX_VALUES = 1_000_000  # nodes after expanding aliases; 1 MiB of YAML without aliases holds fewer
-#: Files read lately and how many, and up to what size, are kept (:func:`_read`).
+#: Files read lately kept (:func:`_read`): how many, the most characters in all (a document and its node index take ~50 bytes a
+#: character: ~6 MB), and in one file (a mission is a few thousand).
 READ_KEPT = 32
-READ_KEPT_MAX_CHARS = 1 << 16
+READ_KEPT_CHARS = 1 << 17
+READ_KEPT_MAX_CHARS = 1 << 15
 
 M = TypeVar("M", bound=BaseModel)
 #: Rules between fields of a validated model: (path of the offending value, why) for each problem.
@@ -402,9 +404,9 @@ def _read(text: str, filename: str, what: str) -> tuple[dict[str, Any], _Loader]
         found = _parse(text, filename, what)
         if len(text) <= READ_KEPT_MAX_CHARS:
             with _read_lock:
-                while len(_read_lately) >= READ_KEPT:
-                    del _read_lately[next(iter(_read_lately))]  # the oldest
                 _read_lately[key] = found
+                while len(_read_lately) > READ_KEPT or sum(len(kept[0]) for kept in _read_lately) > READ_KEPT_CHARS:
+                    del _read_lately[next(iter(_read_lately))]  # the oldest
     return copy.deepcopy(found[0]), found[1]
 
 

@@ -337,3 +337,8 @@ def test_only_a_few_small_files_are_kept(minimal_yaml: str, parses: list[str]) -
     load_mission_text(big, "big.yaml")
     load_mission_text(big, "big.yaml")
     assert parses[-2:] == ["big.yaml", "big.yaml"] and len(loader._read_lately) == loader.READ_KEPT
+    large = minimal_yaml + "#" * (loader.READ_KEPT_MAX_CHARS - len(minimal_yaml) - 1) + "\n"  # as large as one kept may be
+    for n in range(loader.READ_KEPT):
+        load_mission_text(large, f"large{n}.yaml")
+    assert sum(len(text) for text, *_ in loader._read_lately) <= loader.READ_KEPT_CHARS
+    assert len(loader._read_lately) == loader.READ_KEPT_CHARS // len(large)
