@@ -350,23 +350,34 @@ class HeadingFilter:
             self._kf = HeadingKalman()
         attitude: Attitude | None = self._in.get("/vehicle/attitude")
         position: GlobalPosition | None = self._in.get("/vehicle/position")
-        new: list[Attitude | GlobalPosition] = []
-        # the same object at most ticks (a reading comes every few ticks): known without comparing its fields
-        if attitude is not None and attitude is not self._attitude and attitude != self._attitude:
+        # The same object at most ticks (a reading comes every few ticks): known without comparing its fields. A new one
+        # received at another time differs in that field, so only one received at the same time has its fields compared.
+        last_attitude, last_position = self._attitude, self._position
+        if (
+            attitude is None
+            or attitude is last_attitude
+            or (last_attitude is not None and attitude.time == last_attitude.time and attitude == last_attitude)
+        ):
+            attitude = None  # nothing new
+        if (
+            position is None
+            or position is last_position
+            or (last_position is not None and position.time == last_position.time and position == last_position)
+        ):
+            position = None
+        if attitude is not None:
             self._attitude = attitude
-            new.append(attitude)
-        if position is not None and position is not self._position and position != self._position:
+        if position is not None:
             self._position = position
-            new.append(position)
         # The filter runs on when the autopilot measured (its boot clock): reception times jitter with the link,
         # and a turn's rate times that jitter reads as a compass error.
-        if len(new) == 2 and _measured_at(new[1]) < _measured_at(new[0]):
-            new.reverse()
-        for reading in new:
-            if isinstance(reading, Attitude):
-                self._on_attitude(reading, _measured_at(reading))
-            else:
-                self._on_position(reading, _measured_at(reading))
+        if attitude is not None and position is not None and _measured_at(position) < _measured_at(attitude):
+            self._on_position(position, _measured_at(position))
+            position = None
+        if attitude is not None:
+            self._on_attitude(attitude, _measured_at(attitude))
+        if position is not None:
+            self._on_position(position, _measured_at(position))
         self._publish(self._clock.now())
 
     # -- the heading filter --------------------------------------------------------------------
