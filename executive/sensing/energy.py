@@ -163,29 +163,12 @@ class EnergyEstimate:
         return self.margin_wh >= 0.0
 
     def figures(self) -> str:
-        """``needs 41 Wh + 9 Wh home (+/- 6), has 38 Wh above the 20 % reserve``
-
-        The energy guard says them at every tick, of a new estimate whose numbers are, between two reports, the very same float
-        objects (:class:`EnergyWatch` reuses its figures): those are not formatted again (the same objects, the same text).
-        """
-        numbers, said = _FIGURES_SAID[0]
-        if (
-            numbers
-            and numbers[0] is self.route_wh and numbers[1] is self.home_wh and numbers[2] is self.sigma_wh
-            and numbers[3] is self.has_wh and numbers[4] is self.reserve_pct
-        ):  # fmt: skip
-            return said
+        """``needs 41 Wh + 9 Wh home (+/- 6), has 38 Wh above the 20 % reserve``"""
         places = 0 if max(self.route_wh, self.home_wh, self.has_wh) >= 10 else 1
-        said = (
+        return (
             f"needs {wh(self.route_wh, places)} Wh + {wh(self.home_wh, places)} Wh home (+/- {wh(self.sigma_wh, places)}), "
             f"has {wh(self.has_wh, places)} Wh above the {self.reserve_pct:g} % reserve"
         )
-        _FIGURES_SAID[0] = ((self.route_wh, self.home_wh, self.sigma_wh, self.has_wh, self.reserve_pct), said)
-        return said
-
-
-#: The numbers :meth:`EnergyEstimate.figures` last formatted, and its text.
-_FIGURES_SAID: list[tuple[tuple[float, ...], str]] = [((), "")]
 
 
 def wh(value: float, places: int | None = None) -> str:
