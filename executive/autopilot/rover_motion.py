@@ -270,8 +270,9 @@ class ShapedTarget:
         self.speed_m_s = speed_m_s
         self.accel_m_s2 = accel_m_s2
         self.jerk_m_s3 = jerk_m_s3
-        # the square-root controllers' gains and limits, worked out once (step runs every 20 ms)
-        self._approach = (0.5 * jerk_m_s3 / accel_m_s2, 0.5 * accel_m_s2)
+        # the square-root controllers' gains and limits, worked out once and passed by position (step runs every 20 ms: a
+        # starred call builds a tuple and takes CPython's slow call path)
+        self._approach_gain, self._approach_limit = 0.5 * jerk_m_s3 / accel_m_s2, 0.5 * accel_m_s2
         self._accel_gain = jerk_m_s3 / accel_m_s2
         self._corner_m_s2 = CORNER_ACCELERATION_RATIO * accel_m_s2
         self.pos = (0.0, 0.0)
@@ -292,7 +293,7 @@ class ShapedTarget:
         size = math.hypot(en, ee)
         want_n = want_e = 0.0
         if size > 0.0:
-            rate = sqrt_controller(size, *self._approach, dt)
+            rate = sqrt_controller(size, self._approach_gain, self._approach_limit, dt)
             want_n, want_e = _limit_length(en * rate / size, ee * rate / size, self.speed_m_s)
         # the acceleration that closes the velocity error, with room kept for turning
         dn, de = want_n - vn, want_e - ve
