@@ -46,6 +46,7 @@ class CommandAction(TimedBehaviour):
         super().__init__(name)
         self.confirm_timeout_s = confirm_timeout_s
         self._asker = Asker(self, None, rules=ONE_ASK, voice=_CommandVoice(self), escalate=False, bounded=True)
+        self._rules = ONE_ASK  # the rules of the last run: made again only when its time allowed differs (Surface's depends on the depth)
 
     @property
     def _ticket(self) -> Request | None:
@@ -68,7 +69,9 @@ class CommandAction(TimedBehaviour):
     def initialise(self) -> None:
         super().initialise()
         self._asker.forget()  # a new run: the ack of the previous one (ChangeSpeed's confirmation) says nothing about it
-        self._asker.rules = replace(ONE_ASK, judge_after_s=self.confirm_timeout_s)
+        if self._rules.judge_after_s != self.confirm_timeout_s:  # frozen: the same rules serve every run with the same time allowed
+            self._rules = replace(ONE_ASK, judge_after_s=self.confirm_timeout_s)
+        self._asker.rules = self._rules
         if not self.confirmed():
             self._asker.start_command(self.name, self.request, self.confirmed, self.name)
 
