@@ -29,7 +29,7 @@ from typing import Any
 
 from py_trees.common import Status
 
-from executive.behaviours.base import ExecutiveBehaviour
+from executive.behaviours.base import FAILURE, SUCCESS, ExecutiveBehaviour
 from executive.world.clock import Clock
 from executive.world.state import Battery, EkfFlags, EkfStatus
 
@@ -130,7 +130,7 @@ class Guard(ExecutiveBehaviour):
     def update(self) -> Status:
         reason = self.judge()
         self.feedback_message = reason or self.note or "ok"
-        return Status.FAILURE if reason else Status.SUCCESS
+        return FAILURE if reason else SUCCESS
 
 
 class LinkAlive(Guard):

@@ -98,3 +98,10 @@ def test_a_behaviour_reads_the_board_as_it_is_now_and_a_subclass_s_own_get_is_ke
         theirs.tick_once()
         outcomes.append((ours.status, theirs.status))
     assert outcomes == [(Status.FAILURE, Status.SUCCESS), (Status.SUCCESS, Status.SUCCESS)]
+
+
+def test_the_status_names_of_base_are_py_trees_own_members() -> None:
+    """Code run every tick reads RUNNING, SUCCESS, FAILURE, INVALID from base (a module's global, not an Enum class's attribute)."""
+    from executive.behaviours import base
+
+    assert [name for name in ("RUNNING", "SUCCESS", "FAILURE", "INVALID") if getattr(base, name) is not Status[name]] == []
