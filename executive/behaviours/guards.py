@@ -34,6 +34,9 @@ from executive.world.clock import Clock
 from executive.world.state import Battery, EkfFlags, EkfStatus
 
 _EPSILON_S = 1e-6  # ten ticks of 0.1 s add up to a hair under 1 s
+#: The flag's bit, tested on the flags as an int: an IntFlag's ``&`` is Python code, and its class's members slow to read
+#: (executive.behaviours.base.RUNNING says why); the test is the same.
+_GPS_GLITCHING = int(EkfFlags.GPS_GLITCHING)
 
 
 class Guard(ExecutiveBehaviour):
@@ -224,7 +227,7 @@ class GpsNotGlitching(Guard):
         old = self.stale(ekf.time, self.stale_after_s, "the EKF report is")
         if old is not None:
             return old
-        return "the EKF flags a GPS glitch (GPS_GLITCHING)" if ekf.flags & EkfFlags.GPS_GLITCHING else None
+        return "the EKF flags a GPS glitch (GPS_GLITCHING)" if int(ekf.flags) & _GPS_GLITCHING else None
 
 
 class Armed(Guard):

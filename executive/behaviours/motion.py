@@ -159,7 +159,9 @@ class GoTo(TimedBehaviour):
 
     def update(self) -> Status:
         target = self.get("/mission/target")
-        if target is not None and target != self.target:  # an operator edited the route during the leg: head for the waypoint as it is now
+        # an operator edited the route during the leg: head for the waypoint as it is now (the same object is equal to itself:
+        # most ticks, and a model's == is dear)
+        if target is not None and target is not self.target and target != self.target:
             self.target, self._last_sent = target, float("-inf")
             self._repositioning.aim()
         if self.target is None:
