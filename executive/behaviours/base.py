@@ -107,7 +107,19 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
             return
         self.terminate(new_status)
         self.status = new_status
-        self.iterator = self.tick()
+
+    @property
+    def iterator(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' ``iterator``: a tick of this node, not started, made when it is read.
+
+        py_trees' ``__init__`` and ``stop`` set a new one each time and nothing reads it; a generator made and dropped costs
+        about 2,000 instructions, and a leaf guard is stopped every tick. What a read gives is what py_trees keeps.
+        """
+        return self.tick()
+
+    @iterator.setter
+    def iterator(self, _: Iterator[py_trees.behaviour.Behaviour]) -> None:
+        """What py_trees sets is dropped: a read makes its own."""
 
     def setup(self, **services: Any) -> None:
         """Take the services this behaviour ``needs`` (the clock, the autopilot port, the mission state) from the runtime."""

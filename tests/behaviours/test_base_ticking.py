@@ -105,3 +105,14 @@ def test_the_status_names_of_base_are_py_trees_own_members() -> None:
     from executive.behaviours import base
 
     assert [name for name in ("RUNNING", "SUCCESS", "FAILURE", "INVALID") if getattr(base, name) is not Status[name]] == []
+
+
+def test_its_iterator_ticks_it_as_py_trees_own_does() -> None:
+    """py_trees keeps a tick of the node, not started, as ``iterator`` (set at every stop); ours is made when read."""
+    seen = []
+    for node in (Ours("ours"), Theirs("theirs")):
+        for _ in range(3):  # RUNNING, RUNNING, SUCCESS: stopped
+            node.tick_once()
+        node.calls.clear()
+        seen.append(([n is node for n in node.iterator], node.calls, node.status))  # FAILURE (SCRIPT's fourth)
+    assert seen[0] == seen[1] == ([True], ["initialise", "update", "terminate FAILURE"], Status.FAILURE)
