@@ -1,6 +1,6 @@
 """executive: an onboard behaviour-tree mission executive for uncrewed vehicles."""
 
-import importlib.abc
+import importlib
 import importlib.machinery
 import importlib.util
 import sys
@@ -19,7 +19,9 @@ _HERE = Path(__file__).resolve().parent
 _CHECKOUT_TREES = _HERE.parent / "trees"
 
 
-class _CheckoutTrees(importlib.abc.MetaPathFinder):
+# The finders and the loader below are duck-typed (the import system asks for find_spec, create_module and exec_module):
+# importlib.abc's base classes would cost every command's start ~10 ms (importlib.resources, tempfile...).
+class _CheckoutTrees:
     """Finds ``executive.trees`` (only that name; its modules then by its path) in a checkout's ``trees/`` folder."""
 
     def find_spec(self, fullname: str, path: object = None, target: object = None) -> importlib.machinery.ModuleSpec | None:
@@ -104,7 +106,7 @@ def _warn_moved(old: str, new: str, stacklevel: int = 3) -> None:
     warnings.warn(f"{old} moved to {new} (0.2); the old name goes in 0.3", DeprecationWarning, stacklevel=stacklevel)
 
 
-class _MovedModule(importlib.abc.Loader):
+class _MovedModule:
     """Loads an old module name as the module now at its new name (the same module object)."""
 
     def __init__(self, new: str) -> None:
@@ -120,7 +122,7 @@ class _MovedModule(importlib.abc.Loader):
         module.__spec__ = self._spec  # the import system set the old name's spec on it
 
 
-class _MovedModules(importlib.abc.MetaPathFinder):
+class _MovedModules:
     def find_spec(self, fullname: str, path: object = None, target: object = None) -> importlib.machinery.ModuleSpec | None:
         old = fullname.removeprefix("executive.")
         if fullname == old or old not in MOVED:

@@ -68,7 +68,7 @@ def number(
 
 #: Command -> the module of this package that registers it (``register(subparsers)`` setting ``func``).
 COMMANDS = {
-    "validate": "validate", "show": "show", "run": "run", "sim": "sim", "schema": "schema", "ctl": "ctl", "report": "report",
+    "validate": "validate", "show": "show", "run": "run_options", "sim": "sim", "schema": "schema", "ctl": "ctl", "report": "report",
     "replay": "replay", "convert": "replay", "foxglove-layout": "replay", "can": "can", "import": "plan_files", "export": "plan_files",
     "service": "service", "behaviours": "behaviours", "examples": "examples",
 }  # fmt: skip

@@ -5,15 +5,13 @@ from __future__ import annotations
 import sys
 from typing import TYPE_CHECKING
 
-from executive.admission.checks import load_mission
 from executive.cli import BadInput, number
-from executive.io.mavlink.link import load_signing_key
-from executive.mission.errors import MissionError
-from executive.mission.model import Mission
-from executive.world.clock import Clock
 
 if TYPE_CHECKING:
+    from executive.mission.errors import MissionError
+    from executive.mission.model import Mission
     from executive.sim.faults import FaultInjector
+    from executive.world.clock import Clock
 
 
 def print_errors(exc: MissionError) -> None:
@@ -24,6 +22,9 @@ def print_errors(exc: MissionError) -> None:
 
 def load_or_report(path: str) -> Mission | None:
     """The mission in ``path``, or ``None`` after printing every error to stderr."""
+    from executive.admission.checks import load_mission
+    from executive.mission.errors import MissionError
+
     try:
         return load_mission(path)
     except MissionError as exc:
@@ -33,6 +34,7 @@ def load_or_report(path: str) -> Mission | None:
 
 def faults_or_report(paths: list[str], vehicle: str, clock: Clock, autopilot: str = "ardupilot") -> FaultInjector | None:
     """One fault injector playing every event/fault file in ``paths``, or ``None`` after printing every error."""
+    from executive.mission.errors import MissionError
     from executive.sim.faults import FaultInjector, load_faults
 
     faults = []
@@ -49,6 +51,8 @@ def signing_key_arg(path: str | None) -> bytes | None:
     """The signing key of ``--signing-key`` (None without one); BadInput if it cannot be read."""
     if path is None:
         return None
+    from executive.io.mavlink.link import load_signing_key
+
     try:
         return load_signing_key(path)
     except (OSError, ValueError) as exc:

@@ -19,8 +19,6 @@ from typing import Any
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_FAILED, EXIT_NO_VEHICLE, EXIT_OK, number
 from executive.io.control import default_socket_path, request
-from executive.operator.status import status_line
-from executive.tree.ticks import TickState, render_tree
 
 REQUESTS = ("status", "start", "pause", "resume", "abort", "delete", "upload", "route", "tree", "arm", "disarm", "mode")
 #: How long (wall clock) to wait for the autopilot's answer to arm, disarm or mode.
@@ -183,6 +181,8 @@ def main(args: argparse.Namespace) -> int:
     elif "tree" in reply:
         print(tree_text(reply))
     elif "status" in reply:
+        from executive.operator.status import status_line  # an answer to show: an executive that is not there costs none of it
+
         print(status_line(reply["status"]))
     else:
         print(f"{reply['state']}: {reply['reason']}")
@@ -220,6 +220,9 @@ def _report_answer(args: argparse.Namespace, reply: dict[str, Any]) -> int:
 
 def tree_text(reply: dict[str, Any]) -> str:
     """A ``tree`` reply for a person: the status line (what the tree waits for), then the tree at its latest tick."""
+    from executive.operator.status import status_line
+    from executive.tree.ticks import TickState, render_tree
+
     lines = [status_line(reply["status"]), *render_tree(TickState.from_tree_dict(reply["tree"]))]
     if not reply["tree"]["live"]:
         lines[1] += f" (the last tick of the run, which ended {reply['state']})"

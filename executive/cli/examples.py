@@ -14,8 +14,6 @@ import shutil
 import sys
 from pathlib import Path
 
-import yaml
-
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 
 _PACKAGE = Path(__file__).resolve().parents[1]
@@ -64,6 +62,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 
 def _described(path: Path) -> dict[str, str]:
+    import yaml
+
     data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
     return {"name": path.stem, "vehicle": str(data.get("vehicle", "")), "description": str(data.get("description") or ""), "file": str(path)}
 

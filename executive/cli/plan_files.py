@@ -12,18 +12,18 @@ import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import yaml
-
-from executive.admission.checks import load_mission_text
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report, print_errors
 from executive.cli.examples import mission_file
 from executive.mission.errors import MissionError, format_path
 from executive.mission.errors import Path as MissionPath
-from executive.mission.formats.plan_files import WAITS_FOR_ARMING, WPL_SUFFIXES, Exported, export_plan, export_waypoints, import_file
-from executive.tree.formats import btcpp, recompose
+
+if TYPE_CHECKING:
+    import yaml
+
+    from executive.mission.formats.plan_files import Exported
 
 KINDS = ("rover", "boat", "sub", "vtol")
 
@@ -69,6 +69,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 def run_import(args: argparse.Namespace) -> int:
     """Import, report what was not imported, write the mission; 2 on bad input."""
+    from executive.mission.formats.plan_files import WAITS_FOR_ARMING, import_file
+
     if args.file.lower().endswith(".xml"):
         return _import_btcpp(args)
     try:
@@ -89,6 +91,9 @@ def run_import(args: argparse.Namespace) -> int:
 
 def run_export(args: argparse.Namespace) -> int:
     """Export a mission; 2 if it is invalid or the format cannot be told."""
+    from executive.mission.formats.plan_files import export_plan, export_waypoints
+    from executive.tree.formats import recompose
+
     fmt = args.format or _format_from_suffix(args.output)
     if fmt is None:
         print("executive: export: --format plan|waypoints|btcpp is needed (or an -o file ending in .plan, .waypoints or .xml)", file=sys.stderr)
@@ -107,6 +112,8 @@ def run_export(args: argparse.Namespace) -> int:
 
 
 def _format_from_suffix(output: str | None) -> str | None:
+    from executive.mission.formats.plan_files import WPL_SUFFIXES
+
     if output is None:
         return None
     suffix = os.path.splitext(output)[1].lower()
@@ -122,6 +129,11 @@ def _catalogue() -> Any:
 
 def _import_btcpp(args: argparse.Namespace) -> int:
     """A BehaviorTree.CPP file's tree as a mission's ``tree:``, alone or in place of ``--mission``'s; 2 on bad input."""
+    import yaml
+
+    from executive.admission.checks import load_mission_text
+    from executive.tree.formats import btcpp
+
     try:
         tree = btcpp.import_tree(args.file, _catalogue())
     except MissionError as exc:
@@ -172,6 +184,8 @@ def _indexed(paths: list[MissionPath]) -> str:
 
 def _locator(mission_file: str) -> Callable[[MissionPath], tuple[int, int]]:
     """``locate(path) -> (line, column)`` in a (valid) mission file: of the value at ``path`` or of its nearest enclosing value."""
+    import yaml
+
     marks: dict[MissionPath, tuple[int, int]] = {}
 
     def index(node: yaml.Node, path: MissionPath) -> None:

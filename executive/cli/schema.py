@@ -7,7 +7,6 @@ import sys
 from pathlib import Path
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
-from executive.tree.schema import mission_json_schema_text
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -22,6 +21,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def run(args: argparse.Namespace) -> int:
     """Print the schema, or write it to ``--output``."""
     from executive.registry import PluginError
+    from executive.tree.schema import mission_json_schema_text
 
     try:
         text = mission_json_schema_text()  # plugins' behaviours are in it

@@ -7,14 +7,14 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
-
-import py_trees
+from typing import TYPE_CHECKING
 
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK
 from executive.cli.common import load_or_report
 from executive.cli.examples import mission_file
-from executive.tree import select as mission_tree
-from executive.tree.drawing import dot_graph, unicode_tree
+
+if TYPE_CHECKING:
+    import py_trees
 
 FORMATS = ("ascii", "unicode", "dot", "svg", "png")
 #: The format an output file's suffix names (without --format).
@@ -35,6 +35,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def render(root: py_trees.behaviour.Behaviour, fmt: str, name: str) -> str | bytes:
     """The tree in a format (a graph is named ``name``); svg/png need Graphviz (raises FileNotFoundError with a hint)."""
+    import py_trees
+
+    from executive.tree.drawing import dot_graph, unicode_tree
+
     if fmt == "ascii":
         return py_trees.display.ascii_tree(root) + "\n"
     if fmt == "unicode":
@@ -62,6 +66,8 @@ def output_format(fmt: str | None, output: str | None) -> str:
 
 
 def main(args: argparse.Namespace) -> int:
+    from executive.tree import select as mission_tree
+
     mission = load_or_report(args.mission)
     if mission is None:
         return EXIT_BAD_INPUT

@@ -18,14 +18,9 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from executive.admission.checks import load_mission, plugin_problems
 from executive.cli import EXIT_BAD_INPUT, EXIT_OK, BadInput
 from executive.cli.examples import mission_file
-from executive.cli.run_checks import check_mission
 from executive.mission.errors import FieldError, MissionError
-from executive.mission.model import tree_name
-from executive.mission.rules import waits_for_the_vehicle
-from executive.sensing.energy import planned
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -61,6 +56,8 @@ def mission_files(path: str) -> list[str]:
 
 def run(args: argparse.Namespace) -> int:
     """Validate every file named, and every mission file of every directory named; exit 0 if all are good, 2 if any is not."""
+    from executive.admission.checks import plugin_problems
+
     results: list[dict[str, Any]] = []
     for named in args.missions:
         files = mission_files(named)
@@ -83,6 +80,12 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _validate(path: str, args: argparse.Namespace, results: list[dict[str, Any]]) -> None:
+    from executive.admission.checks import load_mission
+    from executive.cli.run_checks import check_mission
+    from executive.mission.model import tree_name
+    from executive.mission.rules import waits_for_the_vehicle
+    from executive.sensing.energy import planned
+
     try:
         mission = load_mission(path)
         check_mission(path, mission, autopilot=args.autopilot, simulator=not args.real_vehicle)

@@ -8,10 +8,12 @@ that every pydantic and cross-field error points at the line and column of the o
 
 from __future__ import annotations
 
+import copy
 import difflib
 import math
 import os
 import re
+import threading
 from collections.abc import Callable, Iterator
 from typing import Any, Literal, NoReturn, TypeVar, cast, get_args, get_origin
 
@@ -27,6 +29,11 @@ MAX_BYTES = 1 << 20  # a mission file is small; refuse anything bigger before pa
 MAX_ALIASES = 100
 MAX_DEPTH = 64  # nested mappings/sequences, the root mapping being level 1
 MAX_VALUES = 1_000_000  # nodes after expanding aliases; 1 MiB of YAML without aliases holds fewer
+#: Files read lately kept (:func:`_read`): how many, the most characters in all (a document and its node index take ~50 bytes a
+#: character: ~6 MB), and in one file (a mission is a few thousand).
+READ_KEPT = 32
+READ_KEPT_CHARS = 1 << 17
+READ_KEPT_MAX_CHARS = 1 << 15
 
 M = TypeVar("M", bound=BaseModel)
 #: Rules between fields of a validated model: (path of the offending value, why) for each problem.
@@ -188,7 +195,7 @@ def load_model(path: str | os.PathLike[str], model: type[M], checks: Checks[M] |
 def load_model_text(text: str, filename: str, model: type[M], checks: Checks[M] | None = None, what: str = "mission") -> M:
     """Validate YAML ``text`` as ``model`` (then ``checks``); ``filename`` is only used to locate errors."""
     _check_size(filename, len(text.encode("utf-8", "surrogatepass")), what)
-    data, loader = _parse(text, filename, what)
+    data, loader = _read(text, filename, what)
     if model is Mission:  # with the options section its plugin tree declares
         model = cast("type[M]", mission_model(data))
 
@@ -380,6 +387,27 @@ def _located_after(file: str, before: str, field: str, message: str) -> FieldErr
 def _check_size(name: str, size: int, what: str) -> None:
     if size > MAX_BYTES:
         raise MissionError([_located(name, None, "(file)", f"file is {size} bytes; a {what} file may have at most {MAX_BYTES} (1 MiB)")])
+
+
+_read_lately: dict[tuple[object, ...], tuple[dict[str, Any], _Loader]] = {}
+_read_lock = threading.Lock()
+
+
+def _read(text: str, filename: str, what: str) -> tuple[dict[str, Any], _Loader]:
+    """:func:`_parse`, of a file read lately kept: a process reads one file again (``validate`` then ``run``, a test's runs), and
+    PyYAML's pure-Python scanner is most of loading (~1.5 µs a character). The document is a copy each time: a caller's own.
+    A file that cannot be read is read again each time (its errors are not kept).
+    """
+    key = (text, filename, what, MAX_ALIASES, MAX_DEPTH, MAX_VALUES)  # the limits too: what a text gives depends on them
+    found = _read_lately.get(key)
+    if found is None:
+        found = _parse(text, filename, what)
+        if len(text) <= READ_KEPT_MAX_CHARS:
+            with _read_lock:
+                _read_lately[key] = found
+                while len(_read_lately) > READ_KEPT or sum(len(kept[0]) for kept in _read_lately) > READ_KEPT_CHARS:
+                    del _read_lately[next(iter(_read_lately))]  # the oldest
+    return copy.deepcopy(found[0]), found[1]
 
 
 def _parse(text: str, filename: str, what: str) -> tuple[dict[str, Any], _Loader]:

@@ -179,6 +179,8 @@ class SnapshotRecorder:
     ``FILE.mcap`` is written as MCAP (:mod:`executive.observers.mcap.recording`), anything else as JSON lines;
     ``clock`` times what happens between ticks (mission transitions, log lines) in an MCAP file.
     ``live``: a Foxglove server given what an MCAP file is (``path`` None: the server alone).
+    ``wall``: the wall-clock time (Unix seconds) a run starts at, in an MCAP file's ``/mission/run``: ``time.time``; a
+    lock-step test gives its own, and the same run then makes the same MCAP file byte for byte.
     """
 
     def __init__(
@@ -190,9 +192,11 @@ class SnapshotRecorder:
         storage: Storage | None = None,
         clock: Clock | None = None,
         live: Any = None,
+        wall: Callable[[], float] = time.time,
     ) -> None:
         self.path = Path(path) if path is not None else None
         self.keyframe_every = keyframe_every
+        self._wall = wall
         self._file = open_tick_file(self.path, max_bytes, storage, clock, live)
         self._nodes: list[py_trees.behaviour.Behaviour] = []
         self._status: list[str] = []
@@ -213,7 +217,7 @@ class SnapshotRecorder:
     def run_started(self, mission: Any, resumed_from: int | None) -> None:
         """A run of ``mission`` (a :class:`~executive.mission.model.Mission`) begins: what it is, and the route it starts on."""
         waypoints = [{"lat": w.lat, "lon": w.lon, "name": w.name} for w in mission.waypoints]
-        info = {"mission": mission.name, "vehicle": str(mission.vehicle), "resumed_from": resumed_from, "started": time.time()}
+        info = {"mission": mission.name, "vehicle": str(mission.vehicle), "resumed_from": resumed_from, "started": self._wall()}
         self._file.write_run({**info, "waypoints": waypoints})
 
     @property

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import given, settings
@@ -293,3 +294,51 @@ def test_an_error_in_a_waypoint_says_the_persons_number_and_its_name_after_the_p
     """Issue 43: `waypoints[6]` (the file's path, 0-based) beside status, `ctl route` and `report`'s `waypoint 7 of 8`."""
     text = minimal_yaml + "".join(f"  - {{lat: 47.3977{n}, lon: 8.5456}}\n" for n in range(5)) + "  - {lat: 95.0, lon: 8.5, name: far}\n"
     assert errors_of(text) == ["m.yaml:12:11: waypoints[6].lat: 95.0: Input should be less than or equal to 90 (waypoint 7, 'far')"]
+
+
+@pytest.fixture
+def parses(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The file names the YAML is parsed for (from now on, none kept from before)."""
+    monkeypatch.setattr(loader, "_read_lately", {}, raising=False)
+    parsed: list[str] = []
+    parse = loader._parse
+
+    def counted(text: str, filename: str, what: str) -> Any:
+        parsed.append(filename)
+        return parse(text, filename, what)
+
+    monkeypatch.setattr(loader, "_parse", counted)
+    return parsed
+
+
+def test_a_file_read_again_is_parsed_once_and_loads_an_equal_mission_of_its_own(minimal_yaml: str, parses: list[str]) -> None:
+    first, second = load_mission_text(minimal_yaml, "m.yaml"), load_mission_text(minimal_yaml, "m.yaml")
+    assert parses == ["m.yaml"]
+    assert first == second and first is not second and first.waypoints is not second.waypoints
+    load_mission_text(minimal_yaml, "other.yaml")  # another file's errors would name it
+    assert parses == ["m.yaml", "other.yaml"]
+
+
+def test_a_file_that_cannot_be_read_is_refused_alike_each_time(minimal_yaml: str, parses: list[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    broken = minimal_yaml + "x: [1\n"
+    assert errors_of(broken) == errors_of(broken) != []
+    assert parses == ["m.yaml", "m.yaml"]
+    expanding = minimal_yaml + "x: &a [1, 2, 3, 4, 5, 6, 7, 8, 9]\ny: [*a, *a]\n"
+    assert [e.split(": ")[1] for e in errors_of(expanding)] == ["x", "y"]  # unknown fields: read
+    monkeypatch.setattr(loader, "MAX_VALUES", 40)  # the same text read under other limits is read again
+    assert errors_of(expanding) == ["m.yaml:8:9: (yaml): aliases expand the document to more than 40 values (refusing a possible alias bomb)"]
+
+
+def test_only_a_few_small_files_are_kept(minimal_yaml: str, parses: list[str]) -> None:
+    for n in range(loader.READ_KEPT + 3):
+        load_mission_text(minimal_yaml, f"m{n}.yaml")
+    assert len(loader._read_lately) == loader.READ_KEPT
+    big = minimal_yaml + "#" * loader.READ_KEPT_MAX_CHARS + "\n"
+    load_mission_text(big, "big.yaml")
+    load_mission_text(big, "big.yaml")
+    assert parses[-2:] == ["big.yaml", "big.yaml"] and len(loader._read_lately) == loader.READ_KEPT
+    large = minimal_yaml + "#" * (loader.READ_KEPT_MAX_CHARS - len(minimal_yaml) - 1) + "\n"  # as large as one kept may be
+    for n in range(loader.READ_KEPT):
+        load_mission_text(large, f"large{n}.yaml")
+    assert sum(len(text) for text, *_ in loader._read_lately) <= loader.READ_KEPT_CHARS
+    assert len(loader._read_lately) == loader.READ_KEPT_CHARS // len(large)

@@ -53,15 +53,17 @@ def gap(r1: Route, r2: Route) -> float:
 latitudes = st.floats(-80.0, 80.0)  # vehicles, not polar expeditions: near a pole a compass bearing means little
 longitudes = st.floats(-180.0, 180.0, exclude_max=True)
 bearings = st.floats(0.0, 360.0, exclude_max=True)
+speeds_or_none = st.none() | st.floats(0.1, 5.0)
 
 
 @st.composite
 def routes(draw: st.DrawFn, max_radius_m: float = 2500.0, min_size: int = 1) -> Route:
     """1-12 waypoints within ``max_radius_m`` of a random place (so at most 5 km across), heading for any of them, with a home."""
-    origin = (draw(latitudes), draw(longitudes))
+    # each strategy made once per route, not once per point: the same draws (made at every point, they were a tenth of the file's CPU)
+    origin, distances = (draw(latitudes), draw(longitudes)), st.floats(0.0, max_radius_m)
     size = draw(st.integers(min_size, 12))
-    points = [geo.destination(*origin, draw(bearings), draw(st.floats(0.0, max_radius_m))) for _ in range(size)]
-    speeds = draw(st.lists(st.none() | st.floats(0.1, 5.0), min_size=size, max_size=size))
+    points = [geo.destination(*origin, draw(bearings), draw(distances)) for _ in range(size)]
+    speeds = draw(st.lists(speeds_or_none, min_size=size, max_size=size))
     waypoints = tuple(
         Waypoint(lat=lat, lon=lon, speed_m_s=speed, name=f"wp{i}") for i, ((lat, lon), speed) in enumerate(zip(points, speeds, strict=True))
     )

@@ -416,3 +416,41 @@ def test_the_tick_leaves_its_line_and_the_mavlink_messages_to_the_encoder_thread
     assert "/mavlink/in/HEARTBEAT" in by
     data = next(d for topic, _, d in sink.put_by if topic == "/mavlink/out/HEARTBEAT")
     assert json.loads(data)["sysid"] == 0 and json.loads(data)["compid"] == 0  # as heard, whatever happened to it later
+
+
+def test_the_same_lock_step_run_makes_the_same_file_byte_for_byte_however_late_the_encoder_thread_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Twice the first 20 s of a run, rotated on the way: once as the encoder thread runs when woken, once with it held off to
+    the end (every round written at close). The rounds are cut at ticks, not when the thread runs: the same bytes."""
+    from executive.observers.mcap.recording import ChannelFeed
+    from executive.observers.snapshots import snapshot_recorder
+    from executive.testing import Lockstep
+
+    def record(name: str) -> list[bytes]:
+        recorders: list[SnapshotRecorder] = []
+
+        def plugs(clock: Any) -> dict[str, Any]:
+            recorders.append(SnapshotRecorder(tmp_path / name / "run.mcap", clock=clock, max_bytes=25_000, wall=lambda: 1_796_000_000.5))
+            return {"plugs": [snapshot_recorder(recorders[0])]}
+
+        (tmp_path / name).mkdir()
+        mission = load_mission(Path(__file__).resolve().parents[1] / "data" / "minimal_mission.yaml")
+        with Lockstep(mission, options_for_clock=plugs) as sim:
+            assert sim.run(limit_s=60, until=lambda: sim.clock.now() >= 20.0) is None
+        recorders[0].close()
+        return [(tmp_path / name / f).read_bytes() for f in ("run.mcap.1", "run.mcap")]
+
+    when_woken = record("when woken")
+
+    def held_off(feed: ChannelFeed) -> None:
+        while not feed._closing:
+            feed._work.wait()
+            feed._work.clear()
+
+    monkeypatch.setattr(ChannelFeed, "_encode_forever", held_off)
+    at_the_end = record("at the end")
+    assert when_woken == at_the_end
+    with (tmp_path / "at the end" / "run.mcap").open("rb") as f:
+        run = [json.loads(m.data) for _, _, m in make_reader(f).iter_messages(topics=["/mission/run"])]
+    assert [r["started"] for r in run] == [1_796_000_000.5]  # the latched run, in the second file too: the wall time given

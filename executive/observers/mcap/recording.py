@@ -26,8 +26,10 @@ channels:
 The tick only queues what it saw (its line as the snapshot recorder built it, the mission's changes, the log lines) and
 notes the vehicle's frozen values; an encoder thread woken every :data:`ENCODE_EVERY` ticks encodes and writes them all,
 in order, with the MAVLink messages (as heard, with their source ids as heard) and the vehicle's fixes and poses, so
-they reach a file or a live client up to that many ticks late, each at its own time. When a file is rotated the
-thread writes the next tick line as a keyframe (the tree and blackboard so far): each file is readable alone.
+they reach a file or a live client up to that many ticks late, each at its own time. What is written in a round is cut at
+the tick that woke it, not at the moment the thread runs: the same run makes the same file byte for byte (a lock-step
+run's, with the same wall-clock start: ``SnapshotRecorder(wall=...)``). When a file is rotated the thread writes the
+next tick line as a keyframe (the tree and blackboard so far): each file is readable alone.
 
 Past ``max_bytes`` the file is finished (its index written) and rotated to ``FILE.1`` (the one
 before is dropped), as the JSON-lines file is. A finished file's metadata ``executive.keyframes``
@@ -91,6 +93,18 @@ class _LogLines(logging.Handler):
         self.lines.append((self._clock.now() if self._clock else None, record))
 
 
+class _Batch:
+    """What the ticks between two rounds of the encoder thread queued: written whole, in this order, whenever the thread runs."""
+
+    __slots__ = ("lines", "mavlink", "vehicle")
+
+    def __init__(self) -> None:
+        #: The tick lines and the channels written in order with them (topic, t, message).
+        self.lines: collections.deque[dict[str, Any] | tuple[str, float, dict[str, Any]]] = collections.deque()
+        self.mavlink: collections.deque[tuple[float, str, MAVLinkMessage, tuple[int, int]]] = collections.deque(maxlen=10_000)
+        self.vehicle: collections.deque[tuple[float, Any, Any, Any, bool]] = collections.deque()  # t, fix, home, attitude, new fix
+
+
 class ChannelFeed:
     """A snapshot recorder's :class:`~executive.observers.snapshots.TickFile` as Foxglove channels, into ``sinks``.
 
@@ -107,14 +121,14 @@ class ChannelFeed:
         self._fix_time: float | None = None
         self._pose_times: tuple[float | None, float | None] = (None, None)
         self._logs = _LogLines(clock)
-        self._mavlink: collections.deque[tuple[float, str, MAVLinkMessage, tuple[int, int]]] = collections.deque(maxlen=10_000)
         self._mavlink_schemas: dict[str, tuple[str, bytes]] = {}
         self._mavlink_channels: dict[tuple[str, str], tuple[str, tuple[str, bytes]]] = {}  # topic, schema
         self._mavlink_json = MavlinkJson()
         self._schemas = {topic: (name, schema_bytes(name)) for topic, name in CHANNELS.items()}
-        self._vehicle: collections.deque[tuple[float, Any, Any, Any, bool]] = collections.deque()  # t, fix, home, attitude, new fix
-        #: The tick lines and the channels written in order with them (topic, t, message), until the encoder thread writes them.
-        self._lines: collections.deque[dict[str, Any] | tuple[str, float, dict[str, Any]]] = collections.deque()
+        #: What the ticks since the last round queued, and the rounds' batches the encoder thread has yet to write. A batch is cut
+        #: at a tick, not when the thread happens to run, so the file's bytes are the same however late the thread is.
+        self._batch = _Batch()
+        self._ready: collections.deque[_Batch] = collections.deque()
         self._state: dict[str, dict[Any, Any]] = {"s": {}, "f": {}, "bb": {}}  # the tree and blackboard so far: a keyframe's
         self._new_file = False  # a sink began a new file: the next tick line is written as a keyframe
         self._sinks_lock = threading.Lock()  # the sinks are written by the encoder thread, and by close after it
@@ -134,13 +148,16 @@ class ChannelFeed:
         if self._storage is not None:
             self._storage.deliver()
         self._write_logs()
-        self._lines.append(line)  # the tick's /tree/tick and /blackboard: built from the line by the encoder thread
+        batch = self._batch
+        batch.lines.append(line)  # the tick's /tree/tick and /blackboard: built from the line by the encoder thread
         mission = tuple(self._value(k) for k in MISSION_KEYS)
         if mission != self._mission:
             self._mission = mission
-            self._lines.append(("/mission/state", t, dict(zip(("state", "leg_index", "leg_count", "reason"), mission, strict=True))))
+            batch.lines.append(("/mission/state", t, dict(zip(("state", "leg_index", "leg_count", "reason"), mission, strict=True))))
         self._note_vehicle(t)
         if line["tick"] % ENCODE_EVERY == 0:
+            self._ready.append(batch)
+            self._batch = _Batch()
             self._work.set()  # the tick's channels, the MAVLink messages and the vehicle's: encoded and written by the encoder thread
         return True  # a new file begins with a keyframe made by the encoder thread (:meth:`_write_line`)
 
@@ -155,7 +172,7 @@ class ChannelFeed:
     def mavlink(self, direction: str, msg: MAVLinkMessage) -> None:
         """A MAVLink message received (``in``) or sent (``out``) on the autopilot's link: kept until the tick writes it."""
         # its source now: a message we send gets its header when packed, after this (the encoder thread may run later)
-        self._mavlink.append((self._now(), direction, msg, (msg.get_srcSystem(), msg.get_srcComponent())))
+        self._batch.mavlink.append((self._now(), direction, msg, (msg.get_srcSystem(), msg.get_srcComponent())))
 
     def close(self) -> None:
         logging.getLogger("executive").removeHandler(self._logs)
@@ -163,6 +180,8 @@ class ChannelFeed:
         self._work.set()
         self._encoder.join()
         self._write_logs()
+        self._ready.append(self._batch)
+        self._batch = _Batch()
         start = time.thread_time_ns()
         self._encode()  # what came after the thread's last round
         self.encoder_ns += time.thread_time_ns() - start
@@ -174,7 +193,7 @@ class ChannelFeed:
 
     def _put(self, topic: str, t: float, message: dict[str, Any]) -> None:
         """``message`` on ``topic`` at time ``t``: written by the encoder thread, in order with the tick lines."""
-        self._lines.append((topic, t, message))
+        self._batch.lines.append((topic, t, message))
 
     def _write(self, topic: str, t: float, message: dict[str, Any]) -> int:
         """Write ``message`` at time ``t`` to every sink; its log time, ns."""
@@ -220,7 +239,7 @@ class ChannelFeed:
         if new_pose:
             self._pose_times = times
         if new_fix or new_pose:
-            self._vehicle.append((t, fix, home if new_pose else None, attitude, new_fix))
+            self._batch.vehicle.append((t, fix, home if new_pose else None, attitude, new_fix))
 
     def _encode_forever(self) -> None:
         """The encoder thread: each tick's MAVLink messages and vehicle channels, off the tick (its CPU in ``encoder_ns``)."""
@@ -232,15 +251,20 @@ class ChannelFeed:
             self.encoder_ns += time.thread_time_ns() - start
 
     def _encode(self) -> None:
-        while self._lines:
-            item = self._lines.popleft()
-            if isinstance(item, dict):
-                self._write_line(item)
-            else:
-                self._write(*item)
-        self._write_mavlink()
-        while self._vehicle:
-            t, fix, home, attitude, new_fix = self._vehicle.popleft()
+        """Every batch ready, oldest first: its lines, then its MAVLink messages, then the vehicle's channels."""
+        while self._ready:
+            batch = self._ready.popleft()
+            for item in batch.lines:
+                if isinstance(item, dict):
+                    self._write_line(item)
+                else:
+                    self._write(*item)
+            self._write_mavlink(batch.mavlink)
+            self._write_vehicle(batch.vehicle)
+
+    def _write_vehicle(self, vehicle: collections.deque[tuple[float, Any, Any, Any, bool]]) -> None:
+        while vehicle:
+            t, fix, home, attitude, new_fix = vehicle.popleft()
             if new_fix:
                 self._write("/vehicle/location", fix.time, location_fix(fix))
             if home is not None:
@@ -248,10 +272,10 @@ class ChannelFeed:
                 self._write("/vehicle/pose", t, in_frame)
                 self._write("/tf", t, transforms)
 
-    def _write_mavlink(self) -> None:
+    def _write_mavlink(self, mavlink: collections.deque[tuple[float, str, MAVLinkMessage, tuple[int, int]]]) -> None:
         channels, sinks, encode = self._mavlink_channels, self.sinks, self._mavlink_json.encode
-        while self._mavlink:
-            t, direction, msg, source = self._mavlink.popleft()
+        while mavlink:
+            t, direction, msg, source = mavlink.popleft()
             if not msg.fieldnames:
                 continue  # a kind the reader skims (header only, never decoded): the tlog has its bytes
             kind = msg.get_type()

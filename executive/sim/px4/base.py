@@ -102,24 +102,20 @@ class Px4Sim(Px4Streams):
         self.home_amsl_m = home_amsl_m
         self._pending: list[tuple[Command, tuple[int, int]]] = []  # commands for the commander's next loop
         self._goal: tuple[float, float, float] | None = None  # lat, lon, height above home the mode flies to
-        self._goal_radius = NAV_LOITER_RAD
-        self._landing = False
+        self._goal_radius, self._landing = NAV_LOITER_RAD, False
         self._takeoff_alt: float | None = None  # AUTO.TAKEOFF's height above home
         self._takeoff_point: tuple[float, float] | None = None  # NAV_TAKEOFF's finite param5/param6; None: here
         self._offboard_at = -math.inf  # when the last setpoint came (elapsed s)
         self._offboard_goal: tuple[float, float, float] | None = None
         self._failsafe_at: float | None = None  # when the offboard failsafe began
         self.mode_after_disarm = "AUTO.LOITER"  # UserModeIntention::_nav_state_after_disarming
-        self._armed_at = 0.0
-        self._taken_off = False
-        self._landed = True
+        self._armed_at, self._taken_off, self._landed = 0.0, False, True
         self._landed_at: float | None = None
         self._moved_at = -math.inf  # the last time the land detector saw the vehicle move (or in the air)
         self._mission_item: tuple[int | None, object] | None = None
         # Commander::dataLinkCheck: HEARTBEAT type -> (last seen, lost), for a ground station and a mission computer
         self._links: dict[int, tuple[float, bool]] = {}
-        modes = MappingProxyType(dict(PX4_MODE_NUMBERS))
-        profile = dataclasses.replace(profile, mav_type=self.MAV_TYPE, modes=modes)
+        profile = dataclasses.replace(profile, mav_type=self.MAV_TYPE, modes=MappingProxyType(dict(PX4_MODE_NUMBERS)))
         super().__init__(profile, clock, home, ekf_ready_after_s=ekf_ready_after_s, **options)
 
     # -- the state PX4 reports ---------------------------------------------------------------------
@@ -313,14 +309,13 @@ class Px4Sim(Px4Streams):
         return super().update()
 
     def _update_mode(self) -> None:
-        v = self.vehicle
         self._update_links()
         self._update_land_detector()
         if not self.armed:
             return
         self._update_airframe()
         self._update_offboard_failsafe()
-        if self.mode == "AUTO.TAKEOFF" and self._goal is not None and v.alt_m >= self._goal[2] - 0.5 and not self._landed:
+        if self.mode == "AUTO.TAKEOFF" and self._goal is not None and self._takeoff_reached(self._goal[2]) and not self._landed:
             self._takeoff_alt, self._takeoff_point, there = None, None, self._goal
             self._user_intends("AUTO.LOITER")
             self._switch("AUTO.LOITER")  # the takeoff is done: loiter there (Commander::checkForMissionUpdate)
@@ -330,6 +325,11 @@ class Px4Sim(Px4Streams):
         elif self.mode == "AUTO.MISSION":
             self._update_mission()
         self._auto_disarm()
+
+    def _takeoff_reached(self, takeoff_alt_m: float) -> bool:
+        """navigator/mission_block.cpp, NAV_CMD_TAKEOFF on a rotary wing (a VTOL's): above it less NAV_MC_ALT_RAD (or half of it if less)."""
+        radius = self.params["NAV_MC_ALT_RAD"]
+        return self.vehicle.alt_m > takeoff_alt_m - (takeoff_alt_m / 2.0 if 0.0 < takeoff_alt_m < radius else radius)
 
     def _update_land_detector(self) -> None:
         v = self.vehicle

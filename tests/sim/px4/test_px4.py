@@ -245,6 +245,25 @@ def test_takeoff_without_an_altitude_climbs_to_the_default_height(px4: MakePx4) 
     assert gcs.ap.mode == "AUTO.LOITER" and gcs.ap.vehicle.alt_m == pytest.approx(MIS_TAKEOFF_ALT, abs=0.6)
 
 
+@pytest.mark.parametrize(("takeoff_m", "alt_rad_m", "ends_above_m"), [(15.0, None, 14.2), (15.0, 2.0, 13.0), (0.6, None, 0.3)])
+def test_the_take_off_ends_as_the_vehicle_climbs_within_nav_mc_alt_rad_of_its_altitude(
+    px4: MakePx4, takeoff_m: float, alt_rad_m: float | None, ends_above_m: float
+) -> None:
+    """navigator/mission_block.cpp: a rotary wing's take-off (a VTOL's) is reached above its altitude less NAV_MC_ALT_RAD
+    (0.8 m, or as set), or less half the take-off's altitude when that is under the radius; then it loiters."""
+    gcs = px4()
+    if alt_rad_m is not None:
+        gcs.send(gcs.mav.param_set_encode(1, 1, b"NAV_MC_ALT_RAD", alt_rad_m, m.MAV_PARAM_TYPE_REAL32))
+    gcs.result(m.MAV_CMD_COMPONENT_ARM_DISARM, 1)
+    assert gcs.result(m.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME_AMSL_M + takeoff_m) == m.MAV_RESULT_ACCEPTED
+    climbed = [gcs.ap.vehicle.alt_m]
+    while gcs.ap.mode == "AUTO.TAKEOFF" and len(climbed) < 1500:
+        gcs.run(0.02, step=0.02)
+        climbed.append(gcs.ap.vehicle.alt_m)
+    assert gcs.ap.mode == "AUTO.LOITER"
+    assert climbed[-3] <= ends_above_m < climbed[-2]  # judged as the 20 ms loop starts: at the first loop above it
+
+
 def test_the_take_offs_altitude_acceptance_is_read_at_its_default(px4: MakePx4) -> None:
     """NAV_MC_ALT_RAD, 0.8 m (navigator/navigator_params.c), a float: the executive judges PX4's end of take-off by it."""
     gcs = px4()
