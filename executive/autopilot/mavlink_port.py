@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import ClassVar
 
 from executive.autopilot.port import Capabilities, FenceSettings, Request, Target, VtolState
@@ -32,6 +32,8 @@ class MavlinkPort:
         self.commander = commander
         self.transfer = transfer
         self.profile = profile
+        self._route_differs = SameAnswer(route_not_on_autopilot)
+        self._horizon_differs = SameAnswer(horizon_not_on_autopilot)
 
     def _request(self, ticket: int, command: int, how: str = "") -> Request:
         return Request(ticket, command_outcome(command), how)
@@ -117,8 +119,7 @@ class MavlinkPort:
 
     # -- the autopilot's own route -------------------------------------------------------------
     def route_differs(self, waypoints: Sequence[Waypoint], held: object | None) -> str | None:
-        items: Sequence[MissionItem] | None = held  # type: ignore[assignment]  # /vehicle/mission_items
-        return route_not_on_autopilot(waypoints, items)
+        return self._route_differs(waypoints, held)
 
     @property
     def route_transfer_idle(self) -> bool:
@@ -130,8 +131,7 @@ class MavlinkPort:
         return self.transfer.upload(route_items(waypoints), (home.lat, home.lon, home.alt_m) if home else None)
 
     def horizon_differs(self, waypoints: Sequence[Waypoint], leg: int, horizon: int, held: object | None) -> str | None:
-        items: Sequence[MissionItem] | None = held  # type: ignore[assignment]  # /vehicle/mission_items
-        return horizon_not_on_autopilot(waypoints, leg, horizon, items)
+        return self._horizon_differs(waypoints, leg, horizon, held)
 
     def extend_route(self, waypoints: Sequence[Waypoint]) -> int:
         if self.transfer is None:
@@ -162,6 +162,33 @@ class MavlinkPort:
 
     def fence_settings(self, *, radius_m: float | None, inclusion_shapes: Sequence[str], held: dict[str, float]) -> FenceSettings:
         return FenceSettings({}, f"the {self.name or 'autopilot'} back end enforces no fence")
+
+
+class SameAnswer:
+    """A comparison of a route with the items the autopilot holds (``/vehicle/mission_items``), answered again without
+    comparing while it is asked of the same objects as last time: the tree asks every tick, and they seldom change.
+
+    The answer is a function of the values alone, and these cannot change under the same objects: the waypoints are frozen
+    models (compared by identity, and kept, so that no new object takes one's id), the other arguments plain values, and
+    the items held a tuple of frozen dataclasses (the mission transfer's). Held items of another type are compared each time.
+    """
+
+    def __init__(self, compare: Callable[..., str | None]) -> None:
+        self._compare = compare
+        #: The last call's waypoints' ids, other arguments and items held, the waypoints (kept) and the answer.
+        self._last: tuple[tuple[int, ...], tuple[object, ...], object, tuple[Waypoint, ...], str | None] | None = None
+
+    def __call__(self, waypoints: Sequence[Waypoint], *args: object) -> str | None:
+        """``compare(waypoints, *args)``; its last argument is the items held."""
+        values, held = args[:-1], args[-1]
+        ids = tuple(map(id, waypoints))
+        last = self._last
+        if last is not None and last[2] is held and last[0] == ids and last[1] == values:
+            return last[4]
+        answer = self._compare(waypoints, *args)
+        if held is None or type(held) is tuple:
+            self._last = (ids, values, held, tuple(waypoints), answer)
+        return answer
 
 
 def ahead_of(position: GlobalPosition, heading_deg: float, distance_m: float) -> tuple[float, float]:

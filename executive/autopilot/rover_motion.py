@@ -270,8 +270,9 @@ class ShapedTarget:
         self.speed_m_s = speed_m_s
         self.accel_m_s2 = accel_m_s2
         self.jerk_m_s3 = jerk_m_s3
-        # the square-root controllers' gains and limits, worked out once (step runs every 20 ms)
-        self._approach = (0.5 * jerk_m_s3 / accel_m_s2, 0.5 * accel_m_s2)
+        # the square-root controllers' gains and limits, worked out once and passed by position (step runs every 20 ms: a
+        # starred call builds a tuple and takes CPython's slow call path)
+        self._approach_gain, self._approach_limit = 0.5 * jerk_m_s3 / accel_m_s2, 0.5 * accel_m_s2
         self._accel_gain = jerk_m_s3 / accel_m_s2
         self._corner_m_s2 = CORNER_ACCELERATION_RATIO * accel_m_s2
         self.pos = (0.0, 0.0)
@@ -292,7 +293,7 @@ class ShapedTarget:
         size = math.hypot(en, ee)
         want_n = want_e = 0.0
         if size > 0.0:
-            rate = sqrt_controller(size, *self._approach, dt)
+            rate = sqrt_controller(size, self._approach_gain, self._approach_limit, dt)
             want_n, want_e = _limit_length(en * rate / size, ee * rate / size, self.speed_m_s)
         # the acceleration that closes the velocity error, with room kept for turning
         dn, de = want_n - vn, want_e - ve
@@ -312,8 +313,12 @@ class ShapedTarget:
                 cn, ce = _limit_length(cn, ce, a)
             else:
                 xn, xe = _limit_length(xn, xe, self._corner_m_s2)
-                room = math.sqrt(max(0.0, a * a - xn * xn - xe * xe))
-                along = max(-room, min(room, along))
+                # max(0.0, room2) and max(-room, min(room, along)) written out (ties and NaN as the builtins give them,
+                # which cost several times a comparison: this runs 5 times a tick, and every 20 ms in the simulated rover)
+                room2 = a * a - xn * xn - xe * xe
+                room = math.sqrt(room2 if room2 > 0.0 else 0.0)
+                along = along if along < room else room
+                along = along if along > -room else -room
                 cn, ce = xn + along * un, xe + along * ue
         # the acceleration moves toward that within the jerk
         dn, de = _limit_length(cn - an, ce - ae, j * dt)
@@ -442,13 +447,14 @@ class SCurveLeg:
             return 0.0, 0.0, 0.0
         if t >= self.end_s:
             return self.length_m, 0.0, 0.0
-        t = max(0.0, t)
+        t = t if t > 0.0 else 0.0  # max(0.0, t), written out as in ShapedTarget.step
         index = bisect_right(self._starts, t) - 1  # the last span begun by t (of spans of no time, the last)
         if index < 0:
             return 0.0, 0.0, 0.0
         segment = self._segments[index]
         pos, vel, acc = segment.at(t - segment.start_s)
-        return min(max(pos, 0.0), self.length_m), vel, acc
+        pos = 0.0 if pos < 0.0 else pos  # min(max(pos, 0.0), length), written out
+        return self.length_m if self.length_m < pos else pos, vel, acc
 
     def state(self, t: float) -> tuple[tuple[float, float], tuple[float, float], tuple[float, float]]:
         """Offset from the origin, velocity and acceleration (north, east) ``t`` seconds into the leg."""
@@ -475,7 +481,8 @@ def _route_distance(point: tuple[float, float], corner: tuple[float, float], inb
             distances.append(math.hypot(dn, de))
         else:
             distances.append(abs(dn * ue - de * un))
-    return min(distances)
+    to_inbound, to_outbound = distances
+    return to_outbound if to_outbound < to_inbound else to_inbound  # min(), written out as in ShapedTarget.step
 
 
 def _unit(bearing_rad: float) -> tuple[float, float]:
@@ -513,7 +520,8 @@ def auto_corner_cut_m(motion: RoverMotion, inbound_m: float, outbound_m: float, 
     worst, start = 0.0, t
     while t <= this.end_s + following.end_s:
         (p1, _, _), (p2, _, _) = this.state(t), following.state(t - start)
-        worst = max(worst, _route_distance((p1[0] + p2[0], p1[1] + p2[1]), corner, inbound, outbound))
+        here = _route_distance((p1[0] + p2[0], p1[1] + p2[1]), corner, inbound, outbound)
+        worst = here if here > worst else worst  # max(), written out as in ShapedTarget.step
         if t - start >= this.end_s - start + 1.0:
             break
         t += dt
@@ -545,7 +553,7 @@ def guided_switch_cut_m(
         target.step(destination, dt)
         (n, e), (vn, ve) = target.pos, target.vel
         here = _route_distance((n, e), corner, inbound, outbound)
-        worst = max(worst, here)
+        worst = here if here > worst else worst  # max(), written out as in ShapedTarget.step
         round_it = (n - corner[0]) * bisector[0] + e * bisector[1] > 0.0 and vn * outbound[0] + ve * outbound[1] > 0.98 * math.hypot(vn, ve)
         if round_it and here < last:
             break  # round the corner, on the next leg's course, closing on its line: the worst is behind

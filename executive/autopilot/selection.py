@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import inspect
 import logging
+from types import FunctionType
 from typing import TYPE_CHECKING, Any
 
 from executive.autopilot.ardupilot import ArduPilotPort
@@ -50,7 +52,8 @@ class Autopilot(_Port):
         self._transfer = transfer
         self._profile = profile
         self.forced = forced
-        self.backend: MavlinkPort = BACK_ENDS[forced or "ardupilot"](commander, transfer, profile)
+        self._bound: list[str] = []
+        self.backend = BACK_ENDS[forced or "ardupilot"](commander, transfer, profile)
         if forced == "px4":
             self._commander.modes = mode_table(mavlink.MAV_AUTOPILOT_PX4, profile.mav_type)
             self._commander.double_acked = DOUBLE_ACKED["px4"]
@@ -72,6 +75,22 @@ class Autopilot(_Port):
         """Every tick, before the commands are sent: the back end's own traffic (PX4's offboard setpoint stream)."""
         self.backend.service()
 
+    @property
+    def backend(self) -> MavlinkPort:
+        """The back end of the firmware found (or forced)."""
+        return self._backend
+
+    @backend.setter
+    def backend(self, backend: MavlinkPort) -> None:
+        # Its methods are bound here, as __getattr__ would give them: the tree calls several a tick, and each call would go
+        # through __getattr__ (a failed look-up first). Its other members (capabilities, properties) are read at each use.
+        for name in self._bound:
+            del self.__dict__[name]
+        self._backend = backend
+        self._bound = [name for name in _methods(type(backend)) if not hasattr(Autopilot, name)]
+        for name in self._bound:
+            self.__dict__[name] = getattr(backend, name)
+
     if not TYPE_CHECKING:  # a type checker sees the back end's own signatures (MavlinkPort's) instead
 
         def __getattr__(self, name: str) -> Any:
@@ -79,3 +98,9 @@ class Autopilot(_Port):
             if name.startswith("_"):  # the back end's own state, and Python's protocols (copy, pickle), are not forwarded
                 raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
             return getattr(self.backend, name)
+
+
+def _methods(backend: type) -> list[str]:
+    """The public methods of a back end's class (plain functions, as its class and bases define them last)."""
+    names = {name for klass in backend.__mro__ for name in vars(klass) if not name.startswith("_")}
+    return sorted(name for name in names if isinstance(inspect.getattr_static(backend, name), FunctionType))

@@ -24,6 +24,7 @@ from py_trees.common import Status
 
 from executive.behaviours.auto_legs import HorizonOnAutopilot
 from executive.behaviours.auto_route import AUTO
+from executive.behaviours.base import FAILURE, SUCCESS
 from executive.behaviours.motion import seabed_log
 from executive.mission.model import Waypoint
 from executive.world.seabed import Floor, depth_floor
@@ -108,14 +109,14 @@ class DepthsOnAutopilot(HorizonOnAutopilot):
             self._flown = (leg, held)
             self._started(self.autopilot.set_route_leg(leg))
             self.feedback_message = f"leg {leg + 1} started again at {held:g} m (the seabed floor moved)"
-            return Status.SUCCESS
+            return SUCCESS
         status = super().update()
         wanted = self._given.get(leg, (0.0, 0.0))[0]
         floor = self._floor
         if self.too_deep == "fail" and floor is not None and floor.kind == "seabed" and floor.depth_m < wanted:
             self.feedback_message = f"depth {wanted:g} m deeper than the water holds: {floor.why} (limits.seabed_floor: fail)"
             seabed_log.warning("%s: %s", self.name, self.feedback_message)
-            return Status.FAILURE
+            return FAILURE
         return status
 
     def _held_depth(self, leg: int) -> float | None:

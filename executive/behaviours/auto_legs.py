@@ -19,7 +19,7 @@ from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort
 from executive.behaviours.auto_route import AUTO, MissionTransferFollower
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, TimedBehaviour
 from executive.mission.model import Waypoint
 from executive.mission.port import MissionPort
 from executive.world import geo
@@ -70,7 +70,7 @@ class HorizonOnAutopilot(MissionTransferFollower):
         if prefix and n_held >= least:
             extra = f"; appending up to waypoint {most}" if busy else ""
             self.feedback_message = f"the autopilot holds waypoints 1-{n_held} of {len(route)}{extra}"
-            return Status.SUCCESS
+            return SUCCESS
         if not busy and not prefix and self._may_start():
             home: HomePosition | None = self.get("/vehicle/home")
             self._started(self.autopilot.upload_route(route[:most], home))
@@ -78,7 +78,7 @@ class HorizonOnAutopilot(MissionTransferFollower):
         why = self.autopilot.horizon_differs(route, leg, self.horizon_legs, held)
         failed = f" (the last try failed: {self.failure})" if self.failure else ""
         self.feedback_message = f"putting waypoints 1-{most} of {len(route)} on the autopilot: {why}{failed}"
-        return Status.RUNNING
+        return RUNNING
 
     def _extend(self, route: Sequence[Waypoint], held: int, most: int) -> int:
         """Waypoints ``held``..``most`` after those held: appended, or (an autopilot without partial writes: PX4) the window uploaded again."""
@@ -140,25 +140,25 @@ class AutopilotAtLeg(MissionTransferFollower):
                 self.autopilot.hold()
                 self._set_for = -1  # asked once per run out
             self.feedback_message = f"the autopilot's mission ended in AUTO before leg {leg + 1}: holding, to set it to item {seq}"
-            return Status.RUNNING
+            return RUNNING
         if in_auto:
             self._set_for = self._out_since = None
             self.feedback_message = f"the autopilot drives its mission (leg {leg + 1})"
-            return Status.SUCCESS
+            return SUCCESS
         if self._set_for == leg:
             self.feedback_message = f"the autopilot's mission set to item {seq}"
-            return Status.SUCCESS
+            return SUCCESS
         now = self.clock.now()
         self._out_since = now if self._out_since is None else self._out_since
         if (current is None or current.time <= self._out_since) and now - self._out_since < self.fresh_wait_s:
             self.feedback_message = "waiting for the autopilot's MISSION_CURRENT (what it did meanwhile)"
-            return Status.RUNNING
+            return RUNNING
         if self._asking is None and self._may_start():
             self._asking, self._set_item = leg, seq
             self._started(self.autopilot.set_route_leg(leg))
         failed = f" (the last try failed: {self.failure})" if self.failure else ""
         self.feedback_message = f"setting the autopilot's mission to item {seq}{failed}"
-        return Status.RUNNING
+        return RUNNING
 
     def _catch_up(self) -> None:
         """Advance the leg index past the items the autopilot reported done since this run first saw it in AUTO (see the class).
@@ -232,7 +232,7 @@ class FollowAutoLeg(TimedBehaviour):
             self._leg, self.started = leg, self.clock.now()
         if target is None:
             self.feedback_message = "no active leg"
-            return Status.FAILURE
+            return FAILURE
         position: GlobalPosition | None = self.get("/vehicle/position")
         distance = where = None
         if position is not None:
@@ -245,16 +245,16 @@ class FollowAutoLeg(TimedBehaviour):
         stop = leg + 1 == n or target.sample  # the vehicle must be there: judged on the position
         if said and not stop:
             self.feedback_message = f"leg {leg + 1}/{n} in AUTO: reached as AUTO counts it ({where or 'no position'})"
-            return Status.SUCCESS
+            return SUCCESS
         if within and stop:
             self.feedback_message = f"leg {leg + 1}/{n} in AUTO: reached ({where})"
-            return Status.SUCCESS
+            return SUCCESS
         if self.elapsed > self.leg_timeout_s:
             self.feedback_message = f"leg {leg + 1}/{n} in AUTO: timed out after {self.leg_timeout_s:g} s" + (f", {where}" if where else "")
-            return Status.FAILURE
+            return FAILURE
         stopped_short = " (the autopilot says reached: short of the acceptance radius)" if said else ""
         self.feedback_message = f"leg {leg + 1}/{n} in AUTO: {where or 'no position'}{stopped_short}"
-        return Status.RUNNING
+        return RUNNING
 
     def _depth_off(self, leg: int, position: GlobalPosition | None) -> str | None:
         """A sub away from the depth the autopilot's item ``leg`` gives (beyond ``depth_tolerance_m``): how far; else None."""

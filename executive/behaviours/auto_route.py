@@ -19,7 +19,7 @@ from __future__ import annotations
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort
-from executive.behaviours.base import ExecutiveBehaviour, TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, ExecutiveBehaviour, TimedBehaviour
 from executive.mission.port import MissionPort
 from executive.mission.route import Route
 from executive.world import geo
@@ -99,23 +99,23 @@ class KeepRouteOnAutopilot(MissionTransferFollower):
             status: MissionTransferStatus = self.get("/link/mission_transfer")
             step = "reading back" if status.verifying else "sending"
             self.feedback_message = f"uploading the route: {step} {status.progress}/{status.total} items"
-            return Status.RUNNING
+            return RUNNING
         waypoints = self.mission_state.route.waypoints
         why = self.autopilot.route_differs(waypoints, self.get("/vehicle/mission_items"))
         if why is None:
             self.failure = ""
             self.feedback_message = f"the autopilot holds the route: {len(waypoints)} waypoints, read back"
-            return Status.RUNNING
+            return RUNNING
         if self.failure and now - self._failed_at < self.retry_s:
             self.feedback_message = f"upload failed ({self.failure}); trying again in {self._failed_at + self.retry_s - now:.0f} s"
-            return Status.RUNNING
+            return RUNNING
         if not self.autopilot.route_transfer_idle:
             self.feedback_message = "waiting for another mission transfer to end"
-            return Status.RUNNING
+            return RUNNING
         home: HomePosition | None = self.get("/vehicle/home")
         self._started(self.autopilot.upload_route(waypoints, home))
         self.feedback_message = f"uploading {len(waypoints)} waypoints: {why}"
-        return Status.RUNNING
+        return RUNNING
 
 
 #: Waypoints closer than this to the first are the same place: a route of them was recorded by a vehicle that never moved.
@@ -174,9 +174,9 @@ class DriveRouteInAuto(TimedBehaviour):
             waited = now - self._waiting_since
             if waited > self.operator_timeout_s:
                 self.feedback_message = f"the operator did not drive the route within {self.operator_timeout_s:g} s: {why}"
-                return Status.FAILURE
+                return FAILURE
             self.feedback_message = f"waiting for the operator ({waited:.0f}/{self.operator_timeout_s:g} s): {why}"
-            return Status.RUNNING
+            return RUNNING
         if self._driving_since is None:
             self._driving_since = before  # what the readers drained in this tick arrived after the last one
             self._progress_at = now
@@ -195,9 +195,9 @@ class DriveRouteInAuto(TimedBehaviour):
             where = f": {distance:.1f} m at {bearing:03.0f}°"
         if now - self._progress_at > self.leg_timeout_s:
             self.feedback_message = f"no progress in AUTO: waypoint {leg + 1}/{n} not reached within {self.leg_timeout_s:g} s{where}"
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = f"waypoint {leg + 1}/{n}{where}"
-        return Status.RUNNING
+        return RUNNING
 
     def _done(self, route: Route) -> Status:
         n = len(route)
@@ -206,9 +206,9 @@ class DriveRouteInAuto(TimedBehaviour):
             self.feedback_message = (
                 f"the route's {n} waypoints are all one place (the vehicle never moved while they were recorded): nothing was driven"
             )
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = f"route done: {n}/{n} waypoints reached"
-        return Status.SUCCESS
+        return SUCCESS
 
     def _why_not_driving(self, route: Route) -> str | None:
         if not route.waypoints:

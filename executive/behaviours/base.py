@@ -37,6 +37,13 @@ from py_trees.common import Access, Status
 from executive.world import blackboard
 from executive.world.clock import Clock
 
+#: py_trees' statuses as names of this module, for code run every tick: ``Status.RUNNING`` reads an attribute of an Enum
+#: class, which Python 3.11 looks up through EnumType's ``__getattr__`` hook, its slow path (about 900 instructions, a
+#: global about 50). They are the same members (``RUNNING is Status.RUNNING``).
+RUNNING, SUCCESS, FAILURE, INVALID = Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
+#: py_trees' INFO log level (an IntEnum member, as slow to read from its class).
+_INFO = py_trees.logging.Level.INFO
+
 
 class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
     """A behaviour that reads documented blackboard keys and may need injected services."""
@@ -71,34 +78,48 @@ class ExecutiveBehaviour(py_trees.behaviour.Behaviour):
             if key not in blackboard.KEYS:
                 raise KeyError(f"{type(self).__name__} writes undeclared blackboard key {key!r} (declare it in `declares`)")
             self.bb.register_key(key=key, access=Access.WRITE)
+        if type(self).get is ExecutiveBehaviour.get:  # a subclass's own get is kept
+            self.get = self.bb.get  # type: ignore[method-assign]  # what get does, without a call through it: a tick reads dozens
 
     # py_trees' Behaviour.tick and stop (py_trees/behaviour.py, 2.6), the same steps in the same order, without what they
     # cost each tick with py_trees' debug log off: a formatted debug line each (an enum formatted in every stop) and
     # ``list(Status)`` built to check the status. A leaf guard is ticked and stopped every tick.
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """Tick once: ``initialise`` when not RUNNING, ``update``, ``stop`` when it ends (py_trees' own with its debug log on)."""
-        if py_trees.logging.level < py_trees.logging.Level.INFO:  # as py_trees.logging.Logger.debug decides
+        if py_trees.logging.level < _INFO:  # as py_trees.logging.Logger.debug decides
             yield from super().tick()
             return
-        if self.status != Status.RUNNING:
+        if self.status != RUNNING:
             self.initialise()
         new_status = self.update()
         if new_status not in _STATUSES:
             self.logger.error(f"A behaviour returned an invalid status, setting to INVALID [{new_status}][{self.name}]")
-            new_status = Status.INVALID
-        if new_status != Status.RUNNING:
+            new_status = INVALID
+        if new_status != RUNNING:
             self.stop(new_status)
         self.status = new_status
         yield self
 
     def stop(self, new_status: Status) -> None:
         """``terminate``, then the new status (py_trees' own with its debug log on)."""
-        if py_trees.logging.level < py_trees.logging.Level.INFO:  # as py_trees.logging.Logger.debug decides
+        if py_trees.logging.level < _INFO:  # as py_trees.logging.Logger.debug decides
             super().stop(new_status)
             return
         self.terminate(new_status)
         self.status = new_status
-        self.iterator = self.tick()
+
+    @property
+    def iterator(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' ``iterator``: a tick of this node, not started, made when it is read.
+
+        py_trees' ``__init__`` and ``stop`` set a new one each time and nothing reads it; a generator made and dropped costs
+        about 2,000 instructions, and a leaf guard is stopped every tick. What a read gives is what py_trees keeps.
+        """
+        return self.tick()
+
+    @iterator.setter
+    def iterator(self, _: Iterator[py_trees.behaviour.Behaviour]) -> None:
+        """What py_trees sets is dropped: a read makes its own."""
 
     def setup(self, **services: Any) -> None:
         """Take the services this behaviour ``needs`` (the clock, the autopilot port, the mission state) from the runtime."""

@@ -18,7 +18,7 @@ from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request
 from executive.autopilot.asking import Asker, Rules, Step, Voice, accepted, refusal_reason, retry_reason
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS, TimedBehaviour
 from executive.mission.model import Waypoint
 from executive.world import blackboard
 from executive.world.state import CommandStatus, Outcome
@@ -46,6 +46,7 @@ class CommandAction(TimedBehaviour):
         super().__init__(name)
         self.confirm_timeout_s = confirm_timeout_s
         self._asker = Asker(self, None, rules=ONE_ASK, voice=_CommandVoice(self), escalate=False, bounded=True)
+        self._rules = ONE_ASK  # the rules of the last run: made again only when its time allowed differs (Surface's depends on the depth)
 
     @property
     def _ticket(self) -> Request | None:
@@ -68,29 +69,31 @@ class CommandAction(TimedBehaviour):
     def initialise(self) -> None:
         super().initialise()
         self._asker.forget()  # a new run: the ack of the previous one (ChangeSpeed's confirmation) says nothing about it
-        self._asker.rules = replace(ONE_ASK, judge_after_s=self.confirm_timeout_s)
+        if self._rules.judge_after_s != self.confirm_timeout_s:  # frozen: the same rules serve every run with the same time allowed
+            self._rules = replace(ONE_ASK, judge_after_s=self.confirm_timeout_s)
+        self._asker.rules = self._rules
         if not self.confirmed():
             self._asker.start_command(self.name, self.request, self.confirmed, self.name)
 
     def terminate(self, new_status: Status) -> None:
-        if new_status == Status.INVALID:  # interrupted: what it asked for no longer matters
+        if new_status == INVALID:  # interrupted: what it asked for no longer matters
             self.autopilot.cancel(self._ticket)
 
     def update(self) -> Status:
         if self.confirmed():
             self.feedback_message = "confirmed"
-            return Status.SUCCESS
+            return SUCCESS
         asking = self._asker.asking
         if asking is None:  # confirmed when it started, not since: nothing was asked to make it so
             self.feedback_message = "no longer confirmed"
-            return Status.FAILURE
+            return FAILURE
         self._asker.follow_up(self.clock.now(), ask=False)
         if asking.judged:  # refused, unanswered or not confirmed in time: the voice said which
-            return Status.FAILURE
+            return FAILURE
         status: CommandStatus | None = self.get(blackboard.command_key(self.outcome))
         retrying = retry_reason(status, asking.request, self.get("/vehicle/statustext"))
         self.feedback_message = retrying or self.progress() or "waiting for the autopilot"
-        return Status.RUNNING
+        return RUNNING
 
 
 class _CommandVoice(Voice):
@@ -195,18 +198,18 @@ class HoldFor(SetMode):
     def update(self) -> Status:
         if self._holding_since is None:
             status = super().update()
-            if status != Status.SUCCESS:
+            if status != SUCCESS:
                 return status
             self._holding_since = self.clock.now()
         elif not self.confirmed():
             self.feedback_message = f"left {self.mode} (now {self.get('/vehicle/mode')}) after {self.clock.now() - self._holding_since:.1f} s"
-            return Status.FAILURE
+            return FAILURE
         held = self.clock.now() - self._holding_since
         if held >= self.seconds:
             self.feedback_message = f"held {self.mode} for {self.seconds:g} s"
-            return Status.SUCCESS
+            return SUCCESS
         self.feedback_message = f"holding {self.mode}: {held:.0f}/{self.seconds:g} s"
-        return Status.RUNNING
+        return RUNNING
 
 
 class ChangeSpeed(CommandAction):
@@ -240,6 +243,6 @@ class ChangeSpeed(CommandAction):
 
     def update(self) -> Status:
         status = super().update()
-        if status == Status.SUCCESS:
+        if status == SUCCESS:
             self.feedback_message = "no speed for this leg" if self.speed_m_s is None else f"{self.speed_m_s:g} m/s"
         return status

@@ -11,7 +11,7 @@ from typing import Literal
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, TimedBehaviour
 from executive.behaviours.commands import CommandAction
 from executive.behaviours.motion import seabed_log
 from executive.mission.model import Waypoint
@@ -67,11 +67,11 @@ class _VerticalSetpoint(TimedBehaviour):
     def update(self) -> Status:
         if self.target_m is None:
             self.feedback_message = f"no {self.what} for this leg"
-            return Status.SUCCESS
+            return SUCCESS
         refusal = self.refuse()
         if refusal is not None:
             self.feedback_message = refusal
-            return Status.FAILURE
+            return FAILURE
         position: GlobalPosition | None = self.get("/vehicle/position")
         if self._here is None and position is not None:
             self._here = (position.lat, position.lon)
@@ -83,13 +83,13 @@ class _VerticalSetpoint(TimedBehaviour):
         value = self.measured(position) if position is not None else None
         if value is not None and abs(value - goal) <= self.tolerance_m and self._last_sent > float("-inf"):
             self.feedback_message = f"{self.what} {value:.1f} m (target {goal:g} m)"
-            return Status.SUCCESS
+            return SUCCESS
         now_at = f"{value:.1f} m" if value is not None else "unknown"
         if self.elapsed > self.timeout_s:
             self.feedback_message = f"{self.what} {now_at}, target {goal:g} m, not reached after {self.timeout_s:g} s"
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = f"{self.what} {now_at} -> {goal:g} m"
-        return Status.RUNNING
+        return RUNNING
 
 
 class ChangeDepth(_VerticalSetpoint):
@@ -148,20 +148,20 @@ class ChangeDepth(_VerticalSetpoint):
         if floor.kind == "seabed" and self.too_deep == "fail":
             self.feedback_message = f"{said} (limits.seabed_floor: fail)"
             seabed_log.warning("%s: %s", self.name, self.feedback_message)
-            return Status.FAILURE
+            return FAILURE
         if floor.kind == "lost" and self._told != "lost":
             self._last_sent = float("-inf")  # stop now, not at the next re-send
         status = super().update()
         if floor.kind == "lost":
             self._tell("lost", f"descent stopped at {floor.depth_m:.1f} m: {floor.why} (target {self.target_m:g} m)")
-            if status == Status.SUCCESS:  # holding where it is is no depth reached: wait for the sonar
+            if status == SUCCESS:  # holding where it is is no depth reached: wait for the sonar
                 self.feedback_message = f"descent stopped at {floor.depth_m:.1f} m: {floor.why}; waiting for the sonar (target {self.target_m:g} m)"
-                return Status.RUNNING
+                return RUNNING
             return status
         if floor.kind == "seabed":
             self._tell("seabed", f"{said}: held there (limits.altitude_m.min)")
             self.feedback_message = f"{self.feedback_message}; held at the seabed floor: {said}"
-            if status == Status.SUCCESS:
+            if status == SUCCESS:
                 seabed_log.warning("%s: leg judged at the seabed floor: %s", self.name, self.feedback_message)
         return status
 

@@ -13,7 +13,7 @@ import logging
 
 from py_trees.common import Status
 
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, TimedBehaviour
 from executive.behaviours.guards import Guard
 from executive.sensing.energy import EnergyEstimate
 
@@ -87,20 +87,20 @@ class EnergyFits(TimedBehaviour):
         if estimate is None and (unjudged := self.get("/energy/not_judged")):
             self.feedback_message = f"energy not judged: {unjudged}"
             log.warning("energy not judged on this vehicle: %s; %s", unjudged, UNJUDGED_HINT)
-            return Status.SUCCESS
+            return SUCCESS
         if estimate is None:
             why = self.get("/energy/unknown")
             if not why:  # the energy watch has nothing to say yet (its model loading): the time to judge has not begun
                 self.started = self.clock.now()
                 self.feedback_message = "waiting for the energy estimate (the consumption model loading)"
-                return Status.RUNNING
+                return RUNNING
             if self.elapsed > self.timeout_s:
                 self.feedback_message = f"the energy rule cannot judge: {why}"
-                return Status.FAILURE
+                return FAILURE
             self.feedback_message = f"waiting ({self.elapsed:.0f}/{self.timeout_s:g} s): {why}"
-            return Status.RUNNING
+            return RUNNING
         if not estimate.fits:
             self.feedback_message = f"does not fit the battery: {estimate.figures()}"
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = f"fits: {estimate.figures()}"
-        return Status.SUCCESS
+        return SUCCESS

@@ -41,7 +41,7 @@ from py_trees.common import Status
 from executive.autopilot import AutopilotPort
 from executive.autopilot.asking import READS, Asker
 from executive.autopilot.fallbacks import DISARM
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, TimedBehaviour
 from executive.behaviours.commands import SetMode
 from executive.behaviours.energy import EnergyEnough
 from executive.behaviours.guards import Armed, BatteryAbove, EkfOk, GpsNotGlitching, Guard, HeadingSane, LinkAlive
@@ -176,13 +176,13 @@ class Failsafe(TimedBehaviour):
         return self._conditions.get(guard) or guard.name
 
     def terminate(self, new_status: Status) -> None:
-        if self.left_in is not None or new_status == Status.FAILURE:
+        if self.left_in is not None or new_status == FAILURE:
             return  # ended the mission: the reaction must reach the vehicle
         # interrupted: by the guards recovering (the work resumes) or by a pause; a reaction still being retried must not undo either
         self._reacting.cancel()
         if self._return is not None:
             self._return.cancel()
-        if self._since and all(g.status == Status.SUCCESS for g in self.guards):
+        if self._since and all(g.status == SUCCESS for g in self.guards):
             causes = ", ".join(self._name(g) for g in self._since)
             self._resume_until = max(since + self.policy_of(g).timeout_s for g, since in self._since.items())
             self._resume_causes, self._retry_said = causes, False
@@ -213,7 +213,7 @@ class Failsafe(TimedBehaviour):
             self._since[g] = now
         if not failing and deferred:
             self.feedback_message = "hands off: " + "; ".join(f"{g.name} {why}" for g, why in deferred.items()) + " (judged when they hand back)"
-            return Status.RUNNING
+            return RUNNING
         if not failing:
             return self._rearm(now) if self._own_disarm else self._retry_refused_mode(now) or self._nothing_to_wait_for()
         self._rearm_from = None
@@ -229,8 +229,8 @@ class Failsafe(TimedBehaviour):
                 self._return_ends_mission, self._return_reason = True, f"{cause.guard.name} {failing[cause.guard]}"
                 return self._returning(now, hands_off)
             self.left_in = mode or self._mode_in_force
-            self.feedback_message = "" if cause.guard.status == Status.FAILURE else f"{cause.guard.name} {failing[cause.guard]}"
-            return Status.FAILURE
+            self.feedback_message = "" if cause.guard.status == FAILURE else f"{cause.guard.name} {failing[cause.guard]}"
+            return FAILURE
         chosen = None if hands_off else self._strongest(failing, new)
         if chosen is not None:
             self._in_force = chosen
@@ -251,10 +251,10 @@ class Failsafe(TimedBehaviour):
             log.warning("failsafe %s: not recovered within %g s -> abort the mission", self._name(late[0]), limit)
             self.left_in = self._mode_in_force
             self.feedback_message = f"not recovered after {limit:g} s: {why}"
-            return Status.FAILURE
+            return FAILURE
         waited, limit = max(((now - self._since[g], self.policy_of(g).timeout_s) for g in failing), key=lambda x: x[0] / x[1])
         self.feedback_message = f"{self._state(hands_off)} ({waited:.0f}/{limit:g} s): {why}"
-        return Status.RUNNING
+        return RUNNING
 
     @property
     def returning(self) -> bool:
@@ -279,15 +279,15 @@ class Failsafe(TimedBehaviour):
             log.warning("failsafe %s: a person took the vehicle during the return -> hands off, abort the mission", self._return.cause)
             self.left_in = None
             self.feedback_message = f"{self._return_reason}; a person took the vehicle during the return: hands off"
-            return Status.FAILURE
+            return FAILURE
         self._reacting.follow_up(now)
         text = self._return.follow(now, self._reacting.done)
         if self._return.arrived or self._return.failed is not None:
             self.left_in = self._return.hold_mode
             self.feedback_message = f"{self._return_reason}; {text}"
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = text
-        return Status.RUNNING
+        return RUNNING
 
     def _state(self, hands_off: bool) -> str:
         """What the vehicle is left in, or what the reaction still waits for."""
@@ -388,12 +388,12 @@ class Failsafe(TimedBehaviour):
             log.warning("failsafe: could not re-arm within %g s -> abort the mission", limit)
             self.left_in = self._mode_in_force
             self.feedback_message = f"could not re-arm within {limit:g} s"
-            return Status.FAILURE
+            return FAILURE
         if now - self._rearm_at >= REARM_RETRY_S:
             self._rearm_at = now
             self._reacting.track(self.autopilot.arm())
         self.feedback_message = f"re-arming ({now - self._rearm_from:.0f}/{limit:g} s)"
-        return Status.RUNNING
+        return RUNNING
 
     def _retry_refused_mode(self, now: float) -> Status | None:
         """RUNNING when the work, resumed after a recovery, failed on a refused mode change and the recovery's time is not up.
@@ -414,20 +414,20 @@ class Failsafe(TimedBehaviour):
                 self._resume_causes, refused, self._resume_until - now,
             )  # fmt: skip
         self.feedback_message = f"resuming after {self._resume_causes}: {refused}; asking again"
-        return Status.RUNNING
+        return RUNNING
 
     def _refused_mode_change(self) -> str | None:
         """Why the guarded work failed on a mode change, if it did."""
         if self.work is None:
             return None
         for node in self.work.iterate():
-            if isinstance(node, SetMode) and node.status == Status.FAILURE:
+            if isinstance(node, SetMode) and node.status == FAILURE:
                 return f"{node.name}: {node.feedback_message}"
         return None
 
     def _nothing_to_wait_for(self) -> Status:
         self.feedback_message = ""  # the branch it stands behind failed: that is the reason to report
-        return Status.FAILURE
+        return FAILURE
 
     def _person_drives(self) -> str | None:
         """Why a person drives the vehicle, if one does: a mode in which a person drives (MANUAL, ACRO...) that this failsafe did not ask for.
@@ -486,7 +486,7 @@ class FailsafeNote(py_trees.behaviour.Behaviour):
     def update(self) -> Status:
         reason = f"{self.guard.feedback_message} -> " if self.guard is not None else ""
         log.warning("failsafe %s: %s%s", self.condition, reason, self.text)
-        return Status.SUCCESS
+        return SUCCESS
 
 
 def failsafe_mode(root: py_trees.behaviour.Behaviour) -> str | None:

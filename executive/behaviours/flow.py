@@ -11,7 +11,7 @@ from py_trees.common import Access, Status
 
 from executive.autopilot import AutopilotPort, Request
 from executive.autopilot.asking import READS, Announce, Asker
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS, TimedBehaviour
 from executive.behaviours.guards import Guard
 from executive.mission.lifecycle import MissionStatus
 from executive.mission.port import MissionPort
@@ -56,33 +56,33 @@ class WaitUntil(ClockedDecorator):
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         assert self.clock is not None
-        if self.status != Status.RUNNING:
+        if self.status != RUNNING:
             self.initialise()
         if self.clock.now() - self._failed_at >= self.retry_s:
             yield from self.decorated.tick()
-            if self.decorated.status == Status.FAILURE:
+            if self.decorated.status == FAILURE:
                 self._failed_at = self.clock.now()
         new_status = self.update()
-        if new_status != Status.RUNNING:
+        if new_status != RUNNING:
             self.stop(new_status)
         self.status = new_status
         yield self
 
     def update(self) -> Status:
         assert self.clock is not None
-        if self.decorated.status == Status.SUCCESS:
+        if self.decorated.status == SUCCESS:
             self.feedback_message = ""
-            return Status.SUCCESS
+            return SUCCESS
         waited = self.clock.now() - self.started
         if waited > self.limit_s:
             hint = f" ({self.hint})" if self.hint else ""
             self.feedback_message = f"gave up after {self.limit_s:g} s: {self.decorated.feedback_message}{hint}"
-            return Status.FAILURE
+            return FAILURE
         if not self._hinted:
             self._hinted = True
             log.info("%s (up to %g s): %s", self.name, self.limit_s, self.hint)
         self.feedback_message = f"waiting ({waited:.0f}/{self.limit_s:g} s): {self.decorated.feedback_message}"
-        return Status.RUNNING
+        return RUNNING
 
 
 class Timeout(ClockedDecorator):
@@ -102,10 +102,10 @@ class Timeout(ClockedDecorator):
     def update(self) -> Status:
         assert self.clock is not None
         status = self.decorated.status
-        if status == Status.RUNNING and self.clock.now() - self.started > self.timeout_s:
-            self.decorated.stop(Status.INVALID)
+        if status == RUNNING and self.clock.now() - self.started > self.timeout_s:
+            self.decorated.stop(INVALID)
             self.feedback_message = f"timed out after {self.timeout_s:g} s: {self.decorated.feedback_message}"
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = self.decorated.feedback_message
         return status
 
@@ -162,14 +162,14 @@ class WaitForGuards(TimedBehaviour):
         self._reacting.cancel()
 
     def update(self) -> Status:
-        failing = [g for g in self.guards if g.status == Status.FAILURE]
+        failing = [g for g in self.guards if g.status == FAILURE]
         if not failing:
             self.feedback_message = ""  # the branch it stands behind failed: that is the reason to report
-            return Status.FAILURE
+            return FAILURE
         why = "; ".join(f"{g.name} {g.feedback_message}" for g in failing)
         if self.elapsed > self.limit_s:
             self.feedback_message = f"not recovered after {self.limit_s:g} s: {why}"
-            return Status.FAILURE
+            return FAILURE
         mode = hold_mode_for(self.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode)
         if any(g.pilot_in_control for g in failing):
             self._reacting.stand_back()
@@ -180,7 +180,7 @@ class WaitForGuards(TimedBehaviour):
             self._reacting.follow_up(self.clock.now())
             state = self._reacting.state() or "waiting"
         self.feedback_message = f"{state} ({self.elapsed:.0f}/{self.limit_s:g} s): {why}"
-        return Status.RUNNING
+        return RUNNING
 
 
 class ForEachLeg(py_trees.decorators.Decorator):
@@ -203,12 +203,12 @@ class ForEachLeg(py_trees.decorators.Decorator):
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         assert self.mission_state is not None
-        if self.status != Status.RUNNING:
+        if self.status != RUNNING:
             self.initialise()
         if self.mission_state.target is not None:
             yield from self.decorated.tick()
         new_status = self.update()
-        if new_status != Status.RUNNING:
+        if new_status != RUNNING:
             self.stop(new_status)
         self.status = new_status
         yield self
@@ -216,24 +216,28 @@ class ForEachLeg(py_trees.decorators.Decorator):
     def update(self) -> Status:
         assert self.mission_state is not None
         state = self.mission_state
-        if state.target is not None and self.decorated.status == Status.SUCCESS:
+        if state.target is not None and self.decorated.status == SUCCESS:
             state.leg_done()
         if state.target is None:
             self.feedback_message = f"{state.leg_index}/{state.leg_count} legs done"
-            return Status.SUCCESS
-        if self.decorated.status == Status.FAILURE:
+            return SUCCESS
+        if self.decorated.status == FAILURE:
             self.feedback_message = f"leg {state.leg_index + 1}/{state.leg_count} failed: {_why_failed(self.decorated)}"
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = f"leg {state.leg_index + 1}/{state.leg_count}"
-        return Status.RUNNING
+        return RUNNING
 
 
 def _why_failed(node: py_trees.behaviour.Behaviour) -> str:
     """The reason of the deepest failed behaviour under ``node`` that gives one (a composite gives none)."""
     for child in node.iterate():  # children before their parents
-        if child.status == Status.FAILURE and child.feedback_message:
+        if child.status == FAILURE and child.feedback_message:
             return child.feedback_message if child is node else f"{child.name}: {child.feedback_message}"
     return ""
+
+
+#: Read every tick (an Enum class's member is slow to read from it: executive.behaviours.base.RUNNING says why).
+_PAUSED = MissionStatus.PAUSED
 
 
 class UnlessPaused(py_trees.decorators.Decorator):
@@ -270,12 +274,12 @@ class UnlessPaused(py_trees.decorators.Decorator):
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         assert self.mission_state is not None and self.autopilot is not None
-        if self.status != Status.RUNNING:
+        if self.status != RUNNING:
             self.initialise()
         state = self.mission_state
-        if state.status is MissionStatus.PAUSED:
-            if self.decorated.status == Status.RUNNING:
-                self.decorated.stop(Status.INVALID)
+        if state.status is _PAUSED:
+            if self.decorated.status == RUNNING:
+                self.decorated.stop(INVALID)
             if not state.hold_while_paused:  # a person took the vehicle (a mode we did not ask for): hands off
                 self.feedback_message = f"paused at leg {state.leg_number}/{state.leg_count}: {state.reason}; hands off"
             else:
@@ -283,7 +287,7 @@ class UnlessPaused(py_trees.decorators.Decorator):
                     self._holding = hold_mode_for(self._bb.get("/vehicle/vtol_state"), self.hold_mode, self.fixed_wing_hold_mode) or self.hold_mode
                     self._hold_ticket = self.autopilot.set_mode(self._holding)
                 self.feedback_message = f"paused at leg {state.leg_number}/{state.leg_count}: holding in {self._holding}"
-            new_status = Status.RUNNING
+            new_status = RUNNING
         else:
             if self._holding is not None:  # resumed: a hold still being retried must not undo the resumed leg
                 self.autopilot.cancel(self._hold_ticket)
@@ -291,7 +295,7 @@ class UnlessPaused(py_trees.decorators.Decorator):
             yield from self.decorated.tick()
             self.feedback_message = ""
             new_status = self.decorated.status
-        if new_status != Status.RUNNING:
+        if new_status != RUNNING:
             self.stop(new_status)
         self.status = new_status
         yield self

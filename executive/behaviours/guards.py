@@ -29,11 +29,14 @@ from typing import Any
 
 from py_trees.common import Status
 
-from executive.behaviours.base import ExecutiveBehaviour
+from executive.behaviours.base import FAILURE, SUCCESS, ExecutiveBehaviour
 from executive.world.clock import Clock
 from executive.world.state import Battery, EkfFlags, EkfStatus
 
 _EPSILON_S = 1e-6  # ten ticks of 0.1 s add up to a hair under 1 s
+#: The flag's bit, tested on the flags as an int: an IntFlag's ``&`` is Python code, and its class's members slow to read
+#: (executive.behaviours.base.RUNNING says why); the test is the same.
+_GPS_GLITCHING = int(EkfFlags.GPS_GLITCHING)
 
 
 class Guard(ExecutiveBehaviour):
@@ -87,7 +90,8 @@ class Guard(ExecutiveBehaviour):
         if heard is None or received_at is None:
             return None
         up_since: float | None = self.get("/link/up_since")
-        age = heard - max(received_at, up_since if up_since is not None else received_at)
+        since = up_since if up_since is not None and up_since > received_at else received_at  # max(): a builtin call costs more
+        age = heard - since
         if age > limit_s + _EPSILON_S:
             return f"{what} {age:.1f} s old while the autopilot is heard (limit {limit_s:g} s)"
         return None
@@ -130,7 +134,7 @@ class Guard(ExecutiveBehaviour):
     def update(self) -> Status:
         reason = self.judge()
         self.feedback_message = reason or self.note or "ok"
-        return Status.FAILURE if reason else Status.SUCCESS
+        return FAILURE if reason else SUCCESS
 
 
 class LinkAlive(Guard):
@@ -224,7 +228,7 @@ class GpsNotGlitching(Guard):
         old = self.stale(ekf.time, self.stale_after_s, "the EKF report is")
         if old is not None:
             return old
-        return "the EKF flags a GPS glitch (GPS_GLITCHING)" if ekf.flags & EkfFlags.GPS_GLITCHING else None
+        return "the EKF flags a GPS glitch (GPS_GLITCHING)" if int(ekf.flags) & _GPS_GLITCHING else None
 
 
 class Armed(Guard):

@@ -15,7 +15,7 @@ from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request, Target
 from executive.autopilot.rover_motion import RoverMotion, TargetEstimate, auto_corner_cut_m, guided_switch_cut_m, vehicle_motion
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, TimedBehaviour
 from executive.behaviours.repositioning import Repositioning
 from executive.mission.model import Waypoint
 from executive.world import blackboard, geo
@@ -159,12 +159,14 @@ class GoTo(TimedBehaviour):
 
     def update(self) -> Status:
         target = self.get("/mission/target")
-        if target is not None and target != self.target:  # an operator edited the route during the leg: head for the waypoint as it is now
+        # an operator edited the route during the leg: head for the waypoint as it is now (the same object is equal to itself:
+        # most ticks, and a model's == is dear)
+        if target is not None and target is not self.target and target != self.target:
             self.target, self._last_sent = target, float("-inf")
             self._repositioning.aim()
         if self.target is None:
             self.feedback_message = "no active leg"
-            return Status.FAILURE
+            return FAILURE
         position: GlobalPosition | None = self.get("/vehicle/position")
         if self._leg_start is None:
             self._leg_start = position
@@ -176,23 +178,23 @@ class GoTo(TimedBehaviour):
             self.distance_m, self.bearing_deg = geo.distance_bearing(position.lat, position.lon, self.target.lat, self.target.lon)
             if self.distance_m <= self.acceptance_radius_m and height is None:
                 self.feedback_message = f"{leg}: reached ({self.distance_m:.1f} m)"
-                return Status.SUCCESS
+                return SUCCESS
             through = self.drive_through(position, self.distance_m)
             if through is not None:
                 self.feedback_message = f"{leg}: driven through ({self.distance_m:.1f} m out; {through})"
-                return Status.SUCCESS
+                return SUCCESS
         if self.elapsed > self.leg_timeout_s:
             short = f", {self.distance_m:.1f} m short" if self.distance_m is not None else ""
             refusal = self._repositioning.refusal
             why = f" (DO_REPOSITION {refusal})" if refusal else ""
             off = f", {height}" if height else ""
             self.feedback_message = f"{leg}: timed out after {self.leg_timeout_s:g} s{short}{off}{why}"
-            return Status.FAILURE
+            return FAILURE
         if self.distance_m is None:
             self.feedback_message = f"{leg}: no position"
         else:
             self.feedback_message = f"{leg}: {self.distance_m:.1f} m at {self.bearing_deg:03.0f}°{f', {height}' if height else ''}"
-        return Status.RUNNING
+        return RUNNING
 
     def _height_off(self, position: GlobalPosition | None) -> str | None:
         """How the vehicle's height misses the waypoint's, if by more than ``height_tolerance_m`` (None: reached in height, or not

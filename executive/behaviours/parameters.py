@@ -7,7 +7,7 @@ from collections.abc import Collection
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, TimedBehaviour
 
 
 class ParameterIs(TimedBehaviour):
@@ -54,21 +54,21 @@ class ParameterIs(TimedBehaviour):
     def update(self) -> Status:
         if self.autopilot.capabilities.autopilot != self.firmware:
             self.feedback_message = f"{self.parameter}: not an {self.firmware} parameter ({self.autopilot.capabilities.autopilot})"
-            return Status.SUCCESS
+            return SUCCESS
         value = (self.get("/vehicle/params") or {}).get(self.parameter)
         if value is not None:
             if value in self.allowed:
                 self.feedback_message = f"{self.parameter} {value:g}"
-                return Status.SUCCESS
+                return SUCCESS
             needed = " or ".join(f"{v:g}" for v in self.allowed)
             self.feedback_message = f"{self.parameter} is {value:g}: set it to {needed}: {self.why}"
-            return Status.FAILURE
+            return FAILURE
         if self.elapsed > self.timeout_s:
             self.feedback_message = f"{self.parameter} not reported by the autopilot within {self.timeout_s:g} s (it needs {self.why})"
-            return Status.FAILURE
+            return FAILURE
         now = self.clock.now()
         if now - self._asked_at >= self.ask_every_s:
             self.autopilot.read_parameter(self.parameter)
             self._asked_at = now
         self.feedback_message = f"asking the autopilot for {self.parameter}"
-        return Status.RUNNING
+        return RUNNING

@@ -33,9 +33,10 @@ class RcNotTakingOver(Guard):
         super().__init__(name)
         self.channel = channel
         self.above_us = above_us
+        self.rc = RcReading("mavlink", channel, above_us)  # as RcAutoMode's: made once, not at every check
 
     def check(self) -> str | None:
-        return RcReading("mavlink", self.channel, self.above_us).not_in_auto(self.get)
+        return self.rc.not_in_auto(self.get)
 
 
 class RcChannelHigh(Guard):

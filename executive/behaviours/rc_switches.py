@@ -27,7 +27,7 @@ from executive.autopilot import AutopilotPort
 from executive.autopilot.asking import ARM, Asker, Rules, Step, Voice, refusal_reason
 from executive.autopilot.fallbacks import DISARM
 from executive.behaviours.auto_route import AUTO
-from executive.behaviours.base import ExecutiveBehaviour
+from executive.behaviours.base import RUNNING, ExecutiveBehaviour
 from executive.mission.lifecycle import Refused
 from executive.mission.model import Waypoint
 from executive.mission.port import MissionPort
@@ -69,7 +69,7 @@ class SwitchWatcher(ExecutiveBehaviour):
                 assert switches is not None
                 self.moved(now, switches)
         self.follow()
-        return Status.RUNNING
+        return RUNNING
 
     def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
         """The switch was moved to ``position``."""
@@ -148,7 +148,7 @@ class ModeSwitch(SwitchWatcher):
         elif self.position is None:
             self.feedback_message = f"no {self.label} position yet"
         self.follow()
-        return Status.RUNNING
+        return RUNNING
 
     def moved(self, position: SwitchPosition, switches: RcSwitches) -> None:
         self._asker.forget()

@@ -14,7 +14,7 @@ from typing import Any
 from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, TimedBehaviour
 from executive.behaviours.guards import BatteryAbove, Guard
 from executive.behaviours.mode_switch import ModeSwitchClear
 
@@ -76,10 +76,10 @@ class ReadingsIn(TimedBehaviour):
         missing = self.missing()
         if not missing:
             self.feedback_message = "every reading the guards need is in"
-            return Status.SUCCESS
+            return SUCCESS
         if self.elapsed > self.timeout_s:
             self.feedback_message = f"never came within {self.timeout_s:g} s: {'; '.join(missing)}"
-            return Status.FAILURE
+            return FAILURE
         now = self.clock.now()
         if now - self._asked_at >= self.ask_every_s:
             self._asked_at = now
@@ -87,4 +87,4 @@ class ReadingsIn(TimedBehaviour):
                 if isinstance(guard, ModeSwitchClear) and guard.awaits() is not None:
                     guard.ask()
         self.feedback_message = f"waiting ({self.elapsed:.0f}/{self.timeout_s:g} s) for {'; '.join(missing)}"
-        return Status.RUNNING
+        return RUNNING

@@ -28,6 +28,7 @@ from py_trees.common import Status
 
 from executive.autopilot import Target
 from executive.autopilot.asking import Announce, Asker, Host
+from executive.behaviours.base import FAILURE, SUCCESS
 from executive.mission.declaration import vehicle_profile
 from executive.mission.return_path import ReturnPath, ReturnPlanner
 from executive.world import geo
@@ -175,6 +176,6 @@ class NoReturnUnderWay(py_trees.behaviour.Behaviour):
     def update(self) -> Status:
         if self.failsafe.returning:
             self.feedback_message = "returning: the mission ends where the return arrives"
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = ""
-        return Status.SUCCESS
+        return SUCCESS

@@ -6,7 +6,7 @@ import math
 
 from py_trees.common import Status
 
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS, TimedBehaviour
 from executive.behaviours.guards import Guard
 from executive.instruments.sampler import Sampler
 from executive.mission.model import Waypoint
@@ -48,9 +48,9 @@ class Sample(TimedBehaviour):
         state = self.mission_state
         self.leg_index, self._ticket, self._finished, self._skip, self._position = state.leg_index, None, True, None, None
         if state.target is None:
-            self._skip, self.feedback_message = Status.FAILURE, "no active leg"
+            self._skip, self.feedback_message = FAILURE, "no active leg"
         elif state.sampled(state.leg_index):
-            self._skip, self.feedback_message = Status.SUCCESS, f"leg {state.leg_index + 1}: already sampled"
+            self._skip, self.feedback_message = SUCCESS, f"leg {state.leg_index + 1}: already sampled"
         else:
             self._ticket = self.sampler.start(state.leg_index)
             self._finished = False
@@ -73,25 +73,25 @@ class Sample(TimedBehaviour):
             self.mission_state.sample_taken(record)
             if partial:
                 self.feedback_message = f"{leg}: partial sample, {len(status.reads)} reads: {status.reason}"
-                return Status.FAILURE
+                return FAILURE
             without = f"; none of {', '.join(status.missing)} (sampling.require: any)" if status.missing else ""
             self.feedback_message = f"{leg}: sampled, {len(status.reads)} reads ({status.instrument}){without}"
-            return Status.SUCCESS
+            return SUCCESS
         if mine and status is not None and status.state is SamplerState.FAILED:
             self._finished = True
             self.feedback_message = f"{leg}: sampler failed: {status.reason}"
-            return Status.FAILURE
+            return FAILURE
         if self.timeout_s is not None and self.elapsed > self.timeout_s:
             self.sampler.cancel()
             self._finished = True
             self.feedback_message = f"{leg}: no sample after {self.timeout_s:g} s"
-            return Status.FAILURE
+            return FAILURE
         reads = len(status.reads) if mine and status is not None else 0
         self.feedback_message = f"{leg}: sampling ({self.elapsed:.0f} s, {reads} reads)"
-        return Status.RUNNING
+        return RUNNING
 
     def terminate(self, new_status: Status) -> None:
-        if new_status == Status.INVALID and not self._finished:
+        if new_status == INVALID and not self._finished:
             self.sampler.cancel()  # interrupted: the sample in progress is abandoned, not recorded
             self._finished = True
             self.feedback_message = "interrupted: sample cancelled"

@@ -10,7 +10,7 @@ from py_trees.common import Status
 
 from executive.autopilot import AutopilotPort, Request, VtolState
 from executive.autopilot.asking import Asker, Step, Voice, refusal_reason
-from executive.behaviours.base import TimedBehaviour
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS, TimedBehaviour
 from executive.behaviours.commands import ONE_ASK, CommandAction
 from executive.behaviours.repositioning import Repositioning
 from executive.world import blackboard, frames
@@ -165,16 +165,16 @@ class VtolTransition(TimedBehaviour):
             self.last_state = state
         if state == self.to:
             self.feedback_message = f"{self.to}" + (f" (by {self.how})" if self.how else "")
-            return Status.SUCCESS
+            return SUCCESS
         asking = self._asker.asking
         if asking is None:  # there when it began, or nothing could be asked: there is no "ahead" without a position
             self.feedback_message = "no position to transition from"
-            return Status.FAILURE
+            return FAILURE
         self._asker.follow_up(self.clock.now(), ask=False)
         if asking.judged:  # refused, unanswered or not there in time: the voice said which
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = f"{self.last_state} -> {self.to} (by {self.how})"
-        return Status.RUNNING
+        return RUNNING
 
 
 class _TransitionVoice(Voice):
@@ -259,15 +259,15 @@ class GoToLocal(TimedBehaviour):
             self.distance_m = math.dist((north, east, -position.alt_rel_m), self.ned)
             if self.distance_m <= self.acceptance_radius_m:
                 self.feedback_message = f"reached ({self.distance_m:.1f} m)"
-                return Status.SUCCESS
+                return SUCCESS
         left = f"{self.distance_m:.1f} m" if self.distance_m is not None else "no position or home"
         if self.elapsed > self.timeout_s:
             refusal = self._repositioning.refusal
             why = f" (DO_REPOSITION {refusal})" if refusal else ""
             self.feedback_message = f"timed out after {self.timeout_s:g} s: {left}{why}"
-            return Status.FAILURE
+            return FAILURE
         self.feedback_message = left
-        return Status.RUNNING
+        return RUNNING
 
     def _reposition(self) -> Request:
         """Ask for the point: north and east of home (the local origin, known: asked only then), ``up`` metres above it."""

@@ -20,6 +20,7 @@ from py_trees.common import Status
 
 from executive.autopilot.fence import ZoneItems, fence_items, inclusion_shapes, rally_items
 from executive.behaviours.auto_route import MissionTransferFollower
+from executive.behaviours.base import FAILURE, RUNNING, SUCCESS
 from executive.mission.model import GeofenceConfig, Mission, RallyPoint
 from executive.world.clock import Clock
 from executive.world.dialect import mavlink
@@ -94,28 +95,28 @@ class ZonesOnAutopilot(MissionTransferFollower):
         refused = self.autopilot.fence_settings(radius_m=self.radius_m, inclusion_shapes=self.inclusions, held={}).refused
         if refused and (self.enforce or self.autopilot.capabilities.autopilot == "px4"):  # PX4 acts on any fence it holds
             self.feedback_message = f"not sent to the autopilot: {refused}"
-            return Status.FAILURE
+            return FAILURE
         if self.clock.now() - self._began > self.timeout_s:
             self.feedback_message = f"not done within {self.timeout_s:g} s: {self.feedback_message}"
-            return Status.FAILURE
+            return FAILURE
         if self._settle():
             status: MissionTransferStatus = self.get("/link/mission_transfer")
             step = "reading back" if status.verifying else "sending"
             self.feedback_message = f"{step} {status.progress}/{status.total} items"
-            return Status.RUNNING
+            return RUNNING
         for what, mission_type, zone_items in self.uploads:
             key = "/vehicle/fence_items" if mission_type == mavlink.MAV_MISSION_TYPE_FENCE else "/vehicle/rally_items"
             if self._holds(zone_items, self.get(key)):
                 continue
             if self.failure:
                 self.feedback_message = self._refusal(what, zone_items, self.failure)
-                return Status.FAILURE
+                return FAILURE
             if not self.autopilot.route_transfer_idle:
                 self.feedback_message = "waiting for another mission transfer to end"
-                return Status.RUNNING
+                return RUNNING
             self._started(self.autopilot.upload_zones(zone_items.items, mission_type))
             self.feedback_message = f"sending the {what}: {len(zone_items.items)} items ({', '.join(zone_items.shapes())})"
-            return Status.RUNNING
+            return RUNNING
         return self._fence_parameters()
 
     def _holds(self, zone_items: ZoneItems, held: object) -> bool:
@@ -136,7 +137,7 @@ class ZonesOnAutopilot(MissionTransferFollower):
         wanted = self.autopilot.fence_settings(radius_m=self.radius_m, inclusion_shapes=self.inclusions, held=held) if self.enforce else None
         if wanted is not None and wanted.refused:
             self.feedback_message = f"not enforced: {wanted.refused}"
-            return Status.FAILURE
+            return FAILURE
         to_set = {} if wanted is None else {n: v for n, v in wanted.params.items() if n not in held or not _same(held[n], v[0])}
         if not missing and not to_set:
             done = ", ".join(f"{n} {held[n]:g}" for n in names)
@@ -144,7 +145,7 @@ class ZonesOnAutopilot(MissionTransferFollower):
             if not self._told:
                 log.info("%s", self.feedback_message)
                 self._told = True
-            return Status.SUCCESS
+            return SUCCESS
         now = self.clock.now()
         if missing and now - self._asked_at >= self.ask_every_s:
             self._asked_at = now
@@ -162,7 +163,7 @@ class ZonesOnAutopilot(MissionTransferFollower):
             self.feedback_message = f"reading the autopilot's fence parameters: {', '.join(missing)}"
         else:
             self.feedback_message = "setting " + ", ".join(f"{n} {held[n]:g} -> {v:g}" for n, (v, _) in to_set.items())
-        return Status.RUNNING
+        return RUNNING
 
     def _sent(self) -> str:
         return ", ".join(f"{what} {len(z.items)} items" for what, _, z in self.uploads) or "nothing"

@@ -17,6 +17,7 @@ import executive
 from executive import registry
 from executive.admission.reach import ReachGate, Refusal
 from executive.autopilot_link import AutopilotLink
+from executive.behaviours.base import FAILURE, INVALID, SUCCESS
 from executive.behaviours.failsafe import failsafe_mode
 from executive.instruments.backends import open_sampler
 from executive.instruments.sampler import InstrumentError, InstrumentSampler, UnavailableSampler
@@ -37,7 +38,11 @@ from executive.tree.ticking import BehaviourTree
 from executive.world import blackboard
 from executive.world.clock import Clock, TickClock
 
-log = logging.getLogger("executive.runtime")  # the name the log and the journal show, kept since 0.1
+log = logging.getLogger("executive.runtime")
+#: The mission statuses in which its tree ticks, and those a person's abort or delete leaves it in: read every tick, and
+#: an Enum class's members are slow to read from it in Python 3.11 (executive.behaviours.base.RUNNING says why).
+_TREE_TICKS = (MissionStatus.RUNNING, MissionStatus.PAUSED)
+_ENDED_BY_A_PERSON = (MissionStatus.ABORTED, MissionStatus.IDLE)  # the name the log and the journal show, kept since 0.1
 
 
 class BehaviourCrashed(RuntimeError):
@@ -81,7 +86,7 @@ def explain_failure(root: py_trees.behaviour.Behaviour) -> str:
     """The reason for a failed tree: the shallowest failed node that says why."""
     best: tuple[int, str] | None = None
     for node in root.iterate():
-        if node.status == Status.FAILURE and node.feedback_message:
+        if node.status == FAILURE and node.feedback_message:
             depth = behaviour_path(node).count("/")
             if best is None or depth <= best[0]:
                 best = (depth, f"{node.name}: {node.feedback_message}")
@@ -192,8 +197,8 @@ class Runtime:
         self.link.pump()
         for reader in self.readers:
             reader.service()
-        status = Status.INVALID
-        running = self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED)
+        status = INVALID
+        running = self.mission_state.status in _TREE_TICKS
         if self.tree is not None and running and not self._tree_waits_for_resume and self._refused is None:
             verdict = self.reach.judge(self.mission_state)
             if isinstance(verdict, Refusal):
@@ -251,7 +256,7 @@ class Runtime:
         try:
             while True:
                 if self._stop_reason is not None:
-                    if self.mission_state.status in (MissionStatus.RUNNING, MissionStatus.PAUSED):
+                    if self.mission_state.status in _TREE_TICKS:
                         return self._end(self._abort(f"stopped: {self._stop_reason}"))  # the journal records it ABORTED
                     self.make_safe()
                     # between missions: the last one that ran, with its own outcome (not the one loaded since, never started)
@@ -302,7 +307,7 @@ class Runtime:
             mode = failsafe_mode(self.tree.root)  # an RTL or a surfacing the mission's failsafe asked for is not undone
             self.tree.interrupt()
             try:
-                self.tree.root.stop(Status.INVALID)  # stop what is running: a sample in progress is cancelled, not left open
+                self.tree.root.stop(INVALID)  # stop what is running: a sample in progress is cancelled, not left open
             except Exception as exc:  # a behaviour's terminate() that raises: the vehicle is made safe all the same
                 node = self._node_that_raised(exc)
                 log.error("stopping the tree: %s", BehaviourCrashed(behaviour_path(node) if node else "(tree)", exc), exc_info=exc)
@@ -346,15 +351,15 @@ class Runtime:
             return self._end(self._refuse(self._refused))
         if not active:
             return None
-        if self.mission_state.status in (MissionStatus.ABORTED, MissionStatus.IDLE):  # the operator aborted or deleted it
+        if self.mission_state.status in _ENDED_BY_A_PERSON:
             self.make_safe()
             return self._end(RunOutcome(self.mission_state.status, self.mission_state.reason, self.ticks))
-        if status == Status.SUCCESS and (undone := self.mission_state.sample_log.work_left(self.mission_state.mission)) is not None:
+        if status == SUCCESS and (undone := self.mission_state.sample_log.work_left(self.mission_state.mission)) is not None:
             return self._end(self._abort(f"the tree ended, but {undone}"))  # never report success for work not done
-        if status == Status.SUCCESS:
+        if status == SUCCESS:
             self.mission_state.complete()  # its reason says how many waypoints were reached
             return self._end(RunOutcome(MissionStatus.COMPLETED, self.mission_state.reason, self.ticks))
-        if status == Status.FAILURE:
+        if status == FAILURE:
             return self._end(self._abort(explain_failure(self.tree.root)))  # type: ignore[union-attr]
         return None
 
@@ -387,7 +392,7 @@ class Runtime:
     def _on_replace(self, mission: Mission, reason: str) -> None:
         """Hot reload: the old tree stopped, the run ended as REPLACED, the new mission's tree (and sampler) installed for the resume."""
         if self.tree is not None:
-            self.tree.root.stop(Status.INVALID)  # a sample in progress is cancelled, not left open
+            self.tree.root.stop(INVALID)  # a sample in progress is cancelled, not left open
             for observer in self.observers:
                 observer.end(REPLACED, reason)
         self.mission = mission

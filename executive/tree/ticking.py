@@ -8,6 +8,7 @@ With visitors it is py_trees' own tick, unchanged.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
 
 import py_trees
@@ -29,8 +30,7 @@ class BehaviourTree(py_trees.trees.BehaviourTree):
             pre_tick_handler(self)
         for handler in self.pre_tick_handlers:
             handler(self)
-        for _ in self.root.tick():
-            pass
+        deque(self.root.tick(), maxlen=0)  # every node's tick run, its yield dropped (a loop in C: 75 yields a tick here)
         for handler in self.post_tick_handlers:
             handler(self)
         if post_tick_handler is not None:

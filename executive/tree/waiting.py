@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from py_trees.common import Status
 
+from executive.behaviours.base import FAILURE, RUNNING
 from executive.tree.ticks import STATUS_CODES, TickState, describe
 from executive.world import blackboard
 
@@ -178,7 +179,7 @@ class TreeWatch:
         if statuses == self._followed:  # most ticks: no node changed status, and the walk down the running nodes is the same
             waiting = self._watch.again(feedback.__getitem__)
         else:
-            running, failure = Status.RUNNING, Status.FAILURE
+            running, failure = RUNNING, FAILURE
             is_running, has_failed = (lambda i: statuses[i] is running), (lambda i: statuses[i] is failure)
             waiting = self._watch.follow(self._description, is_running, has_failed, feedback.__getitem__, now)
         self._statuses = self._followed = statuses

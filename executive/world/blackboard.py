@@ -383,12 +383,11 @@ def _getter(client: Client, board: Board) -> Callable[[str], Any]:
     remappings = client.remappings  # py_trees adds and removes keys in place
 
     def get(name: str) -> Any:
-        remapped = remappings.get(name)
-        if remapped is not None and board.activity_stream is None and Blackboard.activity_stream is None and "." not in name:
+        if board.activity_stream is None and Blackboard.activity_stream is None and "." not in name:
             try:
-                return board.storage[remapped]
+                return board.storage[remappings[name]]
             except KeyError:
-                pass  # py_trees raises its own error
+                pass  # not registered, or not on the board: py_trees raises its own error
         with _installed(board):
             return py_trees.blackboard.Client.get(client, name)
 

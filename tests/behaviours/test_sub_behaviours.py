@@ -118,6 +118,19 @@ class TestSurface:
         assert h.tick(0.125) == F
         assert node.feedback_message == f"not confirmed after {limit_s:g} s: depth 3.0 m in SURFACE"
 
+    def test_run_again_from_another_depth_it_gives_up_after_that_depth_s_climb_time(self, harness, vehicle):
+        """The time allowed, and the asking's rules with it, are worked out at each run: 42 s from 6 m, then 130 s from 50 m."""
+        node = Surface(margin_s=30.0, climb_m_s=0.5)
+        h = harness(node)
+        for start_depth, limit_s in ((6.0, 42.0), (50.0, 130.0)):
+            vehicle.set(vehicle__mode="GUIDED", vehicle__position=depth(start_depth))
+            assert h.tick() == R
+            h.ack(M.MAV_CMD_DO_SET_MODE)
+            vehicle.set(vehicle__mode="SURFACE", vehicle__position=depth(3.0))  # stuck
+            assert h.tick(limit_s) == R
+            assert h.tick(0.125) == F
+            assert node.feedback_message == f"not confirmed after {limit_s:g} s: depth 3.0 m in SURFACE"
+
 
 def test_a_command_action_run_again_sends_its_command_again(harness, mission_state):
     """The next leg's speed: the ack of the previous leg's request does not confirm it."""
