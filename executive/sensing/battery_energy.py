@@ -20,6 +20,7 @@ Left above the reserve = capacity x remaining at start - drawn since - capacity 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -52,8 +53,12 @@ class NotJudged:
     why: str
 
 
+@functools.lru_cache(maxsize=16)
 def cells_at_rest(volts: float) -> int | None:
-    """The pack's cells in series, from its voltage at rest: the one count that puts each cell in :data:`CELL_AT_REST_V`."""
+    """The pack's cells in series, from its voltage at rest: the one count that puts each cell in :data:`CELL_AT_REST_V`.
+
+    Remembered: the capacity is judged again at each battery report with the same voltage at rest (30 divisions each time).
+    """
     low, high = CELL_AT_REST_V
     counts = [n for n in range(1, 31) if low <= volts / n <= high]
     return counts[0] if len(counts) == 1 else None

@@ -292,6 +292,7 @@ class EnergyWatch:
         self._since = 0.0  # when the mission's energy was first looked at
         self._ahead: Ahead | None = None
         self._armed = False  # /vehicle/armed at this tick
+        self._needs: tuple[tuple[object, ...], tuple[float, ...]] = ((), ())  # (inputs, _estimate's figures)
 
     def service(self) -> None:
         mission = self._state.mission
@@ -411,6 +412,40 @@ class EnergyWatch:
         self, mission: Mission, config: EnergyConfig, capacity_wh: float, drawn_since_start: float, autopilot: str, params: dict[str, float]
     ) -> None:
         assert self._model is not None and self._start is not None
+        below: float | None = self._in.get("/vehicle/altitude_above_bottom_m")
+        inputs = (
+            mission, self._state.legs.leg_index, config, capacity_wh, drawn_since_start, autopilot, params, self._in.get("/vehicle/home"),
+            self._last_position, self._start, self._armed, self._wing_borne, self._hovering, below, self._model.windows,
+        )  # fmt: skip
+        if inputs != self._needs[0]:
+            self._needs = (inputs, self._estimate(mission, config, capacity_wh, drawn_since_start, autopilot, params, below))
+        has, route_wh, home_wh, sigma, wh_per_km, wh_per_min = self._needs[1]
+        estimate = EnergyEstimate(
+            has, route_wh, home_wh, sigma, capacity_wh, config.reserve_pct, drawn_since_start,
+            wh_per_km, wh_per_min, self._state.legs.leg_index, self._clock.now(),
+        )  # fmt: skip
+        self._out.set("/energy/estimate", estimate)
+        self._out.set("/energy/unknown", "")
+        self._out.set("/energy/not_judged", "")
+        self._journal(estimate)
+
+    def _estimate(
+        self,
+        mission: Mission,
+        config: EnergyConfig,
+        capacity_wh: float,
+        drawn_since_start: float,
+        autopilot: str,
+        params: dict[str, float],
+        below: float | None,
+    ) -> tuple[float, float, float, float, float, float]:
+        """(has, route, home, sigma) Wh and the model's Wh/km and Wh/min, from what :meth:`_publish` keys them on: worked out
+        again only when one of those is another.
+
+        Between two position reports (5 Hz, ticks at 10 Hz) and battery reports (1 Hz) every input is the same object (the
+        reader writes a new one for each message; the model's state changes only in its ``update``, which counts its
+        ``windows``), and the same inputs give the same figures."""
+        assert self._model is not None and self._start is not None
         ahead = self._legs_ahead(mission)
         home = self._home(mission, ahead)
         here = (self._last_position.lat, self._last_position.lon) if self._last_position else ahead.next or home
@@ -425,7 +460,6 @@ class EnergyWatch:
         held = held_s(mission, self._state.legs.leg_index, take_off, not self._wing_borne and not done, landing)
         route_s, home_s = held.route_s, held.home_s
         depth = max(0.0, -self._last_position.alt_rel_m) if self._last_position is not None else 0.0
-        below: float | None = self._in.get("/vehicle/altitude_above_bottom_m")
         seabed = None if below is None else depth + below
         route_z, home_z = depth_changes(mission, mission.waypoints[self._state.legs.leg_index :], depth, seabed)
         route_wh = self._model.need(route_m, route_s, route_z)[0]
@@ -433,14 +467,7 @@ class EnergyWatch:
         _, sigma = self._model.need(route_m + home_m, route_s + home_s, route_z + home_z)
         kept = capacity_wh * (config.reserve_pct + 100.0 - config.usable_pct) / 100.0
         has = capacity_wh * self._start[1] / 100.0 - drawn_since_start - kept
-        estimate = EnergyEstimate(
-            has, route_wh, home_wh, sigma, capacity_wh, config.reserve_pct, drawn_since_start,
-            self._model.wh_per_m * 1000.0, self._model.wh_per_s * 60.0, self._state.legs.leg_index, self._clock.now(),
-        )  # fmt: skip
-        self._out.set("/energy/estimate", estimate)
-        self._out.set("/energy/unknown", "")
-        self._out.set("/energy/not_judged", "")
-        self._journal(estimate)
+        return has, route_wh, home_wh, sigma, self._model.wh_per_m * 1000.0, self._model.wh_per_s * 60.0
 
     def _home_metres(self, mission: Mission, config: EnergyConfig, home: tuple[float, float], end: tuple[float, float]) -> float:
         """:func:`home_metres`, planned once per route end and home (a return around zones is an A* search: not every report)."""

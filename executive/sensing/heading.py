@@ -67,7 +67,7 @@ class HeadingKalman:
     def __init__(self) -> None:
         kf = self._kf = kalman_filter_class()(dim_x=2, dim_z=1)
         kf.inv = _inverse_1x1  # filterpy's hook for the innovation's inverse: S is 1x1 here
-        self._r = np.zeros((1, 1))
+        self._r = kf.R  # the measurement's variance, set before each update: filterpy reads kf.R when update is given no R
 
     @property
     def heading(self) -> float:
@@ -108,8 +108,9 @@ class HeadingKalman:
         """Take a measurement ``z`` of state component ``i`` whose variance is ``r``."""
         self._r[0, 0] = r
         # z as a float: filterpy keeps a deepcopy of it (kalman_filter.py update), ten times dearer for an array;
-        # with H given it is not reshaped, and z - Hx is the same 1x1 array of the same number
-        self._kf.update(z, R=self._r, H=_H[i])
+        # with H given it is not reshaped, and z - Hx is the same 1x1 array of the same number. R in place rather than
+        # given: a given R is tested with numpy's isscalar (an ABC check) at each update; the arithmetic is the same
+        self._kf.update(z, H=_H[i])
 
 
 def _inverse_1x1(s: np.ndarray) -> np.ndarray:
@@ -349,23 +350,34 @@ class HeadingFilter:
             self._kf = HeadingKalman()
         attitude: Attitude | None = self._in.get("/vehicle/attitude")
         position: GlobalPosition | None = self._in.get("/vehicle/position")
-        new: list[Attitude | GlobalPosition] = []
-        # the same object at most ticks (a reading comes every few ticks): known without comparing its fields
-        if attitude is not None and attitude is not self._attitude and attitude != self._attitude:
+        # The same object at most ticks (a reading comes every few ticks): known without comparing its fields. A new one
+        # received at another time differs in that field, so only one received at the same time has its fields compared.
+        last_attitude, last_position = self._attitude, self._position
+        if (
+            attitude is None
+            or attitude is last_attitude
+            or (last_attitude is not None and attitude.time == last_attitude.time and attitude == last_attitude)
+        ):
+            attitude = None  # nothing new
+        if (
+            position is None
+            or position is last_position
+            or (last_position is not None and position.time == last_position.time and position == last_position)
+        ):
+            position = None
+        if attitude is not None:
             self._attitude = attitude
-            new.append(attitude)
-        if position is not None and position is not self._position and position != self._position:
+        if position is not None:
             self._position = position
-            new.append(position)
         # The filter runs on when the autopilot measured (its boot clock): reception times jitter with the link,
         # and a turn's rate times that jitter reads as a compass error.
-        if len(new) == 2 and _measured_at(new[1]) < _measured_at(new[0]):
-            new.reverse()
-        for reading in new:
-            if isinstance(reading, Attitude):
-                self._on_attitude(reading, _measured_at(reading))
-            else:
-                self._on_position(reading, _measured_at(reading))
+        if attitude is not None and position is not None and _measured_at(position) < _measured_at(attitude):
+            self._on_position(position, _measured_at(position))
+            position = None
+        if attitude is not None:
+            self._on_attitude(attitude, _measured_at(attitude))
+        if position is not None:
+            self._on_position(position, _measured_at(position))
         self._publish(self._clock.now())
 
     # -- the heading filter --------------------------------------------------------------------
@@ -518,7 +530,8 @@ class HeadingFilter:
         ok: bool | None = None
         if not stale:
             ok = False if self._rejecting or self._bias_flagged else True if judged else None
-        self._out.set("/heading/deg", None if stale else self.heading_deg)
+        # heading_deg, with the verdict's ``judged``: the same bias taken off (or none), not judged again
+        self._out.set("/heading/deg", None if stale or self._t is None else (self._kf.heading - (self._bias if judged else 0.0)) % 360.0)
         self._out.set("/heading/ok", ok)
         self._out.set("/heading/bias_deg", self._bias if judged else None)
         self._out.set("/heading/reason", self.reason if ok is False else "")

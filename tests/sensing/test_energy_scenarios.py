@@ -18,6 +18,7 @@ from executive.mission.lifecycle import MissionStatus
 from executive.mission.model import Mission
 from executive.operator.status import status_line
 from executive.runtime.loop import RunOutcome
+from executive.sensing.energy import EnergyWatch
 from executive.sim.faults import Headwind
 from executive.testing import Lockstep
 from executive.world import blackboard, geo
@@ -175,3 +176,24 @@ def test_a_person_who_takes_over_wins_over_the_energy_failsafe(lockstep) -> None
     estimate = blackboard.reader("energy test", ["/energy/estimate"]).get("/energy/estimate")
     assert estimate.margin_wh < 0.0  # short (needs 1.6 Wh + 4.1 Wh home (+/- 1.3), has 4.5 Wh): still nothing asked
     assert asked == []
+
+
+def test_the_estimate_worked_out_once_per_report_is_the_one_worked_out_afresh_at_every_tick(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The energy watch works its figures out again only when an input is another object (a position or battery report,
+    the leg, the model's update): at every tick of a drive they are the figures worked out afresh, and most ticks reuse them."""
+    ticks: list[tuple[object, object, bool]] = []
+    real = EnergyWatch._publish
+
+    def publish(self: EnergyWatch, mission: Mission, config: Any, capacity_wh: float, drawn: float, autopilot: str, params: Any) -> None:
+        before = self._needs
+        real(self, mission, config, capacity_wh, drawn, autopilot, params)
+        estimate = blackboard.value("/energy/estimate")
+        afresh = self._estimate(mission, config, capacity_wh, drawn, autopilot, params, blackboard.value("/vehicle/altitude_above_bottom_m"))
+        published = (estimate.has_wh, estimate.route_wh, estimate.home_wh, estimate.sigma_wh, estimate.wh_per_km, estimate.wh_per_min)
+        ticks.append((published, afresh, self._needs is before))
+
+    monkeypatch.setattr(EnergyWatch, "_publish", publish)
+    with Lockstep(energy_line(1000.0, legs=1), home=(*LINE_HOME, 0.0)) as sim:
+        sim.run(limit_s=60, until=lambda: sim.clock.now() >= 25.0)  # armed, driving, the model's first window learnt
+    assert [published for published, _, _ in ticks] == [afresh for _, afresh, _ in ticks]
+    assert sum(reused for _, _, reused in ticks) > len(ticks) / 3  # between two position reports (5 Hz; ticks at 10 Hz)

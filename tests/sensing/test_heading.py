@@ -100,6 +100,21 @@ def test_nothing_is_judged_before_any_reading(drive):
     assert (bb("/heading/deg"), bb("/heading/ok"), bb("/heading/bias_deg")) == (None, None, None)
 
 
+def test_a_reading_written_again_is_taken_once_and_another_received_at_the_same_time_is_taken(drive):
+    """A duplicated ATTITUDE (a new, equal object) is not filtered twice; one with other values at the same reception time is."""
+    drive.run(1.0)
+    taken = drive.filter.compass_accepted + drive.filter.compass_rejected
+    now = drive.clock.now()
+    drive.vehicle.set(vehicle__attitude=Attitude(0.0, 0.0, 61.0, 0.0, now))
+    drive.filter.service()
+    drive.vehicle.set(vehicle__attitude=Attitude(0.0, 0.0, 61.0, 0.0, now))  # the same reading again
+    drive.filter.service()
+    assert drive.filter.compass_accepted + drive.filter.compass_rejected == taken + 1
+    drive.vehicle.set(vehicle__attitude=Attitude(0.0, 0.0, 62.0, 0.0, now))  # another, received at the same time
+    drive.filter.service()
+    assert drive.filter.compass_accepted + drive.filter.compass_rejected == taken + 2
+
+
 def test_a_good_compass_stays_ok_with_no_bias(drive):
     drive.run(3.0)  # standing: a heading, no verdict yet
     assert bb("/heading/deg") == pytest.approx(60.0, abs=3.0)
