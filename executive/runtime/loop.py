@@ -38,11 +38,11 @@ from executive.tree.ticking import BehaviourTree
 from executive.world import blackboard
 from executive.world.clock import Clock, TickClock
 
-log = logging.getLogger("executive.runtime")
+log = logging.getLogger("executive.runtime")  # the name the log and the journal show, kept since 0.1
 #: The mission statuses in which its tree ticks, and those a person's abort or delete leaves it in: read every tick, and
 #: an Enum class's members are slow to read from it in Python 3.11 (executive.behaviours.base.RUNNING says why).
 _TREE_TICKS = (MissionStatus.RUNNING, MissionStatus.PAUSED)
-_ENDED_BY_A_PERSON = (MissionStatus.ABORTED, MissionStatus.IDLE)  # the name the log and the journal show, kept since 0.1
+_ENDED_BY_A_PERSON = (MissionStatus.ABORTED, MissionStatus.IDLE)
 
 
 class BehaviourCrashed(RuntimeError):
