@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING
 
+from executive.world.bounds import clamp
+
 if TYPE_CHECKING:
     from executive.autopilot.port import Capabilities
 
@@ -313,12 +315,11 @@ class ShapedTarget:
                 cn, ce = _limit_length(cn, ce, a)
             else:
                 xn, xe = _limit_length(xn, xe, self._corner_m_s2)
-                # max(0.0, room2) and max(-room, min(room, along)) written out (ties and NaN as the builtins give them,
-                # which cost several times a comparison: this runs 5 times a tick, and every 20 ms in the simulated rover)
+                # max(0.0, room2) written out, and clamp (ties and NaN as the builtins give them, which cost several times a
+                # comparison: this runs 5 times a tick, and every 20 ms in the simulated rover)
                 room2 = a * a - xn * xn - xe * xe
                 room = math.sqrt(room2 if room2 > 0.0 else 0.0)
-                along = along if along < room else room
-                along = along if along > -room else -room
+                along = clamp(along, room)
                 cn, ce = xn + along * un, xe + along * ue
         # the acceleration moves toward that within the jerk
         dn, de = _limit_length(cn - an, ce - ae, j * dt)

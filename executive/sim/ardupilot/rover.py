@@ -15,7 +15,8 @@ from executive.sim.ardupilot.rover_fence import FENCE_ACTIONS, FENCE_DEFAULTS, b
 from executive.sim.ardupilot.rover_nav import RoverNavigator
 from executive.sim.firmware import EPSILON_S, Command, CommandHandler, Home, valid_latlon
 from executive.sim.mission_store import StoredCommand
-from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, MotionLimits, SurfaceVehicle, VehicleModel, clamp
+from executive.sim.physics.vehicle import BOAT_LIMITS, ROVER_LIMITS, MotionLimits, SurfaceVehicle, VehicleModel
+from executive.world.bounds import clamp
 from executive.world.dialect import MAVLinkMessage, mavlink
 
 _M = mavlink

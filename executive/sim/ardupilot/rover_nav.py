@@ -33,7 +33,7 @@ import math
 from typing import Literal, Protocol
 
 from executive.autopilot.rover_motion import RoverMotion, SCurveLeg, ShapedTarget, sqrt_controller, stopping_distance
-from executive.sim.physics.vehicle import within
+from executive.world.bounds import within
 
 #: AR_PIVOT_ANGLE_ACCURACY: a pivot ends within this many degrees of the bearing.
 PIVOT_ACCURACY_DEG = 5.0

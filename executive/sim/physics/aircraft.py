@@ -14,7 +14,8 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from executive.sim.physics.vehicle import LocalFrame, clamp, wrap_pi
+from executive.sim.physics.vehicle import LocalFrame, wrap_pi
+from executive.world.bounds import clamp
 
 GRAVITY_M_S2 = 9.80665
 

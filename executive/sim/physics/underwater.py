@@ -9,7 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from executive.sim.physics.vehicle import MotionLimits, SurfaceVehicle, clamp
+from executive.sim.physics.vehicle import MotionLimits, SurfaceVehicle
+from executive.world.bounds import clamp
 
 
 @dataclass(frozen=True)

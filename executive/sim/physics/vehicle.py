@@ -11,25 +11,13 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import executive
+from executive.world.bounds import clamp
 
 _EARTH_RADIUS_M = 6378137.0
 
 
 def wrap_pi(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
-
-
-def clamp(value: float, limit: float) -> float:
-    """``max(-limit, min(limit, value))``, ties and NaN alike: written out, as the models' other min and max of every step
-    (the builtins cost several times a comparison)."""
-    value = value if value < limit else limit
-    return value if value > -limit else -limit
-
-
-def within(value: float, low: float, high: float) -> float:
-    """``max(low, min(high, value))``, ties and NaN alike, without the builtin calls (see :func:`clamp`)."""
-    value = value if value < high else high
-    return value if value > low else low
 
 
 class VehicleModel(Protocol):
